@@ -1,0 +1,47 @@
+# Ramure — the two commands (make run, make test) plus make bench.
+PY      ?= python3
+VENV    := .venv
+VPY     := $(VENV)/bin/python
+STAMP   := $(VENV)/.installed
+GRAMMAR ?= grammars/honda_sympodial.lsys
+
+.PHONY: run test bench venv sysdeps clean
+
+$(VPY):
+	$(PY) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(VPY)
+	$(VPY) -m pip install -q --upgrade pip
+	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,test]"
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+# System packages for Qt/VTK under a virtual screen; installed only when missing
+# and only when we may (root or sudo), so a developer with a display needs nothing.
+sysdeps:
+	@bash .ci/sysdeps.sh
+
+run: venv
+	@if [ -z "$$DISPLAY" ] && [ -z "$$WAYLAND_DISPLAY" ]; then \
+	  mkdir -p out; \
+	  echo "No display: rendering $(GRAMMAR) off-screen to out/ instead of opening the window."; \
+	  $(VPY) -m app.cli render $(GRAMMAR) -o out/plant.png && \
+	  (bash .ci/sysdeps.sh >/dev/null 2>&1 && xvfb-run -a -s "-screen 0 1400x900x24" $(VPY) -m app.desktop $(GRAMMAR) --screenshot out/window.png --quit-after 1 \
+	     && echo "Wrote out/plant.png and out/window.png" || echo "Wrote out/plant.png"); \
+	else \
+	  $(VPY) -m app.desktop $(GRAMMAR); \
+	fi
+
+test: venv sysdeps
+	@if [ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null 2>&1; then \
+	  xvfb-run -a -s "-screen 0 1400x900x24" $(VPY) -m pytest; \
+	else \
+	  $(VPY) -m pytest; \
+	fi
+
+bench: venv
+	@$(VPY) benchmarks/run.py
+
+clean:
+	rm -rf $(VENV) out tests/artifacts .pytest_cache

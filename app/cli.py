@@ -1,0 +1,57 @@
+"""The ``ramure`` command line.
+
+Sub-commands live in :mod:`app.commands`; each module there registers its own
+parsers, so adding a command never touches this file.  Errors a user can fix
+(grammar errors, bad values, missing files) are printed as one clear message
+without a traceback and exit with status 2.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+
+import app.commands
+
+
+class UserError(Exception):
+    """An error caused by the user's input: printed without a traceback, exit 2."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="ramure",
+        description="Explore procedural plants: derive, select, regenerate, measure.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for info in sorted(pkgutil.iter_modules(app.commands.__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"app.commands.{info.name}")
+        module.register(sub)
+    return parser
+
+
+def _user_errors():
+    errors = [UserError, FileNotFoundError, IsADirectoryError, PermissionError]
+    from lsys.errors import RamureError
+
+    errors.append(RamureError)
+    return tuple(errors)
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except _user_errors() as exc:
+        print(f"ramure {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("ramure: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
