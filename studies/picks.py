@@ -1,0 +1,141 @@
+"""The 27 picked variants of a grammar: read from an exploration, or synthesised.
+
+The metrics/exploration step writes, per grammar, a directory holding
+``picks.json``: a list of 27 objects ``{"id": 1..27, "variant": int,
+"pca": [x, y, z], "params": {"rule": int, "constants": {...}}, "image":
+"thumbs/pick_01.png"}`` (``image`` relative to that directory, optional).
+
+>>> picks = lattice_picks(seed=0)
+>>> len(picks), picks[0].id, picks[26].id
+(27, 1, 27)
+>>> picks[0].pca[0] < picks[13].pca[0] < picks[26].pca[0]   # PC1 varies slowest
+True
+"""
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import pathlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from studies.errors import StudyInputError
+
+N_PICKS = 27
+PICK_IDS = tuple(range(1, N_PICKS + 1))
+
+
+@dataclass(frozen=True)
+class Pick:
+    """One of the 27 images of a grammar: ``id`` 1-27 and its variant."""
+
+    id: int
+    variant: int
+    pca: tuple
+    params: dict = field(hash=False)
+    image: str | None = None
+
+
+def _fail(where, message):
+    raise StudyInputError(f"{where}: {message}")
+
+
+def _check_pick(obj, where):
+    if not isinstance(obj, dict):
+        _fail(where, f"expected an object, got {type(obj).__name__}")
+    for key in ("id", "variant", "pca", "params"):
+        if key not in obj:
+            _fail(where, f"missing key {key!r}")
+    pid, variant, pca, params = obj["id"], obj["variant"], obj["pca"], obj["params"]
+    if isinstance(pid, bool) or not isinstance(pid, numbers.Integral) or not 1 <= pid <= N_PICKS:
+        _fail(where, f"id {pid!r} is not an integer 1-27")
+    if isinstance(variant, bool) or not isinstance(variant, numbers.Integral) or variant < 0:
+        _fail(where, f"variant {variant!r} is not a non-negative integer")
+    if (not isinstance(pca, (list, tuple)) or len(pca) != 3
+            or not all(isinstance(v, numbers.Real) and math.isfinite(v) for v in pca)):
+        _fail(where, f"pca {pca!r} is not three finite numbers")
+    if not isinstance(params, dict) or "rule" not in params:
+        _fail(where, "params must be an object with a 'rule'")
+    image = obj.get("image")
+    if image is not None and not isinstance(image, str):
+        _fail(where, f"image {image!r} is not a path")
+    return Pick(int(pid), int(variant), tuple(float(v) for v in pca), dict(params), image)
+
+
+def picks_from_data(items, where="picks") -> list[Pick]:
+    """Validate plain data (a list of 27 dicts or :class:`Pick`) into picks sorted by id."""
+    if not isinstance(items, (list, tuple)):
+        _fail(where, "expected a list of 27 picks")
+    picks = [p if isinstance(p, Pick) else _check_pick(p, f"{where}[{i}]")
+             for i, p in enumerate(items)]
+    ids = sorted(p.id for p in picks)
+    if ids != list(PICK_IDS):
+        missing = sorted(set(PICK_IDS) - set(ids))
+        doubled = sorted({i for i in ids if ids.count(i) > 1})
+        detail = []
+        if missing:
+            detail.append(f"missing ids {missing}")
+        if doubled:
+            detail.append(f"repeated ids {doubled}")
+        _fail(where, f"expected the 27 ids 1-27 once each ({'; '.join(detail)})")
+    return sorted(picks, key=lambda p: p.id)
+
+
+def load_picks(directory) -> list[Pick]:
+    """Read ``directory/picks.json``; image paths become absolute."""
+    directory = pathlib.Path(directory)
+    path = directory / "picks.json"
+    if not path.is_file():
+        raise StudyInputError(f"{directory}: no picks.json (run the exploration first)")
+    try:
+        items = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise StudyInputError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    picks = picks_from_data(items, where=str(path))
+    return [Pick(p.id, p.variant, p.pca, p.params,
+                 str((directory / p.image).resolve()) if p.image else None) for p in picks]
+
+
+def lattice_index(levels) -> np.ndarray:
+    """Pick id (1-27) of lattice levels ``(i, j, k)`` in {0, 1, 2}, PC1 slowest.
+
+    >>> lattice_index([[0, 0, 0], [0, 0, 1], [1, 0, 0], [2, 2, 2]]).tolist()
+    [1, 2, 10, 27]
+    """
+    levels = np.asarray(levels)
+    return 1 + 9 * levels[..., 0] + 3 * levels[..., 1] + levels[..., 2]
+
+
+def lattice_picks(seed=0, extent=(60.0, 30.0, 12.0), noise=0.05) -> list[Pick]:
+    """27 synthetic picks on the 3x3x3 lattice of a box, with seeded noise.
+
+    ``extent`` is the half-size of the box along PC1..PC3; each point moves by
+    Gaussian noise of ``noise * extent``.  The constants follow the lattice
+    level (-10 %, 0, +10 %), one constant per axis, all on rule 1.
+    """
+    rng = np.random.default_rng(seed)
+    extent = np.asarray(extent, dtype=float)
+    grid = np.stack(np.meshgrid(*[np.arange(3)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    points = (grid - 1) * extent + rng.normal(0.0, noise, size=(N_PICKS, 3)) * extent
+    base = {"r1": 0.9, "a0": 45.0, "wr": 0.707}
+    picks = []
+    for levels, point in zip(grid, points):
+        pid = int(lattice_index(levels))
+        constants = {name: round(value * (1 + 0.1 * (lvl - 1)), 6)
+                     for (name, value), lvl in zip(base.items(), levels)}
+        picks.append(Pick(pid, int(pid * 17 + int(rng.integers(0, 17))),
+                          tuple(float(v) for v in point),
+                          {"rule": 1, "constants": constants}, None))
+    return sorted(picks, key=lambda p: p.id)
+
+
+def synthetic_grammars(count=3, seed=0) -> dict:
+    """``count`` fake grammars ``synth1..`` with lattice picks of varied box sizes."""
+    rng = np.random.default_rng(seed)
+    grammars = {}
+    for n in range(count):
+        extent = np.sort(rng.uniform(8.0, 80.0, size=3))[::-1]
+        grammars[f"synth{n + 1}"] = lattice_picks(seed=seed * 1000 + n, extent=tuple(extent))
+    return grammars

@@ -1,0 +1,308 @@
+"""One participant's test on one grammar: sort, pick representatives, rate, name.
+
+Every call is checked first and then written in its own transaction, together
+with the time spent since the previous answer; a refused call changes nothing.
+Front ends (desktop, Jupyter) drive a test only through this object.
+
+>>> import tempfile, pathlib
+>>> from studies.picks import lattice_picks
+>>> from studies.storage import Study
+>>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db",
+...                      grammars={"honda": lattice_picks()})
+>>> s = study.session(study.add_participant(consent=True), "honda")
+>>> s.set_groups([range(1, 10), range(10, 27), [27]])
+>>> s.set_representative(1, 5)
+>>> s.rate(1, usefulness="good", difference=3, representative="excellent")
+>>> s.add_qualifier(1, "Petit")
+>>> s.set_groups([[1, 2, 3, 4, 5, 5]])
+Traceback (most recent call last):
+...
+studies.errors.StudyInputError: image 5 is listed twice in group 1
+>>> s.groups()[0].usefulness, s.missing()[0]
+(3, 'group 2: choose a representative')
+>>> study.close()
+"""
+from __future__ import annotations
+
+import contextlib
+import numbers
+import sqlite3
+import zlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from studies.errors import StudyInputError
+from studies.likert import likert_value
+from studies.picks import N_PICKS, PICK_IDS
+from studies.storage import now_iso
+
+
+@dataclass
+class Group:
+    """A group as stored: ``label`` 1.., its images and answers (Likert 1-4 or None)."""
+
+    label: int
+    images: list
+    representative: int | None = None
+    usefulness: int | None = None
+    difference: int | None = None
+    representative_quality: int | None = None
+    qualifiers: list = field(default_factory=list)
+
+
+def image_order(seed, grammar) -> list[int]:
+    """The seeded random order (a permutation of 1-27) shown to one participant.
+
+    It depends on the participant's seed and on the grammar, never on the clock,
+    so a resumed test shows the same order.
+
+    >>> image_order(7, "honda") == image_order(7, "honda") != image_order(8, "honda")
+    True
+    """
+    rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, zlib.crc32(grammar.encode())])
+    return (rng.permutation(N_PICKS) + 1).tolist()
+
+
+def _check_partition(groups):
+    """Validate ``groups`` (iterables of image ids) and return them as lists of ints."""
+    if isinstance(groups, (str, bytes)) or not hasattr(groups, "__iter__"):
+        raise StudyInputError("groups must be a list of groups, each a list of image numbers 1-27")
+    checked, owner = [], {}
+    for label, group in enumerate(groups, start=1):
+        if isinstance(group, (str, bytes)) or not hasattr(group, "__iter__"):
+            raise StudyInputError(f"group {label} must be a list of image numbers 1-27, got {group!r}")
+        images = list(group)
+        if not images:
+            raise StudyInputError(f"group {label} is empty; every group needs at least one image")
+        seen = set()
+        for image in images:
+            if isinstance(image, bool) or not isinstance(image, numbers.Integral) \
+                    or not 1 <= image <= N_PICKS:
+                raise StudyInputError(f"group {label}: {image!r} is not an image number 1-27")
+            image = int(image)
+            if image in seen:
+                raise StudyInputError(f"image {image} is listed twice in group {label}")
+            if image in owner:
+                raise StudyInputError(f"image {image} is in two groups ({owner[image]} and {label})")
+            seen.add(image)
+            owner[image] = label
+        checked.append(sorted(seen))
+    return checked
+
+
+class TestSession:
+    """A participant's test on one grammar, backed by the study database.
+
+    Obtain it with :meth:`studies.storage.Study.session`; the same call resumes
+    an unfinished test.  Groups are addressed by their ``label`` (1, 2, ... in
+    the order given to :meth:`set_groups`).
+    """
+
+    __test__ = False  # not a pytest class
+
+    def __init__(self, study, test_id, participant, grammar, seed):
+        self.study = study
+        self.conn = study.conn
+        self.test_id = test_id
+        self.participant = participant
+        self.grammar = grammar
+        self.seed = seed
+        self._tick = study.clock()
+
+    # -- reading ----------------------------------------------------------------
+    def order(self) -> list[int]:
+        """The image ids 1-27 in this participant's seeded display order."""
+        return image_order(self.seed, self.grammar)
+
+    def picks(self):
+        """The 27 :class:`~studies.picks.Pick` of the grammar (image paths, params)."""
+        return self.study.picks(self.grammar)
+
+    @property
+    def finished(self) -> bool:
+        return self.conn.execute("SELECT finished_at FROM tests WHERE id = ?",
+                                 (self.test_id,)).fetchone()[0] is not None
+
+    def groups(self) -> list[Group]:
+        """The groups as stored, by label, with their answers and qualifiers."""
+        rows = self.conn.execute(
+            "SELECT id, label, representative, usefulness, difference, representative_quality "
+            "FROM groups WHERE test_id = ? ORDER BY label", (self.test_id,)).fetchall()
+        members, names = {}, {}
+        for gid, image in self.conn.execute("SELECT group_id, pick_id FROM group_images "
+                                            "WHERE test_id = ? ORDER BY pick_id", (self.test_id,)):
+            members.setdefault(gid, []).append(image)
+        for gid, text in self.conn.execute(
+                "SELECT q.group_id, q.text FROM qualifiers q JOIN groups g ON g.id = q.group_id "
+                "WHERE g.test_id = ? ORDER BY q.id", (self.test_id,)):
+            names.setdefault(gid, []).append(text)
+        return [Group(r[1], members.get(r[0], []), *r[2:], qualifiers=names.get(r[0], []))
+                for r in rows]
+
+    def unsorted(self) -> list[int]:
+        """Images not yet placed in a group."""
+        placed = {r[0] for r in self.conn.execute("SELECT pick_id FROM group_images WHERE test_id = ?",
+                                                  (self.test_id,))}
+        return [i for i in PICK_IDS if i not in placed]
+
+    def missing(self) -> list[str]:
+        """What is still to answer before :meth:`finish`, one line per item."""
+        todo = []
+        left = self.unsorted()
+        if left:
+            todo.append(f"images not in any group: {', '.join(map(str, left))}")
+        for g in self.groups():
+            several = len(g.images) > 1
+            if several and g.representative is None:
+                todo.append(f"group {g.label}: choose a representative")
+            for name, value in (("usefulness", g.usefulness), ("difference", g.difference)):
+                if value is None:
+                    todo.append(f"group {g.label}: rate its {name}")
+            if several and g.representative_quality is None:
+                todo.append(f"group {g.label}: rate its representative")
+            if not g.qualifiers:
+                todo.append(f"group {g.label}: give at least one qualifier")
+        return todo
+
+    # -- time ---------------------------------------------------------------------
+    def elapsed_seconds(self) -> float:
+        """Time spent on this test: committed time plus time since the last answer."""
+        stored = self.conn.execute("SELECT elapsed_seconds FROM tests WHERE id = ?",
+                                   (self.test_id,)).fetchone()[0]
+        return float(stored) + (0.0 if self.finished else self.study.clock() - self._tick)
+
+    def remaining_seconds(self) -> float:
+        """The participant's budget left over all their tests (never below 0).
+
+        The budget is advisory while a test runs: answers are still accepted
+        after it is spent, so nothing typed is lost; only new tests are refused.
+        """
+        pending = 0.0 if self.finished else self.study.clock() - self._tick
+        return max(0.0, self.study.remaining_seconds(self.participant) - pending)
+
+    # -- writing ------------------------------------------------------------------
+    @contextlib.contextmanager
+    def _write(self):
+        """One transaction holding the change and the time spent since the last one."""
+        if self.finished:
+            raise StudyInputError(f"the test of {self.participant!r} on {self.grammar!r} is "
+                                  "finished; its answers can no longer change")
+        now = self.study.clock()
+        try:
+            with self.conn:
+                yield self.conn
+                self.conn.execute("UPDATE tests SET elapsed_seconds = elapsed_seconds + ? WHERE id = ?",
+                                  (max(0.0, now - self._tick), self.test_id))
+        except sqlite3.IntegrityError as exc:  # a check the validation above missed
+            raise StudyInputError(f"answer refused by the database: {exc}") from None
+        self._tick = now
+
+    def _group(self, label):
+        if isinstance(label, bool) or not isinstance(label, numbers.Integral):
+            raise StudyInputError(f"group {label!r} must be a group number")
+        row = self.conn.execute("SELECT id FROM groups WHERE test_id = ? AND label = ?",
+                                (self.test_id, int(label))).fetchone()
+        if row is None:
+            count = self.conn.execute("SELECT count(*) FROM groups WHERE test_id = ?",
+                                      (self.test_id,)).fetchone()[0]
+            have = f"groups 1-{count}" if count else "no groups yet"
+            raise StudyInputError(f"group {label} does not exist (this test has {have})")
+        images = [r[0] for r in self.conn.execute("SELECT pick_id FROM group_images WHERE group_id = ? "
+                                                  "ORDER BY pick_id", (row[0],))]
+        return row[0], images
+
+    def set_groups(self, groups):
+        """Replace the grouping with ``groups``: a list of groups of image ids 1-27.
+
+        Images may stay unsorted until :meth:`finish`.  A group whose image set
+        is unchanged keeps its representative, ratings and qualifiers (under its
+        new label); the answers of changed groups are dropped, since they were
+        about other images.  A single-image group's representative is its image.
+        Refused: an empty group, an image outside 1-27, an image twice.
+        """
+        checked = _check_partition(groups)
+        old = {}
+        for gid, image in self.conn.execute("SELECT group_id, pick_id FROM group_images WHERE test_id = ?",
+                                            (self.test_id,)):
+            old.setdefault(gid, set()).add(image)
+        by_set = {frozenset(images): gid for gid, images in old.items()}
+        with self._write() as conn:
+            keep = {by_set.get(frozenset(images)) for images in checked} - {None}
+            conn.execute("DELETE FROM group_images WHERE test_id = ?", (self.test_id,))
+            conn.executemany("DELETE FROM groups WHERE id = ?", [(gid,) for gid in old if gid not in keep])
+            # Kept groups move to new labels: free the old ones first (labels are unique per test).
+            conn.execute("UPDATE groups SET label = -label WHERE test_id = ?", (self.test_id,))
+            for label, images in enumerate(checked, start=1):
+                gid = by_set.get(frozenset(images))
+                if gid is None:
+                    gid = conn.execute("INSERT INTO groups (test_id, label, representative) VALUES (?, ?, ?)",
+                                       (self.test_id, label, images[0] if len(images) == 1 else None)).lastrowid
+                else:
+                    conn.execute("UPDATE groups SET label = ? WHERE id = ?", (label, gid))
+                conn.executemany("INSERT INTO group_images (group_id, test_id, pick_id) VALUES (?, ?, ?)",
+                                 [(gid, self.test_id, image) for image in images])
+
+    def set_representative(self, group, image):
+        """Choose ``image`` (which must be in ``group``) as the group's representative.
+
+        Changing the representative clears its quality rating.
+        """
+        gid, images = self._group(group)
+        if image not in images:
+            raise StudyInputError(f"image {image!r} is not in group {group} "
+                                  f"(it holds {', '.join(map(str, images))})")
+        with self._write() as conn:
+            conn.execute("UPDATE groups SET representative_quality = CASE WHEN representative = ? "
+                         "THEN representative_quality END, representative = ? WHERE id = ?",
+                         (int(image), int(image), gid))
+
+    def rate(self, group, usefulness=None, difference=None, representative=None):
+        """Rate ``group`` on any of the three scales (1-4 or poor/fair/good/excellent).
+
+        Only the scales given are written.  The representative's quality is
+        rated only for groups of two or more images, once it is chosen.
+        """
+        gid, images = self._group(group)
+        answers = {}
+        for column, value in (("usefulness", usefulness), ("difference", difference),
+                              ("representative_quality", representative)):
+            if value is not None:
+                answers[column] = likert_value(value, f"group {group} {column.replace('_', ' ')}")
+        if not answers:
+            raise StudyInputError(f"group {group}: give at least one of usefulness, difference, representative")
+        if "representative_quality" in answers:
+            if len(images) == 1:
+                raise StudyInputError(f"group {group} holds a single image; its representative is not rated")
+            chosen = self.conn.execute("SELECT representative FROM groups WHERE id = ?", (gid,)).fetchone()[0]
+            if chosen is None:
+                raise StudyInputError(f"group {group}: choose its representative before rating it")
+        with self._write() as conn:
+            conn.execute(f"UPDATE groups SET {', '.join(f'{c} = ?' for c in answers)} WHERE id = ?",
+                         (*answers.values(), gid))
+
+    def add_qualifier(self, group, text) -> None:
+        """Add one free-text qualifier (French or English) to ``group``."""
+        gid, _ = self._group(group)
+        if not isinstance(text, str) or not text.strip():
+            raise StudyInputError(f"group {group}: a qualifier must be non-empty text, got {text!r}")
+        with self._write() as conn:
+            conn.execute("INSERT INTO qualifiers (group_id, text) VALUES (?, ?)", (gid, text.strip()))
+
+    def remove_qualifier(self, group, text) -> None:
+        """Remove the qualifier ``text`` from ``group`` (refused if it is not there)."""
+        gid, _ = self._group(group)
+        row = self.conn.execute("SELECT id FROM qualifiers WHERE group_id = ? AND text = ? "
+                                "ORDER BY id DESC", (gid, str(text).strip())).fetchone()
+        if row is None:
+            raise StudyInputError(f"group {group} has no qualifier {text!r}")
+        with self._write() as conn:
+            conn.execute("DELETE FROM qualifiers WHERE id = ?", (row[0],))
+
+    def finish(self) -> None:
+        """Mark the test finished; refused, listing what is missing, if incomplete."""
+        todo = self.missing()
+        if todo:
+            raise StudyInputError("the test is not complete: " + "; ".join(todo))
+        with self._write() as conn:
+            conn.execute("UPDATE tests SET finished_at = ? WHERE id = ?", (now_iso(), self.test_id))

@@ -1,0 +1,284 @@
+"""A study stored in SQLite: grammars and their 27 picks, participants, tests.
+
+Every write is one transaction (``with conn:``), foreign keys are on and the
+journal is WAL, so a crash loses at most the answer being written.  The schema
+is ``studies/schema.sql``.
+
+>>> import tempfile, pathlib
+>>> from studies.picks import lattice_picks
+>>> db = pathlib.Path(tempfile.mkdtemp()) / "study.db"
+>>> study = Study.create(db, grammars={"honda": lattice_picks(seed=1)}, name="demo")
+>>> code = study.add_participant(consent=True)
+>>> code, study.grammars
+('P101', ['honda'])
+>>> session = study.session(code, "honda")
+>>> sorted(session.order()) == list(range(1, 28))
+True
+>>> study.close()
+"""
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import pathlib
+import re
+import sqlite3
+import time
+import zlib
+from importlib import resources
+
+from studies.errors import StudyInputError
+from studies.picks import Pick, load_picks, picks_from_data
+
+SCHEMA_VERSION = 1
+DEFAULT_BUDGET_MINUTES = 30.0
+_CODE = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
+
+
+def now_iso() -> str:
+    """The current UTC time as ISO-8601 text (seconds precision)."""
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def connect(path, durable=True) -> sqlite3.Connection:
+    """Open ``path`` with foreign keys on, WAL journal and a busy timeout.
+
+    ``durable=False`` sets ``synchronous=NORMAL``: a committed answer still
+    survives a killed process, but not a power cut; simulations use it for speed.
+    """
+    conn = sqlite3.connect(os.fspath(path), timeout=10.0)
+    conn.execute("PRAGMA foreign_keys = ON")
+    conn.execute("PRAGMA journal_mode = WAL")
+    conn.execute(f"PRAGMA synchronous = {'FULL' if durable else 'NORMAL'}")
+    return conn
+
+
+def schema_sql() -> str:
+    """The text of ``studies/schema.sql``."""
+    return resources.files("studies").joinpath("schema.sql").read_text(encoding="utf-8")
+
+
+def _has_study(conn) -> bool:
+    row = conn.execute("SELECT name FROM sqlite_master WHERE type='table' AND name='study'").fetchone()
+    return row is not None and conn.execute("SELECT count(*) FROM study").fetchone()[0] == 1
+
+
+class Study:
+    """A study database: grammars x 27 picks, participants, one test per grammar each.
+
+    Use :meth:`create` for a new file and :meth:`open` for an existing one.
+    ``clock`` (seconds, monotonic) times the participants' budget; tests pass a fake.
+    """
+
+    def __init__(self, conn, path, clock=time.monotonic):
+        self.conn = conn
+        self.path = pathlib.Path(path)
+        self.clock = clock
+        row = conn.execute("SELECT name, budget_seconds FROM study WHERE id = 1").fetchone()
+        self.name, self.budget_seconds = row[0], float(row[1])
+
+    # -- opening -----------------------------------------------------------
+    @classmethod
+    def create(cls, path, grammars=None, name=None, budget_minutes=DEFAULT_BUDGET_MINUTES,
+               clock=time.monotonic, durable=True) -> "Study":
+        """Create a study in a new file ``path``.
+
+        ``grammars`` maps a grammar name to an exploration directory (holding
+        ``picks.json``) or to plain data: a list of 27 pick dicts or
+        :class:`~studies.picks.Pick`.  ``budget_minutes`` is each participant's
+        time budget over all their tests.
+        """
+        path = pathlib.Path(path)
+        if budget_minutes is None or not budget_minutes > 0:
+            raise StudyInputError(f"budget must be a positive number of minutes, got {budget_minutes!r}")
+        # Read every grammar before touching the disk, so a bad one leaves no file.
+        loaded = {gname: _read_grammar(gname, spec) for gname, spec in (grammars or {}).items()}
+        if path.exists() and path.stat().st_size > 0:
+            conn = sqlite3.connect(os.fspath(path))
+            try:
+                exists = _has_study(conn)
+            except sqlite3.DatabaseError:
+                raise StudyInputError(f"{path}: exists and is not a SQLite file") from None
+            finally:
+                conn.close()
+            if exists:
+                raise StudyInputError(f"{path}: already holds a study; open it instead")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        conn = connect(path, durable)
+        conn.executescript(schema_sql())
+        with conn:
+            conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            conn.execute("INSERT INTO study (id, name, budget_seconds, created_at) VALUES (1, ?, ?, ?)",
+                         (name or path.stem, 60.0 * float(budget_minutes), now_iso()))
+            for gname, (source, picks) in loaded.items():
+                _insert_grammar(conn, gname, source, picks)
+        return cls(conn, path, clock)
+
+    @classmethod
+    def open(cls, path, clock=time.monotonic, durable=True) -> "Study":
+        """Open an existing study file (refused with a clear message otherwise)."""
+        path = pathlib.Path(path)
+        if not path.is_file():
+            raise StudyInputError(f"{path}: no such study file")
+        conn = connect(path, durable)
+        try:
+            ok = _has_study(conn)
+        except sqlite3.DatabaseError:
+            ok = False
+        if not ok:
+            conn.close()
+            raise StudyInputError(f"{path}: not a Ramure study database")
+        return cls(conn, path, clock)
+
+    def close(self):
+        self.conn.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- grammars and picks --------------------------------------------------
+    @property
+    def grammars(self) -> list[str]:
+        """Grammar names, in the order they were added."""
+        return [r[0] for r in self.conn.execute("SELECT name FROM grammars ORDER BY id")]
+
+    def add_grammar(self, name, spec):
+        """Add one grammar (exploration directory or plain pick data)."""
+        source, picks = _read_grammar(name, spec)
+        with self.conn:
+            _insert_grammar(self.conn, name, source, picks)
+
+    def grammar_id(self, name) -> int:
+        row = self.conn.execute("SELECT id FROM grammars WHERE name = ?", (name,)).fetchone()
+        if row is None:
+            known = ", ".join(self.grammars) or "none"
+            raise StudyInputError(f"no grammar {name!r} in this study (known: {known})")
+        return row[0]
+
+    def picks(self, grammar) -> list[Pick]:
+        """The 27 picks of ``grammar``, by id."""
+        rows = self.conn.execute(
+            "SELECT pick_id, variant_id, pc1, pc2, pc3, params, image FROM picks "
+            "WHERE grammar_id = ? ORDER BY pick_id", (self.grammar_id(grammar),))
+        return [Pick(r[0], r[1], (r[2], r[3], r[4]), json.loads(r[5]), r[6]) for r in rows]
+
+    # -- participants --------------------------------------------------------
+    def add_participant(self, code=None, consent=False, seed=None) -> str:
+        """Register a participant under an anonymous ``code`` (default P101, P102...).
+
+        ``seed`` fixes the image order of their tests (default: from the code).
+        """
+        if code is None:
+            taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
+            number = 101
+            while f"P{number}" in taken:
+                number += 1
+            code = f"P{number}"
+        code = str(code)
+        if not _CODE.match(code):
+            raise StudyInputError(f"participant code {code!r} must be 1-32 letters, digits, '-' or '_' "
+                                  "(an anonymous code, not a name)")
+        if seed is None:
+            seed = zlib.crc32(code.encode())
+        stamp = now_iso()
+        try:
+            with self.conn:
+                self.conn.execute(
+                    "INSERT INTO participants (code, seed, consent, consent_at, created_at) "
+                    "VALUES (?, ?, ?, ?, ?)",
+                    (code, int(seed), int(bool(consent)), stamp if consent else None, stamp))
+        except sqlite3.IntegrityError:
+            raise StudyInputError(f"participant code {code!r} is already used") from None
+        return code
+
+    def record_consent(self, code, given=True):
+        """Record that participant ``code`` gave (or withdrew) consent, with the time."""
+        self._participant(code)
+        with self.conn:
+            self.conn.execute("UPDATE participants SET consent = ?, consent_at = ? WHERE code = ?",
+                              (int(bool(given)), now_iso(), code))
+
+    def _participant(self, code):
+        row = self.conn.execute("SELECT id, seed, consent FROM participants WHERE code = ?",
+                                (str(code),)).fetchone()
+        if row is None:
+            raise StudyInputError(f"no participant {code!r} in this study")
+        return row
+
+    def participants(self) -> list[dict]:
+        """Each participant's code, consent and number of tests started/finished."""
+        rows = self.conn.execute(
+            "SELECT p.code, p.consent, p.consent_at, count(t.id), count(t.finished_at), "
+            "coalesce(sum(t.elapsed_seconds), 0) FROM participants p "
+            "LEFT JOIN tests t ON t.participant_id = p.id GROUP BY p.id ORDER BY p.id")
+        return [dict(code=r[0], consent=bool(r[1]), consent_at=r[2], tests=r[3], finished=r[4],
+                     elapsed_seconds=r[5]) for r in rows]
+
+    def used_seconds(self, code) -> float:
+        """Seconds participant ``code`` has spent, as committed with their answers."""
+        pid = self._participant(code)[0]
+        return float(self.conn.execute("SELECT coalesce(sum(elapsed_seconds), 0) FROM tests "
+                                       "WHERE participant_id = ?", (pid,)).fetchone()[0])
+
+    def remaining_seconds(self, code) -> float:
+        """Budget left for ``code`` (never below 0)."""
+        return max(0.0, self.budget_seconds - self.used_seconds(code))
+
+    # -- tests ----------------------------------------------------------------
+    def session(self, code, grammar):
+        """Start, or resume, participant ``code``'s test on ``grammar``.
+
+        Refused without consent, and refused for a *new* test once the
+        participant's budget is spent (an unfinished test can always be resumed).
+        """
+        from studies.session import TestSession
+
+        pid, seed, consent = self._participant(code)
+        gid = self.grammar_id(grammar)
+        if not consent:
+            raise StudyInputError(f"participant {code!r} has not given consent; record it first")
+        row = self.conn.execute("SELECT id FROM tests WHERE participant_id = ? AND grammar_id = ?",
+                                (pid, gid)).fetchone()
+        if row is None:
+            if self.remaining_seconds(code) <= 0:
+                raise StudyInputError(f"participant {code!r} has used their "
+                                      f"{self.budget_seconds / 60:g}-minute budget; no new test")
+            with self.conn:
+                cur = self.conn.execute("INSERT INTO tests (participant_id, grammar_id, started_at) "
+                                        "VALUES (?, ?, ?)", (pid, gid, now_iso()))
+            test_id = cur.lastrowid
+        else:
+            test_id = row[0]
+        return TestSession(self, test_id, str(code), grammar, seed)
+
+    def tests(self) -> list[dict]:
+        """Every test: participant, grammar, finished or not, elapsed seconds."""
+        rows = self.conn.execute(
+            "SELECT t.id, p.code, g.name, t.started_at, t.finished_at, t.elapsed_seconds "
+            "FROM tests t JOIN participants p ON p.id = t.participant_id "
+            "JOIN grammars g ON g.id = t.grammar_id ORDER BY t.id")
+        return [dict(test=r[0], participant=r[1], grammar=r[2], started_at=r[3], finished_at=r[4],
+                     elapsed_seconds=r[5]) for r in rows]
+
+
+def _read_grammar(name, spec):
+    if not isinstance(name, str) or not name.strip():
+        raise StudyInputError(f"grammar name {name!r} must be non-empty text")
+    if isinstance(spec, (str, os.PathLike)):
+        return str(pathlib.Path(spec).resolve()), load_picks(spec)
+    return None, picks_from_data(spec, where=f"grammar {name!r}")
+
+
+def _insert_grammar(conn, name, source, picks):
+    try:
+        gid = conn.execute("INSERT INTO grammars (name, source) VALUES (?, ?)", (name, source)).lastrowid
+    except sqlite3.IntegrityError:
+        raise StudyInputError(f"grammar {name!r} is already in this study") from None
+    conn.executemany(
+        "INSERT INTO picks (grammar_id, pick_id, variant_id, pc1, pc2, pc3, params, image) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+        [(gid, p.id, p.variant, *p.pca, json.dumps(p.params, sort_keys=True), p.image) for p in picks])
