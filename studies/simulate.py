@@ -1,0 +1,175 @@
+"""Simulated participants, so the whole study pipeline runs without people.
+
+A :class:`SimulatedParticipant` sees each image as its pick's point in PCA
+space plus Gaussian "perception" noise, groups the points by Ward clustering
+into a number of groups drawn around the thesis mean (5.2), and answers the
+questionnaire from the geometry: compact groups are more useful, groups far
+from the others more different, the representative is the image nearest the
+group's centre.  Qualifiers come from where the group sits in the box (PC1 ->
+small/large, PC2 -> sparse/dense, PC3 -> thin/thick, the centre -> normal,
+plus round/fir-like/realistic at random), written in French or English with
+random case, accents and plurals, so normalisation has work to do.
+
+Everything goes through :class:`~studies.session.TestSession`, exactly like a
+front end, so a simulation exercises storage and validation too.
+
+>>> data = simulate_study(participants=2, grammars=1, seed=3)
+>>> data.n_tests, bool(data.membership.sum(axis=0).min() == 2)
+(2, True)
+"""
+from __future__ import annotations
+
+import os
+import pathlib
+import tempfile
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.cluster.hierarchy import fcluster, linkage
+
+from studies.picks import synthetic_grammars
+
+# Surface forms per canonical qualifier: English, French, and misspelt/plural variants.
+_FORMS = {
+    "small": ["small", "petit", "Petits", "petite", "tiny"],
+    "large": ["large", "grand", "Grande", "big", "tall"],
+    "sparse": ["sparse", "épars", "epars", "clairsemé", "peu dense"],
+    "dense": ["dense", "Dense", "denses", "touffu", "bushy"],
+    "thin": ["thin", "mince", "minces", "slender", "élancé"],
+    "thick": ["thick", "gros", "grosse", "épais", "stout"],
+    "normal": ["normal", "normale", "ordinaire", "typical"],
+    "round": ["round", "rond", "ronde", "arrondi"],
+    "fir-like": ["fir-like", "sapin", "Sapin de Noël", "conifer"],
+    "symmetric": ["symmetric", "symétrique", "régulier"],
+    "asymmetric": ["asymmetric", "asymétrique", "irrégulier"],
+    "realistic": ["realistic", "réaliste", "naturel"],
+    "unrealistic": ["unrealistic", "irréaliste", "bizarre"],
+}
+_FREE_TEXT = ["branches obliques et longues", "angles plus fermés", "comme un buisson",
+              "weird spirals", "long trunk"]
+_AXES = (("small", "large"), ("sparse", "dense"), ("thin", "thick"))
+
+
+def _level(x):
+    return int(np.clip(np.rint(x), 1, 4))
+
+
+@dataclass
+class SimulatedParticipant:
+    """A participant model: grouping by PCA distance with noise, geometric answers.
+
+    ``noise`` is the standard deviation of the perception noise as a fraction
+    of the box's largest extent; ``mean_groups`` the mean number of groups.
+    """
+
+    noise: float = 0.15
+    mean_groups: float = 5.2
+    max_groups: int = 9
+    seed: int = 0
+
+    def __post_init__(self):
+        self.rng = np.random.default_rng(self.seed)
+
+    def sort(self, points) -> list:
+        """Groups (lists of pick ids 1-27) for the 27 ``points`` (27 x 3)."""
+        points = np.asarray(points, dtype=float)
+        scale = np.ptp(points, axis=0).max() or 1.0
+        seen = points / scale + self.rng.normal(0.0, self.noise, size=points.shape)
+        k = int(np.clip(np.rint(self.rng.normal(self.mean_groups, 1.5)), 2, self.max_groups))
+        labels = fcluster(linkage(seen, "ward"), k, criterion="maxclust")
+        groups = [sorted((np.flatnonzero(labels == lab) + 1).tolist()) for lab in np.unique(labels)]
+        self.rng.shuffle(groups)
+        return groups
+
+    def answer(self, session, points) -> None:
+        """Do a whole test through ``session`` and finish it."""
+        points = np.asarray(points, dtype=float)
+        scale = np.ptp(points, axis=0).max() or 1.0
+        unit = (points - points.mean(axis=0)) / scale
+        box = (points - points.min(axis=0)) / np.where(np.ptp(points, axis=0) > 0,
+                                                        np.ptp(points, axis=0), 1.0) * 2 - 1
+        groups = self.sort(points)
+        session.set_groups(groups)
+        centres = np.array([unit[np.array(g) - 1].mean(axis=0) for g in groups])
+        for label, images in enumerate(groups, start=1):
+            idx = np.array(images) - 1
+            spread = np.linalg.norm(unit[idx] - centres[label - 1], axis=1).mean()
+            others = np.delete(centres, label - 1, axis=0)
+            gap = np.linalg.norm(others - centres[label - 1], axis=1).min() if len(others) else 1.0
+            usefulness = _level(3.9 - 5.0 * spread + self.rng.normal(0, 0.7))
+            difference = _level(1.2 + 4.0 * gap + self.rng.normal(0, 0.7))
+            if len(images) > 1:
+                nearest = images[int(np.argmin(np.linalg.norm(unit[idx] - centres[label - 1], axis=1)))]
+                good = self.rng.random() < 0.8
+                session.set_representative(label, nearest if good else int(self.rng.choice(images)))
+                session.rate(label, representative=_level((3.6 if good else 2.2) + self.rng.normal(0, 0.6)))
+            session.rate(label, usefulness=usefulness, difference=difference)
+            for text in self.qualifiers(box[idx].mean(axis=0), usefulness):
+                session.add_qualifier(label, text)
+        session.finish()
+
+    def qualifiers(self, where, usefulness) -> list:
+        """1-4 qualifier texts for a group centred at ``where`` (box coords in [-1, 1])."""
+        names = []
+        order = np.argsort(-np.abs(where))
+        for axis in order:
+            if abs(where[axis]) > 0.35 and self.rng.random() < 0.85:
+                names.append(_AXES[axis][int(where[axis] > 0)])
+        if not names:
+            names.append("normal")
+        for name, chance in (("round", 0.15), ("fir-like", 0.1), ("symmetric", 0.1),
+                             ("asymmetric", 0.08)):
+            if self.rng.random() < chance:
+                names.append(name)
+        if self.rng.random() < 0.3:
+            names.append("realistic" if usefulness >= 3 else "unrealistic")
+        texts = [str(self.rng.choice(_FORMS[n])) for n in names[:3]]
+        if self.rng.random() < 0.1:
+            texts.append(str(self.rng.choice(_FREE_TEXT)))
+        return texts
+
+
+def run_simulation(study, participants=20, tests_per_participant=None, noise=0.15, seed=0) -> list:
+    """Add ``participants`` simulated participants to ``study``, each doing tests.
+
+    Each does ``tests_per_participant`` grammars drawn at random (default:
+    every grammar), in random order.  Returns the new participant codes.
+    """
+    rng = np.random.default_rng(seed)
+    grammars = study.grammars
+    points = {g: np.array([p.pca for p in study.picks(g)]) for g in grammars}
+    count = len(grammars) if tests_per_participant is None else min(int(tests_per_participant), len(grammars))
+    codes = []
+    for n in range(int(participants)):
+        code = study.add_participant(consent=True)
+        person = SimulatedParticipant(noise=noise, seed=int(rng.integers(2**31)))
+        for grammar in rng.permutation(grammars)[:count].tolist():
+            person.answer(study.session(code, grammar), points[grammar])
+        codes.append(code)
+    return codes
+
+
+def simulate_study(db=None, participants=20, grammars=3, tests_per_participant=None,
+                   noise=0.15, seed=0, name="simulated"):
+    """Create a study, run simulated participants, and return its :class:`StudyData`.
+
+    ``grammars`` is a number of synthetic grammars or a mapping accepted by
+    :meth:`~studies.storage.Study.create`.  Without ``db`` a temporary file is
+    used and removed.  Writes use ``synchronous=NORMAL`` for speed.
+    """
+    from studies.data import load_study_data
+    from studies.storage import Study
+
+    if isinstance(grammars, int):
+        grammars = synthetic_grammars(grammars, seed=seed)
+    tmp = None
+    if db is None:
+        tmp = tempfile.TemporaryDirectory()
+        db = pathlib.Path(tmp.name) / "simulated.db"
+    try:
+        with Study.create(db, grammars=grammars, name=name, durable=False) as study:
+            run_simulation(study, participants, tests_per_participant, noise, seed)
+            return load_study_data(study)
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
