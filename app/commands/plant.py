@@ -1,0 +1,112 @@
+"""``ramure check | derive | render``: grammars, derived strings and pictures."""
+from __future__ import annotations
+
+import json
+import pathlib
+import time
+
+from app.cli import UserError
+from lsys import LSystem
+
+
+def add_grammar_options(parser, derive=True):
+    """The options every plant command shares: FILE, -n, --seed, --set."""
+    parser.add_argument("file", help="an .lsys grammar file")
+    if derive:
+        parser.add_argument("-n", type=int, default=None, help="derivation steps (default: the grammar's n:)")
+        parser.add_argument("--seed", type=int, default=0, help="random seed (stochastic grammars)")
+        parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                            help="override a #define constant (repeatable)")
+
+
+def parse_sets(pairs, known):
+    """``["r1=0.8"]`` -> ``{"r1": 0.8}``; unknown names and bad numbers are refused."""
+    out = {}
+    for pair in pairs:
+        name, sep, value = pair.partition("=")
+        name = name.strip()
+        if not sep:
+            raise UserError(f"--set expects NAME=VALUE, got '{pair}'")
+        if name not in known:
+            raise UserError(f"--set {name}: the grammar has no constant '{name}' "
+                            f"(it defines: {', '.join(known) or 'none'})")
+        try:
+            out[name] = float(value)
+        except ValueError:
+            raise UserError(f"--set {name}: '{value}' is not a number") from None
+    return out
+
+
+def load_and_derive(args):
+    """Parse ``args.file``, apply ``--set``, derive; returns (lsystem, derivation, seconds)."""
+    ls = LSystem.from_file(args.file)
+    ls.constants.update(parse_sets(args.set, ls.constants))
+    if args.n is not None and args.n < 0:
+        raise UserError(f"-n must be >= 0, not {args.n}")
+    t0 = time.perf_counter()
+    d = ls.derive(n=args.n, seed=args.seed)
+    return ls, d, time.perf_counter() - t0
+
+
+def run_check(args):
+    ls = LSystem.from_file(args.file)
+    g = ls.grammar
+    print(f"{args.file}: ok — {len(g.rules)} rule(s), {len(g.constants)} constant(s), n = {g.n}, "
+          f"axiom {''.join(str(m) for m in g.axiom)}")
+    return 0
+
+
+def run_derive(args):
+    ls, d, seconds = load_and_derive(args)
+    if not args.json:
+        print(d.to_string())
+        return 0
+    t0 = time.perf_counter()
+    sk = d.skeleton()
+    lo, hi = sk.bounds()
+    record = {
+        "file": args.file, "n": d.n, "seed": d.seed, "modules": len(d), "tree_nodes": len(d.tree),
+        "segments": len(sk), "organs": len(sk.organs),
+        "organ_kinds": {k: int((sk.organs.kind == k).sum()) for k in sorted(set(sk.organs.kind))},
+        "bounding_box": {"min": lo.round(6).tolist(), "max": hi.round(6).tolist()},
+        "constants": d.constants, "seconds": round(seconds + time.perf_counter() - t0, 6),
+    }
+    if args.string:
+        record["string"] = d.to_string()
+    print(json.dumps(record))
+    return 0
+
+
+def run_render(args):
+    from app.render import render_plant
+
+    _, d, _ = load_and_derive(args)
+    out = pathlib.Path(args.output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    w, _, h = args.size.partition("x")
+    try:
+        size = (int(w), int(h or w))
+    except ValueError:
+        raise UserError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
+    render_plant(d.skeleton(), out, size=size, view=args.view)
+    print(f"wrote {out}")
+    return 0
+
+
+def register(sub):
+    p = sub.add_parser("check", help="parse a grammar and report problems with line and column")
+    add_grammar_options(p, derive=False)
+    p.set_defaults(func=run_check)
+
+    p = sub.add_parser("derive", help="derive a grammar and print the string (or --json facts)")
+    add_grammar_options(p)
+    p.add_argument("--json", action="store_true", help="print modules, segments, organs, box, seconds")
+    p.add_argument("--string", action="store_true", help="with --json: include the derived string")
+    p.set_defaults(func=run_derive)
+
+    p = sub.add_parser("render", help="render the plant off-screen to a PNG")
+    add_grammar_options(p)
+    p.add_argument("-o", "--output", required=True, help="PNG file to write")
+    p.add_argument("--size", default="800x800", help="image size WIDTHxHEIGHT (default 800x800)")
+    p.add_argument("--view", default="front", choices=["front", "side", "top", "iso"])
+    p.set_defaults(func=run_render)

@@ -1,0 +1,69 @@
+"""Off-screen rendering of plants to PNG (pyvista), shared by the CLI and thumbnails.
+
+With no X display VTK renders through EGL; we select that window class up
+front so no "bad X server connection" warning is printed.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+BARK = (0.45, 0.32, 0.2)
+LEAF = (0.3, 0.62, 0.22)
+FRUIT = (0.85, 0.18, 0.12)
+SELECTED = (1.0, 0.0, 0.0)
+
+
+def _headless_setup():
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+
+def plant_colors(mesh, selected=()):
+    """RGB per cell: bark, leaf or fruit by ``kind``; selected leaves in red."""
+    kind = np.asarray(mesh.cell_data["kind"])
+    rgb = np.empty((mesh.n_cells, 3))
+    rgb[:] = BARK
+    rgb[kind == 1] = LEAF
+    rgb[kind >= 2] = FRUIT
+    if len(selected):
+        rgb[np.isin(mesh.cell_data["leaf_id"], np.asarray(list(selected)))] = SELECTED
+    return (rgb * 255).astype(np.uint8)
+
+
+def frame_camera(plotter, bounds, view="front"):
+    """Frame the camera on ``bounds`` (xmin, xmax, ymin, ymax, zmin, zmax), z up."""
+    b = np.asarray(bounds, float).reshape(3, 2)
+    center = b.mean(axis=1)
+    size = float(np.max(b[:, 1] - b[:, 0])) or 1.0
+    direction = {"front": (0.0, -1.0, 0.15), "side": (1.0, 0.0, 0.15), "top": (0.0, -0.05, 1.0),
+                 "iso": (0.7, -0.7, 0.45)}[view]
+    d = np.asarray(direction) / np.linalg.norm(direction)
+    plotter.camera_position = [tuple(center + d * size * 2.2), tuple(center), (0.0, 0.0, 1.0)]
+    plotter.reset_camera(bounds=tuple(b.ravel()))
+
+
+def render_mesh(mesh, path, size=(800, 800), selected=(), view="front", background="white",
+                title=None):
+    """Render a plant mesh (cell data ``kind``/``leaf_id``) to a PNG file; returns the path."""
+    _headless_setup()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    plotter.set_background(background)
+    if mesh.n_cells:
+        mesh = mesh.copy(deep=False)
+        mesh.cell_data["rgb"] = plant_colors(mesh, selected)
+        plotter.add_mesh(mesh, scalars="rgb", rgb=True, smooth_shading=False)
+        frame_camera(plotter, mesh.bounds, view)
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
+
+
+def render_plant(skeleton, path, **kwargs):
+    """Render a :class:`lsys.Skeleton` to PNG."""
+    return render_mesh(skeleton.to_polydata(), path, **kwargs)

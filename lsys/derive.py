@@ -1,0 +1,437 @@
+"""Parallel rewriting with history: :class:`LSystem` and :class:`Derivation`.
+
+One derivation step is vectorised over the whole string: for every rule, the
+modules it rewrites are found with array masks, its condition and successor
+parameters are evaluated once for all of them (numpy expressions), and the new
+string is assembled with one scatter.  Only context matching walks modules one
+by one, and only for modules whose symbol has a context rule.
+
+Rule choice for one module, in order:
+
+1. context-sensitive rules before context-free ones (groups in file order);
+2. within a group of rules with the same predecessor and contexts, a
+   deterministic group takes the first rule (file order) whose condition holds;
+   a stochastic group (rules with probabilities) draws one rule with those
+   probabilities, and **if the drawn rule's condition is false the module is
+   left unchanged** (it is not redrawn);
+3. no rule: the module keeps its node (identity production).
+
+Random numbers (rule draws, ``uniform``/``normal``) come from one seeded
+:class:`numpy.random.Generator`, so the same seed gives the same string.
+
+>>> ls = LSystem.from_text("n: 2\\nw: A(1)\\np:\\n A(x) -> A(x+1)B(x+1)C(1)\\n B(y) -> B(y+3)")
+>>> ls.derive().to_string()
+'A(3)B(3)C(1)B(5)C(1)'
+"""
+from __future__ import annotations
+
+import pathlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import DerivationError, GrammarError
+from .expr import compile_expression, evaluate_constant
+from .grammar import Grammar, parse_grammar
+from .tree import DerivationTree
+
+
+@dataclass
+class _CompiledRule:
+    rule: object
+    condition: object  # compiled fn or None
+    succ_symbols: np.ndarray
+    succ_nparams: np.ndarray
+    succ_args: list  # per successor module: list of compiled fns
+    sources: dict  # formal name -> (slot, param index); slot 0 = pred, -k = left k, +k = right k
+
+
+@dataclass
+class _Group:
+    symbol: int
+    arity: int
+    rules: list
+    left: list  # [(symbol id, arity)]
+    right: list
+    cumulative: np.ndarray | None  # for stochastic groups
+
+
+class LSystem:
+    """A grammar ready to derive.  ``constants`` is a plain dict you may edit.
+
+    >>> ls = LSystem.from_text("#define k 2\\nn: 1\\nw: A(1)\\np:\\n A(x) -> A(x*k)")
+    >>> ls.constants["k"] = 5
+    >>> ls.derive().to_string()
+    'A(5)'
+    """
+
+    def __init__(self, grammar: Grammar):
+        self.grammar = grammar
+        self.constants = dict(grammar.constants)
+        self.symbols = list(grammar.symbols)
+        self._sym = {s: i for i, s in enumerate(self.symbols)}
+        self.max_params = max([len(m.args) for m in grammar.axiom]
+                              + [len(m.args) for r in grammar.rules for m in r.successor] + [1])
+        self._rules = [self._compile(r) for r in grammar.rules]
+        self._groups = self._make_groups()
+        self.bracket_ids = (self._sym.get("["), self._sym.get("]"))
+        self.ignore_ids = {self._sym[s] for s in grammar.ignore if s in self._sym}
+
+    @classmethod
+    def from_text(cls, text, filename=None):
+        return cls(parse_grammar(text, filename))
+
+    @classmethod
+    def from_file(cls, path):
+        path = pathlib.Path(path)
+        return cls.from_text(path.read_text(encoding="utf-8"), filename=str(path))
+
+    @property
+    def n(self):
+        return self.grammar.n
+
+    @property
+    def text(self):
+        return self.grammar.text
+
+    # -- compilation -------------------------------------------------------
+    def _compile(self, rule):
+        formals, consts = rule.formals, self.constants
+        sources = {}
+        for k, pattern in enumerate(reversed(rule.left), start=1):
+            for j, name in enumerate(pattern.params):
+                sources[name] = (-k, j)
+        for j, name in enumerate(rule.pred.params):
+            sources[name] = (0, j)
+        for k, pattern in enumerate(rule.right, start=1):
+            for j, name in enumerate(pattern.params):
+                sources[name] = (k, j)
+        cond = compile_expression(rule.condition, formals, consts) if rule.condition else None
+        return _CompiledRule(
+            rule=rule,
+            condition=cond,
+            succ_symbols=np.array([self._sym[m.symbol] for m in rule.successor], np.int32),
+            succ_nparams=np.array([len(m.args) for m in rule.successor], np.int8),
+            succ_args=[[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor],
+            sources=sources,
+        )
+
+    def _make_groups(self):
+        groups = {}
+        for rule in self.grammar.rules:
+            groups.setdefault(rule.group_key(), []).append(rule.index)
+        out = []
+        for (sym, arity, left, right), members in groups.items():
+            probs = [self.grammar.rules[i].probability for i in members]
+            cumulative = None if probs[0] is None else np.cumsum(probs)
+            if cumulative is not None:
+                cumulative[-1] = 1.0 + 1e-12
+            out.append(_Group(self._sym[sym], arity, members,
+                              [(self._sym[s], a) for s, a in left],
+                              [(self._sym[s], a) for s, a in right], cumulative))
+        # Context-sensitive groups first; file order otherwise.
+        out.sort(key=lambda g: (not (g.left or g.right), g.rules[0]))
+        return out
+
+    # -- deriving ----------------------------------------------------------
+    def derive(self, n=None, seed=0, constants=None, rule_constants=None, progress=None):
+        """Derive ``n`` steps (default: the grammar's ``n:``) from the axiom.
+
+        ``constants`` overrides constant values for this derivation;
+        ``rule_constants`` maps a rule index to overrides applied to that rule
+        only (the variant explorer's "one rule at a time").
+        """
+        n = self.grammar.n if n is None else int(n)
+        if n < 0:
+            raise GrammarError(f"the derivation count must be >= 0, not {n}")
+        consts = {**self.constants, **(constants or {})}
+        unknown = set(constants or {}) - set(self.constants)
+        for overrides in (rule_constants or {}).values():
+            unknown |= set(overrides) - set(self.constants)
+        if unknown:
+            raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}; "
+                               f"the grammar defines {', '.join(self.constants) or 'none'}")
+        tree = DerivationTree(self.max_params, capacity=4096)
+        axiom = self.grammar.axiom
+        params = np.full((len(axiom), tree.max_params), np.nan)
+        for i, spec in enumerate(axiom):
+            for j, arg in enumerate(spec.args):
+                params[i, j] = evaluate_constant(arg, consts)
+        ids = tree.append([self._sym[m.symbol] for m in axiom], [len(m.args) for m in axiom], params,
+                          -1, 0, -1, np.arange(len(axiom)))
+        tree.leaves = ids
+        rng = np.random.default_rng(seed)
+        string = ids
+        for step in range(1, n + 1):
+            string = self.rewrite(tree, string, step, rng, consts, rule_constants)
+            if progress is not None:
+                progress(step, n)
+        tree.leaves = string
+        tree.changed()
+        return Derivation(self, tree, n=n, seed=seed, constants=consts,
+                          rule_constants=rule_constants)
+
+    def rewrite(self, tree, string, step, rng, constants, rule_constants=None):
+        """One parallel rewriting step of ``string`` (node ids); returns the new string."""
+        symbols = tree.symbol[string]
+        nparams = tree.nparams[string]
+        chosen = np.full(len(string), -1, np.int32)
+        context = {}
+        by_symbol = {}
+        for group in self._groups:
+            if group.symbol not in by_symbol:
+                by_symbol[group.symbol] = np.flatnonzero(symbols == group.symbol)
+            cand = by_symbol[group.symbol]
+            cand = cand[(nparams[cand] == group.arity) & (chosen[cand] < 0)]
+            if not cand.size:
+                continue
+            ctx = None
+            if group.left or group.right:
+                cand, ctx = self._match_context(group, cand, symbols, nparams, string, context)
+                if not cand.size:
+                    continue
+            self._choose(group, cand, ctx, chosen, tree, string, rng, constants, rule_constants)
+        return self._assemble(tree, string, chosen, step, rng, constants, rule_constants, context)
+
+    def _variables(self, crule, positions, ctx_nodes, tree, string):
+        nodes = string[positions]
+        V = {}
+        for name, (slot, j) in crule.sources.items():
+            src = nodes if slot == 0 else ctx_nodes[slot]
+            V[name] = tree.params[src, j]
+        return V
+
+    def _choose(self, group, cand, ctx, chosen, tree, string, rng, constants, rule_constants):
+        if group.cumulative is not None:
+            draws = np.searchsorted(group.cumulative, rng.random(cand.size), side="right")
+            subsets = [(r, draws == k) for k, r in enumerate(group.rules)]
+        else:
+            subsets = [(r, None) for r in group.rules]
+        for r, mask in subsets:
+            keep = np.ones(cand.size, bool) if mask is None else mask.copy()
+            keep &= chosen[cand] < 0
+            if not keep.any():
+                continue
+            crule = self._rules[r]
+            pos = cand[keep]
+            if crule.condition is not None:
+                sub_ctx = {k: v[keep] for k, v in ctx.items()} if ctx else None
+                V = self._variables(crule, pos, sub_ctx, tree, string)
+                ok = self._evaluate(crule.condition, V, r, rule_constants, constants, rng, pos.size,
+                                    tree, string, pos, "condition").astype(bool)
+                pos = pos[ok]
+            chosen[pos] = r
+
+    def _evaluate(self, fn, V, r, rule_constants, constants, rng, n, tree, string, pos, what):
+        C = constants if not rule_constants or r not in rule_constants else {
+            **constants, **rule_constants[r]}
+        with np.errstate(divide="raise", invalid="raise", over="raise"):
+            try:
+                return fn(V, C, rng, n)
+            except (FloatingPointError, ZeroDivisionError) as exc:
+                bad = self._first_failing(fn, V, C, n)
+                module = self.module_text(tree, string[pos[bad]])
+                rule = self.grammar.rules[r]
+                problem = "division by zero" if "divide" in str(exc) or isinstance(
+                    exc, ZeroDivisionError) else f"invalid arithmetic ({exc})"
+                raise DerivationError(
+                    f"{problem} in the {what} of rule {r + 1} ({rule}) while rewriting {module}",
+                    rule.line, rule.pred.column, rule.source_line) from None
+
+    @staticmethod
+    def _first_failing(fn, V, C, n):
+        with np.errstate(all="raise"):
+            for i in range(n):
+                try:
+                    fn({k: v[i:i + 1] for k, v in V.items()}, C, np.random.default_rng(0), 1)
+                except (FloatingPointError, ZeroDivisionError):
+                    return i
+        return 0
+
+    def _assemble(self, tree, string, chosen, step, rng, constants, rule_constants, context):
+        lengths = np.ones(len(string), np.int64)
+        active = [r for r in np.unique(chosen) if r >= 0]
+        positions = {r: np.flatnonzero(chosen == r) for r in active}
+        for r in active:
+            lengths[positions[r]] = len(self._rules[r].succ_symbols)
+        ends = np.cumsum(lengths)
+        offsets = ends - lengths
+        out = np.empty(int(ends[-1]) if len(ends) else 0, np.int64)
+        keep = chosen < 0
+        out[offsets[keep]] = string[keep]
+        for r in active:
+            crule, pos = self._rules[r], positions[r]
+            k, m = len(crule.succ_symbols), pos.size
+            parents = string[pos]
+            if k == 0:
+                tree.set_children(parents, -1, 0)
+                continue
+            ctx = context.get(r)
+            ctx_nodes = None
+            if ctx is not None:
+                ctx_nodes = {s: v[np.searchsorted(ctx["pos"], pos)] for s, v in ctx.items() if s != "pos"}
+            V = self._variables(crule, pos, ctx_nodes, tree, string)
+            block = np.full((m, k, tree.max_params), np.nan)
+            for j, args in enumerate(crule.succ_args):
+                for a, fn in enumerate(args):
+                    block[:, j, a] = self._evaluate(fn, V, r, rule_constants, constants, rng, m,
+                                                    tree, string, pos, "successor")
+            ids = tree.append(np.tile(crule.succ_symbols, m), np.tile(crule.succ_nparams, m),
+                              block.reshape(m * k, -1), np.repeat(parents, k), step, r,
+                              np.tile(np.arange(k), m))
+            tree.set_children(parents, ids[0] + np.arange(m) * k, k)
+            out[(offsets[pos][:, None] + np.arange(k)).ravel()] = ids
+        return out
+
+    # -- context -----------------------------------------------------------
+    def _match_context(self, group, cand, symbols, nparams, string, cache):
+        if "match" not in cache:
+            cache["match"] = bracket_matches(symbols, *self.bracket_ids)
+        match = cache["match"]
+        open_id, close_id = self.bracket_ids
+        ignore = self.ignore_ids
+        sym_list = symbols.tolist()
+        npar_list = nparams.tolist()
+        size = len(sym_list)
+        ok = np.zeros(cand.size, bool)
+        found = {}
+        slots = [-k for k in range(1, len(group.left) + 1)] + list(range(1, len(group.right) + 1))
+        for s in slots:
+            found[s] = np.full(cand.size, -1, np.int64)
+        for c, i in enumerate(cand.tolist()):
+            left = _walk_left(i, len(group.left), sym_list, match, open_id, close_id, ignore)
+            if left is None:
+                continue
+            right = _walk_right(i, len(group.right), sym_list, match, open_id, close_id, ignore, size)
+            if right is None:
+                continue
+            wanted = group.left + group.right
+            got = left + right
+            if all(sym_list[p] == s and npar_list[p] == a for p, (s, a) in zip(got, wanted)):
+                ok[c] = True
+                for k, p in enumerate(reversed(left), start=1):
+                    found[-k][c] = p
+                for k, p in enumerate(right, start=1):
+                    found[k][c] = p
+        cand = cand[ok]
+        ctx = {s: string[v[ok]] for s, v in found.items()}
+        for r in group.rules:
+            cache[r] = {"pos": cand, **ctx}
+        return cand, ctx
+
+    # -- display -----------------------------------------------------------
+    def module_text(self, tree, node):
+        k = int(tree.nparams[node])
+        name = self.symbols[tree.symbol[node]]
+        if not k:
+            return name
+        return name + "(" + ",".join(_fmt(v) for v in tree.params[node, :k]) + ")"
+
+
+def _walk_left(i, count, sym, match, open_id, close_id, ignore):
+    out, j = [], i - 1
+    while len(out) < count:
+        if j < 0:
+            return None
+        s = sym[j]
+        if s == close_id:
+            j = match[j] - 1  # skip a whole branch
+        elif s == open_id or s in ignore:
+            j -= 1  # leave the branch toward its parent, or skip an ignored symbol
+        else:
+            out.append(j)
+            j -= 1
+    out.reverse()
+    return out
+
+
+def _walk_right(i, count, sym, match, open_id, close_id, ignore, size):
+    out, j = [], i + 1
+    while len(out) < count:
+        if j >= size:
+            return None
+        s = sym[j]
+        if s == open_id:
+            j = match[j] + 1  # skip lateral branches
+        elif s == close_id:
+            return None  # the branch ends
+        elif s in ignore:
+            j += 1
+        else:
+            out.append(j)
+            j += 1
+    return out
+
+
+def bracket_matches(symbols, open_id, close_id):
+    """For each ``[`` the position of its ``]`` and vice versa (-1 elsewhere), vectorised.
+
+    Brackets of one nesting level alternate open/close in string order, so
+    sorting brackets by level and pairing neighbours matches them.
+    """
+    match = np.full(len(symbols), -1, np.int64)
+    if open_id is None or close_id is None:
+        return match
+    is_open = symbols == open_id
+    is_close = symbols == close_id
+    depth = np.cumsum(is_open.astype(np.int64) - is_close)
+    where = np.flatnonzero(is_open | is_close)
+    level = depth[where] + is_close[where]  # open: depth after it; close: depth before it
+    order = np.lexsort((where, level))
+    pairs = where[order].reshape(-1, 2)
+    match[pairs[:, 0]] = pairs[:, 1]
+    match[pairs[:, 1]] = pairs[:, 0]
+    return match
+
+
+def _fmt(v):
+    return f"{v:.6g}"
+
+
+class Derivation:
+    """The result of :meth:`LSystem.derive`: the history tree and its current string."""
+
+    def __init__(self, lsystem, tree, n, seed, constants, rule_constants=None):
+        self.lsystem = lsystem
+        self.tree = tree
+        self.n = n
+        self.seed = seed
+        self.constants = constants
+        self.rule_constants = rule_constants
+
+    @property
+    def leaves(self):
+        """Node ids of the current string, in order."""
+        return self.tree.leaves
+
+    def __len__(self):
+        return len(self.tree.leaves)
+
+    @property
+    def symbols(self):
+        """Symbol name of each module of the current string."""
+        return [self.lsystem.symbols[s] for s in self.tree.symbol[self.tree.leaves]]
+
+    @property
+    def modules(self):
+        """The current string as ``(symbol, params)`` pairs (convenient, not fast)."""
+        tree, names = self.tree, self.lsystem.symbols
+        leaves = tree.leaves
+        syms, counts, params = tree.symbol[leaves], tree.nparams[leaves], tree.params[leaves]
+        return [(names[s], tuple(p[:k].tolist())) for s, k, p in zip(syms, counts, params)]
+
+    def to_string(self, sep=""):
+        """The current string, e.g. ``A(3)B(3)C(1)B(5)C(1)``."""
+        return sep.join(self.lsystem.module_text(self.tree, v) for v in self.tree.leaves.tolist())
+
+    def count(self, symbol):
+        """How many modules of the current string have this symbol."""
+        if symbol not in self.lsystem.symbols:
+            return 0
+        return int(np.count_nonzero(self.tree.symbol[self.tree.leaves] == self.lsystem.symbols.index(symbol)))
+
+    def skeleton(self):
+        """Interpret the string with the 3D turtle (see :mod:`lsys.turtle`)."""
+        from .turtle import interpret
+
+        return interpret(self)

@@ -1,0 +1,332 @@
+"""Arithmetic and logical expressions of the grammar language, compiled to numpy.
+
+An expression is parsed once (a small Pratt parser) and compiled to a Python
+function that evaluates it for *all* modules matched by a rule at once: formal
+parameters are numpy arrays, constants are looked up at call time (so editing
+``LSystem.constants`` needs no re-parse).
+
+Precedence, lowest first: ``||``; ``&&``; ``== != =``; ``< > <= >=``;
+``+ -``; ``* / %``; unary ``- + !``; ``^`` (right-associative, so
+``-2^2 == -4``).  ``=`` is equality, as in ABOP conditions.
+
+Functions: ``sin cos tan asin acos atan sqrt exp log abs min max floor ceil``
+and the seeded random draws ``uniform(a, b)`` and ``normal(mean, sd)``.
+**Trigonometry is in degrees** (``sin(90) == 1``, ``atan(1) == 45``), like
+turtle angles.
+
+>>> e = parse_expression("x * r1 + 1")
+>>> import numpy as np
+>>> compile_expression(e, params=["x"], constants={"r1": 2.0})(
+...     {"x": np.array([1.0, 2.0])}, {"r1": 2.0}, None, 2).tolist()
+[3.0, 5.0]
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import GrammarError
+
+FUNCTIONS = {
+    # name: (arity, numpy source template); trig works in degrees.
+    "sin": (1, "np.sin(np.radians({0}))"),
+    "cos": (1, "np.cos(np.radians({0}))"),
+    "tan": (1, "np.tan(np.radians({0}))"),
+    "asin": (1, "np.degrees(np.arcsin({0}))"),
+    "acos": (1, "np.degrees(np.arccos({0}))"),
+    "atan": (1, "np.degrees(np.arctan({0}))"),
+    "sqrt": (1, "np.sqrt({0})"),
+    "exp": (1, "np.exp({0})"),
+    "log": (1, "np.log({0})"),
+    "abs": (1, "np.abs({0})"),
+    "floor": (1, "np.floor({0})"),
+    "ceil": (1, "np.ceil({0})"),
+    "min": (2, "np.minimum({0}, {1})"),
+    "max": (2, "np.maximum({0}, {1})"),
+    "uniform": (2, "R.uniform({0}, {1}, n)"),
+    "normal": (2, "R.normal({0}, {1}, n)"),
+}
+RANDOM_FUNCTIONS = {"uniform", "normal"}
+
+_BINARY = {
+    "||": (1, "np.logical_or({0}, {1})"),
+    "&&": (2, "np.logical_and({0}, {1})"),
+    "==": (3, "({0} == {1})"),
+    "=": (3, "({0} == {1})"),
+    "!=": (3, "({0} != {1})"),
+    "<": (4, "({0} < {1})"),
+    ">": (4, "({0} > {1})"),
+    "<=": (4, "({0} <= {1})"),
+    ">=": (4, "({0} >= {1})"),
+    "+": (5, "({0} + {1})"),
+    "-": (5, "({0} - {1})"),
+    "*": (6, "({0} * {1})"),
+    "/": (6, "({0} / {1})"),
+    "%": (6, "np.mod({0}, {1})"),
+    "^": (8, "np.power({0}, {1})"),
+}
+_UNARY_PRECEDENCE = 7
+_OPERATORS = sorted(_BINARY, key=len, reverse=True) + ["!"]
+
+
+@dataclass(frozen=True)
+class Token:
+    kind: str  # 'num', 'name', 'op', '(', ')', ',', 'end'
+    text: str
+    offset: int
+
+
+@dataclass(frozen=True)
+class Node:
+    """One expression node: ``kind`` is num, name, call, unary or binary."""
+
+    kind: str
+    value: object
+    args: tuple = ()
+    offset: int = 0
+
+
+class Source:
+    """A piece of grammar text with its position, to point errors at the right column."""
+
+    def __init__(self, text, line=None, column=1, source_line=None):
+        self.text = text
+        self.line = line
+        self.column = column
+        self.source_line = source_line if source_line is not None else text
+
+    def error(self, message, offset=0, cls=GrammarError):
+        return cls(message, self.line, self.column + offset, self.source_line)
+
+
+def tokenize(src: Source):
+    text, i, tokens = src.text, 0, []
+    while i < len(text):
+        ch = text[i]
+        if ch.isspace():
+            i += 1
+            continue
+        if ch.isdigit() or (ch == "." and i + 1 < len(text) and text[i + 1].isdigit()):
+            j = i
+            while j < len(text) and (text[j].isdigit() or text[j] == "."):
+                j += 1
+            if j < len(text) and text[j] in "eE":
+                k = j + 1
+                if k < len(text) and text[k] in "+-":
+                    k += 1
+                if k < len(text) and text[k].isdigit():
+                    j = k
+                    while j < len(text) and text[j].isdigit():
+                        j += 1
+            try:
+                float(text[i:j])
+            except ValueError:
+                raise src.error(f"bad number '{text[i:j]}'", i) from None
+            tokens.append(Token("num", text[i:j], i))
+            i = j
+        elif ch.isalpha() or ch == "_":
+            j = i
+            while j < len(text) and (text[j].isalnum() or text[j] == "_"):
+                j += 1
+            tokens.append(Token("name", text[i:j], i))
+            i = j
+        elif ch in "(),":
+            tokens.append(Token(ch, ch, i))
+            i += 1
+        else:
+            for op in _OPERATORS:
+                if text.startswith(op, i):
+                    tokens.append(Token("op", op, i))
+                    i += len(op)
+                    break
+            else:
+                raise src.error(f"unexpected character '{ch}' in expression", i)
+    tokens.append(Token("end", "", len(text)))
+    return tokens
+
+
+class _Parser:
+    def __init__(self, src: Source):
+        self.src = src
+        self.tokens = tokenize(src)
+        self.pos = 0
+
+    def peek(self):
+        return self.tokens[self.pos]
+
+    def take(self):
+        tok = self.tokens[self.pos]
+        self.pos += 1
+        return tok
+
+    def expect(self, kind, what):
+        tok = self.take()
+        if tok.kind != kind:
+            found = f"'{tok.text}'" if tok.text else "the end"
+            raise self.src.error(f"expected {what}, found {found}", tok.offset)
+        return tok
+
+    def parse(self):
+        if self.peek().kind == "end":
+            raise self.src.error("empty expression", 0)
+        node = self.expression(0)
+        tok = self.peek()
+        if tok.kind != "end":
+            raise self.src.error(f"unexpected '{tok.text}' after expression", tok.offset)
+        return node
+
+    def expression(self, min_prec):
+        left = self.unary()
+        while True:
+            tok = self.peek()
+            if tok.kind != "op" or tok.text not in _BINARY:
+                return left
+            prec = _BINARY[tok.text][0]
+            if prec < min_prec:
+                return left
+            self.take()
+            right_min = prec if tok.text == "^" else prec + 1
+            right = self.expression(right_min)
+            left = Node("binary", tok.text, (left, right), tok.offset)
+
+    def unary(self):
+        tok = self.peek()
+        if tok.kind == "op" and tok.text in ("-", "+", "!"):
+            self.take()
+            operand = self.expression(_UNARY_PRECEDENCE)
+            return Node("unary", tok.text, (operand,), tok.offset)
+        return self.primary()
+
+    def primary(self):
+        tok = self.take()
+        if tok.kind == "num":
+            return Node("num", float(tok.text), (), tok.offset)
+        if tok.kind == "(":
+            node = self.expression(0)
+            self.expect(")", "')'")
+            return node
+        if tok.kind == "name":
+            if self.peek().kind == "(":
+                return self.call(tok)
+            return Node("name", tok.text, (), tok.offset)
+        found = f"'{tok.text}'" if tok.text else "the end of the expression"
+        raise self.src.error(f"expected a number, name or '(', found {found}", tok.offset)
+
+    def call(self, name_tok):
+        self.take()  # '('
+        args = []
+        if self.peek().kind != ")":
+            args.append(self.expression(0))
+            while self.peek().kind == ",":
+                self.take()
+                args.append(self.expression(0))
+        self.expect(")", "')' closing the call")
+        name = name_tok.text
+        if name not in FUNCTIONS:
+            raise self.src.error(f"unknown function '{name}'", name_tok.offset)
+        arity = FUNCTIONS[name][0]
+        if len(args) != arity:
+            raise self.src.error(
+                f"{name}() takes {arity} argument{'s' if arity > 1 else ''}, got {len(args)}",
+                name_tok.offset,
+            )
+        return Node("call", name, tuple(args), name_tok.offset)
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A parsed expression: its tree and the source it came from (for errors)."""
+
+    node: Node
+    src: Source
+
+    @property
+    def text(self):
+        return self.src.text
+
+
+def parse_expression(text, line=None, column=1, source_line=None) -> Expression:
+    """Parse ``text`` into an :class:`Expression`; errors point at line and column."""
+    src = text if isinstance(text, Source) else Source(text, line, column, source_line)
+    return Expression(_Parser(src).parse(), src)
+
+
+def names_used(node):
+    """All variable names an expression reads, with their offsets."""
+    node = getattr(node, "node", node)
+    if node.kind == "name":
+        return [(node.value, node.offset)]
+    out = []
+    for arg in node.args:
+        out.extend(names_used(arg))
+    return out
+
+
+def uses_random(node):
+    node = getattr(node, "node", node)
+    if node.kind == "call" and node.value in RANDOM_FUNCTIONS:
+        return True
+    return any(uses_random(a) for a in node.args)
+
+
+def _source(node, params, constants, src):
+    if node.kind == "num":
+        return repr(node.value)
+    if node.kind == "name":
+        if node.value in params:
+            return f"V[{node.value!r}]"
+        if node.value in constants:
+            return f"C[{node.value!r}]"
+        raise src.error(f"unknown name '{node.value}'", node.offset)
+    parts = [_source(a, params, constants, src) for a in node.args]
+    if node.kind == "unary":
+        return {"-": "(-{0})", "+": "(+{0})", "!": "np.logical_not({0})"}[node.value].format(*parts)
+    if node.kind == "binary":
+        return _BINARY[node.value][1].format(*parts)
+    return FUNCTIONS[node.value][1].format(*parts)
+
+
+def compile_expression(expr, params, constants):
+    """Compile an expression tree to ``f(V, C, R, n) -> float array of length n``.
+
+    ``V`` maps formal parameter names to arrays, ``C`` constant names to
+    floats, ``R`` is a :class:`numpy.random.Generator` (only read by
+    ``uniform``/``normal``), ``n`` the number of modules evaluated.
+    Unknown names raise :class:`GrammarError` here, at compile time.
+    """
+    body = _source(expr.node, set(params), set(constants), expr.src)
+    code = f"lambda V, C, R, n: _out({body}, n)"
+    return eval(code, {"np": np, "_out": _broadcast})  # noqa: S307 - generated from our own AST
+
+
+def _broadcast(value, n):
+    arr = np.asarray(value, dtype=float)
+    if arr.shape == (n,):
+        return arr
+    return np.broadcast_to(arr, (n,)).astype(float)
+
+
+def evaluate_constant(expr, constants):
+    """Evaluate a parameter-free expression (a ``#define`` value) to a float."""
+    fn = compile_expression(expr, (), constants)
+    with np.errstate(all="raise"):
+        try:
+            value = float(fn({}, constants, np.random.default_rng(0), 1)[0])
+        except (FloatingPointError, ZeroDivisionError) as exc:
+            raise expr.src.error(f"cannot evaluate: {_explain(exc)}", 0) from None
+    if not math.isfinite(value):
+        raise expr.src.error("value is not a finite number", 0)
+    return value
+
+
+def _explain(exc):
+    text = str(exc)
+    if "divide" in text or isinstance(exc, ZeroDivisionError):
+        return "division by zero"
+    if "invalid" in text:
+        return "invalid operation (e.g. sqrt or log of a negative number)"
+    if "overflow" in text:
+        return "overflow"
+    return text

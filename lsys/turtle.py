@@ -1,0 +1,278 @@
+"""The 3D turtle (ABOP ch. 1): from a derived string to a :class:`Skeleton`.
+
+The turtle keeps a position and a frame of unit vectors H (heading), L (left)
+and U (up) with ``H x L = U``.  It starts at the origin heading up the z axis
+(H = +z, L = +x, U = +y), so 2D grammars lie in the x-z plane.
+
+=========  ==========================================================
+``F(l)``   draw a branch segment of length l (default ``#step``)
+``f(l)``   move by l without drawing
+``+ -``    turn left / right about U by the parameter (default ``#angle``)
+``& ^``    pitch down / up about L
+``\\ /``    roll left / right about H
+``|``      turn around (180 degrees about U)
+``$``      roll about H so that L is horizontal (ABOP's ``$``)
+``[ ]``    push / pop the whole state (position, frame, width, colour, order)
+``!(w)``   set the width (diameter) to w; ``!`` alone multiplies it by 0.7
+``'(c)``   set the colour index to c; ``'`` alone adds 1 (``;`` subtracts 1)
+organs     ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded with
+           the turtle's position and frame; their first parameter is the size
+=========  ==========================================================
+
+A segment's **base radius** is half the width when it is drawn, times
+``#widthscale`` (default 1; ABOP widths are often in pixels, so a grammar may
+scale them).  Its **top radius** is the base radius of the segment that
+continues it on the same axis (the next ``F`` at the same branch order), else
+the widest segment forking from its tip, else its own base radius, so the
+tubes join smoothly.
+
+Tropism (``#tropism tx ty tz e``) bends H toward T by ``e*|H x T|`` after each
+``F``, as in ABOP section 2.3.
+
+Branch order is the number of ``[`` open around a segment (the trunk is 0).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+_ACTIONS = {
+    "F": 1, "f": 2, "+": 3, "-": 4, "&": 5, "^": 6, "\\": 7, "/": 8, "|": 9, "$": 10,
+    "[": 11, "]": 12, "!": 13, "'": 14, ";": 15,
+}
+_ORGAN = 16
+
+
+@dataclass
+class Organs:
+    """Organs as arrays: ``kind`` (str), ``position`` (k,3), ``frame`` (k,3,3) with rows
+    H, L, U, ``size`` (k,), ``params`` (k,p) and the history ``leaf_id`` (k,)."""
+
+    kind: np.ndarray
+    position: np.ndarray
+    frame: np.ndarray
+    size: np.ndarray
+    params: np.ndarray
+    leaf_id: np.ndarray
+
+    def __len__(self):
+        return len(self.kind)
+
+
+@dataclass
+class Skeleton:
+    """Branch segments (truncated cones) and organs of a derived plant, as numpy arrays.
+
+    ``start``/``end`` (s,3); ``base_radius``/``top_radius`` (s,); ``order`` (s,)
+    branch order; ``leaf_id`` (s,) the history-tree leaf (module ``F``) that drew
+    the segment; ``color`` (s,) colour index; ``normal`` (s,3) the turtle's L
+    vector, used to orient tube rings; ``parent`` (s,) the segment this one
+    grows from (-1 at the base).
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    base_radius: np.ndarray
+    top_radius: np.ndarray
+    order: np.ndarray
+    leaf_id: np.ndarray
+    color: np.ndarray
+    normal: np.ndarray
+    parent: np.ndarray
+    organs: Organs
+    extra: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return len(self.start)
+
+    @property
+    def length(self):
+        return np.linalg.norm(self.end - self.start, axis=1)
+
+    def bounds(self):
+        """Axis-aligned ``(min xyz, max xyz)`` of segments (with radii) and organs."""
+        pts = [self.start, self.end]
+        if len(self.organs):
+            pts.append(self.organs.position)
+        pts = np.concatenate(pts) if any(len(p) for p in pts) else np.zeros((1, 3))
+        pad = float(max(self.base_radius.max(initial=0), self.organs.size.max(initial=0)))
+        return pts.min(axis=0) - pad, pts.max(axis=0) + pad
+
+    def select(self, leaf_ids):
+        """Boolean mask of the segments drawn by the given history leaves."""
+        return np.isin(self.leaf_id, np.asarray(list(leaf_ids), np.int64))
+
+    def to_polydata(self, sides=8, organ_resolution=8):
+        """All tubes and organs as one :class:`pyvista.PolyData` (see :mod:`lsys.geometry`)."""
+        from .geometry import skeleton_to_polydata
+
+        return skeleton_to_polydata(self, sides=sides, organ_resolution=organ_resolution)
+
+
+def _rot(h, l, u, axis, deg):
+    """Rotate the frame (tuples) by ``deg`` degrees about H (0), L (1) or U (2), ABOP matrices."""
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    if axis == 2:  # R_U: H' = H c - L s ; L' = H s + L c
+        return ((h[0] * c - l[0] * s, h[1] * c - l[1] * s, h[2] * c - l[2] * s),
+                (h[0] * s + l[0] * c, h[1] * s + l[1] * c, h[2] * s + l[2] * c), u)
+    if axis == 1:  # R_L: H' = H c + U s ; U' = -H s + U c
+        return ((h[0] * c + u[0] * s, h[1] * c + u[1] * s, h[2] * c + u[2] * s), l,
+                (u[0] * c - h[0] * s, u[1] * c - h[1] * s, u[2] * c - h[2] * s))
+    # R_H: L' = L c + U s ; U' = -L s + U c
+    return (h, (l[0] * c + u[0] * s, l[1] * c + u[1] * s, l[2] * c + u[2] * s),
+            (u[0] * c - l[0] * s, u[1] * c - l[1] * s, u[2] * c - l[2] * s))
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _unit(v):
+    n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    return (v[0] / n, v[1] / n, v[2] / n) if n > 1e-12 else None
+
+
+def _roll_horizontal(h, l, u):
+    """ABOP ``$``: L = (V x H)/|V x H| with V = +z; U = H x L.  No-op when H is vertical."""
+    new_l = _unit(_cross((0.0, 0.0, 1.0), h))
+    if new_l is None:
+        return h, l, u
+    return h, new_l, _cross(h, new_l)
+
+
+def _tropism(h, l, u, t, e):
+    axis = _cross(h, t)
+    size = math.sqrt(sum(a * a for a in axis))
+    if size < 1e-12:
+        return h, l, u
+    angle = e * size
+    k = (axis[0] / size, axis[1] / size, axis[2] / size)
+    return tuple(_rodrigues(v, k, angle) for v in (h, l, u))
+
+
+def _rodrigues(v, k, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    kxv = _cross(k, v)
+    kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2]
+    return tuple(v[i] * c + kxv[i] * s + k[i] * kv * (1 - c) for i in range(3))
+
+
+def interpret(derivation):
+    """Run the turtle over a derivation's current string and return its :class:`Skeleton`."""
+    lsys = derivation.lsystem
+    g = lsys.grammar
+    tree = derivation.tree
+    leaves = tree.leaves
+    organs = set(g.organs)
+    action_of = np.array([_ACTIONS.get(s, _ORGAN if s in organs else 0) for s in lsys.symbols] + [0],
+                         np.int8)
+    actions = action_of[tree.symbol[leaves]]
+    keep = np.flatnonzero(actions)  # modules with no turtle meaning are skipped up front
+    acts = actions[keep].tolist()
+    nps = tree.nparams[leaves[keep]].tolist()
+    first = tree.params[leaves[keep], 0].tolist()
+    nodes = leaves[keep].tolist()
+    syms = tree.symbol[leaves[keep]].tolist()
+    angle, step = g.angle, g.step
+    tropism = g.tropism
+
+    pos, h, l, u = (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+    width, color, order, last_seg = g.width, 0, 0, -1
+    stack = []
+    seg_start, seg_end, seg_width, seg_order, seg_leaf, seg_color, seg_normal, seg_parent = (
+        [], [], [], [], [], [], [], [])
+    org = []
+    for a, k, p, node, sym in zip(acts, nps, first, nodes, syms):
+        if a == 1 or a == 2:
+            d = p if k else step
+            end = (pos[0] + h[0] * d, pos[1] + h[1] * d, pos[2] + h[2] * d)
+            if a == 1:
+                seg_start.append(pos)
+                seg_end.append(end)
+                seg_width.append(width)
+                seg_order.append(order)
+                seg_leaf.append(node)
+                seg_color.append(color)
+                seg_normal.append(l)
+                seg_parent.append(last_seg)
+                last_seg = len(seg_start) - 1
+                if tropism is not None:
+                    h, l, u = _tropism(h, l, u, tropism[:3], tropism[3])
+            pos = end
+        elif a <= 9:
+            deg = p if k else angle
+            if a == 3:
+                h, l, u = _rot(h, l, u, 2, deg)
+            elif a == 4:
+                h, l, u = _rot(h, l, u, 2, -deg)
+            elif a == 5:
+                h, l, u = _rot(h, l, u, 1, deg)
+            elif a == 6:
+                h, l, u = _rot(h, l, u, 1, -deg)
+            elif a == 7:
+                h, l, u = _rot(h, l, u, 0, deg)
+            elif a == 8:
+                h, l, u = _rot(h, l, u, 0, -deg)
+            else:
+                h, l, u = _rot(h, l, u, 2, 180.0)
+        elif a == 10:
+            h, l, u = _roll_horizontal(h, l, u)
+        elif a == 11:
+            stack.append((pos, h, l, u, width, color, order, last_seg))
+            order += 1
+        elif a == 12:
+            if stack:
+                pos, h, l, u, width, color, order, last_seg = stack.pop()
+        elif a == 13:
+            width = p if k else width * 0.7
+        elif a == 14:
+            color = int(p) if k else color + 1
+        elif a == 15:
+            color -= 1
+        else:
+            org.append((sym, pos, h, l, u, p if k else 1.0, node))
+    return _build(lsys, tree, seg_start, seg_end, seg_width, seg_order, seg_leaf, seg_color,
+                  seg_normal, seg_parent, org)
+
+
+def _build(lsys, tree, start, end, width, order, leaf, color, normal, parent, org):
+    s = len(start)
+    start = np.array(start, float).reshape(s, 3)
+    end = np.array(end, float).reshape(s, 3)
+    base = np.array(width, float) * (lsys.grammar.width_scale / 2.0)
+    order = np.array(order, np.int32)
+    parent = np.array(parent, np.int64)
+    top = base.copy()
+    # Without a continuation, taper to the widest child segment (a fork), if any.
+    child = np.flatnonzero(parent >= 0)
+    if child.size:
+        widest = np.full(s, -1.0)
+        np.maximum.at(widest, parent[child], base[child])
+        fork = widest >= 0
+        top[fork] = widest[fork]
+    # A segment's continuation: the first child segment on the same branch order.
+    cont = np.flatnonzero((parent >= 0) & (order == order[np.maximum(parent, 0)]))
+    if cont.size:
+        par = parent[cont]
+        first_child = np.full(s, s, np.int64)
+        np.minimum.at(first_child, par, cont)  # the earliest continuing child wins
+        has = first_child < s
+        top[has] = base[first_child[has]]
+    organs = _organs(lsys, tree, org)
+    return Skeleton(start, end, base, top, order, np.array(leaf, np.int64), np.array(color, np.int32),
+                    np.array(normal, float).reshape(s, 3), parent, organs)
+
+
+def _organs(lsys, tree, org):
+    k = len(org)
+    if not k:
+        return Organs(np.array([], dtype=object), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
+                      np.zeros((0, tree.max_params)), np.zeros(0, np.int64))
+    kind = np.array([lsys.symbols[o[0]] for o in org], dtype=object)
+    position = np.array([o[1] for o in org], float)
+    frame = np.array([(o[2], o[3], o[4]) for o in org], float)
+    size = np.array([o[5] for o in org], float)
+    leaf_id = np.array([o[6] for o in org], np.int64)
+    return Organs(kind, position, frame, size, tree.params[leaf_id], leaf_id)
