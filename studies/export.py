@@ -1,0 +1,82 @@
+"""Export a study's raw answers to CSV, one file per table, in long format.
+
+Files: ``picks.csv``, ``participants.csv``, ``tests.csv``, ``groups.csv``
+(one row per group, images joined by ``;``), ``memberships.csv`` (one row per
+image placed), ``qualifiers.csv`` (raw text plus its canonical names).  Likert
+answers are 1-4 (poor, fair, good, excellent); unfinished tests are included
+with an empty ``finished_at``.
+
+>>> import tempfile, pathlib
+>>> from studies.simulate import simulate_study
+>>> tmp = pathlib.Path(tempfile.mkdtemp())
+>>> _ = simulate_study(tmp / "s.db", participants=2, grammars=1)
+>>> sorted(p.name for p in export_csv(tmp / "s.db", tmp / "csv"))[:3]
+['groups.csv', 'memberships.csv', 'participants.csv']
+"""
+from __future__ import annotations
+
+import csv
+import os
+import pathlib
+
+from studies.qualifiers import SynonymTable
+
+_QUERIES = {
+    "picks.csv": (
+        "SELECT g.name AS grammar, p.pick_id, p.variant_id, p.pc1, p.pc2, p.pc3, p.params, p.image "
+        "FROM picks p JOIN grammars g ON g.id = p.grammar_id ORDER BY g.id, p.pick_id"),
+    "participants.csv": (
+        "SELECT code, consent, consent_at, created_at FROM participants ORDER BY id"),
+    "tests.csv": (
+        "SELECT t.id AS test, p.code AS participant, g.name AS grammar, t.started_at, t.finished_at, "
+        "t.elapsed_seconds FROM tests t JOIN participants p ON p.id = t.participant_id "
+        "JOIN grammars g ON g.id = t.grammar_id ORDER BY t.id"),
+    "groups.csv": (
+        "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, "
+        "count(gi.pick_id) AS size, group_concat(gi.pick_id, ';') AS images, g.representative, "
+        "g.usefulness, g.difference, g.representative_quality "
+        "FROM groups g JOIN tests t ON t.id = g.test_id JOIN participants p ON p.id = t.participant_id "
+        "JOIN grammars gr ON gr.id = t.grammar_id LEFT JOIN (SELECT * FROM group_images "
+        "ORDER BY pick_id) gi ON gi.group_id = g.id GROUP BY g.id ORDER BY t.id, g.label"),
+    "memberships.csv": (
+        "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, gi.pick_id "
+        "FROM group_images gi JOIN groups g ON g.id = gi.group_id JOIN tests t ON t.id = g.test_id "
+        "JOIN participants p ON p.id = t.participant_id JOIN grammars gr ON gr.id = t.grammar_id "
+        "ORDER BY t.id, g.label, gi.pick_id"),
+    "qualifiers.csv": (
+        "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, q.text "
+        "FROM qualifiers q JOIN groups g ON g.id = q.group_id JOIN tests t ON t.id = g.test_id "
+        "JOIN participants p ON p.id = t.participant_id JOIN grammars gr ON gr.id = t.grammar_id "
+        "ORDER BY t.id, g.label, q.id"),
+}
+
+
+def export_csv(source, out_dir, synonyms=None) -> list:
+    """Write the CSV files of study ``source`` (a Study or a path) into ``out_dir``.
+
+    ``synonyms`` (extra synonym files) only affects the ``canonical`` column of
+    ``qualifiers.csv``.  Returns the paths written.
+    """
+    from studies.storage import Study
+
+    if isinstance(source, (str, os.PathLike)):
+        with Study.open(source) as study:
+            return export_csv(study, out_dir, synonyms)
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    table = SynonymTable.load(*(synonyms or []))
+    written = []
+    for name, sql in _QUERIES.items():
+        cur = source.conn.execute(sql)
+        header = [d[0] for d in cur.description]
+        rows = cur.fetchall()
+        if name == "qualifiers.csv":
+            header.append("canonical")
+            rows = [(*r, ";".join(table.canonical(r[-1]))) for r in rows]
+        path = out_dir / name
+        with open(path, "w", newline="", encoding="utf-8") as fh:
+            writer = csv.writer(fh)
+            writer.writerow(header)
+            writer.writerows(rows)
+        written.append(path)
+    return written

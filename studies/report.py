@@ -1,0 +1,319 @@
+"""The study report: one HTML page with heat maps, box plots and tables, plus CSVs.
+
+:func:`analyze` computes every figure of the thesis' study chapter from a
+:class:`~studies.data.StudyData`; :func:`write_report` writes them to a folder:
+
+* ``index.html`` -- the page (figures are PNG files next to it);
+* ``cooccurrence.png``, ``grouping.png``, ``ratings.png``, ``qualifiers.png``;
+* ``cooccurrence_<grammar>.csv`` and ``cooccurrence_all.csv`` (27 x 27);
+* ``image_ratings_usefulness.tsv`` / ``..._difference.tsv`` -- rows = image
+  points, columns = grammars: the layout ``ramure study anova`` reads back;
+* ``grouping_stats.csv``, ``anova.csv``, ``qualifiers.csv``,
+  ``qualifiers_unmatched.csv`` and ``summary.json`` (everything above as JSON).
+
+Figures use matplotlib's object API on the Agg canvas, never pyplot, so the
+report can be written from inside a Qt application.
+
+>>> import tempfile, pathlib
+>>> from studies.simulate import simulate_study
+>>> out = pathlib.Path(tempfile.mkdtemp())
+>>> data = simulate_study(participants=3, grammars=2)
+>>> summary = write_report(data, out)
+>>> (out / "index.html").is_file(), summary["tests"]
+(True, 6)
+"""
+from __future__ import annotations
+
+import csv
+import html
+import json
+import math
+import os
+import pathlib
+import re
+
+import numpy as np
+
+from studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
+from studies.anova import anova_table
+from studies.data import load_study_data
+from studies.likert import LEVELS
+from studies.qualifiers import SynonymTable, qualifier_frequencies
+
+RATED = ("usefulness", "difference")
+
+
+def analyze(data, alpha=0.05, synonyms=(), min_usefulness="good") -> dict:
+    """Every statistic of the report as plain JSON-ready data."""
+    table = SynonymTable.load(*synonyms)
+    ratings, anova = {}, {}
+    for measure in RATED:
+        means, counts = image_ratings(data, measure, with_counts=True)
+        ratings[measure] = dict(mean=_listify(means), count=counts.tolist())
+        anova[measure] = anova_table(means.T, alpha)
+    return dict(
+        study=data.name, grammars=list(data.grammars),
+        participants=int(len(set(data.test_participant.tolist()))), tests=int(data.n_tests),
+        groups=int(len(data.group_test)), alpha=alpha,
+        grouping=grouping_stats(data),
+        cooccurrence={g: cooccurrence(data, g).tolist() for g in data.grammars}
+        | {"all": cooccurrence(data).tolist()},
+        ratings=ratings, anova=anova,
+        qualifiers=dict(all=qualifier_frequencies(data, table),
+                        kept=qualifier_frequencies(data, table, min_usefulness),
+                        min_usefulness=min_usefulness),
+    )
+
+
+def _listify(a):
+    return [[None if math.isnan(v) else round(float(v), 6) for v in row] for row in a]
+
+
+def _safe(name):
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
+
+
+def write_report(source, out_dir, alpha=0.05, synonyms=(), min_usefulness="good",
+                 figures=True) -> dict:
+    """Write the HTML report and CSVs of ``source`` (StudyData, Study or path).
+
+    Returns the :func:`analyze` result plus ``files`` (the paths written).
+    """
+    if not hasattr(source, "membership"):
+        source = load_study_data(source)
+    data = source
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    result = analyze(data, alpha, synonyms, min_usefulness)
+    files = []
+    files += _write_csvs(data, result, out)
+    if figures:
+        files += _write_figures(data, result, out)
+    (out / "summary.json").write_text(json.dumps(result, indent=1, allow_nan=False), encoding="utf-8")
+    files.append(out / "summary.json")
+    (out / "index.html").write_text(_html(result, [f.name for f in files], figures), encoding="utf-8")
+    files.append(out / "index.html")
+    result["files"] = [os.fspath(f) for f in files]
+    return result
+
+
+# -- CSV -------------------------------------------------------------------------
+def _write_rows(path, header, rows):
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        w.writerows(rows)
+    return path
+
+
+def _write_csvs(data, result, out):
+    files = []
+    ids = list(range(1, 28))
+    for key, matrix in result["cooccurrence"].items():
+        name = "cooccurrence_all.csv" if key == "all" else f"cooccurrence_{_safe(key)}.csv"
+        files.append(_write_rows(out / name, ["image", *ids], [[i, *row] for i, row in zip(ids, matrix)]))
+    for measure in RATED:
+        means = np.array(result["ratings"][measure]["mean"], dtype=float).T  # 27 x grammars
+        path = out / f"image_ratings_{measure}.tsv"
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write("\t".join(["image", *data.grammars]) + "\n")
+            for i, row in zip(ids, means):
+                fh.write("\t".join([str(i), *("" if math.isnan(v) else f"{v:.6g}" for v in row)]) + "\n")
+        files.append(path)
+    rows = []
+    for grammar, stats in result["grouping"].items():
+        for what, s in stats.items():
+            rows.append([grammar, what, *(s[k] for k in ("n", "mean", "median", "q1", "q3", "min", "max"))])
+    files.append(_write_rows(out / "grouping_stats.csv",
+                             ["grammar", "measure", "n", "mean", "median", "q1", "q3", "min", "max"], rows))
+    keys = ("F", "F_crit", "p", "df_between", "df_within", "significant", "verdict")
+    rows = [[m, d, *(r.get(k) for k in keys), r.get("error", "")]
+            for m, res in result["anova"].items() for d, r in res.items()]
+    files.append(_write_rows(out / "anova.csv", ["measure", "test", *keys, "error"], rows))
+    q = result["qualifiers"]
+    rows = []
+    for scope in ("kept", "all"):
+        for r in q[scope]["qualifiers"]:
+            rows.append([scope, r["name"], r["fr"], r["groups"], r["images"], r["tests"], ";".join(r["grammars"])])
+    files.append(_write_rows(out / "qualifiers.csv",
+                             ["groups_kept", "qualifier", "fr", "groups", "images", "tests", "grammars"], rows))
+    files.append(_write_rows(out / "qualifiers_unmatched.csv", ["text", "groups"],
+                             [[r["text"], r["groups"]] for r in q["all"]["unmatched"]]))
+    return files
+
+
+# -- figures ---------------------------------------------------------------------
+def _figure(width, height):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _write_figures(data, result, out):
+    files = [_cooccurrence_figure(result, out / "cooccurrence.png"),
+             _grouping_figure(data, out / "grouping.png"),
+             _ratings_figure(result, out / "ratings.png")]
+    if result["qualifiers"]["all"]["qualifiers"]:
+        files.append(_qualifier_figure(result, out / "qualifiers.png"))
+    return files
+
+
+def _cooccurrence_figure(result, path):
+    panels = ["all", *result["grammars"]]
+    cols = min(4, len(panels))
+    rows = math.ceil(len(panels) / cols)
+    fig = _figure(3.6 * cols, 3.4 * rows)
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    ticks = [0, 8, 17, 26]
+    for ax, key in zip(axes, panels):
+        m = np.array(result["cooccurrence"][key], dtype=float)
+        n = max(m.diagonal().max(), 1)
+        im = ax.imshow(m / n, cmap="magma", vmin=0, vmax=1, interpolation="nearest")
+        for edge in (8.5, 17.5):  # the PC1 blocks 1-9, 10-18, 19-27
+            ax.axhline(edge, color="cyan", lw=0.6, alpha=0.7)
+            ax.axvline(edge, color="cyan", lw=0.6, alpha=0.7)
+        ax.set_xticks(ticks, [t + 1 for t in ticks])
+        ax.set_yticks(ticks, [t + 1 for t in ticks])
+        ax.set_title(f"{'all grammars' if key == 'all' else key} ({int(n)} tests)", fontsize=10)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    fig.colorbar(im, ax=axes.tolist(), shrink=0.8, label="share of tests grouping the pair")
+    fig.savefig(path)
+    return path
+
+
+def _grouping_figure(data, path):
+    labels = [*data.grammars, "all"]
+    fig = _figure(max(7.0, 1.1 * len(labels) * 2), 3.6)
+    left, right = fig.subplots(1, 2)
+    for ax, values, title in (
+            (left, [groups_per_test(data, g) for g in [*data.grammars, None]], "groups per test"),
+            (right, [images_per_group(data, g) for g in [*data.grammars, None]], "images per group")):
+        ax.boxplot([v if len(v) else [np.nan] for v in values], tick_labels=labels, showmeans=True)
+        ax.set_title(title)
+        ax.tick_params(axis="x", rotation=30)
+        ax.grid(axis="y", alpha=0.3)
+    fig.savefig(path)
+    return path
+
+
+def _ratings_figure(result, path):
+    grammars = result["grammars"]
+    fig = _figure(12.0, 0.9 + 0.75 * len(grammars) * 2)
+    axes = fig.subplots(2, 1)
+    for ax, measure in zip(axes, RATED):
+        m = np.array(result["ratings"][measure]["mean"], dtype=float)
+        im = ax.imshow(m, cmap="RdYlGn", vmin=1, vmax=4, aspect="auto", interpolation="nearest")
+        ax.set_yticks(range(len(grammars)), grammars)
+        ax.set_xticks(range(27), range(1, 28), fontsize=7)
+        ax.set_title(f"mean {measure} per image (1 = poor ... 4 = excellent)", fontsize=10)
+        for (i, j), v in np.ndenumerate(m):
+            if not math.isnan(v):
+                ax.text(j, i, f"{v:.1f}", ha="center", va="center", fontsize=6)
+        fig.colorbar(im, ax=ax, ticks=[1, 2, 3, 4], shrink=0.9)
+    fig.savefig(path)
+    return path
+
+
+def _qualifier_figure(result, path):
+    q = result["qualifiers"]
+    names = [r["name"] for r in q["all"]["qualifiers"]][::-1]
+    all_ = {r["name"]: r["groups"] for r in q["all"]["qualifiers"]}
+    kept = {r["name"]: r["groups"] for r in q["kept"]["qualifiers"]}
+    fig = _figure(6.5, 0.9 + 0.3 * len(names))
+    ax = fig.subplots()
+    y = np.arange(len(names))
+    ax.barh(y + 0.2, [all_[n] for n in names], height=0.4, label="all groups", color="#9ab")
+    ax.barh(y - 0.2, [kept.get(n, 0) for n in names], height=0.4,
+            label=f"groups rated {q['min_usefulness']} or better", color="#2a6")
+    ax.set_yticks(y, names)
+    ax.set_xlabel("groups named")
+    ax.legend(loc="lower right", fontsize=8)
+    fig.savefig(path)
+    return path
+
+
+# -- HTML ------------------------------------------------------------------------
+def _fmt(v, digits=3):
+    if v is None:
+        return "–"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.{digits}g}" if abs(v) < 1e-3 and v != 0 else f"{v:.{digits}f}".rstrip("0").rstrip(".")
+    return html.escape(str(v))
+
+
+def _table(header, rows):
+    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+_CSS = """body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}
+table{border-collapse:collapse;margin:.5em 0 1.5em;font-size:.9em}td,th{border:1px solid #ccc;padding:.25em .6em;
+text-align:right}th{background:#eee}td:first-child{text-align:left}img{max-width:100%}
+.note{color:#555;font-size:.9em}"""
+
+
+def _html(result, files, figures):
+    e = html.escape
+    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>Study {e(result['study'])}</title>"
+             f"<style>{_CSS}</style></head><body>",
+             f"<h1>User study “{e(result['study'])}”</h1>",
+             f"<p>{result['participants']} participants, {result['tests']} finished tests, "
+             f"{result['groups']} groups, grammars: {e(', '.join(result['grammars']))}. "
+             f"Likert answers coded 1–4 ({', '.join(LEVELS)}).</p>"]
+    parts.append("<h2>Co-occurrence</h2><p class='note'>Share of tests that put two images in the same "
+                 "group (images 1–27, PC1 varying slowest; lines mark the blocks 1–9, 10–18, 19–27).</p>")
+    if figures:
+        parts.append("<img src='cooccurrence.png' alt='co-occurrence heat maps'>")
+    parts.append("<h2>Grouping</h2>")
+    if figures:
+        parts.append("<img src='grouping.png' alt='box plots of groups per test and images per group'>")
+    keys = ("n", "mean", "median", "q1", "q3", "min", "max")
+    rows = [[e(g), e(w.replace("_", " ")), *(_fmt(s[k]) for k in keys)]
+            for g, stats in result["grouping"].items() for w, s in stats.items()]
+    parts.append(_table(["grammar", "measure", *keys], rows))
+    parts.append("<h2>Per-image ratings</h2><p class='note'>Each group's rating passes to each of its "
+                 "images; means over the tests of each grammar.</p>")
+    if figures:
+        parts.append("<img src='ratings.png' alt='per-image mean ratings'>")
+    for measure in RATED:
+        m = result["ratings"][measure]["mean"]
+        rows = [[str(i + 1), *(_fmt(m[g][i], 2) for g in range(len(result["grammars"])))] for i in range(27)]
+        parts.append(f"<details><summary>mean {measure} table</summary>"
+                     f"{_table(['image', *result['grammars']], rows)}</details>")
+    parts.append(f"<h2>One-way ANOVA (α = {result['alpha']:g})</h2>")
+    rows = []
+    for measure, res in result["anova"].items():
+        for test, r in res.items():
+            label = test.replace("_", " ")
+            if "error" in r:
+                rows.append([e(measure), e(label), "–", "–", "–", "–", e(r["error"])])
+            else:
+                rows.append([e(measure), e(label), _fmt(r["F"]), _fmt(r["F_crit"]), _fmt(r["p"]),
+                             f"{r['df_between']}, {r['df_within']}", e(r["verdict"])])
+    parts.append(_table(["measure", "across", "F", "F crit", "p", "df", "verdict"], rows))
+    q = result["qualifiers"]
+    parts.append("<h2>Qualifiers</h2>")
+    parts.append(f"<p>{q['all']['observations']} qualifiers given ({q['all']['unique_texts']} distinct "
+                 f"after folding case and accents), {_fmt(q['all']['per_group'], 3)} per group. Groups rated "
+                 f"{e(str(q['min_usefulness']))} or better for usefulness: {q['kept']['groups']}.</p>")
+    if figures and q["all"]["qualifiers"]:
+        parts.append("<img src='qualifiers.png' alt='qualifier frequencies'>")
+    kept = {r["name"]: r for r in q["kept"]["qualifiers"]}
+    rows = [[e(r["name"]), e(r["fr"]), r["groups"], kept.get(r["name"], {}).get("groups", 0),
+             kept.get(r["name"], {}).get("images", 0), e(", ".join(r["grammars"]))]
+            for r in q["all"]["qualifiers"]]
+    parts.append(_table(["qualifier", "French", "groups", "groups kept", "images kept", "grammars"], rows))
+    if q["all"]["unmatched"]:
+        rows = [[e(r["text"]), r["groups"]] for r in q["all"]["unmatched"][:30]]
+        parts.append("<details><summary>texts outside the vocabulary</summary>"
+                     f"{_table(['text', 'groups'], rows)}</details>")
+    parts.append("<h2>Files</h2><ul>" + "".join(f"<li><a href='{e(f)}'>{e(f)}</a></li>" for f in files)
+                 + "</ul></body></html>")
+    return "\n".join(parts)
