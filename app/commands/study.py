@@ -1,0 +1,216 @@
+"""``ramure study``: user studies on variant relevance (create, simulate, analyse, export).
+
+Sub-commands print one JSON object on stdout::
+
+    ramure study create study.db --grammar honda=explore/honda --grammar tree2=explore/tree2
+    ramure study simulate --participants 20 --grammars 3 -o report/
+    ramure study analyze study.db -o report/
+    ramure study anova table.tsv
+    ramure study export-csv study.db -o csv/
+    ramure study export-qualifiers study.db --store qualifiers.db
+    ramure study status study.db
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+
+def _print(obj) -> int:
+    json.dump(obj, sys.stdout, indent=1, allow_nan=False, default=str)
+    sys.stdout.write("\n")
+    return 0
+
+
+def _grammar_specs(items):
+    from studies.errors import StudyInputError
+
+    specs = {}
+    for item in items or []:
+        name, sep, path = item.partition("=")
+        if not sep or not name or not path:
+            raise StudyInputError(f"--grammar {item!r}: expected NAME=EXPLORATION_DIR")
+        specs[name] = path
+    return specs
+
+
+def _summary(result) -> dict:
+    """The short part of a report result: counts, grouping, ANOVA, top qualifiers."""
+    overall = result["grouping"]["all"]
+    kept = result["qualifiers"]["kept"]
+    return dict(
+        study=result["study"], grammars=result["grammars"], participants=result["participants"],
+        tests=result["tests"], groups=result["groups"],
+        groups_per_test=overall["groups_per_test"], images_per_group=overall["images_per_group"],
+        anova=result["anova"],
+        qualifiers=dict(observations=result["qualifiers"]["all"]["observations"],
+                        unique_texts=result["qualifiers"]["all"]["unique_texts"],
+                        kept_groups=kept["groups"],
+                        top=[dict(name=q["name"], groups=q["groups"]) for q in kept["qualifiers"][:10]]),
+    )
+
+
+def run_create(args) -> int:
+    from studies.storage import Study
+
+    with Study.create(args.db, grammars=_grammar_specs(args.grammar), name=args.name,
+                      budget_minutes=args.budget_minutes) as study:
+        return _print(dict(db=str(study.path), name=study.name, grammars=study.grammars,
+                           budget_minutes=study.budget_seconds / 60))
+
+
+def run_simulate(args) -> int:
+    import tempfile
+
+    from studies.data import load_study_data
+    from studies.picks import synthetic_grammars
+    from studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
+    from studies.report import analyze, write_report
+    from studies.simulate import run_simulation
+    from studies.storage import Study
+
+    grammars = _grammar_specs(args.grammar) or synthetic_grammars(args.grammars, seed=args.seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        db = pathlib.Path(args.db) if args.db else pathlib.Path(tmp) / "simulated.db"
+        with Study.create(db, grammars=grammars, name=args.name, durable=False) as study:
+            run_simulation(study, args.participants, args.tests_per_participant, args.noise, args.seed)
+            data = load_study_data(study)
+        synonyms = args.synonyms or []
+        if args.output:
+            result = write_report(data, args.output, synonyms=synonyms)
+        else:
+            result = analyze(data, synonyms=synonyms)
+        out = dict(db=str(db) if args.db else None, report=str(pathlib.Path(args.output) / "index.html")
+                   if args.output else None, **_summary(result))
+        if args.store:
+            rows = labelled_points(data, SynonymTable.load(*synonyms))
+            out["qualifier_points"] = export_qualifier_points(rows, args.store)
+            out["store"] = str(args.store)
+    return _print(out)
+
+
+def run_analyze(args) -> int:
+    from studies.data import load_study_data
+    from studies.report import write_report
+
+    data = load_study_data(args.db, finished_only=not args.include_unfinished)
+    result = write_report(data, args.output, alpha=args.alpha, synonyms=args.synonyms or [],
+                          min_usefulness=args.min_usefulness, figures=not args.no_figures)
+    return _print(dict(report=str(pathlib.Path(args.output) / "index.html"), files=len(result["files"]),
+                       **_summary(result)))
+
+
+def run_anova(args) -> int:
+    import numpy as np
+
+    from studies.anova import anova_table, read_table
+
+    values, rows, columns = read_table(args.table, row_labels=args.row_labels)
+    result = anova_table(values, alpha=args.alpha)
+    means = [float(c[~np.isnan(c)].mean()) if (~np.isnan(c)).any() else None for c in values.T]
+    return _print(dict(table=str(args.table), rows=len(rows), columns=columns, column_means=means,
+                       alpha=args.alpha, **result))
+
+
+def run_export_csv(args) -> int:
+    from studies.export import export_csv
+
+    files = export_csv(args.db, args.output, synonyms=args.synonyms or [])
+    return _print(dict(files=[str(f) for f in files]))
+
+
+def run_export_qualifiers(args) -> int:
+    from studies.data import load_study_data
+    from studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
+
+    data = load_study_data(args.db)
+    rows = labelled_points(data, SynonymTable.load(*(args.synonyms or [])),
+                           min_usefulness=args.min_usefulness, source=args.source)
+    count = export_qualifier_points(rows, args.store)
+    per = {}
+    for r in rows:
+        per[r["qualifier"]] = per.get(r["qualifier"], 0) + 1
+    return _print(dict(store=str(args.store), source=rows[0]["source"] if rows else args.source,
+                       points=count, per_qualifier=dict(sorted(per.items()))))
+
+
+def run_status(args) -> int:
+    from studies.storage import Study
+
+    with Study.open(args.db) as study:
+        tests = study.tests()
+        return _print(dict(db=str(study.path), name=study.name, grammars=study.grammars,
+                           budget_minutes=study.budget_seconds / 60, participants=study.participants(),
+                           tests=len(tests), finished=sum(t["finished_at"] is not None for t in tests)))
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("study", help="user studies on variant relevance",
+                                   description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
+    sub.required = True
+
+    def synonyms(p):
+        p.add_argument("--synonyms", action="append", metavar="FILE",
+                       help="extra synonym table (JSON, same shape as studies/synonyms.json); repeatable")
+
+    p = sub.add_parser("create", help="create a study database from exploration directories")
+    p.add_argument("db", help="new SQLite file")
+    p.add_argument("--grammar", action="append", metavar="NAME=DIR", required=True,
+                   help="a grammar and its exploration directory (holding picks.json); repeatable")
+    p.add_argument("--name", help="study name (default: the file name)")
+    p.add_argument("--budget-minutes", type=float, default=30.0, help="time budget per participant")
+    p.set_defaults(func=run_create)
+
+    p = sub.add_parser("simulate", help="run simulated participants end to end (store, analyse, export)")
+    p.add_argument("--participants", type=int, default=20)
+    p.add_argument("--grammars", type=int, default=3, help="number of synthetic grammars (without --grammar)")
+    p.add_argument("--grammar", action="append", metavar="NAME=DIR", help="use real exploration directories")
+    p.add_argument("--tests-per-participant", type=int, help="grammars per participant (default: all)")
+    p.add_argument("--noise", type=float, default=0.15, help="perception noise, fraction of the box size")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--name", default="simulated")
+    p.add_argument("--db", help="keep the study in this new SQLite file (default: temporary)")
+    p.add_argument("-o", "--output", help="write the HTML report to this folder")
+    p.add_argument("--store", help="export labelled qualifier points to this SQLite file")
+    synonyms(p)
+    p.set_defaults(func=run_simulate)
+
+    p = sub.add_parser("analyze", help="write the HTML report and CSVs of a study")
+    p.add_argument("db")
+    p.add_argument("-o", "--output", required=True, help="report folder")
+    p.add_argument("--alpha", type=float, default=0.05)
+    p.add_argument("--min-usefulness", default="good", help="groups kept for qualifiers (default: good)")
+    p.add_argument("--include-unfinished", action="store_true", help="also analyse unfinished tests")
+    p.add_argument("--no-figures", action="store_true", help="tables and CSVs only")
+    synonyms(p)
+    p.set_defaults(func=run_analyze)
+
+    p = sub.add_parser("anova", help="one-way ANOVA of a table (rows = image points, columns = grammars)")
+    p.add_argument("table", help="TSV file, optional header row and row-label column")
+    p.add_argument("--alpha", type=float, default=0.05)
+    labels = p.add_mutually_exclusive_group()
+    labels.add_argument("--row-labels", dest="row_labels", action="store_true", default=None,
+                        help="the first column holds row labels")
+    labels.add_argument("--no-row-labels", dest="row_labels", action="store_false",
+                        help="the first column is data")
+    p.set_defaults(func=run_anova)
+
+    p = sub.add_parser("export-csv", help="export the raw answers to CSV files")
+    p.add_argument("db")
+    p.add_argument("-o", "--output", required=True, help="folder for the CSV files")
+    synonyms(p)
+    p.set_defaults(func=run_export_csv)
+
+    p = sub.add_parser("export-qualifiers", help="export labelled points to the qualifier store")
+    p.add_argument("db")
+    p.add_argument("--store", required=True, help="SQLite file holding the qualifier_points table")
+    p.add_argument("--min-usefulness", default="good", help="keep groups rated at least this (default: good)")
+    p.add_argument("--source", help="source tag (default: study:<study name>)")
+    synonyms(p)
+    p.set_defaults(func=run_export_qualifiers)
+
+    p = sub.add_parser("status", help="participants and tests of a study")
+    p.add_argument("db")
+    p.set_defaults(func=run_status)
