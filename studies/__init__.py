@@ -1,0 +1,43 @@
+"""User studies on variant relevance (thesis §7): sessions, storage, analysis, reports.
+
+A study is a set of grammars, each with its 27 picked variants, and
+participants who each do one test per grammar: sort the 27 images into
+groups, choose representatives, rate groups on 4-level Likert scales and name
+them.  Everything is stored in SQLite, one transaction per answer.
+
+>>> import tempfile, pathlib
+>>> from studies import Study, lattice_picks, load_study_data, cooccurrence
+>>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db", grammars={"honda": lattice_picks()})
+>>> s = study.session(study.add_participant(consent=True), "honda")
+>>> s.set_groups([range(1, 14), range(14, 28)])
+>>> for g in (1, 2):
+...     s.set_representative(g, 14 if g == 2 else 1)
+...     s.rate(g, usefulness="good", difference="fair", representative="excellent")
+...     s.add_qualifier(g, "petit" if g == 1 else "grand")
+>>> s.finish()
+>>> int(cooccurrence(load_study_data(study))[0, 12]), int(cooccurrence(load_study_data(study))[0, 13])
+(1, 0)
+"""
+from studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
+from studies.anova import AnovaResult, anova_table, one_way_anova, read_table
+from studies.data import StudyData, load_study_data
+from studies.errors import StudyInputError
+from studies.export import export_csv
+from studies.likert import LEVELS, likert_value
+from studies.picks import Pick, lattice_picks, load_picks, picks_from_data, synthetic_grammars
+from studies.qualifiers import (SynonymTable, export_qualifier_points, labelled_points, normalise_text,
+                                qualifier_frequencies)
+from studies.report import analyze, write_report
+from studies.session import Group, TestSession, image_order
+from studies.simulate import SimulatedParticipant, run_simulation, simulate_study
+from studies.storage import Study, connect
+
+__all__ = [
+    "AnovaResult", "Group", "LEVELS", "Pick", "SimulatedParticipant", "Study", "StudyData",
+    "StudyInputError", "SynonymTable", "TestSession", "analyze", "anova_table", "connect",
+    "cooccurrence", "export_csv", "export_qualifier_points", "grouping_stats", "groups_per_test",
+    "image_order", "image_ratings", "images_per_group", "labelled_points", "lattice_picks",
+    "likert_value", "load_picks", "load_study_data", "normalise_text", "one_way_anova",
+    "picks_from_data", "qualifier_frequencies", "read_table", "run_simulation", "simulate_study",
+    "synthetic_grammars", "write_report",
+]
