@@ -48,6 +48,11 @@ def main(argv=None) -> int:
     except _user_errors() as exc:
         print(f"ramure {args.command}: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # e.g. `ramure leaves ... | head`
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print("ramure: interrupted", file=sys.stderr)
         return 130

@@ -1,0 +1,374 @@
+"""Regrow or prune parts of a plant in place, with undo/redo and JSON sessions.
+
+:func:`regenerate` removes each root's subtree and re-derives it from the
+root's module for the remaining steps (``n - step[root]``), with a new seed,
+constants scoped to that regeneration, or a parameter combination
+``{"rule": r, "constants": {...}}`` from the metrics/qualifier layer.  Node
+ids outside the regenerated subtrees never change: removed nodes are only
+marked dead and new nodes are appended, so undo is cheap and exact.
+
+Context-sensitive rules see only the regrown subtree while it is re-derived
+(the rest of the plant is not its context) — a documented simplification.
+
+:class:`Session` is what the front ends drive: select → regrow / prune →
+undo / redo, constant changes, and ``save``/``load`` to JSON that replays to
+the identical plant.
+
+>>> from lsys import LSystem
+>>> s = Session(LSystem.from_file("grammars/honda_sympodial.lsys"), n=6)
+>>> before = s.derivation.to_string()
+>>> leaves = s.leaves_with_symbol("F")[-4:]
+>>> result = s.regrow(leaves, rho=0.5, constants={"a2": 20})
+>>> s.derivation.to_string() != before, s.undo() is not None, s.derivation.to_string() == before
+(True, True, True)
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .cut import ascend, check_rho, collapse_nested, select_roots
+from .derive import LSystem
+from .errors import GrammarError, RamureError, ValueRefused
+
+SESSION_FORMAT = "ramure-session"
+SESSION_VERSION = 1
+
+
+@dataclass
+class Change:
+    """One in-place change of the tree: enough to undo and redo it exactly."""
+
+    roots: np.ndarray
+    old_children: tuple  # (child_start, child_count) of the roots before
+    new_children: tuple
+    removed: np.ndarray  # node ids marked dead
+    added: np.ndarray  # node ids appended
+    old_leaves: np.ndarray
+    new_leaves: np.ndarray
+    removed_leaves: int = 0  # modules taken out of the string
+    added_leaves: int = 0  # modules put in
+
+    def apply(self, tree, forward=True):
+        kill, revive = (self.removed, self.added) if forward else (self.added, self.removed)
+        tree._alive[kill] = False
+        tree._alive[revive] = True
+        start, count = self.new_children if forward else self.old_children
+        tree.set_children(self.roots, start, count)
+        tree.leaves = self.new_leaves if forward else self.old_leaves
+        tree.changed()
+
+
+@dataclass
+class RegenResult:
+    """What a regrow/prune did (JSON-able through :meth:`to_dict`)."""
+
+    op: str
+    roots: np.ndarray
+    cut_roots: np.ndarray
+    min_roots: np.ndarray
+    removed: int  # modules (leaves) removed from the string
+    added: int  # modules (leaves) added to the string
+    cut_value: float | None
+    seconds: float
+    cut: object = field(default=None, repr=False)
+    change: Change | None = field(default=None, repr=False)
+
+    def to_dict(self):
+        return {"op": self.op, "roots": self.roots.tolist(), "cut_roots": self.cut_roots.tolist(),
+                "min_roots": self.min_roots.tolist(), "removed_modules": self.removed,
+                "added_modules": self.added, "cut_value": self.cut_value,
+                "seconds": round(self.seconds, 6)}
+
+
+def _replace_spans(old, first, last, pieces):
+    """The string with each span ``old[first[i]:last[i] + 1]`` replaced by ``pieces[i]``."""
+    parts, cursor = [], 0
+    for i in np.argsort(first):
+        parts.append(old[cursor:first[i]])
+        parts.append(pieces[i])
+        cursor = last[i] + 1
+    parts.append(old[cursor:])
+    return np.concatenate(parts).astype(np.int64)
+
+
+def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, prune=False):
+    """Regrow (or, with ``prune=True``, cut back) the subtrees under ``roots`` in place.
+
+    Returns a :class:`Change` that :meth:`Change.apply` can undo.  Roots that
+    are leaves are ignored (nothing grows under them).
+    """
+    tree, ls = derivation.tree, derivation.lsystem
+    roots = collapse_nested(tree, roots)
+    roots = roots[tree.child_count[roots] > 0]
+    unknown = set(constants or {}) - set(ls.constants)
+    if unknown:
+        raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}")
+    consts = {**derivation.constants, **(constants or {})}
+    first, last = (span[roots].copy() for span in tree.leaf_spans())
+    old_leaves = tree.leaves
+    old_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
+    removed = np.concatenate([tree.subtree(r) for r in roots]) if roots.size else np.zeros(0, np.int64)
+    first_new = tree.size
+    rng = np.random.default_rng(seed)
+    pieces = []
+    for r in roots.tolist():
+        string = np.array([r], np.int64)
+        if not prune:  # rewrite() points the root at its new children
+            for step in range(int(tree.step[r]) + 1, derivation.n + 1):
+                string = ls.rewrite(tree, string, step, rng, consts, rule_constants)
+        pieces.append(string)
+    if prune:
+        tree.set_children(roots, -1, 0)
+    new_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
+    tree._alive[removed] = False
+    new_leaves = _replace_spans(old_leaves, first, last, pieces)
+    change = Change(roots, old_children, new_children, removed,
+                    np.arange(first_new, tree.size, dtype=np.int64), old_leaves, new_leaves,
+                    int((last - first + 1).sum()), int(sum(len(p) for p in pieces)))
+    tree.leaves = new_leaves
+    tree.changed()
+    return change
+
+
+class Session:
+    """A plant being edited: derivation + edit log with undo/redo, saved as JSON.
+
+    Every edit is a dict in :attr:`edits` (``op`` = ``regrow``, ``prune`` or
+    ``constants``) holding everything needed to replay it, including the seed
+    actually used, so :meth:`load` rebuilds the identical plant.
+    """
+
+    def __init__(self, lsystem, n=None, seed=0, constants=None, filename=None):
+        if isinstance(lsystem, (str, pathlib.Path)):
+            filename = filename or str(lsystem)
+            lsystem = LSystem.from_file(lsystem)
+        self.lsystem = lsystem
+        self.filename = filename
+        self.n = lsystem.n if n is None else int(n)
+        self.seed = int(seed)
+        self.base_constants = {**lsystem.constants, **(constants or {})}
+        self.constants = dict(self.base_constants)
+        self.derivation = lsystem.derive(n=self.n, seed=self.seed, constants=self.constants)
+        self.edits = []  # applied edits, oldest first
+        self._undo = []  # (edit, how to undo)
+        self._redo = []
+        self.last_result = None
+
+    # -- queries -----------------------------------------------------------
+    @property
+    def tree(self):
+        return self.derivation.tree
+
+    def leaves_with_symbol(self, symbol):
+        """Current leaf ids whose module symbol is ``symbol`` (e.g. all ``F``)."""
+        if symbol not in self.lsystem.symbols:
+            return np.zeros(0, np.int64)
+        sid = self.lsystem.symbols.index(symbol)
+        return self.tree.leaves[self.tree.symbol[self.tree.leaves] == sid]
+
+    def plan(self, selection, rho=0.5, min_ascend=1, ascend_levels=None, flow_func=None):
+        """The cut for a selection, without changing anything."""
+        if ascend_levels is not None:
+            sel = np.asarray(list(selection), np.int64)
+            roots = collapse_nested(self.tree, [ascend(self.tree, leaf, ascend_levels) for leaf in sel])
+            return None, roots, roots, np.zeros(0, np.int64)
+        cut = select_roots(self.tree, selection, rho=rho, n=self.n, min_ascend=min_ascend,
+                           flow_func=flow_func)
+        return cut, cut.roots, cut.cut_roots, cut.min_roots
+
+    # -- edits -------------------------------------------------------------
+    def regrow(self, selection=(), rho=0.5, seed=None, constants=None, params=None, min_ascend=1,
+               ascend_levels=None):
+        """Regrow the selection's cut subtrees (or the whole plant if ``selection`` is empty).
+
+        ``seed`` None draws the next seed of this session (recorded in the edit);
+        ``constants`` apply to this regeneration only; ``params`` is a
+        parameter combination ``{"rule": r or None, "constants": {...}}``.
+        """
+        edit = {"op": "regrow", "selection": [int(x) for x in selection], "rho": check_rho(rho),
+                "seed": self._next_seed() if seed is None else int(seed),
+                "constants": dict(constants or {}), "params": _check_params(params, self.lsystem),
+                "min_ascend": int(min_ascend), "ascend": ascend_levels}
+        return self._apply(edit)
+
+    def prune(self, selection, rho=0.5, min_ascend=1, ascend_levels=None):
+        """Delete the cut subtrees without regrowing them (their roots become leaves)."""
+        edit = {"op": "prune", "selection": [int(x) for x in selection], "rho": check_rho(rho),
+                "seed": 0, "constants": {}, "params": None, "min_ascend": int(min_ascend),
+                "ascend": ascend_levels}
+        return self._apply(edit)
+
+    def set_constants(self, values):
+        """Change global constants: the whole plant is re-derived (an undoable edit)."""
+        unknown = set(values) - set(self.lsystem.constants)
+        if unknown:
+            raise ValueRefused(f"unknown constant(s): {', '.join(sorted(unknown))}")
+        edit = {"op": "constants", "values": {k: float(v) for k, v in values.items()}}
+        return self._apply(edit)
+
+    def _next_seed(self):
+        return self.seed * 1_000_003 + len(self.edits) + 1
+
+    def _apply(self, edit):
+        t0 = time.perf_counter()
+        if edit["op"] == "constants":
+            undo = ("derivation", self.derivation, dict(self.constants))
+            self.constants.update(edit["values"])
+            self.derivation = self.lsystem.derive(n=self.n, seed=self.seed, constants=self.constants)
+            result = RegenResult("constants", *(np.zeros(0, np.int64),) * 3, len(undo[1]),
+                                 len(self.derivation), None, time.perf_counter() - t0)
+        else:
+            result = self._regrow_or_prune(edit, t0)
+            undo = ("change", result.change)
+        self.edits.append(edit)
+        self._undo.append((edit, undo))
+        self._redo.clear()
+        self.last_result = result
+        return result
+
+    def _regrow_or_prune(self, edit, t0):
+        tree = self.tree
+        if edit["selection"]:
+            cut, roots, cut_roots, min_roots = self.plan(edit["selection"], edit["rho"],
+                                                         edit["min_ascend"], edit["ascend"])
+        else:  # the whole plant: regrow from every axiom module
+            cut = None
+            roots = np.flatnonzero((tree.parent == -1) & tree.alive & (tree.child_count > 0))
+            cut_roots, min_roots = roots, np.zeros(0, np.int64)
+        params = edit["params"] or {}
+        constants = {**edit["constants"]}
+        rule_constants = None
+        if params:
+            if params.get("rule") is None:
+                constants.update(params.get("constants", {}))
+            else:
+                rule_constants = {int(params["rule"]): dict(params.get("constants", {}))}
+        change = regenerate(self.derivation, roots, seed=edit["seed"], constants=constants,
+                            rule_constants=rule_constants, prune=edit["op"] == "prune")
+        return RegenResult(edit["op"], change.roots, cut_roots, min_roots, change.removed_leaves,
+                           change.added_leaves, cut.cut_value if cut else None,
+                           time.perf_counter() - t0, cut, change)
+
+    def undo(self):
+        """Undo the last edit; returns it (None when there is nothing to undo)."""
+        if not self._undo:
+            return None
+        edit, how = self._undo.pop()
+        if how[0] == "derivation":
+            current = ("derivation", self.derivation, dict(self.constants))
+            self.derivation, self.constants = how[1], how[2]
+            how = current
+        else:
+            how[1].apply(self.tree, forward=False)
+        self.edits.pop()
+        self._redo.append((edit, how))
+        return edit
+
+    def redo(self):
+        """Redo the last undone edit; returns it (None when there is nothing to redo)."""
+        if not self._redo:
+            return None
+        edit, how = self._redo.pop()
+        if how[0] == "derivation":
+            current = ("derivation", self.derivation, dict(self.constants))
+            self.derivation, self.constants = how[1], how[2]
+            how = current
+        else:
+            how[1].apply(self.tree, forward=True)
+        self.edits.append(edit)
+        self._undo.append((edit, how))
+        return edit
+
+    @property
+    def can_undo(self):
+        return bool(self._undo)
+
+    @property
+    def can_redo(self):
+        return bool(self._redo)
+
+    # -- persistence -------------------------------------------------------
+    def to_dict(self):
+        return {"format": SESSION_FORMAT, "version": SESSION_VERSION, "grammar": self.lsystem.text,
+                "filename": self.filename, "n": self.n, "seed": self.seed,
+                "constants": self.base_constants, "edits": self.edits}
+
+    def save(self, path):
+        """Write the session as JSON (atomically: a crash never leaves half a file)."""
+        path = pathlib.Path(path)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(self.to_dict(), indent=1), encoding="utf-8")
+        tmp.replace(path)
+        return path
+
+    @classmethod
+    def from_dict(cls, data, where="session"):
+        if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:
+            raise RamureError(f"{where} is not a Ramure session (no '\"format\": \"{SESSION_FORMAT}\"')")
+        if data.get("version") != SESSION_VERSION:
+            raise RamureError(f"{where} has session version {data.get('version')!r}; this Ramure "
+                              f"reads version {SESSION_VERSION}")
+        missing = [k for k in ("grammar", "n", "seed", "constants", "edits") if k not in data]
+        if missing:
+            raise RamureError(f"{where} is incomplete: missing {', '.join(missing)}")
+        try:
+            ls = LSystem.from_text(data["grammar"], filename=data.get("filename"))
+            session = cls(ls, n=data["n"], seed=data["seed"], constants=data["constants"],
+                          filename=data.get("filename"))
+            for i, edit in enumerate(data["edits"]):
+                session._apply(_check_edit(edit, i))
+        except RamureError as exc:
+            raise RamureError(f"{where} cannot be replayed: {exc}") from None
+        except (KeyError, TypeError, ValueError) as exc:
+            raise RamureError(f"{where} is corrupt: {exc!r}") from None
+        session._undo.clear()  # a loaded session starts a fresh undo history
+        return session
+
+    @classmethod
+    def load(cls, path):
+        """Read a session file; a corrupt or truncated file raises RamureError, nothing else changes."""
+        path = pathlib.Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise RamureError(f"{path} is not valid JSON (line {exc.lineno}, column {exc.colno}: "
+                              f"{exc.msg}); is the file truncated?") from None
+        except UnicodeDecodeError:
+            raise RamureError(f"{path} is not a text file") from None
+        return cls.from_dict(data, where=str(path))
+
+
+def _check_params(params, lsystem):
+    if params is None:
+        return None
+    if not isinstance(params, dict) or "constants" not in params:
+        raise ValueRefused("a parameter combination is {'rule': index or None, 'constants': {...}}")
+    rule = params.get("rule")
+    if rule is not None and not 0 <= int(rule) < len(lsystem.grammar.rules):
+        raise ValueRefused(f"rule {rule} does not exist (the grammar has "
+                           f"{len(lsystem.grammar.rules)} rules)")
+    unknown = set(params["constants"]) - set(lsystem.constants)
+    if unknown:
+        raise ValueRefused(f"unknown constant(s) in the combination: {', '.join(sorted(unknown))}")
+    return {"rule": None if rule is None else int(rule),
+            "constants": {k: float(v) for k, v in params["constants"].items()}}
+
+
+def _check_edit(edit, i):
+    if not isinstance(edit, dict) or edit.get("op") not in ("regrow", "prune", "constants"):
+        raise RamureError(f"edit {i + 1} has no valid 'op'")
+    if edit["op"] == "constants":
+        if not isinstance(edit.get("values"), dict):
+            raise RamureError(f"edit {i + 1} (constants) has no 'values'")
+        return edit
+    for key in ("selection", "rho", "seed", "constants", "min_ascend"):
+        if key not in edit:
+            raise RamureError(f"edit {i + 1} ({edit['op']}) is missing '{key}'")
+    edit.setdefault("params", None)
+    edit.setdefault("ascend", None)
+    return edit

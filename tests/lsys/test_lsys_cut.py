@@ -1,0 +1,142 @@
+"""Min-cut selection over the derivation tree (issue 8's required tests)."""
+import networkx as nx
+import numpy as np
+import pytest
+from networkx.algorithms import flow
+
+from lsys import LSystem, ValueRefused
+from lsys.cut import alpha_table, initial_capacities, kinship, select_roots
+
+
+def ternary(n=3):
+    return LSystem.from_text(f"n: {n}\nw: A\np:\n A -> AAA\n").derive()
+
+
+def leaves_of(tree, node):
+    return tree.leaves_under(node).tolist()
+
+
+def test_alpha_table_n10():
+    assert alpha_table(10, rho=0.5, alpha0=1024, kmax=5).tolist() == [1024, 1022, 1018, 1010, 994, 962]
+
+
+@pytest.mark.parametrize("rho", [0, -0.1, 1.01, "x"])
+def test_rho_out_of_range_refused(rho):
+    with pytest.raises(ValueRefused, match="rho"):
+        alpha_table(3, rho=rho)
+
+
+def test_initial_capacities_double_up():
+    t = ternary(2).tree
+    cap = initial_capacities(t)
+    assert cap[t.leaves].tolist() == [1.0] * 9
+    assert cap[1] == 6 and cap[0] == 36  # 2*(1+1+1), 2*(6+6+6)
+
+
+def test_no_selection_effect_keeps_leaves():
+    d = ternary(3)
+    one = d.tree.leaves[:1]
+    cut = select_roots(d.tree, one, n=3, min_ascend=0)
+    assert cut.cut_roots.size == 0 and cut.roots.size == 0
+
+
+def test_more_than_rho_of_siblings_makes_parent_a_root():
+    d = ternary(3)
+    t = d.tree
+    parent = int(t.parent[t.leaves[0]])
+    cut = select_roots(t, t.leaves[:2], n=3, min_ascend=0)  # 2 of 3 > 0.5
+    assert cut.cut_roots.tolist() == [parent]
+    cut = select_roots(t, t.leaves[:1], n=3, min_ascend=0)  # 1 of 3 < 0.5
+    assert cut.cut_roots.tolist() == []
+
+
+def test_isolated_leaf_stays_while_cluster_climbs():
+    d = ternary(3)
+    t = d.tree
+    cluster_root = int(t.ancestor(t.leaves[:1], 2)[0])  # depth-1 node holding 9 leaves
+    cluster = leaves_of(t, cluster_root)
+    lonely = int(t.leaves[-1])
+    cut = select_roots(t, cluster + [lonely], n=3, min_ascend=0)
+    assert cluster_root in cut.cut_roots.tolist()
+    assert int(t.parent[lonely]) not in cut.cut_roots.tolist()
+    assert lonely in cut.cut_nodes.tolist()  # the cut stays on the lonely leaf
+
+
+def test_lower_rho_climbs_sooner():
+    d = ternary(3)
+    t = d.tree
+    sel = t.leaves[:1]
+    assert select_roots(t, sel, rho=0.5, n=3, min_ascend=0).cut_roots.size == 0
+    assert select_roots(t, sel, rho=0.3, n=3, min_ascend=0).cut_roots.tolist() == [int(t.parent[sel[0]])]
+
+
+def test_half_selected_tie_goes_to_lower_cut():
+    d = LSystem.from_text("n: 2\nw: A\np:\n A -> AA\n").derive()  # balanced binary, 4 leaves
+    t = d.tree
+    cut = select_roots(t, t.leaves[:1], n=2, min_ascend=0)  # 1 of 2: a tie at the parent
+    assert cut.cut_roots.size == 0
+
+
+def test_min_ascend_regrows_from_parent():
+    d = ternary(3)
+    t = d.tree
+    leaf = int(t.leaves[4])
+    cut = select_roots(t, [leaf], n=3)  # min_ascend=1 by default
+    assert cut.cut_roots.size == 0
+    assert cut.min_roots.tolist() == [int(t.parent[leaf])] == cut.roots.tolist()
+
+
+@pytest.mark.parametrize("flow_func", [flow.boykov_kolmogorov, flow.preflow_push, flow.edmonds_karp])
+def test_cut_value_equals_sum_of_cut_capacities(flow_func):
+    d = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=6)
+    t = d.tree
+    rng = np.random.default_rng(0)
+    sel = rng.choice(t.leaves, 25, replace=False)
+    cut = select_roots(t, sel, n=6, flow_func=flow_func)
+    assert cut.cut_value == pytest.approx(sum(cut.cut_edges.values()))
+    # cross-check against networkx's own minimum_cut on the unreduced graph
+    full = select_roots(t, sel, n=6, flow_func=flow_func, reduce=False)
+    value, _ = nx.minimum_cut(full.graph, "s", "t")
+    assert cut.cut_value == pytest.approx(value) == pytest.approx(full.cut_value)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_graph_reduction_keeps_the_answer(seed):
+    d = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=7)
+    t = d.tree
+    rng = np.random.default_rng(seed)
+    sel = rng.choice(t.leaves, int(rng.integers(1, 200)), replace=False)
+    rho = float(rng.uniform(0.2, 1.0))
+    a = select_roots(t, sel, rho=rho, n=7)
+    b = select_roots(t, sel, rho=rho, n=7, reduce=False)
+    assert a.roots.tolist() == b.roots.tolist()
+    assert a.cut_nodes.tolist() == b.cut_nodes.tolist()
+    assert a.cut_value == pytest.approx(b.cut_value)
+    assert a.graph.number_of_nodes() <= b.graph.number_of_nodes()
+
+
+def test_roots_do_not_nest():
+    d = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8)
+    t = d.tree
+    sel = t.leaves[::7]
+    roots = select_roots(t, sel, n=8).roots
+    for r in roots.tolist():
+        assert not set(t.ancestors(r).tolist()) & set(roots.tolist())
+
+
+def test_selection_must_be_leaves():
+    d = ternary(2)
+    with pytest.raises(ValueRefused, match="not a leaf"):
+        select_roots(d.tree, [0], n=2)
+    with pytest.raises(ValueRefused, match="empty"):
+        select_roots(d.tree, [], n=2)
+
+
+def test_kinship_hues():
+    d = ternary(2)
+    t = d.tree
+    leaf = int(t.leaves[0])
+    phi, hue, rgb = kinship(t, leaf, n=2)
+    assert phi.tolist() == [0, 1, 1, 2, 2, 2, 2, 2, 2]
+    assert hue.tolist() == [0, 120, 120, 240, 240, 240, 240, 240, 240]
+    assert np.allclose(rgb[0], [1, 0, 0]) and np.allclose(rgb[-1], [0, 0, 1])
