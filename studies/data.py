@@ -3,7 +3,8 @@
 Groups are rows of a boolean membership matrix (groups x 27); tests, grammars
 and participants are integer indices.  Likert answers are floats 1-4, NaN when
 unanswered.  By default only finished tests are read: an unfinished test is
-work in progress, not an answer.
+work in progress, not an answer.  Tests of participants whose consent is not
+recorded (or was withdrawn) are never read.
 
 >>> import tempfile, pathlib
 >>> from studies.picks import lattice_picks
@@ -87,7 +88,8 @@ def load_study_data(source, finished_only=True) -> StudyData:
     people = conn.execute("SELECT id, code FROM participants ORDER BY id").fetchall()
     pindex = {pid: i for i, (pid, _) in enumerate(people)}
 
-    where = "WHERE t.finished_at IS NOT NULL" if finished_only else ""
+    where = ("JOIN participants p ON p.id = t.participant_id WHERE p.consent = 1"
+             + (" AND t.finished_at IS NOT NULL" if finished_only else ""))
     tests = np.array(conn.execute(f"SELECT t.id, t.grammar_id, t.participant_id FROM tests t {where} "
                                   "ORDER BY t.id").fetchall(), dtype=np.int64).reshape(-1, 3)
     tindex = {tid: i for i, tid in enumerate(tests[:, 0].tolist())}

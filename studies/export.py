@@ -4,7 +4,8 @@ Files: ``picks.csv``, ``participants.csv``, ``tests.csv``, ``groups.csv``
 (one row per group, images joined by ``;``), ``memberships.csv`` (one row per
 image placed), ``qualifiers.csv`` (raw text plus its canonical names).  Likert
 answers are 1-4 (poor, fair, good, excellent); unfinished tests are included
-with an empty ``finished_at``.
+with an empty ``finished_at``.  Answers of participants without recorded
+consent are left out (they stay listed in ``participants.csv``).
 
 >>> import tempfile, pathlib
 >>> from studies.simulate import simulate_study
@@ -30,24 +31,24 @@ _QUERIES = {
     "tests.csv": (
         "SELECT t.id AS test, p.code AS participant, g.name AS grammar, t.started_at, t.finished_at, "
         "t.elapsed_seconds FROM tests t JOIN participants p ON p.id = t.participant_id "
-        "JOIN grammars g ON g.id = t.grammar_id ORDER BY t.id"),
+        "JOIN grammars g ON g.id = t.grammar_id WHERE p.consent = 1 ORDER BY t.id"),
     "groups.csv": (
         "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, "
         "count(gi.pick_id) AS size, group_concat(gi.pick_id, ';') AS images, g.representative, "
         "g.usefulness, g.difference, g.representative_quality "
         "FROM groups g JOIN tests t ON t.id = g.test_id JOIN participants p ON p.id = t.participant_id "
         "JOIN grammars gr ON gr.id = t.grammar_id LEFT JOIN (SELECT * FROM group_images "
-        "ORDER BY pick_id) gi ON gi.group_id = g.id GROUP BY g.id ORDER BY t.id, g.label"),
+        "ORDER BY pick_id) gi ON gi.group_id = g.id WHERE p.consent = 1 GROUP BY g.id ORDER BY t.id, g.label"),
     "memberships.csv": (
         "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, gi.pick_id "
         "FROM group_images gi JOIN groups g ON g.id = gi.group_id JOIN tests t ON t.id = g.test_id "
         "JOIN participants p ON p.id = t.participant_id JOIN grammars gr ON gr.id = t.grammar_id "
-        "ORDER BY t.id, g.label, gi.pick_id"),
+        "WHERE p.consent = 1 ORDER BY t.id, g.label, gi.pick_id"),
     "qualifiers.csv": (
         "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, q.text "
         "FROM qualifiers q JOIN groups g ON g.id = q.group_id JOIN tests t ON t.id = g.test_id "
         "JOIN participants p ON p.id = t.participant_id JOIN grammars gr ON gr.id = t.grammar_id "
-        "ORDER BY t.id, g.label, q.id"),
+        "WHERE p.consent = 1 ORDER BY t.id, g.label, q.id"),
 }
 
 

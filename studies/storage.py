@@ -196,11 +196,22 @@ class Study:
         return code
 
     def record_consent(self, code, given=True):
-        """Record that participant ``code`` gave (or withdrew) consent, with the time."""
+        """Record that participant ``code`` gave (or withdrew) consent, with the time.
+
+        Without consent a participant cannot start or resume a test, and their
+        answers are left out of the analysis and exports (but kept on disk; use
+        :meth:`delete_participant` to erase them).
+        """
         self._participant(code)
         with self.conn:
             self.conn.execute("UPDATE participants SET consent = ?, consent_at = ? WHERE code = ?",
                               (int(bool(given)), now_iso(), code))
+
+    def delete_participant(self, code):
+        """Erase participant ``code`` and every answer they gave (one transaction)."""
+        pid = self._participant(code)[0]
+        with self.conn:
+            self.conn.execute("DELETE FROM participants WHERE id = ?", (pid,))
 
     def _participant(self, code):
         row = self.conn.execute("SELECT id, seed, consent FROM participants WHERE code = ?",
@@ -268,6 +279,8 @@ class Study:
 def _read_grammar(name, spec):
     if not isinstance(name, str) or not name.strip():
         raise StudyInputError(f"grammar name {name!r} must be non-empty text")
+    if name.strip().casefold() == "all":
+        raise StudyInputError("grammar name 'all' is reserved for the pooled statistics")
     if isinstance(spec, (str, os.PathLike)):
         return str(pathlib.Path(spec).resolve()), load_picks(spec)
     return None, picks_from_data(spec, where=f"grammar {name!r}")

@@ -242,3 +242,29 @@ def test_foreign_keys_are_enforced(study):
         with study.conn:
             study.conn.execute("INSERT INTO tests (participant_id, grammar_id, started_at) "
                                "VALUES (99, 99, 'x')")
+
+
+def test_withdrawn_consent_excludes_answers_and_delete_erases_them(study, tmp_path):
+    from studies.data import load_study_data
+    from studies.export import export_csv
+
+    a, b = study.add_participant(consent=True), study.add_participant(consent=True)
+    complete(study.session(a, "honda"))
+    complete(study.session(b, "honda"))
+    assert load_study_data(study).n_tests == 2
+    study.record_consent(b, given=False)
+    assert load_study_data(study).n_tests == 1
+    with pytest.raises(StudyInputError, match="not given consent"):
+        study.session(b, "honda")
+    export_csv(study, tmp_path / "csv")
+    assert (tmp_path / "csv" / "tests.csv").read_text().count("\n") == 2  # header + one test
+    study.delete_participant(b)
+    assert [p["code"] for p in study.participants()] == [a]
+    counts = [study.conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0]
+              for t in ("tests", "groups", "group_images", "qualifiers")]
+    assert counts == [1, 4, 27, 4]
+
+
+def test_reserved_grammar_name(tmp_path):
+    with pytest.raises(StudyInputError, match="reserved"):
+        Study.create(tmp_path / "s.db", grammars={"All": lattice_picks()})
