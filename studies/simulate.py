@@ -19,7 +19,6 @@ front end, so a simulation exercises storage and validation too.
 """
 from __future__ import annotations
 
-import os
 import pathlib
 import tempfile
 from dataclasses import dataclass
