@@ -1,0 +1,297 @@
+"""The explorer's state, shared by the desktop window and the Jupyter widgets.
+
+:class:`Explorer` holds the grammar text, the editing :class:`~lsys.regen.Session`,
+the selection and the last cut, and turns user actions into calls on the core
+packages.  It has no GUI code: a front end calls its methods and redraws when
+:attr:`Explorer.version` changes.  Bad input is refused with a
+:class:`~lsys.errors.RamureError` and leaves the state as it was.
+
+>>> ex = Explorer("grammars/honda_sympodial.lsys", n=6)
+>>> ex.select(ex.session.leaves_with_symbol("F")[-3:])
+>>> result = ex.regrow(constants={"a2": 30})
+>>> ex.undo() is not None and ex.selection == []
+True
+"""
+from __future__ import annotations
+
+import math
+import pathlib
+
+import numpy as np
+
+from lsys import GrammarError, LSystem
+from lsys.cut import kinship
+from lsys.errors import RamureError, ValueRefused
+from lsys.regen import Session
+
+SELECT_MODES = ("replace", "add", "remove", "toggle")
+
+
+class Explorer:
+    """Edit–select–regenerate state for one plant.
+
+    ``source`` is a grammar file path or grammar text.
+    """
+
+    def __init__(self, source, n=None, seed=0):
+        path = pathlib.Path(source) if isinstance(source, pathlib.Path) or (
+            isinstance(source, str) and "\n" not in source and source.endswith(".lsys")) else None
+        self.path = path
+        self.text = path.read_text(encoding="utf-8") if path else str(source)
+        self.error = None  # the last grammar error, shown by the front end
+        self.rho = 0.5
+        self.selection = []
+        self.last_result = None
+        self.version = 0
+        self._cache = {}
+        self.session = Session(LSystem.from_text(self.text, filename=str(path) if path else None),
+                               n=n, seed=seed, filename=str(path) if path else None)
+
+    # -- derived views (cached per version) --------------------------------
+    def _cached(self, key, make):
+        if self._cache.get("version") != self.version:
+            self._cache = {"version": self.version}
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
+    @property
+    def lsystem(self):
+        return self.session.lsystem
+
+    @property
+    def derivation(self):
+        return self.session.derivation
+
+    @property
+    def skeleton(self):
+        return self._cached("skeleton", self.derivation.skeleton)
+
+    @property
+    def mesh(self):
+        return self._cached("mesh", lambda: self.skeleton.to_polydata())
+
+    @property
+    def constants(self):
+        return dict(self.session.constants)
+
+    def _changed(self):
+        self.version += 1
+
+    # -- grammar -----------------------------------------------------------
+    def set_text(self, text):
+        """Parse new grammar text.  On error keep the current plant and return the error."""
+        try:
+            ls = LSystem.from_text(text, filename=str(self.path) if self.path else None)
+            session = Session(ls, n=None, seed=self.session.seed, filename=self.session.filename)
+        except GrammarError as err:
+            self.error = err
+            return err
+        self.text, self.error, self.session = text, None, session
+        self.selection, self.last_result = [], None
+        self._changed()
+        return None
+
+    def set_constant(self, name, value):
+        """Change one ``#define`` (an undoable edit that re-derives the plant)."""
+        value = _finite(value, name)
+        if name not in self.lsystem.constants:
+            raise ValueRefused(f"the grammar has no constant '{name}'")
+        self.session.set_constants({name: value})
+        self.selection = []
+        self._changed()
+
+    def set_derivation(self, n=None, seed=None):
+        """Change the derivation count or seed: a fresh session (clears undo history)."""
+        n = self.session.n if n is None else n
+        seed = self.session.seed if seed is None else seed
+        if not float(n).is_integer() or not 0 <= int(n) <= 30:
+            raise ValueRefused(f"the derivation count must be a whole number from 0 to 30, not {n}")
+        if not float(seed).is_integer():
+            raise ValueRefused(f"the seed must be a whole number, not {seed}")
+        self.session = Session(self.lsystem, n=int(n), seed=int(seed), constants=self.constants,
+                               filename=self.session.filename)
+        self.selection, self.last_result = [], None
+        self._changed()
+
+    def set_rho(self, rho):
+        """ρ as a fraction in (0, 1] or a percentage in (1, 100] (the UI's slider)."""
+        rho = _finite(rho, "rho")
+        rho = rho / 100.0 if rho > 1 else rho
+        if not 0 < rho <= 1:
+            raise ValueRefused(f"rho must be in (0, 100], got {rho:g}")
+        self.rho = rho
+
+    # -- selection ---------------------------------------------------------
+    def select(self, leaf_ids, mode="replace"):
+        """Change the selection: ``replace``, ``add``, ``remove`` or ``toggle`` these leaves."""
+        if mode not in SELECT_MODES:
+            raise ValueRefused(f"selection mode must be one of {', '.join(SELECT_MODES)}")
+        ids = {int(i) for i in np.atleast_1d(np.asarray(list(leaf_ids) if not np.isscalar(leaf_ids)
+                                                        else [leaf_ids], np.int64))}
+        leaves = set(self.derivation.tree.leaves.tolist())
+        bad = ids - leaves
+        if bad:
+            raise ValueRefused(f"{min(bad)} is not a leaf of the current plant")
+        current = set(self.selection)
+        new = {"replace": ids, "add": current | ids, "remove": current - ids,
+               "toggle": current ^ ids}[mode]
+        self.selection = sorted(new)
+
+    def clear_selection(self):
+        self.selection = []
+
+    def leaf_of_cell(self, cell_id):
+        """The history leaf that drew a mesh cell (what a click picks)."""
+        leaf_ids = self.mesh.cell_data["leaf_id"]
+        if not 0 <= int(cell_id) < len(leaf_ids):
+            raise ValueRefused(f"cell {cell_id} is not part of the plant")
+        return int(leaf_ids[int(cell_id)])
+
+    def leaves_in_rectangle(self, screen_xy, rect):
+        """Leaves whose segment midpoints project inside ``rect`` = (x0, y0, x1, y1).
+
+        ``screen_xy`` is (s, 2): each segment midpoint projected by the view.
+        """
+        return leaves_in_rectangle(self.skeleton.leaf_id, screen_xy, rect)
+
+    def segment_midpoints(self):
+        sk = self.skeleton
+        return (sk.start + sk.end) / 2.0
+
+    def leaves_where(self, min_order=None, min_height=None, max_height=None):
+        """Leaves by a branch-order / height filter (e.g. order >= 3 above height h)."""
+        sk = self.skeleton
+        mask = np.ones(len(sk), bool)
+        if min_order is not None:
+            mask &= sk.order >= min_order
+        mid_z = (sk.start[:, 2] + sk.end[:, 2]) / 2
+        if min_height is not None:
+            mask &= mid_z >= min_height
+        if max_height is not None:
+            mask &= mid_z <= max_height
+        return np.unique(sk.leaf_id[mask]).tolist()
+
+    def kinship_hues(self):
+        """Per-segment RGB by kinship to the single selected leaf (None otherwise)."""
+        if len(self.selection) != 1:
+            return None
+        tree = self.derivation.tree
+        _, _, rgb = kinship(tree, self.selection[0], n=self.session.n)
+        pos = tree.leaf_positions(self.skeleton.leaf_id)
+        return rgb[pos]
+
+    def plan(self):
+        """The cut the current selection would use (nothing changes)."""
+        if not self.selection:
+            return None
+        cut, *_ = self.session.plan(self.selection, self.rho)
+        return cut
+
+    # -- edits -------------------------------------------------------------
+    def regrow(self, seed=None, constants=None, params=None):
+        """Regrow the selection's cut subtrees (the whole plant when nothing is selected)."""
+        constants = {k: _finite(v, k) for k, v in (constants or {}).items()}
+        result = self.session.regrow(self.selection, rho=self.rho, seed=seed, constants=constants,
+                                     params=params)
+        return self._after_edit(result)
+
+    def prune(self):
+        if not self.selection:
+            raise ValueRefused("select the branches to prune first")
+        return self._after_edit(self.session.prune(self.selection, rho=self.rho))
+
+    def _after_edit(self, result):
+        self.last_result = result
+        self.selection = []
+        self._changed()
+        return result
+
+    def undo(self):
+        edit = self.session.undo()
+        if edit is not None:
+            self.selection, self.last_result = [], None
+            self._changed()
+        return edit
+
+    def redo(self):
+        edit = self.session.redo()
+        if edit is not None:
+            self.selection, self.last_result = [], None
+            self._changed()
+        return edit
+
+    def status(self):
+        """One line for a status bar."""
+        r = self.last_result
+        base = f"{len(self.derivation)} modules, {len(self.skeleton)} segments"
+        if self.selection:
+            base += f", {len(self.selection)} selected"
+        if r is None:
+            return base
+        return (f"{base} — last {r.op}: roots {r.roots.tolist()[:8]}{'…' if len(r.roots) > 8 else ''}, "
+                f"{r.removed} modules replaced by {r.added}")
+
+    # -- files -------------------------------------------------------------
+    def save_grammar(self, path):
+        pathlib.Path(path).write_text(self.text, encoding="utf-8")
+        self.path = pathlib.Path(path)
+
+    def save_session(self, path):
+        return self.session.save(path)
+
+    def load_session(self, path):
+        """Load a session file; on error the current plant is untouched."""
+        session = Session.load(path)
+        self.session, self.text = session, session.lsystem.text
+        self.selection, self.last_result, self.error = [], None, None
+        self._changed()
+
+    def export(self, path):
+        """Export the plant mesh by suffix: .vtp, .vtk, .obj, .ply, .stl, .gltf/.glb (via pyvista)."""
+        path = pathlib.Path(path)
+        suffix = path.suffix.lower()
+        mesh = self.mesh
+        if suffix in (".vtp", ".vtk", ".ply", ".stl"):
+            mesh.save(str(path))
+        elif suffix == ".obj":
+            write_obj(mesh, path)
+        elif suffix in (".gltf", ".glb"):
+            from app.render import export_gltf
+
+            export_gltf(mesh, path)
+        else:
+            raise ValueRefused(f"cannot export to '{suffix}': use .vtp, .obj, .gltf, .ply or .stl")
+        return path
+
+
+def leaves_in_rectangle(leaf_ids, screen_xy, rect):
+    """Unique leaf ids whose screen points fall inside the rectangle (any corner order)."""
+    x0, y0, x1, y1 = rect
+    xy = np.asarray(screen_xy, float)
+    inside = ((xy[:, 0] >= min(x0, x1)) & (xy[:, 0] <= max(x0, x1))
+              & (xy[:, 1] >= min(y0, y1)) & (xy[:, 1] <= max(y0, y1)))
+    return np.unique(np.asarray(leaf_ids)[inside]).tolist()
+
+
+def write_obj(mesh, path):
+    """Wavefront OBJ of a polygonal mesh (vertices and faces), vectorised formatting."""
+    mesh = mesh.triangulate()
+    faces = mesh.faces.reshape(-1, 4)[:, 1:] + 1
+    with open(path, "w", encoding="utf-8") as f:
+        f.write("# Ramure plant\n")
+        np.savetxt(f, mesh.points, fmt="v %.6g %.6g %.6g")
+        np.savetxt(f, faces, fmt="f %d %d %d")
+
+
+def _finite(value, name):
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueRefused(f"{name}: '{value}' is not a number") from None
+    if not math.isfinite(value):
+        raise ValueRefused(f"{name}: the value must be a finite number")
+    return value
+
+
+__all__ = ["Explorer", "RamureError", "leaves_in_rectangle", "write_obj"]
