@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import math
 import os
 import pathlib
 import re
@@ -90,7 +91,11 @@ class Study:
         time budget over all their tests.
         """
         path = pathlib.Path(path)
-        if budget_minutes is None or not budget_minutes > 0:
+        try:
+            budget = float(budget_minutes)
+        except (TypeError, ValueError):
+            budget = math.nan
+        if not budget > 0:
             raise StudyInputError(f"budget must be a positive number of minutes, got {budget_minutes!r}")
         # Read every grammar before touching the disk, so a bad one leaves no file.
         loaded = {gname: _read_grammar(gname, spec) for gname, spec in (grammars or {}).items()}
@@ -104,13 +109,14 @@ class Study:
                 conn.close()
             if exists:
                 raise StudyInputError(f"{path}: already holds a study; open it instead")
+            raise StudyInputError(f"{path}: exists and is not a study; choose a new file")
         path.parent.mkdir(parents=True, exist_ok=True)
         conn = connect(path, durable)
         conn.executescript(schema_sql())
         with conn:
             conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
             conn.execute("INSERT INTO study (id, name, budget_seconds, created_at) VALUES (1, ?, ?, ?)",
-                         (name or path.stem, 60.0 * float(budget_minutes), now_iso()))
+                         (name or path.stem, 60.0 * budget, now_iso()))
             for gname, (source, picks) in loaded.items():
                 _insert_grammar(conn, gname, source, picks)
         return cls(conn, path, clock)

@@ -50,6 +50,11 @@ def test_create_refuses_existing_study_and_open_refuses_other_files(tmp_path, st
     sqlite3.connect(other).execute("CREATE TABLE x (a)").connection.close()
     with pytest.raises(StudyInputError, match="not a Ramure study"):
         Study.open(other)
+    with pytest.raises(StudyInputError, match="exists and is not a study"):
+        Study.create(other, grammars={})
+    (tmp_path / "text.db").write_text("hello, not sqlite at all" * 100)
+    with pytest.raises(StudyInputError, match="not a SQLite file"):
+        Study.create(tmp_path / "text.db", grammars={})
     with pytest.raises(StudyInputError, match="no such study file"):
         Study.open(tmp_path / "missing.db")
 
