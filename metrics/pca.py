@@ -1,0 +1,100 @@
+"""PCA of the metric deltas to three components (thesis §5.3), with scikit-learn.
+
+:class:`DeltaPCA` centres the (N,10) delta matrix, optionally standardises
+each metric by its standard deviation (``standardize=True``; off by default
+as in the thesis, where metrics with large deltas dominate), and keeps the
+three main components.  Rows with NaN (failed variants) are ignored by
+:meth:`~DeltaPCA.fit` and stay NaN after :meth:`~DeltaPCA.transform`.
+
+Each component's sign is fixed so that its largest loading is positive, so
+the same data always gives the same axes.  Fewer than three informative
+directions (e.g. fewer than four variants) give zero components, not an error.
+
+>>> import numpy as np
+>>> X = np.random.default_rng(0).normal(size=(50, 10)) * np.arange(10, 0, -1)
+>>> pca = DeltaPCA().fit(X)
+>>> pca.transform(X).shape, bool(pca.explained_variance_ratio_[0] > pca.explained_variance_ratio_[1])
+((50, 3), True)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from lsys.errors import RamureError
+
+
+class DeltaPCA:
+    """Three-component PCA of metric deltas.
+
+    Fitted attributes: ``components_`` (3, f), ``explained_variance_`` (3,),
+    ``explained_variance_ratio_`` (3,), ``mean_`` (f,), ``scale_`` (f,) (ones
+    unless standardised), ``n_features_in_``, ``n_samples_``.
+    """
+
+    def __init__(self, n_components=3, standardize=False):
+        self.n_components = n_components
+        self.standardize = standardize
+
+    def _check(self, X, fitting):
+        X = np.asarray(X, float)
+        if X.ndim != 2:
+            raise RamureError(f"expected a 2-D array of deltas (variants x metrics), got shape {X.shape}")
+        if not fitting and X.shape[1] != self.n_features_in_:
+            raise RamureError(f"expected {self.n_features_in_} metrics per row, got {X.shape[1]}")
+        return X
+
+    def fit(self, X):
+        from sklearn.decomposition import PCA
+
+        X = self._check(X, fitting=True)
+        k = int(self.n_components)
+        if k < 1:
+            raise RamureError(f"n_components must be >= 1, not {self.n_components}")
+        rows = X[np.all(np.isfinite(X), axis=1)]
+        if not len(rows):
+            raise RamureError("no valid variant to analyse (every variant failed)")
+        f = X.shape[1]
+        self.n_features_in_ = f
+        self.n_samples_ = len(rows)
+        self.mean_ = rows.mean(axis=0)
+        scale = rows.std(axis=0) if self.standardize else np.ones(f)
+        self.scale_ = np.where(scale > 0, scale, 1.0)
+        Z = (rows - self.mean_) / self.scale_
+        components = np.zeros((k, f))
+        variance = np.zeros(k)
+        usable = min(k, len(rows), f)
+        total = float(Z.var(axis=0).sum())
+        if usable and total > 0:
+            pca = PCA(n_components=usable, svd_solver="full").fit(Z)
+            components[:usable] = pca.components_
+            variance[:usable] = pca.explained_variance_ * (len(rows) - 1) / len(rows)
+        for c in components:  # deterministic sign: largest loading positive
+            if c[np.argmax(np.abs(c))] < 0:
+                c *= -1
+        self.components_ = components
+        self.explained_variance_ = variance
+        self.explained_variance_ratio_ = variance / total if total > 0 else np.zeros(k)
+        return self
+
+    def transform(self, X):
+        """Project deltas (N, f) to (N, 3); NaN rows stay NaN."""
+        if not hasattr(self, "components_"):
+            raise RamureError("this PCA is not fitted yet: call fit(deltas) first")
+        X = self._check(X, fitting=False)
+        return ((X - self.mean_) / self.scale_) @ self.components_.T
+
+    def fit_transform(self, X):
+        return self.fit(X).transform(X)
+
+    def to_dict(self, metric_names=None) -> dict:
+        """JSON-able description (what ``pca.json`` holds)."""
+        return {
+            "metrics": list(metric_names) if metric_names is not None else None,
+            "components": self.components_.tolist(),
+            "explained_variance": self.explained_variance_.tolist(),
+            "explained_variance_ratio": self.explained_variance_ratio_.tolist(),
+            "mean": self.mean_.tolist(),
+            "scale": self.scale_.tolist(),
+            "standardized": bool(self.standardize),
+            "n_samples": int(self.n_samples_),
+        }

@@ -1,0 +1,329 @@
+"""The variant sweep: derive every variant, measure it, compare it with the base plant.
+
+:class:`VariantSweep` is configured, then fitted on a grammar, then queried
+(scikit-learn style; fitted state ends with ``_``).  Per variant the work is
+derive -> skeleton -> ten metrics (no mesh).  Variants go to workers in
+chunks (one task = ``chunk_size`` variants; the grammar is parsed once per
+worker process), on a local process pool by default or on a Dask cluster
+with ``scheduler="tcp://host:port"`` (``pip install ramure[dask]``).
+
+A ``progress(done, total)`` callback is called as chunks finish, and the
+sweep stops with :class:`SweepCancelled` soon after ``cancel`` is set (a
+:class:`threading.Event`, anything with ``is_set()``, or a callable returning
+True) or :meth:`VariantSweep.cancel` is called from another thread.
+
+Results are cached on disk (see :mod:`metrics.cache`), keyed by the grammar
+text, constants, seed, n, beta, chosen constants, mode and samples, so a
+second fit of the same sweep only reads one ``.npz``.
+
+A variant whose derivation fails (e.g. a division by zero appears with the
+changed constants) gets NaN metrics and ``failed_[i] = True``; it is left out
+of the PCA and the picks.
+
+>>> from lsys import LSystem
+>>> sweep = VariantSweep(n=3, n_jobs=1, cache=False).fit(LSystem.from_file("grammars/honda_sympodial.lsys"))
+>>> sweep.n_variants_, sweep.deltas_.shape, sweep.combination(0)["rule"]
+(486, (486, 10), 0)
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import math
+import multiprocessing
+import os
+import pathlib
+import sys
+import threading
+import time
+
+import numpy as np
+
+from lsys import LSystem
+from lsys.errors import RamureError, ValueRefused
+
+from . import cache as _cache
+from .plant import METRIC_NAMES, metric_deltas, metrics_from_arrays
+from .variants import variant_design
+
+
+class SweepCancelled(RamureError):
+    """The sweep was cancelled before it finished (nothing is cached)."""
+
+
+def as_lsystem(grammar) -> LSystem:
+    """Accept an :class:`~lsys.LSystem` or the path of an ``.lsys`` file."""
+    if isinstance(grammar, LSystem):
+        return grammar
+    if isinstance(grammar, (str, os.PathLike)):
+        path = pathlib.Path(grammar)
+        if not path.is_file():
+            raise RamureError(f"{path}: no such grammar file")
+        return LSystem.from_file(path)
+    raise RamureError(f"expected an LSystem or a grammar file path, not {type(grammar).__name__}")
+
+
+# -- worker side ----------------------------------------------------------------
+_PARSED = {}
+
+
+def _parsed(text):
+    ls = _PARSED.get(text)
+    if ls is None:
+        if len(_PARSED) > 8:
+            _PARSED.clear()
+        ls = _PARSED[text] = LSystem.from_text(text)
+    return ls
+
+
+def measure(lsystem, n, seed, constants=None, rule_constants=None) -> np.ndarray:
+    """Derive one plant and return its ten metrics (10,)."""
+    sk = lsystem.derive(n=n, seed=seed, constants=constants, rule_constants=rule_constants).skeleton()
+    return metrics_from_arrays(sk.start, sk.end, sk.base_radius, sk.top_radius)
+
+
+def evaluate_variants(text, constants, n, seed, names, rules, values):
+    """Metrics (c,10) and failure flags (c,) of a chunk of variants — one worker task.
+
+    Module-level and given plain data only, so it pickles for process pools
+    and Dask workers alike; the grammar text is parsed once per worker.
+    """
+    ls = _parsed(text)
+    out = np.full((len(rules), len(METRIC_NAMES)), np.nan)
+    failed = np.zeros(len(rules), bool)
+    for i, (rule, vals) in enumerate(zip(np.asarray(rules).tolist(), np.asarray(values).tolist())):
+        try:
+            out[i] = measure(ls, n, seed, constants, {int(rule): dict(zip(names, vals))})
+        except (RamureError, ArithmeticError, ValueError, MemoryError):
+            failed[i] = True
+    return out, failed
+
+
+def _matches(stored, design):
+    """A cache entry is used only if it holds exactly this design's variants."""
+    try:
+        return (stored is not None and stored["metrics"].shape == (len(design), len(METRIC_NAMES))
+                and np.array_equal(stored["rules"], design.rules)
+                and np.array_equal(stored["values"], design.values))
+    except KeyError:
+        return False
+
+
+# -- the sweep ------------------------------------------------------------------
+class VariantSweep:
+    """All ``{k(1-beta), k, k(1+beta)}`` variants of a grammar, one rule at a time, measured.
+
+    Parameters (stored as given; checked by :meth:`fit`):
+
+    n, seed
+        derivation steps (default: the grammar's ``n:``) and random seed.
+    beta
+        relative variation, in (0, 1); default 0.1 (+-10 %).
+    constants
+        names of the constants to vary (list or ``"r1,r2"``); default all non-zero ones.
+    mode, n_samples
+        ``"grid"`` (3^m per rule), or ``"lhs"`` / ``"sobol"`` with ``n_samples`` per rule.
+    n_jobs
+        worker processes (default: all cores); 1 runs in this process.
+    chunk_size
+        variants per task (default: about 8 tasks per worker, between 8 and 50).
+    cache, cache_dir
+        read/write the on-disk cache (``cache_dir`` default ``$RAMURE_CACHE`` or ``~/.cache/ramure``).
+    scheduler
+        a Dask scheduler address (``"tcp://host:port"``) or a ``distributed.Client``.
+    mp_context
+        multiprocessing start method for the local pool (default ``"fork"`` on Linux).
+
+    Fitted attributes: ``names_`` (chosen constants), ``design_``
+    (:class:`~metrics.variants.VariantDesign`), ``rules_`` (N,), ``values_`` (N,m),
+    ``metrics_`` (N,10), ``base_metrics_`` (10,), ``deltas_`` (N,10), ``failed_`` (N,),
+    ``n_variants_``, ``n_rules_``, ``n_``, ``grammar_text_``, ``base_constants_``,
+    ``seconds_``, ``from_cache_``, ``cache_path_``.
+    """
+
+    def __init__(self, n=None, seed=0, beta=0.1, constants=None, mode="grid", n_samples=None,
+                 n_jobs=None, chunk_size=None, cache=True, cache_dir=None, scheduler=None,
+                 mp_context=None):
+        self.n = n
+        self.seed = seed
+        self.beta = beta
+        self.constants = constants
+        self.mode = mode
+        self.n_samples = n_samples
+        self.n_jobs = n_jobs
+        self.chunk_size = chunk_size
+        self.cache = cache
+        self.cache_dir = cache_dir
+        self.scheduler = scheduler
+        self.mp_context = mp_context
+        self._cancel = threading.Event()
+
+    # -- control -----------------------------------------------------------
+    def cancel(self):
+        """Ask a running :meth:`fit` (in another thread) to stop; it raises :class:`SweepCancelled`."""
+        self._cancel.set()
+
+    def _cancelled(self, cancel):
+        if self._cancel.is_set():
+            return True
+        if cancel is None:
+            return False
+        return bool(cancel.is_set() if hasattr(cancel, "is_set") else cancel())
+
+    # -- validation --------------------------------------------------------
+    def _check(self, ls):
+        n = ls.n if self.n is None else self.n
+        if isinstance(n, bool) or int(n) != n or n < 0:
+            raise ValueRefused(f"n must be a non-negative integer, not {self.n!r}")
+        jobs = (os.cpu_count() or 1) if self.n_jobs is None else self.n_jobs
+        if isinstance(jobs, bool) or int(jobs) != jobs or jobs < 1:
+            raise ValueRefused(f"n_jobs must be a positive integer, not {self.n_jobs!r}")
+        if self.chunk_size is not None and (int(self.chunk_size) != self.chunk_size or self.chunk_size < 1):
+            raise ValueRefused(f"chunk_size must be a positive integer, not {self.chunk_size!r}")
+        return int(n), int(jobs)
+
+    def _key_payload(self, ls, n, design):
+        return {"grammar": ls.text, "constants": {k: float(v) for k, v in ls.constants.items()},
+                "seed": int(self.seed), "n": n, "beta": design.beta, "names": list(design.names),
+                "mode": design.mode, "n_samples": self.n_samples}
+
+    # -- fitting -----------------------------------------------------------
+    def fit(self, grammar, progress=None, cancel=None):
+        """Derive and measure every variant of ``grammar`` (an LSystem or a file path)."""
+        t0 = time.perf_counter()
+        self._cancel.clear()
+        ls = as_lsystem(grammar)
+        n, jobs = self._check(ls)
+        design = variant_design(ls.constants, len(ls.grammar.rules), self.constants, self.beta,
+                                self.mode, self.n_samples, seed=self.seed)
+        base_constants = dict(ls.constants)
+        path = None
+        stored = None
+        if self.cache:
+            path = _cache.cache_path(_cache.cache_key(self._key_payload(ls, n, design)), self.cache_dir)
+            stored = _cache.load(path)
+        if _matches(stored, design):
+            metrics, failed, base = stored["metrics"], stored["failed"], stored["base_metrics"]
+            self.from_cache_ = True
+            if progress is not None:
+                progress(len(design), len(design))
+        else:
+            base = measure(ls, n, self.seed, base_constants)
+            metrics, failed = self._run(ls.text, base_constants, n, design, jobs, progress, cancel)
+            self.from_cache_ = False
+            if path is not None:
+                _cache.save(path, metrics=metrics, failed=failed, base_metrics=base,
+                            rules=design.rules, values=design.values)
+        self.grammar_text_ = ls.text
+        self.base_constants_ = base_constants
+        self.n_ = n
+        self.n_rules_ = len(ls.grammar.rules)
+        self.design_ = design
+        self.names_ = design.names
+        self.rules_ = design.rules
+        self.values_ = design.values
+        self.metrics_ = metrics
+        self.failed_ = failed.astype(bool)
+        self.base_metrics_ = base
+        self.deltas_ = metric_deltas(metrics, base)
+        self.n_variants_ = len(design)
+        self.cache_path_ = path
+        self.seconds_ = time.perf_counter() - t0
+        return self
+
+    def _chunks(self, total, jobs):
+        size = self.chunk_size or min(50, max(8, math.ceil(total / (jobs * 8))))
+        return [(i, min(i + size, total)) for i in range(0, total, size)]
+
+    def _run(self, text, constants, n, design, jobs, progress, cancel):
+        total = len(design)
+        metrics = np.full((total, len(METRIC_NAMES)), np.nan)
+        failed = np.zeros(total, bool)
+        chunks = self._chunks(total, jobs)
+        args = [(text, constants, n, int(self.seed), design.names, design.rules[a:b], design.values[a:b])
+                for a, b in chunks]
+        done = 0
+
+        def store(k, result):
+            nonlocal done
+            a, b = chunks[k]
+            metrics[a:b], failed[a:b] = result
+            done += b - a
+            if progress is not None:
+                progress(done, total)
+
+        if self.scheduler is not None:
+            self._run_dask(args, store, cancel)
+        elif jobs == 1 or len(chunks) == 1:
+            for k, task in enumerate(args):
+                if self._cancelled(cancel):
+                    raise SweepCancelled("the sweep was cancelled")
+                store(k, evaluate_variants(*task))
+        else:
+            self._run_pool(args, jobs, store, cancel)
+        return metrics, failed
+
+    def _context(self):
+        method = self.mp_context
+        if method is None:
+            method = "fork" if sys.platform.startswith("linux") else "spawn"
+        return multiprocessing.get_context(method)
+
+    def _run_pool(self, args, jobs, store, cancel):
+        pool = cf.ProcessPoolExecutor(max_workers=min(jobs, len(args)), mp_context=self._context())
+        try:
+            pending = {pool.submit(evaluate_variants, *task): k for k, task in enumerate(args)}
+            while pending:
+                finished, _ = cf.wait(pending, timeout=0.1, return_when=cf.FIRST_COMPLETED)
+                for fut in finished:
+                    store(pending.pop(fut), fut.result())
+                if pending and self._cancelled(cancel):
+                    raise SweepCancelled("the sweep was cancelled")
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def _run_dask(self, args, store, cancel):
+        try:
+            from dask.distributed import Client, as_completed
+        except ImportError:
+            raise RamureError("running on a Dask cluster needs Dask: pip install 'ramure[dask]'") from None
+        own = isinstance(self.scheduler, str)
+        if own:
+            try:
+                client = Client(self.scheduler, timeout="10s")
+            except (OSError, TimeoutError) as exc:
+                raise RamureError(f"cannot reach the Dask scheduler at {self.scheduler} ({exc})") from None
+        else:
+            client = self.scheduler
+        futures = []
+        try:
+            futures = [client.submit(evaluate_variants, *task, pure=False) for task in args]
+            index = {f.key: k for k, f in enumerate(futures)}
+            for fut in as_completed(futures):
+                store(index[fut.key], fut.result())
+                if self._cancelled(cancel):
+                    raise SweepCancelled("the sweep was cancelled")
+        finally:
+            if futures:
+                client.cancel(futures)
+            if own:
+                client.close()
+
+    # -- queries -----------------------------------------------------------
+    def _fitted(self):
+        if not hasattr(self, "deltas_"):
+            raise RamureError("this sweep is not fitted yet: call fit(grammar) first")
+
+    def combination(self, i) -> dict:
+        """The parameter combination ``{"rule": int, "constants": {...}}`` of variant ``i``."""
+        self._fitted()
+        if not 0 <= int(i) < self.n_variants_:
+            raise RamureError(f"variant {i} is out of range 0..{self.n_variants_ - 1}")
+        return self.design_.combination(int(i))
+
+    def derive(self, i, n=None):
+        """Derive variant ``i`` again (e.g. to render it); ``n`` defaults to the sweep's."""
+        self._fitted()
+        c = self.combination(i)
+        ls = _parsed(self.grammar_text_)
+        return ls.derive(n=self.n_ if n is None else n, seed=self.seed, constants=self.base_constants_,
+                         rule_constants={c["rule"]: c["constants"]})

@@ -1,0 +1,149 @@
+"""The variant design: which constant values each variant uses, on which rule (thesis §6).
+
+Every variant changes the chosen constants ``k`` to ``k (1 + beta * level)``
+on **one rule only**; the other rules keep the grammar's values.
+
+``mode="grid"`` (the thesis): levels in {-1, 0, +1} — every combination of
+``{k(1-beta), k, k(1+beta)}`` over the m chosen constants, for each rule:
+``3^m x N_rules`` variants.  Variant ``i`` applies to rule ``i // 3^m``; within
+a rule the combinations run in :func:`itertools.product` order (the first
+constant varies slowest, level -1 first).  The all-original combination
+appears once per rule, as in the thesis.
+
+``mode="lhs"`` / ``"sobol"`` (for large m): ``n_samples`` points per rule from
+a Latin hypercube or a scrambled Sobol sequence (:mod:`scipy.stats.qmc`,
+seeded), mapped to continuous levels in [-1, 1].  Same rule-major order.
+
+Values are rounded to 12 significant digits, so a combination written to
+JSON and read back derives exactly the same plant.
+
+>>> d = variant_design({"r1": 0.9, "r2": 0.7}, n_rules=2)
+>>> len(d), d.names, d.values[0].tolist(), d.combination(0)
+(18, ('r1', 'r2'), [0.81, 0.63], {'rule': 0, 'constants': {'r1': 0.81, 'r2': 0.63}})
+"""
+from __future__ import annotations
+
+import itertools
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from lsys.errors import RamureError, ValueRefused
+
+MODES = ("grid", "lhs", "sobol")
+MAX_VARIANTS = 200_000
+DEFAULT_SAMPLES = 243
+
+
+@dataclass(frozen=True)
+class VariantDesign:
+    """``names`` (m,), and per variant: ``rules`` (N,), ``levels`` (N,m) in [-1, 1], ``values`` (N,m)."""
+
+    names: tuple
+    rules: np.ndarray
+    levels: np.ndarray
+    values: np.ndarray
+    beta: float
+    mode: str
+
+    def __len__(self):
+        return len(self.rules)
+
+    def combination(self, i) -> dict:
+        """Variant ``i`` as the JSON-able parameter combination ``{"rule", "constants"}``."""
+        return {"rule": int(self.rules[i]),
+                "constants": {k: float(v) for k, v in zip(self.names, self.values[i].tolist())}}
+
+    def rule_constants(self, i) -> dict:
+        """Variant ``i`` in the form :meth:`lsys.LSystem.derive` takes: ``{rule: {name: value}}``."""
+        c = self.combination(i)
+        return {c["rule"]: c["constants"]}
+
+
+def round12(values) -> np.ndarray:
+    """Round to 12 significant digits (``0.9 * 1.1 -> 0.99``)."""
+    values = np.asarray(values, float)
+    return np.array([float(f"{v:.12g}") for v in values.ravel()]).reshape(values.shape)
+
+
+def choose_constants(constants, names=None) -> tuple:
+    """The constants to vary: ``names`` (validated) or every constant whose value is not 0.
+
+    A constant equal to 0 cannot be varied by a percentage, so it is skipped by
+    default and refused when named.
+    """
+    if names is None:
+        chosen = tuple(k for k, v in constants.items() if v != 0)
+        if not chosen:
+            raise RamureError("the grammar has no non-zero #define constant to vary; "
+                              "add #define lines or pass constants explicitly")
+        return chosen
+    if isinstance(names, str):
+        names = [n.strip() for n in names.split(",") if n.strip()]
+    names = tuple(names)
+    if not names:
+        raise RamureError("choose at least one constant to vary")
+    unknown = [k for k in names if k not in constants]
+    if unknown:
+        raise RamureError(f"unknown constant(s) {', '.join(unknown)}: the grammar defines "
+                          f"{', '.join(constants) or 'none'}")
+    if len(set(names)) != len(names):
+        raise RamureError(f"a constant is named twice in {', '.join(names)}")
+    zero = [k for k in names if constants[k] == 0]
+    if zero:
+        raise RamureError(f"constant(s) {', '.join(zero)} equal 0 and cannot be varied by a percentage")
+    return names
+
+
+def check_beta(beta) -> float:
+    try:
+        beta = float(beta)
+    except (TypeError, ValueError):
+        raise ValueRefused(f"beta must be a number, not {beta!r}") from None
+    if not 0 < beta < 1:
+        raise ValueRefused(f"beta must be in (0, 1) (a fraction, e.g. 0.1 for +-10 %), not {beta}")
+    return beta
+
+
+def variant_design(constants, n_rules, names=None, beta=0.1, mode="grid", n_samples=None,
+                   seed=0) -> VariantDesign:
+    """All variants of a grammar with ``constants`` (dict) and ``n_rules`` rules (see module doc)."""
+    beta = check_beta(beta)
+    if mode not in MODES:
+        raise RamureError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
+    if int(n_rules) < 1:
+        raise RamureError("the grammar has no production rule to vary")
+    names = choose_constants(constants, names)
+    m = len(names)
+    if mode == "grid":
+        per_rule = 3 ** m
+        if per_rule * n_rules > MAX_VARIANTS:
+            raise ValueRefused(f"a full grid of {m} constants gives 3^{m} x {n_rules} = "
+                               f"{per_rule * n_rules:,} variants (limit {MAX_VARIANTS:,}); choose "
+                               f"fewer constants or use mode 'lhs' or 'sobol' with n_samples")
+        if n_samples is not None:
+            raise RamureError("n_samples only applies to modes 'lhs' and 'sobol'")
+        levels = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=m)), float).reshape(-1, m)
+    else:
+        n_samples = DEFAULT_SAMPLES if n_samples is None else n_samples
+        if isinstance(n_samples, bool) or int(n_samples) != n_samples or n_samples < 1:
+            raise ValueRefused(f"n_samples must be a positive integer, not {n_samples!r}")
+        if int(n_samples) * n_rules > MAX_VARIANTS:
+            raise ValueRefused(f"{n_samples} samples x {n_rules} rules exceeds {MAX_VARIANTS:,} variants")
+        levels = 2.0 * _unit_samples(mode, m, int(n_samples), seed) - 1.0
+    base = np.array([constants[k] for k in names], float)
+    values = round12(base * (1.0 + beta * levels))
+    rules = np.repeat(np.arange(n_rules), len(levels))
+    return VariantDesign(names, rules, np.tile(levels, (n_rules, 1)), np.tile(values, (n_rules, 1)),
+                         beta, mode)
+
+
+def _unit_samples(mode, m, count, seed):
+    from scipy.stats import qmc
+
+    if mode == "lhs":
+        return qmc.LatinHypercube(d=m, seed=seed).random(count)
+    with warnings.catch_warnings():  # Sobol prefers powers of two; any count is fine here
+        warnings.simplefilter("ignore", UserWarning)
+        return qmc.Sobol(d=m, scramble=True, seed=seed).random(count)
