@@ -208,14 +208,12 @@ class Explorer:
         return result
 
     def undo(self):
-        edit = self.session.undo()
-        if edit is not None:
-            self.selection, self.last_result = [], None
-            self._changed()
-        return edit
+        return self._history(self.session.undo())
 
     def redo(self):
-        edit = self.session.redo()
+        return self._history(self.session.redo())
+
+    def _history(self, edit):
         if edit is not None:
             self.selection, self.last_result = [], None
             self._changed()

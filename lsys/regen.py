@@ -256,32 +256,27 @@ class Session:
 
     def undo(self):
         """Undo the last edit; returns it (None when there is nothing to undo)."""
-        if not self._undo:
-            return None
-        edit, how = self._undo.pop()
-        if how[0] == "derivation":
-            current = ("derivation", self.derivation, dict(self.constants))
-            self.derivation, self.constants = how[1], how[2]
-            how = current
-        else:
-            how[1].apply(self.tree, forward=False)
-        self.edits.pop()
-        self._redo.append((edit, how))
-        return edit
+        return self._travel(self._undo, self._redo, forward=False)
 
     def redo(self):
         """Redo the last undone edit; returns it (None when there is nothing to redo)."""
-        if not self._redo:
+        return self._travel(self._redo, self._undo, forward=True)
+
+    def _travel(self, take, give, forward):
+        if not take:
             return None
-        edit, how = self._redo.pop()
-        if how[0] == "derivation":
+        edit, how = take.pop()
+        if how[0] == "derivation":  # swap whole derivations (a constants edit)
             current = ("derivation", self.derivation, dict(self.constants))
             self.derivation, self.constants = how[1], how[2]
             how = current
         else:
-            how[1].apply(self.tree, forward=True)
-        self.edits.append(edit)
-        self._undo.append((edit, how))
+            how[1].apply(self.tree, forward=forward)
+        if forward:
+            self.edits.append(edit)
+        else:
+            self.edits.pop()
+        give.append((edit, how))
         return edit
 
     @property
