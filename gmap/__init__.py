@@ -1,0 +1,18 @@
+"""3-G-maps and volumetric fruit.
+
+The kernel is :class:`GMap3` (darts and involutions as numpy arrays); fruit are
+built by :func:`gmap.fruit.build_fruit`; subdivision lives in
+:mod:`gmap.subdivide`, tissues in :mod:`gmap.tissue`, conversion to pyvista in
+:mod:`gmap.pyvista` and plane cuts in :mod:`gmap.cut`.
+
+>>> from gmap import GMap3
+>>> gm = GMap3()
+>>> _ = gm.add_prisms(4)
+>>> gm.counts()["darts"]
+48
+"""
+from gmap.errors import GMapError
+from gmap.map3 import GMap3, sublabel_name
+from gmap.prism import face_label_code, face_label_name
+
+__all__ = ["GMap3", "GMapError", "face_label_code", "face_label_name", "sublabel_name"]

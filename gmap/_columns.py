@@ -1,0 +1,104 @@
+"""Growable structure-of-arrays storage used for darts and volumes.
+
+A :class:`Columns` holds named numpy arrays that share their first axis (one
+row per dart, or per volume).  Rows are appended in blocks; capacity doubles so
+that appending is amortised O(1) per row and no per-row Python work happens.
+
+>>> import numpy as np
+>>> c = Columns({"tissue": (np.int8, (), 0), "origin": (np.float64, (3,), 0.0)})
+>>> rows = c.extend(3)
+>>> c["tissue"][rows] = [1, 2, 3]
+>>> len(c), c["origin"].shape
+(3, (3, 3))
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+class Columns:
+    """Named arrays sharing one growable first axis.
+
+    ``spec`` maps a name to ``(dtype, trailing_shape, fill)``; new rows are set
+    to ``fill``.  ``columns[name]`` is a view of the used rows only.
+    """
+
+    def __init__(self, spec, capacity=0):
+        self._spec = dict(spec)
+        self._n = 0
+        self._data = {
+            name: np.full((capacity, *shape), fill, dtype=dtype)
+            for name, (dtype, shape, fill) in self._spec.items()
+        }
+
+    def __len__(self):
+        return self._n
+
+    def __getitem__(self, name):
+        return self._data[name][: self._n]
+
+    def __contains__(self, name):
+        return name in self._data
+
+    def names(self):
+        return list(self._data)
+
+    def add(self, name, dtype, shape=(), fill=0):
+        """Add a column (filled with ``fill`` for existing rows); no-op if present."""
+        if name in self._data:
+            return
+        self._spec[name] = (dtype, tuple(shape), fill)
+        cap = self.capacity
+        self._data[name] = np.full((cap, *shape), fill, dtype=dtype)
+
+    @property
+    def capacity(self):
+        return next(iter(self._data.values())).shape[0] if self._data else 0
+
+    def reserve(self, capacity):
+        """Make room for ``capacity`` rows without changing the length."""
+        if capacity <= self.capacity:
+            return
+        for name, arr in self._data.items():
+            dtype, shape, fill = self._spec[name]
+            grown = np.full((capacity, *shape), fill, dtype=arr.dtype)
+            grown[: self._n] = arr[: self._n]
+            self._data[name] = grown
+
+    def extend(self, count):
+        """Append ``count`` rows filled with defaults; return their ``slice``."""
+        start = self._n
+        need = start + int(count)
+        if need > self.capacity:
+            self.reserve(max(need, 2 * self.capacity, 16))
+        for name, arr in self._data.items():
+            arr[start:need] = self._spec[name][2]
+        self._n = need
+        return slice(start, need)
+
+    def keep(self, rows):
+        """Keep only ``rows`` (an index array), in that order."""
+        for name, arr in self._data.items():
+            kept = arr[: self._n][rows]
+            arr[: len(kept)] = kept
+        self._n = len(rows)
+
+    def copy(self):
+        other = Columns(self._spec, capacity=self._n)
+        other._n = self._n
+        for name in self._data:
+            other._data[name][:] = self._data[name][: self._n]
+        return other
+
+    @classmethod
+    def from_arrays(cls, spec, arrays):
+        """Wrap full-length ``arrays`` (dict name -> array); missing columns get fills."""
+        n = len(next(iter(arrays.values())))
+        cols = cls(spec, capacity=0)
+        cols._n = n
+        for name, (dtype, shape, fill) in cols._spec.items():
+            if name in arrays:
+                cols._data[name] = np.ascontiguousarray(arrays[name], dtype=dtype).reshape(n, *shape)
+            else:
+                cols._data[name] = np.full((n, *shape), fill, dtype=dtype)
+        return cols

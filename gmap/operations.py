@@ -1,0 +1,428 @@
+"""Topological operations of :class:`gmap.GMap3` (mixed into the class).
+
+Create labelled prisms in bulk, alpha3-sew and unsew faces, split an edge, a
+face or a volume, remove volumes.  Every operation works on arrays of darts and
+copies per-dart data (volume, face label, sub-label) to the darts it creates;
+new darts get their point on the geometry of their own volume (an edge split
+puts the new vertex on the segment, a face split reuses the face's corners).
+
+>>> from gmap import GMap3
+>>> gm = GMap3()
+>>> a, b = gm.add_prisms(4, 2, origins=[[0, 0, 0], [1, 0, 0]])
+>>> gm.sew3(gm.prism_face(a, 4, "E"), gm.prism_face(b, 4, "O"))
+>>> gm.counts()["vertices"], gm.is_valid()
+(12, True)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from gmap import prism as _prism
+from gmap.errors import GMapError, ValueRefused
+
+
+def _darts(x):
+    return np.atleast_1d(np.asarray(x, dtype=np.int64))
+
+
+class Operations:
+    """Mixin holding the operations; see the module docstring."""
+
+    # ------------------------------------------------------------------ creation
+    def add_prisms(self, n, count=1, origins=None, frames=None, sizes=None, label="A", **volume_values):
+        """Create ``count`` free prisms of order ``n`` (12 n darts each) in one go.
+
+        ``origins`` (count, 3) are the centres of the O faces, ``frames``
+        (count, 3, 3) the rows H, L, U, ``sizes`` (count, 3) the (H, L, W)
+        extents (default a unit box).  Darts get their volume's default
+        corners as points.  Extra keyword arguments set volume attributes
+        (``tissue=``, ``order=``, ``stage=``, ...).  Returns the first dart of
+        each prism; prism ``p`` owns darts ``first[p] .. first[p] + 12 n - 1``.
+
+        >>> from gmap import GMap3
+        >>> gm = GMap3()
+        >>> first = gm.add_prisms(10, 3, label="A", order=0, stage=[0, 1, 2])
+        >>> first.tolist(), gm.n_darts, gm.volume_data["stage"].tolist()
+        ([0, 120, 240], 360, [0, 1, 2])
+        """
+        n, count = int(n), int(count)
+        if n < 3:
+            raise ValueRefused(f"prism order must be at least 3, got {n}")
+        if count < 0:
+            raise ValueRefused(f"prism count must be at least 0, got {count}")
+        t = _prism.template(n)
+        origins = np.zeros((count, 3)) if origins is None else np.broadcast_to(np.asarray(origins, float), (count, 3))
+        frames = np.broadcast_to(np.eye(3), (count, 3, 3)) if frames is None else np.broadcast_to(
+            np.asarray(frames, float), (count, 3, 3))
+        sizes = np.ones((count, 3)) if sizes is None else np.broadcast_to(np.asarray(sizes, float), (count, 3))
+        darts = self._new_darts(count * t.size)
+        base = int(darts[0]) if count else self.n_darts
+        first = base + t.size * np.arange(count)
+        local = first[:, None] + np.arange(t.size)[None, :]
+        alpha = self._alpha
+        for i in range(3):
+            alpha[i, local] = first[:, None] + t.alpha[i][None, :]
+        volumes = self._new_volumes(
+            count, label=label, degree=n, origin=origins, frame=frames, size=sizes, **volume_values
+        )
+        d = self._darts
+        d["volume"][local] = volumes[:, None]
+        d["face"][local] = t.face[None, :]
+        d["sublabel"][local] = 0
+        d["fcorner"][local] = t.fcorner[None, :]
+        d["forward"][local] = t.forward[None, :]
+        corner_points = _prism.corners(n, origins, frames, sizes)
+        d["point"][local] = corner_points[:, t.corner, :]
+        self._changed()
+        return first
+
+    @staticmethod
+    def prism_face(first, n, face, j=0):
+        """Dart ``j`` of face ``face`` ('O', 'E', 'C1'..'Cn') of prisms starting at ``first``.
+
+        ``j = 0`` is the face's forward dart at its corner 0 (for ``Ck``, the
+        base corner k-1).
+
+        >>> Operations.prism_face(0, 4, "C2")
+        24
+        """
+        code = _prism.face_label_code(face)
+        n = int(n)
+        if code == _prism.FACE_O:
+            off = 0
+        elif code == _prism.FACE_E:
+            off = 2 * n
+        elif 2 <= code <= n + 1:
+            off = 4 * n + 8 * (code - 2)
+        else:
+            raise GMapError(f"a prism of order {n} has no face {face!r}")
+        out = np.asarray(first) + off + j
+        return int(out) if out.ndim == 0 else out
+
+    # ------------------------------------------------------------------ faces
+    def face_walk(self, starts):
+        """Walk the faces ``<a0,a1>`` of ``starts``: ``d, a0 d, a1 a0 d, ...``.
+
+        Returns ``(walk, lengths)``: walk (k, L) padded with -1 and the number
+        of darts of each face (twice its degree).
+
+        >>> from gmap import GMap3
+        >>> gm = GMap3(); _ = gm.add_prisms(5)
+        >>> walk, lengths = gm.face_walk([0, 20])
+        >>> lengths.tolist(), walk[0, :4].tolist()
+        ([10, 8], [0, 1, 2, 3])
+        """
+        starts = _darts(starts)
+        a0, a1 = self._alpha[0], self._alpha[1]
+        cur = starts.copy()
+        active = np.ones(len(starts), bool)
+        lengths = np.zeros(len(starts), np.int64)
+        columns = []
+        step = 0
+        while active.any():
+            columns.append(np.where(active, cur, -1))
+            lengths += active
+            cur = np.where(active, (a0 if step % 2 == 0 else a1)[cur], cur)
+            step += 1
+            if step % 2 == 0:
+                active &= cur != starts
+            if step > self.n_darts + 2:
+                raise GMapError("face walk does not close: the map is not valid")
+        walk = np.stack(columns, axis=1) if columns else np.zeros((len(starts), 0), np.int64)
+        return walk, lengths
+
+    def sew3(self, a, b):
+        """alpha3-sew the free faces of darts ``a`` and ``b`` (arrays pair up element-wise).
+
+        Walking both faces in lock-step from ``a`` and ``b`` (``a0``, then
+        ``a1``, ...) pairs their darts, so alpha3 commutes with alpha0 and
+        alpha1.  ``a`` and ``b`` must therefore sit at the same corner of the
+        same edge.  When a single pair of faces differs in degree, edges of
+        the smaller face are split (evenly, starting at ``a``'s edge) until the
+        degrees match; the new vertices are spaced evenly along the edges.
+        """
+        a, b = _darts(a), _darts(b)
+        if a.shape != b.shape:
+            raise GMapError(f"sew3 needs as many darts on each side, got {len(a)} and {len(b)}")
+        wa, la = self.face_walk(a)
+        wb, lb = self.face_walk(b)
+        if np.any(la != lb):
+            if len(a) != 1:
+                raise GMapError("faces of different degrees can only be sewn one pair at a time")
+            small, big = (a, lb[0]) if la[0] < lb[0] else (b, la[0])
+            self._split_face_edges(int(small[0]), int(min(la[0], lb[0]) // 2), int(big // 2))
+            wa, la = self.face_walk(a)
+            wb, lb = self.face_walk(b)
+        keep = wa >= 0
+        da, db = wa[keep], wb[keep]
+        alpha = self._alpha
+        if np.any(alpha[3][da] != da) or np.any(alpha[3][db] != db):
+            raise GMapError("sew3 needs alpha3-free faces; a face is already sewn")
+        both = np.concatenate([da, db])
+        if len(np.unique(both)) != len(both):
+            raise GMapError("sew3 would sew a face to itself or use a face twice")
+        alpha[3][da] = db
+        alpha[3][db] = da
+        self._changed()
+
+    def _split_face_edges(self, dart, degree, target):
+        """Split the edges of ``dart``'s face so that it gets ``target`` edges."""
+        parts = np.full(degree, target // degree)
+        parts[: target % degree] += 1
+        walk, _ = self.face_walk([dart])
+        edge_darts = walk[0, 0 : 2 * degree : 2]
+        for d, m in zip(edge_darts, parts):
+            current = int(d)
+            for step in range(int(m) - 1, 0, -1):
+                # cut 1/(step+1) of what is left, so the m pieces are equal
+                new = self.split_edge([current], 1.0 / (step + 1))
+                current = int(self._alpha[1][new[0]])
+
+    def unsew3(self, darts):
+        """Make the faces of ``darts`` alpha3-free again (and their partners)."""
+        walk, _ = self.face_walk(darts)
+        d = walk[walk >= 0]
+        partners = self._alpha[3][d].copy()
+        self._alpha[3][d] = d
+        self._alpha[3][partners] = partners
+        self._changed()
+
+    # ------------------------------------------------------------------ splits
+    def _copy_dart_data(self, new, src):
+        data = self._darts
+        for name in ("volume", "face", "sublabel"):
+            data[name][new] = data[name][src]
+        data["fcorner"][new] = -1
+
+    def split_edge(self, darts, t=0.5):
+        """Split the edges of ``darts`` (one dart per edge) at fraction ``t`` from each dart.
+
+        The whole edge ``<a0,a2,a3>`` is split: every face and volume around
+        it gets the new vertex.  Returns, for each given dart ``d``, the new
+        dart ``a0(d)`` that sits at the new vertex on ``d``'s side.
+
+        >>> from gmap import GMap3
+        >>> gm = GMap3(); _ = gm.add_prisms(4)
+        >>> new = gm.split_edge([0])
+        >>> gm.n_darts, gm.counts()["vertices"], gm.is_valid()
+        (52, 9, True)
+        """
+        darts = _darts(darts)
+        t = np.broadcast_to(np.asarray(t, float), darts.shape)
+        edge_of = self._orbits_from(darts, (0, 2, 3))
+        side_of = self._orbits_from(darts, (2, 3))
+        members = np.flatnonzero(edge_of >= 0)
+        which = edge_of[members]
+        frac = np.where(side_of[members] == which, t[which], 1.0 - t[which])
+        alpha = self._alpha
+        old_a0 = alpha[0][members].astype(np.int64)
+        new = self._new_darts(len(members))
+        alpha = self._alpha
+        nmap = np.arange(self.n_darts, dtype=np.int64)
+        nmap[members] = new
+        alpha[0][members] = new
+        alpha[0][new] = members
+        alpha[1][new] = nmap[old_a0]
+        alpha[2][new] = nmap[alpha[2][members]]
+        alpha[3][new] = nmap[alpha[3][members]]
+        self._copy_dart_data(new, members)
+        fw = self._darts["forward"]
+        fw[new] = ~fw[members]
+        pts = self._darts["point"]
+        pts[new] = pts[members] + frac[:, None] * (pts[old_a0] - pts[members])
+        self._changed()
+        return nmap[darts]
+
+    def split_face(self, d1, d2):
+        """Split the face of ``d1`` by a new edge from ``d1``'s vertex to ``d2``'s vertex.
+
+        ``d1`` and ``d2`` belong to one face ``<a0,a1>`` and sit at two
+        vertices that are neither equal nor adjacent.  A face sewn by alpha3
+        is split on both sides.  Both halves keep the face label.  Returns
+        the two new darts at ``d1``'s vertex (in the half holding ``a0(d1)``
+        and in the other half).
+
+        >>> from gmap import GMap3
+        >>> gm = GMap3(); _ = gm.add_prisms(4)
+        >>> _ = gm.split_face(0, 4)          # cut the O square along its diagonal
+        >>> gm.counts()["faces"], gm.counts()["edges"], gm.is_valid()
+        (7, 13, True)
+        """
+        d1, d2 = int(d1), int(d2)
+        walk, length = self.face_walk([d1])
+        walk = walk[0, : length[0]]
+        where = np.flatnonzero(walk == d2)
+        if where.size == 0:
+            raise GMapError(f"darts {d1} and {d2} are not in the same face")
+        q = int(where[0])
+        if q in (0, len(walk) - 1):
+            raise GMapError("split_face needs two different vertices")
+        p = q if q % 2 == 1 else q - 1          # the dart at d2's vertex reached by a0
+        if p in (1, len(walk) - 3):
+            raise GMapError("split_face needs two vertices that are not adjacent")
+        x, y, z = int(walk[p]), int(walk[-1]), int(walk[p + 1])
+        a3 = self._alpha[3]
+        sides = [(d1, x, y, z)]
+        if a3[d1] != d1:
+            sides.append((int(a3[d1]), int(a3[x]), int(a3[y]), int(a3[z])))
+        new = self._new_darts(4 * len(sides)).reshape(len(sides), 4)
+        alpha = self._alpha
+        fw = self._darts["forward"]
+        pts = self._darts["point"]
+        for (s1, sx, sy, sz), (n1, n2, m1, m2) in zip(sides, new):
+            pairs = [(1, sx, n2), (1, n1, s1), (1, sz, m2), (1, m1, sy),
+                     (0, n1, n2), (0, m1, m2), (2, n1, m1), (2, n2, m2)]
+            for i, u, v in pairs:
+                alpha[i][u], alpha[i][v] = v, u
+            self._copy_dart_data([n1, n2, m1, m2], [s1, s1, s1, s1])
+            fw[[n1, n2, m1, m2]] = [not fw[s1], fw[s1], fw[s1], not fw[s1]]
+            pts[[n1, m1]] = pts[s1]
+            pts[[n2, m2]] = pts[sx]
+        if len(sides) == 2:
+            for k in range(4):
+                alpha[3][new[0, k]], alpha[3][new[1, k]] = new[1, k], new[0, k]
+        self._changed()
+        return int(new[0, 0]), int(new[0, 2])
+
+    def split_volume(self, path, labels=("E", "O")):
+        """Cut a volume in two along a closed loop of edges on its surface.
+
+        ``path`` holds one dart per loop edge, all on the same side of the
+        loop (part 1).  Two new faces close the parts, sewn to each other by
+        alpha3: the one closing part 1 gets ``labels[0]``, the other
+        ``labels[1]``.  Part 2 becomes a new volume with a copy of the
+        attributes.  Returns the new volume id.
+        """
+        path = _darts(path)
+        alpha = self._alpha
+        vol = self._darts["volume"]
+        if len(np.unique(vol[path])) != 1:
+            raise GMapError("split_volume needs a path in one volume")
+        p1 = np.unique(np.concatenate([path, alpha[0][path]]))
+        if len(p1) != 2 * len(path):
+            raise GMapError("split_volume needs one dart per path edge")
+        on_path = np.zeros(self.n_darts, bool)
+        on_path[p1] = True
+        a1, a2 = alpha[1], alpha[2]
+        # next path dart around each vertex, staying on part 1
+        y = a1[p1].astype(np.int64)
+        for _ in range(self.n_darts):
+            todo = ~on_path[y]
+            if not todo.any():
+                break
+            y[todo] = a1[a2[y[todo]]]
+        else:
+            raise GMapError("split_volume: the path is not a closed loop")
+        if np.any(on_path[a2[p1]]):
+            raise GMapError("split_volume: the path touches itself")
+        old_a2 = a2[p1].astype(np.int64)
+        k = len(p1)
+        new = self._new_darts(2 * k)
+        alpha = self._alpha
+        f, g = new[:k], new[k:]
+        fmap = np.full(self.n_darts, -1, np.int64)
+        gmap = np.full(self.n_darts, -1, np.int64)
+        fmap[p1], gmap[p1] = f, g
+        alpha[2][p1], alpha[2][f] = f, p1
+        alpha[2][old_a2], alpha[2][g] = g, old_a2
+        alpha[0][f], alpha[0][g] = fmap[alpha[0][p1]], gmap[alpha[0][p1]]
+        alpha[1][f], alpha[1][g] = fmap[y], gmap[y]
+        alpha[3][f], alpha[3][g] = g, f
+        if np.any(alpha[1][f] < 0):
+            raise GMapError("split_volume: the path is not a closed loop")
+        data = self._darts
+        data["volume"][f] = vol[p1]
+        data["volume"][g] = vol[p1]
+        data["face"][f] = _prism.face_label_code(labels[0])
+        data["face"][g] = _prism.face_label_code(labels[1])
+        data["sublabel"][new] = 0
+        data["point"][f] = data["point"][p1]
+        data["point"][g] = data["point"][p1]
+        walk, length = self.face_walk([f[0]])
+        w = walk[0, : length[0]]
+        pos = np.arange(len(w))
+        data["forward"][w] = pos % 2 == 0
+        data["fcorner"][w] = ((pos + 1) // 2) % (len(w) // 2)
+        data["forward"][alpha[3][w]] = data["forward"][w]
+        data["fcorner"][alpha[3][w]] = data["fcorner"][w]
+        self._changed()
+        part2 = np.flatnonzero(self._orbits_from([int(g[0])], (0, 1, 2)) >= 0)
+        if np.any(np.isin(part2, f)):
+            raise GMapError("split_volume: the path does not separate the volume")
+        old = int(vol[p1[0]])
+        (new_vol,) = self._new_volumes(1)
+        for name in self._volumes.names():
+            self._volumes[name][new_vol] = self._volumes[name][old]
+        data["volume"][part2] = new_vol
+        self._changed()
+        return int(new_vol)
+
+    def split_prism(self, volume, t=0.5):
+        """Split prism ``volume`` across its axis (thesis rule ``A ->^O B C``).
+
+        The lateral edges are split at fraction ``t`` from ``O``, every lateral
+        face is cut between the new vertices, and the volume is cut along the
+        new loop.  The lower part keeps the volume id and ``O``; the upper
+        part (returned) keeps ``E``; the new faces are labelled E and O.
+
+        >>> from gmap import GMap3
+        >>> gm = GMap3(); _ = gm.add_prisms(6)
+        >>> upper = gm.split_prism(0)
+        >>> gm.counts()["volumes"], gm.counts()["vertices"], gm.is_valid()
+        (2, 18, True)
+        """
+        vol = self._darts["volume"]
+        face = self._darts["face"]
+        darts = np.flatnonzero((vol == volume) & (face == _prism.FACE_O) & self._darts["forward"])
+        if darts.size == 0:
+            raise GMapError(f"volume {volume} has no O face")
+        walk, length = self.face_walk(darts[:1])
+        w = walk[0, : length[0]]
+        alpha = self._alpha
+        lateral = alpha[2][w[0::2]]                 # lateral face darts at each O vertex
+        starts = alpha[1][lateral]                  # on the lateral edges, at O
+        ends = alpha[1][alpha[2][w[1::2]]]          # same lateral edges seen from the other face
+        new = self.split_edge(starts, t)
+        path = []
+        for i, s in enumerate(new):
+            nxt = int(self._alpha[0][ends[i]])      # new vertex on the next lateral edge
+            upper_side = int(s)
+            n1, _ = self.split_face(upper_side, nxt)
+            path.append(n1)
+        return self.split_volume(path, labels=("E", "O"))
+
+    # ------------------------------------------------------------------ removal
+    def remove_volumes(self, volumes):
+        """Delete volumes; the faces they were sewn to become alpha3-free.
+
+        Dart and volume ids are renumbered (kept in order).
+
+        >>> from gmap import GMap3
+        >>> gm = GMap3()
+        >>> a, b = gm.add_prisms(4, 2)
+        >>> gm.sew3(gm.prism_face(a, 4, "E"), gm.prism_face(b, 4, "O"))
+        >>> gm.remove_volumes([0])
+        >>> gm.n_darts, gm.n_volumes, bool(gm.is_free(range(48), 3).all())
+        (48, 1, True)
+        """
+        volumes = np.unique(_darts(volumes))
+        if volumes.size and (volumes.min() < 0 or volumes.max() >= self.n_volumes):
+            raise GMapError(f"volume ids must be in 0..{self.n_volumes - 1}")
+        gone = np.isin(self._darts["volume"], volumes)
+        alpha = self.alpha
+        partners = alpha[3][gone]
+        alpha[3][partners] = partners
+        keep = np.flatnonzero(~gone)
+        remap = np.full(self.n_darts, -1, np.int64)
+        remap[keep] = np.arange(len(keep))
+        new_alpha = remap[alpha[:, keep]].astype(np.int32)
+        self._darts.keep(keep)
+        self._alpha[:, : len(keep)] = new_alpha
+        vkeep = np.setdiff1d(np.arange(self.n_volumes), volumes)
+        vremap = np.full(self.n_volumes, -1, np.int64)
+        vremap[vkeep] = np.arange(len(vkeep))
+        parent = self._volumes["parent"].astype(np.int64)
+        self._volumes["parent"][:] = np.where(parent >= 0, vremap[np.maximum(parent, 0)], -1)
+        self._volumes.keep(vkeep)
+        self._darts["volume"][:] = vremap[self._darts["volume"]]
+        self._changed()
