@@ -128,8 +128,9 @@ class VariantSweep:
         variants per task (default: about 8 tasks per worker, between 8 and 50).
     cache, cache_dir
         read/write the on-disk cache (``cache_dir`` default ``$RAMURE_CACHE`` or ``~/.cache/ramure``).
-    scheduler
-        a Dask scheduler address (``"tcp://host:port"``) or a ``distributed.Client``.
+    scheduler, connect_timeout
+        a Dask scheduler address (``"tcp://host:port"``) or a ``distributed.Client``;
+        seconds to wait when connecting to an address (default 10).
     mp_context
         multiprocessing start method for the local pool (default ``"fork"`` on Linux).
 
@@ -142,7 +143,7 @@ class VariantSweep:
 
     def __init__(self, n=None, seed=0, beta=0.1, constants=None, mode="grid", n_samples=None,
                  n_jobs=None, chunk_size=None, cache=True, cache_dir=None, scheduler=None,
-                 mp_context=None):
+                 mp_context=None, connect_timeout=10.0):
         self.n = n
         self.seed = seed
         self.beta = beta
@@ -155,6 +156,7 @@ class VariantSweep:
         self.cache_dir = cache_dir
         self.scheduler = scheduler
         self.mp_context = mp_context
+        self.connect_timeout = connect_timeout
         self._cancel = threading.Event()
 
     # -- control -----------------------------------------------------------
@@ -289,7 +291,7 @@ class VariantSweep:
         own = isinstance(self.scheduler, str)
         if own:
             try:
-                client = Client(self.scheduler, timeout="10s")
+                client = Client(self.scheduler, timeout=f"{float(self.connect_timeout)}s")
             except (OSError, TimeoutError) as exc:
                 raise RamureError(f"cannot reach the Dask scheduler at {self.scheduler} ({exc})") from None
         else:
