@@ -1,0 +1,160 @@
+"""The qualifier store: one SQLite file of labelled variant points per grammar.
+
+The studies package writes study results into the same table
+(``source = 'study:<name>'``); this module reads them back as
+:class:`~metrics.qualifiers.QualifierRegions`, and can also write the
+default vocabulary's top-ranked variants (``source = 'default'``) so a
+grammar has regions before any study.  ``grammar`` is a name, by convention
+the grammar file's stem (:func:`metrics.explore.grammar_name`); ``qualifier``
+is the normalised English name.
+
+>>> import tempfile, pathlib
+>>> store = QualifierStore(pathlib.Path(tempfile.mkdtemp()) / "q.sqlite")
+>>> store.add("honda", "dense", [4, 7], [[0, 0, 0], [1, 1, 1]], [{"rule": 0, "constants": {}}] * 2)
+2
+>>> store.qualifiers("honda"), store.points("honda")["dense"].shape
+(['dense'], (2, 3))
+>>> store.close()
+"""
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import sqlite3
+
+import numpy as np
+
+from lsys.errors import RamureError
+
+from .qualifiers import VOCABULARY, QualifierRegions, canonical_name, rank_variants
+
+SCHEMA = """CREATE TABLE IF NOT EXISTS qualifier_points (
+  id INTEGER PRIMARY KEY,
+  grammar TEXT NOT NULL,
+  qualifier TEXT NOT NULL,       -- normalised English name, e.g. 'dense', 'small', 'round'
+  variant_id INTEGER NOT NULL,
+  pick_id INTEGER,               -- 1..27
+  pc1 REAL NOT NULL, pc2 REAL NOT NULL, pc3 REAL NOT NULL,
+  params TEXT NOT NULL,          -- JSON {"rule": int, "constants": {...}}
+  source TEXT NOT NULL           -- e.g. 'study:<name>' or 'default'
+)"""
+
+
+class QualifierStore:
+    """Read and write ``qualifier_points`` in one SQLite file (created if missing)."""
+
+    def __init__(self, path):
+        self.path = pathlib.Path(path)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.conn = sqlite3.connect(os.fspath(self.path), timeout=10.0)
+            with self.conn:
+                self.conn.execute(SCHEMA)
+        except (sqlite3.Error, OSError) as exc:
+            raise RamureError(f"{self.path}: cannot open the qualifier store ({exc})") from None
+
+    def close(self):
+        self.conn.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- writing -----------------------------------------------------------
+    def add(self, grammar, qualifier, variant_ids, points, params, pick_ids=None, source="default") -> int:
+        """Insert labelled points: one row per variant (``points`` (k,3), ``params`` k dicts)."""
+        points = np.asarray(points, float).reshape(-1, 3)
+        variant_ids = [int(v) for v in variant_ids]
+        params = list(params)
+        pick_ids = [None] * len(variant_ids) if pick_ids is None else [None if p is None else int(p)
+                                                                        for p in pick_ids]
+        if not (len(points) == len(variant_ids) == len(params) == len(pick_ids)):
+            raise RamureError("variant_ids, points, params and pick_ids must have the same length")
+        if not np.isfinite(points).all():
+            raise RamureError("qualifier points must be finite")
+        name = canonical_name(qualifier)
+        rows = [(str(grammar), name, v, p, *map(float, pt), json.dumps(pr), str(source))
+                for v, p, pt, pr in zip(variant_ids, pick_ids, points, params)]
+        with self.conn:
+            self.conn.executemany(
+                "INSERT INTO qualifier_points (grammar, qualifier, variant_id, pick_id, pc1, pc2, pc3, "
+                "params, source) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)", rows)
+        return len(rows)
+
+    def remove(self, grammar=None, source=None) -> int:
+        """Delete rows of a grammar and/or a source; returns how many."""
+        where, args = self._where(grammar, None, source)
+        with self.conn:
+            return self.conn.execute(f"DELETE FROM qualifier_points{where}", args).rowcount
+
+    def write_default(self, exploration, per_qualifier=10) -> int:
+        """Store, for every vocabulary qualifier, its ``per_qualifier`` best-ranked variants.
+
+        Rows use ``source='default'`` and replace that grammar's previous
+        default rows, so the call is idempotent.
+        """
+        sweep, cloud, grammar = exploration.sweep, exploration.points, exploration.name
+        self.remove(grammar, "default")
+        total = 0
+        for name in VOCABULARY:
+            top = rank_variants(name, sweep)[:per_qualifier]
+            top = top[np.all(np.isfinite(cloud[top]), axis=1)]
+            total += self.add(grammar, name, top, cloud[top], [sweep.combination(i) for i in top])
+        return total
+
+    # -- reading -----------------------------------------------------------
+    @staticmethod
+    def _where(grammar, qualifier, source):
+        clauses, args = [], []
+        if grammar is not None:
+            clauses.append("grammar = ?")
+            args.append(str(grammar))
+        if qualifier is not None:
+            clauses.append("qualifier = ?")
+            args.append(canonical_name(qualifier))
+        if source is not None:
+            if str(source).endswith("%"):
+                clauses.append("source LIKE ?")
+            else:
+                clauses.append("source = ?")
+            args.append(str(source))
+        return (" WHERE " + " AND ".join(clauses)) if clauses else "", args
+
+    def rows(self, grammar=None, qualifier=None, source=None) -> list:
+        """Rows as dicts (``params`` decoded); ``source`` may end with ``%`` (e.g. ``'study:%'``)."""
+        where, args = self._where(grammar, qualifier, source)
+        cur = self.conn.execute("SELECT id, grammar, qualifier, variant_id, pick_id, pc1, pc2, pc3, params, "
+                                f"source FROM qualifier_points{where} ORDER BY id", args)
+        keys = [c[0] for c in cur.description]
+        out = []
+        for values in cur.fetchall():
+            row = dict(zip(keys, values))
+            try:
+                row["params"] = json.loads(row["params"])
+            except json.JSONDecodeError:
+                raise RamureError(f"{self.path}: row {row['id']} has invalid params JSON") from None
+            out.append(row)
+        return out
+
+    def grammars(self) -> list:
+        return [r[0] for r in self.conn.execute("SELECT DISTINCT grammar FROM qualifier_points ORDER BY grammar")]
+
+    def qualifiers(self, grammar, source=None) -> list:
+        where, args = self._where(grammar, None, source)
+        return [r[0] for r in self.conn.execute(
+            f"SELECT DISTINCT qualifier FROM qualifier_points{where} ORDER BY qualifier", args)]
+
+    def points(self, grammar, source=None) -> dict:
+        """``{qualifier: (k,3) PCA points}`` of a grammar."""
+        out = {}
+        for r in self.rows(grammar, source=source):
+            out.setdefault(r["qualifier"], []).append((r["pc1"], r["pc2"], r["pc3"]))
+        return {k: np.array(v, float) for k, v in out.items()}
+
+    def regions(self, grammar, source=None, trim=0.07):
+        """Fitted :class:`QualifierRegions` of a grammar, or None if it has no points."""
+        points = self.points(grammar, source)
+        return QualifierRegions(trim=trim).fit(points) if points else None

@@ -1,0 +1,169 @@
+"""Qualifier vocabulary, regions, the SQLite store, and "make this selection denser"."""
+import json
+import sqlite3
+
+import numpy as np
+import pytest
+
+from lsys import LSystem, RamureError
+from lsys.regen import Session
+from metrics import VariantSweep, explore, plant_metrics
+from metrics.apply import apply_qualifier
+from metrics.plant import METRIC_NAMES
+from metrics.qualifiers import (VOCABULARY, QualifierRegions, canonical_name, qualifier_combination,
+                                qualifier_scores, rank_variants, trim_points, vocabulary_name)
+from metrics.store import SCHEMA, QualifierStore
+
+# Shipped branching grammars with #define constants (n kept small for speed).
+WITH_CONSTANTS = {"honda_sympodial": 6, "honda_monopodial": 6, "ternary_branching": 4, "abop_tree": 6,
+                  "fruit_tree": 5, "branche_stochastic": 5}
+WITHOUT_CONSTANTS = ["plant_1_24a", "plant_1_24d", "stochastic_plant", "context_plant"]
+
+
+@pytest.fixture(scope="module")
+def sweeps(tmp_path_factory):
+    cache = tmp_path_factory.mktemp("cache")
+    return {g: VariantSweep(n=n, n_jobs=2, cache_dir=cache).fit(f"grammars/{g}.lsys")
+            for g, n in WITH_CONSTANTS.items()}
+
+
+def test_vocabulary_has_the_thirteen_qualifiers_in_two_languages():
+    assert len(VOCABULARY) == 13
+    pairs = {(q.name, q.french) for q in VOCABULARY.values()}
+    assert ("sparse", "épars") in pairs and ("fir-like", "sapin") in pairs and ("thick", "gros") in pairs
+    for q in VOCABULARY.values():
+        assert canonical_name(q.french) == q.name and canonical_name(q.name.upper()) == q.name
+        assert q.meaning
+        assert q.direction is None or set(q.direction) <= set(METRIC_NAMES)
+    assert VOCABULARY["dense"].vector().tolist() == [1.0 if m == "branch_density" else 0.0 for m in METRIC_NAMES]
+    assert canonical_name("Symétrique") == "symmetric" and canonical_name("IRRÉALISTE") == "unrealistic"
+    with pytest.raises(RamureError, match="unknown qualifier"):
+        vocabulary_name("fluffy")
+
+
+def test_opposite_qualifiers_rank_in_opposite_orders(sweeps):
+    sweep = sweeps["honda_sympodial"]
+    for a, b in [("small", "large"), ("thin", "thick"), ("dense", "sparse")]:
+        sa, sb = qualifier_scores(a, sweep), qualifier_scores(b, sweep)
+        assert np.corrcoef(sa, sb)[0, 1] < -0.5
+    best_small, best_large = rank_variants("small", sweep)[0], rank_variants("large", sweep)[0]
+    bv = METRIC_NAMES.index("box_volume")
+    assert sweep.deltas_[best_small, bv] < 0 < sweep.deltas_[best_large, bv]
+    normal = rank_variants("normal", sweep)[0]
+    assert np.allclose(sweep.deltas_[normal], 0)  # the base plant itself
+
+
+def test_rule_restriction(sweeps):
+    sweep = sweeps["honda_monopodial"]
+    order = rank_variants("dense", sweep, rules={2})
+    assert len(order) == 729 and set(sweep.rules_[order].tolist()) == {2}
+    assert qualifier_combination("dense", sweep, rules={2})["rule"] == 2
+
+
+@pytest.mark.parametrize("grammar", sorted(WITH_CONSTANTS))
+def test_dense_combination_raises_whole_plant_density(grammar, sweeps):
+    sweep = sweeps[grammar]
+    combo = qualifier_combination("dense", sweep)
+    ls = LSystem.from_file(f"grammars/{grammar}.lsys")
+    n = WITH_CONSTANTS[grammar]
+    base = plant_metrics(ls.derive(n=n).skeleton())
+    denser = plant_metrics(ls.derive(n=n, rule_constants={combo["rule"]: combo["constants"]}).skeleton())
+    assert denser.branch_density > base.branch_density
+    # and through the regeneration layer, on the whole plant
+    session = Session(ls, n=n)
+    out = apply_qualifier(session, "dense", sweep)
+    assert out.improved and out.after.branch_density > out.before.branch_density
+    assert plant_metrics(session.derivation.skeleton()).branch_density == pytest.approx(out.after.branch_density)
+
+
+def _selection(session):
+    """The F leaves of the largest subtree one level below the axiom."""
+    tree = session.tree
+    nodes = np.flatnonzero((tree.depth == 1) & tree.alive & (tree.child_count > 0))
+    node = nodes[np.argmax(tree.leaf_counts()[nodes])]
+    f = set(session.leaves_with_symbol("F").tolist())
+    return [leaf for leaf in tree.leaves_under(node).tolist() if leaf in f]
+
+
+@pytest.mark.parametrize("grammar", sorted(WITH_CONSTANTS))
+def test_dense_raises_the_density_of_a_selection(grammar, sweeps):
+    session = Session(f"grammars/{grammar}.lsys", n=WITH_CONSTANTS[grammar])
+    selection = _selection(session)
+    assert len(selection) >= 3
+    before_all = plant_metrics(session.derivation.skeleton())
+    out = apply_qualifier(session, "dense", sweeps[grammar], selection=selection)
+    assert out.improved, out.to_dict()
+    assert out.after.branch_density > out.before.branch_density
+    assert len(session.edits) == 1 and session.can_undo
+    # the rest of the plant is untouched: the roots are strictly inside it
+    assert out.before.branch_count < before_all.branch_count
+    json.dumps(out.to_dict())
+
+
+@pytest.mark.parametrize("grammar", WITHOUT_CONSTANTS)
+def test_grammars_without_constants_say_so(grammar):
+    with pytest.raises(RamureError, match="no non-zero #define constant"):
+        VariantSweep(n=2, n_jobs=1, cache=False).fit(f"grammars/{grammar}.lsys")
+
+
+def test_trimming_and_regions():
+    pts = np.vstack([np.zeros((99, 3)) + np.arange(99)[:, None] * 0.01, [[50.0, 50.0, 50.0]]])
+    keep = trim_points(pts, 0.07)
+    assert keep.sum() == 93 and not keep[-1]
+    assert trim_points(pts[:10], 0.07).all()  # floor(0.7) = 0 points trimmed
+    regions = QualifierRegions().fit({"dense": pts, "Petit": pts[:50] + 0.2})
+    assert regions.names_ == ["dense", "small"]
+    lo, hi = regions.boxes_["dense"]
+    assert hi.max() < 50  # the outlier was trimmed away
+    m = regions.collision_matrix_
+    assert m[0, 0] == 100 and m[1, 1] == 100
+    # small's kept points span 0.2..0.68, dense's box 0..0.92 -> all inside; not the reverse
+    assert m[1, 0] == 100 and 0 < m[0, 1] < 100
+    assert regions.mean_collision() == pytest.approx((m[0, 1] + m[1, 0]) / 2)
+    with pytest.raises(RamureError, match="no region"):
+        regions.contains("round", pts)
+
+
+def test_store_schema_is_shared_with_studies(tmp_path):
+    from studies.qualifiers import QUALIFIER_POINTS_SQL, export_qualifier_points
+
+    def columns(sql):
+        conn = sqlite3.connect(":memory:")
+        conn.execute(sql)
+        return conn.execute("PRAGMA table_info(qualifier_points)").fetchall()
+
+    assert columns(SCHEMA) == columns(QUALIFIER_POINTS_SQL)
+    path = tmp_path / "q.sqlite"
+    export_qualifier_points([dict(grammar="honda_sympodial", qualifier="dense", variant_id=3, pick_id=4,
+                                  pc1=1.0, pc2=2.0, pc3=3.0, params=json.dumps({"rule": 1, "constants": {"r1": 0.81}}),
+                                  source="study:demo")], path)
+    with QualifierStore(path) as store:
+        rows = store.rows("honda_sympodial", source="study:%")
+        assert rows[0]["params"] == {"rule": 1, "constants": {"r1": 0.81}} and rows[0]["pick_id"] == 4
+        assert store.qualifiers("honda_sympodial") == ["dense"]
+        store.add("honda_sympodial", "épars", [1], [[0, 0, 0]], [{"rule": 0, "constants": {}}])
+        assert store.qualifiers("honda_sympodial") == ["dense", "sparse"]
+        assert store.remove(source="default") == 1
+    cols = [r[1] for r in sqlite3.connect(path).execute("PRAGMA table_info(qualifier_points)")]
+    assert cols == ["id", "grammar", "qualifier", "variant_id", "pick_id", "pc1", "pc2", "pc3", "params", "source"]
+
+
+def test_default_points_and_study_regions_drive_the_combination(tmp_path):
+    exp = explore("grammars/honda_sympodial.lsys", n=4, n_jobs=1, cache=False)
+    with QualifierStore(tmp_path / "q.sqlite") as store:
+        assert store.write_default(exp, per_qualifier=5) == 13 * 5
+        assert store.write_default(exp, per_qualifier=5) == 13 * 5  # idempotent
+        assert len(store.rows(exp.name)) == 65
+        regions = store.regions(exp.name)
+        assert set(regions.names_) == set(VOCABULARY)
+        # a study saying "round" = the region around pick 14's point
+        p = exp.picks.variant[13]
+        store.add(exp.name, "rond", [p], [exp.points[p]], [exp.sweep.combination(p)], pick_ids=[14],
+                  source="study:demo")
+        study = store.regions(exp.name, source="study:%", trim=0)
+    assert study.names_ == ["round"]
+    combo = qualifier_combination("round", exp.sweep, points=exp.points, regions=study)
+    assert combo == exp.sweep.combination(p)
+    # a name without a region falls back to the vocabulary direction
+    assert qualifier_combination("dense", exp.sweep, points=exp.points, regions=study) == \
+        qualifier_combination("dense", exp.sweep)
