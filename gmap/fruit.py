@@ -28,7 +28,8 @@ rotz
 Choices where the thesis is silent: the axiom trunk prism is sized by ``fc``
 like the others; a branch's base matches its trunk face (L = segment height,
 W = face width); the stem end is the last trunk prism's E face; every preset
-uses ``ph = 10`` except the ribbed tomato (24, so six ribs are resolved).
+uses ``ph = 10`` except the ribbed tomato (24, so six ribs are resolved);
+the pear's profile is walked from 1.6 down to -0.6 so the neck is at the stem.
 
 Internal structure (see :mod:`gmap.tissue`) needs ``volume_levels >= 1``; its
 parameters ``carpels``, ``exocarp``, ``mesocarp``, ``endocarp``, ``septum``,
@@ -53,13 +54,15 @@ from gmap import tissue as _tissue
 from gmap.errors import ValueRefused
 from gmap.map3 import GMap3
 
-#: 1-D profile functions and their sampling interval ``[binf, bsup]``.
+#: 1-D profile functions and their sampling interval ``[binf, bsup]``, walked
+#: from the blossom end (first trunk prism) to the stem end.  The pear's
+#: interval [-0.6, 1.6] is walked downwards so its neck is at the stem end.
 PROFILES = {
     "sin": (np.sin, 0.0, np.pi),
     "constant": (np.ones_like, 0.0, 1.0),
     "circle": (lambda x: np.sqrt(np.clip(1.0 - x * x, 0.0, None)), -1.0, 1.0),
     "circle15": (lambda x: np.sqrt(np.clip(1.5 * (1.0 - x * x), 0.0, None)), -1.0, 1.0),
-    "pear": (lambda x: x ** 3 * (1.5 - x) + 0.46, -0.6, 1.6),
+    "pear": (lambda x: x ** 3 * (1.5 - x) + 0.46, 1.6, -0.6),
 }
 
 #: Shape parameters and their defaults (Grammar 2.7).
@@ -95,7 +98,7 @@ PRESETS = {
 def sample(profile, count, floor):
     """Sample a named profile at ``count`` evenly spaced points of its interval, floored.
 
-    ``x_i = binf + i dx`` with ``dx = |bsup - binf| / (count - 1)``; returns
+    ``x_i = binf + i dx`` with ``dx = (bsup - binf) / (count - 1)``; returns
     ``max(floor, f(x_i))``.
 
     >>> sample("circle", 3, 0.1).tolist()

@@ -209,29 +209,33 @@ class Operations:
         """
         darts = _darts(darts)
         t = np.broadcast_to(np.asarray(t, float), darts.shape)
-        edge_of = self._orbits_from(darts, (0, 2, 3))
-        side_of = self._orbits_from(darts, (2, 3))
-        members = np.flatnonzero(edge_of >= 0)
-        which = edge_of[members]
-        frac = np.where(side_of[members] == which, t[which], 1.0 - t[which])
+        members, which = self._orbits_from(darts, (0, 2, 3))
+        side, side_which = self._orbits_from(darts, (2, 3))
+        same_side = np.zeros(len(members), bool)
+        same_side[np.searchsorted(members, side)] = True          # side darts are members too
+        frac = np.where(same_side, t[which], 1.0 - t[which])
         alpha = self._alpha
         old_a0 = alpha[0][members].astype(np.int64)
-        new = self._new_darts(len(members))
+        new = self._new_darts(len(members)).astype(np.int64)
         alpha = self._alpha
-        nmap = np.arange(self.n_darts, dtype=np.int64)
-        nmap[members] = new
+
+        def nmap(x):                       # old member dart -> its new dart
+            return new[np.searchsorted(members, x)]
+
         alpha[0][members] = new
         alpha[0][new] = members
-        alpha[1][new] = nmap[old_a0]
-        alpha[2][new] = nmap[alpha[2][members]]
-        alpha[3][new] = nmap[alpha[3][members]]
+        alpha[1][new] = nmap(old_a0)
+        alpha[2][new] = nmap(alpha[2][members])
+        alpha[3][new] = nmap(alpha[3][members])
         self._copy_dart_data(new, members)
         fw = self._darts["forward"]
         fw[new] = ~fw[members]
         pts = self._darts["point"]
         pts[new] = pts[members] + frac[:, None] * (pts[old_a0] - pts[members])
+        rad = self._darts["radial"]
+        rad[new] = rad[members] + frac * (rad[old_a0] - rad[members])
         self._changed()
-        return nmap[darts]
+        return nmap(darts)
 
     def split_face(self, d1, d2):
         """Split the face of ``d1`` by a new edge from ``d1``'s vertex to ``d2``'s vertex.
@@ -269,6 +273,7 @@ class Operations:
         alpha = self._alpha
         fw = self._darts["forward"]
         pts = self._darts["point"]
+        rad = self._darts["radial"]
         for (s1, sx, sy, sz), (n1, n2, m1, m2) in zip(sides, new):
             pairs = [(1, sx, n2), (1, n1, s1), (1, sz, m2), (1, m1, sy),
                      (0, n1, n2), (0, m1, m2), (2, n1, m1), (2, n2, m2)]
@@ -278,6 +283,8 @@ class Operations:
             fw[[n1, n2, m1, m2]] = [not fw[s1], fw[s1], fw[s1], not fw[s1]]
             pts[[n1, m1]] = pts[s1]
             pts[[n2, m2]] = pts[sx]
+            rad[[n1, m1]] = rad[s1]
+            rad[[n2, m2]] = rad[sx]
         if len(sides) == 2:
             for k in range(4):
                 alpha[3][new[0, k]], alpha[3][new[1, k]] = new[1, k], new[0, k]
@@ -301,43 +308,43 @@ class Operations:
         p1 = np.unique(np.concatenate([path, alpha[0][path]]))
         if len(p1) != 2 * len(path):
             raise GMapError("split_volume needs one dart per path edge")
-        on_path = np.zeros(self.n_darts, bool)
-        on_path[p1] = True
+        def on_path(x):
+            pos = np.minimum(np.searchsorted(p1, x), len(p1) - 1)
+            return p1[pos] == x
+
         a1, a2 = alpha[1], alpha[2]
         # next path dart around each vertex, staying on part 1
         y = a1[p1].astype(np.int64)
         for _ in range(self.n_darts):
-            todo = ~on_path[y]
+            todo = ~on_path(y)
             if not todo.any():
                 break
             y[todo] = a1[a2[y[todo]]]
         else:
             raise GMapError("split_volume: the path is not a closed loop")
-        if np.any(on_path[a2[p1]]):
+        if np.any(on_path(a2[p1])):
             raise GMapError("split_volume: the path touches itself")
         old_a2 = a2[p1].astype(np.int64)
         k = len(p1)
         new = self._new_darts(2 * k)
         alpha = self._alpha
         f, g = new[:k], new[k:]
-        fmap = np.full(self.n_darts, -1, np.int64)
-        gmap = np.full(self.n_darts, -1, np.int64)
-        fmap[p1], gmap[p1] = f, g
+        at = np.searchsorted(p1, alpha[0][p1])        # p1 is sorted and closed under alpha0
+        ay = np.searchsorted(p1, y)
         alpha[2][p1], alpha[2][f] = f, p1
         alpha[2][old_a2], alpha[2][g] = g, old_a2
-        alpha[0][f], alpha[0][g] = fmap[alpha[0][p1]], gmap[alpha[0][p1]]
-        alpha[1][f], alpha[1][g] = fmap[y], gmap[y]
+        alpha[0][f], alpha[0][g] = f[at], g[at]
+        alpha[1][f], alpha[1][g] = f[ay], g[ay]
         alpha[3][f], alpha[3][g] = g, f
-        if np.any(alpha[1][f] < 0):
-            raise GMapError("split_volume: the path is not a closed loop")
         data = self._darts
         data["volume"][f] = vol[p1]
         data["volume"][g] = vol[p1]
         data["face"][f] = _prism.face_label_code(labels[0])
         data["face"][g] = _prism.face_label_code(labels[1])
         data["sublabel"][new] = 0
-        data["point"][f] = data["point"][p1]
-        data["point"][g] = data["point"][p1]
+        for name in ("point", "radial"):
+            data[name][f] = data[name][p1]
+            data[name][g] = data[name][p1]
         walk, length = self.face_walk([f[0]])
         w = walk[0, : length[0]]
         pos = np.arange(len(w))
@@ -346,7 +353,7 @@ class Operations:
         data["forward"][alpha[3][w]] = data["forward"][w]
         data["fcorner"][alpha[3][w]] = data["fcorner"][w]
         self._changed()
-        part2 = np.flatnonzero(self._orbits_from([int(g[0])], (0, 1, 2)) >= 0)
+        part2, _ = self._orbits_from([int(g[0])], (0, 1, 2))
         if np.any(np.isin(part2, f)):
             raise GMapError("split_volume: the path does not separate the volume")
         old = int(vol[p1[0]])
@@ -357,13 +364,16 @@ class Operations:
         self._changed()
         return int(new_vol)
 
-    def split_prism(self, volume, t=0.5):
-        """Split prism ``volume`` across its axis (thesis rule ``A ->^O B C``).
+    def split_prism(self, volume, t=0.5, face=None, labels=("E", "O")):
+        """Split prism ``volume`` parallel to one face (thesis rule ``A ->^O B C``).
 
-        The lateral edges are split at fraction ``t`` from ``O``, every lateral
-        face is cut between the new vertices, and the volume is cut along the
-        new loop.  The lower part keeps the volume id and ``O``; the upper
-        part (returned) keeps ``E``; the new faces are labelled E and O.
+        ``face`` is a dart of the face to cut parallel to (default: the
+        volume's ``O`` face).  The edge leaving each corner of that face is
+        split at fraction ``t``, every face around is cut between the new
+        vertices (which must not be adjacent) and the volume is cut along the
+        new loop.  The part holding ``face`` keeps the volume id;
+        the other part is returned.  The new faces get ``labels`` (the kept
+        part's first).
 
         >>> from gmap import GMap3
         >>> gm = GMap3(); _ = gm.add_prisms(6)
@@ -371,25 +381,25 @@ class Operations:
         >>> gm.counts()["volumes"], gm.counts()["vertices"], gm.is_valid()
         (2, 18, True)
         """
-        vol = self._darts["volume"]
-        face = self._darts["face"]
-        darts = np.flatnonzero((vol == volume) & (face == _prism.FACE_O) & self._darts["forward"])
-        if darts.size == 0:
-            raise GMapError(f"volume {volume} has no O face")
-        walk, length = self.face_walk(darts[:1])
+        if face is None:
+            darts = np.flatnonzero((self._darts["volume"] == volume) & (self._darts["face"] == _prism.FACE_O))
+            if darts.size == 0:
+                raise GMapError(f"volume {volume} has no O face")
+            face = int(darts[0])
+        elif int(self._darts["volume"][face]) != int(volume):
+            raise GMapError(f"dart {face} is not in volume {volume}")
+        walk, length = self.face_walk([face])
         w = walk[0, : length[0]]
         alpha = self._alpha
-        lateral = alpha[2][w[0::2]]                 # lateral face darts at each O vertex
-        starts = alpha[1][lateral]                  # on the lateral edges, at O
-        ends = alpha[1][alpha[2][w[1::2]]]          # same lateral edges seen from the other face
+        starts = alpha[1][alpha[2][w[0::2]]]        # edges leaving the face, one per corner
+        ends = alpha[1][alpha[2][w[1::2]]]          # the same edges seen from the previous side face
         new = self.split_edge(starts, t)
         path = []
         for i, s in enumerate(new):
-            nxt = int(self._alpha[0][ends[i]])      # new vertex on the next lateral edge
-            upper_side = int(s)
-            n1, _ = self.split_face(upper_side, nxt)
+            nxt = int(self._alpha[0][ends[i]])      # new vertex on the next edge, same side face
+            n1, _ = self.split_face(int(s), nxt)
             path.append(n1)
-        return self.split_volume(path, labels=("E", "O"))
+        return self.split_volume(path, labels=labels)
 
     # ------------------------------------------------------------------ removal
     def remove_volumes(self, volumes):

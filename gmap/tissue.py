@@ -24,9 +24,12 @@ mesocarp; ``L = 3``: exocarp, mesocarp, locule).  Any branch cell with a
 boundary face is exocarp, so the skin also covers the poles.  Around the axis,
 the fruit is cut into ``carpels`` equal angular sectors; the fraction
 ``septum`` of each sector centred on its borders turns endocarp and locule
-cells into septum.  ``seeds`` locule cells glued to the columella are picked at
-random and become seeds, rounded by ``seed_smoothing`` surface subdivisions
-of those cells only.
+cells into septum.  Then ``seeds`` locule cells glued to the columella (no two
+sharing a vertex) are picked at random; each is cut across its depth into gel,
+seed and gel (the seed spans :data:`SEED_SPAN` of the cell's depth), and the
+seeds are rounded by ``seed_smoothing`` surface subdivisions of those cells
+only (their neighbours' faces follow).  The thesis relabels whole cells as
+seeds; here a whole cell would be as deep as the locule, hence the cuts.
 
 Thicknesses ``exocarp``, ``mesocarp`` and ``endocarp`` are *fractions of the
 local pericarp depth* (core surface to skin; the locules take the rest): the
@@ -52,13 +55,13 @@ CODES = {name: code for code, name in enumerate(TISSUES)}
 #: Display colours (hex RGB) by tissue name, for renderers.
 COLORS = {
     "columella": "#f4c7a1", "pericarp": "#e0452f", "exocarp": "#9e0d12", "mesocarp": "#e8412c",
-    "endocarp": "#f0866a", "septum": "#d9382a", "locule": "#e9c45a", "seed": "#fff3cf",
+    "endocarp": "#f0866a", "septum": "#d9382a", "locule": "#d4b843", "seed": "#fff8e0",
 }
 
 #: Internal-structure parameters and their defaults.
 DEFAULTS = {
     "carpels": 3, "exocarp": 0.04, "mesocarp": 0.30, "endocarp": 0.06, "septum": 0.25,
-    "seeds": 40, "seed_smoothing": 1,
+    "seeds": 120, "seed_smoothing": 1,
 }
 
 
@@ -154,11 +157,8 @@ def differentiate(gm, carpels=3, exocarp=0.04, mesocarp=0.30, endocarp=0.06, sep
     inner = np.isin(tissue, [CODES["endocarp"], CODES["locule"]])
     tissue[inner & _in_septum(gm, carpels, septum)] = CODES["septum"]
     _place_layers(gm, layers, depths)
-    seed_mask = _pick_seeds(gm, seeds, rng)
-    tissue[seed_mask] = CODES["seed"]
-    if seed_smoothing and seed_mask.any():
-        gm = _subdivide.surface(gm, seed_smoothing, volumes=seed_mask)
-    return gm
+    cells, inner = _pick_seeds(gm, seeds, rng)
+    return _carve_seeds(gm, cells, inner, seed_smoothing)
 
 
 def _in_septum(gm, carpels, septum):
@@ -211,16 +211,54 @@ def _place_layers(gm, layers, depths):
     gm.points[:] = new[vid]
 
 
+#: Where a seed sits inside its locule cell: fractions of the cell's depth from its inner face.
+SEED_SPAN = (0.2, 0.45)
+
+
 def _pick_seeds(gm, count, rng):
-    """Boolean mask of ``count`` random locule volumes glued to the columella."""
+    """Up to ``count`` random locule cells glued to the columella that share no vertex.
+
+    Returns ``(volumes, inner_darts)``: each cell and a dart of its face on the columella.
+    """
     tissue = gm.volume_data["tissue"]
     alpha = gm.alpha
     vol = gm.dart_volume
-    sewn = alpha[3] != np.arange(gm.n_darts)
-    a, b = vol[sewn], vol[alpha[3][sewn]]
-    touch = (tissue[a] == CODES["locule"]) & (tissue[b] == CODES["columella"])
-    candidates = np.unique(a[touch])
-    mask = np.zeros(gm.n_volumes, bool)
-    if count and candidates.size:
-        mask[rng.choice(candidates, size=min(int(count), candidates.size), replace=False)] = True
-    return mask
+    sewn = np.flatnonzero(alpha[3] != np.arange(gm.n_darts))
+    touch = sewn[(tissue[vol[sewn]] == CODES["locule"]) & (tissue[vol[alpha[3][sewn]]] == CODES["columella"])]
+    cells, first = np.unique(vol[touch], return_index=True)
+    if not count or cells.size == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    inner = touch[first]
+    vid, _ = gm.cells(0)
+    by_vol = np.argsort(vol, kind="stable")
+    bounds = np.searchsorted(vol[by_vol], np.arange(gm.n_volumes + 1))
+    used = np.zeros(int(vid.max()) + 1, bool)
+    chosen = []
+    for i in rng.permutation(len(cells)):          # one step per candidate cell, not per dart
+        c = cells[i]
+        verts = vid[by_vol[bounds[c]:bounds[c + 1]]]
+        if used[verts].any():
+            continue
+        used[verts] = True
+        chosen.append(i)
+        if len(chosen) == count:
+            break
+    chosen = np.array(chosen, np.int64)
+    return cells[chosen], inner[chosen]
+
+
+def _carve_seeds(gm, cells, inner, smoothing):
+    """Cut each cell into gel | seed | gel across its depth, then round the seeds."""
+    t0, t1 = SEED_SPAN
+    seeds = []
+    for c, d in zip(cells, inner):                 # one step per seed
+        rest = gm.split_prism(int(c), t0, face=int(d), labels=("I", "I"))
+        vol = gm.dart_volume
+        cut = np.flatnonzero((vol == rest) & (vol[gm.alpha[3]] == c))
+        gm.split_prism(rest, (t1 - t0) / (1.0 - t0), face=int(cut[0]), labels=("I", "I"))
+        seeds.append(rest)
+    seeds = np.array(seeds, np.int64)
+    gm.volume_data["tissue"][seeds] = CODES["seed"]
+    if smoothing and seeds.size:
+        gm = _subdivide.surface(gm, smoothing, volumes=seeds)
+    return gm

@@ -1,0 +1,172 @@
+"""``ramure fruit``: build a volumetric fruit, print its facts, write a PNG or a VTU.
+
+Examples::
+
+    ramure fruit --preset round_tomato --json
+    ramure fruit --preset ribbed_tomato --set nbprotus=8 -o ribbed.png
+    ramure fruit --subdivide volume:2 --cut z=0 -o tomato.png
+    ramure fruit --subdivide volume:2 -o tomato.vtu
+
+JSON keys: preset, seed, darts, vertices, edges, faces (2-cells), faces_per_volume
+(the thesis's count), volumes, tissues (volumes per tissue), valid, seconds
+(build + validity check), and output when a file was written.
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+import time
+
+import numpy as np
+
+from app.cli import UserError
+
+SUBDIVISIONS = ("surface", "volume")
+
+
+def parse_subdivide(specs):
+    """``["volume:2", "surface:1"]`` -> ``{"volume_levels": 2, "surface_levels": 1}``."""
+    levels = {"volume_levels": 0, "surface_levels": 0}
+    for spec in specs:
+        kind, sep, count = spec.partition(":")
+        kind = kind.strip().lower()
+        if kind not in SUBDIVISIONS:
+            raise UserError(f"--subdivide expects surface:N or volume:N, got '{spec}'")
+        try:
+            n = int(count) if sep else 1
+        except ValueError:
+            raise UserError(f"--subdivide {kind}: '{count}' is not a whole number") from None
+        if not 0 <= n <= 4:
+            raise UserError(f"--subdivide {kind}: levels must be in 0..4, got {n}")
+        levels[f"{kind}_levels"] += n
+    return levels
+
+
+def parse_sets(pairs):
+    """``["precision=12"]`` -> ``{"precision": "12"}`` (the fruit builder converts and checks)."""
+    out = {}
+    for pair in pairs:
+        name, sep, value = pair.partition("=")
+        if not sep or not name.strip():
+            raise UserError(f"--set expects NAME=VALUE, got '{pair}'")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def tissue_rgb(tissue):
+    """uint8 RGB per cell from tissue codes (colours of :data:`gmap.tissue.COLORS`)."""
+    from gmap.tissue import COLORS, TISSUES
+
+    table = np.array([[int(COLORS[n][i:i + 2], 16) for i in (1, 3, 5)] for n in TISSUES], np.uint8)
+    return table[np.asarray(tissue, np.int64)]
+
+
+def render_fruit(grid, path, size=(800, 800), cut_normal=None, title=None):
+    """Render a fruit grid (cell data ``tissue``) off-screen to PNG, coloured by tissue."""
+    from app.render import _headless_setup
+    from gmap.tissue import COLORS, TISSUES
+
+    _headless_setup()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    plotter.set_background("white")
+    shown = grid.copy(deep=False)
+    shown.cell_data["rgb"] = tissue_rgb(shown.cell_data["tissue"])
+    surface = shown.extract_surface(algorithm="dataset_surface")
+    plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=False)
+    edges = surface.extract_feature_edges(feature_angle=25, boundary_edges=False,
+                                          non_manifold_edges=False, manifold_edges=False)
+    if edges.n_points:
+        plotter.add_mesh(edges, color=(0.25, 0.1, 0.1), line_width=0.5, opacity=0.25)
+    present = np.unique(np.asarray(grid.cell_data["tissue"]))
+    plotter.add_legend([[TISSUES[c], COLORS[TISSUES[c]]] for c in present], bcolor=(0.6, 0.6, 0.6),
+                       face="rectangle", size=(0.2, 0.032 * len(present) + 0.01), loc="lower right")
+    b = np.asarray(grid.bounds, float).reshape(3, 2)
+    centre = b.mean(axis=1)
+    extent = float(np.max(b[:, 1] - b[:, 0])) or 1.0
+    look = np.array([0.55, -0.75, 0.55]) if cut_normal is None else np.asarray(cut_normal, float) * 1.0
+    if cut_normal is not None:
+        side = np.cross(look, [0.0, 0.0, 1.0])
+        if np.linalg.norm(side) < 1e-6:
+            side = np.array([0.0, -1.0, 0.0])
+        look = look + 0.8 * side / np.linalg.norm(side) + 0.3 * np.array([0.0, 0.0, 1.0])
+    look = look / np.linalg.norm(look)
+    up = (0.0, 0.0, 1.0) if abs(look[2]) < 0.9 else (0.0, 1.0, 0.0)
+    plotter.camera_position = [tuple(centre + look * extent * 2.5), tuple(centre), up]
+    plotter.reset_camera(bounds=tuple(b.ravel()))
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
+
+
+def run_fruit(args):
+    from gmap.cut import parse_plane, plane_cut
+    from gmap.fruit import build_fruit
+    from gmap.pyvista import to_unstructured_grid
+    from gmap.tissue import tissue_counts
+
+    levels = parse_subdivide(args.subdivide)
+    t0 = time.perf_counter()
+    gm = build_fruit(args.preset, seed=args.seed, **levels, **parse_sets(args.set))
+    valid = gm.is_valid()
+    seconds = time.perf_counter() - t0
+    out = None
+    if args.output:
+        out = pathlib.Path(args.output)
+        if out.suffix.lower() not in (".png", ".vtu"):
+            raise UserError(f"-o: write a .png picture or a .vtu grid, not '{out.name}'")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        grid = to_unstructured_grid(gm)
+        normal = None
+        if args.cut:
+            normal, origin = parse_plane(args.cut)
+            grid = plane_cut(grid, normal=normal, origin=origin, mode=args.cut_mode)
+            if grid.n_cells == 0:
+                raise UserError(f"--cut {args.cut}: the plane leaves nothing of the fruit")
+        if out.suffix.lower() == ".vtu":
+            grid.save(str(out))
+        else:
+            w, _, h = args.size.partition("x")
+            try:
+                size = (int(w), int(h or w))
+            except ValueError:
+                raise UserError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
+            render_fruit(grid, out, size=size, cut_normal=normal, title=args.preset.replace("_", " "))
+    if args.json:
+        c = gm.counts()
+        record = {"preset": args.preset, "seed": args.seed, **c, "tissues": tissue_counts(gm),
+                  "valid": bool(valid), "seconds": round(seconds, 6)}
+        if out is not None:
+            record["output"] = str(out)
+        print(json.dumps(record))
+    elif out is not None:
+        print(f"wrote {out}")
+    else:
+        c = gm.counts()
+        print(f"{args.preset}: {c['darts']} darts, {c['vertices']} vertices, {c['volumes']} volumes, "
+              f"{'valid' if valid else 'INVALID'}, {seconds * 1000:.1f} ms")
+    return 0 if valid else 1
+
+
+def register(sub):
+    from gmap.fruit import PRESETS
+
+    p = sub.add_parser("fruit", help="build a volumetric fruit (3G-map); facts, PNG or VTU")
+    p.add_argument("--preset", default="round_tomato", choices=sorted(PRESETS),
+                   help="fruit preset (default round_tomato)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a fruit parameter, e.g. precision=12 or carpels=4 (repeatable)")
+    p.add_argument("--subdivide", action="append", default=[], metavar="KIND:N",
+                   help="surface:N or volume:N subdivisions (repeatable); volume:N also builds tissues")
+    p.add_argument("--seed", type=int, default=0, help="random seed (seed placement)")
+    p.add_argument("--cut", default=None, metavar="AXIS=VALUE",
+                   help="show the inside: keep what lies behind the plane, e.g. z=0")
+    p.add_argument("--cut-mode", default="clip", choices=["clip", "cells"],
+                   help="clip cells flat (default) or drop whole cells in front of the plane")
+    p.add_argument("--size", default="800x800", help="PNG size WIDTHxHEIGHT (default 800x800)")
+    p.add_argument("--json", action="store_true", help="print the facts as one JSON object")
+    p.add_argument("-o", "--output", default=None, help="write a .png picture or a .vtu grid")
+    p.set_defaults(func=run_fruit)

@@ -1,0 +1,69 @@
+"""Plane cuts that show the inside of a volumetric model.
+
+:func:`plane_cut` keeps what lies behind a plane (the side opposite its
+normal).  ``mode="clip"`` cuts cells exactly (VTK clip), giving a flat face
+like a knife; ``mode="cells"`` drops whole cells whose centre is in front, so
+the cut face shows the cells themselves.  Cell data (``tissue``, ``label``,
+``leaf_id``...) is kept either way.
+
+>>> from gmap.fruit import build_fruit
+>>> grid = plane_cut(build_fruit("round_tomato"), normal="z", origin=(0, 0, 0), mode="cells")
+>>> 0 < grid.n_cells < 110
+True
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from gmap.errors import ValueRefused
+
+_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+def parse_plane(text):
+    """``"z=0"`` or ``"x=1.5"`` -> (normal, origin); the normal points along the axis.
+
+    >>> parse_plane("z=2")
+    ((0.0, 0.0, 1.0), (0.0, 0.0, 2.0))
+    """
+    axis, sep, value = str(text).partition("=")
+    axis = axis.strip().lower()
+    if not sep or axis not in _AXES:
+        raise ValueRefused(f"cut plane must look like x=VALUE, y=VALUE or z=VALUE, got {text!r}")
+    try:
+        v = float(value)
+    except ValueError:
+        raise ValueRefused(f"cut plane value must be a number, got {value.strip()!r}") from None
+    normal = _AXES[axis]
+    return normal, tuple(v * c for c in normal)
+
+
+def _normal(normal):
+    if isinstance(normal, str):
+        if normal.lower() not in _AXES:
+            raise ValueRefused(f"normal must be x, y, z or a 3-vector, got {normal!r}")
+        normal = _AXES[normal.lower()]
+    n = np.asarray(normal, float).reshape(3)
+    length = np.linalg.norm(n)
+    if length == 0:
+        raise ValueRefused("the cut plane's normal must not be zero")
+    return n / length
+
+
+def plane_cut(model, normal="z", origin=None, mode="clip"):
+    """Keep the part of ``model`` (a GMap3 or an UnstructuredGrid) behind the plane.
+
+    ``origin`` defaults to the centre of the model's bounds.
+    """
+    from gmap.pyvista import to_unstructured_grid
+
+    grid = model if hasattr(model, "cell_data") else to_unstructured_grid(model)
+    n = _normal(normal)
+    o = np.asarray(grid.center if origin is None else origin, float).reshape(3)
+    if mode == "cells":
+        centres = grid.cell_centers().points
+        keep = (centres - o) @ n <= 0
+        return grid.extract_cells(np.flatnonzero(keep))
+    if mode == "clip":
+        return grid.clip(normal=tuple(n), origin=tuple(o), invert=True)
+    raise ValueRefused(f"cut mode must be 'clip' or 'cells', got {mode!r}")
