@@ -1,0 +1,227 @@
+"""The constants panel: one slider and spin box per ``#define``, derivation count and seed.
+
+Rows are rebuilt when the grammar's constant names change.  Each slider
+covers a range inferred from the grammar's value
+(:func:`app.desktop.state.constant_range`); "Edit ranges" shows min/max boxes
+to change it, and typing a value outside the range widens it.  A change is
+emitted (:attr:`ConstantsPanel.constant_changed`) after a short pause so a
+slider drag re-derives a few times, not at every pixel.
+"""
+from __future__ import annotations
+
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtWidgets import (QCheckBox, QDoubleSpinBox, QFormLayout, QGridLayout, QGroupBox, QLabel,
+                               QScrollArea, QSlider, QSpinBox, QVBoxLayout, QWidget)
+
+from app.desktop.state import constant_range
+
+SLIDER_STEPS = 1000
+SETTLE_MS = 60
+LIMIT = 1e9
+
+
+def _spin(lo=-LIMIT, hi=LIMIT, decimals=4, width=96):
+    box = QDoubleSpinBox()
+    box.setMaximumWidth(width)
+    box.setRange(lo, hi)
+    box.setDecimals(decimals)
+    box.setKeyboardTracking(False)
+    box.setAccelerated(True)
+    return box
+
+
+class ConstantRow:
+    """The widgets of one constant: label, slider, value box and (hidden) min/max boxes."""
+
+    def __init__(self, panel, name, value):
+        self.panel, self.name = panel, name
+        self.label = QLabel(name)
+        self.slider = QSlider(Qt.Orientation.Horizontal)
+        self.slider.setRange(0, SLIDER_STEPS)
+        self.slider.setObjectName(f"slider_{name}")
+        self.slider.setMinimumWidth(90)
+        self.value = _spin()
+        self.value.setObjectName(f"value_{name}")
+        self.low, self.high = _spin(width=80), _spin(width=80)
+        self.lo, self.hi = constant_range(value)
+        self.low.setValue(self.lo)
+        self.high.setValue(self.hi)
+        self.set_value(value)
+        self.slider.valueChanged.connect(self._slid)
+        self.value.valueChanged.connect(self._typed)
+        self.low.valueChanged.connect(self._range_typed)
+        self.high.valueChanged.connect(self._range_typed)
+
+    def widgets(self):
+        return [self.label, self.slider, self.value, self.low, self.high]
+
+    def set_value(self, value):
+        """Show ``value`` without emitting anything (widening the range if needed)."""
+        value = float(value)
+        if value < self.lo or value > self.hi:
+            self.set_range(min(self.lo, value), max(self.hi, value))
+        for w in (self.slider, self.value):
+            w.blockSignals(True)
+        self.value.setValue(value)
+        self.slider.setValue(self._to_step(value))
+        for w in (self.slider, self.value):
+            w.blockSignals(False)
+
+    def set_range(self, lo, hi):
+        lo, hi = float(lo), float(hi)
+        if not hi > lo:
+            raise ValueError(f"{self.name}: the range maximum must be above its minimum ({lo:g} .. {hi:g})")
+        self.lo, self.hi = lo, hi
+        for box, v in ((self.low, lo), (self.high, hi)):
+            box.blockSignals(True)
+            box.setValue(v)
+            box.blockSignals(False)
+        self.slider.blockSignals(True)
+        self.slider.setValue(self._to_step(self.value.value()))
+        self.slider.blockSignals(False)
+
+    def _to_step(self, value):
+        return int(round((value - self.lo) / (self.hi - self.lo) * SLIDER_STEPS))
+
+    def _slid(self, step):
+        value = self.lo + (self.hi - self.lo) * step / SLIDER_STEPS
+        value = float(f"{value:.6g}")
+        self.value.blockSignals(True)
+        self.value.setValue(value)
+        self.value.blockSignals(False)
+        self.panel._changed(self.name, value)
+
+    def _typed(self, value):
+        if value < self.lo or value > self.hi:
+            self.set_range(min(self.lo, value), max(self.hi, value))
+        self.slider.blockSignals(True)
+        self.slider.setValue(self._to_step(value))
+        self.slider.blockSignals(False)
+        self.panel._changed(self.name, value)
+
+    def _range_typed(self, _):
+        lo, hi = self.low.value(), self.high.value()
+        if hi > lo:
+            self.set_range(lo, hi)
+            self.panel.range_refused.emit("")
+        else:
+            self.panel.range_refused.emit(f"{self.name}: the maximum must be above the minimum")
+
+
+class ConstantsPanel(QWidget):
+    """Sliders for the grammar's constants plus the derivation count and seed."""
+
+    constant_changed = Signal(str, float)
+    derivation_changed = Signal(int, int)  # n, seed
+    range_refused = Signal(str)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.rows = {}
+        self._pending = {}
+        self.settle = QTimer(self)
+        self.settle.setSingleShot(True)
+        self.settle.setInterval(SETTLE_MS)
+        self.settle.timeout.connect(self._flush)
+
+        self.n_box = QSpinBox()
+        self.n_box.setObjectName("derivationCount")
+        self.n_box.setRange(0, 30)
+        self.n_box.setKeyboardTracking(False)
+        self.seed_box = QSpinBox()
+        self.seed_box.setObjectName("seed")
+        self.seed_box.setRange(0, 2_000_000_000)
+        self.seed_box.setKeyboardTracking(False)
+        self.n_box.valueChanged.connect(self._derivation)
+        self.seed_box.valueChanged.connect(self._derivation)
+        derivation = QGroupBox("Derivation")
+        form = QFormLayout(derivation)
+        form.addRow("Steps n", self.n_box)
+        form.addRow("Seed", self.seed_box)
+
+        self.edit_ranges = QCheckBox("Edit ranges")
+        self.edit_ranges.toggled.connect(self._show_ranges)
+        self.grid_host = QWidget()
+        self.grid = QGridLayout(self.grid_host)
+        self.grid.setColumnStretch(1, 1)
+        self.empty = QLabel("The grammar has no #define constants.")
+        self.empty.setWordWrap(True)
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(self.grid_host)
+        consts = QGroupBox("Constants (#define)")
+        box = QVBoxLayout(consts)
+        box.addWidget(self.edit_ranges)
+        box.addWidget(self.empty)
+        box.addWidget(scroll, 1)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(derivation)
+        layout.addWidget(consts, 1)
+
+    # -- from the model --------------------------------------------------------
+    def show_snapshot(self, snap, grammar_constants):
+        """Show the values of ``snap``; rebuild the rows if the constant names changed."""
+        names = list(grammar_constants)
+        if names != list(self.rows):
+            self._rebuild(grammar_constants)
+        for name, row in self.rows.items():
+            if name not in self._pending:
+                row.set_value(snap.constants.get(name, grammar_constants[name]))
+        for box, v in ((self.n_box, snap.n), (self.seed_box, snap.seed)):
+            box.blockSignals(True)
+            box.setValue(int(v))
+            box.blockSignals(False)
+
+    def _rebuild(self, constants):
+        while self.grid.count():
+            item = self.grid.takeAt(0)
+            if item.widget():
+                item.widget().deleteLater()
+        self.rows = {}
+        for col, title in enumerate(("", "", "value", "min", "max")):
+            if title:
+                label = QLabel(title)
+                label.setProperty("rangeHeader", col >= 3)
+                self.grid.addWidget(label, 0, col)
+        for i, (name, value) in enumerate(constants.items(), start=1):
+            row = ConstantRow(self, name, value)
+            self.rows[name] = row
+            for col, w in enumerate(row.widgets()):
+                self.grid.addWidget(w, i, col)
+        self.grid.setRowStretch(len(constants) + 1, 1)
+        self.empty.setVisible(not constants)
+        self._show_ranges(self.edit_ranges.isChecked())
+
+    def _show_ranges(self, on):
+        for row in self.rows.values():
+            row.low.setVisible(on)
+            row.high.setVisible(on)
+        for i in range(self.grid.count()):
+            w = self.grid.itemAt(i).widget()
+            if w is not None and w.property("rangeHeader"):
+                w.setVisible(on)
+
+    # -- to the model ----------------------------------------------------------
+    def _changed(self, name, value):
+        self._pending[name] = float(value)
+        self.settle.start()
+
+    def _flush(self):
+        pending, self._pending = self._pending, {}
+        for name, value in pending.items():
+            self.constant_changed.emit(name, value)
+
+    def _derivation(self, _):
+        self.derivation_changed.emit(self.n_box.value(), self.seed_box.value())
+
+    # -- for tests and scripting ------------------------------------------------
+    def set_constant(self, name, value, now=True):
+        """Type ``value`` into ``name``'s box (as a user would); ``now`` skips the pause."""
+        self.rows[name].value.setValue(float(value))
+        if now:
+            self.settle.stop()
+            self._flush()
+
+    def values(self):
+        return {name: row.value.value() for name, row in self.rows.items()}

@@ -1,0 +1,245 @@
+"""The window's link to the model: one :class:`~app.model.Explorer`, changed by one worker.
+
+:class:`Controller` owns the explorer and a :class:`~app.desktop.workers.JobQueue`.
+Everything that re-derives or edits the plant (grammar text, constants,
+derivation count, regrow, prune, undo, sessions) is a job run in the worker
+thread under the model lock; each job ends with a fresh
+:class:`~app.desktop.state.Snapshot`, which :attr:`Controller.plant_changed`
+hands to the widgets.  Quick reads and selection changes run in the GUI
+thread under the same lock, and only when the plant on screen is the
+model's current plant (so a click never lands on a plant that is gone).
+
+Errors: a :class:`~lsys.errors.RamureError` (bad input) leaves the model as
+it was and is reported through :attr:`refused`; anything else is a bug,
+reported through :attr:`crashed` with its traceback; in both cases the last
+good plant stays on screen.
+"""
+from __future__ import annotations
+
+import pathlib
+import threading
+import time
+import traceback
+
+from PySide6.QtCore import QObject, Signal
+
+from app.desktop import state
+from app.desktop.workers import JobQueue
+from app.model import Explorer
+from lsys.errors import RamureError
+
+
+class Busy(RamureError):
+    """The model is being changed by a job; the request was not applied."""
+
+
+class Controller(QObject):
+    """Runs the explorer's edits in a worker and publishes snapshots."""
+
+    plant_changed = Signal(object)  # Snapshot (a new plant version)
+    state_changed = Signal(object)  # Snapshot (same plant; text, error, selection, undo... changed)
+    selection_changed = Signal(tuple)
+    job_done = Signal(object)  # Job (after the signals above)
+    refused = Signal(str)  # a user error's message
+    crashed = Signal(str, str)  # message, traceback
+    busy_changed = Signal(bool)
+
+    def __init__(self, explorer: Explorer, parent=None):
+        super().__init__(parent)
+        self.explorer = explorer
+        self.lock = threading.RLock()
+        self.jobs = JobQueue(self._execute, self)
+        self.jobs.finished.connect(self._finished)
+        self.jobs.busy_changed.connect(self.busy_changed)
+        self.snapshot = state.take_snapshot(explorer)
+        self.last_job_seconds = 0.0
+
+    # -- running jobs ------------------------------------------------------
+    @property
+    def idle(self):
+        return self.jobs.idle
+
+    def submit(self, name, fn, key=None):
+        """Run ``fn(explorer)`` in the worker; returns the :class:`~app.desktop.workers.Job`."""
+        return self.jobs.submit(name, fn, key)
+
+    def _execute(self, job):  # worker thread
+        with self.lock:
+            try:
+                job.result = job.fn(self.explorer)
+            except Exception as exc:  # noqa: BLE001 - reported to the user, never fatal
+                job.error = exc
+                job.details = traceback.format_exc()
+            try:
+                job.snapshot = state.take_snapshot(self.explorer, self.snapshot)
+            except Exception as exc:  # noqa: BLE001
+                if job.error is None:
+                    job.error = exc
+                    job.details = traceback.format_exc()
+
+    def _finished(self, job):  # GUI thread
+        self.last_job_seconds = time.perf_counter() - job.submitted
+        snap = job.snapshot
+        if snap is not None and not (job.stale and job.error is None):
+            self._publish(snap)
+        if job.error is not None and not job.stale:
+            if isinstance(job.error, RamureError):
+                self.refused.emit(str(job.error))
+            else:
+                self.crashed.emit(f"{type(job.error).__name__}: {job.error}", job.details)
+        self.job_done.emit(job)
+
+    def _publish(self, snap):
+        old = self.snapshot
+        self.snapshot = snap
+        if snap.version != old.version:
+            self.plant_changed.emit(snap)
+        else:
+            self.state_changed.emit(snap)
+
+    def refresh(self):
+        """Re-read the light parts of the model (selection, status...) in the GUI thread."""
+        with self.lock:
+            snap = state.take_snapshot(self.explorer, self.snapshot)
+        self._publish(snap)
+        return snap
+
+    # -- edits (jobs) ------------------------------------------------------
+    def set_text(self, text):
+        """Parse and derive new grammar text; the job's result is the GrammarError or None."""
+        def run(ex):
+            if text == ex.text and ex.error is None:
+                return None
+            return ex.set_text(text)
+        return self.submit("grammar", run, key="text")
+
+    def set_constant(self, name, value):
+        return self.submit(f"constant {name}", lambda ex: ex.set_constant(name, value), key=f"const:{name}")
+
+    def set_derivation(self, n=None, seed=None):
+        return self.submit("derivation", lambda ex: ex.set_derivation(n, seed), key="derivation")
+
+    def regrow(self, seed=None, constants=None, params=None):
+        return self.submit("regrow", lambda ex: ex.regrow(seed=seed, constants=constants, params=params))
+
+    def prune(self):
+        return self.submit("prune", lambda ex: ex.prune())
+
+    def undo(self):
+        return self.submit("undo", lambda ex: ex.undo())
+
+    def redo(self):
+        return self.submit("redo", lambda ex: ex.redo())
+
+    def load_session(self, path):
+        return self.submit("load session", lambda ex: ex.load_session(path))
+
+    def load_grammar(self, path):
+        """Replace the plant by a grammar file (a fresh session); the job's result is the text."""
+        path = pathlib.Path(path)
+
+        def run(ex):
+            try:
+                text = path.read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as exc:
+                raise RamureError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
+            old = ex.path
+            ex.path = path
+            err = ex.set_text(text)
+            if err is not None:
+                ex.path = old
+                raise err
+            return text
+        return self.submit("open grammar", run, key="text")
+
+    # -- quick reads and selection (GUI thread) -------------------------------
+    def _acquire(self, wait):
+        if wait is None:
+            ok = self.lock.acquire()
+        elif wait <= 0:
+            ok = self.lock.acquire(blocking=False)
+        else:
+            ok = self.lock.acquire(timeout=wait)
+        if not ok:
+            raise Busy("the plant is being recomputed; try again in a moment")
+
+    def read(self, fn, wait=0.0):
+        """``fn(explorer)`` under the lock in the GUI thread (``wait`` seconds at most; None = forever)."""
+        self._acquire(wait)
+        try:
+            return fn(self.explorer)
+        finally:
+            self.lock.release()
+
+    def _current(self, ex):
+        if ex.version != self.snapshot.version:
+            raise Busy("the plant on screen is being replaced; try again in a moment")
+
+    def _select(self, fn):
+        def run(ex):
+            self._current(ex)
+            fn(ex)
+            return state.take_snapshot(ex, self.snapshot)
+        self.snapshot = self.read(run)
+        self.selection_changed.emit(self.snapshot.selection)
+        return self.snapshot.selection
+
+    def select(self, leaf_ids, mode="replace"):
+        return self._select(lambda ex: ex.select(leaf_ids, mode))
+
+    def clear_selection(self):
+        return self._select(lambda ex: ex.clear_selection())
+
+    def pick_cell(self, cell_id, mode="replace"):
+        """Select the history leaf that drew mesh cell ``cell_id``; returns that leaf."""
+        picked = []
+
+        def run(ex):
+            picked.append(ex.leaf_of_cell(cell_id))
+            ex.select([picked[0]], mode)
+        self._select(run)
+        return picked[0]
+
+    def select_rectangle(self, screen_xy, rect, mode="replace"):
+        """Select the leaves whose projected segment midpoints fall in ``rect`` (x0, y0, x1, y1)."""
+        found = []
+
+        def run(ex):
+            found.extend(ex.leaves_in_rectangle(screen_xy, rect))
+            ex.select(found, mode)
+        self._select(run)
+        return found
+
+    def set_rho(self, value):
+        self.read(lambda ex: ex.set_rho(value), wait=None)
+
+    def kinship_colors(self):
+        """Per-cell kinship RGB of the plant on screen (None unless exactly one leaf is selected)."""
+        def run(ex):
+            self._current(ex)
+            return state.kinship_cell_colors(ex, self.snapshot.mesh)
+        return self.read(run, wait=0.5)
+
+    def selection_box(self):
+        """The selection's OBB as (12, 2, 3) line segments, or None."""
+        snap = self.snapshot
+        sel = self.read(lambda ex: tuple(ex.selection), wait=0.5)
+        return state.selection_box_lines(snap.skeleton, sel)
+
+    def selected_modules(self):
+        return self.read(state.selected_modules, wait=0.5)
+
+    def plan(self):
+        return self.read(lambda ex: ex.plan(), wait=None)
+
+    def wait_idle(self, timeout=30.0):
+        """Process events until every job is delivered (tests, shutdown, file saves)."""
+        from PySide6.QtCore import QCoreApplication
+
+        end = time.perf_counter() + timeout
+        while not self.idle:
+            if time.perf_counter() > end:
+                return False
+            QCoreApplication.processEvents()
+            time.sleep(0.002)
+        return True

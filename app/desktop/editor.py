@@ -1,0 +1,160 @@
+"""The grammar editor: syntax highlighting, debounced parsing, errors underlined in place.
+
+:class:`GrammarEditor` emits :attr:`~GrammarEditor.text_settled` a moment
+after the user stops typing (``DEBOUNCE_MS``); the window then asks the model
+to parse and derive the text in the worker and calls
+:meth:`~GrammarEditor.show_error` with the result.  An error is drawn as a red
+wavy underline from its column to the end of the word, with the message in a
+line under the editor; the plant on screen does not change.
+"""
+from __future__ import annotations
+
+import re
+
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtGui import QColor, QFont, QFontDatabase, QSyntaxHighlighter, QTextCharFormat, QTextCursor
+from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
+
+DEBOUNCE_MS = 350
+
+
+def _format(color, bold=False, italic=False):
+    fmt = QTextCharFormat()
+    fmt.setForeground(QColor(color))
+    if bold:
+        fmt.setFontWeight(QFont.Weight.Bold)
+    fmt.setFontItalic(italic)
+    return fmt
+
+
+class GrammarHighlighter(QSyntaxHighlighter):
+    """Colours directives, the n:/w:/p: sections, arrows, brackets, numbers and comments."""
+
+    RULES = [
+        (re.compile(r"^\s*#\w+:?"), _format("#7b2d8b", bold=True)),  # #define, #ignore: ...
+        (re.compile(r"^\s*[nwp]\s*:"), _format("#1f4e9c", bold=True)),  # n: w: p:
+        (re.compile(r"->|<|>|:\s*\*"), _format("#b35900", bold=True)),
+        (re.compile(r"[\[\]]"), _format("#2b7a2b", bold=True)),
+        (re.compile(r"(?<![A-Za-z_])\d+\.?\d*|\.\d+"), _format("#0a7f8c")),
+        (re.compile(r"\b(Leaf|Fruit)\b"), _format("#a0522d", bold=True)),
+    ]
+    COMMENT = _format("#808080", italic=True)
+
+    def highlightBlock(self, text):  # noqa: N802 (Qt API)
+        for pattern, fmt in self.RULES:
+            for m in pattern.finditer(text):
+                self.setFormat(m.start(), m.end() - m.start(), fmt)
+        # comments last, so they win; /* ... */ may span lines (block state 1 = inside one)
+        inside = self.previousBlockState() == 1
+        self.setCurrentBlockState(0)
+        pos = 0
+        while True:
+            if inside:
+                end = text.find("*/", pos)
+                if end < 0:
+                    self.setFormat(pos, len(text) - pos, self.COMMENT)
+                    self.setCurrentBlockState(1)
+                    return
+                self.setFormat(pos, end + 2 - pos, self.COMMENT)
+                pos, inside = end + 2, False
+                continue
+            block, line = text.find("/*", pos), text.find("//", pos)
+            if line >= 0 and (block < 0 or line < block):
+                self.setFormat(line, len(text) - line, self.COMMENT)
+                return
+            if block < 0:
+                return
+            self.setFormat(block, 2, self.COMMENT)
+            pos, inside = block + 2, True
+
+
+class GrammarEditor(QWidget):
+    """A plain-text grammar editor with an error line under it."""
+
+    text_settled = Signal(str)  # emitted DEBOUNCE_MS after the last keystroke
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.edit = QPlainTextEdit(self)
+        self.edit.setObjectName("grammarText")
+        font = QFontDatabase.systemFont(QFontDatabase.SystemFont.FixedFont)
+        font.setPointSize(max(font.pointSize(), 10))
+        self.edit.setFont(font)
+        self.edit.setLineWrapMode(QPlainTextEdit.LineWrapMode.NoWrap)
+        self.edit.setTabStopDistance(4 * self.edit.fontMetrics().horizontalAdvance(" "))
+        self.highlighter = GrammarHighlighter(self.edit.document())
+        self.message = QLabel("", self)
+        self.message.setObjectName("grammarError")
+        self.message.setWordWrap(True)
+        self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.message.setStyleSheet("color: #b00020;")
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.edit, 1)
+        layout.addWidget(self.message)
+        self.timer = QTimer(self)
+        self.timer.setSingleShot(True)
+        self.timer.setInterval(DEBOUNCE_MS)
+        self.timer.timeout.connect(lambda: self.text_settled.emit(self.text()))
+        self.edit.textChanged.connect(self.timer.start)
+        self.error = None
+
+    def text(self):
+        return self.edit.toPlainText()
+
+    def set_text(self, text):
+        """Replace the text without emitting :attr:`text_settled` (e.g. after opening a file)."""
+        if text == self.text():
+            return
+        self.edit.blockSignals(True)
+        self.edit.setPlainText(text)
+        self.edit.blockSignals(False)
+        self.edit.document().setModified(False)
+        self.timer.stop()
+        self.show_error(None)
+
+    def show_error(self, error):
+        """Underline ``error`` (a GrammarError with ``line``/``column``) or clear it."""
+        self.error = error
+        if error is None:
+            self.message.setText("")
+            self.edit.setExtraSelections([])
+            return
+        where = f"line {error.line}, column {error.column}: " if error.line else ""
+        self.message.setText(where + getattr(error, "message", str(error)))
+        if not error.line:
+            self.edit.setExtraSelections([])
+            return
+        block = self.edit.document().findBlockByNumber(int(error.line) - 1)
+        if not block.isValid():
+            self.edit.setExtraSelections([])
+            return
+        text = block.text()
+        col = max(int(error.column or 1) - 1, 0)
+        col = min(col, max(len(text) - 1, 0))
+        end = col + 1
+        while end < len(text) and (text[end].isalnum() or text[end] in "_."):
+            end += 1
+        if not text:  # an empty line: mark the line itself
+            col, end = 0, 0
+        cursor = QTextCursor(block)
+        cursor.setPosition(block.position() + col)
+        cursor.setPosition(block.position() + max(end, col + (1 if text else 0)),
+                           QTextCursor.MoveMode.KeepAnchor)
+        selection = QTextEdit.ExtraSelection()
+        fmt = QTextCharFormat()
+        fmt.setUnderlineStyle(QTextCharFormat.UnderlineStyle.WaveUnderline)
+        fmt.setUnderlineColor(QColor("#d00000"))
+        fmt.setBackground(QColor(255, 220, 220))
+        selection.format = fmt
+        selection.cursor = cursor
+        self.edit.setExtraSelections([selection])
+
+    def underlined(self):
+        """``(line, column)`` (1-based) of the underlined error, or None (for tests)."""
+        sels = self.edit.extraSelections()
+        if not sels:
+            return None
+        cursor = sels[0].cursor
+        block = self.edit.document().findBlock(cursor.selectionStart())
+        return block.blockNumber() + 1, cursor.selectionStart() - block.position() + 1

@@ -1,0 +1,160 @@
+"""The File menu's work: open/save grammar and session, export, screenshots, recent files.
+
+:class:`FileActions` asks for paths with file dialogs (or takes them as
+arguments, for scripts and tests) and calls the model through the
+controller.  Recent files are kept in the window's ``QSettings``.
+"""
+from __future__ import annotations
+
+import pathlib
+
+from PySide6.QtWidgets import QFileDialog
+
+from lsys.errors import RamureError, ValueRefused
+
+GRAMMAR_FILTER = "L-system grammars (*.lsys);;All files (*)"
+SESSION_FILTER = "Ramure sessions (*.json);;All files (*)"
+EXPORT_FILTER = "VTK PolyData (*.vtp);;Wavefront OBJ (*.obj);;glTF (*.gltf *.glb);;PLY (*.ply);;STL (*.stl)"
+PNG_FILTER = "PNG images (*.png)"
+MAX_RECENT = 8
+
+
+class FileActions:
+    """Open, save, export and the recent-files list of one window."""
+
+    def __init__(self, window, settings):
+        self.window = window
+        self.settings = settings
+
+    @property
+    def controller(self):
+        return self.window.controller
+
+    # -- recent files -----------------------------------------------------------
+    def recent(self):
+        value = self.settings.value("recent", [])
+        if isinstance(value, str):
+            value = [value]
+        return [v for v in (value or []) if pathlib.Path(v).exists()]
+
+    def remember(self, path):
+        path = str(pathlib.Path(path).resolve())
+        items = [path] + [p for p in self.recent() if p != path]
+        self.settings.setValue("recent", items[:MAX_RECENT])
+        self.settings.sync()
+        self.window.update_recent_menu()
+
+    # -- dialogs ----------------------------------------------------------------
+    def _ask_open(self, title, filters):
+        path, _ = QFileDialog.getOpenFileName(self.window, title, self._folder(), filters)
+        return path or None
+
+    def _ask_save(self, title, filters, suffix):
+        path, _ = QFileDialog.getSaveFileName(self.window, title, self._folder(), filters)
+        if not path:
+            return None
+        path = pathlib.Path(path)
+        return path if path.suffix else path.with_suffix(suffix)
+
+    def _folder(self):
+        snap = self.controller.snapshot
+        return str(pathlib.Path(snap.path).parent) if snap.path else str(pathlib.Path.cwd())
+
+    # -- grammar ----------------------------------------------------------------
+    def open_grammar(self, path=None):
+        """Load a grammar file as a fresh plant (after the unsaved-changes prompt)."""
+        if not self.window.confirm_discard():
+            return None
+        path = path or self._ask_open("Open grammar", GRAMMAR_FILTER)
+        if not path:
+            return None
+        path = pathlib.Path(path)
+        if not path.is_file():
+            self.window.report_refused(f"{path}: no such grammar file")
+            return None
+        job = self.controller.load_grammar(path)
+        self.window.pending_open = (job.id, path)
+        self.remember(path)
+        return job
+
+    def save_grammar(self, path=None, ask=False):
+        snap = self.controller.snapshot
+        if path is None and (ask or snap.path is None):
+            path = self._ask_save("Save grammar", GRAMMAR_FILTER, ".lsys")
+            if path is None:
+                return None
+        path = pathlib.Path(path or snap.path)
+        text = self.window.editor.text()
+        try:
+            path.write_text(text, encoding="utf-8")
+            self.controller.read(lambda ex: setattr(ex, "path", path), wait=None)
+        except OSError as exc:
+            self.window.report_refused(f"cannot save {path}: {exc.strerror or exc}")
+            return None
+        self.window.mark_saved()
+        self.remember(path)
+        self.window.status(f"Saved {path}")
+        return path
+
+    # -- session ----------------------------------------------------------------
+    def save_session(self, path=None):
+        path = path or self._ask_save("Save session", SESSION_FILTER, ".json")
+        if path is None:
+            return None
+        self.controller.wait_idle()
+        try:
+            self.controller.read(lambda ex: ex.save_session(path), wait=None)
+        except (OSError, RamureError) as exc:
+            self.window.report_refused(f"cannot save the session to {path}: {exc}")
+            return None
+        self.window.mark_saved()
+        self.remember(path)
+        self.window.status(f"Saved session {path}")
+        return pathlib.Path(path)
+
+    def load_session(self, path=None):
+        if not self.window.confirm_discard():
+            return None
+        path = path or self._ask_open("Load session", SESSION_FILTER)
+        if not path:
+            return None
+        job = self.controller.load_session(path)
+        self.remember(path)
+        self.window.after_load = job.id
+        return job
+
+    def open_recent(self, path):
+        if str(path).endswith(".json"):
+            return self.load_session(path)
+        return self.open_grammar(path)
+
+    # -- export -----------------------------------------------------------------
+    def export_mesh(self, path=None):
+        path = path or self._ask_save("Export plant", EXPORT_FILTER, ".vtp")
+        if path is None:
+            return None
+        self.controller.wait_idle()
+        try:
+            out = self.controller.read(lambda ex: ex.export(path), wait=None)
+        except (OSError, RamureError, ValueError) as exc:
+            self.window.report_refused(f"cannot export to {path}: {exc}")
+            return None
+        self.window.status(f"Exported {out}")
+        return out
+
+    def screenshot(self, path=None, whole_window=False):
+        """Save the 3D view (or the whole window) as PNG."""
+        path = path or self._ask_save("Save screenshot", PNG_FILTER, ".png")
+        if path is None:
+            return None
+        path = pathlib.Path(path)
+        if path.suffix.lower() != ".png":
+            self.window.report_refused(str(ValueRefused(f"screenshots are PNG files, not '{path.suffix}'")))
+            return None
+        image = self.window.grab_window() if whole_window else self.window.view.grab_image()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not image.save(str(path), "PNG"):
+            self.window.report_refused(f"cannot write {path}")
+            return None
+        self.window.status(f"Saved screenshot {path}")
+        return path

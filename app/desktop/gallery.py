@@ -1,0 +1,80 @@
+"""The variant gallery dock: the 27 picks as thumbnails; a click applies that variant.
+
+The pictures are drawn in a worker (:mod:`app.desktop.thumbnails`) or read
+from the exploration's image files.  Clicking a thumbnail asks the window to
+regrow the selection (or the whole plant) with that pick's parameter
+combination.
+"""
+from __future__ import annotations
+
+from PySide6.QtCore import QSize, Qt, Signal
+from PySide6.QtGui import QIcon, QPixmap
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QVBoxLayout, QWidget
+
+ICON = 110
+
+
+class GalleryView(QWidget):
+    """Thumbnails of the 27 picks."""
+
+    pick_clicked = Signal(dict)  # the picks.json record
+    explore_requested = Signal()
+    open_requested = Signal()
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        self.explore_button = QPushButton("Explore variants")
+        self.explore_button.clicked.connect(self.explore_requested)
+        self.open_button = QPushButton("Open exploration…")
+        self.open_button.clicked.connect(self.open_requested)
+        self.list = QListWidget()
+        self.list.setObjectName("gallery")
+        self.list.setViewMode(QListView.ViewMode.IconMode)
+        self.list.setIconSize(QSize(ICON, ICON))
+        self.list.setResizeMode(QListView.ResizeMode.Adjust)
+        self.list.setMovement(QListView.Movement.Static)
+        self.list.setSpacing(4)
+        self.list.itemClicked.connect(self._clicked)
+        top = QHBoxLayout()
+        top.addWidget(self.note, 1)
+        top.addWidget(self.explore_button)
+        top.addWidget(self.open_button)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addLayout(top)
+        layout.addWidget(self.list, 1)
+        self.picks = []
+
+    def set_unavailable(self, message):
+        self.list.clear()
+        self.picks = []
+        self.note.setText(message)
+
+    def set_picks(self, picks, images=None, note=""):
+        """Show the picks (records) with QImages (or placeholders until :meth:`set_images`)."""
+        self.list.clear()
+        self.picks = list(picks)
+        for i, pick in enumerate(self.picks):
+            params = pick.get("params", {})
+            rule = params.get("rule")
+            tip = "\n".join(f"{k} = {v:g}" for k, v in params.get("constants", {}).items())
+            item = QListWidgetItem(f"#{pick.get('id', i + 1)}")
+            item.setToolTip(f"pick {pick.get('id')} — variant {pick.get('variant')}"
+                            f"{'' if rule is None else f', rule {rule}'}\n{tip}\n(click to apply)")
+            item.setData(Qt.ItemDataRole.UserRole, i)
+            self.list.addItem(item)
+        if images is not None:
+            self.set_images(images)
+        self.note.setText(note or f"{len(self.picks)} picks — click one to apply it to the selection "
+                                  "(or to the whole plant).")
+
+    def set_images(self, images):
+        for i, image in enumerate(images):
+            if image is not None and i < self.list.count():
+                self.list.item(i).setIcon(QIcon(QPixmap.fromImage(image)))
+
+    def _clicked(self, item):
+        index = item.data(Qt.ItemDataRole.UserRole)
+        self.pick_clicked.emit(self.picks[index])

@@ -1,0 +1,77 @@
+"""The ``python -m app.desktop`` command: open the window on a grammar.
+
+``--screenshot PATH`` saves a PNG of the whole window once the plant is
+drawn; ``--quit-after SECONDS`` closes it after that many seconds (both
+for headless runs under Xvfb, e.g. ``make run`` without a display).
+A grammar that cannot be read or parsed is reported in one line, exit 2.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import sys
+
+DEFAULT_GRAMMAR = "grammars/honda_sympodial.lsys"
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog="python -m app.desktop",
+                                description="The Ramure desktop explorer: edit, pick, regenerate, browse variants.")
+    p.add_argument("grammar", nargs="?", default=DEFAULT_GRAMMAR, help="an .lsys grammar file")
+    p.add_argument("-n", type=int, default=None, help="derivation steps (default: the grammar's n:)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--screenshot", metavar="PATH", help="save a PNG of the window once the plant is drawn")
+    p.add_argument("--quit-after", metavar="SECONDS", type=float, default=None,
+                   help="close the window after this many seconds")
+    return p
+
+
+def make_application(argv=None):
+    """The QApplication (created once), with the GL format pyvistaqt needs set first."""
+    from PySide6.QtWidgets import QApplication
+
+    app = QApplication.instance()
+    if app is None:
+        import pyvistaqt  # noqa: F401  (sets the default surface format before the first window)
+
+        app = QApplication(list(argv or sys.argv[:1]))
+        app.setApplicationName("Ramure")
+        app.setOrganizationName("Ramure")
+    return app
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    path = pathlib.Path(args.grammar)
+    from app.model import Explorer
+    from lsys.errors import RamureError
+
+    try:
+        explorer = Explorer(str(path), n=args.n, seed=args.seed)
+    except (OSError, RamureError) as exc:
+        print(f"ramure desktop: {exc}", file=sys.stderr)
+        return 2
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY") \
+            and not os.environ.get("QT_QPA_PLATFORM"):
+        print("ramure desktop: no display (set DISPLAY, or run under xvfb-run)", file=sys.stderr)
+        return 2
+    app = make_application()
+    from PySide6.QtCore import QTimer
+
+    from app.desktop.window import MainWindow
+
+    headless = args.screenshot is not None or args.quit_after is not None
+    window = MainWindow(explorer, ask=not headless)
+    window.show()
+    if args.screenshot:
+        def shoot():
+            window.controller.wait_idle()
+            out = pathlib.Path(args.screenshot)
+            out.parent.mkdir(parents=True, exist_ok=True)
+            window.grab_window().save(str(out), "PNG")
+            print(f"wrote {out}")
+        QTimer.singleShot(300, shoot)
+    if args.quit_after is not None:
+        QTimer.singleShot(int(max(args.quit_after, 0.4) * 1000), window.close)
+    return app.exec()

@@ -1,0 +1,114 @@
+"""The PCA dock: the variant cloud in 3D, the 27 picks, qualifier boxes toggled by check boxes.
+
+Drawn with matplotlib's 3D axes on a Qt canvas (drag to rotate).  The base
+plant is the origin (all deltas zero).
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from matplotlib.figure import Figure
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QLabel, QListWidget, QListWidgetItem, QSplitter, QVBoxLayout, QWidget
+
+BOX_COLORS = ["#e41a1c", "#377eb8", "#4daf4a", "#984ea3", "#ff7f00", "#a65628", "#f781bf", "#999999",
+              "#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"]
+
+
+def box_edges(lo, hi):
+    """The 12 edges ((12, 2, 3)) of the axis-aligned box [lo, hi]."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
+                        for i, j, k in itertools.product((0, 1), repeat=3)])
+    edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
+    return corners[np.array(edges)]
+
+
+class PcaCloudView(QWidget):
+    """A 3D scatter of the variant cloud with toggleable qualifier boxes."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.figure = Figure(figsize=(4, 3), dpi=90)
+        self.canvas = FigureCanvasQTAgg(self.figure)
+        self.axes = self.figure.add_subplot(projection="3d")
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        self.boxes_list = QListWidget()
+        self.boxes_list.setObjectName("qualifierBoxes")
+        self.boxes_list.itemChanged.connect(lambda _: self.redraw())
+        split = QSplitter(Qt.Orientation.Horizontal)
+        split.addWidget(self.canvas)
+        split.addWidget(self.boxes_list)
+        split.setSizes([4, 1])
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(self.note)
+        layout.addWidget(split, 1)
+        self.variant_set = None
+        self.set_unavailable("No exploration yet (Variants ▸ Explore).")
+
+    def set_unavailable(self, message):
+        self.variant_set = None
+        self.boxes_list.clear()
+        self.note.setText(message)
+        self.axes.cla()
+        self.canvas.draw_idle()
+
+    def set_variants(self, variant_set):
+        self.variant_set = variant_set
+        self.boxes_list.blockSignals(True)
+        self.boxes_list.clear()
+        for i, name in enumerate(sorted(variant_set.boxes)):
+            item = QListWidgetItem(name)
+            item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
+            item.setCheckState(Qt.CheckState.Unchecked)
+            item.setForeground(Qt.GlobalColor.black)
+            item.setData(Qt.ItemDataRole.UserRole, BOX_COLORS[i % len(BOX_COLORS)])
+            self.boxes_list.addItem(item)
+        self.boxes_list.blockSignals(False)
+        count = 0 if variant_set.points is None else int(np.isfinite(variant_set.points[:, 0]).sum())
+        self.note.setText(f"{variant_set.name}: {count} variants, 27 picks"
+                          + ("" if variant_set.boxes else " — no qualifier boxes"))
+        self.redraw()
+
+    def checked_boxes(self):
+        return [self.boxes_list.item(i).text() for i in range(self.boxes_list.count())
+                if self.boxes_list.item(i).checkState() == Qt.CheckState.Checked]
+
+    def set_box_checked(self, name, on=True):
+        for i in range(self.boxes_list.count()):
+            item = self.boxes_list.item(i)
+            if item.text() == name:
+                item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)
+
+    def redraw(self):
+        ax = self.axes
+        ax.cla()
+        vs = self.variant_set
+        if vs is None:
+            self.canvas.draw_idle()
+            return
+        if vs.points is not None:
+            ok = np.all(np.isfinite(vs.points), axis=1)
+            ax.scatter(*vs.points[ok].T, s=3, c="#9a9a9a", alpha=0.4, depthshade=False)
+        picks = np.array([p.get("pca", [np.nan] * 3) for p in vs.picks], float)
+        if len(picks):
+            ax.scatter(*picks.T, s=18, c=np.arange(len(picks)), cmap="viridis", depthshade=False)
+            for p, rec in zip(picks, vs.picks):
+                ax.text(*p, str(rec.get("id", "")), fontsize=6)
+        ax.scatter([0], [0], [0], marker="x", s=40, c="black")
+        colors = {self.boxes_list.item(i).text(): self.boxes_list.item(i).data(Qt.ItemDataRole.UserRole)
+                  for i in range(self.boxes_list.count())}
+        for name in self.checked_boxes():
+            lo, hi = vs.boxes[name]
+            for a, b in box_edges(lo, hi):
+                ax.plot(*np.c_[a, b], color=colors[name], linewidth=1.2)
+            ax.text(*hi, name, color=colors[name], fontsize=7)
+        ax.set_xlabel("PC1", fontsize=7)
+        ax.set_ylabel("PC2", fontsize=7)
+        ax.set_zlabel("PC3", fontsize=7)
+        ax.tick_params(labelsize=6)
+        self.canvas.draw_idle()

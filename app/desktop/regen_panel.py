@@ -1,0 +1,182 @@
+"""The regeneration panel: ρ, Regrow, Regrow with constants, qualifiers, Prune, Undo/Redo.
+
+The panel only collects the user's choices and emits them; the window turns
+them into model jobs.  "Regrow with constants" sends the values typed in the
+panel's own constant boxes that differ from the plant's current constants:
+they apply to the selection's regrown subtrees only.
+"""
+from __future__ import annotations
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QPixmap
+from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGridLayout, QGroupBox, QHBoxLayout,
+                               QLabel, QPushButton, QScrollArea, QSlider, QVBoxLayout, QWidget)
+
+from app.desktop.state import changed_constants
+
+THUMB = 96
+
+
+class RegenPanel(QWidget):
+    """Buttons and values for regrowing or pruning the selection."""
+
+    rho_changed = Signal(int)  # 1..100
+    regrow = Signal()
+    regrow_with_constants = Signal(dict)
+    qualifier_chosen = Signal(str)  # the qualifier in the drop-down changed (preview)
+    apply_qualifier = Signal(str)
+    prune = Signal()
+    undo = Signal()
+    redo = Signal()
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.rho = QSlider(Qt.Orientation.Horizontal)
+        self.rho.setObjectName("rho")
+        self.rho.setRange(1, 100)
+        self.rho.setValue(50)
+        self.rho_label = QLabel("ρ = 50")
+        self.rho.valueChanged.connect(self._rho)
+        rho_row = QHBoxLayout()
+        rho_row.addWidget(QLabel("ρ"))
+        rho_row.addWidget(self.rho, 1)
+        rho_row.addWidget(self.rho_label)
+
+        self.regrow_button = QPushButton("Regrow")
+        self.regrow_button.setToolTip("Regrow the selection's cut subtrees with a new seed "
+                                      "(the whole plant when nothing is selected)")
+        self.regrow_button.clicked.connect(self.regrow)
+        self.prune_button = QPushButton("Prune")
+        self.prune_button.setToolTip("Delete the selection's cut subtrees")
+        self.prune_button.clicked.connect(self.prune)
+        self.undo_button = QPushButton("Undo")
+        self.undo_button.clicked.connect(self.undo)
+        self.redo_button = QPushButton("Redo")
+        self.redo_button.clicked.connect(self.redo)
+        buttons = QGridLayout()
+        buttons.addWidget(self.regrow_button, 0, 0)
+        buttons.addWidget(self.prune_button, 0, 1)
+        buttons.addWidget(self.undo_button, 1, 0)
+        buttons.addWidget(self.redo_button, 1, 1)
+
+        self.constants_box = QGroupBox("Constants for the selection")
+        self.constants_form = QFormLayout()
+        host = QWidget()
+        host.setLayout(self.constants_form)
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(host)
+        scroll.setMinimumHeight(90)
+        self.with_constants_button = QPushButton("Regrow with constants")
+        self.with_constants_button.setToolTip("Regrow the selection using the values above "
+                                              "(only for the regrown parts)")
+        self.with_constants_button.clicked.connect(self._with_constants)
+        self.reset_constants_button = QPushButton("Reset values")
+        self.reset_constants_button.clicked.connect(lambda: self.show_constants(self._current, force=True))
+        cbox = QVBoxLayout(self.constants_box)
+        cbox.addWidget(scroll, 1)
+        row = QHBoxLayout()
+        row.addWidget(self.with_constants_button)
+        row.addWidget(self.reset_constants_button)
+        cbox.addLayout(row)
+        self.boxes = {}
+        self._current = {}
+
+        qual = QGroupBox("Qualifier")
+        self.qualifier = QComboBox()
+        self.qualifier.setObjectName("qualifier")
+        self.qualifier.currentTextChanged.connect(self._qualifier_changed)
+        self.preview = QLabel()
+        self.preview.setFixedSize(THUMB, THUMB)
+        self.preview.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.preview.setStyleSheet("border: 1px solid #bbb; background: white;")
+        self.apply_button = QPushButton("Apply qualifier")
+        self.apply_button.clicked.connect(lambda: self.apply_qualifier.emit(self.qualifier.currentText()))
+        self.qualifier_note = QLabel("")
+        self.qualifier_note.setWordWrap(True)
+        qgrid = QGridLayout(qual)
+        qgrid.addWidget(self.qualifier, 0, 0)
+        qgrid.addWidget(self.apply_button, 1, 0)
+        qgrid.addWidget(self.qualifier_note, 2, 0)
+        qgrid.addWidget(self.preview, 0, 1, 3, 1)
+        self.set_qualifiers([], "Qualifiers need a variant exploration (Variants ▸ Explore).")
+
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addLayout(rho_row)
+        layout.addLayout(buttons)
+        layout.addWidget(qual)
+        layout.addWidget(self.constants_box, 1)
+
+    def _rho(self, value):
+        self.rho_label.setText(f"ρ = {value}")
+        self.rho_changed.emit(value)
+
+    def set_rho(self, percent):
+        self.rho.blockSignals(True)
+        self.rho.setValue(int(round(percent)))
+        self.rho_label.setText(f"ρ = {self.rho.value()}")
+        self.rho.blockSignals(False)
+
+    def set_history(self, can_undo, can_redo):
+        self.undo_button.setEnabled(can_undo)
+        self.redo_button.setEnabled(can_redo)
+
+    def set_selection_size(self, count):
+        self.prune_button.setEnabled(count > 0)
+        target = f"{count} selected" if count else "whole plant"
+        self.regrow_button.setText(f"Regrow ({target})")
+
+    # -- constants for the selection -----------------------------------------------
+    def show_constants(self, constants, force=False):
+        """Offer ``constants`` (the plant's current values); keeps typed values unless ``force``."""
+        changed_names = list(constants) != list(self.boxes)
+        typed = changed_constants(self.values(), self._current) if not force else {}
+        self._current = dict(constants)
+        if changed_names:
+            while self.constants_form.rowCount():
+                self.constants_form.removeRow(0)
+            self.boxes = {}
+            for name in constants:
+                box = QDoubleSpinBox()
+                box.setObjectName(f"regen_{name}")
+                box.setRange(-1e9, 1e9)
+                box.setDecimals(4)
+                self.boxes[name] = box
+                self.constants_form.addRow(name, box)
+        for name, box in self.boxes.items():
+            box.setValue(typed.get(name, constants[name]))
+        self.with_constants_button.setEnabled(bool(self.boxes))
+
+    def values(self):
+        return {name: box.value() for name, box in self.boxes.items()}
+
+    def _with_constants(self):
+        self.regrow_with_constants.emit(changed_constants(self.values(), self._current))
+
+    # -- qualifiers ---------------------------------------------------------------
+    def set_qualifiers(self, names, note=""):
+        self.qualifier.blockSignals(True)
+        self.qualifier.clear()
+        self.qualifier.addItems(list(names))
+        self.qualifier.blockSignals(False)
+        self.qualifier.setEnabled(bool(names))
+        self.apply_button.setEnabled(bool(names))
+        self.qualifier_note.setText(note)
+        self.preview.clear()
+        if names:
+            self._qualifier_changed(self.qualifier.currentText())
+
+    def _qualifier_changed(self, name):
+        if name:
+            self.qualifier_chosen.emit(name)
+
+    def set_preview(self, image):
+        """Show a QImage (or None) as the qualifier's preview thumbnail."""
+        if image is None:
+            self.preview.clear()
+            return
+        self.preview.setPixmap(QPixmap.fromImage(image).scaled(
+            THUMB, THUMB, Qt.AspectRatioMode.KeepAspectRatio, Qt.TransformationMode.SmoothTransformation))
+
+

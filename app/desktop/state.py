@@ -1,0 +1,207 @@
+"""Plain functions over :class:`app.model.Explorer` used by the desktop window (no Qt).
+
+The window draws from a :class:`Snapshot`: an immutable copy of what it needs
+of the explorer at one ``version`` (mesh, segment midpoints, constants,
+status...), taken in the worker thread right after a change.  The helpers
+below turn the model's answers into what the view draws (cell colours, the
+selection's box edges, screen projections, the cut graph layout) and hold the
+few rules that are the window's own (the range a constant's slider offers).
+
+>>> import numpy as np
+>>> constant_range(0.9), constant_range(-2.0), constant_range(0.0)
+((0.0, 1.8), (-4.0, 0.0), (-1.0, 1.0))
+>>> m = np.eye(4)
+>>> project_to_display(m, np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]), (200, 100)).tolist()
+[[100.0, 50.0], [200.0, 100.0]]
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from app.render import plant_colors
+
+STRING_PREVIEW_MODULES = 5000  # the string dock shows at most this many modules
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What the window shows of the explorer at one ``version``."""
+
+    version: int
+    mesh: object  # pyvista.PolyData with cell data leaf_id, segment, kind, order
+    skeleton: object  # lsys.Skeleton
+    segment_leaf: np.ndarray  # (s,) history leaf of each segment
+    midpoints: np.ndarray  # (s, 3) segment midpoints
+    text: str
+    error: object  # the last GrammarError or None
+    constants: dict  # current values (grammar #define plus edits)
+    n: int
+    seed: int
+    rho: float
+    selection: tuple
+    status: str
+    can_undo: bool
+    can_redo: bool
+    last_result: object  # lsys.regen.RegenResult or None
+    n_modules: int
+    string_preview: str = ""
+    path: object = None
+    edits: int = 0
+    extra: dict = field(default_factory=dict)
+
+
+def take_snapshot(explorer, previous=None):
+    """A :class:`Snapshot` of ``explorer``; reuses ``previous``'s heavy parts if the version is the same."""
+    session = explorer.session
+    light = dict(text=explorer.text, error=explorer.error, constants=explorer.constants,
+                 n=session.n, seed=session.seed, rho=explorer.rho, selection=tuple(explorer.selection),
+                 status=explorer.status(), can_undo=session.can_undo, can_redo=session.can_redo,
+                 last_result=explorer.last_result, path=explorer.path, edits=len(session.edits))
+    if previous is not None and previous.version == explorer.version:
+        return Snapshot(**{**previous.__dict__, **light})
+    skeleton = explorer.skeleton
+    mesh = explorer.mesh
+    return Snapshot(version=explorer.version, mesh=mesh, skeleton=skeleton,
+                    segment_leaf=np.asarray(skeleton.leaf_id), midpoints=explorer.segment_midpoints(),
+                    n_modules=len(explorer.derivation), string_preview=string_preview(explorer),
+                    **light)
+
+
+def string_preview(explorer, limit=STRING_PREVIEW_MODULES):
+    """The current string, modules separated by spaces, cut after ``limit`` modules."""
+    derivation = explorer.derivation
+    leaves = derivation.tree.leaves
+    text = " ".join(explorer.lsystem.module_text(derivation.tree, v) for v in leaves[:limit].tolist())
+    if len(leaves) > limit:
+        text += f" … ({len(leaves) - limit} more modules)"
+    return text
+
+
+def selected_modules(explorer, limit=200):
+    """``"id: module"`` lines for the selected leaves (for the string dock)."""
+    tree = explorer.derivation.tree
+    return [f"{leaf}: {explorer.lsystem.module_text(tree, leaf)}" for leaf in explorer.selection[:limit]]
+
+
+# -- constants -------------------------------------------------------------------
+def constant_range(value):
+    """The slider range offered for a ``#define`` value: [0, 2v] (or [2v, 0]), [-1, 1] for 0."""
+    value = float(value)
+    if value > 0:
+        return 0.0, 2.0 * value
+    if value < 0:
+        return 2.0 * value, 0.0
+    return -1.0, 1.0
+
+
+def changed_constants(edited, current, tol=1e-12):
+    """The entries of ``edited`` that differ from ``current`` (what "Regrow with constants" sends)."""
+    return {k: float(v) for k, v in edited.items() if abs(float(v) - float(current.get(k, np.nan))) > tol
+            or k not in current}
+
+
+# -- drawing ---------------------------------------------------------------------
+def cell_colors(mesh, selection=(), kinship_rgb=None):
+    """RGB (uint8) per cell: bark/leaf/fruit with the selection red, or the kinship colours."""
+    if kinship_rgb is not None:
+        return kinship_rgb
+    return plant_colors(mesh, selection)
+
+
+def kinship_cell_colors(explorer, mesh):
+    """Per-cell RGB (uint8) by derivation kinship to the single selected leaf, else None.
+
+    Segments take the model's :meth:`~app.model.Explorer.kinship_hues`; organ
+    cells (leaves, fruit) take the colour of their own history leaf.
+    """
+    seg_rgb = explorer.kinship_hues()
+    if seg_rgb is None:
+        return None
+    rgb = np.zeros((mesh.n_cells, 3))
+    seg = np.asarray(mesh.cell_data["segment"])
+    on_segment = seg >= 0
+    rgb[on_segment] = seg_rgb[seg[on_segment]]
+    if not on_segment.all():
+        from lsys.cut import kinship
+
+        tree = explorer.derivation.tree
+        _, _, leaf_rgb = kinship(tree, explorer.selection[0], n=explorer.session.n)
+        pos = tree.leaf_positions(np.asarray(mesh.cell_data["leaf_id"])[~on_segment])
+        rgb[~on_segment] = np.where((pos >= 0)[:, None], leaf_rgb[np.maximum(pos, 0)], 0.5)
+    return (np.clip(rgb, 0, 1) * 255).astype(np.uint8)
+
+
+def selection_box_lines(skeleton, selection):
+    """The selection's OBB as line segments (12, 2, 3), or None (empty or no branch selected)."""
+    if not len(selection):
+        return None
+    mask = skeleton.select(selection)
+    if not mask.any():
+        return None
+    from metrics import plant_obb
+    from metrics.obb import EDGES
+
+    corners = plant_obb(skeleton, leaf_ids=selection).corners()
+    return corners[EDGES]
+
+
+def project_to_display(matrix, points, size):
+    """Display coordinates (k, 2) of world ``points`` through a 4x4 composite projection.
+
+    ``matrix`` maps world to clip coordinates (VTK's composite projection
+    transform); ``size`` is the viewport (width, height) in pixels.  Display y
+    points up (VTK's convention).  Points behind the camera come out as NaN.
+    """
+    pts = np.asarray(points, float)
+    clip = np.c_[pts, np.ones(len(pts))] @ np.asarray(matrix, float).T
+    w = clip[:, 3:4]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ndc = clip[:, :2] / w
+    ndc[(w[:, 0] <= 0)] = np.nan
+    width, height = size
+    return np.c_[(ndc[:, 0] + 1.0) * 0.5 * width, (ndc[:, 1] + 1.0) * 0.5 * height]
+
+
+# -- the cut graph -----------------------------------------------------------------
+@dataclass
+class GraphLayout:
+    """Positions and roles of the cut graph's vertices and edges, ready to draw."""
+
+    positions: dict  # vertex -> (x, y), y grows downwards
+    source_side: set
+    edges: list  # (u, v, capacity or None, is_cut)
+    roots: set  # tree nodes regrown from
+    selected: set  # selected leaves
+
+
+def cut_graph_layout(cut, tree, roots=()):
+    """Lay out the graph of a :class:`lsys.cut.CutResult` by derivation depth.
+
+    Each tree node ``v`` gives two vertices ``(v, "in")`` above ``(v, "out")``;
+    nodes of one depth sit on one row in node-id (string) order; the source is
+    at the top, the sink at the bottom.
+    """
+    graph = cut.graph
+    nodes = sorted({v[0] for v in graph if isinstance(v, tuple)})
+    depth = tree.depth
+    rows = {}
+    for v in nodes:
+        rows.setdefault(int(depth[v]), []).append(v)
+    positions = {}
+    top = min(rows) if rows else 0
+    bottom = max(rows) if rows else 0
+    for d, members in rows.items():
+        for i, v in enumerate(members):
+            x = (i - (len(members) - 1) / 2.0)
+            y = 2.0 * (d - top) + 1.0
+            positions[(v, "in")] = (x, y)
+            positions[(v, "out")] = (x, y + 0.8)
+    positions["s"] = (0.0, 0.0)
+    positions["t"] = (0.0, 2.0 * (bottom - top) + 3.0)
+    source_side = set(cut.source_side)
+    edges = [(u, v, d.get("capacity"), u in source_side and v not in source_side)
+             for u, v, d in graph.edges(data=True)]
+    selected = set(np.asarray(cut.selected if cut.selected is not None else [], np.int64).tolist())
+    return GraphLayout(positions, source_side, edges, {int(r) for r in roots}, selected)

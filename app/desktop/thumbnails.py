@@ -1,0 +1,96 @@
+"""Small pictures of plants drawn with QPainter on a QImage (safe in worker threads).
+
+Thumbnails (the variant gallery, the qualifier preview, the study's 27
+images when an exploration has none) draw the skeleton as lines seen from
+the front (x right, z up), line width from the segment radius, organs as
+dots.  No OpenGL is involved, so many can be drawn in a worker while the
+3D view keeps the GL context.
+"""
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QLineF, QPointF, QRectF, Qt
+from PySide6.QtGui import QColor, QImage, QPainter, QPen
+
+from app.render import BARK, FRUIT, LEAF
+
+
+def _qcolor(rgb):
+    return QColor.fromRgbF(*rgb)
+
+
+def skeleton_image(skeleton, size=160, label=None, background="white"):
+    """A ``size`` x ``size`` QImage of a skeleton, front view, with an optional corner label."""
+    image = QImage(size, size, QImage.Format.Format_RGB32)
+    image.fill(QColor(background))
+    painter = QPainter(image)
+    painter.setRenderHint(QPainter.RenderHint.Antialiasing)
+    start, end = np.asarray(skeleton.start), np.asarray(skeleton.end)
+    organs = skeleton.organs
+    pts = [start[:, [0, 2]], end[:, [0, 2]]]
+    if len(organs):
+        pts.append(np.asarray(organs.position)[:, [0, 2]])
+    allpts = np.concatenate(pts) if any(len(p) for p in pts) else np.zeros((1, 2))
+    lo, hi = allpts.min(axis=0), allpts.max(axis=0)
+    span = float(max(hi[0] - lo[0], hi[1] - lo[1], 1e-9))
+    margin = 0.06 * size
+    scale = (size - 2 * margin) / span
+    cx = (lo[0] + hi[0]) / 2
+
+    def to_px(xz):
+        return np.c_[size / 2 + (xz[:, 0] - cx) * scale, size - margin - (xz[:, 1] - lo[1]) * scale]
+
+    a, b = to_px(start[:, [0, 2]]), to_px(end[:, [0, 2]])
+    widths = np.clip(2 * np.asarray(skeleton.base_radius) * scale, 0.6, size / 12)
+    pen = QPen(_qcolor(BARK))
+    pen.setCapStyle(Qt.PenCapStyle.RoundCap)
+    order = np.argsort(-widths)  # thick first, thin on top
+    for i in order.tolist():
+        pen.setWidthF(float(widths[i]))
+        painter.setPen(pen)
+        painter.drawLine(QLineF(a[i, 0], a[i, 1], b[i, 0], b[i, 1]))
+    if len(organs):
+        p = to_px(np.asarray(organs.position)[:, [0, 2]])
+        radius = np.clip(np.asarray(organs.size) * scale / 2, 1.0, size / 15)
+        painter.setPen(Qt.PenStyle.NoPen)
+        for (x, y), r, kind in zip(p.tolist(), radius.tolist(), list(organs.kind)):
+            painter.setBrush(_qcolor(FRUIT if kind == "Fruit" else LEAF))
+            painter.drawEllipse(QPointF(x, y), r, r)
+    if label:
+        painter.setPen(QColor("black"))
+        font = painter.font()
+        font.setPixelSize(max(9, size // 10))
+        painter.setFont(font)
+        painter.drawText(QRectF(3, 2, size - 6, size // 6), Qt.AlignmentFlag.AlignLeft, str(label))
+    painter.end()
+    return image
+
+
+def placeholder_image(size=160, label="", note="no image"):
+    """A grey tile with a label, for a pick whose plant cannot be drawn."""
+    image = QImage(size, size, QImage.Format.Format_RGB32)
+    image.fill(QColor("#eeeeee"))
+    painter = QPainter(image)
+    painter.setPen(QColor("#555555"))
+    font = painter.font()
+    font.setPixelSize(max(10, size // 6))
+    painter.setFont(font)
+    painter.drawText(QRectF(0, 0, size, size * 0.7), Qt.AlignmentFlag.AlignCenter, str(label))
+    font.setPixelSize(max(8, size // 12))
+    painter.setFont(font)
+    painter.drawText(QRectF(0, size * 0.6, size, size * 0.3), Qt.AlignmentFlag.AlignCenter, note)
+    painter.end()
+    return image
+
+
+def image_is_blank(image, threshold=1.0):
+    """True when a QImage has (almost) no pixel variance: the test of "something was drawn"."""
+    return pixel_variance(image) <= threshold
+
+
+def pixel_variance(image):
+    """The variance of the grey levels of a QImage."""
+    img = image.convertToFormat(QImage.Format.Format_Grayscale8)
+    width, height, stride = img.width(), img.height(), img.bytesPerLine()
+    data = np.frombuffer(img.constBits(), np.uint8, count=stride * height).reshape(height, stride)[:, :width]
+    return float(data.astype(float).var())

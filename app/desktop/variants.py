@@ -1,0 +1,188 @@
+"""The window's bridge to :mod:`metrics`: explorations, the 27 picks, qualifiers (no Qt).
+
+A :class:`VariantSet` is what the gallery, the PCA dock and the qualifier
+drop-down show: the 27 picks (``picks.json`` records), the PCA cloud and,
+when a fitted sweep is at hand, the qualifier vocabulary with one box per
+qualifier in PCA space.  It comes from :func:`explore_plant` (runs the sweep,
+cancellable, with progress) or :func:`load_exploration` (a directory written
+by ``ramure explore`` / :func:`metrics.write_exploration`).
+
+Everything degrades gracefully: if a part of :mod:`metrics` is missing, the
+corresponding feature reports "not available" instead of failing.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import pathlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lsys.errors import RamureError
+
+
+@dataclass
+class VariantSet:
+    """The 27 picks, the cloud and (optionally) the qualifiers of one grammar's exploration."""
+
+    name: str
+    picks: list  # picks.json records: {"id", "variant", "pca", "params", "image"?}
+    points: np.ndarray | None = None  # (N, 3) PCA cloud
+    n: int | None = None
+    seed: int = 0
+    exploration: object = None  # metrics.Exploration when explored in this window
+    boxes: dict = field(default_factory=dict)  # qualifier -> (lo (3,), hi (3,)) in PCA space
+    directory: pathlib.Path | None = None
+
+    @property
+    def qualifiers(self):
+        """Qualifier names offered in the drop-down (empty without a fitted sweep)."""
+        if self.exploration is None:
+            return []
+        vocab = _vocabulary()
+        return list(vocab) if vocab else []
+
+    def image_path(self, pick):
+        image = pick.get("image")
+        if not image:
+            return None
+        path = pathlib.Path(image)
+        if not path.is_absolute() and self.directory is not None:
+            path = self.directory / path
+        return path if path.is_file() else None
+
+
+def metrics_available():
+    """None if :mod:`metrics` can explore, else the reason (shown in the docks)."""
+    try:
+        from metrics import explore  # noqa: F401
+    except ImportError as exc:
+        return f"metrics is not available yet ({exc})"
+    return None
+
+
+def _vocabulary():
+    try:
+        from metrics.qualifiers import VOCABULARY
+    except ImportError:
+        return {}
+    return VOCABULARY
+
+
+def explore_plant(lsystem, n, seed, progress=None, cancel=None, n_jobs=None):
+    """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`metrics.explore`)."""
+    reason = metrics_available()
+    if reason:
+        raise RamureError(reason)
+    from metrics import VariantSweep, explore
+
+    sweep = VariantSweep(n=n, seed=seed, n_jobs=n_jobs, mp_context="forkserver")
+    exp = explore(lsystem, progress=progress, cancel=cancel, sweep=sweep)
+    picks = exp.pick_records()
+    name = exp.name
+    filename = getattr(lsystem.grammar, "filename", None)
+    if filename:
+        name = pathlib.Path(filename).stem
+    return VariantSet(name, picks, np.asarray(exp.points, float), exp.sweep.n_, seed, exp,
+                      qualifier_boxes(exp))
+
+
+def qualifier_boxes(exploration, per_qualifier=10):
+    """One PCA-space box per vocabulary qualifier: around its ``per_qualifier`` best variants."""
+    try:
+        from metrics.qualifiers import QualifierRegions, ranked_variants
+    except ImportError:
+        return {}
+    points = {}
+    for name in _vocabulary():
+        try:
+            order, _ = ranked_variants(name, exploration.sweep)
+        except RamureError:
+            continue
+        pts = exploration.points[order[:per_qualifier]]
+        pts = pts[np.all(np.isfinite(pts), axis=1)]
+        if len(pts):
+            points[name] = pts
+    if not points:
+        return {}
+    regions = QualifierRegions(trim=0.0).fit(points)
+    return {k: (np.asarray(lo), np.asarray(hi)) for k, (lo, hi) in regions.boxes_.items()}
+
+
+def load_exploration(directory):
+    """Read an exploration directory: ``picks.json`` (required), ``variants.csv`` and ``pca.json``."""
+    directory = pathlib.Path(directory)
+    path = directory / "picks.json"
+    if not path.is_file():
+        raise RamureError(f"{directory}: no picks.json (run a variant exploration first)")
+    try:
+        picks = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise RamureError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    if not isinstance(picks, list) or not all(isinstance(p, dict) and "params" in p for p in picks):
+        raise RamureError(f"{path}: expected a list of picks with 'params'")
+    info = {}
+    pca = directory / "pca.json"
+    if pca.is_file():
+        try:
+            info = json.loads(pca.read_text(encoding="utf-8"))
+        except json.JSONDecodeError:
+            info = {}
+    points = _cloud(directory / "variants.csv")
+    return VariantSet(str(info.get("grammar", directory.name)), picks, points, info.get("n"),
+                      int(info.get("seed", 0) or 0), directory=directory)
+
+
+def _cloud(path):
+    if not path.is_file():
+        return None
+    rows = []
+    with open(path, newline="", encoding="utf-8") as f:
+        for row in csv.DictReader(f):
+            try:
+                rows.append([float(row["pc1"]), float(row["pc2"]), float(row["pc3"])])
+            except (KeyError, ValueError):
+                rows.append([np.nan] * 3)
+    return np.asarray(rows, float) if rows else None
+
+
+def qualifier_params(variant_set, name, rules=None):
+    """The parameter combination qualifier ``name`` applies (restricted to ``rules`` if given)."""
+    if variant_set is None or variant_set.exploration is None:
+        raise RamureError("qualifiers need a variant exploration of this grammar (Variants ▸ Explore)")
+    from metrics.qualifiers import qualifier_combination
+
+    sweep = variant_set.exploration.sweep
+    if rules is not None:
+        try:
+            return qualifier_combination(name, sweep, rules=rules)
+        except RamureError:
+            pass  # no variant on those rules: fall back to any rule
+    return qualifier_combination(name, sweep)
+
+
+def selection_rules(explorer):
+    """The rules that rewrote inside the selection's cut subtrees (None: whole plant / unknown)."""
+    cut = explorer.plan()
+    if cut is None:
+        return None
+    try:
+        from metrics.apply import active_rules
+    except ImportError:
+        return None
+    rules = active_rules(explorer.derivation.tree, cut.roots)
+    return rules or None
+
+
+def variant_skeleton(lsystem, n, seed, params, constants=None):
+    """Derive the whole plant with a parameter combination ``{"rule", "constants"}`` (a preview)."""
+    params = params or {}
+    consts = dict(lsystem.constants if constants is None else constants)
+    rule = params.get("rule")
+    if rule is None:
+        consts.update(params.get("constants", {}))
+        rule_constants = None
+    else:
+        rule_constants = {int(rule): dict(params.get("constants", {}))}
+    return lsystem.derive(n=n, seed=seed, constants=consts, rule_constants=rule_constants).skeleton()

@@ -1,0 +1,264 @@
+"""The 3D view: the plant in a pyvistaqt ``QtInteractor``, click and rubber-band picking.
+
+Mouse:
+
+* left drag rotates (VTK trackball), wheel zooms, middle drag pans;
+* a click (press and release without moving) picks the branch or organ
+  under the cursor: plain click replaces the selection, Ctrl+click toggles,
+  Shift+click adds;
+* a right-button drag (or a left drag in rectangle mode, key R) draws a
+  rubber band: the branches whose midpoints fall inside are selected
+  (Shift adds, Ctrl removes);
+* Esc clears the selection.
+
+The view only measures where the user clicked: it emits
+:attr:`PlantView.cell_clicked` (a mesh cell id, found with a
+:class:`vtkCellPicker`) or :attr:`PlantView.rectangle_selected` (display
+coordinates), and the window asks the model which leaves those are.
+Display coordinates follow VTK: pixels, origin at the bottom left.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, Signal
+from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
+from pyvistaqt import QtInteractor
+
+from app.desktop.state import project_to_display
+from app.render import frame_camera
+
+CLICK_SLOP = 4  # pixels a click may move and still be a click
+PICK_TOLERANCE = 0.002
+
+
+def selection_mode(modifiers, rectangle=False):
+    """The selection mode for Qt keyboard modifiers: replace, add, remove or toggle."""
+    ctrl = bool(modifiers & Qt.KeyboardModifier.ControlModifier)
+    shift = bool(modifiers & Qt.KeyboardModifier.ShiftModifier)
+    if rectangle:
+        return "remove" if ctrl else "add" if shift else "replace"
+    return "toggle" if ctrl else "add" if shift else "replace"
+
+
+class _MouseFilter(QObject):
+    """Turns mouse events on the interactor into clicks and rubber bands."""
+
+    def __init__(self, view):
+        super().__init__(view)
+        self.view = view
+        self.press = None  # (QPoint, button, band?)
+
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt API)
+        kind = event.type()
+        view = self.view
+        if kind == QEvent.Type.MouseButtonPress:
+            pos = event.position().toPoint()
+            button = event.button()
+            band = button == Qt.MouseButton.RightButton or (
+                button == Qt.MouseButton.LeftButton and view.rectangle_mode)
+            self.press = (pos, button, band)
+            if band:
+                view.band.setGeometry(QRect(pos, QSize()))
+                view.band.show()
+                return True
+            return False
+        if kind == QEvent.Type.MouseMove and self.press is not None and self.press[2]:
+            view.band.setGeometry(QRect(self.press[0], event.position().toPoint()).normalized())
+            return True
+        if kind == QEvent.Type.MouseButtonRelease and self.press is not None:
+            start, button, band = self.press
+            self.press = None
+            pos = event.position().toPoint()
+            moved = (pos - start).manhattanLength() > CLICK_SLOP
+            if band:
+                view.band.hide()
+                if moved:
+                    view.rectangle_from_widget(start, pos, selection_mode(event.modifiers(), True))
+                elif button == Qt.MouseButton.LeftButton:
+                    view.click_from_widget(pos, selection_mode(event.modifiers()))
+                return True
+            if button == Qt.MouseButton.LeftButton and not moved:
+                view.click_from_widget(pos, selection_mode(event.modifiers()))
+            return False
+        if kind in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
+            # VTK/pyvista key bindings ('q' closes, 'w' wireframe...) are not wanted here.
+            if kind == QEvent.Type.KeyPress:
+                view.key_pressed(event)
+            return True
+        return False
+
+
+class PlantView(QWidget):
+    """The plant, its selection in red, the selection's OBB as a red wireframe."""
+
+    cell_clicked = Signal(int, str)  # cell id (-1: nothing under the cursor), mode
+    rectangle_selected = Signal(object, str)  # (x0, y0, x1, y1) display coords, mode
+    escape = Signal()
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.plotter = QtInteractor(self, auto_update=False)
+        self.plotter.set_background("white")
+        self.plotter.enable_trackball_style()
+        if self.plotter.iren is not None:
+            self.plotter.iren.clear_key_event_callbacks()
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.plotter)
+        self.band = QRubberBand(QRubberBand.Shape.Rectangle, self.plotter)
+        self.rectangle_mode = False
+        self._filter = _MouseFilter(self)
+        self.plotter.installEventFilter(self._filter)
+        self.mesh = None
+        self.actor = None
+        self.snapshot = None
+        self.picker = None
+        self._diag = None
+
+    # -- drawing ---------------------------------------------------------------
+    def show_plant(self, snap, colors, reset_camera=None):
+        """Draw ``snap``'s mesh with per-cell ``colors`` (uint8 RGB)."""
+        self.snapshot = snap
+        mesh = snap.mesh.copy(deep=False)
+        if mesh.n_cells == 0:
+            self.plotter.remove_actor("plant", render=False)
+            self.mesh, self.actor = None, None
+            self.redraw()
+            return
+        mesh.cell_data["rgb"] = colors
+        self.mesh = mesh
+        self.actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False,
+                                           smooth_shading=False, show_scalar_bar=False, render=False,
+                                           pickable=True)
+        self.picker = None
+        diag = float(np.linalg.norm(np.subtract(*np.reshape(mesh.bounds, (3, 2)).T)))
+        if reset_camera is None:
+            reset_camera = self._diag is None or not (0.4 < diag / max(self._diag, 1e-12) < 2.5)
+        if reset_camera:
+            self.reset_camera()
+            self._diag = diag
+        self.redraw()
+
+    def reset_camera(self):
+        if self.mesh is not None:
+            frame_camera(self.plotter, self.mesh.bounds, "front")
+            self.plotter.camera.zoom(1.25)
+            self._diag = float(np.linalg.norm(np.subtract(*np.reshape(self.mesh.bounds, (3, 2)).T)))
+        self.redraw()
+
+    def set_colors(self, colors):
+        """Recolour the plant in place (selection or kinship changed)."""
+        if self.mesh is None:
+            return
+        self.mesh.cell_data["rgb"][:] = colors
+        self.mesh.Modified()
+        self.redraw()
+
+    def set_box(self, lines):
+        """Draw the selection's OBB edges ((12, 2, 3) segments) in red, or remove it (None)."""
+        if lines is None:
+            self.plotter.remove_actor("obb", render=False)
+        else:
+            pts = np.asarray(lines, float).reshape(-1, 3)
+            cells = np.c_[np.full(len(pts) // 2, 2), np.arange(len(pts)).reshape(-1, 2)].ravel()
+            box = pv.PolyData(pts, lines=cells)
+            self.plotter.add_mesh(box, color="red", line_width=2, name="obb", reset_camera=False,
+                                  pickable=False, render=False, lighting=False)
+        self.redraw()
+
+    def redraw(self, now=False):
+        """Schedule a repaint (``now``: paint before returning, e.g. for a benchmark or screenshot)."""
+        if now:
+            self.plotter.repaint()
+        else:
+            self.plotter.update()
+
+    def has_box(self):
+        return "obb" in self.plotter.actors
+
+    # -- coordinates -------------------------------------------------------------
+    def display_size(self):
+        return tuple(self.plotter.ren_win.GetSize())
+
+    def to_display(self, qpoint):
+        """VTK display coordinates of a point in widget (Qt) coordinates."""
+        scale = self.plotter.devicePixelRatioF()
+        return qpoint.x() * scale, (self.plotter.height() - qpoint.y() - 1) * scale
+
+    def to_widget(self, x, y):
+        """Widget (Qt) coordinates of VTK display coordinates."""
+        scale = self.plotter.devicePixelRatioF()
+        return QPoint(int(round(x / scale)), int(round(self.plotter.height() - 1 - y / scale)))
+
+    def projection_matrix(self):
+        renderer = self.plotter.renderer
+        camera = renderer.GetActiveCamera()
+        m = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+        return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+
+    def project(self, points):
+        """Display coordinates (k, 2) of world points (vectorised: one matrix, no VTK call per point)."""
+        x0, y0, x1, y1 = self.plotter.renderer.GetViewport()
+        w, h = self.display_size()
+        xy = project_to_display(self.projection_matrix(), points, ((x1 - x0) * w, (y1 - y0) * h))
+        return xy + np.array([x0 * w, y0 * h])
+
+    # -- picking -----------------------------------------------------------------
+    def pick(self, x, y):
+        """The plant's mesh cell at display ``(x, y)``, or -1."""
+        if self.actor is None:
+            return -1
+        if self.picker is None:
+            import vtk
+
+            picker = vtk.vtkCellPicker()
+            picker.SetTolerance(PICK_TOLERANCE)
+            picker.PickFromListOn()
+            picker.AddPickList(self.actor)
+            locator = vtk.vtkStaticCellLocator()
+            locator.SetDataSet(self.actor.GetMapper().GetInput())
+            locator.BuildLocator()
+            picker.AddLocator(locator)
+            self.picker = picker
+        if not self.picker.Pick(float(x), float(y), 0.0, self.plotter.renderer):
+            return -1
+        return int(self.picker.GetCellId())
+
+    def click_at(self, x, y, mode="replace"):
+        """Pick at display ``(x, y)`` and emit :attr:`cell_clicked` (what a mouse click does)."""
+        cell = self.pick(x, y)
+        self.cell_clicked.emit(cell, mode)
+        return cell
+
+    def click_from_widget(self, qpoint, mode):
+        return self.click_at(*self.to_display(qpoint), mode)
+
+    def rectangle_at(self, rect, mode="replace"):
+        """Emit :attr:`rectangle_selected` for display rectangle ``(x0, y0, x1, y1)``."""
+        self.rectangle_selected.emit(tuple(float(v) for v in rect), mode)
+
+    def rectangle_from_widget(self, a, b, mode):
+        self.rectangle_at((*self.to_display(a), *self.to_display(b)), mode)
+
+    def key_pressed(self, event):
+        if event.key() == Qt.Key.Key_Escape:
+            self.escape.emit()
+        elif event.key() == Qt.Key.Key_R and not event.modifiers():
+            self.set_rectangle_mode(not self.rectangle_mode)
+        elif event.key() == Qt.Key.Key_Home:
+            self.reset_camera()
+
+    def set_rectangle_mode(self, on):
+        self.rectangle_mode = bool(on)
+        self.plotter.setCursor(Qt.CursorShape.CrossCursor if on else Qt.CursorShape.ArrowCursor)
+
+    # -- images -------------------------------------------------------------------
+    def grab_image(self):
+        """The 3D view as a QImage (what is on screen)."""
+        self.redraw(now=True)
+        return self.plotter.grabFramebuffer()
+
+    def close(self):
+        self.plotter.close()
+        return super().close()

@@ -1,0 +1,428 @@
+"""The main window: editor, constants, 3D view, regeneration panel and the docks.
+
+:class:`MainWindow` wires widgets to the :class:`~app.desktop.controller.Controller`:
+widgets emit what the user asked for, the controller runs it on the model
+(in the worker when it changes the plant), and the window redraws from the
+snapshot it publishes.  No algorithm lives here.
+"""
+from __future__ import annotations
+
+import pathlib
+
+from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import (QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton,
+                               QTabWidget)
+
+from app.desktop import state
+from app.desktop.constants_panel import ConstantsPanel
+from app.desktop.controller import Busy, Controller
+from app.desktop.cut_graph import CutGraphView
+from app.desktop.editor import GrammarEditor
+from app.desktop.files import FileActions
+from app.desktop.gallery import GalleryView
+from app.desktop.pca_cloud import PcaCloudView
+from app.desktop.regen_panel import RegenPanel
+from app.desktop.string_dock import StringView
+from app.desktop.variants_panel import VariantsController
+from app.desktop.view import PlantView
+from app.model import Explorer
+from lsys.errors import RamureError
+
+TITLE = "Ramure"
+
+
+class MainWindow(QMainWindow):
+    """The Ramure desktop explorer for one plant."""
+
+    def __init__(self, explorer: Explorer, settings=None, ask=True, parent=None):
+        super().__init__(parent)
+        self.ask = ask  # False: never show modal questions (tests, --quit-after)
+        self.settings = settings or QSettings("Ramure", "Ramure desktop")
+        self.controller = Controller(explorer, self)
+        self.files = FileActions(self, self.settings)
+        self.kinship = False
+        self.dirty = False
+        self.pending_open = None
+        self.after_load = None
+        self.message_box = None
+        self.last_message = None
+        self.drawn_version = None
+
+        self.view = PlantView(self)
+        self.setCentralWidget(self.view)
+        self.editor = GrammarEditor()
+        self.constants_panel = ConstantsPanel()
+        self.regen = RegenPanel()
+        self.string_view = StringView()
+        self.cut_view = CutGraphView()
+        self.gallery = GalleryView()
+        self.pca_view = PcaCloudView()
+        self.docks = {}
+        self._dock("grammar", "Grammar", self.editor, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self._dock("constants", "Constants", self.constants_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
+        self._dock("regeneration", "Regeneration", self.regen, Qt.DockWidgetArea.RightDockWidgetArea)
+        self._dock("string", "String", self.string_view, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self._dock("cut", "Cut graph", self.cut_view, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self._dock("gallery", "Variant gallery", self.gallery, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self._dock("pca", "PCA cloud", self.pca_view, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.tabifyDockWidget(self.docks["string"], self.docks["cut"])
+        self.tabifyDockWidget(self.docks["cut"], self.docks["gallery"])
+        self.docks["string"].raise_()
+        self.tabifyDockWidget(self.docks["regeneration"], self.docks["pca"])
+        self.docks["regeneration"].raise_()
+        self.setTabPosition(Qt.DockWidgetArea.AllDockWidgetAreas, QTabWidget.TabPosition.North)
+
+        self.status_label = QLabel("")
+        self.status_label.setObjectName("plantStatus")
+        self.progress = QProgressBar()
+        self.progress.setMaximumWidth(220)
+        self.progress.hide()
+        self.cancel_button = QPushButton("Cancel")
+        self.cancel_button.hide()
+        self.statusBar().addWidget(self.status_label, 1)
+        self.statusBar().addPermanentWidget(self.progress)
+        self.statusBar().addPermanentWidget(self.cancel_button)
+
+        self.variants = VariantsController(self)
+        self._actions()
+        self._connect()
+        self.resize(1400, 880)
+        self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330],
+                         Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [420, 330], Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
+        self.editor.set_text(explorer.text)
+        self.show_plant(self.controller.snapshot, reset_camera=True)
+        self.mark_saved()
+
+    # -- construction ----------------------------------------------------------------
+    def _dock(self, key, title, widget, area):
+        dock = QDockWidget(title, self)
+        dock.setObjectName(f"dock_{key}")
+        dock.setWidget(widget)
+        self.addDockWidget(area, dock)
+        self.docks[key] = dock
+        return dock
+
+    def _action(self, menu, text, slot, shortcut=None, checkable=False, tip=None):
+        action = QAction(text, self)
+        if shortcut:
+            action.setShortcut(QKeySequence(shortcut))
+        action.setCheckable(checkable)
+        if tip:
+            action.setStatusTip(tip)
+        action.triggered.connect(slot)
+        menu.addAction(action)
+        return action
+
+    def _actions(self):
+        bar = self.menuBar()
+        f = bar.addMenu("&File")
+        self._action(f, "&Open grammar…", lambda: self.files.open_grammar(), QKeySequence.StandardKey.Open)
+        self._action(f, "&Save grammar", lambda: self.files.save_grammar(), QKeySequence.StandardKey.Save)
+        self._action(f, "Save grammar &as…", lambda: self.files.save_grammar(ask=True),
+                     QKeySequence.StandardKey.SaveAs)
+        f.addSeparator()
+        self._action(f, "Save session…", lambda: self.files.save_session())
+        self._action(f, "Load session…", lambda: self.files.load_session())
+        f.addSeparator()
+        self._action(f, "Export PNG screenshot…", lambda: self.files.screenshot())
+        self._action(f, "Export plant (VTK, OBJ, glTF)…", lambda: self.files.export_mesh())
+        f.addSeparator()
+        self.recent_menu = f.addMenu("Recent files")
+        self.update_recent_menu()
+        f.addSeparator()
+        self._action(f, "&Quit", self.close, QKeySequence.StandardKey.Quit)
+
+        e = bar.addMenu("&Edit")
+        self.undo_action = self._action(e, "&Undo", self.controller.undo, "Ctrl+Z")
+        self.redo_action = self._action(e, "&Redo", self.controller.redo, "Ctrl+Shift+Z")
+        e.addSeparator()
+        self._action(e, "Regrow", self._regrow, "Ctrl+R")
+        self._action(e, "Prune", self._prune, "Delete")
+        self.clear_action = self._action(e, "Clear selection", self._clear_selection, "Esc")
+        self.clear_action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+
+        v = bar.addMenu("&View")
+        self.rect_action = self._action(v, "Rectangle selection (left drag)", self.view.set_rectangle_mode,
+                                        checkable=True, tip="Right drag always draws a rectangle")
+        self.kinship_action = self._action(v, "Kinship colours", self.set_kinship, "K", checkable=True,
+                                           tip="Colour the plant by derivation kinship to one selected leaf")
+        self._action(v, "Reset camera", self.view.reset_camera, "Home")
+        v.addSeparator()
+        for dock in self.docks.values():
+            v.addAction(dock.toggleViewAction())
+        self.fruit_action = self.variants.fruit_action(v)
+
+        self.variants.build_menu(bar.addMenu("Va&riants"))
+        from app.desktop.study import StudyMenu
+
+        self.study_menu = StudyMenu(self, bar.addMenu("&Study"))
+
+        tools = self.addToolBar("Plant")
+        tools.setObjectName("plantToolbar")
+        for action in (self.undo_action, self.redo_action, self.rect_action, self.kinship_action):
+            tools.addAction(action)
+
+    def _connect(self):
+        c = self.controller
+        c.plant_changed.connect(self.show_plant)
+        c.state_changed.connect(self.show_state)
+        c.selection_changed.connect(self.show_selection)
+        c.job_done.connect(self._job_done)
+        c.refused.connect(self.report_refused)
+        c.crashed.connect(self.report_crash)
+        c.busy_changed.connect(lambda busy: self.status("Computing…" if busy else "", 0 if busy else 1))
+        self.editor.text_settled.connect(self._text_settled)
+        self.constants_panel.constant_changed.connect(self._constant)
+        self.constants_panel.derivation_changed.connect(self._derivation)
+        self.constants_panel.range_refused.connect(lambda m: m and self.status(m))
+        self.view.cell_clicked.connect(self.pick_cell)
+        self.view.rectangle_selected.connect(self.select_rectangle)
+        self.view.escape.connect(self._clear_selection)
+        r = self.regen
+        r.rho_changed.connect(self._rho)
+        r.regrow.connect(self._regrow)
+        r.regrow_with_constants.connect(self._regrow_with_constants)
+        r.prune.connect(self._prune)
+        r.undo.connect(c.undo)
+        r.redo.connect(c.redo)
+        self.cut_view.plan_button.clicked.connect(self.show_planned_cut)
+
+    # -- drawing from snapshots ---------------------------------------------------------
+    def show_plant(self, snap, reset_camera=None):
+        """A new plant version: redraw the 3D view and every view of the plant."""
+        self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection), reset_camera)
+        self.drawn_version = snap.version
+        self.string_view.show_snapshot(snap)
+        self.show_state(snap)
+        self.show_selection(snap.selection)
+        self.show_cut(snap)
+        self.variants.plant_changed(snap)
+
+    def show_state(self, snap):
+        """Same plant, other state: constants, undo/redo, status line, grammar error."""
+        self.constants_panel.show_snapshot(snap, self.controller.explorer.lsystem.constants)
+        self.regen.show_constants(snap.constants)
+        self.regen.set_rho(snap.rho * 100)
+        self.regen.set_history(snap.can_undo, snap.can_redo)
+        self.undo_action.setEnabled(snap.can_undo)
+        self.redo_action.setEnabled(snap.can_redo)
+        self.status_label.setText(snap.status)
+        name = pathlib.Path(snap.path).name if snap.path else "untitled"
+        self.setWindowTitle(f"{name}{' *' if self.dirty else ''} — {TITLE}")
+
+    def show_selection(self, selection):
+        """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe."""
+        snap = self.controller.snapshot
+        kin = None
+        if self.kinship and len(selection) == 1:
+            try:
+                kin = self.controller.kinship_colors()
+            except RamureError:
+                kin = None
+        self.view.set_colors(state.cell_colors(snap.mesh, selection, kin))
+        try:
+            self.view.set_box(self.controller.selection_box() if selection else None)
+        except RamureError:
+            self.view.set_box(None)
+        self.regen.set_selection_size(len(selection))
+        self.status_label.setText(snap.status)
+        try:
+            self.string_view.show_selection(self.controller.selected_modules() if selection else [])
+        except RamureError:
+            pass
+
+    def show_cut(self, snap):
+        result = snap.last_result
+        if result is None:
+            return
+        cut = getattr(result, "cut", None)
+        if cut is None:
+            self.cut_view.clear(f"Last {result.op}: the whole plant (no cut).")
+            return
+        layout = self.controller.read(lambda ex: state.cut_graph_layout(cut, ex.derivation.tree, result.roots),
+                                      wait=None)
+        self.cut_view.show_layout(layout, f"Last {result.op}: roots {result.roots.tolist()[:12]}, "
+                                          f"{result.removed} modules replaced by {result.added}, "
+                                          f"cut value {result.cut_value:g}")
+
+    def show_planned_cut(self):
+        try:
+            cut = self.controller.plan()
+        except RamureError as exc:
+            self.report_refused(str(exc))
+            return
+        if cut is None:
+            self.cut_view.clear("Select branches first: the cut is planned for the selection.")
+            return
+        layout = self.controller.read(lambda ex: state.cut_graph_layout(cut, ex.derivation.tree, cut.roots),
+                                      wait=None)
+        self.cut_view.show_layout(layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, "
+                                          f"cut value {cut.cut_value:g}")
+        self.docks["cut"].raise_()
+
+    def set_kinship(self, on):
+        self.kinship = bool(on)
+        self.kinship_action.setChecked(self.kinship)
+        self.show_selection(self.controller.snapshot.selection)
+
+    # -- user actions -------------------------------------------------------------------
+    def _text_settled(self, text):
+        self.dirty = True
+        self.controller.set_text(text)
+
+    def _constant(self, name, value):
+        self.dirty = True
+        self.controller.set_constant(name, value)
+
+    def _derivation(self, n, seed):
+        self.dirty = True
+        self.controller.set_derivation(n, seed)
+
+    def _rho(self, value):
+        try:
+            self.controller.set_rho(value)
+        except RamureError as exc:
+            self.report_refused(str(exc))
+
+    def _regrow(self):
+        self.dirty = True
+        self.controller.regrow()
+
+    def _regrow_with_constants(self, constants):
+        if not constants:
+            self.status("Change a value under 'Constants for the selection' first.")
+            return
+        self.dirty = True
+        self.controller.regrow(constants=constants)
+
+    def _prune(self):
+        if not self.controller.snapshot.selection:
+            self.report_refused("select the branches to prune first")
+            return
+        self.dirty = True
+        self.controller.prune()
+
+    def _clear_selection(self):
+        self._select(self.controller.clear_selection)
+
+    def _select(self, fn, *args):
+        try:
+            return fn(*args)
+        except Busy as exc:
+            self.status(str(exc))
+        except RamureError as exc:
+            self.report_refused(str(exc))
+        return None
+
+    def pick_cell(self, cell, mode="replace"):
+        """A click landed on mesh cell ``cell`` (-1: on the background)."""
+        if cell < 0:
+            self.status("Nothing under the cursor")
+            return None
+        leaf = self._select(self.controller.pick_cell, cell, mode)
+        if leaf is not None:
+            self.status(f"Picked leaf {leaf} ({mode})")
+        return leaf
+
+    def select_rectangle(self, rect, mode="replace"):
+        """Select the branches whose midpoints project inside display rectangle ``rect``."""
+        snap = self.controller.snapshot
+        if self.drawn_version != snap.version:
+            return None
+        xy = self.view.project(snap.midpoints)
+        found = self._select(self.controller.select_rectangle, xy, rect, mode)
+        if found is not None:
+            self.status(f"Rectangle: {len(found)} leaves ({mode})")
+        return found
+
+    def _job_done(self, job):
+        if job.stale:
+            return
+        if job.name == "grammar":
+            if job.error is None:
+                self.editor.show_error(job.result)
+                if job.result is not None:
+                    self.status("Grammar error: the last good plant stays on screen")
+        elif job.name in ("open grammar", "load session") and job.error is None:
+            self.editor.set_text(self.controller.snapshot.text)
+            self.mark_saved()
+            self.view.reset_camera()
+        elif job.name.startswith(("regrow", "prune")) and job.error is None:
+            self.status(self.controller.snapshot.status, 0)
+
+    # -- messages -------------------------------------------------------------------------
+    def status(self, text, timeout=4000):
+        if text:
+            self.statusBar().showMessage(text, timeout)
+        else:
+            self.statusBar().clearMessage()
+
+    def report_refused(self, message):
+        """A user error: the status bar and a non-blocking message box."""
+        self.status(message, 8000)
+        self._message(QMessageBox.Icon.Warning, "Not possible", message)
+
+    def report_crash(self, message, details):
+        """An unexpected error in a worker: a dialog; the last good plant stays."""
+        self.status(f"Error: {message}", 10000)
+        self._message(QMessageBox.Icon.Critical, "Unexpected error",
+                      f"{message}\n\nThe last good plant is kept.", details)
+
+    def _message(self, icon, title, text, details=None):
+        self.last_message = text
+        if not self.ask:
+            return
+        if self.message_box is None:
+            self.message_box = QMessageBox(self)
+            self.message_box.setWindowModality(Qt.WindowModality.WindowModal)
+        box = self.message_box
+        box.setIcon(icon)
+        box.setWindowTitle(title)
+        box.setText(text)
+        box.setDetailedText(details or "")
+        box.open()
+
+    # -- files and closing ------------------------------------------------------------------
+    def update_recent_menu(self):
+        self.recent_menu.clear()
+        for path in self.files.recent():
+            action = self.recent_menu.addAction(path)
+            action.triggered.connect(lambda _=False, p=path: self.files.open_recent(p))
+        self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
+
+    def mark_saved(self):
+        self.dirty = False
+        self.show_state(self.controller.snapshot)
+
+    def confirm_discard(self):
+        """True if there are no unsaved changes or the user agrees to lose them."""
+        if not self.dirty or not self.ask:
+            return True
+        answer = QMessageBox.question(
+            self, TITLE, "The plant has unsaved changes. Save the grammar first?",
+            QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Discard
+            | QMessageBox.StandardButton.Cancel, QMessageBox.StandardButton.Save)
+        if answer == QMessageBox.StandardButton.Save:
+            return self.files.save_grammar() is not None
+        return answer == QMessageBox.StandardButton.Discard
+
+    def grab_window(self):
+        """The whole window as a QImage, with the 3D view freshly painted."""
+        self.view.redraw(now=True)
+        return self.grab().toImage()
+
+    def closeEvent(self, event):  # noqa: N802 (Qt API)
+        if not self.confirm_discard():
+            event.ignore()
+            return
+        self.variants.cancel_all()
+        self.controller.wait_idle(10.0)
+        self.controller.jobs.wait(10000)
+        self.view.close()
+        event.accept()
+
+    def run_later(self, msecs, fn):
+        QTimer.singleShot(msecs, fn)
