@@ -1,0 +1,359 @@
+"""The notebook explorer: edit, select, regenerate and browse variants of one plant.
+
+:class:`Explorer` is a thin ipywidgets front end over :class:`app.model.Explorer`
+(``ex.model``), the GUI-free state the desktop window also uses.  Every button
+and every method below goes through the model; a refused input (a
+:class:`~lsys.errors.RamureError`) is shown on the explorer's message line —
+never as a traceback — and leaves the plant as it was.  Code and clicks mix
+freely: ``ex.plant``, ``ex.selection``, ``ex.history`` and ``ex.session`` are
+the live state.
+
+>>> ex = Explorer("grammars/honda_sympodial.lsys", n=5, view="static")
+>>> _ = ex.select_where(min_order=2)
+>>> before = ex.plant.to_string()
+>>> result = ex.regrow(constants={"a2": 25})
+>>> ex.plant.to_string() != before, ex.selection, len(ex.history)
+(True, [], 1)
+>>> ex.select([10**9]) is None, ex.error
+(True, '1000000000 is not a leaf of the current plant')
+"""
+from __future__ import annotations
+
+import base64
+import pathlib
+
+import ipywidgets as W
+
+from app.jupyter._ui import MessageLine, button, on_value
+from app.jupyter.grammar import GrammarPanel
+from app.jupyter.selection import SelectionPanel, TreeBrowser
+from app.jupyter.variants import VariantPanel
+from app.jupyter.view import VIEWS, PlantView
+from app.model import Explorer as Model
+from lsys.errors import GrammarError, RamureError
+
+PLACEHOLDER = "n: 0\nw: F"  # the plant shown while the given grammar does not parse
+
+
+def _open_model(source, n, seed):
+    """The model for ``source``; a grammar that does not parse gives a one-segment
+    placeholder plant, the error and the text to show in the editor."""
+    is_path = isinstance(source, pathlib.Path) or (isinstance(source, str) and "\n" not in source
+                                                   and source.endswith(".lsys"))
+    if is_path and not pathlib.Path(source).is_file():
+        raise RamureError(f"{source}: no such grammar file")
+    try:
+        return Model(source, n=n, seed=seed), None
+    except GrammarError as err:
+        text = pathlib.Path(source).read_text(encoding="utf-8") if is_path else str(source)
+        model = Model(PLACEHOLDER, seed=seed)
+        model.error = err
+        return model, text
+
+
+class EditPanel:
+    """ρ, Regrow, Regrow with constants, the qualifier drop-down, Prune, Undo, Redo, files."""
+
+    def __init__(self, app):
+        self.app = app
+        self.rho = W.IntSlider(value=round(app.model.rho * 100), min=1, max=100, description="ρ %",
+                               continuous_update=False, style={"description_width": "30px"},
+                               layout=W.Layout(width="98%"))
+        on_value(self.rho, app.set_rho)
+        self.regrow = button("Regrow", app.regrow, "regrow the selection's cut (whole plant if nothing selected)",
+                             style="success")
+        self.regrow_constants = button("Regrow with constants", app.regrow_with_constants,
+                                       "regrow the cut with the slider values (only there)")
+        self.prune = button("Prune", app.prune, "delete the cut subtrees", style="danger")
+        self.undo = button("Undo", app.undo, icon="undo")
+        self.redo = button("Redo", app.redo, icon="repeat")
+        self.qualifier = W.Dropdown(options=[], description="qualifier", style={"description_width": "60px"},
+                                    layout=W.Layout(width="210px"))
+        self.apply_qualifier = button("Apply", lambda: app.apply_qualifier(self.qualifier.value),
+                                      "regrow the cut with this qualifier's parameter combination")
+        self.path = W.Text(value="plant_session.json", layout=W.Layout(width="170px"))
+        self.widget = W.VBox([
+            W.HTML("<b>Regenerate</b>"), self.rho,
+            W.HBox([self.regrow, self.regrow_constants]),
+            W.HBox([self.qualifier, self.apply_qualifier]),
+            W.HBox([self.prune, self.undo, self.redo]),
+            W.HBox([self.path, button("Save", lambda: app.save(self.path.value),
+                                      ".json: the session; .lsys: the grammar; .vtp/.obj/.gltf/.ply/.stl: the mesh")]),
+        ])
+
+    def refresh(self):
+        model = self.app.model
+        self.undo.disabled = not model.session.can_undo
+        self.redo.disabled = not model.session.can_redo
+        self.prune.disabled = not model.selection
+        names = self.app.variants.qualifier_names()
+        if list(self.qualifier.options) != names:
+            self.qualifier.options = names
+        self.qualifier.disabled = self.apply_qualifier.disabled = not names
+        self.qualifier.tooltip = ("" if names else "qualifiers need a variant exploration first")
+        rho = round(model.rho * 100)
+        if self.rho.value != rho:
+            self.rho.value = rho
+
+
+class Explorer:
+    """Jupyter explorer of a grammar file path or grammar text.
+
+    ``view``: ``"auto"`` (interactive trame view when installed, else a
+    picture), ``"static"`` or a trame mode.  ``size``: the 3D view in pixels.
+    ``cache``: let variant sweeps use the on-disk cache.
+    """
+
+    def __init__(self, source, n=None, seed=0, view="auto", size=(480, 480), cache=True):
+        self.model, text = _open_model(source, n, seed)
+        self.error = None
+        self.message = MessageLine()
+        self.title = W.HTML()
+        self.status_line = W.HTML()
+        self.grammar = GrammarPanel(self, text)
+        self.variants = VariantPanel(self, cache=cache)
+        self.view = PlantView(self, backend=view, size=size)
+        self.selection_panel = SelectionPanel(self)
+        self.tree = TreeBrowser(self)
+        self.edits = EditPanel(self)
+        self.camera = W.Dropdown(options=VIEWS, value=self.view.view, description="view",
+                                 style={"description_width": "35px"}, layout=W.Layout(width="130px"))
+        on_value(self.camera, self.set_view)
+        self.show_cut = W.Checkbox(value=False, description="show the cut (orange)", indent=False)
+        on_value(self.show_cut, self.set_show_cut)
+        picking = ("click a branch to select it" if self.view.picking
+                   else "picture view: select with the tools on the right or the derivation tree")
+        centre = W.VBox([self.view.widget, W.HBox([self.camera, self.show_cut]),
+                         W.HTML(f"<small>{picking}</small>")])
+        side = W.VBox([self.selection_panel.widget, self.edits.widget], layout=W.Layout(width="31%"))
+        left = W.VBox([self.grammar.widget], layout=W.Layout(width="31%"))
+        self.tabs = W.Tab(children=[self.tree.widget, self.variants.widget, self.variants.pca_widget],
+                          titles=("Derivation tree", "Variants", "PCA & qualifiers"))
+        self.widget = W.VBox([self.title, self.status_line, self.message.widget,
+                              W.HBox([left, centre, side]), self.tabs])
+        if getattr(self.view, "fallback_reason", None):
+            self.message.show(self.view.fallback_reason, "note")
+        if self.model.error is not None:
+            self._refused(self.model.error, "the grammar does not parse; fix it in the text area")
+        self.refresh()
+
+    # -- live state ----------------------------------------------------------
+    @property
+    def plant(self):
+        """The current :class:`~lsys.Derivation` (its string, tree and ``skeleton()``)."""
+        return self.model.derivation
+
+    @property
+    def skeleton(self):
+        return self.model.skeleton
+
+    @property
+    def session(self):
+        """The editing :class:`~lsys.regen.Session` (``save``, ``edits``, ``derivation``)."""
+        return self.model.session
+
+    @property
+    def history(self):
+        """The applied edits, oldest first (each a dict that replays the edit)."""
+        return self.model.session.edits
+
+    @property
+    def selection(self):
+        """Selected leaf ids (sorted); assign a list to replace it."""
+        return list(self.model.selection)
+
+    @selection.setter
+    def selection(self, leaf_ids):
+        self.select(leaf_ids, "replace")
+
+    def status(self):
+        return self.model.status()
+
+    # -- running actions -------------------------------------------------------
+    def run(self, action, note=None):
+        """Run ``action()`` against the model; a RamureError is shown inline and None returned."""
+        try:
+            result = action()
+        except RamureError as err:
+            self._refused(err)
+            self.refresh()
+            return None
+        self.error = None
+        self.message.show(note or self.model.status(), "info")
+        self.refresh()
+        return result
+
+    def _refused(self, err, note=None):
+        self.error = str(err)
+        self.message.show(note or err, "error")
+
+    def refresh(self):
+        """Bring every panel up to date with the model (called after each action)."""
+        model = self.model
+        name = model.path.name if model.path else "grammar text"
+        self.title.value = f"<h3 style='margin:4px 0'>Ramure explorer — {name}</h3>"
+        self.status_line.value = f"<small>{model.status()}</small>"
+        for panel in (self.grammar, self.view, self.selection_panel, self.tree, self.edits):
+            panel.refresh()
+
+    # -- grammar and constants ---------------------------------------------------
+    def set_text(self, text):
+        """Parse new grammar text; a parse error is shown at its line and column."""
+        model = self.model
+        if text == model.text and model.error is None:
+            return None
+        self.grammar.show_text(text)
+        err = model.set_text(text)
+        if err is not None:
+            self._refused(err, f"grammar not applied (line {err.line}, column {err.column}); "
+                               "the plant on screen is the last one that parsed")
+            self.refresh()
+            return err
+        self.variants.exploration = None  # the variants were of the old grammar
+        self.run(lambda: None)
+        return None
+
+    def set_constant(self, name, value):
+        return self.run(lambda: self.model.set_constant(name, value))
+
+    def apply_constants(self, values=None):
+        """Set constants on the whole plant (default: the staged slider values)."""
+        values = self.grammar.staged() if values is None else dict(values)
+        if not values:
+            self.message.show("no constant differs from the plant's: move a slider first", "note")
+            return None
+
+        def apply():
+            for name, value in values.items():
+                self.model.set_constant(name, value)
+        return self.run(apply)
+
+    def set_derivation(self, n=None, seed=None):
+        s = self.model.session
+        if (n is None or n == s.n) and (seed is None or seed == s.seed):
+            return None
+        return self.run(lambda: self.model.set_derivation(n, seed))
+
+    def set_rho(self, rho):
+        """ρ as a percentage (1-100) or a fraction."""
+        return self.run(lambda: self.model.set_rho(rho), note=f"ρ = {rho}")
+
+    # -- selection -------------------------------------------------------------------
+    def select(self, leaf_ids, mode="replace"):
+        return self.run(lambda: self.model.select(leaf_ids, mode))
+
+    def select_where(self, min_order=None, min_height=None, max_height=None, mode="replace"):
+        """Select by branch order and height, e.g. every branch of order ≥ 3 above height h."""
+        return self.run(lambda: self.model.select(
+            self.model.leaves_where(min_order, min_height, max_height), mode))
+
+    def clear_selection(self):
+        return self.run(self.model.clear_selection)
+
+    def pick(self, cell_id, mode=None):
+        """Select the leaf that drew mesh cell ``cell_id`` (what a click in the 3D view does)."""
+        mode = mode or self.selection_panel.mode.value
+        return self.run(lambda: self.model.select([self.model.leaf_of_cell(cell_id)], mode))
+
+    # -- edits --------------------------------------------------------------------------
+    def regrow(self, seed=None, constants=None, params=None):
+        """Regrow the selection's cut (the whole plant when nothing is selected)."""
+        return self.run(lambda: self.model.regrow(seed=seed, constants=constants, params=params))
+
+    def regrow_with_constants(self, constants=None):
+        """Regrow the cut with new constant values, there only (default: the staged sliders)."""
+        constants = self.grammar.staged() if constants is None else constants
+        if not constants:
+            self.message.show("move a constant slider first: its new value is used for the regrown part",
+                              "note")
+            return None
+        return self.regrow(constants=constants)
+
+    def apply_pick(self, pick_id):
+        """Regrow the cut with the parameters of variant pick ``pick_id`` (1-27)."""
+        params = self.run(lambda: self.variants.pick_params(pick_id))
+        if params is None:
+            return None
+        result = self.regrow(params=params)
+        if result is not None:
+            self.variants.mark_applied(params)
+            self.message.show(f"applied pick #{pick_id} {params} — {self.model.status()}", "info")
+        return result
+
+    def apply_qualifier(self, name):
+        """Regrow the cut with qualifier ``name``'s parameter combination."""
+        if not name:
+            self.message.show("choose a qualifier (they appear after a variant exploration)", "note")
+            return None
+        params = self.run(lambda: self.variants.qualifier_params(name, self.model))
+        if params is None:
+            return None
+        result = self.regrow(params=params)
+        if result is not None:
+            self.variants.mark_applied(params)
+            self.message.show(f"applied '{name}' {params} — {self.model.status()}", "info")
+        return result
+
+    def prune(self):
+        return self.run(self.model.prune)
+
+    def undo(self):
+        return self.run(self.model.undo)
+
+    def redo(self):
+        return self.run(self.model.redo)
+
+    # -- variants -----------------------------------------------------------------------
+    def explore_variants(self, n=None, beta=None, n_jobs=None, wait=True):
+        """Sweep the grammar's variants (progress bar; interrupt the kernel or press Stop)."""
+        return self.run(lambda: self.variants.explore(n, beta, n_jobs, wait=wait),
+                        note=None if wait else "exploring in the background…")
+
+    def load_qualifiers(self, store, grammar=None):
+        """Use qualifier regions from a study's qualifier store (SQLite path)."""
+        return self.run(lambda: self.variants.load_regions(store, grammar))
+
+    # -- view ----------------------------------------------------------------------------
+    def set_view(self, view):
+        if view not in VIEWS:
+            self.message.show(f"view must be one of {', '.join(VIEWS)}", "error")
+            return
+        self.view.view = view
+        self.refresh()
+
+    def set_show_cut(self, on):
+        self.view.show_cut = bool(on)
+        self.refresh()
+
+    def png(self) -> bytes:
+        """The current picture of the plant (PNG bytes)."""
+        return self.view.png()
+
+    def snapshot(self):
+        """The current picture as an IPython image (stays in a saved notebook)."""
+        from IPython.display import Image
+
+        return Image(data=self.png(), format="png")
+
+    # -- files -----------------------------------------------------------------------------
+    def save(self, path):
+        """Save by suffix: ``.json`` session, ``.lsys`` grammar, else the mesh (``.vtp``, ``.obj``, …)."""
+        path = pathlib.Path(path)
+        suffix = path.suffix.lower()
+        if suffix == ".json":
+            return self.run(lambda: self.model.save_session(path), note=f"session saved to {path}")
+        if suffix == ".lsys":
+            return self.run(lambda: self.model.save_grammar(path), note=f"grammar saved to {path}")
+        return self.run(lambda: self.model.export(path), note=f"mesh exported to {path}")
+
+    def load_session(self, path):
+        return self.run(lambda: self.model.load_session(path))
+
+    # -- display ---------------------------------------------------------------------------
+    def _repr_mimebundle_(self, **kwargs):
+        """The widget, plus a PNG of the plant for viewers that cannot run widgets."""
+        bundle = self.widget._repr_mimebundle_(**kwargs) or {}
+        bundle = dict(bundle[0]) if isinstance(bundle, tuple) else dict(bundle)
+        bundle["image/png"] = base64.b64encode(self.png()).decode("ascii")
+        bundle["text/plain"] = f"<Ramure Explorer: {self.model.status()}>"
+        return bundle

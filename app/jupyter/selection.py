@@ -1,0 +1,188 @@
+"""Selection tools: leaf ids, an order/height filter, and a derivation-tree browser.
+
+Every tool goes through the explorer's ``select`` (with the mode chosen on the
+panel: replace, add, remove or toggle), so clicks, filters and code all end
+in :meth:`app.model.Explorer.select`.
+
+>>> from app.model import Explorer
+>>> m = Explorer("grammars/honda_sympodial.lsys", n=3)
+>>> node_label(m, int(m.derivation.tree.leaves[1]))
+'F(1) · leaf'
+"""
+from __future__ import annotations
+
+import ipywidgets as W
+import numpy as np
+
+from app.jupyter._ui import button, parse_ids, short_list
+from app.model import SELECT_MODES
+
+MAX_ROWS = 400  # children listed at once in the tree browser
+
+
+class SelectionPanel:
+    """Selection mode, leaf ids, the order/height filter, clear, and the selection summary."""
+
+    def __init__(self, app):
+        self.app = app
+        self.mode = W.ToggleButtons(options=SELECT_MODES, value="replace", style={"button_width": "62px"})
+        self.ids = W.Text(placeholder="leaf ids, e.g. 12, 40-45", layout=W.Layout(width="170px"))
+        self.min_order = W.BoundedIntText(value=0, min=0, max=99, description="order ≥",
+                                          style={"description_width": "55px"}, layout=W.Layout(width="120px"))
+        self.height = W.FloatRangeSlider(value=(0.0, 1.0), min=0.0, max=1.0, step=0.01, description="height",
+                                         readout_format=".3g", continuous_update=False,
+                                         style={"description_width": "55px"}, layout=W.Layout(width="98%"))
+        self.summary = W.HTML()
+        self._bounds = None
+        self.widget = W.VBox([
+            W.HTML("<b>Selection</b>"), self.mode,
+            W.HBox([self.ids, button("Select ids", self.select_ids)]),
+            W.HBox([self.min_order, button("Select where", self.select_where,
+                                           "leaves of branches of at least this order within the height range")]),
+            self.height,
+            W.HBox([button("Clear", app.clear_selection)]),
+            self.summary,
+        ])
+        self.refresh()
+
+    def select_ids(self):
+        self.app.run(lambda: self.app.model.select(parse_ids(self.ids.value), self.mode.value))
+
+    def select_where(self):
+        lo, hi = self.height.value
+        full = (lo <= self.height.min and hi >= self.height.max)
+        self.app.select_where(min_order=self.min_order.value or None,
+                              min_height=None if full else lo, max_height=None if full else hi,
+                              mode=self.mode.value)
+
+    def refresh(self):
+        model = self.app.model
+        sk = model.skeleton
+        if len(sk):
+            z = np.concatenate([sk.start[:, 2], sk.end[:, 2]])
+            bounds = (float(z.min()), float(z.max()))
+        else:
+            bounds = (0.0, 1.0)
+        if bounds != self._bounds:
+            lo, hi = bounds[0], max(bounds[1], bounds[0] + 1e-6)
+            self.height.min, self.height.max = -1e30, 1e30  # avoid clipping while both ends move
+            self.height.value = (lo, hi)
+            self.height.min, self.height.max = lo, hi
+            self.height.step = (hi - lo) / 200
+            self.min_order.max = max(int(sk.order.max()) if len(sk) else 0, 0)
+            self._bounds = bounds
+        sel = model.selection
+        self.summary.value = (f"{len(sel)} selected: {short_list(sel)}" if sel
+                              else "<i>nothing selected: edits apply to the whole plant</i>")
+
+
+def node_label(model, node) -> str:
+    """``"B(0.9,7.07) · 31 leaves, step 2"`` (or ``"F(1) · leaf"``) for a history node."""
+    tree = model.derivation.tree
+    text = model.lsystem.module_text(tree, node)
+    count = int(tree.leaf_counts()[node])
+    if tree.is_leaf(node):
+        return f"{text} · leaf"
+    return f"{text} · {count} leaves, step {int(tree.step[node])}"
+
+
+class TreeBrowser:
+    """Browse the derivation history from the axiom down; select a leaf or all leaves under a node.
+
+    ``path`` holds the opened nodes (empty = the axiom's modules).  Choose a row,
+    then *Open* to go down, *Up* to go back, *Select* to select the row's leaves
+    with the panel's mode.
+    """
+
+    def __init__(self, app):
+        self.app = app
+        self.path = []
+        self.crumbs = W.HTML()
+        self.rows = W.Select(options=[], rows=12, layout=W.Layout(width="98%"))
+        self.rows.observe(lambda ch: self._describe(), names="value")
+        self.info = W.HTML()
+        self.widget = W.VBox([
+            self.crumbs, self.rows,
+            W.HBox([button("Open ▸", self.open_selected, "show this node's children"),
+                    button("◂ Up", self.up), button("Top", self.top),
+                    button("Select", self.select_selected, "select this leaf, or every leaf under this node",
+                           style="info")]),
+            self.info,
+        ])
+        self._version = None
+        self.refresh()
+
+    def children(self):
+        tree = self.app.model.derivation.tree
+        if self.path:
+            return tree.children(self.path[-1])
+        return np.flatnonzero((tree.parent == -1) & tree.alive)
+
+    def open(self, node):
+        """Show ``node``'s children (a leaf has none: nothing happens)."""
+        tree = self.app.model.derivation.tree
+        if tree.is_leaf(node):
+            self.info.value = "<i>a leaf has no children: use Select</i>"
+            return
+        self.path.append(int(node))
+        self._fill()
+
+    def open_selected(self):
+        if self.rows.value is not None:
+            self.open(self.rows.value)
+
+    def up(self):
+        if self.path:
+            self.path.pop()
+            self._fill()
+
+    def top(self):
+        self.path = []
+        self._fill()
+
+    def select_selected(self):
+        if self.rows.value is None:
+            self.info.value = "<i>choose a row first</i>"
+            return
+        self.select(self.rows.value)
+
+    def select(self, node):
+        """Select the leaves under ``node`` (the node itself if it is a leaf)."""
+        leaves = self.app.model.derivation.tree.leaves_under(int(node))
+        self.app.select(leaves.tolist(), self.app.selection_panel.mode.value)
+
+    def _describe(self):
+        node = self.rows.value
+        if node is None:
+            self.info.value = ""
+            return
+        tree = self.app.model.derivation.tree
+        self.info.value = (f"node {node}: {node_label(self.app.model, node)}, "
+                           f"rule {int(tree.rule[node])}, depth {int(tree.depth[node])}")
+
+    def _fill(self):
+        model = self.app.model
+        names = [model.lsystem.module_text(model.derivation.tree, n) for n in self.path]
+        self.crumbs.value = "<b>Derivation tree</b>: " + (" ▸ ".join(names) if names else "axiom")
+        kids = self.children()
+        options = [(f"{int(n)}: {node_label(model, int(n))}", int(n)) for n in kids[:MAX_ROWS]]
+        if len(kids) > MAX_ROWS:
+            options.append((f"… {len(kids) - MAX_ROWS} more not listed", None))
+        self.rows.options = options
+        self.rows.value = None
+
+    def refresh(self):
+        model = self.app.model
+        if model.version == self._version:
+            return
+        self._version = model.version
+        tree = model.derivation.tree
+        # keep the opened path as far as it is still alive
+        keep = []
+        for n in self.path:
+            if n < tree.size and tree.alive[n] and not tree.is_leaf(n) and (not keep or tree.parent[n] == keep[-1]):
+                keep.append(n)
+            else:
+                break
+        self.path = keep
+        self._fill()

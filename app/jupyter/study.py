@@ -1,0 +1,245 @@
+"""Study mode in the notebook: one participant's test on one grammar.
+
+:class:`StudyPanel` drives a :class:`studies.TestSession`, so every answer is
+checked and stored in the study's SQLite file as it is given (one
+transaction each, timed).  The participant
+
+1. sorts the 27 thumbnails (in their own seeded order) by giving each a
+   group number,
+2. for each group chooses a representative, rates usefulness, difference and
+   the representative (poor / fair / good / excellent) and names it with one
+   or more qualifiers,
+3. presses *Finish*; anything missing is listed instead.
+
+The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answer`,
+:meth:`~StudyPanel.finish`) that set the widgets and run their handlers.
+
+>>> import tempfile, pathlib
+>>> from studies import Study, lattice_picks
+>>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db", grammars={"honda": lattice_picks()})
+>>> panel = StudyPanel(study, study.add_participant(consent=True), "honda")
+>>> panel.assign({i: 1 if i <= 13 else 2 for i in range(1, 28)})
+>>> [len(g.images) for g in panel.session.groups()]
+[13, 14]
+>>> panel.finish() is None, panel.message.text.startswith("the test is not complete")
+(True, True)
+>>> study.close()
+"""
+from __future__ import annotations
+
+import pathlib
+
+import ipywidgets as W
+
+from app.jupyter._ui import MessageLine, button, png_image
+from lsys.errors import RamureError
+from studies.likert import LEVELS
+
+MAX_GROUPS = 9
+
+
+def _thumbnail(pick, size):
+    path = pathlib.Path(pick.image) if pick.image else None
+    if path is not None and path.is_file():
+        return png_image(path.read_bytes(), width=size)
+    return W.HTML(f"<div style='width:{size}px;height:{size}px;background:#eceff1;display:flex;"
+                  f"align-items:center;justify-content:center;color:#607d8b;font-size:20px'>#{pick.id}</div>")
+
+
+def _likert(description):
+    return W.ToggleButtons(options=LEVELS, value=None, description=description,
+                           style={"description_width": "110px", "button_width": "72px"})
+
+
+class GroupQuestions:
+    """The questionnaire of one stored group (representative, three ratings, qualifiers)."""
+
+    def __init__(self, panel, group):
+        self.panel = panel
+        self.label = group.label
+        several = len(group.images) > 1
+        self.representative = W.Dropdown(options=[("choose…", None)] + [(f"#{i}", i) for i in group.images],
+                                         value=group.representative if several else None,
+                                         description="representative", style={"description_width": "110px"},
+                                         layout=W.Layout(width="240px", display="" if several else "none"))
+        self.usefulness = _likert("usefulness")
+        self.difference = _likert("difference")
+        self.quality = _likert("representative")
+        self.quality.layout.display = "" if several else "none"
+        for widget, stored in ((self.usefulness, group.usefulness), (self.difference, group.difference),
+                               (self.quality, group.representative_quality)):
+            widget.value = LEVELS[stored - 1] if stored else None
+        self.qualifiers = W.Text(value=", ".join(group.qualifiers), description="qualifiers",
+                                 placeholder="e.g. petit, dense", continuous_update=False,
+                                 style={"description_width": "110px"}, layout=W.Layout(width="420px"))
+        self.representative.observe(lambda ch: self._save("representative", ch["new"]), names="value")
+        self.usefulness.observe(lambda ch: self._save("usefulness", ch["new"]), names="value")
+        self.difference.observe(lambda ch: self._save("difference", ch["new"]), names="value")
+        self.quality.observe(lambda ch: self._save("quality", ch["new"]), names="value")
+        self.qualifiers.observe(lambda ch: self._save("qualifiers", ch["new"]), names="value")
+        self.widget = W.VBox([
+            W.HTML(f"<b>Group {group.label}</b>: images {', '.join(f'#{i}' for i in group.images)}"),
+            self.representative, self.usefulness, self.difference, self.quality, self.qualifiers,
+        ], layout=W.Layout(border="1px solid #ddd", padding="4px", margin="2px 0"))
+
+    def update(self, group):
+        """Show the stored answers of ``group`` (also undoes a refused answer on screen)."""
+        if len(group.images) > 1:
+            self.representative.value = group.representative
+        for widget, stored in ((self.usefulness, group.usefulness), (self.difference, group.difference),
+                               (self.quality, group.representative_quality)):
+            widget.value = LEVELS[stored - 1] if stored else None
+        self.qualifiers.value = ", ".join(group.qualifiers)
+
+    def _save(self, what, value):
+        if self.panel.quiet or value is None:
+            return
+        s, g = self.panel.session, self.label
+        if what == "representative":
+            self.panel.run(lambda: s.set_representative(g, value))
+        elif what == "usefulness":
+            self.panel.run(lambda: s.rate(g, usefulness=value))
+        elif what == "difference":
+            self.panel.run(lambda: s.rate(g, difference=value))
+        elif what == "quality":
+            self.panel.run(lambda: s.rate(g, representative=value))
+        else:
+            self.panel.run(lambda: self._sync_qualifiers(value))
+
+    def _sync_qualifiers(self, text):
+        wanted = [t.strip() for t in str(text).split(",") if t.strip()]
+        stored = next(g.qualifiers for g in self.panel.session.groups() if g.label == self.label)
+        for name in stored:
+            if name not in wanted:
+                self.panel.session.remove_qualifier(self.label, name)
+        for name in wanted:
+            if name not in stored:
+                self.panel.session.add_qualifier(self.label, name)
+
+
+class StudyPanel:
+    """A participant's test on ``grammar`` of an open :class:`studies.Study`."""
+
+    def __init__(self, study, participant, grammar, thumb_size=96):
+        self.study = study
+        self.session = study.session(participant, grammar)
+        self.quiet = False
+        self.message = MessageLine()
+        self.header = W.HTML()
+        picks = {p.id: p for p in self.session.picks()}
+        self.group_of = {}
+        cards = []
+        options = [("–", 0)] + [(str(g), g) for g in range(1, MAX_GROUPS + 1)]
+        for image in self.session.order():
+            dropdown = W.Dropdown(options=options, value=0, layout=W.Layout(width="52px"))
+            dropdown.observe(lambda ch: None if self.quiet else self.run(self._store_groups), names="value")
+            self.group_of[image] = dropdown
+            cards.append(W.VBox([_thumbnail(picks[image], thumb_size),
+                                 W.HBox([W.Label(f"#{image}", layout=W.Layout(width="38px")), dropdown])]))
+        self.grid = W.GridBox(cards, layout=W.Layout(grid_template_columns=f"repeat(9, {thumb_size + 8}px)"))
+        self.questions = W.VBox()
+        self.forms = {}
+        self._layout = None
+        self.finish_button = button("Finish test", self.finish, style="primary",
+                                    tooltip="store the test as finished (refused while answers are missing)")
+        self.todo = W.HTML()
+        self.widget = W.VBox([
+            self.header, self.message.widget,
+            W.HTML("<b>1. Sort the trees</b>: give each image a group number; trees in a group look "
+                   "alike, groups look different (a group may hold one image)."),
+            self.grid,
+            W.HTML("<b>2. For each group</b>: choose a representative, rate, and name it "
+                   "(several qualifiers separated by commas)."),
+            self.questions, W.HBox([self.finish_button]), self.todo,
+        ])
+        self.refresh()
+
+    # -- actions -------------------------------------------------------------
+    def run(self, action):
+        """Run ``action()``; a refused answer is shown inline (nothing stored changes)."""
+        try:
+            result = action()
+        except RamureError as err:
+            self.message.show(err, "error")
+            self.refresh()
+            return None
+        self.message.clear()
+        self.refresh()
+        return result
+
+    def _store_groups(self):
+        groups = {}
+        for image, dropdown in self.group_of.items():
+            if dropdown.value:
+                groups.setdefault(dropdown.value, []).append(image)
+        self.session.set_groups([sorted(groups[g]) for g in sorted(groups)])
+
+    def assign(self, groups):
+        """Set every image's group at once: ``{image: group}`` or a list of groups of images
+        (images left out stay unsorted), then store the grouping."""
+        if not isinstance(groups, dict):
+            groups = {image: label for label, images in enumerate(groups, start=1) for image in images}
+        self.quiet = True
+        try:
+            for image, dropdown in self.group_of.items():
+                dropdown.value = int(groups.get(image, 0))
+        except Exception as exc:  # noqa: BLE001 - a group number outside the drop-down
+            self.quiet = False
+            self.message.show(f"group numbers must be 1-{MAX_GROUPS} ({exc})", "error")
+            return
+        finally:
+            self.quiet = False
+        self.run(self._store_groups)
+
+    def answer(self, group, representative=None, usefulness=None, difference=None, quality=None,
+               qualifiers=None):
+        """Answer for ``group`` as the participant would (each given value through its widget)."""
+        form = self.forms.get(group)
+        if form is None:
+            self.message.show(f"group {group} does not exist (sort the images first)", "error")
+            return
+        for widget, value in ((form.representative, representative), (form.usefulness, usefulness),
+                              (form.difference, difference), (form.quality, quality)):
+            if value is not None:
+                widget.value = value
+        if qualifiers is not None:
+            form.qualifiers.value = qualifiers if isinstance(qualifiers, str) else ", ".join(qualifiers)
+
+    def finish(self):
+        """Finish the test; refused, listing what is missing, while it is incomplete."""
+        self.run(self.session.finish)
+        if self.session.finished:
+            self.message.show("test finished and stored — thank you", "info")
+
+    # -- display -------------------------------------------------------------
+    def refresh(self):
+        s = self.session
+        groups = s.groups()
+        self.quiet = True
+        try:
+            label_of = {image: g.label for g in groups for image in g.images}
+            for image, dropdown in self.group_of.items():
+                dropdown.value = label_of.get(image, 0)
+                dropdown.disabled = s.finished
+            layout = [(g.label, tuple(g.images)) for g in groups]
+            if layout != self._layout:  # the grouping changed: a new questionnaire
+                self.forms = {g.label: GroupQuestions(self, g) for g in groups}
+                self.questions.children = [f.widget for f in self.forms.values()]
+                self._layout = layout
+            else:
+                for g in groups:
+                    self.forms[g.label].update(g)
+        finally:
+            self.quiet = False
+        minutes = s.remaining_seconds() / 60
+        state = "finished" if s.finished else f"{minutes:.0f} min left"
+        self.header.value = (f"<h3 style='margin:4px 0'>Study “{self.study.name}” — participant {s.participant}, "
+                             f"grammar {s.grammar} ({state})</h3>")
+        todo = [] if s.finished else s.missing()
+        self.todo.value = ("<small>still to do: " + "; ".join(todo[:8]) + ("…" if len(todo) > 8 else "")
+                           + "</small>") if todo else ""
+        self.finish_button.disabled = s.finished
+        if s.finished:
+            for form in self.forms.values():
+                for child in form.widget.children[1:]:
+                    child.disabled = True

@@ -1,0 +1,315 @@
+"""Variant exploration in the notebook: sweep with a progress bar, 27-thumbnail gallery,
+PCA scatter with qualifier boxes, and the qualifier choices.
+
+The work is done by :mod:`metrics` (sweep, PCA, picks, qualifier regions and
+combinations); this panel only runs it and shows it.  A sweep started from
+the button runs in a thread and *Stop* cancels it; a sweep started from code
+(:meth:`VariantPanel.explore`) blocks, updates the same bar, and stops on a
+kernel interrupt.  Without :mod:`metrics` (or before a sweep) the panels say
+what is missing instead of failing.
+
+Applying a pick or a qualifier regrows the selection's cut (the whole plant
+when nothing is selected) with that parameter combination, through
+:meth:`app.model.Explorer.regrow`.
+"""
+from __future__ import annotations
+
+import pathlib
+import threading
+
+import ipywidgets as W
+import numpy as np
+
+from app.jupyter._ui import button, message_html, png_image
+from app.jupyter.scatter import pca_png
+from app.jupyter.view import mesh_png
+from lsys.errors import RamureError
+
+N_PICKS = 27
+
+
+def metrics_status() -> str | None:
+    """None when the variant exploration can run, else why not."""
+    try:
+        from metrics import SweepCancelled, VariantSweep, explore  # noqa: F401
+    except ImportError as exc:
+        return f"variant exploration is not available ({exc})"
+    return None
+
+
+def qualifier_tools():
+    """``(VOCABULARY, qualifier_combination, active_rules, QualifierStore)`` or None if metrics lacks them."""
+    try:
+        from metrics.apply import active_rules
+        from metrics.qualifiers import VOCABULARY, qualifier_combination
+        from metrics.store import QualifierStore
+    except ImportError:
+        return None
+    return VOCABULARY, qualifier_combination, active_rules, QualifierStore
+
+
+class Stopped(RamureError):
+    """The exploration was stopped before it finished."""
+
+
+class VariantPanel:
+    """Explore the current grammar's variants, browse the 27 picks, apply one."""
+
+    def __init__(self, app, thumb_size=110, cache=True):
+        self.app = app
+        self.thumb_size = thumb_size
+        self.cache = cache
+        self.exploration = None
+        self.thumbnails = [None] * N_PICKS
+        self.regions = None  # metrics.qualifiers.QualifierRegions from a study, if loaded
+        self.defaults = None  # regions of the default vocabulary (its best-ranked variants)
+        self.chosen = None  # PCA point of the last applied pick/qualifier
+        self.running = None  # the worker thread of a button-started sweep
+        self._sweep = None
+        self._stop = threading.Event()
+        model = app.model
+        self.n = W.BoundedIntText(value=min(model.session.n, 5), min=0, max=30, description="n",
+                                  style={"description_width": "20px"}, layout=W.Layout(width="100px"))
+        self.beta = W.BoundedFloatText(value=0.1, min=0.001, max=0.999, step=0.01, description="β",
+                                       style={"description_width": "20px"}, layout=W.Layout(width="110px"))
+        self.jobs = W.BoundedIntText(value=1, min=1, max=64, description="workers",
+                                     style={"description_width": "55px"}, layout=W.Layout(width="130px"))
+        self.start = button("Explore variants", lambda: self.explore(wait=False), style="primary",
+                            tooltip="derive and measure every ±β variant, PCA, pick 27 (runs in the background)")
+        self.stop_button = button("Stop", self.stop, style="warning", tooltip="cancel the running exploration")
+        self.stop_button.disabled = True
+        self.bar = W.IntProgress(value=0, min=0, max=1, layout=W.Layout(width="260px"))
+        self.progress_text = W.Label("")
+        self.note = W.HTML()
+        self.cards = []
+        for pid in range(1, N_PICKS + 1):
+            image = png_image(width=thumb_size)
+            pick = button(f"#{pid}", lambda pid=pid: self.app.apply_pick(pid), width=f"{thumb_size}px",
+                          tooltip=f"regrow the selection (or the plant) with variant #{pid}'s parameters")
+            self.cards.append((image, pick))
+        self.gallery = W.GridBox([W.VBox([img, b]) for img, b in self.cards],
+                                 layout=W.Layout(grid_template_columns=f"repeat(9, {thumb_size + 6}px)"))
+        self.scatter = png_image()
+        self.box_toggles = W.VBox()
+        self.widget = W.VBox([
+            W.HBox([self.n, self.beta, self.jobs, self.start, self.stop_button]),
+            W.HBox([self.bar, self.progress_text]), self.note, self.gallery,
+        ])
+        self.pca_widget = W.HBox([self.scatter, W.VBox([W.HTML("<b>Qualifier boxes</b>"), self.box_toggles])])
+        self.refresh()
+
+    # -- running -----------------------------------------------------------
+    def _progress(self, done, total, what="variants"):
+        self.bar.max = max(int(total), 1)
+        self.bar.value = int(done)
+        self.progress_text.value = f"{what} {done}/{total}"
+
+    def explore(self, n=None, beta=None, n_jobs=None, wait=True, thumbnails=True):
+        """Sweep the current grammar, run the PCA, pick 27 and render their thumbnails.
+
+        With ``wait`` (the default from code) this blocks and returns the
+        exploration; otherwise it starts a thread and returns it.
+        """
+        reason = metrics_status()
+        if reason:
+            raise RamureError(reason)
+        if self.running is not None and self.running.is_alive():
+            raise RamureError("an exploration is already running: stop it first")
+        from metrics import VariantSweep
+
+        for widget, value in ((self.n, n), (self.beta, beta), (self.jobs, n_jobs)):
+            if value is not None:
+                widget.value = value
+        sweep = VariantSweep(n=self.n.value, beta=self.beta.value, n_jobs=self.jobs.value, cache=self.cache)
+        self._sweep = sweep
+        self._stop.clear()
+        lsystem = self.app.model.lsystem
+        if wait:
+            return self._run(sweep, lsystem, thumbnails)
+        self.running = threading.Thread(target=self._run_reported, args=(sweep, lsystem, thumbnails),
+                                        name="ramure-explore", daemon=True)
+        self.running.start()
+        return self.running
+
+    def _run_reported(self, sweep, lsystem, thumbnails):
+        try:
+            self._run(sweep, lsystem, thumbnails)
+        except RamureError as err:
+            self.app.message.show(err, "error")
+
+    def _run(self, sweep, lsystem, thumbnails):
+        from metrics import SweepCancelled, explore
+
+        self.start.disabled, self.stop_button.disabled = True, False
+        self.note.value = message_html("exploring…", "note")
+        try:
+            exp = explore(lsystem, sweep=sweep, progress=self._progress, cancel=self._stop)
+            images = self._render_thumbnails(exp) if thumbnails else [None] * N_PICKS
+        except (SweepCancelled, Stopped, KeyboardInterrupt):
+            sweep.cancel()
+            self.note.value = message_html("exploration stopped; the previous results are kept", "note")
+            raise Stopped("the exploration was stopped") from None
+        finally:
+            self.start.disabled, self.stop_button.disabled = False, True
+        self.exploration, self.thumbnails, self.chosen = exp, images, None
+        self.defaults = None
+        self.refresh()
+        self.app.refresh()
+        return exp
+
+    def _render_thumbnails(self, exp):
+        images = []
+        for k, variant in enumerate(exp.picks.variant.tolist()):
+            if self._stop.is_set():
+                raise Stopped("stopped")
+            mesh = exp.sweep.derive(int(variant)).skeleton().to_polydata()
+            images.append(mesh_png(mesh, size=(self.thumb_size * 2, self.thumb_size * 2), view="front"))
+            self._progress(k + 1, N_PICKS, "thumbnails")
+        return images
+
+    def stop(self):
+        """Cancel a running exploration (the button; safe to call when none runs)."""
+        self._stop.set()
+        if self._sweep is not None:
+            self._sweep.cancel()
+
+    def wait(self, timeout=None):
+        """Wait for a button-started exploration to end."""
+        if self.running is not None:
+            self.running.join(timeout)
+
+    # -- queries -----------------------------------------------------------
+    def _need(self):
+        if self.exploration is None:
+            raise RamureError("explore the variants first (Variants ▸ Explore variants)")
+        return self.exploration
+
+    def pick_params(self, pick_id) -> dict:
+        """The parameter combination ``{"rule", "constants"}`` of pick ``pick_id`` (1-27)."""
+        exp = self._need()
+        if not 1 <= int(pick_id) <= N_PICKS:
+            raise RamureError(f"pick {pick_id} is not a number 1-27")
+        return exp.sweep.combination(int(exp.picks.variant[int(pick_id) - 1]))
+
+    def pick_point(self, pick_id):
+        return self._need().picks.points[int(pick_id) - 1]
+
+    def qualifier_names(self) -> list:
+        """Qualifiers offered for the current exploration (study regions first)."""
+        tools = qualifier_tools()
+        if tools is None or self.exploration is None:
+            return []
+        vocabulary = tools[0]
+        study = list(self.regions.names_) if self.regions is not None else []
+        return study + [name for name in vocabulary if name not in study]
+
+    def qualifier_params(self, name, model) -> dict:
+        """The combination qualifier ``name`` applies to the model's selection (or whole plant)."""
+        exp = self._need()
+        tools = qualifier_tools()
+        if tools is None:
+            raise RamureError("qualifiers are not available (the metrics qualifier modules are missing)")
+        _, combination, active_rules, _ = tools
+        rules = None
+        cut = model.plan()
+        if cut is not None and len(cut.roots):
+            rules = active_rules(model.derivation.tree, cut.roots)
+        return combination(name, exp.sweep, exp.points, self.regions, rules)
+
+    def mark_applied(self, params):
+        """Show the variant whose combination is ``params`` as the applied one in the scatter."""
+        exp = self.exploration
+        self.chosen = None
+        for i in range(exp.sweep.n_variants_):
+            if exp.sweep.combination(i) == params and np.all(np.isfinite(exp.points[i])):
+                self.chosen = exp.points[i]
+                break
+        self._draw_scatter()
+
+    def load_regions(self, store, grammar=None):
+        """Use the qualifier regions of ``grammar`` (default: the explored grammar) from a
+        qualifier store (a path, e.g. written by ``ramure study export-qualifiers``)."""
+        exp = self._need()
+        tools = qualifier_tools()
+        if tools is None:
+            raise RamureError("qualifier regions are not available (metrics.store is missing)")
+        with tools[3](store) as qs:
+            self.regions = qs.regions(grammar or exp.name)
+        if self.regions is None:
+            raise RamureError(f"{store}: no qualifier points for grammar '{grammar or exp.name}'")
+        self.refresh()
+        return self.regions
+
+    def boxes(self) -> dict:
+        """``{name: (lo, hi)}`` to draw: study regions, else the default vocabulary's boxes."""
+        if self.regions is not None:
+            return dict(self.regions.boxes_)
+        tools = qualifier_tools()
+        if tools is None or self.exploration is None:
+            return {}
+        if self.defaults is None:
+            with tools[3](":memory:") as qs:
+                qs.write_default(self.exploration)
+                self.defaults = qs.regions(self.exploration.name)
+        return dict(self.defaults.boxes_) if self.defaults is not None else {}
+
+    # -- files -------------------------------------------------------------
+    def save(self, directory) -> dict:
+        """Write the exploration (``variants.csv``, ``pca.json``, ``picks.json``) and the
+        thumbnails (``thumbs/pick_NN.png``) to ``directory``: what a study reads."""
+        from metrics import write_exploration
+
+        exp = self._need()
+        out = pathlib.Path(directory)
+        (out / "thumbs").mkdir(parents=True, exist_ok=True)
+        images = None
+        if all(t is not None for t in self.thumbnails):
+            images = []
+            for pid, data in enumerate(self.thumbnails, start=1):
+                rel = f"thumbs/pick_{pid:02d}.png"
+                (out / rel).write_bytes(data)
+                images.append(rel)
+        return write_exploration(exp, out, images=images)
+
+    # -- display -----------------------------------------------------------
+    def refresh(self):
+        reason = metrics_status()
+        exp = self.exploration
+        if reason:
+            self.note.value = message_html(reason, "note")
+            self.start.disabled = True
+        elif exp is None:
+            self.note.value = message_html("No variants yet: press “Explore variants” (or call "
+                                           "ex.explore_variants()) to fill the gallery and the PCA view.", "note")
+        else:
+            s = exp.sweep
+            self.note.value = message_html(
+                f"{s.n_variants_} variants of '{exp.name}' (n={s.n_}, β={s.design_.beta:g}, "
+                f"{int(s.failed_.sum())} failed), PCA explains "
+                f"{100 * float(np.sum(exp.pca.explained_variance_ratio_)):.0f}% — click a pick to apply it.", "info")
+        for k, (image, pick) in enumerate(self.cards):
+            data = (self.thumbnails[k] if exp is not None else None) or b""
+            if image.value != data:
+                image.value = data
+            pick.disabled = exp is None
+        self._draw_scatter()
+
+    def _draw_scatter(self):
+        exp = self.exploration
+        if exp is None:
+            self.box_toggles.children = [W.HTML("<i>explore the variants first</i>")]
+            self.scatter.value = b""
+            return
+        boxes = self.boxes()
+        known = {cb.description: cb.value for cb in self.box_toggles.children if isinstance(cb, W.Checkbox)}
+        if set(known) != set(boxes):
+            toggles = []
+            for name in boxes:
+                cb = W.Checkbox(value=known.get(name, name in ("small", "large", "dense", "sparse")),
+                                description=name, indent=False)
+                cb.observe(lambda _c: self._draw_scatter(), names="value")
+                toggles.append(cb)
+            self.box_toggles.children = toggles or [W.HTML("<i>no qualifier regions</i>")]
+        shown = {cb.description for cb in self.box_toggles.children if isinstance(cb, W.Checkbox) and cb.value}
+        self.scatter.value = pca_png(exp.points, exp.picks.points, exp.picks.ids,
+                                     {k: v for k, v in boxes.items() if k in shown}, self.chosen)

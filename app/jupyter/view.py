@@ -1,0 +1,190 @@
+"""The explorer's 3D view: an interactive pyvista/trame view when it can run, else a PNG.
+
+The static view is an ``ipywidgets.Image`` re-rendered off-screen (VTK, EGL
+when there is no display) after every change.  The interactive view uses
+pyvista's trame backend (``pip install "pyvista[jupyter]"``, i.e.
+``trame-pyvista``) and supports picking: a click on a branch selects its leaf.
+``backend="auto"`` takes trame when it is installed and pyvista's notebook
+backend is not set to ``static`` (``PYVISTA_JUPYTER_BACKEND=static``), else
+the PNG.  Either way :meth:`PlantView.png` gives the current picture, which is
+also what a notebook shows where no widget can run (nbconvert, GitHub).
+
+>>> from app.model import Explorer
+>>> png = plant_png(Explorer("grammars/honda_sympodial.lsys", n=4), size=(120, 120))
+>>> png[:4] == b"\\x89PNG"
+True
+"""
+from __future__ import annotations
+
+import importlib.util
+import io
+import threading
+
+import numpy as np
+
+from app.jupyter._ui import png_image
+from app.render import _headless_setup, frame_camera, plant_colors
+
+CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
+VIEWS = ("iso", "front", "side", "top")
+BACKENDS = ("auto", "static", "trame", "server", "client")
+RENDER_LOCK = threading.Lock()  # one off-screen render at a time (thumbnail threads included)
+
+
+def cut_leaves(model):
+    """Leaf ids the current selection's cut would regrow (empty without a selection)."""
+    cut = model.plan()
+    if cut is None or not len(cut.roots):
+        return np.zeros(0, np.int64)
+    tree = model.derivation.tree
+    return np.concatenate([tree.leaves_under(int(r)) for r in cut.roots])
+
+
+def view_colors(model, show_cut=False):
+    """RGB (uint8) per mesh cell: bark/leaf/fruit, kinship hues for one selected leaf,
+    the planned cut in orange (``show_cut``), the selection in red."""
+    mesh = model.mesh
+    rgb = plant_colors(mesh)
+    if show_cut:
+        rgb[np.isin(mesh.cell_data["leaf_id"], cut_leaves(model))] = np.multiply(CUT, 255).astype(np.uint8)
+    else:
+        hues = model.kinship_hues()
+        if hues is not None:
+            seg = np.asarray(mesh.cell_data["segment"])
+            rgb[seg >= 0] = (np.asarray(hues)[seg[seg >= 0]] * 255).astype(np.uint8)
+    if model.selection:
+        rgb[np.isin(mesh.cell_data["leaf_id"], model.selection)] = (255, 0, 0)
+    return rgb
+
+
+def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zoom=1.3) -> bytes:
+    """PNG bytes of a plant mesh coloured by ``rgb`` per cell (default: bark/leaf/fruit)."""
+    _headless_setup()
+    import pyvista as pv
+
+    with RENDER_LOCK:
+        plotter = pv.Plotter(off_screen=True, window_size=[int(size[0]), int(size[1])])
+        try:
+            plotter.set_background(background)
+            if mesh.n_cells:
+                shown = mesh.copy(deep=False)
+                shown.cell_data["rgb"] = plant_colors(mesh) if rgb is None else rgb
+                plotter.add_mesh(shown, scalars="rgb", rgb=True)
+                frame_camera(plotter, mesh.bounds, view)
+                plotter.camera.zoom(zoom)
+            buf = io.BytesIO()
+            plotter.screenshot(buf)
+        finally:
+            plotter.close()
+    return buf.getvalue()
+
+
+def plant_png(model, size=(480, 480), view="iso", show_cut=False) -> bytes:
+    """PNG bytes of the model's current plant as the explorer colours it."""
+    return mesh_png(model.mesh, view_colors(model, show_cut), size, view)
+
+
+def trame_available() -> bool:
+    """True when pyvista's trame notebook backend is installed."""
+    return importlib.util.find_spec("trame_pyvista") is not None
+
+
+def resolve_backend(backend="auto") -> str:
+    """``"static"`` or a trame mode (``"trame"``, ``"server"``, ``"client"``)."""
+    if backend not in BACKENDS:
+        from lsys.errors import ValueRefused
+
+        raise ValueRefused(f"view backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+    if backend == "static" or not trame_available():
+        return "static"
+    if backend != "auto":
+        return backend
+    import pyvista as pv
+
+    chosen = pv.global_theme.jupyter_backend
+    return chosen if chosen in ("trame", "server", "client") else ("trame" if chosen is None else "static")
+
+
+class PlantView:
+    """The 3D view of an explorer ``app`` (anything with ``.model`` and ``.pick(cell_id)``)."""
+
+    def __init__(self, app, backend="auto", size=(480, 480), view="iso"):
+        self.app = app
+        self.size = tuple(size)
+        self.view = view
+        self.show_cut = False
+        self.backend = resolve_backend(backend)
+        self.image = png_image()
+        self._shown = None
+        self._png = None
+        self.trame = None
+        if self.backend != "static":
+            try:
+                self.trame = TrameView(self, self.backend)
+            except Exception as exc:  # noqa: BLE001 - any trame/server failure falls back to the PNG
+                self.backend = "static"
+                self.fallback_reason = f"interactive view unavailable ({type(exc).__name__}: {exc}); showing a picture"
+        self.widget = self.trame.widget if self.trame else self.image
+
+    @property
+    def picking(self) -> bool:
+        """Whether a click in the view selects leaves."""
+        return self.trame is not None
+
+    def _key(self):
+        m = self.app.model
+        return (m.version, tuple(m.selection), m.rho if self.show_cut else None, self.show_cut, self.view,
+                self.size)
+
+    def png(self) -> bytes:
+        """The current picture (re-rendered only when something changed)."""
+        key = self._key()
+        if self._png is None or self._png[0] != key:
+            self._png = (key, plant_png(self.app.model, self.size, self.view, self.show_cut))
+        return self._png[1]
+
+    def refresh(self):
+        """Redraw after a change of plant, selection, camera side or cut preview."""
+        key = self._key()
+        if key == self._shown:
+            return
+        self._shown = key
+        if self.trame is not None:
+            self.trame.draw()
+        else:
+            self.image.value = self.png()
+
+
+class TrameView:
+    """pyvista's trame view of the plant, with click picking (needs ``trame-pyvista``)."""
+
+    def __init__(self, owner, mode="trame"):
+        _headless_setup()
+        import pyvista as pv
+
+        self.owner = owner
+        self.plotter = pv.Plotter(notebook=True, window_size=list(owner.size))
+        self.plotter.set_background("white")
+        self._actor = None
+        self.draw(update=False)
+        frame_camera(self.plotter, owner.app.model.mesh.bounds, owner.view)
+        self.plotter.enable_point_picking(callback=self._picked, use_picker=True, picker="cell",
+                                          left_clicking=True, show_message=False, show_point=False)
+        self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
+
+    def draw(self, update=True):
+        model = self.owner.app.model
+        mesh = model.mesh.copy(deep=False)
+        mesh.cell_data["rgb"] = view_colors(model, self.owner.show_cut)
+        self._actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False)
+        if update:
+            viewer = getattr(self.widget, "viewer", None)
+            if viewer is not None:
+                viewer.update()
+            else:
+                self.plotter.render()
+
+    def _picked(self, _point, picker):
+        cell = int(picker.GetCellId())
+        if cell >= 0:
+            self.owner.app.pick(cell)
