@@ -1,0 +1,271 @@
+"""``ramure explore | metrics | qualify``: variant exploration, plant metrics, qualifier edits.
+
+::
+
+    ramure explore grammars/honda_sympodial.lsys -n 7 -o out/honda --json
+    ramure metrics grammars/honda_sympodial.lsys --select 12,15,20-23 --tight --json
+    ramure qualify grammars/honda_sympodial.lsys --qualifier dense --select 12,15,20-23 -o session.json
+
+``explore`` writes ``variants.csv``, ``pca.json``, ``picks.json``,
+``thumbs/pick_XX.png`` and ``contact_sheet.png`` (see :mod:`metrics.explore`);
+with ``--json`` it prints one summary object (variant count, the 27 picks
+with their parameter combinations, matching distances, seconds).
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+import time
+
+from app.cli import UserError
+from app.commands.plant import add_grammar_options, parse_sets
+from app.commands.regen import parse_ids
+from lsys import LSystem
+from lsys.errors import RamureError
+
+
+def _size(text):
+    w, _, h = text.partition("x")
+    try:
+        return int(w), int(h or w)
+    except ValueError:
+        raise RamureError(f"--thumb-size expects WIDTHxHEIGHT, got '{text}'") from None
+
+
+def _load(args):
+    ls = LSystem.from_file(args.file)
+    ls.constants.update(parse_sets(args.set, ls.constants))
+    if args.n is not None and args.n < 0:
+        raise RamureError(f"-n must be >= 0, not {args.n}")
+    return ls
+
+
+def _ids(text, option):
+    """``"12,15,20-23"`` -> ids, refusing bad syntax as a user error (exit 2, no traceback)."""
+    try:
+        return parse_ids(text)
+    except UserError as exc:
+        raise RamureError(str(exc).replace("--select", option)) from None
+
+
+def _check_leaves(ids, leaves):
+    """Refuse ids that are not leaves of the current string (leaves drawing nothing are fine)."""
+    unknown = sorted(set(ids) - set(leaves.tolist()))
+    if unknown:
+        raise RamureError(f"--select: {', '.join(map(str, unknown[:5]))}"
+                          f"{' ...' if len(unknown) > 5 else ''} not leaf id(s) of this plant "
+                          "(see 'ramure leaves FILE' for the ids)")
+
+
+def _progress_bar(enabled, desc):
+    """A ``progress(done, total)`` callback drawing a tqdm bar on stderr, and a closer."""
+    if not enabled:
+        return None, lambda: None
+    from tqdm import tqdm
+
+    state = {}
+
+    def progress(done, total):
+        bar = state.get("bar")
+        if bar is None:
+            bar = state["bar"] = tqdm(total=total, desc=desc, unit="variant", file=sys.stderr,
+                                      disable=None, leave=False)
+        bar.update(done - bar.n)
+
+    def close():
+        if "bar" in state:
+            state["bar"].close()
+
+    return progress, close
+
+
+def _add_sweep_options(p):
+    p.add_argument("--beta", type=float, default=0.1, help="relative variation of each constant (default 0.1)")
+    p.add_argument("--constants", default=None, metavar="K1,K2",
+                   help="constants to vary (default: every non-zero #define)")
+    p.add_argument("--mode", choices=["grid", "lhs", "sobol"], default="grid",
+                   help="grid: all 3^m combinations per rule; lhs/sobol: --samples per rule")
+    p.add_argument("--samples", type=int, default=None, help="samples per rule for --mode lhs/sobol")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="run the sweep on a Dask cluster (needs ramure[dask])")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the sweep cache")
+    p.add_argument("--cache-dir", default=None, help="cache directory (default $RAMURE_CACHE or ~/.cache/ramure)")
+
+
+def _sweep_kwargs(args):
+    return dict(n=args.n, seed=args.seed, beta=args.beta, constants=args.constants, mode=args.mode,
+                n_samples=args.samples, n_jobs=args.jobs, cache=not args.no_cache, cache_dir=args.cache_dir,
+                scheduler=args.scheduler)
+
+
+# -- explore ----------------------------------------------------------------------
+def run_explore(args):
+    from metrics.explore import explore, write_exploration
+
+    t0 = time.perf_counter()
+    ls = _load(args)
+    size = _size(args.thumb_size)
+    progress, close = _progress_bar(not args.json or sys.stderr.isatty(), "variants")
+    try:
+        exp = explore(ls, standardize=args.standardize, match=args.match, progress=progress,
+                      **_sweep_kwargs(args))
+    finally:
+        close()
+    exp.name = args.grammar_name or pathlib.Path(args.file).stem
+    out = pathlib.Path(args.output)
+    images = None
+    if not args.no_thumbnails:
+        from app.thumbnails import contact_sheet, render_picks
+
+        images = render_picks(exp, out, size=size)
+        contact_sheet([out / p for p in images], range(1, 28), out / "contact_sheet.png",
+                      title=f"{exp.name}: 27 picks (rows = PC1 low, mid, high)")
+    paths = write_exploration(exp, out, images)
+    if args.store:
+        from metrics.store import QualifierStore
+
+        with QualifierStore(args.store) as store:
+            store.write_default(exp)
+    summary = exp.summary(images)
+    summary["seconds"] = round(time.perf_counter() - t0, 4)
+    summary["sweep_seconds"] = round(exp.sweep.seconds_, 4)
+    summary["output"] = str(out)
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    m = exp.matching
+    print(f"{summary['variants']} variants ({summary['failed']} failed) of {exp.name} in "
+          f"{summary['seconds']:.2f} s{' (from cache)' if summary['from_cache'] else ''}")
+    ratio = ", ".join(f"{r:.1%}" for r in exp.pca.explained_variance_ratio_)
+    print(f"PCA explained variance: {ratio}")
+    print(f"matching distance: sequential {m['sequential']:.4g}, greedy {m['greedy']:.4g}, "
+          f"optimal {m['optimal']:.4g} (using {exp.picks.method})")
+    print(f"wrote {', '.join(p.name for p in paths.values())}"
+          + ("" if images is None else ", thumbs/, contact_sheet.png") + f" to {out}")
+    return 0
+
+
+# -- metrics ----------------------------------------------------------------------
+def run_metrics(args):
+    from metrics.plant import plant_metrics, plant_obb
+
+    t0 = time.perf_counter()
+    ls = _load(args)
+    d = ls.derive(n=args.n, seed=args.seed)
+    sk = d.skeleton()
+    leaf_ids = _ids(args.select, "--select") if args.select else None
+    segments = _ids(args.segments, "--segments") if args.segments else None
+    if leaf_ids is not None:
+        _check_leaves(leaf_ids, d.leaves)
+    m = plant_metrics(sk, leaf_ids, segments)
+    box = plant_obb(sk, leaf_ids, segments)
+    mask_count = m.branch_count
+    record = {"file": args.file, "n": ls.n if args.n is None else args.n, "segments": len(sk),
+              "selected_segments": mask_count, "metrics": m.to_dict(), "obb": box.to_dict()}
+    if args.tight:
+        tight = plant_obb(sk, leaf_ids, segments, tight=True)
+        record["tight_obb"] = {**tight.to_dict(), "reduction_percent":
+                               100.0 * (1 - tight.volume / box.volume) if box.volume > 0 else 0.0}
+        record["tight_metrics"] = plant_metrics(sk, leaf_ids, segments, tight=True).to_dict()
+    record["seconds"] = round(time.perf_counter() - t0, 6)
+    if args.json:
+        print(json.dumps(record))
+        return 0
+    for k, v in m.to_dict().items():
+        print(f"{k:15s} {v:.6g}")
+    if args.tight:
+        print(f"tight box volume {record['tight_obb']['volume']:.6g} "
+              f"({record['tight_obb']['reduction_percent']:.1f} % smaller)")
+    return 0
+
+
+# -- qualify ----------------------------------------------------------------------
+def run_qualify(args):
+    from lsys.regen import Session
+    from metrics.apply import apply_qualifier
+    from metrics.explore import explore
+    from metrics.qualifiers import vocabulary_name
+    from metrics.store import QualifierStore
+
+    t0 = time.perf_counter()
+    ls = LSystem.from_file(args.file)
+    sets = parse_sets(args.set, ls.constants)
+    ls.constants.update(sets)
+    name = args.grammar_name or pathlib.Path(args.file).stem
+    regions = None
+    if args.store:
+        with QualifierStore(args.store) as store:
+            regions = store.regions(name, source=args.source, trim=args.trim)
+    if regions is None or args.qualifier not in regions:
+        vocabulary_name(args.qualifier)  # refuse unknown names before the sweep
+    progress, close = _progress_bar(not args.json or sys.stderr.isatty(), "variants")
+    try:
+        exp = explore(ls, progress=progress, **_sweep_kwargs(args))
+    finally:
+        close()
+    session = Session(ls, n=args.n, seed=args.seed, filename=args.file)
+    selection = _ids(args.select, "--select") if args.select else []
+    _check_leaves(selection, session.tree.leaves)
+    rho = args.rho / 100.0 if args.rho > 1 else args.rho
+    result = apply_qualifier(session, args.qualifier, exp.sweep, selection=selection, rho=rho,
+                             points=exp.points, regions=regions, tries=args.tries)
+    if args.output:
+        session.save(args.output)
+    record = {**result.to_dict(), "selection": selection, "modules": len(session.derivation),
+              "variants": int(exp.sweep.n_variants_), "seconds": round(time.perf_counter() - t0, 4)}
+    if args.output:
+        record["session"] = args.output
+    if args.json:
+        print(json.dumps(record))
+        return 0
+    d0, d1 = result.before.branch_density, result.after.branch_density
+    print(f"{result.qualifier}: variant {result.variant} {json.dumps(result.params)} ({result.source}); "
+          f"{'improved' if result.improved else 'NOT improved'} after {result.tried} tr"
+          f"{'y' if result.tried == 1 else 'ies'}; density {d0:.4g} -> {d1:.4g}")
+    if args.output:
+        print(f"wrote {args.output}")
+    return 0
+
+
+def register(sub):
+    p = sub.add_parser("explore", help="sweep the constants' variants, PCA, 27 picks, thumbnails")
+    add_grammar_options(p)
+    _add_sweep_options(p)
+    p.add_argument("--standardize", action="store_true", help="standardise each metric before the PCA")
+    p.add_argument("--match", choices=["optimal", "greedy", "sequential"], default="optimal",
+                   help="how variants are matched to the 27 interest points (default optimal)")
+    p.add_argument("--no-thumbnails", action="store_true", help="skip rendering thumbnails")
+    p.add_argument("--thumb-size", default="240x240", help="thumbnail size WIDTHxHEIGHT")
+    p.add_argument("--grammar-name", default=None, help="name recorded for the grammar (default: file stem)")
+    p.add_argument("--store", default=None, metavar="SQLITE",
+                   help="also write the default vocabulary's points into this qualifier store")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.set_defaults(func=run_explore)
+
+    p = sub.add_parser("metrics", help="the ten metrics and OBB of a plant or a selection")
+    add_grammar_options(p)
+    p.add_argument("--select", default=None, metavar="LEAF_IDS", help="history leaf ids, e.g. 12,15,20-23")
+    p.add_argument("--segments", default=None, metavar="IDS", help="segment indices, e.g. 0-9")
+    p.add_argument("--tight", action="store_true", help="also report the refined (tighter) OBB")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=run_metrics)
+
+    p = sub.add_parser("qualify", help="regrow a selection (or the plant) toward a qualifier, e.g. dense")
+    add_grammar_options(p)
+    _add_sweep_options(p)
+    p.add_argument("--qualifier", required=True,
+                   help="small/petit, large/grand, sparse/épars, dense, symmetric, asymmetric, realistic, "
+                        "unrealistic, fir-like/sapin, normal, thin/mince, thick/gros, round/rond")
+    p.add_argument("--select", default=None, metavar="LEAF_IDS", help="leaf ids (default: the whole plant)")
+    p.add_argument("--rho", type=float, default=0.5, help="cut threshold in (0, 1] (or 0-100)")
+    p.add_argument("--tries", type=int, default=5, help="candidate combinations to try (default 5)")
+    p.add_argument("--store", default=None, metavar="SQLITE", help="qualifier store with study regions")
+    p.add_argument("--source", default="study:%", help="store rows to use (default 'study:%%')")
+    p.add_argument("--trim", type=float, default=0.07, help="share of extreme points trimmed (default 0.07)")
+    p.add_argument("--grammar-name", default=None, help="grammar name in the store (default: file stem)")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("-o", "--output", default=None, help="save the edited session (JSON) here")
+    p.set_defaults(func=run_qualify)

@@ -1,0 +1,116 @@
+"""Off-screen thumbnails of variants (the 27 picks) and one contact-sheet PNG.
+
+Each thumbnail is rendered (tubes, plus every segment as a one-pixel line
+so branches thinner than a pixel still show) with the camera framed on that
+plant's own bounds (:func:`app.render.frame_camera`), so every plant fills its tile; the
+tile's caption gives the pick id and the plant's height so sizes stay
+comparable.  One :class:`pyvista.Plotter` is reused for all renders.
+
+The contact sheet lays the 27 tiles out in three rows of nine — row k holds
+ids 9k+1..9k+9, i.e. one PC1 slab per row (ids put PC1 slowest) — with each
+id written on its tile.
+
+>>> from metrics import explore
+>>> import tempfile, pathlib
+>>> exp = explore("grammars/honda_sympodial.lsys", n=3, n_jobs=1, cache=False)
+>>> out = pathlib.Path(tempfile.mkdtemp())
+>>> images = render_picks(exp, out, size=(64, 64))
+>>> images[0], contact_sheet([out / p for p in images], range(1, 28), out / "sheet.png").exists()
+('thumbs/pick_01.png', True)
+"""
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from app.render import BARK, _headless_setup, frame_camera, plant_colors
+
+THUMB_DIR = "thumbs"
+
+
+def _segment_lines(sk):
+    """Segments as 1-pixel lines, so branches thinner than a pixel still show."""
+    import pyvista as pv
+
+    s = len(sk)
+    points = np.concatenate([sk.start, sk.end])
+    lines = np.column_stack([np.full(s, 2), np.arange(s), np.arange(s) + s]).ravel()
+    return pv.PolyData(points, lines=lines)
+
+
+def _render_many(skeletons, paths, size=(256, 256), view="front", captions=None, zoom=1.15):
+    """Render skeletons to PNG files with one reused off-screen plotter."""
+    _headless_setup()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    try:
+        for k, (sk, path) in enumerate(zip(skeletons, paths)):
+            plotter.clear_actors()
+            plotter.set_background("white")
+            mesh = sk.to_polydata(sides=6)
+            if mesh.n_cells:
+                mesh.cell_data["rgb"] = plant_colors(mesh)
+                plotter.add_mesh(mesh, scalars="rgb", rgb=True, smooth_shading=False)
+                plotter.add_mesh(_segment_lines(sk), color=BARK, line_width=1.0)
+                frame_camera(plotter, mesh.bounds, view)
+                plotter.camera.zoom(zoom)
+            if captions is not None:
+                plotter.add_text(captions[k], position="lower_left", font_size=8, color="black")
+            plotter.screenshot(str(path))
+    finally:
+        plotter.close()
+    return paths
+
+
+def render_variants(sweep, variants, paths, size=(256, 256), view="front", captions=None):
+    """Derive variants ``variants`` of a fitted sweep and render each to ``paths``."""
+    skeletons = (sweep.derive(int(v)).skeleton() for v in variants)
+    return _render_many(skeletons, list(paths), size, view, captions)
+
+
+def render_picks(exploration, directory, size=(256, 256), view="front") -> list:
+    """Render the 27 picks to ``directory/thumbs/pick_XX.png``; returns the paths relative
+    to ``directory`` (what ``picks.json`` records)."""
+    directory = pathlib.Path(directory)
+    (directory / THUMB_DIR).mkdir(parents=True, exist_ok=True)
+    rel = [f"{THUMB_DIR}/pick_{i:02d}.png" for i in range(1, 28)]
+    sweep = exploration.sweep
+    skeletons = [sweep.derive(int(v)).skeleton() for v in exploration.picks.variant]
+    captions = []
+    for i, sk in enumerate(skeletons, start=1):
+        lo, hi = sk.bounds() if len(sk) else (np.zeros(3), np.zeros(3))
+        captions.append(f"h {hi[2] - lo[2]:.3g}")
+    _render_many(skeletons, [directory / p for p in rel], size, view, captions)
+    return rel
+
+
+def contact_sheet(images, labels, path, columns=9, title=None, pad=6):
+    """Tile ``images`` (paths) in a grid with ``labels`` written on them; write a PNG to ``path``."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    images = [Image.open(p).convert("RGB") for p in images]
+    labels = [str(x) for x in labels]
+    if not images:
+        raise ValueError("no image to put on the contact sheet")
+    w, h = images[0].size
+    rows = -(-len(images) // columns)
+    head = 28 if title else 0
+    sheet = Image.new("RGB", (columns * (w + pad) + pad, head + rows * (h + pad) + pad), "white")
+    draw = ImageDraw.Draw(sheet)
+    font = ImageFont.load_default(size=max(12, h // 10))
+    if title:
+        draw.text((pad, 4), title, fill="black", font=ImageFont.load_default(size=18))
+    for k, (img, label) in enumerate(zip(images, labels)):
+        x = pad + (k % columns) * (w + pad)
+        y = head + pad + (k // columns) * (h + pad)
+        sheet.paste(img.resize((w, h)), (x, y))
+        draw.rectangle([x, y, x + w - 1, y + h - 1], outline=(190, 190, 190))
+        box = draw.textbbox((x + 4, y + 2), label, font=font)
+        draw.rectangle(box, fill="white")
+        draw.text((x + 4, y + 2), label, fill=(180, 0, 0), font=font)
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    sheet.save(path)
+    return path
