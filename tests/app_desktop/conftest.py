@@ -1,0 +1,95 @@
+"""Fixtures for the desktop window tests: a display (Xvfb if needed), a window, helpers.
+
+GUI tests are skipped only when no display can be had: no ``DISPLAY`` and no
+``Xvfb`` to start one.  Screenshots go to ``tests/artifacts/`` (git-ignored).
+"""
+from __future__ import annotations
+
+import atexit
+import os
+import pathlib
+import shutil
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+ARTIFACTS = ROOT / "tests" / "artifacts"
+HONDA = ROOT / "grammars" / "honda_sympodial.lsys"
+
+
+def _start_xvfb():
+    """Start a private Xvfb and point DISPLAY at it; returns False if impossible."""
+    xvfb = shutil.which("Xvfb")
+    if not xvfb:
+        return False
+    read, write = os.pipe()
+    proc = subprocess.Popen([xvfb, "-displayfd", str(write), "-screen", "0", "1400x900x24", "-nolisten", "tcp"],
+                            pass_fds=(write,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write)
+    with os.fdopen(read) as f:
+        number = f.readline().strip()
+    if not number:
+        proc.kill()
+        return False
+    os.environ["DISPLAY"] = f":{number}"
+    atexit.register(proc.terminate)
+    return True
+
+
+HAVE_DISPLAY = bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) or _start_xvfb()
+os.environ.setdefault("QT_QPA_PLATFORM", "xcb" if os.environ.get("DISPLAY") else "offscreen")
+
+
+def pytest_collection_modifyitems(config, items):
+    if HAVE_DISPLAY:
+        return
+    skip = pytest.mark.skip(reason="no display and no Xvfb: GUI tests need one")
+    for item in items:
+        if "gui" in item.keywords and str(ROOT / "tests" / "app_desktop") in str(item.fspath):
+            item.add_marker(skip)
+
+
+@pytest.fixture(scope="session")
+def artifacts():
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    return ARTIFACTS
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path):
+    """``make_window(source=HONDA, n=6)`` -> a shown MainWindow with its plant drawn."""
+    from PySide6.QtCore import QSettings
+
+    from app.desktop.launch import make_application
+    from app.desktop.window import MainWindow
+    from app.model import Explorer
+
+    make_application()
+    windows = []
+
+    def make(source=HONDA, n=6, seed=0):
+        settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
+        window = MainWindow(Explorer(str(source), n=n, seed=seed), settings=settings, ask=False)
+        qtbot.addWidget(window)
+        window.resize(1200, 800)
+        window.show()
+        qtbot.waitExposed(window)
+        window.activateWindow()
+        qtbot.waitUntil(window.isActiveWindow, timeout=3000)
+        settle(qtbot, window)
+        windows.append(window)
+        return window
+
+    yield make
+    for window in windows:
+        window.dirty = False
+        window.close()
+
+
+def settle(qtbot, window, timeout=20.0):
+    """Wait until every model job is delivered and the view has painted."""
+    assert window.controller.wait_idle(timeout), "a model job did not finish in time"
+    qtbot.waitUntil(lambda: not window.variants.busy(), timeout=int(timeout * 1000))
+    window.view.redraw(now=True)
+    qtbot.wait(10)
