@@ -24,8 +24,8 @@ mesocarp; ``L = 3``: exocarp, mesocarp, locule).  Any branch cell with a
 boundary face is exocarp, so the skin also covers the poles.  Around the axis,
 the fruit is cut into ``carpels`` equal angular sectors; the fraction
 ``septum`` of each sector centred on its borders turns endocarp and locule
-cells into septum.  Then ``seeds`` locule cells glued to the columella (no two
-sharing a vertex) are picked at random; each is cut across its depth into gel,
+cells into septum.  Then ``seeds`` locule cells glued to the columella but not to the
+exocarp (no two sharing a vertex) are picked at random; each is cut across its depth into gel,
 seed and gel (the seed spans :data:`SEED_SPAN` of the cell's depth), and the
 seeds are rounded by ``seed_smoothing`` surface subdivisions of those cells
 only (their neighbours' faces follow).  The thesis relabels whole cells as
@@ -216,7 +216,7 @@ SEED_SPAN = (0.2, 0.45)
 
 
 def _pick_seeds(gm, count, rng):
-    """Up to ``count`` random locule cells glued to the columella that share no vertex.
+    """Up to ``count`` random locule cells glued to the columella, not to the exocarp, sharing no vertex.
 
     Returns ``(volumes, inner_darts)``: each cell and a dart of its face on the columella.
     """
@@ -224,7 +224,10 @@ def _pick_seeds(gm, count, rng):
     alpha = gm.alpha
     vol = gm.dart_volume
     sewn = np.flatnonzero(alpha[3] != np.arange(gm.n_darts))
-    touch = sewn[(tissue[vol[sewn]] == CODES["locule"]) & (tissue[vol[alpha[3][sewn]]] == CODES["columella"])]
+    here, there = tissue[vol[sewn]], tissue[vol[alpha[3][sewn]]]
+    touch = sewn[(here == CODES["locule"]) & (there == CODES["columella"])]
+    near_skin = np.unique(vol[sewn[there == CODES["exocarp"]]])
+    touch = touch[~np.isin(vol[touch], near_skin)]
     cells, first = np.unique(vol[touch], return_index=True)
     if not count or cells.size == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
