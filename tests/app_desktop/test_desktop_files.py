@@ -1,0 +1,95 @@
+"""File menu: grammars, sessions, exports, screenshots, recent files, unsaved changes."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import pyvista as pv
+
+from app.desktop.thumbnails import pixel_variance
+from conftest import ROOT, settle
+
+pytestmark = pytest.mark.gui
+
+
+def test_session_round_trip(make_window, qtbot, tmp_path):
+    w = make_window(ROOT / "grammars" / "stochastic_plant.lsys", n=4)
+    ex = w.controller.explorer
+    snap = w.controller.snapshot
+    before = ex.derivation.to_string()
+    order = np.asarray(snap.skeleton.order)
+    w.controller.select(snap.segment_leaf[np.flatnonzero(order == order.max())[:6]])
+    w.controller.regrow()
+    settle(qtbot, w)
+    grown = ex.derivation.to_string()
+    assert grown != before
+    path = w.files.save_session(tmp_path / "s.json")
+    assert path.is_file() and not w.dirty
+    w.controller.undo()
+    settle(qtbot, w)
+    assert ex.derivation.to_string() != grown
+    w.files.load_session(path)
+    settle(qtbot, w)
+    assert ex.derivation.to_string() == grown
+    assert w.editor.text() == ex.text
+    assert str(path.resolve()) in w.files.recent()
+
+
+def test_a_corrupt_session_is_refused(make_window, qtbot, tmp_path):
+    w = make_window()
+    version = w.drawn_version
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "ramure-session", "version": 1, "grammar": "n: 1\\nw: F"')
+    w.files.load_session(bad)
+    settle(qtbot, w)
+    assert "JSON" in w.last_message and w.drawn_version == version
+
+
+def test_open_and_save_grammar(make_window, qtbot, tmp_path):
+    w = make_window()
+    w.files.open_grammar(ROOT / "grammars" / "fruit_tree.lsys")
+    settle(qtbot, w)
+    assert "Fruit" in w.editor.text() and w.controller.explorer.path.name == "fruit_tree.lsys"
+    assert "fs" in w.constants_panel.rows  # the panel was rebuilt from the new #defines
+    kinds = np.asarray(w.view.mesh.cell_data["kind"])
+    assert (kinds == 2).any()  # fruit are drawn
+    w.editor.edit.setPlainText(w.editor.text().replace("#define a 40", "#define a 30"))
+    qtbot.waitUntil(lambda: w.controller.explorer.constants.get("a") == 30, timeout=5000)
+    assert w.dirty
+    out = w.files.save_grammar(tmp_path / "mine.lsys")
+    assert "#define a 30" in out.read_text() and not w.dirty
+    w.files.open_grammar(tmp_path / "missing.lsys")
+    assert "no such" in w.last_message
+
+
+def test_exports_and_screenshot(make_window, qtbot, tmp_path):
+    w = make_window()
+    cells = w.controller.snapshot.mesh.n_cells
+    vtp = w.files.export_mesh(tmp_path / "plant.vtp")
+    assert pv.read(vtp).n_cells == cells
+    obj = w.files.export_mesh(tmp_path / "plant.obj")
+    assert obj.read_text().count("\nf ") > 0
+    gltf = w.files.export_mesh(tmp_path / "plant.gltf")
+    assert gltf.stat().st_size > 1000
+    assert w.files.export_mesh(tmp_path / "plant.xyz") is None and "cannot export" in w.last_message
+    png = w.files.screenshot(tmp_path / "view.png")
+    from PySide6.QtGui import QImage
+
+    assert pixel_variance(QImage(str(png))) > 20
+
+
+def test_unsaved_changes_prompt(make_window, qtbot, monkeypatch):
+    from PySide6.QtWidgets import QMessageBox
+
+    w = make_window()
+    w.ask = True
+    w.constants_panel.set_constant("a2", 30.0)
+    settle(qtbot, w)
+    assert w.dirty and w.windowTitle().startswith("honda_sympodial.lsys *")
+    asked = []
+    monkeypatch.setattr(QMessageBox, "question",
+                        lambda *a, **k: asked.append(a) or QMessageBox.StandardButton.Cancel)
+    assert not w.confirm_discard() and asked
+    assert w.files.open_grammar(ROOT / "grammars" / "algae.lsys") is None  # cancelled: nothing opened
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
+    assert w.confirm_discard()
+    w.ask = False
