@@ -258,10 +258,10 @@ def build_shape(**params):
     bgrid = branch.reshape(n, ph)
     # glue: trunk E to next O; branch O to trunk side; branches around and along the axis
     face = gm.prism_face
+    gm.sew3(face(trunk[:-1], ph, "E"), face(trunk[1:], ph, "O"))
     trunk_sides = np.repeat(trunk, ph) + 4 * ph + 8 * np.tile(k, n)     # dart 0 of C(k+1)
-    a = [face(trunk[:-1], ph, "E"), trunk_sides, face(bgrid, 4, "C2"), face(bgrid[:-1], 4, "C3")]
-    b = [face(trunk[1:], ph, "O"), face(branch, 4, "O"),
-         face(bgrid[:, k1], 4, "C4", 1), face(bgrid[1:], 4, "C1", 1)]
+    a = [trunk_sides, face(bgrid, 4, "C2"), face(bgrid[:-1], 4, "C3")]  # all quads: one walk
+    b = [face(branch, 4, "O"), face(bgrid[:, k1], 4, "C4", 1), face(bgrid[1:], 4, "C1", 1)]
     gm.sew3(np.concatenate([np.ravel(x) for x in a]), np.concatenate([np.ravel(x) for x in b]))
     gm.embed()
     return gm
@@ -329,5 +329,4 @@ def _place(gm, stem, anchor, size, origin, frame):
         f = np.asarray(frame, float).reshape(3, 3)
         rot = np.stack([f[1], f[2], f[0]])   # local x -> L, y -> U, z (axis) -> H
     off = np.zeros(3) if origin is None else np.asarray(origin, float).reshape(3)
-    gm.transform(offset=-ref)
-    gm.transform(rotation=rot, scale=scale, offset=off)
+    gm.transform(rotation=rot, scale=scale, offset=off - scale * ref @ rot)

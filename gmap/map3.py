@@ -494,11 +494,15 @@ class GMap3(Operations):
         """
         rot = np.eye(3) if rotation is None else np.asarray(rotation, float)
         off = np.zeros(3) if offset is None else np.asarray(offset, float)
+
+        def move(p):    # einsum: BLAS matmul is slow on tall (n, 3) arrays
+            return scale * np.einsum("ni,ij->nj", p, rot) + off
+
         pts = self._darts["point"]
-        pts[:] = scale * pts @ rot + off
+        pts[:] = move(pts)
         vols = self._volumes
-        vols["origin"][:] = scale * vols["origin"] @ rot + off
-        vols["frame"][:] = vols["frame"] @ rot
+        vols["origin"][:] = move(vols["origin"])
+        vols["frame"][:] = np.einsum("vki,ij->vkj", vols["frame"], rot)
         vols["size"][:] *= scale
 
     # ------------------------------------------------------------------ boundary

@@ -159,7 +159,7 @@ class Operations:
         if np.any(alpha[3][da] != da) or np.any(alpha[3][db] != db):
             raise GMapError("sew3 needs alpha3-free faces; a face is already sewn")
         both = np.concatenate([da, db])
-        if len(np.unique(both)) != len(both):
+        if np.bincount(both, minlength=self.n_darts).max(initial=0) > 1:
             raise GMapError("sew3 would sew a face to itself or use a face twice")
         alpha[3][da] = db
         alpha[3][db] = da
