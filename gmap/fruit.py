@@ -277,7 +277,7 @@ def build_fruit(preset="round_tomato", *, seed=0, volume_levels=0, surface_level
     surface subdivisions; placement.  Placement puts the ``anchor``
     (``"center"``: bounding-box centre, ``"stem"``: centre of the stem-end
     face of the axis) at ``origin``, scales uniformly so that the largest
-    bounding-box extent is ``size`` (when given) and turns the fruit so its
+    extent of the fruit's own bounding box (before turning) is ``size`` (when given) and turns the fruit so its
     axis (blossom end to stem end, local +z) follows ``frame[0]`` (rows H,
     L, U; local x goes to L).  Provenance is stored in ``gm.meta``.
 
