@@ -21,59 +21,41 @@ def _best(fn, repeats=5):
     return best, result
 
 
-def _record(seconds, target, gm, valid, **extra):
+def _bench_build(make, repeats, target, reference=None):
+    """Best time of ``make()`` plus the validity check, with the map's figures."""
+    def run():
+        gm = make()
+        return gm, gm.is_valid()
+
+    seconds, (gm, valid) = _best(run, repeats)
     c = gm.counts()
-    return {"seconds": round(seconds, 6), "target_seconds": target, "ok": bool(valid and seconds <= target),
-            "darts": c["darts"], "vertices": c["vertices"], "volumes": c["volumes"], "valid": bool(valid),
-            **extra}
+    record = {"seconds": round(seconds, 6), "target_seconds": target, "ok": bool(valid and seconds <= target),
+              "darts": c["darts"], "vertices": c["vertices"], "volumes": c["volumes"], "valid": bool(valid)}
+    if reference is not None:
+        record["reference_seconds"] = reference
+    return record
 
 
 def bench_round_tomato():
     """Trunk order 10, precision 10, 100 branches: 6,000 darts (thesis: 422 ms)."""
-    def run():
-        gm = build_fruit("round_tomato")
-        return gm, gm.is_valid()
-
-    seconds, (gm, valid) = _best(run, 20)
-    return _record(seconds, 0.040, gm, valid, reference_seconds=0.422)
+    return _bench_build(lambda: build_fruit("round_tomato"), 20, 0.040, 0.422)
 
 
 def bench_round_tomato_surface2():
     """Round tomato, two surface subdivisions: 96,000 darts (thesis: 1,995 ms)."""
-    def run():
-        gm = subdivide.surface(build_fruit("round_tomato"), 2)
-        return gm, gm.is_valid()
-
-    seconds, (gm, valid) = _best(run, 7)
-    return _record(seconds, 0.200, gm, valid, reference_seconds=1.995)
+    return _bench_build(lambda: subdivide.surface(build_fruit("round_tomato"), 2), 7, 0.200, 1.995)
 
 
 def bench_round_tomato_volume2():
     """Round tomato, two volume subdivisions: 384,000 darts (thesis: 3,689 ms)."""
-    def run():
-        gm = subdivide.volume(build_fruit("round_tomato"), 2)
-        return gm, gm.is_valid()
-
-    seconds, (gm, valid) = _best(run, 5)
-    return _record(seconds, 0.370, gm, valid, reference_seconds=3.689)
+    return _bench_build(lambda: subdivide.volume(build_fruit("round_tomato"), 2), 5, 0.370, 3.689)
 
 
 def bench_million_darts():
     """A fruit of 1,020,000 darts (precision 170, 100 branches per ring) built and validated."""
-    def run():
-        gm = build_fruit("round_tomato", precision=170, ph=100, nbvolangle=5)
-        return gm, gm.is_valid()
-
-    seconds, (gm, valid) = _best(run, 3)
-    return {"seconds": round(seconds, 6), "target_seconds": 2.0, "ok": bool(valid and seconds <= 2.0),
-            "darts": gm.n_darts, "volumes": gm.n_volumes, "valid": bool(valid)}
+    return _bench_build(lambda: build_fruit("round_tomato", precision=170, ph=100), 3, 2.0)
 
 
 def bench_tomato_with_tissues():
     """Round tomato, two volume subdivisions, tissues and 120 rounded seeds (no thesis figure)."""
-    def run():
-        gm = build_fruit("round_tomato", volume_levels=2)
-        return gm, gm.is_valid()
-
-    seconds, (gm, valid) = _best(run, 3)
-    return _record(seconds, 2.0, gm, valid)
+    return _bench_build(lambda: build_fruit("round_tomato", volume_levels=2), 3, 3.0)

@@ -24,8 +24,8 @@ VTK_HEXAHEDRON, VTK_WEDGE, VTK_POLYHEDRON = 12, 13, 42
 _SKIP = {"frame", "origin", "size", "parent"}
 
 
-def face_cycles(gm):
-    """Every per-volume face ``<a0,a1>`` as a vertex cycle.
+def face_cycles(gm, darts=None):
+    """Every per-volume face ``<a0,a1>`` (or those holding ``darts``) as a vertex cycle.
 
     Returns ``(first, cycles, degree, volume, corner_darts)``: the face's
     smallest dart, the vertex ids padded with -1 (n_faces, max_degree), the
@@ -34,7 +34,9 @@ def face_cycles(gm):
     """
     vid, _ = gm.cells(0)
     side, _ = gm.orbit_ids("01")
-    _, first = np.unique(side, return_index=True)
+    darts = np.arange(gm.n_darts) if darts is None else np.asarray(darts, np.int64)
+    _, first = np.unique(side[darts], return_index=True)
+    first = darts[first]
     walk, length = gm.face_walk(first)
     corner_darts = walk[:, 0::2]
     cycles = np.where(corner_darts >= 0, vid[np.maximum(corner_darts, 0)], -1)
@@ -51,6 +53,16 @@ def _newell(pos, cycles, degree):
     normal = np.where(ok[:, :, None], np.cross(p, q), 0.0).sum(axis=1)
     centre = np.where(ok[:, :, None], p, 0.0).sum(axis=1) / degree[:, None]
     return normal, centre
+
+
+def _outward(pos, cycles, degree, cell_centre):
+    """Reverse the cycles whose Newell normal points towards ``cell_centre`` (first vertex kept)."""
+    normal, fcentre = _newell(pos, cycles, degree)
+    inward = np.sum(normal * (fcentre - cell_centre), axis=1) < 0
+    idx = np.arange(cycles.shape[1])[None, :]
+    rev = np.where(idx == 0, 0, degree[:, None] - idx)
+    rev = np.where(idx < degree[:, None], rev, idx)
+    return np.where(inward[:, None], np.take_along_axis(cycles, rev, axis=1), cycles)
 
 
 def _cell_records(gm, pos):
@@ -73,14 +85,7 @@ def _cell_records(gm, pos):
     # faces grouped by volume (stable: faces of a volume in increasing first dart)
     order = np.argsort(fvol, kind="stable")
     fvol_s, deg_s, cyc_s, cd_s = fvol[order], degree[order], cycles[order], cdarts[order]
-    centroid = gm.volume_centroids()
-    normal, fcentre = _newell(pos, cyc_s, deg_s)
-    inward = np.sum(normal * (fcentre - centroid[fvol_s]), axis=1) < 0
-    # reverse inward faces: keep the first vertex, reverse the rest
-    idx = np.arange(cyc_s.shape[1])[None, :]
-    rev = np.where(idx == 0, 0, deg_s[:, None] - idx)
-    rev = np.where(idx < deg_s[:, None], rev, idx)
-    cyc_o = np.where(inward[:, None], np.take_along_axis(cyc_s, rev, axis=1), cyc_s)
+    cyc_o = _outward(pos, cyc_s, deg_s, gm.volume_centroids()[fvol_s])
 
     length = np.where(ctype == VTK_HEXAHEDRON, 9, np.where(ctype == VTK_WEDGE, 7, 0)).astype(np.int64)
     poly_len = 2 + np.bincount(fvol_s, deg_s + 1, minlength=nvol).astype(np.int64)
@@ -171,24 +176,10 @@ def boundary_polydata(gm):
     >>> surf.n_cells, surf.is_manifold
     (122, True)
     """
-    vid, pos = gm.vertex_positions()
-    alpha = gm.alpha
-    free = np.flatnonzero(alpha[3] == np.arange(gm.n_darts))
-    side, _ = gm.orbit_ids("01")
-    _, first = np.unique(side[free], return_index=True)
-    first = free[first]
-    walk, length = gm.face_walk(first)
-    corner_darts = walk[:, 0::2]
-    degree = length // 2
-    cycles = np.where(corner_darts >= 0, vid[np.maximum(corner_darts, 0)], -1)
-    vol = gm.dart_volume[first].astype(np.int64)
-    centroid = gm.volume_centroids()
-    normal, fcentre = _newell(pos, cycles, degree)
-    inward = np.sum(normal * (fcentre - centroid[vol]), axis=1) < 0
-    idx = np.arange(cycles.shape[1])[None, :]
-    rev = np.where(idx == 0, 0, degree[:, None] - idx)
-    rev = np.where(idx < degree[:, None], rev, idx)
-    cycles = np.where(inward[:, None], np.take_along_axis(cycles, rev, axis=1), cycles)
+    _, pos = gm.vertex_positions()
+    free = np.flatnonzero(gm.alpha[3] == np.arange(gm.n_darts))
+    first, cycles, degree, vol, _ = face_cycles(gm, free)
+    cycles = _outward(pos, cycles, degree, gm.volume_centroids()[vol])
     used = np.unique(cycles[cycles >= 0])
     remap = np.full(len(pos), -1, np.int64)
     remap[used] = np.arange(len(used))
