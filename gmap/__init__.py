@@ -14,5 +14,7 @@ built by :func:`gmap.fruit.build_fruit`; subdivision lives in
 from gmap.errors import GMapError
 from gmap.map3 import GMap3, sublabel_name
 from gmap.prism import face_label_code, face_label_name
+from gmap import cut, fruit, plant, subdivide, tissue  # noqa: E402  (gmap.pyvista: import it yourself)
 
-__all__ = ["GMap3", "GMapError", "face_label_code", "face_label_name", "sublabel_name"]
+__all__ = ["GMap3", "GMapError", "cut", "face_label_code", "face_label_name", "fruit", "plant",
+           "subdivide", "sublabel_name", "tissue"]

@@ -194,8 +194,11 @@ def _volume_mask(gm, volumes):
         if volumes.shape != (gm.n_volumes,):
             raise ValueRefused(f"volume mask must have {gm.n_volumes} entries, got {volumes.shape}")
         return volumes.copy()
+    volumes = volumes.astype(np.int64)
+    if volumes.size and (volumes.min() < 0 or volumes.max() >= gm.n_volumes):
+        raise ValueRefused(f"volume ids must be in 0..{gm.n_volumes - 1}")
     mask = np.zeros(gm.n_volumes, bool)
-    mask[volumes.astype(np.int64)] = True
+    mask[volumes] = True
     return mask
 
 
@@ -216,11 +219,11 @@ def _surface_once(gm, mask):
     n = gm.n_darts
     alpha = gm.alpha.astype(np.int64)
     vid, eid, side, _, new_pos, edge_pt, face_pt = _old_geometry(gm, mask)
-    fid, nf = gm.cells(2)
     if mask is None:
         split_face = np.ones(n, bool)
         split_edge = np.ones(n, bool)
     else:
+        fid, nf = gm.cells(2)
         face_hit = np.zeros(nf, bool)
         face_hit[fid[mask[gm.dart_volume]]] = True
         split_face = face_hit[fid]
