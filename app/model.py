@@ -201,6 +201,32 @@ class Explorer:
             raise ValueRefused("select the branches to prune first")
         return self._after_edit(self.session.prune(self.selection, rho=self.rho))
 
+    def fruit_ids(self):
+        """History-leaf ids of the plant's ``Fruit`` organs."""
+        organs = self.skeleton.organs
+        return organs.leaf_id[organs.kind == "Fruit"].tolist()
+
+    def regrow_fruit(self, seed=None, **settings):
+        """New seed / preset / size for the selected fruit (other fruit stay as they are)."""
+        fruit = [leaf for leaf in self.selection if leaf in set(self.fruit_ids())]
+        if not fruit:
+            raise ValueRefused("select one or more fruit first")
+        if "preset" in settings or len(settings) > int("size" in settings):
+            from gmap.fruit import resolve_params
+
+            params = {k: v for k, v in settings.items() if k not in ("preset", "size")}
+            resolve_params(settings.get("preset", "round_tomato"), **params)  # refuse bad values now
+        return self._after_edit(self.session.regrow_fruit(fruit, seed=seed, **settings))
+
+    def fruit_volumes(self, preset="round_tomato", seed=0, **kwargs):
+        """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""
+        def build():
+            from gmap.plant import fruits_from_skeleton
+
+            return fruits_from_skeleton(self.skeleton, preset=preset, seed=seed,
+                                        overrides=self.session.fruit_overrides(), **kwargs)
+        return self._cached(("fruit", preset, seed, tuple(sorted(kwargs.items()))), build)
+
     def _after_edit(self, result):
         self.last_result = result
         self.selection = []

@@ -138,8 +138,8 @@ def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, p
 class Session:
     """A plant being edited: derivation + edit log with undo/redo, saved as JSON.
 
-    Every edit is a dict in :attr:`edits` (``op`` = ``regrow``, ``prune`` or
-    ``constants``) holding everything needed to replay it, including the seed
+    Every edit is a dict in :attr:`edits` (``op`` = ``regrow``, ``prune``,
+    ``constants`` or ``fruit``) holding everything needed to replay it, including the seed
     actually used, so :meth:`load` rebuilds the identical plant.
     """
 
@@ -203,6 +203,41 @@ class Session:
                 "ascend": ascend_levels}
         return self._apply(edit)
 
+    def regrow_fruit(self, leaf_ids, seed=None, **settings):
+        """Give selected ``Fruit`` organs new volumetric-fruit settings (an undoable edit).
+
+        ``settings`` are recorded as given (``preset``, ``size`` and fruit
+        parameters, checked by the volumetric layer that applies them, see
+        :func:`gmap.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
+        :meth:`fruit_overrides` gives what applies to the current plant.
+        """
+        leaves = [int(x) for x in leaf_ids]
+        tree = self.tree
+        organs = {self.lsystem.symbols.index(o) for o in self.lsystem.grammar.organs
+                  if o in self.lsystem.symbols}
+        in_string = set(tree.leaves.tolist())
+        bad = [x for x in leaves if x not in in_string or int(tree.symbol[x]) not in organs]
+        if not leaves or bad:
+            raise ValueRefused(f"select fruit to regrow; {bad[0] if bad else 'nothing'} is not a "
+                               "fruit of the current plant")
+        size = settings.get("size")
+        if size is not None and not (np.isfinite(float(size)) and float(size) > 0):
+            raise ValueRefused(f"fruit size must be a positive number, not {size}")
+        edit = {"op": "fruit", "leaves": leaves,
+                "settings": {**settings, "seed": self._next_seed() if seed is None else int(seed)}}
+        return self._apply(edit)
+
+    def fruit_overrides(self):
+        """``{leaf_id: settings}`` from the fruit edits, for fruit still in the plant."""
+        present = set(self.tree.leaves.tolist())
+        out = {}
+        for edit in self.edits:
+            if edit["op"] == "fruit":
+                for leaf in edit["leaves"]:
+                    if leaf in present:
+                        out.setdefault(leaf, {}).update(edit["settings"])
+        return out
+
     def set_constants(self, values):
         """Change global constants: the whole plant is re-derived (an undoable edit)."""
         unknown = set(values) - set(self.lsystem.constants)
@@ -216,7 +251,11 @@ class Session:
 
     def _apply(self, edit):
         t0 = time.perf_counter()
-        if edit["op"] == "constants":
+        if edit["op"] == "fruit":  # data only: the volumetric layer reads fruit_overrides()
+            undo = ("none",)
+            result = RegenResult("fruit", np.array(edit["leaves"], np.int64), *(np.zeros(0, np.int64),) * 2,
+                                 0, 0, None, time.perf_counter() - t0)
+        elif edit["op"] == "constants":
             undo = ("derivation", self.derivation, dict(self.constants))
             self.constants.update(edit["values"])
             self.derivation = self.lsystem.derive(n=self.n, seed=self.seed, constants=self.constants)
@@ -270,7 +309,7 @@ class Session:
             current = ("derivation", self.derivation, dict(self.constants))
             self.derivation, self.constants = how[1], how[2]
             how = current
-        else:
+        elif how[0] == "change":
             how[1].apply(self.tree, forward=forward)
         if forward:
             self.edits.append(edit)
@@ -355,8 +394,12 @@ def _check_params(params, lsystem):
 
 
 def _check_edit(edit, i):
-    if not isinstance(edit, dict) or edit.get("op") not in ("regrow", "prune", "constants"):
+    if not isinstance(edit, dict) or edit.get("op") not in ("regrow", "prune", "constants", "fruit"):
         raise RamureError(f"edit {i + 1} has no valid 'op'")
+    if edit["op"] == "fruit":
+        if not isinstance(edit.get("leaves"), list) or not isinstance(edit.get("settings"), dict):
+            raise RamureError(f"edit {i + 1} (fruit) needs 'leaves' and 'settings'")
+        return edit
     if edit["op"] == "constants":
         if not isinstance(edit.get("values"), dict):
             raise RamureError(f"edit {i + 1} (constants) has no 'values'")

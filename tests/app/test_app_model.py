@@ -1,0 +1,135 @@
+"""The shared explorer state (app.model.Explorer), without any GUI."""
+import json
+
+import numpy as np
+import pytest
+
+from app.model import Explorer, leaves_in_rectangle
+from lsys import RamureError
+from lsys.regen import Session
+
+HONDA = "grammars/honda_sympodial.lsys"
+
+
+@pytest.fixture
+def ex():
+    return Explorer(HONDA, n=6)
+
+
+def test_selection_modes(ex):
+    f = ex.session.leaves_with_symbol("F")[:4].tolist()
+    ex.select(f[:2])
+    ex.select(f[2:3], mode="add")
+    assert ex.selection == sorted(f[:3])
+    ex.select(f[1:2], mode="remove")
+    assert ex.selection == sorted([f[0], f[2]])
+    ex.select(f[:2], mode="toggle")
+    assert ex.selection == sorted([f[1], f[2]])
+    ex.clear_selection()
+    assert ex.selection == []
+    with pytest.raises(RamureError, match="not a leaf"):
+        ex.select([0])
+
+
+def test_rectangle_picks_segments_inside():
+    xy = np.array([[0, 0], [5, 5], [10, 10], [5, 5]])
+    assert leaves_in_rectangle([7, 8, 9, 8], xy, (11, 11, 4, 4)) == [8, 9]
+
+
+def test_cell_maps_to_leaf(ex):
+    mesh = ex.mesh
+    cell = int(np.flatnonzero(mesh.cell_data["segment"] == 5)[0])
+    assert ex.leaf_of_cell(cell) == int(ex.skeleton.leaf_id[5])
+    with pytest.raises(RamureError):
+        ex.leaf_of_cell(10**9)
+
+
+def test_bad_grammar_keeps_plant(ex):
+    before = ex.derivation.to_string()
+    err = ex.set_text("n: 2\nw: A(\n")
+    assert err is not None and err.line == 2
+    assert ex.error is err and ex.derivation.to_string() == before
+    assert ex.set_text(ex.text.replace("60", "45")) is None and ex.error is None
+
+
+def test_bad_values_refused_and_nothing_changes(ex):
+    before, version = ex.derivation.to_string(), ex.version
+    for call in (lambda: ex.set_constant("r1", "abc"), lambda: ex.set_constant("nope", 1),
+                 lambda: ex.set_constant("r1", float("nan")), lambda: ex.set_rho(0),
+                 lambda: ex.set_rho(250), lambda: ex.set_derivation(n=-1),
+                 lambda: ex.prune(), lambda: ex.regrow_fruit()):
+        with pytest.raises(RamureError):
+            call()
+    assert ex.derivation.to_string() == before and ex.version == version
+
+
+def test_regrow_undo_redo_and_version(ex):
+    before = ex.derivation.to_string()
+    ex.set_rho(80)
+    assert ex.rho == 0.8
+    ex.select(ex.session.leaves_with_symbol("F")[-6:])
+    v = ex.version
+    result = ex.regrow(constants={"a2": 20})
+    assert ex.version == v + 1 and result.roots.size and ex.selection == []
+    assert "roots" in ex.status()
+    assert ex.undo() is not None and ex.derivation.to_string() == before
+    assert ex.redo() is not None and ex.derivation.to_string() != before
+
+
+def test_kinship_needs_one_leaf(ex):
+    assert ex.kinship_hues() is None
+    leaf = int(ex.skeleton.leaf_id[3])
+    ex.select([leaf])
+    rgb = ex.kinship_hues()
+    assert rgb.shape == (len(ex.skeleton), 3)
+    assert np.allclose(rgb[3], [1, 0, 0])  # the selection itself is red
+
+
+def test_order_filter(ex):
+    picked = ex.leaves_where(min_order=3, min_height=1.0)
+    sk = ex.skeleton
+    mask = np.isin(sk.leaf_id, picked)
+    assert mask.any() and (sk.order[mask] >= 3).all()
+
+
+def test_exports(ex, tmp_path):
+    for suffix in (".vtp", ".obj", ".gltf"):
+        path = ex.export(tmp_path / f"plant{suffix}")
+        assert path.stat().st_size > 1000
+    obj = (tmp_path / "plant.obj").read_text().splitlines()
+    assert sum(line.startswith("f ") for line in obj) == 2 * ex.mesh.n_cells  # quads -> 2 triangles
+    with pytest.raises(RamureError, match="cannot export"):
+        ex.export(tmp_path / "plant.xyz")
+
+
+def test_session_round_trip(ex, tmp_path):
+    ex.select(ex.session.leaves_with_symbol("F")[10:14])
+    ex.regrow()
+    path = ex.save_session(tmp_path / "s.json")
+    other = Explorer(HONDA, n=3)
+    other.load_session(path)
+    assert other.derivation.to_string() == ex.derivation.to_string()
+    (tmp_path / "broken.json").write_text(json.dumps({"format": "ramure-session"})[:-3])
+    with pytest.raises(RamureError):
+        other.load_session(tmp_path / "broken.json")
+    assert other.derivation.to_string() == ex.derivation.to_string()
+
+
+def test_regrow_one_fruit_changes_only_that_fruit():
+    ex = Explorer("grammars/fruit_tree.lsys")
+    fruit = ex.fruit_ids()
+    base = ex.fruit_volumes()
+    ex.select(fruit[:1])
+    ex.regrow_fruit(preset="pear")
+    after = ex.fruit_volumes()
+    leaf = np.asarray(after.volume_data["leaf_id"])
+    old = np.asarray(base.volume_data["leaf_id"])
+    assert (leaf == fruit[0]).sum() != (old == fruit[0]).sum()  # the pear has another shape
+    for other in fruit[1:]:
+        assert (leaf == other).sum() == (old == other).sum()
+    # saved and replayed: the override comes back
+    s = Session.from_dict(ex.session.to_dict())
+    assert s.fruit_overrides() == ex.session.fruit_overrides() == {fruit[0]: {"preset": "pear",
+                                                                                "seed": s.edits[0]["settings"]["seed"]}}
+    ex.undo()
+    assert ex.session.fruit_overrides() == {}
