@@ -31,6 +31,9 @@ def make_application(argv=None):
     """The QApplication (created once), with the GL format pyvistaqt needs set first."""
     from PySide6.QtWidgets import QApplication
 
+    from app.desktop.qt_fix import protect_none
+
+    protect_none()
     app = QApplication.instance()
     if app is None:
         import pyvistaqt  # noqa: F401  (sets the default surface format before the first window)

@@ -125,7 +125,9 @@ class RegenPanel(QWidget):
     def set_selection_size(self, count):
         self.prune_button.setEnabled(count > 0)
         target = f"{count} selected" if count else "whole plant"
-        self.regrow_button.setText(f"Regrow ({target})")
+        text = f"Regrow ({target})"
+        if self.regrow_button.text() != text:
+            self.regrow_button.setText(text)
 
     # -- constants for the selection -----------------------------------------------
     def show_constants(self, constants, force=False):

@@ -98,7 +98,7 @@ class PlantView(QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.plotter = QtInteractor(self, auto_update=False)
+        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
         self.plotter.set_background("white")
         self.plotter.enable_trackball_style()
         if self.plotter.iren is not None:
@@ -114,6 +114,8 @@ class PlantView(QWidget):
         self.actor = None
         self.snapshot = None
         self.picker = None
+        self.box = None
+        self.box_actor = None
         self._diag = None
 
     # -- drawing ---------------------------------------------------------------
@@ -156,15 +158,26 @@ class PlantView(QWidget):
         self.redraw()
 
     def set_box(self, lines):
-        """Draw the selection's OBB edges ((12, 2, 3) segments) in red, or remove it (None)."""
+        """Draw the selection's OBB edges ((12, 2, 3) segments) in red, or hide it (None).
+
+        One actor is kept and its points moved, so a new selection costs no new GL objects.
+        """
         if lines is None:
-            self.plotter.remove_actor("obb", render=False)
-        else:
-            pts = np.asarray(lines, float).reshape(-1, 3)
+            if self.box_actor is not None and self.box_actor.GetVisibility():
+                self.box_actor.SetVisibility(False)
+                self.redraw()
+            return
+        pts = np.asarray(lines, float).reshape(-1, 3)
+        if self.box is None or self.box.n_points != len(pts):
             cells = np.c_[np.full(len(pts) // 2, 2), np.arange(len(pts)).reshape(-1, 2)].ravel()
-            box = pv.PolyData(pts, lines=cells)
-            self.plotter.add_mesh(box, color="red", line_width=2, name="obb", reset_camera=False,
-                                  pickable=False, render=False, lighting=False)
+            self.box = pv.PolyData(pts.copy(), lines=cells)
+            self.box_actor = self.plotter.add_mesh(self.box, color="red", line_width=2, name="obb",
+                                                   reset_camera=False, pickable=False, render=False,
+                                                   lighting=False)
+        else:
+            self.box.points[:] = pts
+            self.box.Modified()
+        self.box_actor.SetVisibility(True)
         self.redraw()
 
     def redraw(self, now=False):
@@ -175,7 +188,7 @@ class PlantView(QWidget):
             self.plotter.update()
 
     def has_box(self):
-        return "obb" in self.plotter.actors
+        return self.box_actor is not None and bool(self.box_actor.GetVisibility())
 
     # -- coordinates -------------------------------------------------------------
     def display_size(self):

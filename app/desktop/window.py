@@ -7,7 +7,9 @@ snapshot it publishes.  No algorithm lives here.
 """
 from __future__ import annotations
 
+import importlib
 import pathlib
+import threading
 
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
@@ -22,6 +24,7 @@ from app.desktop.editor import GrammarEditor
 from app.desktop.files import FileActions
 from app.desktop.gallery import GalleryView
 from app.desktop.pca_cloud import PcaCloudView
+from app.desktop.qt_fix import protect_none
 from app.desktop.regen_panel import RegenPanel
 from app.desktop.string_dock import StringView
 from app.desktop.variants_panel import VariantsController
@@ -32,10 +35,22 @@ from lsys.errors import RamureError
 TITLE = "Ramure"
 
 
+def warm_up():
+    """Import the heavy optional packages in the background so the first pick does not wait."""
+    def run():
+        for name in ("metrics", "lsys.cut"):
+            try:
+                importlib.import_module(name)
+            except Exception:  # noqa: BLE001 - missing or broken: reported when used
+                pass
+    threading.Thread(target=run, name="ramure-warm-up", daemon=True).start()
+
+
 class MainWindow(QMainWindow):
     """The Ramure desktop explorer for one plant."""
 
     def __init__(self, explorer: Explorer, settings=None, ask=True, parent=None):
+        protect_none()  # PySide6 6.12 on Python 3.11 leaks references to None: see qt_fix
         super().__init__(parent)
         self.ask = ask  # False: never show modal questions (tests, --quit-after)
         self.settings = settings or QSettings("Ramure", "Ramure desktop")
@@ -88,6 +103,7 @@ class MainWindow(QMainWindow):
         self._actions()
         self._connect()
         self.resize(1400, 880)
+        warm_up()
         self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330],
                          Qt.Orientation.Horizontal)
         self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [420, 330], Qt.Orientation.Vertical)
@@ -193,7 +209,9 @@ class MainWindow(QMainWindow):
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap, reset_camera=None):
         """A new plant version: redraw the 3D view and every view of the plant."""
-        self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection), reset_camera)
+        self.base_colors = state.plant_colors(snap.mesh)
+        self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection, base=self.base_colors),
+                             reset_camera)
         self.drawn_version = snap.version
         self.string_view.show_snapshot(snap)
         self.show_state(snap)
@@ -222,13 +240,14 @@ class MainWindow(QMainWindow):
                 kin = self.controller.kinship_colors()
             except RamureError:
                 kin = None
-        self.view.set_colors(state.cell_colors(snap.mesh, selection, kin))
+        self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors))
         try:
             self.view.set_box(self.controller.selection_box() if selection else None)
         except RamureError:
             self.view.set_box(None)
         self.regen.set_selection_size(len(selection))
-        self.status_label.setText(snap.status)
+        if self.status_label.text() != snap.status:
+            self.status_label.setText(snap.status)
         try:
             self.string_view.show_selection(self.controller.selected_modules() if selection else [])
         except RamureError:

@@ -1,0 +1,140 @@
+"""Desktop window speed: pick-to-highlight, rectangle selection, regrow-and-redraw, constant edits.
+
+Needs a display (run under ``xvfb-run -a``).  Each figure is the median of
+several repeats, measured from the user's action to the 3D view's next
+``frameSwapped`` signal after the change was applied: the new frame is on
+screen (llvmpipe software OpenGL under Xvfb, Qt composing the window).
+``render_seconds`` is the same with nothing changed: the floor set by one
+repaint of the window.
+"""
+from __future__ import annotations
+
+import pathlib
+import statistics
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+HONDA = ROOT / "grammars" / "honda_sympodial.lsys"
+
+
+def _window(n):
+    from PySide6.QtCore import QSettings
+
+    from app.desktop.launch import make_application
+    from app.desktop.window import MainWindow
+    from app.model import Explorer
+
+    app = make_application()
+    settings = QSettings(str(pathlib.Path(tempfile.mkdtemp()) / "s.ini"), QSettings.Format.IniFormat)
+    window = MainWindow(Explorer(str(HONDA), n=n), settings=settings, ask=False)
+    window.resize(1400, 880)
+    window.show()
+    for _ in range(20):
+        app.processEvents()
+    window.controller.wait_idle()
+    window.view.redraw(now=True)
+    return app, window
+
+
+def _until_painted(app, window, action, idle=True):
+    """Seconds from ``action()`` to the first frame swapped after its result was drawn."""
+    from PySide6.QtCore import QEventLoop
+
+    swaps = []
+    plotter = window.view.plotter
+    slot = lambda: swaps.append(time.perf_counter())  # noqa: E731
+    plotter.frameSwapped.connect(slot)
+    try:
+        t0 = time.perf_counter()
+        action()
+        if idle:
+            window.controller.wait_idle()
+        drawn = time.perf_counter()
+        window.view.redraw()
+        deadline = drawn + 10.0
+        while not any(t >= drawn for t in swaps) and time.perf_counter() < deadline:
+            app.processEvents(QEventLoop.ProcessEventsFlag.AllEvents, 5)
+        return min(t for t in swaps if t >= drawn) - t0
+    finally:
+        plotter.frameSwapped.disconnect(slot)
+
+
+def _floor(app, window, repeats=5):
+    return round(statistics.median(_until_painted(app, window, lambda: None) for _ in range(repeats)), 4)
+
+
+def _close(window):
+    window.dirty = False
+    window.close()
+
+
+def _result(times, target, **extra):
+    seconds = statistics.median(times)
+    return {"seconds": round(seconds, 4), "max_seconds": round(max(times), 4), "repeats": len(times),
+            "target_seconds": target, "ok": seconds <= target, **extra}
+
+
+def bench_pick_to_highlight():
+    """Click on a segment -> its leaf selected, recoloured red, OBB drawn, frame painted (<= 50 ms)."""
+    app, w = _window(10)
+    snap = w.controller.snapshot
+    rng = np.random.default_rng(0)
+    segments = rng.choice(len(snap.midpoints), 12, replace=False)
+    xy = w.view.project(snap.midpoints[segments])
+    w.view.click_at(*xy[0])  # the first click builds the cell locator
+    times, cells = [], []
+    for x, y in xy:  # pick -> model selection -> recolour + OBB -> frame on screen
+        times.append(_until_painted(app, w, lambda: cells.append(w.view.click_at(x, y, "replace"))))
+    out = _result(times, 0.05, segments=len(snap.midpoints), cells=snap.mesh.n_cells,
+                  hits=sum(c >= 0 for c in cells), render_seconds=_floor(app, w))
+    _close(w)
+    return out
+
+
+def bench_rectangle_select_10k():
+    """Rubber band over a plant of 16,383 segments (Honda n=14): select, recolour, repaint (<= 100 ms)."""
+    app, w = _window(14)
+    snap = w.controller.snapshot
+    xy = w.view.project(snap.midpoints)
+    lo, hi = np.nanmin(xy, axis=0), np.nanmax(xy, axis=0)
+    rects = [(lo[0], lo[1], hi[0], hi[1]), (lo[0], (lo[1] + hi[1]) / 2, hi[0], hi[1]),
+             ((lo[0] + hi[0]) / 2, lo[1], hi[0], hi[1]), (lo[0], lo[1], (lo[0] + hi[0]) / 2, hi[1])]
+    times, selected = [], []
+    for rect in rects * 2:
+        times.append(_until_painted(app, w, lambda: w.view.rectangle_at(rect, "replace")))
+        selected.append(len(w.controller.explorer.selection))
+    out = _result(times, 0.1, segments=len(snap.midpoints), cells=snap.mesh.n_cells,
+                  selected_leaves=max(selected), render_seconds=_floor(app, w))
+    _close(w)
+    return out
+
+
+def bench_regrow_and_redraw():
+    """Regrow a 10-leaf selection on Honda sympodial (n=10) and repaint (<= 200 ms)."""
+    app, w = _window(10)
+    times = []
+    for k in range(6):
+        snap = w.controller.snapshot
+        leaves = snap.segment_leaf[np.linspace(len(snap.segment_leaf) // 3, len(snap.segment_leaf) - 1,
+                                               10).astype(int)]
+        w.controller.select(np.unique(leaves))
+        times.append(_until_painted(app, w, lambda: w.controller.regrow(constants={"a2": 45.0 + k})))
+    out = _result(times, 0.2, segments=len(w.controller.snapshot.midpoints), render_seconds=_floor(app, w))
+    _close(w)
+    return out
+
+
+def bench_constant_edit():
+    """Change a #define on Honda sympodial (n=10): re-derive in the worker, redraw (<= 150 ms)."""
+    app, w = _window(10)
+    times = []
+    for value in (20.0, 30.0, 40.0, 50.0, 55.0, 60.0):
+        times.append(_until_painted(app, w, lambda: w.controller.set_constant("a2", value)))
+    out = _result(times, 0.15, segments=len(w.controller.snapshot.midpoints), render_seconds=_floor(app, w))
+    _close(w)
+    return out
