@@ -15,7 +15,7 @@ The front doors:
 >>> plant_metrics(sk).branch_count
 15
 """
-from .explore import Exploration, explore, grammar_name, write_exploration
+from .exploration import Exploration, explore, grammar_name, write_exploration
 from .obb import OrientedBox, obb_from_frustums, obb_from_points, tighten
 from .pca import DeltaPCA
 from .picks import Picks, interest_points, match, match_totals, pick_variants

@@ -5,7 +5,7 @@ The studies package writes study results into the same table
 :class:`~metrics.qualifiers.QualifierRegions`, and can also write the
 default vocabulary's top-ranked variants (``source = 'default'``) so a
 grammar has regions before any study.  ``grammar`` is a name, by convention
-the grammar file's stem (:func:`metrics.explore.grammar_name`); ``qualifier``
+the grammar file's stem (:func:`metrics.exploration.grammar_name`); ``qualifier``
 is the normalised English name.
 
 >>> import tempfile, pathlib

@@ -7,7 +7,14 @@ chunks (one task = ``chunk_size`` variants; the grammar is parsed once per
 worker process), on a local process pool by default or on a Dask cluster
 with ``scheduler="tcp://host:port"`` (``pip install ramure[dask]``).
 
-A ``progress(done, total)`` callback is called as chunks finish, and the
+Only distinct plants are derived: a variant changes constants on one rule,
+so constants that rule never reads change nothing; variants agreeing on the
+ones it reads share one derivation, and variants changing none of them are
+the base plant (see :func:`metrics.variants.distinct_variants`).  On Honda
+monopodial that is 405 derivations for 2,187 variants.
+
+A ``progress(done, total)`` callback (counting the derivations actually
+run, starting with ``(0, total)``) is called as chunks finish, and the
 sweep stops with :class:`SweepCancelled` soon after ``cancel`` is set (a
 :class:`threading.Event`, anything with ``is_set()``, or a callable returning
 True) or :meth:`VariantSweep.cancel` is called from another thread.
@@ -43,7 +50,7 @@ from lsys.errors import RamureError, ValueRefused
 
 from . import cache as _cache
 from .plant import METRIC_NAMES, metric_deltas, metrics_from_arrays
-from .variants import variant_design
+from .variants import distinct_variants, rule_constant_names, variant_design
 
 
 class SweepCancelled(RamureError):
@@ -137,7 +144,8 @@ class VariantSweep:
     Fitted attributes: ``names_`` (chosen constants), ``design_``
     (:class:`~metrics.variants.VariantDesign`), ``rules_`` (N,), ``values_`` (N,m),
     ``metrics_`` (N,10), ``base_metrics_`` (10,), ``deltas_`` (N,10), ``failed_`` (N,),
-    ``n_variants_``, ``n_rules_``, ``n_``, ``grammar_text_``, ``base_constants_``,
+    ``n_variants_``, ``n_derived_`` (derivations run; 0 from the cache), ``n_rules_``, ``n_``,
+    ``grammar_text_``, ``base_constants_``,
     ``seconds_``, ``from_cache_``, ``cache_path_``.
     """
 
@@ -206,11 +214,12 @@ class VariantSweep:
         if _matches(stored, design):
             metrics, failed, base = stored["metrics"], stored["failed"], stored["base_metrics"]
             self.from_cache_ = True
+            self.n_derived_ = 0
             if progress is not None:
                 progress(len(design), len(design))
         else:
             base = measure(ls, n, self.seed, base_constants)
-            metrics, failed = self._run(ls.text, base_constants, n, design, jobs, progress, cancel)
+            metrics, failed = self._run(ls, base_constants, n, design, base, jobs, progress, cancel)
             self.from_cache_ = False
             if path is not None:
                 _cache.save(path, metrics=metrics, failed=failed, base_metrics=base,
@@ -236,32 +245,38 @@ class VariantSweep:
         size = self.chunk_size or min(50, max(8, math.ceil(total / (jobs * 8))))
         return [(i, min(i + size, total)) for i in range(0, total, size)]
 
-    def _run(self, text, constants, n, design, jobs, progress, cancel):
-        total = len(design)
-        metrics = np.full((total, len(METRIC_NAMES)), np.nan)
-        failed = np.zeros(total, bool)
+    def _run(self, ls, constants, n, design, base, jobs, progress, cancel):
+        reps, inverse = distinct_variants(design, rule_constant_names(ls))
+        total = len(reps)
+        rep_metrics = np.full((total, len(METRIC_NAMES)), np.nan)
+        rep_failed = np.zeros(total, bool)
         chunks = self._chunks(total, jobs)
-        args = [(text, constants, n, int(self.seed), design.names, design.rules[a:b], design.values[a:b])
-                for a, b in chunks]
+        args = [(ls.text, constants, n, int(self.seed), design.names, design.rules[reps[a:b]],
+                 design.values[reps[a:b]]) for a, b in chunks]
         done = 0
 
         def store(k, result):
             nonlocal done
             a, b = chunks[k]
-            metrics[a:b], failed[a:b] = result
+            rep_metrics[a:b], rep_failed[a:b] = result
             done += b - a
             if progress is not None:
                 progress(done, total)
 
+        if progress is not None:
+            progress(0, total)
         if self.scheduler is not None:
             self._run_dask(args, store, cancel)
-        elif jobs == 1 or len(chunks) == 1:
+        elif jobs == 1 or len(chunks) <= 1:
             for k, task in enumerate(args):
                 if self._cancelled(cancel):
                     raise SweepCancelled("the sweep was cancelled")
                 store(k, evaluate_variants(*task))
         else:
             self._run_pool(args, jobs, store, cancel)
+        self.n_derived_ = total
+        metrics = np.where((inverse < 0)[:, None], base, rep_metrics[np.maximum(inverse, 0)])
+        failed = np.where(inverse < 0, False, rep_failed[np.maximum(inverse, 0)])
         return metrics, failed
 
     def _context(self):

@@ -61,6 +61,56 @@ class VariantDesign:
         return {c["rule"]: c["constants"]}
 
 
+def rule_constant_names(lsystem) -> list:
+    """For each rule, the set of constants its condition and successor expressions read.
+
+    A name that is also one of the rule's formal parameters means the parameter.
+    """
+    from lsys.expr import names_used
+
+    out = []
+    for rule in lsystem.grammar.rules:
+        exprs = [rule.condition] if rule.condition is not None else []
+        exprs += [arg for module in rule.successor for arg in module.args]
+        formals = set(rule.formals)
+        out.append({name for e in exprs for name, _ in names_used(e)
+                    if name not in formals and name in lsystem.constants})
+    return out
+
+
+def distinct_variants(design, used) -> tuple:
+    """Which variants really differ: ``(representative, inverse)``.
+
+    A variant changes constants on one rule only, so constants that rule
+    never reads change nothing: two variants of the same rule agreeing on the
+    constants it reads derive exactly the same plant, and a variant changing
+    none of them *is* the base plant.  ``used`` is :func:`rule_constant_names`.
+    Returns the indices of one representative per distinct plant (the first)
+    and, per variant, the position of its representative in that list, or -1
+    for "the base plant".
+
+    >>> d = variant_design({"a": 1.0, "b": 2.0}, n_rules=2)
+    >>> reps, inv = distinct_variants(d, [{"a"}, {"a", "b"}])
+    >>> len(reps), int((inv == -1).sum())   # rule 0: 2 plants + base; rule 1: 8 + base
+    (10, 4)
+    """
+    mask = np.array([[name in used[r] for name in design.names] for r in range(int(design.rules.max()) + 1)])
+    relevant = mask[design.rules]
+    levels = np.where(relevant, design.levels, 0.0)
+    base = ~np.any(levels != 0, axis=1)
+    keys = np.column_stack([design.rules, levels])
+    inverse = np.full(len(design), -1, np.int64)
+    todo = np.flatnonzero(~base)
+    if not todo.size:
+        return todo, inverse
+    _, first, inv = np.unique(keys[todo], axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # representatives in variant order
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    inverse[todo] = rank[inv.reshape(-1)]
+    return todo[np.sort(first)], inverse
+
+
 def round12(values) -> np.ndarray:
     """Round to 12 significant digits (``0.9 * 1.1 -> 0.99``)."""
     values = np.asarray(values, float)

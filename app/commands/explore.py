@@ -7,7 +7,7 @@
     ramure qualify grammars/honda_sympodial.lsys --qualifier dense --select 12,15,20-23 -o session.json
 
 ``explore`` writes ``variants.csv``, ``pca.json``, ``picks.json``,
-``thumbs/pick_XX.png`` and ``contact_sheet.png`` (see :mod:`metrics.explore`);
+``thumbs/pick_XX.png`` and ``contact_sheet.png`` (see :mod:`metrics.exploration`);
 with ``--json`` it prints one summary object (variant count, the 27 picks
 with their parameter combinations, matching distances, seconds).
 """
@@ -102,7 +102,7 @@ def _sweep_kwargs(args):
 
 # -- explore ----------------------------------------------------------------------
 def run_explore(args):
-    from metrics.explore import explore, write_exploration
+    from metrics.exploration import explore, write_exploration
 
     t0 = time.perf_counter()
     ls = _load(args)
@@ -185,7 +185,7 @@ def run_metrics(args):
 def run_qualify(args):
     from lsys.regen import Session
     from metrics.apply import apply_qualifier
-    from metrics.explore import explore
+    from metrics.exploration import explore
     from metrics.qualifiers import vocabulary_name
     from metrics.store import QualifierStore
 

@@ -74,8 +74,10 @@ def test_pool_gives_the_same_result_as_serial_and_reports_progress():
     seen = []
     pooled = VariantSweep(n=4, n_jobs=2, chunk_size=40, cache=False).fit(ls, progress=lambda d, t: seen.append((d, t)))
     assert np.array_equal(serial.metrics_, pooled.metrics_)
-    assert seen[-1] == (486, 486) and [d for d, _ in seen] == sorted(d for d, _ in seen)
-    assert len(seen) == len(range(0, 486, 40))
+    # both rules read all five constants: only the all-original combinations (= the base) are skipped
+    assert pooled.n_derived_ == 484
+    assert seen[0] == (0, 484) and seen[-1] == (484, 484) and [d for d, _ in seen] == sorted(d for d, _ in seen)
+    assert len(seen) == 1 + len(range(0, 484, 40))
 
 
 @pytest.mark.parametrize("jobs", [1, 2])
@@ -86,7 +88,8 @@ def test_cancel_stops_the_sweep(jobs, tmp_path):
 
     def progress(done, total):
         calls.append(done)
-        stop.set()
+        if done:
+            stop.set()
 
     sweep = VariantSweep(n=5, n_jobs=jobs, chunk_size=10, cache_dir=tmp_path)
     with pytest.raises(SweepCancelled):
@@ -104,6 +107,18 @@ def test_cancel_from_another_thread():
     with pytest.raises(SweepCancelled):
         sweep.fit(ls, progress=lambda d, t: sweep_progress.append(d) or __import__("time").sleep(0.02))
     timer.cancel()
+
+
+def test_identical_variants_are_derived_once():
+    mono = LSystem.from_file("grammars/honda_monopodial.lsys")
+    # A reads r1 r2 a0 d wr (not a2), B and C read r1 r2 a2 wr: 3^5 + 3^4 + 3^4 distinct plants, minus 3 bases
+    design_sweep = VariantSweep(n=3, n_jobs=1, cache=False).fit(mono)
+    assert design_sweep.n_variants_ == 2187 and design_sweep.n_derived_ == 243 + 81 + 81 - 3
+    # every variant's metrics still equal a direct derivation of it
+    for i in [0, 5, 728, 729, 1000, 2186]:
+        c = design_sweep.combination(i)
+        direct = plant_metrics(mono.derive(n=3, rule_constants={c["rule"]: c["constants"]}).skeleton())
+        assert np.allclose(design_sweep.metrics_[i], np.array(direct))
 
 
 def test_cache_makes_the_second_run_a_read(tmp_path):
