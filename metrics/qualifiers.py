@@ -287,11 +287,19 @@ def ranked_variants(name, sweep, points=None, regions=None, rules=None) -> tuple
 def qualifier_combination(name, sweep, points=None, regions=None, rules=None) -> dict:
     """The parameter combination ``{"rule", "constants"}`` that qualifier ``name`` applies.
 
+    ``sweep`` is a fitted :class:`~metrics.sweep.VariantSweep`, or a grammar
+    (LSystem or file path), which is then swept with the default settings
+    (cached on disk, so only the first call is slow).
+
     >>> from metrics import VariantSweep
     >>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("grammars/honda_sympodial.lsys")
     >>> combo = qualifier_combination("dense", sweep)
     >>> sorted(combo), combo["rule"] in (0, 1)
     (['constants', 'rule'], True)
     """
+    if not hasattr(sweep, "deltas_"):
+        from .sweep import VariantSweep
+
+        sweep = VariantSweep().fit(sweep)
     order, _ = ranked_variants(name, sweep, points, regions, rules)
     return sweep.combination(int(order[0]))

@@ -53,6 +53,14 @@ def test_opposite_qualifiers_rank_in_opposite_orders(sweeps):
     assert np.allclose(sweep.deltas_[normal], 0)  # the base plant itself
 
 
+def test_combination_from_a_grammar_path(tmp_path, monkeypatch, sweeps):
+    monkeypatch.setenv("RAMURE_CACHE", str(tmp_path))
+    ls = LSystem.from_file("grammars/honda_sympodial.lsys")
+    combo = qualifier_combination("grand", "grammars/honda_sympodial.lsys")
+    assert combo == qualifier_combination("large", VariantSweep().fit(ls))
+    assert list(tmp_path.rglob("*.npz"))
+
+
 def test_rule_restriction(sweeps):
     sweep = sweeps["honda_monopodial"]
     order = rank_variants("dense", sweep, rules={2})
