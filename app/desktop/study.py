@@ -1,8 +1,586 @@
-"""Study mode (placeholder while the screens are written)."""
+"""Study mode: the participant's screens and the Study menu.
+
+A participant session (:class:`ParticipantWindow`) walks through:
+
+1. **Consent** — the study's purpose and an "I agree" box (recorded with
+   :meth:`studies.Study.record_consent`);
+2. per grammar, **sorting** — the 27 thumbnails in the participant's seeded
+   order, dragged into groups (drop on "New group" to start one);
+3. per group, a **representative** (click an image, "Make representative"),
+   the **three Likert questions** and free-text **qualifiers**;
+4. **Finish** — refused, listing what is missing, until everything is answered.
+
+Every answer goes straight to :class:`studies.TestSession` (one SQLite
+transaction each), and the screen is rebuilt from what is stored, so a crash
+loses at most the qualifier being typed.  A timer shows the participant's
+remaining budget.  :class:`~app.desktop.analyst.AnalystWindow` shows a
+study's report.
+"""
 from __future__ import annotations
 
+import pathlib
 
+from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
+from PySide6.QtGui import QIcon, QPixmap
+from PySide6.QtWidgets import (QAbstractItemView, QButtonGroup, QCheckBox, QFileDialog, QGridLayout,
+                               QGroupBox, QHBoxLayout, QLabel, QLineEdit, QListView, QListWidget, QListWidgetItem,
+                               QMessageBox, QPushButton, QRadioButton, QScrollArea, QStackedWidget, QTextBrowser,
+                               QVBoxLayout, QWidget)
+
+from app.desktop.thumbnails import placeholder_image, skeleton_image
+from app.desktop.workers import Task
+from lsys.errors import RamureError
+
+MIME = "application/x-ramure-images"
+ICON = 96
+QUESTIONS = (("usefulness", "How useful is this group of variants?"),
+             ("difference", "How different are the images of this group from the others?"),
+             ("representative", "How well does the representative stand for its group?"))
+LEVELS = ("poor", "fair", "good", "excellent")
+CONSENT_TEXT = (
+    "<h3>Variants of procedural plants</h3>"
+    "<p>You will see 27 pictures of plants made from one grammar. Sort them into groups of "
+    "pictures that look alike to you, choose one picture to represent each group, answer three "
+    "short questions per group and give each group one or more words that describe it.</p>"
+    "<p>Your answers are stored under an anonymous code, each as soon as you give it. You can stop "
+    "at any time; you can withdraw your consent later and your answers will be left out.</p>")
+
+
+# -- images --------------------------------------------------------------------------
+def pick_images(study, grammar, size=ICON, grammars_dir=None):
+    """QImages of a grammar's 27 picks, by id: their image files, else derived, else placeholders.
+
+    Drawing derives each variant (when a grammar file named like the grammar is found), so call
+    it from a worker.
+    """
+    picks = study.picks(grammar)
+    lsystem, n, seed = _study_grammar(study, grammar, grammars_dir)
+    images = {}
+    from PySide6.QtGui import QImage
+
+    from app.desktop.variants import variant_skeleton
+
+    for pick in picks:
+        image = QImage(pick.image) if pick.image and pathlib.Path(pick.image).is_file() else QImage()
+        if image.isNull() and lsystem is not None:
+            try:
+                image = skeleton_image(variant_skeleton(lsystem, n, seed, pick.params), size)
+            except (RamureError, ValueError, KeyError, ArithmeticError):
+                image = QImage()
+        if image.isNull():
+            image = placeholder_image(size, str(pick.id), "")
+        images[pick.id] = image.scaled(size, size, Qt.AspectRatioMode.KeepAspectRatio,
+                                       Qt.TransformationMode.SmoothTransformation)
+    return images
+
+
+def _study_grammar(study, grammar, grammars_dir=None):
+    """The LSystem, n and seed to draw a study grammar's picks with (None if not found)."""
+    import json
+
+    from lsys import LSystem
+
+    row = study.conn.execute("SELECT source FROM grammars WHERE name = ?", (grammar,)).fetchone()
+    source = pathlib.Path(row[0]) if row and row[0] else None
+    info = {}
+    if source is not None and (source / "pca.json").is_file():
+        try:
+            info = json.loads((source / "pca.json").read_text(encoding="utf-8"))
+        except ValueError:
+            info = {}
+    folder = pathlib.Path(grammars_dir) if grammars_dir else pathlib.Path(__file__).resolve().parents[2] / "grammars"
+    path = folder / f"{info.get('grammar', grammar)}.lsys"
+    if not path.is_file():
+        return None, None, 0
+    try:
+        lsystem = LSystem.from_file(path)
+    except RamureError:
+        return None, None, 0
+    return lsystem, int(info.get("n") or lsystem.n), int(info.get("seed") or 0)
+
+
+# -- drag and drop lists -----------------------------------------------------------------
+class ImageList(QListWidget):
+    """Thumbnails that can be dragged to another :class:`ImageList`.
+
+    A drop does not move items itself: it emits :attr:`dropped` with the image
+    ids, and the screen re-sorts the images through the study session.
+    """
+
+    dropped = Signal(list, object)  # image ids, target list
+
+    def __init__(self, target, icon=ICON, parent=None):
+        super().__init__(parent)
+        self.target = target  # "pool", "new" or a group label
+        self.setViewMode(QListView.ViewMode.IconMode)
+        self.setIconSize(QSize(icon, icon))
+        self.setResizeMode(QListView.ResizeMode.Adjust)
+        self.setMovement(QListView.Movement.Snap)
+        self.setSpacing(3)
+        self.setSelectionMode(QAbstractItemView.SelectionMode.ExtendedSelection)
+        self.setDragEnabled(True)
+        self.setAcceptDrops(True)
+        self.setDropIndicatorShown(True)
+        self.setDragDropMode(QAbstractItemView.DragDropMode.DragDrop)
+        self.setDefaultDropAction(Qt.DropAction.MoveAction)
+
+    def mimeTypes(self):  # noqa: N802 (Qt API)
+        return [MIME]
+
+    def mimeData(self, items):  # noqa: N802 (Qt API)
+        data = QMimeData()
+        ids = [str(item.data(Qt.ItemDataRole.UserRole)) for item in items]
+        data.setData(MIME, ",".join(ids).encode())
+        return data
+
+    def dragEnterEvent(self, event):  # noqa: N802 (Qt API)
+        if event.mimeData().hasFormat(MIME):
+            event.acceptProposedAction()
+        else:
+            event.ignore()
+
+    def dragMoveEvent(self, event):  # noqa: N802 (Qt API)
+        if event.mimeData().hasFormat(MIME):
+            event.acceptProposedAction()
+        else:
+            event.ignore()
+
+    def dropEvent(self, event):  # noqa: N802 (Qt API)
+        if not event.mimeData().hasFormat(MIME):
+            event.ignore()
+            return
+        text = bytes(event.mimeData().data(MIME)).decode()
+        ids = [int(x) for x in text.split(",") if x]
+        event.setDropAction(Qt.DropAction.CopyAction)  # the source keeps its items; we re-sort
+        event.accept()
+        self.dropped.emit(ids, self)
+
+    def add_image(self, image_id, pixmap):
+        item = QListWidgetItem(QIcon(pixmap), str(image_id))
+        item.setData(Qt.ItemDataRole.UserRole, int(image_id))
+        self.addItem(item)
+        return item
+
+    def image_ids(self):
+        return [self.item(i).data(Qt.ItemDataRole.UserRole) for i in range(self.count())]
+
+    def selected_ids(self):
+        return [item.data(Qt.ItemDataRole.UserRole) for item in self.selectedItems()]
+
+
+class LikertRow(QWidget):
+    """One question answered on the four-level scale."""
+
+    answered = Signal(str, int)  # question, level 1-4
+
+    def __init__(self, key, question, parent=None):
+        super().__init__(parent)
+        self.key = key
+        self.buttons = QButtonGroup(self)
+        layout = QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        label = QLabel(question)
+        label.setWordWrap(True)
+        layout.addWidget(label, 1)
+        for level, name in enumerate(LEVELS, start=1):
+            button = QRadioButton(name)
+            self.buttons.addButton(button, level)
+            layout.addWidget(button)
+        self.buttons.idClicked.connect(lambda level: self.answered.emit(self.key, level))
+
+    def set_level(self, level):
+        self.buttons.setExclusive(False)
+        for button in self.buttons.buttons():
+            button.setChecked(False)
+        self.buttons.setExclusive(True)
+        if level:
+            self.buttons.button(int(level)).setChecked(True)
+
+
+class GroupPanel(QGroupBox):
+    """One group: its images (a drop target), representative, ratings and qualifiers."""
+
+    def __init__(self, page, group, pixmaps):
+        super().__init__(f"Group {group.label} — {len(group.images)} image(s)")
+        self.page, self.label = page, group.label
+        self.images = ImageList(group.label, icon=64)
+        rows = min(3, max(1, -(-len(group.images) // 8)))
+        self.images.setMinimumHeight(12 + 88 * rows)
+        self.images.dropped.connect(page.images_dropped)
+        for image in group.images:
+            item = self.images.add_image(image, pixmaps[image])
+            if image == group.representative:
+                item.setBackground(Qt.GlobalColor.yellow)
+                item.setText(f"{image} ★")
+        self.make_rep = QPushButton("Make representative")
+        self.make_rep.clicked.connect(self._representative)
+        self.make_rep.setEnabled(len(group.images) > 1)
+        self.rep_label = QLabel(f"Representative: {group.representative or '—'}")
+        self.rows = {}
+        answers = {"usefulness": group.usefulness, "difference": group.difference,
+                   "representative": group.representative_quality}
+        for key, question in QUESTIONS:
+            if key == "representative" and len(group.images) < 2:
+                continue
+            row = LikertRow(key, question)
+            row.set_level(answers[key])
+            row.answered.connect(lambda k, level: page.rate(self.label, k, level))
+            self.rows[key] = row
+        self.qualifier = QLineEdit()
+        self.qualifier.setPlaceholderText("a word for this group (e.g. dense, petit), then Enter")
+        self.qualifier.returnPressed.connect(self._add_qualifier)
+        add = QPushButton("Add")
+        add.clicked.connect(self._add_qualifier)
+        self.qualifiers = QListWidget()
+        self.qualifiers.setMaximumHeight(60)
+        self.qualifiers.addItems(group.qualifiers)
+        remove = QPushButton("Remove selected word")
+        remove.clicked.connect(self._remove_qualifier)
+        grid = QGridLayout(self)
+        grid.addWidget(self.images, 0, 0, 1, 3)
+        grid.addWidget(self.rep_label, 1, 0)
+        grid.addWidget(self.make_rep, 1, 1)
+        r = 2
+        for row in self.rows.values():
+            grid.addWidget(row, r, 0, 1, 3)
+            r += 1
+        grid.addWidget(self.qualifier, r, 0, 1, 2)
+        grid.addWidget(add, r, 2)
+        grid.addWidget(self.qualifiers, r + 1, 0, 1, 2)
+        grid.addWidget(remove, r + 1, 2)
+
+    def _representative(self):
+        chosen = self.images.selected_ids()
+        if len(chosen) != 1:
+            self.page.refuse("Click one image of the group first, then 'Make representative'.")
+            return
+        self.page.set_representative(self.label, chosen[0])
+
+    def _add_qualifier(self):
+        text = self.qualifier.text()
+        if self.page.add_qualifier(self.label, text):
+            self.qualifier.clear()
+
+    def _remove_qualifier(self):
+        for item in self.qualifiers.selectedItems():
+            self.page.remove_qualifier(self.label, item.text())
+
+
+class TestPage(QWidget):
+    """Sorting, groups and answers for one grammar; everything is written as it is given."""
+
+    finished = Signal()
+
+    def __init__(self, window, session, pixmaps):
+        super().__init__()
+        self.window, self.session, self.pixmaps = window, session, pixmaps
+        self.pool = ImageList("pool")
+        self.pool.setObjectName("pool")
+        self.pool.dropped.connect(self.images_dropped)
+        self.new_group = ImageList("new", icon=32)
+        self.new_group.setObjectName("newGroup")
+        self.new_group.setMaximumHeight(70)
+        self.new_group.setToolTip("Drop images here to start a new group")
+        self.new_group.setStyleSheet("QListWidget { border: 2px dashed #888; background: #f4f8ff; }")
+        self.new_group.dropped.connect(self.images_dropped)
+        self.groups_host = QWidget()
+        self.groups_layout = QVBoxLayout(self.groups_host)
+        scroll = self.scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(self.groups_host)
+        self.finish_button = QPushButton("Finish this grammar")
+        self.finish_button.clicked.connect(self.finish)
+        self.todo = QLabel("")
+        self.todo.setWordWrap(True)
+        left = QVBoxLayout()
+        left.addWidget(QLabel(f"<b>{session.grammar}</b>: drag the pictures into groups of similar plants."))
+        left.addWidget(self.pool, 1)
+        left.addWidget(QLabel("Drop here to start a new group:"))
+        left.addWidget(self.new_group)
+        right = QVBoxLayout()
+        right.addWidget(scroll, 1)
+        right.addWidget(self.todo)
+        right.addWidget(self.finish_button)
+        layout = QHBoxLayout(self)
+        layout.addLayout(left, 2)
+        layout.addLayout(right, 3)
+        self.refresh()
+
+    # -- what the participant does ---------------------------------------------------
+    def partition(self):
+        return [list(g.images) for g in self.session.groups()]
+
+    def images_dropped(self, ids, target):
+        self.move_images(ids, target.target)
+
+    def move_images(self, ids, target):
+        """Move images to a group label, to ``"new"`` (a new group) or to ``"pool"`` (unsorted)."""
+        ids = [int(i) for i in ids]
+        groups = [[i for i in g if i not in ids] for g in self.partition()]
+        if target == "new":
+            groups.append(ids)
+        elif target != "pool":
+            groups[int(target) - 1].extend(ids)
+        self._write(lambda: self.session.set_groups([g for g in groups if g]))
+
+    def set_representative(self, label, image):
+        self._write(lambda: self.session.set_representative(label, image))
+
+    def rate(self, label, key, level):
+        self._write(lambda: self.session.rate(label, **{key: level}))
+
+    def add_qualifier(self, label, text):
+        return self._write(lambda: self.session.add_qualifier(label, text))
+
+    def remove_qualifier(self, label, text):
+        self._write(lambda: self.session.remove_qualifier(label, text))
+
+    def finish(self):
+        if self._write(self.session.finish, refresh=False):
+            self.finished.emit()
+
+    def _write(self, action, refresh=True):
+        try:
+            action()
+        except RamureError as exc:
+            self.refuse(str(exc))
+            return False
+        if refresh:
+            self.refresh()
+        return True
+
+    def refuse(self, message):
+        self.window.refuse(message)
+
+    # -- showing what is stored --------------------------------------------------------
+    def refresh(self):
+        """Rebuild the screen from the database (the single source of truth)."""
+        position = self.scroll.verticalScrollBar().value()
+        unsorted = set(self.session.unsorted())
+        self.pool.clear()
+        for image in self.session.order():
+            if image in unsorted:
+                self.pool.add_image(image, self.pixmaps[image])
+        while self.groups_layout.count():
+            w = self.groups_layout.takeAt(0).widget()
+            if w is not None:
+                w.deleteLater()
+        self.panels = {}
+        for group in self.session.groups():
+            panel = GroupPanel(self, group, self.pixmaps)
+            self.panels[group.label] = panel
+            self.groups_layout.addWidget(panel)
+        self.groups_layout.addStretch(1)
+        QTimer.singleShot(0, lambda: self.scroll.verticalScrollBar().setValue(position))
+        todo = self.session.missing()
+        self.todo.setText("Still to do: " + "; ".join(todo[:6]) + (" …" if len(todo) > 6 else "")
+                          if todo else "Everything is answered: you can finish.")
+
+
+class ParticipantWindow(QWidget):
+    """Consent, then one :class:`TestPage` per grammar, with the remaining time always visible."""
+
+    closed = Signal()
+
+    def __init__(self, study, code, grammars=None, ask=True, grammars_dir=None):
+        super().__init__()
+        self.setWindowTitle(f"Ramure study — participant {code}")
+        self.study, self.code, self.ask = study, code, ask
+        self.grammars = list(grammars or study.grammars)
+        self.grammars_dir = grammars_dir
+        self.last_message = None
+        self.page = None
+        self.image_task = None
+        self.is_closed = False
+        self.timer_label = QLabel("")
+        self.timer_label.setObjectName("studyTimer")
+        self.timer_label.setStyleSheet("font-size: 14pt; font-weight: bold;")
+        self.stack = QStackedWidget()
+        top = QHBoxLayout()
+        top.addWidget(QLabel(f"Participant <b>{code}</b>"), 1)
+        top.addWidget(self.timer_label)
+        layout = QVBoxLayout(self)
+        layout.addLayout(top)
+        layout.addWidget(self.stack, 1)
+        self.consent_page = self._consent_page()
+        self.stack.addWidget(self.consent_page)
+        self.done_page = QLabel("<h2>Thank you!</h2><p>All your answers are saved.</p>")
+        self.done_page.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.stack.addWidget(self.done_page)
+        self.tick = QTimer(self)
+        self.tick.timeout.connect(self.update_timer)
+        self.tick.start(1000)
+        self.resize(1300, 850)
+        consented = any(p["code"] == code and p["consent"] for p in study.participants())
+        if consented:
+            self.next_grammar()
+        self.update_timer()
+
+    def _consent_page(self):
+        page = QWidget()
+        text = QTextBrowser()
+        text.setHtml(CONSENT_TEXT)
+        self.agree = QCheckBox("I have read this and I agree to take part.")
+        self.start_button = QPushButton("Start")
+        self.start_button.setEnabled(False)
+        self.agree.toggled.connect(self.start_button.setEnabled)
+        self.start_button.clicked.connect(self.give_consent)
+        layout = QVBoxLayout(page)
+        layout.addWidget(text, 1)
+        layout.addWidget(self.agree)
+        layout.addWidget(self.start_button)
+        return page
+
+    def give_consent(self):
+        try:
+            self.study.record_consent(self.code, True)
+        except RamureError as exc:
+            self.refuse(str(exc))
+            return
+        self.next_grammar()
+
+    def next_grammar(self):
+        """Open the first grammar whose test is not finished, or the thank-you page."""
+        for grammar in self.grammars:
+            try:
+                session = self.study.session(self.code, grammar)
+            except RamureError as exc:
+                self.refuse(str(exc))
+                self.stack.setCurrentWidget(self.done_page)
+                return None
+            if not session.finished:
+                return self.open_test(session)
+        self.stack.setCurrentWidget(self.done_page)
+        return None
+
+    def open_test(self, session):
+        pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, str(i), "…")) for i in range(1, 28)}
+        page = TestPage(self, session, pixmaps)
+        page.finished.connect(self._test_finished)
+        if self.page is not None:
+            self.stack.removeWidget(self.page)
+            self.page.deleteLater()
+        self.page = page
+        self.stack.addWidget(page)
+        self.stack.setCurrentWidget(page)
+        self._draw_images(session.grammar)
+        return page
+
+    def _draw_images(self, grammar):
+        path = self.study.path
+
+        def work(progress, cancelled):
+            from studies import Study
+
+            study = Study.open(path)  # a connection of this thread
+            try:
+                return pick_images(study, grammar, grammars_dir=self.grammars_dir)
+            finally:
+                study.close()
+        self.image_task = Task("study images", work, self)
+        self.image_task.done.connect(lambda images: self._images_ready(grammar, images))
+        self.image_task.failed.connect(lambda exc, details: self.refuse(f"cannot draw the pictures: {exc}"))
+        self.image_task.start()
+
+    def _images_ready(self, grammar, images):
+        if self.is_closed or self.page is None or self.page.session.grammar != grammar:
+            return
+        self.page.pixmaps = {i: QPixmap.fromImage(img) for i, img in images.items()}
+        self.page.refresh()
+
+    def _test_finished(self):
+        self.next_grammar()
+
+    def update_timer(self):
+        if self.is_closed:
+            return
+        if self.page is not None and not self.page.session.finished:
+            seconds = self.page.session.remaining_seconds()
+        else:
+            seconds = self.study.remaining_seconds(self.code)
+        minutes, secs = divmod(int(seconds), 60)
+        self.timer_label.setText(f"Time left: {minutes:02d}:{secs:02d}")
+        self.timer_label.setStyleSheet("font-size: 14pt; font-weight: bold;"
+                                       + (" color: #c00000;" if seconds < 120 else ""))
+
+    def refuse(self, message):
+        self.last_message = message
+        if self.ask:
+            QMessageBox.warning(self, "Not saved", message)
+
+    def closeEvent(self, event):  # noqa: N802 (Qt API)
+        self.tick.stop()
+        if self.image_task is not None:
+            self.image_task.cancel()
+        self.is_closed = True
+        self.closed.emit()
+        super().closeEvent(event)
+
+
+# -- the Study menu -------------------------------------------------------------------------
 class StudyMenu:
+    """Study ▸ Participant session… / Analyst report…"""
+
     def __init__(self, window, menu):
         self.window = window
-        self.menu = menu
+        self.windows = []
+        menu.addAction("Participant session…").triggered.connect(lambda: self.participant())
+        menu.addAction("Analyst report…").triggered.connect(lambda: self.analyst())
+
+    def _ask_study(self):
+        path, _ = QFileDialog.getOpenFileName(self.window, "Open study", "", "Study databases (*.db *.sqlite);;All files (*)")
+        return path or None
+
+    def participant(self, path=None, code=None):
+        """Open a study and a participant window (a new anonymous code unless ``code`` is given)."""
+        from studies import Study
+
+        path = path or self._ask_study()
+        if not path:
+            return None
+        try:
+            study = Study.open(path)
+            if code is None:
+                code = self._choose_participant(study)
+                if code is None:
+                    study.close()
+                    return None
+            elif code not in [p["code"] for p in study.participants()]:
+                study.add_participant(code)
+        except RamureError as exc:
+            self.window.report_refused(str(exc))
+            return None
+        win = ParticipantWindow(study, code, ask=self.window.ask)
+        win.closed.connect(study.close)
+        self.windows.append(win)
+        win.show()
+        return win
+
+    def _choose_participant(self, study):
+        """A new code, or an existing one to resume (asked in a small dialog)."""
+        codes = [p["code"] for p in study.participants()]
+        if not codes or not self.window.ask:
+            return study.add_participant()
+        from PySide6.QtWidgets import QInputDialog
+
+        new = "New participant"
+        choice, ok = QInputDialog.getItem(self.window, "Participant", "Resume a participant or start a new one:",
+                                          [new, *codes], 0, False)
+        if not ok:
+            return None
+        return study.add_participant() if choice == new else choice
+
+    def analyst(self, path=None):
+        from app.desktop.analyst import AnalystWindow
+
+        path = path or self._ask_study()
+        if not path:
+            return None
+        win = AnalystWindow(ask=self.window.ask)
+        self.windows.append(win)
+        win.show()
+        win.open_study(path)
+        return win
+
+
+__all__ = ["GroupPanel", "ImageList", "ParticipantWindow", "StudyMenu", "TestPage", "pick_images"]

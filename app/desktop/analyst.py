@@ -1,0 +1,113 @@
+"""The analyst view: open a study database, see who took part and read its report.
+
+The report (:func:`studies.write_report`: heat maps, box plots, ANOVA and
+qualifier tables) is written to a temporary folder in a worker and shown in
+a text browser; "Save report to…" copies it elsewhere.
+"""
+from __future__ import annotations
+
+import pathlib
+import shutil
+import tempfile
+
+from PySide6.QtCore import QUrl
+from PySide6.QtWidgets import (QFileDialog, QHBoxLayout, QLabel, QMessageBox, QPushButton, QSplitter,
+                               QTableWidget, QTableWidgetItem, QTextBrowser, QVBoxLayout, QWidget)
+from PySide6.QtCore import Qt
+
+from app.desktop.workers import Task
+from lsys.errors import RamureError
+
+
+class AnalystWindow(QWidget):
+    """Participants, tests and the HTML report of one study."""
+
+    def __init__(self, ask=True):
+        super().__init__()
+        self.setWindowTitle("Ramure study — analyst")
+        self.ask = ask
+        self.last_message = None
+        self.path = None
+        self.report_dir = None
+        self.summary = None
+        self.task = None
+        self.title = QLabel("Open a study database.")
+        open_button = QPushButton("Open study…")
+        open_button.clicked.connect(lambda: self.open_study())
+        self.save_button = QPushButton("Save report to…")
+        self.save_button.setEnabled(False)
+        self.save_button.clicked.connect(lambda: self.save_report())
+        self.participants = QTableWidget(0, 5)
+        self.participants.setHorizontalHeaderLabels(["code", "consent", "tests", "finished", "minutes"])
+        self.report = QTextBrowser()
+        self.report.setObjectName("studyReport")
+        self.report.setOpenExternalLinks(False)
+        top = QHBoxLayout()
+        top.addWidget(self.title, 1)
+        top.addWidget(open_button)
+        top.addWidget(self.save_button)
+        split = QSplitter(Qt.Orientation.Horizontal)
+        split.addWidget(self.participants)
+        split.addWidget(self.report)
+        split.setSizes([300, 900])
+        layout = QVBoxLayout(self)
+        layout.addLayout(top)
+        layout.addWidget(split, 1)
+        self.resize(1250, 820)
+
+    def open_study(self, path=None):
+        from studies import Study
+
+        if path is None:
+            path, _ = QFileDialog.getOpenFileName(self, "Open study", "", "Study databases (*.db *.sqlite);;All files (*)")
+            if not path:
+                return None
+        try:
+            with Study.open(path) as study:
+                people = study.participants()
+                name, grammars = study.name, study.grammars
+        except RamureError as exc:
+            return self.refuse(str(exc))
+        self.path = pathlib.Path(path)
+        self.title.setText(f"<b>{name}</b> — {len(people)} participants, grammars: {', '.join(grammars)} "
+                           "(writing the report…)")
+        self.participants.setRowCount(len(people))
+        for r, p in enumerate(people):
+            for c, value in enumerate((p["code"], "yes" if p["consent"] else "no", p["tests"], p["finished"],
+                                       f"{p['elapsed_seconds'] / 60:.1f}")):
+                self.participants.setItem(r, c, QTableWidgetItem(str(value)))
+        out = pathlib.Path(tempfile.mkdtemp(prefix="ramure-report-"))
+
+        def work(progress, cancelled):
+            from studies import write_report
+
+            return write_report(self.path, out)
+        self.task = Task("report", work, self)
+        self.task.done.connect(lambda summary: self._shown(out, summary, name))
+        self.task.failed.connect(lambda exc, details: self.refuse(f"cannot write the report: {exc}"))
+        self.task.start()
+        return self.task
+
+    def _shown(self, out, summary, name):
+        self.report_dir, self.summary = out, summary
+        self.report.setSearchPaths([str(out)])
+        self.report.setSource(QUrl.fromLocalFile(str(out / "index.html")))
+        self.title.setText(f"<b>{name}</b> — {summary.get('participants')} participants, "
+                           f"{summary.get('tests')} finished tests, {summary.get('groups')} groups")
+        self.save_button.setEnabled(True)
+
+    def save_report(self, folder=None):
+        if self.report_dir is None:
+            return None
+        folder = folder or QFileDialog.getExistingDirectory(self, "Save the report in")
+        if not folder:
+            return None
+        target = pathlib.Path(folder)
+        shutil.copytree(self.report_dir, target, dirs_exist_ok=True)
+        return target
+
+    def refuse(self, message):
+        self.last_message = message
+        if self.ask:
+            QMessageBox.warning(self, "Study", message)
+        return None
