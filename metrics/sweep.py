@@ -139,7 +139,9 @@ class VariantSweep:
         a Dask scheduler address (``"tcp://host:port"``) or a ``distributed.Client``;
         seconds to wait when connecting to an address (default 10).
     mp_context
-        multiprocessing start method for the local pool (default ``"fork"`` on Linux).
+        multiprocessing start method for the local pool (default ``"fork"`` on Linux;
+        a GUI running the sweep from a background thread should pass ``"forkserver"``,
+        since forking a process with running threads is unsafe).
 
     Fitted attributes: ``names_`` (chosen constants), ``design_``
     (:class:`~metrics.variants.VariantDesign`), ``rules_`` (N,), ``values_`` (N,m),
@@ -184,6 +186,8 @@ class VariantSweep:
         n = ls.n if self.n is None else self.n
         if isinstance(n, bool) or int(n) != n or n < 0:
             raise ValueRefused(f"n must be a non-negative integer, not {self.n!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
+            raise ValueRefused(f"seed must be an integer, not {self.seed!r}")
         jobs = (os.cpu_count() or 1) if self.n_jobs is None else self.n_jobs
         if isinstance(jobs, bool) or int(jobs) != jobs or jobs < 1:
             raise ValueRefused(f"n_jobs must be a positive integer, not {self.n_jobs!r}")

@@ -80,6 +80,13 @@ def test_pool_gives_the_same_result_as_serial_and_reports_progress():
     assert len(seen) == 1 + len(range(0, 484, 40))
 
 
+def test_pool_without_fork():
+    # what a GUI uses when it sweeps from a background thread: everything must pickle
+    a = VariantSweep(n=3, n_jobs=2, cache=False, mp_context="forkserver").fit(HONDA)
+    b = VariantSweep(n=3, n_jobs=1, cache=False).fit(HONDA)
+    assert np.array_equal(a.metrics_, b.metrics_)
+
+
 @pytest.mark.parametrize("jobs", [1, 2])
 def test_cancel_stops_the_sweep(jobs, tmp_path):
     ls = LSystem.from_file(HONDA)
