@@ -183,6 +183,24 @@ def project_to_display(matrix, points, size):
     return np.c_[(ndc[:, 0] + 1.0) * 0.5 * width, (ndc[:, 1] + 1.0) * 0.5 * height]
 
 
+# -- volumetric fruit ---------------------------------------------------------------
+def fruit_surface(explorer):
+    """The plant's volumetric fruit (3G-maps) as a surface with a ``leaf_id`` per cell, or None.
+
+    None when the plant has no fruit or the 3G-map layer is not available.
+    """
+    if not explorer.fruit_ids():
+        return None
+    try:
+        from gmap.pyvista import boundary_polydata
+    except ImportError:
+        return None
+    gm = explorer.fruit_volumes()
+    surface = boundary_polydata(gm)
+    surface.cell_data["leaf_id"] = np.asarray(gm.volume_data["leaf_id"])[surface.cell_data["volume"]]
+    return surface
+
+
 # -- the cut graph -----------------------------------------------------------------
 @dataclass
 class GraphLayout:

@@ -70,6 +70,11 @@ def _vocabulary():
     return VOCABULARY
 
 
+def vocabulary_names():
+    """The qualifier vocabulary (English names), or [] without :mod:`metrics.qualifiers`."""
+    return list(_vocabulary())
+
+
 def explore_plant(lsystem, n, seed, progress=None, cancel=None, n_jobs=None):
     """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`metrics.explore`)."""
     reason = metrics_available()

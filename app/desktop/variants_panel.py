@@ -21,13 +21,14 @@ from lsys.errors import RamureError
 THUMB = 150
 
 
-def fruit_builder():
-    """``gmap.plant.fruits_from_skeleton`` if the 3G-map layer provides it, else None."""
+def fruit_available():
+    """True if the 3G-map layer can build volumetric fruit."""
     try:
-        from gmap.plant import fruits_from_skeleton
+        from gmap.plant import fruits_from_skeleton  # noqa: F401
+        from gmap.pyvista import boundary_polydata  # noqa: F401
     except ImportError:
-        return None
-    return fruits_from_skeleton
+        return False
+    return True
 
 
 class VariantsController:
@@ -46,6 +47,7 @@ class VariantsController:
         w.regen.qualifier_chosen.connect(self.preview_qualifier)
         w.regen.apply_qualifier.connect(self.apply_qualifier)
         w.cancel_button.clicked.connect(self.cancel_all)
+        w.view.leaf_clicked.connect(self.fruit_clicked)
         reason = variants.metrics_available()
         if reason:
             w.gallery.set_unavailable(reason)
@@ -54,6 +56,9 @@ class VariantsController:
         else:
             w.gallery.set_unavailable("No exploration yet: Explore variants (a sweep of the constants "
                                       "±10 %, one rule at a time) or open an exploration folder.")
+        names = variants.vocabulary_names()
+        w.regen.set_qualifiers(names, "The first qualifier explores the grammar's variants (once; cached)."
+                               if names else "Qualifiers are not available (metrics.qualifiers is missing).")
 
     @property
     def controller(self):
@@ -71,12 +76,15 @@ class VariantsController:
     def fruit_action(self, menu):
         action = QAction("Volumetric fruit", self.window)
         action.setCheckable(True)
-        builder = fruit_builder()
-        action.setEnabled(builder is not None)
-        action.setStatusTip("Draw fruit as 3G-map volumes" if builder else
-                            "Volumetric fruit needs gmap.plant.fruits_from_skeleton (not available yet)")
+        ok = fruit_available()
+        action.setEnabled(ok)
+        action.setStatusTip("Draw fruit as 3G-map volumes" if ok else
+                            "Volumetric fruit needs gmap.plant and gmap.pyvista (not available)")
         action.toggled.connect(self.set_fruit)
         menu.addAction(action)
+        self.regrow_fruit_action = menu.addAction("Regrow selected fruit (new seed)")
+        self.regrow_fruit_action.setEnabled(ok)
+        self.regrow_fruit_action.triggered.connect(self.regrow_fruit)
         return action
 
     # -- tasks ------------------------------------------------------------------
@@ -136,17 +144,29 @@ class VariantsController:
         return any(t.running for t in self.tasks.values())
 
     # -- explorations ---------------------------------------------------------------
-    def explore(self, n_jobs=None):
-        """Run the variant sweep on the current grammar (worker, progress, cancel)."""
+    def explore(self, n_jobs=None, then=None):
+        """Run the variant sweep on the current grammar (worker, progress, cancel); then ``then()``."""
         snap = self.controller.snapshot
         text, n, seed = snap.text, snap.n, snap.seed
+        filename = str(snap.path) if snap.path else None
 
         def work(progress, cancelled):
-            ls = LSystem.from_text(text)
+            ls = LSystem.from_text(text, filename=filename)
             return variants.explore_plant(ls, n, seed, progress=lambda d, t: progress(d, t, "variants"),
                                           cancel=cancelled, n_jobs=n_jobs)
-        self.text = text
-        return self.run("explore", work, self.set_variants, "Exploring variants")
+
+        def done(vs):
+            self.text = text
+            self.set_variants(vs)
+            if then is not None:
+                then()
+        return self.run("explore", work, done, "Exploring variants")
+
+    def explored(self):
+        """True if the variant set is a sweep of the grammar text on screen."""
+        vs = self.variant_set
+        return (vs is not None and vs.exploration is not None
+                and self.text == self.controller.snapshot.text)
 
     def open_exploration(self, directory=None):
         if directory is None:
@@ -168,9 +188,10 @@ class VariantsController:
         w = self.window
         w.gallery.set_picks(vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks])
         w.pca_view.set_variants(vs)
-        names = vs.qualifiers
-        w.regen.set_qualifiers(names, "" if names else
-                               "Qualifiers need a sweep run in this window (Variants ▸ Explore).")
+        w.regen.qualifier_note.setText("" if vs.exploration is not None else
+                                       "A qualifier explores this grammar's variants first.")
+        if vs.exploration is not None and w.regen.qualifier.currentText():
+            self.preview_qualifier(w.regen.qualifier.currentText())
         self.render_thumbnails()
 
     def render_thumbnails(self):
@@ -188,7 +209,7 @@ class VariantsController:
                 if image.isNull():
                     try:
                         sk = variants.variant_skeleton(ls, n, seed, pick.get("params"))
-                        image = skeleton_image(sk, THUMB, f"#{pick.get('id')}")
+                        image = skeleton_image(sk, THUMB)
                     except RamureError:
                         image = placeholder_image(THUMB, f"#{pick.get('id')}", "cannot derive")
                 images.append(image)
@@ -214,6 +235,10 @@ class VariantsController:
         return variants.qualifier_params(self.variant_set, name, rules)
 
     def apply_qualifier(self, name):
+        """Regrow the selection (or plant) with qualifier ``name``'s combination; explores first if needed."""
+        if not self.explored():
+            self.window.status(f"Exploring the variants before applying '{name}'…", 0)
+            return self.explore(then=lambda: self.apply_qualifier(name))
         try:
             params = self._qualifier_params(name)
         except RamureError as exc:
@@ -224,7 +249,8 @@ class VariantsController:
         return self.controller.regrow(params=params)
 
     def preview_qualifier(self, name):
-        if self.variant_set is None or self.variant_set.exploration is None:
+        if not self.explored():
+            self.window.regen.set_preview(None)
             return None
         try:
             params = variants.qualifier_params(self.variant_set, name)
@@ -247,21 +273,25 @@ class VariantsController:
         if on:
             self.draw_fruit(self.controller.snapshot)
         else:
-            self.window.view.plotter.remove_actor("fruit", render=False)
-            self.window.view.redraw()
+            self.window.view.set_fruit(None)
 
     def draw_fruit(self, snap):
-        builder = fruit_builder()
-        if builder is None:
+        """Build the fruit volumes in the worker (the model caches them) and draw their surface."""
+        from app.desktop.state import fruit_surface
+
+        job = self.controller.submit("fruit", fruit_surface, key="fruit")
+        self.fruit_job = job.id
+
+    def fruit_ready(self, job):
+        if job.name != "fruit" or job.stale or job.error is not None or not self.show_fruit:
             return
-        try:
-            mesh = builder(snap.skeleton)
-        except RamureError as exc:
-            self.window.report_refused(str(exc))
-            return
-        if hasattr(mesh, "n_cells") and mesh.n_cells:
-            self.window.view.plotter.add_mesh(mesh, color=(0.85, 0.18, 0.12), name="fruit", reset_camera=False,
-                                              render=False, pickable=False)
-        else:
-            self.window.view.plotter.remove_actor("fruit", render=False)
-        self.window.view.redraw()
+        self.window.view.set_fruit(job.result, self.controller.snapshot.selection)
+        if job.result is None:
+            self.window.status("This plant has no fruit")
+
+    def fruit_clicked(self, leaf, mode):
+        self.window._select(self.controller.select, [leaf], mode)
+
+    def regrow_fruit(self):
+        self.window.dirty = True
+        return self.controller.submit("regrow fruit", lambda ex: ex.regrow_fruit())

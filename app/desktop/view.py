@@ -28,6 +28,7 @@ from pyvistaqt import QtInteractor
 from app.desktop.state import project_to_display
 from app.render import frame_camera
 
+FRUIT_RGB = (240, 120, 40)  # volumetric fruit; selected ones are pure red
 CLICK_SLOP = 4  # pixels a click may move and still be a click
 PICK_TOLERANCE = 0.002
 
@@ -93,6 +94,7 @@ class PlantView(QWidget):
     """The plant, its selection in red, the selection's OBB as a red wireframe."""
 
     cell_clicked = Signal(int, str)  # cell id (-1: nothing under the cursor), mode
+    leaf_clicked = Signal(int, str)  # a volumetric fruit's history leaf, mode
     rectangle_selected = Signal(object, str)  # (x0, y0, x1, y1) display coords, mode
     escape = Signal()
 
@@ -116,6 +118,8 @@ class PlantView(QWidget):
         self.picker = None
         self.box = None
         self.box_actor = None
+        self.fruit = None
+        self.fruit_actor = None
         self._diag = None
 
     # -- drawing ---------------------------------------------------------------
@@ -187,6 +191,35 @@ class PlantView(QWidget):
         else:
             self.plotter.update()
 
+    def set_fruit(self, surface, selection=()):
+        """Draw volumetric fruit (a surface with ``leaf_id`` cells), or remove them (None)."""
+        self.picker = None
+        if surface is None or surface.n_cells == 0:
+            if self.fruit_actor is not None:
+                self.plotter.remove_actor("fruit", render=False)
+            self.fruit, self.fruit_actor = None, None
+            self.redraw()
+            return
+        self.fruit = surface.copy(deep=False)
+        self.fruit.cell_data["rgb"] = self.fruit_colors(selection)
+        self.fruit_actor = self.plotter.add_mesh(self.fruit, scalars="rgb", rgb=True, name="fruit",
+                                                 reset_camera=False, render=False, pickable=True,
+                                                 show_scalar_bar=False)
+        self.redraw()
+
+    def fruit_colors(self, selection):
+        from app.desktop.state import leaf_mask
+
+        rgb = np.empty((self.fruit.n_cells, 3), np.uint8)
+        rgb[:] = FRUIT_RGB
+        rgb[leaf_mask(self.fruit.cell_data["leaf_id"], selection)] = (255, 0, 0)
+        return rgb
+
+    def set_fruit_selection(self, selection):
+        if self.fruit is not None:
+            self.fruit.cell_data["rgb"][:] = self.fruit_colors(selection)
+            self.fruit.Modified()
+
     def has_box(self):
         return self.box_actor is not None and bool(self.box_actor.GetVisibility())
 
@@ -218,29 +251,46 @@ class PlantView(QWidget):
         return xy + np.array([x0 * w, y0 * h])
 
     # -- picking -----------------------------------------------------------------
-    def pick(self, x, y):
-        """The plant's mesh cell at display ``(x, y)``, or -1."""
-        if self.actor is None:
-            return -1
+    def _picker(self):
         if self.picker is None:
             import vtk
 
             picker = vtk.vtkCellPicker()
             picker.SetTolerance(PICK_TOLERANCE)
             picker.PickFromListOn()
-            picker.AddPickList(self.actor)
-            locator = vtk.vtkStaticCellLocator()
-            locator.SetDataSet(self.actor.GetMapper().GetInput())
-            locator.BuildLocator()
-            picker.AddLocator(locator)
+            for actor in (self.actor, self.fruit_actor):
+                if actor is not None:
+                    picker.AddPickList(actor)
+                    locator = vtk.vtkStaticCellLocator()
+                    locator.SetDataSet(actor.GetMapper().GetInput())
+                    locator.BuildLocator()
+                    picker.AddLocator(locator)
             self.picker = picker
-        if not self.picker.Pick(float(x), float(y), 0.0, self.plotter.renderer):
-            return -1
-        return int(self.picker.GetCellId())
+        return self.picker
+
+    def pick_any(self, x, y):
+        """``("plant" | "fruit", cell id)`` under display ``(x, y)``, or ``(None, -1)``."""
+        if self.actor is None:
+            return None, -1
+        picker = self._picker()
+        if not picker.Pick(float(x), float(y), 0.0, self.plotter.renderer):
+            return None, -1
+        hit = picker.GetActor()
+        kind = "fruit" if self.fruit_actor is not None and hit is self.fruit_actor else "plant"
+        return kind, int(picker.GetCellId())
+
+    def pick(self, x, y):
+        """The plant's mesh cell at display ``(x, y)``, or -1 (volumetric fruit are not plant cells)."""
+        kind, cell = self.pick_any(x, y)
+        return cell if kind == "plant" else -1
 
     def click_at(self, x, y, mode="replace"):
-        """Pick at display ``(x, y)`` and emit :attr:`cell_clicked` (what a mouse click does)."""
-        cell = self.pick(x, y)
+        """Pick at display ``(x, y)`` and emit :attr:`cell_clicked` or :attr:`leaf_clicked`."""
+        kind, cell = self.pick_any(x, y)
+        if kind == "fruit":
+            leaf = int(self.fruit.cell_data["leaf_id"][cell])
+            self.leaf_clicked.emit(leaf, mode)
+            return cell
         self.cell_clicked.emit(cell, mode)
         return cell
 

@@ -187,6 +187,7 @@ class MainWindow(QMainWindow):
         c.state_changed.connect(self.show_state)
         c.selection_changed.connect(self.show_selection)
         c.job_done.connect(self._job_done)
+        c.job_done.connect(self.variants.fruit_ready)
         c.refused.connect(self.report_refused)
         c.crashed.connect(self.report_crash)
         c.busy_changed.connect(lambda busy: self.status("Computing…" if busy else "", 0 if busy else 1))
@@ -241,6 +242,7 @@ class MainWindow(QMainWindow):
             except RamureError:
                 kin = None
         self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors))
+        self.view.set_fruit_selection(selection)
         try:
             self.view.set_box(self.controller.selection_box() if selection else None)
         except RamureError:

@@ -1,0 +1,116 @@
+"""Variants in the window: exploration with progress and cancel, gallery, PCA dock, qualifiers, fruit."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt
+
+from app.desktop.thumbnails import pixel_variance
+from conftest import ROOT, settle
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("RAMURE_CACHE", str(tmp_path / "cache"))
+
+
+def explored(qtbot, w, n_jobs=1):
+    w.variants.explore(n_jobs=n_jobs)
+    assert w.progress.isVisible() and w.cancel_button.isVisible()
+    qtbot.waitUntil(lambda: w.variants.variant_set is not None and not w.variants.busy(), timeout=60000)
+    settle(qtbot, w)
+    return w.variants.variant_set
+
+
+def test_explore_fills_the_gallery_and_the_pca_dock(make_window, qtbot, artifacts):
+    w = make_window(n=4)
+    vs = explored(qtbot, w)
+    assert w.gallery.list.count() == 27 and len(vs.picks) == 27
+    icon = w.gallery.list.item(0).icon().pixmap(100, 100).toImage()
+    assert pixel_variance(icon) > 10  # a drawn plant, not a blank tile
+    assert not w.progress.isVisible()
+    assert w.pca_view.boxes_list.count() >= 10  # one box per vocabulary qualifier
+    w.pca_view.set_box_checked("dense")
+    assert w.pca_view.checked_boxes() == ["dense"]
+    lines = [ln for ln in w.pca_view.axes.get_lines() if ln.get_color() != "black"]
+    assert len(lines) == 12  # the dense box's edges
+    w.docks["gallery"].raise_()
+    w.docks["pca"].raise_()
+    settle(qtbot, w)
+    w.grab_window().save(str(artifacts / "desktop_variants.png"))
+
+
+def test_gallery_click_applies_the_pick(make_window, qtbot):
+    w = make_window(n=4)
+    vs = explored(qtbot, w)
+    item = w.gallery.list.item(5)
+    rect = w.gallery.list.visualItemRect(item)
+    qtbot.mouseClick(w.gallery.list.viewport(), Qt.MouseButton.LeftButton, pos=rect.center())
+    settle(qtbot, w)
+    edit = w.controller.explorer.session.edits[-1]
+    assert edit["op"] == "regrow" and edit["params"] == {
+        "rule": vs.picks[5]["params"]["rule"],
+        "constants": {k: float(v) for k, v in vs.picks[5]["params"]["constants"].items()}}
+
+
+def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot):
+    w = make_window(n=4)
+    assert w.regen.qualifier.count() >= 10
+    snap = w.controller.snapshot
+    w.controller.select(snap.segment_leaf[-4:])
+    w.regen.qualifier.setCurrentText("dense")
+    with qtbot.waitSignal(w.controller.job_done, timeout=60000,
+                          check_params_cb=lambda job: job.name == "regrow"):
+        qtbot.mouseClick(w.regen.apply_button, Qt.MouseButton.LeftButton)
+    settle(qtbot, w)
+    edit = w.controller.explorer.session.edits[-1]
+    assert edit["params"] is not None and edit["selection"] == sorted(snap.segment_leaf[-4:].tolist())
+    assert w.regen.preview.pixmap() is not None and not w.regen.preview.pixmap().isNull()
+
+
+def test_cancel_stops_the_sweep(make_window, qtbot):
+    w = make_window(n=8)
+    w.variants.explore(n_jobs=1)
+    qtbot.waitUntil(lambda: w.progress.value() >= 0, timeout=5000)
+    w.cancel_button.click()
+    qtbot.waitUntil(lambda: not w.variants.busy(), timeout=60000)
+    assert w.variants.variant_set is None and not w.progress.isVisible()
+    assert w.gallery.list.count() == 0
+
+
+def test_open_exploration_folder(make_window, qtbot, tmp_path):
+    from metrics import explore, write_exploration
+
+    write_exploration(explore(ROOT / "grammars" / "honda_sympodial.lsys", n=4, n_jobs=1), tmp_path / "exp")
+    w = make_window(n=4)
+    vs = w.variants.open_exploration(tmp_path / "exp")
+    qtbot.waitUntil(lambda: not w.variants.busy(), timeout=30000)
+    assert w.gallery.list.count() == 27 and vs.points.shape[1] == 3
+    assert w.variants.open_exploration(tmp_path / "missing") is None and "picks.json" in w.last_message
+
+
+def test_volumetric_fruit_can_be_picked(make_window, qtbot):
+    if not w_fruit_available():
+        pytest.skip("gmap volumetric fruit not available")
+    w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=4)
+    w.fruit_action.setChecked(True)
+    qtbot.waitUntil(lambda: w.view.fruit is not None, timeout=30000)
+    settle(qtbot, w)
+    fruit = w.view.fruit
+    leaves = np.asarray(fruit.cell_data["leaf_id"])
+    target = int(leaves[0])
+    centre = np.asarray(fruit.extract_cells(np.flatnonzero(leaves == target)).center)
+    w.view.click_at(*w.view.project(centre[None])[0])
+    assert w.controller.explorer.selection == [target]
+    rgb = np.asarray(w.view.fruit.cell_data["rgb"])
+    assert (rgb[leaves == target] == [255, 0, 0]).all()
+    w.fruit_action.setChecked(False)
+    assert w.view.fruit is None
+
+
+def w_fruit_available():
+    from app.desktop.variants_panel import fruit_available
+
+    return fruit_available()
