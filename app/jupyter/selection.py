@@ -118,6 +118,13 @@ class TreeBrowser:
             return tree.children(self.path[-1])
         return np.flatnonzero((tree.parent == -1) & tree.alive)
 
+    def children_with(self, symbol):
+        """The listed nodes whose module symbol is ``symbol`` (e.g. ``"B"``)."""
+        model = self.app.model
+        kids = self.children()
+        symbols = np.asarray(model.lsystem.symbols, dtype=object)[model.derivation.tree.symbol[kids]]
+        return kids[symbols == symbol].tolist()
+
     def open(self, node):
         """Show ``node``'s children (a leaf has none: nothing happens)."""
         tree = self.app.model.derivation.tree

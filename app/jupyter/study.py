@@ -54,9 +54,10 @@ def _likert(description):
 class GroupQuestions:
     """The questionnaire of one stored group (representative, three ratings, qualifiers)."""
 
-    def __init__(self, panel, group):
+    def __init__(self, panel, group, number=None):
         self.panel = panel
-        self.label = group.label
+        self.label = group.label  # as stored (1, 2, ... in group-number order)
+        self.number = group.label if number is None else number  # as the participant numbered it
         several = len(group.images) > 1
         self.representative = W.Dropdown(options=[("choose…", None)] + [(f"#{i}", i) for i in group.images],
                                          value=group.representative if several else None,
@@ -78,7 +79,7 @@ class GroupQuestions:
         self.quality.observe(lambda ch: self._save("quality", ch["new"]), names="value")
         self.qualifiers.observe(lambda ch: self._save("qualifiers", ch["new"]), names="value")
         self.widget = W.VBox([
-            W.HTML(f"<b>Group {group.label}</b>: images {', '.join(f'#{i}' for i in group.images)}"),
+            W.HTML(f"<b>Group {self.number}</b>: images {', '.join(f'#{i}' for i in group.images)}"),
             self.representative, self.usefulness, self.difference, self.quality, self.qualifiers,
         ], layout=W.Layout(border="1px solid #ddd", padding="4px", margin="2px 0"))
 
@@ -167,12 +168,15 @@ class StudyPanel:
         self.refresh()
         return result
 
+    def numbers(self) -> list:
+        """The group numbers in use on screen, in order (stored as groups 1, 2, ...)."""
+        return sorted({d.value for d in self.group_of.values() if d.value})
+
+    def images_of(self, number) -> list:
+        return sorted(image for image, d in self.group_of.items() if d.value == number)
+
     def _store_groups(self):
-        groups = {}
-        for image, dropdown in self.group_of.items():
-            if dropdown.value:
-                groups.setdefault(dropdown.value, []).append(image)
-        self.session.set_groups([sorted(groups[g]) for g in sorted(groups)])
+        self.session.set_groups([self.images_of(n) for n in self.numbers()])
 
     def assign(self, groups):
         """Set every image's group at once: ``{image: group}`` or a list of groups of images
@@ -193,7 +197,7 @@ class StudyPanel:
 
     def answer(self, group, representative=None, usefulness=None, difference=None, quality=None,
                qualifiers=None):
-        """Answer for ``group`` as the participant would (each given value through its widget)."""
+        """Answer for ``group`` (its number on screen) as the participant would, through its widgets."""
         form = self.forms.get(group)
         if form is None:
             self.message.show(f"group {group} does not exist (sort the images first)", "error")
@@ -212,23 +216,35 @@ class StudyPanel:
             self.message.show("test finished and stored — thank you", "info")
 
     # -- display -------------------------------------------------------------
+    def _repr_mimebundle_(self, **kwargs):
+        bundle = dict(self.widget._repr_mimebundle_(**kwargs) or {})
+        s = self.session
+        bundle["text/plain"] = (f"<StudyPanel: participant {s.participant}, grammar {s.grammar}, "
+                                f"{len(s.groups())} groups, {'finished' if s.finished else 'in progress'}>")
+        return bundle
+
     def refresh(self):
         s = self.session
         groups = s.groups()
         self.quiet = True
         try:
-            label_of = {image: g.label for g in groups for image in g.images}
-            for image, dropdown in self.group_of.items():
-                dropdown.value = label_of.get(image, 0)
+            numbers = self.numbers()
+            if [tuple(g.images) for g in groups] != [tuple(self.images_of(n)) for n in numbers]:
+                # resuming, or the screen differs from what is stored: show the stored groups
+                label_of = {image: g.label for g in groups for image in g.images}
+                for image, dropdown in self.group_of.items():
+                    dropdown.value = label_of.get(image, 0)
+                numbers = self.numbers()
+            for dropdown in self.group_of.values():
                 dropdown.disabled = s.finished
-            layout = [(g.label, tuple(g.images)) for g in groups]
+            layout = [(n, tuple(g.images)) for n, g in zip(numbers, groups)]
             if layout != self._layout:  # the grouping changed: a new questionnaire
-                self.forms = {g.label: GroupQuestions(self, g) for g in groups}
+                self.forms = {n: GroupQuestions(self, g, n) for n, g in zip(numbers, groups)}
                 self.questions.children = [f.widget for f in self.forms.values()]
                 self._layout = layout
             else:
-                for g in groups:
-                    self.forms[g.label].update(g)
+                for n, g in zip(numbers, groups):
+                    self.forms[n].update(g)
         finally:
             self.quiet = False
         minutes = s.remaining_seconds() / 60

@@ -14,7 +14,9 @@ when nothing is selected) with that parameter combination, through
 """
 from __future__ import annotations
 
+import base64
 import pathlib
+import tempfile
 import threading
 
 import ipywidgets as W
@@ -22,7 +24,7 @@ import numpy as np
 
 from app.jupyter._ui import button, message_html, png_image
 from app.jupyter.scatter import pca_png
-from app.jupyter.view import mesh_png
+from app.jupyter.view import RENDER_LOCK
 from lsys.errors import RamureError
 
 N_PICKS = 27
@@ -157,14 +159,25 @@ class VariantPanel:
         self.app.refresh()
         return exp
 
-    def _render_thumbnails(self, exp):
+    def _render_thumbnails(self, exp, batch=3):
+        """The 27 pick thumbnails (PNG bytes) by :mod:`app.thumbnails`, a few at a time so the
+        bar moves and *Stop* is honoured between batches."""
+        from app.thumbnails import render_variants
+
+        size = (self.thumb_size * 2, self.thumb_size * 2)
         images = []
-        for k, variant in enumerate(exp.picks.variant.tolist()):
-            if self._stop.is_set():
-                raise Stopped("stopped")
-            mesh = exp.sweep.derive(int(variant)).skeleton().to_polydata()
-            images.append(mesh_png(mesh, size=(self.thumb_size * 2, self.thumb_size * 2), view="front"))
-            self._progress(k + 1, N_PICKS, "thumbnails")
+        variants = exp.picks.variant.tolist()
+        with tempfile.TemporaryDirectory() as tmp:
+            for start in range(0, N_PICKS, batch):
+                if self._stop.is_set():
+                    raise Stopped("stopped")
+                ids = range(start + 1, min(start + batch, N_PICKS) + 1)
+                paths = [pathlib.Path(tmp) / f"pick_{pid:02d}.png" for pid in ids]
+                with RENDER_LOCK:
+                    render_variants(exp.sweep, variants[start:start + len(paths)], paths, size,
+                                    captions=[f"#{pid}" for pid in ids])
+                images += [p.read_bytes() for p in paths]
+                self._progress(len(images), N_PICKS, "thumbnails")
         return images
 
     def stop(self):
@@ -272,6 +285,23 @@ class VariantPanel:
         return write_exploration(exp, out, images=images)
 
     # -- display -----------------------------------------------------------
+    def gallery_html(self) -> str:
+        """The 27 thumbnails as one HTML grid (what a saved notebook shows without widgets)."""
+        cells = []
+        for pid, data in enumerate(self.thumbnails, start=1):
+            if data:
+                src = base64.b64encode(data).decode("ascii")
+                cells.append(f"<img title='#{pid}' src='data:image/png;base64,{src}' "
+                             f"style='width:{self.thumb_size}px;margin:1px'>")
+        if not cells:
+            return "<i>no variants explored yet</i>"
+        return f"<div style='display:grid;grid-template-columns:repeat(9,{self.thumb_size + 4}px)'>{''.join(cells)}</div>"
+
+    def _repr_mimebundle_(self, **kwargs):
+        bundle = dict(self.widget._repr_mimebundle_(**kwargs) or {})
+        bundle["text/html"] = self.gallery_html()
+        return bundle
+
     def refresh(self):
         reason = metrics_status()
         exp = self.exploration

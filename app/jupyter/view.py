@@ -3,10 +3,11 @@
 The static view is an ``ipywidgets.Image`` re-rendered off-screen (VTK, EGL
 when there is no display) after every change.  The interactive view uses
 pyvista's trame backend (``pip install "pyvista[jupyter]"``, i.e.
-``trame-pyvista``) and supports picking: a click on a branch selects its leaf.
-``backend="auto"`` takes trame when it is installed and pyvista's notebook
-backend is not set to ``static`` (``PYVISTA_JUPYTER_BACKEND=static``), else
-the PNG.  Either way :meth:`PlantView.png` gives the current picture, which is
+``trame-pyvista``) in server-rendering mode, where picking works: a click on
+a branch selects its leaf (in trame's client mode picking does not reach
+Python).  ``backend="auto"`` takes the trame server view when trame is
+installed and pyvista's notebook backend is not set to ``static``
+(``PYVISTA_JUPYTER_BACKEND=static``), else the PNG.  Either way :meth:`PlantView.png` gives the current picture, which is
 also what a notebook shows where no widget can run (nbconvert, GitHub).
 
 >>> from app.model import Explorer
@@ -89,6 +90,16 @@ def trame_available() -> bool:
     return importlib.util.find_spec("trame_pyvista") is not None
 
 
+def in_kernel() -> bool:
+    """True inside a Jupyter kernel (where a widget front end may be connected)."""
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return False
+    shell = get_ipython()
+    return shell is not None and getattr(shell, "kernel", None) is not None
+
+
 def resolve_backend(backend="auto") -> str:
     """``"static"`` or a trame mode (``"trame"``, ``"server"``, ``"client"``)."""
     if backend not in BACKENDS:
@@ -99,10 +110,12 @@ def resolve_backend(backend="auto") -> str:
         return "static"
     if backend != "auto":
         return backend
+    if not in_kernel():
+        return "static"
     import pyvista as pv
 
     chosen = pv.global_theme.jupyter_backend
-    return chosen if chosen in ("trame", "server", "client") else ("trame" if chosen is None else "static")
+    return "server" if chosen in (None, "trame", "server", "client") else "static"
 
 
 class PlantView:
@@ -129,7 +142,7 @@ class PlantView:
     @property
     def picking(self) -> bool:
         """Whether a click in the view selects leaves."""
-        return self.trame is not None
+        return self.trame is not None and self.backend != "client"
 
     def _key(self):
         m = self.app.model
@@ -166,8 +179,8 @@ class TrameView:
         self.plotter = pv.Plotter(notebook=True, window_size=list(owner.size))
         self.plotter.set_background("white")
         self._actor = None
+        self._view = None
         self.draw(update=False)
-        frame_camera(self.plotter, owner.app.model.mesh.bounds, owner.view)
         self.plotter.enable_point_picking(callback=self._picked, use_picker=True, picker="cell",
                                           left_clicking=True, show_message=False, show_point=False)
         self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
@@ -177,6 +190,9 @@ class TrameView:
         mesh = model.mesh.copy(deep=False)
         mesh.cell_data["rgb"] = view_colors(model, self.owner.show_cut)
         self._actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False)
+        if self._view != self.owner.view:
+            frame_camera(self.plotter, model.mesh.bounds, self.owner.view)
+            self._view = self.owner.view
         if update:
             viewer = getattr(self.widget, "viewer", None)
             if viewer is not None:

@@ -1,0 +1,74 @@
+"""The two example notebooks run headless (nbclient) without error and produce their outputs."""
+from __future__ import annotations
+
+import base64
+import os
+import pathlib
+
+import pytest
+
+nbformat = pytest.importorskip("nbformat")
+nbclient = pytest.importorskip("nbclient")
+pytest.importorskip("ipykernel")
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def run_notebook(name, tmp_path):
+    nb = nbformat.read(ROOT / "examples" / name, as_version=4)
+    env = {"PYVISTA_JUPYTER_BACKEND": "static", "RAMURE_CACHE": str(tmp_path / "cache")}
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)  # the kernel inherits them
+    try:
+        client = nbclient.NotebookClient(nb, kernel_name="python3", timeout=180,
+                                         resources={"metadata": {"path": str(ROOT)}})
+        client.execute()
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return nb
+
+
+def outputs(nb):
+    return [o for cell in nb.cells if cell.cell_type == "code" for o in cell.outputs]
+
+
+def text_of(nb):
+    return "".join(o.get("text", "") for o in outputs(nb) if o.output_type == "stream")
+
+
+@pytest.mark.slow
+def test_explore_notebook_runs(tmp_path):
+    nb = run_notebook("explore.ipynb", tmp_path)
+    assert not [o for o in outputs(nb) if o.output_type == "error"]
+    first = nb.cells[1].outputs[-1]["data"]
+    # the explorer shows as a widget, with a PNG of the plant for viewers without widgets
+    assert "application/vnd.jupyter.widget-view+json" in first
+    assert base64.b64decode(first["image/png"])[:4] == b"\x89PNG"
+    text = text_of(nb)
+    assert "undo restores the plant: True" in text
+    assert "changed: True | last edit: regrow {'a2': 30.0}" in text
+    assert "replays to the same plant: True" in text
+    assert "applied 'dense'" in text
+    pngs = [o for o in outputs(nb) if "image/png" in o.get("data", {})]
+    assert len(pngs) >= 6  # explorer, snapshots, PCA, fruit tree
+    gallery = [o for o in outputs(nb) if "text/html" in o.get("data", {})
+               and "data:image/png" in o["data"]["text/html"]]
+    assert gallery and gallery[0]["data"]["text/html"].count("<img") == 27
+
+
+@pytest.mark.slow
+def test_study_notebook_runs(tmp_path):
+    nb = run_notebook("study.ipynb", tmp_path)
+    assert not [o for o in outputs(nb) if o.output_type == "error"]
+    text = text_of(nb)
+    assert "27 thumbnails" in text
+    assert "finished: True" in text
+    assert "12 simulated participants; 13 finished tests" in text
+    report = [o["data"]["text/html"] for o in outputs(nb) if "text/html" in o.get("data", {})
+              and "ramure-report" in o["data"]["text/html"]]
+    assert report, "the analysis cell renders the report inline"
+    assert "13 participants" in report[0] and "data:image/png;base64" in report[0]

@@ -1,0 +1,136 @@
+"""Variant exploration in the explorer: sweep with progress and stop, gallery, picks, qualifiers, files."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("metrics")
+
+from app.jupyter import Explorer  # noqa: E402
+from app.jupyter import variants as variants_module  # noqa: E402
+from jupyter_helpers import HONDA  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def explored():
+    ex = Explorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    ex.variants.thumb_size = 40  # small thumbnails: faster
+    exp = ex.explore_variants(n=3, n_jobs=1)
+    return ex, exp
+
+
+@pytest.fixture
+def ex(explored):
+    """A fresh explorer that already holds the shared exploration."""
+    source, exp = explored
+    fresh = Explorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    fresh.variants.exploration, fresh.variants.thumbnails = exp, list(source.variants.thumbnails)
+    fresh.variants.refresh()
+    fresh.refresh()
+    return fresh
+
+
+def test_exploration_fills_gallery_progress_and_qualifiers(explored):
+    ex, exp = explored
+    assert exp is not None and exp.sweep.n_variants_ == 486
+    assert len(ex.variants.thumbnails) == 27 and all(t[:4] == b"\x89PNG" for t in ex.variants.thumbnails)
+    assert ex.variants.bar.value == ex.variants.bar.max == 27
+    assert ex.variants.progress_text.value == "thumbnails 27/27"
+    assert all(not b.disabled for _, b in ex.variants.cards)
+    assert ex.variants.cards[4][0].value == ex.variants.thumbnails[4]
+    assert {"dense", "small", "round"} <= set(ex.edits.qualifier.options) and not ex.edits.qualifier.disabled
+    assert "486 variants" in ex.variants.note.value and "486 variants explored" in ex.message.text
+    assert ex.variants.scatter.value[:4] == b"\x89PNG"
+    assert ex.variants.gallery_html().count("<img") == 27
+
+
+def test_gallery_button_applies_the_pick(ex):
+    before = ex.plant.to_string()
+    ex.variants.cards[26][1].click()  # pick #27
+    params = ex.variants.pick_params(27)
+    assert ex.history[-1]["params"] == params and ex.plant.to_string() != before
+    assert ex.variants.chosen is not None and np.allclose(ex.variants.chosen, ex.variants.pick_point(27))
+    assert "applied pick #27" in ex.message.text
+
+
+def test_qualifier_dropdown_regrows_the_selection(ex):
+    from metrics.apply import active_rules
+
+    ex.select_where(min_order=2)
+    rules = active_rules(ex.plant.tree, ex.model.plan().roots)
+    before = ex.plant.to_string()
+    ex.edits.qualifier.value = "dense"
+    ex.edits.apply_qualifier.click()
+    params = ex.history[-1]["params"]
+    assert params["rule"] in rules and ex.plant.to_string() != before
+    assert ex.selection == [] and "applied 'dense'" in ex.message.text
+
+
+def test_pick_and_qualifier_need_an_exploration():
+    ex = Explorer(HONDA, n=4, view="static", size=(120, 120))
+    ex.apply_pick(3)
+    assert "explore the variants first" in ex.error and ex.history == []
+    assert ex.edits.qualifier.disabled and all(b.disabled for _, b in ex.variants.cards)
+    ex.apply_qualifier(None)
+    assert ex.message.kind == "note"
+
+
+def test_stop_button_cancels_a_background_exploration():
+    ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
+    thread = ex.explore_variants(n=5, n_jobs=1, wait=False)
+    assert thread.is_alive() and ex.variants.start.disabled
+    ex.variants.stop_button.click()
+    ex.variants.wait(60)
+    assert not thread.is_alive()
+    assert ex.variants.exploration is None and "stopped" in ex.variants.note.value
+    assert not ex.variants.start.disabled and ex.variants.stop_button.disabled
+
+
+def test_kernel_interrupt_stops_a_blocking_exploration(monkeypatch):
+    ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
+
+    def interrupted(done, total, what="variants"):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ex.variants, "_progress", interrupted)
+    assert ex.explore_variants(n=3, n_jobs=1) is None
+    assert "stopped" in ex.error and ex.variants.exploration is None
+
+
+def test_save_writes_what_a_study_reads(ex, tmp_path):
+    from studies import Study
+
+    ex.variants.save(tmp_path / "honda")
+    picks = json.loads((tmp_path / "honda" / "picks.json").read_text())
+    assert [p["id"] for p in picks] == list(range(1, 28))
+    assert all((tmp_path / "honda" / p["image"]).read_bytes()[:4] == b"\x89PNG" for p in picks)
+    assert picks[4]["params"] == ex.variants.pick_params(5)
+    with Study.create(tmp_path / "s.db", grammars={"honda": tmp_path / "honda"}) as study:
+        assert study.picks("honda")[0].image.endswith("thumbs/pick_01.png")
+
+
+def test_study_regions_come_first_and_are_drawn(ex, tmp_path):
+    from metrics.store import QualifierStore
+
+    exp = ex.variants.exploration
+    near = np.argsort(np.linalg.norm(exp.points - exp.picks.points[0], axis=1))[:6]
+    with QualifierStore(tmp_path / "q.sqlite") as store:
+        store.add(exp.name, "petit", near, exp.points[near], [exp.sweep.combination(int(i)) for i in near],
+                  source="study:test")
+    ex.load_qualifiers(tmp_path / "q.sqlite")
+    assert ex.edits.qualifier.options[0] == "small"
+    assert set(ex.variants.boxes()) == {"small"}
+    ex.apply_qualifier("small")
+    applied = ex.history[-1]["params"]
+    assert applied in [exp.sweep.combination(int(i)) for i in near]  # the region's centre picks among them
+    ex.load_qualifiers(tmp_path / "q.sqlite", grammar="other")
+    assert "no qualifier points for grammar 'other'" in ex.error
+
+
+def test_without_metrics_the_panel_says_so(monkeypatch):
+    monkeypatch.setattr(variants_module, "metrics_status", lambda: "variant exploration is not available (test)")
+    ex = Explorer(HONDA, n=3, view="static", size=(120, 120))
+    assert "not available (test)" in ex.variants.note.value and ex.variants.start.disabled
+    assert ex.explore_variants() is None and "not available" in ex.error

@@ -1,0 +1,79 @@
+"""The 3D view: backend choice, colours, camera and the static fallback (trame itself is not installed here)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.jupyter import Explorer
+from app.jupyter import view as view_module
+from app.jupyter.view import CUT, cut_leaves, resolve_backend, view_colors
+from app.render import BARK
+from jupyter_helpers import HONDA
+from lsys.errors import ValueRefused
+
+
+def test_backend_resolution(monkeypatch):
+    assert resolve_backend("static") == "static"
+    assert resolve_backend("auto") == "static"  # no kernel here
+    with pytest.raises(ValueRefused, match="view backend"):
+        resolve_backend("opengl")
+    monkeypatch.setattr(view_module, "trame_available", lambda: True)
+    monkeypatch.setattr(view_module, "in_kernel", lambda: True)
+    assert resolve_backend("auto") == "server"  # trame, server rendering: picking works
+    assert resolve_backend("client") == "client"
+    import pyvista as pv
+
+    monkeypatch.setattr(pv.global_theme, "jupyter_backend", "static")
+    assert resolve_backend("auto") == "static"
+    monkeypatch.setattr(view_module, "trame_available", lambda: False)
+    assert resolve_backend("trame") == "static"
+
+
+def test_trame_failure_falls_back_to_the_picture(monkeypatch):
+    import ipywidgets as W
+
+    class Broken:
+        def __init__(self, *a, **k):
+            raise RuntimeError("no server")
+
+    monkeypatch.setattr(view_module, "resolve_backend", lambda backend: "server")
+    monkeypatch.setattr(view_module, "TrameView", Broken)
+    ex = Explorer(HONDA, n=3, size=(100, 100))
+    assert ex.view.backend == "static" and isinstance(ex.view.widget, W.Image)
+    assert not ex.view.picking and ex.view.image.value[:4] == b"\x89PNG"
+    assert "interactive view unavailable (RuntimeError: no server)" in ex.message.text
+
+
+def test_colours_selection_kinship_and_cut(explorer):
+    ex = explorer
+    mesh = ex.model.mesh
+    bark = (np.array(BARK) * 255).astype(np.uint8)
+    assert (view_colors(ex.model) == bark).all()
+    leaf = int(mesh.cell_data["leaf_id"][np.flatnonzero(np.asarray(mesh.cell_data["order"]) == 3)[0]])
+    ex.select([leaf])
+    rgb = view_colors(ex.model)
+    mine = np.asarray(mesh.cell_data["leaf_id"]) == leaf
+    assert (rgb[mine] == (255, 0, 0)).all()
+    hues = {tuple(c) for c in rgb[~mine].tolist()}
+    assert len(hues) >= 3 and tuple(bark.tolist()) not in hues  # kinship hues, red to blue
+    ex.select(ex.model.session.leaves_with_symbol("F")[-2:].tolist())
+    ex.set_rho(5)  # a low ρ climbs above the selection: the cut takes unselected branches too
+    assert set(ex.selection) <= set(cut_leaves(ex.model).tolist())
+    rgb = view_colors(ex.model, show_cut=True)
+    orange = np.all(rgb == (np.array(CUT) * 255).astype(np.uint8), axis=1)
+    selected = np.isin(mesh.cell_data["leaf_id"], ex.selection)
+    assert orange.any() and not np.any(orange & selected) and (rgb[selected] == (255, 0, 0)).all()
+
+
+def test_camera_and_cut_preview_rerender(explorer):
+    ex = explorer
+    front = ex.png()
+    ex.camera.value = "top"
+    assert ex.view.view == "top" and ex.view.image.value != front
+    before = ex.view.image.value
+    ex.select_where(min_order=4)
+    ex.show_cut.value = True
+    assert ex.view.show_cut and ex.view.image.value != before
+    ex.set_view("sideways")
+    assert ex.message.kind == "error"
+
