@@ -13,9 +13,10 @@ import pkgutil
 import sys
 
 import app.commands
+from lsys.errors import RamureError
 
 
-class UserError(Exception):
+class UserError(RamureError):
     """An error caused by the user's input: printed without a traceback, exit 2."""
 
 
@@ -33,11 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _user_errors():
-    errors = [UserError, FileNotFoundError, IsADirectoryError, PermissionError]
-    from lsys.errors import RamureError
-
-    errors.append(RamureError)
-    return tuple(errors)
+    return (RamureError, FileNotFoundError, IsADirectoryError, PermissionError)
 
 
 def main(argv=None) -> int:
@@ -59,4 +56,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run the imported module's main, so commands and this file share one UserError class.
+    from app.cli import main as _main
+
+    sys.exit(_main())

@@ -69,3 +69,14 @@ def test_unknown_constant_override_refused():
     ls = LSystem.from_file("grammars/honda_sympodial.lsys")
     with pytest.raises(GrammarError, match="unknown constant"):
         ls.derive(constants={"nope": 1})
+
+
+@pytest.mark.parametrize("argv,fragment", [
+    (["derive", "grammars/algae.lsys", "--set", "x=1"], "no constant 'x'"),
+    (["regen", "grammars/algae.lsys", "--select", "a,b"], "--select expects"),
+    (["derive", "missing.lsys"], "No such file"),
+])
+def test_cli_user_errors_exit_2_without_traceback(argv, fragment):
+    proc = subprocess.run([sys.executable, "-m", "app.cli", *argv], capture_output=True, text=True)
+    assert proc.returncode == 2, proc.stderr
+    assert fragment in proc.stderr and "Traceback" not in proc.stderr
