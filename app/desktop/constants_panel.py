@@ -10,7 +10,7 @@ slider drag re-derives a few times, not at every pixel.
 from __future__ import annotations
 
 from PySide6.QtCore import Qt, QTimer, Signal
-from PySide6.QtWidgets import (QCheckBox, QDoubleSpinBox, QFormLayout, QGridLayout, QGroupBox, QLabel,
+from PySide6.QtWidgets import (QCheckBox, QDoubleSpinBox, QGridLayout, QGroupBox, QHBoxLayout, QLabel,
                                QScrollArea, QSlider, QSpinBox, QVBoxLayout, QWidget)
 
 from app.desktop.state import constant_range
@@ -135,9 +135,12 @@ class ConstantsPanel(QWidget):
         self.n_box.valueChanged.connect(self._derivation)
         self.seed_box.valueChanged.connect(self._derivation)
         derivation = QGroupBox("Derivation")
-        form = QFormLayout(derivation)
-        form.addRow("Steps n", self.n_box)
-        form.addRow("Seed", self.seed_box)
+        row = QHBoxLayout(derivation)
+        row.setContentsMargins(6, 2, 6, 2)
+        row.addWidget(QLabel("Steps n"))
+        row.addWidget(self.n_box, 1)
+        row.addWidget(QLabel("Seed"))
+        row.addWidget(self.seed_box, 2)
 
         self.edit_ranges = QCheckBox("Edit ranges")
         self.edit_ranges.toggled.connect(self._show_ranges)

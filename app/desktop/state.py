@@ -37,6 +37,7 @@ class Snapshot:
     text: str
     error: object  # the last GrammarError or None
     constants: dict  # current values (grammar #define plus edits)
+    grammar_constants: dict  # the grammar's #define values (the constants panel's rows)
     n: int
     seed: int
     rho: float
@@ -56,6 +57,7 @@ def take_snapshot(explorer, previous=None):
     """A :class:`Snapshot` of ``explorer``; reuses ``previous``'s heavy parts if the version is the same."""
     session = explorer.session
     light = dict(text=explorer.text, error=explorer.error, constants=explorer.constants,
+                 grammar_constants=dict(explorer.lsystem.constants),
                  n=session.n, seed=session.seed, rho=explorer.rho, selection=tuple(explorer.selection),
                  status=explorer.status(), can_undo=session.can_undo, can_redo=session.can_redo,
                  last_result=explorer.last_result, path=explorer.path, edits=len(session.edits))

@@ -74,6 +74,7 @@ class MainWindow(QMainWindow):
         self.gallery = GalleryView()
         self.pca_view = PcaCloudView()
         self.docks = {}
+        self.setTabPosition(Qt.DockWidgetArea.AllDockWidgetAreas, QTabWidget.TabPosition.North)
         self._dock("grammar", "Grammar", self.editor, Qt.DockWidgetArea.LeftDockWidgetArea)
         self._dock("constants", "Constants", self.constants_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
         self._dock("regeneration", "Regeneration", self.regen, Qt.DockWidgetArea.RightDockWidgetArea)
@@ -86,7 +87,6 @@ class MainWindow(QMainWindow):
         self.docks["string"].raise_()
         self.tabifyDockWidget(self.docks["regeneration"], self.docks["pca"])
         self.docks["regeneration"].raise_()
-        self.setTabPosition(Qt.DockWidgetArea.AllDockWidgetAreas, QTabWidget.TabPosition.North)
 
         self.status_label = QLabel("")
         self.status_label.setObjectName("plantStatus")
@@ -106,7 +106,7 @@ class MainWindow(QMainWindow):
         warm_up()
         self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330],
                          Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [420, 330], Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [360, 390], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
         self.editor.set_text(explorer.text)
         self.show_plant(self.controller.snapshot, reset_camera=True)
@@ -222,7 +222,7 @@ class MainWindow(QMainWindow):
 
     def show_state(self, snap):
         """Same plant, other state: constants, undo/redo, status line, grammar error."""
-        self.constants_panel.show_snapshot(snap, self.controller.explorer.lsystem.constants)
+        self.constants_panel.show_snapshot(snap, snap.grammar_constants)
         self.regen.show_constants(snap.constants)
         self.regen.set_rho(snap.rho * 100)
         self.regen.set_history(snap.can_undo, snap.can_redo)

@@ -7,15 +7,12 @@ from __future__ import annotations
 
 import atexit
 import os
-import pathlib
 import shutil
 import subprocess
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-ARTIFACTS = ROOT / "tests" / "artifacts"
-HONDA = ROOT / "grammars" / "honda_sympodial.lsys"
+from desktop_helpers import ARTIFACTS, HONDA, ROOT, settle
 
 
 def _start_xvfb():
@@ -85,11 +82,3 @@ def make_window(qtbot, tmp_path):
     for window in windows:
         window.dirty = False
         window.close()
-
-
-def settle(qtbot, window, timeout=20.0):
-    """Wait until every model job is delivered and the view has painted."""
-    assert window.controller.wait_idle(timeout), "a model job did not finish in time"
-    qtbot.waitUntil(lambda: not window.variants.busy(), timeout=int(timeout * 1000))
-    window.view.redraw(now=True)
-    qtbot.wait(10)

@@ -6,7 +6,7 @@ import pytest
 import pyvista as pv
 
 from app.desktop.thumbnails import pixel_variance
-from conftest import ROOT, settle
+from desktop_helpers import ROOT, settle
 
 pytestmark = pytest.mark.gui
 

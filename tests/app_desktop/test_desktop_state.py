@@ -9,7 +9,7 @@ import pytest
 
 from app.desktop import state, variants
 from app.model import Explorer
-from conftest import HONDA, ROOT
+from desktop_helpers import HONDA, ROOT
 from lsys.errors import RamureError
 
 

@@ -6,7 +6,7 @@ import pytest
 from PySide6.QtCore import Qt
 
 from app.desktop.thumbnails import pixel_variance
-from conftest import ROOT, settle
+from desktop_helpers import ROOT, settle
 
 pytestmark = pytest.mark.gui
 

@@ -7,9 +7,7 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtTest import QTest
 
 from app.desktop.thumbnails import pixel_variance
-from conftest import ROOT, settle
-
-STOCHASTIC = ROOT / "grammars" / "stochastic_plant.lsys"
+from desktop_helpers import STOCHASTIC, settle
 
 pytestmark = pytest.mark.gui
 
