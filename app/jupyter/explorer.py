@@ -86,7 +86,7 @@ class EditPanel:
         self.undo.disabled = not model.session.can_undo
         self.redo.disabled = not model.session.can_redo
         self.prune.disabled = not model.selection
-        names = self.app.variants.qualifier_names()
+        names = self.app.variants.qualifier_options()
         if list(self.qualifier.options) != names:
             self.qualifier.options = names
         self.qualifier.disabled = self.apply_qualifier.disabled = not names
@@ -125,12 +125,15 @@ class Explorer:
                    else "picture view: select with the tools on the right or the derivation tree")
         centre = W.VBox([self.view.widget, W.HBox([self.camera, self.show_cut]),
                          W.HTML(f"<small>{picking}</small>")])
-        side = W.VBox([self.selection_panel.widget, self.edits.widget], layout=W.Layout(width="31%"))
-        left = W.VBox([self.grammar.widget], layout=W.Layout(width="31%"))
+        side = W.VBox([self.selection_panel.widget, self.edits.widget],
+                      layout=W.Layout(width="30%", min_width="320px"))
+        left = W.VBox([self.grammar.widget], layout=W.Layout(width="30%", min_width="280px"))
         self.tabs = W.Tab(children=[self.tree.widget, self.variants.widget, self.variants.pca_widget],
                           titles=("Derivation tree", "Variants", "PCA & qualifiers"))
         self.widget = W.VBox([self.title, self.status_line, self.message.widget,
-                              W.HBox([left, centre, side]), self.tabs])
+                              W.HBox([left, centre, side],
+                                     layout=W.Layout(flex_flow="row wrap", align_items="flex-start")),
+                              self.tabs])
         if getattr(self.view, "fallback_reason", None):
             self.message.show(self.view.fallback_reason, "note")
         if self.model.error is not None:
@@ -209,7 +212,7 @@ class Explorer:
                                "the plant on screen is the last one that parsed")
             self.refresh()
             return err
-        self.variants.exploration = None  # the variants were of the old grammar
+        self.variants.forget()  # the variants were of the old grammar
         self.run(lambda: None)
         return None
 
@@ -271,27 +274,23 @@ class Explorer:
 
     def apply_pick(self, pick_id):
         """Regrow the cut with the parameters of variant pick ``pick_id`` (1-27)."""
-        params = self.run(lambda: self.variants.pick_params(pick_id))
-        if params is None:
-            return None
-        result = self.regrow(params=params)
-        if result is not None:
-            self.variants.mark_applied(params)
-            self.message.show(f"applied pick #{pick_id} {params} — {self.model.status()}", "info")
-        return result
+        return self._apply_params(lambda: self.variants.pick_params(pick_id), f"pick #{pick_id}")
 
     def apply_qualifier(self, name):
         """Regrow the cut with qualifier ``name``'s parameter combination."""
         if not name:
             self.message.show("choose a qualifier (they appear after a variant exploration)", "note")
             return None
-        params = self.run(lambda: self.variants.qualifier_params(name, self.model))
+        return self._apply_params(lambda: self.variants.qualifier_params(name, self.model), f"'{name}'")
+
+    def _apply_params(self, combination, what):
+        params = self.run(combination)
         if params is None:
             return None
         result = self.regrow(params=params)
         if result is not None:
             self.variants.mark_applied(params)
-            self.message.show(f"applied '{name}' {params} — {self.model.status()}", "info")
+            self.message.show(f"applied {what} {params} — {self.model.status()}", "info")
         return result
 
     def prune(self):

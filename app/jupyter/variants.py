@@ -153,6 +153,10 @@ class VariantPanel:
             raise Stopped("the exploration was stopped") from None
         finally:
             self.start.disabled, self.stop_button.disabled = False, True
+        if self.app.model.lsystem.text != lsystem.text:
+            self.note.value = message_html("the grammar changed during the exploration: its results "
+                                           "were set aside; explore again", "note")
+            return exp
         self.exploration, self.thumbnails, self.chosen = exp, images, None
         self.defaults = None
         self.refresh()
@@ -179,6 +183,12 @@ class VariantPanel:
                 images += [p.read_bytes() for p in paths]
                 self._progress(len(images), N_PICKS, "thumbnails")
         return images
+
+    def forget(self):
+        """Drop the exploration (e.g. the grammar changed): the panels go back to empty."""
+        self.exploration, self.thumbnails, self.regions, self.defaults, self.chosen = (
+            None, [None] * N_PICKS, None, None, None)
+        self.refresh()
 
     def stop(self):
         """Cancel a running exploration (the button; safe to call when none runs)."""
@@ -207,14 +217,22 @@ class VariantPanel:
     def pick_point(self, pick_id):
         return self._need().picks.points[int(pick_id) - 1]
 
-    def qualifier_names(self) -> list:
-        """Qualifiers offered for the current exploration (study regions first)."""
+    def qualifier_options(self) -> list:
+        """``(label, name)`` of the qualifiers offered now: study regions first (marked),
+        then the default vocabulary, each with its French name."""
         tools = qualifier_tools()
         if tools is None or self.exploration is None:
             return []
         vocabulary = tools[0]
         study = list(self.regions.names_) if self.regions is not None else []
-        return study + [name for name in vocabulary if name not in study]
+        names = study + [name for name in vocabulary if name not in study]
+
+        def label(name):
+            french = vocabulary[name].french if name in vocabulary else None
+            text = f"{name} ({french})" if french and french != name else name
+            return f"{text} · study" if name in study else text
+
+        return [(label(name), name) for name in names]
 
     def qualifier_params(self, name, model) -> dict:
         """The combination qualifier ``name`` applies to the model's selection (or whole plant)."""

@@ -40,7 +40,9 @@ def test_exploration_fills_gallery_progress_and_qualifiers(explored):
     assert ex.variants.progress_text.value == "thumbnails 27/27"
     assert all(not b.disabled for _, b in ex.variants.cards)
     assert ex.variants.cards[4][0].value == ex.variants.thumbnails[4]
-    assert {"dense", "small", "round"} <= set(ex.edits.qualifier.options) and not ex.edits.qualifier.disabled
+    options = dict(ex.edits.qualifier.options)
+    assert options["small (petit)"] == "small" and options["dense"] == "dense" and len(options) == 13
+    assert not ex.edits.qualifier.disabled
     assert "486 variants" in ex.variants.note.value and "486 variants explored" in ex.message.text
     assert ex.variants.scatter.value[:4] == b"\x89PNG"
     assert ex.variants.gallery_html().count("<img") == 27
@@ -66,6 +68,12 @@ def test_qualifier_dropdown_regrows_the_selection(ex):
     params = ex.history[-1]["params"]
     assert params["rule"] in rules and ex.plant.to_string() != before
     assert ex.selection == [] and "applied 'dense'" in ex.message.text
+
+
+def test_new_grammar_text_drops_the_variants(ex):
+    ex.set_text(ex.model.text.replace("a2 60 ", "a2 50 "))
+    assert ex.variants.exploration is None and ex.edits.qualifier.disabled
+    assert all(img.value == b"" for img, _ in ex.variants.cards) and all(b.disabled for _, b in ex.variants.cards)
 
 
 def test_pick_and_qualifier_need_an_exploration():
@@ -120,7 +128,7 @@ def test_study_regions_come_first_and_are_drawn(ex, tmp_path):
         store.add(exp.name, "petit", near, exp.points[near], [exp.sweep.combination(int(i)) for i in near],
                   source="study:test")
     ex.load_qualifiers(tmp_path / "q.sqlite")
-    assert ex.edits.qualifier.options[0] == "small"
+    assert ex.edits.qualifier.options[0] == ("small (petit) · study", "small")
     assert set(ex.variants.boxes()) == {"small"}
     ex.apply_qualifier("small")
     applied = ex.history[-1]["params"]
