@@ -116,17 +116,13 @@ def qualifier_boxes(exploration, per_qualifier=10):
 
 
 def load_exploration(directory):
-    """Read an exploration directory: ``picks.json`` (required), ``variants.csv`` and ``pca.json``."""
+    """Read an exploration directory: ``picks.json`` (required, read by :func:`studies.load_picks`),
+    ``variants.csv`` (the cloud) and ``pca.json`` (grammar name, n, seed)."""
+    from studies import load_picks
+
     directory = pathlib.Path(directory)
-    path = directory / "picks.json"
-    if not path.is_file():
-        raise RamureError(f"{directory}: no picks.json (run a variant exploration first)")
-    try:
-        picks = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise RamureError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
-    if not isinstance(picks, list) or not all(isinstance(p, dict) and "params" in p for p in picks):
-        raise RamureError(f"{path}: expected a list of picks with 'params'")
+    picks = [{"id": p.id, "variant": p.variant, "pca": list(p.pca), "params": p.params,
+              **({"image": p.image} if p.image else {})} for p in load_picks(directory)]
     info = {}
     pca = directory / "pca.json"
     if pca.is_file():
