@@ -90,7 +90,8 @@ class EditPanel:
         if list(self.qualifier.options) != names:
             self.qualifier.options = names
         self.qualifier.disabled = self.apply_qualifier.disabled = not names
-        self.qualifier.tooltip = ("" if names else "qualifiers need a variant exploration first")
+        self.qualifier.tooltip = ("the first use explores the variants (a few seconds)"
+                                  if self.app.variants.exploration is None else "")
         rho = round(model.rho * 100)
         if self.rho.value != rho:
             self.rho.value = rho
@@ -279,7 +280,7 @@ class Explorer:
     def apply_qualifier(self, name):
         """Regrow the cut with qualifier ``name``'s parameter combination."""
         if not name:
-            self.message.show("choose a qualifier (they appear after a variant exploration)", "note")
+            self.message.show("choose a qualifier first", "note")
             return None
         return self._apply_params(lambda: self.variants.qualifier_params(name, self.model), f"'{name}'")
 

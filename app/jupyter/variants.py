@@ -122,7 +122,9 @@ class VariantPanel:
         for widget, value in ((self.n, n), (self.beta, beta), (self.jobs, n_jobs)):
             if value is not None:
                 widget.value = value
-        sweep = VariantSweep(n=self.n.value, beta=self.beta.value, n_jobs=self.jobs.value, cache=self.cache)
+        # a kernel always runs threads, so worker processes are started by a fork server, not forked
+        sweep = VariantSweep(n=self.n.value, beta=self.beta.value, n_jobs=self.jobs.value, cache=self.cache,
+                             mp_context="forkserver" if self.jobs.value > 1 else None)
         self._sweep = sweep
         self._stop.clear()
         lsystem = self.app.model.lsystem
@@ -218,10 +220,10 @@ class VariantPanel:
         return self._need().picks.points[int(pick_id) - 1]
 
     def qualifier_options(self) -> list:
-        """``(label, name)`` of the qualifiers offered now: study regions first (marked),
-        then the default vocabulary, each with its French name."""
+        """``(label, name)`` of the qualifiers offered: study regions first (marked), then the
+        default vocabulary, each with its French name (applying one explores first if needed)."""
         tools = qualifier_tools()
-        if tools is None or self.exploration is None:
+        if tools is None or metrics_status():
             return []
         vocabulary = tools[0]
         study = list(self.regions.names_) if self.regions is not None else []
@@ -235,11 +237,12 @@ class VariantPanel:
         return [(label(name), name) for name in names]
 
     def qualifier_params(self, name, model) -> dict:
-        """The combination qualifier ``name`` applies to the model's selection (or whole plant)."""
-        exp = self._need()
+        """The combination qualifier ``name`` applies to the model's selection (or whole plant);
+        without an exploration yet, one is run first (blocking, with the progress bar)."""
         tools = qualifier_tools()
         if tools is None:
             raise RamureError("qualifiers are not available (the metrics qualifier modules are missing)")
+        exp = self.exploration or self.explore(wait=True)
         _, combination, active_rules, _ = tools
         rules = None
         cut = model.plan()

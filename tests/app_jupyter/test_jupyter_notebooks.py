@@ -4,6 +4,7 @@ from __future__ import annotations
 import base64
 import os
 import pathlib
+import re
 
 import pytest
 
@@ -53,6 +54,7 @@ def test_explore_notebook_runs(tmp_path):
     assert "changed: True | last edit: regrow {'a2': 30.0}" in text
     assert "replays to the same plant: True" in text
     assert "applied 'dense'" in text
+    assert re.search(r"\d+ fruit, \d+ volume cells", text) or "not available in this version" in text
     pngs = [o for o in outputs(nb) if "image/png" in o.get("data", {})]
     assert len(pngs) >= 6  # explorer, snapshots, PCA, fruit tree
     gallery = [o for o in outputs(nb) if "text/html" in o.get("data", {})

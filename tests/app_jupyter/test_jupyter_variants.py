@@ -72,17 +72,22 @@ def test_qualifier_dropdown_regrows_the_selection(ex):
 
 def test_new_grammar_text_drops_the_variants(ex):
     ex.set_text(ex.model.text.replace("a2 60 ", "a2 50 "))
-    assert ex.variants.exploration is None and ex.edits.qualifier.disabled
+    assert ex.variants.exploration is None
     assert all(img.value == b"" for img, _ in ex.variants.cards) and all(b.disabled for _, b in ex.variants.cards)
 
 
-def test_pick_and_qualifier_need_an_exploration():
-    ex = Explorer(HONDA, n=4, view="static", size=(120, 120))
+def test_pick_needs_an_exploration_and_a_qualifier_runs_one():
+    ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
     ex.apply_pick(3)
     assert "explore the variants first" in ex.error and ex.history == []
-    assert ex.edits.qualifier.disabled and all(b.disabled for _, b in ex.variants.cards)
+    assert all(b.disabled for _, b in ex.variants.cards)
     ex.apply_qualifier(None)
     assert ex.message.kind == "note"
+    assert not ex.edits.qualifier.disabled and "explores the variants" in ex.edits.qualifier.tooltip
+    ex.variants.n.value = 3
+    ex.apply_qualifier("small")
+    assert ex.variants.exploration is not None and ex.history[-1]["params"]["rule"] in (0, 1)
+    assert ex.variants.bar.value == 27 and "applied 'small'" in ex.message.text
 
 
 def test_stop_button_cancels_a_background_exploration():
@@ -141,4 +146,5 @@ def test_without_metrics_the_panel_says_so(monkeypatch):
     monkeypatch.setattr(variants_module, "metrics_status", lambda: "variant exploration is not available (test)")
     ex = Explorer(HONDA, n=3, view="static", size=(120, 120))
     assert "not available (test)" in ex.variants.note.value and ex.variants.start.disabled
+    assert ex.edits.qualifier.disabled
     assert ex.explore_variants() is None and "not available" in ex.error
