@@ -135,7 +135,7 @@ class Explorer:
                               W.HBox([left, centre, side],
                                      layout=W.Layout(flex_flow="row wrap", align_items="flex-start")),
                               self.tabs])
-        if getattr(self.view, "fallback_reason", None):
+        if self.view.fallback_reason:
             self.message.show(self.view.fallback_reason, "note")
         if self.model.error is not None:
             self._refused(self.model.error, "the grammar does not parse; fix it in the text area")
@@ -319,13 +319,21 @@ class Explorer:
 
     # -- view ----------------------------------------------------------------------------
     def set_view(self, view):
+        """Camera side: ``iso``, ``front``, ``side`` or ``top``."""
         if view not in VIEWS:
             self.message.show(f"view must be one of {', '.join(VIEWS)}", "error")
+            return
+        if self.camera.value != view:
+            self.camera.value = view  # the drop-down's observer comes back here
             return
         self.view.view = view
         self.refresh()
 
     def set_show_cut(self, on):
+        """Colour what a regrow would replace (the selection's cut) in orange."""
+        if self.show_cut.value != bool(on):
+            self.show_cut.value = bool(on)  # the check box's observer comes back here
+            return
         self.view.show_cut = bool(on)
         self.refresh()
 

@@ -83,19 +83,25 @@ class VariantPanel:
         self.bar = W.IntProgress(value=0, min=0, max=1, layout=W.Layout(width="260px"))
         self.progress_text = W.Label("")
         self.note = W.HTML()
+        # The thumbnails are the buttons' backgrounds (a style sheet in an HTML widget), so a
+        # click on the image applies the pick; without the style a button still reads "#k".
+        self._css_class = f"ramure-pick-{id(self):x}"
+        self.thumb_css = W.HTML()
         self.cards = []
         for pid in range(1, N_PICKS + 1):
-            image = png_image(width=thumb_size)
             pick = button(f"#{pid}", lambda pid=pid: self.app.apply_pick(pid), width=f"{thumb_size}px",
-                          tooltip=f"regrow the selection (or the plant) with variant #{pid}'s parameters")
-            self.cards.append((image, pick))
-        self.gallery = W.GridBox([W.VBox([img, b]) for img, b in self.cards],
-                                 layout=W.Layout(grid_template_columns=f"repeat(9, {thumb_size + 6}px)"))
+                          tooltip=f"#{pid}: regrow the selection (or the plant) with this variant's parameters")
+            pick.layout.height = f"{thumb_size}px"
+            pick.add_class(self._css_class)
+            pick.add_class(f"{self._css_class}-{pid}")
+            self.cards.append(pick)
+        self.gallery = W.GridBox(self.cards, layout=W.Layout(
+            grid_template_columns=f"repeat(9, {thumb_size + 4}px)", grid_gap="2px"))
         self.scatter = png_image()
         self.box_toggles = W.VBox()
         self.widget = W.VBox([
             W.HBox([self.n, self.beta, self.jobs, self.start, self.stop_button]),
-            W.HBox([self.bar, self.progress_text]), self.note, self.gallery,
+            W.HBox([self.bar, self.progress_text]), self.note, self.thumb_css, self.gallery,
         ])
         self.pca_widget = W.HBox([self.scatter, W.VBox([W.HTML("<b>Qualifier boxes</b>"), self.box_toggles])])
         self.refresh()
@@ -138,6 +144,8 @@ class VariantPanel:
     def _run_reported(self, sweep, lsystem, thumbnails):
         try:
             self._run(sweep, lsystem, thumbnails)
+        except Stopped as err:
+            self.app.message.show(err, "note")
         except RamureError as err:
             self.app.message.show(err, "error")
 
@@ -162,7 +170,7 @@ class VariantPanel:
         self.exploration, self.thumbnails, self.chosen = exp, images, None
         self.defaults = None
         self.refresh()
-        self.app.refresh()
+        self.app.edits.refresh()  # the qualifier choices (the 3D view is not redrawn from this thread)
         return exp
 
     def _render_thumbnails(self, exp, batch=3):
@@ -338,12 +346,23 @@ class VariantPanel:
                 f"{s.n_variants_} variants of '{exp.name}' (n={s.n_}, β={s.design_.beta:g}, "
                 f"{int(s.failed_.sum())} failed), PCA explains "
                 f"{100 * float(np.sum(exp.pca.explained_variance_ratio_)):.0f}% — click a pick to apply it.", "info")
-        for k, (image, pick) in enumerate(self.cards):
-            data = (self.thumbnails[k] if exp is not None else None) or b""
-            if image.value != data:
-                image.value = data
+        css = self.thumbnail_css() if exp is not None else ""
+        if self.thumb_css.value != css:
+            self.thumb_css.value = css
+        for pick in self.cards:
             pick.disabled = exp is None
         self._draw_scatter()
+
+    def thumbnail_css(self) -> str:
+        """The style sheet that puts each thumbnail on its button."""
+        rules = [f".{self._css_class}:hover{{outline:2px solid #1976d2}}"]
+        for pid, data in enumerate(self.thumbnails, start=1):
+            if data:
+                src = base64.b64encode(data).decode("ascii")
+                rules.append(f".{self._css_class}-{pid}{{background-image:url(data:image/png;base64,{src})"
+                             " !important;background-size:cover !important;background-position:center;"
+                             "color:transparent !important}")
+        return f"<style>{''.join(rules)}</style>"
 
     def _draw_scatter(self):
         exp = self.exploration

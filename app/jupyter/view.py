@@ -131,6 +131,7 @@ class PlantView:
         self._shown = None
         self._png = None
         self.trame = None
+        self.fallback_reason = None
         if self.backend != "static":
             try:
                 self.trame = TrameView(self, self.backend)

@@ -38,8 +38,15 @@ def test_exploration_fills_gallery_progress_and_qualifiers(explored):
     assert len(ex.variants.thumbnails) == 27 and all(t[:4] == b"\x89PNG" for t in ex.variants.thumbnails)
     assert ex.variants.bar.value == ex.variants.bar.max == 27
     assert ex.variants.progress_text.value == "thumbnails 27/27"
-    assert all(not b.disabled for _, b in ex.variants.cards)
-    assert ex.variants.cards[4][0].value == ex.variants.thumbnails[4]
+    assert all(not b.disabled for b in ex.variants.cards)
+    # each thumbnail is its button's background: a click on the image applies the pick
+    import base64
+
+    css = ex.variants.thumb_css.value
+    card = ex.variants.cards[4]
+    rule = [c for c in card._dom_classes if c.endswith("-5")][0]
+    assert f".{rule}{{background-image:url(data:image/png;base64," + base64.b64encode(
+        ex.variants.thumbnails[4]).decode() in css
     options = dict(ex.edits.qualifier.options)
     assert options["small (petit)"] == "small" and options["dense"] == "dense" and len(options) == 13
     assert not ex.edits.qualifier.disabled
@@ -50,7 +57,7 @@ def test_exploration_fills_gallery_progress_and_qualifiers(explored):
 
 def test_gallery_button_applies_the_pick(ex):
     before = ex.plant.to_string()
-    ex.variants.cards[26][1].click()  # pick #27
+    ex.variants.cards[26].click()  # pick #27
     params = ex.variants.pick_params(27)
     assert ex.history[-1]["params"] == params and ex.plant.to_string() != before
     assert ex.variants.chosen is not None and np.allclose(ex.variants.chosen, ex.variants.pick_point(27))
@@ -73,14 +80,14 @@ def test_qualifier_dropdown_regrows_the_selection(ex):
 def test_new_grammar_text_drops_the_variants(ex):
     ex.set_text(ex.model.text.replace("a2 60 ", "a2 50 "))
     assert ex.variants.exploration is None
-    assert all(img.value == b"" for img, _ in ex.variants.cards) and all(b.disabled for _, b in ex.variants.cards)
+    assert ex.variants.thumb_css.value == "" and all(b.disabled for b in ex.variants.cards)
 
 
 def test_pick_needs_an_exploration_and_a_qualifier_runs_one():
     ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
     ex.apply_pick(3)
     assert "explore the variants first" in ex.error and ex.history == []
-    assert all(b.disabled for _, b in ex.variants.cards)
+    assert all(b.disabled for b in ex.variants.cards)
     ex.apply_qualifier(None)
     assert ex.message.kind == "note"
     assert not ex.edits.qualifier.disabled and "explores the variants" in ex.edits.qualifier.tooltip
