@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import io
+import os
 import pathlib
 
 import numpy as np
@@ -16,3 +17,22 @@ def red_pixels(png) -> int:
 
     rgb = imread(io.BytesIO(png), format="png")[..., :3]
     return int(np.sum((rgb[..., 0] > 0.6) & (rgb[..., 1] < 0.15) & (rgb[..., 2] < 0.15)))
+
+
+def execute(nb, env=None, timeout=180):
+    """Run notebook ``nb`` in a fresh python3 kernel at the repository root (``env`` reaches the kernel)."""
+    import nbclient
+
+    env = dict(env or {})
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        nbclient.NotebookClient(nb, kernel_name="python3", timeout=timeout,
+                                resources={"metadata": {"path": str(ROOT)}}).execute()
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return nb

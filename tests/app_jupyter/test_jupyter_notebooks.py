@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import base64
-import os
-import pathlib
 import re
 
 import pytest
@@ -12,25 +10,12 @@ nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")
 pytest.importorskip("ipykernel")
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from jupyter_helpers import ROOT, execute  # noqa: E402
 
 
 def run_notebook(name, tmp_path):
     nb = nbformat.read(ROOT / "examples" / name, as_version=4)
-    env = {"PYVISTA_JUPYTER_BACKEND": "static", "RAMURE_CACHE": str(tmp_path / "cache")}
-    old = {k: os.environ.get(k) for k in env}
-    os.environ.update(env)  # the kernel inherits them
-    try:
-        client = nbclient.NotebookClient(nb, kernel_name="python3", timeout=180,
-                                         resources={"metadata": {"path": str(ROOT)}})
-        client.execute()
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-    return nb
+    return execute(nb, {"PYVISTA_JUPYTER_BACKEND": "static", "RAMURE_CACHE": str(tmp_path / "cache")})
 
 
 def outputs(nb):

@@ -77,3 +77,27 @@ def test_camera_and_cut_preview_rerender(explorer):
     ex.set_view("sideways")
     assert ex.message.kind == "error"
 
+
+
+@pytest.mark.slow
+def test_trame_view_picks_in_a_kernel():
+    """Only where pyvista's trame backend is installed: the interactive view starts in a
+    kernel and a click on a branch selects its leaf."""
+    pytest.importorskip("trame_pyvista")
+    nbformat = pytest.importorskip("nbformat")
+    from jupyter_helpers import execute
+
+    code = f"""from app.jupyter import Explorer
+ex = Explorer({HONDA!r}, n=5)
+pl, sk = ex.view.trame.plotter, ex.skeleton
+k = int(np.argmax(sk.order))
+pl.renderer.SetWorldPoint(*((sk.start[k] + sk.end[k]) / 2), 1.0)
+pl.renderer.WorldToDisplay()
+x, y, _ = pl.renderer.GetDisplayPoint()
+pl.render()
+pl.iren._mouse_left_button_click(int(round(x)), int(round(y)))
+print(ex.view.backend, ex.view.picking, ex.selection == [int(sk.leaf_id[k])])"""
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("import numpy as np\n" + code)])
+    execute(nb, {"PYVISTA_JUPYTER_BACKEND": "trame"}, timeout=120)
+    out = "".join(o.get("text", "") for o in nb.cells[0].outputs if o.output_type == "stream")
+    assert "server True True" in out, out
