@@ -211,26 +211,26 @@ class Controller(QObject):
         return found
 
     def set_rho(self, value):
-        self.read(lambda ex: ex.set_rho(value), wait=None)
+        """ρ (0-100 or a fraction); a job, so a regrow asked for after it uses it."""
+        return self.submit("rho", lambda ex: ex.set_rho(value), key="rho")
 
     def kinship_colors(self):
         """Per-cell kinship RGB of the plant on screen (None unless exactly one leaf is selected)."""
         def run(ex):
             self._current(ex)
             return state.kinship_cell_colors(ex, self.snapshot.mesh)
-        return self.read(run, wait=0.5)
+        return self.read(run, wait=0.05)
 
     def selection_box(self):
         """The selection's OBB as (12, 2, 3) line segments, or None."""
         snap = self.snapshot
-        sel = self.read(lambda ex: tuple(ex.selection), wait=0.5)
-        return state.selection_box_lines(snap.skeleton, sel)
+        return state.selection_box_lines(snap.skeleton, snap.selection)
 
     def selected_modules(self):
-        return self.read(state.selected_modules, wait=0.5)
+        return self.read(state.selected_modules, wait=0.05)
 
     def plan(self):
-        return self.read(lambda ex: ex.plan(), wait=None)
+        return self.read(lambda ex: ex.plan(), wait=2.0)
 
     def wait_idle(self, timeout=30.0):
         """Process events until every job is delivered (tests, shutdown, file saves)."""

@@ -48,6 +48,7 @@ class Snapshot:
     last_result: object  # lsys.regen.RegenResult or None
     n_modules: int
     string_preview: str = ""
+    cut_layout: object = None  # GraphLayout of the last regeneration's cut (None: no cut)
     path: object = None
     edits: int = 0
     extra: dict = field(default_factory=dict)
@@ -65,10 +66,13 @@ def take_snapshot(explorer, previous=None):
         return Snapshot(**{**previous.__dict__, **light})
     skeleton = explorer.skeleton
     mesh = explorer.mesh
+    result = explorer.last_result
+    cut = getattr(result, "cut", None)
+    layout = cut_graph_layout(cut, explorer.derivation.tree, result.roots) if cut is not None else None
     return Snapshot(version=explorer.version, mesh=mesh, skeleton=skeleton,
                     segment_leaf=np.asarray(skeleton.leaf_id), midpoints=explorer.segment_midpoints(),
                     n_modules=len(explorer.derivation), string_preview=string_preview(explorer),
-                    **light)
+                    cut_layout=layout, **light)
 
 
 def string_preview(explorer, limit=STRING_PREVIEW_MODULES):

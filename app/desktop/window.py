@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib
 import pathlib
-import threading
 
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
@@ -36,14 +35,12 @@ TITLE = "Ramure"
 
 
 def warm_up():
-    """Import the heavy optional packages in the background so the first pick does not wait."""
-    def run():
-        for name in ("metrics", "lsys.cut"):
-            try:
-                importlib.import_module(name)
-            except Exception:  # noqa: BLE001 - missing or broken: reported when used
-                pass
-    threading.Thread(target=run, name="ramure-warm-up", daemon=True).start()
+    """Import the optional packages the first pick needs now, not on the first click."""
+    for name in ("metrics",):
+        try:
+            importlib.import_module(name)
+        except Exception:  # noqa: BLE001 - missing or broken: reported when used
+            pass
 
 
 class MainWindow(QMainWindow):
@@ -224,7 +221,8 @@ class MainWindow(QMainWindow):
         """Same plant, other state: constants, undo/redo, status line, grammar error."""
         self.constants_panel.show_snapshot(snap, snap.grammar_constants)
         self.regen.show_constants(snap.constants)
-        self.regen.set_rho(snap.rho * 100)
+        if not self.regen.rho.isSliderDown():
+            self.regen.set_rho(snap.rho * 100)
         self.regen.set_history(snap.can_undo, snap.can_redo)
         self.undo_action.setEnabled(snap.can_undo)
         self.redo_action.setEnabled(snap.can_redo)
@@ -259,27 +257,25 @@ class MainWindow(QMainWindow):
         result = snap.last_result
         if result is None:
             return
-        cut = getattr(result, "cut", None)
-        if cut is None:
+        if snap.cut_layout is None:
             self.cut_view.clear(f"Last {result.op}: the whole plant (no cut).")
             return
-        layout = self.controller.read(lambda ex: state.cut_graph_layout(cut, ex.derivation.tree, result.roots),
-                                      wait=None)
-        self.cut_view.show_layout(layout, f"Last {result.op}: roots {result.roots.tolist()[:12]}, "
+        self.cut_view.show_layout(snap.cut_layout, f"Last {result.op}: roots {result.roots.tolist()[:12]}, "
                                           f"{result.removed} modules replaced by {result.added}, "
                                           f"cut value {result.cut_value:g}")
 
     def show_planned_cut(self):
+        def plan(ex):
+            cut = ex.plan()
+            return cut, (state.cut_graph_layout(cut, ex.derivation.tree, cut.roots) if cut is not None else None)
         try:
-            cut = self.controller.plan()
+            cut, layout = self.controller.read(plan, wait=2.0)
         except RamureError as exc:
             self.report_refused(str(exc))
             return
         if cut is None:
             self.cut_view.clear("Select branches first: the cut is planned for the selection.")
             return
-        layout = self.controller.read(lambda ex: state.cut_graph_layout(cut, ex.derivation.tree, cut.roots),
-                                      wait=None)
         self.cut_view.show_layout(layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, "
                                           f"cut value {cut.cut_value:g}")
         self.docks["cut"].raise_()
@@ -303,10 +299,7 @@ class MainWindow(QMainWindow):
         self.controller.set_derivation(n, seed)
 
     def _rho(self, value):
-        try:
-            self.controller.set_rho(value)
-        except RamureError as exc:
-            self.report_refused(str(exc))
+        self.controller.set_rho(value)
 
     def _regrow(self):
         self.dirty = True
