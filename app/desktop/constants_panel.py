@@ -105,6 +105,7 @@ class ConstantRow:
             self.set_range(lo, hi)
             self.panel.range_refused.emit("")
         else:
+            self.set_range(self.lo, self.hi)  # put the boxes back
             self.panel.range_refused.emit(f"{self.name}: the maximum must be above the minimum")
 
 

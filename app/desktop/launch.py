@@ -67,6 +67,7 @@ def main(argv=None):
     headless = args.screenshot is not None or args.quit_after is not None
     window = MainWindow(explorer, ask=not headless)
     window.show()
+    sys.excepthook = window.report_unexpected  # a bug in a slot shows a dialog, the window stays
     if args.screenshot:
         def shoot():
             window.controller.wait_idle()

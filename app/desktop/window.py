@@ -385,6 +385,15 @@ class MainWindow(QMainWindow):
         self._message(QMessageBox.Icon.Critical, "Unexpected error",
                       f"{message}\n\nThe last good plant is kept.", details)
 
+    def report_unexpected(self, kind, value, tb):
+        """``sys.excepthook`` while the window runs: report, never exit."""
+        import traceback
+
+        if isinstance(value, RamureError):
+            self.report_refused(str(value))
+        else:
+            self.report_crash(f"{kind.__name__}: {value}", "".join(traceback.format_exception(kind, value, tb)))
+
     def _message(self, icon, title, text, details=None):
         self.last_message = text
         if not self.ask:

@@ -287,3 +287,47 @@ def test_window_screenshot_is_not_blank(make_window, artifacts):
     pix = arr.reshape(view.height(), stride)[:, :view.width() * 3].reshape(view.height(), view.width(), 3)
     red = (pix[..., 0] > 180) & (pix[..., 1] < 80) & (pix[..., 2] < 80)
     assert red.sum() > 20  # the selection is drawn red
+
+
+def test_constant_ranges_are_inferred_and_editable(make_window, qtbot):
+    w = make_window()
+    row = w.constants_panel.rows["a2"]
+    assert (row.lo, row.hi) == (0.0, 120.0)
+    w.constants_panel.edit_ranges.setChecked(True)
+    assert row.low.isVisibleTo(w.constants_panel)
+    row.high.setValue(90.0)
+    assert row.hi == 90.0 and row.slider.value() == round(60 / 90 * 1000)
+    refused = []
+    w.constants_panel.range_refused.connect(refused.append)
+    row.low.setValue(95.0)  # above the maximum: refused, the range stays
+    assert refused[-1] and row.lo == 0.0 and row.low.value() == 0.0
+    row.value.setValue(150.0)  # typing outside the range widens it
+    assert row.hi == 150.0
+    qtbot.waitUntil(lambda: w.controller.explorer.constants["a2"] == 150.0, timeout=5000)
+
+
+def test_the_ui_keeps_running_during_a_long_job(make_window, qtbot):
+    import time
+
+    w = make_window()
+    ticks = []
+    from PySide6.QtCore import QTimer
+
+    timer = QTimer()
+    timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
+    timer.start(20)
+    w.controller.submit("slow", lambda ex: time.sleep(0.6))
+    settle(qtbot, w)
+    timer.stop()
+    assert len(ticks) >= 10  # the event loop ran all along
+
+
+def test_an_exception_in_a_slot_is_reported_not_fatal(make_window):
+    import sys
+
+    w = make_window()
+    try:
+        raise ZeroDivisionError("oops")
+    except ZeroDivisionError:
+        w.report_unexpected(*sys.exc_info())
+    assert "oops" in w.last_message and w.isVisible()
