@@ -65,6 +65,10 @@ class LSystem:
     'A(5)'
     """
 
+    #: A derivation that would grow past this many modules stops with a clear
+    #: error instead of exhausting memory (about 150 bytes per module with history).
+    max_modules = 20_000_000
+
     def __init__(self, grammar: Grammar):
         self.grammar = grammar
         self.constants = dict(grammar.constants)
@@ -256,7 +260,12 @@ class LSystem:
             lengths[positions[r]] = len(self._rules[r].succ_symbols)
         ends = np.cumsum(lengths)
         offsets = ends - lengths
-        out = np.empty(int(ends[-1]) if len(ends) else 0, np.int64)
+        total = int(ends[-1]) if len(ends) else 0
+        if total > self.max_modules:
+            raise DerivationError(
+                f"step {step} would make {total:,} modules, more than the limit of "
+                f"{self.max_modules:,}: use fewer derivation steps (or raise LSystem.max_modules)")
+        out = np.empty(total, np.int64)
         keep = chosen < 0
         out[offsets[keep]] = string[keep]
         for r in active:

@@ -142,3 +142,13 @@ def test_large_derivation_is_linear_in_size():
     d = LSystem.from_file("grammars/algae.lsys").derive(n=20)
     assert len(d) == 17711  # Fibonacci
     assert np.array_equal(np.sort(d.tree.leaves), np.unique(d.tree.leaves))
+
+
+def test_runaway_derivation_stops_with_a_clear_error():
+    from lsys import DerivationError
+
+    ls = LSystem.from_file("grammars/algae.lsys")
+    ls.max_modules = 1000
+    with pytest.raises(DerivationError, match="more than the limit of 1,000"):
+        ls.derive(n=30)
+    assert len(ls.derive(n=10)) == 144  # below the limit all is well
