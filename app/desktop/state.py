@@ -109,6 +109,16 @@ def changed_constants(edited, current, tol=1e-12):
 
 
 # -- drawing ---------------------------------------------------------------------
+FRUIT_RGB = (240, 120, 40)  # fruit in orange on screen, so red always means "selected"
+
+
+def base_colors(mesh):
+    """Per-cell RGB of the unselected plant: the shared palette, with fruit in orange."""
+    rgb = plant_colors(mesh)
+    rgb[np.asarray(mesh.cell_data["kind"]) >= 2] = FRUIT_RGB
+    return rgb
+
+
 def leaf_mask(leaf_ids, selection):
     """Boolean mask of ``leaf_ids`` that are in ``selection`` (a lookup table: O(n), no sort)."""
     leaf_ids = np.asarray(leaf_ids)
@@ -123,11 +133,11 @@ def leaf_mask(leaf_ids, selection):
 def cell_colors(mesh, selection=(), kinship_rgb=None, base=None):
     """RGB (uint8) per cell: bark/leaf/fruit with the selection red, or the kinship colours.
 
-    ``base`` is ``plant_colors(mesh)`` computed once per plant (saves a pass per selection).
+    ``base`` is :func:`base_colors` computed once per plant (saves a pass per selection).
     """
     if kinship_rgb is not None:
         return kinship_rgb
-    rgb = plant_colors(mesh) if base is None else base.copy()
+    rgb = base_colors(mesh) if base is None else base.copy()
     if len(selection):
         rgb[leaf_mask(mesh.cell_data["leaf_id"], selection)] = (255, 0, 0)
     return rgb

@@ -25,10 +25,9 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
-from app.desktop.state import project_to_display
+from app.desktop.state import FRUIT_RGB, project_to_display
 from app.render import frame_camera
 
-FRUIT_RGB = (240, 120, 40)  # volumetric fruit; selected ones are pure red
 CLICK_SLOP = 4  # pixels a click may move and still be a click
 PICK_TOLERANCE = 0.002
 

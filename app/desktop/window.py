@@ -207,7 +207,7 @@ class MainWindow(QMainWindow):
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap, reset_camera=None):
         """A new plant version: redraw the 3D view and every view of the plant."""
-        self.base_colors = state.plant_colors(snap.mesh)
+        self.base_colors = state.base_colors(snap.mesh)
         self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection, base=self.base_colors),
                              reset_camera)
         self.drawn_version = snap.version
