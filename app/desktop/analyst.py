@@ -19,6 +19,15 @@ from app.desktop.workers import Task
 from lsys.errors import RamureError
 
 
+STUDY_FILTER = "Study databases (*.db *.sqlite);;All files (*)"
+
+
+def ask_study_path(parent):
+    """A study database chosen in a file dialog, or None."""
+    path, _ = QFileDialog.getOpenFileName(parent, "Open study", "", STUDY_FILTER)
+    return path or None
+
+
 class AnalystWindow(QWidget):
     """Participants, tests and the HTML report of one study."""
 
@@ -58,10 +67,9 @@ class AnalystWindow(QWidget):
     def open_study(self, path=None):
         from studies import Study
 
+        path = path or ask_study_path(self)
         if path is None:
-            path, _ = QFileDialog.getOpenFileName(self, "Open study", "", "Study databases (*.db *.sqlite);;All files (*)")
-            if not path:
-                return None
+            return None
         try:
             with Study.open(path) as study:
                 people = study.participants()

@@ -49,6 +49,12 @@ class FileActions:
         path, _ = QFileDialog.getOpenFileName(self.window, title, self._folder(), filters)
         return path or None
 
+    def _path_to_open(self, path, title, filters):
+        """``path``, or one asked for, once unsaved changes may be dropped (None: cancelled)."""
+        if not self.window.confirm_discard():
+            return None
+        return path or self._ask_open(title, filters) or None
+
     def _ask_save(self, title, filters, suffix):
         path, _ = QFileDialog.getSaveFileName(self.window, title, self._folder(), filters)
         if not path:
@@ -63,10 +69,8 @@ class FileActions:
     # -- grammar ----------------------------------------------------------------
     def open_grammar(self, path=None):
         """Load a grammar file as a fresh plant (after the unsaved-changes prompt)."""
-        if not self.window.confirm_discard():
-            return None
-        path = path or self._ask_open("Open grammar", GRAMMAR_FILTER)
-        if not path:
+        path = self._path_to_open(path, "Open grammar", GRAMMAR_FILTER)
+        if path is None:
             return None
         path = pathlib.Path(path)
         if not path.is_file():
@@ -113,10 +117,8 @@ class FileActions:
         return pathlib.Path(path)
 
     def load_session(self, path=None):
-        if not self.window.confirm_discard():
-            return None
-        path = path or self._ask_open("Load session", SESSION_FILTER)
-        if not path:
+        path = self._path_to_open(path, "Load session", SESSION_FILTER)
+        if path is None:
             return None
         job = self.controller.load_session(path)
         self.remember(path)

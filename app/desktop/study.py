@@ -22,7 +22,7 @@ import pathlib
 
 from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QPixmap
-from PySide6.QtWidgets import (QAbstractItemView, QButtonGroup, QCheckBox, QFileDialog, QGridLayout,
+from PySide6.QtWidgets import (QAbstractItemView, QButtonGroup, QCheckBox, QGridLayout,
                                QGroupBox, QHBoxLayout, QLabel, QLineEdit, QListView, QListWidget, QListWidgetItem,
                                QMessageBox, QPushButton, QRadioButton, QScrollArea, QStackedWidget, QTextBrowser,
                                QVBoxLayout, QWidget)
@@ -528,8 +528,9 @@ class StudyMenu:
         menu.addAction("Analyst report…").triggered.connect(lambda: self.analyst())
 
     def _ask_study(self):
-        path, _ = QFileDialog.getOpenFileName(self.window, "Open study", "", "Study databases (*.db *.sqlite);;All files (*)")
-        return path or None
+        from app.desktop.analyst import ask_study_path
+
+        return ask_study_path(self.window)
 
     def participant(self, path=None, code=None):
         """Open a study and a participant window (a new anonymous code unless ``code`` is given)."""
