@@ -127,12 +127,15 @@ class Explorer:
         """Change the selection: ``replace``, ``add``, ``remove`` or ``toggle`` these leaves."""
         if mode not in SELECT_MODES:
             raise ValueRefused(f"selection mode must be one of {', '.join(SELECT_MODES)}")
-        ids = {int(i) for i in np.atleast_1d(np.asarray(list(leaf_ids) if not np.isscalar(leaf_ids)
-                                                        else [leaf_ids], np.int64))}
-        leaves = set(self.derivation.tree.leaves.tolist())
-        bad = ids - leaves
-        if bad:
-            raise ValueRefused(f"{min(bad)} is not a leaf of the current plant")
+        ids = np.unique(np.atleast_1d(np.asarray(
+            [leaf_ids] if np.isscalar(leaf_ids) else list(leaf_ids), np.int64)))
+        tree = self.derivation.tree
+        known = (ids >= 0) & (ids < tree.size)
+        is_leaf = np.zeros(ids.size, bool)
+        is_leaf[known] = tree.leaf_positions(ids[known]) >= 0
+        if not is_leaf.all():
+            raise ValueRefused(f"{int(ids[~is_leaf][0])} is not a leaf of the current plant")
+        ids = set(ids.tolist())
         current = set(self.selection)
         new = {"replace": ids, "add": current | ids, "remove": current - ids,
                "toggle": current ^ ids}[mode]
