@@ -175,18 +175,28 @@ class LSystem:
         return Derivation(self, tree, n=n, seed=seed, constants=consts,
                           rule_constants=rule_constants)
 
-    def rewrite(self, tree, string, step, rng, constants, rule_constants=None):
-        """One parallel rewriting step of ``string`` (node ids); returns the new string."""
+    @property
+    def has_context(self):
+        """True when some rule has a left or right context."""
+        return any(r.is_context_sensitive for r in self.grammar.rules)
+
+    def rewrite(self, tree, string, step, rng, constants, rule_constants=None, frozen=None):
+        """One parallel rewriting step of ``string`` (node ids); returns the new string.
+
+        ``frozen`` (a boolean mask) marks modules that serve only as context:
+        they are never rewritten.
+        """
         symbols = tree.symbol[string]
         nparams = tree.nparams[string]
         chosen = np.full(len(string), -1, np.int32)
+        free = np.ones(len(string), bool) if frozen is None else ~frozen
         context = {}
         by_symbol = {}
         for group in self._groups:
             if group.symbol not in by_symbol:
                 by_symbol[group.symbol] = np.flatnonzero(symbols == group.symbol)
             cand = by_symbol[group.symbol]
-            cand = cand[(nparams[cand] == group.arity) & (chosen[cand] < 0)]
+            cand = cand[(nparams[cand] == group.arity) & (chosen[cand] < 0) & free[cand]]
             if not cand.size:
                 continue
             ctx = None
@@ -344,6 +354,8 @@ def _walk_left(i, count, sym, match, open_id, close_id, ignore):
             return None
         s = sym[j]
         if s == close_id:
+            if match[j] < 0:
+                return None  # the branch starts outside what we can see
             j = match[j] - 1  # skip a whole branch
         elif s == open_id or s in ignore:
             j -= 1  # leave the branch toward its parent, or skip an ignored symbol
@@ -361,6 +373,8 @@ def _walk_right(i, count, sym, match, open_id, close_id, ignore, size):
             return None
         s = sym[j]
         if s == open_id:
+            if match[j] < 0:
+                return None
             j = match[j] + 1  # skip lateral branches
         elif s == close_id:
             return None  # the branch ends
@@ -376,7 +390,8 @@ def bracket_matches(symbols, open_id, close_id):
     """For each ``[`` the position of its ``]`` and vice versa (-1 elsewhere), vectorised.
 
     Brackets of one nesting level alternate open/close in string order, so
-    sorting brackets by level and pairing neighbours matches them.
+    sorting brackets by level and pairing an open with the close that follows
+    it matches them.  Unbalanced brackets (a piece of a string) stay -1.
     """
     match = np.full(len(symbols), -1, np.int64)
     if open_id is None or close_id is None:
@@ -387,9 +402,11 @@ def bracket_matches(symbols, open_id, close_id):
     where = np.flatnonzero(is_open | is_close)
     level = depth[where] + is_close[where]  # open: depth after it; close: depth before it
     order = np.lexsort((where, level))
-    pairs = where[order].reshape(-1, 2)
-    match[pairs[:, 0]] = pairs[:, 1]
-    match[pairs[:, 1]] = pairs[:, 0]
+    pos, lev = where[order], level[order]
+    opens = is_open[pos]
+    pair = opens[:-1] & ~opens[1:] & (lev[:-1] == lev[1:])
+    a, b = pos[:-1][pair], pos[1:][pair]
+    match[a], match[b] = b, a
     return match
 
 

@@ -36,6 +36,8 @@ from .derive import LSystem
 from .errors import GrammarError, RamureError, ValueRefused
 
 SESSION_FORMAT = "ramure-session"
+#: Neighbouring modules kept as read-only context when regrowing a context-sensitive grammar.
+CONTEXT_WINDOW = 256
 SESSION_VERSION = 1
 
 
@@ -99,40 +101,64 @@ def _replace_spans(old, first, last, pieces):
 def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, prune=False):
     """Regrow (or, with ``prune=True``, cut back) the subtrees under ``roots`` in place.
 
-    Returns a :class:`Change` that :meth:`Change.apply` can undo.  Roots that
-    are leaves are ignored (nothing grows under them).
+    Roots whose leaf spans touch and that were made at the same step are
+    re-derived together as one string, so context rules see each other's
+    modules (regrowing the whole axiom is exactly a fresh derivation).  For
+    context-sensitive grammars the current neighbours of a regrown part (up
+    to :data:`CONTEXT_WINDOW` modules each side) serve as fixed context: they
+    are read, never rewritten — an approximation, since during the original
+    derivation those neighbours were younger.  Returns a :class:`Change`
+    that :meth:`Change.apply` can undo.
     """
     tree, ls = derivation.tree, derivation.lsystem
     roots = collapse_nested(tree, roots)
-    roots = roots[tree.child_count[roots] > 0]
     unknown = set(constants or {}) - set(ls.constants)
     if unknown:
         raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}")
     consts = {**derivation.constants, **(constants or {})}
     first, last = (span[roots].copy() for span in tree.leaf_spans())
+    order = np.argsort(first)
+    roots, first, last = roots[order], first[order], last[order]
     old_leaves = tree.leaves
     old_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
     removed = np.concatenate([tree.subtree(r) for r in roots]) if roots.size else np.zeros(0, np.int64)
     first_new = tree.size
     rng = np.random.default_rng(seed)
-    pieces = []
-    for r in roots.tolist():
-        string = np.array([r], np.int64)
-        if not prune:  # rewrite() points the root at its new children
-            for step in range(int(tree.step[r]) + 1, derivation.n + 1):
-                string = ls.rewrite(tree, string, step, rng, consts, rule_constants)
+    pieces, starts, ends = [], [], []
+    window = CONTEXT_WINDOW if ls.has_context else 0
+    for run in _runs(first, last, tree.step[roots]):
+        string = roots[run]
+        if not prune:  # rewrite() points each root at its new children
+            left = old_leaves[max(0, first[run[0]] - window):first[run[0]]]
+            right = old_leaves[last[run[-1]] + 1:last[run[-1]] + 1 + window]
+            string = np.concatenate([left, string, right])
+            for step in range(int(tree.step[roots[run[0]]]) + 1, derivation.n + 1):
+                frozen = np.zeros(len(string), bool)
+                frozen[:len(left)] = frozen[len(string) - len(right):] = True
+                string = ls.rewrite(tree, string, step, rng, consts, rule_constants, frozen)
+            string = string[len(left):len(string) - len(right)]
         pieces.append(string)
+        starts.append(first[run[0]])
+        ends.append(last[run[-1]])
     if prune:
         tree.set_children(roots, -1, 0)
     new_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
     tree._alive[removed] = False
-    new_leaves = _replace_spans(old_leaves, first, last, pieces)
+    new_leaves = _replace_spans(old_leaves, np.array(starts, np.int64), np.array(ends, np.int64), pieces)
     change = Change(roots, old_children, new_children, removed,
                     np.arange(first_new, tree.size, dtype=np.int64), old_leaves, new_leaves,
                     int((last - first + 1).sum()), int(sum(len(p) for p in pieces)))
     tree.leaves = new_leaves
     tree.changed()
     return change
+
+
+def _runs(first, last, steps):
+    """Split sorted root spans into runs of touching spans made at the same step."""
+    if not len(first):
+        return []
+    breaks = np.flatnonzero((first[1:] != last[:-1] + 1) | (steps[1:] != steps[:-1])) + 1
+    return np.split(np.arange(len(first)), breaks)
 
 
 class Session:
@@ -277,7 +303,7 @@ class Session:
                                                          edit["min_ascend"], edit["ascend"])
         else:  # the whole plant: regrow from every axiom module
             cut = None
-            roots = np.flatnonzero((tree.parent == -1) & tree.alive & (tree.child_count > 0))
+            roots = np.flatnonzero((tree.parent == -1) & tree.alive)
             cut_roots, min_roots = roots, np.zeros(0, np.int64)
         params = edit["params"] or {}
         constants = {**edit["constants"]}

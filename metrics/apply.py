@@ -70,8 +70,8 @@ class QualifierResult:
 def _roots(session, selection, rho):
     """The subtrees a regrow of ``selection`` replaces (as :func:`lsys.regen.regenerate` keeps them)."""
     tree = session.tree
-    if not len(selection):
-        return np.flatnonzero((tree.parent == -1) & tree.alive & (tree.child_count > 0))
+    if not len(selection):  # the whole plant: every axiom module, as Session.regrow does
+        return np.flatnonzero((tree.parent == -1) & tree.alive)
     roots = collapse_nested(tree, session.plan(selection, rho)[1])
     return roots[tree.child_count[roots] > 0]
 

@@ -37,7 +37,7 @@ def test_bracketed_plant_counts():
     # ABOP fig 1.24a: F -> F[+F]F[-F]F, 5 segments per F per step.
     assert LSystem.from_file("grammars/plant_1_24a.lsys").derive().count("F") == 5 ** 5
     # fig 1.24d: F -> FF doubles, X -> F[+X]F[-X]+X
-    assert LSystem.from_file("grammars/plant_1_24d.lsys").derive(n=1).to_string() == "F[+X]F[-X]+X"
+    assert LSystem.from_file("grammars/plant_1_24d.lsys").derive(n=1).to_string() == "F(1)[+(20)X]F(1)[-(20)X]+(20)X"
 
 
 def test_ternary_branching_widths_grow():

@@ -123,3 +123,12 @@ def test_bad_edit_values_refused():
     with pytest.raises(RamureError):
         s.set_constants({"zz": 1})
     assert not s.edits  # nothing was recorded
+
+
+def test_whole_plant_regrow_equals_a_fresh_derivation_even_with_context():
+    for path, n in (("grammars/context_plant.lsys", 20), (HONDA, 6)):
+        s = Session(path, n=n)
+        s.regrow([], seed=0, constants={"a": 30} if "context" in path else {"a2": 30})
+        ls = LSystem.from_file(path)
+        fresh = ls.derive(n=n, constants={"a": 30} if "context" in path else {"a2": 30})
+        assert s.derivation.to_string() == fresh.to_string()

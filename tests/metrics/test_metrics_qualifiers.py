@@ -14,10 +14,19 @@ from metrics.qualifiers import (VOCABULARY, QualifierRegions, canonical_name, qu
                                 qualifier_scores, rank_variants, trim_points, vocabulary_name)
 from metrics.store import SCHEMA, QualifierStore
 
-# Shipped branching grammars with #define constants (n kept small for speed).
+# Every shipped branching grammar (n kept small for speed); all have #define constants.
 WITH_CONSTANTS = {"honda_sympodial": 6, "honda_monopodial": 6, "ternary_branching": 4, "abop_tree": 6,
-                  "fruit_tree": 5, "branche_stochastic": 5}
-WITHOUT_CONSTANTS = ["plant_1_24a", "plant_1_24d", "stochastic_plant", "context_plant"]
+                  "fruit_tree": 5, "branche_stochastic": 5, "plant_1_24a": 3, "plant_1_24b": 3,
+                  "plant_1_24c": 3, "plant_1_24d": 4, "plant_1_24e": 4, "plant_1_24f": 3,
+                  "stochastic_plant": 4, "context_plant": 20}
+WITHOUT_CONSTANTS = ["algae", "koch_island"]
+
+
+def test_every_shipped_branching_grammar_is_covered():
+    import pathlib
+
+    shipped = {p.stem for p in pathlib.Path("grammars").glob("*.lsys")}
+    assert shipped - set(WITH_CONSTANTS) == set(WITHOUT_CONSTANTS)
 
 
 @pytest.fixture(scope="module")
