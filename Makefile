@@ -40,8 +40,12 @@ test: venv sysdeps
 	  $(VPY) -m pytest; \
 	fi
 
-bench: venv
-	@$(VPY) benchmarks/run.py
+bench: venv sysdeps
+	@if [ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null 2>&1; then \
+	  xvfb-run -a -s "-screen 0 1400x900x24" $(VPY) benchmarks/run.py; \
+	else \
+	  $(VPY) benchmarks/run.py; \
+	fi
 
 clean:
 	rm -rf $(VENV) out tests/artifacts .pytest_cache

@@ -3,12 +3,17 @@
 A benchmark module defines functions named ``bench_<name>()``; each returns a
 dict of figures (at least ``seconds``; targets as ``target_seconds`` and the
 verdict as ``ok``).  Run one file with ``python benchmarks/run.py bench_lsys``.
+
+Each module runs in a process of its own, started from this small runner, so
+one module's memory peak never shows in another's figures (Linux carries a
+process's peak RSS over fork and exec).
 """
 from __future__ import annotations
 
 import importlib.util
 import json
 import pathlib
+import subprocess
 import sys
 import traceback
 
@@ -27,8 +32,8 @@ def _modules(names):
         yield path.stem, module
 
 
-def main(argv=None):
-    names = set(argv if argv is not None else sys.argv[1:])
+def run_inline(names):
+    """Run the named modules' benchmarks in this process; 1 if any failed."""
     failed = 0
     for stem, module in _modules(names):
         for name in sorted(n for n in dir(module) if n.startswith("bench_")):
@@ -40,6 +45,15 @@ def main(argv=None):
                 traceback.print_exc(file=sys.stderr)
             print(json.dumps(record), flush=True)
     return 1 if failed else 0
+
+
+def main(argv=None):
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args[:1] == ["--inline"]:
+        return run_inline(set(args[1:]))
+    stems = [f.stem for f in sorted(HERE.glob("bench_*.py")) if not args or f.stem in args]
+    codes = [subprocess.run([sys.executable, __file__, "--inline", stem]).returncode for stem in stems]
+    return 1 if any(codes) else 0
 
 
 if __name__ == "__main__":
