@@ -204,6 +204,28 @@ class Explorer:
             raise ValueRefused("select the branches to prune first")
         return self._after_edit(self.session.prune(self.selection, rho=self.rho))
 
+    def variant_lsystem(self):
+        """The grammar with the session's current constants: what variant sweeps should vary."""
+        ls = LSystem(self.lsystem.grammar)
+        ls.constants.update(self.session.constants)
+        return ls
+
+    def apply_qualifier(self, name, sweep, points=None, regions=None, tries=5):
+        """Regrow the selection (or the whole plant) toward qualifier ``name`` ("denser", "rond", ...).
+
+        ``sweep`` is a fitted :class:`metrics.VariantSweep` of this grammar;
+        with a study's ``regions`` and the sweep's PCA ``points`` the region
+        centre chooses the variant.  Candidates are tried until the selection's
+        metrics move the qualifier's way (see :func:`metrics.apply.apply_qualifier`);
+        the result is one undoable edit.
+        """
+        from metrics.apply import apply_qualifier
+
+        out = apply_qualifier(self.session, name, sweep, self.selection, rho=self.rho, points=points,
+                              regions=regions, tries=tries)
+        self._after_edit(out.regen)
+        return out
+
     def fruit_ids(self):
         """History-leaf ids of the plant's ``Fruit`` organs."""
         organs = self.skeleton.organs

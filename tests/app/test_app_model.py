@@ -133,3 +133,20 @@ def test_regrow_one_fruit_changes_only_that_fruit():
                                                                                 "seed": s.edits[0]["settings"]["seed"]}}
     ex.undo()
     assert ex.session.fruit_overrides() == {}
+
+
+def test_apply_qualifier_makes_the_selection_denser_and_undoes():
+    from metrics import VariantSweep
+
+    ex = Explorer(HONDA, n=5)
+    ex.set_constant("a2", 50)  # the sweep must start from the session's constants
+    ls = ex.variant_lsystem()
+    assert ls.constants["a2"] == 50 and ex.lsystem.constants["a2"] == 60
+    sweep = VariantSweep(n=5, n_jobs=1, cache=False).fit(ls)
+    before = ex.derivation.to_string()
+    ex.select(ex.session.leaves_with_symbol("F")[-12:])
+    out = ex.apply_qualifier("denser", sweep)
+    assert out.improved and out.after.branch_density > out.before.branch_density
+    assert ex.selection == [] and ex.derivation.to_string() != before
+    ex.undo()
+    assert ex.derivation.to_string() == before
