@@ -148,32 +148,38 @@ def _cloud(path):
     return np.asarray(rows, float) if rows else None
 
 
-def qualifier_params(variant_set, name, rules=None):
-    """The parameter combination qualifier ``name`` applies (restricted to ``rules`` if given)."""
-    if variant_set is None or variant_set.exploration is None:
-        raise RamureError("qualifiers need a variant exploration of this grammar (Variants ▸ Explore)")
-    from metrics.qualifiers import qualifier_combination
-
-    sweep = variant_set.exploration.sweep
-    if rules is not None:
-        try:
-            return qualifier_combination(name, sweep, rules=rules)
-        except RamureError:
-            pass  # no variant on those rules: fall back to any rule
-    return qualifier_combination(name, sweep)
+#: Short names of the metrics in status messages ("dense: density 1772 → 2172").
+METRIC_LABELS = {"box_volume": "box volume", "box_surface": "box surface", "branch_surface": "bark area",
+                 "branch_volume": "wood volume", "branch_density": "density", "branch_count": "branches",
+                 "fill_rate": "fill rate", "total_length": "total length", "mean_length": "mean length",
+                 "mean_radius": "mean radius"}
 
 
-def selection_rules(explorer):
-    """The rules that rewrote inside the selection's cut subtrees (None: whole plant / unknown)."""
-    cut = explorer.plan()
-    if cut is None:
-        return None
-    try:
-        from metrics.apply import active_rules
-    except ImportError:
-        return None
-    rules = active_rules(explorer.derivation.tree, cut.roots)
-    return rules or None
+def qualifier_message(result):
+    """One status-bar line for a :class:`metrics.apply.QualifierResult`.
+
+    Names the metric that weighs most in the qualifier's direction and its
+    value on the selection before and after, e.g. ``dense: density 1772 → 2172``.
+    """
+    name = result.qualifier
+    vocab = _vocabulary()
+    direction = getattr(vocab.get(name), "direction", None)
+    tries = f" ({result.tried} tries)" if result.tried > 1 else ""
+    if not direction:
+        return f"{name}: applied variant {result.variant} (rule {result.params.get('rule')}){tries}"
+    metric = max(direction, key=lambda k: abs(direction[k]))
+    before, after = getattr(result.before, metric), getattr(result.after, metric)
+    change = f"{METRIC_LABELS.get(metric, metric)} {_short(before)} → {_short(after)}"
+    if result.improved:
+        return f"{name}: {change}{tries}"
+    return f"{name}: no variant moved the selection that way; kept the closest try, {change}{tries}"
+
+
+def _short(value):
+    value = float(value)
+    if value != 0 and (abs(value) >= 1e5 or abs(value) < 1e-2):
+        return f"{value:.3g}"
+    return f"{value:.0f}" if abs(value) >= 100 else f"{value:.3g}"
 
 
 def variant_skeleton(lsystem, n, seed, params, constants=None):

@@ -15,7 +15,6 @@ from PySide6.QtWidgets import QFileDialog
 from app.desktop import variants
 from app.desktop.thumbnails import placeholder_image, skeleton_image
 from app.desktop.workers import Task
-from lsys import LSystem
 from lsys.errors import RamureError
 
 THUMB = 150
@@ -38,6 +37,9 @@ class VariantsController:
         self.window = window
         self.variant_set = None
         self.text = None  # grammar text the variant set belongs to
+        self.constants = None  # the session's constants the variants were swept from
+        self.lsystem = None  # that grammar with those constants (thumbnails and previews derive it)
+        self.last_qualifier = None  # the last metrics.apply.QualifierResult
         self.tasks = {}
         self.show_fruit = False
         w = window
@@ -48,6 +50,7 @@ class VariantsController:
         w.regen.apply_qualifier.connect(self.apply_qualifier)
         w.cancel_button.clicked.connect(self.cancel_all)
         w.view.leaf_clicked.connect(self.fruit_clicked)
+        w.controller.job_done.connect(self.qualifier_done)
         reason = variants.metrics_available()
         if reason:
             w.gallery.set_unavailable(reason)
@@ -105,7 +108,10 @@ class VariantsController:
         task.done.connect(lambda result: self._finished(task, on_done, result))
         task.failed.connect(lambda exc, details: self._failed(task, exc, details))
         task.was_cancelled.connect(lambda: self._finished(task, None, None, cancelled=True))
-        w.status(f"{label}…", 0)
+        task.quiet = not progress  # a quiet task (a preview) leaves the status bar alone
+        task.label = f"{label}…"
+        if progress:
+            w.status(task.label, 0)
         return task.start()
 
     def _progress(self, done, total, text):
@@ -123,9 +129,11 @@ class VariantsController:
     def _finished(self, task, on_done, result, cancelled=False):
         self._end(task)
         if cancelled:
-            self.window.status(f"{task.name} cancelled")
+            if not task.quiet:
+                self.window.status(f"{task.name} cancelled")
             return
-        self.window.status("")
+        if not task.quiet and self.window.statusBar().currentMessage() == task.label:
+            self.window.status("")  # only our own message: a newer one (a qualifier's result) stays
         if on_done is not None and self.tasks.get(task.name) is None:
             on_done(result)
 
@@ -144,29 +152,34 @@ class VariantsController:
         return any(t.running for t in self.tasks.values())
 
     # -- explorations ---------------------------------------------------------------
+    def _variant_lsystem(self):
+        """The grammar with the session's current constants (what sweeps and previews vary)."""
+        return self.controller.read(lambda ex: ex.variant_lsystem(), wait=None)
+
     def explore(self, n_jobs=None, then=None):
-        """Run the variant sweep on the current grammar (worker, progress, cancel); then ``then()``."""
+        """Sweep the current grammar's variants around the session's current constants
+        (worker, progress, cancel); then ``then()``."""
         snap = self.controller.snapshot
-        text, n, seed = snap.text, snap.n, snap.seed
-        filename = str(snap.path) if snap.path else None
+        text, constants, n, seed = snap.text, dict(snap.constants), snap.n, snap.seed
+        ls = self._variant_lsystem()
 
         def work(progress, cancelled):
-            ls = LSystem.from_text(text, filename=filename)
             return variants.explore_plant(ls, n, seed, progress=lambda d, t: progress(d, t, "variants"),
                                           cancel=cancelled, n_jobs=n_jobs)
 
         def done(vs):
-            self.text = text
+            self.text, self.constants, self.lsystem = text, constants, ls
             self.set_variants(vs)
             if then is not None:
                 then()
         return self.run("explore", work, done, "Exploring variants")
 
     def explored(self):
-        """True if the variant set is a sweep of the grammar text on screen."""
+        """True if the variant set is a sweep of the grammar text and constants on screen."""
         vs = self.variant_set
+        snap = self.controller.snapshot
         return (vs is not None and vs.exploration is not None
-                and self.text == self.controller.snapshot.text)
+                and self.text == snap.text and self.constants == snap.constants)
 
     def open_exploration(self, directory=None):
         if directory is None:
@@ -178,7 +191,8 @@ class VariantsController:
         except RamureError as exc:
             self.window.report_refused(str(exc))
             return None
-        self.text = self.controller.snapshot.text
+        self.text, self.constants = self.controller.snapshot.text, dict(self.controller.snapshot.constants)
+        self.lsystem = self._variant_lsystem()
         self.set_variants(vs)
         return vs
 
@@ -197,10 +211,9 @@ class VariantsController:
     def render_thumbnails(self):
         vs = self.variant_set
         snap = self.controller.snapshot
-        text, n, seed = snap.text, vs.n if vs.n is not None else snap.n, vs.seed
+        ls, n, seed = self.lsystem, vs.n if vs.n is not None else snap.n, vs.seed
 
         def work(progress, cancelled):
-            ls = LSystem.from_text(text)
             images = []
             for i, pick in enumerate(vs.picks):
                 progress(i, len(vs.picks), "thumbnails")
@@ -221,6 +234,9 @@ class VariantsController:
         if self.variant_set is not None and self.text is not None and snap.text != self.text:
             self.window.gallery.note.setText("These variants were explored for another grammar text; "
                                              "explore again to update them.")
+        elif self.variant_set is not None and self.constants is not None and snap.constants != self.constants:
+            self.window.gallery.note.setText("The constants changed since these variants were explored; "
+                                             "a qualifier explores again around the new values.")
         if self.show_fruit:
             self.draw_fruit(snap)
 
@@ -230,41 +246,47 @@ class VariantsController:
         self.window.dirty = True
         return self.controller.regrow(params=pick.get("params"))
 
-    def _qualifier_params(self, name):
-        rules = self.controller.read(variants.selection_rules, wait=None)
-        return variants.qualifier_params(self.variant_set, name, rules)
-
     def apply_qualifier(self, name):
-        """Regrow the selection (or plant) with qualifier ``name``'s combination; explores first if needed."""
+        """Regrow the selection (or plant) toward qualifier ``name`` (explores first if needed).
+
+        :meth:`app.model.Explorer.apply_qualifier` tries the best variants until
+        the selection's metrics move the qualifier's way; one undoable edit.
+        """
         if not self.explored():
             self.window.status(f"Exploring the variants before applying '{name}'…", 0)
             return self.explore(then=lambda: self.apply_qualifier(name))
-        try:
-            params = self._qualifier_params(name)
-        except RamureError as exc:
-            self.window.report_refused(str(exc))
-            return None
+        sweep = self.variant_set.exploration.sweep
         self.window.dirty = True
-        self.window.status(f"Applying '{name}': rule {params.get('rule')}, {params.get('constants')}")
-        return self.controller.regrow(params=params)
+        self.window.status(f"Applying '{name}': trying variants on the "
+                           f"{'selection' if self.controller.snapshot.selection else 'whole plant'}…", 0)
+        return self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep))
+
+    def qualifier_done(self, job):
+        if job.name.startswith("qualifier ") and not job.stale and job.error is None:
+            self.last_qualifier = job.result
+            self.window.status(variants.qualifier_message(job.result), 15000)
 
     def preview_qualifier(self, name):
+        """Draw the whole plant with the qualifier's best-ranked variant (a thumbnail, in a task)."""
         if not self.explored():
             self.window.regen.set_preview(None)
             return None
+        from metrics.qualifiers import qualifier_combination
+
         try:
-            params = variants.qualifier_params(self.variant_set, name)
+            params = qualifier_combination(name, self.variant_set.exploration.sweep)
         except RamureError as exc:
             self.window.regen.qualifier_note.setText(str(exc))
             return None
         snap = self.controller.snapshot
-        text, n, seed = snap.text, snap.n, snap.seed
+        ls, n, seed = self.lsystem, snap.n, snap.seed
         self.window.regen.qualifier_note.setText(
-            f"rule {params.get('rule')}: " + ", ".join(f"{k}={v:g}" for k, v in params["constants"].items()))
+            f"Best variant: rule {params.get('rule')}, "
+            + ", ".join(f"{k}={v:g}" for k, v in params["constants"].items())
+            + ". Applying tries the best few on the selection.")
 
         def work(progress, cancelled):
-            sk = variants.variant_skeleton(LSystem.from_text(text), n, seed, params)
-            return skeleton_image(sk, 96)
+            return skeleton_image(variants.variant_skeleton(ls, n, seed, params), 96)
         return self.run("preview", work, self.window.regen.set_preview, "Preview", progress=False)
 
     # -- volumetric fruit ------------------------------------------------------------

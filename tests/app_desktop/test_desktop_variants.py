@@ -58,16 +58,46 @@ def test_gallery_click_applies_the_pick(make_window, qtbot):
 def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot):
     w = make_window(n=4)
     assert w.regen.qualifier.count() >= 10
+    w.constants_panel.set_constant("a2", 30.0)  # the sweep must start from the session's values
+    settle(qtbot, w)
     snap = w.controller.snapshot
     w.controller.select(snap.segment_leaf[-4:])
     w.regen.qualifier.setCurrentText("dense")
     with qtbot.waitSignal(w.controller.job_done, timeout=60000,
-                          check_params_cb=lambda job: job.name == "regrow"):
+                          check_params_cb=lambda job: job.name == "qualifier dense"):
         qtbot.mouseClick(w.regen.apply_button, Qt.MouseButton.LeftButton)
     settle(qtbot, w)
-    edit = w.controller.explorer.session.edits[-1]
+    sweep = w.variants.variant_set.exploration.sweep
+    assert sweep.base_constants_["a2"] == 30.0
+    session = w.controller.explorer.session
+    edit = session.edits[-1]
+    assert len(session.edits) == 2  # the constant, then one qualifier edit (rejected tries undone)
     assert edit["params"] is not None and edit["selection"] == sorted(snap.segment_leaf[-4:].tolist())
+    result = w.variants.last_qualifier
+    assert result.improved and result.after.branch_density > result.before.branch_density
+    message = w.statusBar().currentMessage()
+    assert message.startswith("dense: density ") and "→" in message
     assert w.regen.preview.pixmap() is not None and not w.regen.preview.pixmap().isNull()
+    w.controller.undo()
+    settle(qtbot, w)
+    assert len(session.edits) == 1
+
+
+def test_qualifier_message_names_the_metric():
+    from types import SimpleNamespace
+
+    from app.desktop.variants import qualifier_message
+    from metrics.plant import PlantMetrics
+
+    before = PlantMetrics(*[1.0] * 10)._replace(branch_density=1772.0)
+    after = before._replace(branch_density=2172.4)
+    result = SimpleNamespace(qualifier="dense", before=before, after=after, improved=True, tried=1,
+                             variant=3, params={"rule": 1})
+    assert qualifier_message(result) == "dense: density 1772 → 2172"
+    result.improved, result.tried = False, 5
+    assert qualifier_message(result).startswith("dense: no variant moved")
+    result.qualifier = "normal"
+    assert qualifier_message(result) == "normal: applied variant 3 (rule 1) (5 tries)"
 
 
 def test_cancel_stops_the_sweep(make_window, qtbot):
