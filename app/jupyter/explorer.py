@@ -27,7 +27,7 @@ import ipywidgets as W
 from app.jupyter._ui import MessageLine, button, on_value
 from app.jupyter.grammar import GrammarPanel
 from app.jupyter.selection import SelectionPanel, TreeBrowser
-from app.jupyter.variants import VariantPanel
+from app.jupyter.variants import VariantPanel, qualifier_summary
 from app.jupyter.view import VIEWS, PlantView
 from app.model import Explorer as Model
 from lsys.errors import GrammarError, RamureError
@@ -70,7 +70,8 @@ class EditPanel:
         self.qualifier = W.Dropdown(options=[], description="qualifier", style={"description_width": "60px"},
                                     layout=W.Layout(width="210px"))
         self.apply_qualifier = button("Apply", lambda: app.apply_qualifier(self.qualifier.value),
-                                      "regrow the cut with this qualifier's parameter combination")
+                                      "regrow the cut toward this qualifier (tries variants until "
+                                      "the selection's metrics move its way)")
         self.path = W.Text(value="plant_session.json", layout=W.Layout(width="170px"))
         self.widget = W.VBox([
             W.HTML("<b>Regenerate</b>"), self.rho,
@@ -91,7 +92,9 @@ class EditPanel:
             self.qualifier.options = names
         self.qualifier.disabled = self.apply_qualifier.disabled = not names
         self.qualifier.tooltip = ("the first use explores the variants (a few seconds)"
-                                  if self.app.variants.exploration is None else "")
+                                  if self.app.variants.exploration is None
+                                  else "the constants changed: the next use explores again"
+                                  if self.app.variants.stale() else "")
         rho = round(model.rho * 100)
         if self.rho.value != rho:
             self.rho.value = rho
@@ -275,23 +278,26 @@ class Explorer:
 
     def apply_pick(self, pick_id):
         """Regrow the cut with the parameters of variant pick ``pick_id`` (1-27)."""
-        return self._apply_params(lambda: self.variants.pick_params(pick_id), f"pick #{pick_id}")
-
-    def apply_qualifier(self, name):
-        """Regrow the cut with qualifier ``name``'s parameter combination."""
-        if not name:
-            self.message.show("choose a qualifier first", "note")
-            return None
-        return self._apply_params(lambda: self.variants.qualifier_params(name, self.model), f"'{name}'")
-
-    def _apply_params(self, combination, what):
-        params = self.run(combination)
+        params = self.run(lambda: self.variants.pick_params(pick_id))
         if params is None:
             return None
         result = self.regrow(params=params)
         if result is not None:
-            self.variants.mark_applied(params)
-            self.message.show(f"applied {what} {params} — {self.model.status()}", "info")
+            self.variants.mark_applied(self.variants.pick_point(pick_id))
+            self.message.show(f"applied pick #{pick_id} {params} — {self.model.status()}", "info")
+        return result
+
+    def apply_qualifier(self, name):
+        """Regrow the cut toward qualifier ``name`` ("dense", "rond", …): candidates are tried
+        until the selection's metrics move its way (:meth:`app.model.Explorer.apply_qualifier`);
+        the message line says whether they did, e.g. "denser: density 1772 → 2172"."""
+        if not name:
+            self.message.show("choose a qualifier first", "note")
+            return None
+        result = self.run(lambda: self.variants.apply_qualifier(name))
+        if result is not None:
+            self.message.show(f"{qualifier_summary(result)} — {self.model.status()}",
+                              "info" if result.improved else "note")
         return result
 
     def prune(self):

@@ -8,14 +8,25 @@ the button runs in a thread and *Stop* cancels it; a sweep started from code
 kernel interrupt.  Without :mod:`metrics` (or before a sweep) the panels say
 what is missing instead of failing.
 
-Applying a pick or a qualifier regrows the selection's cut (the whole plant
-when nothing is selected) with that parameter combination, through
-:meth:`app.model.Explorer.regrow`.
+Sweeps start from the session's current constants
+(:meth:`app.model.Explorer.variant_lsystem`), not the file's ``#define``
+values.  Applying a pick regrows the selection's cut (the whole plant when
+nothing is selected) with that variant's parameter combination
+(:meth:`app.model.Explorer.regrow`); applying a qualifier goes through
+:meth:`app.model.Explorer.apply_qualifier`, which tries candidates until the
+selection's metrics move the qualifier's way and keeps one undoable edit.
+
+>>> from types import SimpleNamespace as NS
+>>> m = NS(branch_density=1772.5)
+>>> qualifier_summary(NS(qualifier="dense", improved=True, before=m, after=NS(branch_density=2172.5),
+...                      params={}, tried=1))
+'denser: density 1772 → 2172'
 """
 from __future__ import annotations
 
 import base64
 import pathlib
+import sqlite3
 import tempfile
 import threading
 
@@ -40,14 +51,42 @@ def metrics_status() -> str | None:
 
 
 def qualifier_tools():
-    """``(VOCABULARY, qualifier_combination, active_rules, QualifierStore)`` or None if metrics lacks them."""
+    """``(VOCABULARY, QualifierStore)`` or None if metrics lacks them."""
     try:
-        from metrics.apply import active_rules
-        from metrics.qualifiers import VOCABULARY, qualifier_combination
+        from metrics.apply import apply_qualifier  # noqa: F401 - what Explorer.apply_qualifier runs
+        from metrics.qualifiers import VOCABULARY
         from metrics.store import QualifierStore
     except ImportError:
         return None
-    return VOCABULARY, qualifier_combination, active_rules, QualifierStore
+    return VOCABULARY, QualifierStore
+
+
+#: How the message line words a qualifier that worked ("denser: density 1772 → 2172").
+COMPARATIVES = {"small": "smaller", "large": "larger", "sparse": "sparser", "dense": "denser",
+                "thin": "thinner", "thick": "thicker", "round": "rounder"}
+
+
+def _metric_label(metric) -> str:
+    return metric.removeprefix("branch_").replace("_", " ") if metric != "branch_count" else "branches"
+
+
+def qualifier_summary(result) -> str:
+    """One line on what applying a qualifier did to the selection: the metrics its direction
+    weighs most, before → after, and whether they moved its way."""
+    name = result.qualifier
+    tools = qualifier_tools()
+    entry = tools[0].get(name) if tools else None
+    weights = (entry.direction or {}) if entry is not None else {}
+    shown = sorted(weights, key=lambda m: -abs(weights[m]))[:2]
+    moves = ", ".join(f"{_metric_label(m)} {getattr(result.before, m):.4g} → {getattr(result.after, m):.4g}"
+                      for m in shown)
+    if not shown:  # no direction (normal, a study-only word): say what was applied
+        return f"'{name}': applied {result.params}"
+    if result.improved:
+        word = COMPARATIVES.get(name, f"more {name}")
+        return f"{word}: {moves}"
+    return (f"'{name}' did not move the selection its way after {result.tried} tries "
+            f"({moves}); kept the closest")
 
 
 class Stopped(RamureError):
@@ -133,7 +172,7 @@ class VariantPanel:
                              mp_context="forkserver" if self.jobs.value > 1 else None)
         self._sweep = sweep
         self._stop.clear()
-        lsystem = self.app.model.lsystem
+        lsystem = self.app.model.variant_lsystem()
         if wait:
             return self._run(sweep, lsystem, thumbnails)
         self.running = threading.Thread(target=self._run_reported, args=(sweep, lsystem, thumbnails),
@@ -217,15 +256,25 @@ class VariantPanel:
             raise RamureError("explore the variants first (Variants ▸ Explore variants)")
         return self.exploration
 
+    def _pick_index(self, pick_id) -> int:
+        """``pick_id`` (1-27) as a 0-based index, or a refusal naming the bad value."""
+        self._need()
+        try:
+            index = int(str(pick_id).strip()) - 1
+        except ValueError:
+            index = -1
+        if not 0 <= index < N_PICKS:
+            raise RamureError(f"pick {pick_id!r} is not a number 1-{N_PICKS}")
+        return index
+
     def pick_params(self, pick_id) -> dict:
         """The parameter combination ``{"rule", "constants"}`` of pick ``pick_id`` (1-27)."""
-        exp = self._need()
-        if not 1 <= int(pick_id) <= N_PICKS:
-            raise RamureError(f"pick {pick_id} is not a number 1-27")
-        return exp.sweep.combination(int(exp.picks.variant[int(pick_id) - 1]))
+        index = self._pick_index(pick_id)
+        exp = self.exploration
+        return exp.sweep.combination(int(exp.picks.variant[index]))
 
     def pick_point(self, pick_id):
-        return self._need().picks.points[int(pick_id) - 1]
+        return self._need().picks.points[self._pick_index(pick_id)]
 
     def qualifier_options(self) -> list:
         """``(label, name)`` of the qualifiers offered: study regions first (marked), then the
@@ -244,28 +293,27 @@ class VariantPanel:
 
         return [(label(name), name) for name in names]
 
-    def qualifier_params(self, name, model) -> dict:
-        """The combination qualifier ``name`` applies to the model's selection (or whole plant);
-        without an exploration yet, one is run first (blocking, with the progress bar)."""
-        tools = qualifier_tools()
-        if tools is None:
-            raise RamureError("qualifiers are not available (the metrics qualifier modules are missing)")
-        exp = self.exploration or self.explore(wait=True)
-        _, combination, active_rules, _ = tools
-        rules = None
-        cut = model.plan()
-        if cut is not None and len(cut.roots):
-            rules = active_rules(model.derivation.tree, cut.roots)
-        return combination(name, exp.sweep, exp.points, self.regions, rules)
-
-    def mark_applied(self, params):
-        """Show the variant whose combination is ``params`` as the applied one in the scatter."""
+    def stale(self) -> bool:
+        """True when the exploration was swept from other constant values than the plant's."""
         exp = self.exploration
-        self.chosen = None
-        for i in range(exp.sweep.n_variants_):
-            if exp.sweep.combination(i) == params and np.all(np.isfinite(exp.points[i])):
-                self.chosen = exp.points[i]
-                break
+        return exp is not None and dict(exp.sweep.base_constants_) != self.app.model.constants
+
+    def apply_qualifier(self, name):
+        """Regrow the model's selection (or whole plant) toward qualifier ``name`` through
+        :meth:`app.model.Explorer.apply_qualifier`, with the study regions when loaded.
+        Without an exploration of the current constants, one is run first (blocking)."""
+        if qualifier_tools() is None:
+            raise RamureError("qualifiers are not available (the metrics qualifier modules are missing)")
+        if self.exploration is None or self.stale():
+            self.explore(wait=True)
+        exp = self.exploration
+        result = self.app.model.apply_qualifier(name, exp.sweep, points=exp.points, regions=self.regions)
+        self.mark_applied(exp.points[int(result.variant)])
+        return result
+
+    def mark_applied(self, point):
+        """Show ``point`` (a variant's PCA point) as the applied one in the scatter."""
+        self.chosen = point if point is not None and np.all(np.isfinite(point)) else None
         self._draw_scatter()
 
     def load_regions(self, store, grammar=None):
@@ -275,8 +323,14 @@ class VariantPanel:
         tools = qualifier_tools()
         if tools is None:
             raise RamureError("qualifier regions are not available (metrics.store is missing)")
-        with tools[3](store) as qs:
-            self.regions = qs.regions(grammar or exp.name)
+        if not pathlib.Path(store).is_file():
+            raise RamureError(f"{store}: no such qualifier store")
+        try:
+            with tools[1](store) as qs:
+                regions = qs.regions(grammar or exp.name)
+        except sqlite3.DatabaseError as err:
+            raise RamureError(f"{store}: not a qualifier store ({err})") from None
+        self.regions = regions
         if self.regions is None:
             raise RamureError(f"{store}: no qualifier points for grammar '{grammar or exp.name}'")
         self.refresh()
@@ -290,7 +344,7 @@ class VariantPanel:
         if tools is None or self.exploration is None:
             return {}
         if self.defaults is None:
-            with tools[3](":memory:") as qs:
+            with tools[1](":memory:") as qs:
                 qs.write_default(self.exploration)
                 self.defaults = qs.regions(self.exploration.name)
         return dict(self.defaults.boxes_) if self.defaults is not None else {}

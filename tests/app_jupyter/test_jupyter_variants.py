@@ -64,17 +64,50 @@ def test_gallery_button_applies_the_pick(ex):
     assert "applied pick #27" in ex.message.text
 
 
-def test_qualifier_dropdown_regrows_the_selection(ex):
-    from metrics.apply import active_rules
+def test_qualifier_dropdown_makes_the_selection_denser(ex):
+    from metrics.apply import active_rules, roots_metrics
 
     ex.select_where(min_order=2)
-    rules = active_rules(ex.plant.tree, ex.model.plan().roots)
-    before = ex.plant.to_string()
+    roots = ex.model.plan().roots
+    rules = active_rules(ex.plant.tree, roots)
+    before = roots_metrics(ex.session, roots).branch_density
     ex.edits.qualifier.value = "dense"
     ex.edits.apply_qualifier.click()
-    params = ex.history[-1]["params"]
-    assert params["rule"] in rules and ex.plant.to_string() != before
-    assert ex.selection == [] and "applied 'dense'" in ex.message.text
+    result = ex.model.last_result
+    after = roots_metrics(ex.session, result.roots).branch_density
+    assert after > before  # the selection really got denser
+    assert ex.history[-1]["params"]["rule"] in rules and len(ex.history) == 1  # one undoable edit
+    assert ex.selection == [] and ex.message.kind == "info"
+    assert ex.message.text.startswith(f"denser: density {before:.4g} → {after:.4g}")
+    assert ex.variants.chosen is not None  # the applied variant is marked in the PCA view
+    ex.undo()
+    assert ex.history == []
+
+
+def test_qualifier_that_cannot_improve_says_so(ex, monkeypatch):
+    from metrics import apply as apply_module
+
+    real = apply_module.apply_qualifier
+
+    def never_better(*args, **kwargs):
+        out = real(*args, **kwargs)
+        out.improved = False
+        return out
+
+    monkeypatch.setattr(apply_module, "apply_qualifier", never_better)
+    ex.apply_qualifier("small")
+    assert ex.message.kind == "note" and "did not move the selection its way" in ex.message.text
+    assert "box volume" in ex.message.text and len(ex.history) == 1
+
+
+def test_qualifier_sweeps_start_from_the_sessions_constants(ex):
+    ex.set_constant("a2", 45)
+    assert ex.variants.stale() and "explores again" in ex.edits.qualifier.tooltip
+    ex.variants.n.value = 3
+    result = ex.apply_qualifier("large")
+    sweep = ex.variants.exploration.sweep
+    assert result is not None and sweep.base_constants_["a2"] == 45 and not ex.variants.stale()
+    assert ex.variants.exploration.name == "honda_sympodial"
 
 
 def test_new_grammar_text_drops_the_variants(ex):
@@ -94,7 +127,7 @@ def test_pick_needs_an_exploration_and_a_qualifier_runs_one():
     ex.variants.n.value = 3
     ex.apply_qualifier("small")
     assert ex.variants.exploration is not None and ex.history[-1]["params"]["rule"] in (0, 1)
-    assert ex.variants.bar.value == 27 and "applied 'small'" in ex.message.text
+    assert ex.variants.bar.value == 27 and ex.message.text.startswith("smaller: box volume")
 
 
 def test_stop_button_cancels_a_background_exploration():
