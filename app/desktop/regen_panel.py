@@ -1,4 +1,4 @@
-"""The regeneration panel: ρ, Regrow, Regrow with constants, qualifiers, Prune, Undo/Redo.
+"""The regeneration panel: ρ, Regrow, Regrow with constants, qualifiers, fruit, Prune, Undo/Redo.
 
 The panel only collects the user's choices and emits them; the window turns
 them into model jobs.  "Regrow with constants" sends the values typed in the
@@ -17,6 +17,14 @@ from app.desktop.state import changed_constants
 THUMB = 96
 
 
+def _fruit_presets():
+    try:
+        from gmap.fruit import PRESETS
+    except ImportError:
+        return []
+    return list(PRESETS)
+
+
 class RegenPanel(QWidget):
     """Buttons and values for regrowing or pruning the selection."""
 
@@ -25,6 +33,7 @@ class RegenPanel(QWidget):
     regrow_with_constants = Signal(dict)
     qualifier_chosen = Signal(str)  # the qualifier in the drop-down changed (preview)
     apply_qualifier = Signal(str)
+    regrow_fruit = Signal(str)  # a gmap.fruit preset name, or "" to keep each fruit's preset
     prune = Signal()
     undo = Signal()
     redo = Signal()
@@ -101,11 +110,30 @@ class RegenPanel(QWidget):
         qgrid.addWidget(self.preview, 0, 1, 3, 1)
         self.set_qualifiers([], "Qualifiers need a variant exploration (Variants ▸ Explore).")
 
+        self.fruit_box = QGroupBox("Fruit")
+        self.fruit_preset = QComboBox()
+        self.fruit_preset.setObjectName("fruitPreset")
+        self.fruit_preset.addItem("same shape, new seed", "")
+        for name in _fruit_presets():
+            self.fruit_preset.addItem(name.replace("_", " "), name)
+        self.regrow_fruit_button = QPushButton("Regrow fruit")
+        self.regrow_fruit_button.setObjectName("regrowFruit")
+        self.regrow_fruit_button.clicked.connect(
+            lambda: self.regrow_fruit.emit(self.fruit_preset.currentData() or ""))
+        self.fruit_note = QLabel("")
+        self.fruit_note.setWordWrap(True)
+        fgrid = QGridLayout(self.fruit_box)
+        fgrid.addWidget(self.fruit_preset, 0, 0)
+        fgrid.addWidget(self.regrow_fruit_button, 0, 1)
+        fgrid.addWidget(self.fruit_note, 1, 0, 1, 2)
+        self.set_fruit_selection(0, 0)
+
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(rho_row)
         layout.addLayout(buttons)
         layout.addWidget(qual)
+        layout.addWidget(self.fruit_box)
         layout.addWidget(self.constants_box, 1)
 
     def _rho(self, value):
@@ -128,6 +156,20 @@ class RegenPanel(QWidget):
         text = f"Regrow ({target})"
         if self.regrow_button.text() != text:
             self.regrow_button.setText(text)
+
+    def set_fruit_selection(self, selected, total, available=True):
+        """``selected`` of the plant's ``total`` fruit are in the selection."""
+        self.fruit_box.setVisible(total > 0)
+        ok = available and selected > 0
+        self.regrow_fruit_button.setEnabled(ok)
+        self.fruit_preset.setEnabled(ok)
+        if not available:
+            note = "Volumetric fruit need gmap (not available)."
+        elif selected:
+            note = f"{selected} of {total} fruit selected: new seed or shape, drawn as volumes."
+        else:
+            note = f"Select fruit (click one, or a rectangle) to regrow them; {total} on the plant."
+        self.fruit_note.setText(note)
 
     # -- constants for the selection -----------------------------------------------
     def show_constants(self, constants, force=False):

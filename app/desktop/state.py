@@ -119,6 +119,45 @@ def base_colors(mesh):
     return rgb
 
 
+KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (lsys.geometry.KIND_FRUIT)
+
+
+def fruit_leaves(mesh):
+    """The history leaves drawn as fruit spheres (sorted, unique)."""
+    if mesh is None or mesh.n_cells == 0:
+        return np.zeros(0, np.int64)
+    kind = np.asarray(mesh.cell_data["kind"])
+    return np.unique(np.asarray(mesh.cell_data["leaf_id"])[kind == KIND_FRUIT])
+
+
+def points_without_fruit(mesh):
+    """A copy of the mesh's points with each fruit sphere shrunk to its centre (None: no fruit).
+
+    Drawn with these points, the spheres vanish (zero-area triangles) while
+    cell ids, colours and picking stay those of the full mesh: what the view
+    shows while volumetric fruit replace the spheres.  (VTK's hidden-cell
+    ghost array is not honoured by the polydata mapper.)
+    """
+    kind = np.asarray(mesh.cell_data["kind"])
+    if not (kind == KIND_FRUIT).any():
+        return None
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    polys = mesh.GetPolys()
+    conn = vtk_to_numpy(polys.GetConnectivityArray())
+    offsets = vtk_to_numpy(polys.GetOffsetsArray())
+    cell = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    fruit = kind[cell] == KIND_FRUIT
+    organ = np.asarray(mesh.cell_data["organ"])[cell[fruit]]
+    ids = conn[fruit]
+    points = np.array(mesh.points, copy=True)
+    count = np.bincount(organ)
+    centre = np.stack([np.bincount(organ, points[ids, k]) for k in range(3)], axis=1)
+    centre /= np.maximum(count, 1)[:, None]
+    points[ids] = centre[organ]
+    return points
+
+
 def leaf_mask(leaf_ids, selection):
     """Boolean mask of ``leaf_ids`` that are in ``selection`` (a lookup table: O(n), no sort)."""
     leaf_ids = np.asarray(leaf_ids)

@@ -42,12 +42,14 @@ class VariantsController:
         self.last_qualifier = None  # the last metrics.apply.QualifierResult
         self.tasks = {}
         self.show_fruit = False
+        self.fruit_ok = fruit_available()
         w = window
         w.gallery.pick_clicked.connect(self.apply_pick)
         w.gallery.explore_requested.connect(self.explore)
         w.gallery.open_requested.connect(self.open_exploration)
         w.regen.qualifier_chosen.connect(self.preview_qualifier)
         w.regen.apply_qualifier.connect(self.apply_qualifier)
+        w.regen.regrow_fruit.connect(self.regrow_fruit)
         w.cancel_button.clicked.connect(self.cancel_all)
         w.view.leaf_clicked.connect(self.fruit_clicked)
         w.controller.job_done.connect(self.qualifier_done)
@@ -79,15 +81,12 @@ class VariantsController:
     def fruit_action(self, menu):
         action = QAction("Volumetric fruit", self.window)
         action.setCheckable(True)
-        ok = fruit_available()
-        action.setEnabled(ok)
-        action.setStatusTip("Draw fruit as 3G-map volumes" if ok else
+        action.setEnabled(self.fruit_ok)
+        action.setStatusTip("Draw fruit as 3G-map volumes" if self.fruit_ok else
                             "Volumetric fruit needs gmap.plant and gmap.pyvista (not available)")
         action.toggled.connect(self.set_fruit)
         menu.addAction(action)
-        self.regrow_fruit_action = menu.addAction("Regrow selected fruit (new seed)")
-        self.regrow_fruit_action.setEnabled(ok)
-        self.regrow_fruit_action.triggered.connect(self.regrow_fruit)
+        self.fruit_toggle = action
         return action
 
     # -- tasks ------------------------------------------------------------------
@@ -291,7 +290,9 @@ class VariantsController:
 
     # -- volumetric fruit ------------------------------------------------------------
     def set_fruit(self, on):
+        """Volumetric fruit on/off: the volumes replace the plant's fruit spheres."""
         self.show_fruit = bool(on)
+        self.window.view.set_fruit_spheres_hidden(self.show_fruit)
         if on:
             self.draw_fruit(self.controller.snapshot)
         else:
@@ -314,6 +315,12 @@ class VariantsController:
     def fruit_clicked(self, leaf, mode):
         self.window._select(self.controller.select, [leaf], mode)
 
-    def regrow_fruit(self):
+    def regrow_fruit(self, preset=""):
+        """New seed (and ``preset`` shape, if given) for the selected fruit; shows the volumes."""
+        settings = {"preset": preset} if preset else {}
         self.window.dirty = True
-        return self.controller.submit("regrow fruit", lambda ex: ex.regrow_fruit())
+        job = self.controller.submit("regrow fruit", lambda ex: ex.regrow_fruit(**settings))
+        if not self.show_fruit:
+            self.fruit_toggle.setChecked(True)  # fruit settings show on the volumes
+            self.window.status("Volumetric fruit shown: fruit shapes and seeds apply to the volumes", 6000)
+        return job

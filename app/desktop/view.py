@@ -25,7 +25,7 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
-from app.desktop.state import FRUIT_RGB, project_to_display
+from app.desktop.state import FRUIT_RGB, points_without_fruit, project_to_display
 from app.render import frame_camera
 
 CLICK_SLOP = 4  # pixels a click may move and still be a click
@@ -119,6 +119,7 @@ class PlantView(QWidget):
         self.box_actor = None
         self.fruit = None
         self.fruit_actor = None
+        self.hide_fruit_spheres = False  # True while volumetric fruit replace the spheres
         self._diag = None
 
     # -- drawing ---------------------------------------------------------------
@@ -133,6 +134,7 @@ class PlantView(QWidget):
             return
         mesh.cell_data["rgb"] = colors
         self.mesh = mesh
+        self._apply_hidden()
         self.actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False,
                                            smooth_shading=False, show_scalar_bar=False, render=False,
                                            pickable=True)
@@ -189,6 +191,21 @@ class PlantView(QWidget):
             self.plotter.repaint()
         else:
             self.plotter.update()
+
+    def set_fruit_spheres_hidden(self, hidden):
+        """Hide the plant mesh's fruit spheres (so they do not show inside volumetric fruit)."""
+        self.hide_fruit_spheres = bool(hidden)
+        self._apply_hidden()
+        self.redraw()
+
+    def _apply_hidden(self):
+        if self.mesh is None or self.snapshot is None:
+            return
+        points = points_without_fruit(self.mesh) if self.hide_fruit_spheres else None
+        # new vtkPoints: the snapshot's mesh (shared, shallow copy) keeps its own
+        self.mesh.SetPoints(pv.vtk_points(points, deep=False) if points is not None
+                            else self.snapshot.mesh.GetPoints())
+        self.mesh.Modified()
 
     def set_fruit(self, surface, selection=()):
         """Draw volumetric fruit (a surface with ``leaf_id`` cells), or remove them (None)."""

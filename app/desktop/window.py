@@ -10,6 +10,8 @@ from __future__ import annotations
 import importlib
 import pathlib
 
+import numpy as np
+
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton,
@@ -208,6 +210,7 @@ class MainWindow(QMainWindow):
     def show_plant(self, snap, reset_camera=None):
         """A new plant version: redraw the 3D view and every view of the plant."""
         self.base_colors = state.base_colors(snap.mesh)
+        self.fruit_leaves = state.fruit_leaves(snap.mesh)
         self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection, base=self.base_colors),
                              reset_camera)
         self.drawn_version = snap.version
@@ -246,6 +249,8 @@ class MainWindow(QMainWindow):
         except RamureError:
             self.view.set_box(None)
         self.regen.set_selection_size(len(selection))
+        self.regen.set_fruit_selection(int(np.isin(self.fruit_leaves, selection).sum()), len(self.fruit_leaves),
+                                       self.variants.fruit_ok)
         if self.status_label.text() != snap.status:
             self.status_label.setText(snap.status)
         try:

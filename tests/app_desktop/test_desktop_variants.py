@@ -144,3 +144,41 @@ def w_fruit_available():
     from app.desktop.variants_panel import fruit_available
 
     return fruit_available()
+
+
+def fruit_sphere_area(mesh):
+    kind = np.asarray(mesh.cell_data["kind"])
+    return float(mesh.extract_cells(np.flatnonzero(kind == 2)).compute_cell_sizes().cell_data["Area"].sum())
+
+
+def test_volumes_hide_the_fruit_spheres_and_regrow_fruit_with_a_preset(make_window, qtbot, artifacts):
+    if not w_fruit_available():
+        pytest.skip("gmap volumetric fruit not available")
+    w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=4)
+    snap = w.controller.snapshot
+    full = fruit_sphere_area(snap.mesh)
+    assert full > 0 and fruit_sphere_area(w.view.mesh) == pytest.approx(full)
+    assert w.regen.fruit_box.isVisibleTo(w.regen) and not w.regen.regrow_fruit_button.isEnabled()
+    branch = int(snap.segment_leaf[0])
+    w.controller.select([branch])
+    assert not w.regen.regrow_fruit_button.isEnabled()  # a branch is no fruit
+
+    fruit = w.fruit_leaves.tolist()
+    w.controller.select(fruit[:2])
+    assert w.regen.regrow_fruit_button.isEnabled() and "2 of" in w.regen.fruit_note.text()
+    w.regen.fruit_preset.setCurrentIndex(w.regen.fruit_preset.findData("pear"))
+    with qtbot.waitSignal(w.controller.job_done, timeout=30000,
+                          check_params_cb=lambda job: job.name == "regrow fruit"):
+        qtbot.mouseClick(w.regen.regrow_fruit_button, Qt.MouseButton.LeftButton)
+    assert w.fruit_action.isChecked()  # regrowing fruit shows the volumes
+    qtbot.waitUntil(lambda: w.view.fruit is not None, timeout=30000)
+    settle(qtbot, w)
+    session = w.controller.explorer.session
+    assert session.edits[-1]["op"] == "fruit"
+    overrides = session.fruit_overrides()
+    assert {overrides[leaf]["preset"] for leaf in fruit[:2]} == {"pear"} and fruit[2] not in overrides
+    assert fruit_sphere_area(w.view.mesh) == 0  # spheres shrunk away under the volumes
+    assert fruit_sphere_area(w.controller.snapshot.mesh) == pytest.approx(full)  # the model's mesh kept
+    w.grab_window().save(str(artifacts / "desktop_fruit_volumes.png"))
+    w.fruit_action.setChecked(False)
+    assert fruit_sphere_area(w.view.mesh) == pytest.approx(full)
