@@ -5,7 +5,9 @@ covers a range inferred from the grammar's value
 (:func:`app.desktop.state.constant_range`); "Edit ranges" shows min/max boxes
 to change it, and typing a value outside the range widens it.  A change is
 emitted (:attr:`ConstantsPanel.constant_changed`) after a short pause so a
-slider drag re-derives a few times, not at every pixel.
+slider drag re-derives a few times, not at every pixel; the changes of one
+drag carry the same non-zero gesture number, and the last one is sent at
+once on release, so the drag makes one undo step.
 """
 from __future__ import annotations
 
@@ -48,6 +50,8 @@ class ConstantRow:
         self.high.setValue(self.hi)
         self.set_value(value)
         self.slider.valueChanged.connect(self._slid)
+        self.slider.sliderPressed.connect(lambda: panel._begin_drag(name))
+        self.slider.sliderReleased.connect(panel._end_drag)
         self.value.valueChanged.connect(self._typed)
         self.low.valueChanged.connect(self._range_typed)
         self.high.valueChanged.connect(self._range_typed)
@@ -112,14 +116,17 @@ class ConstantRow:
 class ConstantsPanel(QWidget):
     """Sliders for the grammar's constants plus the derivation count and seed."""
 
-    constant_changed = Signal(str, float)
+    constant_changed = Signal(str, float, int)  # name, value, drag gesture (0: a single change)
     derivation_changed = Signal(int, int)  # n, seed
     range_refused = Signal(str)
 
     def __init__(self, parent=None):
         super().__init__(parent)
         self.rows = {}
-        self._pending = {}
+        self._pending = {}  # name -> (value, gesture)
+        self._gesture = 0  # the slider drag in progress (0: none)
+        self._gestures = 0
+        self._dragged = None
         self.settle = QTimer(self)
         self.settle.setSingleShot(True)
         self.settle.setInterval(SETTLE_MS)
@@ -170,7 +177,7 @@ class ConstantsPanel(QWidget):
         if names != list(self.rows):
             self._rebuild(grammar_constants)
         for name, row in self.rows.items():
-            if name not in self._pending:
+            if name not in self._pending and not row.slider.isSliderDown():  # never under the cursor
                 row.set_value(snap.constants.get(name, grammar_constants[name]))
         for box, v in ((self.n_box, snap.n), (self.seed_box, snap.seed)):
             box.blockSignals(True)
@@ -207,14 +214,24 @@ class ConstantsPanel(QWidget):
                 w.setVisible(on)
 
     # -- to the model ----------------------------------------------------------
+    def _begin_drag(self, name):
+        self._gestures += 1
+        self._gesture, self._dragged = self._gestures, name
+
+    def _end_drag(self):
+        """Release: send the final value now; the drag's changes were one gesture."""
+        self.settle.stop()
+        self._flush()
+        self._gesture, self._dragged = 0, None
+
     def _changed(self, name, value):
-        self._pending[name] = float(value)
+        self._pending[name] = (float(value), self._gesture if name == self._dragged else 0)
         self.settle.start()
 
     def _flush(self):
         pending, self._pending = self._pending, {}
-        for name, value in pending.items():
-            self.constant_changed.emit(name, value)
+        for name, (value, gesture) in pending.items():
+            self.constant_changed.emit(name, value, gesture)
 
     def _derivation(self, _):
         self.derivation_changed.emit(self.n_box.value(), self.seed_box.value())

@@ -53,6 +53,7 @@ class Controller(QObject):
         self.jobs.busy_changed.connect(self.busy_changed)
         self.snapshot = state.take_snapshot(explorer)
         self.last_job_seconds = 0.0
+        self._gesture_edits = {}  # slider-drag gesture -> its edit (see set_constant)
 
     # -- running jobs ------------------------------------------------------
     @property
@@ -113,8 +114,14 @@ class Controller(QObject):
             return ex.set_text(text)
         return self.submit("grammar", run, key="text")
 
-    def set_constant(self, name, value):
-        return self.submit(f"constant {name}", lambda ex: ex.set_constant(name, value), key=f"const:{name}")
+    def set_constant(self, name, value, gesture=0):
+        """Change a constant.  Changes sharing a non-zero ``gesture`` (one slider drag) make one
+        undo step: each replaces the previous one's edit while that is still the last edit."""
+        def run(ex):
+            edit = state.set_constant_merging(ex, name, value, self._gesture_edits.get(gesture) if gesture else None)
+            if gesture:
+                self._gesture_edits = {gesture: edit}  # worker thread only
+        return self.submit(f"constant {name}", run, key=f"const:{name}")
 
     def set_derivation(self, n=None, seed=None):
         return self.submit("derivation", lambda ex: ex.set_derivation(n, seed), key="derivation")

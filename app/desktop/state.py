@@ -92,6 +92,26 @@ def selected_modules(explorer, limit=200):
 
 
 # -- constants -------------------------------------------------------------------
+def set_constant_merging(explorer, name, value, previous=None):
+    """Set constant ``name``; if ``previous`` (an edit dict) is still the session's last edit,
+    replace it, so a slider drag is one undo step.  Returns the new edit.
+
+    Undoing a constants edit only swaps derivations back (cheap); on a refused
+    value the replaced edit is redone, leaving the history as it was.
+    """
+    edits = explorer.session.edits
+    merged = previous is not None and bool(edits) and edits[-1] is previous
+    if merged:
+        explorer.undo()
+    try:
+        explorer.set_constant(name, value)
+    except Exception:
+        if merged:
+            explorer.redo()
+        raise
+    return explorer.session.edits[-1]
+
+
 def constant_range(value):
     """The slider range offered for a ``#define`` value: [0, 2v] (or [2v, 0]), [-1, 1] for 0."""
     value = float(value)

@@ -295,9 +295,9 @@ class MainWindow(QMainWindow):
         self.dirty = True
         self.controller.set_text(text)
 
-    def _constant(self, name, value):
+    def _constant(self, name, value, gesture=0):
         self.dirty = True
-        self.controller.set_constant(name, value)
+        self.controller.set_constant(name, value, gesture)
 
     def _derivation(self, n, seed):
         self.dirty = True

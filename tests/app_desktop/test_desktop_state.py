@@ -115,3 +115,18 @@ def test_variant_skeleton_applies_the_combination_to_one_rule():
     other = variants.variant_skeleton(ls, 5, 0, {"rule": 1, "constants": {"a2": 30.0}})
     direct = ls.derive(n=5, seed=0, rule_constants={1: {"a2": 30.0}}).skeleton()
     assert np.allclose(other.end, direct.end) and not np.allclose(other.end, base.end)
+
+
+def test_set_constant_merging_replaces_only_its_own_last_edit():
+    ex = Explorer(str(HONDA), n=4)
+    first = state.set_constant_merging(ex, "a2", 50)
+    second = state.set_constant_merging(ex, "a2", 40, previous=first)
+    assert len(ex.session.edits) == 1 and ex.constants["a2"] == 40
+    with pytest.raises(RamureError):
+        state.set_constant_merging(ex, "a2", float("nan"), previous=second)
+    assert len(ex.session.edits) == 1 and ex.constants["a2"] == 40  # refused: history as it was
+    ex.regrow(seed=1)  # another edit in between: the drag's next value is a new step
+    state.set_constant_merging(ex, "a2", 30, previous=second)
+    assert [e["op"] for e in ex.session.edits] == ["constants", "regrow", "constants"]
+    ex.undo(), ex.undo(), ex.undo()
+    assert ex.constants["a2"] == 60

@@ -240,6 +240,32 @@ def test_constant_slider_rederives(make_window, qtbot):
     assert w.controller.explorer.session.n == 4
 
 
+def test_a_slider_drag_is_one_undo_step(make_window, qtbot):
+    w = make_window()
+    ex = w.controller.explorer
+    before = ex.constants["a2"]
+    slider = w.constants_panel.rows["a2"].slider
+    slider.setSliderDown(True)  # the user grabs the handle (emits sliderPressed)
+    for step in (300, 320, 350, 400):
+        slider.setValue(step)
+        qtbot.wait(120)  # longer than the settle pause: each value re-derives
+        settle(qtbot, w)
+    assert len(ex.session.edits) == 1  # the values shown while dragging replaced each other
+    slider.setValue(420)
+    slider.setSliderDown(False)  # release: the final value is sent at once
+    settle(qtbot, w)
+    final = w.constants_panel.values()["a2"]
+    assert ex.constants["a2"] == final != before and len(ex.session.edits) == 1
+    w.constants_panel.set_constant("a2", 45.0)  # a separate change: its own step
+    settle(qtbot, w)
+    assert len(ex.session.edits) == 2
+    w.controller.undo()
+    w.controller.undo()
+    settle(qtbot, w)
+    assert ex.constants["a2"] == before and not ex.session.can_undo
+    assert w.constants_panel.values()["a2"] == before
+
+
 def test_bad_values_are_refused_and_a_crash_keeps_the_plant(make_window, qtbot):
     w = make_window()
     version = w.drawn_version
