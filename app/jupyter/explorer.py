@@ -20,6 +20,7 @@ the live state.
 from __future__ import annotations
 
 import base64
+import math
 import pathlib
 
 import ipywidgets as W
@@ -28,9 +29,9 @@ from app.jupyter._ui import MessageLine, button, on_value
 from app.jupyter.grammar import GrammarPanel
 from app.jupyter.selection import SelectionPanel, TreeBrowser
 from app.jupyter.variants import VariantPanel, qualifier_summary
-from app.jupyter.view import VIEWS, PlantView
+from app.jupyter.view import VIEWS, PlantView, fruit_png
 from app.model import Explorer as Model
-from lsys.errors import GrammarError, RamureError
+from lsys.errors import GrammarError, RamureError, ValueRefused
 
 PLACEHOLDER = "n: 0\nw: F"  # the plant shown while the given grammar does not parse
 
@@ -49,6 +50,15 @@ def _open_model(source, n, seed):
         model = Model(PLACEHOLDER, seed=seed)
         model.error = err
         return model, text
+
+
+def fruit_presets() -> list:
+    """The volumetric fruit presets (:data:`gmap.fruit.PRESETS`); empty without :mod:`gmap`."""
+    try:
+        from gmap.fruit import PRESETS
+    except ImportError:
+        return []
+    return list(PRESETS)
 
 
 class EditPanel:
@@ -72,11 +82,22 @@ class EditPanel:
         self.apply_qualifier = button("Apply", lambda: app.apply_qualifier(self.qualifier.value),
                                       "regrow the cut toward this qualifier (tries variants until "
                                       "the selection's metrics move its way)")
+        self.fruit_preset = W.Dropdown(options=[("same kind", "")] + [(p.replace("_", " "), p)
+                                                                      for p in fruit_presets()],
+                                       value="", description="fruit", style={"description_width": "35px"},
+                                       layout=W.Layout(width="170px"))
+        self.fruit_size = W.BoundedFloatText(value=0.0, min=0.0, max=1e6, step=0.01, description="size",
+                                             tooltip="0: keep the organ's size",
+                                             style={"description_width": "30px"}, layout=W.Layout(width="110px"))
+        self.regrow_fruit = button("Regrow fruit", lambda: app.regrow_fruit(
+            preset=self.fruit_preset.value or None, size=self.fruit_size.value or None),
+            "new volumetric fruit for the selected fruit (new seed; the kind and size chosen here)")
         self.path = W.Text(value="plant_session.json", layout=W.Layout(width="170px"))
         self.widget = W.VBox([
             W.HTML("<b>Regenerate</b>"), self.rho,
             W.HBox([self.regrow, self.regrow_constants]),
             W.HBox([self.qualifier, self.apply_qualifier]),
+            W.HBox([self.fruit_preset, self.fruit_size, self.regrow_fruit]),
             W.HBox([self.prune, self.undo, self.redo]),
             W.HBox([self.path, button("Save", lambda: app.save(self.path.value),
                                       ".json: the session; .lsys: the grammar; .vtp/.obj/.gltf/.ply/.stl: the mesh")]),
@@ -87,6 +108,8 @@ class EditPanel:
         self.undo.disabled = not model.session.can_undo
         self.redo.disabled = not model.session.can_redo
         self.prune.disabled = not model.selection
+        has_fruit = bool(model.selection) and bool(set(model.selection) & set(model.fruit_ids()))
+        self.regrow_fruit.disabled = not has_fruit or not fruit_presets()
         names = self.app.variants.qualifier_options()
         if list(self.qualifier.options) != names:
             self.qualifier.options = names
@@ -185,6 +208,10 @@ class Explorer:
             self._refused(err)
             self.refresh()
             return None
+        except OSError as err:  # a file that cannot be read or written
+            self._refused(f"{err.filename or 'file'}: {err.strerror or err}")
+            self.refresh()
+            return None
         self.error = None
         self.message.show(note or self.model.status(), "info")
         self.refresh()
@@ -231,15 +258,23 @@ class Explorer:
             return None
 
         def apply():
-            for name, value in values.items():
+            checked = {name: _number(value, name) for name, value in values.items()}  # all or none
+            unknown = sorted(set(checked) - set(self.model.constants))
+            if unknown:
+                raise ValueRefused(f"the grammar has no constant '{unknown[0]}'")
+            for name, value in checked.items():
                 self.model.set_constant(name, value)
         return self.run(apply)
 
     def set_derivation(self, n=None, seed=None):
-        s = self.model.session
-        if (n is None or n == s.n) and (seed is None or seed == s.seed):
-            return None
-        return self.run(lambda: self.model.set_derivation(n, seed))
+        def apply():
+            count = None if n is None else _number(n, "the derivation count")
+            start = None if seed is None else _number(seed, "the seed")
+            s = self.model.session
+            if (count is None or count == s.n) and (start is None or start == s.seed):
+                return None
+            return self.model.set_derivation(count, start)
+        return self.run(apply)
 
     def set_rho(self, rho):
         """ρ as a percentage (1-100) or a fraction."""
@@ -299,6 +334,28 @@ class Explorer:
             self.message.show(f"{qualifier_summary(result)} — {self.model.status()}",
                               "info" if result.improved else "note")
         return result
+
+    def regrow_fruit(self, seed=None, preset=None, size=None):
+        """New volumetric fruit for the selected fruit: a new seed (or ``seed``), and optionally
+        another ``preset`` (:data:`gmap.fruit.PRESETS`, e.g. ``"pear"``) and ``size``."""
+        def apply():
+            settings = {}
+            if preset:
+                settings["preset"] = str(preset)
+            if size is not None:
+                settings["size"] = _positive(size, "fruit size")
+            return self.model.regrow_fruit(seed=seed, **settings)
+        fruit = len(set(self.model.selection) & set(self.model.fruit_ids()))
+        result = self.run(apply)
+        if result is not None:
+            kind = f" as {str(preset).replace('_', ' ')}" if preset else ""
+            self.message.show(f"regrew {fruit} fruit{kind} — {self.model.status()}", "info")
+        return result
+
+    def fruit_png(self, size=(480, 480), view="front", focus=None, zoom=1.2):
+        """PNG of the plant with its volumetric fruit (per-fruit edits applied; ``focus``: a
+        fruit's leaf id to frame), or None when the plant has no fruit."""
+        return fruit_png(self.model, size=size, view=view, focus=focus, zoom=zoom)
 
     def prune(self):
         return self.run(self.model.prune)
@@ -375,3 +432,21 @@ class Explorer:
         bundle["image/png"] = base64.b64encode(self.png()).decode("ascii")
         bundle["text/plain"] = f"<Ramure Explorer: {self.model.status()}>"
         return bundle
+
+
+def _number(value, name) -> float:
+    """``value`` as a finite number, or a refusal naming it (checked before anything changes)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueRefused(f"{name}: '{value}' is not a number") from None
+    if not math.isfinite(number):
+        raise ValueRefused(f"{name}: the value must be a finite number")
+    return number
+
+
+def _positive(value, name) -> float:
+    number = _number(value, name)
+    if number <= 0:
+        raise ValueRefused(f"{name} must be a positive number, not {value!r}")
+    return number

@@ -149,7 +149,7 @@ class TreeBrowser:
 
     def select_selected(self):
         if self.rows.value is None:
-            self.info.value = "<i>choose a row first</i>"
+            self.app.message.show("choose a row in the derivation tree first", "note")
             return
         self.select(self.rows.value)
 

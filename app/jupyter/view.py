@@ -24,7 +24,8 @@ import threading
 import numpy as np
 
 from app.jupyter._ui import png_image
-from app.render import _headless_setup, frame_camera, plant_colors
+from app.desktop.state import FRUIT_RGB, base_colors, fruit_surface  # Qt-free helpers shared with the desktop
+from app.render import _headless_setup, frame_camera
 
 CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
 VIEWS = ("iso", "front", "side", "top")
@@ -42,10 +43,11 @@ def cut_leaves(model):
 
 
 def view_colors(model, show_cut=False):
-    """RGB (uint8) per mesh cell: bark/leaf/fruit, kinship hues for one selected leaf,
-    the planned cut in orange (``show_cut``), the selection in red."""
+    """RGB (uint8) per mesh cell: bark/leaf/fruit (orange, as on the desktop: red always means
+    selected), kinship hues for one selected leaf, the planned cut in orange (``show_cut``),
+    the selection in red."""
     mesh = model.mesh
-    rgb = plant_colors(mesh)
+    rgb = base_colors(mesh)
     if show_cut:
         rgb[np.isin(mesh.cell_data["leaf_id"], cut_leaves(model))] = np.multiply(CUT, 255).astype(np.uint8)
     else:
@@ -69,7 +71,7 @@ def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zo
             plotter.set_background(background)
             if mesh.n_cells:
                 shown = mesh.copy(deep=False)
-                shown.cell_data["rgb"] = plant_colors(mesh) if rgb is None else rgb
+                shown.cell_data["rgb"] = base_colors(mesh) if rgb is None else rgb
                 plotter.add_mesh(shown, scalars="rgb", rgb=True)
                 frame_camera(plotter, mesh.bounds, view)
                 plotter.camera.zoom(zoom)
@@ -83,6 +85,57 @@ def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zo
 def plant_png(model, size=(480, 480), view="iso", show_cut=False) -> bytes:
     """PNG bytes of the model's current plant as the explorer colours it."""
     return mesh_png(model.mesh, view_colors(model, show_cut), size, view)
+
+
+def fruit_png(model, size=(480, 480), view="front", focus=None, zoom=1.2) -> bytes | None:
+    """PNG of the plant's wood with its volumetric fruit (3G-maps, per-fruit edits applied) in
+    orange, the selected ones in red; ``focus`` (a fruit's leaf id) shows that fruit alone with
+    its faces outlined, seen from outside the crown (``view`` is then not used).
+    None when the plant has no fruit or the 3G-map layer is missing."""
+    surface = fruit_surface(model)
+    if surface is None:
+        return None
+    _headless_setup()
+    import pyvista as pv
+
+    mesh = model.mesh
+    wood = mesh.extract_cells(np.asarray(mesh.cell_data["kind"]) < 2)
+    leaf = np.asarray(surface.cell_data["leaf_id"])
+    colours = np.tile(np.array(FRUIT_RGB, np.uint8), (surface.n_cells, 1))
+    colours[np.isin(leaf, model.selection)] = (255, 0, 0)
+    surface.cell_data["rgb"] = colours
+    bounds, outward = mesh.bounds, None
+    if focus is not None:
+        one = surface.extract_cells(leaf == int(focus))
+        if one.n_cells:
+            centre = np.reshape(one.bounds, (3, 2)).mean(axis=1)
+            half = 0.6 * float(np.ptp(np.reshape(one.bounds, (3, 2)), axis=1).max())
+            surface, wood = one, wood.extract_cells([])  # that fruit alone, its faces outlined
+            bounds = np.column_stack([centre - half, centre + half]).ravel()
+            # look from outside the crown: from the plant's axis out through the fruit, a little above
+            axis = np.reshape(mesh.bounds, (3, 2)).mean(axis=1)
+            outward = np.append(centre[:2] - axis[:2], 0.0)
+            outward = outward / (np.linalg.norm(outward) or 1.0) + (0.0, 0.0, 0.35)
+    with RENDER_LOCK:
+        plotter = pv.Plotter(off_screen=True, window_size=[int(size[0]), int(size[1])])
+        try:
+            plotter.set_background("white")
+            if wood.n_cells:
+                wood.cell_data["rgb"] = base_colors(wood)
+                plotter.add_mesh(wood, scalars="rgb", rgb=True)
+            plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=outward is not None,
+                             edge_color="#7a3d12")
+            if outward is None:
+                frame_camera(plotter, bounds, view)
+            else:
+                plotter.camera_position = [tuple(centre + outward * 10 * half), tuple(centre), (0.0, 0.0, 1.0)]
+                plotter.reset_camera(bounds=tuple(bounds))
+            plotter.camera.zoom(zoom)
+            buf = io.BytesIO()
+            plotter.screenshot(buf)
+        finally:
+            plotter.close()
+    return buf.getvalue()
 
 
 def trame_available() -> bool:
