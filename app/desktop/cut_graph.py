@@ -1,22 +1,29 @@
 """The cut graph dock: the derivation graph of the last regeneration and its minimum cut.
 
 Each tree node is two vertices, ``in`` above ``out``, joined by its node
-edge; rows are derivation depths.  Source-side vertices are blue, sink-side
-orange, cut edges thick red; the regrown roots are ringed in red and the
-selected leaves filled in red.  The layout comes from
-:func:`app.desktop.state.cut_graph_layout`.
+edge; rows are derivation depths and each subtree is a block under its
+parent (:func:`app.desktop.state.cut_graph_layout`).  Source-side vertices
+are blue, sink-side orange, cut edges thick red; the regrown roots are
+ringed in red and the selected leaves filled in red.
+
+A wide graph is fitted to the view's height (scroll across it) rather than
+shrunk to a line.  Node numbers keep a fixed on-screen size and each shows
+only when its row neighbours are far enough apart to read it: zoom in with
+the wheel to see more.  Hovering a node always tells its number, symbol and
+role.
 """
 from __future__ import annotations
 
-from PySide6.QtCore import QPointF, QRectF, Qt
-from PySide6.QtGui import QBrush, QColor, QPainter, QPen
-from PySide6.QtWidgets import (QGraphicsScene, QGraphicsView, QHBoxLayout, QLabel, QPushButton,
+from PySide6.QtCore import QEvent, QPointF, QRectF, Qt
+from PySide6.QtGui import QBrush, QColor, QFont, QFontMetrics, QPainter, QPen
+from PySide6.QtWidgets import (QGraphicsItem, QGraphicsScene, QGraphicsView, QHBoxLayout, QLabel, QPushButton,
                                QVBoxLayout, QWidget)
 
 SOURCE_COLOR = QColor("#3b6fd8")
 SINK_COLOR = QColor("#e08a1e")
 CUT_COLOR = QColor("#d00000")
-X_STEP, Y_STEP, RADIUS = 28.0, 26.0, 5.0
+X_STEP, Y_STEP, RADIUS = 30.0, 18.0, 5.0
+LABEL_POINTS = 8
 
 
 class CutGraphView(QWidget):
@@ -28,30 +35,45 @@ class CutGraphView(QWidget):
         self.view = QGraphicsView(self.scene)
         self.view.setRenderHint(QPainter.RenderHint.Antialiasing)
         self.view.setDragMode(QGraphicsView.DragMode.ScrollHandDrag)
+        self.view.setTransformationAnchor(QGraphicsView.ViewportAnchor.AnchorUnderMouse)
+        self.view.viewport().installEventFilter(self)
         self.title = QLabel("No cut yet: select branches, then Regrow or Prune.")
         self.title.setWordWrap(True)
         self.plan_button = QPushButton("Show the cut for the selection")
         legend = QLabel('<span style="color:#3b6fd8">● source side</span> &nbsp; '
                         '<span style="color:#e08a1e">● sink side</span> &nbsp; '
                         '<span style="color:#d00000">━ cut edge, ○ regrown root</span>')
+        self.hint = QLabel("")
+        self.hint.setStyleSheet("color: #666;")
         top = QHBoxLayout()
         top.addWidget(self.title, 1)
         top.addWidget(self.plan_button)
+        bottom = QHBoxLayout()
+        bottom.addWidget(legend)
+        bottom.addStretch(1)
+        bottom.addWidget(self.hint)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(top)
-        layout.addWidget(legend)
+        layout.addLayout(bottom)
         layout.addWidget(self.view, 1)
         self.layout_data = None
+        self.labels = []
+        self.label_width = 0.0
+        self.font = QFont()
+        self.font.setPointSize(LABEL_POINTS)
 
     def clear(self, message):
         self.scene.clear()
+        self.labels = []
         self.layout_data = None
         self.title.setText(message)
+        self.hint.setText("")
 
     def show_layout(self, layout, title):
         """Draw a :class:`~app.desktop.state.GraphLayout`."""
         self.scene.clear()
+        self.labels = []
         self.layout_data = layout
         self.title.setText(title)
         pos = {v: QPointF(x * X_STEP, y * Y_STEP) for v, (x, y) in layout.positions.items()}
@@ -59,31 +81,114 @@ class CutGraphView(QWidget):
         cut_pen = QPen(CUT_COLOR, 3.0)
         for u, v, _cap, is_cut in layout.edges:
             if u in pos and v in pos:
-                self.scene.addLine(pos[u].x(), pos[u].y(), pos[v].x(), pos[v].y(), cut_pen if is_cut else thin)
-        labels = len(pos) <= 160
+                line = self.scene.addLine(pos[u].x(), pos[u].y(), pos[v].x(), pos[v].y(),
+                                          cut_pen if is_cut else thin)
+                if is_cut:
+                    line.setZValue(1)
+        widest = ""
+        rows = {}
+        for v, p in pos.items():
+            if isinstance(v, tuple) and v[1] == "in":
+                rows.setdefault(p.y(), []).append(p.x())
+        gaps, below = {}, {}  # labels alternate above / below their row: twice the room
+        for y, xs in rows.items():
+            xs.sort()
+            for i, x in enumerate(xs):
+                left = x - xs[i - 2] if i > 1 else float("inf")
+                right = xs[i + 2] - x if i + 2 < len(xs) else float("inf")
+                gaps[x, y] = min(left, right)
+                below[x, y] = i % 2 == 1
         for v, p in pos.items():
             terminal = v in ("s", "t")
             r = RADIUS * (1.8 if terminal else 1.0)
-            color = SOURCE_COLOR if v in layout.source_side else SINK_COLOR
+            source = v in layout.source_side
+            color = SOURCE_COLOR if source else SINK_COLOR
             node = v[0] if isinstance(v, tuple) else None
             brush = QBrush(CUT_COLOR if node in layout.selected and v[1] == "out" else color)
             pen = QPen(CUT_COLOR, 2.5) if node in layout.roots and v[1] == "in" else QPen(Qt.PenStyle.NoPen)
-            self.scene.addEllipse(QRectF(p.x() - r, p.y() - r, 2 * r, 2 * r), pen, brush)
-            if terminal or (labels and v[1] == "in"):
-                text = self.scene.addText(v if terminal else str(node))
-                font = text.font()
-                font.setPointSize(7)
-                text.setFont(font)
-                text.setPos(p.x() + r, p.y() - 2.5 * r)
-        self.view.fitInView(self.scene.itemsBoundingRect().adjusted(-10, -10, 10, 10),
-                            Qt.AspectRatioMode.KeepAspectRatio)
+            item = self.scene.addEllipse(QRectF(p.x() - r, p.y() - r, 2 * r, 2 * r), pen, brush)
+            item.setZValue(2)
+            item.setToolTip(self._tooltip(layout, v, source))
+            if terminal or v[1] == "in":
+                text = self.scene.addSimpleText(v if terminal else str(node), self.font)
+                text.setFlag(QGraphicsItem.GraphicsItemFlag.ItemIgnoresTransformations)
+                low = not terminal and below[p.x(), p.y()]
+                width = QFontMetrics(self.font).horizontalAdvance(text.text())
+                # ignores the view's scale: placed by its top-left corner, centred by hand in fit()
+                text.anchor = (p, -width / 2, 0.8 * Y_STEP + r if low else -r - 2 * LABEL_POINTS)
+                text.setPos(p.x() + r, p.y() - 2.5 * r) if terminal else None
+                text.setZValue(3)
+                text.setToolTip(item.toolTip())
+                if not terminal:
+                    text.gap = gaps[p.x(), p.y()]  # scene distance to the labels beside it
+                    self.labels.append(text)
+                    widest = max(widest, str(node), key=len)
+        self.label_width = QFontMetrics(self.font).horizontalAdvance(widest + "0")
+        self.scene.setSceneRect(self.scene.itemsBoundingRect().adjusted(-10, -10, 10, 10))  # not the old graph's
+        self.fit()
+
+    @staticmethod
+    def _tooltip(layout, v, source):
+        if v in ("s", "t"):
+            return "source (the kept plant)" if v == "s" else "sink (what is regrown)"
+        node, end = v
+        roles = ["source side" if source else "sink side"]
+        if node in layout.roots:
+            roles.append("regrown root")
+        if node in layout.selected:
+            roles.append("selected leaf")
+        name = layout.names.get(node)
+        depth = layout.depths.get(node)
+        what = f"node {node}" + (f" ({name})" if name else "") + (f", depth {depth}" if depth is not None else "")
+        return f"{what} — {end} vertex, {', '.join(roles)}"
+
+    def fit(self):
+        """Fit the whole graph in the view, then show or hide the node numbers."""
+        if self.layout_data is None:
+            return
+        rect = self.scene.itemsBoundingRect().adjusted(-10, -10, 10, 10)
+        port = self.view.viewport().size()
+        fit_w = port.width() / max(rect.width(), 1.0)
+        fit_h = port.height() / max(rect.height(), 1.0)
+        readable = (self.label_width + 4) / X_STEP  # columns a label apart
+        scale = min(fit_h, max(fit_w, readable), 2.0)
+        self.view.resetTransform()
+        self.view.scale(scale, scale)
+        self.view.centerOn(rect.center())
+        self.update_labels()
+
+    def update_labels(self):
+        """Node numbers only where neighbouring columns are at least a label apart on screen."""
+        scale = self.view.transform().m11()
+        hidden = 0
+        for text in self.labels:
+            p, dx, dy = text.anchor
+            text.setPos(p.x() + dx / scale, p.y() + dy / scale if dy < 0 else p.y() + dy)
+            readable = text.gap * scale >= self.label_width
+            text.setVisible(readable)
+            hidden += not readable
+        across = self.view.horizontalScrollBar().maximum() > 0
+        if hidden:
+            self.hint.setText(f"{hidden} of {len(self.labels)} node numbers hidden: zoom in (wheel) "
+                              "to read them, or hover a node")
+        else:
+            self.hint.setText(f"{len(self.labels)} nodes; hover one for details"
+                              + (" — drag to scroll across" if across else ""))
+
+    def labels_shown(self):
+        """How many node numbers are visible."""
+        return sum(text.isVisible() for text in self.labels)
+
+    def zoom(self, factor):
+        self.view.scale(factor, factor)
+        self.update_labels()
 
     def resizeEvent(self, event):  # noqa: N802 (Qt API)
         super().resizeEvent(event)
-        if self.layout_data is not None:
-            self.view.fitInView(self.scene.itemsBoundingRect().adjusted(-10, -10, 10, 10),
-                                Qt.AspectRatioMode.KeepAspectRatio)
+        self.fit()
 
-    def wheelEvent(self, event):  # noqa: N802 (Qt API)
-        factor = 1.15 if event.angleDelta().y() > 0 else 1 / 1.15
-        self.view.scale(factor, factor)
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt API)
+        if obj is self.view.viewport() and event.type() == QEvent.Type.Wheel:
+            self.zoom(1.15 if event.angleDelta().y() > 0 else 1 / 1.15)
+            return True
+        return super().eventFilter(obj, event)

@@ -68,7 +68,8 @@ def take_snapshot(explorer, previous=None):
     mesh = explorer.mesh
     result = explorer.last_result
     cut = getattr(result, "cut", None)
-    layout = cut_graph_layout(cut, explorer.derivation.tree, result.roots) if cut is not None else None
+    layout = (cut_graph_layout(cut, explorer.derivation.tree, result.roots, explorer.lsystem.symbols)
+              if cut is not None else None)
     return Snapshot(version=explorer.version, mesh=mesh, skeleton=skeleton,
                     segment_leaf=np.asarray(skeleton.leaf_id), midpoints=explorer.segment_midpoints(),
                     n_modules=len(explorer.derivation), string_preview=string_preview(explorer),
@@ -286,34 +287,66 @@ class GraphLayout:
     edges: list  # (u, v, capacity or None, is_cut)
     roots: set  # tree nodes regrown from
     selected: set  # selected leaves
+    names: dict = field(default_factory=dict)  # tree node -> symbol name (tooltips)
+    depths: dict = field(default_factory=dict)  # tree node -> derivation depth
 
 
-def cut_graph_layout(cut, tree, roots=()):
-    """Lay out the graph of a :class:`lsys.cut.CutResult` by derivation depth.
+def cut_graph_layout(cut, tree, roots=(), symbols=None):
+    """Lay out the graph of a :class:`lsys.cut.CutResult` as a tidy tree by derivation depth.
 
     Each tree node ``v`` gives two vertices ``(v, "in")`` above ``(v, "out")``;
-    nodes of one depth sit on one row in node-id (string) order; the source is
-    at the top, the sink at the bottom.
+    rows are derivation depths (the source at the top, the sink at the
+    bottom).  Across, the graph's leaves take one column each in depth-first
+    order and a parent sits centred over its children, so a subtree is one
+    block under its parent and tree edges never cross.  ``symbols`` (the
+    grammar's symbol names) names the nodes in :attr:`GraphLayout.names`.
     """
     graph = cut.graph
     nodes = sorted({v[0] for v in graph if isinstance(v, tuple)})
     depth = tree.depth
-    rows = {}
+    parent = tree.parent
+    members = set(nodes)
+    children = {}
+    tops = []
     for v in nodes:
-        rows.setdefault(int(depth[v]), []).append(v)
-    positions = {}
+        p = int(parent[v])
+        if p in members:
+            children.setdefault(p, []).append(v)
+        else:
+            tops.append(v)
+    xs = {}
+    column = 0
+    for top in tops:  # iterative post-order: leaves take columns, parents centre over children
+        stack = [(top, False)]
+        while stack:
+            v, done = stack.pop()
+            kids = children.get(v)
+            if not kids:
+                xs[v] = float(column)
+                column += 1
+            elif done:
+                xs[v] = (xs[kids[0]] + xs[kids[-1]]) / 2.0
+            else:
+                stack.append((v, True))
+                stack.extend((k, False) for k in reversed(kids))
+    rows = {int(depth[v]) for v in nodes}
     top = min(rows) if rows else 0
     bottom = max(rows) if rows else 0
-    for d, members in rows.items():
-        for i, v in enumerate(members):
-            x = (i - (len(members) - 1) / 2.0)
-            y = 2.0 * (d - top) + 1.0
-            positions[(v, "in")] = (x, y)
-            positions[(v, "out")] = (x, y + 0.8)
+    middle = (column - 1) / 2.0 if column else 0.0
+    positions = {}
+    for v in nodes:
+        x, y = xs[v] - middle, 2.0 * (int(depth[v]) - top) + 1.0
+        positions[(v, "in")] = (x, y)
+        positions[(v, "out")] = (x, y + 0.8)
     positions["s"] = (0.0, 0.0)
     positions["t"] = (0.0, 2.0 * (bottom - top) + 3.0)
     source_side = set(cut.source_side)
     edges = [(u, v, d.get("capacity"), u in source_side and v not in source_side)
              for u, v, d in graph.edges(data=True)]
     selected = set(np.asarray(cut.selected if cut.selected is not None else [], np.int64).tolist())
-    return GraphLayout(positions, source_side, edges, {int(r) for r in roots}, selected)
+    names = {}
+    if symbols is not None:
+        symbol = tree.symbol
+        names = {v: str(symbols[int(symbol[v])]) for v in nodes}
+    return GraphLayout(positions, source_side, edges, {int(r) for r in roots}, selected, names,
+                       {v: int(depth[v]) for v in nodes})

@@ -272,7 +272,8 @@ class MainWindow(QMainWindow):
     def show_planned_cut(self):
         def plan(ex):
             cut = ex.plan()
-            return cut, (state.cut_graph_layout(cut, ex.derivation.tree, cut.roots) if cut is not None else None)
+            return cut, (state.cut_graph_layout(cut, ex.derivation.tree, cut.roots, ex.lsystem.symbols)
+                         if cut is not None else None)
         try:
             cut, layout = self.controller.read(plan, wait=2.0)
         except RamureError as exc:

@@ -130,3 +130,22 @@ def test_set_constant_merging_replaces_only_its_own_last_edit():
     assert [e["op"] for e in ex.session.edits] == ["constants", "regrow", "constants"]
     ex.undo(), ex.undo(), ex.undo()
     assert ex.constants["a2"] == 60
+
+
+def test_cut_graph_layout_is_a_tidy_tree():
+    ex = Explorer(str(HONDA), n=6)
+    ex.select(ex.skeleton.leaf_id[-40:])
+    cut = ex.plan()
+    tree = ex.derivation.tree
+    layout = state.cut_graph_layout(cut, tree, cut.roots, ex.lsystem.symbols)
+    nodes = {v[0] for v in layout.positions if isinstance(v, tuple)}
+    xs = {v: layout.positions[(v, "in")][0] for v in nodes}
+    for v in nodes:
+        kids = [k for k in nodes if tree.parent[k] == v]
+        if kids:  # a parent sits over its children
+            assert min(xs[k] for k in kids) <= xs[v] <= max(xs[k] for k in kids)
+    rows = {}
+    for v in nodes:
+        rows.setdefault(layout.positions[(v, "in")][1], []).append(xs[v])
+    assert all(len(set(r)) == len(r) for r in rows.values())  # no two nodes on one spot
+    assert set(layout.names) == nodes and all(layout.names.values())

@@ -357,3 +357,38 @@ def test_an_exception_in_a_slot_is_reported_not_fatal(make_window):
     except ZeroDivisionError:
         w.report_unexpected(*sys.exc_info())
     assert "oops" in w.last_message and w.isVisible()
+
+
+def test_wide_cut_graph_stays_readable(make_window, qtbot, artifacts):
+    from PySide6.QtCore import QRect
+
+    w = make_window(n=8)
+    snap = w.controller.snapshot
+    w.controller.select(snap.segment_leaf[len(snap.segment_leaf) // 3:])
+    w.controller.regrow(seed=3)
+    settle(qtbot, w)
+    w.docks["cut"].raise_()
+    settle(qtbot, w)
+    cut = w.cut_view
+    layout = cut.layout_data
+    assert len(cut.labels) > 100
+    assert cut.labels_shown() > 20  # fitted to the height, not shrunk to an unreadable line
+
+    def rects():
+        out = []
+        for text in cut.labels:
+            if text.isVisible():
+                top_left = cut.view.mapFromScene(text.pos())
+                size = text.boundingRect().size().toSize()
+                out.append(QRect(top_left, size))
+        return out
+    shown = rects()
+    assert not any(a.intersects(b) for i, a in enumerate(shown) for b in shown[i + 1:])
+    for _ in range(6):
+        cut.zoom(1 / 1.15)
+    assert cut.labels_shown() < len(shown) and "zoom in" in cut.hint.text()
+    shown = rects()
+    assert not any(a.intersects(b) for i, a in enumerate(shown) for b in shown[i + 1:])
+    node = next(v for v in layout.positions if isinstance(v, tuple))
+    assert f"node {node[0]} (" in cut._tooltip(layout, node, node in layout.source_side)
+    w.grab_window().save(str(artifacts / "desktop_cut_graph.png"))
