@@ -99,7 +99,12 @@ class AnalystWindow(QWidget):
     def _shown(self, out, summary, name):
         self.report_dir, self.summary = out, summary
         self.report.setSearchPaths([str(out)])
-        self.report.setSource(QUrl.fromLocalFile(str(out / "index.html")))
+        if not summary.get("tests"):  # empty heat maps and plots would only puzzle
+            self.report.setHtml("<h2>No finished tests yet</h2><p>The report (co-occurrence, grouping, "
+                                "Likert answers, qualifier regions) fills in once participants finish "
+                                "a grammar. The table on the left shows who has started.</p>")
+        else:
+            self.report.setSource(QUrl.fromLocalFile(str(out / "index.html")))
         self.title.setText(f"<b>{name}</b> — {summary.get('participants')} participants, "
                            f"{summary.get('tests')} finished tests, {summary.get('groups')} groups")
         self.save_button.setEnabled(True)

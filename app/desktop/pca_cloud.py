@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QColor, QIcon, QPixmap
 from PySide6.QtWidgets import QLabel, QListWidget, QListWidgetItem, QSplitter, QVBoxLayout, QWidget
 
 BOX_COLORS = ["#e41a1c", "#377eb8", "#4daf4a", "#984ea3", "#ff7f00", "#a65628", "#f781bf", "#999999",
@@ -39,9 +40,9 @@ class PcaCloudView(QWidget):
         self.boxes_list = QListWidget()
         self.boxes_list.setObjectName("qualifierBoxes")
         self.boxes_list.itemChanged.connect(lambda _: self.redraw())
-        self.boxes_list.setMaximumWidth(150)
-        self.canvas.setMinimumWidth(180)
-        split = QSplitter(Qt.Orientation.Horizontal)
+        self.boxes_list.setToolTip("Tick a qualifier to draw its box: where its best variants lie in PCA space")
+        self.canvas.setMinimumSize(180, 180)
+        self.split = split = QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.canvas)
         split.addWidget(self.boxes_list)
         split.setStretchFactor(0, 1)
@@ -50,8 +51,24 @@ class PcaCloudView(QWidget):
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.note)
         layout.addWidget(split, 1)
+        self.figure.subplots_adjust(left=0.02, right=0.92, bottom=0.06, top=0.98)
+        self._arrange()
         self.variant_set = None
         self.set_unavailable("No exploration yet (Variants ▸ Explore).")
+
+    def resizeEvent(self, event):  # noqa: N802 (Qt API)
+        super().resizeEvent(event)
+        self._arrange()
+
+    def _arrange(self):
+        """The box list beside the cloud in a wide dock, under it in a tall one (no blank half)."""
+        tall = self.height() > 1.2 * self.width()
+        orientation = Qt.Orientation.Vertical if tall else Qt.Orientation.Horizontal
+        if self.split.orientation() != orientation:
+            self.split.setOrientation(orientation)
+            self.boxes_list.setMaximumSize(16777215 if tall else 160, 170 if tall else 16777215)
+            self.boxes_list.setFlow(QListWidget.Flow.LeftToRight if tall else QListWidget.Flow.TopToBottom)
+            self.boxes_list.setWrapping(tall)
 
     def set_unavailable(self, message):
         self.variant_set = None
@@ -69,7 +86,11 @@ class PcaCloudView(QWidget):
             item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
             item.setCheckState(Qt.CheckState.Unchecked)
             item.setForeground(Qt.GlobalColor.black)
-            item.setData(Qt.ItemDataRole.UserRole, BOX_COLORS[i % len(BOX_COLORS)])
+            color = BOX_COLORS[i % len(BOX_COLORS)]
+            item.setData(Qt.ItemDataRole.UserRole, color)
+            swatch = QPixmap(12, 12)
+            swatch.fill(QColor(color))
+            item.setIcon(QIcon(swatch))  # the colour its box is drawn in
             self.boxes_list.addItem(item)
         self.boxes_list.blockSignals(False)
         count = 0 if variant_set.points is None else int(np.isfinite(variant_set.points[:, 0]).sum())

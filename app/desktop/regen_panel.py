@@ -98,7 +98,8 @@ class RegenPanel(QWidget):
         self.preview = QLabel()
         self.preview.setFixedSize(THUMB, THUMB)
         self.preview.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        self.preview.setStyleSheet("border: 1px solid #bbb; background: white;")
+        self.preview.setStyleSheet("border: 1px solid #bbb; background: white; color: #888;")
+        self.preview.setToolTip("The whole plant with the qualifier's best-ranked variant")
         self.apply_button = QPushButton("Apply qualifier")
         self.apply_button.clicked.connect(lambda: self.apply_qualifier.emit(self.qualifier.currentText()))
         self.qualifier_note = QLabel("")
@@ -207,7 +208,7 @@ class RegenPanel(QWidget):
         self.qualifier.setEnabled(bool(names))
         self.apply_button.setEnabled(bool(names))
         self.qualifier_note.setText(note)
-        self.preview.clear()
+        self.set_preview(None)
         if names:
             self._qualifier_changed(self.qualifier.currentText())
 
@@ -219,6 +220,7 @@ class RegenPanel(QWidget):
         """Show a QImage (or None) as the qualifier's preview thumbnail."""
         if image is None:
             self.preview.clear()
+            self.preview.setText("preview\nafter the\nexploration")
             return
         self.preview.setPixmap(QPixmap.fromImage(image).scaled(
             THUMB, THUMB, Qt.AspectRatioMode.KeepAspectRatio, Qt.TransformationMode.SmoothTransformation))

@@ -60,7 +60,7 @@ def take_snapshot(explorer, previous=None):
     light = dict(text=explorer.text, error=explorer.error, constants=explorer.constants,
                  grammar_constants=dict(explorer.lsystem.constants),
                  n=session.n, seed=session.seed, rho=explorer.rho, selection=tuple(explorer.selection),
-                 status=explorer.status(), can_undo=session.can_undo, can_redo=session.can_redo,
+                 status=status_line(explorer), can_undo=session.can_undo, can_redo=session.can_redo,
                  last_result=explorer.last_result, path=explorer.path, edits=len(session.edits))
     if previous is not None and previous.version == explorer.version:
         return Snapshot(**{**previous.__dict__, **light})
@@ -74,6 +74,21 @@ def take_snapshot(explorer, previous=None):
                     segment_leaf=np.asarray(skeleton.leaf_id), midpoints=explorer.segment_midpoints(),
                     n_modules=len(explorer.derivation), string_preview=string_preview(explorer),
                     cut_layout=layout, **light)
+
+
+def status_line(explorer):
+    """The status bar's line: :meth:`Explorer.status`, but worded for fruit and constants edits
+    (which replace no subtree: "roots [], 0 modules replaced by 0" would say nothing)."""
+    r = explorer.last_result
+    if r is None or r.op not in ("fruit", "constants"):
+        return explorer.status()
+    base = f"{len(explorer.derivation)} modules, {len(explorer.skeleton)} segments"
+    if explorer.selection:
+        base += f", {len(explorer.selection)} selected"
+    if r.op == "fruit":
+        count = len(r.roots)
+        return f"{base} — last edit: {count} fruit regrown (new seed or shape)"
+    return f"{base} — last edit: constants changed, whole plant re-derived ({r.removed} → {r.added} modules)"
 
 
 def string_preview(explorer, limit=STRING_PREVIEW_MODULES):

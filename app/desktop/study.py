@@ -370,6 +370,14 @@ class TestPage(QWidget):
             panel = GroupPanel(self, group, self.pixmaps)
             self.panels[group.label] = panel
             self.groups_layout.addWidget(panel)
+        if not self.panels:  # say what this empty area is for
+            hint = QLabel("Your groups will appear here.\n\nDrag one or more pictures from the left onto "
+                          "“Drop here to start a new group”; then drag more pictures onto a group, or "
+                          "between groups.")
+            hint.setWordWrap(True)
+            hint.setAlignment(Qt.AlignmentFlag.AlignCenter)
+            hint.setStyleSheet("color: #777; font-size: 13pt; padding: 40px;")
+            self.groups_layout.addWidget(hint)
         self.groups_layout.addStretch(1)
         QTimer.singleShot(0, lambda: self.scroll.verticalScrollBar().setValue(position))
         todo = self.session.missing()

@@ -34,6 +34,9 @@ from app.model import Explorer
 from lsys.errors import RamureError
 
 TITLE = "Ramure"
+KINSHIP_HINT = ("Kinship colours: red = the selected leaf and its closest kin, through yellow and green, "
+                "to blue = related only through the first derivation steps")
+KINSHIP_NEEDS_ONE = "Kinship colours: click exactly one branch to colour the plant by kinship to it"
 
 
 def warm_up():
@@ -253,6 +256,8 @@ class MainWindow(QMainWindow):
                                        self.variants.fruit_ok)
         if self.status_label.text() != snap.status:
             self.status_label.setText(snap.status)
+        if self.kinship and len(selection) != 1:
+            self.status(KINSHIP_NEEDS_ONE, 6000)
         try:
             self.string_view.show_selection(self.controller.selected_modules() if selection else [])
         except RamureError:
@@ -290,6 +295,8 @@ class MainWindow(QMainWindow):
         self.kinship = bool(on)
         self.kinship_action.setChecked(self.kinship)
         self.show_selection(self.controller.snapshot.selection)
+        if self.kinship:
+            self.status(KINSHIP_HINT if len(self.controller.snapshot.selection) == 1 else KINSHIP_NEEDS_ONE, 10000)
 
     # -- user actions -------------------------------------------------------------------
     def _text_settled(self, text):
