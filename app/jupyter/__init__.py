@@ -8,8 +8,9 @@
 Display ``ex`` in a cell to get the widgets; everything they do is also a
 method (``ex.select``, ``ex.regrow``, ``ex.explore_variants``...).
 """
+from app.jupyter._ui import side_by_side
 from app.jupyter.explorer import Explorer
 from app.jupyter.report import report_html, show_report
 from app.jupyter.study import StudyPanel
 
-__all__ = ["Explorer", "StudyPanel", "report_html", "show_report"]
+__all__ = ["Explorer", "StudyPanel", "report_html", "show_report", "side_by_side"]

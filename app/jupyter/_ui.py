@@ -5,6 +5,7 @@
 """
 from __future__ import annotations
 
+import base64
 import html
 import re
 
@@ -83,3 +84,22 @@ def png_image(data=b"", width=None):
     """An ``ipywidgets.Image`` holding PNG bytes."""
     layout = W.Layout(width=f"{width}px") if width else W.Layout()
     return W.Image(value=data, format="png", layout=layout)
+
+
+def png_tag(data, width, title="") -> str:
+    """An ``<img>`` holding PNG bytes as a data URI (stays in a saved notebook)."""
+    src = base64.b64encode(data).decode("ascii")
+    return (f"<img title='{html.escape(str(title))}' src='data:image/png;base64,{src}' "
+            f"style='width:{int(width)}px;margin:1px'>")
+
+
+def side_by_side(images, captions=(), width=260):
+    """PNG pictures in a row, each over its caption, as an IPython ``HTML`` object
+    (e.g. a fruit before and after an edit)."""
+    from IPython.display import HTML
+
+    captions = list(captions) + [""] * (len(images) - len(captions))
+    cells = "".join(f"<figure style='margin:0 6px;text-align:center'>{png_tag(data, width, text)}"
+                    f"<figcaption style='font-size:12px'>{html.escape(str(text))}</figcaption></figure>"
+                    for data, text in zip(images, captions) if data)
+    return HTML(f"<div style='display:flex;flex-wrap:wrap;align-items:flex-end'>{cells}</div>")

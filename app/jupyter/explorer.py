@@ -29,7 +29,7 @@ from app.jupyter._ui import MessageLine, button, on_value
 from app.jupyter.grammar import GrammarPanel
 from app.jupyter.selection import SelectionPanel, TreeBrowser
 from app.jupyter.variants import VariantPanel, qualifier_summary
-from app.jupyter.view import VIEWS, PlantView, fruit_png
+from app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
 from app.model import Explorer as Model
 from lsys.errors import GrammarError, RamureError, ValueRefused
 
@@ -349,13 +349,18 @@ class Explorer:
         result = self.run(apply)
         if result is not None:
             kind = f" as {str(preset).replace('_', ' ')}" if preset else ""
-            self.message.show(f"regrew {fruit} fruit{kind} — {self.model.status()}", "info")
+            self.message.show(f"regrew {fruit} fruit{kind} (seed {self.history[-1]['settings']['seed']}); "
+                              "Undo brings the previous one back", "info")
         return result
 
     def fruit_png(self, size=(480, 480), view="front", focus=None, zoom=1.2):
         """PNG of the plant with its volumetric fruit (per-fruit edits applied; ``focus``: a
         fruit's leaf id to frame), or None when the plant has no fruit."""
         return fruit_png(self.model, size=size, view=view, focus=focus, zoom=zoom)
+
+    def fruit_cut_png(self, leaf, size=(420, 420)):
+        """PNG of fruit ``leaf`` cut open across its axis, coloured by tissue (None without fruit)."""
+        return fruit_cut_png(self.model, leaf, size=size)
 
     def prune(self):
         return self.run(self.model.prune)

@@ -27,7 +27,7 @@ def box_edges(lo, hi):
             if a < b and sum(x != y for x, y in zip(a, b)) == 1]
 
 
-def pca_png(points, picks=None, pick_ids=None, boxes=None, chosen=None, size=(440, 400)) -> bytes:
+def pca_png(points, picks=None, pick_ids=None, boxes=None, chosen=None, size=(560, 500)) -> bytes:
     """PNG of the cloud ``points`` (N,3), ``picks`` (27,3) labelled by ``pick_ids``,
     ``boxes`` ``{name: (lo, hi)}`` and the ``chosen`` point (red)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -42,8 +42,9 @@ def pca_png(points, picks=None, pick_ids=None, boxes=None, chosen=None, size=(44
     if picks is not None:
         picks = np.asarray(picks, float).reshape(-1, 3)
         ax.scatter(*picks.T, s=16, c="#37474f", depthshade=False, label="27 picks")
+        span = np.ptp(points[ok], axis=0) if ok.any() else np.ones(3)
         for pid, p in zip(pick_ids if pick_ids is not None else range(1, len(picks) + 1), picks):
-            ax.text(*p, str(pid), fontsize=6, color="#37474f")
+            ax.text(*(p + 0.025 * span), str(pid), fontsize=7, color="#263238")  # beside its dot
     palette = itertools.cycle(["#ef6c00", "#6a1b9a", "#00838f", "#ad1457", "#558b2f", "#4e342e", "#283593"])
     for (name, (lo, hi)), color in zip((boxes or {}).items(), palette):
         for i, (a, b) in enumerate(box_edges(lo, hi)):
@@ -52,9 +53,9 @@ def pca_png(points, picks=None, pick_ids=None, boxes=None, chosen=None, size=(44
         ax.scatter(*np.asarray(chosen, float).reshape(1, 3).T, s=60, c="red", depthshade=False, label="applied")
     for set_label, label, color in zip((ax.set_xlabel, ax.set_ylabel, ax.set_zlabel), ("PC1", "PC2", "PC3"),
                                        AXIS_COLORS):
-        set_label(label, color=color, fontsize=8)
-    ax.tick_params(labelsize=6)
-    ax.legend(loc="upper left", fontsize=6, frameon=False)
+        set_label(label, color=color, fontsize=10)
+    ax.tick_params(labelsize=7)
+    ax.legend(loc="upper left", fontsize=8, frameon=False)
     ax.set_box_aspect(None, zoom=0.85)
     fig.subplots_adjust(left=0.0, right=0.95, bottom=0.02, top=1.0)
     buf = io.BytesIO()

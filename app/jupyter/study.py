@@ -31,7 +31,7 @@ import pathlib
 
 import ipywidgets as W
 
-from app.jupyter._ui import MessageLine, button, png_image
+from app.jupyter._ui import MessageLine, button, png_image, png_tag
 from lsys.errors import RamureError
 from studies.likert import LEVELS
 
@@ -129,6 +129,7 @@ class StudyPanel:
         self.header = W.HTML()
         picks = {p.id: p for p in self.session.picks()}
         self.group_of = {}
+        self._picks, self._thumb_size = picks, thumb_size
         cards = []
         options = [("–", 0)] + [(str(g), g) for g in range(1, MAX_GROUPS + 1)]
         for image in self.session.order():
@@ -219,9 +220,23 @@ class StudyPanel:
     def _repr_mimebundle_(self, **kwargs):
         bundle = dict(self.widget._repr_mimebundle_(**kwargs) or {})
         s = self.session
+        bundle["text/html"] = self.screen_html()  # for viewers without widgets (nbconvert, GitHub)
         bundle["text/plain"] = (f"<StudyPanel: participant {s.participant}, grammar {s.grammar}, "
                                 f"{len(s.groups())} groups, {'finished' if s.finished else 'in progress'}>")
         return bundle
+
+    def screen_html(self) -> str:
+        """The participant's images in their order, each with its group (a static picture of the test)."""
+        cells = []
+        for image, dropdown in self.group_of.items():
+            path = pathlib.Path(self._picks[image].image or "")
+            picture = (png_tag(path.read_bytes(), self._thumb_size, f"#{image}") if path.is_file()
+                       else f"<div style='width:{self._thumb_size}px'>#{image}</div>")
+            group = f"group {dropdown.value}" if dropdown.value else "unsorted"
+            cells.append(f"<figure style='margin:2px;text-align:center'>{picture}"
+                         f"<figcaption style='font-size:11px'>#{image} · {group}</figcaption></figure>")
+        return (f"{self.header.value}<div style='display:grid;grid-template-columns:repeat(9,"
+                f"{self._thumb_size + 8}px)'>{''.join(cells)}</div>")
 
     def refresh(self):
         s = self.session

@@ -33,7 +33,7 @@ import threading
 import ipywidgets as W
 import numpy as np
 
-from app.jupyter._ui import button, message_html, png_image
+from app.jupyter._ui import button, message_html, png_image, png_tag
 from app.jupyter.scatter import pca_png
 from app.jupyter.view import RENDER_LOCK
 from lsys.errors import RamureError
@@ -370,12 +370,8 @@ class VariantPanel:
     # -- display -----------------------------------------------------------
     def gallery_html(self) -> str:
         """The 27 thumbnails as one HTML grid (what a saved notebook shows without widgets)."""
-        cells = []
-        for pid, data in enumerate(self.thumbnails, start=1):
-            if data:
-                src = base64.b64encode(data).decode("ascii")
-                cells.append(f"<img title='#{pid}' src='data:image/png;base64,{src}' "
-                             f"style='width:{self.thumb_size}px;margin:1px'>")
+        cells = [png_tag(data, self.thumb_size, f"#{pid}")
+                 for pid, data in enumerate(self.thumbnails, start=1) if data]
         if not cells:
             return "<i>no variants explored yet</i>"
         return f"<div style='display:grid;grid-template-columns:repeat(9,{self.thumb_size + 4}px)'>{''.join(cells)}</div>"

@@ -138,6 +138,49 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, zoom=1.2) -> byt
     return buf.getvalue()
 
 
+def fruit_cut_png(model, leaf, size=(420, 420), volume_levels=1) -> bytes | None:
+    """PNG of fruit ``leaf`` cut open across its axis, volume cells coloured by tissue
+    (:data:`gmap.tissue.COLORS`) with a legend; None without fruit or :mod:`gmap`."""
+    if int(leaf) not in model.fruit_ids():
+        return None
+    try:
+        from app.commands.fruit import tissue_rgb
+        from gmap.cut import plane_cut
+        from gmap.pyvista import to_unstructured_grid
+        from gmap.tissue import COLORS, TISSUES
+    except ImportError:
+        return None
+    _headless_setup()
+    import pyvista as pv
+
+    grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
+    cells = grid.extract_cells(np.asarray(grid.cell_data["leaf_id"]) == int(leaf))
+    organs = model.skeleton.organs
+    axis = np.asarray(organs.frame)[list(organs.leaf_id).index(int(leaf))][0]  # the heading
+    inside = plane_cut(cells, normal=tuple(axis), origin=cells.center, mode="cells")
+    inside.cell_data["rgb"] = tissue_rgb(inside.cell_data["tissue"])
+    present = [TISSUES[c] for c in np.unique(np.asarray(inside.cell_data["tissue"]))]
+    side = np.cross(axis, (0.0, 0.0, 1.0))
+    look = axis + 0.6 * side / (np.linalg.norm(side) or 1.0) + (0.0, 0.0, 0.3)  # the cut face, a bit aside
+    centre = np.asarray(inside.center)
+    with RENDER_LOCK:
+        plotter = pv.Plotter(off_screen=True, window_size=[int(size[0]), int(size[1])])
+        try:
+            plotter.set_background("white")
+            plotter.add_mesh(inside, scalars="rgb", rgb=True, show_edges=True, edge_color="#5d4037",
+                             line_width=0.5)
+            plotter.add_legend([[name, COLORS[name]] for name in present], bcolor="white", border=True,
+                               face="rectangle", loc="lower right",
+                               size=(0.045 + 0.022 * max(map(len, present)), 0.06 * len(present)))
+            plotter.camera_position = [tuple(centre + look * 10), tuple(centre), (0.0, 0.0, 1.0)]
+            plotter.reset_camera(bounds=tuple(inside.bounds))
+            buf = io.BytesIO()
+            plotter.screenshot(buf)
+        finally:
+            plotter.close()
+    return buf.getvalue()
+
+
 def trame_available() -> bool:
     """True when pyvista's trame notebook backend is installed."""
     return importlib.util.find_spec("trame_pyvista") is not None

@@ -36,12 +36,13 @@ def test_regrow_fruit_button_turns_one_fruit_into_a_pear(tree):
     ex.edits.regrow_fruit.click()
     assert ex.history[-1]["op"] == "fruit" and ex.history[-1]["leaves"] == [fruit[3]]
     assert ex.history[-1]["settings"]["preset"] == "pear"
-    assert ex.message.kind == "info" and ex.message.text.startswith("regrew 1 fruit as pear")
+    assert ex.message.kind == "info" and ex.message.text.startswith("regrew 1 fruit as pear (seed ")
     assert not np.allclose(fruit_bounds(ex, fruit[3]), target)  # that fruit's volume changed
     assert np.allclose(fruit_bounds(ex, fruit[0]), other)  # the others did not
     assert ex.edits.regrow_fruit.disabled  # the edit cleared the selection
-    png = ex.fruit_png(size=(120, 120), focus=fruit[3])
-    assert png[:4] == b"\x89PNG"
+    assert ex.fruit_png(size=(120, 120), focus=fruit[3])[:4] == b"\x89PNG"
+    assert ex.fruit_cut_png(fruit[3], size=(120, 120))[:4] == b"\x89PNG"
+    assert ex.fruit_cut_png(10**9) is None  # not a fruit
     ex.undo()
     assert np.allclose(fruit_bounds(ex, fruit[3]), target)
 

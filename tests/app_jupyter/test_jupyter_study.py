@@ -111,6 +111,9 @@ def test_thumbnails_from_pick_images(tmp_path):
         assert card.children[0].value == png
         other = panel.grid.children[panel.session.order().index(1)]
         assert "#1" in other.children[0].value  # a placeholder for a pick without image
+        panel.assign({2: 4})
+        page = panel._repr_mimebundle_()["text/html"]  # what a viewer without widgets shows
+        assert page.count("data:image/png") == 1 and "#2 · group 4" in page and "#1 · unsorted" in page
 
 
 def test_no_consent_is_refused(study):
