@@ -201,6 +201,8 @@ class PlantView(QWidget):
     def _apply_hidden(self):
         if self.mesh is None or self.snapshot is None:
             return
+        if not self.hide_fruit_spheres and self.mesh.GetPoints() is self.snapshot.mesh.GetPoints():
+            return  # shown as derived: nothing to do (the usual case)
         points = points_without_fruit(self.mesh) if self.hide_fruit_spheres else None
         # new vtkPoints: the snapshot's mesh (shared, shallow copy) keeps its own
         self.mesh.SetPoints(pv.vtk_points(points, deep=False) if points is not None
