@@ -45,6 +45,8 @@ class RegenPanel(QWidget):
         self.rho.setRange(1, 100)
         self.rho.setValue(50)
         self.rho_label = QLabel("ρ = 50")
+        self.rho.setToolTip("ρ: a parent is regrown whole when more than ρ % of its leaves are selected — "
+                            "lower ρ regrows larger parts, higher ρ stays closer to the selection")
         self.rho.valueChanged.connect(self._rho)
         rho_row = QHBoxLayout()
         rho_row.addWidget(QLabel("ρ"))

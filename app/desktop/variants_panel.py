@@ -256,9 +256,10 @@ class VariantsController:
             return self.explore(then=lambda: self.apply_qualifier(name))
         sweep = self.variant_set.exploration.sweep
         self.window.dirty = True
-        self.window.status(f"Applying '{name}': trying variants on the "
+        job = self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep))
+        self.window.status(f"Applying '{name}': trying the best variants on the "  # after "Computing…"
                            f"{'selection' if self.controller.snapshot.selection else 'whole plant'}…", 0)
-        return self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep))
+        return job
 
     def qualifier_done(self, job):
         if job.name.startswith("qualifier ") and not job.stale and job.error is None:
