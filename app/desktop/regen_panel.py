@@ -202,10 +202,13 @@ class RegenPanel(QWidget):
         self.regrow_with_constants.emit(changed_constants(self.values(), self._current))
 
     # -- qualifiers ---------------------------------------------------------------
-    def set_qualifiers(self, names, note=""):
+    def set_qualifiers(self, names, note="", tips=None):
         self.qualifier.blockSignals(True)
         self.qualifier.clear()
         self.qualifier.addItems(list(names))
+        for i, name in enumerate(names):
+            if tips and name in tips:
+                self.qualifier.setItemData(i, tips[name], Qt.ItemDataRole.ToolTipRole)
         self.qualifier.blockSignals(False)
         self.qualifier.setEnabled(bool(names))
         self.apply_button.setEnabled(bool(names))

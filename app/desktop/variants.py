@@ -75,6 +75,11 @@ def vocabulary_names():
     return list(_vocabulary())
 
 
+def qualifier_meanings():
+    """``{name: "dense (FR dense): more branches per unit of box volume"}`` for tooltips."""
+    return {name: f"{name} (FR {q.french}): {q.meaning}" for name, q in _vocabulary().items()}
+
+
 def explore_plant(lsystem, n, seed, progress=None, cancel=None, n_jobs=None):
     """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`metrics.explore`)."""
     reason = metrics_available()

@@ -63,7 +63,8 @@ class VariantsController:
                                       "±10 %, one rule at a time) or open an exploration folder.")
         names = variants.vocabulary_names()
         w.regen.set_qualifiers(names, "The first qualifier explores the grammar's variants (once; cached)."
-                               if names else "Qualifiers are not available (metrics.qualifiers is missing).")
+                               if names else "Qualifiers are not available (metrics.qualifiers is missing).",
+                               variants.qualifier_meanings())
 
     @property
     def controller(self):

@@ -63,6 +63,8 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
     snap = w.controller.snapshot
     w.controller.select(snap.segment_leaf[-4:])
     w.regen.qualifier.setCurrentText("dense")
+    tip = w.regen.qualifier.itemData(w.regen.qualifier.currentIndex(), Qt.ItemDataRole.ToolTipRole)
+    assert "more branches" in tip  # each qualifier says what it does
     with qtbot.waitSignal(w.controller.job_done, timeout=60000,
                           check_params_cb=lambda job: job.name == "qualifier dense"):
         qtbot.mouseClick(w.regen.apply_button, Qt.MouseButton.LeftButton)
