@@ -426,17 +426,32 @@ class ParticipantWindow(QWidget):
 
     def _consent_page(self):
         page = QWidget()
-        text = QTextBrowser()
-        text.setHtml(CONSENT_TEXT)
+        text = QLabel(CONSENT_TEXT)
+        text.setTextFormat(Qt.TextFormat.RichText)
+        text.setWordWrap(True)
+        font = text.font()
+        font.setPointSizeF(font.pointSizeF() * 1.3)  # read by participants: large, in a column
+        text.setFont(font)
         self.agree = QCheckBox("I have read this and I agree to take part.")
+        self.agree.setFont(font)
         self.start_button = QPushButton("Start")
         self.start_button.setEnabled(False)
+        self.start_button.setMinimumHeight(36)
         self.agree.toggled.connect(self.start_button.setEnabled)
         self.start_button.clicked.connect(self.give_consent)
-        layout = QVBoxLayout(page)
-        layout.addWidget(text, 1)
-        layout.addWidget(self.agree)
-        layout.addWidget(self.start_button)
+        column = QWidget()
+        column.setMaximumWidth(760)
+        inner = QVBoxLayout(column)
+        inner.addStretch(1)
+        inner.addWidget(text)
+        inner.addSpacing(16)
+        inner.addWidget(self.agree)
+        inner.addWidget(self.start_button)
+        inner.addStretch(2)
+        layout = QHBoxLayout(page)
+        layout.addStretch(1)
+        layout.addWidget(column, 4)
+        layout.addStretch(1)
         return page
 
     def give_consent(self):
