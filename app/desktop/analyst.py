@@ -40,6 +40,7 @@ class AnalystWindow(QWidget):
         self.report_dir = None
         self.summary = None
         self.task = None
+        self.people = 0
         self.title = QLabel("Open a study database.")
         open_button = QPushButton("Open study…")
         open_button.clicked.connect(lambda: self.open_study())
@@ -48,6 +49,8 @@ class AnalystWindow(QWidget):
         self.save_button.clicked.connect(lambda: self.save_report())
         self.participants = QTableWidget(0, 5)
         self.participants.setHorizontalHeaderLabels(["code", "consent", "tests", "finished", "minutes"])
+        self.participants.verticalHeader().hide()
+        self.participants.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.report = QTextBrowser()
         self.report.setObjectName("studyReport")
         self.report.setOpenExternalLinks(False)
@@ -58,7 +61,7 @@ class AnalystWindow(QWidget):
         split = QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.participants)
         split.addWidget(self.report)
-        split.setSizes([300, 900])
+        split.setSizes([360, 890])
         layout = QVBoxLayout(self)
         layout.addLayout(top)
         layout.addWidget(split, 1)
@@ -84,6 +87,8 @@ class AnalystWindow(QWidget):
             for c, value in enumerate((p["code"], "yes" if p["consent"] else "no", p["tests"], p["finished"],
                                        f"{p['elapsed_seconds'] / 60:.1f}")):
                 self.participants.setItem(r, c, QTableWidgetItem(str(value)))
+        self.participants.resizeColumnsToContents()
+        self.people = len(people)
         out = pathlib.Path(tempfile.mkdtemp(prefix="ramure-report-"))
 
         def work(progress, cancelled):
@@ -105,8 +110,9 @@ class AnalystWindow(QWidget):
                                 "a grammar. The table on the left shows who has started.</p>")
         else:
             self.report.setSource(QUrl.fromLocalFile(str(out / "index.html")))
-        self.title.setText(f"<b>{name}</b> — {summary.get('participants')} participants, "
-                           f"{summary.get('tests')} finished tests, {summary.get('groups')} groups")
+        self.title.setText(f"<b>{name}</b> — {self.people} participants ({summary.get('participants')} "
+                           f"with a finished test), {summary.get('tests')} finished tests, "
+                           f"{summary.get('groups')} groups")
         self.save_button.setEnabled(True)
 
     def save_report(self, folder=None):
