@@ -256,8 +256,8 @@ class MainWindow(QMainWindow):
                                        self.variants.fruit_ok)
         if self.status_label.text() != snap.status:
             self.status_label.setText(snap.status)
-        if self.kinship and len(selection) != 1:
-            self.status(KINSHIP_NEEDS_ONE, 6000)
+        if self.kinship:  # say what the colours mean, or what they need
+            self.status(KINSHIP_HINT if len(selection) == 1 else KINSHIP_NEEDS_ONE, 10000)
         try:
             self.string_view.show_selection(self.controller.selected_modules() if selection else [])
         except RamureError:
@@ -295,8 +295,6 @@ class MainWindow(QMainWindow):
         self.kinship = bool(on)
         self.kinship_action.setChecked(self.kinship)
         self.show_selection(self.controller.snapshot.selection)
-        if self.kinship:
-            self.status(KINSHIP_HINT if len(self.controller.snapshot.selection) == 1 else KINSHIP_NEEDS_ONE, 10000)
 
     # -- user actions -------------------------------------------------------------------
     def _text_settled(self, text):

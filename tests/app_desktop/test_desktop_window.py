@@ -293,6 +293,9 @@ def test_kinship_mode_colours_by_hue(make_window):
     mine = np.asarray(w.view.mesh.cell_data["leaf_id"]) == leaf
     assert (rgb[mine] == [255, 0, 0]).all()
     assert len(np.unique(rgb, axis=0)) > 3 and (rgb[:, 2] > 200).any()  # hues reach blue
+    assert w.statusBar().currentMessage().startswith("Kinship colours: red = the selected leaf")
+    w.controller.select(snap.segment_leaf[:3].tolist())
+    assert "exactly one" in w.statusBar().currentMessage()
     w.set_kinship(False)
     assert len(np.unique(np.asarray(w.view.mesh.cell_data["rgb"]), axis=0)) <= 4
 
