@@ -42,10 +42,14 @@ def test_explore_notebook_runs(tmp_path):
     assert "regrew 1 fruit as pear (seed" in text or "not available in this version" in text
     assert re.search(r"\d+ fruit, \d+ volume cells", text) or "not available in this version" in text
     pngs = [o for o in outputs(nb) if "image/png" in o.get("data", {})]
-    assert len(pngs) >= 6  # explorer, snapshots, PCA, fruit tree
-    gallery = [o for o in outputs(nb) if "text/html" in o.get("data", {})
-               and "data:image/png" in o["data"]["text/html"]]
-    assert gallery and gallery[0]["data"]["text/html"].count("<img") == 27
+    assert len(pngs) >= 4  # explorer, selection, regrown plant, pick
+    pictures = [o["data"]["text/html"] for o in outputs(nb) if "text/html" in o.get("data", {})
+                and "data:image/png" in o["data"]["text/html"]]
+    assert pictures and pictures[0].count("<img") == 27  # the gallery
+    assert "the plant after &#x27;dense&#x27;" in pictures[1] and pictures[1].count("<img") == 2  # with the PCA view
+    if "not available in this version" not in text:
+        assert "after Regrow fruit: a pear" in pictures[2] and pictures[2].count("<img") == 3
+        assert "the pear cut across its axis" in pictures[3] and pictures[3].count("<img") == 2
 
 
 @pytest.mark.slow
