@@ -20,7 +20,6 @@ the live state.
 from __future__ import annotations
 
 import base64
-import math
 import pathlib
 
 import ipywidgets as W
@@ -31,6 +30,7 @@ from app.jupyter.selection import SelectionPanel, TreeBrowser
 from app.jupyter.variants import VariantPanel, qualifier_summary
 from app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
 from app.model import Explorer as Model
+from app.model import _finite as _number  # a finite number or a refusal naming it
 from lsys.errors import GrammarError, RamureError, ValueRefused
 
 PLACEHOLDER = "n: 0\nw: F"  # the plant shown while the given grammar does not parse
@@ -437,17 +437,6 @@ class Explorer:
         bundle["image/png"] = base64.b64encode(self.png()).decode("ascii")
         bundle["text/plain"] = f"<Ramure Explorer: {self.model.status()}>"
         return bundle
-
-
-def _number(value, name) -> float:
-    """``value`` as a finite number, or a refusal naming it (checked before anything changes)."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ValueRefused(f"{name}: '{value}' is not a number") from None
-    if not math.isfinite(number):
-        raise ValueRefused(f"{name}: the value must be a finite number")
-    return number
 
 
 def _positive(value, name) -> float:

@@ -60,8 +60,9 @@ def view_colors(model, show_cut=False):
     return rgb
 
 
-def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zoom=1.3) -> bytes:
-    """PNG bytes of a plant mesh coloured by ``rgb`` per cell (default: bark/leaf/fruit)."""
+def _screenshot(size, draw, background="white") -> bytes:
+    """Render off-screen (one render at a time): ``draw(plotter)`` adds the meshes and places
+    the camera; returns the PNG bytes."""
     _headless_setup()
     import pyvista as pv
 
@@ -69,17 +70,24 @@ def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zo
         plotter = pv.Plotter(off_screen=True, window_size=[int(size[0]), int(size[1])])
         try:
             plotter.set_background(background)
-            if mesh.n_cells:
-                shown = mesh.copy(deep=False)
-                shown.cell_data["rgb"] = base_colors(mesh) if rgb is None else rgb
-                plotter.add_mesh(shown, scalars="rgb", rgb=True)
-                frame_camera(plotter, mesh.bounds, view)
-                plotter.camera.zoom(zoom)
+            draw(plotter)
             buf = io.BytesIO()
             plotter.screenshot(buf)
         finally:
             plotter.close()
     return buf.getvalue()
+
+
+def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zoom=1.3) -> bytes:
+    """PNG bytes of a plant mesh coloured by ``rgb`` per cell (default: bark/leaf/fruit)."""
+    def draw(plotter):
+        if mesh.n_cells:
+            shown = mesh.copy(deep=False)
+            shown.cell_data["rgb"] = base_colors(mesh) if rgb is None else rgb
+            plotter.add_mesh(shown, scalars="rgb", rgb=True)
+            frame_camera(plotter, mesh.bounds, view)
+            plotter.camera.zoom(zoom)
+    return _screenshot(size, draw, background)
 
 
 def plant_png(model, size=(480, 480), view="iso", show_cut=False) -> bytes:
@@ -95,9 +103,6 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, zoom=1.2) -> byt
     surface = fruit_surface(model)
     if surface is None:
         return None
-    _headless_setup()
-    import pyvista as pv
-
     mesh = model.mesh
     wood = mesh.extract_cells(np.asarray(mesh.cell_data["kind"]) < 2)
     leaf = np.asarray(surface.cell_data["leaf_id"])
@@ -116,26 +121,18 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, zoom=1.2) -> byt
             axis = np.reshape(mesh.bounds, (3, 2)).mean(axis=1)
             outward = np.append(centre[:2] - axis[:2], 0.0)
             outward = outward / (np.linalg.norm(outward) or 1.0) + (0.0, 0.0, 0.35)
-    with RENDER_LOCK:
-        plotter = pv.Plotter(off_screen=True, window_size=[int(size[0]), int(size[1])])
-        try:
-            plotter.set_background("white")
-            if wood.n_cells:
-                wood.cell_data["rgb"] = base_colors(wood)
-                plotter.add_mesh(wood, scalars="rgb", rgb=True)
-            plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=outward is not None,
-                             edge_color="#7a3d12")
-            if outward is None:
-                frame_camera(plotter, bounds, view)
-            else:
-                plotter.camera_position = [tuple(centre + outward * 10 * half), tuple(centre), (0.0, 0.0, 1.0)]
-                plotter.reset_camera(bounds=tuple(bounds))
-            plotter.camera.zoom(zoom)
-            buf = io.BytesIO()
-            plotter.screenshot(buf)
-        finally:
-            plotter.close()
-    return buf.getvalue()
+    def draw(plotter):
+        if wood.n_cells:
+            wood.cell_data["rgb"] = base_colors(wood)
+            plotter.add_mesh(wood, scalars="rgb", rgb=True)
+        plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=outward is not None, edge_color="#7a3d12")
+        if outward is None:
+            frame_camera(plotter, bounds, view)
+        else:
+            plotter.camera_position = [tuple(centre + outward * 10 * half), tuple(centre), (0.0, 0.0, 1.0)]
+            plotter.reset_camera(bounds=tuple(bounds))
+        plotter.camera.zoom(zoom)
+    return _screenshot(size, draw)
 
 
 def fruit_cut_png(model, leaf, size=(420, 420), volume_levels=1) -> bytes | None:
@@ -150,9 +147,6 @@ def fruit_cut_png(model, leaf, size=(420, 420), volume_levels=1) -> bytes | None
         from gmap.tissue import COLORS, TISSUES
     except ImportError:
         return None
-    _headless_setup()
-    import pyvista as pv
-
     grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
     cells = grid.extract_cells(np.asarray(grid.cell_data["leaf_id"]) == int(leaf))
     organs = model.skeleton.organs
@@ -163,22 +157,14 @@ def fruit_cut_png(model, leaf, size=(420, 420), volume_levels=1) -> bytes | None
     side = np.cross(axis, (0.0, 0.0, 1.0))
     look = axis + 0.6 * side / (np.linalg.norm(side) or 1.0) + (0.0, 0.0, 0.3)  # the cut face, a bit aside
     centre = np.asarray(inside.center)
-    with RENDER_LOCK:
-        plotter = pv.Plotter(off_screen=True, window_size=[int(size[0]), int(size[1])])
-        try:
-            plotter.set_background("white")
-            plotter.add_mesh(inside, scalars="rgb", rgb=True, show_edges=True, edge_color="#5d4037",
-                             line_width=0.5)
-            plotter.add_legend([[name, COLORS[name]] for name in present], bcolor="white", border=True,
-                               face="rectangle", loc="lower right",
-                               size=(0.045 + 0.022 * max(map(len, present)), 0.06 * len(present)))
-            plotter.camera_position = [tuple(centre + look * 10), tuple(centre), (0.0, 0.0, 1.0)]
-            plotter.reset_camera(bounds=tuple(inside.bounds))
-            buf = io.BytesIO()
-            plotter.screenshot(buf)
-        finally:
-            plotter.close()
-    return buf.getvalue()
+    def draw(plotter):
+        plotter.add_mesh(inside, scalars="rgb", rgb=True, show_edges=True, edge_color="#5d4037", line_width=0.5)
+        plotter.add_legend([[name, COLORS[name]] for name in present], bcolor="white", border=True,
+                           face="rectangle", loc="lower right",
+                           size=(0.045 + 0.022 * max(map(len, present)), 0.06 * len(present)))
+        plotter.camera_position = [tuple(centre + look * 10), tuple(centre), (0.0, 0.0, 1.0)]
+        plotter.reset_camera(bounds=tuple(inside.bounds))
+    return _screenshot(size, draw)
 
 
 def trame_available() -> bool:

@@ -51,10 +51,16 @@ REFUSALS = {
 }
 
 
+@pytest.fixture(scope="module")
+def shared():
+    """One explorer for every case: a refusal changes nothing, which each case checks."""
+    return Explorer(HONDA, n=4, view="static", size=(80, 80), cache=False)
+
+
 @pytest.mark.parametrize("case", REFUSALS)
-def test_bad_input_is_refused_on_the_message_line(case):
+def test_bad_input_is_refused_on_the_message_line(case, shared):
     action, expected = REFUSALS[case]
-    ex = Explorer(HONDA, n=4, view="static", size=(80, 80), cache=False)
+    ex = shared
     leaf = ex.model.session.leaves_with_symbol("F")[-1]
     ex.select([int(leaf)])
     if "select" in expected and "first" in expected:  # the refusals of an empty selection
