@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import base64
 import pathlib
-import sqlite3
 import tempfile
 import threading
 
@@ -325,14 +324,11 @@ class VariantPanel:
             raise RamureError("qualifier regions are not available (metrics.store is missing)")
         if not pathlib.Path(store).is_file():
             raise RamureError(f"{store}: no such qualifier store")
-        try:
-            with tools[1](store) as qs:
-                regions = qs.regions(grammar or exp.name)
-        except sqlite3.DatabaseError as err:
-            raise RamureError(f"{store}: not a qualifier store ({err})") from None
-        self.regions = regions
-        if self.regions is None:
+        with tools[1](store) as qs:  # a file that is not a store is refused there
+            regions = qs.regions(grammar or exp.name)
+        if regions is None:  # refused: the regions loaded before stay
             raise RamureError(f"{store}: no qualifier points for grammar '{grammar or exp.name}'")
+        self.regions = regions
         self.refresh()
         return self.regions
 

@@ -180,6 +180,7 @@ def test_study_regions_come_first_and_are_drawn(ex, tmp_path):
     assert applied in [exp.sweep.combination(int(i)) for i in near]  # the region's centre picks among them
     ex.load_qualifiers(tmp_path / "q.sqlite", grammar="other")
     assert "no qualifier points for grammar 'other'" in ex.error
+    assert set(ex.variants.boxes()) == {"small"}  # the study's regions stay
 
 
 def test_without_metrics_the_panel_says_so(monkeypatch):
@@ -188,3 +189,24 @@ def test_without_metrics_the_panel_says_so(monkeypatch):
     assert "not available (test)" in ex.variants.note.value and ex.variants.start.disabled
     assert ex.edits.qualifier.disabled
     assert ex.explore_variants() is None and "not available" in ex.error
+
+
+@pytest.mark.parametrize("action, expected", [
+    (lambda ex: ex.apply_pick(28), "pick 28 is not a number 1-27"),
+    (lambda ex: ex.apply_pick("x"), "pick 'x' is not a number 1-27"),
+    (lambda ex: ex.apply_pick(0), "is not a number 1-27"),
+    (lambda ex: ex.apply_qualifier("purple"), "unknown qualifier 'purple'"),
+    (lambda ex: ex.load_qualifiers("/nonexistent/q.sqlite"), "no such qualifier store"),
+], ids=["pick 28", "pick x", "pick 0", "unknown qualifier", "missing store"])
+def test_bad_variant_input_is_refused(ex, action, expected):
+    ex.select_where(min_order=2)
+    before, selection = ex.plant.to_string(), ex.selection
+    action(ex)
+    assert ex.message.kind == "error" and expected in ex.message.text
+    assert ex.plant.to_string() == before and ex.history == [] and ex.selection == selection
+
+
+def test_a_file_that_is_not_a_qualifier_store_is_refused(ex, tmp_path):
+    (tmp_path / "q.sqlite").write_text("not a database")
+    ex.load_qualifiers(tmp_path / "q.sqlite")
+    assert "cannot open the qualifier store" in ex.error and ex.variants.regions is None
