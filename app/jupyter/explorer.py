@@ -229,6 +229,7 @@ class Explorer:
         self.status_line.value = f"<small>{model.status()}</small>"
         for panel in (self.grammar, self.view, self.selection_panel, self.tree, self.edits):
             panel.refresh()
+        self.variants.refresh_note()
 
     # -- grammar and constants ---------------------------------------------------
     def set_text(self, text):

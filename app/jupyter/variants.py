@@ -377,21 +377,32 @@ class VariantPanel:
         bundle["text/html"] = self.gallery_html()
         return bundle
 
-    def refresh(self):
+    def refresh_note(self):
+        """The line over the gallery: what was explored, or why nothing is (cheap: called after
+        every change of the plant, so it says when the constants moved since the sweep)."""
         reason = metrics_status()
         exp = self.exploration
         if reason:
-            self.note.value = message_html(reason, "note")
+            note = message_html(reason, "note")
             self.start.disabled = True
         elif exp is None:
-            self.note.value = message_html("No variants yet: press “Explore variants” (or call "
-                                           "ex.explore_variants()) to fill the gallery and the PCA view.", "note")
+            note = message_html("No variants yet: press “Explore variants” (or call "
+                                "ex.explore_variants()) to fill the gallery and the PCA view.", "note")
+        elif self.stale():
+            note = message_html("These variants were swept from other constant values than the plant's: "
+                                "explore again (a qualifier does so by itself).", "note")
         else:
             s = exp.sweep
-            self.note.value = message_html(
+            note = message_html(
                 f"{s.n_variants_} variants of '{exp.name}' (n={s.n_}, β={s.design_.beta:g}, "
                 f"{int(s.failed_.sum())} failed), PCA explains "
                 f"{100 * float(np.sum(exp.pca.explained_variance_ratio_)):.0f}% — click a pick to apply it.", "info")
+        if self.note.value != note:
+            self.note.value = note
+
+    def refresh(self):
+        exp = self.exploration
+        self.refresh_note()
         css = self.thumbnail_css() if exp is not None else ""
         if self.thumb_css.value != css:
             self.thumb_css.value = css

@@ -103,6 +103,7 @@ def test_qualifier_that_cannot_improve_says_so(ex, monkeypatch):
 def test_qualifier_sweeps_start_from_the_sessions_constants(ex):
     ex.set_constant("a2", 45)
     assert ex.variants.stale() and "explores again" in ex.edits.qualifier.tooltip
+    assert "other constant values" in ex.variants.note.value
     ex.variants.n.value = 3
     result = ex.apply_qualifier("large")
     sweep = ex.variants.exploration.sweep
