@@ -354,10 +354,10 @@ class Explorer:
                               "Undo brings the previous one back", "info")
         return result
 
-    def fruit_png(self, size=(480, 480), view="front", focus=None, zoom=1.2):
+    def fruit_png(self, size=(480, 480), view="front", focus=None, fill=0.9):
         """PNG of the plant with its volumetric fruit (per-fruit edits applied; ``focus``: a
         fruit's leaf id to frame), or None when the plant has no fruit."""
-        return fruit_png(self.model, size=size, view=view, focus=focus, zoom=zoom)
+        return fruit_png(self.model, size=size, view=view, focus=focus, fill=fill)
 
     def fruit_cut_png(self, leaf, size=(420, 420)):
         """PNG of fruit ``leaf`` cut open across its axis, coloured by tissue (None without fruit)."""

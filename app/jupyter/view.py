@@ -78,15 +78,53 @@ def _screenshot(size, draw, background="white") -> bytes:
     return buf.getvalue()
 
 
-def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", zoom=1.3) -> bytes:
-    """PNG bytes of a plant mesh coloured by ``rgb`` per cell (default: bark/leaf/fruit)."""
+def fit_view(plotter, points, fill=0.9, max_points=20_000):
+    """Pan and zoom the camera so ``points`` (n,3) fill ``fill`` of the picture, centred.
+
+    :func:`app.render.frame_camera` fits the bounding *sphere*, which leaves a tall plant
+    seen from above off-centre (its top near the edge, empty space below); this measures
+    where the points land on screen and corrects for it.
+    """
+    points = np.asarray(points, float).reshape(-1, 3)
+    if len(points) > max_points:
+        points = points[:: len(points) // max_points + 1]
+    if not len(points):
+        return
+    cam = plotter.camera
+    width, height = plotter.window_size
+    aspect = width / height
+    for _ in range(3):  # a perspective view: converge in a few steps
+        m = np.array([[cam.GetCompositeProjectionTransformMatrix(aspect, -1, 1).GetElement(i, j)
+                       for j in range(4)] for i in range(4)])
+        h = np.c_[points, np.ones(len(points))] @ m.T
+        ndc = h[:, :2] / h[:, 3:4]
+        lo, hi = ndc.min(axis=0), ndc.max(axis=0)
+        centre, extent = (lo + hi) / 2, (hi - lo) / 2
+        position, focal = np.array(cam.position), np.array(cam.focal_point)
+        distance = np.linalg.norm(focal - position)
+        half_h = distance * np.tan(np.radians(cam.view_angle) / 2)
+        up = np.array(cam.up) / np.linalg.norm(cam.up)
+        forward = (focal - position) / distance
+        right = np.cross(forward, up)
+        up = np.cross(right, forward)
+        shift = centre[0] * half_h * aspect * right + centre[1] * half_h * up
+        cam.position, cam.focal_point = tuple(position + shift), tuple(focal + shift)
+        scale = float(np.max(extent))
+        if scale > 0:
+            cam.zoom(fill / scale)
+    plotter.reset_camera_clipping_range()
+
+
+def mesh_png(mesh, rgb=None, size=(480, 480), view="iso", background="white", fill=0.9) -> bytes:
+    """PNG bytes of a plant mesh coloured by ``rgb`` per cell (default: bark/leaf/fruit),
+    framed so the plant fills ``fill`` of the picture."""
     def draw(plotter):
         if mesh.n_cells:
             shown = mesh.copy(deep=False)
             shown.cell_data["rgb"] = base_colors(mesh) if rgb is None else rgb
             plotter.add_mesh(shown, scalars="rgb", rgb=True)
             frame_camera(plotter, mesh.bounds, view)
-            plotter.camera.zoom(zoom)
+            fit_view(plotter, mesh.points, fill)
     return _screenshot(size, draw, background)
 
 
@@ -95,7 +133,7 @@ def plant_png(model, size=(480, 480), view="iso", show_cut=False) -> bytes:
     return mesh_png(model.mesh, view_colors(model, show_cut), size, view)
 
 
-def fruit_png(model, size=(480, 480), view="front", focus=None, zoom=1.2) -> bytes | None:
+def fruit_png(model, size=(480, 480), view="front", focus=None, fill=0.9) -> bytes | None:
     """PNG of the plant's wood with its volumetric fruit (3G-maps, per-fruit edits applied) in
     orange, the selected ones in red; ``focus`` (a fruit's leaf id) shows that fruit alone with
     its faces outlined, seen from outside the crown (``view`` is then not used).
@@ -128,10 +166,11 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, zoom=1.2) -> byt
         plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=outward is not None, edge_color="#7a3d12")
         if outward is None:
             frame_camera(plotter, bounds, view)
+            fit_view(plotter, mesh.points, fill)
         else:
             plotter.camera_position = [tuple(centre + outward * 10 * half), tuple(centre), (0.0, 0.0, 1.0)]
             plotter.reset_camera(bounds=tuple(bounds))
-        plotter.camera.zoom(zoom)
+            fit_view(plotter, surface.points, fill * 0.8)
     return _screenshot(size, draw)
 
 

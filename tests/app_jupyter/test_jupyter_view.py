@@ -101,3 +101,27 @@ print(ex.view.backend, ex.view.picking, ex.selection == [int(sk.leaf_id[k])])"""
     execute(nb, {"PYVISTA_JUPYTER_BACKEND": "trame"}, timeout=120)
     out = "".join(o.get("text", "") for o in nb.cells[0].outputs if o.output_type == "stream")
     assert "server True True" in out, out
+
+
+@pytest.mark.parametrize("side", ["iso", "front", "top"])
+def test_the_plant_fills_and_centres_the_picture(side):
+    import io
+
+    from matplotlib.image import imread
+
+    ex = Explorer(HONDA, n=6, view="static", size=(160, 160))
+    ex.set_view(side)
+    rgb = imread(io.BytesIO(ex.png()), format="png")[..., :3]
+    rows, cols = np.nonzero(np.any(rgb < 0.9, axis=2))  # not the white background
+    height, width = np.ptp(rows) + 1, np.ptp(cols) + 1
+    assert max(height, width) >= 0.8 * 160 and max(height, width) <= 0.97 * 160  # fills, not cropped
+    assert abs((rows.min() + rows.max()) / 2 - 80) < 10 and abs((cols.min() + cols.max()) / 2 - 80) < 10
+
+
+def test_fruit_are_orange_so_red_means_selected():
+    from jupyter_helpers import ROOT, red_pixels
+
+    ex = Explorer(str(ROOT / "grammars" / "fruit_tree.lsys"), view="static", size=(200, 200))
+    assert red_pixels(ex.png()) == 0
+    ex.select(ex.model.fruit_ids()[:4])
+    assert red_pixels(ex.png()) > 0
