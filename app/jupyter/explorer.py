@@ -62,7 +62,7 @@ def fruit_presets() -> list:
 
 
 class EditPanel:
-    """ρ, Regrow, Regrow with constants, the qualifier drop-down, Prune, Undo, Redo, files."""
+    """ρ, Regrow, Regrow with constants, the qualifier drop-down, Regrow fruit, Prune, Undo, Redo, files."""
 
     def __init__(self, app):
         self.app = app
