@@ -94,7 +94,7 @@ class Explorer:
 
     def set_constant(self, name, value):
         """Change one ``#define`` (an undoable edit that re-derives the plant)."""
-        value = _finite(value, name)
+        value = finite_number(value, name)
         if name not in self.lsystem.constants:
             raise ValueRefused(f"the grammar has no constant '{name}'")
         self.session.set_constants({name: value})
@@ -116,7 +116,7 @@ class Explorer:
 
     def set_rho(self, rho):
         """ρ as a fraction in (0, 1] or a percentage in (1, 100] (the UI's slider)."""
-        rho = _finite(rho, "rho")
+        rho = finite_number(rho, "rho")
         rho = rho / 100.0 if rho > 1 else rho
         if not 0 < rho <= 1:
             raise ValueRefused(f"rho must be in (0, 100], got {rho:g}")
@@ -194,7 +194,7 @@ class Explorer:
     # -- edits -------------------------------------------------------------
     def regrow(self, seed=None, constants=None, params=None):
         """Regrow the selection's cut subtrees (the whole plant when nothing is selected)."""
-        constants = {k: _finite(v, k) for k, v in (constants or {}).items()}
+        constants = {k: finite_number(v, k) for k, v in (constants or {}).items()}
         result = self.session.regrow(self.selection, rho=self.rho, seed=seed, constants=constants,
                                      params=params)
         return self._after_edit(result)
@@ -252,6 +252,19 @@ class Explorer:
                                         overrides=self.session.fruit_overrides(), **kwargs)
         return self._cached(("fruit", preset, seed, tuple(sorted(kwargs.items()))), build)
 
+    def fruit_surface(self):
+        """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit or gmap)."""
+        if not self.fruit_ids():
+            return None
+        try:
+            from gmap.pyvista import boundary_polydata
+        except ImportError:
+            return None
+        gm = self.fruit_volumes()
+        surface = boundary_polydata(gm)
+        surface.cell_data["leaf_id"] = np.asarray(gm.volume_data["leaf_id"])[surface.cell_data["volume"]]
+        return surface
+
     def _after_edit(self, result):
         self.last_result = result
         self.selection = []
@@ -278,6 +291,10 @@ class Explorer:
             base += f", {len(self.selection)} selected"
         if r is None:
             return base
+        if r.op == "fruit":
+            return f"{base} — {len(r.roots)} fruit regrown"
+        if r.op == "constants":
+            return f"{base} — constants changed, plant re-derived"
         return (f"{base} — last {r.op}: roots {r.roots.tolist()[:8]}{'…' if len(r.roots) > 8 else ''}, "
                 f"{r.removed} modules replaced by {r.added}")
 
@@ -333,7 +350,7 @@ def write_obj(mesh, path):
         np.savetxt(f, faces, fmt="f %d %d %d")
 
 
-def _finite(value, name):
+def finite_number(value, name):
     try:
         value = float(value)
     except (TypeError, ValueError):
@@ -343,4 +360,4 @@ def _finite(value, name):
     return value
 
 
-__all__ = ["Explorer", "RamureError", "leaves_in_rectangle", "write_obj"]
+__all__ = ["Explorer", "RamureError", "finite_number", "leaves_in_rectangle", "write_obj"]

@@ -11,7 +11,8 @@ import numpy as np
 
 BARK = (0.45, 0.32, 0.2)
 LEAF = (0.3, 0.62, 0.22)
-FRUIT = (0.85, 0.18, 0.12)
+FRUIT_RGB = (240, 120, 40)  # orange, so red always means "selected"
+FRUIT = tuple(c / 255 for c in FRUIT_RGB)
 SELECTED = (1.0, 0.0, 0.0)
 
 

@@ -145,14 +145,9 @@ def changed_constants(edited, current, tol=1e-12):
 
 
 # -- drawing ---------------------------------------------------------------------
-FRUIT_RGB = (240, 120, 40)  # fruit in orange on screen, so red always means "selected"
-
-
 def base_colors(mesh):
-    """Per-cell RGB of the unselected plant: the shared palette, with fruit in orange."""
-    rgb = plant_colors(mesh)
-    rgb[np.asarray(mesh.cell_data["kind"]) >= 2] = FRUIT_RGB
-    return rgb
+    """Per-cell RGB of the unselected plant (the shared palette: fruit in orange)."""
+    return plant_colors(mesh)
 
 
 KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (lsys.geometry.KIND_FRUIT)
@@ -276,20 +271,8 @@ def project_to_display(matrix, points, size):
 
 # -- volumetric fruit ---------------------------------------------------------------
 def fruit_surface(explorer):
-    """The plant's volumetric fruit (3G-maps) as a surface with a ``leaf_id`` per cell, or None.
-
-    None when the plant has no fruit or the 3G-map layer is not available.
-    """
-    if not explorer.fruit_ids():
-        return None
-    try:
-        from gmap.pyvista import boundary_polydata
-    except ImportError:
-        return None
-    gm = explorer.fruit_volumes()
-    surface = boundary_polydata(gm)
-    surface.cell_data["leaf_id"] = np.asarray(gm.volume_data["leaf_id"])[surface.cell_data["volume"]]
-    return surface
+    """The plant's volumetric fruit as a surface (see :meth:`app.model.Explorer.fruit_surface`)."""
+    return explorer.fruit_surface()
 
 
 # -- the cut graph -----------------------------------------------------------------

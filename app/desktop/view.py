@@ -25,7 +25,8 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
-from app.desktop.state import FRUIT_RGB, points_without_fruit, project_to_display
+from app.desktop.state import points_without_fruit, project_to_display
+from app.render import FRUIT_RGB
 from app.render import frame_camera
 
 CLICK_SLOP = 4  # pixels a click may move and still be a click

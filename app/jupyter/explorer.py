@@ -30,7 +30,7 @@ from app.jupyter.selection import SelectionPanel, TreeBrowser
 from app.jupyter.variants import VariantPanel, qualifier_summary
 from app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
 from app.model import Explorer as Model
-from app.model import _finite as _number  # a finite number or a refusal naming it
+from app.model import finite_number as _number  # a finite number or a refusal naming it
 from lsys.errors import GrammarError, RamureError, ValueRefused
 
 PLACEHOLDER = "n: 0\nw: F"  # the plant shown while the given grammar does not parse

@@ -24,7 +24,7 @@ import threading
 import numpy as np
 
 from app.jupyter._ui import png_image
-from app.desktop.state import FRUIT_RGB, base_colors, fruit_surface  # Qt-free helpers shared with the desktop
+from app.render import FRUIT_RGB, plant_colors as base_colors
 from app.render import _headless_setup, frame_camera
 
 CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
@@ -138,7 +138,7 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, fill=0.9) -> byt
     orange, the selected ones in red; ``focus`` (a fruit's leaf id) shows that fruit alone with
     its faces outlined, seen from outside the crown (``view`` is then not used).
     None when the plant has no fruit or the 3G-map layer is missing."""
-    surface = fruit_surface(model)
+    surface = model.fruit_surface()
     if surface is None:
         return None
     mesh = model.mesh

@@ -17,9 +17,8 @@ def tree():
 
 
 def fruit_bounds(ex, leaf):
-    from app.desktop.state import fruit_surface
 
-    surface = fruit_surface(ex.model)
+    surface = ex.model.fruit_surface()
     return np.asarray(surface.extract_cells(surface.cell_data["leaf_id"] == leaf).bounds)
 
 
