@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import DerivationError, GrammarError
+from .errors import DerivationError, GrammarError, ValueRefused
 from .expr import compile_expression, evaluate_constant
 from .grammar import Grammar, parse_grammar
 from .tree import DerivationTree
@@ -68,6 +68,9 @@ class LSystem:
     #: A derivation that would grow past this many modules stops with a clear
     #: error instead of exhausting memory (about 150 bytes per module with history).
     max_modules = 20_000_000
+    #: More derivation steps than this are refused: a grammar whose string stops
+    #: growing would otherwise loop for hours on an absurd ``n``.
+    max_steps = 10_000
 
     def __init__(self, grammar: Grammar):
         self.grammar = grammar
@@ -148,7 +151,12 @@ class LSystem:
         n = self.grammar.n if n is None else int(n)
         if n < 0:
             raise GrammarError(f"the derivation count must be >= 0, not {n}")
+        if n > self.max_steps:
+            raise DerivationError(f"{n} derivation steps are more than the limit of {self.max_steps:,}: "
+                                  "use fewer steps (or raise LSystem.max_steps)")
+        check_seed(seed)
         consts = {**self.constants, **(constants or {})}
+        check_constants(consts)
         unknown = set(constants or {}) - set(self.constants)
         for overrides in (rule_constants or {}).values():
             unknown |= set(overrides) - set(self.constants)
@@ -242,12 +250,16 @@ class LSystem:
         with np.errstate(divide="raise", invalid="raise", over="raise"):
             try:
                 return fn(V, C, rng, n)
-            except (FloatingPointError, ZeroDivisionError) as exc:
+            except (FloatingPointError, ZeroDivisionError, ValueError, OverflowError) as exc:
                 bad = self._first_failing(fn, V, C, n)
                 module = self.module_text(tree, string[pos[bad]])
                 rule = self.grammar.rules[r]
-                problem = "division by zero" if "divide" in str(exc) or isinstance(
-                    exc, ZeroDivisionError) else f"invalid arithmetic ({exc})"
+                if isinstance(exc, (ValueError, OverflowError)):  # e.g. normal(0, -1)
+                    problem = f"invalid arguments ({exc})"
+                elif "divide" in str(exc) or isinstance(exc, ZeroDivisionError):
+                    problem = "division by zero"
+                else:
+                    problem = f"invalid arithmetic ({exc})"
                 raise DerivationError(
                     f"{problem} in the {what} of rule {r + 1} ({rule}) while rewriting {module}",
                     rule.line, rule.pred.column, rule.source_line) from None
@@ -258,7 +270,7 @@ class LSystem:
             for i in range(n):
                 try:
                     fn({k: v[i:i + 1] for k, v in V.items()}, C, np.random.default_rng(0), 1)
-                except (FloatingPointError, ZeroDivisionError):
+                except (FloatingPointError, ZeroDivisionError, ValueError, OverflowError):
                     return i
         return 0
 
@@ -345,6 +357,22 @@ class LSystem:
         if not k:
             return name
         return name + "(" + ",".join(_fmt(v) for v in tree.params[node, :k]) + ")"
+
+
+def check_seed(seed):
+    """A random seed must be a whole number >= 0 (what numpy accepts); returns it as int."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2 ** 64:
+        raise ValueRefused(f"a seed must be a whole number from 0 to 2^64 - 1, not {seed!r}")
+    return int(seed)
+
+
+def check_constants(constants):
+    """Constant values must be finite numbers; refuses NaN, infinities and non-numbers."""
+    for name, value in constants.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(value):
+            raise ValueRefused(f"constant {name} must be a finite number, not {value!r}")
+    return constants
 
 
 def _walk_left(i, count, sym, match, open_id, close_id, ignore):

@@ -51,15 +51,17 @@ FUNCTIONS = {
 RANDOM_FUNCTIONS = {"uniform", "normal"}
 
 _BINARY = {
-    "||": (1, "np.logical_or({0}, {1})"),
-    "&&": (2, "np.logical_and({0}, {1})"),
-    "==": (3, "({0} == {1})"),
-    "=": (3, "({0} == {1})"),
-    "!=": (3, "({0} != {1})"),
-    "<": (4, "({0} < {1})"),
-    ">": (4, "({0} > {1})"),
-    "<=": (4, "({0} <= {1})"),
-    ">=": (4, "({0} >= {1})"),
+    # Comparisons and logic give 1.0 / 0.0 (not booleans), so -(x < 1) and
+    # (a < b) - (c < d) are ordinary arithmetic.
+    "||": (1, "_f(np.logical_or({0}, {1}))"),
+    "&&": (2, "_f(np.logical_and({0}, {1}))"),
+    "==": (3, "_f({0} == {1})"),
+    "=": (3, "_f({0} == {1})"),
+    "!=": (3, "_f({0} != {1})"),
+    "<": (4, "_f({0} < {1})"),
+    ">": (4, "_f({0} > {1})"),
+    "<=": (4, "_f({0} <= {1})"),
+    ">=": (4, "_f({0} >= {1})"),
     "+": (5, "({0} + {1})"),
     "-": (5, "({0} - {1})"),
     "*": (6, "({0} * {1})"),
@@ -68,6 +70,12 @@ _BINARY = {
     "^": (8, "np.power({0}, {1})"),
 }
 _UNARY_PRECEDENCE = 7
+#: Deepest expression tree accepted: the compiled Python code nests one or two
+#: parentheses per level and Python refuses more than 200.
+MAX_DEPTH = 64
+#: Deepest nesting of parentheses, unary signs and right-associative powers the
+#: (recursive) parser follows before refusing.
+MAX_NESTING = 100
 _OPERATORS = sorted(_BINARY, key=len, reverse=True) + ["!"]
 
 
@@ -86,6 +94,7 @@ class Node:
     value: object
     args: tuple = ()
     offset: int = 0
+    depth: int = 1
 
 
 class Source:
@@ -121,9 +130,11 @@ def tokenize(src: Source):
                     while j < len(text) and text[j].isdigit():
                         j += 1
             try:
-                float(text[i:j])
+                value = float(text[i:j])
             except ValueError:
                 raise src.error(f"bad number '{text[i:j]}'", i) from None
+            if not math.isfinite(value):
+                raise src.error(f"number '{text[i:j]}' is too large", i)
             tokens.append(Token("num", text[i:j], i))
             i = j
         elif ch.isalpha() or ch == "_":
@@ -152,6 +163,15 @@ class _Parser:
         self.src = src
         self.tokens = tokenize(src)
         self.pos = 0
+        self.nesting = 0
+
+    def node(self, kind, value, args, offset):
+        """A new node; refuses trees deeper than :data:`MAX_DEPTH`."""
+        depth = 1 + max((a.depth for a in args), default=0)
+        if depth > MAX_DEPTH:
+            raise self.src.error(f"expression is too deeply nested (more than {MAX_DEPTH} levels of "
+                                 "operators and calls); split it with #define constants", offset)
+        return Node(kind, value, args, offset, depth)
 
     def peek(self):
         return self.tokens[self.pos]
@@ -178,6 +198,16 @@ class _Parser:
         return node
 
     def expression(self, min_prec):
+        self.nesting += 1
+        if self.nesting > MAX_NESTING:
+            raise self.src.error(f"expression is too deeply nested (more than {MAX_NESTING} levels)",
+                                 self.peek().offset)
+        try:
+            return self._expression(min_prec)
+        finally:
+            self.nesting -= 1
+
+    def _expression(self, min_prec):
         left = self.unary()
         while True:
             tok = self.peek()
@@ -189,14 +219,14 @@ class _Parser:
             self.take()
             right_min = prec if tok.text == "^" else prec + 1
             right = self.expression(right_min)
-            left = Node("binary", tok.text, (left, right), tok.offset)
+            left = self.node("binary", tok.text, (left, right), tok.offset)
 
     def unary(self):
         tok = self.peek()
         if tok.kind == "op" and tok.text in ("-", "+", "!"):
             self.take()
             operand = self.expression(_UNARY_PRECEDENCE)
-            return Node("unary", tok.text, (operand,), tok.offset)
+            return self.node("unary", tok.text, (operand,), tok.offset)
         return self.primary()
 
     def primary(self):
@@ -232,7 +262,7 @@ class _Parser:
                 f"{name}() takes {arity} argument{'s' if arity > 1 else ''}, got {len(args)}",
                 name_tok.offset,
             )
-        return Node("call", name, tuple(args), name_tok.offset)
+        return self.node("call", name, tuple(args), name_tok.offset)
 
 
 @dataclass(frozen=True)
@@ -282,7 +312,7 @@ def _source(node, params, constants, src):
         raise src.error(f"unknown name '{node.value}'", node.offset)
     parts = [_source(a, params, constants, src) for a in node.args]
     if node.kind == "unary":
-        return {"-": "(-{0})", "+": "(+{0})", "!": "np.logical_not({0})"}[node.value].format(*parts)
+        return {"-": "(-{0})", "+": "(+{0})", "!": "_f(np.logical_not({0}))"}[node.value].format(*parts)
     if node.kind == "binary":
         return _BINARY[node.value][1].format(*parts)
     return FUNCTIONS[node.value][1].format(*parts)
@@ -298,7 +328,11 @@ def compile_expression(expr, params, constants):
     """
     body = _source(expr.node, set(params), set(constants), expr.src)
     code = f"lambda V, C, R, n: _out({body}, n)"
-    return eval(code, {"np": np, "_out": _broadcast})  # noqa: S307 - generated from our own AST
+    return eval(code, {"np": np, "_out": _broadcast, "_f": _as_float})  # noqa: S307 - generated from our own AST
+
+
+def _as_float(value):
+    return np.multiply(value, 1.0)
 
 
 def _broadcast(value, n):
@@ -314,7 +348,7 @@ def evaluate_constant(expr, constants):
     with np.errstate(all="raise"):
         try:
             value = float(fn({}, constants, np.random.default_rng(0), 1)[0])
-        except (FloatingPointError, ZeroDivisionError) as exc:
+        except (FloatingPointError, ZeroDivisionError, ValueError, OverflowError) as exc:
             raise expr.src.error(f"cannot evaluate: {_explain(exc)}", 0) from None
     if not math.isfinite(value):
         raise expr.src.error("value is not a finite number", 0)
@@ -323,6 +357,8 @@ def evaluate_constant(expr, constants):
 
 def _explain(exc):
     text = str(exc)
+    if isinstance(exc, (ValueError, OverflowError)):  # e.g. normal(0, -1): "scale < 0"
+        return f"invalid arguments ({text})"
     if "divide" in text or isinstance(exc, ZeroDivisionError):
         return "division by zero"
     if "invalid" in text:

@@ -198,8 +198,11 @@ class _GrammarParser:
 
     # -- line level --------------------------------------------------------
     def parse(self):
-        originals = self.text.splitlines()
-        stripped = strip_comments(self.text).splitlines()
+        # Lines end at \n, \r\n or \r only (as editors count them); other Unicode
+        # separators stay inside a line, so a '//' comment never runs to the end of file.
+        text = self.text.replace("\r\n", "\n").replace("\r", "\n")
+        originals = text.split("\n")
+        stripped = strip_comments(text).split("\n")
         in_rules = False
         for number, (text, original) in enumerate(zip(stripped, originals), start=1):
             line = _Line(number, text, original)
