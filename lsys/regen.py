@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cut import ascend, check_rho, collapse_nested, select_roots
-from .derive import LSystem
+from .cut import _validate_selection
+from .derive import LSystem, check_constants, check_seed
 from .errors import GrammarError, RamureError, ValueRefused
 
 SESSION_FORMAT = "ramure-session"
@@ -115,7 +116,8 @@ def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, p
     unknown = set(constants or {}) - set(ls.constants)
     if unknown:
         raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}")
-    consts = {**derivation.constants, **(constants or {})}
+    consts = check_constants({**derivation.constants, **(constants or {})})
+    check_seed(seed)
     first, last = (span[roots].copy() for span in tree.leaf_spans())
     order = np.argsort(first)
     roots, first, last = roots[order], first[order], last[order]
@@ -124,6 +126,31 @@ def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, p
     removed = np.concatenate([tree.subtree(r) for r in roots]) if roots.size else np.zeros(0, np.int64)
     first_new = tree.size
     rng = np.random.default_rng(seed)
+    try:
+        pieces, starts, ends = _rederive(derivation, roots, first, last, old_leaves, rng, consts,
+                                         rule_constants, prune)
+    except BaseException:
+        # Loses nothing: forget the half-grown nodes and point the roots at their old children.
+        tree.size = first_new
+        tree.set_children(roots, *old_children)
+        tree.changed()
+        raise
+    if prune:
+        tree.set_children(roots, -1, 0)
+    new_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
+    tree._alive[removed] = False
+    new_leaves = _replace_spans(old_leaves, np.array(starts, np.int64), np.array(ends, np.int64), pieces)
+    change = Change(roots, old_children, new_children, removed,
+                    np.arange(first_new, tree.size, dtype=np.int64), old_leaves, new_leaves,
+                    int((last - first + 1).sum()), int(sum(len(p) for p in pieces)))
+    tree.leaves = new_leaves
+    tree.changed()
+    return change
+
+
+def _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune):
+    """Re-derive each run of touching roots; returns (pieces, span starts, span ends)."""
+    tree, ls = derivation.tree, derivation.lsystem
     pieces, starts, ends = [], [], []
     window = CONTEXT_WINDOW if ls.has_context else 0
     for run in _runs(first, last, tree.step[roots]):
@@ -140,17 +167,7 @@ def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, p
         pieces.append(string)
         starts.append(first[run[0]])
         ends.append(last[run[-1]])
-    if prune:
-        tree.set_children(roots, -1, 0)
-    new_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
-    tree._alive[removed] = False
-    new_leaves = _replace_spans(old_leaves, np.array(starts, np.int64), np.array(ends, np.int64), pieces)
-    change = Change(roots, old_children, new_children, removed,
-                    np.arange(first_new, tree.size, dtype=np.int64), old_leaves, new_leaves,
-                    int((last - first + 1).sum()), int(sum(len(p) for p in pieces)))
-    tree.leaves = new_leaves
-    tree.changed()
-    return change
+    return pieces, starts, ends
 
 
 def _runs(first, last, steps):
@@ -200,7 +217,10 @@ class Session:
     def plan(self, selection, rho=0.5, min_ascend=1, ascend_levels=None, flow_func=None):
         """The cut for a selection, without changing anything."""
         if ascend_levels is not None:
-            sel = np.asarray(list(selection), np.int64)
+            levels = ascend_levels
+            if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
+                raise ValueRefused(f"ascend levels must be a whole number >= 0, not {levels!r}")
+            sel = _validate_selection(self.tree, selection)
             roots = collapse_nested(self.tree, [ascend(self.tree, leaf, ascend_levels) for leaf in sel])
             return None, roots, roots, np.zeros(0, np.int64)
         cut = select_roots(self.tree, selection, rho=rho, n=self.n, min_ascend=min_ascend,
@@ -217,7 +237,7 @@ class Session:
         parameter combination ``{"rule": r or None, "constants": {...}}``.
         """
         edit = {"op": "regrow", "selection": [int(x) for x in selection], "rho": check_rho(rho),
-                "seed": self._next_seed() if seed is None else int(seed),
+                "seed": self._next_seed() if seed is None else check_seed(seed),
                 "constants": dict(constants or {}), "params": _check_params(params, self.lsystem),
                 "min_ascend": int(min_ascend), "ascend": ascend_levels}
         return self._apply(edit)
@@ -266,10 +286,7 @@ class Session:
 
     def set_constants(self, values):
         """Change global constants: the whole plant is re-derived (an undoable edit)."""
-        unknown = set(values) - set(self.lsystem.constants)
-        if unknown:
-            raise ValueRefused(f"unknown constant(s): {', '.join(sorted(unknown))}")
-        edit = {"op": "constants", "values": {k: float(v) for k, v in values.items()}}
+        edit = {"op": "constants", "values": _check_values(values, self.lsystem)}
         return self._apply(edit)
 
     def _next_seed(self):
@@ -283,8 +300,10 @@ class Session:
                                  0, 0, None, time.perf_counter() - t0)
         elif edit["op"] == "constants":
             undo = ("derivation", self.derivation, dict(self.constants))
-            self.constants.update(edit["values"])
-            self.derivation = self.lsystem.derive(n=self.n, seed=self.seed, constants=self.constants)
+            constants = {**self.constants, **edit["values"]}
+            derivation = self.lsystem.derive(n=self.n, seed=self.seed, constants=constants)
+            # Only now that the plant re-derived: a refused value changes nothing.
+            self.derivation, self.constants = derivation, constants
             result = RegenResult("constants", *(np.zeros(0, np.int64),) * 3, len(undo[1]),
                                  len(self.derivation), None, time.perf_counter() - t0)
         else:
@@ -361,9 +380,15 @@ class Session:
     def save(self, path):
         """Write the session as JSON (atomically: a crash never leaves half a file)."""
         path = pathlib.Path(path)
+        if path.is_dir():
+            raise RamureError(f"cannot save the session to {path}: it is a directory")
         tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(json.dumps(self.to_dict(), indent=1), encoding="utf-8")
-        tmp.replace(path)
+        try:
+            tmp.write_text(json.dumps(self.to_dict(), indent=1), encoding="utf-8")
+            tmp.replace(path)
+        except OSError as exc:
+            tmp.unlink(missing_ok=True) if tmp.parent.is_dir() else None
+            raise RamureError(f"cannot save the session to {path}: {exc.strerror or exc}") from None
         return path
 
     @classmethod
@@ -376,12 +401,13 @@ class Session:
         missing = [k for k in ("grammar", "n", "seed", "constants", "edits") if k not in data]
         if missing:
             raise RamureError(f"{where} is incomplete: missing {', '.join(missing)}")
+        _check_session_fields(data, where)
         try:
             ls = LSystem.from_text(data["grammar"], filename=data.get("filename"))
             session = cls(ls, n=data["n"], seed=data["seed"], constants=data["constants"],
                           filename=data.get("filename"))
             for i, edit in enumerate(data["edits"]):
-                session._apply(_check_edit(edit, i))
+                session._apply(_check_edit(edit, i, session))
         except RamureError as exc:
             raise RamureError(f"{where} cannot be replayed: {exc}") from None
         except (KeyError, TypeError, ValueError) as exc:
@@ -406,33 +432,85 @@ class Session:
 def _check_params(params, lsystem):
     if params is None:
         return None
-    if not isinstance(params, dict) or "constants" not in params:
+    if not isinstance(params, dict) or not isinstance(params.get("constants"), dict):
         raise ValueRefused("a parameter combination is {'rule': index or None, 'constants': {...}}")
     rule = params.get("rule")
-    if rule is not None and not 0 <= int(rule) < len(lsystem.grammar.rules):
-        raise ValueRefused(f"rule {rule} does not exist (the grammar has "
-                           f"{len(lsystem.grammar.rules)} rules)")
+    if rule is not None and not (_is_whole(rule) and rule < len(lsystem.grammar.rules)):
+        raise ValueRefused(f"rule {rule!r} does not exist (the grammar has "
+                           f"{len(lsystem.grammar.rules)} rules, numbered from 0)")
     unknown = set(params["constants"]) - set(lsystem.constants)
     if unknown:
         raise ValueRefused(f"unknown constant(s) in the combination: {', '.join(sorted(unknown))}")
     return {"rule": None if rule is None else int(rule),
-            "constants": {k: float(v) for k, v in params["constants"].items()}}
+            "constants": _check_values(params["constants"], lsystem)}
 
 
-def _check_edit(edit, i):
+def _check_values(values, lsystem):
+    """Constant overrides: known names, finite numbers (returned as floats)."""
+    if not isinstance(values, dict):
+        raise ValueRefused(f"constant values must be a mapping of name to number, not {values!r}")
+    unknown = set(values) - set(lsystem.constants)
+    if unknown:
+        raise ValueRefused(f"unknown constant(s): {', '.join(sorted(map(str, unknown)))}")
+    check_constants(values)
+    return {k: float(v) for k, v in values.items()}
+
+
+def _is_whole(value, low=0):
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= low
+
+
+def _check_session_fields(data, where):
+    problems = []
+    if not isinstance(data["grammar"], str):
+        problems.append("'grammar' must be the grammar text")
+    if data.get("filename") is not None and not isinstance(data["filename"], str):
+        problems.append("'filename' must be a string or null")
+    if not _is_whole(data["n"]):
+        problems.append(f"'n' must be a whole number >= 0, not {data['n']!r}")
+    if not _is_whole(data["seed"]):
+        problems.append(f"'seed' must be a whole number >= 0, not {data['seed']!r}")
+    if not isinstance(data["constants"], dict):
+        problems.append("'constants' must be a mapping of name to number")
+    if not isinstance(data["edits"], list):
+        problems.append("'edits' must be a list")
+    if problems:
+        raise RamureError(f"{where} is corrupt: {'; '.join(problems)}")
+
+
+def _check_edit(edit, i, session):
+    """Check one saved edit before replaying it on ``session`` (ids must be current leaves)."""
     if not isinstance(edit, dict) or edit.get("op") not in ("regrow", "prune", "constants", "fruit"):
         raise RamureError(f"edit {i + 1} has no valid 'op'")
+    what = f"edit {i + 1} ({edit['op']})"
     if edit["op"] == "fruit":
-        if not isinstance(edit.get("leaves"), list) or not isinstance(edit.get("settings"), dict):
-            raise RamureError(f"edit {i + 1} (fruit) needs 'leaves' and 'settings'")
+        leaves, settings = edit.get("leaves"), edit.get("settings")
+        if not isinstance(leaves, list) or not isinstance(settings, dict) or \
+                not all(_is_whole(x) for x in leaves):
+            raise RamureError(f"{what} needs 'leaves' (leaf ids) and 'settings'")
+        in_string = np.isin(np.asarray(leaves, np.int64), session.tree.leaves)
+        if not in_string.all():
+            raise RamureError(f"{what}: {leaves[int(np.argmin(in_string))]} is not a leaf of the plant")
         return edit
     if edit["op"] == "constants":
-        if not isinstance(edit.get("values"), dict):
-            raise RamureError(f"edit {i + 1} (constants) has no 'values'")
-        return edit
+        try:
+            return {**edit, "values": _check_values(edit.get("values"), session.lsystem)}
+        except ValueRefused as exc:
+            raise RamureError(f"{what}: {exc}") from None
     for key in ("selection", "rho", "seed", "constants", "min_ascend"):
         if key not in edit:
-            raise RamureError(f"edit {i + 1} ({edit['op']}) is missing '{key}'")
-    edit.setdefault("params", None)
-    edit.setdefault("ascend", None)
-    return edit
+            raise RamureError(f"{what} is missing '{key}'")
+    selection = edit["selection"]
+    if not isinstance(selection, list) or not all(_is_whole(x) for x in selection):
+        raise RamureError(f"{what}: 'selection' must be a list of leaf ids")
+    if not _is_whole(edit["seed"]) or not _is_whole(edit["min_ascend"]):
+        raise RamureError(f"{what}: 'seed' and 'min_ascend' must be whole numbers >= 0")
+    ascend_levels = edit.get("ascend")
+    if ascend_levels is not None and not _is_whole(ascend_levels):
+        raise RamureError(f"{what}: 'ascend' must be null or a whole number >= 0")
+    try:
+        constants = _check_values(edit["constants"], session.lsystem)
+        params = _check_params(edit.get("params"), session.lsystem)
+    except (ValueRefused, TypeError, ValueError) as exc:
+        raise RamureError(f"{what}: {exc}") from None
+    return {**edit, "constants": constants, "params": params, "ascend": ascend_levels}
