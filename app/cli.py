@@ -34,7 +34,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _user_errors():
-    return (RamureError, FileNotFoundError, IsADirectoryError, PermissionError)
+    # Every OSError (missing file, directory instead of file, no permission, full disk,
+    # a writer that cannot write) is about the user's paths, not a bug.
+    return (RamureError, OSError)
 
 
 def main(argv=None) -> int:

@@ -34,6 +34,8 @@ def parse_plane(text):
         v = float(value)
     except ValueError:
         raise ValueRefused(f"cut plane value must be a number, got {value.strip()!r}") from None
+    if not np.isfinite(v):
+        raise ValueRefused(f"cut plane value must be a finite number, got {value.strip()!r}")
     normal = _AXES[axis]
     return normal, tuple(v * c for c in normal)
 

@@ -127,13 +127,15 @@ class Study:
         path = pathlib.Path(path)
         if not path.is_file():
             raise StudyInputError(f"{path}: no such study file")
-        conn = connect(path, durable)
+        conn = None
         try:
+            conn = connect(path, durable)  # the WAL pragma already fails on a non-database
             ok = _has_study(conn)
         except sqlite3.DatabaseError:
             ok = False
         if not ok:
-            conn.close()
+            if conn is not None:
+                conn.close()
             raise StudyInputError(f"{path}: not a Ramure study database")
         return cls(conn, path, clock)
 

@@ -19,18 +19,14 @@ import sys
 import time
 
 from app.cli import UserError
-from app.commands.plant import add_grammar_options, parse_sets
+from app.commands.plant import add_grammar_options, parse_sets, parse_size
 from app.commands.regen import parse_ids
 from lsys import LSystem
 from lsys.errors import RamureError
 
 
 def _size(text):
-    w, _, h = text.partition("x")
-    try:
-        return int(w), int(h or w)
-    except ValueError:
-        raise RamureError(f"--thumb-size expects WIDTHxHEIGHT, got '{text}'") from None
+    return parse_size(text, "--thumb-size")
 
 
 def _load(args):
@@ -105,6 +101,8 @@ def run_explore(args):
     from metrics.exploration import explore, write_exploration
 
     t0 = time.perf_counter()
+    if pathlib.Path(args.output).exists() and not pathlib.Path(args.output).is_dir():
+        raise RamureError(f"-o {args.output}: exists and is not a directory")
     ls = _load(args)
     size = _size(args.thumb_size)
     progress, close = _progress_bar(not args.json or sys.stderr.isatty(), "variants")

@@ -20,6 +20,8 @@ import time
 import numpy as np
 
 from app.cli import UserError
+from app.commands.plant import parse_size
+from gmap.cut import parse_plane
 
 SUBDIVISIONS = ("surface", "volume")
 
@@ -103,12 +105,14 @@ def render_fruit(grid, path, size=(800, 800), cut_normal=None, title=None):
 
 
 def run_fruit(args):
-    from gmap.cut import parse_plane, plane_cut
+    from gmap.cut import plane_cut
     from gmap.fruit import build_fruit
     from gmap.pyvista import to_unstructured_grid
     from gmap.tissue import tissue_counts
 
     levels = parse_subdivide(args.subdivide)
+    plane = parse_plane(args.cut) if args.cut else None  # checked even without -o
+    size = parse_size(args.size)
     t0 = time.perf_counter()
     gm = build_fruit(args.preset, seed=args.seed, **levels, **parse_sets(args.set))
     valid = gm.is_valid()
@@ -121,19 +125,14 @@ def run_fruit(args):
         out.parent.mkdir(parents=True, exist_ok=True)
         grid = to_unstructured_grid(gm)
         normal = None
-        if args.cut:
-            normal, origin = parse_plane(args.cut)
+        if plane:
+            normal, origin = plane
             grid = plane_cut(grid, normal=normal, origin=origin, mode=args.cut_mode)
             if grid.n_cells == 0:
                 raise UserError(f"--cut {args.cut}: the plane leaves nothing of the fruit")
         if out.suffix.lower() == ".vtu":
             grid.save(str(out))
         else:
-            w, _, h = args.size.partition("x")
-            try:
-                size = (int(w), int(h or w))
-            except ValueError:
-                raise UserError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
             render_fruit(grid, out, size=size, cut_normal=normal, title=args.preset.replace("_", " "))
     if args.json:
         c = gm.counts()

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 import pathlib
 import time
 
@@ -34,6 +35,30 @@ def parse_sets(pairs, known):
             out[name] = float(value)
         except ValueError:
             raise UserError(f"--set {name}: '{value}' is not a number") from None
+        if not math.isfinite(out[name]):
+            raise UserError(f"--set {name}: '{value}' is not a finite number")
+    return out
+
+
+def parse_size(text, option="--size", largest=10_000):
+    """``"800x600"`` -> ``(800, 600)``; each side must be in 1..``largest`` pixels."""
+    w, _, h = text.partition("x")
+    try:
+        size = (int(w), int(h or w))
+    except ValueError:
+        raise UserError(f"{option} expects WIDTHxHEIGHT, got '{text}'") from None
+    if not all(1 <= side <= largest for side in size):
+        raise UserError(f"{option} {text}: width and height must be in 1..{largest} pixels")
+    return size
+
+
+def output_file(text, suffixes, option="-o"):
+    """The output path, refused when it is a directory or has the wrong suffix."""
+    out = pathlib.Path(text)
+    if out.is_dir():
+        raise UserError(f"{option} {text}: is a directory; give a file name")
+    if suffixes and out.suffix.lower() not in suffixes:
+        raise UserError(f"{option} {text}: the file name must end with {' or '.join(suffixes)}")
     return out
 
 
@@ -80,14 +105,10 @@ def run_derive(args):
 def run_render(args):
     from app.render import render_plant
 
+    out = output_file(args.output, (".png",))
+    size = parse_size(args.size)
     _, d, _ = load_and_derive(args)
-    out = pathlib.Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    w, _, h = args.size.partition("x")
-    try:
-        size = (int(w), int(h or w))
-    except ValueError:
-        raise UserError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
     render_plant(d.skeleton(), out, size=size, view=args.view)
     print(f"wrote {out}")
     return 0

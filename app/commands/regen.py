@@ -7,9 +7,13 @@ import time
 import numpy as np
 
 from app.cli import UserError
-from app.commands.plant import add_grammar_options, parse_sets
+from app.commands.plant import add_grammar_options, output_file, parse_sets
 from lsys import LSystem
 from lsys.regen import Session
+
+
+#: Most ids one --select may name (a typo such as 0-99999999999 must not exhaust memory).
+MAX_IDS = 10_000_000
 
 
 def parse_ids(text):
@@ -18,9 +22,14 @@ def parse_ids(text):
     for part in filter(None, (p.strip() for p in text.split(","))):
         lo, dash, hi = part.partition("-")
         try:
-            ids.extend(range(int(lo), int(hi) + 1) if dash else [int(lo)])
+            lo, hi = int(lo), int(hi) if dash else int(lo)
         except ValueError:
             raise UserError(f"--select expects leaf ids like 12,15,20-23; got '{part}'") from None
+        if hi < lo:
+            raise UserError(f"--select: the range '{part}' is reversed; write {hi}-{lo}")
+        if hi - lo >= MAX_IDS or len(ids) + hi - lo >= MAX_IDS:
+            raise UserError(f"--select: more than {MAX_IDS:,} ids in '{part}'")
+        ids.extend(range(lo, hi + 1))
     return ids
 
 
@@ -44,6 +53,10 @@ def run_leaves(args):
 
 def run_regen(args):
     t0 = time.perf_counter()
+    if args.min_ascend < 0:
+        raise UserError(f"--min-ascend must be >= 0, not {args.min_ascend}")
+    if args.output:
+        output_file(args.output, ())
     ls = LSystem.from_file(args.file)
     session = Session(ls, n=args.n, seed=args.seed, filename=args.file)
     selection = parse_ids(args.select)

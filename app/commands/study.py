@@ -16,6 +16,8 @@ import json
 import pathlib
 import sys
 
+from app.cli import UserError
+
 
 def _print(obj) -> int:
     json.dump(obj, sys.stdout, indent=1, allow_nan=False, default=str)
@@ -70,6 +72,12 @@ def run_simulate(args) -> int:
     from studies.simulate import run_simulation
     from studies.storage import Study
 
+    for option, value in (("--participants", args.participants), ("--grammars", args.grammars),
+                          ("--tests-per-participant", args.tests_per_participant)):
+        if value is not None and value < 1:
+            raise UserError(f"{option} must be at least 1, not {value}")
+    if not 0 <= args.noise < float("inf"):
+        raise UserError(f"--noise must be a number >= 0, not {args.noise}")
     grammars = _grammar_specs(args.grammar) or synthetic_grammars(args.grammars, seed=args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         db = pathlib.Path(args.db) if args.db else pathlib.Path(tmp) / "simulated.db"

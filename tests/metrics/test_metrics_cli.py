@@ -77,7 +77,7 @@ def test_qualify_saves_a_session_that_replays(tmp_path, capsys):
     (["explore", HONDA, "--beta", "0", "-o", "x"], "beta"),
     (["explore", HONDA, "--constants", "zz", "-o", "x"], "unknown constant"),
     (["qualify", HONDA, "--qualifier", "fluffy"], "unknown qualifier"),
-    (["qualify", "grammars/plant_1_24a.lsys", "--qualifier", "dense"], "no non-zero #define"),
+    (["qualify", "grammars/algae.lsys", "--qualifier", "dense"], "no non-zero #define"),
     (["metrics", HONDA, "--select", "999999"], "not leaf id"),
     (["metrics", HONDA, "--segments", "1,x"], "--segments expects"),
 ])
