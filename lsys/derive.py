@@ -68,6 +68,9 @@ class LSystem:
     #: A derivation that would grow past this many modules stops with a clear
     #: error instead of exhausting memory (about 150 bytes per module with history).
     max_modules = 20_000_000
+    #: The derivation history (every module ever made) may not grow past this many
+    #: nodes either: a small string rewritten at every step grows it without bound.
+    max_history = 60_000_000
     #: More derivation steps than this are refused: a grammar whose string stops
     #: growing would otherwise loop for hours on an absurd ``n``.
     max_steps = 10_000
@@ -287,6 +290,13 @@ class LSystem:
             raise DerivationError(
                 f"step {step} would make {total:,} modules, more than the limit of "
                 f"{self.max_modules:,}: use fewer derivation steps (or raise LSystem.max_modules)")
+        history = tree.size + sum(len(self._rules[r].succ_symbols) * positions[r].size for r in active)
+        if history > self.max_history:
+            # A string that stays small but is rewritten at every step still grows the history.
+            raise DerivationError(
+                f"step {step} would make the derivation history {history:,} modules long, more than "
+                f"the limit of {self.max_history:,}: use fewer derivation steps "
+                "(or raise LSystem.max_history)")
         out = np.empty(total, np.int64)
         keep = chosen < 0
         out[offsets[keep]] = string[keep]

@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import DerivationError
+
 _ACTIONS = {
     "F": 1, "f": 2, "+": 3, "-": 4, "&": 5, "^": 6, "\\": 7, "/": 8, "|": 9, "$": 10,
     "[": 11, "]": 12, "!": 13, "'": 14, ";": 15,
@@ -242,6 +244,7 @@ def _build(lsys, tree, start, end, width, order, leaf, color, normal, parent, or
     start = np.array(start, float).reshape(s, 3)
     end = np.array(end, float).reshape(s, 3)
     base = np.array(width, float) * (lsys.grammar.width_scale / 2.0)
+    _check_finite(lsys, tree, leaf, np.isfinite(start).all(1) & np.isfinite(end).all(1) & np.isfinite(base))
     order = np.array(order, np.int32)
     parent = np.array(parent, np.int64)
     top = base.copy()
@@ -265,6 +268,15 @@ def _build(lsys, tree, start, end, width, order, leaf, color, normal, parent, or
                     np.array(normal, float).reshape(s, 3), parent, organs)
 
 
+def _check_finite(lsys, tree, leaf, ok):
+    """Refuse a plant whose turtle overflowed (e.g. F(1e308)F(1e308)): no inf/NaN geometry."""
+    if ok.all():
+        return
+    module = lsys.module_text(tree, int(leaf[int(np.argmin(ok))]))
+    raise DerivationError(f"the turtle geometry is not finite at module {module} (a length, width or "
+                          "angle too large for floating point): use smaller values")
+
+
 def _organs(lsys, tree, org):
     k = len(org)
     if not k:
@@ -275,4 +287,5 @@ def _organs(lsys, tree, org):
     frame = np.array([(o[2], o[3], o[4]) for o in org], float)
     size = np.array([o[5] for o in org], float)
     leaf_id = np.array([o[6] for o in org], np.int64)
+    _check_finite(lsys, tree, leaf_id, np.isfinite(position).all(1) & np.isfinite(size))
     return Organs(kind, position, frame, size, tree.params[leaf_id], leaf_id)

@@ -105,7 +105,10 @@ def test_random_expressions_in_rules_derive_or_raise_derivation_error(expr, star
     try:
         LSystem(grammar).derive().skeleton()
     except DerivationError as err:
-        assert err.line in (5, 6) and "rule" in err.message and "while rewriting" in err.message
+        if "turtle" in err.message:  # geometry overflow: names the module
+            assert "at module F(" in err.message
+        else:
+            assert err.line in (5, 6) and "rule" in err.message and "while rewriting" in err.message
 
 
 @pytest.mark.parametrize("expr", [
@@ -199,3 +202,17 @@ def test_deriving_all_shipped_grammars_a_few_steps():
     for text in TEXTS:
         d = LSystem.from_text(text).derive(n=3)
         assert np.isfinite(d.skeleton().start).all()
+
+
+@pytest.mark.parametrize("text", ["#step 1e308\nn: 1\nw: FFFF\n", "n: 1\nw: F(1e308)F(1e308)\n",
+                                  "n: 1\nw: F(1e308)f(1e308)Fruit\n"])
+def test_turtle_overflow_is_a_derivation_error(text):
+    with pytest.raises(DerivationError, match="not finite at module F"):
+        LSystem.from_text(text).derive().skeleton()
+
+
+def test_history_of_a_string_rewritten_in_place_is_limited(monkeypatch):
+    ls = LSystem.from_text("n: 5000\nw: " + "A(0)" * 100 + "\np:\n  A(x) -> A(x+1)\n")
+    monkeypatch.setattr(ls, "max_history", 10_000)  # the string stays at 100 modules
+    with pytest.raises(DerivationError, match="history"):
+        ls.derive()
