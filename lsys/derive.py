@@ -94,7 +94,13 @@ class LSystem:
     @classmethod
     def from_file(cls, path):
         path = pathlib.Path(path)
-        return cls.from_text(path.read_text(encoding="utf-8"), filename=str(path))
+        try:
+            text = path.read_text(encoding="utf-8-sig")  # -sig: a BOM (Windows editors) is not text
+        except UnicodeDecodeError as exc:
+            line = path.read_bytes()[:exc.start].count(b"\n") + 1
+            raise GrammarError(f"the file is not UTF-8 text (byte 0x{exc.object[exc.start]:02x} cannot be "
+                               "decoded); save it as UTF-8", line, filename=str(path)) from None
+        return cls.from_text(text, filename=str(path))
 
     @property
     def n(self):

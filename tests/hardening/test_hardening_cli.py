@@ -42,6 +42,7 @@ def places(tmp_path_factory):
     (tmp / "div.lsys").write_text("n: 2\nw: A(1)\np:\n  A(x) -> A(x/0)\n")
     (tmp / "notdb.db").write_text("garbage, not sqlite")
     (tmp / "afile").write_text("x")
+    (tmp / "binary.lsys").write_bytes(bytes(range(256)))
     return tmp
 
 
@@ -52,6 +53,7 @@ def _cases(t):
         (["check", f"{t}/adir"], "Is a directory"),
         (["check", f"{t}/empty.lsys"], "no axiom"),
         (["derive", f"{t}/div.lsys"], "division by zero"),
+        (["derive", f"{t}/binary.lsys"], "not UTF-8"),
         (["derive", G, "-n", "-1"], "-n must be >= 0"),
         (["derive", G, "-n", "50"], "limit"),
         (["derive", "grammars/algae.lsys", "-n", "100000000"], "limit"),
@@ -108,7 +110,7 @@ def _cases(t):
 
 
 def _groups():
-    return [(i, i + 14) for i in range(0, 56, 14)]  # 56 cases in 4 child processes
+    return [(i, i + 15) for i in range(0, 60, 15)]  # 57 cases in 4 child processes
 
 
 @pytest.mark.parametrize("lo, hi", _groups())

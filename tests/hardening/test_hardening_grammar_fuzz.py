@@ -216,3 +216,17 @@ def test_history_of_a_string_rewritten_in_place_is_limited(monkeypatch):
     monkeypatch.setattr(ls, "max_history", 10_000)  # the string stays at 100 modules
     with pytest.raises(DerivationError, match="history"):
         ls.derive()
+
+
+def test_non_utf8_grammar_file_is_a_grammar_error(tmp_path):
+    path = tmp_path / "latin1.lsys"
+    path.write_bytes("n: 1\nw: A\n// d\xe9j\xe0\n".encode("latin-1"))
+    with pytest.raises(GrammarError, match="not UTF-8") as info:
+        LSystem.from_file(path)
+    assert info.value.line == 3 and info.value.filename == str(path)
+
+
+def test_utf8_bom_is_not_part_of_the_grammar(tmp_path):
+    path = tmp_path / "bom.lsys"
+    path.write_bytes(b"\xef\xbb\xbfn: 1\nw: A\np:\n  A -> AB\n")
+    assert LSystem.from_file(path).derive().to_string() == "AB"
