@@ -188,6 +188,10 @@ def run_qualify(args):
     from metrics.store import QualifierStore
 
     t0 = time.perf_counter()
+    if args.tries < 1:
+        raise RamureError(f"--tries must be at least 1, not {args.tries}")
+    if not 0 <= args.trim < 1:
+        raise RamureError(f"--trim is the share of points trimmed, in [0, 1), not {args.trim}")
     ls = LSystem.from_file(args.file)
     sets = parse_sets(args.set, ls.constants)
     ls.constants.update(sets)

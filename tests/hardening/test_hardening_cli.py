@@ -90,6 +90,8 @@ def _cases(t):
         (["explore", G, "-n", "2", "-o", f"{t}/e", "--constants", "zz", "--no-cache"], "unknown constant"),
         (["qualify", G, "-n", "2", "--qualifier", "zzz", "--no-cache"], "unknown qualifier"),
         (["qualify", G, "-n", "2", "--qualifier", "dense", "--rho", "0", "--no-cache"], "rho"),
+        (["qualify", G, "-n", "2", "--qualifier", "dense", "--tries", "0", "--no-cache"], "--tries"),
+        (["qualify", G, "-n", "2", "--qualifier", "dense", "--trim", "nan", "--no-cache"], "--trim"),
         (["fruit", "--set", "zz=1"], "unknown fruit parameter"),
         (["fruit", "--set", "precision=nan"], "precision"),
         (["fruit", "--subdivide", "volume:9"], "0..4"),
@@ -110,7 +112,7 @@ def _cases(t):
 
 
 def _groups():
-    return [(i, i + 15) for i in range(0, 60, 15)]  # 57 cases in 4 child processes
+    return [(i, i + 15) for i in range(0, 60, 15)]  # 59 cases in 4 child processes
 
 
 @pytest.mark.parametrize("lo, hi", _groups())
