@@ -267,6 +267,18 @@ def build_shape(**params):
     return gm
 
 
+#: Most darts a fruit may have (about 450 bytes each once built): absurd parameters
+#: such as precision=2000 with two volume subdivisions are refused, not an out-of-memory.
+MAX_DARTS = 8_000_000
+
+
+def estimated_darts(p, volume_levels=0, surface_levels=0):
+    """Darts of the fruit ``build_fruit`` would make: 60 per trunk branch, x8 per volume
+    subdivision (plus about 20 % for tissues), x4 per surface subdivision."""
+    darts = 60 * int(p["precision"]) * int(p["ph"]) * 8 ** int(volume_levels) * 4 ** int(surface_levels)
+    return darts * (1.2 if volume_levels else 1.0)
+
+
 def build_fruit(preset="round_tomato", *, seed=0, volume_levels=0, surface_levels=0, tissues=True,
                 size=None, origin=None, frame=None, anchor="center", **params):
     """Build a volumetric fruit from a preset and parameter overrides.
@@ -291,6 +303,12 @@ def build_fruit(preset="round_tomato", *, seed=0, volume_levels=0, surface_level
         raise ValueRefused(f"subdivision levels must be >= 0, got volume={levels[0]}, surface={levels[1]}")
     if anchor not in ("center", "stem"):
         raise ValueRefused(f"anchor must be 'center' or 'stem', got {anchor!r}")
+    darts = estimated_darts(p, *levels)
+    if darts > MAX_DARTS:
+        raise ValueRefused(
+            f"this fruit would have about {darts:,.0f} darts, more than the limit of {MAX_DARTS:,} "
+            f"(precision={p['precision']}, ph={p['ph']}, volume levels {levels[0]}, surface levels "
+            f"{levels[1]}): lower precision or ph, or subdivide fewer times")
     t0 = time.perf_counter()
     gm = build_shape(**p)
     stem = _stem_point(gm, p)

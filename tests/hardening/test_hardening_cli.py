@@ -95,6 +95,8 @@ def _cases(t):
         (["fruit", "--set", "zz=1"], "unknown fruit parameter"),
         (["fruit", "--set", "precision=nan"], "precision"),
         (["fruit", "--subdivide", "volume:9"], "0..4"),
+        (["fruit", "--set", "precision=2000", "--subdivide", "volume:2"], "limit of 8,000,000"),
+        (["fruit", "--set", "precision=2000", "--set", "ph=2000"], "limit of 8,000,000"),
         (["fruit", "--cut", "z=abc"], "number"),
         (["fruit", "--cut", "z=nan"], "finite"),
         (["fruit", "--cut", "q=0"], "x=VALUE"),
@@ -112,7 +114,7 @@ def _cases(t):
 
 
 def _groups():
-    return [(i, i + 15) for i in range(0, 60, 15)]  # 59 cases in 4 child processes
+    return [(i, i + 16) for i in range(0, 64, 16)]  # 61 cases in 4 child processes
 
 
 @pytest.mark.parametrize("lo, hi", _groups())
