@@ -142,9 +142,7 @@ def face_corners(gm, side=None):
     go to the smaller dart).
     """
     if side is None:
-        side, ns = gm.orbit_ids("01")
-    else:
-        ns = int(side.max()) + 1 if side.size else 0
+        side, _ = gm.orbit_ids("01")
     fc = gm.dart_data["fcorner"].astype(np.int64)
     fw = gm.dart_data["forward"]
     key = np.where(fw, np.where(fc >= 0, fc, _BIG), 2 * _BIG)

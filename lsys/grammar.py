@@ -50,7 +50,7 @@ import re
 from dataclasses import dataclass, field
 
 from .errors import GrammarError
-from .expr import Expression, Source, compile_expression, evaluate_constant, names_used, parse_expression
+from .expr import Expression, Source, compile_expression, evaluate_constant, parse_expression
 
 DEFAULT_MODULES = ("Leaf", "Fruit")
 DEFAULT_ORGANS = ("Leaf", "Fruit")

@@ -438,20 +438,17 @@ def _check_params(params, lsystem):
     if rule is not None and not (_is_whole(rule) and rule < len(lsystem.grammar.rules)):
         raise ValueRefused(f"rule {rule!r} does not exist (the grammar has "
                            f"{len(lsystem.grammar.rules)} rules, numbered from 0)")
-    unknown = set(params["constants"]) - set(lsystem.constants)
-    if unknown:
-        raise ValueRefused(f"unknown constant(s) in the combination: {', '.join(sorted(unknown))}")
     return {"rule": None if rule is None else int(rule),
-            "constants": _check_values(params["constants"], lsystem)}
+            "constants": _check_values(params["constants"], lsystem, " in the combination")}
 
 
-def _check_values(values, lsystem):
+def _check_values(values, lsystem, where=""):
     """Constant overrides: known names, finite numbers (returned as floats)."""
     if not isinstance(values, dict):
         raise ValueRefused(f"constant values must be a mapping of name to number, not {values!r}")
     unknown = set(values) - set(lsystem.constants)
     if unknown:
-        raise ValueRefused(f"unknown constant(s): {', '.join(sorted(map(str, unknown)))}")
+        raise ValueRefused(f"unknown constant(s){where}: {', '.join(sorted(map(str, unknown)))}")
     check_constants(values)
     return {k: float(v) for k, v in values.items()}
 

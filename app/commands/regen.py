@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 import time
 
-import numpy as np
 
 from app.cli import UserError
 from app.commands.plant import add_grammar_options, output_file, parse_sets

@@ -24,8 +24,7 @@ from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QPixmap
 from PySide6.QtWidgets import (QAbstractItemView, QButtonGroup, QCheckBox, QGridLayout,
                                QGroupBox, QHBoxLayout, QLabel, QLineEdit, QListView, QListWidget, QListWidgetItem,
-                               QMessageBox, QPushButton, QRadioButton, QScrollArea, QStackedWidget, QTextBrowser,
-                               QVBoxLayout, QWidget)
+                               QMessageBox, QPushButton, QRadioButton, QScrollArea, QStackedWidget, QVBoxLayout, QWidget)
 
 from app.desktop.thumbnails import placeholder_image, skeleton_image
 from app.desktop.workers import Task
