@@ -76,8 +76,9 @@ def initial_capacities(tree):
         cap[nodes] = np.where(is_leaf[nodes], 1.0, 2.0 * child_sum[nodes])
         has_parent = tree.parent[nodes] >= 0
         np.add.at(child_sum, tree.parent[nodes[has_parent]], cap[nodes[has_parent]])
-    dead_leafless = ~np.isin(np.arange(tree.size), tree.leaves) & is_leaf
-    cap[dead_leafless] = 0.0  # modules deleted by an empty successor
+    in_string = np.zeros(tree.size, bool)
+    in_string[tree.leaves] = True
+    cap[is_leaf & ~in_string] = 0.0  # modules deleted by an empty successor
     tree._cache["capacity"] = cap
     return cap
 
