@@ -26,11 +26,11 @@ run: venv
 	@if [ -z "$$DISPLAY" ] && [ -z "$$WAYLAND_DISPLAY" ]; then \
 	  mkdir -p out; \
 	  echo "No display: rendering $(GRAMMAR) off-screen to out/ instead of opening the window."; \
-	  $(VPY) -m app.cli render $(GRAMMAR) -o out/plant.png && \
-	  (bash .ci/sysdeps.sh >/dev/null 2>&1 && xvfb-run -a -s "-screen 0 1400x900x24" $(VPY) -m app.desktop $(GRAMMAR) --screenshot out/window.png --quit-after 1 \
+	  $(VPY) -m ramure.app.cli render $(GRAMMAR) -o out/plant.png && \
+	  (bash .ci/sysdeps.sh >/dev/null 2>&1 && xvfb-run -a -s "-screen 0 1400x900x24" $(VPY) -m ramure.app.desktop $(GRAMMAR) --screenshot out/window.png --quit-after 1 \
 	     && echo "Wrote out/plant.png and out/window.png" || echo "Wrote out/plant.png"); \
 	else \
-	  $(VPY) -m app.desktop $(GRAMMAR); \
+	  $(VPY) -m ramure.app.desktop $(GRAMMAR); \
 	fi
 
 test: venv sysdeps

@@ -1,6 +1,6 @@
 """The ``ramure`` command line.
 
-Sub-commands live in :mod:`app.commands`; each module there registers its own
+Sub-commands live in :mod:`ramure.app.commands`; each module there registers its own
 parsers, so adding a command never touches this file.  Errors a user can fix
 (grammar errors, bad values, missing files) are printed as one clear message
 without a traceback and exit with status 2.
@@ -12,8 +12,8 @@ import importlib
 import pkgutil
 import sys
 
-import app.commands
-from lsys.errors import RamureError
+import ramure.app.commands
+from ramure.errors import RamureError
 
 
 class UserError(RamureError):
@@ -27,8 +27,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for info in sorted(pkgutil.iter_modules(app.commands.__path__), key=lambda m: m.name):
-        module = importlib.import_module(f"app.commands.{info.name}")
+    for info in sorted(pkgutil.iter_modules(ramure.app.commands.__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"ramure.app.commands.{info.name}")
         module.register(sub)
     return parser
 
@@ -59,6 +59,6 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":
     # Run the imported module's main, so commands and this file share one UserError class.
-    from app.cli import main as _main
+    from ramure.app.cli import main as _main
 
     sys.exit(_main())

@@ -1,10 +1,10 @@
 """The explorer's state, shared by the desktop window and the Jupyter widgets.
 
-:class:`Explorer` holds the grammar text, the editing :class:`~lsys.regen.Session`,
+:class:`Explorer` holds the grammar text, the editing :class:`~ramure.lsys.regen.Session`,
 the selection and the last cut, and turns user actions into calls on the core
 packages.  It has no GUI code: a front end calls its methods and redraws when
 :attr:`Explorer.version` changes.  Bad input is refused with a
-:class:`~lsys.errors.RamureError` and leaves the state as it was.
+:class:`~ramure.lsys.errors.RamureError` and leaves the state as it was.
 
 >>> ex = Explorer("grammars/honda_sympodial.lsys", n=6)
 >>> ex.select(ex.session.leaves_with_symbol("F")[-3:])
@@ -19,10 +19,11 @@ import pathlib
 
 import numpy as np
 
-from lsys import GrammarError, LSystem
-from lsys.cut import kinship
-from lsys.errors import RamureError, ValueRefused
-from lsys.regen import Session
+from ramure.lsys import GrammarError, LSystem
+from ramure.lsys.cut import kinship
+import ramure.grammars as grammar_files
+from ramure.errors import RamureError, ValueRefused
+from ramure.lsys.regen import Session
 
 SELECT_MODES = ("replace", "add", "remove", "toggle")
 
@@ -36,6 +37,7 @@ class Explorer:
     def __init__(self, source, n=None, seed=0):
         path = pathlib.Path(source) if isinstance(source, pathlib.Path) or (
             isinstance(source, str) and "\n" not in source and source.endswith(".lsys")) else None
+        path = grammar_files.resolve(path) if path else None
         self.path = path
         self.text = path.read_text(encoding="utf-8") if path else str(source)
         self.error = None  # the last grammar error, shown by the front end
@@ -213,13 +215,13 @@ class Explorer:
     def apply_qualifier(self, name, sweep, points=None, regions=None, tries=5):
         """Regrow the selection (or the whole plant) toward qualifier ``name`` ("denser", "rond", ...).
 
-        ``sweep`` is a fitted :class:`metrics.VariantSweep` of this grammar;
+        ``sweep`` is a fitted :class:`ramure.metrics.VariantSweep` of this grammar;
         with a study's ``regions`` and the sweep's PCA ``points`` the region
         centre chooses the variant.  Candidates are tried until the selection's
-        metrics move the qualifier's way (see :func:`metrics.apply.apply_qualifier`);
+        metrics move the qualifier's way (see :func:`ramure.metrics.apply.apply_qualifier`);
         the result is one undoable edit.
         """
-        from metrics.apply import apply_qualifier
+        from ramure.metrics.apply import apply_qualifier
 
         out = apply_qualifier(self.session, name, sweep, self.selection, rho=self.rho, points=points,
                               regions=regions, tries=tries)
@@ -237,7 +239,7 @@ class Explorer:
         if not fruit:
             raise ValueRefused("select one or more fruit first")
         if "preset" in settings or len(settings) > int("size" in settings):
-            from gmap.fruit import resolve_params
+            from ramure.gmap.fruit import resolve_params
 
             params = {k: v for k, v in settings.items() if k not in ("preset", "size")}
             resolve_params(settings.get("preset", "round_tomato"), **params)  # refuse bad values now
@@ -246,7 +248,7 @@ class Explorer:
     def fruit_volumes(self, preset="round_tomato", seed=0, **kwargs):
         """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""
         def build():
-            from gmap.plant import fruits_from_skeleton
+            from ramure.gmap.plant import fruits_from_skeleton
 
             return fruits_from_skeleton(self.skeleton, preset=preset, seed=seed,
                                         overrides=self.session.fruit_overrides(), **kwargs)
@@ -257,7 +259,7 @@ class Explorer:
         if not self.fruit_ids():
             return None
         try:
-            from gmap.pyvista import boundary_polydata
+            from ramure.gmap.pyvista import boundary_polydata
         except ImportError:
             return None
         gm = self.fruit_volumes()
@@ -323,7 +325,7 @@ class Explorer:
         elif suffix == ".obj":
             write_obj(mesh, path)
         elif suffix in (".gltf", ".glb"):
-            from app.render import export_gltf
+            from ramure.app.render import export_gltf
 
             export_gltf(mesh, path)
         else:

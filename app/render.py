@@ -66,7 +66,7 @@ def render_mesh(mesh, path, size=(800, 800), selected=(), view="front", backgrou
 
 
 def render_plant(skeleton, path, **kwargs):
-    """Render a :class:`lsys.Skeleton` to PNG."""
+    """Render a :class:`ramure.lsys.Skeleton` to PNG."""
     return render_mesh(skeleton.to_polydata(), path, **kwargs)
 
 

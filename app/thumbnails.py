@@ -2,7 +2,7 @@
 
 Each thumbnail is rendered (tubes, plus every segment as a one-pixel line
 so branches thinner than a pixel still show) with the camera framed on that
-plant's own bounds (:func:`app.render.frame_camera`), so every plant fills its tile; the
+plant's own bounds (:func:`ramure.app.render.frame_camera`), so every plant fills its tile; the
 tile's caption gives the pick id and the plant's height so sizes stay
 comparable.  One :class:`pyvista.Plotter` is reused for all renders.
 
@@ -10,7 +10,7 @@ The contact sheet lays the 27 tiles out in three rows of nine — row k holds
 ids 9k+1..9k+9, i.e. one PC1 slab per row (ids put PC1 slowest) — with each
 id written on its tile.
 
->>> from metrics import explore
+>>> from ramure.metrics import explore
 >>> import tempfile, pathlib
 >>> exp = explore("grammars/honda_sympodial.lsys", n=3, n_jobs=1, cache=False)
 >>> out = pathlib.Path(tempfile.mkdtemp())
@@ -24,7 +24,7 @@ import pathlib
 
 import numpy as np
 
-from app.render import BARK, _headless_setup, frame_camera, plant_colors
+from ramure.app.render import BARK, _headless_setup, frame_camera, plant_colors
 
 THUMB_DIR = "thumbs"
 

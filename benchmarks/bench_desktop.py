@@ -25,9 +25,9 @@ HONDA = ROOT / "grammars" / "honda_sympodial.lsys"
 def _window(n, grammar=HONDA):
     from PySide6.QtCore import QSettings
 
-    from app.desktop.launch import make_application
-    from app.desktop.window import MainWindow
-    from app.model import Explorer
+    from ramure.app.desktop.launch import make_application
+    from ramure.app.desktop.window import MainWindow
+    from ramure.app.model import Explorer
 
     app = make_application()
     settings = QSettings(str(pathlib.Path(tempfile.mkdtemp()) / "s.ini"), QSettings.Format.IniFormat)

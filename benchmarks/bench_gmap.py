@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import time
 
-from gmap import subdivide
-from gmap.fruit import build_fruit
+from ramure.gmap import subdivide
+from ramure.gmap.fruit import build_fruit
 
 
 def _best(fn, repeats=5):

@@ -2,7 +2,7 @@
 import time
 import tracemalloc
 
-from lsys import LSystem
+from ramure.lsys import LSystem
 
 
 def _best(fn, repeat=5):

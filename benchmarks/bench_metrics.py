@@ -11,7 +11,7 @@ PCA with its first scikit-learn import, picks; cache off) and
 ``median_seconds`` their median; ``wall_seconds`` is the best run's whole
 process, imports included.  ``derivations`` counts the distinct plants
 actually derived (variants changing only constants their rule never reads
-are the same plant; see :func:`metrics.variants.distinct_variants`).
+are the same plant; see :func:`ramure.metrics.variants.distinct_variants`).
 ``peak_mb`` bounds the peak memory of the run: the parent's peak RSS plus
 ``jobs`` times the largest worker's peak RSS (workers run at the same time;
 shared pages are counted in each, so the real figure is lower).
@@ -24,8 +24,8 @@ import time
 
 _CHILD = r"""
 import json, os, resource, sys, time
-from lsys import LSystem
-from metrics import explore
+from ramure.lsys import LSystem
+from ramure.metrics import explore
 path, n, jobs = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 ls = LSystem.from_file(path)
 t0 = time.perf_counter()

@@ -20,9 +20,9 @@ TARGET_SECONDS = 5.0
 
 @functools.lru_cache(maxsize=1)
 def _study():
-    from studies.picks import synthetic_grammars
-    from studies.simulate import run_simulation
-    from studies.storage import Study
+    from ramure.studies.picks import synthetic_grammars
+    from ramure.studies.simulate import run_simulation
+    from ramure.studies.storage import Study
 
     tmp = tempfile.mkdtemp(prefix="ramure-bench-study-")
     atexit.register(shutil.rmtree, tmp, ignore_errors=True)
@@ -36,8 +36,8 @@ def _study():
 
 def bench_analysis_100x7():
     """Load from SQLite and compute every statistic (no figures)."""
-    from studies.data import load_study_data
-    from studies.report import analyze
+    from ramure.studies.data import load_study_data
+    from ramure.studies.report import analyze
 
     db, setup, _ = _study()
     start = time.perf_counter()
@@ -51,7 +51,7 @@ def bench_analysis_100x7():
 
 def bench_report_100x7():
     """Load, compute and write the whole report: HTML, PNG figures and CSVs."""
-    from studies.report import write_report
+    from ramure.studies.report import write_report
 
     db, _, _ = _study()
     with tempfile.TemporaryDirectory() as out:
@@ -64,8 +64,8 @@ def bench_report_100x7():
 
 def bench_session_answers():
     """One participant's answers: mean time per committed answer (durable writes)."""
-    from studies.picks import lattice_picks
-    from studies.storage import Study
+    from ramure.studies.picks import lattice_picks
+    from ramure.studies.storage import Study
 
     with tempfile.TemporaryDirectory() as tmp:
         with Study.create(pathlib.Path(tmp) / "s.db", grammars={"g": lattice_picks()}) as study:

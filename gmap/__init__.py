@@ -1,20 +1,20 @@
 """3-G-maps and volumetric fruit.
 
 The kernel is :class:`GMap3` (darts and involutions as numpy arrays); fruit are
-built by :func:`gmap.fruit.build_fruit`; subdivision lives in
-:mod:`gmap.subdivide`, tissues in :mod:`gmap.tissue`, conversion to pyvista in
-:mod:`gmap.pyvista` and plane cuts in :mod:`gmap.cut`.
+built by :func:`ramure.gmap.fruit.build_fruit`; subdivision lives in
+:mod:`ramure.gmap.subdivide`, tissues in :mod:`ramure.gmap.tissue`, conversion to pyvista in
+:mod:`ramure.gmap.pyvista` and plane cuts in :mod:`ramure.gmap.cut`.
 
->>> from gmap import GMap3
+>>> from ramure.gmap import GMap3
 >>> gm = GMap3()
 >>> _ = gm.add_prisms(4)
 >>> gm.counts()["darts"]
 48
 """
-from gmap.errors import GMapError
-from gmap.map3 import GMap3, sublabel_name
-from gmap.prism import face_label_code, face_label_name
-from gmap import cut, fruit, plant, subdivide, tissue  # noqa: E402  (gmap.pyvista: import it yourself)
+from ramure.gmap.errors import GMapError
+from ramure.gmap.map3 import GMap3, sublabel_name
+from ramure.gmap.prism import face_label_code, face_label_name
+from ramure.gmap import cut, fruit, plant, subdivide, tissue  # noqa: E402  (gmap.pyvista: import it yourself)
 
 __all__ = ["GMap3", "GMapError", "cut", "face_label_code", "face_label_name", "fruit", "plant",
            "subdivide", "sublabel_name", "tissue"]

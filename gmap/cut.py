@@ -6,7 +6,7 @@ like a knife; ``mode="cells"`` drops whole cells whose centre is in front, so
 the cut face shows the cells themselves.  Cell data (``tissue``, ``label``,
 ``leaf_id``...) is kept either way.
 
->>> from gmap.fruit import build_fruit
+>>> from ramure.gmap.fruit import build_fruit
 >>> grid = plane_cut(build_fruit("round_tomato"), normal="z", origin=(0, 0, 0), mode="cells")
 >>> 0 < grid.n_cells < 110
 True
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gmap.errors import ValueRefused
+from ramure.gmap.errors import ValueRefused
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -57,7 +57,7 @@ def plane_cut(model, normal="z", origin=None, mode="clip"):
 
     ``origin`` defaults to the centre of the model's bounds.
     """
-    from gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.pyvista import to_unstructured_grid
 
     grid = model if hasattr(model, "cell_data") else to_unstructured_grid(model)
     n = _normal(normal)

@@ -1,11 +1,11 @@
 """Errors raised by the 3-G-map kernel and the fruit builders.
 
-They derive from :class:`lsys.errors.RamureError`, so the CLI prints them as a
+They derive from :class:`ramure.lsys.errors.RamureError`, so the CLI prints them as a
 plain message without a traceback.
 """
 from __future__ import annotations
 
-from lsys.errors import RamureError, ValueRefused
+from ramure.errors import RamureError, ValueRefused
 
 __all__ = ["GMapError", "ValueRefused"]
 

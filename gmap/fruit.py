@@ -31,11 +31,11 @@ W = face width); the stem end is the last trunk prism's E face; every preset
 uses ``ph = 10`` except the ribbed tomato (24, so six ribs are resolved);
 the pear's profile is walked from 1.6 down to -0.6 so the neck is at the stem.
 
-Internal structure (see :mod:`gmap.tissue`) needs ``volume_levels >= 1``; its
+Internal structure (see :mod:`ramure.gmap.tissue`) needs ``volume_levels >= 1``; its
 parameters ``carpels``, ``exocarp``, ``mesocarp``, ``endocarp``, ``septum``,
 ``seeds`` and ``seed_smoothing`` are accepted here too.
 
->>> from gmap.fruit import build_fruit
+>>> from ramure.gmap.fruit import build_fruit
 >>> gm = build_fruit("round_tomato")
 >>> c = gm.counts()
 >>> c["darts"], c["vertices"], c["faces_per_volume"], c["volumes"]
@@ -47,12 +47,12 @@ import time
 
 import numpy as np
 
-from gmap import frames as _frames
-from gmap import prism as _prism
-from gmap import subdivide as _subdivide
-from gmap import tissue as _tissue
-from gmap.errors import ValueRefused
-from gmap.map3 import GMap3
+from ramure.gmap import frames as _frames
+from ramure.gmap import prism as _prism
+from ramure.gmap import subdivide as _subdivide
+from ramure.gmap import tissue as _tissue
+from ramure.gmap.errors import ValueRefused
+from ramure.gmap.map3 import GMap3
 
 #: 1-D profile functions and their sampling interval ``[binf, bsup]``, walked
 #: from the blossom end (first trunk prism) to the stem end.  The pear's
@@ -142,7 +142,7 @@ def resolve_params(preset="round_tomato", **params):
 
     Values may be strings (from the command line); they are converted to the
     default's type.  Unknown names and out-of-range values raise
-    :class:`~gmap.errors.ValueRefused`.
+    :class:`~ramure.gmap.errors.ValueRefused`.
 
     >>> resolve_params("banana", precision="12")["precision"]
     12

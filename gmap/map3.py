@@ -25,7 +25,7 @@ Cells are orbits: vertex ``<a1,a2,a3>``, edge ``<a0,a2,a3>``, face
 ``<a0,a1,a3>``, volume ``<a0,a1,a2>``; all cells of one dimension are labelled
 at once with :func:`scipy.sparse.csgraph.connected_components`.
 
->>> from gmap import GMap3
+>>> from ramure.gmap import GMap3
 >>> gm = GMap3()
 >>> first = gm.add_prisms(4)          # one cube
 >>> gm.n_darts, gm.is_valid()
@@ -42,9 +42,9 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
-from gmap._columns import Columns
-from gmap.errors import GMapError
-from gmap.operations import Operations
+from ramure.gmap._columns import Columns
+from ramure.gmap.errors import GMapError
+from ramure.gmap.operations import Operations
 
 DART_SPEC = {
     "volume": (np.int32, (), -1),

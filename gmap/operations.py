@@ -1,4 +1,4 @@
-"""Topological operations of :class:`gmap.GMap3` (mixed into the class).
+"""Topological operations of :class:`ramure.gmap.GMap3` (mixed into the class).
 
 Create labelled prisms in bulk, alpha3-sew and unsew faces, split an edge, a
 face or a volume, remove volumes.  Every operation works on arrays of darts and
@@ -6,7 +6,7 @@ copies per-dart data (volume, face label, sub-label) to the darts it creates;
 new darts get their point on the geometry of their own volume (an edge split
 puts the new vertex on the segment, a face split reuses the face's corners).
 
->>> from gmap import GMap3
+>>> from ramure.gmap import GMap3
 >>> gm = GMap3()
 >>> a, b = gm.add_prisms(4, 2, origins=[[0, 0, 0], [1, 0, 0]])
 >>> gm.sew3(gm.prism_face(a, 4, "E"), gm.prism_face(b, 4, "O"))
@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from gmap import prism as _prism
-from gmap.errors import GMapError, ValueRefused
+from ramure.gmap import prism as _prism
+from ramure.gmap.errors import GMapError, ValueRefused
 
 
 def _darts(x):

@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from gmap.errors import ValueRefused
-from gmap.fruit import build_fruit, resolve_params
-from gmap.frames import frame_from
-from gmap.map3 import GMap3
+from ramure.gmap.errors import ValueRefused
+from ramure.gmap.fruit import build_fruit, resolve_params
+from ramure.gmap.frames import frame_from
+from ramure.gmap.map3 import GMap3
 
 #: Keys of an override besides fruit parameters.
 OVERRIDE_KEYS = ("preset", "seed", "size")
@@ -88,7 +88,7 @@ def fruits_from_organs(positions, frames, sizes, leaf_ids, params=None, preset="
 
     ``positions`` (k, 3), ``frames`` (k, 3, 3) with rows H, L, U, ``sizes``
     (k,) and ``leaf_ids`` (k,) come straight from the turtle.  ``params``
-    (fruit parameters, see :mod:`gmap.fruit`) apply to every fruit;
+    (fruit parameters, see :mod:`ramure.gmap.fruit`) apply to every fruit;
     ``overrides`` maps a leaf id to changes for that fruit only: ``preset``,
     ``seed``, ``size`` or any fruit parameter.
     """
@@ -127,7 +127,7 @@ def fruits_from_skeleton(skeleton, kind="Fruit", **kwargs):
     """:func:`fruits_from_organs` for the organs of ``kind`` in ``skeleton.organs``.
 
     Duck-typed: ``skeleton.organs`` needs ``kind``, ``position``, ``frame``,
-    ``size`` and ``leaf_id`` arrays (as :class:`lsys.Skeleton` has).
+    ``size`` and ``leaf_id`` arrays (as :class:`ramure.lsys.Skeleton` has).
     """
     organs = skeleton.organs
     mask = np.asarray([str(k) == kind for k in organs.kind], bool)

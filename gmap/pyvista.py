@@ -1,14 +1,14 @@
-"""Convert a :class:`gmap.GMap3` to pyvista data objects (no plotting here).
+"""Convert a :class:`ramure.gmap.GMap3` to pyvista data objects (no plotting here).
 
 :func:`to_unstructured_grid` gives one cell per volume: a hexahedron when
 the volume has 6 quad faces and 8 corners, a wedge for 2 triangles, 3 quads
 and 6 corners, otherwise a polyhedron whose faces are oriented outwards.
 Cell data: ``volume`` (id), ``label`` (string), ``tissue`` (int code; names in
-field data ``tissue_names`` and :data:`gmap.tissue.TISSUES`), ``leaf_id``,
+field data ``tissue_names`` and :data:`ramure.gmap.tissue.TISSUES`), ``leaf_id``,
 ``order``, ``stage`` and any other one-value-per-volume attribute.
 :func:`boundary_polydata` gives the alpha3-free faces as a surface.
 
->>> from gmap.fruit import build_fruit
+>>> from ramure.gmap.fruit import build_fruit
 >>> grid = to_unstructured_grid(build_fruit("round_tomato"))
 >>> grid.n_cells, grid.n_points, sorted(set(grid.celltypes.tolist()))
 (110, 220, [12, 42])
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
-from gmap.tissue import TISSUES
+from ramure.gmap.tissue import TISSUES
 
 VTK_HEXAHEDRON, VTK_WEDGE, VTK_POLYHEDRON = 12, 13, 42
 _SKIP = {"frame", "origin", "size", "parent"}

@@ -1,4 +1,4 @@
-"""Surface and volume subdivision of a :class:`gmap.GMap3` (Catmull-Clark geometry).
+"""Surface and volume subdivision of a :class:`ramure.gmap.GMap3` (Catmull-Clark geometry).
 
 ``surface(gm, levels)``
     Every face (n corners) becomes n quads, one per corner; volumes are kept.
@@ -22,8 +22,8 @@
     letter; the new inner faces are labelled ``I``.  Child volumes copy their
     parent's attributes, with ``degree`` 4.
 
->>> from gmap import GMap3
->>> from gmap import subdivide
+>>> from ramure.gmap import GMap3
+>>> from ramure.gmap import subdivide
 >>> gm = GMap3(); _ = gm.add_prisms(4)
 >>> s = subdivide.surface(gm, 1)
 >>> s.n_darts, s.counts()["faces"], s.is_valid()
@@ -36,9 +36,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from gmap.errors import ValueRefused
-from gmap.map3 import SUBLABEL_BASE, GMap3
-from gmap.prism import FACE_I
+from ramure.gmap.errors import ValueRefused
+from ramure.gmap.map3 import SUBLABEL_BASE, GMap3
+from ramure.gmap.prism import FACE_I
 
 #: letters (1 = a) of the children of a quad at its corners 0, 1, 2, 3
 QUAD_LETTERS = np.array([2, 3, 4, 1])

@@ -36,7 +36,7 @@ local pericarp depth* (core surface to skin; the locules take the rest): the
 vertices between layers are moved along each radial line to these depths, as
 the thesis moves the inner faces "along their incident edges".
 
->>> from gmap.fruit import build_fruit
+>>> from ramure.gmap.fruit import build_fruit
 >>> gm = build_fruit("round_tomato", volume_levels=2, seeds=10)
 >>> counts = tissue_counts(gm)
 >>> counts["seed"], counts["exocarp"] > 0, counts["locule"] > 0
@@ -46,8 +46,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from gmap import subdivide as _subdivide
-from gmap.errors import ValueRefused
+from ramure.gmap import subdivide as _subdivide
+from ramure.gmap.errors import ValueRefused
 
 TISSUES = ("columella", "pericarp", "exocarp", "mesocarp", "endocarp", "septum", "locule", "seed")
 CODES = {name: code for code, name in enumerate(TISSUES)}
@@ -66,7 +66,7 @@ DEFAULTS = {
 
 
 def check_params(p):
-    """Raise :class:`~gmap.errors.ValueRefused` for out-of-range tissue parameters."""
+    """Raise :class:`~ramure.gmap.errors.ValueRefused` for out-of-range tissue parameters."""
     if not 1 <= p["carpels"] <= 64:
         raise ValueRefused(f"carpels must be in 1..64, got {p['carpels']}")
     for name in ("exocarp", "mesocarp", "endocarp"):
@@ -127,7 +127,7 @@ def differentiate(gm, carpels=3, exocarp=0.04, mesocarp=0.30, endocarp=0.06, sep
                   seed_smoothing=1, rng=None):
     """Assign tissues to a volume-subdivided fruit and shape its layers; returns a map.
 
-    Works on maps from :func:`gmap.fruit.build_fruit` (volume attributes
+    Works on maps from :func:`ramure.gmap.fruit.build_fruit` (volume attributes
     ``order``, ``ring`` and the ``radial`` vertex scalar).  With fewer than
     two radial layers (no volume subdivision) the branches stay
     ``pericarp``.  See the module docstring for the rule.

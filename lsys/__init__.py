@@ -1,6 +1,6 @@
 """L-systems with derivation history: grammar language, derivation, turtle, regeneration.
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> d = LSystem.from_text("n: 2\\nw: A(1)\\np:\\n A(x) -> A(x+1)B(x+1)C(1)\\n B(y) -> B(y+3)").derive()
 >>> d.to_string()
 'A(3)B(3)C(1)B(5)C(1)'

@@ -22,7 +22,7 @@ size of the plant.
 Ties go to the **lower** cut (the spec's prudent behaviour): the source side
 is every vertex that cannot reach the sink in the residual graph.
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> d = LSystem.from_text("n: 1\\nw: A\\np: A -> BBBB").derive()
 >>> select_roots(d.tree, [1, 2, 3], n=1).cut_roots.tolist()  # 3 of 4 > rho = 0.5
 [0]

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import ramure.grammars as grammar_files
 from .errors import DerivationError, GrammarError, ValueRefused
 from .expr import compile_expression, evaluate_constant
 from .grammar import Grammar, parse_grammar
@@ -93,7 +94,12 @@ class LSystem:
 
     @classmethod
     def from_file(cls, path):
-        path = pathlib.Path(path)
+        """Load a grammar file; a shipped grammar's name (``"honda_sympodial"``) works too.
+
+        A path that exists wins; ``"grammars/NAME.lsys"`` that does not exist here falls
+        back to the shipped grammar of that name, so examples work from any directory.
+        """
+        path = grammar_files.resolve(path)
         try:
             text = path.read_text(encoding="utf-8-sig")  # -sig: a BOM (Windows editors) is not text
         except UnicodeDecodeError as exc:
@@ -501,7 +507,7 @@ class Derivation:
         return int(np.count_nonzero(self.tree.symbol[self.tree.leaves] == self.lsystem.symbols.index(symbol)))
 
     def skeleton(self):
-        """Interpret the string with the 3D turtle (see :mod:`lsys.turtle`)."""
+        """Interpret the string with the 3D turtle (see :mod:`ramure.lsys.turtle`)."""
         from .turtle import interpret
 
         return interpret(self)

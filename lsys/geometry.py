@@ -1,4 +1,4 @@
-"""Meshes of a :class:`~lsys.turtle.Skeleton`, built for all segments at once.
+"""Meshes of a :class:`~ramure.lsys.turtle.Skeleton`, built for all segments at once.
 
 Each segment becomes a frustum of ``sides`` quads (no caps: neighbouring
 segments close the tube); leaves are flat diamonds in the turtle's H-L plane;
@@ -10,7 +10,7 @@ fruit and other organs are low-poly spheres.  Every cell carries:
 ``kind``     0 branch, 1 leaf, 2 fruit, 3 other organ
 ``order``    branch order (organs: -1)
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> mesh = LSystem.from_text("n: 1\\nw: F\\np: F -> F[+F]F").derive().skeleton().to_polydata(sides=6)
 >>> mesh.n_cells, sorted(set(mesh.cell_data["segment"].tolist()))
 (18, [0, 1, 2])

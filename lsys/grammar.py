@@ -499,7 +499,7 @@ def _check(grammar):
 
 
 def parse_grammar(text, filename=None) -> Grammar:
-    """Parse grammar text.  Raises :class:`~lsys.errors.GrammarError` with line and column.
+    """Parse grammar text.  Raises :class:`~ramure.lsys.errors.GrammarError` with line and column.
 
     >>> g = parse_grammar("n: 2\\nw: A(1)\\np:\\n A(x) -> A(x+1)B(x+1)C(1)\\n B(y) -> B(y+3)")
     >>> [str(r.pred) for r in g.rules]

@@ -14,7 +14,7 @@ Context-sensitive rules see only the regrown subtree while it is re-derived
 undo / redo, constant changes, and ``save``/``load`` to JSON that replays to
 the identical plant.
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> s = Session(LSystem.from_file("grammars/honda_sympodial.lsys"), n=6)
 >>> before = s.derivation.to_string()
 >>> leaves = s.leaves_with_symbol("F")[-4:]
@@ -254,7 +254,7 @@ class Session:
 
         ``settings`` are recorded as given (``preset``, ``size`` and fruit
         parameters, checked by the volumetric layer that applies them, see
-        :func:`gmap.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
+        :func:`ramure.gmap.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
         :meth:`fruit_overrides` gives what applies to the current plant.
         """
         leaves = [int(x) for x in leaf_ids]

@@ -107,7 +107,7 @@ class Skeleton:
         return np.isin(self.leaf_id, np.asarray(list(leaf_ids), np.int64))
 
     def to_polydata(self, sides=8, organ_resolution=8):
-        """All tubes and organs as one :class:`pyvista.PolyData` (see :mod:`lsys.geometry`)."""
+        """All tubes and organs as one :class:`pyvista.PolyData` (see :mod:`ramure.lsys.geometry`)."""
         from .geometry import skeleton_to_polydata
 
         return skeleton_to_polydata(self, sides=sides, organ_resolution=organ_resolution)

@@ -7,10 +7,10 @@ The front doors:
 * :class:`VariantSweep` — every variant of a grammar, measured (process pool,
   Dask, cache, progress, cancel);
 * :func:`explore` / :func:`write_exploration` — sweep, PCA, 27 picks, files;
-* qualifiers (:mod:`metrics.qualifiers`, :mod:`metrics.store`) — default
+* qualifiers (:mod:`ramure.metrics.qualifiers`, :mod:`ramure.metrics.store`) — default
   vocabulary, regions from studies, ``qualifier_combination``.
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> sk = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=4).skeleton()
 >>> plant_metrics(sk).branch_count
 15

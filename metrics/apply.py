@@ -1,4 +1,4 @@
-"""Apply a qualifier to a selection of a plant being edited (an :class:`lsys.regen.Session`).
+"""Apply a qualifier to a selection of a plant being edited (an :class:`ramure.lsys.regen.Session`).
 
 The thesis applies the qualifier's combination to the part of the plant the
 min-cut selects.  Two refinements make "make this selection <qualifier>"
@@ -12,7 +12,7 @@ dependable on any grammar:
    ``tries``).  Each is applied with ``Session.regrow``; the selection's ten
    metrics are measured before and after (the segments drawn by the leaves
    under the cut roots) and scored along the qualifier's direction
-   (:func:`~metrics.qualifiers.qualifier_scores` with the sweep's scale).
+   (:func:`~ramure.metrics.qualifiers.qualifier_scores` with the sweep's scale).
    The first candidate that moves the selection the right way is kept; if
    none does, the best tried is kept and ``improved`` is False.  On a
    stochastic grammar the regrown part is a new random draw, so each
@@ -22,8 +22,8 @@ dependable on any grammar:
 
 Only one edit stays in the session's history (rejected tries are undone).
 
->>> from lsys.regen import Session
->>> from metrics import VariantSweep
+>>> from ramure.lsys.regen import Session
+>>> from ramure.metrics import VariantSweep
 >>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("grammars/honda_sympodial.lsys")
 >>> s = Session("grammars/honda_sympodial.lsys", n=4)
 >>> out = apply_qualifier(s, "dense", sweep)
@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lsys.cut import collapse_nested
+from ramure.lsys.cut import collapse_nested
 
 from .plant import PlantMetrics, metric_deltas, plant_metrics
 from .qualifiers import VOCABULARY, canonical_name, metric_scale, qualifier_scores, ranked_variants
@@ -68,7 +68,7 @@ class QualifierResult:
 
 
 def _roots(session, selection, rho):
-    """The subtrees a regrow of ``selection`` replaces (as :func:`lsys.regen.regenerate` keeps them)."""
+    """The subtrees a regrow of ``selection`` replaces (as :func:`ramure.lsys.regen.regenerate` keeps them)."""
     tree = session.tree
     if not len(selection):  # the whole plant: every axiom module, as Session.regrow does
         return np.flatnonzero((tree.parent == -1) & tree.alive)
@@ -110,7 +110,7 @@ def apply_qualifier(session, name, sweep, selection=(), rho=0.5, points=None, re
                     seed=None) -> QualifierResult:
     """Regrow ``selection`` (leaf ids; empty = whole plant) of ``session`` toward qualifier ``name``.
 
-    ``sweep`` is a fitted :class:`~metrics.sweep.VariantSweep` of the same
+    ``sweep`` is a fitted :class:`~ramure.metrics.sweep.VariantSweep` of the same
     grammar; with ``regions`` (e.g. from a study) and the sweep's PCA cloud
     ``points``, the region's centre chooses the candidates instead of the
     default direction.  See the module docstring for the procedure.

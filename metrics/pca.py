@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 
 class DeltaPCA:

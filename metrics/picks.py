@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 N_PICKS = 27
 METHODS = ("sequential", "greedy", "optimal")

@@ -3,7 +3,7 @@
 =====  ==================  ======================================================
 #      name                definition (b base radius, t top radius, h length)
 =====  ==================  ======================================================
-1      ``box_volume``      OBB volume ``l w h`` (covariance box, see :mod:`metrics.obb`)
+1      ``box_volume``      OBB volume ``l w h`` (covariance box, see :mod:`ramure.metrics.obb`)
 2      ``box_surface``     OBB surface ``2(lw + lh + wh)``
 3      ``branch_surface``  lateral area ``sum pi (b + t) sqrt((b - t)^2 + h^2)``
 4      ``branch_volume``   ``sum 1/3 pi (b^2 + b t + t^2) h``
@@ -21,7 +21,7 @@ thesis.  Conventions for degenerate inputs: a selection that draws no segment
 has every metric 0; a flat box (volume 0, e.g. zero-width 2D segments) has
 ``branch_density`` and ``fill_rate`` 0 rather than infinite.
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> sk = LSystem.from_text("n: 0\\nw: !(2)F(3)").derive().skeleton()   # one cylinder r=1, h=3
 >>> m = plant_metrics(sk)
 >>> m.branch_count, round(m.branch_volume, 6), round(m.branch_surface, 6), round(m.box_volume, 6)
@@ -33,7 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 from .obb import obb_from_frustums
 
@@ -64,7 +64,7 @@ class PlantMetrics(NamedTuple):
 def metrics_from_arrays(start, end, base_radius, top_radius, box=None) -> np.ndarray:
     """The ten metrics (10,) of frustums given as arrays — the sweep's hot path.
 
-    ``box`` is an :class:`~metrics.obb.OrientedBox` to use instead of the
+    ``box`` is an :class:`~ramure.metrics.obb.OrientedBox` to use instead of the
     covariance OBB of the segments (e.g. a tight box).
     """
     count = len(start)

@@ -19,7 +19,7 @@ cube), ``fir-like``/``asymmetric`` an elongated one, ``realistic`` sturdier
 and fuller branches.  A study replaces these guesses with measured regions.
 
 **Regions** (:class:`QualifierRegions`, thesis §5.5): from labelled variant
-points per qualifier (a study's, read from the :mod:`metrics.store`), one
+points per qualifier (a study's, read from the :mod:`ramure.metrics.store`), one
 axis-aligned box per qualifier in PCA space, after trimming the ``trim``
 share (7 % by default) of its points farthest from the qualifier's median
 point (``floor(trim * k)`` of k points); the collision matrix; and the box
@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 from .plant import METRIC_NAMES
 
@@ -56,7 +56,7 @@ class Qualifier:
     meaning: str
 
     def vector(self) -> np.ndarray | None:
-        """The unit direction (10,) over :data:`~metrics.plant.METRIC_NAMES`, or None."""
+        """The unit direction (10,) over :data:`~ramure.metrics.plant.METRIC_NAMES`, or None."""
         if self.direction is None:
             return None
         v = np.array([self.direction.get(m, 0.0) for m in METRIC_NAMES], float)
@@ -287,7 +287,7 @@ def ranked_variants(name, sweep, points=None, regions=None, rules=None) -> tuple
 def qualifier_combination(name, sweep, points=None, regions=None, rules=None) -> dict:
     """The parameter combination ``{"rule", "constants"}`` that qualifier ``name`` applies.
 
-    ``sweep`` is a fitted :class:`~metrics.sweep.VariantSweep`, or a grammar
+    ``sweep`` is a fitted :class:`~ramure.metrics.sweep.VariantSweep`, or a grammar
     (LSystem or file path), which is then swept with the default settings
     (cached on disk, so only the first call is slow).
 

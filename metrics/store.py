@@ -2,10 +2,10 @@
 
 The studies package writes study results into the same table
 (``source = 'study:<name>'``); this module reads them back as
-:class:`~metrics.qualifiers.QualifierRegions`, and can also write the
+:class:`~ramure.metrics.qualifiers.QualifierRegions`, and can also write the
 default vocabulary's top-ranked variants (``source = 'default'``) so a
 grammar has regions before any study.  ``grammar`` is a name, by convention
-the grammar file's stem (:func:`metrics.exploration.grammar_name`); ``qualifier``
+the grammar file's stem (:func:`ramure.metrics.exploration.grammar_name`); ``qualifier``
 is the normalised English name.
 
 >>> import tempfile, pathlib
@@ -25,7 +25,7 @@ import sqlite3
 
 import numpy as np
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 from .qualifiers import VOCABULARY, QualifierRegions, canonical_name, rank_variants
 

@@ -10,7 +10,7 @@ with ``scheduler="tcp://host:port"`` (``pip install ramure[dask]``).
 Only distinct plants are derived: a variant changes constants on one rule,
 so constants that rule never reads change nothing; variants agreeing on the
 ones it reads share one derivation, and variants changing none of them are
-the base plant (see :func:`metrics.variants.distinct_variants`).  On Honda
+the base plant (see :func:`ramure.metrics.variants.distinct_variants`).  On Honda
 monopodial that is 405 derivations for 2,187 variants.
 
 A ``progress(done, total)`` callback (counting the derivations actually
@@ -19,7 +19,7 @@ sweep stops with :class:`SweepCancelled` soon after ``cancel`` is set (a
 :class:`threading.Event`, anything with ``is_set()``, or a callable returning
 True) or :meth:`VariantSweep.cancel` is called from another thread.
 
-Results are cached on disk (see :mod:`metrics.cache`), keyed by the grammar
+Results are cached on disk (see :mod:`ramure.metrics.cache`), keyed by the grammar
 text, constants, seed, n, beta, chosen constants, mode and samples, so a
 second fit of the same sweep only reads one ``.npz``.
 
@@ -27,7 +27,7 @@ A variant whose derivation fails (e.g. a division by zero appears with the
 changed constants) gets NaN metrics and ``failed_[i] = True``; it is left out
 of the PCA and the picks.
 
->>> from lsys import LSystem
+>>> from ramure.lsys import LSystem
 >>> sweep = VariantSweep(n=3, n_jobs=1, cache=False).fit(LSystem.from_file("grammars/honda_sympodial.lsys"))
 >>> sweep.n_variants_, sweep.deltas_.shape, sweep.combination(0)["rule"]
 (486, (486, 10), 0)
@@ -45,8 +45,9 @@ import time
 
 import numpy as np
 
-from lsys import LSystem
-from lsys.errors import RamureError, ValueRefused
+from ramure.lsys import LSystem
+import ramure.grammars as grammar_files
+from ramure.errors import RamureError, ValueRefused
 
 from . import cache as _cache
 from .plant import METRIC_NAMES, metric_deltas, metrics_from_arrays
@@ -58,11 +59,11 @@ class SweepCancelled(RamureError):
 
 
 def as_lsystem(grammar) -> LSystem:
-    """Accept an :class:`~lsys.LSystem` or the path of an ``.lsys`` file."""
+    """Accept an :class:`~ramure.lsys.LSystem` or the path of an ``.lsys`` file."""
     if isinstance(grammar, LSystem):
         return grammar
     if isinstance(grammar, (str, os.PathLike)):
-        path = pathlib.Path(grammar)
+        path = grammar_files.resolve(grammar)
         if not path.is_file():
             raise RamureError(f"{path}: no such grammar file")
         return LSystem.from_file(path)
@@ -144,7 +145,7 @@ class VariantSweep:
         since forking a process with running threads is unsafe).
 
     Fitted attributes: ``names_`` (chosen constants), ``design_``
-    (:class:`~metrics.variants.VariantDesign`), ``rules_`` (N,), ``values_`` (N,m),
+    (:class:`~ramure.metrics.variants.VariantDesign`), ``rules_`` (N,), ``values_`` (N,m),
     ``metrics_`` (N,10), ``base_metrics_`` (10,), ``deltas_`` (N,10), ``failed_`` (N,),
     ``n_variants_``, ``n_derived_`` (derivations run; 0 from the cache), ``n_rules_``, ``n_``,
     ``grammar_text_``, ``base_constants_``,

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lsys.errors import RamureError, ValueRefused
+from ramure.errors import RamureError, ValueRefused
 
 MODES = ("grid", "lhs", "sobol")
 MAX_VARIANTS = 200_000
@@ -56,7 +56,7 @@ class VariantDesign:
                 "constants": {k: float(v) for k, v in zip(self.names, self.values[i].tolist())}}
 
     def rule_constants(self, i) -> dict:
-        """Variant ``i`` in the form :meth:`lsys.LSystem.derive` takes: ``{rule: {name: value}}``."""
+        """Variant ``i`` in the form :meth:`ramure.lsys.LSystem.derive` takes: ``{rule: {name: value}}``."""
         c = self.combination(i)
         return {c["rule"]: c["constants"]}
 
@@ -66,7 +66,7 @@ def rule_constant_names(lsystem) -> list:
 
     A name that is also one of the rule's formal parameters means the parameter.
     """
-    from lsys.expr import names_used
+    from ramure.lsys.expr import names_used
 
     out = []
     for rule in lsystem.grammar.rules:

@@ -6,7 +6,7 @@ groups, choose representatives, rate groups on 4-level Likert scales and name
 them.  Everything is stored in SQLite, one transaction per answer.
 
 >>> import tempfile, pathlib
->>> from studies import Study, lattice_picks, load_study_data, cooccurrence
+>>> from ramure.studies import Study, lattice_picks, load_study_data, cooccurrence
 >>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db", grammars={"honda": lattice_picks()})
 >>> s = study.session(study.add_participant(consent=True), "honda")
 >>> s.set_groups([range(1, 14), range(14, 28)])
@@ -18,19 +18,19 @@ them.  Everything is stored in SQLite, one transaction per answer.
 >>> int(cooccurrence(load_study_data(study))[0, 12]), int(cooccurrence(load_study_data(study))[0, 13])
 (1, 0)
 """
-from studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
-from studies.anova import AnovaResult, anova_table, one_way_anova, read_table
-from studies.data import StudyData, load_study_data
-from studies.errors import StudyInputError
-from studies.export import export_csv
-from studies.likert import LEVELS, likert_value
-from studies.picks import Pick, lattice_picks, load_picks, picks_from_data, synthetic_grammars
-from studies.qualifiers import (SynonymTable, export_qualifier_points, labelled_points, normalise_text,
+from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
+from ramure.studies.anova import AnovaResult, anova_table, one_way_anova, read_table
+from ramure.studies.data import StudyData, load_study_data
+from ramure.studies.errors import StudyInputError
+from ramure.studies.export import export_csv
+from ramure.studies.likert import LEVELS, likert_value
+from ramure.studies.picks import Pick, lattice_picks, load_picks, picks_from_data, synthetic_grammars
+from ramure.studies.qualifiers import (SynonymTable, export_qualifier_points, labelled_points, normalise_text,
                                 qualifier_frequencies)
-from studies.report import analyze, write_report
-from studies.session import Group, TestSession, image_order
-from studies.simulate import SimulatedParticipant, run_simulation, simulate_study
-from studies.storage import Study, connect
+from ramure.studies.report import analyze, write_report
+from ramure.studies.session import Group, TestSession, image_order
+from ramure.studies.simulate import SimulatedParticipant, run_simulation, simulate_study
+from ramure.studies.storage import Study, connect
 
 __all__ = [
     "AnovaResult", "Group", "LEVELS", "Pick", "SimulatedParticipant", "Study", "StudyData",

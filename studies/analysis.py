@@ -1,6 +1,6 @@
 """Grouping and rating statistics of a study (thesis §7.2-7.3), vectorised.
 
-All functions take a :class:`~studies.data.StudyData` and an optional grammar
+All functions take a :class:`~ramure.studies.data.StudyData` and an optional grammar
 name (``None`` = every grammar pooled).
 
 * :func:`cooccurrence` -- how often two images were put in the same group:
@@ -11,7 +11,7 @@ name (``None`` = every grammar pooled).
   groups holding that image: a group's rating passes to each of its images.
 
 >>> import numpy as np
->>> from studies.simulate import simulate_study
+>>> from ramure.studies.simulate import simulate_study
 >>> data = simulate_study(participants=3, grammars=2, seed=0)
 >>> c = cooccurrence(data)
 >>> c.shape, bool((c == c.T).all()), int(c[0, 0])
@@ -84,7 +84,7 @@ def image_ratings(data, measure="usefulness", with_counts=False):
     With ``with_counts`` also return the number of ratings averaged.
     """
     if measure not in MEASURES:
-        from studies.errors import StudyInputError
+        from ramure.studies.errors import StudyInputError
 
         raise StudyInputError(f"unknown measure {measure!r} (choose from {', '.join(MEASURES)})")
     rating = getattr(data, measure)

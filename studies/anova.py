@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import stats
 
-from studies.errors import StudyInputError
+from ramure.studies.errors import StudyInputError
 
 ROW_LABEL_WORDS = {"", "#", "id", "image", "images", "point", "points", "pick", "no", "n", "n°", "row"}
 

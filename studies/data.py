@@ -7,8 +7,8 @@ work in progress, not an answer.  Tests of participants whose consent is not
 recorded (or was withdrawn) are never read.
 
 >>> import tempfile, pathlib
->>> from studies.picks import lattice_picks
->>> from studies.storage import Study
+>>> from ramure.studies.picks import lattice_picks
+>>> from ramure.studies.storage import Study
 >>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db", grammars={"g": lattice_picks()})
 >>> s = study.session(study.add_participant(consent=True), "g")
 >>> s.set_groups([range(1, 28)])
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from studies.picks import N_PICKS
+from ramure.studies.picks import N_PICKS
 
 
 @dataclass
@@ -58,7 +58,7 @@ class StudyData:
         return self.test_grammar[self.group_test]
 
     def grammar_index(self, grammar) -> int:
-        from studies.errors import StudyInputError
+        from ramure.studies.errors import StudyInputError
 
         if grammar not in self.grammars:
             raise StudyInputError(f"no grammar {grammar!r} in study {self.name!r} "
@@ -67,8 +67,8 @@ class StudyData:
 
 
 def load_study_data(source, finished_only=True) -> StudyData:
-    """Read a :class:`~studies.storage.Study` (or a path to one) into arrays."""
-    from studies.storage import Study
+    """Read a :class:`~ramure.studies.storage.Study` (or a path to one) into arrays."""
+    from ramure.studies.storage import Study
 
     if isinstance(source, (str, os.PathLike)):
         with Study.open(source) as study:

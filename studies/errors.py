@@ -1,7 +1,7 @@
 """Errors a study user can fix: each says what was wrong, in the user's words."""
 from __future__ import annotations
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 
 class StudyInputError(RamureError, ValueError):

@@ -8,7 +8,7 @@ with an empty ``finished_at``.  Answers of participants without recorded
 consent are left out (they stay listed in ``participants.csv``).
 
 >>> import tempfile, pathlib
->>> from studies.simulate import simulate_study
+>>> from ramure.studies.simulate import simulate_study
 >>> tmp = pathlib.Path(tempfile.mkdtemp())
 >>> _ = simulate_study(tmp / "s.db", participants=2, grammars=1)
 >>> sorted(p.name for p in export_csv(tmp / "s.db", tmp / "csv"))[:3]
@@ -20,7 +20,7 @@ import csv
 import os
 import pathlib
 
-from studies.qualifiers import SynonymTable
+from ramure.studies.qualifiers import SynonymTable
 
 _QUERIES = {
     "picks.csv": (
@@ -58,7 +58,7 @@ def export_csv(source, out_dir, synonyms=None) -> list:
     ``synonyms`` (extra synonym files) only affects the ``canonical`` column of
     ``qualifiers.csv``.  Returns the paths written.
     """
-    from studies.storage import Study
+    from ramure.studies.storage import Study
 
     if isinstance(source, (str, os.PathLike)):
         with Study.open(source) as study:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numbers
 import unicodedata
 
-from studies.errors import StudyInputError
+from ramure.studies.errors import StudyInputError
 
 LEVELS = ("poor", "fair", "good", "excellent")
 

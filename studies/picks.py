@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from studies.errors import StudyInputError
+from ramure.studies.errors import StudyInputError
 
 N_PICKS = 27
 PICK_IDS = tuple(range(1, N_PICKS + 1))

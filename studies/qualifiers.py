@@ -29,8 +29,8 @@ from importlib import resources
 
 import numpy as np
 
-from studies.errors import StudyInputError
-from studies.likert import fold, likert_value
+from ramure.studies.errors import StudyInputError
+from ramure.studies.likert import fold, likert_value
 
 NEGATIONS = {"pas", "not", "non", "peu", "moins", "less", "sans", "without", "ni", "no"}
 MAX_PHRASE = 4
@@ -63,7 +63,7 @@ class SynonymTable:
     def load(cls, *paths) -> "SynonymTable":
         """The built-in table, extended (and overridden) by each file in ``paths``."""
         table = cls()
-        builtin = resources.files("studies").joinpath("synonyms.json").read_text(encoding="utf-8")
+        builtin = resources.files(__package__).joinpath("synonyms.json").read_text(encoding="utf-8")
         table.update(json.loads(builtin), "studies/synonyms.json")
         for path in paths:
             if path is None:

@@ -1,7 +1,7 @@
 """The study report: one HTML page with heat maps, box plots and tables, plus CSVs.
 
 :func:`analyze` computes every figure of the thesis' study chapter from a
-:class:`~studies.data.StudyData`; :func:`write_report` writes them to a folder:
+:class:`~ramure.studies.data.StudyData`; :func:`write_report` writes them to a folder:
 
 * ``index.html`` -- the page (figures are PNG files next to it);
 * ``cooccurrence.png``, ``grouping.png``, ``ratings.png``, ``qualifiers.png``;
@@ -15,7 +15,7 @@ Figures use matplotlib's object API on the Agg canvas, never pyplot, so the
 report can be written from inside a Qt application.
 
 >>> import tempfile, pathlib
->>> from studies.simulate import simulate_study
+>>> from ramure.studies.simulate import simulate_study
 >>> out = pathlib.Path(tempfile.mkdtemp())
 >>> data = simulate_study(participants=3, grammars=2)
 >>> summary = write_report(data, out)
@@ -34,11 +34,11 @@ import re
 
 import numpy as np
 
-from studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
-from studies.anova import anova_table
-from studies.data import load_study_data
-from studies.likert import LEVELS
-from studies.qualifiers import SynonymTable, qualifier_frequencies
+from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
+from ramure.studies.anova import anova_table
+from ramure.studies.data import load_study_data
+from ramure.studies.likert import LEVELS
+from ramure.studies.qualifiers import SynonymTable, qualifier_frequencies
 
 RATED = ("usefulness", "difference")
 

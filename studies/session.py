@@ -5,8 +5,8 @@ with the time spent since the previous answer; a refused call changes nothing.
 Front ends (desktop, Jupyter) drive a test only through this object.
 
 >>> import tempfile, pathlib
->>> from studies.picks import lattice_picks
->>> from studies.storage import Study
+>>> from ramure.studies.picks import lattice_picks
+>>> from ramure.studies.storage import Study
 >>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db",
 ...                      grammars={"honda": lattice_picks()})
 >>> s = study.session(study.add_participant(consent=True), "honda")
@@ -17,7 +17,7 @@ Front ends (desktop, Jupyter) drive a test only through this object.
 >>> s.set_groups([[1, 2, 3, 4, 5, 5]])
 Traceback (most recent call last):
 ...
-studies.errors.StudyInputError: image 5 is listed twice in group 1
+ramure.studies.errors.StudyInputError: image 5 is listed twice in group 1
 >>> s.groups()[0].usefulness, s.missing()[0]
 (3, 'group 2: choose a representative')
 >>> study.close()
@@ -32,10 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from studies.errors import StudyInputError
-from studies.likert import likert_value
-from studies.picks import N_PICKS, PICK_IDS
-from studies.storage import now_iso
+from ramure.studies.errors import StudyInputError
+from ramure.studies.likert import likert_value
+from ramure.studies.picks import N_PICKS, PICK_IDS
+from ramure.studies.storage import now_iso
 
 
 @dataclass
@@ -94,7 +94,7 @@ def _check_partition(groups):
 class TestSession:
     """A participant's test on one grammar, backed by the study database.
 
-    Obtain it with :meth:`studies.storage.Study.session`; the same call resumes
+    Obtain it with :meth:`ramure.studies.storage.Study.session`; the same call resumes
     an unfinished test.  Groups are addressed by their ``label`` (1, 2, ... in
     the order given to :meth:`set_groups`).
     """
@@ -116,7 +116,7 @@ class TestSession:
         return image_order(self.seed, self.grammar)
 
     def picks(self):
-        """The 27 :class:`~studies.picks.Pick` of the grammar (image paths, params)."""
+        """The 27 :class:`~ramure.studies.picks.Pick` of the grammar (image paths, params)."""
         return self.study.picks(self.grammar)
 
     @property

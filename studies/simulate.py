@@ -10,7 +10,7 @@ small/large, PC2 -> sparse/dense, PC3 -> thin/thick, the centre -> normal,
 plus round/fir-like/realistic at random), written in French or English with
 random case, accents and plurals, so normalisation has work to do.
 
-Everything goes through :class:`~studies.session.TestSession`, exactly like a
+Everything goes through :class:`~ramure.studies.session.TestSession`, exactly like a
 front end, so a simulation exercises storage and validation too.
 
 >>> data = simulate_study(participants=2, grammars=1, seed=3)
@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
 
-from studies.picks import synthetic_grammars
+from ramure.studies.picks import synthetic_grammars
 
 # Surface forms per canonical qualifier: English, French, and misspelt/plural variants.
 _FORMS = {
@@ -153,11 +153,11 @@ def simulate_study(db=None, participants=20, grammars=3, tests_per_participant=N
     """Create a study, run simulated participants, and return its :class:`StudyData`.
 
     ``grammars`` is a number of synthetic grammars or a mapping accepted by
-    :meth:`~studies.storage.Study.create`.  Without ``db`` a temporary file is
+    :meth:`~ramure.studies.storage.Study.create`.  Without ``db`` a temporary file is
     used and removed.  Writes use ``synchronous=NORMAL`` for speed.
     """
-    from studies.data import load_study_data
-    from studies.storage import Study
+    from ramure.studies.data import load_study_data
+    from ramure.studies.storage import Study
 
     if isinstance(grammars, int):
         grammars = synthetic_grammars(grammars, seed=seed)

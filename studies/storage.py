@@ -5,7 +5,7 @@ journal is WAL, so a crash loses at most the answer being written.  The schema
 is ``studies/schema.sql``.
 
 >>> import tempfile, pathlib
->>> from studies.picks import lattice_picks
+>>> from ramure.studies.picks import lattice_picks
 >>> db = pathlib.Path(tempfile.mkdtemp()) / "study.db"
 >>> study = Study.create(db, grammars={"honda": lattice_picks(seed=1)}, name="demo")
 >>> code = study.add_participant(consent=True)
@@ -29,8 +29,8 @@ import time
 import zlib
 from importlib import resources
 
-from studies.errors import StudyInputError
-from studies.picks import Pick, load_picks, picks_from_data
+from ramure.studies.errors import StudyInputError
+from ramure.studies.picks import Pick, load_picks, picks_from_data
 
 SCHEMA_VERSION = 1
 DEFAULT_BUDGET_MINUTES = 30.0
@@ -57,7 +57,7 @@ def connect(path, durable=True) -> sqlite3.Connection:
 
 def schema_sql() -> str:
     """The text of ``studies/schema.sql``."""
-    return resources.files("studies").joinpath("schema.sql").read_text(encoding="utf-8")
+    return resources.files(__package__).joinpath("schema.sql").read_text(encoding="utf-8")
 
 
 def _has_study(conn) -> bool:
@@ -87,7 +87,7 @@ class Study:
 
         ``grammars`` maps a grammar name to an exploration directory (holding
         ``picks.json``) or to plain data: a list of 27 pick dicts or
-        :class:`~studies.picks.Pick`.  ``budget_minutes`` is each participant's
+        :class:`~ramure.studies.picks.Pick`.  ``budget_minutes`` is each participant's
         time budget over all their tests.
         """
         path = pathlib.Path(path)
@@ -254,7 +254,7 @@ class Study:
         Refused without consent, and refused for a *new* test once the
         participant's budget is spent (an unfinished test can always be resumed).
         """
-        from studies.session import TestSession
+        from ramure.studies.session import TestSession
 
         pid, seed, consent = self._participant(code)
         gid = self.grammar_id(grammar)

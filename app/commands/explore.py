@@ -7,7 +7,7 @@
     ramure qualify grammars/honda_sympodial.lsys --qualifier dense --select 12,15,20-23 -o session.json
 
 ``explore`` writes ``variants.csv``, ``pca.json``, ``picks.json``,
-``thumbs/pick_XX.png`` and ``contact_sheet.png`` (see :mod:`metrics.exploration`);
+``thumbs/pick_XX.png`` and ``contact_sheet.png`` (see :mod:`ramure.metrics.exploration`);
 with ``--json`` it prints one summary object (variant count, the 27 picks
 with their parameter combinations, matching distances, seconds).
 """
@@ -18,11 +18,11 @@ import pathlib
 import sys
 import time
 
-from app.cli import UserError
-from app.commands.plant import add_grammar_options, parse_sets, parse_size
-from app.commands.regen import parse_ids
-from lsys import LSystem
-from lsys.errors import RamureError
+from ramure.app.cli import UserError
+from ramure.app.commands.plant import add_grammar_options, parse_sets, parse_size
+from ramure.app.commands.regen import parse_ids
+from ramure.lsys import LSystem
+from ramure.errors import RamureError
 
 
 def _size(text):
@@ -98,7 +98,7 @@ def _sweep_kwargs(args):
 
 # -- explore ----------------------------------------------------------------------
 def run_explore(args):
-    from metrics.exploration import explore, write_exploration
+    from ramure.metrics.exploration import explore, write_exploration
 
     t0 = time.perf_counter()
     if pathlib.Path(args.output).exists() and not pathlib.Path(args.output).is_dir():
@@ -115,14 +115,14 @@ def run_explore(args):
     out = pathlib.Path(args.output)
     images = None
     if not args.no_thumbnails:
-        from app.thumbnails import contact_sheet, render_picks
+        from ramure.app.thumbnails import contact_sheet, render_picks
 
         images = render_picks(exp, out, size=size)
         contact_sheet([out / p for p in images], range(1, 28), out / "contact_sheet.png",
                       title=f"{exp.name}: 27 picks (rows = PC1 low, mid, high)")
     paths = write_exploration(exp, out, images)
     if args.store:
-        from metrics.store import QualifierStore
+        from ramure.metrics.store import QualifierStore
 
         with QualifierStore(args.store) as store:
             store.write_default(exp)
@@ -147,7 +147,7 @@ def run_explore(args):
 
 # -- metrics ----------------------------------------------------------------------
 def run_metrics(args):
-    from metrics.plant import plant_metrics, plant_obb
+    from ramure.metrics.plant import plant_metrics, plant_obb
 
     t0 = time.perf_counter()
     ls = _load(args)
@@ -181,11 +181,11 @@ def run_metrics(args):
 
 # -- qualify ----------------------------------------------------------------------
 def run_qualify(args):
-    from lsys.regen import Session
-    from metrics.apply import apply_qualifier
-    from metrics.exploration import explore
-    from metrics.qualifiers import vocabulary_name
-    from metrics.store import QualifierStore
+    from ramure.lsys.regen import Session
+    from ramure.metrics.apply import apply_qualifier
+    from ramure.metrics.exploration import explore
+    from ramure.metrics.qualifiers import vocabulary_name
+    from ramure.metrics.store import QualifierStore
 
     t0 = time.perf_counter()
     if args.tries < 1:

@@ -19,9 +19,9 @@ import time
 
 import numpy as np
 
-from app.cli import UserError
-from app.commands.plant import parse_size
-from gmap.cut import parse_plane
+from ramure.app.cli import UserError
+from ramure.app.commands.plant import parse_size
+from ramure.gmap.cut import parse_plane
 
 SUBDIVISIONS = ("surface", "volume")
 
@@ -56,8 +56,8 @@ def parse_sets(pairs):
 
 
 def tissue_rgb(tissue):
-    """uint8 RGB per cell from tissue codes (colours of :data:`gmap.tissue.COLORS`)."""
-    from gmap.tissue import COLORS, TISSUES
+    """uint8 RGB per cell from tissue codes (colours of :data:`ramure.gmap.tissue.COLORS`)."""
+    from ramure.gmap.tissue import COLORS, TISSUES
 
     table = np.array([[int(COLORS[n][i:i + 2], 16) for i in (1, 3, 5)] for n in TISSUES], np.uint8)
     return table[np.asarray(tissue, np.int64)]
@@ -65,8 +65,8 @@ def tissue_rgb(tissue):
 
 def render_fruit(grid, path, size=(800, 800), cut_normal=None, title=None):
     """Render a fruit grid (cell data ``tissue``) off-screen to PNG, coloured by tissue."""
-    from app.render import _headless_setup
-    from gmap.tissue import COLORS, TISSUES
+    from ramure.app.render import _headless_setup
+    from ramure.gmap.tissue import COLORS, TISSUES
 
     _headless_setup()
     import pyvista as pv
@@ -105,10 +105,10 @@ def render_fruit(grid, path, size=(800, 800), cut_normal=None, title=None):
 
 
 def run_fruit(args):
-    from gmap.cut import plane_cut
-    from gmap.fruit import build_fruit
-    from gmap.pyvista import to_unstructured_grid
-    from gmap.tissue import tissue_counts
+    from ramure.gmap.cut import plane_cut
+    from ramure.gmap.fruit import build_fruit
+    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.tissue import tissue_counts
 
     levels = parse_subdivide(args.subdivide)
     plane = parse_plane(args.cut) if args.cut else None  # checked even without -o
@@ -151,7 +151,7 @@ def run_fruit(args):
 
 
 def register(sub):
-    from gmap.fruit import PRESETS
+    from ramure.gmap.fruit import PRESETS
 
     p = sub.add_parser("fruit", help="build a volumetric fruit (3G-map); facts, PNG or VTU")
     p.add_argument("--preset", default="round_tomato", choices=sorted(PRESETS),

@@ -6,8 +6,8 @@ import math
 import pathlib
 import time
 
-from app.cli import UserError
-from lsys import LSystem
+from ramure.app.cli import UserError
+from ramure.lsys import LSystem
 
 
 def add_grammar_options(parser, derive=True):
@@ -103,7 +103,7 @@ def run_derive(args):
 
 
 def run_render(args):
-    from app.render import render_plant
+    from ramure.app.render import render_plant
 
     out = output_file(args.output, (".png",))
     size = parse_size(args.size)

@@ -5,10 +5,10 @@ import json
 import time
 
 
-from app.cli import UserError
-from app.commands.plant import add_grammar_options, output_file, parse_sets
-from lsys import LSystem
-from lsys.regen import Session
+from ramure.app.cli import UserError
+from ramure.app.commands.plant import add_grammar_options, output_file, parse_sets
+from ramure.lsys import LSystem
+from ramure.lsys.regen import Session
 
 
 #: Most ids one --select may name (a typo such as 0-99999999999 must not exhaust memory).

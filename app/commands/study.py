@@ -16,7 +16,7 @@ import json
 import pathlib
 import sys
 
-from app.cli import UserError
+from ramure.app.cli import UserError
 
 
 def _print(obj) -> int:
@@ -26,7 +26,7 @@ def _print(obj) -> int:
 
 
 def _grammar_specs(items):
-    from studies.errors import StudyInputError
+    from ramure.studies.errors import StudyInputError
 
     specs = {}
     for item in items or []:
@@ -54,7 +54,7 @@ def _summary(result) -> dict:
 
 
 def run_create(args) -> int:
-    from studies.storage import Study
+    from ramure.studies.storage import Study
 
     with Study.create(args.db, grammars=_grammar_specs(args.grammar), name=args.name,
                       budget_minutes=args.budget_minutes) as study:
@@ -65,12 +65,12 @@ def run_create(args) -> int:
 def run_simulate(args) -> int:
     import tempfile
 
-    from studies.data import load_study_data
-    from studies.picks import synthetic_grammars
-    from studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
-    from studies.report import analyze, write_report
-    from studies.simulate import run_simulation
-    from studies.storage import Study
+    from ramure.studies.data import load_study_data
+    from ramure.studies.picks import synthetic_grammars
+    from ramure.studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
+    from ramure.studies.report import analyze, write_report
+    from ramure.studies.simulate import run_simulation
+    from ramure.studies.storage import Study
 
     for option, value in (("--participants", args.participants), ("--grammars", args.grammars),
                           ("--tests-per-participant", args.tests_per_participant)):
@@ -99,8 +99,8 @@ def run_simulate(args) -> int:
 
 
 def run_analyze(args) -> int:
-    from studies.data import load_study_data
-    from studies.report import write_report
+    from ramure.studies.data import load_study_data
+    from ramure.studies.report import write_report
 
     data = load_study_data(args.db, finished_only=not args.include_unfinished)
     result = write_report(data, args.output, alpha=args.alpha, synonyms=args.synonyms or [],
@@ -112,7 +112,7 @@ def run_analyze(args) -> int:
 def run_anova(args) -> int:
     import numpy as np
 
-    from studies.anova import anova_table, read_table
+    from ramure.studies.anova import anova_table, read_table
 
     values, rows, columns = read_table(args.table, row_labels=args.row_labels)
     result = anova_table(values, alpha=args.alpha)
@@ -122,15 +122,15 @@ def run_anova(args) -> int:
 
 
 def run_export_csv(args) -> int:
-    from studies.export import export_csv
+    from ramure.studies.export import export_csv
 
     files = export_csv(args.db, args.output, synonyms=args.synonyms or [])
     return _print(dict(files=[str(f) for f in files]))
 
 
 def run_export_qualifiers(args) -> int:
-    from studies.data import load_study_data
-    from studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
+    from ramure.studies.data import load_study_data
+    from ramure.studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
 
     data = load_study_data(args.db)
     rows = labelled_points(data, SynonymTable.load(*(args.synonyms or [])),
@@ -144,7 +144,7 @@ def run_export_qualifiers(args) -> int:
 
 
 def run_status(args) -> int:
-    from studies.storage import Study
+    from ramure.studies.storage import Study
 
     with Study.open(args.db) as study:
         tests = study.tests()

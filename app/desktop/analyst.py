@@ -1,6 +1,6 @@
 """The analyst view: open a study database, see who took part and read its report.
 
-The report (:func:`studies.write_report`: heat maps, box plots, ANOVA and
+The report (:func:`ramure.studies.write_report`: heat maps, box plots, ANOVA and
 qualifier tables) is written to a temporary folder in a worker and shown in
 a text browser; "Save report to…" copies it elsewhere.
 """
@@ -15,8 +15,8 @@ from PySide6.QtWidgets import (QFileDialog, QHBoxLayout, QLabel, QMessageBox, QP
                                QTableWidget, QTableWidgetItem, QTextBrowser, QVBoxLayout, QWidget)
 from PySide6.QtCore import Qt
 
-from app.desktop.workers import Task
-from lsys.errors import RamureError
+from ramure.app.desktop.workers import Task
+from ramure.errors import RamureError
 
 
 STUDY_FILTER = "Study databases (*.db *.sqlite);;All files (*)"
@@ -68,7 +68,7 @@ class AnalystWindow(QWidget):
         self.resize(1250, 820)
 
     def open_study(self, path=None):
-        from studies import Study
+        from ramure.studies import Study
 
         path = path or ask_study_path(self)
         if path is None:
@@ -92,7 +92,7 @@ class AnalystWindow(QWidget):
         out = pathlib.Path(tempfile.mkdtemp(prefix="ramure-report-"))
 
         def work(progress, cancelled):
-            from studies import write_report
+            from ramure.studies import write_report
 
             return write_report(self.path, out)
         self.task = Task("report", work, self)

@@ -2,7 +2,7 @@
 
 Rows are rebuilt when the grammar's constant names change.  Each slider
 covers a range inferred from the grammar's value
-(:func:`app.desktop.state.constant_range`); "Edit ranges" shows min/max boxes
+(:func:`ramure.app.desktop.state.constant_range`); "Edit ranges" shows min/max boxes
 to change it, and typing a value outside the range widens it.  A change is
 emitted (:attr:`ConstantsPanel.constant_changed`) after a short pause so a
 slider drag re-derives a few times, not at every pixel; the changes of one
@@ -15,7 +15,7 @@ from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (QCheckBox, QDoubleSpinBox, QGridLayout, QGroupBox, QHBoxLayout, QLabel,
                                QScrollArea, QSlider, QSpinBox, QVBoxLayout, QWidget)
 
-from app.desktop.state import constant_range
+from ramure.app.desktop.state import constant_range
 
 SLIDER_STEPS = 1000
 SETTLE_MS = 60

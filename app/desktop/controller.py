@@ -1,15 +1,15 @@
-"""The window's link to the model: one :class:`~app.model.Explorer`, changed by one worker.
+"""The window's link to the model: one :class:`~ramure.app.model.Explorer`, changed by one worker.
 
-:class:`Controller` owns the explorer and a :class:`~app.desktop.workers.JobQueue`.
+:class:`Controller` owns the explorer and a :class:`~ramure.app.desktop.workers.JobQueue`.
 Everything that re-derives or edits the plant (grammar text, constants,
 derivation count, regrow, prune, undo, sessions) is a job run in the worker
 thread under the model lock; each job ends with a fresh
-:class:`~app.desktop.state.Snapshot`, which :attr:`Controller.plant_changed`
+:class:`~ramure.app.desktop.state.Snapshot`, which :attr:`Controller.plant_changed`
 hands to the widgets.  Quick reads and selection changes run in the GUI
 thread under the same lock, and only when the plant on screen is the
 model's current plant (so a click never lands on a plant that is gone).
 
-Errors: a :class:`~lsys.errors.RamureError` (bad input) leaves the model as
+Errors: a :class:`~ramure.lsys.errors.RamureError` (bad input) leaves the model as
 it was and is reported through :attr:`refused`; anything else is a bug,
 reported through :attr:`crashed` with its traceback; in both cases the last
 good plant stays on screen.
@@ -23,10 +23,10 @@ import traceback
 
 from PySide6.QtCore import QObject, Signal
 
-from app.desktop import state
-from app.desktop.workers import JobQueue
-from app.model import Explorer
-from lsys.errors import RamureError
+from ramure.app.desktop import state
+from ramure.app.desktop.workers import JobQueue
+from ramure.app.model import Explorer
+from ramure.errors import RamureError
 
 
 class Busy(RamureError):
@@ -61,7 +61,7 @@ class Controller(QObject):
         return self.jobs.idle
 
     def submit(self, name, fn, key=None):
-        """Run ``fn(explorer)`` in the worker; returns the :class:`~app.desktop.workers.Job`."""
+        """Run ``fn(explorer)`` in the worker; returns the :class:`~ramure.app.desktop.workers.Job`."""
         return self.jobs.submit(name, fn, key)
 
     def _execute(self, job):  # worker thread

@@ -2,7 +2,7 @@
 
 Each tree node is two vertices, ``in`` above ``out``, joined by its node
 edge; rows are derivation depths and each subtree is a block under its
-parent (:func:`app.desktop.state.cut_graph_layout`).  Source-side vertices
+parent (:func:`ramure.app.desktop.state.cut_graph_layout`).  Source-side vertices
 are blue, sink-side orange, cut edges thick red; the regrown roots are
 ringed in red and the selected leaves filled in red.
 
@@ -71,7 +71,7 @@ class CutGraphView(QWidget):
         self.hint.setText("")
 
     def show_layout(self, layout, title):
-        """Draw a :class:`~app.desktop.state.GraphLayout`."""
+        """Draw a :class:`~ramure.app.desktop.state.GraphLayout`."""
         self.scene.clear()
         self.labels = []
         self.layout_data = layout

@@ -10,7 +10,7 @@ import pathlib
 
 from PySide6.QtWidgets import QFileDialog
 
-from lsys.errors import RamureError, ValueRefused
+from ramure.errors import RamureError, ValueRefused
 
 GRAMMAR_FILTER = "L-system grammars (*.lsys);;All files (*)"
 SESSION_FILTER = "Ramure sessions (*.json);;All files (*)"

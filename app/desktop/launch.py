@@ -1,4 +1,4 @@
-"""The ``python -m app.desktop`` command: open the window on a grammar.
+"""The ``python -m ramure.app.desktop`` command: open the window on a grammar.
 
 ``--screenshot PATH`` saves a PNG of the whole window once the plant is
 drawn; ``--quit-after SECONDS`` closes it after that many seconds (both
@@ -16,7 +16,7 @@ DEFAULT_GRAMMAR = "grammars/honda_sympodial.lsys"
 
 
 def build_parser():
-    p = argparse.ArgumentParser(prog="python -m app.desktop",
+    p = argparse.ArgumentParser(prog="python -m ramure.app.desktop",
                                 description="The Ramure desktop explorer: edit, pick, regenerate, browse variants.")
     p.add_argument("grammar", nargs="?", default=DEFAULT_GRAMMAR, help="an .lsys grammar file")
     p.add_argument("-n", type=int, default=None, help="derivation steps (default: the grammar's n:)")
@@ -31,7 +31,7 @@ def make_application(argv=None):
     """The QApplication (created once), with the GL format pyvistaqt needs set first."""
     from PySide6.QtWidgets import QApplication
 
-    from app.desktop.qt_fix import protect_none
+    from ramure.app.desktop.qt_fix import protect_none
 
     protect_none()
     app = QApplication.instance()
@@ -47,8 +47,8 @@ def make_application(argv=None):
 def main(argv=None):
     args = build_parser().parse_args(argv)
     path = pathlib.Path(args.grammar)
-    from app.model import Explorer
-    from lsys.errors import RamureError
+    from ramure.app.model import Explorer
+    from ramure.errors import RamureError
 
     try:
         explorer = Explorer(str(path), n=args.n, seed=args.seed)
@@ -62,7 +62,7 @@ def main(argv=None):
     app = make_application()
     from PySide6.QtCore import QTimer
 
-    from app.desktop.window import MainWindow
+    from ramure.app.desktop.window import MainWindow
 
     headless = args.screenshot is not None or args.quit_after is not None
     window = MainWindow(explorer, ask=not headless)

@@ -12,14 +12,14 @@ from PySide6.QtGui import QPixmap
 from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGridLayout, QGroupBox, QHBoxLayout,
                                QLabel, QPushButton, QScrollArea, QSlider, QVBoxLayout, QWidget)
 
-from app.desktop.state import changed_constants
+from ramure.app.desktop.state import changed_constants
 
 THUMB = 96
 
 
 def _fruit_presets():
     try:
-        from gmap.fruit import PRESETS
+        from ramure.gmap.fruit import PRESETS
     except ImportError:
         return []
     return list(PRESETS)

@@ -1,4 +1,4 @@
-"""Plain functions over :class:`app.model.Explorer` used by the desktop window (no Qt).
+"""Plain functions over :class:`ramure.app.model.Explorer` used by the desktop window (no Qt).
 
 The window draws from a :class:`Snapshot`: an immutable copy of what it needs
 of the explorer at one ``version`` (mesh, segment midpoints, constants,
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.render import plant_colors
+from ramure.app.render import plant_colors
 
 STRING_PREVIEW_MODULES = 5000  # the string dock shows at most this many modules
 
@@ -216,7 +216,7 @@ def cell_colors(mesh, selection=(), kinship_rgb=None, base=None):
 def kinship_cell_colors(explorer, mesh):
     """Per-cell RGB (uint8) by derivation kinship to the single selected leaf, else None.
 
-    Segments take the model's :meth:`~app.model.Explorer.kinship_hues`; organ
+    Segments take the model's :meth:`~ramure.app.model.Explorer.kinship_hues`; organ
     cells (leaves, fruit) take the colour of their own history leaf.
     """
     seg_rgb = explorer.kinship_hues()
@@ -227,7 +227,7 @@ def kinship_cell_colors(explorer, mesh):
     on_segment = seg >= 0
     rgb[on_segment] = seg_rgb[seg[on_segment]]
     if not on_segment.all():
-        from lsys.cut import kinship
+        from ramure.lsys.cut import kinship
 
         tree = explorer.derivation.tree
         _, _, leaf_rgb = kinship(tree, explorer.selection[0], n=explorer.session.n)
@@ -244,8 +244,8 @@ def selection_box_lines(skeleton, selection):
     if not len(segments):
         return None
     try:
-        from metrics import plant_obb
-        from metrics.obb import EDGES
+        from ramure.metrics import plant_obb
+        from ramure.metrics.obb import EDGES
     except ImportError:  # metrics not installed or being rebuilt: no box, the selection still shows
         return None
     corners = plant_obb(skeleton, segments=segments).corners()
@@ -271,7 +271,7 @@ def project_to_display(matrix, points, size):
 
 # -- volumetric fruit ---------------------------------------------------------------
 def fruit_surface(explorer):
-    """The plant's volumetric fruit as a surface (see :meth:`app.model.Explorer.fruit_surface`)."""
+    """The plant's volumetric fruit as a surface (see :meth:`ramure.app.model.Explorer.fruit_surface`)."""
     return explorer.fruit_surface()
 
 
@@ -290,7 +290,7 @@ class GraphLayout:
 
 
 def cut_graph_layout(cut, tree, roots=(), symbols=None):
-    """Lay out the graph of a :class:`lsys.cut.CutResult` as a tidy tree by derivation depth.
+    """Lay out the graph of a :class:`ramure.lsys.cut.CutResult` as a tidy tree by derivation depth.
 
     Each tree node ``v`` gives two vertices ``(v, "in")`` above ``(v, "out")``;
     rows are derivation depths (the source at the top, the sink at the

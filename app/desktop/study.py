@@ -3,17 +3,17 @@
 A participant session (:class:`ParticipantWindow`) walks through:
 
 1. **Consent** — the study's purpose and an "I agree" box (recorded with
-   :meth:`studies.Study.record_consent`);
+   :meth:`ramure.studies.Study.record_consent`);
 2. per grammar, **sorting** — the 27 thumbnails in the participant's seeded
    order, dragged into groups (drop on "New group" to start one);
 3. per group, a **representative** (click an image, "Make representative"),
    the **three Likert questions** and free-text **qualifiers**;
 4. **Finish** — refused, listing what is missing, until everything is answered.
 
-Every answer goes straight to :class:`studies.TestSession` (one SQLite
+Every answer goes straight to :class:`ramure.studies.TestSession` (one SQLite
 transaction each), and the screen is rebuilt from what is stored, so a crash
 loses at most the qualifier being typed.  A timer shows the participant's
-remaining budget.  :class:`~app.desktop.analyst.AnalystWindow` shows a
+remaining budget.  :class:`~ramure.app.desktop.analyst.AnalystWindow` shows a
 study's report.
 """
 from __future__ import annotations
@@ -26,9 +26,9 @@ from PySide6.QtWidgets import (QAbstractItemView, QButtonGroup, QCheckBox, QGrid
                                QGroupBox, QHBoxLayout, QLabel, QLineEdit, QListView, QListWidget, QListWidgetItem,
                                QMessageBox, QPushButton, QRadioButton, QScrollArea, QStackedWidget, QVBoxLayout, QWidget)
 
-from app.desktop.thumbnails import placeholder_image, skeleton_image
-from app.desktop.workers import Task
-from lsys.errors import RamureError
+from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
+from ramure.app.desktop.workers import Task
+from ramure.errors import RamureError
 
 MIME = "application/x-ramure-images"
 ICON = 96
@@ -57,7 +57,7 @@ def pick_images(study, grammar, size=ICON, grammars_dir=None):
     images = {}
     from PySide6.QtGui import QImage
 
-    from app.desktop.variants import variant_skeleton
+    from ramure.app.desktop.variants import variant_skeleton
 
     for pick in picks:
         image = QImage(pick.image) if pick.image and pathlib.Path(pick.image).is_file() else QImage()
@@ -77,7 +77,7 @@ def _study_grammar(study, grammar, grammars_dir=None):
     """The LSystem, n and seed to draw a study grammar's picks with (None if not found)."""
     import json
 
-    from lsys import LSystem
+    from ramure.lsys import LSystem
 
     row = study.conn.execute("SELECT source FROM grammars WHERE name = ?", (grammar,)).fetchone()
     source = pathlib.Path(row[0]) if row and row[0] else None
@@ -492,7 +492,7 @@ class ParticipantWindow(QWidget):
         path = self.study.path
 
         def work(progress, cancelled):
-            from studies import Study
+            from ramure.studies import Study
 
             study = Study.open(path)  # a connection of this thread
             try:
@@ -550,13 +550,13 @@ class StudyMenu:
         menu.addAction("Analyst report…").triggered.connect(lambda: self.analyst())
 
     def _ask_study(self):
-        from app.desktop.analyst import ask_study_path
+        from ramure.app.desktop.analyst import ask_study_path
 
         return ask_study_path(self.window)
 
     def participant(self, path=None, code=None):
         """Open a study and a participant window (a new anonymous code unless ``code`` is given)."""
-        from studies import Study
+        from ramure.studies import Study
 
         path = path or self._ask_study()
         if not path:
@@ -594,7 +594,7 @@ class StudyMenu:
         return study.add_participant() if choice == new else choice
 
     def analyst(self, path=None):
-        from app.desktop.analyst import AnalystWindow
+        from ramure.app.desktop.analyst import AnalystWindow
 
         path = path or self._ask_study()
         if not path:

@@ -12,7 +12,7 @@ import numpy as np
 from PySide6.QtCore import QLineF, QPointF, QRectF, Qt
 from PySide6.QtGui import QColor, QImage, QPainter, QPen
 
-from app.render import BARK, FRUIT, LEAF
+from ramure.app.render import BARK, FRUIT, LEAF
 
 
 def _qcolor(rgb):

@@ -1,13 +1,13 @@
-"""The window's bridge to :mod:`metrics`: explorations, the 27 picks, qualifiers (no Qt).
+"""The window's bridge to :mod:`ramure.metrics`: explorations, the 27 picks, qualifiers (no Qt).
 
 A :class:`VariantSet` is what the gallery, the PCA dock and the qualifier
 drop-down show: the 27 picks (``picks.json`` records), the PCA cloud and,
 when a fitted sweep is at hand, the qualifier vocabulary with one box per
 qualifier in PCA space.  It comes from :func:`explore_plant` (runs the sweep,
 cancellable, with progress) or :func:`load_exploration` (a directory written
-by ``ramure explore`` / :func:`metrics.write_exploration`).
+by ``ramure explore`` / :func:`ramure.metrics.write_exploration`).
 
-Everything degrades gracefully: if a part of :mod:`metrics` is missing, the
+Everything degrades gracefully: if a part of :mod:`ramure.metrics` is missing, the
 corresponding feature reports "not available" instead of failing.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 
 @dataclass
@@ -54,9 +54,9 @@ class VariantSet:
 
 
 def metrics_available():
-    """None if :mod:`metrics` can explore, else the reason (shown in the docks)."""
+    """None if :mod:`ramure.metrics` can explore, else the reason (shown in the docks)."""
     try:
-        from metrics import explore  # noqa: F401
+        from ramure.metrics import explore  # noqa: F401
     except ImportError as exc:
         return f"metrics is not available yet ({exc})"
     return None
@@ -64,14 +64,14 @@ def metrics_available():
 
 def _vocabulary():
     try:
-        from metrics.qualifiers import VOCABULARY
+        from ramure.metrics.qualifiers import VOCABULARY
     except ImportError:
         return {}
     return VOCABULARY
 
 
 def vocabulary_names():
-    """The qualifier vocabulary (English names), or [] without :mod:`metrics.qualifiers`."""
+    """The qualifier vocabulary (English names), or [] without :mod:`ramure.metrics.qualifiers`."""
     return list(_vocabulary())
 
 
@@ -81,11 +81,11 @@ def qualifier_meanings():
 
 
 def explore_plant(lsystem, n, seed, progress=None, cancel=None, n_jobs=None):
-    """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`metrics.explore`)."""
+    """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`ramure.metrics.explore`)."""
     reason = metrics_available()
     if reason:
         raise RamureError(reason)
-    from metrics import VariantSweep, explore
+    from ramure.metrics import VariantSweep, explore
 
     sweep = VariantSweep(n=n, seed=seed, n_jobs=n_jobs, mp_context="forkserver")
     exp = explore(lsystem, progress=progress, cancel=cancel, sweep=sweep)
@@ -101,7 +101,7 @@ def explore_plant(lsystem, n, seed, progress=None, cancel=None, n_jobs=None):
 def qualifier_boxes(exploration, per_qualifier=10):
     """One PCA-space box per vocabulary qualifier: around its ``per_qualifier`` best variants."""
     try:
-        from metrics.qualifiers import QualifierRegions, ranked_variants
+        from ramure.metrics.qualifiers import QualifierRegions, ranked_variants
     except ImportError:
         return {}
     points = {}
@@ -121,9 +121,9 @@ def qualifier_boxes(exploration, per_qualifier=10):
 
 
 def load_exploration(directory):
-    """Read an exploration directory: ``picks.json`` (required, read by :func:`studies.load_picks`),
+    """Read an exploration directory: ``picks.json`` (required, read by :func:`ramure.studies.load_picks`),
     ``variants.csv`` (the cloud) and ``pca.json`` (grammar name, n, seed)."""
-    from studies import load_picks
+    from ramure.studies import load_picks
 
     directory = pathlib.Path(directory)
     picks = [{"id": p.id, "variant": p.variant, "pca": list(p.pca), "params": p.params,
@@ -161,7 +161,7 @@ METRIC_LABELS = {"box_volume": "box volume", "box_surface": "box surface", "bran
 
 
 def qualifier_message(result):
-    """One status-bar line for a :class:`metrics.apply.QualifierResult`.
+    """One status-bar line for a :class:`ramure.metrics.apply.QualifierResult`.
 
     Names the metric that weighs most in the qualifier's direction and its
     value on the selection before and after, e.g. ``dense: density 1772 → 2172``.

@@ -1,21 +1,21 @@
 """Variants in the window: explorations, the gallery, the PCA dock, qualifiers, volumetric fruit.
 
 :class:`VariantsController` runs the long work (the variant sweep, the 27
-thumbnails, qualifier previews) as cancellable :class:`~app.desktop.workers.Task`
+thumbnails, qualifier previews) as cancellable :class:`~ramure.app.desktop.workers.Task`
 objects with the status bar's progress bar, and feeds the results to the
 gallery, the PCA dock and the regeneration panel's qualifier drop-down.
-The computations themselves are in :mod:`app.desktop.variants` and
-:mod:`metrics`.
+The computations themselves are in :mod:`ramure.app.desktop.variants` and
+:mod:`ramure.metrics`.
 """
 from __future__ import annotations
 
 from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import QFileDialog
 
-from app.desktop import variants
-from app.desktop.thumbnails import placeholder_image, skeleton_image
-from app.desktop.workers import Task
-from lsys.errors import RamureError
+from ramure.app.desktop import variants
+from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
+from ramure.app.desktop.workers import Task
+from ramure.errors import RamureError
 
 THUMB = 150
 
@@ -23,15 +23,15 @@ THUMB = 150
 def fruit_available():
     """True if the 3G-map layer can build volumetric fruit."""
     try:
-        from gmap.plant import fruits_from_skeleton  # noqa: F401
-        from gmap.pyvista import boundary_polydata  # noqa: F401
+        from ramure.gmap.plant import fruits_from_skeleton  # noqa: F401
+        from ramure.gmap.pyvista import boundary_polydata  # noqa: F401
     except ImportError:
         return False
     return True
 
 
 class VariantsController:
-    """Owns the current :class:`~app.desktop.variants.VariantSet` and the tasks that build it."""
+    """Owns the current :class:`~ramure.app.desktop.variants.VariantSet` and the tasks that build it."""
 
     def __init__(self, window):
         self.window = window
@@ -249,7 +249,7 @@ class VariantsController:
     def apply_qualifier(self, name):
         """Regrow the selection (or plant) toward qualifier ``name`` (explores first if needed).
 
-        :meth:`app.model.Explorer.apply_qualifier` tries the best variants until
+        :meth:`ramure.app.model.Explorer.apply_qualifier` tries the best variants until
         the selection's metrics move the qualifier's way; one undoable edit.
         """
         if not self.explored():
@@ -272,7 +272,7 @@ class VariantsController:
         if not self.explored():
             self.window.regen.set_preview(None)
             return None
-        from metrics.qualifiers import qualifier_combination
+        from ramure.metrics.qualifiers import qualifier_combination
 
         try:
             params = qualifier_combination(name, self.variant_set.exploration.sweep)
@@ -302,7 +302,7 @@ class VariantsController:
 
     def draw_fruit(self, snap):
         """Build the fruit volumes in the worker (the model caches them) and draw their surface."""
-        from app.desktop.state import fruit_surface
+        from ramure.app.desktop.state import fruit_surface
 
         job = self.controller.submit("fruit", fruit_surface, key="fruit")
         self.fruit_job = job.id

@@ -25,9 +25,9 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
-from app.desktop.state import points_without_fruit, project_to_display
-from app.render import FRUIT_RGB
-from app.render import frame_camera
+from ramure.app.desktop.state import points_without_fruit, project_to_display
+from ramure.app.render import FRUIT_RGB
+from ramure.app.render import frame_camera
 
 CLICK_SLOP = 4  # pixels a click may move and still be a click
 PICK_TOLERANCE = 0.002
@@ -227,7 +227,7 @@ class PlantView(QWidget):
         self.redraw()
 
     def fruit_colors(self, selection):
-        from app.desktop.state import leaf_mask
+        from ramure.app.desktop.state import leaf_mask
 
         rgb = np.empty((self.fruit.n_cells, 3), np.uint8)
         rgb[:] = FRUIT_RGB

@@ -1,6 +1,6 @@
 """The main window: editor, constants, 3D view, regeneration panel and the docks.
 
-:class:`MainWindow` wires widgets to the :class:`~app.desktop.controller.Controller`:
+:class:`MainWindow` wires widgets to the :class:`~ramure.app.desktop.controller.Controller`:
 widgets emit what the user asked for, the controller runs it on the model
 (in the worker when it changes the plant), and the window redraws from the
 snapshot it publishes.  No algorithm lives here.
@@ -17,21 +17,21 @@ from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton,
                                QTabWidget)
 
-from app.desktop import state
-from app.desktop.constants_panel import ConstantsPanel
-from app.desktop.controller import Busy, Controller
-from app.desktop.cut_graph import CutGraphView
-from app.desktop.editor import GrammarEditor
-from app.desktop.files import FileActions
-from app.desktop.gallery import GalleryView
-from app.desktop.pca_cloud import PcaCloudView
-from app.desktop.qt_fix import protect_none
-from app.desktop.regen_panel import RegenPanel
-from app.desktop.string_dock import StringView
-from app.desktop.variants_panel import VariantsController
-from app.desktop.view import PlantView
-from app.model import Explorer
-from lsys.errors import RamureError
+from ramure.app.desktop import state
+from ramure.app.desktop.constants_panel import ConstantsPanel
+from ramure.app.desktop.controller import Busy, Controller
+from ramure.app.desktop.cut_graph import CutGraphView
+from ramure.app.desktop.editor import GrammarEditor
+from ramure.app.desktop.files import FileActions
+from ramure.app.desktop.gallery import GalleryView
+from ramure.app.desktop.pca_cloud import PcaCloudView
+from ramure.app.desktop.qt_fix import protect_none
+from ramure.app.desktop.regen_panel import RegenPanel
+from ramure.app.desktop.string_dock import StringView
+from ramure.app.desktop.variants_panel import VariantsController
+from ramure.app.desktop.view import PlantView
+from ramure.app.model import Explorer
+from ramure.errors import RamureError
 
 TITLE = "Ramure"
 KINSHIP_HINT = ("Kinship colours: red = the selected leaf and its closest kin, through yellow and green, "
@@ -41,11 +41,7 @@ KINSHIP_NEEDS_ONE = "Kinship colours: click exactly one branch to colour the pla
 
 def warm_up():
     """Import the optional packages the first pick needs now, not on the first click."""
-    for name in ("metrics",):
-        try:
-            importlib.import_module(name)
-        except Exception:  # noqa: BLE001 - missing or broken: reported when used
-            pass
+    importlib.import_module("ramure.metrics")
 
 
 class MainWindow(QMainWindow):
@@ -174,7 +170,7 @@ class MainWindow(QMainWindow):
         self.fruit_action = self.variants.fruit_action(v)
 
         self.variants.build_menu(bar.addMenu("Va&riants"))
-        from app.desktop.study import StudyMenu
+        from ramure.app.desktop.study import StudyMenu
 
         self.study_menu = StudyMenu(self, bar.addMenu("&Study"))
 

@@ -1,6 +1,6 @@
 """Ramure in Jupyter (ipywidgets 8, JupyterLab 4): the explorer, study sessions, the study report.
 
->>> from app.jupyter import Explorer
+>>> from ramure.app.jupyter import Explorer
 >>> ex = Explorer("grammars/honda_sympodial.lsys", n=4, view="static")
 >>> len(ex.plant) > 0, ex.selection, ex.history
 (True, [], [])
@@ -8,9 +8,9 @@
 Display ``ex`` in a cell to get the widgets; everything they do is also a
 method (``ex.select``, ``ex.regrow``, ``ex.explore_variants``...).
 """
-from app.jupyter._ui import side_by_side
-from app.jupyter.explorer import Explorer
-from app.jupyter.report import report_html, show_report
-from app.jupyter.study import StudyPanel
+from ramure.app.jupyter._ui import side_by_side
+from ramure.app.jupyter.explorer import Explorer
+from ramure.app.jupyter.report import report_html, show_report
+from ramure.app.jupyter.study import StudyPanel
 
 __all__ = ["Explorer", "StudyPanel", "report_html", "show_report", "side_by_side"]

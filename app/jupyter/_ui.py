@@ -11,7 +11,7 @@ import re
 
 import ipywidgets as W
 
-from lsys.errors import ValueRefused
+from ramure.errors import ValueRefused
 
 _COLORS = {"error": "#b00020", "info": "#1b5e20", "note": "#555"}
 

@@ -1,9 +1,9 @@
 """The notebook explorer: edit, select, regenerate and browse variants of one plant.
 
-:class:`Explorer` is a thin ipywidgets front end over :class:`app.model.Explorer`
+:class:`Explorer` is a thin ipywidgets front end over :class:`ramure.app.model.Explorer`
 (``ex.model``), the GUI-free state the desktop window also uses.  Every button
 and every method below goes through the model; a refused input (a
-:class:`~lsys.errors.RamureError`) is shown on the explorer's message line —
+:class:`~ramure.lsys.errors.RamureError`) is shown on the explorer's message line —
 never as a traceback — and leaves the plant as it was.  Code and clicks mix
 freely: ``ex.plant``, ``ex.selection``, ``ex.history`` and ``ex.session`` are
 the live state.
@@ -24,14 +24,15 @@ import pathlib
 
 import ipywidgets as W
 
-from app.jupyter._ui import MessageLine, button, on_value
-from app.jupyter.grammar import GrammarPanel
-from app.jupyter.selection import SelectionPanel, TreeBrowser
-from app.jupyter.variants import VariantPanel, qualifier_summary
-from app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
-from app.model import Explorer as Model
-from app.model import finite_number as _number  # a finite number or a refusal naming it
-from lsys.errors import GrammarError, RamureError, ValueRefused
+import ramure.grammars as grammar_files
+from ramure.app.jupyter._ui import MessageLine, button, on_value
+from ramure.app.jupyter.grammar import GrammarPanel
+from ramure.app.jupyter.selection import SelectionPanel, TreeBrowser
+from ramure.app.jupyter.variants import VariantPanel, qualifier_summary
+from ramure.app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
+from ramure.app.model import Explorer as Model
+from ramure.app.model import finite_number as _number  # a finite number or a refusal naming it
+from ramure.errors import GrammarError, RamureError, ValueRefused
 
 PLACEHOLDER = "n: 0\nw: F"  # the plant shown while the given grammar does not parse
 
@@ -41,6 +42,8 @@ def _open_model(source, n, seed):
     placeholder plant, the error and the text to show in the editor."""
     is_path = isinstance(source, pathlib.Path) or (isinstance(source, str) and "\n" not in source
                                                    and source.endswith(".lsys"))
+    if is_path:
+        source = grammar_files.resolve(source)
     if is_path and not pathlib.Path(source).is_file():
         raise RamureError(f"{source}: no such grammar file")
     try:
@@ -53,9 +56,9 @@ def _open_model(source, n, seed):
 
 
 def fruit_presets() -> list:
-    """The volumetric fruit presets (:data:`gmap.fruit.PRESETS`); empty without :mod:`gmap`."""
+    """The volumetric fruit presets (:data:`ramure.gmap.fruit.PRESETS`); empty without :mod:`ramure.gmap`."""
     try:
-        from gmap.fruit import PRESETS
+        from ramure.gmap.fruit import PRESETS
     except ImportError:
         return []
     return list(PRESETS)
@@ -170,7 +173,7 @@ class Explorer:
     # -- live state ----------------------------------------------------------
     @property
     def plant(self):
-        """The current :class:`~lsys.Derivation` (its string, tree and ``skeleton()``)."""
+        """The current :class:`~ramure.lsys.Derivation` (its string, tree and ``skeleton()``)."""
         return self.model.derivation
 
     @property
@@ -179,7 +182,7 @@ class Explorer:
 
     @property
     def session(self):
-        """The editing :class:`~lsys.regen.Session` (``save``, ``edits``, ``derivation``)."""
+        """The editing :class:`~ramure.lsys.regen.Session` (``save``, ``edits``, ``derivation``)."""
         return self.model.session
 
     @property
@@ -325,7 +328,7 @@ class Explorer:
 
     def apply_qualifier(self, name):
         """Regrow the cut toward qualifier ``name`` ("dense", "rond", …): candidates are tried
-        until the selection's metrics move its way (:meth:`app.model.Explorer.apply_qualifier`);
+        until the selection's metrics move its way (:meth:`ramure.app.model.Explorer.apply_qualifier`);
         the message line says whether they did, e.g. "denser: density 1772 → 2172"."""
         if not name:
             self.message.show("choose a qualifier first", "note")
@@ -338,7 +341,7 @@ class Explorer:
 
     def regrow_fruit(self, seed=None, preset=None, size=None):
         """New volumetric fruit for the selected fruit: a new seed (or ``seed``), and optionally
-        another ``preset`` (:data:`gmap.fruit.PRESETS`, e.g. ``"pear"``) and ``size``."""
+        another ``preset`` (:data:`ramure.gmap.fruit.PRESETS`, e.g. ``"pear"``) and ``size``."""
         def apply():
             settings = {}
             if preset:

@@ -14,7 +14,7 @@ import math
 
 import ipywidgets as W
 
-from app.jupyter._ui import button, message_html, on_value
+from ramure.app.jupyter._ui import button, message_html, on_value
 
 
 def slider_range(value):

@@ -1,12 +1,12 @@
 """The study report inline in a notebook.
 
-:func:`report_html` writes the report with :func:`studies.write_report` and
+:func:`report_html` writes the report with :func:`ramure.studies.write_report` and
 returns its page as one self-contained HTML fragment: figures embedded as
 data URIs and the page's style scoped to the fragment, so it neither needs
 the files next to it nor restyles the notebook.  :func:`show_report` wraps it
 for display.
 
->>> from studies import simulate_study
+>>> from ramure.studies import simulate_study
 >>> html = report_html(simulate_study(participants=2, grammars=1), figures=False)
 >>> "ramure-report" in html and "Co-occurrence" in html
 True
@@ -48,9 +48,9 @@ def report_html(source, out_dir=None, **options) -> str:
     """The study report of ``source`` (a Study, its path or StudyData) as an HTML fragment.
 
     The report files (HTML, PNG, CSV, JSON) go to ``out_dir`` (a temporary
-    folder if None); ``options`` go to :func:`studies.write_report`.
+    folder if None); ``options`` go to :func:`ramure.studies.write_report`.
     """
-    from studies import write_report
+    from ramure.studies import write_report
 
     with tempfile.TemporaryDirectory() as tmp:
         folder = pathlib.Path(out_dir) if out_dir is not None else pathlib.Path(tmp)

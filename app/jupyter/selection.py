@@ -2,9 +2,9 @@
 
 Every tool goes through the explorer's ``select`` (with the mode chosen on the
 panel: replace, add, remove or toggle), so clicks, filters and code all end
-in :meth:`app.model.Explorer.select`.
+in :meth:`ramure.app.model.Explorer.select`.
 
->>> from app.model import Explorer
+>>> from ramure.app.model import Explorer
 >>> m = Explorer("grammars/honda_sympodial.lsys", n=3)
 >>> node_label(m, int(m.derivation.tree.leaves[1]))
 'F(1) · leaf'
@@ -14,8 +14,8 @@ from __future__ import annotations
 import ipywidgets as W
 import numpy as np
 
-from app.jupyter._ui import button, parse_ids, short_list
-from app.model import SELECT_MODES
+from ramure.app.jupyter._ui import button, parse_ids, short_list
+from ramure.app.model import SELECT_MODES
 
 MAX_ROWS = 400  # children listed at once in the tree browser
 

@@ -1,6 +1,6 @@
 """Study mode in the notebook: one participant's test on one grammar.
 
-:class:`StudyPanel` drives a :class:`studies.TestSession`, so every answer is
+:class:`StudyPanel` drives a :class:`ramure.studies.TestSession`, so every answer is
 checked and stored in the study's SQLite file as it is given (one
 transaction each, timed).  The participant
 
@@ -15,7 +15,7 @@ The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answe
 :meth:`~StudyPanel.finish`) that set the widgets and run their handlers.
 
 >>> import tempfile, pathlib
->>> from studies import Study, lattice_picks
+>>> from ramure.studies import Study, lattice_picks
 >>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db", grammars={"honda": lattice_picks()})
 >>> panel = StudyPanel(study, study.add_participant(consent=True), "honda")
 >>> panel.assign({i: 1 if i <= 13 else 2 for i in range(1, 28)})
@@ -31,9 +31,9 @@ import pathlib
 
 import ipywidgets as W
 
-from app.jupyter._ui import MessageLine, button, png_image, png_tag
-from lsys.errors import RamureError
-from studies.likert import LEVELS
+from ramure.app.jupyter._ui import MessageLine, button, png_image, png_tag
+from ramure.errors import RamureError
+from ramure.studies.likert import LEVELS
 
 MAX_GROUPS = 9
 
@@ -119,7 +119,7 @@ class GroupQuestions:
 
 
 class StudyPanel:
-    """A participant's test on ``grammar`` of an open :class:`studies.Study`."""
+    """A participant's test on ``grammar`` of an open :class:`ramure.studies.Study`."""
 
     def __init__(self, study, participant, grammar, thumb_size=96):
         self.study = study

@@ -1,19 +1,19 @@
 """Variant exploration in the notebook: sweep with a progress bar, 27-thumbnail gallery,
 PCA scatter with qualifier boxes, and the qualifier choices.
 
-The work is done by :mod:`metrics` (sweep, PCA, picks, qualifier regions and
+The work is done by :mod:`ramure.metrics` (sweep, PCA, picks, qualifier regions and
 combinations); this panel only runs it and shows it.  A sweep started from
 the button runs in a thread and *Stop* cancels it; a sweep started from code
 (:meth:`VariantPanel.explore`) blocks, updates the same bar, and stops on a
-kernel interrupt.  Without :mod:`metrics` (or before a sweep) the panels say
+kernel interrupt.  Without :mod:`ramure.metrics` (or before a sweep) the panels say
 what is missing instead of failing.
 
 Sweeps start from the session's current constants
-(:meth:`app.model.Explorer.variant_lsystem`), not the file's ``#define``
+(:meth:`ramure.app.model.Explorer.variant_lsystem`), not the file's ``#define``
 values.  Applying a pick regrows the selection's cut (the whole plant when
 nothing is selected) with that variant's parameter combination
-(:meth:`app.model.Explorer.regrow`); applying a qualifier goes through
-:meth:`app.model.Explorer.apply_qualifier`, which tries candidates until the
+(:meth:`ramure.app.model.Explorer.regrow`); applying a qualifier goes through
+:meth:`ramure.app.model.Explorer.apply_qualifier`, which tries candidates until the
 selection's metrics move the qualifier's way and keeps one undoable edit.
 
 >>> from types import SimpleNamespace as NS
@@ -32,10 +32,10 @@ import threading
 import ipywidgets as W
 import numpy as np
 
-from app.jupyter._ui import button, message_html, png_image, png_tag
-from app.jupyter.scatter import pca_png
-from app.jupyter.view import RENDER_LOCK
-from lsys.errors import RamureError
+from ramure.app.jupyter._ui import button, message_html, png_image, png_tag
+from ramure.app.jupyter.scatter import pca_png
+from ramure.app.jupyter.view import RENDER_LOCK
+from ramure.errors import RamureError
 
 N_PICKS = 27
 
@@ -43,7 +43,7 @@ N_PICKS = 27
 def metrics_status() -> str | None:
     """None when the variant exploration can run, else why not."""
     try:
-        from metrics import SweepCancelled, VariantSweep, explore  # noqa: F401
+        from ramure.metrics import SweepCancelled, VariantSweep, explore  # noqa: F401
     except ImportError as exc:
         return f"variant exploration is not available ({exc})"
     return None
@@ -52,9 +52,9 @@ def metrics_status() -> str | None:
 def qualifier_tools():
     """``(VOCABULARY, QualifierStore)`` or None if metrics lacks them."""
     try:
-        from metrics.apply import apply_qualifier  # noqa: F401 - what Explorer.apply_qualifier runs
-        from metrics.qualifiers import VOCABULARY
-        from metrics.store import QualifierStore
+        from ramure.metrics.apply import apply_qualifier  # noqa: F401 - what Explorer.apply_qualifier runs
+        from ramure.metrics.qualifiers import VOCABULARY
+        from ramure.metrics.store import QualifierStore
     except ImportError:
         return None
     return VOCABULARY, QualifierStore
@@ -161,7 +161,7 @@ class VariantPanel:
             raise RamureError(reason)
         if self.running is not None and self.running.is_alive():
             raise RamureError("an exploration is already running: stop it first")
-        from metrics import VariantSweep
+        from ramure.metrics import VariantSweep
 
         for widget, value in ((self.n, n), (self.beta, beta), (self.jobs, n_jobs)):
             if value is not None:
@@ -188,7 +188,7 @@ class VariantPanel:
             self.app.message.show(err, "error")
 
     def _run(self, sweep, lsystem, thumbnails):
-        from metrics import SweepCancelled, explore
+        from ramure.metrics import SweepCancelled, explore
 
         self.start.disabled, self.stop_button.disabled = True, False
         self.note.value = message_html("exploring…", "note")
@@ -212,9 +212,9 @@ class VariantPanel:
         return exp
 
     def _render_thumbnails(self, exp, batch=3):
-        """The 27 pick thumbnails (PNG bytes) by :mod:`app.thumbnails`, a few at a time so the
+        """The 27 pick thumbnails (PNG bytes) by :mod:`ramure.app.thumbnails`, a few at a time so the
         bar moves and *Stop* is honoured between batches."""
-        from app.thumbnails import render_variants
+        from ramure.app.thumbnails import render_variants
 
         size = (self.thumb_size * 2, self.thumb_size * 2)
         images = []
@@ -299,7 +299,7 @@ class VariantPanel:
 
     def apply_qualifier(self, name):
         """Regrow the model's selection (or whole plant) toward qualifier ``name`` through
-        :meth:`app.model.Explorer.apply_qualifier`, with the study regions when loaded.
+        :meth:`ramure.app.model.Explorer.apply_qualifier`, with the study regions when loaded.
         Without an exploration of the current constants, one is run first (blocking)."""
         if qualifier_tools() is None:
             raise RamureError("qualifiers are not available (the metrics qualifier modules are missing)")
@@ -349,7 +349,7 @@ class VariantPanel:
     def save(self, directory) -> dict:
         """Write the exploration (``variants.csv``, ``pca.json``, ``picks.json``) and the
         thumbnails (``thumbs/pick_NN.png``) to ``directory``: what a study reads."""
-        from metrics import write_exploration
+        from ramure.metrics import write_exploration
 
         exp = self._need()
         out = pathlib.Path(directory)

@@ -10,7 +10,7 @@ installed and pyvista's notebook backend is not set to ``static``
 (``PYVISTA_JUPYTER_BACKEND=static``), else the PNG.  Either way :meth:`PlantView.png` gives the current picture, which is
 also what a notebook shows where no widget can run (nbconvert, GitHub).
 
->>> from app.model import Explorer
+>>> from ramure.app.model import Explorer
 >>> png = plant_png(Explorer("grammars/honda_sympodial.lsys", n=4), size=(120, 120))
 >>> png[:4] == b"\\x89PNG"
 True
@@ -23,9 +23,9 @@ import threading
 
 import numpy as np
 
-from app.jupyter._ui import png_image
-from app.render import FRUIT_RGB, plant_colors as base_colors
-from app.render import _headless_setup, frame_camera
+from ramure.app.jupyter._ui import png_image
+from ramure.app.render import FRUIT_RGB, plant_colors as base_colors
+from ramure.app.render import _headless_setup, frame_camera
 
 CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
 VIEWS = ("iso", "front", "side", "top")
@@ -81,7 +81,7 @@ def _screenshot(size, draw, background="white") -> bytes:
 def fit_view(plotter, points, fill=0.9, max_points=20_000):
     """Pan and zoom the camera so ``points`` (n,3) fill ``fill`` of the picture, centred.
 
-    :func:`app.render.frame_camera` fits the bounding *sphere*, which leaves a tall plant
+    :func:`ramure.app.render.frame_camera` fits the bounding *sphere*, which leaves a tall plant
     seen from above off-centre (its top near the edge, empty space below); this measures
     where the points land on screen and corrects for it.
     """
@@ -176,14 +176,14 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, fill=0.9) -> byt
 
 def fruit_cut_png(model, leaf, size=(420, 420), volume_levels=1) -> bytes | None:
     """PNG of fruit ``leaf`` cut open across its axis, volume cells coloured by tissue
-    (:data:`gmap.tissue.COLORS`) with a legend; None without fruit or :mod:`gmap`."""
+    (:data:`ramure.gmap.tissue.COLORS`) with a legend; None without fruit or :mod:`ramure.gmap`."""
     if int(leaf) not in model.fruit_ids():
         return None
     try:
-        from app.commands.fruit import tissue_rgb
-        from gmap.cut import plane_cut
-        from gmap.pyvista import to_unstructured_grid
-        from gmap.tissue import COLORS, TISSUES
+        from ramure.app.commands.fruit import tissue_rgb
+        from ramure.gmap.cut import plane_cut
+        from ramure.gmap.pyvista import to_unstructured_grid
+        from ramure.gmap.tissue import COLORS, TISSUES
     except ImportError:
         return None
     grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
@@ -224,7 +224,7 @@ def in_kernel() -> bool:
 def resolve_backend(backend="auto") -> str:
     """``"static"`` or a trame mode (``"trame"``, ``"server"``, ``"client"``)."""
     if backend not in BACKENDS:
-        from lsys.errors import ValueRefused
+        from ramure.errors import ValueRefused
 
         raise ValueRefused(f"view backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
     if backend == "static" or not trame_available():

@@ -4,9 +4,9 @@ import json
 import numpy as np
 import pytest
 
-from app.model import Explorer, leaves_in_rectangle
-from lsys import RamureError
-from lsys.regen import Session
+from ramure.app.model import Explorer, leaves_in_rectangle
+from ramure.lsys import RamureError
+from ramure.lsys.regen import Session
 
 HONDA = "grammars/honda_sympodial.lsys"
 
@@ -139,7 +139,7 @@ def test_regrow_one_fruit_changes_only_that_fruit():
 
 
 def test_apply_qualifier_makes_the_selection_denser_and_undoes():
-    from metrics import VariantSweep
+    from ramure.metrics import VariantSweep
 
     ex = Explorer(HONDA, n=5)
     ex.set_constant("a2", 50)  # the sweep must start from the session's constants

@@ -58,9 +58,9 @@ def make_window(qtbot, tmp_path):
     """``make_window(source=HONDA, n=6)`` -> a shown MainWindow with its plant drawn."""
     from PySide6.QtCore import QSettings
 
-    from app.desktop.launch import make_application
-    from app.desktop.window import MainWindow
-    from app.model import Explorer
+    from ramure.app.desktop.launch import make_application
+    from ramure.app.desktop.window import MainWindow
+    from ramure.app.model import Explorer
 
     make_application()
     windows = []

@@ -1,4 +1,4 @@
-"""``python -m app.desktop``: the headless screenshot run of ``make run`` and its errors."""
+"""``python -m ramure.app.desktop``: the headless screenshot run of ``make run`` and its errors."""
 from __future__ import annotations
 
 import os
@@ -8,7 +8,7 @@ import sys
 import pytest
 from PySide6.QtGui import QImage
 
-from app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.thumbnails import pixel_variance
 from desktop_helpers import HONDA, ROOT
 
 pytestmark = pytest.mark.gui
@@ -16,7 +16,7 @@ pytestmark = pytest.mark.gui
 
 def run(*args, timeout=60):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run([sys.executable, "-m", "app.desktop", *map(str, args)], cwd=ROOT, env=env,
+    return subprocess.run([sys.executable, "-m", "ramure.app.desktop", *map(str, args)], cwd=ROOT, env=env,
                           capture_output=True, text=True, timeout=timeout)
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.thumbnails import pixel_variance
 from desktop_helpers import ROOT, settle
 
 pytestmark = pytest.mark.gui

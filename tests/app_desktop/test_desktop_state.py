@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from app.desktop import state, variants
-from app.model import Explorer
+from ramure.app.desktop import state, variants
+from ramure.app.model import Explorer
 from desktop_helpers import HONDA, ROOT
-from lsys.errors import RamureError
+from ramure.errors import RamureError
 
 
 def test_doctests():
@@ -108,7 +108,7 @@ def test_load_exploration(tmp_path):
 
 
 def test_variant_skeleton_applies_the_combination_to_one_rule():
-    from lsys import LSystem
+    from ramure.lsys import LSystem
 
     ls = LSystem.from_file(ROOT / "grammars" / "honda_sympodial.lsys")
     base = variants.variant_skeleton(ls, 5, 0, None)

@@ -10,7 +10,7 @@ from PySide6.QtGui import QDragEnterEvent, QDropEvent
 from PySide6.QtTest import QTest
 from PySide6.QtWidgets import QApplication
 
-from studies import Study, lattice_picks, run_simulation
+from ramure.studies import Study, lattice_picks, run_simulation
 
 pytestmark = pytest.mark.gui
 

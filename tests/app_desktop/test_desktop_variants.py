@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 
-from app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.thumbnails import pixel_variance
 from desktop_helpers import ROOT, settle
 
 pytestmark = pytest.mark.gui
@@ -88,8 +88,8 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
 def test_qualifier_message_names_the_metric():
     from types import SimpleNamespace
 
-    from app.desktop.variants import qualifier_message
-    from metrics.plant import PlantMetrics
+    from ramure.app.desktop.variants import qualifier_message
+    from ramure.metrics.plant import PlantMetrics
 
     before = PlantMetrics(*[1.0] * 10)._replace(branch_density=1772.0)
     after = before._replace(branch_density=2172.4)
@@ -113,7 +113,7 @@ def test_cancel_stops_the_sweep(make_window, qtbot):
 
 
 def test_open_exploration_folder(make_window, qtbot, tmp_path):
-    from metrics import explore, write_exploration
+    from ramure.metrics import explore, write_exploration
 
     write_exploration(explore(ROOT / "grammars" / "honda_sympodial.lsys", n=4, n_jobs=1), tmp_path / "exp")
     w = make_window(n=4)
@@ -143,7 +143,7 @@ def test_volumetric_fruit_can_be_picked(make_window, qtbot):
 
 
 def w_fruit_available():
-    from app.desktop.variants_panel import fruit_available
+    from ramure.app.desktop.variants_panel import fruit_available
 
     return fruit_available()
 

@@ -10,6 +10,6 @@ from jupyter_helpers import HONDA  # noqa: E402
 
 @pytest.fixture
 def explorer():
-    from app.jupyter import Explorer
+    from ramure.app.jupyter import Explorer
 
     return Explorer(HONDA, n=5, view="static", size=(200, 200), cache=False)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.jupyter import Explorer
+from ramure.app.jupyter import Explorer
 from jupyter_helpers import HONDA, ROOT
 
 pytest.importorskip("gmap")

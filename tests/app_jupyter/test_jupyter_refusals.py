@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.jupyter import Explorer
+from ramure.app.jupyter import Explorer
 from jupyter_helpers import HONDA
 
 

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import pytest
 
-from app.jupyter import StudyPanel, report_html
-from studies import Study, StudyInputError, lattice_picks, load_study_data, simulate_study
-from studies.picks import Pick
+from ramure.app.jupyter import StudyPanel, report_html
+from ramure.studies import Study, StudyInputError, lattice_picks, load_study_data, simulate_study
+from ramure.studies.picks import Pick
 
 
 @pytest.fixture
@@ -98,8 +98,8 @@ def test_answer_and_qualifier_sync(panel):
 
 
 def test_thumbnails_from_pick_images(tmp_path):
-    from app.jupyter.view import mesh_png
-    from app.model import Explorer
+    from ramure.app.jupyter.view import mesh_png
+    from ramure.app.model import Explorer
 
     png = mesh_png(Explorer("n: 1\nw: F").mesh, size=(32, 32))
     (tmp_path / "img.png").write_bytes(png)

@@ -8,8 +8,8 @@ import pytest
 
 pytest.importorskip("metrics")
 
-from app.jupyter import Explorer  # noqa: E402
-from app.jupyter import variants as variants_module  # noqa: E402
+from ramure.app.jupyter import Explorer  # noqa: E402
+from ramure.app.jupyter import variants as variants_module  # noqa: E402
 from jupyter_helpers import HONDA  # noqa: E402
 
 
@@ -65,7 +65,7 @@ def test_gallery_button_applies_the_pick(ex):
 
 
 def test_qualifier_dropdown_makes_the_selection_denser(ex):
-    from metrics.apply import active_rules, roots_metrics
+    from ramure.metrics.apply import active_rules, roots_metrics
 
     ex.select_where(min_order=2)
     roots = ex.model.plan().roots
@@ -85,7 +85,7 @@ def test_qualifier_dropdown_makes_the_selection_denser(ex):
 
 
 def test_qualifier_that_cannot_improve_says_so(ex, monkeypatch):
-    from metrics import apply as apply_module
+    from ramure.metrics import apply as apply_module
 
     real = apply_module.apply_qualifier
 
@@ -155,7 +155,7 @@ def test_kernel_interrupt_stops_a_blocking_exploration(monkeypatch):
 
 
 def test_save_writes_what_a_study_reads(ex, tmp_path):
-    from studies import Study
+    from ramure.studies import Study
 
     ex.variants.save(tmp_path / "honda")
     picks = json.loads((tmp_path / "honda" / "picks.json").read_text())
@@ -167,7 +167,7 @@ def test_save_writes_what_a_study_reads(ex, tmp_path):
 
 
 def test_study_regions_come_first_and_are_drawn(ex, tmp_path):
-    from metrics.store import QualifierStore
+    from ramure.metrics.store import QualifierStore
 
     exp = ex.variants.exploration
     near = np.argsort(np.linalg.norm(exp.points - exp.picks.points[0], axis=1))[:6]

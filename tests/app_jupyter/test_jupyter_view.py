@@ -4,12 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.jupyter import Explorer
-from app.jupyter import view as view_module
-from app.jupyter.view import CUT, cut_leaves, resolve_backend, view_colors
-from app.render import BARK
+from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import view as view_module
+from ramure.app.jupyter.view import CUT, cut_leaves, resolve_backend, view_colors
+from ramure.app.render import BARK
 from jupyter_helpers import HONDA
-from lsys.errors import ValueRefused
+from ramure.errors import ValueRefused
 
 
 def test_backend_resolution(monkeypatch):

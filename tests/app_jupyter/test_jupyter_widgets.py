@@ -6,10 +6,10 @@ import base64
 import numpy as np
 import pytest
 
-from app.jupyter import Explorer
-from app.jupyter._ui import parse_ids
-from app.model import Explorer as Model
-from lsys.regen import Session
+from ramure.app.jupyter import Explorer
+from ramure.app.jupyter._ui import parse_ids
+from ramure.app.model import Explorer as Model
+from ramure.lsys.regen import Session
 from jupyter_helpers import HONDA, red_pixels
 
 
@@ -46,7 +46,7 @@ def test_bad_grammar_at_start_opens_with_the_error():
 
 
 def test_missing_file_is_refused():
-    from lsys.errors import RamureError
+    from ramure.errors import RamureError
 
     with pytest.raises(RamureError, match="no such grammar file"):
         Explorer("grammars/nope.lsys", view="static")

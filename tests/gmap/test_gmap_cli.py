@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from app.cli import main
+from ramure.app.cli import main
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -63,7 +63,7 @@ def test_user_errors_print_one_line_and_exit_2(capsys, argv, message):
 
 def test_png_render_of_a_cut_tomato(tmp_path):
     out = tmp_path / "tomato.png"
-    cmd = [sys.executable, "-m", "app.cli", "fruit", "--subdivide", "volume:1", "--cut", "z=0",
+    cmd = [sys.executable, "-m", "ramure.app.cli", "fruit", "--subdivide", "volume:1", "--cut", "z=0",
            "--size", "320x240", "-o", str(out)]
     if not os.environ.get("DISPLAY"):
         if shutil.which("xvfb-run") is None:

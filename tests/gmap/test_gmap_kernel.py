@@ -4,8 +4,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gmap import GMap3, GMapError
-from lsys.errors import RamureError, ValueRefused
+from ramure.gmap import GMap3, GMapError
+from ramure.errors import RamureError, ValueRefused
 
 
 def cube_pair(sizes=((1.0, 1.0, 1.0), (1.0, 1.0, 1.0))):

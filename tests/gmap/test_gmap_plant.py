@@ -4,10 +4,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from gmap.errors import ValueRefused
-from gmap.plant import fruits_from_organs, fruits_from_skeleton
-from gmap.pyvista import to_unstructured_grid
-from gmap.tissue import CODES
+from ramure.gmap.errors import ValueRefused
+from ramure.gmap.plant import fruits_from_organs, fruits_from_skeleton
+from ramure.gmap.pyvista import to_unstructured_grid
+from ramure.gmap.tissue import CODES
 
 
 def organs(k=3):
@@ -99,7 +99,7 @@ def test_fruits_from_a_duck_typed_skeleton():
 
 
 def test_fruits_of_the_fruit_tree_grammar():
-    from lsys import LSystem
+    from ramure.lsys import LSystem
 
     sk = LSystem.from_file("grammars/fruit_tree.lsys").derive().skeleton()
     is_fruit = np.array([k == "Fruit" for k in sk.organs.kind])

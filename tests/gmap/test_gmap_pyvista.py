@@ -3,12 +3,12 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from gmap import GMap3, subdivide
-from gmap.cut import parse_plane, plane_cut
-from gmap.errors import ValueRefused
-from gmap.fruit import build_fruit
-from gmap.pyvista import boundary_polydata, to_unstructured_grid
-from gmap.tissue import TISSUES
+from ramure.gmap import GMap3, subdivide
+from ramure.gmap.cut import parse_plane, plane_cut
+from ramure.gmap.errors import ValueRefused
+from ramure.gmap.fruit import build_fruit
+from ramure.gmap.pyvista import boundary_polydata, to_unstructured_grid
+from ramure.gmap.tissue import TISSUES
 
 
 @pytest.fixture(scope="module")

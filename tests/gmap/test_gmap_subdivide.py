@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from gmap import GMap3, subdivide, sublabel_name
-from gmap.fruit import build_fruit
+from ramure.gmap import GMap3, subdivide, sublabel_name
+from ramure.gmap.fruit import build_fruit
 
 
 @pytest.fixture(scope="module")
@@ -127,7 +127,7 @@ def test_selected_volume_surface_subdivision_keeps_neighbours_conforming():
 
 
 def test_negative_levels_are_refused(tomato):
-    from lsys.errors import ValueRefused
+    from ramure.errors import ValueRefused
 
     with pytest.raises(ValueRefused):
         subdivide.surface(tomato, -1)

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from gmap.fruit import build_fruit
-from gmap.pyvista import to_unstructured_grid
-from gmap.tissue import CODES, TISSUES, layer_tissues, tissue_counts
+from ramure.gmap.fruit import build_fruit
+from ramure.gmap.pyvista import to_unstructured_grid
+from ramure.gmap.tissue import CODES, TISSUES, layer_tissues, tissue_counts
 
 
 @pytest.fixture(scope="module")

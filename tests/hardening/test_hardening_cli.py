@@ -1,7 +1,7 @@
 """Every ``ramure`` command with bad input: exit 2, one clear line naming the problem, no traceback.
 
 Cases run in groups: one child process per group calls ``app.cli.main`` for each case
-(``python -m app.cli`` startup is most of the cost), and a few run as the real command.
+(``python -m ramure.app.cli`` startup is most of the cost), and a few run as the real command.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ G = "grammars/honda_sympodial.lsys"
 
 _CHILD = textwrap.dedent("""
     import contextlib, io, json, sys, traceback
-    from app.cli import main
+    from ramure.app.cli import main
     out = []
     for argv in json.loads(sys.argv[1]):
         err = io.StringIO()
@@ -146,7 +146,7 @@ def test_nothing_is_left_behind_by_refused_outputs(places):
     (["regen", G, "-n", "3", "--select", "10-5"], "reversed"),
 ])
 def test_real_command_prints_one_line_and_exits_2(argv, words):
-    proc = subprocess.run([sys.executable, "-m", "app.cli", *argv], cwd=ROOT, capture_output=True,
+    proc = subprocess.run([sys.executable, "-m", "ramure.app.cli", *argv], cwd=ROOT, capture_output=True,
                           text=True, timeout=120)
     assert proc.returncode == 2 and words in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1 and proc.stdout == ""

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lsys import DerivationError, GrammarError, LSystem, RamureError, parse_grammar
-from lsys.expr import evaluate_constant, parse_expression
+from ramure.lsys import DerivationError, GrammarError, LSystem, RamureError, parse_grammar
+from ramure.lsys.expr import evaluate_constant, parse_expression
 
 GRAMMARS = sorted((pathlib.Path(__file__).parents[2] / "grammars").glob("*.lsys"))
 TEXTS = [p.read_text(encoding="utf-8") for p in GRAMMARS]

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lsys import LSystem, RamureError
-from lsys.regen import Session
+from ramure.lsys import LSystem, RamureError
+from ramure.lsys.regen import Session
 
 ROOT = pathlib.Path(__file__).parents[2]
 CASES = {"honda_sympodial": 6, "fruit_tree": 4, "context_plant": 12, "stochastic_plant": 4,

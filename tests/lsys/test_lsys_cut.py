@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from networkx.algorithms import flow
 
-from lsys import LSystem, ValueRefused
-from lsys.cut import alpha_table, initial_capacities, kinship, select_roots
+from ramure.lsys import LSystem, ValueRefused
+from ramure.lsys.cut import alpha_table, initial_capacities, kinship, select_roots
 
 
 def ternary(n=3):

@@ -4,7 +4,7 @@ import collections
 import numpy as np
 import pytest
 
-from lsys import LSystem
+from ramure.lsys import LSystem
 
 HISTORY = "n: 2\nw: A(1)\np:\n A(x) -> A(x+1)B(x+1)C(1)\n B(y) -> B(y+3)\n"
 
@@ -145,7 +145,7 @@ def test_large_derivation_is_linear_in_size():
 
 
 def test_runaway_derivation_stops_with_a_clear_error():
-    from lsys import DerivationError
+    from ramure.lsys import DerivationError
 
     ls = LSystem.from_file("grammars/algae.lsys")
     ls.max_modules = 1000

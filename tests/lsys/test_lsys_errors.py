@@ -4,7 +4,7 @@ import sys
 
 import pytest
 
-from lsys import DerivationError, GrammarError, LSystem
+from ramure.lsys import DerivationError, GrammarError, LSystem
 
 BAD = [
     # (text, line, message fragment)
@@ -58,7 +58,7 @@ def test_division_by_zero_names_rule_and_module():
 def test_cli_check_prints_error_without_traceback(tmp_path):
     bad = tmp_path / "bad.lsys"
     bad.write_text("n: 2\nw: A\np:\n A -> B(q)\n")
-    proc = subprocess.run([sys.executable, "-m", "app.cli", "check", str(bad)],
+    proc = subprocess.run([sys.executable, "-m", "ramure.app.cli", "check", str(bad)],
                           capture_output=True, text=True)
     assert proc.returncode == 2
     assert "line 4" in proc.stderr and "unknown name 'q'" in proc.stderr
@@ -77,6 +77,6 @@ def test_unknown_constant_override_refused():
     (["derive", "missing.lsys"], "No such file"),
 ])
 def test_cli_user_errors_exit_2_without_traceback(argv, fragment):
-    proc = subprocess.run([sys.executable, "-m", "app.cli", *argv], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "ramure.app.cli", *argv], capture_output=True, text=True)
     assert proc.returncode == 2, proc.stderr
     assert fragment in proc.stderr and "Traceback" not in proc.stderr

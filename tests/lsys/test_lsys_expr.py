@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from lsys.errors import GrammarError
-from lsys.expr import compile_expression, parse_expression
+from ramure.errors import GrammarError
+from ramure.lsys.expr import compile_expression, parse_expression
 
 
 def ev(text, **params):

@@ -4,7 +4,7 @@ import pathlib
 import numpy as np
 import pytest
 
-from lsys import LSystem
+from ramure.lsys import LSystem
 
 GRAMMARS = sorted(pathlib.Path("grammars").glob("*.lsys"))
 BRANCHING = [g for g in GRAMMARS if g.stem not in ("algae", "koch_island")]

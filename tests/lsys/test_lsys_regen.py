@@ -4,8 +4,8 @@ import json
 import numpy as np
 import pytest
 
-from lsys import LSystem, RamureError
-from lsys.regen import Session
+from ramure.lsys import LSystem, RamureError
+from ramure.lsys.regen import Session
 
 HONDA = "grammars/honda_sympodial.lsys"
 

@@ -4,9 +4,9 @@ import json
 import numpy as np
 import pytest
 
-from app.cli import main
-from lsys.regen import Session
-from metrics import plant_metrics
+from ramure.app.cli import main
+from ramure.lsys.regen import Session
+from ramure.metrics import plant_metrics
 
 HONDA = "grammars/honda_sympodial.lsys"
 
@@ -91,6 +91,6 @@ def test_user_errors_exit_2_without_traceback(argv, message, capsys, tmp_path, m
 def test_thumbnail_doctests():
     import doctest
 
-    import app.thumbnails
+    import ramure.app.thumbnails as thumbnails
 
-    assert doctest.testmod(app.thumbnails).failed == 0
+    assert doctest.testmod(thumbnails).failed == 0

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from lsys import RamureError
-from metrics import VariantSweep
+from ramure.lsys import RamureError
+from ramure.metrics import VariantSweep
 
 distributed = pytest.importorskip("dask.distributed")
 

@@ -4,9 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from lsys import LSystem, RamureError
-from metrics.obb import (EDGES, frustum_covariance, frustum_points, obb_from_frustums, obb_from_points)
-from metrics.plant import METRIC_NAMES, metric_deltas, metrics_from_arrays, plant_metrics, plant_obb
+from ramure.lsys import LSystem, RamureError
+from ramure.metrics.obb import (EDGES, frustum_covariance, frustum_points, obb_from_frustums, obb_from_points)
+from ramure.metrics.plant import METRIC_NAMES, metric_deltas, metrics_from_arrays, plant_metrics, plant_obb
 
 
 def _rotation(seed):

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from metrics import explore, interest_points, match, match_totals, pick_variants, write_exploration
-from metrics.picks import _greedy, _optimal, _sequential
+from ramure.metrics import explore, interest_points, match, match_totals, pick_variants, write_exploration
+from ramure.metrics.picks import _greedy, _optimal, _sequential
 
 
 def test_interest_points_are_the_lattice_with_pc1_slowest():
@@ -74,7 +74,7 @@ def test_duplicates_failed_and_small_clouds():
 
 
 def test_exploration_files_follow_the_contract(tmp_path):
-    from studies.picks import load_picks
+    from ramure.studies.picks import load_picks
 
     exp = explore("grammars/honda_sympodial.lsys", n=4, n_jobs=1, cache=False)
     paths = write_exploration(exp, tmp_path, images=[f"thumbs/pick_{i:02d}.png" for i in range(1, 28)])

@@ -5,14 +5,14 @@ import sqlite3
 import numpy as np
 import pytest
 
-from lsys import LSystem, RamureError
-from lsys.regen import Session
-from metrics import VariantSweep, explore, plant_metrics
-from metrics.apply import apply_qualifier
-from metrics.plant import METRIC_NAMES
-from metrics.qualifiers import (VOCABULARY, QualifierRegions, canonical_name, qualifier_combination,
+from ramure.lsys import LSystem, RamureError
+from ramure.lsys.regen import Session
+from ramure.metrics import VariantSweep, explore, plant_metrics
+from ramure.metrics.apply import apply_qualifier
+from ramure.metrics.plant import METRIC_NAMES
+from ramure.metrics.qualifiers import (VOCABULARY, QualifierRegions, canonical_name, qualifier_combination,
                                 qualifier_scores, rank_variants, trim_points, vocabulary_name)
-from metrics.store import SCHEMA, QualifierStore
+from ramure.metrics.store import SCHEMA, QualifierStore
 
 # Every shipped branching grammar (n kept small for speed); all have #define constants.
 WITH_CONSTANTS = {"honda_sympodial": 6, "honda_monopodial": 6, "ternary_branching": 4, "abop_tree": 6,
@@ -142,7 +142,7 @@ def test_trimming_and_regions():
 
 
 def test_store_schema_is_shared_with_studies(tmp_path):
-    from studies.qualifiers import QUALIFIER_POINTS_SQL, export_qualifier_points
+    from ramure.studies.qualifiers import QUALIFIER_POINTS_SQL, export_qualifier_points
 
     def columns(sql):
         conn = sqlite3.connect(":memory:")

@@ -4,9 +4,9 @@ import threading
 import numpy as np
 import pytest
 
-from lsys import LSystem, RamureError, ValueRefused
-from metrics import DeltaPCA, SweepCancelled, VariantSweep, variant_design
-from metrics.plant import METRIC_NAMES, plant_metrics
+from ramure.lsys import LSystem, RamureError, ValueRefused
+from ramure.metrics import DeltaPCA, SweepCancelled, VariantSweep, variant_design
+from ramure.metrics.plant import METRIC_NAMES, plant_metrics
 
 HONDA = "grammars/honda_sympodial.lsys"
 

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pytest
 
-from studies.picks import lattice_picks
-from studies.storage import Study
+from ramure.studies.picks import lattice_picks
+from ramure.studies.storage import Study
 
 
 class FakeClock:

@@ -5,13 +5,13 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from studies.analysis import (cooccurrence, grouping_stats, groups_per_test, image_ratings,
+from ramure.studies.analysis import (cooccurrence, grouping_stats, groups_per_test, image_ratings,
                               images_per_group, summary)
-from studies.anova import anova_table, one_way_anova, read_table
-from studies.data import load_study_data
-from studies.errors import StudyInputError
-from studies.picks import lattice_picks
-from studies.storage import Study
+from ramure.studies.anova import anova_table, one_way_anova, read_table
+from ramure.studies.data import load_study_data
+from ramure.studies.errors import StudyInputError
+from ramure.studies.picks import lattice_picks
+from ramure.studies.storage import Study
 
 REST = list(range(7, 28))
 

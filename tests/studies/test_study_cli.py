@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from app.cli import main
-from studies.picks import lattice_picks
+from ramure.app.cli import main
+from ramure.studies.picks import lattice_picks
 
 
 def run(capsys, *argv):
@@ -61,8 +61,8 @@ def test_create_status_analyze_export(tmp_path, capsys):
                        "--grammar", f"tree2={explore / 'tree2'}", "--budget-minutes", "20")
     assert code == 0 and out["grammars"] == ["honda", "tree2"] and out["budget_minutes"] == 20
 
-    from studies.simulate import run_simulation
-    from studies.storage import Study
+    from ramure.studies.simulate import run_simulation
+    from ramure.studies.storage import Study
     with Study.open(db) as study:
         run_simulation(study, participants=4, seed=1)
 

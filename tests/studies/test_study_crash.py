@@ -9,8 +9,8 @@ import textwrap
 
 import pytest
 
-from studies.picks import lattice_picks
-from studies.storage import Study
+from ramure.studies.picks import lattice_picks
+from ramure.studies.storage import Study
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -19,7 +19,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 # the last answer it keeps a write transaction open (an answer being typed).
 CHILD = textwrap.dedent("""
     import sys, time
-    from studies.storage import Study
+    from ramure.studies.storage import Study
     def committed(*args):
         sys.stdout.write(" ".join(map(str, args)) + chr(10))
         sys.stdout.flush()

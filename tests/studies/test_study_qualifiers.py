@@ -7,12 +7,12 @@ import sqlite3
 import pytest
 from test_study_analysis import answer
 
-from studies.data import load_study_data
-from studies.errors import StudyInputError
-from studies.picks import lattice_picks
-from studies.qualifiers import (SynonymTable, export_qualifier_points, labelled_points, normalise_text,
+from ramure.studies.data import load_study_data
+from ramure.studies.errors import StudyInputError
+from ramure.studies.picks import lattice_picks
+from ramure.studies.qualifiers import (SynonymTable, export_qualifier_points, labelled_points, normalise_text,
                                 qualifier_frequencies)
-from studies.storage import Study
+from ramure.studies.storage import Study
 
 VOCABULARY = {"small": "petit", "large": "grand", "sparse": "épars", "dense": "dense",
               "symmetric": "symétrique", "asymmetric": "asymétrique", "realistic": "réaliste",

@@ -7,10 +7,10 @@ import sqlite3
 
 import numpy as np
 
-from app.cli import main
-from studies.analysis import cooccurrence, groups_per_test
-from studies.picks import lattice_picks, synthetic_grammars
-from studies.simulate import SimulatedParticipant, simulate_study
+from ramure.app.cli import main
+from ramure.studies.analysis import cooccurrence, groups_per_test
+from ramure.studies.picks import lattice_picks, synthetic_grammars
+from ramure.studies.simulate import SimulatedParticipant, simulate_study
 
 
 def test_lattice_picks_order_pc1_slowest():

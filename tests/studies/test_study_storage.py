@@ -7,9 +7,9 @@ import sqlite3
 import pytest
 from conftest import complete
 
-from studies.errors import StudyInputError
-from studies.picks import lattice_picks
-from studies.storage import Study
+from ramure.studies.errors import StudyInputError
+from ramure.studies.picks import lattice_picks
+from ramure.studies.storage import Study
 
 
 def _pick_dicts(seed=0):
@@ -250,8 +250,8 @@ def test_foreign_keys_are_enforced(study):
 
 
 def test_withdrawn_consent_excludes_answers_and_delete_erases_them(study, tmp_path):
-    from studies.data import load_study_data
-    from studies.export import export_csv
+    from ramure.studies.data import load_study_data
+    from ramure.studies.export import export_csv
 
     a, b = study.add_participant(consent=True), study.add_participant(consent=True)
     complete(study.session(a, "honda"))
