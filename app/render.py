@@ -16,7 +16,7 @@ FRUIT = tuple(c / 255 for c in FRUIT_RGB)
 SELECTED = (1.0, 0.0, 0.0)
 
 
-def _headless_setup():
+def headless_setup():
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
@@ -48,7 +48,7 @@ def frame_camera(plotter, bounds, view="front"):
 def render_mesh(mesh, path, size=(800, 800), selected=(), view="front", background="white",
                 title=None):
     """Render a plant mesh (cell data ``kind``/``leaf_id``) to a PNG file; returns the path."""
-    _headless_setup()
+    headless_setup()
     import pyvista as pv
 
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
@@ -72,7 +72,7 @@ def render_plant(skeleton, path, **kwargs):
 
 def export_gltf(mesh, path):
     """glTF of a plant mesh through a pyvista off-screen scene (VTK's glTF exporter)."""
-    _headless_setup()
+    headless_setup()
     import pyvista as pv
 
     plotter = pv.Plotter(off_screen=True)

@@ -24,7 +24,7 @@ import pathlib
 
 import numpy as np
 
-from ramure.app.render import BARK, _headless_setup, frame_camera, plant_colors
+from ramure.app.render import BARK, headless_setup, frame_camera, plant_colors
 
 THUMB_DIR = "thumbs"
 
@@ -41,7 +41,7 @@ def _segment_lines(sk):
 
 def _render_many(skeletons, paths, size=(256, 256), view="front", captions=None, zoom=1.15):
     """Render skeletons to PNG files with one reused off-screen plotter."""
-    _headless_setup()
+    headless_setup()
     import pyvista as pv
 
     plotter = pv.Plotter(off_screen=True, window_size=list(size))

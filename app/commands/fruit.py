@@ -65,10 +65,10 @@ def tissue_rgb(tissue):
 
 def render_fruit(grid, path, size=(800, 800), cut_normal=None, title=None):
     """Render a fruit grid (cell data ``tissue``) off-screen to PNG, coloured by tissue."""
-    from ramure.app.render import _headless_setup
+    from ramure.app.render import headless_setup
     from ramure.gmap.tissue import COLORS, TISSUES
 
-    _headless_setup()
+    headless_setup()
     import pyvista as pv
 
     plotter = pv.Plotter(off_screen=True, window_size=list(size))

@@ -25,7 +25,7 @@ import numpy as np
 
 from ramure.app.jupyter._ui import png_image
 from ramure.app.render import FRUIT_RGB, plant_colors as base_colors
-from ramure.app.render import _headless_setup, frame_camera
+from ramure.app.render import headless_setup, frame_camera
 
 CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
 VIEWS = ("iso", "front", "side", "top")
@@ -63,7 +63,7 @@ def view_colors(model, show_cut=False):
 def _screenshot(size, draw, background="white") -> bytes:
     """Render off-screen (one render at a time): ``draw(plotter)`` adds the meshes and places
     the camera; returns the PNG bytes."""
-    _headless_setup()
+    headless_setup()
     import pyvista as pv
 
     with RENDER_LOCK:
@@ -294,7 +294,7 @@ class TrameView:
     """pyvista's trame view of the plant, with click picking (needs ``trame-pyvista``)."""
 
     def __init__(self, owner, mode="trame"):
-        _headless_setup()
+        headless_setup()
         import pyvista as pv
 
         self.owner = owner
