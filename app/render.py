@@ -16,7 +16,8 @@ FRUIT = tuple(c / 255 for c in FRUIT_RGB)
 SELECTED = (1.0, 0.0, 0.0)
 
 
-def headless_setup():
+def headless_setup() -> None:
+    """Off-screen rendering without a display: ask VTK for an EGL window (no X needed)."""
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
