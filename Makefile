@@ -5,14 +5,14 @@ VPY     := $(VENV)/bin/python
 STAMP   := $(VENV)/.installed
 GRAMMAR ?= grammars/honda_sympodial.lsys
 
-.PHONY: run test bench venv sysdeps clean
+.PHONY: run test bench venv sysdeps clean docs lint
 
 $(VPY):
 	$(PY) -m venv $(VENV)
 
 $(STAMP): pyproject.toml | $(VPY)
 	$(VPY) -m pip install -q --upgrade pip
-	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,test]"
+	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,test,docs]"
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -40,6 +40,17 @@ test: venv sysdeps
 	  $(VPY) -m pytest; \
 	fi
 
+# The documentation site: API reference from the docstrings, the grammar reference and a
+# gallery built by running examples/gallery/plot_*.py; any warning fails the build.
+docs: venv
+	rm -rf docs/_build docs/auto_examples docs/api
+	$(VPY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
+
+lint: venv
+	$(VPY) -m ruff check .
+	$(VPY) -m mypy
+
 bench: venv sysdeps
 	@if [ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null 2>&1; then \
 	  xvfb-run -a -s "-screen 0 1400x900x24" $(VPY) benchmarks/run.py; \
@@ -48,4 +59,4 @@ bench: venv sysdeps
 	fi
 
 clean:
-	rm -rf $(VENV) out tests/artifacts .pytest_cache
+	rm -rf $(VENV) out tests/artifacts .pytest_cache docs/_build docs/auto_examples docs/api

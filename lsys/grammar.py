@@ -34,7 +34,7 @@ Directives (one per line, ``//`` and ``/* */`` comments anywhere):
     radius = width * s / 2 (default 1), for grammars whose widths are pixels.
 ``#tropism tx ty tz e``
     ABOP tropism: after each ``F`` the heading bends toward (tx,ty,tz) by
-    e·|H×T|.  Off by default.
+    e·‖H×T‖.  Off by default.
 ``n: N``, ``w: axiom``, ``p:``
     derivation count, axiom, then one rule per line.
 

@@ -1,0 +1,18 @@
+"""Show a PNG rendered by Ramure in the gallery (matplotlib collects the figure)."""
+import tempfile
+
+import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
+
+
+def show(render, *args, **kwargs):
+    """Call ``render(..., path, ...)`` into a temporary PNG and show it without axes."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = f"{folder}/picture.png"
+        render(*args, path, **kwargs)
+        image = mpimg.imread(path)
+    fig, ax = plt.subplots(figsize=(5, 5))
+    ax.imshow(image)
+    ax.set_axis_off()
+    fig.tight_layout()
+    return fig
