@@ -20,6 +20,7 @@ import pathlib
 import numpy as np
 
 from ramure.lsys import GrammarError, LSystem
+from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import kinship
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
@@ -165,17 +166,8 @@ class Explorer:
         return (sk.start + sk.end) / 2.0
 
     def leaves_where(self, min_order=None, min_height=None, max_height=None):
-        """Leaves by a branch-order / height filter (e.g. order >= 3 above height h)."""
-        sk = self.skeleton
-        mask = np.ones(len(sk), bool)
-        if min_order is not None:
-            mask &= sk.order >= min_order
-        mid_z = (sk.start[:, 2] + sk.end[:, 2]) / 2
-        if min_height is not None:
-            mask &= mid_z >= min_height
-        if max_height is not None:
-            mask &= mid_z <= max_height
-        return np.unique(sk.leaf_id[mask]).tolist()
+        """Leaves by a branch-order / height filter (see :func:`ramure.lsys.select.leaves_where`)."""
+        return leaves_where(self.skeleton, min_order, min_height, max_height)
 
     def kinship_hues(self):
         """Per-segment RGB by kinship to the single selected leaf (None otherwise)."""
@@ -208,9 +200,7 @@ class Explorer:
 
     def variant_lsystem(self):
         """The grammar with the session's current constants: what variant sweeps should vary."""
-        ls = LSystem(self.lsystem.grammar)
-        ls.constants.update(self.session.constants)
-        return ls
+        return self.session.current_lsystem()
 
     def apply_qualifier(self, name, sweep, points=None, regions=None, tries=5):
         """Regrow the selection (or the whole plant) toward qualifier ``name`` ("denser", "rond", ...).

@@ -5,13 +5,17 @@
 >>> d.to_string()
 'A(3)B(3)C(1)B(5)C(1)'
 """
+from .cut import CutResult, select_roots
 from .derive import Derivation, LSystem
 from .errors import DerivationError, GrammarError, RamureError, ValueRefused
 from .grammar import Grammar, parse_grammar
+from .regen import RegenResult, Session, regenerate
+from .select import leaves_where
 from .tree import DerivationTree
 from .turtle import Organs, Skeleton
 
 __all__ = [
-    "Derivation", "DerivationError", "DerivationTree", "Grammar", "GrammarError", "LSystem",
-    "Organs", "RamureError", "Skeleton", "ValueRefused", "parse_grammar",
+    "CutResult", "Derivation", "DerivationError", "DerivationTree", "Grammar", "GrammarError", "LSystem",
+    "Organs", "RamureError", "RegenResult", "Session", "Skeleton", "ValueRefused", "leaves_where",
+    "parse_grammar", "regenerate", "select_roots",
 ]

@@ -289,6 +289,17 @@ class Session:
         edit = {"op": "constants", "values": _check_values(values, self.lsystem)}
         return self._apply(edit)
 
+    def current_lsystem(self) -> LSystem:
+        """The grammar with this session's current constants: what a variant sweep should vary.
+
+        The session's own :attr:`lsystem` keeps the file's values; this copy carries the
+        values set since (sliders, :meth:`set_constants`), so exploring or qualifying a
+        session starts from the plant on screen.
+        """
+        current = LSystem(self.lsystem.grammar)
+        current.constants.update(self.constants)
+        return current
+
     def _next_seed(self):
         return self.seed * 1_000_003 + len(self.edits) + 1
 

@@ -23,6 +23,8 @@ _LAZY = {
     "Session": ("ramure.lsys.regen", "Session"),
     "regenerate": ("ramure.lsys.regen", "regenerate"),
     "select_roots": ("ramure.lsys.cut", "select_roots"),
+    "leaves_where": ("ramure.lsys.select", "leaves_where"),
+    "apply_qualifier": ("ramure.metrics.apply", "apply_qualifier"),
     "plant_metrics": ("ramure.metrics", "plant_metrics"),
     "plant_obb": ("ramure.metrics", "plant_obb"),
     "explore": ("ramure.metrics", "explore"),
