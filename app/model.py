@@ -245,12 +245,10 @@ class Explorer:
         return self._cached(("fruit", preset, seed, tuple(sorted(kwargs.items()))), build)
 
     def fruit_surface(self):
-        """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit or gmap)."""
+        """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit)."""
+        from ramure.gmap.pyvista import boundary_polydata
+
         if not self.fruit_ids():
-            return None
-        try:
-            from ramure.gmap.pyvista import boundary_polydata
-        except ImportError:
             return None
         gm = self.fruit_volumes()
         surface = boundary_polydata(gm)
