@@ -1,17 +1,20 @@
-"""Small widget helpers shared by the Jupyter panels: the message line, buttons, id lists.
+"""Small widget helpers shared by the Jupyter panels: the message line, buttons, observers.
 
->>> parse_ids("3, 7-9 12")
-[3, 7, 8, 9, 12]
+Every callback registered through :func:`button`, :func:`observe` or :func:`on_value` runs on the
+kernel's main thread (:mod:`ramure.app.jupyter.mainthread`).  Typed leaf ids are read by
+:func:`ramure.app.ids.parse_ids`, shared with the desktop.
+
+>>> short_list(range(1, 30), limit=3)
+'1, 2, 3, … (29 in all)'
 """
 from __future__ import annotations
 
 import base64
 import html
-import re
 
 import ipywidgets as W
 
-from ramure.errors import ValueRefused
+from ramure.app.jupyter.mainthread import main_thread_callback, on_main
 
 _COLORS = {"error": "#b00020", "info": "#1b5e20", "note": "#555"}
 
@@ -41,36 +44,23 @@ class MessageLine:
 
 
 def button(description, handler, tooltip="", style="", width="auto", icon=""):
-    """A button calling ``handler()`` (the clicked button is not passed on)."""
+    """A button calling ``handler()`` on the kernel's main thread (the clicked button is not passed on)."""
     b = W.Button(description=description, tooltip=tooltip or description, button_style=style, icon=icon,
                  layout=W.Layout(width=width))
-    b.on_click(lambda _b: handler())
+    b.on_click(lambda _b: on_main(handler))
     return b
 
 
-def on_value(widget, handler):
-    """Call ``handler(new_value)`` whenever ``widget.value`` changes."""
-    widget.observe(lambda change: handler(change["new"]), names="value")
+def observe(widget, handler, names="value"):
+    """Call ``handler(change)`` on the kernel's main thread whenever ``widget``'s trait ``names`` changes
+    (:mod:`ramure.app.jupyter.mainthread`: widget messages may arrive on a subshell thread)."""
+    widget.observe(main_thread_callback(handler), names=names)
     return widget
 
 
-def parse_ids(text) -> list[int]:
-    """Leaf ids typed as ``"12, 40-45 51"`` (commas or spaces, ``a-b`` ranges inclusive)."""
-    ids = []
-    for token in re.split(r"[\s,;]+", str(text).strip()):
-        if not token:
-            continue
-        m = re.fullmatch(r"(\d+)(?:-(\d+))?", token)
-        if m is None:
-            raise ValueRefused(f"'{token}' is not a leaf id or a range like 40-45")
-        a = int(m.group(1))
-        b = int(m.group(2)) if m.group(2) else a
-        if b < a:
-            raise ValueRefused(f"range '{token}' goes backwards")
-        if b - a > 100_000:
-            raise ValueRefused(f"range '{token}' is too long")
-        ids.extend(range(a, b + 1))
-    return ids
+def on_value(widget, handler):
+    """Call ``handler(new_value)`` on the kernel's main thread whenever ``widget.value`` changes."""
+    return observe(widget, lambda change: handler(change["new"]))
 
 
 def short_list(values, limit=12) -> str:
@@ -103,3 +93,49 @@ def side_by_side(images, captions=(), width=260):
                     f"<figcaption style='font-size:12px'>{html.escape(str(text))}</figcaption></figure>"
                     for data, text in zip(images, captions) if data)
     return HTML(f"<div style='display:flex;flex-wrap:wrap;align-items:flex-end'>{cells}</div>")
+
+
+#: Shown with a widget so that a saved notebook reopened without a kernel shows a picture:
+#: JupyterLab then has no widget model and writes "Error displaying widget: model not found".
+#: The rules hide this fallback while the widget above it is live, and hide that error line
+#: (the widget output in its error state) when the picture is all there is to show.
+FALLBACK_CSS = (
+    ".jp-OutputArea-child:has(.widget-box) + .jp-OutputArea-child:has(.ramure-fallback){display:none}"
+    ".jp-OutputArea-child:has(> .jp-OutputArea-output.jupyter-widgets)"
+    ":has(+ .jp-OutputArea-child .ramure-fallback){display:none}"
+)
+
+
+def fallback_bundle(html_body: str, png: bytes | None = None) -> dict:
+    """The mime bundle of a static fallback: ``html_body`` (pictures as data URIs) in a
+    ``ramure-fallback`` block with :data:`FALLBACK_CSS`, and ``png`` for viewers without HTML."""
+    bundle = {"text/html": f"<div class='ramure-fallback'><style>{FALLBACK_CSS}</style>{html_body}</div>"}
+    if png:
+        bundle["image/png"] = base64.b64encode(png).decode("ascii")
+    return bundle
+
+
+class Fallback:
+    """A widget shown with a static fallback output right after it (see :data:`FALLBACK_CSS`).
+
+    ``picture()`` returns ``(html_body, png)``; :meth:`update` re-sends it into the same
+    output (a ``display_id``), so a notebook saved later keeps the latest picture.
+    """
+
+    def __init__(self, widget, picture, text=""):
+        self.widget = widget
+        self.picture = picture
+        self.text = text
+        self.handle = None
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        plain = self.text() if callable(self.text) else self.text
+        display({**self.widget._repr_mimebundle_(), "text/plain": plain}, raw=True)
+        self.handle = display(fallback_bundle(*self.picture()), raw=True, display_id=True)
+
+    def update(self):
+        """Send the current picture to the fallback output (nothing before it is displayed)."""
+        if self.handle is not None:
+            self.handle.update(fallback_bundle(*self.picture()), raw=True)

@@ -20,12 +20,13 @@ the live state.
 from __future__ import annotations
 
 import base64
+import html
 import pathlib
 
 import ipywidgets as W
 
 import ramure.grammars as grammar_files
-from ramure.app.jupyter._ui import MessageLine, button, on_value
+from ramure.app.jupyter._ui import Fallback, MessageLine, button, on_value, png_tag
 from ramure.app.jupyter.grammar import GrammarPanel
 from ramure.app.jupyter.selection import SelectionPanel, TreeBrowser
 from ramure.app.jupyter.variants import VariantPanel, qualifier_summary
@@ -41,7 +42,8 @@ def _open_model(source, n, seed):
     """The model for ``source``; a grammar that does not parse gives a one-segment
     placeholder plant, the error and the text to show in the editor."""
     is_path = isinstance(source, pathlib.Path) or (isinstance(source, str) and "\n" not in source
-                                                   and source.endswith(".lsys"))
+                                                   and (source.endswith(".lsys")
+                                                        or source in grammar_files.names()))
     if is_path:
         source = grammar_files.resolve(source)
     if is_path and not pathlib.Path(source).is_file():
@@ -56,11 +58,9 @@ def _open_model(source, n, seed):
 
 
 def fruit_presets() -> list:
-    """The volumetric fruit presets (:data:`ramure.gmap.fruit.PRESETS`); empty without :mod:`ramure.gmap`."""
-    try:
-        from ramure.gmap.fruit import PRESETS
-    except ImportError:
-        return []
+    """The volumetric fruit presets (:data:`ramure.gmap.fruit.PRESETS`)."""
+    from ramure.gmap.fruit import PRESETS
+
     return list(PRESETS)
 
 
@@ -81,7 +81,7 @@ class EditPanel:
         self.undo = button("Undo", app.undo, icon="undo")
         self.redo = button("Redo", app.redo, icon="repeat")
         self.qualifier = W.Dropdown(options=[], description="qualifier", style={"description_width": "60px"},
-                                    layout=W.Layout(width="210px"))
+                                    layout=W.Layout(width="230px"))
         self.apply_qualifier = button("Apply", lambda: app.apply_qualifier(self.qualifier.value),
                                       "regrow the cut toward this qualifier (tries variants until "
                                       "the selection's metrics move its way)")
@@ -100,7 +100,7 @@ class EditPanel:
             W.HTML("<b>Regenerate</b>"), self.rho,
             W.HBox([self.regrow, self.regrow_constants]),
             W.HBox([self.qualifier, self.apply_qualifier]),
-            W.HBox([self.fruit_preset, self.fruit_size, self.regrow_fruit]),
+            W.HBox([self.fruit_preset, self.fruit_size]), W.HBox([self.regrow_fruit]),
             W.HBox([self.prune, self.undo, self.redo]),
             W.HBox([self.path, button("Save", lambda: app.save(self.path.value),
                                       ".json: the session; .lsys: the grammar; .vtp/.obj/.gltf/.ply/.stl: the mesh")]),
@@ -114,8 +114,11 @@ class EditPanel:
         has_fruit = bool(model.selection) and bool(set(model.selection) & set(model.fruit_ids()))
         self.regrow_fruit.disabled = not has_fruit or not fruit_presets()
         names = self.app.variants.qualifier_options()
-        if list(self.qualifier.options) != names:
-            self.qualifier.options = names
+        options = [("choose a qualifier…", "")] + names if names else []  # never blank (None shows nothing)
+        if list(self.qualifier.options) != options:
+            chosen = self.qualifier.value
+            self.qualifier.options = options
+            self.qualifier.value = chosen if chosen in [v for _, v in options] else (options[0][1] if options else None)
         self.qualifier.disabled = self.apply_qualifier.disabled = not names
         self.qualifier.tooltip = ("the first use explores the variants (a few seconds)"
                                   if self.app.variants.exploration is None
@@ -164,6 +167,8 @@ class Explorer:
                               W.HBox([left, centre, side],
                                      layout=W.Layout(flex_flow="row wrap", align_items="flex-start")),
                               self.tabs])
+        self.fallback = Fallback(self.widget, self._picture, lambda: f"<Ramure Explorer: {self.model.status()}>")
+        self._fallback_key = None
         if self.view.fallback_reason:
             self.message.show(self.view.fallback_reason, "note")
         if self.model.error is not None:
@@ -233,6 +238,9 @@ class Explorer:
         for panel in (self.grammar, self.view, self.selection_panel, self.tree, self.edits):
             panel.refresh()
         self.variants.refresh_note()
+        if self.fallback.handle is not None and self._fallback_key != self.view._key():
+            self._fallback_key = self.view._key()
+            self.fallback.update()  # a saved notebook shows the plant as it is now
 
     # -- grammar and constants ---------------------------------------------------
     def set_text(self, text):
@@ -434,6 +442,20 @@ class Explorer:
         return self.run(lambda: self.model.load_session(path))
 
     # -- display ---------------------------------------------------------------------------
+    def _picture(self):
+        """The explorer's static fallback: the plant's picture and a caption."""
+        png = self.png()
+        name = self.model.path.name if self.model.path else "grammar text"
+        caption = (f"<div style='font-size:12px;color:#555'>Ramure explorer — {html.escape(name)}: "
+                   f"{html.escape(self.model.status())} (a picture; run the cell for the explorer)</div>")
+        return png_tag(png, self.view.size[0], name) + caption, png
+
+    def _ipython_display_(self):
+        """The widget, then a picture of the plant in its own output: what a notebook saved and
+        reopened without a kernel shows (:class:`ramure.app.jupyter._ui.Fallback`)."""
+        self._fallback_key = self.view._key()
+        self.fallback._ipython_display_()
+
     def _repr_mimebundle_(self, **kwargs):
         """The widget, plus a PNG of the plant for viewers that cannot run widgets."""
         bundle = self.widget._repr_mimebundle_(**kwargs) or {}

@@ -14,7 +14,7 @@ import math
 
 import ipywidgets as W
 
-from ramure.app.jupyter._ui import button, message_html, on_value
+from ramure.app.jupyter._ui import button, message_html, observe, on_value
 
 
 def slider_range(value):
@@ -45,15 +45,16 @@ class GrammarPanel:
         self.apply_text = button("Parse & derive", lambda: app.set_text(self.text.value),
                                  "re-read the grammar text (also done when the text area loses focus)")
         self._quiet = False
-        self.text.observe(lambda change: None if self._quiet else app.set_text(change["new"]), names="value")
+        observe(self.text, lambda change: None if self._quiet else app.set_text(change["new"]))
         self.n = W.BoundedIntText(value=model.session.n, min=0, max=30, description="n",
                                   style={"description_width": "20px"}, layout=W.Layout(width="110px"))
         self.seed = W.IntText(value=model.session.seed, description="seed",
                               style={"description_width": "35px"}, layout=W.Layout(width="140px"))
         on_value(self.n, lambda v: app.set_derivation(n=v))
         on_value(self.seed, lambda v: app.set_derivation(seed=v))
-        self.live = W.Checkbox(value=False, description="live: re-derive the plant when a slider is released",
-                               indent=False)
+        self.live = W.Checkbox(value=False, description="live: re-derive on slider release", indent=False,
+                               tooltip="re-derive the whole plant when a slider is released (one undoable edit)",
+                               style={"description_width": "initial"}, layout=W.Layout(width="auto"))
         self.sliders = {}
         self.slider_box = W.VBox()
         self.apply_constants = button("Apply constants", app.apply_constants,
@@ -82,7 +83,7 @@ class GrammarPanel:
         self.sliders = {}
         for name, value in constants.items():
             s = constant_slider(name, value)
-            s.observe(lambda change, name=name: self._slider_moved(name, change["new"]), names="value")
+            observe(s, lambda change, name=name: self._slider_moved(name, change["new"]))
             self.sliders[name] = s
         self.slider_box.children = list(self.sliders.values()) or [W.HTML("<i>no #define constants</i>")]
 

@@ -2,8 +2,9 @@
 
 :func:`report_html` writes the report with :func:`ramure.studies.write_report` and
 returns its page as one self-contained HTML fragment: figures embedded as
-data URIs and the page's style scoped to the fragment, so it neither needs
-the files next to it nor restyles the notebook.  :func:`show_report` wraps it
+data URIs, its links to the CSV/TSV/JSON tables as data URIs that download under the file's
+name (a relative link 404s in JupyterLab), and the page's style scoped to the fragment, so it
+neither needs the files next to it nor restyles the notebook.  :func:`show_report` wraps it
 for display.
 
 >>> from ramure.studies import simulate_study
@@ -14,6 +15,7 @@ True
 from __future__ import annotations
 
 import base64
+import html
 import pathlib
 import re
 import tempfile
@@ -44,6 +46,28 @@ def _inline_images(page, folder):
     return re.sub(r"(src=['\"])([^'\"]+\.png)(['\"])", data_uri, page)
 
 
+MIME = {".csv": "text/csv", ".tsv": "text/tab-separated-values", ".json": "application/json",
+        ".txt": "text/plain", ".html": "text/html"}
+MAX_EMBED = 4_000_000  # bytes: a linked file larger than this is named, not embedded
+
+
+def _inline_links(page, folder):
+    """Links to the report's own files (CSV, TSV, JSON) become data URIs that download under the
+    file's name: relative links 404 in JupyterLab, whose page is not the report's folder."""
+    def data_uri(match):
+        name = match.group(2)
+        path = folder / name
+        if "/" in name or ":" in name or not path.is_file():
+            return match.group(0)
+        if path.stat().st_size > MAX_EMBED:
+            return f"{match.group(1)}#{match.group(3)} title='{html.escape(str(path))}'"
+        mime = MIME.get(path.suffix.lower(), "application/octet-stream")
+        encoded = base64.b64encode(path.read_bytes()).decode("ascii")
+        return f"{match.group(1)}data:{mime};base64,{encoded}{match.group(3)} download='{html.escape(name)}'"
+
+    return re.sub(r"(href=['\"])([^'\"#]+)(['\"])", data_uri, page)
+
+
 def report_html(source, out_dir=None, **options) -> str:
     """The study report of ``source`` (a Study, its path or StudyData) as an HTML fragment.
 
@@ -56,7 +80,7 @@ def report_html(source, out_dir=None, **options) -> str:
         folder = pathlib.Path(out_dir) if out_dir is not None else pathlib.Path(tmp)
         write_report(source, folder, **options)
         page = (folder / "index.html").read_text(encoding="utf-8")
-        page = _inline_images(page, folder)
+        page = _inline_links(_inline_images(page, folder), folder)
     style = re.search(r"<style>(.*?)</style>", page, re.S)
     body = re.search(r"<body>(.*)</body>", page, re.S)
     css = _scope_css(style.group(1)) if style else ""

@@ -14,7 +14,8 @@ from __future__ import annotations
 import ipywidgets as W
 import numpy as np
 
-from ramure.app.jupyter._ui import button, parse_ids, short_list
+from ramure.app.ids import id_example, resolve_ids
+from ramure.app.jupyter._ui import button, observe, short_list
 from ramure.app.model import SELECT_MODES
 
 MAX_ROWS = 400  # children listed at once in the tree browser
@@ -25,8 +26,10 @@ class SelectionPanel:
 
     def __init__(self, app):
         self.app = app
-        self.mode = W.ToggleButtons(options=SELECT_MODES, value="replace", style={"button_width": "62px"})
-        self.ids = W.Text(placeholder="leaf ids, e.g. 12, 40-45", layout=W.Layout(width="170px"))
+        self.mode = W.ToggleButtons(options=SELECT_MODES, value="replace", style={"button_width": "auto"},
+                                    tooltips=["replace the selection", "add to it", "remove from it",
+                                              "toggle each leaf"])
+        self.ids = W.Text(placeholder="leaf ids", layout=W.Layout(width="170px"))
         self.min_order = W.BoundedIntText(value=0, min=0, max=99, description="order ≥",
                                           style={"description_width": "55px"}, layout=W.Layout(width="120px"))
         self.height = W.FloatRangeSlider(value=(0.0, 1.0), min=0.0, max=1.0, step=0.01, description="height",
@@ -46,7 +49,8 @@ class SelectionPanel:
         self.refresh()
 
     def select_ids(self):
-        self.app.run(lambda: self.app.model.select(parse_ids(self.ids.value), self.mode.value))
+        model = self.app.model
+        self.app.run(lambda: model.select(resolve_ids(self.ids.value, model.derivation.tree.leaves), self.mode.value))
 
     def select_where(self):
         lo, hi = self.height.value
@@ -71,6 +75,11 @@ class SelectionPanel:
             self.height.step = (hi - lo) / 200
             self.min_order.max = max(int(sk.order.max()) if len(sk) else 0, 0)
             self._bounds = bounds
+        # leaves of this plant (those that draw, if any), so typing the example selects
+        example = id_example(sk.leaf_id) or id_example(model.derivation.tree.leaves)
+        placeholder = f"leaf ids, e.g. {example}" if example else "leaf ids"
+        if self.ids.placeholder != placeholder:
+            self.ids.placeholder = placeholder
         sel = model.selection
         self.summary.value = (f"{len(sel)} selected: {short_list(sel)}" if sel
                               else "<i>nothing selected: edits apply to the whole plant</i>")
@@ -99,7 +108,7 @@ class TreeBrowser:
         self.path = []
         self.crumbs = W.HTML()
         self.rows = W.Select(options=[], rows=12, layout=W.Layout(width="98%"))
-        self.rows.observe(lambda ch: self._describe(), names="value")
+        observe(self.rows, lambda ch: self._describe())
         self.info = W.HTML()
         self.widget = W.VBox([
             self.crumbs, self.rows,

@@ -31,7 +31,7 @@ import pathlib
 
 import ipywidgets as W
 
-from ramure.app.jupyter._ui import MessageLine, button, png_image, png_tag
+from ramure.app.jupyter._ui import Fallback, MessageLine, button, observe, png_image, png_tag
 from ramure.errors import RamureError
 from ramure.studies.likert import LEVELS
 
@@ -59,8 +59,9 @@ class GroupQuestions:
         self.label = group.label  # as stored (1, 2, ... in group-number order)
         self.number = group.label if number is None else number  # as the participant numbered it
         several = len(group.images) > 1
-        self.representative = W.Dropdown(options=[("choose…", None)] + [(f"#{i}", i) for i in group.images],
-                                         value=group.representative if several else None,
+        # 0 stands for "not chosen yet": a Dropdown whose value is None shows a blank box
+        self.representative = W.Dropdown(options=[("choose…", 0)] + [(f"#{i}", i) for i in group.images],
+                                         value=(group.representative or 0) if several else 0,
                                          description="representative", style={"description_width": "110px"},
                                          layout=W.Layout(width="240px", display="" if several else "none"))
         self.usefulness = _likert("usefulness")
@@ -73,11 +74,11 @@ class GroupQuestions:
         self.qualifiers = W.Text(value=", ".join(group.qualifiers), description="qualifiers",
                                  placeholder="e.g. petit, dense", continuous_update=False,
                                  style={"description_width": "110px"}, layout=W.Layout(width="420px"))
-        self.representative.observe(lambda ch: self._save("representative", ch["new"]), names="value")
-        self.usefulness.observe(lambda ch: self._save("usefulness", ch["new"]), names="value")
-        self.difference.observe(lambda ch: self._save("difference", ch["new"]), names="value")
-        self.quality.observe(lambda ch: self._save("quality", ch["new"]), names="value")
-        self.qualifiers.observe(lambda ch: self._save("qualifiers", ch["new"]), names="value")
+        observe(self.representative, lambda ch: self._save("representative", ch["new"]))
+        observe(self.usefulness, lambda ch: self._save("usefulness", ch["new"]))
+        observe(self.difference, lambda ch: self._save("difference", ch["new"]))
+        observe(self.quality, lambda ch: self._save("quality", ch["new"]))
+        observe(self.qualifiers, lambda ch: self._save("qualifiers", ch["new"]))
         self.widget = W.VBox([
             W.HTML(f"<b>Group {self.number}</b>: images {', '.join(f'#{i}' for i in group.images)}"),
             self.representative, self.usefulness, self.difference, self.quality, self.qualifiers,
@@ -86,14 +87,14 @@ class GroupQuestions:
     def update(self, group):
         """Show the stored answers of ``group`` (also undoes a refused answer on screen)."""
         if len(group.images) > 1:
-            self.representative.value = group.representative
+            self.representative.value = group.representative or 0
         for widget, stored in ((self.usefulness, group.usefulness), (self.difference, group.difference),
                                (self.quality, group.representative_quality)):
             widget.value = LEVELS[stored - 1] if stored else None
         self.qualifiers.value = ", ".join(group.qualifiers)
 
     def _save(self, what, value):
-        if self.panel.quiet or value is None:
+        if self.panel.quiet or value is None or (what == "representative" and value == 0):
             return
         s, g = self.panel.session, self.label
         if what == "representative":
@@ -134,7 +135,7 @@ class StudyPanel:
         options = [("–", 0)] + [(str(g), g) for g in range(1, MAX_GROUPS + 1)]
         for image in self.session.order():
             dropdown = W.Dropdown(options=options, value=0, layout=W.Layout(width="52px"))
-            dropdown.observe(lambda ch: None if self.quiet else self.run(self._store_groups), names="value")
+            observe(dropdown, lambda ch: None if self.quiet else self.run(self._store_groups))
             self.group_of[image] = dropdown
             cards.append(W.VBox([_thumbnail(picks[image], thumb_size),
                                  W.HBox([W.Label(f"#{image}", layout=W.Layout(width="38px")), dropdown])]))
@@ -217,13 +218,12 @@ class StudyPanel:
             self.message.show("test finished and stored — thank you", "info")
 
     # -- display -------------------------------------------------------------
-    def _repr_mimebundle_(self, **kwargs):
-        bundle = dict(self.widget._repr_mimebundle_(**kwargs) or {})
+    def _ipython_display_(self):
+        """The test widget, then a static picture of it (for a notebook reopened without a kernel)."""
         s = self.session
-        bundle["text/html"] = self.screen_html()  # for viewers without widgets (nbconvert, GitHub)
-        bundle["text/plain"] = (f"<StudyPanel: participant {s.participant}, grammar {s.grammar}, "
-                                f"{len(s.groups())} groups, {'finished' if s.finished else 'in progress'}>")
-        return bundle
+        text = (f"<StudyPanel: participant {s.participant}, grammar {s.grammar}, "
+                f"{len(s.groups())} groups, {'finished' if s.finished else 'in progress'}>")
+        Fallback(self.widget, lambda: (self.screen_html(), None), text)._ipython_display_()
 
     def screen_html(self) -> str:
         """The participant's images in their order, each with its group (a static picture of the test)."""

@@ -5,8 +5,7 @@ The work is done by :mod:`ramure.metrics` (sweep, PCA, picks, qualifier regions 
 combinations); this panel only runs it and shows it.  A sweep started from
 the button runs in a thread and *Stop* cancels it; a sweep started from code
 (:meth:`VariantPanel.explore`) blocks, updates the same bar, and stops on a
-kernel interrupt.  Without :mod:`ramure.metrics` (or before a sweep) the panels say
-what is missing instead of failing.
+kernel interrupt.  Before a sweep the panels say what to press.
 
 Sweeps start from the session's current constants
 (:meth:`ramure.app.model.Explorer.variant_lsystem`), not the file's ``#define``
@@ -32,7 +31,8 @@ import threading
 import ipywidgets as W
 import numpy as np
 
-from ramure.app.jupyter._ui import button, message_html, png_image, png_tag
+from ramure.app.jupyter._ui import Fallback, button, message_html, observe, png_image, png_tag
+from ramure.app.jupyter.mainthread import is_main_thread, kernel_loop, on_main
 from ramure.app.jupyter.scatter import pca_png
 from ramure.app.jupyter.view import RENDER_LOCK
 from ramure.errors import RamureError
@@ -40,23 +40,11 @@ from ramure.errors import RamureError
 N_PICKS = 27
 
 
-def metrics_status() -> str | None:
-    """None when the variant exploration can run, else why not."""
-    try:
-        from ramure.metrics import SweepCancelled, VariantSweep, explore  # noqa: F401
-    except ImportError as exc:
-        return f"variant exploration is not available ({exc})"
-    return None
-
-
 def qualifier_tools():
-    """``(VOCABULARY, QualifierStore)`` or None if metrics lacks them."""
-    try:
-        from ramure.metrics.apply import apply_qualifier  # noqa: F401 - what Explorer.apply_qualifier runs
-        from ramure.metrics.qualifiers import VOCABULARY
-        from ramure.metrics.store import QualifierStore
-    except ImportError:
-        return None
+    """``(VOCABULARY, QualifierStore)``: the qualifier words and the store of study regions."""
+    from ramure.metrics.qualifiers import VOCABULARY
+    from ramure.metrics.store import QualifierStore
+
     return VOCABULARY, QualifierStore
 
 
@@ -73,8 +61,7 @@ def qualifier_summary(result) -> str:
     """One line on what applying a qualifier did to the selection: the metrics its direction
     weighs most, before → after, and whether they moved its way."""
     name = result.qualifier
-    tools = qualifier_tools()
-    entry = tools[0].get(name) if tools else None
+    entry = qualifier_tools()[0].get(name)
     weights = (entry.direction or {}) if entry is not None else {}
     shown = sorted(weights, key=lambda m: -abs(weights[m]))[:2]
     moves = ", ".join(f"{_metric_label(m)} {getattr(result.before, m):.4g} → {getattr(result.after, m):.4g}"
@@ -107,6 +94,7 @@ class VariantPanel:
         self.running = None  # the worker thread of a button-started sweep
         self._sweep = None
         self._stop = threading.Event()
+        self._pending = None  # (exploration, grammar) whose thumbnails the main thread renders
         model = app.model
         self.n = W.BoundedIntText(value=min(model.session.n, 5), min=0, max=30, description="n",
                                   style={"description_width": "20px"}, layout=W.Layout(width="100px"))
@@ -156,9 +144,6 @@ class VariantPanel:
         With ``wait`` (the default from code) this blocks and returns the
         exploration; otherwise it starts a thread and returns it.
         """
-        reason = metrics_status()
-        if reason:
-            raise RamureError(reason)
         if self.running is not None and self.running.is_alive():
             raise RamureError("an exploration is already running: stop it first")
         from ramure.metrics import VariantSweep
@@ -194,13 +179,38 @@ class VariantPanel:
         self.note.value = message_html("exploring…", "note")
         try:
             exp = explore(lsystem, sweep=sweep, progress=self._progress, cancel=self._stop)
-            images = self._render_thumbnails(exp) if thumbnails else [None] * N_PICKS
         except (SweepCancelled, Stopped, KeyboardInterrupt):
-            sweep.cancel()
-            self.note.value = message_html("exploration stopped; the previous results are kept", "note")
-            raise Stopped("the exploration was stopped") from None
-        finally:
-            self.start.disabled, self.stop_button.disabled = False, True
+            self._stopped(sweep)
+        if thumbnails and not is_main_thread() and kernel_loop() is not None:
+            # VTK draws on the kernel's main thread only: the thumbnails are rendered there
+            self._pending = (exp, lsystem)
+            on_main(self._finish_pending)
+            return exp
+        return self._finish(exp, lsystem, thumbnails)
+
+    def _stopped(self, sweep):
+        sweep.cancel()
+        self.start.disabled, self.stop_button.disabled = False, True
+        self.note.value = message_html("exploration stopped; the previous results are kept", "note")
+        raise Stopped("the exploration was stopped") from None
+
+    def _finish_pending(self):
+        """Render the thumbnails of a sweep a worker thread finished (on the main thread)."""
+        pending, self._pending = self._pending, None
+        if pending is None:
+            return
+        try:
+            self._finish(*pending, thumbnails=True)
+        except RamureError as err:
+            self.app.message.show(err, "note" if isinstance(err, Stopped) else "error")
+
+    def _finish(self, exp, lsystem, thumbnails):
+        """Thumbnails (optional), then show the exploration — unless the grammar changed meanwhile."""
+        try:
+            images = self._render_thumbnails(exp) if thumbnails else [None] * N_PICKS
+        except (Stopped, KeyboardInterrupt):
+            self._stopped(exp.sweep)
+        self.start.disabled, self.stop_button.disabled = False, True
         if self.app.model.lsystem.text != lsystem.text:
             self.note.value = message_html("the grammar changed during the exploration: its results "
                                            "were set aside; explore again", "note")
@@ -208,7 +218,7 @@ class VariantPanel:
         self.exploration, self.thumbnails, self.chosen = exp, images, None
         self.defaults = None
         self.refresh()
-        self.app.edits.refresh()  # the qualifier choices (the 3D view is not redrawn from this thread)
+        self.app.edits.refresh()  # the qualifier choices
         return exp
 
     def _render_thumbnails(self, exp, batch=3):
@@ -245,9 +255,11 @@ class VariantPanel:
             self._sweep.cancel()
 
     def wait(self, timeout=None):
-        """Wait for a button-started exploration to end."""
+        """Wait for a button-started exploration to end (its thumbnails included)."""
         if self.running is not None:
             self.running.join(timeout)
+        if not (self.running is not None and self.running.is_alive()) and is_main_thread():
+            self._finish_pending()  # the main loop cannot run it while this cell waits
 
     # -- queries -----------------------------------------------------------
     def _need(self):
@@ -278,10 +290,7 @@ class VariantPanel:
     def qualifier_options(self) -> list:
         """``(label, name)`` of the qualifiers offered: study regions first (marked), then the
         default vocabulary, each with its French name (applying one explores first if needed)."""
-        tools = qualifier_tools()
-        if tools is None or metrics_status():
-            return []
-        vocabulary = tools[0]
+        vocabulary = qualifier_tools()[0]
         study = list(self.regions.names_) if self.regions is not None else []
         names = study + [name for name in vocabulary if name not in study]
 
@@ -301,8 +310,6 @@ class VariantPanel:
         """Regrow the model's selection (or whole plant) toward qualifier ``name`` through
         :meth:`ramure.app.model.Explorer.apply_qualifier`, with the study regions when loaded.
         Without an exploration of the current constants, one is run first (blocking)."""
-        if qualifier_tools() is None:
-            raise RamureError("qualifiers are not available (the metrics qualifier modules are missing)")
         if self.exploration is None or self.stale():
             self.explore(wait=True)
         exp = self.exploration
@@ -320,8 +327,6 @@ class VariantPanel:
         qualifier store (a path, e.g. written by ``ramure study export-qualifiers``)."""
         exp = self._need()
         tools = qualifier_tools()
-        if tools is None:
-            raise RamureError("qualifier regions are not available (metrics.store is missing)")
         if not pathlib.Path(store).is_file():
             raise RamureError(f"{store}: no such qualifier store")
         with tools[1](store) as qs:  # a file that is not a store is refused there
@@ -337,7 +342,7 @@ class VariantPanel:
         if self.regions is not None:
             return dict(self.regions.boxes_)
         tools = qualifier_tools()
-        if tools is None or self.exploration is None:
+        if self.exploration is None:
             return {}
         if self.defaults is None:
             with tools[1](":memory:") as qs:
@@ -372,20 +377,21 @@ class VariantPanel:
             return "<i>no variants explored yet</i>"
         return f"<div style='display:grid;grid-template-columns:repeat(9,{self.thumb_size + 4}px)'>{''.join(cells)}</div>"
 
-    def _repr_mimebundle_(self, **kwargs):
-        bundle = dict(self.widget._repr_mimebundle_(**kwargs) or {})
-        bundle["text/html"] = self.gallery_html()
-        return bundle
+    def _ipython_display_(self):
+        """The panel, then the gallery as pictures (what a notebook reopened without a kernel shows)."""
+        Fallback(self.widget, lambda: (self.gallery_html(), None), "<Ramure variants>")._ipython_display_()
+
+    @property
+    def pca(self):
+        """The *PCA & qualifiers* view for display in a cell, with its picture as the fallback."""
+        return Fallback(self.pca_widget, lambda: (png_tag(self.scatter.value, 480, "PCA") if self.scatter.value
+                                                  else "", self.scatter.value or None), "<Ramure PCA view>")
 
     def refresh_note(self):
         """The line over the gallery: what was explored, or why nothing is (cheap: called after
         every change of the plant, so it says when the constants moved since the sweep)."""
-        reason = metrics_status()
         exp = self.exploration
-        if reason:
-            note = message_html(reason, "note")
-            self.start.disabled = True
-        elif exp is None:
+        if exp is None:
             note = message_html("No variants yet: press “Explore variants” (or call "
                                 "ex.explore_variants()) to fill the gallery and the PCA view.", "note")
         elif self.stale():
@@ -434,7 +440,7 @@ class VariantPanel:
             for name in boxes:
                 cb = W.Checkbox(value=known.get(name, name in ("small", "large", "dense", "sparse")),
                                 description=name, indent=False)
-                cb.observe(lambda _c: self._draw_scatter(), names="value")
+                observe(cb, lambda _c: self._draw_scatter())
                 toggles.append(cb)
             self.box_toggles.children = toggles or [W.HTML("<i>no qualifier regions</i>")]
         shown = {cb.description for cb in self.box_toggles.children if isinstance(cb, W.Checkbox) and cb.value}

@@ -17,8 +17,10 @@ True
 """
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import io
+import sys
 import threading
 
 import numpy as np
@@ -176,16 +178,14 @@ def fruit_png(model, size=(480, 480), view="front", focus=None, fill=0.9) -> byt
 
 def fruit_cut_png(model, leaf, size=(420, 420), volume_levels=1) -> bytes | None:
     """PNG of fruit ``leaf`` cut open across its axis, volume cells coloured by tissue
-    (:data:`ramure.gmap.tissue.COLORS`) with a legend; None without fruit or :mod:`ramure.gmap`."""
+    (:data:`ramure.gmap.tissue.COLORS`) with a legend; None when ``leaf`` is not a fruit."""
     if int(leaf) not in model.fruit_ids():
         return None
-    try:
-        from ramure.app.commands.fruit import tissue_rgb
-        from ramure.gmap.cut import plane_cut
-        from ramure.gmap.pyvista import to_unstructured_grid
-        from ramure.gmap.tissue import COLORS, TISSUES
-    except ImportError:
-        return None
+    from ramure.app.commands.fruit import tissue_rgb
+    from ramure.gmap.cut import plane_cut
+    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.tissue import COLORS, TISSUES
+
     grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
     cells = grid.extract_cells(np.asarray(grid.cell_data["leaf_id"]) == int(leaf))
     organs = model.skeleton.organs
@@ -213,10 +213,8 @@ def trame_available() -> bool:
 
 def in_kernel() -> bool:
     """True inside a Jupyter kernel (where a widget front end may be connected)."""
-    try:
-        from IPython import get_ipython
-    except ImportError:
-        return False
+    from IPython import get_ipython  # ipywidgets depends on IPython
+
     shell = get_ipython()
     return shell is not None and getattr(shell, "kernel", None) is not None
 
@@ -290,11 +288,101 @@ class PlantView:
             self.image.value = self.png()
 
 
+CLICK_PIXELS = 4  # a left press and release closer than this (in pixels) is a click, else a drag
+
+
+class ClickPicker:
+    """Select on click, rotate on drag: ``on_cell(cell_id)`` is called when the left button goes
+    down and up at (nearly) the same place over the plant.  A press alone picks nothing, so a
+    drag that starts on a branch rotates the view and leaves the selection as it was."""
+
+    def __init__(self, plotter, on_cell, actor=None):
+        import vtk
+
+        self.plotter = plotter
+        self.on_cell = on_cell
+        self.actor = actor  # pick only this actor's cells (None: any)
+        self.down = None
+        self.picker = vtk.vtkCellPicker()
+        self.picker.SetTolerance(0.004)
+        plotter.iren.add_observer("LeftButtonPressEvent", self._press)
+        plotter.iren.add_observer("LeftButtonReleaseEvent", self._release)
+
+    def _press(self, interactor, _event):
+        self.down = interactor.GetEventPosition()
+
+    def _release(self, interactor, _event):
+        down, self.down = self.down, None
+        x, y = interactor.GetEventPosition()
+        if down is None or max(abs(x - down[0]), abs(y - down[1])) > CLICK_PIXELS:
+            return  # a drag: the interactor style rotated the view
+        cell = self.pick(x, y)
+        if cell is not None:
+            self.on_cell(cell)
+
+    def pick(self, x, y) -> int | None:
+        """The plant cell under display position (x, y), or None."""
+        if not self.picker.Pick(x, y, 0, self.plotter.renderer):
+            return None
+        if self.actor is not None and self.picker.GetActor() is not self.actor:
+            return None
+        cell = int(self.picker.GetCellId())
+        return cell if cell >= 0 else None
+
+
+_ABSENT = object()
+
+
+@contextlib.contextmanager
+def without_vtklocal():
+    """Hide ``trame.widgets.vtklocal`` while pyvista starts its trame server.
+
+    ``trame_pyvista.launch_server`` initialises trame-vtklocal whenever it is importable, and
+    that downloads VTK's WebAssembly bundle from the internet (a 60-line traceback offline).
+    Ramure's view renders on the server (where picking works) and never uses it, and Ramure
+    never reaches the network on its own: for the duration of the launch the module cannot be
+    imported, which pyvista treats as "not installed".
+    """
+    import trame.widgets as trame_widgets
+
+    name = "trame.widgets.vtklocal"
+    module, attribute = sys.modules.get(name, _ABSENT), trame_widgets.__dict__.pop("vtklocal", _ABSENT)
+    sys.modules[name] = None  # an import of it now raises ImportError
+    try:
+        yield
+    finally:
+        if module is _ABSENT:
+            sys.modules.pop(name, None)
+        else:
+            sys.modules[name] = module
+        if attribute is not _ABSENT:
+            trame_widgets.vtklocal = attribute
+
+
+def needs_reframe(framed, bounds, margin=0.02, shrink=0.5) -> bool:
+    """True when ``bounds`` (a plant's, after an edit) leave the ``framed`` bounds (grown past
+    them by more than ``margin`` of their size) or shrink below ``shrink`` of their size.
+
+    >>> needs_reframe((0, 1, 0, 1, 0, 4), (0, 1, 0, 1, 0, 4.05)), needs_reframe((0, 1, 0, 1, 0, 4), (0, 1, 0, 1, 0, 5))
+    (False, True)
+    """
+    if framed is None:
+        return True
+    old, new = np.reshape(framed, (3, 2)), np.reshape(bounds, (3, 2))
+    size = float(np.ptp(old, axis=1).max()) or 1.0
+    grew = np.any(new[:, 0] < old[:, 0] - margin * size) or np.any(new[:, 1] > old[:, 1] + margin * size)
+    return bool(grew or float(np.ptp(new, axis=1).max()) < shrink * size)
+
+
 class TrameView:
-    """pyvista's trame view of the plant, with click picking (needs ``trame-pyvista``)."""
+    """pyvista's trame view of the plant (needs ``trame-pyvista``): rotate on drag, select on click,
+    re-framed when the camera side is chosen or an edit grows the plant out of the picture.
+
+    Every call into it happens on the kernel's main thread, where the trame server renders
+    (:mod:`ramure.app.jupyter.mainthread`)."""
 
     def __init__(self, owner, mode="trame"):
-        headless_setup()
+        _headless_setup()
         import pyvista as pv
 
         self.owner = owner
@@ -302,10 +390,11 @@ class TrameView:
         self.plotter.set_background("white")
         self._actor = None
         self._view = None
+        self._framed = None
         self.draw(update=False)
-        self.plotter.enable_point_picking(callback=self._picked, use_picker=True, picker="cell",
-                                          left_clicking=True, show_message=False, show_point=False)
-        self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
+        self.clicks = ClickPicker(self.plotter, self._picked)
+        with without_vtklocal():
+            self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
 
     def draw(self, update=True):
         model = self.owner.app.model
@@ -314,7 +403,10 @@ class TrameView:
         self._actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False)
         if self._view != self.owner.view:
             frame_camera(self.plotter, model.mesh.bounds, self.owner.view)
+            self._frame(model.mesh)
             self._view = self.owner.view
+        elif model.mesh.n_cells and needs_reframe(self._framed, model.mesh.bounds):
+            self.reframe(model.mesh)
         if update:
             viewer = getattr(self.widget, "viewer", None)
             if viewer is not None:
@@ -322,7 +414,21 @@ class TrameView:
             else:
                 self.plotter.render()
 
-    def _picked(self, _point, picker):
-        cell = int(picker.GetCellId())
-        if cell >= 0:
-            self.owner.app.pick(cell)
+    def reframe(self, mesh):
+        """Frame the whole plant again, looking from where the camera looks now (z up)."""
+        cam = self.plotter.camera
+        direction = np.subtract(cam.position, cam.focal_point)
+        direction = direction / (np.linalg.norm(direction) or 1.0)
+        b = np.reshape(mesh.bounds, (3, 2))
+        centre, size = b.mean(axis=1), float(np.ptp(b, axis=1).max()) or 1.0
+        self.plotter.camera_position = [tuple(centre + direction * size * 2.2), tuple(centre), (0.0, 0.0, 1.0)]
+        self.plotter.reset_camera(bounds=tuple(b.ravel()))
+        self._frame(mesh)
+
+    def _frame(self, mesh):
+        if mesh.n_cells:
+            fit_view(self.plotter, mesh.points, 0.9)
+            self._framed = tuple(mesh.bounds)
+
+    def _picked(self, cell):
+        self.owner.app.pick(cell)

@@ -112,7 +112,7 @@ def test_thumbnails_from_pick_images(tmp_path):
         other = panel.grid.children[panel.session.order().index(1)]
         assert "#1" in other.children[0].value  # a placeholder for a pick without image
         panel.assign({2: 4})
-        page = panel._repr_mimebundle_()["text/html"]  # what a viewer without widgets shows
+        page = panel.screen_html()  # the fallback output: what a notebook reopened without a kernel shows
         assert page.count("data:image/png") == 1 and "#2 · group 4" in page and "#1 · unsorted" in page
 
 
@@ -129,3 +129,11 @@ def test_report_inline_is_self_contained(tmp_path):
     assert html.startswith("<div class='ramure-report'>") and "4 participants, 8 finished tests" in html
     assert html.count("data:image/png;base64,") == 4 and "src='cooccurrence.png'" not in html
     assert "<body" not in html and ".ramure-report table{" in html and "}body{" not in html
+    # the table links download the files themselves (a relative link 404s in JupyterLab)
+    import base64
+    import re
+
+    links = dict((name, data) for data, name in re.findall(r"href='data:[^;]+;base64,([^']+)' download='([^']+)'", html))
+    assert "summary.json" in links and "anova.csv" in links
+    assert base64.b64decode(links["anova.csv"]) == (tmp_path / "r" / "anova.csv").read_bytes()
+    assert not re.search(r"href='(?!data:|#)", html)

@@ -48,7 +48,8 @@ def test_exploration_fills_gallery_progress_and_qualifiers(explored):
     assert f".{rule}{{background-image:url(data:image/png;base64," + base64.b64encode(
         ex.variants.thumbnails[4]).decode() in css
     options = dict(ex.edits.qualifier.options)
-    assert options["small (petit)"] == "small" and options["dense"] == "dense" and len(options) == 13
+    assert options["small (petit)"] == "small" and options["dense"] == "dense" and len(options) == 1 + 13
+    assert ex.edits.qualifier.value == "" and ex.edits.qualifier.options[0][0] == "choose a qualifier…"
     assert not ex.edits.qualifier.disabled
     assert "486 variants" in ex.variants.note.value and "486 variants explored" in ex.message.text
     assert ex.variants.scatter.value[:4] == b"\x89PNG"
@@ -175,7 +176,7 @@ def test_study_regions_come_first_and_are_drawn(ex, tmp_path):
         store.add(exp.name, "petit", near, exp.points[near], [exp.sweep.combination(int(i)) for i in near],
                   source="study:test")
     ex.load_qualifiers(tmp_path / "q.sqlite")
-    assert ex.edits.qualifier.options[0] == ("small (petit) · study", "small")
+    assert ex.edits.qualifier.options[1] == ("small (petit) · study", "small")
     assert set(ex.variants.boxes()) == {"small"}
     ex.apply_qualifier("small")
     applied = ex.history[-1]["params"]
@@ -183,14 +184,6 @@ def test_study_regions_come_first_and_are_drawn(ex, tmp_path):
     ex.load_qualifiers(tmp_path / "q.sqlite", grammar="other")
     assert "no qualifier points for grammar 'other'" in ex.error
     assert set(ex.variants.boxes()) == {"small"}  # the study's regions stay
-
-
-def test_without_metrics_the_panel_says_so(monkeypatch):
-    monkeypatch.setattr(variants_module, "metrics_status", lambda: "variant exploration is not available (test)")
-    ex = Explorer(HONDA, n=3, view="static", size=(120, 120))
-    assert "not available (test)" in ex.variants.note.value and ex.variants.start.disabled
-    assert ex.edits.qualifier.disabled
-    assert ex.explore_variants() is None and "not available" in ex.error
 
 
 @pytest.mark.parametrize("action, expected", [

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ramure.app.jupyter import Explorer
-from ramure.app.jupyter._ui import parse_ids
+from ramure.app.ids import parse_ids
 from ramure.app.model import Explorer as Model
 from ramure.lsys.regen import Session
 from jupyter_helpers import HONDA, red_pixels
