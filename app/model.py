@@ -24,6 +24,7 @@ from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import kinship
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
+from ramure.app.ids import not_a_leaf
 from ramure.lsys.regen import Session
 
 SELECT_MODES = ("replace", "add", "remove", "toggle")
@@ -137,7 +138,7 @@ class Explorer:
         is_leaf = np.zeros(ids.size, bool)
         is_leaf[known] = tree.leaf_positions(ids[known]) >= 0
         if not is_leaf.all():
-            raise ValueRefused(f"{int(ids[~is_leaf][0])} is not a leaf of the current plant")
+            raise ValueRefused(not_a_leaf(ids[~is_leaf][0]))
         ids = set(ids.tolist())
         current = set(self.selection)
         new = {"replace": ids, "add": current | ids, "remove": current - ids,
