@@ -3,8 +3,8 @@
 >>> import ramure.grammars as g
 >>> "honda_sympodial" in g.names()
 True
->>> g.path("honda_sympodial").name
-'honda_sympodial.lsys'
+>>> g.path("honda_sympodial").name, g.path("grammars/amap/rauh.lsys".removeprefix("grammars/")).name
+('honda_sympodial.lsys', 'rauh.lsys')
 """
 from __future__ import annotations
 
@@ -17,15 +17,16 @@ SUFFIXES = (".lsys",)
 
 
 def names() -> list[str]:
-    """Names of the shipped grammars (file stems), sorted."""
-    return sorted(p.stem for p in FOLDER.iterdir() if p.suffix in SUFFIXES)
+    """Names of the shipped grammars, sorted: file stems, with their sub-folder (``"amap/rauh"``)."""
+    return sorted(p.relative_to(FOLDER).with_suffix("").as_posix()
+                  for suffix in SUFFIXES for p in FOLDER.rglob(f"*{suffix}"))
 
 
 def path(name: str) -> pathlib.Path:
-    """The file of the shipped grammar ``name`` (a stem such as ``"honda_sympodial"``)."""
-    stem = pathlib.Path(name).stem if name.endswith(SUFFIXES) else name
+    """The file of the shipped grammar ``name`` (``"honda_sympodial"``, ``"amap/rauh"``, with or without ``.lsys``)."""
+    stem = name[: -len(".lsys")] if name.endswith(SUFFIXES) else name
     file = FOLDER / f"{stem}.lsys"
-    if not file.is_file():
+    if ".." in pathlib.PurePosixPath(stem).parts or not file.is_file():
         raise ValueRefused(f"no shipped grammar named {name!r}; known: {', '.join(names())}")
     return file
 
@@ -33,15 +34,16 @@ def path(name: str) -> pathlib.Path:
 def resolve(name_or_path: str | pathlib.Path) -> pathlib.Path:
     """A grammar file: ``name_or_path`` if it exists, else the shipped grammar it names.
 
-    ``"grammars/honda_sympodial.lsys"`` and ``"honda_sympodial"`` both work from any
-    directory; a path that exists always wins over a shipped name.
+    ``"grammars/honda_sympodial.lsys"``, ``"honda_sympodial"`` and ``"grammars/amap/rauh.lsys"``
+    all work from any directory; a path that exists always wins over a shipped name.
     """
     given = pathlib.Path(name_or_path)
     if given.exists():
         return given
-    if given.parent.name in ("", "grammars") and given.suffix in ("",) + SUFFIXES:
+    parts = given.parts[1:] if given.parts[:1] == ("grammars",) else given.parts
+    if parts and given.suffix in ("",) + SUFFIXES and not given.is_absolute():
         try:
-            return path(given.name)
+            return path("/".join(parts))
         except ValueRefused:
             pass
     return given

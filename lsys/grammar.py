@@ -143,6 +143,7 @@ class Grammar:
     tropism: tuple | None = None
     filename: str | None = None
     symbols: list = field(default_factory=list)
+    amap: tuple = ()  # (role, symbol, line, column, source line) of each #amap annotation
 
     def symbol_id(self, name):
         return self.symbols.index(name)
@@ -192,6 +193,7 @@ class _GrammarParser:
         self.settings = {"angle": DEFAULT_ANGLE, "step": DEFAULT_STEP, "width": DEFAULT_WIDTH,
                          "widthscale": 1.0}
         self.tropism = None
+        self.amap = []
         self.n = None
         self.axiom = None
         self.rule_lines = []  # list of [line, start column, list of (line, start) continuations]
@@ -247,9 +249,13 @@ class _GrammarParser:
             modules=tuple(self.modules), organs=tuple(self.organs), ignore=frozenset(self.ignore),
             angle=self.settings["angle"], step=self.settings["step"], width=self.settings["width"],
             width_scale=self.settings["widthscale"],
-            tropism=self.tropism, filename=self.filename,
+            tropism=self.tropism, filename=self.filename, amap=tuple(self.amap),
         )
         _check(grammar)
+        if grammar.amap:
+            from .amap import check_annotations
+
+            check_annotations(grammar)
         return grammar
 
     def constant(self, line, start, end=None):
@@ -291,6 +297,12 @@ class _GrammarParser:
             self.ignore.update(p.symbol for p in self.modules_at(line, rest, None, formal=True))
         elif name in self.settings:
             self.settings[name] = self.constant(line, rest)
+        elif name == "amap":  # architecture roles, checked by ramure.lsys.amap once every module is known
+            words = [(w.group(), rest + w.start() + 1) for w in re.finditer(r"\S+", text[rest:])]
+            if len(words) < 2:
+                raise line.error("#amap takes a role and one or more modules, e.g. '#amap internode F'", rest + 1)
+            (role, role_col), *symbols = words
+            self.amap += [(role, sym, line.number, col, line.original, role_col) for sym, col in symbols]
         elif name == "tropism":
             words = [(w.group(), rest + w.start()) for w in re.finditer(r"\S+", text[rest:])]
             if len(words) != 4:

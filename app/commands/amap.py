@@ -1,0 +1,56 @@
+"""``ramure amap``: the botanical architecture of a plant (axes, annual shoots, growth units,
+internodes, events) from its ``#amap`` annotations, and its MTG file.
+
+    ramure amap amap/rauh -n 7 --seed 0 --json --mtg rauh.mtg
+"""
+from __future__ import annotations
+
+import json
+import time
+
+from ramure.app.cli import UserError
+from ramure.app.commands.plant import add_grammar_options, load_and_derive, output_file
+from ramure.lsys.amap import architecture
+from ramure.lsys.mtg import read_mtg, write_mtg
+
+
+def run_amap(args):
+    mtg = output_file(args.mtg, (".mtg",), "--mtg") if args.mtg else None
+    _, derivation, derive_seconds = load_and_derive(args)
+    t0 = time.perf_counter()
+    arch = architecture(derivation)
+    facts = {"file": args.file, "n": derivation.n, "seed": derivation.seed, **arch.to_dict(),
+             "derive_seconds": round(derive_seconds, 6), "seconds": round(time.perf_counter() - t0, 6)}
+    if mtg is not None:
+        write_mtg(arch, mtg)
+        facts["mtg"] = str(mtg)
+    if args.json:
+        print(json.dumps(facts))
+    else:
+        print(f"{args.file}: {facts['axes']} axes {facts['axes_per_order']}, {facts['annual_shoots']} annual "
+              f"shoots, {facts['growth_units']} growth units, {facts['internodes']} internodes")
+        if mtg is not None:
+            print(f"wrote {mtg}")
+    return 0
+
+
+def run_mtg_check(args):
+    arch = read_mtg(args.file)
+    print(json.dumps({"file": args.file, **arch.to_dict()}))
+    return 0
+
+
+def register(sub):
+    p = sub.add_parser("amap", help="botanical architecture (AMAP) tables of a plant; --mtg writes an MTG file")
+    add_grammar_options(p)
+    p.add_argument("--json", action="store_true", help="print counts per level, axes per order, events, "
+                   "the internodes-per-growth-unit histogram")
+    p.add_argument("--mtg", metavar="FILE.mtg", help="write the plant as an MTG file (OpenAlea's format)")
+    p.set_defaults(func=run_amap)
+
+    p = sub.add_parser("mtg", help="read an MTG file and print its architecture as JSON")
+    p.add_argument("file", help="an .mtg file")
+    p.set_defaults(func=run_mtg_check)
+
+
+__all__ = ["UserError", "register"]

@@ -1,0 +1,291 @@
+"""MTG export and import: OpenAlea's multiscale tree graph text format (FORM-A).
+
+Scales: ``P`` plant (1), ``A`` axis (2), ``S`` annual shoot (3), ``U`` growth unit (4),
+``I`` internode (5). The ``MTG:`` section writes one entity per line; leading tabs give the
+column, ``/`` decomposes (a component), ``<`` follows, ``+`` branches, and ``^`` refers to the
+last entity of the same column (without it, to the last entity one column to the left).
+Axes are labelled by their order (``A1`` trunk, ``A2`` ...), the other entities by their rank
+in their container. Internodes carry the feature ``node`` (the history-tree node id), and a
+comment line keeps the derivation's event counts, so :func:`read_mtg` gives back exactly the
+:class:`~ramure.lsys.amap.Architecture` that :func:`write_mtg` wrote.
+
+>>> import ramure, tempfile, pathlib
+>>> from ramure.lsys.amap import architecture
+>>> arch = architecture(ramure.derive("amap/rauh", n=6))
+>>> path = pathlib.Path(tempfile.mkdtemp()) / "rauh.mtg"
+>>> _ = write_mtg(arch, path)
+>>> read_mtg(path).equals(arch)
+True
+"""
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import re
+import tempfile
+
+import numpy as np
+
+from ramure.errors import RamureError
+
+from .amap import Architecture, Table
+
+SCALES = {"P": 1, "A": 2, "S": 3, "U": 4, "I": 5}
+_EVENTS = "# ramure-events: "
+_TOKEN = re.compile(r"([/<+])([A-Za-z$]+)(\d*)")
+
+
+class MTGError(RamureError, ValueError):
+    """An MTG file Ramure cannot read: the message names the line."""
+
+
+# -- export ---------------------------------------------------------------------------------
+def mtg_text(arch: Architecture) -> str:
+    """The MTG text of an architecture (see the module docstring)."""
+    lines = []  # (column, code, node or None)
+    borne = {}
+    for row, bearer in enumerate(arch.axes.bearer.tolist()):
+        borne.setdefault(bearer, []).append(row)
+    roots = borne.get(-1, [])
+    lines.append((0, "/P1", None))
+    for axis in roots:
+        _write_axis(arch, axis, 0, "^/", borne, lines)
+    width = max(col for col, _, _ in lines) + 1
+    header = [_EVENTS + json.dumps(arch.events, sort_keys=True), "CODE:\tFORM-A", "",
+              "CLASSES:", "SYMBOL\tSCALE\tDECOMPOSITION\tINDEXATION\tDEFINITION", "$\t0\tFREE\tFREE\tIMPLICIT"]
+    header += [f"{s}\t{scale}\tFREE\tFREE\tIMPLICIT" for s, scale in SCALES.items()]
+    header += ["", "DESCRIPTION:", "LEFT\tRIGHT\tRELTYPE\tMAX"]
+    header += [f"{a}\t{a}\t{r}\t?" for a in ("A", "S", "U", "I") for r in "<+"]
+    header += ["", "FEATURES:", "NAME\tTYPE", "node\tINT", "", "MTG:", "ENTITY-CODE" + "\t" * width + "node"]
+    body = ["\t" * col + code + ("\t" * (width - col) + str(node) if node is not None else "")
+            for col, code, node in lines]
+    return "\n".join(header + body) + "\n"
+
+
+def _write_axis(arch, axis, col, prefix, borne, lines):
+    lines.append((col, f"{prefix}A{int(arch.axes.order[axis])}", None))
+    inter = arch.internodes
+    rows = np.flatnonzero(inter.axis == axis)
+    previous_shoot = previous_unit = -1
+    for row in rows.tolist():
+        shoot, unit = int(inter.shoot[row]), int(inter.growth_unit[row])
+        shoot_rank = _first_of(arch.shoots.axis, axis, shoot)
+        unit_rank = _first_of(arch.growth_units.shoot, shoot, unit)
+        if previous_shoot < 0:
+            lines += [(col, "^/S1", None), (col, "^/U1", None)]
+        elif shoot != previous_shoot:
+            lines += [(col, f"^<S{shoot_rank + 1}", None), (col, "^/U1", None)]
+        elif unit != previous_unit:
+            lines.append((col, f"^<U{unit_rank + 1}", None))
+        first_in_unit = unit != previous_unit
+        code = "^/I1" if first_in_unit else f"^<I{int(inter.rank[row]) + 1}"
+        lines.append((col, code, int(inter.node[row])))
+        previous_shoot, previous_unit = shoot, unit
+        for child in borne.get(row, []):
+            _write_axis(arch, child, col + 1, "+", borne, lines)
+
+
+def _first_of(owner, axis, row):
+    """Rank of ``row`` among the rows of ``owner`` that belong to ``axis``."""
+    return int(np.count_nonzero(owner[:row] == axis))
+
+
+def write_mtg(arch: Architecture, path) -> pathlib.Path:
+    """Write ``arch`` as an MTG file (temporary file in the same folder, fsync, then renamed)."""
+    path = pathlib.Path(path)
+    text = mtg_text(arch)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as out:
+            out.write(text)
+            out.flush()
+            os.fsync(out.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        pathlib.Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+# -- import ---------------------------------------------------------------------------------
+def read_mtg(path) -> Architecture:
+    """Read an MTG file written by :func:`write_mtg` (or any FORM-A file with these scales)."""
+    path = pathlib.Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise MTGError(f"{path}: not a UTF-8 text file") from None
+    return parse_mtg(text, str(path))
+
+
+def parse_mtg(text: str, where: str = "MTG") -> Architecture:
+    """The architecture described by MTG ``text``."""
+    lines = text.replace("\r\n", "\n").split("\n")
+    events = {}
+    if lines and lines[0].startswith(_EVENTS):
+        events = json.loads(lines[0][len(_EVENTS):])
+    classes, start = _classes(lines, where)
+    entities = _entities(lines, start, classes, where)
+    return _to_architecture(entities, events, where)
+
+
+def _classes(lines, where):
+    classes, in_classes = {}, False
+    for number, line in enumerate(lines, start=1):
+        head = line.strip().split("\t")[0].replace(" ", "")
+        if head == "CLASSES:":
+            in_classes = True
+        elif head in ("DESCRIPTION:", "FEATURES:"):
+            in_classes = False
+        elif head == "MTG:":
+            return classes, number
+        elif in_classes and head and head != "SYMBOL":
+            cells = [c for c in line.split("\t") if c.strip()]
+            try:
+                classes[cells[0].strip()] = int(cells[1])
+            except (IndexError, ValueError):
+                raise MTGError(f"{where}, line {number}: a class needs a symbol and a whole-number scale") from None
+    raise MTGError(f"{where}: no 'MTG:' section")
+
+
+def _entities(lines, start, classes, where):
+    """Entities as dicts: class, scale, complex, relation, reference, fine (the line's reference)."""
+    entities, last = [], {}
+    feature_col = None
+    for number in range(start + 1, len(lines) + 1):
+        line = lines[number - 1]
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        if line.startswith("ENTITY-CODE"):
+            names = line.split("\t")
+            feature_col = names.index("node") if "node" in names else None
+            continue
+        col = len(line) - len(line.lstrip("\t"))
+        cells = line.split("\t")
+        code = cells[col]
+        node = _node_feature(cells, feature_col, number, where)
+        ref = last.get(col) if code.startswith("^") else last.get(col - 1, None)
+        if code.startswith("^") and ref is None:
+            raise MTGError(f"{where}, line {number}: '^' refers to nothing in column {col + 1}")
+        tokens = _TOKEN.findall(code.lstrip("^"))
+        if not tokens or "".join(r + s + i for r, s, i in tokens) != code.lstrip("^"):
+            raise MTGError(f"{where}, line {number}: cannot read the entity code {code!r}")
+        fine = ref
+        for relation, symbol, _ in tokens:
+            if symbol not in classes or symbol not in SCALES:
+                raise MTGError(f"{where}, line {number}: unknown class or scale '{symbol}' "
+                               f"(Ramure reads {', '.join(SCALES)})")
+            ref = _add(entities, relation, symbol, ref, fine, number, where)
+        entities[ref]["node"] = node
+        last[col] = ref
+        for deeper in [c for c in last if c > col]:
+            del last[deeper]
+    return entities
+
+
+def _node_feature(cells, feature_col, number, where):
+    if feature_col is None or len(cells) <= feature_col or not cells[feature_col].strip():
+        return None
+    try:
+        return int(cells[feature_col])
+    except ValueError:
+        raise MTGError(f"{where}, line {number}: the node feature must be a whole number") from None
+
+
+def _ancestor(entities, index, scale):
+    while index is not None and entities[index]["scale"] > scale:
+        index = entities[index]["complex"]
+    return index if index is not None and entities[index]["scale"] == scale else None
+
+
+def _add(entities, relation, symbol, ref, fine, number, where):
+    scale = SCALES[symbol]
+    if relation == "/":
+        complex_ = _ancestor(entities, ref, scale - 1) if ref is not None else None
+        if ref is not None and complex_ is None:
+            raise MTGError(f"{where}, line {number}: '/{symbol}' has no container at scale {scale - 1}")
+        other = None
+    else:
+        other = _ancestor(entities, ref, scale) if ref is not None else None
+        if other is None:
+            raise MTGError(f"{where}, line {number}: '{relation}{symbol}' follows or branches from nothing "
+                           f"at scale {scale}")
+        complex_ = entities[other]["complex"]
+    entities.append({"symbol": symbol, "scale": scale, "complex": complex_, "relation": relation,
+                     "other": other, "fine": fine, "node": None})
+    return len(entities) - 1
+
+
+def _to_architecture(entities, events, where):
+    index = {s: [i for i, e in enumerate(entities) if e["symbol"] == s] for s in SCALES}
+    row = {s: {e: r for r, e in enumerate(index[s])} for s in SCALES}
+
+    def up(i, symbol):
+        return row[symbol][_ancestor(entities, i, SCALES[symbol])]
+
+    inter = index["I"]
+    nodes = [entities[i]["node"] for i in inter]
+    if any(n is None for n in nodes):
+        raise MTGError(f"{where}: every internode needs its 'node' feature")
+    unit_of = np.array([up(i, "U") for i in inter], np.int64)
+    internodes = Table({"node": np.array(nodes, np.int64), "axis": np.array([up(i, "A") for i in inter], np.int64),
+                        "growth_unit": unit_of, "shoot": np.array([up(i, "S") for i in inter], np.int64),
+                        "rank": _ranks(unit_of)})
+    units = index["U"]
+    growth_units = Table({"axis": np.array([up(u, "A") for u in units], np.int64),
+                          "shoot": np.array([up(u, "S") for u in units], np.int64),
+                          "first": _firsts(unit_of, len(units)), "count": np.bincount(unit_of, minlength=len(units))})
+    shoot_of_unit = growth_units.shoot
+    shoots = Table({"axis": np.array([up(s, "A") for s in index["S"]], np.int64),
+                    "first": _firsts(shoot_of_unit, len(index["S"])),
+                    "count": np.bincount(shoot_of_unit, minlength=len(index["S"]))})
+    axes = _axes(entities, index["A"], row, internodes, where)
+    return Architecture(internodes, growth_units, shoots, axes, events)
+
+
+def _ranks(groups):
+    out, seen = np.zeros(len(groups), np.int64), {}
+    for k, g in enumerate(groups.tolist()):
+        out[k] = seen.get(g, 0)
+        seen[g] = out[k] + 1
+    return out
+
+
+def _firsts(groups, count):
+    first = np.full(count, -1, np.int64)
+    for k in range(len(groups) - 1, -1, -1):
+        first[groups[k]] = k
+    return first
+
+
+def _axes(entities, axes, row, internodes, where):
+    parent = np.full(len(axes), -1, np.int64)
+    bearer = np.full(len(axes), -1, np.int64)
+    order = np.ones(len(axes), np.int64)
+    node_row = {int(n): r for r, n in enumerate(internodes.node.tolist())}
+    for r, i in enumerate(axes):
+        e = entities[i]
+        if e["relation"] == "+":
+            fine = e["fine"]
+            if fine is None or entities[fine]["symbol"] != "I":
+                raise MTGError(f"{where}: axis {r + 1} branches from something that is not an internode")
+            bearer[r] = node_row[entities[fine]["node"]]
+            parent[r] = internodes.axis[bearer[r]]
+        order[r] = int(e.get("order", 0)) or (order[parent[r]] + 1 if parent[r] >= 0 else 1)
+    _refuse_bearer_cycles(parent, where)
+    first = _firsts(internodes.axis, len(axes))
+    return Table({"parent": parent, "bearer": bearer, "order": order, "first": first})
+
+
+def _refuse_bearer_cycles(parent, where):
+    state = np.zeros(len(parent), np.int8)  # 0 unseen, 1 on the path, 2 done
+    for start in range(len(parent)):
+        path, a = [], start
+        while a >= 0 and state[a] == 0:
+            state[a] = 1
+            path.append(a)
+            a = parent[a]
+        if a >= 0 and state[a] == 1:
+            raise MTGError(f"{where}: the bearer links of axes {sorted(path)} form a cycle")
+        state[path] = 2
