@@ -30,21 +30,52 @@ Tropism (``#tropism tx ty tz e``) bends H toward T by ``e*|H x T|`` after each
 ``F``, as in ABOP section 2.3.
 
 Branch order is the number of ``[`` open around a segment (the trunk is 0).
+
+The interpreter is one compiled loop (:mod:`numba`, see :func:`_walk`) over
+arrays of the string: actions, parameter counts and first parameters.  It
+also records the turtle state at every ``[`` (a :class:`Trace`), so an edit
+re-interprets only the part of the string it changed (:func:`reinterpret`).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+from enum import IntEnum
 
 import numpy as np
 
 from .errors import DerivationError
 
-_ACTIONS = {
-    "F": 1, "f": 2, "+": 3, "-": 4, "&": 5, "^": 6, "\\": 7, "/": 8, "|": 9, "$": 10,
-    "[": 11, "]": 12, "!": 13, "'": 14, ";": 15,
+
+class TurtleAction(IntEnum):
+    """What a module does to the turtle (the compiled loop dispatches on these values)."""
+
+    NONE = 0  # no turtle meaning (skipped)
+    DRAW = 1  # F
+    MOVE = 2  # f
+    TURN_LEFT = 3  # +
+    TURN_RIGHT = 4  # -
+    PITCH_DOWN = 5  # &
+    PITCH_UP = 6  # ^
+    ROLL_LEFT = 7  # \\
+    ROLL_RIGHT = 8  # /
+    TURN_AROUND = 9  # |
+    ROLL_HORIZONTAL = 10  # $
+    PUSH = 11  # [
+    POP = 12  # ]
+    WIDTH = 13  # !
+    COLOR_UP = 14  # '
+    COLOR_DOWN = 15  # ;
+    ORGAN = 16  # Leaf, Fruit and #organ modules
+
+
+#: The turtle symbols and their actions (organs come from the grammar's ``#organ``).
+SYMBOL_ACTIONS = {
+    "F": TurtleAction.DRAW, "f": TurtleAction.MOVE, "+": TurtleAction.TURN_LEFT,
+    "-": TurtleAction.TURN_RIGHT, "&": TurtleAction.PITCH_DOWN, "^": TurtleAction.PITCH_UP,
+    "\\": TurtleAction.ROLL_LEFT, "/": TurtleAction.ROLL_RIGHT, "|": TurtleAction.TURN_AROUND,
+    "$": TurtleAction.ROLL_HORIZONTAL, "[": TurtleAction.PUSH, "]": TurtleAction.POP,
+    "!": TurtleAction.WIDTH, "'": TurtleAction.COLOR_UP, ";": TurtleAction.COLOR_DOWN,
 }
-_ORGAN = 16
 
 
 @dataclass
@@ -113,140 +144,95 @@ class Skeleton:
         return skeleton_to_polydata(self, sides=sides, organ_resolution=organ_resolution)
 
 
-def _rot(h, l, u, axis, deg):
-    """Rotate the frame (tuples) by ``deg`` degrees about H (0), L (1) or U (2), ABOP matrices."""
-    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
-    if axis == 2:  # R_U: H' = H c - L s ; L' = H s + L c
-        return ((h[0] * c - l[0] * s, h[1] * c - l[1] * s, h[2] * c - l[2] * s),
-                (h[0] * s + l[0] * c, h[1] * s + l[1] * c, h[2] * s + l[2] * c), u)
-    if axis == 1:  # R_L: H' = H c + U s ; U' = -H s + U c
-        return ((h[0] * c + u[0] * s, h[1] * c + u[1] * s, h[2] * c + u[2] * s), l,
-                (u[0] * c - h[0] * s, u[1] * c - h[1] * s, u[2] * c - h[2] * s))
-    # R_H: L' = L c + U s ; U' = -L s + U c
-    return (h, (l[0] * c + u[0] * s, l[1] * c + u[1] * s, l[2] * c + u[2] * s),
-            (u[0] * c - l[0] * s, u[1] * c - l[1] * s, u[2] * c - l[2] * s))
+@dataclass
+class Trace:
+    """What a skeleton keeps of its turtle run so an edit re-interprets only what it changed.
+
+    ``leaves`` is the string interpreted (node ids); ``acts``, ``nps``,
+    ``par`` its action codes, parameter counts and first parameters;
+    ``segment_at`` / ``organ_at`` the string position of each segment's ``F``
+    / each organ; ``match`` the bracket matches (None when some bracket is
+    unmatched: edits then re-interpret the whole string).  The turtle state
+    at any position is found again by walking from the root and jumping over
+    the branches in between (:func:`ramure.lsys._turtle_kernel.walk`, SEEK).
+    """
+
+    leaves: np.ndarray
+    acts: np.ndarray
+    nps: np.ndarray
+    par: np.ndarray
+    segment_at: np.ndarray
+    organ_at: np.ndarray
+    match: np.ndarray | None
+
+    def nbytes(self) -> int:
+        arrays = (self.acts, self.nps, self.par, self.segment_at, self.organ_at, self.match)
+        return sum(a.nbytes for a in arrays if a is not None)
 
 
-def _cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+def _settings(lsys):
+    g = lsys.grammar
+    trop = np.asarray(g.tropism, float) if g.tropism is not None else np.zeros(0)
+    return float(g.angle), float(g.step), trop
 
 
-def _unit(v):
-    n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-    return (v[0] / n, v[1] / n, v[2] / n) if n > 1e-12 else None
+def action_table(lsys):
+    """The :class:`TurtleAction` of every symbol of ``lsys`` (one more entry, 0, for padding)."""
+    organs = set(lsys.grammar.organs)
+    return np.array([SYMBOL_ACTIONS.get(s, TurtleAction.ORGAN if s in organs else TurtleAction.NONE)
+                     for s in lsys.symbols] + [0], np.int8)
 
 
-def _roll_horizontal(h, l, u):
-    """ABOP ``$``: L = (V x H)/|V x H| with V = +z; U = H x L.  No-op when H is vertical."""
-    new_l = _unit(_cross((0.0, 0.0, 1.0), h))
-    if new_l is None:
-        return h, l, u
-    return h, new_l, _cross(h, new_l)
-
-
-def _tropism(h, l, u, t, e):
-    axis = _cross(h, t)
-    size = math.sqrt(sum(a * a for a in axis))
-    if size < 1e-12:
-        return h, l, u
-    angle = e * size
-    k = (axis[0] / size, axis[1] / size, axis[2] / size)
-    return tuple(_rodrigues(v, k, angle) for v in (h, l, u))
-
-
-def _rodrigues(v, k, angle):
-    c, s = math.cos(angle), math.sin(angle)
-    kxv = _cross(k, v)
-    kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2]
-    return tuple(v[i] * c + kxv[i] * s + k[i] * kv * (1 - c) for i in range(3))
+def module_arrays(lsys, tree, leaves):
+    """Per module of ``leaves``: action code, parameter count and first parameter."""
+    acts = action_table(lsys)[tree.symbol[leaves]]
+    nps = tree.nparams[leaves]
+    par = tree.params[leaves, 0]
+    return acts, nps, par
 
 
 def interpret(derivation):
     """Run the turtle over a derivation's current string and return its :class:`Skeleton`."""
-    lsys = derivation.lsystem
-    g = lsys.grammar
-    tree = derivation.tree
-    leaves = tree.leaves
-    organs = set(g.organs)
-    action_of = np.array([_ACTIONS.get(s, _ORGAN if s in organs else 0) for s in lsys.symbols] + [0],
-                         np.int8)
-    actions = action_of[tree.symbol[leaves]]
-    keep = np.flatnonzero(actions)  # modules with no turtle meaning are skipped up front
-    acts = actions[keep].tolist()
-    nps = tree.nparams[leaves[keep]].tolist()
-    first = tree.params[leaves[keep], 0].tolist()
-    nodes = leaves[keep].tolist()
-    syms = tree.symbol[leaves[keep]].tolist()
-    angle, step = g.angle, g.step
-    tropism = g.tropism
-
-    pos, h, l, u = (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
-    width, color, order, last_seg = g.width, 0, 0, -1
-    stack = []
-    seg_start, seg_end, seg_width, seg_order, seg_leaf, seg_color, seg_normal, seg_parent = (
-        [], [], [], [], [], [], [], [])
-    org = []
-    for a, k, p, node, sym in zip(acts, nps, first, nodes, syms):
-        if a == 1 or a == 2:
-            d = p if k else step
-            end = (pos[0] + h[0] * d, pos[1] + h[1] * d, pos[2] + h[2] * d)
-            if a == 1:
-                seg_start.append(pos)
-                seg_end.append(end)
-                seg_width.append(width)
-                seg_order.append(order)
-                seg_leaf.append(node)
-                seg_color.append(color)
-                seg_normal.append(l)
-                seg_parent.append(last_seg)
-                last_seg = len(seg_start) - 1
-                if tropism is not None:
-                    h, l, u = _tropism(h, l, u, tropism[:3], tropism[3])
-            pos = end
-        elif a <= 9:
-            deg = p if k else angle
-            if a == 3:
-                h, l, u = _rot(h, l, u, 2, deg)
-            elif a == 4:
-                h, l, u = _rot(h, l, u, 2, -deg)
-            elif a == 5:
-                h, l, u = _rot(h, l, u, 1, deg)
-            elif a == 6:
-                h, l, u = _rot(h, l, u, 1, -deg)
-            elif a == 7:
-                h, l, u = _rot(h, l, u, 0, deg)
-            elif a == 8:
-                h, l, u = _rot(h, l, u, 0, -deg)
-            else:
-                h, l, u = _rot(h, l, u, 2, 180.0)
-        elif a == 10:
-            h, l, u = _roll_horizontal(h, l, u)
-        elif a == 11:
-            stack.append((pos, h, l, u, width, color, order, last_seg))
-            order += 1
-        elif a == 12:
-            if stack:
-                pos, h, l, u, width, color, order, last_seg = stack.pop()
-        elif a == 13:
-            width = p if k else width * 0.7
-        elif a == 14:
-            color = int(p) if k else color + 1
-        elif a == 15:
-            color -= 1
-        else:
-            org.append((sym, pos, h, l, u, p if k else 1.0, node))
-    return _build(lsys, tree, seg_start, seg_end, seg_width, seg_order, seg_leaf, seg_color,
-                  seg_normal, seg_parent, org)
+    return interpret_string(derivation.lsystem, derivation.tree, derivation.tree.leaves)
 
 
-def _build(lsys, tree, start, end, width, order, leaf, color, normal, parent, org):
-    s = len(start)
-    start = np.array(start, float).reshape(s, 3)
-    end = np.array(end, float).reshape(s, 3)
-    base = np.array(width, float) * (lsys.grammar.width_scale / 2.0)
+def interpret_string(lsys, tree, leaves) -> Skeleton:
+    """The :class:`Skeleton` of the string ``leaves`` (node ids of ``tree``), with its :class:`Trace`."""
+    from ._turtle_kernel import FULL, initial_state, walk  # numba loads on first use only
+
+    leaves = np.asarray(leaves, np.int64)
+    acts, nps, par = module_arrays(lsys, tree, leaves)
+    angle, step, trop = _settings(lsys)
+    state = initial_state(lsys.grammar.width)
+    _, segs, orgs = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)
+    trace = Trace(leaves, acts, nps, par, segs[0], orgs[0], _matches(acts))
+    return _skeleton(lsys, tree, leaves, segs, orgs, trace)
+
+
+_NO_MATCH = np.zeros(0, np.int64)
+
+
+def _matches(acts):
+    """Bracket matches of the string from its actions; None if some bracket is unmatched."""
+    from ._turtle_kernel import bracket_pairs
+
+    match, balanced = bracket_pairs(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
+    return match if balanced else None
+
+
+def _skeleton(lsys, tree, leaves, segs, orgs, trace):
+    seg_at, start, end, width, order, color, normal, parent = segs
+    base = width * (lsys.grammar.width_scale / 2.0)
+    leaf = leaves[seg_at]
     _check_finite(lsys, tree, leaf, np.isfinite(start).all(1) & np.isfinite(end).all(1) & np.isfinite(base))
-    order = np.array(order, np.int32)
-    parent = np.array(parent, np.int64)
+    organs = _organs(lsys, tree, leaves, orgs)
+    return Skeleton(start, end, base, top_radius(base, order, parent), order.astype(np.int32), leaf,
+                    color.astype(np.int32), normal, parent, organs, {"trace": trace})
+
+
+def top_radius(base, order, parent):
+    """Each segment's top radius: its continuation's base radius, else its widest fork's, else its own."""
+    s = len(base)
     top = base.copy()
     # Without a continuation, taper to the widest child segment (a fork), if any.
     child = np.flatnonzero(parent >= 0)
@@ -263,9 +249,7 @@ def _build(lsys, tree, start, end, width, order, leaf, color, normal, parent, or
         np.minimum.at(first_child, par, cont)  # the earliest continuing child wins
         has = first_child < s
         top[has] = base[first_child[has]]
-    organs = _organs(lsys, tree, org)
-    return Skeleton(start, end, base, top, order, np.array(leaf, np.int64), np.array(color, np.int32),
-                    np.array(normal, float).reshape(s, 3), parent, organs)
+    return top
 
 
 def _check_finite(lsys, tree, leaf, ok):
@@ -277,15 +261,10 @@ def _check_finite(lsys, tree, leaf, ok):
                           "angle too large for floating point): use smaller values")
 
 
-def _organs(lsys, tree, org):
-    k = len(org)
-    if not k:
-        return Organs(np.array([], dtype=object), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0),
-                      np.zeros((0, tree.max_params)), np.zeros(0, np.int64))
-    kind = np.array([lsys.symbols[o[0]] for o in org], dtype=object)
-    position = np.array([o[1] for o in org], float)
-    frame = np.array([(o[2], o[3], o[4]) for o in org], float)
-    size = np.array([o[5] for o in org], float)
-    leaf_id = np.array([o[6] for o in org], np.int64)
+def _organs(lsys, tree, leaves, orgs):
+    org_at, position, frame, size = orgs
+    leaf_id = leaves[org_at]
+    kind = np.array(lsys.symbols, dtype=object)[tree.symbol[leaf_id]] if len(leaf_id) else \
+        np.array([], dtype=object)
     _check_finite(lsys, tree, leaf_id, np.isfinite(position).all(1) & np.isfinite(size))
     return Organs(kind, position, frame, size, tree.params[leaf_id], leaf_id)

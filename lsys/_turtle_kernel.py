@@ -1,0 +1,238 @@
+"""The turtle's compiled loop (numba): one pass over the action arrays of a string.
+
+Kept apart from :mod:`ramure.lsys.turtle` so that module stays readable.  The
+arithmetic is written in the same order as Ramure's original Python turtle
+(kept in ``tests/lsys/turtle_reference.py``) so the two agree to rounding.
+
+The turtle state is a float vector of :data:`STATE_SIZE` values: position
+(0:3), H (3:6), L (6:9), U (9:12), width (12), colour (13), branch order (14)
+and the last segment drawn (15, -1 for none).
+
+Why numba rather than numpy prefix products of rotations: ``$`` and tropism
+depend on the world heading, so every ``$`` and (with ``#tropism``) every
+``F`` breaks a prefix product into a new pass; measured on Honda n=17 the
+numpy scan was several times slower than this loop, which also keeps the
+original arithmetic exactly (see the commit message for the figures).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+STATE_SIZE = 16
+
+# Action codes: the values of ramure.lsys.turtle.TurtleAction (numba needs plain ints).
+DRAW, MOVE, TURN_LEFT, TURN_RIGHT, PITCH_DOWN, PITCH_UP, ROLL_LEFT, ROLL_RIGHT = 1, 2, 3, 4, 5, 6, 7, 8
+TURN_AROUND, ROLL_HORIZONTAL, PUSH, POP, WIDTH, COLOR_UP, COLOR_DOWN, ORGAN = 9, 10, 11, 12, 13, 14, 15, 16
+
+
+def initial_state(width):
+    """The turtle at the origin heading up +z with L = +x, U = +y, no segment drawn yet."""
+    state = np.zeros(STATE_SIZE)
+    state[5] = 1.0  # H = +z
+    state[6] = 1.0  # L = +x
+    state[10] = 1.0  # U = +y
+    state[12] = width
+    state[15] = -1.0
+    return state
+
+
+@njit(cache=True, inline="always")
+def _pair(ax, ay, az, bx, by, bz, c, s):
+    """(a c + b s, b c - a s): a rotation of the frame pair (a, b) by (c, s)."""
+    return (ax * c + bx * s, ay * c + by * s, az * c + bz * s,
+            bx * c - ax * s, by * c - ay * s, bz * c - az * s)
+
+
+@njit(cache=True, inline="always")
+def _rodrigues(vx, vy, vz, kx, ky, kz, c, s):
+    cx, cy, cz = ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx
+    kv = kx * vx + ky * vy + kz * vz
+    return (vx * c + cx * s + kx * kv * (1 - c), vy * c + cy * s + ky * kv * (1 - c),
+            vz * c + cz * s + kz * kv * (1 - c))
+
+
+FULL, SEEK, REGION = 0, 1, 2
+
+
+@njit(cache=True, nogil=True)
+def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_base):
+    """Interpret ``acts[begin:end]`` from ``state`` (updated in place); returns where it stopped.
+
+    ``mode`` FULL draws everything (a ``]`` with nothing to pop is ignored);
+    SEEK only moves the turtle to ``end`` (no output), jumping over every
+    ``[ ... ]`` that closes before ``end`` (``match``: bracket matches), so it
+    costs the modules on the path from the root, not the whole string before
+    ``end``; REGION draws like FULL but stops at the first ``]`` that closes a
+    branch opened before ``begin`` (the end of the part an edit changed).
+    ``trop`` is (tx, ty, tz, e) or empty; ``seg_base`` numbers the segments
+    drawn here (their parent links).
+
+    Returns (stop, segment arrays, organ arrays), see the code.
+    """
+    seek = mode == SEEK
+    n_draw = n_org = depth = max_depth = 0
+    for i in range(begin, end):
+        a = acts[i]
+        if a == DRAW:
+            n_draw += 1
+        elif a == ORGAN:
+            n_org += 1
+        elif a == PUSH:
+            depth += 1
+            max_depth = max(depth, max_depth)
+        elif a == POP:
+            if depth > 0:
+                depth -= 1
+            elif mode == REGION:
+                break
+    if seek:
+        n_draw = n_org = 0
+    seg_at = np.empty(n_draw, np.int64)
+    seg_start = np.empty((n_draw, 3))
+    seg_end = np.empty((n_draw, 3))
+    seg_width = np.empty(n_draw)
+    seg_order = np.empty(n_draw, np.int32)
+    seg_color = np.empty(n_draw, np.int64)
+    seg_normal = np.empty((n_draw, 3))
+    seg_parent = np.empty(n_draw, np.int64)
+    org_at = np.empty(n_org, np.int64)
+    org_pos = np.empty((n_org, 3))
+    org_frame = np.empty((n_org, 3, 3))
+    org_size = np.empty(n_org)
+    stack = np.empty((max_depth + 1, STATE_SIZE))
+
+    px, py, pz = state[0], state[1], state[2]
+    hx, hy, hz = state[3], state[4], state[5]
+    lx, ly, lz = state[6], state[7], state[8]
+    ux, uy, uz = state[9], state[10], state[11]
+    width = state[12]
+    color = np.int64(state[13])
+    order = np.int64(state[14])
+    last = np.int64(state[15])
+    has_trop = trop.size == 4
+    tx = ty = tz = te = 0.0
+    if has_trop:
+        tx, ty, tz, te = trop[0], trop[1], trop[2], trop[3]
+    top = k_seg = k_org = 0
+    stop = end
+    i = begin
+    while i < end:
+        a = acts[i]
+        if a == 0:
+            i += 1
+            continue
+        k = nps[i]
+        p = par[i]
+        if a == DRAW or a == MOVE:
+            d = p if k else step
+            ex, ey, ez = px + hx * d, py + hy * d, pz + hz * d
+            if a == DRAW and not seek:
+                seg_at[k_seg] = i
+                seg_start[k_seg, 0], seg_start[k_seg, 1], seg_start[k_seg, 2] = px, py, pz
+                seg_end[k_seg, 0], seg_end[k_seg, 1], seg_end[k_seg, 2] = ex, ey, ez
+                seg_width[k_seg] = width
+                seg_order[k_seg] = order
+                seg_color[k_seg] = color
+                seg_normal[k_seg, 0], seg_normal[k_seg, 1], seg_normal[k_seg, 2] = lx, ly, lz
+                seg_parent[k_seg] = last
+                last = seg_base + k_seg
+                k_seg += 1
+            if a == DRAW and has_trop:
+                ax, ay, az = hy * tz - hz * ty, hz * tx - hx * tz, hx * ty - hy * tx
+                size = math.sqrt(0.0 + ax * ax + ay * ay + az * az)
+                if size >= 1e-12:
+                    rad = te * size
+                    kx, ky, kz = ax / size, ay / size, az / size
+                    c, s = math.cos(rad), math.sin(rad)
+                    hx, hy, hz = _rodrigues(hx, hy, hz, kx, ky, kz, c, s)
+                    lx, ly, lz = _rodrigues(lx, ly, lz, kx, ky, kz, c, s)
+                    ux, uy, uz = _rodrigues(ux, uy, uz, kx, ky, kz, c, s)
+            px, py, pz = ex, ey, ez
+        elif a <= TURN_AROUND:
+            deg = p if k else angle
+            if a == TURN_RIGHT or a == PITCH_UP or a == ROLL_RIGHT:
+                deg = -deg
+            elif a == TURN_AROUND:
+                deg = 180.0
+            c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+            if a == TURN_LEFT or a == TURN_RIGHT or a == TURN_AROUND:  # about U
+                hx, hy, hz, lx, ly, lz = _pair(hx, hy, hz, lx, ly, lz, c, -s)
+            elif a == PITCH_DOWN or a == PITCH_UP:  # about L
+                hx, hy, hz, ux, uy, uz = _pair(hx, hy, hz, ux, uy, uz, c, s)
+            else:  # about H
+                lx, ly, lz, ux, uy, uz = _pair(lx, ly, lz, ux, uy, uz, c, s)
+        elif a == ROLL_HORIZONTAL:
+            vx, vy, vz = 0.0 * hz - 1.0 * hy, 1.0 * hx - 0.0 * hz, 0.0 * hy - 0.0 * hx
+            norm = math.sqrt(vx * vx + vy * vy + vz * vz)
+            if norm > 1e-12:
+                lx, ly, lz = vx / norm, vy / norm, vz / norm
+                ux, uy, uz = hy * lz - hz * ly, hz * lx - hx * lz, hx * ly - hy * lx
+        elif a == PUSH:
+            if seek and match[i] > i and match[i] < end:
+                i = match[i] + 1  # a whole branch before the target: the state after it is the one before
+                continue
+            row = stack[top]
+            row[0], row[1], row[2], row[3], row[4], row[5] = px, py, pz, hx, hy, hz
+            row[6], row[7], row[8], row[9], row[10], row[11] = lx, ly, lz, ux, uy, uz
+            row[12], row[13], row[14], row[15] = width, color, order, last
+            top += 1
+            order += 1
+        elif a == POP:
+            if top > 0:
+                top -= 1
+                row = stack[top]
+                px, py, pz, hx, hy, hz = row[0], row[1], row[2], row[3], row[4], row[5]
+                lx, ly, lz, ux, uy, uz = row[6], row[7], row[8], row[9], row[10], row[11]
+                width, color, order, last = row[12], np.int64(row[13]), np.int64(row[14]), np.int64(row[15])
+            elif mode == REGION:
+                stop = i
+                break
+        elif a == WIDTH:
+            width = p if k else width * 0.7
+        elif a == COLOR_UP:
+            color = np.int64(p) if k else color + 1
+        elif a == COLOR_DOWN:
+            color -= 1
+        elif a == ORGAN and not seek:
+            org_at[k_org] = i
+            org_pos[k_org, 0], org_pos[k_org, 1], org_pos[k_org, 2] = px, py, pz
+            org_frame[k_org, 0, 0], org_frame[k_org, 0, 1], org_frame[k_org, 0, 2] = hx, hy, hz
+            org_frame[k_org, 1, 0], org_frame[k_org, 1, 1], org_frame[k_org, 1, 2] = lx, ly, lz
+            org_frame[k_org, 2, 0], org_frame[k_org, 2, 1], org_frame[k_org, 2, 2] = ux, uy, uz
+            org_size[k_org] = p if k else 1.0
+            k_org += 1
+        i += 1
+    state[0], state[1], state[2], state[3], state[4], state[5] = px, py, pz, hx, hy, hz
+    state[6], state[7], state[8], state[9], state[10], state[11] = lx, ly, lz, ux, uy, uz
+    state[12], state[13], state[14], state[15] = width, color, order, last
+    seg = (seg_at[:k_seg], seg_start[:k_seg], seg_end[:k_seg], seg_width[:k_seg], seg_order[:k_seg],
+           seg_color[:k_seg], seg_normal[:k_seg], seg_parent[:k_seg])
+    return stop, seg, (org_at[:k_org], org_pos[:k_org], org_frame[:k_org], org_size[:k_org])
+
+@njit(cache=True, nogil=True)
+def bracket_pairs(symbols, open_id, close_id):
+    """For each open bracket the position of its close and vice versa (-1 elsewhere), one pass.
+
+    Returns (match, balanced); an unmatched bracket keeps -1 and makes ``balanced`` False.
+    """
+    n = len(symbols)
+    match = np.full(n, -1, np.int64)
+    stack = np.empty(n + 1, np.int64)
+    top = 0
+    balanced = True
+    for i in range(n):
+        s = symbols[i]
+        if s == open_id:
+            stack[top] = i
+            top += 1
+        elif s == close_id:
+            if top > 0:
+                top -= 1
+                match[stack[top]] = i
+                match[i] = stack[top]
+            else:
+                balanced = False
+    return match, balanced and top == 0
