@@ -26,6 +26,7 @@ import pathlib
 import ipywidgets as W
 
 import ramure.grammars as grammar_files
+from ramure.app.jupyter.architecture import ArchitectureBrowser
 from ramure.app.jupyter._ui import Fallback, MessageLine, button, on_value, png_tag
 from ramure.app.jupyter.grammar import GrammarPanel
 from ramure.app.jupyter.selection import SelectionPanel, TreeBrowser
@@ -148,6 +149,7 @@ class Explorer:
         self.view = PlantView(self, backend=view, size=size)
         self.selection_panel = SelectionPanel(self)
         self.tree = TreeBrowser(self)
+        self.architecture = ArchitectureBrowser(self)
         self.edits = EditPanel(self)
         self.camera = W.Dropdown(options=VIEWS, value=self.view.view, description="view",
                                  style={"description_width": "35px"}, layout=W.Layout(width="130px"))
@@ -161,8 +163,9 @@ class Explorer:
         side = W.VBox([self.selection_panel.widget, self.edits.widget],
                       layout=W.Layout(width="30%", min_width="320px"))
         left = W.VBox([self.grammar.widget], layout=W.Layout(width="30%", min_width="280px"))
-        self.tabs = W.Tab(children=[self.tree.widget, self.variants.widget, self.variants.pca_widget],
-                          titles=("Derivation tree", "Variants", "PCA & qualifiers"))
+        self.tabs = W.Tab(children=[self.tree.widget, self.architecture.widget, self.variants.widget,
+                                    self.variants.pca_widget],
+                          titles=("Derivation tree", "Architecture", "Variants", "PCA & qualifiers"))
         self.widget = W.VBox([self.title, self.status_line, self.message.widget,
                               W.HBox([left, centre, side],
                                      layout=W.Layout(flex_flow="row wrap", align_items="flex-start")),
@@ -235,7 +238,7 @@ class Explorer:
         name = model.path.name if model.path else "grammar text"
         self.title.value = f"<h3 style='margin:4px 0'>Ramure explorer — {name}</h3>"
         self.status_line.value = f"<small>{model.status()}</small>"
-        for panel in (self.grammar, self.view, self.selection_panel, self.tree, self.edits):
+        for panel in (self.grammar, self.view, self.selection_panel, self.tree, self.architecture, self.edits):
             panel.refresh()
         self.variants.refresh_note()
         if self.fallback.handle is not None and self._fallback_key != self.view._key():
