@@ -3,8 +3,9 @@
 One derivation step is vectorised over the whole string: for every rule, the
 modules it rewrites are found with array masks, its condition and successor
 parameters are evaluated once for all of them (numpy expressions), and the new
-string is assembled with one scatter.  Only context matching walks modules one
-by one, and only for modules whose symbol has a context rule.
+string is assembled with one scatter.  Contexts come from each module's nearest
+context neighbours, computed once per step for the whole string in one linear
+pass (:func:`context_neighbours`).
 
 Rule choice for one module, in order:
 
@@ -338,34 +339,22 @@ class LSystem:
 
     # -- context -----------------------------------------------------------
     def _match_context(self, group, cand, symbols, nparams, string, cache):
-        if "match" not in cache:
-            cache["match"] = bracket_matches(symbols, *self.bracket_ids)
-        match = cache["match"]
-        open_id, close_id = self.bracket_ids
-        ignore = self.ignore_ids
-        sym_list = symbols.tolist()
-        npar_list = nparams.tolist()
-        size = len(sym_list)
-        ok = np.zeros(cand.size, bool)
-        found = {}
+        """The candidates whose contexts match ``group``'s, and their context nodes by slot.
+
+        Every module's nearest context neighbours are computed once per step for
+        the whole string (:func:`context_neighbours`, linear); a k-module context
+        follows them k times.  A wanted symbol or arity of -1 matches anything.
+        """
+        if "neighbours" not in cache:
+            cache["neighbours"] = context_neighbours(symbols, *self.bracket_ids, self.ignore_ids)
+        from ._context_kernel import match_contexts
+
+        prev, nxt = cache["neighbours"]
+        wanted = list(reversed(group.left)) + list(group.right)
         slots = [-k for k in range(1, len(group.left) + 1)] + list(range(1, len(group.right) + 1))
-        for s in slots:
-            found[s] = np.full(cand.size, -1, np.int64)
-        for c, i in enumerate(cand.tolist()):
-            left = _walk_left(i, len(group.left), sym_list, match, open_id, close_id, ignore)
-            if left is None:
-                continue
-            right = _walk_right(i, len(group.right), sym_list, match, open_id, close_id, ignore, size)
-            if right is None:
-                continue
-            wanted = group.left + group.right
-            got = left + right
-            if all(sym_list[p] == s and npar_list[p] == a for p, (s, a) in zip(got, wanted)):
-                ok[c] = True
-                for k, p in enumerate(reversed(left), start=1):
-                    found[-k][c] = p
-                for k, p in enumerate(right, start=1):
-                    found[k][c] = p
+        ok, at = match_contexts(cand, prev, nxt, symbols, nparams, np.array([w[0] for w in wanted], np.int64),
+                                np.array([w[1] for w in wanted], np.int64), np.sign(slots).astype(np.int64))
+        found = dict(zip(slots, at))
         cand = cand[ok]
         ctx = {s: string[v[ok]] for s, v in found.items()}
         for r in group.rules:
@@ -397,66 +386,36 @@ def check_constants(constants):
     return constants
 
 
-def _walk_left(i, count, sym, match, open_id, close_id, ignore):
-    out, j = [], i - 1
-    while len(out) < count:
-        if j < 0:
-            return None
-        s = sym[j]
-        if s == close_id:
-            if match[j] < 0:
-                return None  # the branch starts outside what we can see
-            j = match[j] - 1  # skip a whole branch
-        elif s == open_id or s in ignore:
-            j -= 1  # leave the branch toward its parent, or skip an ignored symbol
-        else:
-            out.append(j)
-            j -= 1
-    out.reverse()
-    return out
+def context_neighbours(symbols, open_id, close_id, ignore_ids):
+    """(prev, next): each module's nearest left / right context module (-1 for none).
 
+    Linear in the string length (see :mod:`ramure.lsys._context_kernel`):
+    ``#ignore`` symbols are skipped, whole branches are jumped over, a left
+    context may be found across ``[`` (in the parent branch), a right context
+    never across ``]``.
+    """
+    from ._context_kernel import neighbours
 
-def _walk_right(i, count, sym, match, open_id, close_id, ignore, size):
-    out, j = [], i + 1
-    while len(out) < count:
-        if j >= size:
-            return None
-        s = sym[j]
-        if s == open_id:
-            if match[j] < 0:
-                return None
-            j = match[j] + 1  # skip lateral branches
-        elif s == close_id:
-            return None  # the branch ends
-        elif s in ignore:
-            j += 1
-        else:
-            out.append(j)
-            j += 1
-    return out
+    symbols = np.asarray(symbols)
+    size = int(symbols.max(initial=0)) + 1
+    ignored = np.zeros(max(size, max(ignore_ids, default=0) + 1), bool)
+    ignored[list(ignore_ids)] = True
+    match = bracket_matches(symbols, open_id, close_id)
+    return neighbours(symbols.astype(np.int64), match, -1 if open_id is None else open_id,
+                      -1 if close_id is None else close_id, ignored)
 
 
 def bracket_matches(symbols, open_id, close_id):
-    """For each ``[`` the position of its ``]`` and vice versa (-1 elsewhere), vectorised.
+    """For each ``[`` the position of its ``]`` and vice versa (-1 elsewhere), one linear pass.
 
-    Brackets of one nesting level alternate open/close in string order, so
-    sorting brackets by level and pairing an open with the close that follows
-    it matches them.  Unbalanced brackets (a piece of a string) stay -1.
+    A ``]`` closes the nearest open ``[``; unbalanced brackets (a piece of a
+    string) stay -1.
     """
-    match = np.full(len(symbols), -1, np.int64)
     if open_id is None or close_id is None:
-        return match
-    is_open = symbols == open_id
-    is_close = symbols == close_id
-    depth = np.cumsum(is_open.astype(np.int64) - is_close)
-    where = np.flatnonzero(is_open | is_close)
-    level = depth[where] + is_close[where]  # open: depth after it; close: depth before it
-    order = np.lexsort((where, level))
-    pos, lev = where[order], level[order]
-    opens = is_open[pos]
-    pair = opens[:-1] & ~opens[1:] & (lev[:-1] == lev[1:])
-    a, b = pos[:-1][pair], pos[1:][pair]
-    match[a], match[b] = b, a
+        return np.full(len(symbols), -1, np.int64)
+    from ._turtle_kernel import bracket_pairs
+
+    match, _ = bracket_pairs(np.asarray(symbols), open_id, close_id)
     return match
 
 
