@@ -265,7 +265,7 @@ def _tables(nodes, axis_of, parent_of_open, is_internode, is_uc, is_shoot):
     unit_key = shoot_key << 16 | unit_seq
     shoot_ids, shoot_row = _first_seen_ids(shoot_key)
     unit_ids, unit_row = _first_seen_ids(unit_key)
-    rank = _rank_in_group(unit_row)
+    rank = rank_in_group(unit_row)
 
     internodes = Table({"node": nodes[pos].astype(np.int64), "axis": axis_row.astype(np.int64),
                         "growth_unit": unit_row, "shoot": shoot_row, "rank": rank})
@@ -295,7 +295,7 @@ def _first_seen_ids(keys):
     return len(uniq), rank[inverse]
 
 
-def _rank_in_group(groups):
+def rank_in_group(groups: np.ndarray) -> np.ndarray:
     """0-based place of each element among the elements of its group (in array order)."""
     by_group = np.argsort(groups, kind="stable")
     sorted_groups = groups[by_group]

@@ -29,7 +29,7 @@ import numpy as np
 
 from ramure.errors import RamureError
 
-from .amap import Architecture, Table
+from .amap import Architecture, Table, rank_in_group
 
 SCALES = {"P": 1, "A": 2, "S": 3, "U": 4, "I": 5}
 _EVENTS = "# ramure-events: "
@@ -47,10 +47,17 @@ def mtg_text(arch: Architecture) -> str:
     borne = {}
     for row, bearer in enumerate(arch.axes.bearer.tolist()):
         borne.setdefault(bearer, []).append(row)
-    roots = borne.get(-1, [])
+    by_axis = np.argsort(arch.internodes.axis, kind="stable")
+    starts = np.searchsorted(arch.internodes.axis[by_axis], np.arange(len(arch.axes) + 1))
+    ranks = {"rows": [by_axis[starts[a]:starts[a + 1]].tolist() for a in range(len(arch.axes))],
+             "shoot": rank_in_group(arch.shoots.axis).tolist(),
+             "unit": rank_in_group(arch.growth_units.shoot).tolist(),
+             "shoot_of": arch.internodes.shoot.tolist(), "unit_of": arch.internodes.growth_unit.tolist(),
+             "node": arch.internodes.node.tolist(), "rank": arch.internodes.rank.tolist(),
+             "order": arch.axes.order.tolist()}
     lines.append((0, "/P1", None))
-    for axis in roots:
-        _write_axis(arch, axis, 0, "^/", borne, lines)
+    for axis in borne.get(-1, []):
+        _write_axis(arch, axis, 0, "^/", borne, ranks, lines)
     width = max(col for col, _, _ in lines) + 1
     header = [_EVENTS + json.dumps(arch.events, sort_keys=True), "CODE:\tFORM-A", "",
               "CLASSES:", "SYMBOL\tSCALE\tDECOMPOSITION\tINDEXATION\tDEFINITION", "$\t0\tFREE\tFREE\tIMPLICIT"]
@@ -63,32 +70,23 @@ def mtg_text(arch: Architecture) -> str:
     return "\n".join(header + body) + "\n"
 
 
-def _write_axis(arch, axis, col, prefix, borne, lines):
-    lines.append((col, f"{prefix}A{int(arch.axes.order[axis])}", None))
-    inter = arch.internodes
-    rows = np.flatnonzero(inter.axis == axis)
+def _write_axis(arch, axis, col, prefix, borne, ranks, lines):
+    lines.append((col, f"{prefix}A{ranks['order'][axis]}", None))
+    shoot_of, unit_of, nodes, rank = ranks["shoot_of"], ranks["unit_of"], ranks["node"], ranks["rank"]
     previous_shoot = previous_unit = -1
-    for row in rows.tolist():
-        shoot, unit = int(inter.shoot[row]), int(inter.growth_unit[row])
-        shoot_rank = _first_of(arch.shoots.axis, axis, shoot)
-        unit_rank = _first_of(arch.growth_units.shoot, shoot, unit)
+    for row in ranks["rows"][axis]:
+        shoot, unit = shoot_of[row], unit_of[row]
         if previous_shoot < 0:
             lines += [(col, "^/S1", None), (col, "^/U1", None)]
         elif shoot != previous_shoot:
-            lines += [(col, f"^<S{shoot_rank + 1}", None), (col, "^/U1", None)]
+            lines += [(col, f"^<S{ranks['shoot'][shoot] + 1}", None), (col, "^/U1", None)]
         elif unit != previous_unit:
-            lines.append((col, f"^<U{unit_rank + 1}", None))
-        first_in_unit = unit != previous_unit
-        code = "^/I1" if first_in_unit else f"^<I{int(inter.rank[row]) + 1}"
-        lines.append((col, code, int(inter.node[row])))
+            lines.append((col, f"^<U{ranks['unit'][unit] + 1}", None))
+        code = "^/I1" if unit != previous_unit else f"^<I{rank[row] + 1}"
+        lines.append((col, code, nodes[row]))
         previous_shoot, previous_unit = shoot, unit
         for child in borne.get(row, []):
-            _write_axis(arch, child, col + 1, "+", borne, lines)
-
-
-def _first_of(owner, axis, row):
-    """Rank of ``row`` among the rows of ``owner`` that belong to ``axis``."""
-    return int(np.count_nonzero(owner[:row] == axis))
+            _write_axis(arch, child, col + 1, "+", borne, ranks, lines)
 
 
 def write_mtg(arch: Architecture, path) -> pathlib.Path:

@@ -47,6 +47,7 @@ class EventScheduler:
                           ("date", np.float64), ("tie", np.float64))}
         self.state = np.zeros(0, np.int8)  # per node id
         self.handled = 0
+        self._unsorted = False
 
     def __len__(self) -> int:
         return len(self._columns["tick"])
@@ -70,6 +71,7 @@ class EventScheduler:
         new = {"tick": np.floor(dates / self.dt).astype(np.int64), "kind": kinds, "order": orders.astype(np.int32),
                "node": nodes, "date": dates, "tie": self.rng.random(len(dates))}
         self._columns = {k: np.concatenate([self._columns[k], new[k]]) for k in self._columns}
+        self._unsorted = True
 
     def set_state(self, nodes, state: str) -> None:
         """Mark nodes ``"active"``, ``"paused"`` or ``"dead"``."""
@@ -84,9 +86,12 @@ class EventScheduler:
             self.state = np.concatenate([self.state, np.zeros(size - len(self.state), np.int8)])
 
     def _sorted(self):
-        c = self._columns
-        order = np.lexsort((c["tie"], c["order"], c["kind"], c["tick"]))
-        self._columns = {k: v[order] for k, v in c.items()}
+        """Sort the pending events once after each addition (each tick is then a slice)."""
+        if self._unsorted:
+            c = self._columns
+            order = np.lexsort((c["tie"], c["order"], c["kind"], c["tick"]))
+            self._columns = {k: v[order] for k, v in c.items()}
+            self._unsorted = False
 
     def run(self, handler: Callable | None = None, until: float = np.inf) -> Iterator:
         """Yield ``(tick, kind, nodes, dates)`` for each non-empty list, in time order.
@@ -109,6 +114,7 @@ class EventScheduler:
                 later = {k: v[waiting] for k, v in now.items()}
                 later["tick"] = later["tick"] + 1
                 self._columns = {k: np.concatenate([later[k], self._columns[k]]) for k in c}
+                self._unsorted = True
             alive = state == ACTIVE
             if not alive.any() and waiting.all() and len(self) == int(waiting.sum()):
                 return  # only paused nodes are left and nothing can wake them
