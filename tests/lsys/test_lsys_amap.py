@@ -161,7 +161,7 @@ def test_same_tick_lists_ascend_by_order_with_seeded_ties():
     rng = np.random.default_rng(0)  # the same draws as in lists(): dates, kinds, then orders
     rng.uniform(0, 3, 400), rng.integers(0, 4, 400)
     orders = rng.integers(1, 4, 400)
-    for tick, kind, nodes in first:
+    for _tick, _kind, nodes in first:
         assert (np.diff(orders[nodes]) >= 0).all()
     assert all(np.array_equal(a[2], b[2]) for a, b in zip(first, again))
     assert any(not np.array_equal(a[2], b[2]) for a, b in zip(first, other))
@@ -175,7 +175,7 @@ def test_dead_nodes_drop_events_and_paused_nodes_wait():
     s.set_state([1], "dead")
     s.set_state([2], "paused")
     seen = []
-    for tick, kind, nodes, _ in s.run():
+    for tick, _kind, nodes, _ in s.run():
         seen.append((tick, nodes.tolist()))
         if tick == 0:
             s.set_state([2], "active")
@@ -192,3 +192,22 @@ def test_bad_events_are_refused(kwargs, message):
     args = {"dates": [1.0], "kinds": ["internode"], "orders": [1], "nodes": [0], **kwargs}
     with pytest.raises(ValueRefused, match=message):
         EventScheduler().add(**args)
+
+
+def test_command_line_prints_the_tables_and_writes_an_mtg(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "ramure.app.cli", "amap", "amap/massart", "-n", "5", "--json",
+                          "--mtg", str(tmp_path / "m.mtg")], capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    facts = json.loads(out.stdout)
+    assert facts["axes_per_order"] == {"1": 1, "2": 12} and facts["growth_units"] == 5 + 3 * (4 + 3 + 2 + 1)
+    assert facts["internodes_per_growth_unit"] == {"2": 30, "3": 5}
+    again = subprocess.run([sys.executable, "-m", "ramure.app.cli", "mtg", str(tmp_path / "m.mtg")],
+                           capture_output=True, text=True, cwd=tmp_path)
+    assert json.loads(again.stdout)["internodes"] == facts["internodes"]
+    bad = subprocess.run([sys.executable, "-m", "ramure.app.cli", "amap", "amap/massart", "--mtg", "x.txt"],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert bad.returncode == 2 and "must end with .mtg" in bad.stderr and "Traceback" not in bad.stderr
