@@ -67,7 +67,7 @@ ROLES = {
     "reiteration": "a module that marks a reiteration",
 }
 ALIASES = {"gu": "uc", "growth_unit": "uc", "annual_shoot": "shoot", "internodes": "internode"}
-EVENT_KINDS = ("internode", "growth_unit", "branching", "organ", "reiteration", "death")
+EVENT_KINDS = ("growth_unit", "internode", "branching", "organ", "reiteration", "death")
 
 
 def check_annotations(grammar) -> None:
@@ -363,3 +363,63 @@ def _events(tree, lsystem, role_sets, ids):
             "organ": count(set(lsystem.grammar.organs)),
             "reiteration": count(role_sets["reiteration"]),
             "death": count(role_sets["death"])}
+
+
+def growth_events(derivation, arch: Architecture) -> dict:
+    """The growth of ``arch`` as dated events (the scheduler's input), from the history.
+
+    Dates are in years from the start (one derivation step = one year): a growth unit made at
+    step ``s`` starts at ``s - 1``, and its ``c`` internodes appear through that year, the
+    ``k``-th (0-based) at ``s - 1 + (k + 1) / c`` (AMAP's internode events inside a growth
+    unit); an axis branches when its first growth unit starts; an organ appears in the middle
+    of the year its module was made. Returns arrays ``date``, ``kind`` (names of
+    :data:`ramure.lsys.schedule.KINDS`), ``order`` (branching order) and ``node`` (history-tree
+    node ids: the internode, the unit's first internode, the axis's first internode, the organ).
+    """
+    tree, inter, units, axes = derivation.tree, arch.internodes, arch.growth_units, arch.axes
+    step = tree.step[inter.node].astype(np.float64)
+    count = units.count[inter.growth_unit]
+    internode_date = step - 1 + (inter.rank + 1) / count
+    unit_node = inter.node[units.first]
+    unit_date = tree.step[unit_node] - 1.0
+    axis_node = inter.node[axes.first[1:]]
+    organs = _organ_nodes(derivation)
+    organ_order = np.ones(len(organs), np.int64)
+    parts = [("internode", internode_date, axes.order[inter.axis], inter.node),
+             ("growth_unit", unit_date, axes.order[units.axis], unit_node),
+             ("branching", tree.step[axis_node] - 1.0, axes.order[1:], axis_node),
+             ("organ", tree.step[organs] - 0.5, organ_order, organs)]
+    return {"date": np.concatenate([p[1] for p in parts]).astype(np.float64),
+            "kind": np.concatenate([np.full(len(p[1]), p[0], dtype=object) for p in parts]),
+            "order": np.concatenate([p[2] for p in parts]).astype(np.int64),
+            "node": np.concatenate([p[3] for p in parts]).astype(np.int64)}
+
+
+def _organ_nodes(derivation):
+    lsystem, tree = derivation.lsystem, derivation.tree
+    wanted = [i for i, name in enumerate(lsystem.symbols) if name in lsystem.grammar.organs]
+    leaves = tree.leaves
+    return leaves[np.isin(tree.symbol[leaves], wanted)]
+
+
+def grown_by(derivation, arch: Architecture, date: float, seed: int = 0) -> dict:
+    """Replay the growth through the event scheduler up to ``date`` (years, inclusive).
+
+    Returns ``{"internodes": node ids in the order the scheduler handed them out, "events": counts
+    per kind}``: tick by tick, the four lists, each ascending by branching order with ties in
+    a seeded order (see :class:`ramure.lsys.schedule.EventScheduler`).
+    """
+    from .schedule import KINDS, EventScheduler
+
+    if not np.isfinite(date) or date < 0:
+        raise ValueRefused(f"a date must be finite and >= 0, not {date}")
+    events = growth_events(derivation, arch)
+    keep = events["date"] <= date
+    scheduler = EventScheduler(seed=seed)
+    scheduler.add(events["date"][keep], events["kind"][keep], events["order"][keep], events["node"][keep])
+    grown, counts = [], dict.fromkeys(KINDS, 0)
+    for _tick, kind, nodes, _dates in scheduler.run():
+        counts[kind] += len(nodes)
+        if kind == "internode":
+            grown.append(nodes)
+    return {"internodes": np.concatenate(grown) if grown else np.zeros(0, np.int64), "events": counts}

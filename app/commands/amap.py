@@ -2,6 +2,7 @@
 internodes, events) from its ``#amap`` annotations, and its MTG file.
 
     ramure amap amap/rauh -n 7 --seed 0 --json --mtg rauh.mtg
+    ramure amap amap/massart --at 3.5 --json      # what has grown after three and a half years
 """
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import time
 
 from ramure.app.cli import UserError
 from ramure.app.commands.plant import add_grammar_options, load_and_derive, output_file
-from ramure.lsys.amap import architecture
+from ramure.lsys.amap import architecture, grown_by
 from ramure.lsys.mtg import read_mtg, write_mtg
 
 
@@ -21,6 +22,9 @@ def run_amap(args):
     arch = architecture(derivation)
     facts = {"file": args.file, "n": derivation.n, "seed": derivation.seed, **arch.to_dict(),
              "derive_seconds": round(derive_seconds, 6), "seconds": round(time.perf_counter() - t0, 6)}
+    if args.at is not None:
+        grown = grown_by(derivation, arch, args.at, seed=args.seed)
+        facts["at"] = {"date": args.at, "internodes": len(grown["internodes"]), "events": grown["events"]}
     if mtg is not None:
         write_mtg(arch, mtg)
         facts["mtg"] = str(mtg)
@@ -46,6 +50,8 @@ def register(sub):
     p.add_argument("--json", action="store_true", help="print counts per level, axes per order, events, "
                    "the internodes-per-growth-unit histogram")
     p.add_argument("--mtg", metavar="FILE.mtg", help="write the plant as an MTG file (OpenAlea's format)")
+    p.add_argument("--at", type=float, metavar="YEARS", help="replay the growth through the event scheduler "
+                   "up to this date (one step = one year) and report what has grown by then")
     p.set_defaults(func=run_amap)
 
     p = sub.add_parser("mtg", help="read an MTG file and print its architecture as JSON")

@@ -6,7 +6,7 @@ import pytest
 
 import ramure
 from ramure.errors import GrammarError, ValueRefused
-from ramure.lsys.amap import architecture
+from ramure.lsys.amap import architecture, grown_by
 from ramure.lsys.mtg import MTGError, mtg_text, parse_mtg
 from ramure.lsys.schedule import KINDS, EventScheduler
 
@@ -200,14 +200,31 @@ def test_command_line_prints_the_tables_and_writes_an_mtg(tmp_path):
     import sys
 
     out = subprocess.run([sys.executable, "-m", "ramure.app.cli", "amap", "amap/massart", "-n", "5", "--json",
-                          "--mtg", str(tmp_path / "m.mtg")], capture_output=True, text=True, cwd=tmp_path)
+                          "--at", "2", "--mtg", str(tmp_path / "m.mtg")], capture_output=True, text=True, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     facts = json.loads(out.stdout)
     assert facts["axes_per_order"] == {"1": 1, "2": 12} and facts["growth_units"] == 5 + 3 * (4 + 3 + 2 + 1)
     assert facts["internodes_per_growth_unit"] == {"2": 30, "3": 5}
+    assert facts["at"]["internodes"] == 3 + 3 + 3 * 2  # two trunk units and the first tier's first year
     again = subprocess.run([sys.executable, "-m", "ramure.app.cli", "mtg", str(tmp_path / "m.mtg")],
                            capture_output=True, text=True, cwd=tmp_path)
     assert json.loads(again.stdout)["internodes"] == facts["internodes"]
     bad = subprocess.run([sys.executable, "-m", "ramure.app.cli", "amap", "amap/massart", "--mtg", "x.txt"],
                          capture_output=True, text=True, cwd=tmp_path)
     assert bad.returncode == 2 and "must end with .mtg" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_replaying_the_growth_through_the_scheduler():
+    derivation = ramure.derive("amap/rauh", seed=2)
+    arch = architecture(derivation)
+    steps = derivation.tree.step[arch.internodes.node]
+    for year in range(derivation.n + 1):  # after year k, exactly the internodes made by step k
+        grown = grown_by(derivation, arch, float(year))
+        assert sorted(grown["internodes"].tolist()) == sorted(arch.internodes.node[steps <= year].tolist())
+    middle = grown_by(derivation, arch, 3.5, seed=1)
+    order_of = dict(zip(arch.internodes.node.tolist(), arch.axes.order[arch.internodes.axis].tolist()))
+    tick_three = [n for n in middle["internodes"].tolist() if 3 < derivation.tree.step[n] <= 4]
+    assert tick_three and all(order_of[a] <= order_of[b] for a, b in zip(tick_three, tick_three[1:]))
+    assert grown_by(derivation, arch, 3.5, seed=1)["internodes"].tolist() == middle["internodes"].tolist()
+    with pytest.raises(ValueRefused, match="finite and >= 0"):
+        grown_by(derivation, arch, -1.0)
