@@ -35,21 +35,38 @@ def _ring_basis(direction, normal):
     return a, b
 
 
+def tube_points(start, end, normal, base_radius, top_radius, sides=8):
+    """Points (s, 2·sides, 3) of frustums: each segment's bottom ring then its top ring.
+
+    Each segment's points are contiguous, so an edit can replace the rings of
+    some segments and keep the others' bytes as they are.
+    """
+    s = len(start)
+    a, b = _ring_basis(end - start, normal)
+    theta = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
+    ring = np.cos(theta)[None, :, None] * a[:, None, :]
+    ring += np.sin(theta)[None, :, None] * b[:, None, :]
+    pts = np.empty((s, 2 * sides, 3))
+    np.multiply(base_radius[:, None, None], ring, out=pts[:, :sides])
+    pts[:, :sides] += start[:, None, :]
+    np.multiply(top_radius[:, None, None], ring, out=pts[:, sides:])
+    pts[:, sides:] += end[:, None, :]
+    return pts
+
+
+def tube_quads(count, sides=8):
+    """Quad indices (count·sides, 4) of ``count`` frustums laid out as :func:`tube_points`."""
+    j = np.arange(sides)
+    template = np.stack([j, (j + 1) % sides, (j + 1) % sides + sides, j + sides], axis=-1)
+    base = (np.arange(count, dtype=np.int64) * (2 * sides))[:, None, None]
+    return (template[None] + base).reshape(-1, 4)
+
+
 def tube_arrays(skeleton, sides=8):
     """Points (2·s·k, 3) and quad indices (s·k, 4) of all frustums."""
-    s = len(skeleton)
-    a, b = _ring_basis(skeleton.end - skeleton.start, skeleton.normal)
-    theta = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
-    ring = np.cos(theta)[None, :, None] * a[:, None, :] + np.sin(theta)[None, :, None] * b[:, None, :]
-    bottom = skeleton.start[:, None, :] + skeleton.base_radius[:, None, None] * ring
-    top = skeleton.end[:, None, :] + skeleton.top_radius[:, None, None] * ring
-    points = np.concatenate([bottom.reshape(-1, 3), top.reshape(-1, 3)])
-    j = np.arange(sides)
-    base = (np.arange(s) * sides)[:, None]
-    b0, b1 = base + j, base + (j + 1) % sides
-    t0, t1 = b0 + s * sides, b1 + s * sides
-    quads = np.stack([b0, b1, t1, t0], axis=-1).reshape(-1, 4)
-    return points, quads
+    sk = skeleton
+    points = tube_points(sk.start, sk.end, sk.normal, sk.base_radius, sk.top_radius, sides)
+    return points.reshape(-1, 3), tube_quads(len(sk), sides)
 
 
 def _sphere_template(resolution):
@@ -110,23 +127,71 @@ def organ_arrays(organs, resolution=8):
 
 
 def skeleton_to_polydata(skeleton, sides=8, organ_resolution=8):
-    """One :class:`pyvista.PolyData` with tubes and organs and the cell data above."""
-    import pyvista as pv
+    """One :class:`pyvista.PolyData` with tubes and organs and the cell data above.
 
-    tpts, quads = tube_arrays(skeleton, sides)
+    Cells: the tubes' quads segment by segment (``sides`` per segment), then
+    the organs' triangles; points likewise (2·``sides`` per segment first).
+    """
+    sk = skeleton
+    tpts = tube_points(sk.start, sk.end, sk.normal, sk.base_radius, sk.top_radius, sides).reshape(-1, 3)
+    return polydata_from_parts(skeleton, tpts, sides, organ_resolution)
+
+
+def polydata_from_parts(skeleton, tube_pts, sides=8, organ_resolution=8):
+    """The plant's PolyData from already computed tube points (see :func:`tube_points`)."""
+    import pyvista as pv
+    from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
+    from vtkmodules.vtkCommonDataModel import vtkCellArray
+
     opts, tris, organ_idx, organ_kind = organ_arrays(skeleton.organs, organ_resolution)
-    points = np.vstack([tpts, opts]) if len(opts) else tpts
-    tris = tris + len(tpts)
-    faces = np.concatenate([
-        np.hstack([np.full((len(quads), 1), 4), quads]).ravel(),
-        np.hstack([np.full((len(tris), 1), 3), tris]).ravel(),
-    ]).astype(np.int64)
-    mesh = pv.PolyData(points, faces) if len(points) else pv.PolyData()
     nseg = len(skeleton)
+    nq, nt = nseg * sides, len(tris)
+    points = np.concatenate([tube_pts, opts]) if len(opts) else tube_pts
+    mesh = pv.PolyData()
+    if not len(points):
+        return mesh
+    conn = np.empty(4 * nq + 3 * nt, np.int64)
+    conn[:4 * nq] = tube_quads(nseg, sides).ravel()
+    conn[4 * nq:] = (tris + len(tube_pts)).ravel()
+    offsets = np.concatenate([np.arange(0, 4 * nq + 1, 4, dtype=np.int64),
+                              4 * nq + 3 * np.arange(1, nt + 1, dtype=np.int64)])
+    cells = vtkCellArray()
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True), numpy_to_vtkIdTypeArray(conn, deep=True))
+    mesh.points = points
+    mesh.SetPolys(cells)
     seg = np.repeat(np.arange(nseg), sides)
     mesh.cell_data["leaf_id"] = np.concatenate([skeleton.leaf_id[seg], skeleton.organs.leaf_id[organ_idx]])
-    mesh.cell_data["segment"] = np.concatenate([seg, np.full(len(tris), -1)])
-    mesh.cell_data["organ"] = np.concatenate([np.full(len(seg), -1), organ_idx])
-    mesh.cell_data["kind"] = np.concatenate([np.full(len(seg), KIND_BRANCH), organ_kind]).astype(np.int8)
-    mesh.cell_data["order"] = np.concatenate([skeleton.order[seg], np.full(len(tris), -1)]).astype(np.int32)
+    mesh.cell_data["segment"] = np.concatenate([seg, np.full(nt, -1)])
+    mesh.cell_data["organ"] = np.concatenate([np.full(nq, -1), organ_idx])
+    mesh.cell_data["kind"] = np.concatenate([np.full(nq, KIND_BRANCH), organ_kind]).astype(np.int8)
+    mesh.cell_data["order"] = np.concatenate([skeleton.order[seg], np.full(nt, -1)]).astype(np.int32)
     return mesh
+
+
+def patch_polydata(old_mesh, skeleton, sides=8, organ_resolution=8):
+    """The mesh of ``skeleton`` made from ``old_mesh``, recomputing only the tubes that changed.
+
+    ``skeleton`` comes from :func:`ramure.lsys.turtle.reinterpret`, whose
+    ``extra["reuse"]`` = ``(new, old)`` names the segments whose tube is the
+    same as in ``old_mesh`` (built with the same ``sides``): their points are
+    copied, only the other tubes are computed.  Organs are rebuilt (a few
+    vectorised passes).  Without ``reuse`` this is :func:`skeleton_to_polydata`.
+    """
+    reuse = skeleton.extra.get("reuse")
+    if reuse is None or old_mesh is None or old_mesh.n_points == 0:
+        return skeleton_to_polydata(skeleton, sides, organ_resolution)
+    new, old = reuse
+    k = 2 * sides
+    old_pts = np.asarray(old_mesh.points)
+    n_old = int(old.max(initial=-1)) + 1
+    if n_old * k > len(old_pts):
+        return skeleton_to_polydata(skeleton, sides, organ_resolution)
+    pts = np.empty((len(skeleton), k, 3))
+    pts[new] = old_pts[: len(old_pts) - len(old_pts) % k].reshape(-1, k, 3)[old]
+    todo = np.ones(len(skeleton), bool)
+    todo[new] = False
+    sk = skeleton
+    if todo.any():
+        pts[todo] = tube_points(sk.start[todo], sk.end[todo], sk.normal[todo], sk.base_radius[todo],
+                                sk.top_radius[todo], sides)
+    return polydata_from_parts(skeleton, pts.reshape(-1, 3), sides, organ_resolution)

@@ -268,3 +268,173 @@ def _organs(lsys, tree, leaves, orgs):
         np.array([], dtype=object)
     _check_finite(lsys, tree, leaf_id, np.isfinite(position).all(1) & np.isfinite(size))
     return Organs(kind, position, frame, size, tree.params[leaf_id], leaf_id)
+
+
+# -- edits: re-interpret only what changed -------------------------------------------
+def changed_spans(old, new, size):
+    """Spans of ``old`` replaced in ``new`` (two node-id strings of one tree with ``size`` nodes).
+
+    Modules present in both strings are kept; the runs of the others pair up
+    by the number of kept modules before them.  Returns ``(old_spans,
+    new_spans)`` as (k, 2) arrays of inclusive ``[first, last]`` (``last =
+    first - 1`` for an empty span), or None when the kept modules are not in
+    the same order in both strings.
+    """
+    old, new = np.asarray(old, np.int64), np.asarray(new, np.int64)
+    in_old, in_new = np.zeros(size, bool), np.zeros(size, bool)
+    in_old[old], in_new[new] = True, True
+    keep_old, keep_new = in_new[old], in_old[new]
+    if not np.array_equal(old[keep_old], new[keep_new]):
+        return None
+    spans_old, spans_new = _gaps(keep_old), _gaps(keep_new)
+    keys = np.union1d(spans_old[2], spans_new[2])
+    return _paired(spans_old, keep_old, keys), _paired(spans_new, keep_new, keys)
+
+
+def _gaps(keep):
+    """Runs of False in ``keep``: (starts, ends, kept count before each run)."""
+    changed = np.r_[False, ~keep, False].astype(np.int8)
+    edges = np.diff(changed)
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    before = np.cumsum(keep) - keep
+    return starts, ends, before[starts] if len(starts) else np.zeros(0, np.int64)
+
+
+def _paired(gaps, keep, keys):
+    """One span per key (kept count before it); an empty span where this string has none."""
+    starts, ends, counts = gaps
+    kept_at = np.flatnonzero(keep)
+    where = np.searchsorted(counts, keys)
+    has = (where < len(counts)) & (counts[np.minimum(where, max(len(counts) - 1, 0))] == keys) \
+        if len(counts) else np.zeros(len(keys), bool)
+    first = np.where(keys > 0, kept_at[np.maximum(keys - 1, 0)] + 1 if len(kept_at) else 0, 0)
+    out = np.stack([first, first - 1], axis=1)
+    out[has] = np.stack([starts[where[has]], ends[where[has]]], axis=1)
+    return out
+
+
+def reinterpret(lsys, tree, skeleton, leaves, old_spans, new_spans):
+    """The :class:`Skeleton` of ``leaves`` after an edit, re-interpreting only what changed.
+
+    ``skeleton`` is the old string's (it carries its :class:`Trace`); the edit
+    replaced each ``old_spans`` row (inclusive positions in that string) by
+    the matching ``new_spans`` row of ``leaves``.  A change moves what follows
+    it up to the end of its branch, so each changed span is re-interpreted from
+    its first module to the ``]`` that closes the branch it is in (a region);
+    the turtle state at a region's start is found by walking from the root
+    and jumping over the branches in between.  The rest keeps its arrays.
+
+    The result's ``extra["reuse"]`` is ``(new, old)``: segments whose tube is
+    unchanged (same geometry, same radii), for :func:`ramure.lsys.geometry.patch_polydata`.
+    Falls back to a full interpretation (no ``reuse``) when the strings do not
+    allow it (unbalanced brackets, no trace).
+    """
+    from ._turtle_kernel import REGION, SEEK, bracket_pairs, initial_state, walk
+
+    trace = skeleton.extra.get("trace")
+    leaves = np.asarray(leaves, np.int64)
+    old_spans = np.asarray(old_spans, np.int64).reshape(-1, 2)
+    new_spans = np.asarray(new_spans, np.int64).reshape(-1, 2)
+    if trace is None or trace.match is None or not len(old_spans):
+        return interpret_string(lsys, tree, leaves)
+    order = np.argsort(old_spans[:, 0], kind="stable")
+    old_spans, new_spans = old_spans[order], new_spans[order]
+    pieces = [module_arrays(lsys, tree, leaves[a:b + 1]) for a, b in new_spans]
+    acts, nps, par = (_splice(old, old_spans, [p[k] for p in pieces])
+                      for k, old in enumerate((trace.acts, trace.nps, trace.par)))
+    match, balanced = bracket_pairs(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
+    if len(acts) != len(leaves) or not balanced:
+        return interpret_string(lsys, tree, leaves)
+    angle, step, trop = _settings(lsys)
+    start_state = initial_state(lsys.grammar.width)
+    delta = np.cumsum((new_spans[:, 1] - new_spans[:, 0]) - (old_spans[:, 1] - old_spans[:, 0]))
+    regions = []  # (old start, old stop, segment arrays, organ arrays)
+    for i, (a, b) in enumerate(new_spans):
+        if regions and a < regions[-1][4]:
+            if b >= regions[-1][4]:
+                return interpret_string(lsys, tree, leaves)
+            regions[-1][1] = regions[-1][4] - delta[i]  # merged: the old stop shifts by this span too
+            continue
+        state = start_state.copy()
+        walk(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0)
+        stop, segs, orgs = walk(acts, nps, par, a, len(acts), match, REGION, state, angle, step, trop, 0)
+        if stop <= b:
+            return interpret_string(lsys, tree, leaves)
+        regions.append([old_spans[i, 0], stop - delta[i], segs, orgs, stop])
+    return _patched(lsys, tree, skeleton, trace, leaves, (acts, nps, par, match), regions,
+                    old_spans, delta)
+
+
+def _splice(old, spans, parts):
+    out, cursor = [], 0
+    for (a, b), part in zip(spans, parts):
+        out += [old[cursor:a], part]
+        cursor = b + 1
+    out.append(old[cursor:])
+    return np.concatenate(out)
+
+
+def _shift(positions, old_spans, delta):
+    """New string positions of kept old positions (each span before them changed the length)."""
+    k = np.searchsorted(old_spans[:, 1], positions, side="left")
+    return positions + np.r_[0, delta][k]
+
+
+def _pieces(at, regions, slot):
+    """Kept old rows (index ranges) between the regions, and each region's new arrays (``slot``)."""
+    kept, new, cursor = [], [], 0
+    for r in regions:
+        lo, hi = np.searchsorted(at, r[0]), np.searchsorted(at, r[1])
+        kept.append(np.arange(cursor, lo))
+        new.append(r[slot])
+        cursor = hi
+    kept.append(np.arange(cursor, len(at)))
+    return kept, new
+
+
+def _interleave(old, kept, new):
+    """Kept old rows and new rows in turn (string order)."""
+    out = []
+    for i, idx in enumerate(kept):
+        out.append(old[idx])
+        if i < len(new):
+            out.append(new[i])
+    return np.concatenate(out)
+
+
+def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, delta):
+    sk, scale = skeleton, lsys.grammar.width_scale / 2.0
+    kept, new = _pieces(trace.segment_at, regions, 2)
+
+    def field(old, k, convert=None):
+        return _interleave(old, kept, [p[k] if convert is None else convert(p[k]) for p in new])
+
+    seg_at = field(_shift(trace.segment_at, old_spans, delta), 0)
+    start, end, order, color, normal = (field(old, k) for old, k in (
+        (sk.start, 1), (sk.end, 2), (sk.order, 4), (sk.color, 5), (sk.normal, 6)))
+    base = field(sk.base_radius, 3, lambda w: w * scale)
+    is_kept = field(np.ones(len(sk), bool), 0, lambda a: np.zeros(len(a), bool))
+    old_index = np.concatenate(kept)
+    new_index = np.full(len(sk) + 1, -1, np.int64)  # the extra -1 maps parent -1 to -1
+    new_index[old_index] = np.flatnonzero(is_kept)
+    parent = field(new_index[sk.parent], 7)
+    coded = parent <= -2  # a parent given by its string position (see _turtle_kernel.walk)
+    parent[coded] = np.searchsorted(seg_at, -2 - parent[coded])
+    leaf = leaves[seg_at]
+    fresh = ~is_kept
+    _check_finite(lsys, tree, leaf[fresh], np.isfinite(start[fresh]).all(1) & np.isfinite(end[fresh]).all(1)
+                  & np.isfinite(base[fresh]))
+    top = top_radius(base, order, parent)
+    same = is_kept.copy()
+    same[is_kept] = top[is_kept] == sk.top_radius[old_index]
+    okept, onew = _pieces(trace.organ_at, regions, 3)
+    org = sk.organs
+    org_at = _interleave(_shift(trace.organ_at, old_spans, delta), okept, [p[0] for p in onew])
+    position, frame, size = (_interleave(old, okept, [p[k] for p in onew])
+                             for k, old in ((1, org.position), (2, org.frame), (3, org.size)))
+    organs = _organs(lsys, tree, leaves, (org_at, position, frame, size))
+    acts, nps, par, match = arrays
+    new_trace = Trace(leaves, acts, nps, par, seg_at, org_at, match)
+    reuse = (np.flatnonzero(same), old_index[same[is_kept]])
+    return Skeleton(start, end, base, top, order.astype(np.int32), leaf, color.astype(np.int32), normal,
+                    parent, organs, {"trace": new_trace, "reuse": reuse})
