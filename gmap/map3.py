@@ -42,6 +42,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
+from ramure.errors import RamureError
 from ramure.gmap._columns import Columns
 from ramure.gmap.errors import GMapError
 from ramure.gmap.operations import Operations
@@ -54,7 +55,18 @@ DART_SPEC = {
     "forward": (np.bool_, (), False),
     "point": (np.float64, (3,), 0.0),
     "radial": (np.float64, (), 0.0),
+    "corner": (np.float64, (3,), 0.0),
 }
+
+#: How each per-dart column reaches the darts an operation creates (see
+#: :meth:`GMap3.add_dart_attribute`): ``copy`` from the dart the new one continues,
+#: ``interpolate`` along the split edge (or average over the face / cell for
+#: subdivision's face and cell points), ``reset`` to the column's fill value.
+BUILTIN_RULES = {
+    "volume": "copy", "face": "copy", "sublabel": "copy", "fcorner": "reset", "forward": "copy",
+    "point": "interpolate", "radial": "interpolate", "corner": "interpolate",
+}
+PROPAGATION_RULES = ("copy", "interpolate", "reset")
 
 #: ``parent_face`` value of a volume that was not grown on a parent face.
 NO_FACE = -2
@@ -71,6 +83,10 @@ VOLUME_SPEC = {
     "origin": (np.float64, (3,), 0.0),
     "frame": (np.float64, (3, 3), 0.0),
     "size": (np.float64, (3,), 0.0),
+    "angles": (np.float64, (3,), 0.0),
+    "shift": (np.float64, (), 0.0),
+    "weight": (np.float64, (), 1.0),
+    "exclusive": (np.bool_, (), False),
 }
 
 SUBLABEL_BASE = 32
@@ -105,6 +121,23 @@ def _involution_key(involutions):
     return key
 
 
+class _Atomic:
+    def __init__(self, gm):
+        self.gm = gm
+
+    def __enter__(self):
+        self.snap = self.gm._snapshot()
+        return self
+
+    def __exit__(self, kind, exc, tb):
+        if kind is None:
+            return False
+        self.gm._restore(self.snap)
+        if isinstance(exc, (IndexError, ValueError, KeyError)) and not isinstance(exc, RamureError):
+            raise GMapError(f"operation refused, map unchanged: {exc}") from exc
+        return False
+
+
 class _ColumnsView(Mapping):
     """Read-through mapping ``name -> array view`` over a :class:`Columns`."""
 
@@ -129,6 +162,7 @@ class GMap3(Operations):
         self._darts = Columns(DART_SPEC)
         self._volumes = Columns(VOLUME_SPEC)
         self._cache = {}
+        self._rules = dict(BUILTIN_RULES)
         #: free-form provenance (preset, parameters, seed) set by builders
         self.meta = {}
 
@@ -172,8 +206,83 @@ class GMap3(Operations):
         """Add a per-volume attribute column (existing volumes get ``fill``)."""
         self._volumes.add(name, dtype, shape, fill)
 
+    def add_dart_attribute(self, name, dtype, shape=(), fill=0, rule="copy"):
+        """Add a per-dart column kept through every operation by ``rule``.
+
+        ``rule`` is ``"copy"`` (a dart made by splitting an edge, a face or a
+        cell takes the value of the dart it continues; darts of a new face
+        take the value of the dart they are alpha2-glued to), ``"interpolate"``
+        (linear along a split edge at the split fraction; subdivision's edge,
+        face and cell points take the mean over the edge, the face side
+        ``<a0,a1>`` or the volume; new faces take the glued dart's value) or
+        ``"reset"`` (darts created by an operation get ``fill``).  Existing
+        darts get ``fill``.  Texture coordinates interpolate; crack and healed
+        markers copy or reset.
+
+        >>> gm = GMap3(); _ = gm.add_prisms(4)
+        >>> gm.add_dart_attribute("uvw", float, (3,), rule="interpolate")
+        >>> gm.dart_data["uvw"][:] = gm.points
+        >>> new = gm.split_edge([0], 0.25)
+        >>> bool(abs(gm.dart_data["uvw"][new[0]] - gm.points[new[0]]).max() < 1e-12)
+        True
+        """
+        if rule not in PROPAGATION_RULES:
+            raise GMapError(f"propagation rule must be one of {', '.join(PROPAGATION_RULES)}, got {rule!r}")
+        if name in self._darts:
+            raise GMapError(f"dart attribute {name!r} exists already")
+        if rule == "interpolate" and not np.issubdtype(np.dtype(dtype), np.floating):
+            raise GMapError(f"an interpolated attribute must have a float dtype, got {np.dtype(dtype)}")
+        self._darts.add(name, dtype, tuple(shape), fill)
+        self._rules[name] = rule
+
+    def dart_rules(self):
+        """``name -> propagation rule`` of every per-dart column."""
+        return dict(self._rules)
+
+    def _dart_fill(self, name):
+        return self._darts._spec[name][2]
+
+    def _propagate(self, new, src, other=None, frac=None, skip=()):
+        """Give the new darts ``new`` values from ``src`` by each column's rule.
+
+        ``interpolate`` columns get ``src + frac (other - src)`` when ``other``
+        is given (else a copy of ``src``).
+        """
+        data = self._darts
+        for name, rule in self._rules.items():
+            if name in skip:
+                continue
+            col = data[name]
+            if rule == "reset":
+                col[new] = self._dart_fill(name)
+            elif rule == "interpolate" and other is not None:
+                f = np.asarray(frac, float).reshape((-1,) + (1,) * (col.ndim - 1))
+                col[new] = col[src] + f * (col[other] - col[src])
+            else:
+                col[new] = col[src]
+
     def _changed(self):
         self._cache.clear()
+
+    def _snapshot(self):
+        """Copies of everything an operation may change (for :meth:`_atomic`)."""
+        return (self.alpha.copy(), self._darts.copy(), self._volumes.copy(), dict(self._rules))
+
+    def _restore(self, snap):
+        alpha, darts, volumes, rules = snap
+        self._darts, self._volumes, self._rules = darts, volumes, rules
+        self._alpha = np.empty((4, darts.capacity), np.int32)
+        self._alpha[:, : alpha.shape[1]] = alpha
+        self._changed()
+
+    def _atomic(self):
+        """Context manager: a refused operation leaves the map exactly as it was.
+
+        Any exception inside restores the arrays copied on entry (O(darts)
+        memory copies, taken only by multi-stage operations); errors that
+        are not Ramure errors are re-raised as :class:`GMapError`.
+        """
+        return _Atomic(self)
 
     def _new_darts(self, count):
         """Append ``count`` free darts (each alpha points to itself); return their ids."""
@@ -202,12 +311,17 @@ class GMap3(Operations):
         other._alpha = self.alpha.copy()
         other._darts = self._darts.copy()
         other._volumes = self._volumes.copy()
+        other._rules = dict(self._rules)
         other.meta = dict(self.meta)
         return other
 
     @classmethod
-    def from_arrays(cls, alpha, darts=None, volumes=None):
+    def from_arrays(cls, alpha, darts=None, volumes=None, rules=None):
         """Build a map from full arrays: ``alpha`` (4, n), dicts of dart and volume arrays.
+
+        Dart arrays beyond the built-in columns become attributes with the
+        propagation rule given in ``rules`` (default ``copy``).  Without a
+        ``corner`` array the default corners are the given points.
 
         >>> import numpy as np
         >>> one = GMap3()
@@ -221,7 +335,20 @@ class GMap3(Operations):
         n = gm._alpha.shape[1]
         darts = dict(darts or {})
         darts.setdefault("volume", np.zeros(n, np.int32))
-        gm._darts = Columns.from_arrays(DART_SPEC, darts)
+        if "corner" not in darts and "point" in darts:
+            darts["corner"] = darts["point"]
+        gm._darts = Columns.from_arrays(DART_SPEC, {k: v for k, v in darts.items() if k in DART_SPEC})
+        rules = dict(rules or {})
+        for name, arr in darts.items():
+            if name in DART_SPEC:
+                continue
+            arr = np.asarray(arr)
+            rule = rules.get(name, "copy")
+            if rule not in PROPAGATION_RULES:
+                raise GMapError(f"propagation rule must be one of {', '.join(PROPAGATION_RULES)}, got {rule!r}")
+            gm._darts.add(name, arr.dtype, arr.shape[1:], 0)
+            gm._darts._data[name] = np.ascontiguousarray(arr).copy()
+            gm._rules[name] = rule
         volumes = dict(volumes or {})
         if not volumes:
             volumes = {"label": np.full(int(darts["volume"].max(initial=-1)) + 1, "A")}
@@ -248,14 +375,15 @@ class GMap3(Operations):
         dart_off = np.cumsum([0] + [m.n_darts for m in maps])
         vol_off = np.cumsum([0] + [m.n_volumes for m in maps])
         alpha = np.concatenate([m.alpha.astype(np.int64) + o for m, o in zip(maps, dart_off)], axis=1)
-        darts = {name: np.concatenate([m.dart_data[name] for m in maps]) for name in DART_SPEC}
+        dnames = [n for n in maps[0].dart_data if all(n in m.dart_data for m in maps)]
+        darts = {name: np.concatenate([m.dart_data[name] for m in maps]) for name in dnames}
         darts["volume"] = np.concatenate([m.dart_volume + o for m, o in zip(maps, vol_off)])
         names = [n for n in maps[0].volume_data if all(n in m.volume_data for m in maps)]
         volumes = {name: np.concatenate([m.volume_data[name] for m in maps]) for name in names}
         parent = volumes["parent"].astype(np.int64)
         shift = np.repeat(vol_off[:-1], [m.n_volumes for m in maps])
         volumes["parent"] = np.where(parent >= 0, parent + shift, -1)
-        return cls.from_arrays(alpha, darts, volumes)
+        return cls.from_arrays(alpha, darts, volumes, maps[0].dart_rules())
 
     # ------------------------------------------------------------------ orbits
     def orbit(self, dart, involutions="0123"):
@@ -430,12 +558,19 @@ class GMap3(Operations):
 
     # ------------------------------------------------------------------ embedding
     def embed(self):
-        """Place every vertex at the barycentre of its incident volumes' corners.
+        """Place every vertex at the weighted barycentre of its incident volumes' default corners.
 
-        Each dart's ``point`` holds its volume's corner (from :meth:`add_prisms`
-        or an operation); a volume counts once per vertex however many of its
-        darts meet there.  Afterwards all darts of a vertex share one point, so
-        embedding twice changes nothing.  Returns the vertex positions.
+        Each dart's ``corner`` holds its volume's default corner (set by
+        :meth:`add_prisms`, interpolated by operations, re-derived by
+        :func:`ramure.gmap.embedding.reframe`); ``point`` receives the
+        embedded position.  A volume counts once per vertex however many of
+        its darts meet there, with its ``weight`` (volume column, default 1);
+        where a vertex touches a volume flagged ``exclusive`` (the thesis's
+        ``seulPourPl``: a branch base), only the exclusive volumes count, so
+        the trunk's slot takes the branch's shape.  Corners are never
+        overwritten, so embedding after every step or once at the end gives
+        the same positions.  The ``radial`` scalar is averaged the same way.
+        Returns the vertex positions.
         """
         ids, count = self.cells(0)
         if not self.n_darts:
@@ -443,12 +578,19 @@ class GMap3(Operations):
         vol = self.dart_volume.astype(np.int64)
         key = ids.astype(np.int64) * max(self.n_volumes, 1) + vol
         _, inverse, per_pair = np.unique(key, return_inverse=True, return_counts=True)
-        weight = 1.0 / per_pair[inverse]
-        pts = self.points
+        vweight = self._volumes["weight"].astype(float)
+        exclusive = self._volumes["exclusive"]
+        weight = vweight[vol] / per_pair[inverse]
+        if exclusive.any():
+            at_excl = np.bincount(ids, exclusive[vol], minlength=count) > 0
+            weight = np.where(at_excl[ids] & ~exclusive[vol], 0.0, weight)
         total = np.bincount(ids, weight, minlength=count)
-        pos = np.stack([np.bincount(ids, weight * pts[:, j], minlength=count) for j in range(3)], axis=1)
+        if np.any(total <= 0):
+            raise GMapError("embedding: a vertex has only volumes of weight 0 around it")
+        corners = self._darts["corner"]
+        pos = np.stack([np.bincount(ids, weight * corners[:, j], minlength=count) for j in range(3)], axis=1)
         pos /= total[:, None]
-        pts[:] = pos[ids]
+        self._darts["point"][:] = pos[ids]
         radial = self._darts["radial"]
         radial[:] = (np.bincount(ids, weight * radial, minlength=count) / total)[ids]
         return pos
@@ -498,8 +640,9 @@ class GMap3(Operations):
         def move(p):    # einsum: BLAS matmul is slow on tall (n, 3) arrays
             return scale * np.einsum("ni,ij->nj", p, rot) + off
 
-        pts = self._darts["point"]
-        pts[:] = move(pts)
+        for name in ("point", "corner"):
+            pts = self._darts[name]
+            pts[:] = move(pts)
         vols = self._volumes
         vols["origin"][:] = move(vols["origin"])
         vols["frame"][:] = np.einsum("vki,ij->vkj", vols["frame"], rot)

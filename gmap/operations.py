@@ -21,8 +21,21 @@ from ramure.gmap import prism as _prism
 from ramure.gmap.errors import GMapError, ValueRefused
 
 
+_BUILTIN_SET = {"volume", "face", "sublabel", "fcorner", "forward", "point", "radial", "corner"}
+
+
 def _darts(x):
     return np.atleast_1d(np.asarray(x, dtype=np.int64))
+
+
+def _label_code(label):
+    """Face label code of ``label`` (a name such as ``'C3'`` or a code), as GMapError when unknown."""
+    if isinstance(label, (int, np.integer)):
+        return int(label)
+    try:
+        return _prism.face_label_code(label)
+    except ValueError as exc:
+        raise GMapError(str(exc)) from None
 
 
 class Operations:
@@ -71,8 +84,12 @@ class Operations:
         d["sublabel"][local] = 0
         d["fcorner"][local] = t.fcorner[None, :]
         d["forward"][local] = t.forward[None, :]
-        corner_points = _prism.corners(n, origins, frames, sizes)
-        d["point"][local] = corner_points[:, t.corner, :]
+        corner_points = _prism.corners(n, origins, frames, sizes)[:, t.corner, :]
+        d["corner"][local] = corner_points
+        d["point"][local] = corner_points
+        for name, rule in self._rules.items():
+            if name not in _BUILTIN_SET:
+                d[name][local] = self._dart_fill(name)
         self._changed()
         return first
 
@@ -98,6 +115,32 @@ class Operations:
             raise GMapError(f"a prism of order {n} has no face {face!r}")
         out = np.asarray(first) + off + j
         return int(out) if out.ndim == 0 else out
+
+    # ------------------------------------------------------------------ faces by label
+    def face_of(self, volumes, label, sublabel=None, missing="raise"):
+        """Anchor dart of face ``label`` (O, E, C1..Cn, I) of each volume; see :mod:`ramure.gmap.faces`.
+
+        Robust to split and sewn faces (labels ride on the darts).  Returns
+        an int for an int volume, else an array.
+
+        >>> from ramure.gmap import GMap3
+        >>> gm = GMap3(); _ = gm.add_prisms(4)
+        >>> gm.face_of(0, "C2") == gm.prism_face(0, 4, "C2")
+        True
+        """
+        from ramure.gmap import faces
+        out = faces.face_of(self, volumes, label, sublabel, missing)
+        return int(out[0]) if np.ndim(volumes) == 0 else out
+
+    def face_darts(self, volumes, label, sublabel=None):
+        """All darts of face ``label`` of each volume: ``(darts, which)``; see :mod:`ramure.gmap.faces`."""
+        from ramure.gmap import faces
+        return faces.face_darts(self, volumes, label, sublabel)
+
+    def identify(self, a, b):
+        """Glue the free faces of ``a[i]`` and ``b[i]`` that share an edge; see :mod:`ramure.gmap.identify`."""
+        from ramure.gmap import identify
+        identify.identify(self, a, b)
 
     # ------------------------------------------------------------------ faces
     def face_walk(self, starts):
@@ -140,27 +183,55 @@ class Operations:
         same edge.  When a single pair of faces differs in degree, edges of
         the smaller face are split (evenly, starting at ``a``'s edge) until the
         degrees match; the new vertices are spaced evenly along the edges.
+        (:meth:`identify` finds the start darts itself from the shared edge
+        and splits edge runs by face side; prefer it.)  A refused sew raises
+        :class:`GMapError` and leaves the map unchanged.
         """
-        a, b = _darts(a), _darts(b)
+        a, b = self._check_darts(a), self._check_darts(b)
         if a.shape != b.shape:
             raise GMapError(f"sew3 needs as many darts on each side, got {len(a)} and {len(b)}")
         wa, la = self.face_walk(a)
         wb, lb = self.face_walk(b)
-        if np.any(la != lb):
-            if len(a) != 1:
-                raise GMapError("faces of different degrees can only be sewn one pair at a time")
+        self._check_sewable(wa, wb)
+        if np.all(la == lb):
+            self._sew_walks(wa, wb)
+            return
+        if len(a) != 1:
+            raise GMapError("faces of different degrees can only be sewn one pair at a time")
+        with self._atomic():
             small, big = (a, lb[0]) if la[0] < lb[0] else (b, la[0])
             self._split_face_edges(int(small[0]), int(min(la[0], lb[0]) // 2), int(big // 2))
             wa, la = self.face_walk(a)
             wb, lb = self.face_walk(b)
-        keep = wa >= 0
-        da, db = wa[keep], wb[keep]
-        alpha = self._alpha
-        if np.any(alpha[3][da] != da) or np.any(alpha[3][db] != db):
-            raise GMapError("sew3 needs alpha3-free faces; a face is already sewn")
+            if la[0] != lb[0]:
+                raise GMapError(
+                    f"sew3: the faces of darts {int(a[0])} and {int(b[0])} share an edge, so splitting one "
+                    "splits the other and their degrees cannot be matched")
+            self._check_sewable(wa, wb)
+            self._sew_walks(wa, wb)
+
+    def _check_darts(self, darts):
+        d = _darts(darts)
+        if d.size and (d.min() < 0 or d.max() >= self.n_darts):
+            raise GMapError(f"dart ids must be in 0..{self.n_darts - 1}")
+        return d
+
+    def _check_sewable(self, wa, wb):
+        """Refuse sewing faces that are not alpha3-free, or that overlap."""
+        da, db = wa[wa >= 0], wb[wb >= 0]
+        a3 = self._alpha[3]
+        for side, d in (("first", da), ("second", db)):
+            busy = d[a3[d] != d]
+            if busy.size:
+                raise GMapError(f"sew3 needs alpha3-free faces; the {side} face of dart {int(busy[0])} is sewn already")
         both = np.concatenate([da, db])
         if np.bincount(both, minlength=self.n_darts).max(initial=0) > 1:
             raise GMapError("sew3 would sew a face to itself or use a face twice")
+
+    def _sew_walks(self, wa, wb):
+        keep = wa >= 0
+        da, db = wa[keep], wb[keep]
+        alpha = self._alpha
         alpha[3][da] = db
         alpha[3][db] = da
         self._changed()
@@ -188,12 +259,6 @@ class Operations:
         self._changed()
 
     # ------------------------------------------------------------------ splits
-    def _copy_dart_data(self, new, src):
-        data = self._darts
-        for name in ("volume", "face", "sublabel"):
-            data[name][new] = data[name][src]
-        data["fcorner"][new] = -1
-
     def split_edge(self, darts, t=0.5):
         """Split the edges of ``darts`` (one dart per edge) at fraction ``t`` from each dart.
 
@@ -227,13 +292,9 @@ class Operations:
         alpha[1][new] = nmap(old_a0)
         alpha[2][new] = nmap(alpha[2][members])
         alpha[3][new] = nmap(alpha[3][members])
-        self._copy_dart_data(new, members)
+        self._propagate(new, members, old_a0, frac)
         fw = self._darts["forward"]
         fw[new] = ~fw[members]
-        pts = self._darts["point"]
-        pts[new] = pts[members] + frac[:, None] * (pts[old_a0] - pts[members])
-        rad = self._darts["radial"]
-        rad[new] = rad[members] + frac * (rad[old_a0] - rad[members])
         self._changed()
         return nmap(darts)
 
@@ -272,19 +333,16 @@ class Operations:
         new = self._new_darts(4 * len(sides)).reshape(len(sides), 4)
         alpha = self._alpha
         fw = self._darts["forward"]
-        pts = self._darts["point"]
-        rad = self._darts["radial"]
         for (s1, sx, sy, sz), (n1, n2, m1, m2) in zip(sides, new):
             pairs = [(1, sx, n2), (1, n1, s1), (1, sz, m2), (1, m1, sy),
                      (0, n1, n2), (0, m1, m2), (2, n1, m1), (2, n2, m2)]
             for i, u, v in pairs:
                 alpha[i][u], alpha[i][v] = v, u
-            self._copy_dart_data([n1, n2, m1, m2], [s1, s1, s1, s1])
+            self._propagate([n1, m1], [s1, s1])
+            self._propagate([n2, m2], [sx, sx], skip=("volume", "face", "sublabel"))
+            for name in ("volume", "face", "sublabel"):
+                self._darts[name][[n2, m2]] = self._darts[name][s1]
             fw[[n1, n2, m1, m2]] = [not fw[s1], fw[s1], fw[s1], not fw[s1]]
-            pts[[n1, m1]] = pts[s1]
-            pts[[n2, m2]] = pts[sx]
-            rad[[n1, m1]] = rad[s1]
-            rad[[n2, m2]] = rad[sx]
         if len(sides) == 2:
             for k in range(4):
                 alpha[3][new[0, k]], alpha[3][new[1, k]] = new[1, k], new[0, k]
@@ -298,9 +356,17 @@ class Operations:
         loop (part 1).  Two new faces close the parts, sewn to each other by
         alpha3: the one closing part 1 gets ``labels[0]``, the other
         ``labels[1]``.  Part 2 becomes a new volume with a copy of the
-        attributes.  Returns the new volume id.
+        attributes.  Returns the new volume id.  A refused split leaves the
+        map unchanged.
         """
+        codes = [_label_code(x) for x in labels]
         path = _darts(path)
+        if path.size == 0 or path.min() < 0 or path.max() >= self.n_darts:
+            raise GMapError(f"split_volume needs dart ids in 0..{self.n_darts - 1}")
+        with self._atomic():
+            return self._split_volume(path, codes)
+
+    def _split_volume(self, path, codes):
         alpha = self._alpha
         vol = self._darts["volume"]
         if len(np.unique(vol[path])) != 1:
@@ -337,14 +403,11 @@ class Operations:
         alpha[1][f], alpha[1][g] = f[ay], g[ay]
         alpha[3][f], alpha[3][g] = g, f
         data = self._darts
-        data["volume"][f] = vol[p1]
-        data["volume"][g] = vol[p1]
-        data["face"][f] = _prism.face_label_code(labels[0])
-        data["face"][g] = _prism.face_label_code(labels[1])
+        self._propagate(f, p1)
+        self._propagate(g, p1)
+        data["face"][f] = codes[0]
+        data["face"][g] = codes[1]
         data["sublabel"][new] = 0
-        for name in ("point", "radial"):
-            data[name][f] = data[name][p1]
-            data[name][g] = data[name][p1]
         walk, length = self.face_walk([f[0]])
         w = walk[0, : length[0]]
         pos = np.arange(len(w))
@@ -381,6 +444,18 @@ class Operations:
         >>> gm.counts()["volumes"], gm.counts()["vertices"], gm.is_valid()
         (2, 18, True)
         """
+        volume = int(volume)
+        if not 0 <= volume < self.n_volumes:
+            raise GMapError(f"volume ids must be in 0..{self.n_volumes - 1}, got {volume}")
+        if not 0.0 < float(t) < 1.0:
+            raise GMapError(f"split fraction must be strictly between 0 and 1, got {t}")
+        if face is not None and not 0 <= int(face) < self.n_darts:
+            raise GMapError(f"dart ids must be in 0..{self.n_darts - 1}, got {face}")
+        codes = [_label_code(x) for x in labels]
+        with self._atomic():
+            return self._split_prism(volume, float(t), face, codes)
+
+    def _split_prism(self, volume, t, face, labels):
         if face is None:
             darts = np.flatnonzero((self._darts["volume"] == volume) & (self._darts["face"] == _prism.FACE_O))
             if darts.size == 0:
@@ -399,7 +474,7 @@ class Operations:
             nxt = int(self._alpha[0][ends[i]])      # new vertex on the next edge, same side face
             n1, _ = self.split_face(int(s), nxt)
             path.append(n1)
-        return self.split_volume(path, labels=labels)
+        return self._split_volume(_darts(path), labels)
 
     # ------------------------------------------------------------------ removal
     def remove_volumes(self, volumes):
