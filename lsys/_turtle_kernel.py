@@ -67,14 +67,16 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
     costs the modules on the path from the root, not the whole string before
     ``end``; REGION draws like FULL but stops at the first ``]`` that closes a
     branch opened before ``begin`` (the end of the part an edit changed).
-    ``trop`` is (tx, ty, tz, e) or empty; ``seg_base`` numbers the segments
-    drawn here (their parent links).
+    ``trop`` is (tx, ty, tz, e) or empty.  FULL numbers the segments from
+    ``seg_base`` (their parent links); SEEK and REGION cannot know the final
+    numbering, so there a parent link (and the state's last segment) is
+    ``-2 - p``, p the string position of the parent's ``F``.
 
     Returns (stop, segment arrays, organ arrays), see the code.
     """
     seek = mode == SEEK
     n_draw = n_org = depth = max_depth = 0
-    for i in range(begin, end):
+    for i in range(begin, begin if seek else end):  # SEEK draws nothing; its stack grows as needed
         a = acts[i]
         if a == DRAW:
             n_draw += 1
@@ -102,7 +104,7 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
     org_pos = np.empty((n_org, 3))
     org_frame = np.empty((n_org, 3, 3))
     org_size = np.empty(n_org)
-    stack = np.empty((max_depth + 1, STATE_SIZE))
+    stack = np.empty((max_depth + 8, STATE_SIZE))
 
     px, py, pz = state[0], state[1], state[2]
     hx, hy, hz = state[3], state[4], state[5]
@@ -129,7 +131,9 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
         if a == DRAW or a == MOVE:
             d = p if k else step
             ex, ey, ez = px + hx * d, py + hy * d, pz + hz * d
-            if a == DRAW and not seek:
+            if a == DRAW and seek:
+                last = -2 - i
+            elif a == DRAW:
                 seg_at[k_seg] = i
                 seg_start[k_seg, 0], seg_start[k_seg, 1], seg_start[k_seg, 2] = px, py, pz
                 seg_end[k_seg, 0], seg_end[k_seg, 1], seg_end[k_seg, 2] = ex, ey, ez
@@ -138,7 +142,7 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 seg_color[k_seg] = color
                 seg_normal[k_seg, 0], seg_normal[k_seg, 1], seg_normal[k_seg, 2] = lx, ly, lz
                 seg_parent[k_seg] = last
-                last = seg_base + k_seg
+                last = seg_base + k_seg if mode == FULL else -2 - i
                 k_seg += 1
             if a == DRAW and has_trop:
                 ax, ay, az = hy * tz - hz * ty, hz * tx - hx * tz, hx * ty - hy * tx
@@ -174,6 +178,10 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
             if seek and match[i] > i and match[i] < end:
                 i = match[i] + 1  # a whole branch before the target: the state after it is the one before
                 continue
+            if top == len(stack):
+                bigger = np.empty((2 * len(stack), STATE_SIZE))
+                bigger[:top] = stack
+                stack = bigger
             row = stack[top]
             row[0], row[1], row[2], row[3], row[4], row[5] = px, py, pz, hx, hy, hz
             row[6], row[7], row[8], row[9], row[10], row[11] = lx, ly, lz, ux, uy, uz
@@ -236,3 +244,30 @@ def bracket_pairs(symbols, open_id, close_id):
             else:
                 balanced = False
     return match, balanced and top == 0
+
+
+@njit(cache=True, nogil=True)
+def kept_modules(old, new, size):
+    """(keep_old, keep_new, same_order): modules of each string present in the other, and
+    whether the kept modules come in the same order in both (one pass each)."""
+    in_old = np.zeros(size, np.bool_)
+    in_new = np.zeros(size, np.bool_)
+    for v in old:
+        in_old[v] = True
+    for v in new:
+        in_new[v] = True
+    keep_old = np.empty(len(old), np.bool_)
+    keep_new = np.empty(len(new), np.bool_)
+    for i in range(len(old)):
+        keep_old[i] = in_new[old[i]]
+    for i in range(len(new)):
+        keep_new[i] = in_old[new[i]]
+    j = 0
+    for i in range(len(old)):
+        if keep_old[i]:
+            while not keep_new[j]:
+                j += 1
+            if new[j] != old[i]:
+                return keep_old, keep_new, False
+            j += 1
+    return keep_old, keep_new, True

@@ -54,8 +54,19 @@ def tube_points(start, end, normal, base_radius, top_radius, sides=8):
     return pts
 
 
+_QUADS = {}  # sides -> the quads of the largest plant so far (a smaller plant's are a prefix)
+
+
 def tube_quads(count, sides=8):
     """Quad indices (count·sides, 4) of ``count`` frustums laid out as :func:`tube_points`."""
+    cached = _QUADS.get(sides)
+    if cached is not None and len(cached) >= count * sides:
+        return cached[:count * sides]
+    _QUADS[sides] = quads = _make_quads(count, sides)
+    return quads
+
+
+def _make_quads(count, sides):
     j = np.arange(sides)
     template = np.stack([j, (j + 1) % sides, (j + 1) % sides + sides, j + sides], axis=-1)
     base = (np.arange(count, dtype=np.int64) * (2 * sides))[:, None, None]
@@ -187,7 +198,10 @@ def patch_polydata(old_mesh, skeleton, sides=8, organ_resolution=8):
     if n_old * k > len(old_pts):
         return skeleton_to_polydata(skeleton, sides, organ_resolution)
     pts = np.empty((len(skeleton), k, 3))
-    pts[new] = old_pts[: len(old_pts) - len(old_pts) % k].reshape(-1, k, 3)[old]
+    old_tubes = old_pts[: len(old_pts) - len(old_pts) % k].reshape(-1, k, 3)
+    breaks = np.flatnonzero((np.diff(new) != 1) | (np.diff(old) != 1)) + 1
+    for a, b in zip(np.r_[0, breaks], np.r_[breaks, len(new)]):  # runs of kept tubes: block copies
+        pts[new[a]:new[a] + b - a] = old_tubes[old[a]:old[a] + b - a]
     todo = np.ones(len(skeleton), bool)
     todo[new] = False
     sk = skeleton

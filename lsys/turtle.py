@@ -280,11 +280,11 @@ def changed_spans(old, new, size):
     first - 1`` for an empty span), or None when the kept modules are not in
     the same order in both strings.
     """
+    from ._turtle_kernel import kept_modules
+
     old, new = np.asarray(old, np.int64), np.asarray(new, np.int64)
-    in_old, in_new = np.zeros(size, bool), np.zeros(size, bool)
-    in_old[old], in_new[new] = True, True
-    keep_old, keep_new = in_new[old], in_old[new]
-    if not np.array_equal(old[keep_old], new[keep_new]):
+    keep_old, keep_new, same_order = kept_modules(old, new, int(size))
+    if not same_order:
         return None
     spans_old, spans_new = _gaps(keep_old), _gaps(keep_new)
     keys = np.union1d(spans_old[2], spans_new[2])
