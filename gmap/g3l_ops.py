@@ -1,0 +1,134 @@
+"""Face-level operators of the 3Gmap L-systems: add a volume on a free face, identify two faces.
+
+These work on any :class:`~ramure.gmap.map3.GMap3` through its public API.
+Faces are found by label (the per-dart ``face`` column), never by template
+offsets, and two faces are identified through the edge they share, never by
+coordinates (spec decisions 4 and 5).
+
+*Shared edge.*  On the boundary of a manifold solid, a free dart ``a`` has
+one boundary neighbour across its edge: walk ``x = alpha2(a)`` and, while
+``x`` is sewn, ``x = alpha2(alpha3(x))``.  The dart reached lies on the same
+edge and at the same vertex as ``a``, in the next free face around that edge
+(this is the alpha2 of :meth:`GMap3.boundary`).  Two free faces share an edge
+exactly when some dart of one has its boundary neighbour in the other; that
+pair gives the start darts and the rotation sense of the identification.
+
+>>> from ramure.gmap import GMap3
+>>> gm = GMap3()
+>>> a, b = gm.add_prisms(4, 2)
+>>> gm.sew3(gm.prism_face(a, 4, "C2"), gm.prism_face(b, 4, "C4", 1))
+>>> pairs = shared_edge_pairs(gm, face_darts(gm, [0], "C3"), face_darts(gm, [1], "C3"))
+>>> len(pairs[0])      # the two C3 faces meet along one edge, but lie in one plane
+1
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ramure.gmap import prism as _prism
+from ramure.gmap.errors import GMapError
+
+
+def boundary_neighbour(gm, darts):
+    """For alpha3-free ``darts``, the free dart across their edge (same edge, same vertex)."""
+    alpha = gm.alpha
+    x = alpha[2][np.asarray(darts, np.int64)].astype(np.int64)
+    for _ in range(gm.n_darts + 1):
+        inner = alpha[3][x] != x
+        if not inner.any():
+            return x
+        x[inner] = alpha[2][alpha[3][x[inner]]]
+    raise GMapError("boundary walk does not end: the map is not valid")
+
+
+def face_starts(gm, volumes, label):
+    """One dart per face ``label`` ('O', 'E', 'Ck') of each volume (-1 when it has none).
+
+    The dart is the face's forward dart at its corner 0 when the face still
+    has it, else its smallest dart; works on faces that were split or sewn.
+    """
+    volumes = np.asarray(volumes, np.int64)
+    code = _prism.face_label_code(label)
+    data = gm.dart_data
+    mask = (data["face"] == code) & np.isin(gm.dart_volume, volumes)
+    darts = np.flatnonzero(mask)
+    vol = gm.dart_volume[darts]
+    rank = ~((data["fcorner"][darts] == 0) & data["forward"][darts])        # preferred first
+    order = np.lexsort((darts, rank, vol))
+    darts, vol = darts[order], vol[order]
+    first = np.ones(len(darts), bool)
+    first[1:] = vol[1:] != vol[:-1]
+    out = np.full(len(volumes), -1, np.int64)
+    sorter = np.argsort(volumes)
+    pos = np.searchsorted(volumes, vol[first], sorter=sorter)
+    out[sorter[pos]] = darts[first]
+    return out
+
+
+def face_darts(gm, volumes, label):
+    """All darts of face ``label`` of each volume, as one sorted array."""
+    code = _prism.face_label_code(label)
+    return np.flatnonzero((gm.dart_data["face"] == code) & np.isin(gm.dart_volume, np.asarray(volumes)))
+
+
+def face_is_free(gm, starts):
+    """True where the whole face ``<a0,a1>`` of each start dart is alpha3-free."""
+    walk, _ = gm.face_walk(starts)
+    d = np.where(walk >= 0, walk, 0)
+    free = (gm.alpha[3][d] == d) | (walk < 0)
+    return free.all(axis=1)
+
+
+def shared_edge_pairs(gm, darts_a, darts_b):
+    """Pairs ``(a, b)``: ``a`` in ``darts_a``, ``b`` in ``darts_b``, same edge and vertex, both free.
+
+    ``b`` is ``a``'s boundary neighbour (see the module docstring).
+    """
+    darts_a = np.asarray(darts_a, np.int64)
+    alpha = gm.alpha
+    a = darts_a[alpha[3][darts_a] == darts_a]
+    if not a.size:
+        return a, a
+    b = boundary_neighbour(gm, a)
+    keep = np.isin(b, np.asarray(darts_b, np.int64)) & (gm.dart_volume[b] != gm.dart_volume[a])
+    return a[keep], b[keep]
+
+
+def identify(gm, a, b):
+    """Identify (alpha3-sew) the free faces of darts ``a`` and ``b`` through the edge they share.
+
+    Each pair must be two free faces of different volumes with a common
+    edge; the darts of the pair are re-chosen on that edge, so any dart of
+    each face will do.  Faces of different degrees get edge splits (one pair
+    at a time).  Refused, naming both faces, when a face is sewn or the faces
+    share no edge.
+    """
+    a, b = np.atleast_1d(np.asarray(a, np.int64)), np.atleast_1d(np.asarray(b, np.int64))
+    wa, _ = gm.face_walk(a)
+    wb, _ = gm.face_walk(b)
+    starts_a, starts_b = [], []
+    for i in range(len(a)):               # one step per face pair
+        fa, fb = wa[i][wa[i] >= 0], wb[i][wb[i] >= 0]
+        name = f"faces of darts {int(a[i])} (volume {int(gm.dart_volume[a[i]])}) and {int(b[i])} " \
+               f"(volume {int(gm.dart_volume[b[i]])})"
+        if np.any(gm.alpha[3][fa] != fa) or np.any(gm.alpha[3][fb] != fb):
+            raise GMapError(f"cannot identify the {name}: a face is not free")
+        pa, pb = shared_edge_pairs(gm, fa, fb)
+        if not pa.size:
+            raise GMapError(f"cannot identify the {name}: they share no edge")
+        starts_a.append(pa[0])
+        starts_b.append(pb[0])
+    sew_pairs(gm, np.array(starts_a, np.int64), np.array(starts_b, np.int64))
+
+
+def sew_pairs(gm, a, b):
+    """``sew3`` many face pairs: equal degrees in one batch, the others one by one."""
+    if not len(a):
+        return
+    _, la = gm.face_walk(a)
+    _, lb = gm.face_walk(b)
+    same = la == lb
+    if same.any():
+        gm.sew3(a[same], b[same])
+    for x, y in zip(a[~same], b[~same]):          # degree mismatch: edge splits, one pair at a time
+        gm.sew3([int(x)], [int(y)])
