@@ -198,6 +198,11 @@ class GMap3(Operations):
         return self._darts["point"]
 
     @property
+    def corners(self):
+        """Per-dart default corners (n_darts, 3), a writable view; :meth:`embed` reads them."""
+        return self._darts["corner"]
+
+    @property
     def dart_volume(self):
         """Volume id of every dart."""
         return self._darts["volume"]

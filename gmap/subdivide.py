@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ramure.gmap import attributes as _attributes
 from ramure.gmap.errors import ValueRefused
 from ramure.gmap.map3 import SUBLABEL_BASE, GMap3
 from ramure.gmap.prism import FACE_I
@@ -281,11 +282,17 @@ def _surface_once(gm, mask):
         pts[n2[f]] = edge_pt[eid[f]]
         pts[n3[f]] = face_pt[side[f]]
     darts["point"], darts["radial"] = pts[:, :3], pts[:, 3]
+    kind = np.zeros(total, np.int64)               # per-dart attributes: n1, n2 edge points, n3 face point
+    kind[n1[e]] = _attributes.EDGE
+    if f.size:
+        kind[n2[f]] = _attributes.EDGE
+        kind[n3[f]] = _attributes.FACE
+    darts.update(_attributes.carried(gm, src, kind))
     return _rebuilt(gm, a, darts, dict(gm.volume_data))
 
 
 def _rebuilt(gm, alpha, darts, volumes):
-    out = GMap3.from_arrays(alpha, darts, volumes)
+    out = GMap3.from_arrays(alpha, darts, volumes, gm.dart_rules())
     out.meta = dict(gm.meta)
     return out
 
@@ -360,6 +367,8 @@ def _volume_once(gm):
         "point": pts[:, :, :3].reshape(-1, 3),
         "radial": pts[:, :, 3].ravel(),
     }
+    kind = np.tile(np.array([0, 1, 1, 2, 1, 2, 2, 3]), n)   # matches the points above
+    darts.update(_attributes.carried(gm, np.repeat(np.arange(n), 8), kind))
     parent_vol = pairs // max(nv, 1)
     volumes = {name: arr[parent_vol] for name, arr in gm.volume_data.items()}
     volumes["degree"] = np.full(len(pairs), 4, np.int16)
