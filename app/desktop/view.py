@@ -134,11 +134,18 @@ class PlantView(QWidget):
             self.redraw()
             return
         mesh.cell_data["rgb"] = colors
-        self.mesh = mesh
-        self._apply_hidden()
-        self.actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False,
-                                           smooth_shading=False, show_scalar_bar=False, render=False,
-                                           pickable=True)
+        if self.actor is not None and self.mesh is not None:
+            # A new version of the plant: the same actor and dataset take the new arrays (no new
+            # actor, mapper or shaders; only the arrays go to the GPU again).
+            self.mesh.copy_from(mesh, deep=False)
+            self.mesh.cell_data.active_scalars_name = "rgb"
+            self._apply_hidden()
+        else:
+            self.mesh = mesh
+            self._apply_hidden()
+            self.actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False,
+                                               smooth_shading=False, show_scalar_bar=False, render=False,
+                                               pickable=True)
         self.picker = None
         diag = float(np.linalg.norm(np.subtract(*np.reshape(mesh.bounds, (3, 2)).T)))
         if reset_camera is None:

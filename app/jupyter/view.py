@@ -400,7 +400,13 @@ class TrameView:
         model = self.owner.app.model
         mesh = model.mesh.copy(deep=False)
         mesh.cell_data["rgb"] = view_colors(model, self.owner.show_cut)
-        self._actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False)
+        shown = getattr(self, "_mesh", None)
+        if self._actor is not None and shown is not None:  # same actor, new arrays (no new GL objects)
+            shown.copy_from(mesh, deep=False)
+            shown.cell_data.active_scalars_name = "rgb"
+        else:
+            self._mesh = mesh
+            self._actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False)
         if self._view != self.owner.view:
             frame_camera(self.plotter, model.mesh.bounds, self.owner.view)
             self._frame(model.mesh)
