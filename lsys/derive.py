@@ -354,9 +354,10 @@ class LSystem:
         slots = [-k for k in range(1, len(group.left) + 1)] + list(range(1, len(group.right) + 1))
         ok, at = match_contexts(cand, prev, nxt, symbols, nparams, np.array([w[0] for w in wanted], np.int64),
                                 np.array([w[1] for w in wanted], np.int64), np.sign(slots).astype(np.int64))
-        found = dict(zip(slots, at))
+        # Context nodes are kept only for rules that read context parameters (``A(x) < B -> ...``).
+        used = {slot for r in group.rules for slot, _ in self._rules[r].sources.values() if slot}
         cand = cand[ok]
-        ctx = {s: string[v[ok]] for s, v in found.items()}
+        ctx = {s: string[v[ok]] for s, v in zip(slots, at) if s in used}
         for r in group.rules:
             cache[r] = {"pos": cand, **ctx}
         return cand, ctx
