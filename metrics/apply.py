@@ -1,55 +1,72 @@
 """Apply a qualifier to a selection of a plant being edited (an :class:`ramure.lsys.regen.Session`).
 
 The thesis applies the qualifier's combination to the part of the plant the
-min-cut selects.  Two refinements make "make this selection <qualifier>"
-dependable on any grammar:
+min-cut selects.  Here the choice is checked, not assumed:
 
-1. **Only rules that act there.**  A combination changes constants on one
-   rule; if that rule never rewrites inside the cut subtrees, nothing
-   changes.  Candidates are therefore restricted to variants whose rule
-   produced a node under the cut roots (for the whole plant: every rule).
-2. **Check, then keep.**  The candidates are tried best first (at most
-   ``tries``).  Each is applied with ``Session.regrow``; the selection's ten
-   metrics are measured before and after (the segments drawn by the leaves
-   under the cut roots) and scored along the qualifier's direction
-   (:func:`~ramure.metrics.qualifiers.qualifier_scores` with the sweep's scale).
-   The first candidate that moves the selection the right way is kept; if
-   none does, the best tried is kept and ``improved`` is False.  On a
-   stochastic grammar the regrown part is a new random draw, so each
-   candidate is also tried with three more seeds (unless ``seed`` is given).  ``normal``
-   (no direction) and study regions without a vocabulary direction keep the
-   first candidate.
+1. **Rules that read the varied constants.**  A combination changes
+   constants on one rule; candidates are the variants whose rule rewrites
+   inside the regrown subtrees (for the whole plant: every rule) and
+   changes a constant that rule reads, ranked by
+   :meth:`~ramure.metrics.qualifiers.QualifierModel.rank` (a variant that
+   moves another qualifier more than this one comes after those that do not).
+2. **Climb when nothing can move.**  When the selected leaves' own rules
+   read none of the varied constants (typically a few tips: the last step
+   only copies parameters), or no candidate changes the regrown part, the
+   regrowth climbs: the cut's minimum ascension grows one level at a time
+   (``min_ascend`` 1, 2, ...) until a rule that reads them is regrown and
+   the part changes.  ``climbed`` says how many levels above the default.
+3. **Measure, then keep.**  Each candidate (at most ``tries`` per level) is
+   applied with ``Session.regrow``; the fifteen qualifier metrics of the
+   regrown part are measured before and after, and scored along every
+   qualifier's direction.  The first candidate that moves its own
+   qualifier forward *and* moves no other qualifier more is kept.  If none
+   does, the one that moved its own qualifier furthest forward is kept
+   (``dominant`` False, ``rival`` names who moved more); if nothing moved
+   forward, the best tried is kept with ``improved`` False, a ``reason``
+   and a ``suggestion``.  On a stochastic grammar each candidate is also
+   tried with three more seeds (unless ``seed`` is given).  ``normal`` (no
+   direction) keeps its first candidate: the combination closest to the
+   base plant.
 
 Only one edit stays in the session's history (rejected tries are undone).
 
 >>> from ramure.lsys.regen import Session
 >>> from ramure.metrics import VariantSweep
->>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("grammars/honda_sympodial.lsys")
->>> s = Session("grammars/honda_sympodial.lsys", n=4)
->>> out = apply_qualifier(s, "dense", sweep)
->>> out.improved, out.after.branch_density > out.before.branch_density, len(s.edits)
+>>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("honda_sympodial")
+>>> s = Session("honda_sympodial", n=4)
+>>> out = apply_qualifier(s, "tall", sweep)
+>>> out.improved, out.own["height"]["after"] > out.own["height"]["before"], len(s.edits)
 (True, True, 1)
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ramure.lsys.cut import collapse_nested
 
-from .plant import PlantMetrics, metric_deltas, plant_metrics
-from .qualifiers import VOCABULARY, canonical_name, metric_scale, qualifier_scores, ranked_variants
+from .plant import METRIC_NAMES, PlantMetrics, plant_metrics
+from .qualifiers import QUALIFIER_METRICS, VOCABULARY, QualifierModel, all_deltas, canonical_name
+from .shape import SHAPE_METRIC_NAMES, ShapeMetrics, plant_shape
+from .variants import rule_constant_names
 
 
 @dataclass
 class QualifierResult:
-    """What :func:`apply_qualifier` did."""
+    """What :func:`apply_qualifier` did.
+
+    ``own`` gives, for each of the qualifier's own metrics, ``before``,
+    ``after`` and the ``direction`` (+1/-1) it should move; ``moves`` the
+    score of the change along every qualifier; ``climbed`` the levels
+    climbed above the default ascension (``min_ascend``); ``reason`` and
+    ``suggestion`` explain a result that is not ``improved``.
+    """
 
     qualifier: str
     variant: int
     params: dict
-    source: str  # "vocabulary" or "region"
+    source: str  # "vocabulary", "region" or "transfer"
     roots: np.ndarray
     before: PlantMetrics
     after: PlantMetrics
@@ -58,92 +75,238 @@ class QualifierResult:
     tried: int
     regen: object
     seed: int | None = None  # the regrow seed given (None: the session's next seed)
+    before_shape: ShapeMetrics | None = None
+    after_shape: ShapeMetrics | None = None
+    own: dict = field(default_factory=dict)
+    moves: dict = field(default_factory=dict)
+    dominant: bool = True
+    rival: str | None = None
+    min_ascend: int = 1
+    climbed: int = 0
+    reason: str | None = None
+    suggestion: str | None = None
 
     def to_dict(self) -> dict:
         return {"qualifier": self.qualifier, "variant": int(self.variant), "params": self.params,
                 "source": self.source, "roots": self.roots.tolist(), "before": self.before.to_dict(),
-                "after": self.after.to_dict(), "score": None if np.isnan(self.score) else float(self.score),
-                "improved": bool(self.improved), "tried": self.tried,
+                "after": self.after.to_dict(),
+                "before_shape": self.before_shape.to_dict() if self.before_shape else None,
+                "after_shape": self.after_shape.to_dict() if self.after_shape else None,
+                "own": self.own, "score": None if np.isnan(self.score) else float(self.score),
+                "improved": bool(self.improved), "dominant": bool(self.dominant), "rival": self.rival,
+                "moves": {k: round(v, 6) for k, v in self.moves.items()},
+                "min_ascend": self.min_ascend, "climbed": self.climbed, "reason": self.reason,
+                "suggestion": self.suggestion, "tried": self.tried,
                 "regen": self.regen.to_dict() if self.regen is not None else None}
 
 
-def _roots(session, selection, rho):
+def _roots(session, selection, rho, min_ascend=1):
     """The subtrees a regrow of ``selection`` replaces (as :func:`ramure.lsys.regen.regenerate` keeps them)."""
     tree = session.tree
     if not len(selection):  # the whole plant: every axiom module, as Session.regrow does
         return np.flatnonzero((tree.parent == -1) & tree.alive)
-    roots = collapse_nested(tree, session.plan(selection, rho)[1])
+    roots = collapse_nested(tree, session.plan(selection, rho, min_ascend=min_ascend)[1])
     return roots[tree.child_count[roots] > 0]
 
 
 def active_rules(tree, roots) -> set:
-    """Indices of the rules that produced a node under ``roots``."""
+    """Indices of the rules a regrowth of ``roots`` applies: those that produced a node below them."""
     if not len(roots):
         return set()
     nodes = np.concatenate([tree.subtree(int(r)) for r in roots])
-    return set(np.unique(tree.rule[nodes][tree.rule[nodes] >= 0]).tolist())
+    nodes = nodes[~np.isin(nodes, roots)]
+    rules = tree.rule[nodes]
+    return set(np.unique(rules[rules >= 0]).tolist())
+
+
+def reading_rules(lsystem, rules, names) -> set:
+    """The rules among ``rules`` that read at least one of the constants ``names``."""
+    used = rule_constant_names(lsystem)
+    return {r for r in rules if r < len(used) and used[r] & set(names)}
 
 
 def roots_metrics(session, roots) -> PlantMetrics:
     """The ten metrics of the segments drawn by the current leaves under ``roots``."""
+    return plant_metrics(session.derivation.skeleton(), leaf_ids=_leaves(session, roots))
+
+
+def _leaves(session, roots):
     tree = session.tree
     leaves = [tree.leaves_under(int(r)) for r in roots]
-    leaves = np.concatenate(leaves) if leaves else np.zeros(0, np.int64)
-    return plant_metrics(session.derivation.skeleton(), leaf_ids=leaves)
+    return np.concatenate(leaves) if leaves else np.zeros(0, np.int64)
+
+
+def _measure(session, roots):
+    """``(PlantMetrics, ShapeMetrics, (15,) vector)`` of the part under ``roots``."""
+    sk = session.derivation.skeleton()
+    leaves = _leaves(session, roots)
+    m, s = plant_metrics(sk, leaf_ids=leaves), plant_shape(sk, leaf_ids=leaves)
+    return m, s, np.concatenate([np.array(m, float), np.array(s, float)])
 
 
 def _stochastic(lsystem):
     return any(r.probability is not None for r in lsystem.grammar.rules)
 
 
-def _attempts(session, order, tries, seed, seeds_per_candidate=4):
-    """(variant, seed) pairs to try: the ``tries`` best variants; on a stochastic grammar
-    (without an explicit ``seed``) each with the session's next seed and a few more."""
+def _seeds(session, seed, seeds_per_candidate=4):
+    """Seeds to try each candidate with: the given one (or the session's next); on a stochastic
+    grammar without an explicit ``seed``, a few more."""
     seeds = [seed]
     if seed is None and _stochastic(session.lsystem):
         rng = np.random.default_rng([session.seed, len(session.edits)])
         seeds += rng.integers(0, 2**31 - 1, size=seeds_per_candidate - 1).tolist()
-    return [(v, s) for v in order[:max(int(tries), 1)].tolist() for s in seeds]
+    return seeds
+
+
+def _own(key, before, after):
+    q = VOCABULARY.get(key)
+    if q is None or q.direction is None:
+        return {}
+    idx = {m: i for i, m in enumerate(QUALIFIER_METRICS)}
+    return {m: {"before": float(before[idx[m]]), "after": float(after[idx[m]]),
+                "direction": 1 if q.direction[m] > 0 else -1} for m in q.metrics()}
+
+
+@dataclass
+class _Try:
+    level: int
+    variant: int
+    seed: int | None
+    params: dict
+    score: float
+    dominant: bool
+    rival: str | None
+    moves: dict
+    changed: bool
+
+
+def _judge(model, key, before, after, antonym):
+    """Score a measured change: own score, whether no other qualifier moved more, and who did."""
+    moves = model.move_scores(all_deltas(after, before))
+    own = moves.get(key, float("nan"))
+    rivals = {k: v for k, v in moves.items() if k not in (key, antonym)}
+    rival = max(rivals, key=rivals.get) if rivals else None
+    dominant = rival is None or own >= rivals[rival]
+    return own, dominant, (None if dominant else rival), moves
+
+
+def _try_level(session, model, key, selection, rho, level, order, tries, seed, before):
+    """Apply up to ``tries`` candidates at one ascension level; returns the tries (all undone)
+    and the accepted one (left applied) or None."""
+    antonym = VOCABULARY[key].antonym if key in VOCABULARY else None
+    out = []
+    for variant in order[:max(int(tries), 1)].tolist():
+        params = model.sweep_.combination(int(variant))
+        for try_seed in _seeds(session, seed):
+            regen = session.regrow(selection, rho=rho, seed=try_seed, params=params, min_ascend=level)
+            after = _measure(session, regen.roots)[2]
+            own, dominant, rival, moves = _judge(model, key, before, after, antonym)
+            t = _Try(level, variant, try_seed, params, own, dominant, rival, moves,
+                     not np.allclose(after, before, rtol=1e-9, atol=1e-12))
+            out.append(t)
+            if own > 0 and dominant:
+                return out, t, regen
+            session.undo()
+    return out, None, None
 
 
 def apply_qualifier(session, name, sweep, selection=(), rho=0.5, points=None, regions=None, tries=5,
-                    seed=None) -> QualifierResult:
+                    seed=None, directions=None, max_climb=None) -> QualifierResult:
     """Regrow ``selection`` (leaf ids; empty = whole plant) of ``session`` toward qualifier ``name``.
 
     ``sweep`` is a fitted :class:`~ramure.metrics.sweep.VariantSweep` of the same
-    grammar; with ``regions`` (e.g. from a study) and the sweep's PCA cloud
-    ``points``, the region's centre chooses the candidates instead of the
-    default direction.  See the module docstring for the procedure.
+    grammar; ``regions`` (a study's, with the sweep's PCA cloud ``points``)
+    refine the directions; ``directions`` (``{qualifier: {metric: weight}}``,
+    e.g. learnt on another grammar) replace them.  ``max_climb`` bounds the
+    extra ascension levels (default: up to the axiom).  See the module docstring.
     """
     key = canonical_name(name)
+    model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
+    model.sweep_ = sweep
+    source = model.sources_.get(key, "vocabulary")
     selection = [int(x) for x in selection]
+    if key == "normal" or key not in model.names_:
+        return _apply_first(session, model, key, selection, rho, seed, source)
+    varied = list(getattr(sweep, "names_", []))
+    top = session.n + 1 if max_climb is None else 1 + max(int(max_climb), 0)
+    levels = [1] if not selection else range(1, top + 1)
+    tried, last_roots, reasons = [], None, []
+    for level in levels:
+        roots = _roots(session, selection, rho, level)
+        if last_roots is not None and np.array_equal(roots, last_roots):
+            continue
+        last_roots = roots
+        rules = None
+        if selection:
+            regrown = active_rules(session.tree, roots)
+            rules = reading_rules(session.lsystem, regrown, varied)
+            if not rules:
+                reasons.append(f"ascension {level}: rule(s) {sorted(regrown)} read none of {', '.join(varied)}")
+                continue
+        order = model.rank(key, rules=rules)
+        if not len(order):
+            reasons.append(f"ascension {level}: no variant of rule(s) {sorted(rules)} changes the plant")
+            continue
+        m0, s0, before = _measure(session, roots)
+        level_tries, accepted, regen = _try_level(session, model, key, selection, rho, level, order, tries,
+                                                  seed, before)
+        tried += level_tries
+        if accepted is None:
+            forward = [t for t in level_tries if t.score > 0]
+            if forward:  # the one moving its own metrics most, preferring variants no one else picks
+                others = set(model.picks_.values()) - {model.picks_.get(key)}
+                accepted = max(forward, key=lambda t: (t.variant not in others, t.score))
+            elif any(t.changed for t in level_tries) or not selection:
+                break  # things moved, only the wrong way: climbing further would not be honest
+            else:
+                reasons.append(f"ascension {level}: none of {len(level_tries)} tries changed the part regrown")
+                continue
+            regen = session.regrow(selection, rho=rho, seed=accepted.seed, params=accepted.params,
+                                   min_ascend=level)
+        return _result(session, key, source, accepted, regen, m0, s0, before, len(tried), level, True)
+    return _not_improved(session, model, key, source, selection, rho, tried, reasons, varied)
+
+
+def _result(session, key, source, t, regen, m0, s0, before, tried, level, improved, reason=None,
+            suggestion=None):
+    m1, s1, after = _measure(session, regen.roots)
+    improved = improved and t.score > 0
+    return QualifierResult(key, t.variant, t.params, source, regen.roots, m0, m1, float(t.score), improved,
+                           tried, regen, t.seed, s0, s1, _own(key, before, after), t.moves, t.dominant,
+                           t.rival, level, level - 1, reason, suggestion)
+
+
+def _not_improved(session, model, key, source, selection, rho, tried, reasons, varied):
+    """Nothing moved the qualifier forward: keep the best try (or nothing) and say why."""
+    suggestion = ("select a larger part, lower rho (e.g. --rho 0.1), or vary constants the selected "
+                  f"rules read (varied now: {', '.join(varied) or 'none'})")
+    if not tried:
+        roots = _roots(session, selection, rho)
+        m0, s0, before = _measure(session, roots)
+        reason = "nothing to regrow: " + ("; ".join(reasons) or "no candidate variant")
+        return QualifierResult(key, -1, {}, source, roots, m0, m0, float("nan"), False, 0, None, None,
+                               s0, s0, _own(key, before, before), {}, True, None, 1, 0, reason, suggestion)
+    best = max(tried, key=lambda t: t.score)
+    roots = _roots(session, selection, rho, best.level)
+    m0, s0, before = _measure(session, roots)
+    regen = session.regrow(selection, rho=rho, seed=best.seed, params=best.params, min_ascend=best.level)
+    moved = any(t.changed for t in tried)
+    reason = (f"the {len(tried)} tries moved {key}'s own metrics the other way (best score {best.score:.3g})"
+              if moved else f"none of the {len(tried)} tries changed the part regrown; " + "; ".join(reasons))
+    return _result(session, key, source, best, regen, m0, s0, before, len(tried), best.level, False, reason,
+                   suggestion)
+
+
+def _apply_first(session, model, key, selection, rho, seed, source):
+    """``normal`` (or a name without direction): apply the first candidate, no check."""
+    order = model.rank(key)
     roots = _roots(session, selection, rho)
-    rules = active_rules(session.tree, roots) if len(selection) else None
-    order, source = ranked_variants(key, sweep, points, regions, rules)
-    before = roots_metrics(session, roots)
-    direction = VOCABULARY.get(key)
-    checks = direction is not None and direction.direction is not None
-    scale = metric_scale(sweep) if checks else None
-    best = None
-    tried = 0
-    for variant, try_seed in _attempts(session, order, tries, seed):
-        tried += 1
-        params = sweep.combination(variant)
-        regen = session.regrow(selection, rho=rho, seed=try_seed, params=params)
-        after = roots_metrics(session, regen.roots)
-        score = float("nan")
-        if checks:
-            delta = metric_deltas(np.array(after, float), np.array(before, float))
-            score = float(qualifier_scores(key, delta[None], scale)[0])
-        result = QualifierResult(key, variant, params, source, regen.roots, before, after, score,
-                                 checks and score > 0, tried, regen, try_seed)
-        if not checks or result.improved:
-            return result
-        if best is None or score > best.score:
-            best = result
-        session.undo()
-    # nothing improved: keep the best candidate tried
-    regen = session.regrow(selection, rho=rho, seed=best.seed, params=best.params)
-    best.regen, best.tried = regen, tried
-    best.after = roots_metrics(session, regen.roots)
-    return best
+    m0, s0, before = _measure(session, roots)
+    variant = int(order[0])
+    params = model.sweep_.combination(variant)
+    regen = session.regrow(selection, rho=rho, seed=seed, params=params)
+    m1, s1, after = _measure(session, regen.roots)
+    return QualifierResult(key, variant, params, source, regen.roots, m0, m1, float("nan"), False, 1, regen,
+                           seed, s0, s1, {}, {}, True, None, 1, 0,
+                           "normal has no metric direction: the combination closest to the base plant",
+                           None)

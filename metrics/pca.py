@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ramure.errors import RamureError
+from ramure.errors import ValueRefused
+
+from .estimator import ParamsMixin
 
 
-class DeltaPCA:
+class DeltaPCA(ParamsMixin):
     """Three-component PCA of metric deltas.
 
     Fitted attributes: ``components_`` (3, f), ``explained_variance_`` (3,),
@@ -38,9 +40,9 @@ class DeltaPCA:
     def _check(self, X, fitting):
         X = np.asarray(X, float)
         if X.ndim != 2:
-            raise RamureError(f"expected a 2-D array of deltas (variants x metrics), got shape {X.shape}")
+            raise ValueRefused(f"expected a 2-D array of deltas (variants x metrics), got shape {X.shape}")
         if not fitting and X.shape[1] != self.n_features_in_:
-            raise RamureError(f"expected {self.n_features_in_} metrics per row, got {X.shape[1]}")
+            raise ValueRefused(f"expected {self.n_features_in_} metrics per row, got {X.shape[1]}")
         return X
 
     def fit(self, X):
@@ -49,10 +51,10 @@ class DeltaPCA:
         X = self._check(X, fitting=True)
         k = int(self.n_components)
         if k < 1:
-            raise RamureError(f"n_components must be >= 1, not {self.n_components}")
+            raise ValueRefused(f"n_components must be >= 1, not {self.n_components}")
         rows = X[np.all(np.isfinite(X), axis=1)]
         if not len(rows):
-            raise RamureError("no valid variant to analyse (every variant failed)")
+            raise ValueRefused("no valid variant to analyse (every variant failed)")
         f = X.shape[1]
         self.n_features_in_ = f
         self.n_samples_ = len(rows)
@@ -79,7 +81,7 @@ class DeltaPCA:
     def transform(self, X):
         """Project deltas (N, f) to (N, 3); NaN rows stay NaN."""
         if not hasattr(self, "components_"):
-            raise RamureError("this PCA is not fitted yet: call fit(deltas) first")
+            raise ValueRefused("this PCA is not fitted yet: call fit(deltas) first")
         X = self._check(X, fitting=False)
         return ((X - self.mean_) / self.scale_) @ self.components_.T
 

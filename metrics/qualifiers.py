@@ -1,36 +1,55 @@
-"""Qualifiers: the default vocabulary, qualifier regions in PCA space, and their combinations.
+"""Qualifiers: what each word means as metric directions, the regions of studies, and how to pick a variant.
 
-**Default vocabulary.**  Before any study exists, each of the thirteen
-qualifiers of the thesis's collision matrix has a documented *direction* in
-metric-delta space.  Variants are ranked by their projection on it, after
-dividing each metric's delta by its standard deviation over the sweep (so
-``small = -box_volume - total_length`` weighs both terms equally; a metric
-that never varies contributes nothing).  The best-ranked variant's parameter
-combination is what "make this selection <qualifier>" applies, so it works on
-any grammar from day one.  ``normal`` has no direction: it ranks variants by
-closeness to the base plant (the smallest standardised deltas), i.e. it
-gives back the grammar's own look.
+**Meaning.**  Every default qualifier is a *direction* over the fifteen
+qualifier metrics (:data:`QUALIFIER_METRICS`: the ten metrics of the
+thesis, :mod:`ramure.metrics.plant`, then the five shape metrics of
+:mod:`ramure.metrics.shape` — height, crown width, branch angle to the
+vertical, angle spread, asymmetry).  :data:`VOCABULARY` gives each one in
+English and French with a one-line meaning (``ramure qualify --list``
+prints them).  Antonym pairs (:data:`ANTONYMS`) are exact opposites; no two
+qualifiers share a direction.  ``normal`` has no direction: it ranks
+variants by closeness to the base plant.
 
-The ten metrics do not measure symmetry, roundness or realism directly, so
-those directions are proxies, documented in :data:`VOCABULARY`:
-``round``/``symmetric`` favour a compact box (``1.5 d_box_surface -
-d_box_volume`` is the first-order change of ``S^1.5 / V``, smallest for a
-cube), ``fir-like``/``asymmetric`` an elongated one, ``realistic`` sturdier
-and fuller branches.  A study replaces these guesses with measured regions.
+**Scores.**  A variant's change of each metric against the base plant
+(relative %, see :func:`~ramure.metrics.plant.metric_deltas` and
+:func:`~ramure.metrics.shape.shape_deltas`) is divided by that metric's
+standard deviation over the sweep, so every metric weighs the same and one
+that never varies counts for nothing; a qualifier's score is the
+projection of that vector on its unit direction.
+
+**The choice is checked** (:class:`QualifierModel`).  A variant *belongs*
+to the qualifier it moves most (its highest score over all directional
+qualifiers).  For a qualifier, candidates come in three tiers: (1) variants
+it owns, that move it forward (score > 0), best score first — so the
+variant applied moves the qualifier's own metrics more than any other
+candidate not rejected, and two qualifiers never pick the same one;
+(2) variants that move it forward but move some other qualifier more,
+smallest rival lead first; (3) variants that do not move it forward.
+Failed variants and variants identical to the base plant are left out.
+
+**Transfer.**  The directions hold for any grammar with ``#define``
+constants, with no study.  When a study's regions exist for a grammar
+(:class:`QualifierRegions` in PCA space), the variants nearest a region's
+centre give a *learnt* direction (the mean of their standardised deltas)
+that refines the default one (:func:`learn_directions`, ``refine``); those
+learnt directions are plain metric weights, so regions learnt on one
+grammar apply to another: ``QualifierModel(directions=learn_directions(...))``.
 
 **Regions** (:class:`QualifierRegions`, thesis §5.5): from labelled variant
-points per qualifier (a study's, read from the :mod:`ramure.metrics.store`), one
-axis-aligned box per qualifier in PCA space, after trimming the ``trim``
+points per qualifier (a study's, read from the :mod:`ramure.metrics.store`),
+one axis-aligned box per qualifier in PCA space, after trimming the ``trim``
 share (7 % by default) of its points farthest from the qualifier's median
 point (``floor(trim * k)`` of k points); the collision matrix; and the box
 centre -> nearest variant -> its parameter combination.
 
 >>> import numpy as np
->>> canonical_name("Épars"), canonical_name("sapin"), canonical_name("Fir like")
-('sparse', 'fir-like', 'fir-like')
+>>> canonical_name("Épars"), canonical_name("sapin"), canonical_name("Fir like"), canonical_name("haut")
+('sparse', 'fir-like', 'fir-like', 'tall')
 >>> deltas = np.array([[10.0, 0, 0, 0, -5, 0, 0, 0, 0, 0], [0, 0, 0, 0, 20, 0, 0, 0, 0, 0]])
 >>> rank_variants("dense", deltas).tolist()
 [1, 0]
+>>> VOCABULARY["tall"].describe(), VOCABULARY["short"].describe()
+('+height', '-height')
 """
 from __future__ import annotations
 
@@ -40,59 +59,117 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ramure.errors import RamureError
+from ramure.errors import ValueRefused
 
-from .plant import METRIC_NAMES
+from .estimator import ParamsMixin
+from .plant import METRIC_NAMES, metric_deltas
+from .shape import SHAPE_METRIC_NAMES, shape_deltas
+
+#: The metrics qualifiers are defined on: the ten metrics, then the five shape metrics.
+QUALIFIER_METRICS = tuple(METRIC_NAMES) + tuple(SHAPE_METRIC_NAMES)
+
+
+def _unit(weights: dict) -> np.ndarray:
+    unknown = set(weights) - set(QUALIFIER_METRICS)
+    if unknown:
+        raise ValueRefused(f"unknown metric(s) {', '.join(sorted(unknown))} in a qualifier direction "
+                           f"(metrics: {', '.join(QUALIFIER_METRICS)})")
+    v = np.array([float(weights.get(m, 0.0)) for m in QUALIFIER_METRICS])
+    norm = np.linalg.norm(v)
+    if not np.isfinite(norm) or norm == 0:
+        raise ValueRefused("a qualifier direction needs at least one non-zero, finite metric weight")
+    return v / norm
 
 
 @dataclass(frozen=True)
 class Qualifier:
     """A vocabulary entry: English ``name``, ``french`` name, metric weights (None: nearest
-    to the base plant) and what the direction means."""
+    to the base plant), what the direction means, and its ``antonym`` (or None)."""
 
     name: str
     french: str
     direction: dict | None
     meaning: str
+    antonym: str | None = None
 
     def vector(self) -> np.ndarray | None:
-        """The unit direction (10,) over :data:`~ramure.metrics.plant.METRIC_NAMES`, or None."""
+        """The unit direction (15,) over :data:`QUALIFIER_METRICS`, or None."""
+        return None if self.direction is None else _unit(self.direction)
+
+    def metrics(self) -> tuple:
+        """The metrics the qualifier reads (its own metrics), strongest first."""
         if self.direction is None:
-            return None
-        v = np.array([self.direction.get(m, 0.0) for m in METRIC_NAMES], float)
-        return v / np.linalg.norm(v)
+            return ()
+        return tuple(sorted(self.direction, key=lambda m: -abs(self.direction[m])))
+
+    def describe(self) -> str:
+        """The direction in one line, e.g. ``+height -crown_width +0.5 branch_angle``."""
+        if self.direction is None:
+            return "closest to the base plant"
+        parts = []
+        for m in self.metrics():
+            w = self.direction[m]
+            sign = "+" if w > 0 else "-"
+            parts.append(f"{sign}{m}" if abs(w) == 1 else f"{sign}{abs(w):g} {m}")
+        return " ".join(parts)
 
 
-_COMPACT = {"box_volume": 1.0, "box_surface": -1.5}
-_ELONGATED = {"box_volume": -1.0, "box_surface": 1.5}
+def _neg(direction: dict) -> dict:
+    return {k: -v for k, v in direction.items()}
 
-#: The default vocabulary: canonical English name -> :class:`Qualifier`.
+
+def _pair(pos, neg, direction, pos_meaning, neg_meaning):
+    """Two antonyms: ``neg``'s direction is exactly ``-direction``."""
+    return [Qualifier(pos[0], pos[1], dict(direction), pos_meaning, neg[0]),
+            Qualifier(neg[0], neg[1], _neg(direction), neg_meaning, pos[0])]
+
+
+#: The default vocabulary: canonical English name -> :class:`Qualifier` (thesis's 13, then 9 more).
 VOCABULARY = {q.name: q for q in [
-    Qualifier("small", "petit", {"box_volume": -1, "total_length": -1}, "smaller box, shorter branches"),
-    Qualifier("large", "grand", {"box_volume": 1, "total_length": 1}, "bigger box, longer branches"),
-    Qualifier("sparse", "épars", {"branch_density": -1, "fill_rate": -1},
-              "fewer branches and less wood per unit of box volume"),
-    Qualifier("dense", "dense", {"branch_density": 1}, "more branches per unit of box volume (+density)"),
-    Qualifier("symmetric", "symétrique", dict(_COMPACT),
-              "proxy: a more cube-like box (lower surface^1.5 / volume)"),
-    Qualifier("asymmetric", "asymétrique", dict(_ELONGATED),
-              "proxy: a more elongated, lopsided box (higher surface^1.5 / volume)"),
-    Qualifier("realistic", "réaliste", {"mean_radius": 1, "fill_rate": 0.5, "mean_length": -0.5},
-              "proxy: sturdier, shorter branches that fill their box more"),
-    Qualifier("unrealistic", "irréaliste", {"mean_radius": -1, "fill_rate": -0.5, "mean_length": 0.5},
-              "proxy: spindly, long branches in an emptier box"),
-    Qualifier("fir-like", "sapin", {**_ELONGATED, "branch_density": 0.5},
-              "an elongated box densely filled with branches (tall, narrow, busy)"),
-    Qualifier("normal", "normal", None, "closest to the base plant (smallest standardised deltas)"),
-    Qualifier("thin", "mince", {"mean_radius": -1, "branch_volume": -1}, "thinner branches, less wood"),
-    Qualifier("thick", "gros", {"mean_radius": 1, "branch_volume": 1}, "thicker branches, more wood"),
-    Qualifier("round", "rond", {**_COMPACT, "fill_rate": 0.5},
-              "a compact, cube-like box well filled with wood"),
+    *_pair(("small", "petit"), ("large", "grand"), {"box_volume": -1, "total_length": -1},
+           "a smaller plant: smaller box and less branch length in all",
+           "a bigger plant: bigger box and more branch length in all"),
+    *_pair(("dense", "dense"), ("sparse", "épars"), {"branch_count": 1, "branch_density": 1},
+           "more branches, packed closer (more per unit of box volume)",
+           "fewer branches, spread through more space"),
+    *_pair(("asymmetric", "asymétrique"), ("symmetric", "symétrique"), {"asymmetry": 1},
+           "wood more on one side of the trunk's vertical (higher asymmetry)",
+           "wood better balanced around the trunk's vertical (lower asymmetry)"),
+    *_pair(("realistic", "réaliste"), ("unrealistic", "irréaliste"), {"mean_radius": 1, "mean_length": -1},
+           "proxy: stouter segments, thicker and shorter (lower slenderness), as wood grows",
+           "proxy: spindly segments, thinner and longer (higher slenderness)"),
+    Qualifier("fir-like", "sapin", {"height": 1, "crown_width": -1, "branch_angle": 0.5},
+              "a conical crown: taller and narrower, branches held more horizontally"),
+    Qualifier("normal", "normal", None, "closest to the base plant (smallest standardised changes)"),
+    *_pair(("thick", "gros"), ("thin", "mince"), {"mean_radius": 1, "branch_volume": 0.5},
+           "thicker branches (mean radius up), more wood",
+           "thinner branches (mean radius down), less wood"),
+    Qualifier("round", "rond", {"box_volume": 1, "box_surface": -1.5},
+              "a compact, cube-like box (lower surface^1.5 / volume)"),
+    *_pair(("tall", "haut"), ("short", "bas"), {"height": 1},
+           "taller: larger vertical extent", "shorter: smaller vertical extent"),
+    *_pair(("wide", "large"), ("narrow", "étroit"), {"crown_width": 1},
+           "wider: larger horizontal extent of the crown", "narrower: smaller horizontal extent"),
+    *_pair(("drooping", "retombant"), ("upright", "érigé"), {"branch_angle": 1},
+           "branches lean further from the vertical (mean angle to vertical up)",
+           "branches closer to the vertical (mean angle to vertical down)"),
+    Qualifier("bushy", "touffu", {"branch_count": 1, "crown_width": 0.5, "mean_length": -0.5},
+              "more and shorter branches in a wider crown"),
+    *_pair(("irregular", "irrégulier"), ("regular", "régulier"), {"angle_spread": 1},
+           "branching angles more varied (higher angle spread)",
+           "branching angles more alike (lower angle spread)"),
 ]}
 
-_ALIASES = {"fir": "fir-like", "fir-tree": "fir-like", "denser": "dense", "sparser": "sparse",
-            "smaller": "small", "larger": "large", "big": "large", "thinner": "thin", "thicker": "thick",
-            "rounder": "round", "rounded": "round"}
+#: Antonym pairs (each direction is exactly minus the other).
+ANTONYMS = sorted({tuple(sorted((q.name, q.antonym))) for q in VOCABULARY.values() if q.antonym})
+
+_ALIASES = {"fir": "fir-like", "fir-tree": "fir-like", "conical": "fir-like", "denser": "dense",
+            "sparser": "sparse", "smaller": "small", "larger": "large", "big": "large", "bigger": "large",
+            "thinner": "thin", "thicker": "thick", "rounder": "round", "rounded": "round",
+            "taller": "tall", "shorter": "short", "wider": "wide", "narrower": "narrow", "broad": "wide",
+            "erect": "upright", "weeping": "drooping", "pendulous": "drooping", "bushier": "bushy",
+            "balanced": "symmetric", "lopsided": "asymmetric", "plus-haut": "tall", "etale": "wide",
+            "evase": "wide", "pleureur": "drooping", "dresse": "upright", "buissonnant": "bushy"}
 
 
 def _fold(text) -> str:
@@ -101,34 +178,66 @@ def _fold(text) -> str:
     return "-".join(re.sub(r"[^0-9a-z]+", " ", text).split())
 
 
-_LOOKUP = {**{_fold(q.name): q.name for q in VOCABULARY.values()},
-           **{_fold(q.french): q.name for q in VOCABULARY.values()},
-           **{_fold(k): v for k, v in _ALIASES.items()}}
+# English names first: "large" is English "large" (grand); French "large" is "wide" with language="fr".
+_FRENCH = {_fold(q.french): q.name for q in VOCABULARY.values()}
+_LOOKUP = {**_FRENCH, **{_fold(k): v for k, v in _ALIASES.items()},
+           **{_fold(q.name): q.name for q in VOCABULARY.values()}}
 
 
-def canonical_name(name) -> str:
-    """The canonical English name of a qualifier given in English or French (any case, accents)."""
+def canonical_name(name, language: str | None = None) -> str:
+    """The canonical English name of a qualifier given in English or French (any case, accents).
+
+    One word is both English and French: ``large`` (English: bigger, *grand*;
+    French: wider, *wide*).  It reads as English unless ``language="fr"``.
+
+    >>> canonical_name("large"), canonical_name("large", language="fr"), canonical_name("Érigé")
+    ('large', 'wide', 'upright')
+    """
     key = _fold(name)
-    if key in _LOOKUP:
-        return _LOOKUP[key]
-    return key
+    if language == "fr" and key in _FRENCH:
+        return _FRENCH[key]
+    return _LOOKUP.get(key, key)
 
 
-def vocabulary_name(name) -> str:
+def vocabulary_name(name, language: str | None = None) -> str:
     """Like :func:`canonical_name` but refuses names outside the default vocabulary."""
-    key = canonical_name(name)
+    key = canonical_name(name, language)
     if key not in VOCABULARY:
         known = ", ".join(f"{q.name}/{q.french}" for q in VOCABULARY.values())
-        raise RamureError(f"unknown qualifier {name!r}; the vocabulary is: {known}")
+        raise ValueRefused(f"unknown qualifier {name!r}; the vocabulary is: {known}")
     return key
 
 
-def _deltas_of(source):
-    deltas = getattr(source, "deltas_", source)
-    deltas = np.asarray(deltas, float)
-    if deltas.ndim != 2 or deltas.shape[1] != len(METRIC_NAMES):
-        raise RamureError(f"expected deltas of shape (N, {len(METRIC_NAMES)}), got {deltas.shape}")
+def vocabulary_table() -> list:
+    """One dict per qualifier (name, french, direction, meaning, antonym): ``qualify --list``."""
+    return [{"name": q.name, "french": q.french, "direction": q.describe(), "meaning": q.meaning,
+             "antonym": q.antonym, "metrics": list(q.metrics())} for q in VOCABULARY.values()]
+
+
+# -- scores ---------------------------------------------------------------------
+def _deltas_of(source) -> np.ndarray:
+    """(N,15) deltas from a fitted sweep or an (N,10) / (N,15) array (missing shape deltas: 0)."""
+    if hasattr(source, "deltas_"):
+        shape = getattr(source, "shape_deltas_", None)
+        deltas = np.asarray(source.deltas_, float)
+        if shape is None:
+            shape = np.zeros((len(deltas), len(SHAPE_METRIC_NAMES)))
+        return np.hstack([deltas, np.asarray(shape, float)])
+    deltas = np.asarray(source, float)
+    if deltas.ndim == 2 and deltas.shape[1] == len(METRIC_NAMES):
+        deltas = np.hstack([deltas, np.where(np.isfinite(deltas[:, :1]), 0.0, np.nan)
+                            * np.ones((1, len(SHAPE_METRIC_NAMES)))])
+    if deltas.ndim != 2 or deltas.shape[1] != len(QUALIFIER_METRICS):
+        raise ValueRefused(f"expected deltas of shape (N, {len(METRIC_NAMES)}) or "
+                           f"(N, {len(QUALIFIER_METRICS)}), got {deltas.shape}")
     return deltas
+
+
+def all_deltas(after, before) -> np.ndarray:
+    """Change (15,) of the fifteen qualifier metrics from ``before`` to ``after`` (15,)."""
+    k = len(METRIC_NAMES)
+    after, before = np.asarray(after, float), np.asarray(before, float)
+    return np.concatenate([metric_deltas(after[:k], before[:k]), shape_deltas(after[k:], before[k:])])
 
 
 def metric_scale(deltas) -> np.ndarray:
@@ -138,17 +247,28 @@ def metric_scale(deltas) -> np.ndarray:
     return deltas[ok].std(axis=0) if ok.any() else np.zeros(deltas.shape[1])
 
 
-def qualifier_scores(name, deltas, scale=None) -> np.ndarray:
-    """Score (N,) of each variant for qualifier ``name``; higher is better, NaN for failed variants.
+def standardise(deltas, scale) -> np.ndarray:
+    """``deltas / scale`` per metric (0 where the scale is 0; NaN rows stay NaN)."""
+    deltas = np.atleast_2d(np.asarray(deltas, float))
+    scale = np.asarray(scale, float)
+    z = np.divide(deltas, scale, out=np.zeros_like(deltas), where=scale > 0)
+    z[~np.isfinite(deltas)] = np.nan
+    return z
 
-    ``deltas`` (N,10) or a fitted sweep; ``scale`` (10,) the per-metric
-    standardisation (default: :func:`metric_scale` of ``deltas``).
+
+def qualifier_scores(name, deltas, scale=None) -> np.ndarray:
+    """Score (N,) of each variant along qualifier ``name``'s own direction; NaN for failed variants.
+
+    ``deltas`` (N,10), (N,15) or a fitted sweep; ``scale`` the per-metric
+    standardisation (default: :func:`metric_scale` of ``deltas``).  ``normal``
+    scores minus the length of the standardised change.
     """
     q = VOCABULARY[vocabulary_name(name)]
     deltas = _deltas_of(deltas)
     scale = metric_scale(deltas) if scale is None else np.asarray(scale, float)
-    z = np.divide(deltas, scale, out=np.zeros_like(deltas), where=scale > 0)
-    z[~np.isfinite(deltas)] = np.nan
+    if scale.shape[0] == len(METRIC_NAMES):
+        scale = np.concatenate([scale, np.zeros(len(SHAPE_METRIC_NAMES))])
+    z = standardise(deltas, scale)
     if q.direction is None:
         return -np.linalg.norm(z, axis=1)
     return z @ q.vector()
@@ -157,19 +277,211 @@ def qualifier_scores(name, deltas, scale=None) -> np.ndarray:
 def rank_variants(name, deltas, rules=None, variant_rules=None) -> np.ndarray:
     """Variant indices, best first, for qualifier ``name`` (failed variants left out).
 
+    The ranking of :meth:`QualifierModel.rank` with the default vocabulary.
     With ``rules`` (a set of rule indices) and ``variant_rules`` (N,) only the
     variants acting on one of those rules are ranked — e.g. the rules that
     actually rewrite inside a selection.
     """
-    scores = qualifier_scores(name, deltas)
-    keep = np.isfinite(scores)
-    if rules is not None:
-        variant_rules = getattr(deltas, "rules_", variant_rules)
-        if variant_rules is None:
-            raise RamureError("ranking by rules needs each variant's rule (pass a fitted sweep)")
-        keep &= np.isin(np.asarray(variant_rules), np.asarray(sorted(rules), dtype=np.int64))
-    idx = np.flatnonzero(keep)
-    return idx[np.argsort(-scores[idx], kind="stable")]
+    model = QualifierModel().fit(deltas)
+    return model.rank(name, rules=rules, variant_rules=variant_rules)
+
+
+# -- the model ------------------------------------------------------------------
+def learn_directions(regions, sweep, points, k_nearest=10) -> dict:
+    """Metric directions learnt from study ``regions`` on one grammar: ``{name: {metric: weight}}``.
+
+    For each region, the ``k_nearest`` variants of ``points`` (the sweep's PCA
+    cloud, (N,3)) closest to the box centre; their standardised deltas,
+    averaged, give the direction (unit length; a region whose variants do not
+    move any metric is left out).  The result applies to any grammar
+    (``QualifierModel(directions=...)``), since it speaks of metrics, not of
+    one grammar's PCA axes.
+    """
+    deltas = _deltas_of(sweep)
+    z = standardise(deltas, metric_scale(deltas))
+    out = {}
+    for name in regions.names_:
+        near = regions.nearest_variants(name, points)
+        near = near[np.all(np.isfinite(z[near]), axis=1)][:max(int(k_nearest), 1)]
+        if not len(near):
+            continue
+        v = z[near].mean(axis=0)
+        norm = np.linalg.norm(v)
+        if norm > 0:
+            out[name] = {m: float(w) for m, w in zip(QUALIFIER_METRICS, v / norm) if w != 0}
+    return out
+
+
+class QualifierModel(ParamsMixin):
+    """Qualifier directions fitted on one grammar's sweep: scores, owners and rankings.
+
+    Parameters (stored as given, checked by :meth:`fit`):
+
+    directions
+        ``{qualifier: {metric: weight}}`` replacing or adding directions —
+        e.g. :func:`learn_directions` of another grammar's study (transfer).
+    regions
+        fitted :class:`QualifierRegions` of *this* grammar (a study's); with
+        ``points`` given to :meth:`fit`, each region refines its qualifier's direction.
+    refine
+        weight in [0, 1] of a region's learnt direction against the default one.
+    k_nearest
+        variants nearest a region's centre used to learn its direction.
+
+    Fitted: ``names_`` (directional qualifiers, sorted), ``directions_`` (Q,15),
+    ``sources_`` ``{name: "vocabulary" | "transfer" | "region"}``, ``scale_`` (15,),
+    ``scores_`` (N,Q), ``normal_scores_`` (N,), ``owner_`` (N,) (index into
+    ``names_`` of the qualifier each variant moves most; -1 for none),
+    ``usable_`` (N,) (finite and not the base plant), ``rules_`` (N,) or None,
+    ``picks_`` ``{name: variant}`` (whole-plant picks, pairwise distinct).
+    """
+
+    def __init__(self, directions=None, regions=None, refine=0.5, k_nearest=10):
+        self.directions = directions
+        self.regions = regions
+        self.refine = refine
+        self.k_nearest = k_nearest
+
+    def fit(self, sweep, points=None):
+        """Fit on a fitted sweep (or a delta array (N,10)/(N,15)); ``points`` its PCA cloud (N,3)."""
+        refine = float(self.refine)
+        if not 0 <= refine <= 1:
+            raise ValueRefused(f"refine must be in [0, 1], not {self.refine!r}")
+        deltas = _deltas_of(sweep)
+        self.scale_ = metric_scale(deltas)
+        dirs = {n: q.vector() for n, q in VOCABULARY.items() if q.direction is not None}
+        sources = dict.fromkeys(dirs, "vocabulary")
+        for name, weights in (self.directions or {}).items():
+            key = canonical_name(name)
+            dirs[key], sources[key] = _unit(weights), "transfer"
+        if self.regions is not None and points is not None:
+            for name, weights in learn_directions(self.regions, sweep, points, self.k_nearest).items():
+                learnt = _unit(weights)
+                mixed = learnt if name not in dirs else (1 - refine) * dirs[name] + refine * learnt
+                if np.linalg.norm(mixed) > 0:
+                    dirs[name], sources[name] = mixed / np.linalg.norm(mixed), "region"
+        self.names_ = sorted(dirs)
+        self.directions_ = np.array([dirs[n] for n in self.names_]).reshape(-1, len(QUALIFIER_METRICS))
+        self.sources_ = {n: sources[n] for n in self.names_}
+        z = standardise(deltas, self.scale_)
+        self.scores_ = z @ self.directions_.T
+        self.normal_scores_ = -np.linalg.norm(z, axis=1)
+        finite = np.all(np.isfinite(z), axis=1)
+        changes = getattr(sweep, "changes_", None)
+        moved = np.any(z != 0, axis=1) if changes is None else np.asarray(changes, bool)
+        self.usable_ = finite & moved
+        filled = np.where(np.isfinite(self.scores_), self.scores_, -np.inf)
+        self.owner_ = np.where(filled.max(axis=1, initial=-np.inf) > 0, filled.argmax(axis=1), -1)
+        self.rules_ = getattr(sweep, "rules_", None)
+        self.n_variants_ = len(deltas)
+        self.picks_ = self._assign()
+        return self
+
+    def _fitted(self):
+        if not hasattr(self, "scores_"):
+            raise ValueRefused("this qualifier model is not fitted yet: call fit(sweep) first")
+
+    def index(self, name) -> int:
+        """Position of qualifier ``name`` in ``names_`` (refuses unknown and direction-less names)."""
+        self._fitted()
+        key = canonical_name(name)
+        if key not in self.names_:
+            if key in VOCABULARY:
+                raise ValueRefused(f"qualifier {key!r} has no metric direction")
+            vocabulary_name(name)
+        return self.names_.index(key)
+
+    def direction(self, name) -> dict:
+        """``{metric: weight}`` of qualifier ``name``'s unit direction (non-zero weights)."""
+        row = self.directions_[self.index(name)]
+        return {m: float(w) for m, w in zip(QUALIFIER_METRICS, row) if w != 0}
+
+    def scores(self, name) -> np.ndarray:
+        """Scores (N,) of every variant along ``name`` (``normal``: minus the change's length)."""
+        self._fitted()
+        if canonical_name(name) == "normal":
+            return self.normal_scores_
+        return self.scores_[:, self.index(name)]
+
+    def _tiers(self, q, keep):
+        """Candidate tiers for directional qualifier ``q`` among ``keep`` (module docstring)."""
+        s = self.scores_[:, q]
+        keep = keep & self.usable_ & np.isfinite(s)
+        owned = keep & (s > 0) & (self.owner_ == q)
+        return owned, keep & (s > 0) & ~owned, keep & ~(s > 0)
+
+    def _assign(self):
+        """One whole-plant pick per directional qualifier, never shared (``picks_``).
+
+        Owners take their best owned variant; a qualifier owning none takes
+        its best forward variant not taken yet (strongest claims first).
+        """
+        everything = np.ones(self.n_variants_, bool)
+        picks, claims = {}, []
+        for q, name in enumerate(self.names_):
+            owned, second, _ = self._tiers(q, everything)
+            s = self.scores_[:, q]
+            if owned.any():
+                picks[name] = int(np.flatnonzero(owned)[np.argmax(s[owned])])
+            elif second.any():
+                claims.append((-float(s[second].max()), name))
+        taken = set(picks.values())
+        for _, name in sorted(claims):
+            q = self.names_.index(name)
+            s = self.scores_[:, q]
+            idx = np.flatnonzero(self._tiers(q, everything)[1])
+            idx = idx[np.argsort(-s[idx], kind="stable")]
+            free = [int(v) for v in idx if int(v) not in taken]
+            if free:
+                picks[name] = free[0]
+                taken.add(free[0])
+        return picks
+
+    def rank(self, name, rules=None, variant_rules=None) -> np.ndarray:
+        """Candidate variants for ``name``, best first (see the module docstring for the tiers).
+
+        Within a tier, variants are ordered by the qualifier's own score; the
+        whole-plant picks of *other* qualifiers (``picks_``) go last in their
+        tier.  ``rules``: keep only variants on those rules (``variant_rules``
+        (N,) when the model was fitted on a plain array).
+        """
+        self._fitted()
+        keep = np.ones(self.n_variants_, bool)
+        if rules is not None:
+            variant_rules = self.rules_ if variant_rules is None else variant_rules
+            if variant_rules is None:
+                raise ValueRefused("ranking by rules needs each variant's rule (pass a fitted sweep)")
+            keep &= np.isin(np.asarray(variant_rules), np.asarray(sorted(rules), dtype=np.int64))
+        if canonical_name(name) == "normal":
+            s = self.normal_scores_
+            idx = np.flatnonzero(keep & np.isfinite(s))
+            return idx[np.argsort(-s[idx], kind="stable")]
+        q = self.index(name)
+        s = self.scores_[:, q]
+        others = np.zeros(self.n_variants_, bool)
+        others[[v for n, v in self.picks_.items() if n != self.names_[q]]] = True
+        out = []
+        for tier in self._tiers(q, keep):
+            idx = np.flatnonzero(tier)
+            out.append(idx[np.lexsort((-s[idx], others[idx]))])
+        return np.concatenate(out)
+
+    def picks(self) -> dict:
+        """``{name: variant}`` applied to the whole plant: distinct for distinct qualifiers."""
+        self._fitted()
+        return dict(self.picks_)
+
+    def move_scores(self, deltas) -> dict:
+        """``{name: score}`` of one measured change (15,) (e.g. a selection before/after)."""
+        self._fitted()
+        z = standardise(np.asarray(deltas, float)[None], self.scale_)[0]
+        return dict(zip(self.names_, (self.directions_ @ np.nan_to_num(z)).tolist()))
+
+    def to_dict(self) -> dict:
+        """JSON-able directions: ``{"metrics", "directions": {name: {metric: weight}}, "sources"}``."""
+        self._fitted()
+        return {"metrics": list(QUALIFIER_METRICS),
+                "directions": {n: self.direction(n) for n in self.names_}, "sources": self.sources_}
 
 
 # -- regions --------------------------------------------------------------------
@@ -184,7 +496,7 @@ def trim_points(points, trim=0.07) -> np.ndarray:
     return keep
 
 
-class QualifierRegions:
+class QualifierRegions(ParamsMixin):
     """One axis-aligned box per qualifier in PCA space (configure, fit, query).
 
     ``fit(points)`` takes ``{qualifier: (k,3) points}`` (names in English or
@@ -204,7 +516,7 @@ class QualifierRegions:
     def fit(self, points):
         trim = float(self.trim)
         if not 0 <= trim < 1:
-            raise RamureError(f"trim must be a fraction in [0, 1), not {self.trim}")
+            raise ValueRefused(f"trim must be a fraction in [0, 1), not {self.trim}")
         merged = {}
         for name, pts in dict(points).items():
             pts = np.asarray(pts, float).reshape(-1, 3)
@@ -213,7 +525,7 @@ class QualifierRegions:
         merged = {k: v[np.all(np.isfinite(v), axis=1)] for k, v in merged.items()}
         merged = {k: v for k, v in merged.items() if len(v)}
         if not merged:
-            raise RamureError("no qualifier points to build regions from")
+            raise ValueRefused("no qualifier points to build regions from")
         self.names_ = sorted(merged)
         self.kept_ = {k: v[trim_points(v, trim)] for k, v in merged.items()}
         self.boxes_ = {k: (v.min(axis=0), v.max(axis=0)) for k, v in self.kept_.items()}
@@ -228,10 +540,10 @@ class QualifierRegions:
 
     def _name(self, name):
         if not hasattr(self, "boxes_"):
-            raise RamureError("these regions are not fitted yet: call fit(points) first")
+            raise ValueRefused("these regions are not fitted yet: call fit(points) first")
         key = canonical_name(name)
         if key not in self.boxes_:
-            raise RamureError(f"no region for qualifier {name!r} (known: {', '.join(self.names_)})")
+            raise ValueRefused(f"no region for qualifier {name!r} (known: {', '.join(self.names_)})")
         return key
 
     def __contains__(self, name):
@@ -262,37 +574,34 @@ class QualifierRegions:
 
 
 # -- the front door -------------------------------------------------------------
-def ranked_variants(name, sweep, points=None, regions=None, rules=None) -> tuple:
+def ranked_variants(name, sweep, points=None, regions=None, rules=None, directions=None) -> tuple:
     """``(indices best first, source)`` for qualifier ``name`` on a fitted sweep.
 
-    If ``regions`` has a box for ``name`` and the sweep's PCA cloud ``points``
-    (N,3) is given, variants are ordered by distance to the box centre
-    (source ``"region"``); otherwise by the default vocabulary's direction
-    (source ``"vocabulary"``).  ``rules`` restricts to variants on those rules.
+    A :class:`QualifierModel` ranks the variants; with study ``regions`` and
+    the sweep's PCA cloud ``points`` the regions refine the directions
+    (source ``"region"``), with ``directions`` from another grammar they
+    replace them (``"transfer"``), otherwise the default vocabulary's
+    (``"vocabulary"``).  ``rules`` restricts to variants on those rules.
     """
-    if regions is not None and points is not None and name in regions:
-        order = regions.nearest_variants(name, points)
-        if rules is not None:
-            order = order[np.isin(sweep.rules_[order], np.asarray(sorted(rules), dtype=np.int64))]
-        source = "region"
-    else:
-        order = rank_variants(name, sweep, rules=rules)
-        source = "vocabulary"
+    model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
+    key = canonical_name(name)
+    order = model.rank(key, rules=rules)
+    source = model.sources_.get(key, "vocabulary")
     if not len(order):
-        raise RamureError(f"no variant available for qualifier {name!r}"
-                          + (f" on rule(s) {sorted(rules)}" if rules is not None else ""))
+        raise ValueRefused(f"no variant available for qualifier {name!r}"
+                           + (f" on rule(s) {sorted(rules)}" if rules is not None else ""))
     return order, source
 
 
-def qualifier_combination(name, sweep, points=None, regions=None, rules=None) -> dict:
+def qualifier_combination(name, sweep, points=None, regions=None, rules=None, directions=None) -> dict:
     """The parameter combination ``{"rule", "constants"}`` that qualifier ``name`` applies.
 
     ``sweep`` is a fitted :class:`~ramure.metrics.sweep.VariantSweep`, or a grammar
     (LSystem or file path), which is then swept with the default settings
     (cached on disk, so only the first call is slow).
 
-    >>> from metrics import VariantSweep
-    >>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("grammars/honda_sympodial.lsys")
+    >>> from ramure.metrics import VariantSweep
+    >>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("honda_sympodial")
     >>> combo = qualifier_combination("dense", sweep)
     >>> sorted(combo), combo["rule"] in (0, 1)
     (['constants', 'rule'], True)
@@ -301,5 +610,41 @@ def qualifier_combination(name, sweep, points=None, regions=None, rules=None) ->
         from .sweep import VariantSweep
 
         sweep = VariantSweep().fit(sweep)
-    order, _ = ranked_variants(name, sweep, points, regions, rules)
+    order, _ = ranked_variants(name, sweep, points, regions, rules, directions)
     return sweep.combination(int(order[0]))
+
+
+def vocabulary_regions(sweep, points, per_qualifier=10, trim=0.0) -> QualifierRegions:
+    """Regions of the default vocabulary on one grammar, before any study.
+
+    Each directional qualifier's box surrounds its ``per_qualifier`` best
+    candidates that it owns (tier 1 of :meth:`QualifierModel.rank`) in the
+    PCA cloud ``points``; the collision matrix then tells how far the
+    qualifiers' choices overlap in PCA space.
+    """
+    model = QualifierModel().fit(sweep)
+    points = np.asarray(points, float)
+    boxes = {}
+    for name in model.names_:
+        q = model.index(name)
+        order = model.rank(name)
+        order = order[(model.owner_[order] == q) & (model.scores_[order, q] > 0)][:per_qualifier]
+        pts = points[order]
+        pts = pts[np.all(np.isfinite(pts), axis=1)]
+        if len(pts):
+            boxes[name] = pts
+    return QualifierRegions(trim=trim).fit(boxes)
+
+
+def matrix_table(regions) -> str:
+    """The collision matrix as a text table (row A, column B: % of A's points in B's box)."""
+    names = regions.names_
+    width = max(6, max(len(n) for n in names))
+    head = " " * width + " " + " ".join(f"{n[:6]:>6}" for n in names)
+    rows = [head]
+    for i, a in enumerate(names):
+        cells = " ".join("     ." if i == j else f"{regions.collision_matrix_[i, j]:6.1f}"
+                         for j in range(len(names)))
+        rows.append(f"{a:>{width}} {cells}")
+    rows.append(f"mean off-diagonal collision: {regions.mean_collision():.1f} %")
+    return "\n".join(rows)

@@ -50,7 +50,9 @@ import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
 
 from . import cache as _cache
+from .estimator import ParamsMixin, check_n_jobs
 from .plant import METRIC_NAMES, metric_deltas, metrics_from_arrays
+from .shape import SHAPE_METRIC_NAMES, shape_deltas, shape_from_arrays
 from .variants import distinct_variants, rule_constant_names, variant_design
 
 
@@ -65,9 +67,9 @@ def as_lsystem(grammar) -> LSystem:
     if isinstance(grammar, (str, os.PathLike)):
         path = grammar_files.resolve(grammar)
         if not path.is_file():
-            raise RamureError(f"{path}: no such grammar file")
+            raise ValueRefused(f"{path}: no such grammar file")
         return LSystem.from_file(path)
-    raise RamureError(f"expected an LSystem or a grammar file path, not {type(grammar).__name__}")
+    raise ValueRefused(f"expected an LSystem or a grammar file path, not {type(grammar).__name__}")
 
 
 # -- worker side ----------------------------------------------------------------
@@ -83,20 +85,25 @@ def _parsed(text):
     return ls
 
 
+_WIDTH = len(METRIC_NAMES) + len(SHAPE_METRIC_NAMES)
+
+
 def measure(lsystem, n, seed, constants=None, rule_constants=None) -> np.ndarray:
-    """Derive one plant and return its ten metrics (10,)."""
+    """Derive one plant and return its ten metrics then its five shape metrics (15,)."""
     sk = lsystem.derive(n=n, seed=seed, constants=constants, rule_constants=rule_constants).skeleton()
-    return metrics_from_arrays(sk.start, sk.end, sk.base_radius, sk.top_radius)
+    return np.concatenate([metrics_from_arrays(sk.start, sk.end, sk.base_radius, sk.top_radius),
+                           shape_from_arrays(sk.start, sk.end, sk.parent, sk.order)])
 
 
 def evaluate_variants(text, constants, n, seed, names, rules, values):
-    """Metrics (c,10) and failure flags (c,) of a chunk of variants — one worker task.
+    """Metrics (c,15: ten metrics, five shape metrics) and failure flags (c,) of a chunk of
+    variants — one worker task.
 
     Module-level and given plain data only, so it pickles for process pools
     and Dask workers alike; the grammar text is parsed once per worker.
     """
     ls = _parsed(text)
-    out = np.full((len(rules), len(METRIC_NAMES)), np.nan)
+    out = np.full((len(rules), _WIDTH), np.nan)
     failed = np.zeros(len(rules), bool)
     for i, (rule, vals) in enumerate(zip(np.asarray(rules).tolist(), np.asarray(values).tolist())):
         try:
@@ -109,7 +116,7 @@ def evaluate_variants(text, constants, n, seed, names, rules, values):
 def _matches(stored, design):
     """A cache entry is used only if it holds exactly this design's variants."""
     try:
-        return (stored is not None and stored["metrics"].shape == (len(design), len(METRIC_NAMES))
+        return (stored is not None and stored["metrics"].shape == (len(design), _WIDTH)
                 and np.array_equal(stored["rules"], design.rules)
                 and np.array_equal(stored["values"], design.values))
     except KeyError:
@@ -117,7 +124,7 @@ def _matches(stored, design):
 
 
 # -- the sweep ------------------------------------------------------------------
-class VariantSweep:
+class VariantSweep(ParamsMixin):
     """All ``{k(1-beta), k, k(1+beta)}`` variants of a grammar, one rule at a time, measured.
 
     Parameters (stored as given; checked by :meth:`fit`):
@@ -131,7 +138,8 @@ class VariantSweep:
     mode, n_samples
         ``"grid"`` (3^m per rule), or ``"lhs"`` / ``"sobol"`` with ``n_samples`` per rule.
     n_jobs
-        worker processes (default: all cores); 1 runs in this process.
+        worker processes, as in scikit-learn: None or 1 runs in this process, -1 uses
+        every core, -2 all but one, ...; a bool is refused.
     chunk_size
         variants per task (default: about 8 tasks per worker, between 8 and 50).
     cache, cache_dir
@@ -147,6 +155,9 @@ class VariantSweep:
     Fitted attributes: ``names_`` (chosen constants), ``design_``
     (:class:`~ramure.metrics.variants.VariantDesign`), ``rules_`` (N,), ``values_`` (N,m),
     ``metrics_`` (N,10), ``base_metrics_`` (10,), ``deltas_`` (N,10), ``failed_`` (N,),
+    ``shape_metrics_`` (N,5), ``base_shape_metrics_`` (5,), ``shape_deltas_`` (N,5) (the
+    :mod:`ramure.metrics.shape` metrics, for qualifiers; the PCA uses the ten only),
+    ``changes_`` (N,) (the variant changes a constant its rule reads: not the base plant),
     ``n_variants_``, ``n_derived_`` (derivations run; 0 from the cache), ``n_rules_``, ``n_``,
     ``grammar_text_``, ``base_constants_``,
     ``seconds_``, ``from_cache_``, ``cache_path_``.
@@ -168,15 +179,22 @@ class VariantSweep:
         self.scheduler = scheduler
         self.mp_context = mp_context
         self.connect_timeout = connect_timeout
-        self._cancel = threading.Event()
+
+    @property
+    def _event(self):
+        """The cancel flag, created on first use (the constructor stores parameters only)."""
+        event = self.__dict__.get("_cancel_event")
+        if event is None:
+            event = self.__dict__.setdefault("_cancel_event", threading.Event())
+        return event
 
     # -- control -----------------------------------------------------------
     def cancel(self):
         """Ask a running :meth:`fit` (in another thread) to stop; it raises :class:`SweepCancelled`."""
-        self._cancel.set()
+        self._event.set()
 
     def _cancelled(self, cancel):
-        if self._cancel.is_set():
+        if self._event.is_set():
             return True
         if cancel is None:
             return False
@@ -189,12 +207,10 @@ class VariantSweep:
             raise ValueRefused(f"n must be a non-negative integer, not {self.n!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
             raise ValueRefused(f"seed must be an integer, not {self.seed!r}")
-        jobs = (os.cpu_count() or 1) if self.n_jobs is None else self.n_jobs
-        if isinstance(jobs, bool) or int(jobs) != jobs or jobs < 1:
-            raise ValueRefused(f"n_jobs must be a positive integer, not {self.n_jobs!r}")
+        jobs = check_n_jobs(self.n_jobs)
         if self.chunk_size is not None and (int(self.chunk_size) != self.chunk_size or self.chunk_size < 1):
             raise ValueRefused(f"chunk_size must be a positive integer, not {self.chunk_size!r}")
-        return int(n), int(jobs)
+        return int(n), jobs
 
     def _key_payload(self, ls, n, design):
         return {"grammar": ls.text, "constants": {k: float(v) for k, v in ls.constants.items()},
@@ -205,7 +221,7 @@ class VariantSweep:
     def fit(self, grammar, progress=None, cancel=None):
         """Derive and measure every variant of ``grammar`` (an LSystem or a file path)."""
         t0 = time.perf_counter()
-        self._cancel.clear()
+        self._event.clear()
         ls = as_lsystem(grammar)
         n, jobs = self._check(ls)
         design = variant_design(ls.constants, len(ls.grammar.rules), self.constants, self.beta,
@@ -237,10 +253,16 @@ class VariantSweep:
         self.names_ = design.names
         self.rules_ = design.rules
         self.values_ = design.values
-        self.metrics_ = metrics
+        k = len(METRIC_NAMES)
+        self.metrics_ = metrics[:, :k]
+        self.shape_metrics_ = metrics[:, k:]
         self.failed_ = failed.astype(bool)
-        self.base_metrics_ = base
-        self.deltas_ = metric_deltas(metrics, base)
+        self.base_metrics_ = base[:k]
+        self.base_shape_metrics_ = base[k:]
+        self.deltas_ = metric_deltas(self.metrics_, self.base_metrics_)
+        self.shape_deltas_ = shape_deltas(self.shape_metrics_, self.base_shape_metrics_)
+        reps, inverse = distinct_variants(design, rule_constant_names(ls))
+        self.changes_ = inverse >= 0
         self.n_variants_ = len(design)
         self.cache_path_ = path
         self.seconds_ = time.perf_counter() - t0
@@ -253,7 +275,7 @@ class VariantSweep:
     def _run(self, ls, constants, n, design, base, jobs, progress, cancel):
         reps, inverse = distinct_variants(design, rule_constant_names(ls))
         total = len(reps)
-        rep_metrics = np.full((total, len(METRIC_NAMES)), np.nan)
+        rep_metrics = np.full((total, _WIDTH), np.nan)
         rep_failed = np.zeros(total, bool)
         chunks = self._chunks(total, jobs)
         args = [(ls.text, constants, n, int(self.seed), design.names, design.rules[reps[a:b]],
@@ -333,13 +355,13 @@ class VariantSweep:
     # -- queries -----------------------------------------------------------
     def _fitted(self):
         if not hasattr(self, "deltas_"):
-            raise RamureError("this sweep is not fitted yet: call fit(grammar) first")
+            raise ValueRefused("this sweep is not fitted yet: call fit(grammar) first")
 
     def combination(self, i) -> dict:
         """The parameter combination ``{"rule": int, "constants": {...}}`` of variant ``i``."""
         self._fitted()
         if not 0 <= int(i) < self.n_variants_:
-            raise RamureError(f"variant {i} is out of range 0..{self.n_variants_ - 1}")
+            raise ValueRefused(f"variant {i} is out of range 0..{self.n_variants_ - 1}")
         return self.design_.combination(int(i))
 
     def derive(self, i, n=None):

@@ -83,7 +83,8 @@ def _add_sweep_options(p):
     p.add_argument("--mode", choices=["grid", "lhs", "sobol"], default="grid",
                    help="grid: all 3^m combinations per rule; lhs/sobol: --samples per rule")
     p.add_argument("--samples", type=int, default=None, help="samples per rule for --mode lhs/sobol")
-    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--jobs", type=int, default=-1,
+                   help="worker processes (default -1: every core; 1 runs in this process)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                    help="run the sweep on a Dask cluster (needs ramure[dask])")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the sweep cache")
@@ -180,14 +181,74 @@ def run_metrics(args):
 
 
 # -- qualify ----------------------------------------------------------------------
+def run_qualify_list(args):
+    """``ramure qualify --list``: every qualifier, its French name and its metric direction."""
+    from ramure.metrics.qualifiers import vocabulary_table
+
+    table = vocabulary_table()
+    if args.json:
+        print(json.dumps(table))
+        return 0
+    for row in table:
+        anto = f" (opposite: {row['antonym']})" if row["antonym"] else ""
+        print(f"{row['name'] + '/' + row['french']:24s} {row['direction']:45s} {row['meaning']}{anto}")
+    return 0
+
+
+def run_qualify_matrix(args, ls, exp, regions):
+    """``ramure qualify --matrix FILE``: the qualifiers' collision matrix on this grammar."""
+    from ramure.metrics.qualifiers import matrix_table, vocabulary_regions
+
+    source = "study" if regions is not None else "vocabulary"
+    if regions is None:
+        regions = vocabulary_regions(exp.sweep, exp.points, trim=args.trim)
+    if args.json:
+        print(json.dumps({"grammar": exp.name, "source": source, "names": regions.names_,
+                          "collision_matrix": regions.collision_matrix_.round(4).tolist(),
+                          "mean_collision": round(regions.mean_collision(), 4)}))
+        return 0
+    print(f"collision matrix of {exp.name} ({source} regions; row A, column B: % of A's points "
+          "inside B's box)")
+    print(matrix_table(regions))
+    return 0
+
+
+def _describe(result):
+    """One human line per own metric, then the verdict."""
+    lines = []
+    for metric, v in result.own.items():
+        arrow = "up" if v["direction"] > 0 else "down"
+        lines.append(f"  {metric}: {v['before']:.4g} -> {v['after']:.4g} (wanted {arrow})")
+    verdict = "improved" if result.improved else "NOT improved"
+    if result.improved and not result.dominant:
+        verdict += f" (but {result.rival} moved more)"
+    head = (f"{result.qualifier}: variant {result.variant} {json.dumps(result.params)} ({result.source}); "
+            f"{verdict} after {result.tried} tr{'y' if result.tried == 1 else 'ies'}")
+    if result.climbed:
+        head += f"; climbed {result.climbed} level{'s' if result.climbed > 1 else ''} (min ascension " \
+                f"{result.min_ascend})"
+    out = [head, *lines]
+    if result.reason:
+        out.append(f"  why: {result.reason}")
+    if result.suggestion and not result.improved:
+        out.append(f"  try: {result.suggestion}")
+    return "\n".join(out)
+
+
 def run_qualify(args):
     from ramure.lsys.regen import Session
     from ramure.metrics.apply import apply_qualifier
     from ramure.metrics.exploration import explore
-    from ramure.metrics.qualifiers import vocabulary_name
+    from ramure.metrics.qualifiers import canonical_name, vocabulary_name
     from ramure.metrics.store import QualifierStore
 
+    if args.list:
+        return run_qualify_list(args)
     t0 = time.perf_counter()
+    if args.file is None:
+        raise RamureError("give a grammar FILE (or --list for the vocabulary)")
+    if args.qualifier is None and not args.matrix:
+        raise RamureError("give --qualifier NAME (see 'ramure qualify --list'), or --matrix")
     if args.tries < 1:
         raise RamureError(f"--tries must be at least 1, not {args.tries}")
     if not 0 <= args.trim < 1:
@@ -200,18 +261,24 @@ def run_qualify(args):
     if args.store:
         with QualifierStore(args.store) as store:
             regions = store.regions(name, source=args.source, trim=args.trim)
-    if regions is None or args.qualifier not in regions:
-        vocabulary_name(args.qualifier)  # refuse unknown names before the sweep
+    qualifier = None
+    if args.qualifier is not None:
+        qualifier = canonical_name(args.qualifier, args.lang)
+        if regions is None or qualifier not in regions:
+            vocabulary_name(args.qualifier, args.lang)  # refuse unknown names before the sweep
     progress, close = _progress_bar(not args.json or sys.stderr.isatty(), "variants")
     try:
         exp = explore(ls, progress=progress, **_sweep_kwargs(args))
     finally:
         close()
+    exp.name = name
+    if args.matrix:
+        return run_qualify_matrix(args, ls, exp, regions)
     session = Session(ls, n=args.n, seed=args.seed, filename=args.file)
     selection = _ids(args.select, "--select") if args.select else []
     _check_leaves(selection, session.tree.leaves)
     rho = args.rho / 100.0 if args.rho > 1 else args.rho
-    result = apply_qualifier(session, args.qualifier, exp.sweep, selection=selection, rho=rho,
+    result = apply_qualifier(session, qualifier, exp.sweep, selection=selection, rho=rho,
                              points=exp.points, regions=regions, tries=args.tries)
     if args.output:
         session.save(args.output)
@@ -222,10 +289,7 @@ def run_qualify(args):
     if args.json:
         print(json.dumps(record))
         return 0
-    d0, d1 = result.before.branch_density, result.after.branch_density
-    print(f"{result.qualifier}: variant {result.variant} {json.dumps(result.params)} ({result.source}); "
-          f"{'improved' if result.improved else 'NOT improved'} after {result.tried} tr"
-          f"{'y' if result.tried == 1 else 'ies'}; density {d0:.4g} -> {d1:.4g}")
+    print(_describe(result))
     if args.output:
         print(f"wrote {args.output}")
     return 0
@@ -255,15 +319,26 @@ def register(sub):
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=run_metrics)
 
-    p = sub.add_parser("qualify", help="regrow a selection (or the plant) toward a qualifier, e.g. dense")
+    p = sub.add_parser("qualify", help="regrow a selection (or the plant) toward a qualifier, e.g. dense; "
+                                       "--list the vocabulary, --matrix the collision matrix")
     add_grammar_options(p)
+    for action in p._actions:  # FILE is optional with --list
+        if action.dest == "file":
+            action.nargs = "?"
     _add_sweep_options(p)
-    p.add_argument("--qualifier", required=True,
-                   help="small/petit, large/grand, sparse/épars, dense, symmetric, asymmetric, realistic, "
-                        "unrealistic, fir-like/sapin, normal, thin/mince, thick/gros, round/rond")
+    p.add_argument("--qualifier", default=None,
+                   help="a qualifier in English or French, e.g. dense, tall/haut, upright/érigé "
+                        "(see --list)")
+    p.add_argument("--lang", choices=["en", "fr"], default=None,
+                   help="read --qualifier as French first ('large' = wide) or English ('large' = big)")
+    p.add_argument("--list", action="store_true",
+                   help="print every qualifier with its French name and metric direction, then exit")
+    p.add_argument("--matrix", action="store_true",
+                   help="print the qualifiers' collision matrix on FILE (study regions with --store, "
+                        "else the default vocabulary's)")
     p.add_argument("--select", default=None, metavar="LEAF_IDS", help="leaf ids (default: the whole plant)")
     p.add_argument("--rho", type=float, default=0.5, help="cut threshold in (0, 1] (or 0-100)")
-    p.add_argument("--tries", type=int, default=5, help="candidate combinations to try (default 5)")
+    p.add_argument("--tries", type=int, default=5, help="candidate combinations to try per level (default 5)")
     p.add_argument("--store", default=None, metavar="SQLITE", help="qualifier store with study regions")
     p.add_argument("--source", default="study:%", help="store rows to use (default 'study:%%')")
     p.add_argument("--trim", type=float, default=0.07, help="share of extreme points trimmed (default 0.07)")
