@@ -306,14 +306,17 @@ class ClickPicker:
         self.picker = vtk.vtkCellPicker()
         self.picker.SetTolerance(0.004)
         plotter.iren.add_observer("LeftButtonPressEvent", self._press)
+        # a desktop interactor reports the release; trame's remote view ends the gesture with
+        # EndInteractionEvent (no release event reaches the interactor): either one closes it
         plotter.iren.add_observer("LeftButtonReleaseEvent", self._release)
+        plotter.iren.add_observer("EndInteractionEvent", self._release)
 
-    def _press(self, interactor, _event):
-        self.down = interactor.GetEventPosition()
+    def _press(self, _caller, _event):
+        self.down = self.plotter.iren.interactor.GetEventPosition()
 
-    def _release(self, interactor, _event):
+    def _release(self, _caller, _event):  # the caller is the interactor or its style
         down, self.down = self.down, None
-        x, y = interactor.GetEventPosition()
+        x, y = self.plotter.iren.interactor.GetEventPosition()
         if down is None or max(abs(x - down[0]), abs(y - down[1])) > CLICK_PIXELS:
             return  # a drag: the interactor style rotated the view
         cell = self.pick(x, y)
@@ -382,7 +385,7 @@ class TrameView:
     (:mod:`ramure.app.jupyter.mainthread`)."""
 
     def __init__(self, owner, mode="trame"):
-        _headless_setup()
+        headless_setup()
         import pyvista as pv
 
         self.owner = owner

@@ -87,7 +87,7 @@ def test_trame_view_picks_in_a_kernel():
     nbformat = pytest.importorskip("nbformat")
     from jupyter_helpers import execute
 
-    code = f"""from app.jupyter import Explorer
+    code = f"""from ramure.app.jupyter import Explorer
 ex = Explorer({HONDA!r}, n=5)
 pl, sk = ex.view.trame.plotter, ex.skeleton
 k = int(np.argmax(sk.order))
