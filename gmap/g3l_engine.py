@@ -478,7 +478,7 @@ class G3LDerivation:
             w = walk[i, : length[i]:2]
             cid = self.corner[w]
             pc = corners[int(vols[i])]
-            pts = np.where(cid[:, None] >= 0, pc[np.maximum(cid, 0)], gm.points[w])
+            pts = np.where(cid[:, None] >= 0, pc[np.maximum(cid, 0)], gm.corners[w])
             centre = pts.mean(axis=0)
             newell = np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0)
             outward = centre - pc.mean(axis=0)
@@ -556,7 +556,7 @@ class G3LDerivation:
         lengths = np.array([len(c) for c in corners])
         offset = np.concatenate([[0], np.cumsum(lengths)[:-1]])
         flat = np.concatenate(corners)
-        pts = gm.points
+        pts = gm.corners
         manual = gm.volume_data["shape"][vol] < 0
         use = ok & ~manual
         pts[use] = flat[offset[vol[use]] + self.corner[use]]
@@ -564,11 +564,12 @@ class G3LDerivation:
 
     def check_topology(self):
         """Raise :class:`GMapError` unless valid, chi = 1 and boundary chi = 2."""
-        gm = self.gm
-        gm.check()
-        chi, bchi = gm.euler_characteristic(), gm.boundary().euler_characteristic()
-        if chi != 1 or bchi != 2:
-            raise GMapError(f"step {self.stage}: Euler characteristic {chi} (boundary {bchi}), expected 1 and 2")
+        from ramure.gmap.topology import assert_solid
+
+        try:
+            assert_solid(self.gm)
+        except GMapError as err:
+            raise GMapError(f"after step {self.stage}: {err}") from None
 
     def provenance(self, volume):
         """``[(rule name, step), ...]`` from ``volume`` back to the axiom."""

@@ -1,0 +1,244 @@
+"""``ramure wood``: grow volumetric wood (3G-map), cut it, print its facts, write a picture or a grid.
+
+Examples::
+
+    ramure wood --species pine --years 10 --json
+    ramure wood --years 12 --cut z=1.0 -o slice.png
+    ramure wood --years 12 --plank normal=x,offset=0.01,thickness=0.004 -o plank.png
+    ramure wood --grammar grammars/wood/trunk.g3l --years 4 -o trunk.vtu
+    ramure wood --from-plant grammars/abop_tree.lsys -n 6 --years 8 -o tree.glb
+
+JSON keys: species, years, seed, darts, volumes, tissues (volumes per tissue),
+rings and knots at the cut or plank (when one is asked for), chi, boundary_chi,
+valid, seconds (growth + checks), darts_per_second, output.
+"""
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import tempfile
+import time
+
+import numpy as np
+
+from ramure.app.cli import UserError
+
+SUFFIXES = (".vtu", ".png", ".glb")
+
+
+def write_atomic(path, writer):
+    """Call ``writer(tmp_path)`` on a temporary file next to ``path``, fsync it, rename it to ``path``."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        writer(tmp)
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        pathlib.Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def render_wood(grid, path, size=(900, 900), look=None, title=None, legend=None, background="white"):
+    """Render a wood grid (cell data ``rgb``) off-screen to PNG; ``look`` is the viewing direction."""
+    from ramure.app.render import headless_setup
+
+    headless_setup()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    plotter.set_background(background)
+    add_wood_actors(plotter, grid, legend)
+    b = np.asarray(grid.bounds, float).reshape(3, 2)
+    centre = b.mean(axis=1)
+    extent = float(np.max(b[:, 1] - b[:, 0])) or 1.0
+    d = np.array([0.6, -0.7, 0.5]) if look is None else np.asarray(look, float)
+    d = d / np.linalg.norm(d)
+    up = (0.0, 0.0, 1.0) if abs(d[2]) < 0.95 else (0.0, 1.0, 0.0)
+    plotter.camera_position = [tuple(centre + d * extent * 3.0), tuple(centre), up]
+    plotter.reset_camera(bounds=tuple(b.ravel()))
+    plotter.camera.zoom(1.15)
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
+
+
+def add_wood_actors(plotter, grid, legend=None, name="wood"):
+    """Add a wood grid to a plotter, coloured by its ``rgb`` cell data, with faint cell edges."""
+    surface = grid.extract_surface(algorithm="dataset_surface")
+    plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=False, name=name, smooth_shading=False,
+                     ambient=0.35, diffuse=0.75)
+    if legend:
+        plotter.add_legend([[label, color] for label, color in legend], bcolor=(0.9, 0.9, 0.9),
+                           face="rectangle", size=(0.22, 0.035 * len(legend) + 0.01), loc="lower right")
+    return surface
+
+
+def legend_for(species):
+    from ramure.gmap.wood import SPECIES
+
+    c = SPECIES[species]["colors"]
+    return [("pith", c["pith"]), ("heartwood", c["heartwood"][1]), ("sapwood", c["sapwood"][0]),
+            ("bark", c["bark"]), ("knot", c["knot"][1])]
+
+
+def parse_sets(pairs):
+    out = {}
+    for pair in pairs:
+        name, sep, value = pair.partition("=")
+        if not sep or not name.strip():
+            raise UserError(f"--set expects NAME=VALUE, got '{pair}'")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def grow_from_args(args):
+    """The grown model: a :class:`Wood` (species or plant) or a :class:`G3LDerivation` (grammar)."""
+    from ramure.gmap import wood as W
+
+    if args.grammar:
+        from ramure.gmap.g3l_engine import G3LSystem
+
+        if args.set:
+            raise UserError("--set changes species parameters; edit the grammar's #define lines instead")
+        system = G3LSystem.from_file(args.grammar)
+        return system.derive(2 * W._years(args.years), seed=args.seed, check_every_step=True), None
+    params = parse_sets(args.set)
+    if args.from_plant:
+        from ramure.lsys import LSystem
+
+        ls = LSystem.from_file(args.from_plant)
+        if args.n is not None and args.n < 0:
+            raise UserError(f"-n must be >= 0, not {args.n}")
+        d = ls.derive(n=args.n, seed=args.seed)
+        return W.from_skeleton(d.skeleton(), args.years, species=args.species, seed=args.seed,
+                               steps=d.n, check_every_step=True, **params), args.species
+    return W.grow_wood(args.species, args.years, seed=args.seed, check_every_step=True, **params), args.species
+
+
+def _grid(model, species):
+    from ramure.gmap import wood as W
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    if species is not None:
+        return W.to_grid(model)
+    grid = to_unstructured_grid(model.gm)
+    labels = np.asarray(model.gm.volume_data["label"])
+    palette = np.array([[214, 170, 110], [160, 105, 60], [110, 70, 40], [235, 210, 160], [90, 60, 35]], np.uint8)
+    codes = {lab: i for i, lab in enumerate(sorted(set(labels.tolist())))}
+    grid.cell_data["rgb"] = palette[np.array([codes[x] % len(palette) for x in labels], np.int64)]
+    for name in ("axis", "wood", "year"):
+        grid.cell_data[name] = np.full(grid.n_cells, -1)
+    return grid
+
+
+def run_wood(args):
+    from ramure.gmap import wood as W
+    from ramure.gmap.cut import parse_plane, plane_cut
+
+    if args.species not in W.SPECIES:
+        raise UserError(f"--species: unknown species '{args.species}'; choose one of {', '.join(W.SPECIES)}")
+    plane = parse_plane(args.cut) if args.cut else None
+    plank = W.parse_plank(args.plank) if args.plank else None
+    if plane and plank:
+        raise UserError("give --cut or --plank, not both")
+    out = None
+    if args.output:
+        out = pathlib.Path(args.output)
+        if out.suffix.lower() not in SUFFIXES or out.is_dir():
+            raise UserError(f"-o: write a .vtu grid, a .png picture or a .glb scene, not '{out.name}'")
+    t0 = time.perf_counter()
+    model, species = grow_from_args(args)
+    gm = model.gm
+    report = {"valid": gm.is_valid(), "chi": gm.euler_characteristic(),
+              "boundary_chi": gm.boundary().euler_characteristic()}
+    seconds = time.perf_counter() - t0
+    record = {"species": species, "grammar": args.grammar, "years": args.years, "seed": args.seed,
+              "darts": gm.n_darts, "volumes": gm.n_volumes}
+    if species is not None:
+        record["tissues"] = model.tissue_counts()
+    else:
+        labels = np.asarray(gm.volume_data["label"])
+        record["labels"] = {str(k): int((labels == k).sum()) for k in sorted(set(labels.tolist()))}
+    shown, look = None, None
+    if plane or plank or out is not None:
+        grid = _grid(model, species)
+        shown = grid
+        if plane:
+            normal, origin = plane
+            shown = plane_cut(grid, normal=normal, origin=origin)
+            if shown.n_cells == 0:
+                raise UserError(f"--cut {args.cut}: the plane leaves nothing of the wood")
+            look = np.asarray(normal) + np.array([0.25, -0.35, 0.0]) if abs(normal[2]) > 0.5 else normal
+        elif plank:
+            normal, offset, thickness = plank
+            shown = W.plank(grid, normal, offset, thickness)
+            look = -np.asarray(normal)
+        if (plane or plank) and species is not None:
+            record.update(W.cut_facts(shown))
+    record.update(report)
+    record["seconds"] = round(seconds, 6)
+    record["darts_per_second"] = round(gm.n_darts / max(seconds, 1e-9))
+    if out is not None:
+        if out.suffix.lower() == ".vtu":
+            write_atomic(out, lambda tmp: shown.save(tmp))
+        elif out.suffix.lower() == ".png":
+            from ramure.app.commands.plant import parse_size
+
+            size = parse_size(args.size)
+            title = f"{species or pathlib.Path(args.grammar).stem}, {args.years} years"
+            write_atomic(out, lambda tmp: render_wood(shown, tmp, size=size, look=look, title=title,
+                                                      legend=legend_for(species) if species else None))
+        else:
+            write_atomic(out, lambda tmp: export_glb(shown, tmp))
+        record["output"] = str(out)
+    if args.json:
+        print(json.dumps(record))
+    else:
+        tissues = ", ".join(f"{v} {k}" for k, v in record.get("tissues", {}).items() if v)
+        print(f"{record['darts']} darts, {record['volumes']} volumes ({tissues}); chi {record['chi']}, "
+              f"boundary chi {record['boundary_chi']}, {'valid' if record['valid'] else 'INVALID'}, "
+              f"{seconds:.2f} s" + (f"; wrote {out}" if out else ""))
+    return 0 if report["valid"] else 1
+
+
+def export_glb(grid, path):
+    """A binary glTF of the wood's surface, coloured per cell (VTK's glTF exporter)."""
+    from ramure.app.render import headless_setup
+
+    headless_setup()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True)
+    add_wood_actors(plotter, grid)
+    plotter.export_gltf(str(path))
+    plotter.close()
+    return path
+
+
+def register(sub):
+    p = sub.add_parser("wood", help="grow volumetric wood (rings, knots, bark); cut it; facts, PNG, VTU or GLB")
+    p.add_argument("--species", default="pine", help="species preset: pine or oak (default pine)")
+    p.add_argument("--years", type=int, default=10, help="years of growth (two half-year steps each)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (ring widths, branch sectors)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a species parameter, e.g. branches=5 or reaction=0.4 (repeatable)")
+    p.add_argument("--grammar", default=None, metavar="FILE.g3l",
+                   help="grow a 3Gmap L-system instead of the species model (2 steps per year)")
+    p.add_argument("--from-plant", default=None, metavar="FILE.lsys",
+                   help="wood of a derived plant: its trunk and first branches")
+    p.add_argument("-n", type=int, default=None, help="with --from-plant: derivation steps")
+    p.add_argument("--cut", default=None, metavar="AXIS=VALUE", help="keep what lies below the plane, e.g. z=1.0")
+    p.add_argument("--plank", default=None, metavar="normal=x,offset=O,thickness=T",
+                   help="a slab at distance O from the trunk axis, T thick")
+    p.add_argument("--size", default="900x900", help="PNG size WIDTHxHEIGHT")
+    p.add_argument("--json", action="store_true", help="print the facts as one JSON object")
+    p.add_argument("-o", "--output", default=None, help="write a .vtu grid, a .png picture or a .glb scene")
+    p.set_defaults(func=run_wood)

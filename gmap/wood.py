@@ -1,0 +1,836 @@
+"""Volumetric wood on the 3-G-map: pith, growth rings, bark, sapwood, heartwood and knots.
+
+After Guimberteau (2008), chapters 2-3, with the decisions of
+``shared/spec/wood-3gmap.md``.  Each axis (the trunk, and every branch) is a
+chain of pith prisms, one *level* per year of length growth, with a radial
+*stack* of cubes on each side face.  One step is a half-year (spring, then
+summer; spec decision 1); every stack gets one wood cell per step -- earlywood
+in spring, latewood in summer -- and one bark cell per spring, so a stack that
+has lived ``q`` half-years holds ``q`` wood cells and ``ceil(q/2)`` bark cells.
+New cells are added on the free outer face of each stack (the thesis's
+"add a volume on a face") and identified with their neighbours around the
+axis (C2 | C4) and along it (C1 | C3) through the edge they share.
+
+*Cambium (a choice; the thesis has no bark).*  Cells are added outside, but
+the cambium lies under the bark: after each step the roles are re-read from
+the inside of each stack -- the ``q`` inner cells are wood, the outer ones
+bark, the newest bark innermost -- so a cell made as bark becomes wood when
+the cambium passes it.  A cell keeps its topology; its role, width and
+colour follow its position.  Hence bark is always the outer layer (spec
+decision 7: one bark layer per year with its own thickness law), sapwood is
+the outer ``sapwood_rings`` rings, heartwood the rings inside once the tree is
+older than ``heartwood_age`` years (younger trees are all sapwood inside).
+
+*Widths.*  A wood cell's radial width is drawn in its law's bounds,
+``[lo, hi] x f(c) x reaction(phi)``: ``lo, hi`` per season, ``f(c) =
+max(floor, exp(-(c - 1) / decay))`` of the cambial ring number ``c`` (ring
+count from the pith; juvenile rings are wider) and ``reaction(phi) = 1 + r
+max(0, cos(phi - phi_r))``, thicker rings on one side (reaction wood).  The
+draw mixes a per-year value (a good year is wide all round) with a per-cell
+value, both seeded from the axis's seed and the cell's address, never from
+volume ids, so regrowing one branch with a new seed changes only its cells.
+
+*Embedding.*  Default corners are analytic: level frames along each axis,
+corner angles ``2 pi (k - 1/2) / n``, radial boundaries at the cumulative
+widths (apothems).  The kernel's :meth:`GMap3.embed` then averages the
+corners of the volumes around each vertex (spec decision 3).  Default
+corners depend only on attributes, so embedding every step or once gives the
+same positions.
+
+*Knots.*  A branch born in year ``j`` starts on the trunk's pith face of
+level ``j`` in sector ``k`` (the trunk grows no stack there, as in Table 3.4
+``A -> A[F]_E [B]_Ci [R1]_C*-i``): a square *joint* prism (the thesis's UJ)
+sewn to that face, then an axis of ``branch_sides``-prisms along the branch
+direction with its own stacks.  The branch base has ``Y - j`` years of rings
+around its pith.  The trunk's rings bend around the knot: trunk ring corners
+near the branch axis are pushed out of the branch's nominal cone, ``rho' =
+rho + R(s) exp(-rho / R(s))`` (``R`` from the law's mean widths, so it does not
+depend on the seed).  The thesis gets this bending from averaging over glued
+neighbours; here the branch sits in its slot without being sewn to the slot's
+walls (only the joint's base is sewn), which keeps the solid a ball.
+
+>>> w = grow_wood("pine", years=2, branches=0)
+>>> w.gm.n_darts == trunk_darts(16, 2), w.gm.euler_characteristic()
+(True, 1)
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ramure.gmap import prism as _prism
+from ramure.gmap.errors import GMapError, ValueRefused
+from ramure.gmap.g3l_engine import mix
+from ramure.gmap.map3 import GMap3
+
+#: Wood tissues (volume attribute ``wood``).
+TISSUES = ("pith", "heartwood", "sapwood", "bark", "knot")
+CODES = {name: i for i, name in enumerate(TISSUES)}
+EARLY, LATE = 0, 1
+
+#: Dart offsets of a fresh cube's side faces (forward dart at corner 0), see :mod:`ramure.gmap.prism`.
+_C1, _C2, _C3, _C4 = 16, 24, 32, 40
+
+#: Most darts a wood may have (about 450 bytes each).
+MAX_DARTS = 8_000_000
+
+_COMMON = dict(sides=16, branch_sides=8, branch_angle=60.0, branch_length=0.15, branch_scale=0.5,
+               branches=3, branch_start=1, reaction=0.0, reaction_angle=0.0, width_floor=0.35,
+               height_jitter=0.0)
+
+#: Species presets: geometry in metres, widths per half-year cell, colours as hex RGB.
+SPECIES = {
+    "pine": dict(_COMMON, pith_radius=0.003, height=0.5, early_min=0.0025, early_max=0.0045,
+                 late_min=0.0008, late_max=0.0018, decay=25.0, bark_min=0.0010, bark_max=0.0018,
+                 sapwood_rings=6, heartwood_age=8,
+                 colors=dict(pith="#5b3b22", heartwood=("#d7a467", "#a8662f"),
+                             sapwood=("#f3deb0", "#cf9d5c"), bark="#5a3b28", knot=("#8a5527", "#5b3314"))),
+    "oak": dict(_COMMON, pith_radius=0.0025, height=0.35, early_min=0.0008, early_max=0.0012,
+                late_min=0.0010, late_max=0.0028, decay=40.0, bark_min=0.0012, bark_max=0.0022,
+                sapwood_rings=10, heartwood_age=12, branch_angle=50.0,
+                colors=dict(pith="#4a3520", heartwood=("#b58a55", "#7f5630"),
+                            sapwood=("#ead6ad", "#c9a677"), bark="#4b4138", knot=("#6d4a2a", "#4a2f18"))),
+}
+
+#: Parameters a user may set (``--set name=value``) with their meaning.
+PARAMETERS = {
+    "sides": "faces of the trunk's pith prisms (>= 3)",
+    "branch_sides": "faces of a branch's pith prisms (>= 3)",
+    "pith_radius": "apothem of the pith (m)",
+    "height": "length growth of the trunk per year (m)",
+    "early_min": "earlywood width bounds at the pith (m)", "early_max": "",
+    "late_min": "latewood width bounds at the pith (m)", "late_max": "",
+    "decay": "rings for the width law to fall by e (juvenile wood is wider)",
+    "width_floor": "lowest factor of the width law",
+    "bark_min": "bark layer thickness bounds (m)", "bark_max": "",
+    "sapwood_rings": "rings of sapwood under the bark",
+    "heartwood_age": "age (years) after which inner rings are heartwood",
+    "branches": "number of branches (knots)",
+    "branch_start": "first year a branch may be born",
+    "branch_angle": "branch insertion angle from the trunk axis (degrees)",
+    "branch_length": "branch length growth per year (m)",
+    "branch_scale": "branch ring widths / trunk ring widths",
+    "reaction": "extra ring width on the reaction side (0 = none, 0.5 = +50 %)",
+    "reaction_angle": "direction of the reaction side (degrees about the axis)",
+    "height_jitter": "relative random variation of the yearly height growth",
+}
+
+
+def trunk_darts(sides: int, years: int) -> int:
+    """Darts of a branch-free trunk after ``years`` years (closed form).
+
+    Levels ``t = 0..Y-1`` (one pith ``sides``-prism each, ``12 sides`` darts);
+    level ``t`` has lived ``2 (Y - t)`` half-years, so each of its ``sides``
+    stacks holds ``2 (Y - t)`` wood cells and ``Y - t`` bark cells, cubes of 48
+    darts: ``darts = 12 s Y + 48 s * 3 * Y (Y + 1) / 2``.
+
+    >>> trunk_darts(16, 10)
+    128640
+    """
+    return 12 * sides * years + 48 * sides * 3 * years * (years + 1) // 2
+
+
+def trunk_volumes(sides: int, years: int) -> int:
+    """Volumes of a branch-free trunk: ``Y + 3 s Y (Y + 1) / 2``."""
+    return years + 3 * sides * years * (years + 1) // 2
+
+
+def resolve_params(species="pine", **params):
+    """Species preset values overridden by ``params`` (strings converted); checked."""
+    if species not in SPECIES:
+        raise ValueRefused(f"unknown species {species!r}; choose one of {', '.join(SPECIES)}")
+    out = dict(SPECIES[species])
+    for name, value in params.items():
+        if name not in PARAMETERS:
+            raise ValueRefused(f"unknown wood parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+        default = SPECIES[species][name]
+        try:
+            out[name] = int(float(value)) if isinstance(default, int) else float(value)
+        except (TypeError, ValueError):
+            raise ValueRefused(f"wood parameter {name}={value!r} is not a number") from None
+        if isinstance(default, int) and float(value) != int(float(value)):
+            raise ValueRefused(f"wood parameter {name} must be a whole number, got {value!r}")
+    _check(out)
+    return out
+
+
+def _check(p):
+    def need(cond, message):
+        if not cond:
+            raise ValueRefused(message)
+
+    for name in ("pith_radius", "height", "early_min", "early_max", "late_min", "late_max", "decay",
+                 "width_floor", "bark_min", "bark_max", "branch_length", "branch_scale", "reaction",
+                 "reaction_angle", "branch_angle", "height_jitter"):
+        need(math.isfinite(p[name]), f"{name} must be a finite number, got {p[name]}")
+    need(p["sides"] >= 3 and p["branch_sides"] >= 3,
+         f"prism order must be at least 3, got sides={p['sides']}, branch_sides={p['branch_sides']}")
+    for lo, hi in (("early_min", "early_max"), ("late_min", "late_max"), ("bark_min", "bark_max")):
+        need(p[lo] > 0 and p[hi] > 0, f"ring widths must be positive, got {lo}={p[lo]}, {hi}={p[hi]}")
+        need(p[lo] <= p[hi], f"{lo} must not exceed {hi}, got {p[lo]} > {p[hi]}")
+    for name in ("pith_radius", "height", "decay", "branch_length", "branch_scale"):
+        need(p[name] > 0, f"{name} must be > 0, got {p[name]}")
+    need(0 < p["width_floor"] <= 1, f"width_floor must be in (0, 1], got {p['width_floor']}")
+    need(p["reaction"] >= 0, f"reaction must be >= 0, got {p['reaction']}")
+    need(0 <= p["height_jitter"] < 1, f"height_jitter must be in [0, 1), got {p['height_jitter']}")
+    need(0 < p["branch_angle"] < 180, f"branch_angle must be in (0, 180) degrees, got {p['branch_angle']}")
+    need(p["branches"] >= 0 and p["sapwood_rings"] >= 0 and p["heartwood_age"] >= 0,
+         "branches, sapwood_rings and heartwood_age must be >= 0")
+
+
+def estimated_darts(p, years, n_branches=None):
+    """Darts the wood will have: the trunk's closed form plus each branch at its most."""
+    nb = p["branches"] if n_branches is None else n_branches
+    s, b = int(p["sides"]), int(p["branch_sides"])
+    branch = 48 + 12 * b * years + 48 * b * 3 * years * (years + 1) // 2
+    return trunk_darts(s, years) + nb * branch
+
+
+# ---------------------------------------------------------------------- geometry helpers
+def _u01(*key):
+    """A uniform number in [0, 1) from a key (no shared random stream)."""
+    return mix(*key) / float(1 << 63)
+
+
+def mix_array(*columns):
+    """:func:`mix` over integer arrays (broadcast), vectorised: the same values as ``mix``.
+
+    >>> int(mix_array(np.array([1]), 2)[0]) == mix(1, 2)
+    True
+    """
+    with np.errstate(over="ignore"):
+        h = np.full(np.broadcast(*[np.asarray(c) for c in columns]).shape, 0x9E3779B97F4A7C15, np.uint64)
+        for c in columns:
+            v = np.asarray(c).astype(np.int64).astype(np.uint64)
+            h = (h ^ v) * np.uint64(0xBF58476D1CE4E5B9)
+            h ^= h >> np.uint64(31)
+            h = h * np.uint64(0x94D049BB133111EB)
+            h ^= h >> np.uint64(29)
+    return (h & np.uint64((1 << 63) - 1)).astype(np.int64)
+
+
+def u01_array(*columns):
+    """Uniform numbers in [0, 1) from integer key arrays (vectorised :func:`_u01`)."""
+    return mix_array(*columns) / float(1 << 63)
+
+
+@dataclass
+class Branch:
+    """A branch: born in ``year`` on trunk level ``year``, sector ``sector`` (0-based)."""
+
+    year: int
+    sector: int
+    seed: int
+    direction: np.ndarray = None
+
+
+@dataclass
+class Axis:
+    """One pith chain with its stacks; ``levels[t]`` is the first dart of pith prism t."""
+
+    index: int
+    sides: int
+    born_step: int
+    seed: int
+    levels: list = field(default_factory=list)       # pith first darts
+    level_step: list = field(default_factory=list)   # step each level was made
+    stacks: dict = field(default_factory=dict)       # (t, k) -> list of cube first darts
+    missing: set = field(default_factory=set)        # (t, k) slots with no stack (knot holes)
+
+
+class Wood:
+    """A growing volumetric wood: ``gm`` is the :class:`GMap3`; ``step()`` adds a half-year."""
+
+    def __init__(self, params, seed=0, branches=None, species="pine", trunk_frames=None):
+        self.p = params
+        self.species = species
+        self.seed = int(seed)
+        self.steps = 0
+        self.gm = gm = GMap3()
+        for name, dtype in (("axis", np.int16), ("level", np.int16), ("sector", np.int16),
+                            ("cell", np.int16), ("wood", np.int8), ("season", np.int8), ("year", np.int16),
+                            ("ring", np.int16), ("width", np.float64), ("born", np.int16),
+                            ("rule", np.int8), ("key", np.int64)):
+            gm.add_volume_attribute(name, dtype, -1 if dtype is not np.float64 else 0.0)
+        self.corner = np.zeros(0, np.int16)
+        self.trunk = Axis(0, int(params["sides"]), 0, mix(self.seed, 0))
+        self.axes = [self.trunk]
+        self.branches = list(branches or [])
+        self.trunk_frames = trunk_frames
+        self.joint_of = {}
+
+    # ------------------------------------------------------------------ growth
+    @property
+    def year(self):
+        return self.steps // 2
+
+    def step(self):
+        """One half-year: length growth and new branches in spring, then one ring layer."""
+        spring = self.steps % 2 == 0
+        new_joints = []
+        if spring:
+            self._grow_length(self.trunk)
+            for b, br in enumerate(self.branches):
+                if br.year == self.year:
+                    new_joints.append(self._start_branch(b, br))
+                elif br.year < self.year:
+                    self._grow_length(self.axes[b + 1])
+        self._add_layer()
+        if spring:
+            self._add_layer()
+            for b, joint in new_joints:
+                br = self.branches[b]
+                face = self.gm.prism_face(self.trunk.levels[br.year], self.trunk.sides, f"C{br.sector + 1}")
+                self.gm.sew3([face], [self.gm.prism_face(joint, 4, "O")])
+        self.steps += 1
+        self._sync_corner()
+        self.assign_roles()
+
+    def _sync_corner(self):
+        grow = self.gm.n_darts - len(self.corner)
+        if grow > 0:
+            self.corner = np.concatenate([self.corner, np.full(grow, -1, np.int16)])
+
+    def _new(self, n, count, axis, rule, **values):
+        gm = self.gm
+        first = gm.add_prisms(n, count, axis=axis, born=self.steps, rule=rule, **values)
+        self._sync_corner()
+        t = _prism.template(n)
+        self.corner[first[:, None] + np.arange(t.size)[None, :]] = t.corner[None, :]
+        return first
+
+    def _grow_length(self, ax):
+        """A new pith prism on the free E face of the axis's top prism (none for the trunk's first)."""
+        t = len(ax.levels)
+        label = "P" if ax.index == 0 else "Q"
+        (first,) = self._new(ax.sides, 1, ax.index, 0, label=label, level=t, sector=-1, cell=0,
+                             wood=CODES["pith"] if ax.index == 0 else CODES["knot"],
+                             key=mix(ax.seed, 1, t))
+        if ax.levels:
+            gm = self.gm
+            gm.sew3([gm.prism_face(ax.levels[-1], ax.sides, "E")], [gm.prism_face(first, ax.sides, "O")])
+        ax.levels.append(int(first))
+        ax.level_step.append(self.steps)
+        for k in range(ax.sides):
+            if (t, k) not in ax.missing:
+                ax.stacks[(t, k)] = []
+
+    def _start_branch(self, b, br):
+        """The joint (a cube) and the first branch prism; the joint is sewn to the trunk later."""
+        self.trunk.missing.add((br.year, br.sector))
+        self.trunk.stacks.pop((br.year, br.sector), None)
+        ax = Axis(b + 1, int(self.p["branch_sides"]), self.steps, br.seed)
+        self.axes.append(ax)
+        (joint,) = self._new(4, 1, ax.index, 2, label="J", level=-1, sector=-1, cell=0, wood=CODES["knot"],
+                             key=mix(br.seed, 2))
+        self.joint_of[ax.index] = int(joint)
+        self._grow_length(ax)
+        gm = self.gm
+        gm.sew3([gm.prism_face(joint, 4, "E")], [gm.prism_face(ax.levels[0], ax.sides, "O")])
+        return b, int(joint)
+
+    def _add_layer(self):
+        """One new cube on the outside of every stack, then the joins around and along each axis."""
+        gm = self.gm
+        slots, supports = [], []
+        for ax in self.axes:                      # one step per stack, not per dart
+            for (t, k), cells in ax.stacks.items():
+                slots.append((ax, t, k, len(cells) + 1))
+                # fresh template darts keep their ids and labels: E of a cube is first + 8,
+                # C(k+1) of an n-prism first + 4n + 8k (forward dart at the face's corner 0)
+                supports.append(cells[-1] + 8 if cells else ax.levels[t] + 4 * ax.sides + 8 * k)
+        if not slots:
+            return
+        extra = 48 * len(slots)
+        if gm.n_darts + extra > MAX_DARTS:
+            raise ValueRefused(f"the wood would exceed {MAX_DARTS:,} darts")
+        keys = [mix(ax.seed, 3, t, k, i) for ax, t, k, i in slots]
+        first = self._new(4, len(slots), np.array([s[0].index for s in slots]), 1, label="W",
+                          level=[s[1] for s in slots], sector=[s[2] for s in slots],
+                          cell=[s[3] for s in slots], key=keys)
+        gm.sew3(np.array(supports), first)
+        for (ax, t, k, i), f in zip(slots, first.tolist()):
+            ax.stacks[(t, k)].append(f)
+        self._join(slots, first)
+
+    def _join(self, slots, first):
+        """Identify each new cube with its neighbours through the edges they share.
+
+        Around the axis: C2 of (t, k, i) with C4 of (t, k+1, i); along it: C1 of
+        (t, k, i) with C3 of (t-1, k, i).  The neighbours are found by the
+        stacks' bookkeeping (same pith edge, same layer), never by coordinates;
+        the two darts paired sit on the edge the faces share.
+        """
+        gm = self.gm
+        a, b = [], []
+        for (ax, t, k, i), f in zip(slots, first.tolist()):
+            right = ax.stacks.get((t, (k + 1) % ax.sides))
+            if right is not None and len(right) >= i and (right[i - 1] != f):
+                a.append(f + _C2)                  # C2 of this cube, dart 0 ...
+                b.append(right[i - 1] + _C4 + 1)   # ... meets C4 of the next, dart 1: same edge, same vertex
+            below = ax.stacks.get((t - 1, k))
+            if below is not None and len(below) >= i:
+                a.append(below[i - 1] + _C3)       # top of the cube below, dart 0
+                b.append(f + _C1 + 1)              # bottom of this one, dart 1
+        if a:
+            a, b = np.array(a), np.array(b)
+            fresh = gm.alpha[3][a] == a
+            gm.sew3(a[fresh], b[fresh])
+
+    # ------------------------------------------------------------------ roles
+    def assign_roles(self):
+        """Tissue, season, ring and width of every cell from its place in its stack (see module doc)."""
+        gm, p = self.gm, self.p
+        vd = gm.volume_data
+        cell = vd["cell"].astype(np.int64)
+        axis = vd["axis"].astype(np.int64)
+        level = vd["level"].astype(np.int64)
+        is_cell = cell > 0
+        born_level = np.full(gm.n_volumes, 0, np.int64)
+        for ax in self.axes:
+            steps = np.array(ax.level_step + [0], np.int64)
+            on = is_cell & (axis == ax.index)
+            born_level[on] = steps[level[on]]
+        q = self.steps - born_level                      # half-years the stack has lived
+        wood = is_cell & (cell <= q)
+        bark = is_cell & ~wood
+        season = np.where(wood, (cell - 1) % 2, -1)
+        ring = np.where(wood, (cell + 1) // 2, -1)
+        year = np.where(wood, born_level // 2 + (cell - 1) // 2, -1)
+        bark_layer = np.where(bark, (q + 1) // 2 - (cell - q) + 1, -1)   # 1 = oldest, outermost
+        year = np.where(bark, born_level // 2 + bark_layer - 1, year)
+        vd["season"][:] = season
+        vd["ring"][:] = ring
+        vd["year"][:] = np.where(is_cell, year, vd["year"])
+        width = self._widths(wood, bark, axis, level, vd["sector"].astype(np.int64), cell, ring, season,
+                             year, bark_layer)
+        vd["width"][:] = np.where(is_cell, width, 0.0)
+        tissue = vd["wood"]
+        y_now = self.year + (1 if self.steps % 2 else 0)      # years begun
+        from_bark = y_now - year
+        trunk = axis == 0
+        heart = trunk & wood & (from_bark > p["sapwood_rings"]) & (y_now > p["heartwood_age"])
+        tissue[trunk & wood] = CODES["sapwood"]
+        tissue[heart] = CODES["heartwood"]
+        tissue[bark] = CODES["bark"]
+        tissue[~trunk & wood] = CODES["knot"]
+        vd["label"][is_cell] = np.where(bark[is_cell], "K", np.where(season[is_cell] == EARLY, "R", "S"))
+
+    def law(self, ring, season, sector_angle=None, axis=0):
+        """Bounds ``(lo, hi)`` of the width law for cambial ring numbers ``ring`` (arrays)."""
+        p = self.p
+        ring = np.asarray(ring, float)
+        f = np.maximum(p["width_floor"], np.exp(-(ring - 1) / p["decay"]))
+        early = np.asarray(season) == EARLY
+        lo = np.where(early, p["early_min"], p["late_min"]) * f
+        hi = np.where(early, p["early_max"], p["late_max"]) * f
+        scale = np.where(np.asarray(axis) == 0, 1.0, p["branch_scale"])
+        if sector_angle is not None:
+            scale = scale * (1.0 + p["reaction"] * np.maximum(0.0, np.cos(
+                np.asarray(sector_angle) - math.radians(p["reaction_angle"]))) * (np.asarray(axis) == 0))
+        return lo * scale, hi * scale
+
+    def _widths(self, wood, bark, axis, level, sector, cell, ring, season, year, bark_layer):
+        p = self.p
+        seeds = np.array([ax.seed for ax in self.axes], np.int64)[np.maximum(axis, 0)]
+        n = np.where(axis == 0, self.trunk.sides, int(p["branch_sides"]))
+        angle = 2 * np.pi * sector / n
+        lo, hi = self.law(np.maximum(ring, 1), np.maximum(season, 0), angle, axis)
+        u_wood = 0.6 * u01_array(seeds, 5, year, season) + 0.4 * u01_array(seeds, 6, level, sector, cell)
+        u_bark = u01_array(seeds, 7, level, sector, bark_layer)
+        bark_scale = np.where(axis == 0, 1.0, p["branch_scale"])
+        w_bark = bark_scale * (p["bark_min"] + (p["bark_max"] - p["bark_min"]) * u_bark)
+        return np.where(wood, lo + (hi - lo) * u_wood, np.where(bark, w_bark, 0.0))
+
+    # ------------------------------------------------------------------ embedding
+    def level_frames(self, ax):
+        """``(origins, frames, heights)`` of the axis's levels (rows H, L, U)."""
+        p = self.p
+        n_levels = len(ax.levels)
+        if ax.index == 0:
+            if self.trunk_frames is not None:
+                o, f, h = self.trunk_frames
+                return o[:n_levels], f[:n_levels], h[:n_levels]
+            jit = p["height_jitter"]
+            h = np.array([p["height"] * (1 + jit * (2 * _u01(ax.seed, 8, t) - 1)) for t in range(n_levels)])
+            o = np.zeros((n_levels, 3))
+            o[:, 2] = np.concatenate([[0.0], np.cumsum(h)[:-1]])
+            f = np.repeat(np.eye(3)[[2, 0, 1]][None], n_levels, axis=0)
+            return o, f, h
+        br = self.branches[ax.index - 1]
+        p0, frame = self.branch_frame(br)
+        joint = 2 * p["pith_radius"]
+        h = np.full(n_levels, p["branch_length"])
+        s = joint + np.concatenate([[0.0], np.cumsum(h)[:-1]])
+        return p0[None] + s[:, None] * frame[0][None], np.repeat(frame[None], n_levels, axis=0), h
+
+    def branch_frame(self, br):
+        """Base point (centre of the trunk face) and frame (H along the branch) of a branch."""
+        p = self.p
+        o, f, h = self.level_frames(self.trunk)
+        n = self.trunk.sides
+        phi = 2 * np.pi * br.sector / n
+        t = br.year
+        radial = math.cos(phi) * f[t, 1] + math.sin(phi) * f[t, 2]
+        p0 = o[t] + 0.5 * h[t] * f[t, 0] + p["pith_radius"] * radial
+        elev = math.radians(90.0 - p["branch_angle"])
+        d = math.cos(elev) * radial + math.sin(elev) * f[t, 0]
+        d = d / np.linalg.norm(d)
+        # corner 0 of the trunk face (bottom, angle phi - pi/n) gives the frame's turn
+        c0 = o[t] + p["pith_radius"] / math.cos(math.pi / n) * (
+            math.cos(phi - math.pi / n) * f[t, 1] + math.sin(phi - math.pi / n) * f[t, 2])
+        u0 = c0 - p0
+        u0 -= (u0 @ d) * d
+        u0 /= np.linalg.norm(u0)
+        m = int(p["branch_sides"])
+        left = math.cos(math.pi / m) * u0 + math.sin(math.pi / m) * np.cross(d, u0)
+        return p0, np.stack([d, left, np.cross(d, left)])
+
+    def default_corners(self):
+        """Default corners of every volume, flat: ``(points (sum 2n, 3), offset per volume)``."""
+        gm = self.gm
+        vd = gm.volume_data
+        n_corners = 2 * vd["degree"].astype(np.int64)
+        offset = np.concatenate([[0], np.cumsum(n_corners)[:-1]])
+        flat = np.zeros((int(n_corners.sum()), 3))
+        radii = self._radii()
+        for ax in self.axes:                      # one step per axis, not per volume
+            o, f, h = self.level_frames(ax)
+            rp = self.p["pith_radius"] * (1.0 if ax.index == 0 else self.p["branch_scale"])
+            n = ax.sides
+            theta = 2 * np.pi * (np.arange(n + 1) - 0.5) / n
+            pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
+            for t, vol in enumerate(pith.tolist()):
+                flat[offset[vol]:offset[vol] + 2 * n] = self._ring_points(o[t], f[t], h[t], theta[:n],
+                                                                          np.full(n, rp), np.full(n, rp), n)
+            cells = np.flatnonzero((vd["axis"] == ax.index) & (vd["cell"] > 0))
+            if not cells.size:
+                continue
+            t, k = vd["level"][cells].astype(int), vd["sector"][cells].astype(int)
+            r_in, r_out = radii[cells] - vd["width"][cells], radii[cells]
+            pts = self._cube_points(o[t], f[t], h[t], theta[k], theta[k + 1], r_in, r_out, n)
+            if ax.index == 0 and len(self.axes) > 1:
+                pts = self._push(pts)
+            flat[offset[cells][:, None] + np.arange(8)[None, :]] = pts
+        for ax_index, joint in self.joint_of.items():
+            vol = int(gm.dart_volume[joint])
+            flat[offset[vol]:offset[vol] + 8] = self._joint_points(self.branches[ax_index - 1])
+        return flat, offset
+
+    def _radii(self):
+        """Outer apothem of every cell: pith radius plus the widths of its stack up to it."""
+        vd = self.gm.volume_data
+        cell = vd["cell"].astype(np.int64)
+        is_cell = cell > 0
+        key = (vd["axis"].astype(np.int64) * 4096 + vd["level"]) * 4096 + vd["sector"]
+        order = np.lexsort((cell, key))
+        order = order[is_cell[order]]
+        w = vd["width"][order]
+        k = key[order]
+        csum = np.cumsum(w)
+        start = np.ones(len(k), bool)
+        start[1:] = k[1:] != k[:-1]
+        base = np.maximum.accumulate(np.where(start, np.arange(len(k)), 0))
+        offset = csum - np.concatenate([[0.0], csum])[base]
+        out = np.zeros(len(cell))
+        rp = np.where(vd["axis"] == 0, self.p["pith_radius"], self.p["pith_radius"] * self.p["branch_scale"])
+        out[order] = rp[order] + offset
+        return out
+
+    @staticmethod
+    def _ring_points(o, f, h, theta, r_bottom, r_top, n):
+        c = 1.0 / math.cos(math.pi / n)
+        radial = np.cos(theta)[:, None] * f[1][None] + np.sin(theta)[:, None] * f[2][None]
+        bottom = o[None] + (c * r_bottom)[:, None] * radial
+        return np.concatenate([bottom, bottom + h * f[0][None]])
+
+    @staticmethod
+    def _cube_points(o, f, h, th0, th1, r_in, r_out, n):
+        """Corners (m, 8, 3) of cubes: base 0..3 = (bottom th0, bottom th1, top th1, top th0) at r_in."""
+        c = 1.0 / math.cos(math.pi / n)
+        def rad(th):
+            return np.cos(th)[:, None] * f[:, 1] + np.sin(th)[:, None] * f[:, 2]
+        up = h[:, None] * f[:, 0]
+        r0, r1 = rad(th0), rad(th1)
+        out = np.empty((len(o), 8, 3))
+        for base, r in ((0, r_in), (4, r_out)):
+            rr = (c * r)[:, None]
+            out[:, base + 0] = o + rr * r0
+            out[:, base + 1] = o + rr * r1
+            out[:, base + 2] = o + up + rr * r1
+            out[:, base + 3] = o + up + rr * r0
+        return out
+
+    def _joint_points(self, br):
+        o, f, h = self.level_frames(self.trunk)
+        n = self.trunk.sides
+        theta = 2 * np.pi * (np.arange(n + 1) - 0.5) / n
+        t, k = br.year, br.sector
+        face = self._cube_points(o[t:t + 1], f[t:t + 1], h[t:t + 1], theta[k:k + 1], theta[k + 1:k + 2],
+                                 np.array([self.p["pith_radius"]]), np.array([self.p["pith_radius"]]), n)[0, :4]
+        _, frame = self.branch_frame(br)
+        return np.concatenate([face, face + 2 * self.p["pith_radius"] * frame[0][None]])
+
+    def nominal_radius(self, br, s):
+        """The branch's outer radius at distance ``s`` along it, from the law's mean widths."""
+        p = self.p
+        years_here = np.clip(self.year + 1 - br.year - np.floor(np.maximum(s - 2 * p["pith_radius"], 0)
+                                                                  / p["branch_length"]), 0, None)
+        rings = np.arange(1, max(int(years_here.max(initial=0)), 0) + 1)
+        lo_e, hi_e = self.law(rings, np.zeros_like(rings), None, 1)
+        lo_l, hi_l = self.law(rings, np.ones_like(rings), None, 1)
+        per_year = 0.5 * (lo_e + hi_e + lo_l + hi_l)
+        cum = np.concatenate([[0.0], np.cumsum(per_year)])
+        bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"]) * years_here
+        return p["pith_radius"] * p["branch_scale"] + cum[years_here.astype(int)] + bark
+
+    def _push(self, pts):
+        """Push trunk cell corners out of each branch's nominal cone (knots bend the rings)."""
+        flat = pts.reshape(-1, 3).copy()
+        for br in self.branches:
+            if br.year > self.year or br.year >= len(self.trunk.levels):
+                continue
+            p0, frame = self.branch_frame(br)
+            d = frame[0]
+            rel = flat - p0
+            s = rel @ d
+            w = rel - s[:, None] * d
+            rho = np.linalg.norm(w, axis=1)
+            near = (s > 0) & (rho < 6 * self.nominal_radius(br, np.zeros(1))[0])
+            if not near.any():
+                continue
+            radius = self.nominal_radius(br, s[near])
+            fade = np.clip(s[near] / (4 * self.p["pith_radius"]), 0, 1)
+            r = radius * fade
+            new_rho = rho[near] + r * np.exp(-rho[near] / np.maximum(r, 1e-12))
+            direction = w[near] / np.maximum(rho[near], 1e-12)[:, None]
+            flat[near] = p0 + s[near][:, None] * d + new_rho[:, None] * direction
+        return flat.reshape(pts.shape)
+
+    def embed(self):
+        """Default corners on every dart (``gm.corners``), then the kernel's per-vertex average."""
+        gm = self.gm
+        self._sync_corner()
+        flat, offset = self.default_corners()
+        vol = gm.dart_volume
+        corners = gm.corners
+        ok = self.corner >= 0
+        corners[ok] = flat[offset[vol[ok]] + self.corner[ok]]
+        split = np.flatnonzero(~ok)                # darts made by edge splits: edge midpoints
+        if split.size:
+            a0, a1 = gm.alpha[0], gm.alpha[1]
+            corners[split] = 0.5 * (corners[a0[split]] + corners[a0[a1[split]]])
+        return gm.embed()
+
+    # ------------------------------------------------------------------ facts
+    def check_topology(self):
+        """Raise :class:`GMapError` unless valid, chi = 1 and boundary chi = 2."""
+        from ramure.gmap.topology import assert_solid
+
+        try:
+            assert_solid(self.gm)
+        except GMapError as err:
+            raise GMapError(f"after step {self.steps}: {err}") from None
+
+    def tissue_counts(self):
+        """Volumes per wood tissue (all names present)."""
+        counts = np.bincount(self.gm.volume_data["wood"].astype(np.int64), minlength=len(TISSUES))
+        return {name: int(counts[i]) for i, name in enumerate(TISSUES)}
+
+    def branch_volumes(self, b):
+        """Volume ids of branch ``b`` (0-based): its joint, pith prisms and cells."""
+        return np.flatnonzero(self.gm.volume_data["axis"] == b + 1)
+
+
+def place_branches(p, years, seed, count=None):
+    """Branches for a trunk: birth years spread over ``branch_start..years-1``, sectors by 137.5 degrees.
+
+    The sector is the golden-angle divergence quantised onto the trunk's
+    faces, turned by a seeded offset; a branch is never born in its
+    trunk's last year (it would have no rings yet).
+    """
+    count = int(p["branches"] if count is None else count)
+    first = int(p["branch_start"])
+    span = years - 1 - first
+    if count <= 0 or span < 0:
+        return []
+    n = int(p["sides"])
+    turn = int(mix(seed, 11) % n)
+    out = []
+    for i in range(count):
+        year = first + (i * (span + 1)) // count if count > span + 1 else first + round(i * span / max(count - 1, 1))
+        sector = (turn + int(round(i * n * 137.5 / 360.0))) % n
+        out.append(Branch(int(min(year, years - 1)), sector, mix(seed, 1000 + i)))
+    return out
+
+
+def grow_wood(species="pine", years=10, seed=0, branches=None, check_every_step=False, embed_every_step=False,
+              branch_seeds=None, **params) -> Wood:
+    """Grow ``years`` years (``2 * years`` half-year steps) of wood; returns the :class:`Wood`.
+
+    ``branches``: a number (placed by :func:`place_branches`; default the
+    species' ``branches``) or a list of ``(year, sector)`` pairs.
+    ``branch_seeds`` maps a branch index to its seed (regrowth).
+    """
+    if branches is not None and not isinstance(branches, (int, np.integer)):
+        params = dict(params)
+    p = resolve_params(species, **params)
+    years = _years(years)
+    if isinstance(branches, (int, np.integer)) or branches is None:
+        placed = place_branches(p, years, seed, branches)
+    else:
+        placed = []
+        for i, (year, sector) in enumerate(branches):
+            if not 0 <= int(year) < years or not 0 <= int(sector) < p["sides"]:
+                raise ValueRefused(f"branch {i}: year must be in 0..{years - 1} and sector in "
+                                   f"0..{p['sides'] - 1}, got ({year}, {sector})")
+            placed.append(Branch(int(year), int(sector), mix(seed, 1000 + i)))
+    slots = [(b.year, b.sector) for b in placed]
+    if len(set(slots)) != len(slots):
+        raise ValueRefused("two branches share one trunk face (same year and sector)")
+    for i, s in (branch_seeds or {}).items():
+        placed[int(i)].seed = mix(int(s), 1000 + int(i))
+    est = estimated_darts(p, years, len(placed))
+    if est > MAX_DARTS:
+        raise ValueRefused(f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}; "
+                           f"grow fewer years or branches")
+    t0 = time.perf_counter()
+    wood = Wood(p, seed, placed, species)
+    for _ in range(2 * years):
+        wood.step()
+        if embed_every_step:
+            wood.embed()
+        if check_every_step:
+            wood.check_topology()
+    wood.embed()
+    wood.seconds = time.perf_counter() - t0
+    wood.gm.meta = {"species": species, "years": years, "seed": int(seed), "params": {
+        k: v for k, v in p.items() if k != "colors"}, "branches": slots}
+    return wood
+
+
+def _years(years):
+    try:
+        y = int(years)
+    except (TypeError, ValueError):
+        raise ValueRefused(f"years must be a whole number, got {years!r}") from None
+    if y != years or y <= 0:
+        raise ValueRefused(f"years must be a whole number >= 1, got {years}")
+    return y
+
+
+def regrow_branch(wood: Wood, b: int, seed: int) -> Wood:
+    """The same wood with branch ``b`` grown from a new seed (every other cell keeps its draws)."""
+    if not 0 <= b < len(wood.branches):
+        raise ValueRefused(f"branch index must be in 0..{len(wood.branches) - 1}, got {b}")
+    slots = [(br.year, br.sector) for br in wood.branches]
+    seeds = {i: None for i in range(len(slots))}
+    new = Wood(wood.p, wood.seed, [Branch(y, s, br.seed) for (y, s), br in zip(slots, wood.branches)],
+               wood.species, wood.trunk_frames)
+    new.branches[b].seed = mix(int(seed), 1000 + b)
+    del seeds
+    for _ in range(wood.steps):
+        new.step()
+    new.embed()
+    new.gm.meta = dict(wood.gm.meta)
+    return new
+
+
+# ---------------------------------------------------------------------- colours, grids, cuts
+def _hex(c):
+    return [int(c[i:i + 2], 16) for i in (1, 3, 5)]
+
+
+def cell_colors(volume_data, species="pine"):
+    """uint8 RGB per volume from its wood tissue and season (the species' colours)."""
+    colors = SPECIES[species]["colors"]
+    tissue = np.asarray(volume_data["wood"]).astype(np.int64)
+    season = np.asarray(volume_data["season"]).astype(np.int64)
+    out = np.zeros((len(tissue), 3), np.uint8)
+    for code, name in enumerate(TISSUES):
+        value = colors[name]
+        pair = value if isinstance(value, tuple) else (value, value)
+        for s in (EARLY, LATE):
+            out[(tissue == code) & (np.maximum(season, 0) == s)] = _hex(pair[s])
+    return out
+
+
+def to_grid(wood: Wood):
+    """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data."""
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    grid = to_unstructured_grid(wood.gm)
+    grid.cell_data["rgb"] = cell_colors(wood.gm.volume_data, wood.species)
+    return grid
+
+
+def parse_plank(text):
+    """``"normal=x,offset=0.3,thickness=0.02"`` -> (normal 3-vector, offset, thickness)."""
+    from ramure.gmap.cut import _AXES
+
+    values = {}
+    for part in str(text).split(","):
+        name, sep, value = part.partition("=")
+        name = name.strip().lower()
+        if not sep or name not in ("normal", "offset", "thickness"):
+            raise ValueRefused(f"--plank expects normal=AXIS,offset=NUMBER,thickness=NUMBER, got {text!r}")
+        values[name] = value.strip()
+    normal = values.get("normal", "x").lower()
+    if normal in _AXES:
+        n = np.array(_AXES[normal])
+    else:
+        try:
+            n = np.array([float(v) for v in normal.split(":")])
+        except ValueError:
+            raise ValueRefused(f"plank normal must be x, y, z or X:Y:Z, got {normal!r}") from None
+        if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.linalg.norm(n) > 0:
+            raise ValueRefused(f"plank normal must be a non-zero finite 3-vector, got {normal!r}")
+    try:
+        offset, thickness = float(values.get("offset", 0.0)), float(values.get("thickness", 0.02))
+    except ValueError:
+        raise ValueRefused(f"plank offset and thickness must be numbers, got {text!r}") from None
+    if not (math.isfinite(offset) and math.isfinite(thickness)) or thickness <= 0:
+        raise ValueRefused(f"plank thickness must be a positive finite number and offset finite, got {text!r}")
+    return n / np.linalg.norm(n), offset, thickness
+
+
+def plank(grid, normal, offset, thickness):
+    """The slab ``offset <= n . (x - axis) <= offset + thickness`` of a wood grid (VTK clips).
+
+    ``offset`` is measured from the trunk's axis (the line x = y = 0); an
+    empty slab raises :class:`ValueRefused` naming the model's extent.
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    lower = grid.clip(normal=tuple(-n), origin=tuple(offset * n), invert=True)
+    slab = lower.clip(normal=tuple(n), origin=tuple((offset + thickness) * n), invert=True) if lower.n_cells \
+        else lower
+    if slab.n_cells == 0:
+        pts = np.asarray(grid.points)
+        reach = float(np.max(pts @ n)) if len(pts) else 0.0
+        raise ValueRefused(f"the plank at offset {offset:g} misses the wood (it reaches {reach:.4g} along the "
+                           f"normal)")
+    return slab
+
+
+def cut_facts(grid):
+    """``{"rings": ..., "knots": ...}`` of a cut or plank: distinct trunk ring years, branch regions."""
+    axis = np.asarray(grid.cell_data["axis"])
+    tissue = np.asarray(grid.cell_data["wood"])
+    year = np.asarray(grid.cell_data["year"])
+    trunk_wood = (axis == 0) & np.isin(tissue, [CODES["sapwood"], CODES["heartwood"]])
+    rings = int(len(np.unique(year[trunk_wood])))
+    return {"rings": rings, "knots": knot_regions(grid)}
+
+
+def knot_regions(grid):
+    """Number of connected regions of branch cells (``axis >= 1``) in a grid."""
+    ids = np.flatnonzero(np.asarray(grid.cell_data["axis"]) >= 1)
+    if not ids.size:
+        return 0
+    part = grid.extract_cells(ids)
+    conn = part.connectivity()
+    return int(len(np.unique(conn.cell_data["RegionId"])))
