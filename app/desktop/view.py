@@ -25,6 +25,7 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
+from ramure.app.desktop.lod import MotionLevelOfDetail
 from ramure.app.desktop.state import points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
 from ramure.app.render import frame_camera
@@ -59,6 +60,8 @@ class _MouseFilter(QObject):
             band = button == Qt.MouseButton.RightButton or (
                 button == Qt.MouseButton.LeftButton and view.rectangle_mode)
             self.press = (pos, button, band)
+            if not band:
+                view.lod.start()  # large plants: lines while the camera moves
             if band:
                 view.band.setGeometry(QRect(pos, QSize()))
                 view.band.show()
@@ -79,6 +82,8 @@ class _MouseFilter(QObject):
                 elif button == Qt.MouseButton.LeftButton:
                     view.click_from_widget(pos, selection_mode(event.modifiers()))
                 return True
+            view.lod.stop()
+            view.redraw()
             if button == Qt.MouseButton.LeftButton and not moved:
                 view.click_from_widget(pos, selection_mode(event.modifiers()))
             return False
@@ -121,6 +126,7 @@ class PlantView(QWidget):
         self.fruit = None
         self.fruit_actor = None
         self.hide_fruit_spheres = False  # True while volumetric fruit replace the spheres
+        self.lod = MotionLevelOfDetail(self.plotter)
         self._diag = None
 
     # -- drawing ---------------------------------------------------------------
@@ -131,6 +137,7 @@ class PlantView(QWidget):
         if mesh.n_cells == 0:
             self.plotter.remove_actor("plant", render=False)
             self.mesh, self.actor = None, None
+            self.lod.show(None, None, None, None)
             self.redraw()
             return
         mesh.cell_data["rgb"] = colors
@@ -146,6 +153,7 @@ class PlantView(QWidget):
             self.actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, name="plant", reset_camera=False,
                                                smooth_shading=False, show_scalar_bar=False, render=False,
                                                pickable=True)
+        self.lod.show(self.actor, snap.skeleton, self.mesh, colors)
         self.picker = None
         diag = float(np.linalg.norm(np.subtract(*np.reshape(mesh.bounds, (3, 2)).T)))
         if reset_camera is None:
@@ -168,6 +176,7 @@ class PlantView(QWidget):
             return
         self.mesh.cell_data["rgb"][:] = colors
         self.mesh.Modified()
+        self.lod.set_colors(colors)
         self.redraw()
 
     def set_box(self, lines):
