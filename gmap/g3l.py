@@ -267,6 +267,8 @@ class _Parser:
         rest = s[m.end():].strip()
         if not rest:
             return Call(sym, [], col)
+        if rest.startswith("(") and _matching(rest, 0, "(", ")") < 0:
+            self.fail("this '(' is not closed", no, col + s.index("("))
         if not rest.startswith("(") or not rest.endswith(")"):
             self.fail(f"unexpected text after {sym!r}", no, col + m.end())
         inner = rest[1:-1]

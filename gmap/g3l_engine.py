@@ -326,17 +326,20 @@ class G3LDerivation:
     def _pick(self, group, v, env):
         rules = [r for r in self.grammar.rules if r.group == group]
         u = self._rng(v, 1000 + group).random()
-        total = 0.0
+        probs = []
         for r in rules:
             prob = float(self._eval(r.probability, env))
             if not 0 <= prob <= 1:
                 raise self._error(f"a probability must be in [0, 1], got {prob}", r.probability)
+            probs.append(prob)
+        if sum(probs) > 1 + 1e-9:
+            raise self._error(f"probabilities of the rules for {rules[0].pred} add up to {sum(probs):g} > 1",
+                              rules[0].probability)
+        total = 0.0
+        for r, prob in zip(rules, probs):
             total += prob
             if u < total:
                 return r.index
-        if total > 1 + 1e-9:
-            raise self._error(f"probabilities of the rules for {rules[0].pred} add up to {total:g} > 1",
-                              rules[0].probability)
         return -1
 
     def _context_ok(self, rule, v):
