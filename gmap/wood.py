@@ -235,6 +235,7 @@ class Axis:
     sides: int
     born_step: int
     seed: int
+    address: int = 0                                 # seed-free address for volume keys
     levels: list = field(default_factory=list)       # pith first darts
     level_step: list = field(default_factory=list)   # step each level was made
     stacks: dict = field(default_factory=dict)       # (t, k) -> list of cube first darts
@@ -256,7 +257,7 @@ class Wood:
                             ("rule", np.int8), ("key", np.int64)):
             gm.add_volume_attribute(name, dtype, -1 if dtype is not np.float64 else 0.0)
         self.corner = np.zeros(0, np.int16)
-        self.trunk = Axis(0, int(params["sides"]), 0, mix(self.seed, 0))
+        self.trunk = Axis(0, int(params["sides"]), 0, mix(self.seed, 0), address=mix(0))
         self.axes = [self.trunk]
         self.branches = list(branches or [])
         self.trunk_frames = trunk_frames
@@ -308,7 +309,7 @@ class Wood:
         label = "P" if ax.index == 0 else "Q"
         (first,) = self._new(ax.sides, 1, ax.index, 0, label=label, level=t, sector=-1, cell=0,
                              wood=CODES["pith"] if ax.index == 0 else CODES["knot"],
-                             key=mix(ax.seed, 1, t))
+                             key=mix(ax.address, 1, t))
         if ax.levels:
             gm = self.gm
             gm.sew3([gm.prism_face(ax.levels[-1], ax.sides, "E")], [gm.prism_face(first, ax.sides, "O")])
@@ -322,10 +323,10 @@ class Wood:
         """The joint (a cube) and the first branch prism; the joint is sewn to the trunk later."""
         self.trunk.missing.add((br.year, br.sector))
         self.trunk.stacks.pop((br.year, br.sector), None)
-        ax = Axis(b + 1, int(self.p["branch_sides"]), self.steps, br.seed)
+        ax = Axis(b + 1, int(self.p["branch_sides"]), self.steps, br.seed, address=mix(1000 + b))
         self.axes.append(ax)
         (joint,) = self._new(4, 1, ax.index, 2, label="J", level=-1, sector=-1, cell=0, wood=CODES["knot"],
-                             key=mix(br.seed, 2))
+                             key=mix(ax.address, 2))
         self.joint_of[ax.index] = int(joint)
         self._grow_length(ax)
         gm = self.gm
@@ -347,7 +348,7 @@ class Wood:
         extra = 48 * len(slots)
         if gm.n_darts + extra > MAX_DARTS:
             raise ValueRefused(f"the wood would exceed {MAX_DARTS:,} darts")
-        keys = [mix(ax.seed, 3, t, k, i) for ax, t, k, i in slots]
+        keys = [mix(ax.address, 3, t, k, i) for ax, t, k, i in slots]
         first = self._new(4, len(slots), np.array([s[0].index for s in slots]), 1, label="W",
                           level=[s[1] for s in slots], sector=[s[2] for s in slots],
                           cell=[s[3] for s in slots], key=keys)

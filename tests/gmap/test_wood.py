@@ -1,0 +1,213 @@
+"""Volumetric wood: counts in closed form, rings, bark, sapwood, knots, seeds and refusals."""
+import numpy as np
+import pytest
+
+from ramure.gmap import wood as W
+from ramure.gmap.errors import ValueRefused
+from ramure.gmap.topology import assert_solid
+
+
+@pytest.fixture(scope="module")
+def trunk6():
+    return W.grow_wood("pine", years=6, branches=0)
+
+
+@pytest.fixture(scope="module")
+def knotty():
+    # three branches facing +x (sectors 0, 1 and 15 of 16) born in years 1, 2, 3
+    return W.grow_wood("pine", years=6, branches=[(1, 0), (2, 1), (3, 15)], height=0.12)
+
+
+@pytest.mark.parametrize("years", [1, 2, 3, 5])
+def test_trunk_counts_follow_the_closed_form(years):
+    """darts = 12 s Y + 48 s * 3 Y (Y + 1) / 2 (see :func:`trunk_darts`); volumes likewise."""
+    w = W.grow_wood("pine", years=years, branches=0)
+    assert w.gm.n_darts == W.trunk_darts(16, years)
+    assert w.gm.n_volumes == W.trunk_volumes(16, years)
+    w = W.grow_wood("oak", years=years, branches=0, sides=12)
+    assert w.gm.n_darts == W.trunk_darts(12, years)
+
+
+def test_topology_after_every_step_with_branches():
+    W.grow_wood("pine", years=4, branches=[(1, 3), (2, 9)], check_every_step=True)
+
+
+def test_embedding_every_step_equals_once():
+    a = W.grow_wood("pine", years=3, branches=[(1, 2)], embed_every_step=True)
+    b = W.grow_wood("pine", years=3, branches=[(1, 2)])
+    assert np.max(np.abs(a.gm.points - b.gm.points)) < 1e-12
+
+
+def _ray_layers(grid, z, angle, radius):
+    """Distinct cells met along a radial ray at height z, in order, as (tissue, year, season)."""
+    t = np.linspace(1e-5, radius, 4000)
+    pts = np.stack([t * np.cos(angle), t * np.sin(angle), np.full_like(t, z)], axis=1)
+    cells = grid.find_containing_cell(pts)
+    cells = cells[cells >= 0]
+    keep = np.concatenate([[True], cells[1:] != cells[:-1]])
+    cells = cells[keep]
+    cd = grid.cell_data
+    return [(int(cd["wood"][c]), int(cd["year"][c]), int(cd["season"][c])) for c in cells]
+
+
+@pytest.mark.parametrize("level", [0, 2, 4])
+def test_rings_along_a_radial_ray_equal_the_age_at_that_height(trunk6, level):
+    grid = W.to_grid(trunk6)
+    z = (level + 0.5) * trunk6.p["height"]
+    layers = _ray_layers(grid, z, angle=0.3, radius=0.2)
+    wood = [(y, s) for t, y, s in layers if t in (W.CODES["sapwood"], W.CODES["heartwood"])]
+    age = 6 - level
+    assert len(set(wood)) == 2 * age                     # earlywood + latewood per year
+    assert len({y for y, _ in wood}) == age
+    assert [s for _, s in wood] == [0, 1] * age          # early then late, outwards
+    assert layers[0][0] == W.CODES["pith"] and layers[-1][0] == W.CODES["bark"]
+
+
+def test_ring_widths_stay_inside_the_law(trunk6):
+    vd = trunk6.gm.volume_data
+    wood = (vd["cell"] > 0) & (vd["season"] >= 0)
+    n = trunk6.trunk.sides
+    lo, hi = trunk6.law(vd["ring"][wood], vd["season"][wood], 2 * np.pi * vd["sector"][wood] / n,
+                        vd["axis"][wood])
+    w = vd["width"][wood]
+    assert np.all(w >= lo - 1e-15) and np.all(w <= hi + 1e-15)
+    assert np.ptp(w) > 0
+    # measured along a corner line: vertex radii step by averages of neighbouring widths
+    _, pos = trunk6.gm.vertex_positions()
+    r = np.hypot(pos[:, 0], pos[:, 1])
+    on_line = np.abs(np.arctan2(pos[:, 1], pos[:, 0]) - (-np.pi / n)) < 1e-9
+    base = on_line & (np.abs(pos[:, 2] - trunk6.p["height"]) < 1e-9)
+    radii = np.sort(r[base]) * np.cos(np.pi / n)          # corner radius -> apothem
+    steps = np.diff(radii)
+    widths_lo = min(trunk6.p["late_min"], trunk6.p["early_min"]) * trunk6.p["width_floor"]
+    widths_hi = max(trunk6.p["early_max"], trunk6.p["bark_max"])
+    assert np.all(steps > widths_lo - 1e-12) and np.all(steps < widths_hi + 1e-12)
+
+
+def test_reaction_wood_is_thicker_on_one_side():
+    w = W.grow_wood("pine", years=4, branches=0, reaction=0.6, reaction_angle=0)
+    vd = w.gm.volume_data
+    wood = (vd["axis"] == 0) & (vd["season"] >= 0) & (vd["level"] == 0)
+    s = vd["sector"]
+    east = vd["width"][wood & (s == 0)].sum()
+    west = vd["width"][wood & (s == 8)].sum()
+    assert east > 1.3 * west
+
+
+def test_bark_is_the_only_tissue_on_the_lateral_surface(trunk6):
+    gm = trunk6.gm
+    vd = gm.volume_data
+    free = np.flatnonzero(gm.alpha[3] == np.arange(gm.n_darts))
+    vol = gm.dart_volume[free]
+    face = gm.dart_data["face"][free]
+    tissue = vd["wood"][vol]
+    outward = (face == 1) & (vd["cell"][vol] > 0)            # E faces of stack cells
+    assert outward.any() and np.all(tissue[outward] == W.CODES["bark"])
+    _, pos = gm.vertex_positions()
+    vid, _ = gm.cells(0)
+    # every other free face of a non-bark volume is horizontal: the base cut, the steps and the apex
+    other = tissue != W.CODES["bark"]
+    heights = pos[vid[free[other]], 2]
+    level_tops = trunk6.p["height"] * np.arange(7)
+    assert np.all(np.min(np.abs(heights[:, None] - level_tops[None, :]), axis=1) < 1e-9)
+
+
+def test_sapwood_is_exactly_the_outer_rings():
+    w = W.grow_wood("pine", years=10, branches=0, sapwood_rings=4, heartwood_age=5)
+    vd = w.gm.volume_data
+    wood = (vd["axis"] == 0) & (vd["season"] >= 0)
+    from_bark = 10 - vd["year"]
+    sap = wood & (vd["wood"] == W.CODES["sapwood"])
+    heart = wood & (vd["wood"] == W.CODES["heartwood"])
+    assert np.all(from_bark[sap] <= 4) and np.all(from_bark[heart] > 4)
+    assert sap.sum() + heart.sum() == wood.sum() and heart.any()
+    young = W.grow_wood("pine", years=4, branches=0, sapwood_rings=2, heartwood_age=5)
+    assert young.tissue_counts()["heartwood"] == 0        # no heartwood before the age
+
+
+def test_branch_born_in_year_j_shows_Y_minus_j_rings(knotty):
+    vd = knotty.gm.volume_data
+    for b, br in enumerate(knotty.branches):
+        base = (vd["axis"] == b + 1) & (vd["level"] == 0) & (vd["season"] >= 0)
+        assert len(np.unique(vd["year"][base])) == 6 - br.year
+        assert set(vd["season"][base].tolist()) == {0, 1}
+
+
+def test_plank_through_three_branches_shows_three_knots(knotty):
+    grid = W.to_grid(knotty)
+    slab = W.plank(grid, [1, 0, 0], 0.006, 0.004)
+    assert W.knot_regions(slab) == 3
+    assert W.cut_facts(slab)["rings"] >= 2
+    other_side = W.plank(grid, [-1, 0, 0], 0.006, 0.004)
+    assert W.knot_regions(other_side) == 0
+
+
+def test_knots_bend_the_rings(knotty):
+    """Trunk cells near a knot move away from the branch; far from it they stay put."""
+    plain = W.grow_wood("pine", years=6, branches=0, height=0.12)
+    a, b = knotty.gm.volume_data, plain.gm.volume_data
+    where = {int(k): i for i, k in enumerate(b["key"].tolist())}
+    trunk = np.flatnonzero((a["axis"] == 0) & (a["cell"] > 0))
+    match = np.array([where[int(k)] for k in a["key"][trunk]])
+    shift = np.linalg.norm(knotty.gm.volume_centroids()[trunk] - plain.gm.volume_centroids()[match], axis=1)
+    near = (a["level"][trunk] <= 3) & np.isin(a["sector"][trunk], [15, 0, 1, 2])
+    far = a["level"][trunk] == 5
+    assert shift[near].max() > 1e-3          # millimetres: the rings bend around the knots
+    assert shift[far].max() < 1e-4
+
+
+def test_same_seed_same_wood_and_seed_matters():
+    a = W.grow_wood("oak", years=3, seed=4)
+    b = W.grow_wood("oak", years=3, seed=4)
+    c = W.grow_wood("oak", years=3, seed=5)
+    np.testing.assert_array_equal(a.gm.points, b.gm.points)
+    assert not np.array_equal(a.gm.volume_data["width"], c.gm.volume_data["width"])
+
+
+def test_regrowing_a_branch_changes_only_it_and_its_neighbours(knotty):
+    new = W.regrow_branch(knotty, 1, seed=77)
+    old_vd, new_vd = knotty.gm.volume_data, new.gm.volume_data
+    assert knotty.gm.n_volumes == new.gm.n_volumes
+    np.testing.assert_array_equal(old_vd["key"], new_vd["key"])
+    changed = np.flatnonzero(old_vd["width"] != new_vd["width"])
+    branch = knotty.branch_volumes(1)
+    assert changed.size and set(changed.tolist()) <= set(branch.tolist())
+    moved = np.flatnonzero(np.linalg.norm(knotty.gm.volume_centroids() - new.gm.volume_centroids(), axis=1)
+                           > 1e-12)
+    gm = knotty.gm
+    inside = np.isin(gm.dart_volume, branch)
+    neighbours = set(gm.dart_volume[gm.alpha[3][inside]].tolist())
+    assert set(moved.tolist()) <= set(branch.tolist()) | neighbours
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(years=0), "years"),
+    (dict(years=-2), "years"),
+    (dict(species="elm"), "unknown species"),
+    (dict(colour=3), "unknown wood parameter"),
+    (dict(early_min=float("nan")), "finite"),
+    (dict(late_min=-0.001), "positive"),
+    (dict(early_min=0.01, early_max=0.001), "must not exceed"),
+    (dict(sides=2), "at least 3"),
+    (dict(years=400), "darts"),
+    (dict(branches=[(9, 0)]), "year must be in"),
+])
+def test_bad_input_is_refused_before_any_work(kwargs, words):
+    kwargs = {"years": 3, **kwargs}
+    species = kwargs.pop("species", "pine")
+    with pytest.raises(ValueRefused, match=words):
+        W.grow_wood(species, **kwargs)
+
+
+def test_bad_planks_are_refused():
+    with pytest.raises(ValueRefused, match="non-zero"):
+        W.parse_plank("normal=0:0:0,offset=0,thickness=0.01")
+    with pytest.raises(ValueRefused, match="thickness"):
+        W.parse_plank("normal=x,offset=0,thickness=-1")
+    grid = W.to_grid(W.grow_wood("pine", years=2, branches=0))
+    with pytest.raises(ValueRefused, match="misses the wood"):
+        W.plank(grid, [1, 0, 0], 0.3, 0.02)
+
+
+def test_a_grown_wood_is_one_solid(knotty):
+    assert_solid(knotty.gm)
