@@ -200,7 +200,8 @@ def patch_polydata(old_mesh, skeleton, sides=8, organ_resolution=8):
     pts = np.empty((len(skeleton), k, 3))
     old_tubes = old_pts[: len(old_pts) - len(old_pts) % k].reshape(-1, k, 3)
     breaks = np.flatnonzero((np.diff(new) != 1) | (np.diff(old) != 1)) + 1
-    for a, b in zip(np.r_[0, breaks], np.r_[breaks, len(new)]):  # runs of kept tubes: block copies
+    runs = zip(np.r_[0, breaks], np.r_[breaks, len(new)]) if len(new) else ()  # nothing kept: no run
+    for a, b in runs:  # runs of kept tubes: block copies
         pts[new[a]:new[a] + b - a] = old_tubes[old[a]:old[a] + b - a]
     todo = np.ones(len(skeleton), bool)
     todo[new] = False

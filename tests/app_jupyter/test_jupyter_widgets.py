@@ -264,3 +264,14 @@ def test_model_state_is_shared_with_app_model(explorer):
     explorer.model.select(explorer.model.leaves_where(min_order=4))
     explorer.refresh()
     assert f"{len(explorer.selection)} selected" in explorer.selection_panel.summary.value
+
+
+def test_regrowing_the_whole_plant_with_new_constants_redraws():
+    """A whole-plant regrow that keeps no segment of the old mesh (every tube changes) is drawn
+    anew (it raised IndexError in the incremental re-mesh, which stopped explore.ipynb)."""
+    from ramure.app.jupyter import Explorer
+
+    ex = Explorer(HONDA, n=5, view="static", size=(64, 64))
+    before = ex.png()
+    assert ex.regrow(params={"rule": 1, "constants": {"a2": 66.0}}) is not None, ex.error
+    assert ex.error is None and ex.png() != before and ex.model.mesh.n_cells > 0
