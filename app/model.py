@@ -117,6 +117,17 @@ class Explorer:
     def _changed(self):
         self.version += 1
 
+    def checkpoint(self):
+        """The editing state a new text, n or seed replaces: grammar text, path and the session
+        (with its own undo and redo).  :meth:`restore` brings it back (the desktop's undo)."""
+        return {"text": self.text, "path": self.path, "session": self.session}
+
+    def restore(self, checkpoint):
+        """Make a :meth:`checkpoint` current again (selection cleared, a new version)."""
+        self.text, self.path, self.session = checkpoint["text"], checkpoint["path"], checkpoint["session"]
+        self.selection, self.last_result, self.error = [], None, None
+        self._changed()
+
     # -- grammar -----------------------------------------------------------
     def set_text(self, text):
         """Parse new grammar text.  On error keep the current plant and return the error."""

@@ -233,6 +233,12 @@ class ConstantsPanel(QWidget):
         for name, (value, gesture) in pending.items():
             self.constant_changed.emit(name, value, gesture)
 
+    def flush(self):
+        """Send a change still waiting for the pause (before Undo or Save)."""
+        if self._pending:
+            self.settle.stop()
+            self._flush()
+
     def _derivation(self, _):
         self.derivation_changed.emit(self.n_box.value(), self.seed_box.value())
 

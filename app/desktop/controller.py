@@ -24,6 +24,7 @@ import traceback
 from PySide6.QtCore import QObject, Signal
 
 from ramure.app.desktop import state
+from ramure.app.desktop.history import Timeline
 from ramure.app.desktop.workers import JobQueue
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
@@ -51,7 +52,8 @@ class Controller(QObject):
         self.jobs = JobQueue(self._execute, self)
         self.jobs.finished.connect(self._finished)
         self.jobs.busy_changed.connect(self.busy_changed)
-        self.snapshot = state.take_snapshot(explorer)
+        self.timeline = Timeline()  # sessions replaced by a new text, n or seed (undo walks back)
+        self.snapshot = state.take_snapshot(explorer, timeline=self.timeline)
         self.last_job_seconds = 0.0
         self._gesture_edits = {}  # slider-drag gesture -> its edit (see set_constant)
 
@@ -66,17 +68,30 @@ class Controller(QObject):
 
     def _execute(self, job):  # worker thread
         with self.lock:
+            ex = self.explorer
+            before, edits = ex.checkpoint(), list(ex.session.edits)
             try:
-                job.result = job.fn(self.explorer)
+                job.result = job.fn(ex)
             except Exception as exc:  # noqa: BLE001 - reported to the user, never fatal
                 job.error = exc
                 job.details = traceback.format_exc()
+            if job.name not in ("undo", "redo"):
+                self._record(before, edits)
+
             try:
-                job.snapshot = state.take_snapshot(self.explorer, self.snapshot)
+                job.snapshot = state.take_snapshot(ex, self.snapshot, self.timeline, job.name)
             except Exception as exc:  # noqa: BLE001
                 if job.error is None:
                     job.error = exc
                     job.details = traceback.format_exc()
+
+    def _record(self, before, edits):  # worker thread
+        """Keep the history one line: a replaced session is remembered, a new edit ends Redo."""
+        session = self.explorer.session
+        if session is not before["session"]:
+            self.timeline.leave(before, len(edits))
+        elif len(session.edits) != len(edits) or any(a is not b for a, b in zip(session.edits, edits)):
+            self.timeline.new_edit()
 
     def _finished(self, job):  # GUI thread
         self.last_job_seconds = time.perf_counter() - job.submitted
@@ -101,16 +116,24 @@ class Controller(QObject):
     def refresh(self):
         """Re-read the light parts of the model (selection, status...) in the GUI thread."""
         with self.lock:
-            snap = state.take_snapshot(self.explorer, self.snapshot)
+            snap = state.take_snapshot(self.explorer, self.snapshot, self.timeline)
         self._publish(snap)
         return snap
 
     # -- edits (jobs) ------------------------------------------------------
     def set_text(self, text):
-        """Parse and derive new grammar text; the job's result is the GrammarError or None."""
+        """Parse and derive new grammar text; the job's result is the GrammarError or None.
+
+        Text that differs from the plant's only in ``#define`` values is a constants edit
+        on the same plant (its regrown parts stay, one undo step); other text is a new
+        grammar: a fresh plant, the old one one Undo away.
+        """
         def run(ex):
-            if text == ex.text and ex.error is None:
+            shown = state.shown_text(ex)
+            if text == shown and ex.error is None:
                 return None
+            if state.constants_only_change(shown, text):
+                return state.set_constants_from_text(ex, text)
             return ex.set_text(text)
         return self.submit("grammar", run, key="text")
 
@@ -133,10 +156,21 @@ class Controller(QObject):
         return self.submit("prune", lambda ex: ex.prune())
 
     def undo(self):
-        return self.submit("undo", lambda ex: ex.undo())
+        """Undo the last plant edit, or go back to the plant before the last text, n or seed change."""
+        def run(ex):
+            if ex.session.can_undo:
+                return ex.undo()
+            return self.timeline.back(ex, len(ex.session.edits)) or None
+        return self.submit("undo", run)
 
     def redo(self):
-        return self.submit("redo", lambda ex: ex.redo())
+        """Redo what Undo took back, in the order it was done."""
+        def run(ex):
+            stop = self.timeline.stop()
+            if ex.session.can_redo and (stop is None or len(ex.session.edits) < stop):
+                return ex.redo()
+            return self.timeline.forward(ex, len(ex.session.edits)) or None
+        return self.submit("redo", run)
 
     def load_session(self, path):
         return self.submit("load session", lambda ex: ex.load_session(path))
@@ -186,7 +220,7 @@ class Controller(QObject):
         def run(ex):
             self._current(ex)
             fn(ex)
-            return state.take_snapshot(ex, self.snapshot)
+            return state.take_snapshot(ex, self.snapshot, self.timeline)
         self.snapshot = self.read(run)
         self.selection_changed.emit(self.snapshot.selection)
         return self.snapshot.selection
@@ -249,4 +283,7 @@ class Controller(QObject):
                 return False
             QCoreApplication.processEvents()
             time.sleep(0.002)
+        # the queue counts a job delivered in its own slot; the window's slots for the same
+        # job are separate queued calls: run them too before saying "idle"
+        QCoreApplication.processEvents()
         return True

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import re
 
-from PySide6.QtCore import Qt, QTimer, Signal
-from PySide6.QtGui import QColor, QFont, QFontDatabase, QSyntaxHighlighter, QTextCharFormat, QTextCursor
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
+from PySide6.QtGui import (QColor, QFont, QFontDatabase, QKeySequence, QSyntaxHighlighter, QTextCharFormat,
+                           QTextCursor)
 from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
 
 DEBOUNCE_MS = 350
@@ -68,6 +69,25 @@ class GrammarHighlighter(QSyntaxHighlighter):
             pos, inside = block + 2, True
 
 
+class _WindowUndo(QObject):
+    """Lets Ctrl+Z, Ctrl+Shift+Z and Ctrl+Y reach the window's Undo and Redo from the editor.
+
+    The editor keeps no undo history of its own: typing, sliders, regrowing and
+    the derivation count are one history (the window's), so Undo in the editor
+    also takes back a slider move made after the typing, in order.
+    """
+
+    KEYS = (QKeySequence.StandardKey.Undo, QKeySequence.StandardKey.Redo)
+
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt API)
+        if event.type() == QEvent.Type.ShortcutOverride:
+            combo = event.keyCombination().toCombined()
+            if any(event.matches(k) for k in self.KEYS) or combo == QKeySequence("Ctrl+Y")[0].toCombined():
+                event.ignore()  # not ours: the window's shortcut fires
+                return True
+        return False
+
+
 class GrammarEditor(QWidget):
     """A plain-text grammar editor with an error line under it."""
 
@@ -82,6 +102,9 @@ class GrammarEditor(QWidget):
         self.edit.setFont(font)
         self.edit.setLineWrapMode(QPlainTextEdit.LineWrapMode.NoWrap)
         self.edit.setTabStopDistance(4 * self.edit.fontMetrics().horizontalAdvance(" "))
+        self.edit.setUndoRedoEnabled(False)  # one history: the window's (see _WindowUndo)
+        self._undo_keys = _WindowUndo(self)
+        self.edit.installEventFilter(self._undo_keys)
         self.highlighter = GrammarHighlighter(self.edit.document())
         self.message = QLabel("", self)
         self.message.setObjectName("grammarError")
@@ -112,6 +135,40 @@ class GrammarEditor(QWidget):
         self.edit.document().setModified(False)
         self.timer.stop()
         self.show_error(None)
+
+    def pending(self):
+        """True while typing has not yet been sent (the debounce pause is running)."""
+        return self.timer.isActive()
+
+    def flush(self):
+        """Send typed text now instead of after the pause (before Undo, Save...)."""
+        if self.timer.isActive():
+            self.timer.stop()
+            self.text_settled.emit(self.text())
+
+    def replace_text(self, text):
+        """Show ``text`` (a slider, Undo or Redo changed it) by editing only the lines that differ,
+        so the cursor and the scroll position stay where they were; emits nothing."""
+        old = self.text()
+        if text == old:
+            return
+        if any(ord(c) > 0xFFFF for c in old + text):  # Qt positions are UTF-16 units
+            self.set_text(text)
+            return
+        start = 0
+        limit = min(len(old), len(text))
+        while start < limit and old[start] == text[start]:
+            start += 1
+        end = 0
+        while end < limit - start and old[-1 - end] == text[-1 - end]:
+            end += 1
+        cursor = QTextCursor(self.edit.document())
+        cursor.setPosition(start)
+        cursor.setPosition(len(old) - end, QTextCursor.MoveMode.KeepAnchor)
+        self.edit.blockSignals(True)
+        cursor.insertText(text[start:len(text) - end])
+        self.edit.blockSignals(False)
+        self.timer.stop()
 
     def show_error(self, error):
         """Underline ``error`` (a GrammarError with ``line``/``column``) or clear it."""

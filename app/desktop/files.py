@@ -6,7 +6,9 @@ controller.  Recent files are kept in the window's ``QSettings``.
 """
 from __future__ import annotations
 
+import os
 import pathlib
+import tempfile
 
 from PySide6.QtWidgets import QFileDialog
 
@@ -17,6 +19,23 @@ SESSION_FILTER = "Ramure sessions (*.json);;All files (*)"
 EXPORT_FILTER = "VTK PolyData (*.vtp);;Wavefront OBJ (*.obj);;glTF (*.gltf *.glb);;PLY (*.ply);;STL (*.stl)"
 PNG_FILTER = "PNG images (*.png)"
 MAX_RECENT = 8
+
+
+def write_text_atomic(path, text):
+    """Write ``text`` to ``path`` through a temporary file in the same folder, fsync, then rename:
+    a crash or a full disk never leaves half a grammar."""
+    path = pathlib.Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as out:
+            out.write(text)
+            out.flush()
+            os.fsync(out.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        pathlib.Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
 
 
 class FileActions:
@@ -88,9 +107,11 @@ class FileActions:
             if path is None:
                 return None
         path = pathlib.Path(path or snap.path)
-        text = self.window.editor.text()
+        self.window.flush_edits()  # a slider or typing still in its pause is part of what is saved
+        self.controller.wait_idle()
+        text = self.window.editor.text()  # what is on screen (the #define lines follow the sliders)
         try:
-            path.write_text(text, encoding="utf-8")
+            write_text_atomic(path, text)
             self.controller.read(lambda ex: setattr(ex, "path", path), wait=None)
         except OSError as exc:
             self.window.report_refused(f"cannot save {path}: {exc.strerror or exc}")

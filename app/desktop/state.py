@@ -16,6 +16,7 @@ few rules that are the window's own (the range a constant's slider offers).
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,16 +53,24 @@ class Snapshot:
     path: object = None
     edits: int = 0
     extra: dict = field(default_factory=dict)
+    job: str = ""  # the job that took this snapshot ("grammar" when the editor's text made it)
 
 
-def take_snapshot(explorer, previous=None):
-    """A :class:`Snapshot` of ``explorer``; reuses ``previous``'s heavy parts if the version is the same."""
+def take_snapshot(explorer, previous=None, timeline=None, job=""):
+    """A :class:`Snapshot` of ``explorer``; reuses ``previous``'s heavy parts if the version is the same.
+
+    ``timeline`` (a :class:`~ramure.app.desktop.history.Timeline`) adds the sessions
+    left behind to what Undo and Redo can reach.
+    """
     session = explorer.session
-    light = dict(text=explorer.text, error=explorer.error, constants=explorer.constants,
+    back = timeline is not None and timeline.can_back
+    forward = timeline is not None and timeline.can_forward
+    light = dict(text=shown_text(explorer), error=explorer.error, constants=explorer.constants,
                  grammar_constants=dict(explorer.lsystem.constants),
                  n=session.n, seed=session.seed, rho=explorer.rho, selection=tuple(explorer.selection),
-                 status=status_line(explorer), can_undo=session.can_undo, can_redo=session.can_redo,
-                 last_result=explorer.last_result, path=explorer.path, edits=len(session.edits))
+                 status=status_line(explorer), can_undo=session.can_undo or back,
+                 can_redo=session.can_redo or forward, last_result=explorer.last_result, path=explorer.path,
+                 edits=len(session.edits), job=job)
     if previous is not None and previous.version == explorer.version:
         return Snapshot(**{**previous.__dict__, **light})
     skeleton = explorer.skeleton
@@ -74,6 +83,32 @@ def take_snapshot(explorer, previous=None):
                     segment_leaf=np.asarray(skeleton.leaf_id), midpoints=explorer.segment_midpoints(),
                     n_modules=len(explorer.derivation), string_preview=string_preview(explorer),
                     cut_layout=layout, **light)
+
+
+def shown_text(explorer):
+    """The grammar text as the editor shows it: the ``#define`` lines carry the session's current
+    constants (a slider edit rewrites its line; undoing it puts the old value back)."""
+    return text_with_constants(explorer.text, explorer.constants, explorer.lsystem.constants)
+
+
+def set_constants_from_text(explorer, text):
+    """Apply the ``#define`` values of ``text`` (same grammar otherwise) as constants edits.
+
+    Returns the grammar error (nothing changed) or None.
+    """
+    from ramure.lsys import GrammarError, LSystem
+
+    try:
+        written = LSystem.from_text(text).constants
+    except GrammarError as err:
+        explorer.error = err
+        return err
+    explorer.error = None
+    current = explorer.constants
+    for name, value in written.items():
+        if name in current and float(value) != float(current[name]):
+            explorer.set_constant(name, value)
+    return None
 
 
 def status_line(explorer):
@@ -108,6 +143,57 @@ def selected_modules(explorer, limit=200):
 
 
 # -- constants -------------------------------------------------------------------
+_DEFINE = re.compile(r"^(\s*#\s*define\s+)([A-Za-z_][A-Za-z_0-9]*)(\s+)(.*?)(\s*(?://.*|/\*.*)?)$")
+
+
+def format_constant(value):
+    """A constant as the grammar text writes it: ``60``, ``0.9``, ``1e-05`` (10 significant digits)."""
+    return f"{float(value):.10g}"
+
+
+def text_with_constants(text, constants, written):
+    r"""``text`` with each ``#define`` whose value differs from ``written`` (what the text says)
+    rewritten to ``constants``' value; unchanged lines (expressions included) stay as typed.
+
+    The comment after a rewritten value keeps its column where the spaces allow.
+
+    >>> text_with_constants("#define a2 60   // angle\n#define r 0.9", {"a2": 30.0, "r": 0.9},
+    ...                     {"a2": 60.0, "r": 0.9})
+    '#define a2 30   // angle\n#define r 0.9'
+    """
+    changed = {k: v for k, v in constants.items() if k in written and float(v) != float(written[k])}
+    if not changed:
+        return text
+    lines = text.split("\n")
+    for i, line in enumerate(lines):
+        m = _DEFINE.match(line)
+        if not m or m.group(2) not in changed:
+            continue
+        head, name, gap, value, tail = m.groups()
+        new = format_constant(changed[name])
+        if tail.strip():  # keep the comment's column: pad or trim the spaces before it
+            spaces = len(tail) - len(tail.lstrip())
+            tail = " " * max(1, spaces + len(value) - len(new)) + tail.lstrip()
+        lines[i] = head + name + gap + new + tail
+    return "\n".join(lines)
+
+
+def without_define_values(text):
+    """``text`` with every ``#define`` value blanked: equal for two texts that differ only there."""
+    return "\n".join(_DEFINE.sub(lambda m: m.group(1) + m.group(2) + " _" + _comment(m.group(5)), line)
+                     for line in text.split("\n"))
+
+
+def _comment(tail):
+    return (" " + tail.strip()) if tail.strip() else ""
+
+
+def constants_only_change(old_text, new_text):
+    """True if ``new_text`` differs from ``old_text`` in ``#define`` values only (then typing
+    is a constants edit on the same plant, not a new grammar)."""
+    return old_text != new_text and without_define_values(old_text) == without_define_values(new_text)
+
+
 def set_constant_merging(explorer, name, value, previous=None):
     """Set constant ``name``; if ``previous`` (an edit dict) is still the session's last edit,
     replace it, so a slider drag is one undo step.  Returns the new edit.

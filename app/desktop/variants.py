@@ -172,12 +172,21 @@ def qualifier_message(result):
     tries = f" ({result.tried} tries)" if result.tried > 1 else ""
     if not direction:
         return f"{name}: applied variant {result.variant} (rule {result.params.get('rule')}){tries}"
-    metric = max(direction, key=lambda k: abs(direction[k]))
+    metric = max(direction, key=lambda k: (abs(direction[k]), _relative_change(result, k)))
     before, after = getattr(result.before, metric), getattr(result.after, metric)
     change = f"{METRIC_LABELS.get(metric, metric)} {_short(before)} → {_short(after)}"
     if result.improved:
         return f"{name}: {change}{tries}"
     return f"{name}: no variant moved the selection that way; kept the closest try, {change}{tries}"
+
+
+def _relative_change(result, metric):
+    """|after - before| / |before| of one metric (0 when it is missing or not finite)."""
+    before, after = getattr(result.before, metric, None), getattr(result.after, metric, None)
+    if before is None or after is None:
+        return 0.0
+    change = abs(float(after) - float(before)) / max(abs(float(before)), 1e-12)
+    return change if np.isfinite(change) else 0.0
 
 
 def _short(value):

@@ -73,7 +73,7 @@ class VariantsController:
     # -- menu -------------------------------------------------------------------
     def build_menu(self, menu):
         self.explore_action = menu.addAction("Explore variants of this grammar")
-        self.explore_action.triggered.connect(self.explore)
+        self.explore_action.triggered.connect(lambda: self.explore())  # not explore(checked)
         self.explore_action.setEnabled(variants.metrics_available() is None)
         menu.addAction("Open exploration folder…").triggered.connect(lambda: self.open_exploration())
         menu.addSeparator()

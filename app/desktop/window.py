@@ -62,6 +62,7 @@ class MainWindow(QMainWindow):
         self.message_box = None
         self.last_message = None
         self.drawn_version = None
+        self.shown_text = explorer.text  # the model's grammar text the editor last showed
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
@@ -110,7 +111,8 @@ class MainWindow(QMainWindow):
                          Qt.Orientation.Horizontal)
         self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [360, 390], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
-        self.editor.set_text(explorer.text)
+        self.editor.set_text(self.controller.snapshot.text)
+        self.shown_text = self.controller.snapshot.text
         self.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
 
@@ -154,8 +156,10 @@ class MainWindow(QMainWindow):
         self._action(f, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
         e = bar.addMenu("&Edit")
-        self.undo_action = self._action(e, "&Undo", self.controller.undo, "Ctrl+Z")
-        self.redo_action = self._action(e, "&Redo", self.controller.redo, "Ctrl+Shift+Z")
+        self.undo_action = self._action(e, "&Undo", self.undo, "Ctrl+Z",
+                                        tip="Undo the last change: typing, a constant, n, seed, regrow, prune")
+        self.redo_action = self._action(e, "&Redo", self.redo, "Ctrl+Shift+Z")
+        self.redo_action.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
         e.addSeparator()
         self._action(e, "Regrow", self._regrow, "Ctrl+R")
         self._action(e, "Prune", self._prune, "Delete")
@@ -205,8 +209,8 @@ class MainWindow(QMainWindow):
         r.regrow.connect(self._regrow)
         r.regrow_with_constants.connect(self._regrow_with_constants)
         r.prune.connect(self._prune)
-        r.undo.connect(c.undo)
-        r.redo.connect(c.redo)
+        r.undo.connect(self.undo)
+        r.redo.connect(self.redo)
         self.cut_view.plan_button.clicked.connect(self.show_planned_cut)
 
     # -- drawing from snapshots ---------------------------------------------------------
@@ -233,8 +237,19 @@ class MainWindow(QMainWindow):
         self.undo_action.setEnabled(snap.can_undo)
         self.redo_action.setEnabled(snap.can_redo)
         self.status_label.setText(snap.status)
+        self._sync_editor(snap)
         name = pathlib.Path(snap.path).name if snap.path else "untitled"
         self.setWindowTitle(f"{name}{' *' if self.dirty else ''} — {TITLE}")
+
+    def _sync_editor(self, snap):
+        """Show the model's grammar text when something other than typing changed it (a slider,
+        Undo, Redo, a file): the editor and the constants are one state."""
+        if snap.text == self.shown_text:
+            return
+        self.shown_text = snap.text
+        if snap.job == "grammar" or self.editor.pending():
+            return  # the editor's own text (perhaps "30." for 30), or the user is typing
+        self.editor.replace_text(snap.text)
 
     def show_selection(self, selection):
         """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe."""
@@ -308,6 +323,21 @@ class MainWindow(QMainWindow):
     def _derivation(self, n, seed):
         self.dirty = True
         self.controller.set_derivation(n, seed)
+
+    def flush_edits(self):
+        """Send what the user typed or slid but the pause has not sent yet."""
+        self.editor.flush()
+        self.constants_panel.flush()
+
+    def undo(self):
+        """Undo (Ctrl+Z): typing waiting to be sent is sent first, so it is what Undo takes back."""
+        self.flush_edits()
+        return self.controller.undo()
+
+    def redo(self):
+        """Redo (Ctrl+Shift+Z or Ctrl+Y)."""
+        self.flush_edits()
+        return self.controller.redo()
 
     def _rho(self, value):
         self.controller.set_rho(value)

@@ -24,9 +24,23 @@ def explored(qtbot, w, n_jobs=1):
     return w.variants.variant_set
 
 
+def menu_action(window, menu_title, text):
+    """The QAction named ``text`` in the menu bar's ``menu_title`` menu (what a user clicks)."""
+    for top in window.menuBar().actions():
+        if top.text().replace("&", "") == menu_title:
+            for action in top.menu().actions():
+                if action.text().replace("&", "") == text:
+                    return action
+    raise AssertionError(f"no {menu_title} > {text}")
+
+
 def test_explore_fills_the_gallery_and_the_pca_dock(make_window, qtbot, artifacts):
     w = make_window(n=4)
-    vs = explored(qtbot, w)
+    menu_action(w, "Variants", "Explore variants of this grammar").trigger()  # once said "n_jobs ... False"
+    assert w.last_message is None and w.progress.isVisible()
+    qtbot.waitUntil(lambda: w.variants.variant_set is not None and not w.variants.busy(), timeout=60000)
+    settle(qtbot, w)
+    vs = w.variants.variant_set
     assert w.gallery.list.count() == 27 and len(vs.picks) == 27
     icon = w.gallery.list.item(0).icon().pixmap(100, 100).toImage()
     assert pixel_variance(icon) > 10  # a drawn plant, not a blank tile
