@@ -1,0 +1,219 @@
+"""Compiled inner loops of Open-DLA (see :mod:`ramure.gmap.lichen`): surface walks and neighbour tests.
+
+numba because the walk is sequential by nature (each particle's fate depends on the ones
+before it) and steps through triangles one crossing at a time; numpy cannot express it
+without a Python loop per step.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _cross(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+@njit(cache=True)
+def _unit(v):
+    n = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    return v / n if n > 0 else v
+
+
+@njit(cache=True)
+def _triple(ax, ay, az, bx, by, bz, n):
+    """(a x b) . n without temporaries."""
+    return (ay * bz - az * by) * n[0] + (az * bx - ax * bz) * n[1] + (ax * by - ay * bx) * n[2]
+
+
+@njit(cache=True)
+def step_on_surface(points, tris, across, normals, tri, pos, d, length):
+    """Move ``length`` from ``pos`` along direction ``d`` on the surface, crossing edges.
+
+    Crossing into triangle T2 (normal n2) turns the direction into T2's plane:
+    ``t = d x n2; d = n2 x t`` (the source's rule). Returns (tri, pos, d).
+    """
+    remaining = length
+    came_from = -1
+    px, py, pz = pos[0], pos[1], pos[2]
+    dx, dy, dz = d[0], d[1], d[2]
+    for _ in range(64):
+        n = normals[tri]
+        best_t, best_k = 1e300, -1
+        for k in range(3):
+            a = points[tris[tri, k]]
+            b = points[tris[tri, (k + 1) % 3]]
+            ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+            den = _triple(dx, dy, dz, ex, ey, ez, n)
+            if abs(den) < 1e-15:
+                continue
+            apx, apy, apz = a[0] - px, a[1] - py, a[2] - pz
+            t = _triple(apx, apy, apz, ex, ey, ez, n) / den
+            s = _triple(apx, apy, apz, dx, dy, dz, n) / den
+            if t > 1e-12 and -1e-9 <= s <= 1 + 1e-9 and t < best_t and across[tri, k] != came_from:
+                best_t, best_k = t, k
+        if best_k < 0 or best_t >= remaining:
+            return tri, np.array([px + remaining * dx, py + remaining * dy, pz + remaining * dz]), \
+                np.array([dx, dy, dz])
+        px, py, pz = px + best_t * dx, py + best_t * dy, pz + best_t * dz
+        remaining -= best_t
+        came_from = tri
+        tri = across[tri, best_k]
+        n2 = normals[tri]
+        # d <- n2 x (d x n2): the component of d in the new plane
+        dot = dx * n2[0] + dy * n2[1] + dz * n2[2]
+        nx, ny, nz = dx - dot * n2[0], dy - dot * n2[1], dz - dot * n2[2]
+        norm = np.sqrt(nx * nx + ny * ny + nz * nz)
+        if norm < 1e-12:  # faces nearly orthogonal: nudge with the previous normal
+            m = normals[came_from]
+            nx, ny, nz = dx + m[0], dy + m[1], dz + m[2]
+            dot = nx * n2[0] + ny * n2[1] + nz * n2[2]
+            nx, ny, nz = nx - dot * n2[0], ny - dot * n2[1], nz - dot * n2[2]
+            norm = np.sqrt(nx * nx + ny * ny + nz * nz)
+        dx, dy, dz = nx / norm, ny / norm, nz / norm
+    return tri, np.array([px, py, pz]), np.array([dx, dy, dz])
+
+
+@njit(cache=True)
+def _hash(ix, iy, iz, mask):
+    return ((ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791)) & mask
+
+
+@njit(cache=True)
+def cell_key(pos, h, mask):
+    """Hash of the grid cell of ``pos`` (cells of size ``h``) into ``mask + 1`` buckets."""
+    return _hash(np.int64(np.floor(pos[0] / h)), np.int64(np.floor(pos[1] / h)), np.int64(np.floor(pos[2] / h)),
+                 mask)
+
+
+@njit(cache=True)
+def nearest(pos, head, nxt, particles, h, mask, rho):
+    """(min distance, its particle, particles within ``rho``) among the particles of the 27 grid
+    cells around ``pos``: exact for distances up to the cell size ``h``."""
+    best, who, within = 1e300, -1, 0
+    ix = np.int64(np.floor(pos[0] / h))
+    iy = np.int64(np.floor(pos[1] / h))
+    iz = np.int64(np.floor(pos[2] / h))
+    x, y, z = pos[0], pos[1], pos[2]
+    for dx in range(-1, 2):
+        for dy in range(-1, 2):
+            for dz in range(-1, 2):
+                p = head[_hash(ix + dx, iy + dy, iz + dz, mask)]
+                while p >= 0:
+                    ex, ey, ez = particles[p, 0] - x, particles[p, 1] - y, particles[p, 2] - z
+                    dist = np.sqrt(ex * ex + ey * ey + ez * ez)
+                    if dist < best:
+                        best, who = dist, p
+                    if dist <= rho:
+                        within += 1
+                    p = nxt[p]
+    return best, who, within
+
+
+@njit(cache=True)
+def tangent_direction(normal, angle):
+    """A unit vector in the plane of ``normal`` at ``angle`` (radians) from a fixed in-plane axis."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = _unit(_cross(normal, helper))
+    y = _cross(normal, x)
+    return np.cos(angle) * x + np.sin(angle) * y
+
+
+@njit(cache=True)
+def rotate_in_plane(d, normal, angle):
+    """``d`` turned by ``angle`` about ``normal`` (Rodrigues; d is in the plane)."""
+    return _unit(np.cos(angle) * d + np.sin(angle) * _cross(normal, d))
+
+
+@njit(cache=True)
+def grow(points, tris, across, normals, h, mask, env, particles, tri_of, cluster, count, a_count,
+         b_count, head, nxt, r, eps, step, turn, rho, floor, sigma, tau, max_steps, kill, target, seed, tests,
+         a_init, b_init):
+    """Grow clusters until ``target`` particles or every emitter is retired; returns the count.
+
+    ``particles``/``tri_of``/``cluster``/``a_count``/``b_count``/``nxt`` have room for ``target``
+    rows, the first ``count`` used; ``head`` (per hashed grid cell of size ``h``) and ``nxt``
+    chain particles by cell. ``env`` is E(p) per vertex (interpolated at the new particle). ``tests`` (1,)
+    counts distance tests.
+    """
+    np.random.seed(seed)
+    two_r = 2.0 * r
+    while count < target:
+        alive = 0
+        for i in range(count):
+            if b_count[i] > 0:
+                alive += 1
+        if alive == 0:
+            break
+        pick = np.random.randint(alive)
+        i = -1
+        for k in range(count):
+            if b_count[k] > 0:
+                if pick == 0:
+                    i = k
+                    break
+                pick -= 1
+        d = tangent_direction(normals[tri_of[i]], np.random.random() * 2 * np.pi)
+        tri, pos, d = step_on_surface(points, tris, across, normals, tri_of[i], particles[i].copy(), d, two_r + eps)
+        dist, who, _ = nearest(pos, head, nxt, particles, h, mask, rho)
+        tests[0] += 1
+        if dist < two_r:  # born touching the cluster: a failed attempt
+            _fail(a_count, b_count, i, a_init)
+            continue
+        origin = particles[i].copy()
+        joined = False
+        for _ in range(max_steps):
+            d = rotate_in_plane(d, normals[tri], (np.random.random() * 2 - 1) * turn)
+            ntri, npos, nd = step_on_surface(points, tris, across, normals, tri, pos, d, step)
+            dist, who, within = nearest(npos, head, nxt, particles, h, mask, rho)
+            tests[0] += 1
+            if dist < two_r:  # the step would overlap: the particle stops where it was, touching
+                dist, who, within = nearest(pos, head, nxt, particles, h, mask, rho)
+                if who < 0 or cluster[who] != cluster[i] or dist > two_r + step:
+                    break  # another cluster (or lost contact): destroyed
+                bary_env = _env_at(points, tris, env, tri, pos)
+                a_term = floor + (1.0 - floor) * np.exp(-sigma * (within - tau) ** 2)
+                if np.random.random() < a_term * bary_env:
+                    particles[count] = pos
+                    tri_of[count] = tri
+                    cluster[count] = cluster[i]
+                    a_count[count] = a_init
+                    b_count[count] = b_init
+                    key = cell_key(pos, h, mask)
+                    nxt[count] = head[key]
+                    head[key] = count
+                    count += 1
+                    joined = True
+                break
+            tri, pos, d = ntri, npos, nd
+            diff = pos - origin
+            if np.sqrt(np.dot(diff, diff)) > kill:
+                break  # strayed too far from the cluster: destroyed
+        if not joined:
+            _fail(a_count, b_count, i, a_init)
+    return count
+
+
+@njit(cache=True)
+def _fail(a_count, b_count, i, a_init):
+    """A failed attempt of emitter ``i`` costs an ``a`` token; no ``a`` left costs a ``b`` (and
+    refills ``a``); no ``b`` left retires the emitter."""
+    a_count[i] -= 1
+    if a_count[i] <= 0:
+        b_count[i] -= 1
+        a_count[i] = a_init
+
+
+@njit(cache=True)
+def _env_at(points, tris, env, tri, pos):
+    a = points[tris[tri, 0]]
+    b = points[tris[tri, 1]]
+    c = points[tris[tri, 2]]
+    v0, v1, v2 = b - a, c - a, pos - a
+    d00, d01, d11 = np.dot(v0, v0), np.dot(v0, v1), np.dot(v1, v1)
+    d20, d21 = np.dot(v2, v0), np.dot(v2, v1)
+    den = d00 * d11 - d01 * d01
+    v = (d11 * d20 - d01 * d21) / den
+    w = (d00 * d21 - d01 * d20) / den
+    return (1 - v - w) * env[tris[tri, 0]] + v * env[tris[tri, 1]] + w * env[tris[tri, 2]]
