@@ -224,7 +224,7 @@ class Branch:
     year: int
     sector: int
     seed: int
-    direction: np.ndarray = None
+    level: int = -1            # the trunk level (a short node) the branch grows from
 
 
 @dataclass
@@ -236,6 +236,7 @@ class Axis:
     born_step: int
     seed: int
     address: int = 0                                 # seed-free address for volume keys
+    parts: list = field(default_factory=list)        # (year, 'whole' | 'node' | 'internode') per level
     levels: list = field(default_factory=list)       # pith first darts
     level_step: list = field(default_factory=list)   # step each level was made
     stacks: dict = field(default_factory=dict)       # (t, k) -> list of cube first darts
@@ -245,8 +246,11 @@ class Axis:
 class Wood:
     """A growing volumetric wood: ``gm`` is the :class:`GMap3`; ``step()`` adds a half-year."""
 
-    def __init__(self, params, seed=0, branches=None, species="pine", trunk_frames=None):
+    def __init__(self, params, seed=0, branches=None, species="pine", trunk_frames=None, years=None):
         self.p = params
+        self.final_years = years
+        #: push trunk rings out of the knots' cones (see the module docstring)
+        self.bend_rings = True
         self.species = species
         self.seed = int(seed)
         self.steps = 0
@@ -273,7 +277,14 @@ class Wood:
         spring = self.steps % 2 == 0
         new_joints = []
         if spring:
-            self._grow_length(self.trunk)
+            born = [br for br in self.branches if br.year == self.year]
+            if born:                        # a short node carries the new branches, then the internode
+                self._grow_length(self.trunk, "node")
+                for br in born:
+                    br.level = len(self.trunk.levels) - 1
+                self._grow_length(self.trunk, "internode")
+            else:
+                self._grow_length(self.trunk)
             for b, br in enumerate(self.branches):
                 if br.year == self.year:
                     new_joints.append(self._start_branch(b, br))
@@ -284,7 +295,7 @@ class Wood:
             self._add_layer()
             for b, joint in new_joints:
                 br = self.branches[b]
-                face = self.gm.prism_face(self.trunk.levels[br.year], self.trunk.sides, f"C{br.sector + 1}")
+                face = self.gm.prism_face(self.trunk.levels[br.level], self.trunk.sides, f"C{br.sector + 1}")
                 self.gm.sew3([face], [self.gm.prism_face(joint, 4, "O")])
         self.steps += 1
         self._sync_corner()
@@ -303,9 +314,10 @@ class Wood:
         self.corner[first[:, None] + np.arange(t.size)[None, :]] = t.corner[None, :]
         return first
 
-    def _grow_length(self, ax):
+    def _grow_length(self, ax, part="whole"):
         """A new pith prism on the free E face of the axis's top prism (none for the trunk's first)."""
         t = len(ax.levels)
+        ax.parts.append((self.year, part))
         label = "P" if ax.index == 0 else "Q"
         (first,) = self._new(ax.sides, 1, ax.index, 0, label=label, level=t, sector=-1, cell=0,
                              wood=CODES["pith"] if ax.index == 0 else CODES["knot"],
@@ -321,8 +333,8 @@ class Wood:
 
     def _start_branch(self, b, br):
         """The joint (a cube) and the first branch prism; the joint is sewn to the trunk later."""
-        self.trunk.missing.add((br.year, br.sector))
-        self.trunk.stacks.pop((br.year, br.sector), None)
+        self.trunk.missing.add((br.level, br.sector))
+        self.trunk.stacks.pop((br.level, br.sector), None)
         ax = Axis(b + 1, int(self.p["branch_sides"]), self.steps, br.seed, address=mix(1000 + b))
         self.axes.append(ax)
         (joint,) = self._new(4, 1, ax.index, 2, label="J", level=-1, sector=-1, cell=0, wood=CODES["knot"],
@@ -456,7 +468,11 @@ class Wood:
                 o, f, h = self.trunk_frames
                 return o[:n_levels], f[:n_levels], h[:n_levels]
             jit = p["height_jitter"]
-            h = np.array([p["height"] * (1 + jit * (2 * _u01(ax.seed, 8, t) - 1)) for t in range(n_levels)])
+            h = np.empty(n_levels)
+            for t, (year, part) in enumerate(ax.parts[:n_levels]):     # one step per level
+                whole = p["height"] * (1 + jit * (2 * _u01(ax.seed, 8, year) - 1))
+                node = min(self.node_height(), 0.5 * whole)
+                h[t] = {"whole": whole, "node": node, "internode": whole - node}[part]
             o = np.zeros((n_levels, 3))
             o[:, 2] = np.concatenate([[0.0], np.cumsum(h)[:-1]])
             f = np.repeat(np.eye(3)[[2, 0, 1]][None], n_levels, axis=0)
@@ -465,8 +481,28 @@ class Wood:
         p0, frame = self.branch_frame(br)
         joint = 2 * p["pith_radius"]
         h = np.full(n_levels, p["branch_length"])
+        if n_levels:                  # the first level spans the trunk's final radius: the knot cone
+            h[0] = max(self.trunk_radius() - joint, p["branch_length"] * 0.25)
         s = joint + np.concatenate([[0.0], np.cumsum(h)[:-1]])
         return p0[None] + s[:, None] * frame[0][None], np.repeat(frame[None], n_levels, axis=0), h
+
+    def trunk_radius(self):
+        """The trunk's radius at its base after the final year, from the law's mean widths."""
+        p = self.p
+        years = self.final_years or (self.year + 1)
+        rings = np.arange(1, years + 1)
+        lo_e, hi_e = self.law(rings, np.zeros_like(rings), None, 0)
+        lo_l, hi_l = self.law(rings, np.ones_like(rings), None, 0)
+        return float(p["pith_radius"] + 0.5 * (lo_e + hi_e + lo_l + hi_l).sum()
+                     + 0.5 * (p["bark_min"] + p["bark_max"]) * years)
+
+    def node_height(self):
+        """Height of a node carrying branches: the branches' final base diameter and a margin."""
+        if not self.branches:
+            return 0.0
+        years = self.final_years or (self.year + 1)
+        probe = Branch(0, 0, 0)
+        return 2.4 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
 
     def branch_frame(self, br):
         """Base point (centre of the trunk face) and frame (H along the branch) of a branch."""
@@ -474,7 +510,7 @@ class Wood:
         o, f, h = self.level_frames(self.trunk)
         n = self.trunk.sides
         phi = 2 * np.pi * br.sector / n
-        t = br.year
+        t = br.level
         radial = math.cos(phi) * f[t, 1] + math.sin(phi) * f[t, 2]
         p0 = o[t] + 0.5 * h[t] * f[t, 0] + p["pith_radius"] * radial
         elev = math.radians(90.0 - p["branch_angle"])
@@ -512,8 +548,10 @@ class Wood:
                 continue
             t, k = vd["level"][cells].astype(int), vd["sector"][cells].astype(int)
             r_in, r_out = radii[cells] - vd["width"][cells], radii[cells]
-            pts = self._cube_points(o[t], f[t], h[t], theta[k], theta[k + 1], r_in, r_out, n)
-            if ax.index == 0 and len(self.axes) > 1:
+            bottom, top = self._tapers(ax, cells, t, k, radii, rp)
+            pts = self._cube_points(o[t], f[t], h[t], theta[k], theta[k + 1], r_in, r_out, n,
+                                    bottom=bottom, top=top)
+            if ax.index == 0 and len(self.axes) > 1 and self.bend_rings:
                 pts = self._push(pts)
             flat[offset[cells][:, None] + np.arange(8)[None, :]] = pts
         for ax_index, joint in self.joint_of.items():
@@ -548,37 +586,91 @@ class Wood:
         bottom = o[None] + (c * r_bottom)[:, None] * radial
         return np.concatenate([bottom, bottom + h * f[0][None]])
 
+    #: how much of a stack's step is left where the stack above ends (the taper of a level's top)
+    TAPER = 0.12
+    #: a knot's radius at the trunk's pith, as a fraction of the branch's radius at its first node
+    KNOT_BASE = 0.3
+
+    def _tapers(self, ax, cells, t, k, radii, rp):
+        """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
+
+        A stack holds one year's cells more than the stack above it; the top
+        corners of those outer cells are drawn in towards the radius where the
+        stack above ends (``R + TAPER (r - R)``), so each level tapers into the
+        next and the apex closes, instead of leaving flat steps.  A branch's
+        first level opens the same way from its pith, so a knot is a cone
+        from the trunk's pith outwards.  Topology is unchanged.
+        """
+        vd = self.gm.volume_data
+        cell = vd["cell"][cells].astype(np.int64)
+        above = np.array([len(ax.stacks.get((int(a) + 1, int(b)), ())) if (int(a) + 1, int(b)) not in ax.missing
+                          else 10 ** 6 for a, b in zip(t, k)], np.int64)
+        exposed = cell > above
+        # radius where the stack above ends, in this stack
+        key = {(int(a), int(b), int(c)): float(r) for a, b, c, r in zip(t, k, cell, radii[cells])}
+        base = np.array([key.get((int(a), int(b), int(m)), rp) if m > 0 else rp
+                         for a, b, m in zip(t, k, np.minimum(above, cell))])
+        eps = self.TAPER
+
+        def top(r):
+            return np.where(exposed, base + eps * (r - base), r)
+
+        def bottom(r):
+            if ax.index == 0:
+                return r
+            first = t == 0
+            return np.where(first, rp + self.KNOT_BASE * (r - rp), r)
+        return bottom, top
+
     @staticmethod
-    def _cube_points(o, f, h, th0, th1, r_in, r_out, n):
-        """Corners (m, 8, 3) of cubes: base 0..3 = (bottom th0, bottom th1, top th1, top th0) at r_in."""
+    def _cube_points(o, f, h, th0, th1, r_in, r_out, n, bottom=None, top=None):
+        """Corners (m, 8, 3) of cubes: base 0..3 = (bottom th0, bottom th1, top th1, top th0) at r_in.
+
+        ``bottom`` and ``top`` map the radii of the bottom and top corners (tapers).
+        """
         c = 1.0 / math.cos(math.pi / n)
+        bottom = bottom or (lambda r: r)
+        top = top or (lambda r: r)
+
         def rad(th):
             return np.cos(th)[:, None] * f[:, 1] + np.sin(th)[:, None] * f[:, 2]
         up = h[:, None] * f[:, 0]
         r0, r1 = rad(th0), rad(th1)
         out = np.empty((len(o), 8, 3))
         for base, r in ((0, r_in), (4, r_out)):
-            rr = (c * r)[:, None]
-            out[:, base + 0] = o + rr * r0
-            out[:, base + 1] = o + rr * r1
-            out[:, base + 2] = o + up + rr * r1
-            out[:, base + 3] = o + up + rr * r0
+            rb, rt = (c * bottom(r))[:, None], (c * top(r))[:, None]
+            out[:, base + 0] = o + rb * r0
+            out[:, base + 1] = o + rb * r1
+            out[:, base + 2] = o + up + rt * r1
+            out[:, base + 3] = o + up + rt * r0
         return out
 
     def _joint_points(self, br):
+        """The joint (thesis UJ): its base is the trunk's pith face, its top the branch pith's base.
+
+        The branch's O (``m`` corners) meets the joint's E (4 corners, each edge
+        split ``m / 4`` times), so joint corner ``4 + c`` sits at branch corner ``c m / 4``.
+        """
         o, f, h = self.level_frames(self.trunk)
         n = self.trunk.sides
         theta = 2 * np.pi * (np.arange(n + 1) - 0.5) / n
-        t, k = br.year, br.sector
+        t, k = br.level, br.sector
         face = self._cube_points(o[t:t + 1], f[t:t + 1], h[t:t + 1], theta[k:k + 1], theta[k + 1:k + 2],
                                  np.array([self.p["pith_radius"]]), np.array([self.p["pith_radius"]]), n)[0, :4]
-        _, frame = self.branch_frame(br)
-        return np.concatenate([face, face + 2 * self.p["pith_radius"] * frame[0][None]])
+        ax = self.axes[self.branches.index(br) + 1]
+        bo, bf, bh = self.level_frames(ax)
+        m = ax.sides
+        rp = self.p["pith_radius"] * self.p["branch_scale"]
+        btheta = 2 * np.pi * (np.arange(m) - 0.5) / m
+        ring = self._ring_points(bo[0], bf[0], bh[0], btheta, np.full(m, rp), np.full(m, rp), m)[:m]
+        top = ring[np.round(np.arange(4) * m / 4).astype(int) % m]
+        return np.concatenate([face, top])
 
-    def nominal_radius(self, br, s):
+    def nominal_radius(self, br, s, now=None):
         """The branch's outer radius at distance ``s`` along it, from the law's mean widths."""
         p = self.p
-        years_here = np.clip(self.year + 1 - br.year - np.floor(np.maximum(s - 2 * p["pith_radius"], 0)
+        now = self.year + 1 if now is None else now
+        years_here = np.clip(now - br.year - np.floor(np.maximum(s - 2 * p["pith_radius"], 0)
                                                                   / p["branch_length"]), 0, None)
         rings = np.arange(1, max(int(years_here.max(initial=0)), 0) + 1)
         lo_e, hi_e = self.law(rings, np.zeros_like(rings), None, 1)
@@ -592,7 +684,7 @@ class Wood:
         """Push trunk cell corners out of each branch's nominal cone (knots bend the rings)."""
         flat = pts.reshape(-1, 3).copy()
         for br in self.branches:
-            if br.year > self.year or br.year >= len(self.trunk.levels):
+            if br.year > self.year or br.level < 0:
                 continue
             p0, frame = self.branch_frame(br)
             d = frame[0]
@@ -699,7 +791,7 @@ def grow_wood(species="pine", years=10, seed=0, branches=None, check_every_step=
         raise ValueRefused(f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}; "
                            f"grow fewer years or branches")
     t0 = time.perf_counter()
-    wood = Wood(p, seed, placed, species)
+    wood = Wood(p, seed, placed, species, years=years)
     for _ in range(2 * years):
         wood.step()
         if embed_every_step:
@@ -730,7 +822,7 @@ def regrow_branch(wood: Wood, b: int, seed: int) -> Wood:
     slots = [(br.year, br.sector) for br in wood.branches]
     seeds = {i: None for i in range(len(slots))}
     new = Wood(wood.p, wood.seed, [Branch(y, s, br.seed) for (y, s), br in zip(slots, wood.branches)],
-               wood.species, wood.trunk_frames)
+               wood.species, wood.trunk_frames, wood.final_years)
     new.branches[b].seed = mix(int(seed), 1000 + b)
     del seeds
     for _ in range(wood.steps):
