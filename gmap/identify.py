@@ -119,7 +119,7 @@ def identify(gm, a, b):
     if np.all(lx == ly):
         gm._sew_walks(wx, wy)
         return
-    with gm._atomic():
+    with gm._atomic(gm._edge_zone(np.concatenate([wx.ravel(), wy.ravel()]))):
         for i in np.flatnonzero(lx != ly):
             _match_degrees(gm, int(x[i]), int(y[i]))
         wx, lx = gm.face_walk(x)

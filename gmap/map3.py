@@ -56,6 +56,9 @@ DART_SPEC = {
     "point": (np.float64, (3,), 0.0),
     "radial": (np.float64, (), 0.0),
     "corner": (np.float64, (3,), 0.0),
+    "vcorner": (np.int16, (), -1),
+    "sup": (np.int32, (2,), -1),
+    "supt": (np.float64, (), 0.0),
 }
 
 #: How each per-dart column reaches the darts an operation creates (see
@@ -65,6 +68,7 @@ DART_SPEC = {
 BUILTIN_RULES = {
     "volume": "copy", "face": "copy", "sublabel": "copy", "fcorner": "reset", "forward": "copy",
     "point": "interpolate", "radial": "interpolate", "corner": "interpolate",
+    "vcorner": "reset", "sup": "reset", "supt": "reset",
 }
 PROPAGATION_RULES = ("copy", "interpolate", "reset")
 
@@ -87,6 +91,7 @@ VOLUME_SPEC = {
     "shift": (np.float64, (), 0.0),
     "weight": (np.float64, (), 1.0),
     "exclusive": (np.bool_, (), False),
+    "fit": (np.bool_, (), False),
 }
 
 SUBLABEL_BASE = 32
@@ -122,11 +127,12 @@ def _involution_key(involutions):
 
 
 class _Atomic:
-    def __init__(self, gm):
+    def __init__(self, gm, local=None):
         self.gm = gm
+        self.local = local
 
     def __enter__(self):
-        self.snap = self.gm._snapshot()
+        self.snap = self.gm._snapshot(self.local)
         return self
 
     def __exit__(self, kind, exc, tb):
@@ -269,25 +275,45 @@ class GMap3(Operations):
     def _changed(self):
         self._cache.clear()
 
-    def _snapshot(self):
-        """Copies of everything an operation may change (for :meth:`_atomic`)."""
-        return (self.alpha.copy(), self._darts.copy(), self._volumes.copy(), dict(self._rules))
+    def _snapshot(self, local=None):
+        """What an operation may change (for :meth:`_atomic`); ``local``: the only old darts it edits."""
+        n, nvol = self.n_darts, self.n_volumes
+        if local is None:
+            return (n, nvol, None, self.alpha.copy(), self._darts.copy(), self._volumes.copy(), dict(self._rules))
+        local = np.unique(np.asarray(local, np.int64))
+        rows = {name: self._darts[name][local].copy() for name in self._darts.names()}
+        return (n, nvol, local, self._alpha[:, local].copy(), rows, None, dict(self._rules))
 
     def _restore(self, snap):
-        alpha, darts, volumes, rules = snap
-        self._darts, self._volumes, self._rules = darts, volumes, rules
-        self._alpha = np.empty((4, darts.capacity), np.int32)
-        self._alpha[:, : alpha.shape[1]] = alpha
+        n, nvol, local, alpha, darts, volumes, rules = snap
+        self._rules = rules
+        if local is None:
+            self._darts, self._volumes = darts, volumes
+            self._alpha = np.empty((4, darts.capacity), np.int32)
+            self._alpha[:, : alpha.shape[1]] = alpha
+        else:
+            self._darts._n = n
+            self._volumes._n = nvol
+            for name in list(self._darts.names()):
+                if name not in darts:
+                    del self._darts._data[name]
+                    del self._darts._spec[name]
+                else:
+                    self._darts[name][local] = darts[name]
+            self._alpha[:, local] = alpha
         self._changed()
 
-    def _atomic(self):
+    def _atomic(self, local=None):
         """Context manager: a refused operation leaves the map exactly as it was.
 
-        Any exception inside restores the arrays copied on entry (O(darts)
-        memory copies, taken only by multi-stage operations); errors that
-        are not Ramure errors are re-raised as :class:`GMapError`.
+        Any exception inside restores what was saved on entry and re-raises
+        errors that are not Ramure errors as :class:`GMapError`.  Without
+        ``local`` the whole map is copied (O(darts)); with ``local`` (every
+        old dart the operation may edit: its volume's darts, the edge orbits
+        it splits) only those rows are saved, and new darts and volumes are
+        dropped by truncation, so the cost follows the operation's size.
         """
-        return _Atomic(self)
+        return _Atomic(self, local)
 
     def _new_darts(self, count):
         """Append ``count`` free darts (each alpha points to itself); return their ids."""
@@ -383,6 +409,10 @@ class GMap3(Operations):
         dnames = [n for n in maps[0].dart_data if all(n in m.dart_data for m in maps)]
         darts = {name: np.concatenate([m.dart_data[name] for m in maps]) for name in dnames}
         darts["volume"] = np.concatenate([m.dart_volume + o for m, o in zip(maps, vol_off)])
+        if "sup" in darts:
+            sup = np.concatenate([np.where(m.dart_data["sup"] >= 0, m.dart_data["sup"] + o, -1)
+                                  for m, o in zip(maps, dart_off)])
+            darts["sup"] = sup
         names = [n for n in maps[0].volume_data if all(n in m.volume_data for m in maps)]
         volumes = {name: np.concatenate([m.volume_data[name] for m in maps]) for name in names}
         parent = volumes["parent"].astype(np.int64)

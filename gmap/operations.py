@@ -21,7 +21,8 @@ from ramure.gmap import prism as _prism
 from ramure.gmap.errors import GMapError, ValueRefused
 
 
-_BUILTIN_SET = {"volume", "face", "sublabel", "fcorner", "forward", "point", "radial", "corner"}
+_BUILTIN_SET = {"volume", "face", "sublabel", "fcorner", "forward", "point", "radial", "corner",
+                "vcorner", "sup", "supt"}
 
 
 def _darts(x):
@@ -87,6 +88,8 @@ class Operations:
         corner_points = _prism.corners(n, origins, frames, sizes)[:, t.corner, :]
         d["corner"][local] = corner_points
         d["point"][local] = corner_points
+        d["vcorner"][local] = t.corner[None, :]
+        d["sup"][local] = -1
         for name, rule in self._rules.items():
             if name not in _BUILTIN_SET:
                 d[name][local] = self._dart_fill(name)
@@ -198,7 +201,7 @@ class Operations:
             return
         if len(a) != 1:
             raise GMapError("faces of different degrees can only be sewn one pair at a time")
-        with self._atomic():
+        with self._atomic(self._edge_zone(np.concatenate([wa.ravel(), wb.ravel()]))):
             small, big = (a, lb[0]) if la[0] < lb[0] else (b, la[0])
             self._split_face_edges(int(small[0]), int(min(la[0], lb[0]) // 2), int(big // 2))
             wa, la = self.face_walk(a)
@@ -209,6 +212,27 @@ class Operations:
                     "splits the other and their degrees cannot be matched")
             self._check_sewable(wa, wb)
             self._sew_walks(wa, wb)
+
+    def _edge_zone(self, darts):
+        """Darts of every edge ``<a0,a2,a3>`` through ``darts``: all an edge split there may edit."""
+        darts = np.asarray(darts, np.int64).reshape(-1)
+        darts = darts[darts >= 0]
+        if darts.size == 0:
+            return darts
+        members, _ = self._orbits_from(np.unique(darts), (0, 2, 3), strict=False)
+        return members
+
+    def _volume_zone(self, dart, edges=None):
+        """Old darts a split of the volume of ``dart`` may edit.
+
+        Its darts, their alpha3 partners (faces split on both sides) and the
+        whole orbits of the edges in ``edges`` (the edges it splits); without
+        ``edges``, of every edge of the volume.
+        """
+        vol, _ = self._orbits_from([int(dart)], (0, 1, 2))
+        if edges is None:
+            return self._edge_zone(vol)
+        return np.concatenate([vol, self._alpha[3][vol], self._edge_zone(edges)])
 
     def _check_darts(self, darts):
         d = _darts(darts)
@@ -259,6 +283,13 @@ class Operations:
         self._changed()
 
     # ------------------------------------------------------------------ splits
+    def _set_support(self, new, a, b, t):
+        """Record that the default corner of ``new`` is ``(1 - t) corner(a) + t corner(b)``."""
+        d = self._darts
+        d["sup"][new, 0] = a
+        d["sup"][new, 1] = b
+        d["supt"][new] = t
+
     def split_edge(self, darts, t=0.5):
         """Split the edges of ``darts`` (one dart per edge) at fraction ``t`` from each dart.
 
@@ -273,7 +304,10 @@ class Operations:
         (52, 9, True)
         """
         darts = _darts(darts)
+        darts = self._check_darts(darts)
         t = np.broadcast_to(np.asarray(t, float), darts.shape)
+        if not np.all((t > 0) & (t < 1)):
+            raise GMapError("split_edge fractions must lie strictly between 0 and 1")
         members, which = self._orbits_from(darts, (0, 2, 3))
         side, side_which = self._orbits_from(darts, (2, 3))
         same_side = np.zeros(len(members), bool)
@@ -293,6 +327,7 @@ class Operations:
         alpha[2][new] = nmap(alpha[2][members])
         alpha[3][new] = nmap(alpha[3][members])
         self._propagate(new, members, old_a0, frac)
+        self._set_support(new, members, old_a0, frac)
         fw = self._darts["forward"]
         fw[new] = ~fw[members]
         self._changed()
@@ -342,6 +377,8 @@ class Operations:
             self._propagate([n2, m2], [sx, sx], skip=("volume", "face", "sublabel"))
             for name in ("volume", "face", "sublabel"):
                 self._darts[name][[n2, m2]] = self._darts[name][s1]
+            self._set_support([n1, m1], [s1, s1], [s1, s1], 0.0)
+            self._set_support([n2, m2], [sx, sx], [sx, sx], 0.0)
             fw[[n1, n2, m1, m2]] = [not fw[s1], fw[s1], fw[s1], not fw[s1]]
         if len(sides) == 2:
             for k in range(4):
@@ -363,7 +400,7 @@ class Operations:
         path = _darts(path)
         if path.size == 0 or path.min() < 0 or path.max() >= self.n_darts:
             raise GMapError(f"split_volume needs dart ids in 0..{self.n_darts - 1}")
-        with self._atomic():
+        with self._atomic(self._orbits_from(path[:1], (0, 1, 2))[0]):
             return self._split_volume(path, codes)
 
     def _split_volume(self, path, codes):
@@ -405,6 +442,8 @@ class Operations:
         data = self._darts
         self._propagate(f, p1)
         self._propagate(g, p1)
+        self._set_support(f, p1, p1, 0.0)
+        self._set_support(g, p1, p1, 0.0)
         data["face"][f] = codes[0]
         data["face"][g] = codes[1]
         data["sublabel"][new] = 0
@@ -452,17 +491,22 @@ class Operations:
         if face is not None and not 0 <= int(face) < self.n_darts:
             raise GMapError(f"dart ids must be in 0..{self.n_darts - 1}, got {face}")
         codes = [_label_code(x) for x in labels]
-        with self._atomic():
+        if face is not None and int(self._darts["volume"][int(face)]) != volume:
+            raise GMapError(f"dart {face} is not in volume {volume}")
+        anchor = face
+        if anchor is None:
+            anchor = int(self.face_of(volume, "O", missing="ignore"))
+            if anchor < 0:
+                raise GMapError(f"volume {volume} has no O face")
+        walk, length = self.face_walk([anchor])
+        w = walk[0, : length[0]]
+        leaving = self._alpha[1][self._alpha[2][w[0::2]]]
+        with self._atomic(self._volume_zone(anchor, leaving)):
             return self._split_prism(volume, float(t), face, codes)
 
     def _split_prism(self, volume, t, face, labels):
         if face is None:
-            darts = np.flatnonzero((self._darts["volume"] == volume) & (self._darts["face"] == _prism.FACE_O))
-            if darts.size == 0:
-                raise GMapError(f"volume {volume} has no O face")
-            face = int(darts[0])
-        elif int(self._darts["volume"][face]) != int(volume):
-            raise GMapError(f"dart {face} is not in volume {volume}")
+            face = int(self.face_of(volume, "O"))
         walk, length = self.face_walk([face])
         w = walk[0, : length[0]]
         alpha = self._alpha
@@ -503,6 +547,8 @@ class Operations:
         new_alpha = remap[alpha[:, keep]].astype(np.int32)
         self._darts.keep(keep)
         self._alpha[:, : len(keep)] = new_alpha
+        sup = self._darts["sup"]
+        sup[:] = np.where(sup >= 0, remap[np.maximum(sup, 0)], -1)
         vkeep = np.setdiff1d(np.arange(self.n_volumes), volumes)
         vremap = np.full(self.n_volumes, -1, np.int64)
         vremap[vkeep] = np.arange(len(vkeep))

@@ -1,0 +1,97 @@
+"""Hierarchical embedding: grow on faces, re-frame from parents' support faces, embed now or later."""
+import numpy as np
+import pytest
+
+from ramure.gmap import GMap3, GMapError
+from ramure.gmap.embedding import grow, reframe, support_frames
+from ramure.gmap.topology import assert_solid
+
+
+def trunk_with_rings(embed_each):
+    """A 6-prism trunk, a cube on each side, a second layer on the cubes' E faces, rings joined."""
+    gm = GMap3()
+    gm.add_prisms(6, sizes=[[2.0, 2.0, 2.0]])
+    snaps = []
+    ring = grow(gm, gm.face_of(np.zeros(6, int), [f"C{j + 1}" for j in range(6)]), 4, height=0.5)
+    if embed_each:
+        snaps.append(gm.embed().copy())
+    gm.identify(gm.face_of(ring, "C2"), gm.face_of(np.roll(ring, -1), "C4"))
+    outer = grow(gm, gm.face_of(ring, "E"), 4, height=0.2, angles=[0.0, 0.0, 5.0])
+    if embed_each:
+        snaps.append(gm.embed().copy())
+    gm.identify(gm.face_of(outer, "C2"), gm.face_of(np.roll(outer, -1), "C4"))
+    gm.split_prism(int(outer[0]), 0.5)
+    return gm, ring, outer
+
+
+def test_grown_cubes_sit_on_their_support_faces():
+    gm = GMap3()
+    gm.add_prisms(4, sizes=[[1.0, 2.0, 3.0]])
+    kids = grow(gm, gm.face_of([0, 0, 0], ["E", "C1", "C2"]), 4, height=0.5)
+    assert_solid(gm)
+    c = gm.dart_data["corner"]
+    vid, _ = gm.cells(0)
+    for k in kids:            # O corners of each child on the parent's face corners: 4 shared vertices
+        o = gm.face_darts([k], "O")[0]
+        parent_face = gm.alpha[3][o]
+        assert np.abs(c[o] - c[parent_face]).max() < 1e-12
+    size = gm.volume_data["size"][kids]
+    assert np.allclose(size[:, 0], 0.5)
+    assert np.allclose(np.sort(size[:, 1:], axis=1), [[2, 3], [1, 3], [1, 2]])   # E, C1 (+L), C2 (+U)
+
+
+def test_support_frame_of_a_7_gon_is_the_quads_frame():
+    gm = GMap3()
+    gm.add_prisms(4)
+    before = support_frames(gm, [gm.face_of(0, "C4")])
+    gm.add_prisms(7, origins=[[0, -2, 0]])
+    gm.sew3([gm.face_of(0, "C4")], [gm.face_of(1, "O")])
+    after = support_frames(gm, [gm.face_of(0, "C4")])
+    for x, y in zip(before, after):
+        assert np.allclose(x, y)
+
+
+def test_a_branch_of_16_sides_on_a_quad_is_one_solid():
+    gm = GMap3()
+    gm.add_prisms(4)
+    (b,) = grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
+    assert_solid(gm)
+    _, length = gm.face_walk([gm.face_of(0, "C1")])
+    assert length[0] == 32
+    assert gm.volume_data["exclusive"][b]
+
+
+def test_embedding_each_step_or_once_gives_the_same_positions():
+    each, _, _ = trunk_with_rings(True)
+    once, _, _ = trunk_with_rings(False)
+    assert_solid(each)
+    a = each.embed()
+    b = reframe(once)
+    assert np.abs(a - b).max() < 1e-12
+    assert np.abs(reframe(each) - a).max() < 1e-12       # re-framing changes nothing by itself
+
+
+def test_reframe_moves_children_with_their_parent():
+    gm, ring, outer = trunk_with_rings(False)
+    before = reframe(gm).copy()
+    gm.volume_data["size"][0] *= [1.0, 2.0, 2.0]          # fatter pith
+    after = reframe(gm)
+    c = gm.dart_data["corner"]
+    o = gm.face_darts(ring, "O")[0]
+    assert np.abs(c[o] - c[gm.alpha[3][o]]).max() < 1e-12   # rings still sit on the pith's faces
+    assert np.linalg.norm(after, axis=1).max() > np.linalg.norm(before, axis=1).max() + 0.5
+    assert_solid(gm)
+
+
+def test_grow_refusals_change_nothing():
+    gm = GMap3()
+    gm.add_prisms(4)
+    grow(gm, [gm.face_of(0, "E")], 4, height=1.0)
+    before = gm.alpha.copy(), gm.n_volumes
+    with pytest.raises(GMapError, match="sewn already"):
+        grow(gm, [gm.face_of(0, "E")], 4, height=1.0)
+    with pytest.raises(GMapError):
+        grow(gm, [gm.face_of(0, "C1"), gm.face_of(0, "C1")], 4, height=1.0)
+    with pytest.raises(GMapError):
+        grow(gm, [gm.face_of(0, "C1")], 4, height=-1.0)
+    assert np.array_equal(before[0], gm.alpha) and before[1] == gm.n_volumes
