@@ -150,7 +150,15 @@ class Controller(QObject):
         return self.submit("derivation", lambda ex: ex.set_derivation(n, seed), key="derivation")
 
     def regrow(self, seed=None, constants=None, params=None):
-        return self.submit("regrow", lambda ex: ex.regrow(seed=seed, constants=constants, params=params))
+        """Regrow the selection (or the whole plant); what grew back stays selected, so the
+        next Regrow ("again, another seed") regrows the same part."""
+        def run(ex):
+            had_selection = bool(ex.selection)
+            result = ex.regrow(seed=seed, constants=constants, params=params)
+            if had_selection:
+                ex.select(state.regrown_leaves(ex, result))
+            return result
+        return self.submit("regrow", run)
 
     def prune(self):
         return self.submit("prune", lambda ex: ex.prune())

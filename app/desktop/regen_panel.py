@@ -69,6 +69,11 @@ class RegenPanel(QWidget):
         buttons.addWidget(self.prune_button, 0, 1)
         buttons.addWidget(self.undo_button, 1, 0)
         buttons.addWidget(self.redo_button, 1, 1)
+        self.note = QLabel("")
+        self.note.setObjectName("regrowNote")
+        self.note.setWordWrap(True)
+        self.note.setStyleSheet("color: #7a4d00;")
+        self.note.hide()
 
         self.constants_box = QGroupBox("Constants for the selection")
         self.constants_form = QFormLayout()
@@ -135,6 +140,7 @@ class RegenPanel(QWidget):
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(rho_row)
         layout.addLayout(buttons)
+        layout.addWidget(self.note)
         layout.addWidget(qual)
         layout.addWidget(self.fruit_box)
         layout.addWidget(self.constants_box, 1)
@@ -148,6 +154,11 @@ class RegenPanel(QWidget):
         self.rho.setValue(int(round(percent)))
         self.rho_label.setText(f"ρ = {self.rho.value()}")
         self.rho.blockSignals(False)
+
+    def set_note(self, text):
+        """A word under the buttons about the last regrow (hidden when empty)."""
+        self.note.setText(text)
+        self.note.setVisible(bool(text))
 
     def set_history(self, can_undo, can_redo):
         self.undo_button.setEnabled(can_undo)

@@ -112,18 +112,53 @@ def set_constants_from_text(explorer, text):
 
 
 def status_line(explorer):
-    """The status bar's line: :meth:`Explorer.status`, but worded for fruit and constants edits
-    (which replace no subtree: "roots [], 0 modules replaced by 0" would say nothing)."""
-    r = explorer.last_result
-    if r is None or r.op not in ("fruit", "constants"):
-        return explorer.status()
-    base = f"{len(explorer.derivation)} modules, {len(explorer.skeleton)} segments"
+    """The status bar's line, in the user's words: what the plant is and what the last edit did.
+
+    >>> from types import SimpleNamespace as NS
+    >>> r = NS(op="regrow", roots=np.array([4, 9]), removed=412, added=398, cut=object())
+    >>> ex = NS(derivation=range(2100), skeleton=range(1023), selection=[5, 6], last_result=r)
+    >>> status_line(ex)
+    '1,023 branch segments (2,100 modules), 2 selected — last edit: regrew 2 parts of the plant (412 modules replaced by 398)'
+    """
+    base = f"{len(explorer.skeleton):,} branch segments ({len(explorer.derivation):,} modules)"
     if explorer.selection:
-        base += f", {len(explorer.selection)} selected"
-    if r.op == "fruit":
-        count = len(r.roots)
-        return f"{base} — last edit: {count} fruit regrown (new seed or shape)"
-    return f"{base} — last edit: constants changed, whole plant re-derived ({r.removed} → {r.added} modules)"
+        base += f", {len(explorer.selection):,} selected"
+    r = explorer.last_result
+    return base if r is None else f"{base} — last edit: {edit_words(r)}"
+
+
+def edit_words(result):
+    """What one edit did, for people: "regrew 2 parts of the plant (412 modules replaced by 398)"."""
+    count = len(result.roots)
+    parts = f"{count} part{'s' if count != 1 else ''} of the plant"
+    if result.op == "fruit":
+        return f"{count} fruit regrown (new seed or shape)"
+    if result.op == "constants":
+        return f"constants changed, whole plant re-derived ({result.removed:,} → {result.added:,} modules)"
+    if result.op == "prune":
+        return f"pruned {parts} ({result.removed:,} modules removed)"
+    if getattr(result, "cut", None) is None and result.op == "regrow":
+        return f"regrew the whole plant ({result.removed:,} modules replaced by {result.added:,})"
+    return f"{result.op if result.op != 'regrow' else 'regrew'} {parts} " \
+           f"({result.removed:,} modules replaced by {result.added:,})"
+
+
+def regrown_leaves(explorer, result):
+    """The leaves a regrow put in the string (what stays selected after it), sorted."""
+    change = getattr(result, "change", None)
+    if change is None or not len(change.added):
+        return []
+    tree = explorer.derivation.tree
+    added = np.asarray(change.added, np.int64)
+    return np.sort(added[tree.leaf_positions(added) >= 0]).tolist()
+
+
+def same_plant(before, after):
+    """True if ``before`` (segment ``(start, end)`` arrays) and skeleton ``after`` draw the same
+    plant (same segments, same places): a regrow that changed nothing, as on a deterministic grammar."""
+    if before is None or after is None or len(before[0]) != len(after.start):
+        return False
+    return bool(np.array_equal(before[0], after.start) and np.array_equal(before[1], after.end))
 
 
 def string_preview(explorer, limit=STRING_PREVIEW_MODULES):

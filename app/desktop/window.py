@@ -37,6 +37,11 @@ from ramure.errors import RamureError
 TITLE = "Ramure"
 KINSHIP_HINT = ("Kinship colours: red = the selected leaf and its closest kin, through yellow and green, "
                 "to blue = related only through the first derivation steps")
+SAME_PLANT = ("Regrowing gave the same plant: this grammar is deterministic (no rule probabilities, "
+              "no uniform() or normal() draws), so a new seed grows the same branches. To change the "
+              "selected part: type values under 'Constants for the selection' and press 'Regrow with "
+              "constants', apply a qualifier, or open a stochastic grammar.")
+REGROWN = "The regrown part stays selected (red): Regrow again for another seed, Esc clears, Ctrl+Z undoes."
 KINSHIP_NEEDS_ONE = "Kinship colours: click exactly one branch to colour the plant by kinship to it"
 
 
@@ -63,6 +68,7 @@ class MainWindow(QMainWindow):
         self.last_message = None
         self.drawn_version = None
         self.shown_text = explorer.text  # the model's grammar text the editor last showed
+        self.previous_geometry = None  # (start, end) of the plant drawn before the current one
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
@@ -216,6 +222,8 @@ class MainWindow(QMainWindow):
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap, reset_camera=None):
         """A new plant version: redraw the 3D view and every view of the plant."""
+        old = getattr(self.view.snapshot, "skeleton", None)  # copied: an edit may reuse its arrays
+        self.previous_geometry = None if old is None else (np.array(old.start), np.array(old.end))
         self.base_colors = state.base_colors(snap.mesh)
         self.fruit_leaves = state.fruit_leaves(snap.mesh)
         self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection, base=self.base_colors),
@@ -285,9 +293,8 @@ class MainWindow(QMainWindow):
         if snap.cut_layout is None:
             self.cut_view.clear(f"Last {result.op}: the whole plant (no cut).")
             return
-        self.cut_view.show_layout(snap.cut_layout, f"Last {result.op}: roots {result.roots.tolist()[:12]}, "
-                                          f"{result.removed} modules replaced by {result.added}, "
-                                          f"cut value {result.cut_value:g}")
+        self.cut_view.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; "
+                                          f"cut capacity {result.cut_value:g}")
 
     def show_planned_cut(self):
         def plan(ex):
@@ -406,7 +413,18 @@ class MainWindow(QMainWindow):
             self.mark_saved()
             self.view.reset_camera()
         elif job.name.startswith(("regrow", "prune")) and job.error is None:
-            self.status(self.controller.snapshot.status, 0)
+            self.after_regrow(job)
+
+    def after_regrow(self, job):
+        """Say what the regrow did; on a deterministic grammar, say why nothing changed."""
+        snap = self.controller.snapshot
+        note = ""
+        if job.name == "regrow" and state.same_plant(self.previous_geometry, snap.skeleton):
+            note = SAME_PLANT
+        elif job.name == "regrow" and snap.selection:
+            note = REGROWN
+        self.regen.set_note(note)
+        self.status(SAME_PLANT if note == SAME_PLANT else snap.status, 0)
 
     # -- messages -------------------------------------------------------------------------
     def status(self, text, timeout=4000):
