@@ -52,6 +52,16 @@ def _normal(normal):
     return n / length
 
 
+def cut_map(gm, normal, origin=None):
+    """Cut the 3-G-map by a plane; the part behind it as a new valid 3-G-map (see :mod:`ramure.gmap.mapcut`).
+
+    Agrees with ``plane_cut(gm, normal, origin, mode="clip")`` on the kept
+    volume; cuts can be repeated and commute.
+    """
+    from ramure.gmap.mapcut import cut_map as _cut_map
+    return _cut_map(gm, normal, origin)
+
+
 def plane_cut(model, normal="z", origin=None, mode="clip"):
     """Keep the part of ``model`` (a GMap3 or an UnstructuredGrid) behind the plane.
 

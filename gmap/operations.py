@@ -386,6 +386,54 @@ class Operations:
         self._changed()
         return int(new[0, 0]), int(new[0, 2])
 
+    def _split_faces(self, d1, k2):
+        """Split many faces at once: face of ``d1[i]`` from its vertex to the corner ``k2[i]`` steps on.
+
+        Vectorised :meth:`split_face`: ``k2`` counts corners along the walk
+        from ``d1`` (``a0`` first) and must be in ``2 .. degree - 2``.  Each
+        face ``<a0,a1,a3>`` may appear once; sewn faces are split on both
+        sides.  Returns the new darts at ``d1``'s vertex in the half holding
+        ``a0(d1)``.
+        """
+        d1 = np.asarray(d1, np.int64)
+        k2 = np.asarray(k2, np.int64)
+        walk, length = self.face_walk(d1)
+        deg = length // 2
+        if np.any((k2 < 2) | (k2 > deg - 2)):
+            raise GMapError("split_faces needs two vertices that are neither equal nor adjacent")
+        rows = np.arange(len(d1))
+        x = walk[rows, 2 * k2 - 1]
+        y = walk[rows, length - 1]
+        z = walk[rows, 2 * k2]
+        a3 = self._alpha[3]
+        sewn = a3[d1] != d1
+        s1 = np.concatenate([d1, a3[d1[sewn]]]).astype(np.int64)
+        sx = np.concatenate([x, a3[x[sewn]]]).astype(np.int64)
+        sy = np.concatenate([y, a3[y[sewn]]]).astype(np.int64)
+        sz = np.concatenate([z, a3[z[sewn]]]).astype(np.int64)
+        m = len(s1)
+        new = self._new_darts(4 * m).astype(np.int64).reshape(4, m)
+        n1, n2, m1, m2 = new
+        alpha = self._alpha
+        for i, u, v in ((1, sx, n2), (1, n1, s1), (1, sz, m2), (1, m1, sy),
+                        (0, n1, n2), (0, m1, m2), (2, n1, m1), (2, n2, m2)):
+            alpha[i][u], alpha[i][v] = v, u
+        k = len(d1)
+        other = np.flatnonzero(sewn)
+        for row in (n1, n2, m1, m2):
+            alpha[3][row] = row
+            alpha[3][row[other]] = row[k:]
+            alpha[3][row[k:]] = row[other]
+        self._propagate(np.concatenate([n1, m1]), np.concatenate([s1, s1]))
+        self._propagate(np.concatenate([n2, m2]), np.concatenate([sx, sx]))
+        self._set_support(np.concatenate([n1, m1]), np.concatenate([s1, s1]), np.concatenate([s1, s1]), 0.0)
+        self._set_support(np.concatenate([n2, m2]), np.concatenate([sx, sx]), np.concatenate([sx, sx]), 0.0)
+        fw = self._darts["forward"]
+        f1 = fw[s1].copy()
+        fw[n1], fw[n2], fw[m1], fw[m2] = ~f1, f1, f1, ~f1
+        self._changed()
+        return n1[:k]
+
     def split_volume(self, path, labels=("E", "O")):
         """Cut a volume in two along a closed loop of edges on its surface.
 
@@ -403,14 +451,16 @@ class Operations:
         with self._atomic(self._orbits_from(path[:1], (0, 1, 2))[0]):
             return self._split_volume(path, codes)
 
-    def _split_volume(self, path, codes):
+    def _split_volume(self, path, codes, many=False):
+        """Split volumes along closed loops ``path`` (one loop per volume; ``many`` allows several)."""
         alpha = self._alpha
         vol = self._darts["volume"]
-        if len(np.unique(vol[path])) != 1:
+        if not many and len(np.unique(vol[path])) != 1:
             raise GMapError("split_volume needs a path in one volume")
         p1 = np.unique(np.concatenate([path, alpha[0][path]]))
         if len(p1) != 2 * len(path):
             raise GMapError("split_volume needs one dart per path edge")
+
         def on_path(x):
             pos = np.minimum(np.searchsorted(p1, x), len(p1) - 1)
             return p1[pos] == x
@@ -447,24 +497,28 @@ class Operations:
         data["face"][f] = codes[0]
         data["face"][g] = codes[1]
         data["sublabel"][new] = 0
-        walk, length = self.face_walk([f[0]])
-        w = walk[0, : length[0]]
-        pos = np.arange(len(w))
+        old_vols, first = np.unique(vol[p1], return_index=True)
+        walk, length = self.face_walk(f[first])
+        pos = np.broadcast_to(np.arange(walk.shape[1])[None, :], walk.shape)
+        ok = walk >= 0
+        w, pos = walk[ok], pos[ok]
+        deg = np.broadcast_to((length // 2)[:, None], walk.shape)[ok]
         data["forward"][w] = pos % 2 == 0
-        data["fcorner"][w] = ((pos + 1) // 2) % (len(w) // 2)
+        data["fcorner"][w] = ((pos + 1) // 2) % deg
         data["forward"][alpha[3][w]] = data["forward"][w]
         data["fcorner"][alpha[3][w]] = data["fcorner"][w]
+        if len(w) != k:
+            raise GMapError("split_volume: a volume holds more than one loop")
         self._changed()
-        part2, _ = self._orbits_from([int(g[0])], (0, 1, 2))
+        part2, which = self._orbits_from(g[first], (0, 1, 2))
         if np.any(np.isin(part2, f)):
             raise GMapError("split_volume: the path does not separate the volume")
-        old = int(vol[p1[0]])
-        (new_vol,) = self._new_volumes(1)
+        new_vols = self._new_volumes(len(old_vols))
         for name in self._volumes.names():
-            self._volumes[name][new_vol] = self._volumes[name][old]
-        data["volume"][part2] = new_vol
+            self._volumes[name][new_vols] = self._volumes[name][old_vols]
+        data["volume"][part2] = new_vols[which]
         self._changed()
-        return int(new_vol)
+        return new_vols if many else int(new_vols[0])
 
     def split_prism(self, volume, t=0.5, face=None, labels=("E", "O")):
         """Split prism ``volume`` parallel to one face (thesis rule ``A ->^O B C``).

@@ -30,8 +30,8 @@ from functools import lru_cache
 import numpy as np
 
 #: face label codes: O = 0, E = 1, Ck = k + 1 (k >= 1); I = -1 marks interior
-#: faces created by volume subdivision.
-FACE_O, FACE_E, FACE_I = 0, 1, -1
+#: faces created by volume subdivision, X = -2 the faces a map cut creates.
+FACE_O, FACE_E, FACE_I, FACE_CUT = 0, 1, -1, -2
 
 
 def face_label_name(code):
@@ -47,6 +47,8 @@ def face_label_name(code):
         return "E"
     if code == FACE_I:
         return "I"
+    if code == FACE_CUT:
+        return "X"
     return f"C{code - 1}"
 
 
@@ -63,9 +65,11 @@ def face_label_code(name):
         return FACE_E
     if name == "I":
         return FACE_I
+    if name == "X":
+        return FACE_CUT
     if name.startswith("C") and name[1:].isdigit() and int(name[1:]) >= 1:
         return int(name[1:]) + 1
-    raise ValueError(f"unknown face label {name!r}: expected O, E, I or C1, C2, ...")
+    raise ValueError(f"unknown face label {name!r}: expected O, E, I, X or C1, C2, ...")
 
 
 @dataclass(frozen=True)
