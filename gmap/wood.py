@@ -181,12 +181,17 @@ def _check(p):
          "branches, sapwood_rings and heartwood_age must be >= 0")
 
 
-def estimated_darts(p, years, n_branches=None):
-    """Darts the wood will have: the trunk's closed form plus each branch at its most."""
-    nb = p["branches"] if n_branches is None else n_branches
+def estimated_darts(p, years, branch_years=()):
+    """Darts the wood will have: the trunk's closed form plus each branch's (a branch born in
+    year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years, plus its joint);
+    nodes add one pith prism and its stacks per year with branches."""
     s, b = int(p["sides"]), int(p["branch_sides"])
-    branch = 48 + 12 * b * years + 48 * b * 3 * years * (years + 1) // 2
-    return trunk_darts(s, years) + nb * branch
+    total = trunk_darts(s, years)
+    for j in sorted(set(int(y) for y in branch_years)):
+        total += 12 * s + 48 * s * 3 * (years - j)           # the node level and its stacks
+    for j in branch_years:
+        total += 48 + trunk_darts(b, years - int(j))
+    return total
 
 
 # ---------------------------------------------------------------------- geometry helpers
@@ -488,6 +493,12 @@ class Wood:
 
     def trunk_radius(self):
         """The trunk's radius at its base after the final year, from the law's mean widths."""
+        if self.final_years is not None and "_radius" in self.__dict__:
+            return self._radius
+        self._radius = self._trunk_radius()
+        return self._radius
+
+    def _trunk_radius(self):
         p = self.p
         years = self.final_years or (self.year + 1)
         rings = np.arange(1, years + 1)
@@ -500,9 +511,12 @@ class Wood:
         """Height of a node carrying branches: the branches' final base diameter and a margin."""
         if not self.branches:
             return 0.0
+        if self.final_years is not None and "_node" in self.__dict__:
+            return self._node
         years = self.final_years or (self.year + 1)
         probe = Branch(0, 0, 0)
-        return 2.4 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
+        self._node = 2.4 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
+        return self._node
 
     def branch_frame(self, br):
         """Base point (centre of the trunk face) and frame (H along the branch) of a branch."""
@@ -603,13 +617,18 @@ class Wood:
         """
         vd = self.gm.volume_data
         cell = vd["cell"][cells].astype(np.int64)
-        above = np.array([len(ax.stacks.get((int(a) + 1, int(b)), ())) if (int(a) + 1, int(b)) not in ax.missing
-                          else 10 ** 6 for a, b in zip(t, k)], np.int64)
+        n_levels, n = len(ax.levels), ax.sides
+        count = np.zeros((n_levels + 1, n), np.int64)          # cells per stack; a slot never tapers
+        for (a, b), stack in ax.stacks.items():
+            count[a, b] = len(stack)
+        for a, b in ax.missing:
+            count[a, b] = 10 ** 6
+        above = count[t + 1, k]
+        table = np.full((n_levels, n, int(cell.max()) + 1), rp)
+        table[t, k, cell] = radii[cells]
+        m = np.minimum(above, cell)
+        base = np.where(m > 0, table[t, k, np.maximum(m, 0)], rp)
         exposed = cell > above
-        # radius where the stack above ends, in this stack
-        key = {(int(a), int(b), int(c)): float(r) for a, b, c, r in zip(t, k, cell, radii[cells])}
-        base = np.array([key.get((int(a), int(b), int(m)), rp) if m > 0 else rp
-                         for a, b, m in zip(t, k, np.minimum(above, cell))])
         eps = self.TAPER
 
         def top(r):
@@ -768,8 +787,9 @@ def grow_wood(species="pine", years=10, seed=0, branches=None, check_every_step=
     species' ``branches``) or a list of ``(year, sector)`` pairs.
     ``branch_seeds`` maps a branch index to its seed (regrowth).
     """
-    if branches is not None and not isinstance(branches, (int, np.integer)):
-        params = dict(params)
+    if isinstance(branches, str):                 # from the command line (--set branches=3)
+        params = {**params, "branches": branches}
+        branches = None
     p = resolve_params(species, **params)
     years = _years(years)
     if isinstance(branches, (int, np.integer)) or branches is None:
@@ -786,7 +806,7 @@ def grow_wood(species="pine", years=10, seed=0, branches=None, check_every_step=
         raise ValueRefused("two branches share one trunk face (same year and sector)")
     for i, s in (branch_seeds or {}).items():
         placed[int(i)].seed = mix(int(s), 1000 + int(i))
-    est = estimated_darts(p, years, len(placed))
+    est = estimated_darts(p, years, [b.year for b in placed])
     if est > MAX_DARTS:
         raise ValueRefused(f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}; "
                            f"grow fewer years or branches")

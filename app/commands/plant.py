@@ -74,6 +74,10 @@ def load_and_derive(args):
 
 
 def run_check(args):
+    if str(args.file).endswith(".g3l"):               # 3Gmap L-systems (wood)
+        from ramure.app.commands.wood import run_check_g3l
+
+        return run_check_g3l(args)
     ls = LSystem.from_file(args.file)
     g = ls.grammar
     print(f"{args.file}: ok — {len(g.rules)} rule(s), {len(g.constants)} constant(s), n = {g.n}, "

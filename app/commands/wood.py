@@ -223,6 +223,20 @@ def export_glb(grid, path):
     return path
 
 
+def run_check_g3l(args):
+    """``ramure check FILE.g3l``: parse a 3Gmap L-system and report its rules (errors: line, column, caret)."""
+    from ramure.gmap.g3l import load_g3l
+
+    g = load_g3l(args.file)
+    ops = {}
+    for r in g.rules:
+        ops[r.op] = ops.get(r.op, 0) + 1
+    kinds = ", ".join(f"{v} {k}" for k, v in sorted(ops.items()))
+    print(f"{args.file}: ok — {len(g.rules)} rule(s) ({kinds}), {len(g.constants)} constant(s), "
+          f"{len(g.functions)} function(s), axiom {g.axiom.symbol}")
+    return 0
+
+
 def register(sub):
     p = sub.add_parser("wood", help="grow volumetric wood (rings, knots, bark); cut it; facts, PNG, VTU or GLB")
     p.add_argument("--species", default="pine", help="species preset: pine or oak (default pine)")

@@ -1,0 +1,89 @@
+"""Volumetric wood benchmarks (issue 13, spec decision 10).
+
+Reference model: a 16-sided trunk, 10 years (20 half-year steps), 3 branches.
+The thesis reports about 5 s on a Pentium IV 2.66 GHz for its trunk with
+branches, with no size stated.  Targets: growth with the embedding every step
+plus validity and chi checks <= 0.5 s; a cut picture <= 33 ms after the first
+conversion; ``cut_map`` <= 100 ms (when the kernel has it); a 30-year trunk
+with 20 branches <= 5 s and <= 2 GB.  Medians of a few runs; the machine is
+shared, so figures move with the load.
+"""
+from __future__ import annotations
+
+import resource
+import statistics
+import time
+
+import numpy as np
+
+from ramure.gmap import wood as W
+from ramure.gmap.topology import assert_solid
+
+
+def _median(fn, repeats=3):
+    times, result = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), result
+
+
+def _record(seconds, target, gm, **extra):
+    return {"seconds": round(seconds, 4), "target_seconds": target, "ok": bool(seconds <= target),
+            "darts": gm.n_darts, "volumes": gm.n_volumes, "darts_per_second": round(gm.n_darts / seconds),
+            **extra}
+
+
+def bench_wood_reference_growth():
+    """16-sided trunk, 10 years, 3 branches: growth, embedding, validity and chi every step."""
+    seconds, w = _median(lambda: W.grow_wood("pine", years=10, branches=3, embed_every_step=True,
+                                             check_every_step=True))
+    grow_only, _ = _median(lambda: W.grow_wood("pine", years=10, branches=3))
+    return _record(seconds, 0.5, w.gm, growth_only_seconds=round(grow_only, 4))
+
+
+def bench_wood_cut_picture():
+    """A z cut of the reference wood (VTK clip of the converted grid), after the first conversion."""
+    w = W.grow_wood("pine", years=10, branches=3)
+    t0 = time.perf_counter()
+    grid = W.to_grid(w)
+    convert = time.perf_counter() - t0
+
+    def cut():
+        return grid.clip(normal=(0, 0, 1), origin=(0, 0, 1.0), invert=True)
+
+    seconds, part = _median(cut, repeats=7)
+    return _record(seconds, 0.033, w.gm, conversion_seconds=round(convert, 4), cut_cells=part.n_cells)
+
+
+def bench_wood_cut_map():
+    """``cut_map`` (a 3G-map cut, from the kernel) of the reference wood, when available."""
+    w = W.grow_wood("pine", years=10, branches=3)
+    try:
+        from ramure.gmap.cut import cut_map
+    except ImportError:
+        return {"seconds": None, "target_seconds": 0.1, "ok": False, "skipped": "kernel has no cut_map yet",
+                "darts": w.gm.n_darts}
+    seconds, part = _median(lambda: cut_map(w.gm, (0, 0, 1), (0, 0, 1.0)))
+    return _record(seconds, 0.1, w.gm, kept_darts=part.n_darts)
+
+
+def bench_wood_30_years_20_branches():
+    """A 30-year trunk with 20 branches, grown and checked once: <= 5 s and <= 2 GB."""
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    w = W.grow_wood("pine", years=30, branches=20)
+    assert_solid(w.gm)
+    seconds = time.perf_counter() - t0
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    rec = _record(seconds, 5.0, w.gm, peak_rss_mb=round(peak_mb), rss_before_mb=round(before / 1024))
+    rec["ok"] = bool(rec["ok"] and peak_mb <= 2048)
+    return rec
+
+
+if __name__ == "__main__":
+    for name, fn in sorted(globals().items()):
+        if name.startswith("bench_"):
+            print(name, fn())
+            np.random.seed(0)

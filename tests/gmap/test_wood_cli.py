@@ -1,0 +1,77 @@
+"""``ramure wood`` and ``ramure check FILE.g3l``: JSON facts, cuts, outputs, one-line refusals."""
+import json
+
+import numpy as np
+import pytest
+import pyvista as pv
+
+from ramure.app.cli import main
+from ramure.gmap import wood as W
+
+
+def run_json(capsys, *argv):
+    assert main(["wood", *argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_json_facts_of_a_trunk(capsys):
+    r = run_json(capsys, "--years", "3", "--set", "branches=0")
+    assert r["darts"] == W.trunk_darts(16, 3) and r["volumes"] == W.trunk_volumes(16, 3)
+    assert (r["chi"], r["boundary_chi"], r["valid"]) == (1, 2, True)
+    assert r["tissues"]["pith"] == 3 and r["tissues"]["bark"] == 16 * 6
+    assert r["seconds"] > 0 and r["darts_per_second"] > 0
+
+
+def test_cut_reports_rings_and_knots(capsys, tmp_path):
+    out = tmp_path / "slice.vtu"
+    r = run_json(capsys, "--years", "5", "--cut", "z=0.2", "-o", str(out))
+    assert r["rings"] == 5 and r["knots"] >= 0 and out.exists()
+    grid = pv.read(str(out))
+    assert grid.n_cells > 0 and grid.bounds[5] <= 0.2 + 1e-9
+    assert not list(tmp_path.glob(".*"))          # the temporary file was renamed
+
+
+def test_plank_png_is_not_blank(capsys, tmp_path):
+    out = tmp_path / "plank.png"
+    r = run_json(capsys, "--years", "6", "--set", "height=0.12", "--plank",
+                 "normal=x,offset=0.01,thickness=0.004", "-o", str(out), "--size", "300x300")
+    assert r["rings"] >= 2 and out.stat().st_size > 2000
+    from PIL import Image
+
+    pixels = np.asarray(Image.open(out).convert("RGB")).reshape(-1, 3)
+    assert len(np.unique(pixels, axis=0)) > 8                  # wood colours, not a blank picture
+
+
+def test_grammar_option_runs_a_g3l(capsys):
+    r = run_json(capsys, "--grammar", "grammars/wood/spiral.g3l", "--years", "2")
+    assert r["darts"] == 192 * 5 + 384 * 4 and r["chi"] == 1 and "labels" in r
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--years", "0"], "years"),
+    (["--species", "elm"], "unknown species"),
+    (["--set", "early_min=nan"], "finite"),
+    (["--set", "late_min=0.01", "--set", "late_max=0.001"], "must not exceed"),
+    (["--set", "sides=2"], "at least 3"),
+    (["--set", "flavour=1"], "unknown wood parameter"),
+    (["--plank", "normal=0:0:0"], "non-zero"),
+    (["--cut", "q=1"], "cut plane"),
+    (["--years", "2", "--plank", "normal=x,offset=0.3,thickness=0.02"], "misses the wood"),
+    (["-o", "trunk.obj"], ".vtu"),
+])
+def test_bad_input_exits_2_with_one_line(capsys, argv, words, tmp_path):
+    argv = [a if a != "trunk.obj" else str(tmp_path / "trunk.obj") for a in argv]
+    code = main(["wood", *argv])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and words in err and "\n" not in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_check_reads_g3l(capsys, tmp_path):
+    assert main(["check", "grammars/wood/trunk.g3l"]) == 0
+    assert "10 rule(s)" in capsys.readouterr().out
+    bad = tmp_path / "bad.g3l"
+    bad.write_text("axiom: A(4)\n(p1) A -> A[B(4, q)]_E\n")
+    assert main(["check", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "line 2, column 18" in err and "^" in err
