@@ -263,7 +263,8 @@ class Explorer:
 
         out = apply_qualifier(self.session, name, sweep, self.selection, rho=self.rho, points=points,
                               regions=regions, tries=tries)
-        self._after_edit(out.regen)
+        if out.regen is not None:  # not improved: the plant and the selection stay as they were
+            self._after_edit(out.regen)
         return out
 
     def fruit_ids(self):

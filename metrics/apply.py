@@ -15,6 +15,10 @@ min-cut selects.  Here the choice is checked, not assumed:
    regrowth climbs: the cut's minimum ascension grows one level at a time
    (``min_ascend`` 1, 2, ...) until a rule that reads them is regrown and
    the part changes.  ``climbed`` says how many levels above the default.
+   When candidates change the part but only the wrong way, it climbs on
+   too, for at most :data:`MAX_WRONG_WAY_LEVELS` such levels (a larger part
+   regrown is a larger change).  A grammar none of whose variants moves the
+   qualifier's metrics forward is refused at once, with the reason.
 3. **Measure, then keep.**  Each candidate (at most ``tries`` per level) is
    applied with ``Session.regrow``; the fifteen qualifier metrics of the
    regrown part are measured before and after, and scored along every
@@ -22,13 +26,13 @@ min-cut selects.  Here the choice is checked, not assumed:
    qualifier forward *and* moves no other qualifier more is kept.  If none
    does, the one that moved its own qualifier furthest forward is kept
    (``dominant`` False, ``rival`` names who moved more); if nothing moved
-   forward, the best tried is kept with ``improved`` False, a ``reason``
-   and a ``suggestion``.  On a stochastic grammar each candidate is also
+   forward, the plant is left as it was (no edit, ``regen`` None) and the
+   result has ``improved`` False, a ``reason`` and a ``suggestion``.  On a stochastic grammar each candidate is also
    tried with three more seeds (unless ``seed`` is given).  ``normal`` (no
    direction) keeps its first candidate: the combination closest to the
    base plant.
 
-Only one edit stays in the session's history (rejected tries are undone).
+At most one edit stays in the session's history (rejected tries are undone).
 
 >>> from ramure.lsys.regen import Session
 >>> from ramure.metrics import VariantSweep
@@ -40,6 +44,7 @@ Only one edit stays in the session's history (rejected tries are undone).
 """
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -167,6 +172,10 @@ def _own(key, before, after):
                 "direction": 1 if q.direction[m] > 0 else -1} for m in q.metrics()}
 
 
+#: Levels climbed past the first where candidates moved the part the wrong way before giving up.
+MAX_WRONG_WAY_LEVELS = 3
+
+
 @dataclass
 class _Try:
     level: int
@@ -220,17 +229,58 @@ def apply_qualifier(session, name, sweep, selection=(), rho=0.5, points=None, re
     e.g. learnt on another grammar) replace them.  ``max_climb`` bounds the
     extra ascension levels (default: up to the axiom).  See the module docstring.
     """
-    key = canonical_name(name)
     model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
     model.sweep_ = sweep
+    with _same_cut(session):
+        return _apply(session, canonical_name(name), model, sweep, [int(x) for x in selection], rho, tries,
+                      seed, max_climb)
+
+
+@contextlib.contextmanager
+def _same_cut(session):
+    """Solve each min-cut once while trying candidates.
+
+    Every try starts from the same plant (rejected tries are undone), so the
+    cut of (selection, rho, min_ascend) cannot change between tries; the
+    session's :meth:`~ramure.lsys.regen.Session.plan` is memoised for the
+    duration of one :func:`apply_qualifier` call, then restored.
+    """
+    plan, memo = session.plan, {}
+
+    def cached(selection, rho=0.5, min_ascend=1, ascend_levels=None, flow_func=None):
+        key = (tuple(int(x) for x in selection), float(rho), int(min_ascend), ascend_levels, flow_func)
+        if key not in memo:
+            memo[key] = plan(selection, rho, min_ascend, ascend_levels, flow_func)
+        return memo[key]
+
+    session.plan = cached
+    try:
+        yield
+    finally:
+        del session.plan
+
+
+def _unreachable(model, key):
+    """Why no variant of this grammar can move ``key`` forward (None when some can)."""
+    q = model.index(key)
+    s = model.scores_[:, q]
+    if np.any(model.usable_ & np.isfinite(s) & (s > 0)):
+        return None
+    own = ", ".join(VOCABULARY[key].metrics()) if key in VOCABULARY else key
+    return f"no variant of this grammar moves {key}'s metrics ({own}) its way: the varied constants do not reach them"
+
+
+def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
     source = model.sources_.get(key, "vocabulary")
-    selection = [int(x) for x in selection]
     if key == "normal" or key not in model.names_:
         return _apply_first(session, model, key, selection, rho, seed, source)
     varied = list(getattr(sweep, "names_", []))
+    unreachable = _unreachable(model, key)
+    if unreachable:
+        return _not_improved(session, model, key, source, selection, rho, [], [unreachable], varied)
     top = session.n + 1 if max_climb is None else 1 + max(int(max_climb), 0)
     levels = [1] if not selection else range(1, top + 1)
-    tried, last_roots, reasons = [], None, []
+    tried, last_roots, reasons, wrong_way = [], None, [], 0
     for level in levels:
         roots = _roots(session, selection, rho, level)
         if last_roots is not None and np.array_equal(roots, last_roots):
@@ -256,10 +306,14 @@ def apply_qualifier(session, name, sweep, selection=(), rho=0.5, points=None, re
             if forward:  # the one moving its own metrics most, preferring variants no one else picks
                 others = set(model.picks_.values()) - {model.picks_.get(key)}
                 accepted = max(forward, key=lambda t: (t.variant not in others, t.score))
-            elif any(t.changed for t in level_tries) or not selection:
-                break  # things moved, only the wrong way: climbing further would not be honest
             else:
-                reasons.append(f"ascension {level}: none of {len(level_tries)} tries changed the part regrown")
+                if any(t.changed for t in level_tries):
+                    wrong_way += 1
+                    reasons.append(f"ascension {level}: {len(level_tries)} tries moved it the other way")
+                else:
+                    reasons.append(f"ascension {level}: none of {len(level_tries)} tries changed the part regrown")
+                if wrong_way >= MAX_WRONG_WAY_LEVELS:
+                    break
                 continue
             regen = session.regrow(selection, rho=rho, seed=accepted.seed, params=accepted.params,
                                    min_ascend=level)
@@ -277,24 +331,28 @@ def _result(session, key, source, t, regen, m0, s0, before, tried, level, improv
 
 
 def _not_improved(session, model, key, source, selection, rho, tried, reasons, varied):
-    """Nothing moved the qualifier forward: keep the best try (or nothing) and say why."""
+    """Nothing moved the qualifier forward: leave the plant as it was and say why.
+
+    ``variant``/``params``/``score`` describe the best candidate tried (-1 /
+    {} / NaN when none could be); ``after`` equals ``before`` and ``regen``
+    is None, since no edit is kept.
+    """
     suggestion = ("select a larger part, lower rho (e.g. --rho 0.1), or vary constants the selected "
                   f"rules read (varied now: {', '.join(varied) or 'none'})")
+    roots = _roots(session, selection, rho)
+    m0, s0, before = _measure(session, roots)
     if not tried:
-        roots = _roots(session, selection, rho)
-        m0, s0, before = _measure(session, roots)
-        reason = "nothing to regrow: " + ("; ".join(reasons) or "no candidate variant")
+        reason = "; ".join(reasons) or "no candidate variant"
         return QualifierResult(key, -1, {}, source, roots, m0, m0, float("nan"), False, 0, None, None,
                                s0, s0, _own(key, before, before), {}, True, None, 1, 0, reason, suggestion)
     best = max(tried, key=lambda t: t.score)
-    roots = _roots(session, selection, rho, best.level)
-    m0, s0, before = _measure(session, roots)
-    regen = session.regrow(selection, rho=rho, seed=best.seed, params=best.params, min_ascend=best.level)
     moved = any(t.changed for t in tried)
-    reason = (f"the {len(tried)} tries moved {key}'s own metrics the other way (best score {best.score:.3g})"
-              if moved else f"none of the {len(tried)} tries changed the part regrown; " + "; ".join(reasons))
-    return _result(session, key, source, best, regen, m0, s0, before, len(tried), best.level, False, reason,
-                   suggestion)
+    reason = (f"the {len(tried)} tries moved {key}'s own metrics the other way (best score {best.score:.3g}), "
+              "so the plant is left as it was: " if moved else
+              f"none of the {len(tried)} tries changed the part regrown: ") + "; ".join(reasons)
+    return QualifierResult(key, best.variant, best.params, source, roots, m0, m0, float(best.score), False,
+                           len(tried), None, best.seed, s0, s0, _own(key, before, before), best.moves,
+                           best.dominant, best.rival, best.level, best.level - 1, reason, suggestion)
 
 
 def _apply_first(session, model, key, selection, rho, seed, source):

@@ -10,8 +10,9 @@ from ramure.lsys.regen import Session
 from ramure.metrics import VariantSweep, explore, plant_metrics
 from ramure.metrics.apply import apply_qualifier
 from ramure.metrics.plant import METRIC_NAMES
-from ramure.metrics.qualifiers import (VOCABULARY, QualifierRegions, canonical_name, qualifier_combination,
-                                qualifier_scores, rank_variants, trim_points, vocabulary_name)
+from ramure.metrics.qualifiers import (QUALIFIER_METRICS, VOCABULARY, QualifierModel, QualifierRegions,
+                                       canonical_name, qualifier_combination, qualifier_scores, rank_variants,
+                                       standardise, trim_points, vocabulary_name)
 from ramure.metrics.store import SCHEMA, QualifierStore
 
 # Every shipped branching grammar (n kept small for speed); all have #define constants.
@@ -37,14 +38,17 @@ def sweeps(tmp_path_factory):
 
 
 def test_vocabulary_has_the_thirteen_qualifiers_in_two_languages():
-    assert len(VOCABULARY) == 13
+    thesis = ["small", "large", "sparse", "dense", "symmetric", "asymmetric", "realistic", "unrealistic",
+              "fir-like", "normal", "thin", "thick", "round"]
+    assert set(thesis) <= set(VOCABULARY) and len(VOCABULARY) == 22
     pairs = {(q.name, q.french) for q in VOCABULARY.values()}
     assert ("sparse", "épars") in pairs and ("fir-like", "sapin") in pairs and ("thick", "gros") in pairs
     for q in VOCABULARY.values():
-        assert canonical_name(q.french) == q.name and canonical_name(q.name.upper()) == q.name
+        assert canonical_name(q.french, language="fr") == q.name and canonical_name(q.name.upper()) == q.name
         assert q.meaning
-        assert q.direction is None or set(q.direction) <= set(METRIC_NAMES)
-    assert VOCABULARY["dense"].vector().tolist() == [1.0 if m == "branch_density" else 0.0 for m in METRIC_NAMES]
+        assert q.direction is None or set(q.direction) <= set(QUALIFIER_METRICS)
+    assert VOCABULARY["dense"].vector() == pytest.approx(
+        [2 ** -0.5 if m in ("branch_density", "branch_count") else 0.0 for m in QUALIFIER_METRICS])
     assert canonical_name("Symétrique") == "symmetric" and canonical_name("IRRÉALISTE") == "unrealistic"
     with pytest.raises(RamureError, match="unknown qualifier"):
         vocabulary_name("fluffy")
@@ -73,7 +77,8 @@ def test_combination_from_a_grammar_path(tmp_path, monkeypatch, sweeps):
 def test_rule_restriction(sweeps):
     sweep = sweeps["honda_monopodial"]
     order = rank_variants("dense", sweep, rules={2})
-    assert len(order) == 729 and set(sweep.rules_[order].tolist()) == {2}
+    on_rule = (sweep.rules_ == 2) & sweep.changes_ & ~sweep.failed_  # the base plant's copies are left out
+    assert len(order) == on_rule.sum() > 600 and set(sweep.rules_[order].tolist()) == {2}
     assert qualifier_combination("dense", sweep, rules={2})["rule"] == 2
 
 
@@ -168,9 +173,9 @@ def test_store_schema_is_shared_with_studies(tmp_path):
 def test_default_points_and_study_regions_drive_the_combination(tmp_path):
     exp = explore("grammars/honda_sympodial.lsys", n=4, n_jobs=1, cache=False)
     with QualifierStore(tmp_path / "q.sqlite") as store:
-        assert store.write_default(exp, per_qualifier=5) == 13 * 5
-        assert store.write_default(exp, per_qualifier=5) == 13 * 5  # idempotent
-        assert len(store.rows(exp.name)) == 65
+        assert store.write_default(exp, per_qualifier=5) == 22 * 5
+        assert store.write_default(exp, per_qualifier=5) == 22 * 5  # idempotent
+        assert len(store.rows(exp.name)) == 110
         regions = store.regions(exp.name)
         assert set(regions.names_) == set(VOCABULARY)
         # a study saying "round" = the region around pick 14's point
@@ -179,8 +184,13 @@ def test_default_points_and_study_regions_drive_the_combination(tmp_path):
                   source="study:demo")
         study = store.regions(exp.name, source="study:%", trim=0)
     assert study.names_ == ["round"]
+    # the region refines round's direction toward the variants around pick 14
+    refined = QualifierModel(regions=study, refine=1.0).fit(exp.sweep, exp.points)
+    plain = QualifierModel().fit(exp.sweep)
+    z = standardise(np.hstack([exp.sweep.deltas_, exp.sweep.shape_deltas_]), plain.scale_)[p]
+    cos = [float(m.directions_[m.index("round")] @ z) / np.linalg.norm(z) for m in (plain, refined)]
+    assert refined.sources_["round"] == "region" and cos[1] > cos[0]
     combo = qualifier_combination("round", exp.sweep, points=exp.points, regions=study)
-    assert combo == exp.sweep.combination(p)
-    # a name without a region falls back to the vocabulary direction
-    assert qualifier_combination("dense", exp.sweep, points=exp.points, regions=study) == \
-        qualifier_combination("dense", exp.sweep)
+    assert combo != qualifier_combination("round", exp.sweep)
+    # a name without a region keeps the vocabulary direction (its pick may change: round owns other variants)
+    assert refined.direction("dense") == plain.direction("dense") and refined.sources_["dense"] == "vocabulary"
