@@ -230,6 +230,7 @@ class Branch:
     sector: int
     seed: int
     level: int = -1            # the trunk level (a short node) the branch grows from
+    angle: float | None = None  # insertion angle from the trunk axis (degrees); None: the species'
 
 
 @dataclass
@@ -469,18 +470,14 @@ class Wood:
         p = self.p
         n_levels = len(ax.levels)
         if ax.index == 0:
-            if self.trunk_frames is not None:
-                o, f, h = self.trunk_frames
-                return o[:n_levels], f[:n_levels], h[:n_levels]
-            jit = p["height_jitter"]
-            h = np.empty(n_levels)
+            yo, yf, yh = self.year_frames()
+            o, f, h = np.zeros((n_levels, 3)), np.zeros((n_levels, 3, 3)), np.zeros(n_levels)
             for t, (year, part) in enumerate(ax.parts[:n_levels]):     # one step per level
-                whole = p["height"] * (1 + jit * (2 * _u01(ax.seed, 8, year) - 1))
-                node = min(self.node_height(), 0.5 * whole)
-                h[t] = {"whole": whole, "node": node, "internode": whole - node}[part]
-            o = np.zeros((n_levels, 3))
-            o[:, 2] = np.concatenate([[0.0], np.cumsum(h)[:-1]])
-            f = np.repeat(np.eye(3)[[2, 0, 1]][None], n_levels, axis=0)
+                node = min(self.node_height(), 0.5 * yh[year])
+                o[t], f[t] = yo[year], yf[year]
+                h[t] = {"whole": yh[year], "node": node, "internode": yh[year] - node}[part]
+                if part == "internode":
+                    o[t] = yo[year] + node * yf[year, 0]
             return o, f, h
         br = self.branches[ax.index - 1]
         p0, frame = self.branch_frame(br)
@@ -507,6 +504,18 @@ class Wood:
         return float(p["pith_radius"] + 0.5 * (lo_e + hi_e + lo_l + hi_l).sum()
                      + 0.5 * (p["bark_min"] + p["bark_max"]) * years)
 
+    def year_frames(self):
+        """``(origins, frames, heights)`` of the trunk's yearly growth units (straight, or a plant's)."""
+        if self.trunk_frames is not None:
+            return self.trunk_frames
+        p = self.p
+        years = max(self.final_years or 0, self.year + 1)
+        jit = p["height_jitter"]
+        h = np.array([p["height"] * (1 + jit * (2 * _u01(self.trunk.seed, 8, y) - 1)) for y in range(years)])
+        o = np.zeros((years, 3))
+        o[:, 2] = np.concatenate([[0.0], np.cumsum(h)[:-1]])
+        return o, np.repeat(np.eye(3)[[2, 0, 1]][None], years, axis=0), h
+
     def node_height(self):
         """Height of a node carrying branches: the branches' final base diameter and a margin."""
         if not self.branches:
@@ -527,7 +536,7 @@ class Wood:
         t = br.level
         radial = math.cos(phi) * f[t, 1] + math.sin(phi) * f[t, 2]
         p0 = o[t] + 0.5 * h[t] * f[t, 0] + p["pith_radius"] * radial
-        elev = math.radians(90.0 - p["branch_angle"])
+        elev = math.radians(90.0 - (p["branch_angle"] if br.angle is None else br.angle))
         d = math.cos(elev) * radial + math.sin(elev) * f[t, 0]
         d = d / np.linalg.norm(d)
         # corner 0 of the trunk face (bottom, angle phi - pi/n) gives the frame's turn
@@ -947,3 +956,91 @@ def knot_regions(grid):
     part = grid.extract_cells(ids)
     conn = part.connectivity()
     return int(len(np.unique(conn.cell_data["RegionId"])))
+
+
+# ---------------------------------------------------------------------- from a plant
+def _trunk_chain(skeleton):
+    """Indices of the trunk's segments, base to top: order-0 segments following parents."""
+    order = np.asarray(skeleton.order)
+    parent = np.asarray(skeleton.parent)
+    trunk = np.flatnonzero(order == order.min(initial=0))
+    if not trunk.size:
+        raise ValueRefused("the plant has no segments: derive it with more steps")
+    child = {int(parent[i]): int(i) for i in trunk}
+    start = [int(i) for i in trunk if parent[i] < 0 or order[parent[i]] != order.min()]
+    chain = [start[0]]
+    while chain[-1] in child and len(chain) <= len(trunk):
+        chain.append(child[chain[-1]])
+    return np.array(chain)
+
+
+def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_steps=None, max_branches=24,
+                  **params) -> Wood:
+    """Volumetric wood of a derived Ramure plant: its trunk and first branches.
+
+    The trunk polyline (order-0 segments from the base) is cut into
+    ``years`` yearly units of equal length; each unit's frame follows the
+    polyline there (a bent trunk bends the pith and its rings).  Each
+    first-order branch growing from the trunk becomes a knot: its birth year
+    is the year of the trunk unit it grows from -- from the derivation step
+    that made its parent trunk segment when ``leaf_steps`` (the history
+    tree's ``step`` array) and ``steps`` are given, else from its height --
+    its sector from its azimuth and its insertion angle from its direction.
+    Branches that would share a trunk face with an earlier one, or be born
+    in the last year, are left out; at most ``max_branches`` are kept.
+    Units are the plant's.
+    """
+    years = _years(years)
+    p = resolve_params(species, **params)
+    start, end = np.asarray(skeleton.start, float), np.asarray(skeleton.end, float)
+    chain = _trunk_chain(skeleton)
+    pts = np.concatenate([start[chain[:1]], end[chain]])
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    if not arc[-1] > 0:
+        raise ValueRefused("the plant's trunk has zero length")
+    cuts = np.linspace(0.0, arc[-1], years + 1)
+    pos = np.stack([np.interp(cuts, arc, pts[:, j]) for j in range(3)], axis=1)
+    heading = np.diff(pos, axis=0)
+    h = np.linalg.norm(heading, axis=1)
+    from ramure.gmap.frames import frame_from
+
+    frames = frame_from(heading, np.cross(heading, [0.0, 0.0, 1.0]) + np.array([1e-9, 1.0, 0.0]))
+    frames = frame_from(heading, np.repeat(frames[:1, 1], years, axis=0))   # one turn of L for all units
+    branches, used = [], set()
+    order, parent = np.asarray(skeleton.order), np.asarray(skeleton.parent)
+    on_trunk = np.flatnonzero((order == order.min() + 1) & np.isin(parent, chain))
+    where_in_chain = {int(c): i for i, c in enumerate(chain)}
+    n = int(p["sides"])
+    for i in on_trunk:                                    # one step per first-order branch
+        par = int(parent[i])
+        at = arc[where_in_chain[par] + 1]
+        year = int(min(np.searchsorted(cuts, at, side="right") - 1, years - 1))
+        if leaf_steps is not None and steps:
+            step = int(np.asarray(leaf_steps)[int(skeleton.leaf_id[par])])
+            year = int(min(years - 1, max(0, step * years // max(int(steps), 1))))
+        d = end[i] - start[i]
+        if not np.linalg.norm(d) > 0 or year >= years - 1:
+            continue
+        f = frames[year]
+        az = math.atan2(d @ f[2], d @ f[1])
+        sector = int(round(az / (2 * np.pi / n))) % n
+        angle = math.degrees(math.acos(np.clip(d @ f[0] / np.linalg.norm(d), -1, 1)))
+        if (year, sector) in used:
+            continue
+        used.add((year, sector))
+        branches.append(Branch(year, sector, mix(seed, 1000 + len(branches)), angle=float(np.clip(angle, 5, 175))))
+        if len(branches) >= max_branches:
+            break
+    est = estimated_darts(p, years, [b.year for b in branches])
+    if est > MAX_DARTS:
+        raise ValueRefused(f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}")
+    t0 = time.perf_counter()
+    wood = Wood(p, seed, branches, species, trunk_frames=(pos[:-1], frames, h), years=years)
+    for _ in range(2 * years):
+        wood.step()
+    wood.embed()
+    wood.seconds = time.perf_counter() - t0
+    wood.gm.meta = {"species": species, "years": years, "seed": int(seed), "from": "skeleton",
+                    "branches": [(b.year, b.sector) for b in branches]}
+    return wood

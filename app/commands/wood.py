@@ -37,6 +37,9 @@ def write_atomic(path, writer):
         writer(tmp)
         with open(tmp, "rb+") as f:
             os.fsync(f.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)              # mkstemp makes 0600; give the usual mode
         os.replace(tmp, path)
     except BaseException:
         pathlib.Path(tmp).unlink(missing_ok=True)
@@ -118,8 +121,8 @@ def grow_from_args(args):
         if args.n is not None and args.n < 0:
             raise UserError(f"-n must be >= 0, not {args.n}")
         d = ls.derive(n=args.n, seed=args.seed)
-        return W.from_skeleton(d.skeleton(), args.years, species=args.species, seed=args.seed,
-                               steps=d.n, check_every_step=True, **params), args.species
+        return W.from_skeleton(d.skeleton(), W._years(args.years), species=args.species, seed=args.seed,
+                               steps=d.n, leaf_steps=d.tree.step, **params), args.species
     return W.grow_wood(args.species, args.years, seed=args.seed, check_every_step=True, **params), args.species
 
 

@@ -216,3 +216,23 @@ def test_bad_planks_are_refused():
 
 def test_a_grown_wood_is_one_solid(knotty):
     assert_solid(knotty.gm)
+
+
+def test_wood_from_a_derived_plant():
+    from ramure.lsys import LSystem
+
+    d = LSystem.from_file("abop_tree").derive(n=5)
+    sk = d.skeleton()
+    w = W.from_skeleton(sk, 5, leaf_steps=d.tree.step, steps=d.n)
+    assert_solid(w.gm)
+    assert 1 <= len(w.branches) <= 5
+    for b in w.branches:                      # each knot shows the years since its birth
+        vd = w.gm.volume_data
+        axis = w.branches.index(b) + 1
+        base = (vd["axis"] == axis) & (vd["level"] == 0) & (vd["season"] >= 0)
+        assert len(np.unique(vd["year"][base])) == 5 - b.year
+    _, pos = w.gm.vertex_positions()
+    lo, hi = sk.bounds()
+    assert pos[:, 2].max() <= hi[2] + 0.5 and pos[:, 2].min() >= lo[2] - 0.5   # the plant's trunk
+    with pytest.raises(ValueRefused, match="years"):
+        W.from_skeleton(sk, 0)
