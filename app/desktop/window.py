@@ -28,6 +28,7 @@ from ramure.app.desktop.pca_cloud import PcaCloudView
 from ramure.app.desktop.qt_fix import protect_none
 from ramure.app.desktop.regen_panel import RegenPanel
 from ramure.app.desktop.architecture_panel import ArchitecturePanel
+from ramure.app.desktop.wood_panel import WoodPanel
 from ramure.app.desktop.string_dock import StringView
 from ramure.app.desktop.variants_panel import VariantsController
 from ramure.app.desktop.view import PlantView
@@ -90,11 +91,13 @@ class MainWindow(QMainWindow):
         self._dock("pca", "PCA cloud", self.pca_view, Qt.DockWidgetArea.RightDockWidgetArea)
         self._dock("architecture", "Architecture", ArchitecturePanel(self.controller),
                    Qt.DockWidgetArea.RightDockWidgetArea)
+        self._dock("wood", "Wood", WoodPanel(self.controller), Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.docks["string"], self.docks["cut"])
         self.tabifyDockWidget(self.docks["cut"], self.docks["gallery"])
         self.docks["string"].raise_()
         self.tabifyDockWidget(self.docks["regeneration"], self.docks["pca"])
         self.tabifyDockWidget(self.docks["pca"], self.docks["architecture"])
+        self.tabifyDockWidget(self.docks["architecture"], self.docks["wood"])
         self.docks["regeneration"].raise_()
 
         self.status_label = QLabel("")
