@@ -974,6 +974,19 @@ def _trunk_chain(skeleton):
     return np.array(chain)
 
 
+def _subtree_leaves(skeleton, segment):
+    """History-leaf ids of a segment and every segment growing from it."""
+    parent = np.asarray(skeleton.parent)
+    inside = np.zeros(len(parent), bool)
+    inside[segment] = True
+    for _ in range(len(parent)):
+        grow = ~inside & (parent >= 0) & inside[np.maximum(parent, 0)]
+        if not grow.any():
+            break
+        inside |= grow
+    return sorted(set(np.asarray(skeleton.leaf_id)[inside].tolist()))
+
+
 def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_steps=None, max_branches=24,
                   **params) -> Wood:
     """Volumetric wood of a derived Ramure plant: its trunk and first branches.
@@ -1007,7 +1020,7 @@ def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_step
 
     frames = frame_from(heading, np.cross(heading, [0.0, 0.0, 1.0]) + np.array([1e-9, 1.0, 0.0]))
     frames = frame_from(heading, np.repeat(frames[:1, 1], years, axis=0))   # one turn of L for all units
-    branches, used = [], set()
+    branches, used, leaves = [], set(), []
     order, parent = np.asarray(skeleton.order), np.asarray(skeleton.parent)
     on_trunk = np.flatnonzero((order == order.min() + 1) & np.isin(parent, chain))
     where_in_chain = {int(c): i for i, c in enumerate(chain)}
@@ -1030,6 +1043,7 @@ def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_step
             continue
         used.add((year, sector))
         branches.append(Branch(year, sector, mix(seed, 1000 + len(branches)), angle=float(np.clip(angle, 5, 175))))
+        leaves.append(_subtree_leaves(skeleton, int(i)))
         if len(branches) >= max_branches:
             break
     est = estimated_darts(p, years, [b.year for b in branches])
@@ -1042,5 +1056,5 @@ def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_step
     wood.embed()
     wood.seconds = time.perf_counter() - t0
     wood.gm.meta = {"species": species, "years": years, "seed": int(seed), "from": "skeleton",
-                    "branches": [(b.year, b.sector) for b in branches]}
+                    "branches": [(b.year, b.sector) for b in branches], "branch_leaves": leaves}
     return wood

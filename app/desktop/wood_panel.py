@@ -1,0 +1,136 @@
+"""The Wood dock: volumetric wood (3G-map) of a species or of the current plant, with a live cut.
+
+Choose a species and a number of years and press *Grow*: the wood (pith,
+earlywood/latewood rings, heartwood, sapwood, bark and knots, see
+:mod:`ramure.gmap.wood`) appears in the dock's own 3D view, clipped by a
+plane widget you drag and turn (VTK clip, re-cut live).  *From the current
+plant* grows the wood of the plant shown in the main window: its trunk and
+first branches, with their ages from the derivation steps.  Selecting a
+branch of that plant in the main view paints its knot red in the cut.
+
+Growth runs in the GUI thread (a 10-year trunk takes about a second; the
+dock shows a busy cursor); the refusal of bad input is shown in the dock.
+"""
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QGuiApplication
+from PySide6.QtWidgets import (QCheckBox, QComboBox, QFormLayout, QHBoxLayout, QLabel, QPushButton, QSpinBox,
+                               QVBoxLayout, QWidget)
+
+from ramure.errors import RamureError
+
+SELECTED_RGB = (220, 30, 30)
+
+
+class WoodPanel(QWidget):
+    """Species, years, *from the current plant*, Grow; a 3D view with a cut-plane widget."""
+
+    def __init__(self, controller=None, parent=None, plotter_factory=None):
+        super().__init__(parent)
+        from ramure.gmap.wood import SPECIES
+
+        self.controller = controller
+        self.wood = None
+        self.grid = None
+        self.branch_leaves = []          # history leaf of the plant segment each knot came from
+        self.species = QComboBox()
+        self.species.setObjectName("woodSpecies")
+        self.species.addItems(sorted(SPECIES))
+        self.years = QSpinBox()
+        self.years.setObjectName("woodYears")
+        self.years.setRange(1, 40)
+        self.years.setValue(10)
+        self.from_plant = QCheckBox("From the current plant")
+        self.from_plant.setObjectName("woodFromPlant")
+        self.grow_button = QPushButton("Grow")
+        self.grow_button.setObjectName("woodGrow")
+        self.grow_button.clicked.connect(self.grow)
+        self.facts = QLabel("Press Grow to build the wood.")
+        self.facts.setObjectName("woodFacts")
+        self.facts.setWordWrap(True)
+        form = QFormLayout()
+        form.addRow("Species", self.species)
+        form.addRow("Years", self.years)
+        row = QHBoxLayout()
+        row.addWidget(self.from_plant)
+        row.addWidget(self.grow_button)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addLayout(form)
+        layout.addLayout(row)
+        layout.addWidget(self.facts)
+        self.plotter = (plotter_factory or _interactor)(self)
+        layout.addWidget(self.plotter.interactor if hasattr(self.plotter, "interactor") else self.plotter, 1)
+        if controller is not None and hasattr(controller, "selection_changed"):
+            controller.selection_changed.connect(self.highlight_selection)
+
+    # -- growth ------------------------------------------------------------------------
+    def grow(self):
+        """Grow the wood from the widgets' values and show it with a cut plane."""
+        from ramure.gmap import wood as W
+
+        QGuiApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+        try:
+            species, years = self.species.currentText(), int(self.years.value())
+            if self.from_plant.isChecked() and self.controller is not None:
+                skeleton, leaf_steps, steps = self.controller.read(
+                    lambda ex: (ex.skeleton, ex.derivation.tree.step.copy(), ex.derivation.n), wait=5.0)
+                self.wood = W.from_skeleton(skeleton, years, species=species, leaf_steps=leaf_steps, steps=steps)
+                self.branch_leaves = list(self.wood.gm.meta.get("branch_leaves", []))
+            else:
+                self.wood = W.grow_wood(species, years)
+                self.branch_leaves = []
+        except RamureError as err:
+            self.facts.setText(f"Refused: {err}")
+            return None
+        finally:
+            QGuiApplication.restoreOverrideCursor()
+        self.grid = W.to_grid(self.wood)
+        self.show_grid()
+        counts = self.wood.tissue_counts()
+        gm = self.wood.gm
+        self.facts.setText(f"{gm.n_darts:,} darts, {gm.n_volumes:,} volumes; "
+                           + ", ".join(f"{v} {k}" for k, v in counts.items() if v)
+                           + f"; {len(self.wood.branches)} knot(s). Drag the plane to cut.")
+        return self.wood
+
+    def show_grid(self):
+        """Show the grid clipped by a plane widget (horizontal cut through the trunk at first)."""
+        p = self.plotter
+        p.clear()
+        b = np.asarray(self.grid.bounds, float).reshape(3, 2)
+        origin = (0.0, 0.0, float(b[2, 0] + 0.3 * (b[2, 1] - b[2, 0])))
+        p.add_mesh_clip_plane(self.grid, normal="z", origin=origin, invert=True, scalars="rgb", rgb=True,
+                              name="wood", show_scalar_bar=False, crinkle=False)
+        p.view_isometric()
+        p.reset_camera()
+        if hasattr(p, "render"):
+            p.render()
+
+    # -- selection -------------------------------------------------------------------
+    def knot_mask(self, selection):
+        """Cells of the knots whose plant branch is in ``selection`` (history-leaf ids)."""
+        if self.grid is None or not self.branch_leaves:
+            return np.zeros(0 if self.grid is None else self.grid.n_cells, bool)
+        selected = set(int(s) for s in selection)
+        knots = [b + 1 for b, leaves in enumerate(self.branch_leaves) if selected & set(leaves)]
+        return np.isin(np.asarray(self.grid.cell_data["axis"]), knots)
+
+    def highlight_selection(self, selection):
+        """Paint the selected branches' knots red (the clip widget re-cuts the recoloured grid)."""
+        if self.grid is None or self.wood is None:
+            return
+        from ramure.gmap.wood import cell_colors
+
+        rgb = cell_colors(self.wood.gm.volume_data, self.wood.species)
+        rgb[self.knot_mask(selection)] = SELECTED_RGB
+        self.grid.cell_data["rgb"] = rgb
+        self.show_grid()
+
+
+def _interactor(parent):
+    from pyvistaqt import QtInteractor
+
+    return QtInteractor(parent, auto_update=False, multi_samples=0)
