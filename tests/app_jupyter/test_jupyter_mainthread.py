@@ -158,3 +158,22 @@ def test_starting_the_interactive_view_reaches_no_network(monkeypatch):
     remote = [h for h in looked_up if h not in ("127.0.0.1", "localhost", "::1", "0.0.0.0", None)]
     assert remote == []
     assert ("vtklocal" in trame_widgets.__dict__) == before  # the module is given back afterwards
+
+
+def test_the_interactive_view_reframes_when_the_plant_grows():
+    """After an edit that makes the plant taller the whole plant is in the picture again."""
+    pytest.importorskip("trame_pyvista")
+    ex = Explorer(HONDA, n=3, view="server", size=(200, 200))
+    assert ex.view.backend == "server", ex.message.text
+
+    def outside():
+        cam = ex.view.trame.plotter.camera
+        m = np.array([[cam.GetCompositeProjectionTransformMatrix(1.0, -1, 1).GetElement(i, j)
+                       for j in range(4)] for i in range(4)])
+        pts = np.asarray(ex.model.mesh.points)
+        h = np.c_[pts, np.ones(len(pts))] @ m.T
+        return float(np.max(np.abs(h[:, :2] / h[:, 3:4])))
+
+    assert outside() <= 1.0
+    ex.set_derivation(n=7)  # a much bigger plant
+    assert outside() <= 1.0
