@@ -4,7 +4,8 @@
 :class:`~ramure.studies.data.StudyData`; :func:`write_report` writes them to a folder:
 
 * ``index.html`` -- the page (figures are PNG files next to it);
-* ``cooccurrence.png``, ``grouping.png``, ``ratings.png``, ``qualifiers.png``;
+* ``cooccurrence.png``, ``grouping.png``, ``ratings.png``, ``qualifiers.png``,
+  ``collision.png`` (the qualifiers' collision matrix as a heat map);
 * ``cooccurrence_<grammar>.csv`` and ``cooccurrence_all.csv`` (27 x 27);
 * ``image_ratings_usefulness.tsv`` / ``..._difference.tsv`` -- rows = image
   points, columns = grammars: the layout ``ramure study anova`` reads back;
@@ -38,7 +39,9 @@ from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_tes
 from ramure.studies.anova import anova_table
 from ramure.studies.data import load_study_data
 from ramure.studies.likert import LEVELS
-from ramure.studies.qualifiers import SynonymTable, qualifier_frequencies
+from ramure.metrics.heatmap import collision_summary, draw_collision_matrix
+from ramure.metrics.qualifiers import QualifierRegions
+from ramure.studies.qualifiers import SynonymTable, labelled_points, qualifier_frequencies
 
 RATED = ("usefulness", "difference")
 
@@ -62,7 +65,34 @@ def analyze(data, alpha=0.05, synonyms=(), min_usefulness="good") -> dict:
         qualifiers=dict(all=qualifier_frequencies(data, table),
                         kept=qualifier_frequencies(data, table, min_usefulness),
                         min_usefulness=min_usefulness),
+        collision=collision_matrices(data, table, min_usefulness),
     )
+
+
+def collision_matrices(data, table=None, min_usefulness="good") -> dict:
+    """The qualifiers' collision matrix (thesis Fig. 4.11) from the study's labelled points.
+
+    Every image of a kept group is a point of each qualifier the group was
+    given (:func:`~ramure.studies.qualifiers.labelled_points`); one box per
+    qualifier in PCA space.  ``all`` pools the grammars (each in its own PCA
+    space, as the thesis did), with ``trim`` 0 and 0.07; ``per_grammar`` uses
+    the 0.07 trim.  Empty when no kept group named a vocabulary qualifier.
+    """
+    rows = labelled_points(data, table, min_usefulness)
+    out = {"per_grammar": {}}
+    if not rows:
+        return out
+    def points(rs):
+        pts = {}
+        for r in rs:
+            pts.setdefault(r["qualifier"], []).append((r["pc1"], r["pc2"], r["pc3"]))
+        return pts
+    out["all"] = collision_summary(QualifierRegions(trim=0.07).fit(points(rows)))
+    out["all_untrimmed"] = collision_summary(QualifierRegions(trim=0.0).fit(points(rows)))
+    for g in sorted({r["grammar"] for r in rows}):
+        out["per_grammar"][g] = collision_summary(
+            QualifierRegions(trim=0.07).fit(points([r for r in rows if r["grammar"] == g])))
+    return out
 
 
 def _listify(a):
@@ -158,7 +188,22 @@ def _write_figures(data, result, out):
              _ratings_figure(result, out / "ratings.png")]
     if result["qualifiers"]["all"]["qualifiers"]:
         files.append(_qualifier_figure(result, out / "qualifiers.png"))
+    if result["collision"].get("all"):
+        files.append(_collision_figure(result, out / "collision.png"))
     return files
+
+
+def _collision_figure(result, path):
+    """Heat map of the pooled collision matrix (7 % trimmed), thesis Fig. 4.11."""
+    c = result["collision"]["all"]
+    size = 2.5 + 0.42 * len(c["names"])
+    fig = _figure(size + 1.0, size)
+    ax = fig.subplots()
+    image = draw_collision_matrix(ax, c["matrix"], c["names"],
+                                  title=f"collision matrix (mean {c['mean']:.1f} %, 7 % trimmed)")
+    fig.colorbar(image, ax=ax, shrink=0.8, label="% of A's points in B's box")
+    fig.savefig(path)
+    return path
 
 
 def _cooccurrence_figure(result, path):
@@ -335,6 +380,15 @@ def _html(result, files, figures):
              kept.get(r["name"], {}).get("images", 0), e(", ".join(r["grammars"]))]
             for r in q["all"]["qualifiers"]]
     parts.append(_table(["qualifier", "French", "groups", "groups kept", "images kept", "grammars"], rows))
+    c = result["collision"]
+    if c.get("all"):
+        parts.append("<h3>Collision matrix</h3><p class='note'>Row A, column B: share of A's points "
+                     "inside B's box in PCA space (the thesis reports a mean of 66 %, 61 % after trimming "
+                     f"7 %). Here: {c['all_untrimmed']['mean']:.1f} %, {c['all']['mean']:.1f} % trimmed.</p>")
+        if figures:
+            parts.append("<img src='collision.png' alt='qualifier collision matrix heat map'>")
+        rows = [[e(g), len(m["names"]), _fmt(m["mean"], 3)] for g, m in c["per_grammar"].items()]
+        parts.append(_table(["grammar", "qualifiers", "mean collision (%)"], rows))
     if q["all"]["unmatched"]:
         rows = [[e(r["text"]), r["groups"]] for r in q["all"]["unmatched"][:30]]
         parts.append("<details><summary>texts outside the vocabulary</summary>"

@@ -348,3 +348,23 @@ def test_fitted_state_ends_with_underscore_and_errors_are_value_errors(sweeps):
         with pytest.raises(ValueError):
             call(est)
     assert issubclass(ValueRefused, RamureError)
+
+
+def test_study_report_shows_the_collision_matrix(tmp_path):
+    from PIL import Image
+
+    from ramure.studies.qualifiers import labelled_points
+    from ramure.studies.report import write_report
+    from ramure.studies.simulate import simulate_study
+
+    data = simulate_study(participants=6, grammars=2)
+    result = write_report(data, tmp_path)
+    c = result["collision"]
+    names = sorted({r["qualifier"] for r in labelled_points(data)})
+    assert c["all"]["names"] == names and len(c["all"]["matrix"]) == len(names)
+    m = np.array(c["all"]["matrix"])
+    assert np.allclose(np.diag(m), 100) and c["all"]["mean"] == pytest.approx(m[~np.eye(len(m), dtype=bool)].mean(),
+                                                                            abs=1e-3)
+    img = np.asarray(Image.open(tmp_path / "collision.png").convert("L"))
+    assert img.shape[0] > 300 and img.std() > 20  # a drawn heat map, not a blank page
+    assert "collision.png" in (tmp_path / "index.html").read_text()
