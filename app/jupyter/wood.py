@@ -1,0 +1,96 @@
+"""The Wood tab: volumetric wood of a species or of the explorer's plant, with a cut picture.
+
+The notebook counterpart of the desktop's Wood dock (:mod:`ramure.gmap.wood`): choose a
+species and years, tick *from the plant* to grow the wood of the plant shown above (its trunk
+and first branches, ages from the derivation steps), press *Grow*; the picture shows the wood
+cut across at the chosen height (a VTK slice, seen from above), with pith, rings, heartwood, sapwood, bark and
+knots in their colours.  Moving the height re-cuts the grown wood without growing it again.
+
+>>> from ramure.app.jupyter.wood import WoodTab
+>>> tab = WoodTab(None)
+>>> tab.years.value = 3; tab.grow()
+>>> tab.facts.value.startswith("<small>")
+True
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+
+import ipywidgets as W
+
+from ramure.app.jupyter._ui import button, on_value, png_image
+from ramure.errors import RamureError
+
+
+class WoodTab:
+    """Species, years, *from the plant*, Grow, a cut height and the cut picture."""
+
+    def __init__(self, app, size=(420, 420)):
+        from ramure.gmap.wood import SPECIES
+
+        self.app = app
+        self.size = size
+        self.wood = None
+        self.grid = None
+        self.species = W.Dropdown(options=sorted(SPECIES), value="pine", description="species")
+        self.years = W.BoundedIntText(value=8, min=1, max=40, description="years")
+        self.from_plant = W.Checkbox(value=False, description="from the plant", indent=False)
+        self.height = W.FloatSlider(value=0.3, min=0.0, max=1.0, step=0.01, description="cut at",
+                                    readout_format=".0%")
+        on_value(self.height, lambda _v: self.show_cut())
+        self.facts = W.HTML()
+        self.picture = png_image(width=size[0])
+        self.widget = W.VBox([W.HBox([self.species, self.years, self.from_plant, button("Grow", self.grow)]),
+                              self.height, self.facts, self.picture])
+
+    def grow(self):
+        """Grow the wood from the widgets' values, then cut it."""
+        from ramure.gmap import wood as W_
+
+        try:
+            if self.from_plant.value and self.app is not None:
+                model = self.app.model
+                d = model.derivation
+                self.wood = W_.from_skeleton(model.skeleton, self.years.value, species=self.species.value,
+                                             leaf_steps=d.tree.step, steps=d.n)
+            else:
+                self.wood = W_.grow_wood(self.species.value, self.years.value)
+        except RamureError as err:
+            self.facts.value = f"<small style='color:#b00020'>refused: {err}</small>"
+            return
+        self.grid = W_.to_grid(self.wood)
+        gm = self.wood.gm
+        counts = ", ".join(f"{v} {k}" for k, v in self.wood.tissue_counts().items() if v)
+        self.facts.value = (f"<small>{gm.n_darts:,} darts, {gm.n_volumes:,} volumes ({counts}); "
+                            f"{len(self.wood.branches)} knot(s)</small>")
+        self.show_cut()
+
+    def cut(self):
+        """The cross-section of the grown wood at the chosen height, and its rings and knots."""
+        from ramure.gmap.wood import cut_facts
+
+        lo, hi = self.grid.bounds[4], self.grid.bounds[5]
+        z = lo + self.height.value * (hi - lo)
+        part = self.grid.slice(normal="z", origin=(0.0, 0.0, z))
+        return part, z, (cut_facts(part) if part.n_cells else {"rings": 0, "knots": 0})
+
+    def show_cut(self):
+        """Render the cut to the picture (off-screen)."""
+        if self.grid is None:
+            return
+        from ramure.app.commands.wood import render_wood
+
+        part, z, facts = self.cut()
+        if part.n_cells == 0:
+            self.picture.value = b""
+            return
+        fd, path = tempfile.mkstemp(suffix=".png")
+        os.close(fd)
+        try:
+            render_wood(part, path, size=self.size, look=(0.0, -0.02, 1.0),
+                        title=f"z = {z:.3g}: {facts['rings']} rings, {facts['knots']} knots")
+            with open(path, "rb") as f:
+                self.picture.value = f.read()
+        finally:
+            os.unlink(path)
