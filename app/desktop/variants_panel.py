@@ -12,7 +12,7 @@ from __future__ import annotations
 from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import QFileDialog
 
-from ramure.app.desktop import variants
+from ramure.app.desktop import qualifier_map, variants
 from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
@@ -202,6 +202,7 @@ class VariantsController:
         w = self.window
         w.gallery.set_picks(vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks])
         w.pca_view.set_variants(vs)
+        qualifier_map.attach(w).set_variants(vs)
         w.regen.qualifier_note.setText("" if vs.exploration is not None else
                                        "A qualifier explores this grammar's variants first.")
         if vs.exploration is not None and w.regen.qualifier.currentText():

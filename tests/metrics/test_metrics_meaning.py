@@ -368,3 +368,29 @@ def test_study_report_shows_the_collision_matrix(tmp_path):
     img = np.asarray(Image.open(tmp_path / "collision.png").convert("L"))
     assert img.shape[0] > 300 and img.std() > 20  # a drawn heat map, not a blank page
     assert "collision.png" in (tmp_path / "index.html").read_text()
+
+
+@pytest.mark.gui
+def test_desktop_qualifier_map_draws_the_matrix(sweeps, monkeypatch):
+    pytest.importorskip("PySide6")
+    monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
+    from PySide6.QtWidgets import QApplication, QMainWindow
+
+    from ramure.app.desktop.qualifier_map import attach
+
+    app = QApplication.instance() or QApplication([])
+    sweep = sweeps["ternary_bush"]
+    exp = type("Exp", (), {"sweep": sweep, "points": DeltaPCA().fit_transform(sweep.deltas_)})()
+    window = QMainWindow()
+    window.docks = {}
+    view = attach(window)
+    assert attach(window) is view and "qualifier_map" in window.docks
+    view.set_variants(type("VS", (), {"exploration": None, "name": "x"})())
+    assert "Explore variants" in view.note.text() and not view.figure.axes
+    view.set_variants(type("VS", (), {"exploration": exp, "name": "ternary_bush"})())
+    app.processEvents()
+    view.canvas.draw()
+    img = np.asarray(view.canvas.buffer_rgba())[..., :3]
+    assert "mean collision" in view.note.text() and len(view.figure.axes) == 2  # heat map + colour bar
+    assert img.std() > 20
+    window.close()

@@ -1,0 +1,94 @@
+"""The qualifier map dock: the collision matrix of the qualifiers on the grammar being explored.
+
+A heat map (:func:`ramure.metrics.heatmap.draw_collision_matrix`) beside
+the PCA cloud: row A, column B is the share of A's best variants that fall
+inside B's box in PCA space, so a dark cell says "these two words pick the
+same kind of plant here".  With an exploration run in this window the
+regions are the default vocabulary's (:func:`ramure.metrics.qualifiers.vocabulary_regions`);
+a variant set without a fitted sweep (an opened folder) shows its
+qualifier boxes' overlap only when the sweep is there, and says so otherwise.
+
+:func:`attach` adds the dock to a :class:`~ramure.app.desktop.window.MainWindow`
+(tabified with the PCA cloud) the first time variants are shown.
+"""
+from __future__ import annotations
+
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from matplotlib.figure import Figure
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QCheckBox, QDockWidget, QLabel, QVBoxLayout, QWidget
+
+from ramure.errors import RamureError
+
+
+class QualifierMapView(QWidget):
+    """The collision-matrix heat map with a one-line summary and an English/French toggle."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.figure = Figure(figsize=(5, 4.6), dpi=90, layout="constrained")
+        self.canvas = FigureCanvasQTAgg(self.figure)
+        self.note = QLabel("No exploration yet.")
+        self.note.setWordWrap(True)
+        self.french = QCheckBox("French names")
+        self.french.toggled.connect(lambda _: self.redraw())
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(self.note)
+        layout.addWidget(self.canvas, 1)
+        layout.addWidget(self.french)
+        self.regions = None
+        self.name = ""
+
+    def set_unavailable(self, message):
+        self.regions = None
+        self.note.setText(message)
+        self.redraw()
+
+    def set_variants(self, variant_set):
+        """Compute the vocabulary's regions of ``variant_set``'s exploration and draw them."""
+        exp = getattr(variant_set, "exploration", None)
+        if exp is None or getattr(exp, "sweep", None) is None:
+            self.set_unavailable("The collision matrix needs this grammar's variant sweep: "
+                                 "Variants ▸ Explore variants.")
+            return
+        from ramure.metrics.qualifiers import vocabulary_regions
+
+        try:
+            self.regions = vocabulary_regions(exp.sweep, exp.points)
+        except RamureError as exc:
+            self.set_unavailable(f"No collision matrix: {exc}")
+            return
+        self.name = variant_set.name
+        self.note.setText(f"{variant_set.name}: {len(self.regions.names_)} qualifiers, mean collision "
+                          f"{self.regions.mean_collision():.1f} % (the thesis's study: 66 %). Dark = two "
+                          "qualifiers pick the same plants.")
+        self.redraw()
+
+    def redraw(self):
+        from ramure.metrics.heatmap import draw_collision_matrix
+
+        self.figure.clear()
+        if self.regions is not None:
+            ax = self.figure.add_subplot()
+            image = draw_collision_matrix(ax, self.regions.collision_matrix_, self.regions.names_,
+                                          french=self.french.isChecked())
+            self.figure.colorbar(image, ax=ax, shrink=0.75, label="% of A's variants in B's box")
+        self.canvas.draw_idle()
+
+
+def attach(window) -> QualifierMapView:
+    """The window's qualifier map, created (and tabified with the PCA dock) on first use."""
+    view = getattr(window, "qualifier_map", None)
+    if view is not None:
+        return view
+    view = window.qualifier_map = QualifierMapView()
+    dock = QDockWidget("Qualifier map", window)
+    dock.setObjectName("dock_qualifier_map")
+    dock.setWidget(view)
+    window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, dock)
+    docks = getattr(window, "docks", {})
+    if "pca" in docks:
+        window.tabifyDockWidget(docks["pca"], dock)
+    docks["qualifier_map"] = dock
+    return view
