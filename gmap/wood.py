@@ -1058,3 +1058,18 @@ def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_step
     wood.gm.meta = {"species": species, "years": years, "seed": int(seed), "from": "skeleton",
                     "branches": [(b.year, b.sector) for b in branches], "branch_leaves": leaves}
     return wood
+
+
+def plank_map(gm, normal, offset, thickness):
+    """The plank as a 3-G-map (two kernel map cuts), so it can be cut again, textured, cracked.
+
+    Keeps ``offset <= n . x <= offset + thickness`` like :func:`plank`; the
+    new faces are labelled ``X`` and the volumes keep their attributes
+    (tissue, season, axis...).  Refused by the kernel when a plane misses.
+    """
+    from ramure.gmap.cut import cut_map
+
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    inner = cut_map(gm, -n, offset * n)
+    return cut_map(inner, n, (offset + thickness) * n)

@@ -184,6 +184,8 @@ def run_wood(args):
             normal, offset, thickness = plank
             shown = W.plank(grid, normal, offset, thickness)
             look = -np.asarray(normal)
+            if species is not None:
+                record["plank_map"] = _plank_map_facts(gm, normal, offset, thickness)
         if (plane or plank) and species is not None:
             record.update(W.cut_facts(shown))
     record.update(report)
@@ -210,6 +212,18 @@ def run_wood(args):
               f"boundary chi {record['boundary_chi']}, {'valid' if record['valid'] else 'INVALID'}, "
               f"{seconds:.2f} s" + (f"; wrote {out}" if out else ""))
     return 0 if report["valid"] else 1
+
+
+def _plank_map_facts(gm, normal, offset, thickness):
+    """Darts, volumes, validity, knots and seconds of the plank cut as a 3-G-map (kernel cut_map)."""
+    from ramure.gmap import wood as W
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    t0 = time.perf_counter()
+    part = W.plank_map(gm, normal, offset, thickness)
+    seconds = time.perf_counter() - t0
+    return {"darts": part.n_darts, "volumes": part.n_volumes, "valid": part.is_valid(),
+            "knots": W.knot_regions(to_unstructured_grid(part)), "seconds": round(seconds, 6)}
 
 
 def export_glb(grid, path):

@@ -236,3 +236,24 @@ def test_wood_from_a_derived_plant():
     assert pos[:, 2].max() <= hi[2] + 0.5 and pos[:, 2].min() >= lo[2] - 0.5   # the plant's trunk
     with pytest.raises(ValueRefused, match="years"):
         W.from_skeleton(sk, 0)
+
+
+def test_plank_as_a_map_keeps_three_knots_and_cuts_again(knotty):
+    from ramure.gmap.cut import cut_map
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    part = W.plank_map(knotty.gm, [1, 0, 0], 0.006, 0.004)
+    assert part.is_valid() and W.knot_regions(to_unstructured_grid(part)) == 3
+    shorter = cut_map(part, (0, 0, 1), (0, 0, 0.3))          # a plank can be cut again
+    assert shorter.is_valid() and 0 < shorter.n_volumes < part.n_volumes
+
+
+def test_map_cut_and_picture_cut_agree_across_the_trunk(trunk6):
+    from ramure.gmap.cut import cut_map
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    part = cut_map(trunk6.gm, (0, 0, 1), (0, 0, 0.7))
+    grid = W.to_grid(trunk6).clip(normal=(0, 0, 1), origin=(0, 0, 0.7), invert=True)
+    a = to_unstructured_grid(part).compute_cell_sizes()["Volume"].sum()
+    b = grid.compute_cell_sizes()["Volume"].sum()
+    assert abs(a - b) <= 1e-9 * b
