@@ -543,7 +543,8 @@ class G3LDerivation:
                 a_list.append(int(a))
                 b_list.append(int(b))
                 break
-        _ops.sew_pairs(gm, np.array(a_list, np.int64), np.array(b_list, np.int64))
+        if a_list:              # the kernel's identify: start darts and sense from the shared edge
+            gm.identify(np.array(a_list, np.int64), np.array(b_list, np.int64))
         self._sync_corner()
 
     # ------------------------------------------------------------------ results

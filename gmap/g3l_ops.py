@@ -18,8 +18,8 @@ pair gives the start darts and the rotation sense of the identification.
 >>> a, b = gm.add_prisms(4, 2)
 >>> gm.sew3(gm.prism_face(a, 4, "C2"), gm.prism_face(b, 4, "C4", 1))
 >>> pairs = shared_edge_pairs(gm, face_darts(gm, [0], "C3"), face_darts(gm, [1], "C3"))
->>> len(pairs[0])      # the two C3 faces meet along one edge, but lie in one plane
-1
+>>> len(pairs[0])      # the two C3 faces meet along one edge: its two darts pair up
+2
 """
 from __future__ import annotations
 
@@ -30,15 +30,13 @@ from ramure.gmap.errors import GMapError
 
 
 def boundary_neighbour(gm, darts):
-    """For alpha3-free ``darts``, the free dart across their edge (same edge, same vertex)."""
-    alpha = gm.alpha
-    x = alpha[2][np.asarray(darts, np.int64)].astype(np.int64)
-    for _ in range(gm.n_darts + 1):
-        inner = alpha[3][x] != x
-        if not inner.any():
-            return x
-        x[inner] = alpha[2][alpha[3][x[inner]]]
-    raise GMapError("boundary walk does not end: the map is not valid")
+    """For alpha3-free ``darts``, the free dart across their edge (same edge, same vertex).
+
+    The kernel's :func:`ramure.gmap.identify.boundary_neighbour`.
+    """
+    from ramure.gmap.identify import boundary_neighbour as kernel_neighbour
+
+    return np.asarray(kernel_neighbour(gm, np.asarray(darts, np.int64)), np.int64)
 
 
 def face_starts(gm, volumes, label):
@@ -95,30 +93,13 @@ def shared_edge_pairs(gm, darts_a, darts_b):
 
 
 def identify(gm, a, b):
-    """Identify (alpha3-sew) the free faces of darts ``a`` and ``b`` through the edge they share.
+    """Identify the free faces of darts ``a`` and ``b`` through the edge they share.
 
-    Each pair must be two free faces of different volumes with a common
-    edge; the darts of the pair are re-chosen on that edge, so any dart of
-    each face will do.  Faces of different degrees get edge splits (one pair
-    at a time).  Refused, naming both faces, when a face is sewn or the faces
-    share no edge.
+    The kernel's :meth:`GMap3.identify` (start darts and rotation sense from
+    the shared edge, degree mismatches split along runs; refusals name both
+    faces and leave the map unchanged).
     """
-    a, b = np.atleast_1d(np.asarray(a, np.int64)), np.atleast_1d(np.asarray(b, np.int64))
-    wa, _ = gm.face_walk(a)
-    wb, _ = gm.face_walk(b)
-    starts_a, starts_b = [], []
-    for i in range(len(a)):               # one step per face pair
-        fa, fb = wa[i][wa[i] >= 0], wb[i][wb[i] >= 0]
-        name = f"faces of darts {int(a[i])} (volume {int(gm.dart_volume[a[i]])}) and {int(b[i])} " \
-               f"(volume {int(gm.dart_volume[b[i]])})"
-        if np.any(gm.alpha[3][fa] != fa) or np.any(gm.alpha[3][fb] != fb):
-            raise GMapError(f"cannot identify the {name}: a face is not free")
-        pa, pb = shared_edge_pairs(gm, fa, fb)
-        if not pa.size:
-            raise GMapError(f"cannot identify the {name}: they share no edge")
-        starts_a.append(pa[0])
-        starts_b.append(pb[0])
-    sew_pairs(gm, np.array(starts_a, np.int64), np.array(starts_b, np.int64))
+    gm.identify(np.atleast_1d(np.asarray(a, np.int64)), np.atleast_1d(np.asarray(b, np.int64)))
 
 
 def sew_pairs(gm, a, b):
