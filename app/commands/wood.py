@@ -179,6 +179,11 @@ def run_wood(args):
             shown = plane_cut(grid, normal=normal, origin=origin)
             if shown.n_cells == 0:
                 raise UserError(f"--cut {args.cut}: the plane leaves nothing of the wood")
+            b = np.asarray(grid.bounds, float).reshape(3, 2)
+            axis = int(np.argmax(np.abs(normal)))
+            if not b[axis, 0] < origin[axis] < b[axis, 1]:
+                raise UserError(f"--cut {args.cut}: the plane misses the wood (it spans "
+                                f"{b[axis, 0]:.4g}..{b[axis, 1]:.4g} along {'xyz'[axis]})")
             look = np.asarray(normal) + np.array([0.25, -0.35, 0.0]) if abs(normal[2]) > 0.5 else normal
         elif plank:
             normal, offset, thickness = plank

@@ -56,6 +56,7 @@ def test_grammar_option_runs_a_g3l(capsys):
     (["--set", "flavour=1"], "unknown wood parameter"),
     (["--plank", "normal=0:0:0"], "non-zero"),
     (["--cut", "q=1"], "cut plane"),
+    (["--years", "2", "--cut", "z=100"], "misses the wood"),
     (["--years", "2", "--plank", "normal=x,offset=0.3,thickness=0.02"], "misses the wood"),
     (["-o", "trunk.obj"], ".vtu"),
 ])
