@@ -366,7 +366,8 @@ class Wood:
         extra = 48 * len(slots)
         if gm.n_darts + extra > MAX_DARTS:
             raise ValueRefused(f"the wood would exceed {MAX_DARTS:,} darts")
-        keys = [mix(ax.address, 3, t, k, i) for ax, t, k, i in slots]
+        arr = np.array([(ax.address, t, k, i) for ax, t, k, i in slots], np.int64)
+        keys = mix_array(arr[:, 0], 3, arr[:, 1], arr[:, 2], arr[:, 3])
         first = self._new(4, len(slots), np.array([s[0].index for s in slots]), 1, label="W",
                           level=[s[1] for s in slots], sector=[s[2] for s in slots],
                           cell=[s[3] for s in slots], key=keys)
