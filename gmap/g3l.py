@@ -481,8 +481,10 @@ def load_g3l(path) -> Grammar:
     if not p.exists():
         from ramure import grammars
 
-        cand = grammars.FOLDER / (str(path) if str(path).endswith(".g3l") else f"{path}.g3l")
-        if cand.is_file():
+        name = str(path).replace("\\", "/")
+        name = name[len("grammars/"):] if name.startswith("grammars/") else name
+        cand = grammars.FOLDER / (name if name.endswith(".g3l") else f"{name}.g3l")
+        if ".." not in pathlib.PurePosixPath(name).parts and cand.is_file():
             p = cand
     try:
         raw = p.read_bytes()
