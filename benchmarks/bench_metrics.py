@@ -86,3 +86,56 @@ def bench_honda_monopodial_2187_variants():
 def bench_ternary_branching_729_variants_30k_chars():
     # A string twice the 16.8k characters of the thesis's largest grammar (199 s, 4.4 GB there).
     return _run("grammars/ternary_branching.lsys", 6, target_seconds=15.0)
+
+
+def bench_first_exploration_honda_n10():
+    """Issue 16: the first exploration a qualifier needs (Honda sympodial n = 10, 486 variants,
+    1,023 segments each, ten metrics and five shape metrics), fresh process, cache off."""
+    return _run("grammars/honda_sympodial.lsys", 10, target_seconds=3.0)
+
+
+_QUALIFY_CHILD = r"""
+import json, sys, tempfile, time
+import numpy as np
+from ramure.lsys.regen import Session
+from ramure.metrics import explore
+from ramure.metrics.apply import apply_qualifier
+cache = tempfile.mkdtemp()
+exp = explore("honda_sympodial", n=10, n_jobs=-1, cache_dir=cache)      # first exploration, then cached
+exp = explore("honda_sympodial", n=10, n_jobs=-1, cache_dir=cache)
+session = Session("honda_sympodial", n=10)
+tree = session.tree
+rng = np.random.default_rng(0)
+f = set(session.leaves_with_symbol("F").tolist())
+nodes = np.flatnonzero(tree.alive & (tree.child_count > 0) & (tree.depth >= 3))
+times, improved = [], 0
+apply_qualifier(session, "tall", exp.sweep, selection=[l for l in tree.leaves_under(int(nodes[0])).tolist() if l in f])
+session.undo()
+for q in ["dense", "tall", "upright", "thick", "wide", "regular", "small", "bushy", "symmetric", "drooping"]:
+    sel = [l for l in tree.leaves_under(int(rng.choice(nodes))).tolist() if l in f]
+    t0 = time.perf_counter()
+    out = apply_qualifier(session, q, exp.sweep, selection=sel, points=exp.points)
+    times.append(time.perf_counter() - t0)
+    improved += out.improved
+    if out.regen is not None:
+        session.undo()
+print(json.dumps({"times": times, "improved": improved, "cached": bool(exp.sweep.from_cache_)}))
+"""
+
+
+def bench_qualify_selection_honda_n10():
+    """Issue 16: applying a qualifier to a selection, exploration cached (Honda n = 10): <= 300 ms.
+
+    Ten qualifiers on ten random branches (3+ levels down); ``seconds`` is the
+    median apply time (min-cut once per ascension level, regrow and measure
+    each try, undo the rejected ones), ``max_seconds`` the slowest.
+    """
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = subprocess.run([sys.executable, "-c", _QUALIFY_CHILD], cwd=root, capture_output=True, text=True,
+                         check=True, env={**os.environ, "PYTHONPATH": root})
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    times = sorted(r["times"])
+    median = times[len(times) // 2]
+    return {"seconds": round(median, 4), "target_seconds": 0.3, "max_seconds": round(times[-1], 4),
+            "min_seconds": round(times[0], 4), "applies": len(times), "improved": r["improved"],
+            "exploration_cached": r["cached"], "ok": median <= 0.3}

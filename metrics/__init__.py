@@ -7,8 +7,13 @@ The front doors:
 * :class:`VariantSweep` — every variant of a grammar, measured (process pool,
   Dask, cache, progress, cancel);
 * :func:`explore` / :func:`write_exploration` — sweep, PCA, 27 picks, files;
-* qualifiers (:mod:`ramure.metrics.qualifiers`, :mod:`ramure.metrics.store`) — default
-  vocabulary, regions from studies, ``qualifier_combination``.
+* :func:`plant_shape` — five shape metrics (height, crown width, branch angle to
+  the vertical, angle spread, asymmetry) that qualifiers such as "tall" or
+  "upright" need;
+* qualifiers (:mod:`ramure.metrics.qualifiers`, :mod:`ramure.metrics.store`,
+  :mod:`ramure.metrics.apply`) — the vocabulary as metric directions,
+  :class:`QualifierModel`, regions from studies, ``qualifier_combination``,
+  ``apply_qualifier``.
 
 >>> from ramure.lsys import LSystem
 >>> sk = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=4).skeleton()
@@ -20,6 +25,8 @@ from .obb import OrientedBox, obb_from_frustums, obb_from_points, tighten
 from .pca import DeltaPCA
 from .picks import Picks, interest_points, match, match_totals, pick_variants
 from .plant import METRIC_NAMES, PlantMetrics, metric_deltas, plant_metrics, plant_obb
+from .qualifiers import QUALIFIER_METRICS, VOCABULARY, QualifierModel, QualifierRegions
+from .shape import SHAPE_METRIC_NAMES, ShapeMetrics, plant_shape
 from .sweep import SweepCancelled, VariantSweep
 from .variants import VariantDesign, variant_design
 
@@ -28,4 +35,6 @@ __all__ = [
     "VariantDesign", "VariantSweep", "explore", "grammar_name", "interest_points", "match",
     "match_totals", "metric_deltas", "obb_from_frustums", "obb_from_points", "pick_variants",
     "plant_metrics", "plant_obb", "tighten", "variant_design", "write_exploration",
+    "QUALIFIER_METRICS", "VOCABULARY", "QualifierModel", "QualifierRegions", "SHAPE_METRIC_NAMES",
+    "ShapeMetrics", "plant_shape",
 ]

@@ -199,12 +199,21 @@ def _judge(model, key, before, after, antonym):
     return own, dominant, (None if dominant else rival), moves
 
 
-def _try_level(session, model, key, selection, rho, level, order, tries, seed, before):
-    """Apply up to ``tries`` candidates at one ascension level; returns the tries (all undone)
-    and the accepted one (left applied) or None."""
+def _try_level(session, model, key, selection, rho, level, order, tries, seed, before, rules=None):
+    """Apply up to ``tries`` candidates at one ascension level; returns the tries (all undone
+    and the accepted one left applied, or None).
+
+    A part of the plant can answer a constant the other way from the whole
+    plant (a sub-branch's asymmetry may fall where the plant's rises): when
+    every candidate moved the part the wrong way, the antonym's best
+    candidates are tried too.
+    """
     antonym = VOCABULARY[key].antonym if key in VOCABULARY else None
     out = []
-    for variant in order[:max(int(tries), 1)].tolist():
+    candidates = order[:max(int(tries), 1)].tolist()
+    mirrored = False
+    while candidates:
+        variant = candidates.pop(0)
         params = model.sweep_.combination(int(variant))
         for try_seed in _seeds(session, seed):
             regen = session.regrow(selection, rho=rho, seed=try_seed, params=params, min_ascend=level)
@@ -216,6 +225,12 @@ def _try_level(session, model, key, selection, rho, level, order, tries, seed, b
             if own > 0 and dominant:
                 return out, t, regen
             session.undo()
+        wrong_way = all(t.changed and t.score < 0 for t in out)
+        if not candidates and not mirrored and wrong_way and antonym in model.names_:
+            mirrored = True
+            tried = {t.variant for t in out}
+            mirror = [v for v in model.rank(antonym, rules=rules).tolist() if v not in tried]
+            candidates = mirror[:max(int(tries), 1)]
     return out, None, None
 
 
@@ -299,7 +314,7 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
             continue
         m0, s0, before = _measure(session, roots)
         level_tries, accepted, regen = _try_level(session, model, key, selection, rho, level, order, tries,
-                                                  seed, before)
+                                                  seed, before, rules)
         tried += level_tries
         if accepted is None:
             forward = [t for t in level_tries if t.score > 0]
