@@ -40,7 +40,8 @@ def step_on_surface(points, tris, across, normals, tri, pos, d, length):
     dx, dy, dz = d[0], d[1], d[2]
     for _ in range(64):
         n = normals[tri]
-        best_t, best_k = 1e300, -1
+        best_t, best_k, best_s = 1e300, -1, 0.5
+        edge_k, edge_s = -1, 0.5  # an edge the point sits on, leaving through it (t ~ 0)
         for k in range(3):
             a = points[tris[tri, k]]
             b = points[tris[tri, (k + 1) % 3]]
@@ -52,11 +53,21 @@ def step_on_surface(points, tris, across, normals, tri, pos, d, length):
             t = _triple(apx, apy, apz, ex, ey, ez, n) / den
             s = _triple(apx, apy, apz, dx, dy, dz, n) / den
             if t > 1e-12 and -1e-9 <= s <= 1 + 1e-9 and t < best_t and across[tri, k] != came_from:
-                best_t, best_k = t, k
+                best_t, best_k, best_s = t, k, s
+            elif (den > 0 and -1e-5 <= s <= 1 + 1e-5 and across[tri, k] != came_from
+                  and abs(t) <= 1e-5 * np.sqrt(ex * ex + ey * ey + ez * ez)):
+                edge_k, edge_s = k, s
+        if best_k < 0 and edge_k >= 0:  # on an edge (or a vertex) heading out: cross it here
+            best_t, best_k, best_s = 0.0, edge_k, edge_s
         if best_k < 0 or best_t >= remaining:
             return tri, np.array([px + remaining * dx, py + remaining * dy, pz + remaining * dz]), \
                 np.array([dx, dy, dz])
-        px, py, pz = px + best_t * dx, py + best_t * dy, pz + best_t * dz
+        # cross at the hit point, kept off the edge's ends: a ray through a vertex would enter a
+        # triangle it leaves at once (symmetric meshes do this), so it crosses just beside it
+        a = points[tris[tri, best_k]]
+        b = points[tris[tri, (best_k + 1) % 3]]
+        s_in = min(max(best_s, 1e-6), 1 - 1e-6)
+        px, py, pz = a[0] + s_in * (b[0] - a[0]), a[1] + s_in * (b[1] - a[1]), a[2] + s_in * (b[2] - a[2])
         remaining -= best_t
         came_from = tri
         tri = across[tri, best_k]

@@ -7,8 +7,10 @@ triangle that shares a vertex with it, itself included) as CSR arrays. The sourc
 collisions against the edge 1-ring; the vertex 1-ring is a superset that also catches a
 particle sitting just past a corner, so it is used here.
 
-A substrate must be a **closed 2-manifold**: every edge shared by exactly two triangles, with
-opposite orientations. :func:`from_polydata` refuses anything else with "close the model first".
+Triangles are oriented outward (a mesh given inside out, with a negative enclosed volume, is
+flipped), so normals point out of the solid. A substrate must be a **closed 2-manifold**:
+every edge shared by exactly two triangles, with opposite orientations. :func:`from_polydata`
+refuses anything else with "close the model first".
 
 >>> import pyvista as pv
 >>> mesh = from_polydata(pv.Sphere(theta_resolution=16, phi_resolution=16))
@@ -33,6 +35,9 @@ class TriMesh:
         self.points = np.ascontiguousarray(self.points, np.float64)
         self.triangles = np.ascontiguousarray(self.triangles, np.int64)
         a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
+        if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() < 0:  # inside out: orient outward
+            self.triangles = np.ascontiguousarray(self.triangles[:, ::-1])
+            a, b, c = c, b, a
         cross = np.cross(b - a, c - a)
         double_area = np.linalg.norm(cross, axis=1)
         if len(self.triangles) == 0 or (double_area <= 1e-300).any():
