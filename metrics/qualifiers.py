@@ -105,7 +105,7 @@ class Qualifier:
     def describe(self) -> str:
         """The direction in one line, e.g. ``+height -crown_width +0.5 branch_angle``."""
         if self.direction is None:
-            return "closest to the base plant"
+            return "(no direction)"
         parts = []
         for m in self.metrics():
             w = self.direction[m]

@@ -202,14 +202,19 @@ def run_qualify_matrix(args, ls, exp, regions):
     source = "study" if regions is not None else "vocabulary"
     if regions is None:
         regions = vocabulary_regions(exp.sweep, exp.points, trim=args.trim)
+    from ramure.metrics.qualifiers import VOCABULARY
+
+    missing = [q for q, v in VOCABULARY.items() if v.direction is not None and q not in regions.names_]
     if args.json:
         print(json.dumps({"grammar": exp.name, "source": source, "names": regions.names_,
                           "collision_matrix": regions.collision_matrix_.round(4).tolist(),
-                          "mean_collision": round(regions.mean_collision(), 4)}))
+                          "mean_collision": round(regions.mean_collision(), 4), "without_region": missing}))
         return 0
     print(f"collision matrix of {exp.name} ({source} regions; row A, column B: % of A's points "
           "inside B's box)")
     print(matrix_table(regions))
+    if missing:
+        print(f"no region (no variant moves them more than another qualifier): {', '.join(missing)}")
     return 0
 
 
