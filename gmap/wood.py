@@ -801,7 +801,7 @@ def grow_wood(species="pine", years=10, seed=0, branches=None, check_every_step=
         params = {**params, "branches": branches}
         branches = None
     p = resolve_params(species, **params)
-    years = _years(years)
+    years = check_years(years)
     if isinstance(branches, (int, np.integer)) or branches is None:
         placed = place_branches(p, years, seed, branches)
     else:
@@ -835,7 +835,8 @@ def grow_wood(species="pine", years=10, seed=0, branches=None, check_every_step=
     return wood
 
 
-def _years(years):
+def check_years(years):
+    """``years`` as a whole number >= 1, else :class:`ValueRefused`."""
     try:
         y = int(years)
     except (TypeError, ValueError):
@@ -892,8 +893,6 @@ def to_grid(wood: Wood):
 
 def parse_plank(text):
     """``"normal=x,offset=0.3,thickness=0.02"`` -> (normal 3-vector, offset, thickness)."""
-    from ramure.gmap.cut import _AXES
-
     values = {}
     for part in str(text).split(","):
         name, sep, value = part.partition("=")
@@ -902,8 +901,9 @@ def parse_plank(text):
             raise ValueRefused(f"--plank expects normal=AXIS,offset=NUMBER,thickness=NUMBER, got {text!r}")
         values[name] = value.strip()
     normal = values.get("normal", "x").lower()
-    if normal in _AXES:
-        n = np.array(_AXES[normal])
+    axes = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+    if normal in axes:
+        n = np.array(axes[normal])
     else:
         try:
             n = np.array([float(v) for v in normal.split(":")])
@@ -1004,7 +1004,7 @@ def from_skeleton(skeleton, years, species="pine", seed=0, steps=None, leaf_step
     in the last year, are left out; at most ``max_branches`` are kept.
     Units are the plant's.
     """
-    years = _years(years)
+    years = check_years(years)
     p = resolve_params(species, **params)
     start, end = np.asarray(skeleton.start, float), np.asarray(skeleton.end, float)
     chain = _trunk_chain(skeleton)

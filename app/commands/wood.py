@@ -112,7 +112,7 @@ def grow_from_args(args):
         if args.set:
             raise UserError("--set changes species parameters; edit the grammar's #define lines instead")
         system = G3LSystem.from_file(args.grammar)
-        return system.derive(2 * W._years(args.years), seed=args.seed, check_every_step=True), None
+        return system.derive(2 * W.check_years(args.years), seed=args.seed, check_every_step=True), None
     params = parse_sets(args.set)
     if args.from_plant:
         from ramure.lsys import LSystem
@@ -121,7 +121,7 @@ def grow_from_args(args):
         if args.n is not None and args.n < 0:
             raise UserError(f"-n must be >= 0, not {args.n}")
         d = ls.derive(n=args.n, seed=args.seed)
-        return W.from_skeleton(d.skeleton(), W._years(args.years), species=args.species, seed=args.seed,
+        return W.from_skeleton(d.skeleton(), W.check_years(args.years), species=args.species, seed=args.seed,
                                steps=d.n, leaf_steps=d.tree.step, **params), args.species
     return W.grow_wood(args.species, args.years, seed=args.seed, check_every_step=True, **params), args.species
 
