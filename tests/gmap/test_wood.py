@@ -257,3 +257,15 @@ def test_map_cut_and_picture_cut_agree_across_the_trunk(trunk6):
     a = to_unstructured_grid(part).compute_cell_sizes()["Volume"].sum()
     b = grid.compute_cell_sizes()["Volume"].sum()
     assert abs(a - b) <= 1e-9 * b
+
+
+def test_two_map_cuts_of_the_wood_commute(trunk6):
+    from ramure.gmap.cut import cut_map
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    a = cut_map(cut_map(trunk6.gm, (0, 0, 1), (0, 0, 0.7)), (1, 0, 0), (0.0, 0, 0))
+    b = cut_map(cut_map(trunk6.gm, (1, 0, 0), (0.0, 0, 0)), (0, 0, 1), (0, 0, 0.7))
+    assert a.is_valid() and b.is_valid() and a.n_volumes == b.n_volumes
+    va = to_unstructured_grid(a).compute_cell_sizes()["Volume"].sum()
+    vb = to_unstructured_grid(b).compute_cell_sizes()["Volume"].sum()
+    assert abs(va - vb) <= 1e-9 * va
