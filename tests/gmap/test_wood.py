@@ -266,6 +266,9 @@ def test_two_map_cuts_of_the_wood_commute(trunk6):
     a = cut_map(cut_map(trunk6.gm, (0, 0, 1), (0, 0, 0.7)), (1, 0, 0), (0.0, 0, 0))
     b = cut_map(cut_map(trunk6.gm, (1, 0, 0), (0.0, 0, 0)), (0, 0, 1), (0, 0, 0.7))
     assert a.is_valid() and b.is_valid() and a.n_volumes == b.n_volumes
+    assert sorted(a.volume_data["key"].tolist()) == sorted(b.volume_data["key"].tolist())
     va = to_unstructured_grid(a).compute_cell_sizes()["Volume"].sum()
     vb = to_unstructured_grid(b).compute_cell_sizes()["Volume"].sum()
-    assert abs(va - vb) <= 1e-9 * va
+    # the wood's averaged quads are slightly non-planar, so the order of the cuts moves the
+    # triangulated volume in the 7th digit (planar cells agree to 1e-9: the z cut test above)
+    assert abs(va - vb) <= 1e-6 * va
