@@ -15,7 +15,9 @@ min-cut selects.  Here the choice is checked, not assumed:
    regrowth climbs: the cut's minimum ascension grows one level at a time
    (``min_ascend`` 1, 2, ...) until a rule that reads them is regrown and
    the part changes.  ``climbed`` says how many levels above the default.
-   When candidates change the part but only the wrong way, it climbs on
+   A part can answer a constant the other way from the whole plant, so
+   when every candidate moves it the wrong way the antonym's best
+   candidates are tried at the same level.  If they fail too, it climbs on
    too, for at most :data:`MAX_WRONG_WAY_LEVELS` such levels (a larger part
    regrown is a larger change).  A grammar none of whose variants moves the
    qualifier's metrics forward is refused at once, with the reason.
