@@ -46,6 +46,7 @@ At most one edit stays in the session's history (rejected tries are undone).
 """
 from __future__ import annotations
 
+import collections
 import contextlib
 from dataclasses import dataclass, field
 
@@ -53,10 +54,20 @@ import numpy as np
 
 from ramure.lsys.cut import collapse_nested
 
-from .plant import METRIC_NAMES, PlantMetrics, plant_metrics
+from .plant import PlantMetrics, plant_metrics
 from .qualifiers import QUALIFIER_METRICS, VOCABULARY, QualifierModel, all_deltas, canonical_name
-from .shape import SHAPE_METRIC_NAMES, ShapeMetrics, plant_shape
+from .shape import ShapeMetrics, plant_shape
 from .variants import rule_constant_names
+
+
+class QualifierMetrics(collections.namedtuple("QualifierMetrics", QUALIFIER_METRICS)):
+    """The fifteen qualifier metrics of a part of the plant: the ten metrics (as in
+    :class:`~ramure.metrics.plant.PlantMetrics`, same names) then the five shape metrics."""
+
+    __slots__ = ()
+
+    def to_dict(self) -> dict:
+        return {k: (int(v) if k == "branch_count" else float(v)) for k, v in self._asdict().items()}
 
 
 @dataclass
@@ -75,8 +86,8 @@ class QualifierResult:
     params: dict
     source: str  # "vocabulary", "region" or "transfer"
     roots: np.ndarray
-    before: PlantMetrics
-    after: PlantMetrics
+    before: QualifierMetrics  # the ten metrics and the five shape metrics, by name
+    after: QualifierMetrics
     score: float  # along the qualifier's direction (NaN without one)
     improved: bool
     tried: int
@@ -144,11 +155,12 @@ def _leaves(session, roots):
 
 
 def _measure(session, roots):
-    """``(PlantMetrics, ShapeMetrics, (15,) vector)`` of the part under ``roots``."""
+    """``(QualifierMetrics, ShapeMetrics, (15,) vector)`` of the part under ``roots``."""
     sk = session.derivation.skeleton()
     leaves = _leaves(session, roots)
     m, s = plant_metrics(sk, leaf_ids=leaves), plant_shape(sk, leaf_ids=leaves)
-    return m, s, np.concatenate([np.array(m, float), np.array(s, float)])
+    vector = np.concatenate([np.array(m, float), np.array(s, float)])
+    return QualifierMetrics(*m, *s), s, vector
 
 
 def _stochastic(lsystem):

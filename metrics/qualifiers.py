@@ -129,7 +129,7 @@ VOCABULARY = {q.name: q for q in [
     *_pair(("small", "petit"), ("large", "grand"), {"box_volume": -1, "total_length": -1},
            "a smaller plant: smaller box and less branch length in all",
            "a bigger plant: bigger box and more branch length in all"),
-    *_pair(("dense", "dense"), ("sparse", "épars"), {"branch_count": 1, "branch_density": 1},
+    *_pair(("dense", "dense"), ("sparse", "épars"), {"branch_density": 1, "branch_count": 1},
            "more branches, packed closer (more per unit of box volume)",
            "fewer branches, spread through more space"),
     *_pair(("asymmetric", "asymétrique"), ("symmetric", "symétrique"), {"asymmetry": 1},

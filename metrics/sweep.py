@@ -38,7 +38,6 @@ import concurrent.futures as cf
 import math
 import multiprocessing
 import os
-import pathlib
 import sys
 import threading
 import time

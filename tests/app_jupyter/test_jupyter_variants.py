@@ -48,7 +48,7 @@ def test_exploration_fills_gallery_progress_and_qualifiers(explored):
     assert f".{rule}{{background-image:url(data:image/png;base64," + base64.b64encode(
         ex.variants.thumbnails[4]).decode() in css
     options = dict(ex.edits.qualifier.options)
-    assert options["small (petit)"] == "small" and options["dense"] == "dense" and len(options) == 1 + 13
+    assert options["small (petit)"] == "small" and options["dense"] == "dense" and len(options) == 1 + 22
     assert ex.edits.qualifier.value == "" and ex.edits.qualifier.options[0][0] == "choose a qualifier…"
     assert not ex.edits.qualifier.disabled
     assert "486 variants" in ex.variants.note.value and "486 variants explored" in ex.message.text

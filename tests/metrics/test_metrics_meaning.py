@@ -221,8 +221,8 @@ def test_three_tips_change_under_every_qualifier_or_say_why(grammar, sweeps):
         tips = _three_tips(session)
         assert len(tips) == 3
         out = apply_qualifier(session, q, sweeps[grammar], selection=tips, tries=2)
-        before = np.concatenate([np.array(out.before, float), np.array(out.before_shape, float)])
-        after = np.concatenate([np.array(out.after, float), np.array(out.after_shape, float)])
+        before, after = np.array(out.before, float), np.array(out.after, float)  # the 15 metrics
+        assert before.shape == (15,) and np.allclose(before[10:], np.array(out.before_shape))
         if not np.allclose(before, after):
             changed += 1
             assert out.improved and out.min_ascend == out.climbed + 1 and len(session.edits) == 1
@@ -239,6 +239,8 @@ def test_climbing_is_reported(sweeps):
     assert session.edits[-1]["min_ascend"] == out.min_ascend
     d = json.loads(json.dumps(out.to_dict()))
     assert d["own"]["height"]["after"] > d["own"]["height"]["before"] and d["climbed"] == out.climbed
+    assert d["after"]["height"] == d["own"]["height"]["after"] and out.after.height > out.before.height
+    assert isinstance(d["after"]["branch_count"], int) and out.after.branch_density > 0
 
 
 def test_nothing_to_vary_is_explained():
