@@ -614,6 +614,8 @@ class Wood:
     TAPER = 0.12
     #: a knot's radius at the trunk's pith, as a fraction of the branch's radius at its first node
     KNOT_BASE = 0.3
+    #: how far a knot's slot walls move onto the knot (1: all the way)
+    FIT = 0.4
 
     def _tapers(self, ax, cells, t, k, radii, rp):
         """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
@@ -709,26 +711,53 @@ class Wood:
         bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"]) * years_here
         return p["pith_radius"] * p["branch_scale"] + cum[years_here.astype(int)] + bark
 
+    def knot_radius(self, br, s):
+        """The knot's outer radius at distance ``s`` along the branch (its first level is a cone)."""
+        p = self.p
+        rp = p["pith_radius"] * p["branch_scale"]
+        joint = 2 * p["pith_radius"]
+        length = max(self.trunk_radius() - joint, p["branch_length"] * 0.25)
+        opening = self.KNOT_BASE + (1 - self.KNOT_BASE) * np.clip((s - joint) / length, 0, 1)
+        return rp + (self.nominal_radius(br, s) - rp) * opening
+
     def _push(self, pts):
-        """Push trunk cell corners out of each branch's nominal cone (knots bend the rings)."""
+        """Fit the trunk's rings to each knot: its slot's walls go onto the knot's surface.
+
+        Around a branch, a trunk corner at angle offset ``du`` from the slot's
+        centre and height offset ``dz`` from the node's middle has the box
+        norm ``b = max(|du| / (pi / n), |dz| / (h_node / 2))`` (1 on the slot's
+        walls, at ``w = rho / b`` from the branch axis).  Its distance ``rho``
+        becomes ``rho + (R - w) clip(2 - b, 0, 1)``: the walls land on the
+        knot's radius ``R(s)`` (law means, so independent of the seed), the
+        rings between bend to follow, corners beyond twice the slot do not
+        move; ``R`` is capped at ``1.9 w`` so the map stays monotone (no folded
+        cells).
+        """
         flat = pts.reshape(-1, 3).copy()
+        o, f, h = self.level_frames(self.trunk)
+        n = self.trunk.sides
         for br in self.branches:
             if br.year > self.year or br.level < 0:
                 continue
             p0, frame = self.branch_frame(br)
             d = frame[0]
-            rel = flat - p0
-            s = rel @ d
-            w = rel - s[:, None] * d
-            rho = np.linalg.norm(w, axis=1)
-            near = (s > 0) & (rho < 6 * self.nominal_radius(br, np.zeros(1))[0])
+            t = br.level
+            rel = flat - o[t]
+            z = rel @ f[t, 0]
+            ang = np.arctan2(rel @ f[t, 2], rel @ f[t, 1])
+            du = np.angle(np.exp(1j * (ang - 2 * np.pi * br.sector / n)))
+            box = np.maximum(np.abs(du) / (np.pi / n), np.abs(z - 0.5 * h[t]) / (0.5 * h[t]))
+            rel_b = flat - p0
+            s = rel_b @ d
+            near = (box < 2) & (s > 0)
             if not near.any():
                 continue
-            radius = self.nominal_radius(br, s[near])
-            fade = np.clip(s[near] / (4 * self.p["pith_radius"]), 0, 1)
-            r = radius * fade
-            new_rho = rho[near] + r * np.exp(-rho[near] / np.maximum(r, 1e-12))
-            direction = w[near] / np.maximum(rho[near], 1e-12)[:, None]
+            w = rel_b[near] - s[near][:, None] * d
+            rho = np.linalg.norm(w, axis=1)
+            wall = rho / np.maximum(box[near], 1e-12)          # the slot's wall in this direction
+            radius = np.minimum(self.knot_radius(br, s[near]), 1.9 * wall)   # monotone: no folds
+            new_rho = rho + self.FIT * (radius - wall) * np.clip(2 - box[near], 0, 1)
+            direction = w / np.maximum(rho, 1e-12)[:, None]
             flat[near] = p0 + s[near][:, None] * d + new_rho[:, None] * direction
         return flat.reshape(pts.shape)
 

@@ -224,8 +224,13 @@ def _plank_map_facts(gm, normal, offset, thickness):
     from ramure.gmap import wood as W
     from ramure.gmap.pyvista import to_unstructured_grid
 
+    from ramure.errors import RamureError
+
     t0 = time.perf_counter()
-    part = W.plank_map(gm, normal, offset, thickness)
+    try:
+        part = W.plank_map(gm, normal, offset, thickness)
+    except RamureError as err:              # the picture plank still stands; say why the map one does not
+        return {"error": str(err).splitlines()[0]}
     seconds = time.perf_counter() - t0
     return {"darts": part.n_darts, "volumes": part.n_volumes, "valid": part.is_valid(),
             "knots": W.knot_regions(to_unstructured_grid(part)), "seconds": round(seconds, 6)}
