@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ramure.io import open_atomic, write_text
+
 from .pca import DeltaPCA
 from .picks import Picks, match_totals, pick_variants
 from .plant import METRIC_NAMES
@@ -112,7 +114,7 @@ def write_variants_csv(exp, path):
     s = exp.sweep
     header = (["id", "rule", *s.names_, *METRIC_NAMES, *(f"d_{m}" for m in METRIC_NAMES),
                "pc1", "pc2", "pc3", "failed"])
-    with open(path, "w", newline="", encoding="utf-8") as f:
+    with open_atomic(path, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(header)
         for i in range(s.n_variants_):
@@ -136,6 +138,6 @@ def write_exploration(exp, directory, images=None) -> dict:
            "base_metrics": dict(zip(METRIC_NAMES, s.base_metrics_.tolist())),
            "interest_points": exp.picks.targets.tolist(),
            "matching": {"method": exp.picks.method, **exp.matching}}
-    paths["pca"].write_text(json.dumps(doc, indent=1), encoding="utf-8")
-    paths["picks"].write_text(json.dumps(exp.pick_records(images), indent=1), encoding="utf-8")
+    write_text(paths["pca"], json.dumps(doc, indent=1))
+    write_text(paths["picks"], json.dumps(exp.pick_records(images), indent=1))
     return paths

@@ -218,6 +218,37 @@ def run_qualify_matrix(args, ls, exp, regions):
     return 0
 
 
+def _save_directions(path, exp, regions):
+    """Write this grammar's qualifier directions (refined by its study regions, if any) as JSON."""
+    from ramure.io import write_text
+    from ramure.metrics.qualifiers import QualifierModel
+
+    model = QualifierModel(regions=regions).fit(exp.sweep, exp.points)
+    doc = {"grammar": exp.name, **model.to_dict()}
+    write_text(path, json.dumps(doc, indent=1))
+
+
+def _load_directions(path):
+    """``{qualifier: {metric: weight}}`` from a ``--save-directions`` file (or a bare mapping)."""
+    from ramure.metrics.qualifiers import QUALIFIER_METRICS
+
+    try:
+        doc = json.loads(pathlib.Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise RamureError(f"--directions {path}: cannot read it ({exc.strerror})") from None
+    except json.JSONDecodeError as exc:
+        raise RamureError(f"--directions {path}: not JSON (line {exc.lineno}: {exc.msg})") from None
+    directions = doc.get("directions", doc) if isinstance(doc, dict) else None
+    ok = isinstance(directions, dict) and all(
+        isinstance(w, dict) and w and all(m in QUALIFIER_METRICS and isinstance(v, (int, float))
+                                          and not isinstance(v, bool) for m, v in w.items())
+        for w in directions.values())
+    if not ok:
+        raise RamureError(f"--directions {path}: expected {{qualifier: {{metric: weight}}}} over the metrics "
+                          f"{', '.join(QUALIFIER_METRICS)}")
+    return directions
+
+
 def _describe(result):
     """One human line per own metric, then the verdict."""
     lines = []
@@ -252,8 +283,10 @@ def run_qualify(args):
     t0 = time.perf_counter()
     if args.file is None:
         raise RamureError("give a grammar FILE (or --list for the vocabulary)")
-    if args.qualifier is None and not args.matrix:
-        raise RamureError("give --qualifier NAME (see 'ramure qualify --list'), or --matrix")
+    if args.qualifier is None and not args.matrix and not args.save_directions:
+        raise RamureError("give --qualifier NAME (see 'ramure qualify --list'), --matrix or --save-directions")
+    if args.directions:
+        _load_directions(args.directions)  # refuse a bad file before the sweep
     if args.tries < 1:
         raise RamureError(f"--tries must be at least 1, not {args.tries}")
     if not 0 <= args.trim < 1:
@@ -277,14 +310,19 @@ def run_qualify(args):
     finally:
         close()
     exp.name = name
+    if args.save_directions:
+        _save_directions(args.save_directions, exp, regions)
     if args.matrix:
         return run_qualify_matrix(args, ls, exp, regions)
+    if qualifier is None:
+        return 0
     session = Session(ls, n=args.n, seed=args.seed, filename=args.file)
     selection = _ids(args.select, "--select") if args.select else []
     _check_leaves(selection, session.tree.leaves)
     rho = args.rho / 100.0 if args.rho > 1 else args.rho
+    directions = _load_directions(args.directions) if args.directions else None
     result = apply_qualifier(session, qualifier, exp.sweep, selection=selection, rho=rho,
-                             points=exp.points, regions=regions, tries=args.tries)
+                             points=exp.points, regions=regions, tries=args.tries, directions=directions)
     if args.output:
         session.save(args.output)
     record = {**result.to_dict(), "selection": selection, "modules": len(session.derivation),
@@ -341,6 +379,12 @@ def register(sub):
     p.add_argument("--matrix", action="store_true",
                    help="print the qualifiers' collision matrix on FILE (study regions with --store, "
                         "else the default vocabulary's)")
+    p.add_argument("--save-directions", default=None, metavar="JSON",
+                   help="write this grammar's qualifier directions (refined by --store regions) for "
+                        "--directions on another grammar")
+    p.add_argument("--directions", default=None, metavar="JSON",
+                   help="qualifier directions learnt elsewhere (a --save-directions file): transfer a "
+                        "study to a grammar that has none")
     p.add_argument("--select", default=None, metavar="LEAF_IDS", help="leaf ids (default: the whole plant)")
     p.add_argument("--rho", type=float, default=0.5, help="cut threshold in (0, 1] (or 0-100)")
     p.add_argument("--tries", type=int, default=5, help="candidate combinations to try per level (default 5)")

@@ -397,3 +397,32 @@ def test_desktop_qualifier_map_draws_the_matrix(sweeps, monkeypatch):
     assert "mean collision" in view.note.text() and len(view.figure.axes) == 2  # heat map + colour bar
     assert img.std() > 20
     window.close()
+
+
+def test_qualify_cli_transfers_a_study_through_saved_directions(tmp_path, capsys):
+    from ramure.app.cli import main
+    from ramure.metrics.store import QualifierStore
+
+    cache = ["--cache-dir", str(tmp_path / "cache"), "--jobs", "1"]
+    exp = explore("honda_sympodial", n=4, n_jobs=1, cache_dir=tmp_path / "cache")
+    tall = QualifierModel().fit(exp.sweep).rank("tall")[:6]
+    with QualifierStore(tmp_path / "q.sqlite") as store:  # a study: "haut" = Honda's tallest variants
+        store.add("honda_sympodial", "haut", tall, exp.points[tall], [exp.sweep.combination(i) for i in tall],
+                  source="study:demo")
+    saved = tmp_path / "dirs.json"
+    assert main(["qualify", "honda_sympodial", "-n", "4", *cache, "--store", str(tmp_path / "q.sqlite"),
+                 "--trim", "0", "--save-directions", str(saved)]) == 0
+    doc = json.loads(saved.read_text())
+    assert doc["grammar"] == "honda_sympodial" and doc["sources"]["tall"] == "region"
+    assert doc["sources"]["short"] == "vocabulary" and set(doc["directions"]["tall"]) <= set(QUALIFIER_METRICS)
+    g = tmp_path / "bush.lsys"
+    g.write_text(UNSEEN["ternary_bush"])
+    capsys.readouterr()
+    assert main(["qualify", str(g), "-n", "3", *cache, "--qualifier", "tall", "--directions", str(saved),
+                 "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["source"] == "transfer" and rec["improved"] and rec["after"]["height"] > rec["before"]["height"]
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"tall": {"colour": 1}}')
+    assert main(["qualify", str(g), "-n", "3", "--qualifier", "tall", "--directions", str(bad)]) == 2
+    assert "expected {qualifier: {metric: weight}}" in capsys.readouterr().err
