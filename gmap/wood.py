@@ -266,7 +266,7 @@ class Wood:
                             ("ring", np.int16), ("width", np.float64), ("born", np.int16),
                             ("rule", np.int8), ("key", np.int64)):
             gm.add_volume_attribute(name, dtype, -1 if dtype is not np.float64 else 0.0)
-        self.corner = np.zeros(0, np.int16)
+        self._corner = np.zeros(0, np.int16)      # template corner per dart (-1: made by a split)
         self.trunk = Axis(0, int(params["sides"]), 0, mix(self.seed, 0), address=mix(0))
         self.axes = [self.trunk]
         self.branches = list(branches or [])
@@ -308,9 +308,16 @@ class Wood:
         self.assign_roles()
 
     def _sync_corner(self):
-        grow = self.gm.n_darts - len(self.corner)
-        if grow > 0:
-            self.corner = np.concatenate([self.corner, np.full(grow, -1, np.int16)])
+        n = self.gm.n_darts
+        if n > len(self._corner):                 # grow by doubling: no copy per added layer
+            grown = np.full(max(n, 2 * len(self._corner)), -1, np.int16)
+            grown[: len(self._corner)] = self._corner
+            self._corner = grown
+
+    @property
+    def corner(self):
+        """Template corner of every dart (-1 for darts made by edge splits)."""
+        return self._corner[: self.gm.n_darts]
 
     def _new(self, n, count, axis, rule, **values):
         gm = self.gm
