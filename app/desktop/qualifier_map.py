@@ -26,7 +26,7 @@ class QualifierMapView(QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.figure = Figure(figsize=(5, 4.6), dpi=90, layout="constrained")
+        self.figure = Figure(figsize=(5, 4.6), dpi=90)  # fixed margins: a docked canvas can be tiny
         self.canvas = FigureCanvasQTAgg(self.figure)
         self.note = QLabel("No exploration yet.")
         self.note.setWordWrap(True)
@@ -70,6 +70,7 @@ class QualifierMapView(QWidget):
 
         self.figure.clear()
         if self.regions is not None:
+            self.figure.subplots_adjust(left=0.2, bottom=0.22, right=0.95, top=0.98)
             ax = self.figure.add_subplot()
             image = draw_collision_matrix(ax, self.regions.collision_matrix_, self.regions.names_,
                                           french=self.french.isChecked())
