@@ -583,7 +583,7 @@ class Wood:
             pts = self._cube_points(o[t], f[t], h[t], theta[k], theta[k + 1], r_in, r_out, n,
                                     bottom=bottom, top=top)
             if ax.index == 0 and len(self.axes) > 1 and self.bend_rings:
-                pts = self._push(pts)
+                pts = self._push(pts, t)
             flat[offset[cells][:, None] + np.arange(8)[None, :]] = pts
         for ax_index, joint in self.joint_of.items():
             vol = int(gm.dart_volume[joint])
@@ -727,7 +727,7 @@ class Wood:
         opening = self.KNOT_BASE + (1 - self.KNOT_BASE) * np.clip((s - joint) / length, 0, 1)
         return rp + (self.nominal_radius(br, s) - rp) * opening
 
-    def _push(self, pts):
+    def _push(self, pts, levels=None):
         """Fit the trunk's rings to each knot: its slot's walls go onto the knot's surface.
 
         Around a branch, a trunk corner at angle offset ``du`` from the slot's
@@ -740,12 +740,15 @@ class Wood:
         move; ``R`` is capped at ``1.9 w`` so the map stays monotone (no folded
         cells).
         """
-        flat = pts.reshape(-1, 3).copy()
+        out = pts.copy()
         o, f, h = self.level_frames(self.trunk)
         n = self.trunk.sides
+        levels = np.zeros(len(pts), np.int64) if levels is None else np.asarray(levels)
         for br in self.branches:
             if br.year > self.year or br.level < 0:
                 continue
+            cells = np.flatnonzero(np.abs(levels - br.level) <= 1)   # the slot lies in its node level
+            flat = out[cells].reshape(-1, 3)
             p0, frame = self.branch_frame(br)
             d = frame[0]
             t = br.level
@@ -766,7 +769,8 @@ class Wood:
             new_rho = rho + self.FIT * (radius - wall) * np.clip(2 - box[near], 0, 1)
             direction = w / np.maximum(rho, 1e-12)[:, None]
             flat[near] = p0 + s[near][:, None] * d + new_rho[:, None] * direction
-        return flat.reshape(pts.shape)
+            out[cells] = flat.reshape(len(cells), *pts.shape[1:])
+        return out
 
     def embed(self):
         """Default corners on every dart (``gm.corners``), then the kernel's per-vertex average."""
