@@ -9,11 +9,17 @@ A grammar file looks like ABOP with a few directives::
     n: 10
     w: A(1,10)
     p:
-      A(l,w) : * -> !(w)F(l)[&(a1)B(l*r1,w*0.7)]
-                    /(180)[&(60)B(l*0.7,w*0.7)]   // indented continuation
+      A(l,w) : * -> !(w)F(l)[&(a1)B(l*r1,w*0.7)] ...
+                    /(180)[&(60)B(l*0.7,w*0.7)]   /* '...' continued the line */
       B(l,w) -> !(w)F(l)[+(a1)$B(l*r1,w*0.7)][-(60)$B(l*0.7,w*0.7)]
 
-Directives (one per line, ``//`` and ``/* */`` comments anywhere):
+Comments never eat turtle symbols: ``/* ... */`` anywhere (it may span
+lines); ``//`` to the end of the line only on a line of its own or after a
+directive, ``n:`` or a bare ``p:`` (lines that hold no modules).  In an axiom
+or a rule ``/`` is always the roll symbol, so ABOP's ``/////`` and ``B//``
+stay modules.
+
+Directives (one per line):
 
 ``#define NAME expr``
     a constant; may use earlier constants.  Constants are what the variant
@@ -24,7 +30,8 @@ Directives (one per line, ``//`` and ``/* */`` comments anywhere):
 ``#organ Name ...``
     declares organ modules drawn as organs (``Leaf`` and ``Fruit`` are organs).
 ``#ignore: + - F``
-    symbols skipped when matching left/right contexts.
+    symbols skipped when matching left/right contexts (commas between them
+    are allowed: ``#ignore: +, -, F``).
 ``#angle deg``
     the angle of ``+ - & ^ \\ /`` written without a parameter (default 90).
 ``#step len`` / ``#width w``
@@ -34,18 +41,32 @@ Directives (one per line, ``//`` and ``/* */`` comments anywhere):
     radius = width * s / 2 (default 1), for grammars whose widths are pixels.
 ``#tropism tx ty tz e``
     ABOP tropism: after each ``F`` the heading bends toward (tx,ty,tz) by
-    e·‖H×T‖.  Off by default.
+    e·‖H×T‖.  Off by default; e·‖T‖ may be at most :data:`MAX_TROPISM_BEND`.
 ``n: N``, ``w: axiom``, ``p:``
     derivation count, axiom, then one rule per line.
 
-Rules: ``[prob] [left <] Pred(x, y) [> right] : condition -> successor``.
-``*`` (or nothing) as condition means always.  A probability prefix must be a
-decimal number with a point (``.25``, ``0.5``), so digit symbols such as the
-``0 < 1 > 0`` of ABOP fig. 1.31 stay modules.  A line without ``->`` that
-follows a rule continues that rule's successor.
+Rules: ``[prob] [left <] Pred(x, y) [> right] : condition -> successor [: weight]``.
+``*`` (or nothing) as condition means always.  ``*`` as a whole left or right
+context (ABOP's ``* < + > * -> -``) means any neighbour, or none: the same as
+no context.  A probability prefix must be a decimal number with a point
+(``.25``, ``0.5``), so digit symbols such as the ``0 < 1 > 0`` of ABOP
+fig. 1.31 stay modules; the probabilities of one predecessor sum to 1.  The
+cpfg/L-studio suffix ``A -> B : 0.3`` is a stochastic **weight** (a constant
+expression > 0); the weights of the rules with the same predecessor and
+contexts are normalised to probabilities.  One group uses one form.
+
+A rule (and the axiom) ends at the end of its line, unless the line ends
+with ``...`` (:data:`CONTINUATION`): then the next non-blank line continues
+its successor.  Any other line in the rules that is not a rule (``B => A``,
+cpfg's ``homomorphism:``) is a :class:`GrammarError` with line and column.
+
+Limits, refused with a clear error: a grammar text of more than
+:data:`MAX_TEXT_CHARS` characters, a module with more than
+:data:`MAX_PARAMETERS` parameters.
 """
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 
@@ -57,8 +78,19 @@ DEFAULT_ORGANS = ("Leaf", "Fruit")
 DEFAULT_ANGLE = 90.0
 DEFAULT_STEP = 1.0
 DEFAULT_WIDTH = 0.1
+#: The longest grammar text parsed, in characters (refused at once beyond: a
+#: huge pasted axiom would otherwise take minutes before any limit applies).
+MAX_TEXT_CHARS = 4_000_000
+#: The most parameters one module may have.
+MAX_PARAMETERS = 100
+#: The largest tropism bend e·‖T‖ (radians per F) accepted.
+MAX_TROPISM_BEND = 1000.0
+#: A rule or axiom line ending with this mark continues on the next non-blank line.
+CONTINUATION = "..."
 _NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*$")
 _PROBABILITY = re.compile(r"\s*(\d*\.\d+|\d+\.\d*)\s+")
+_CPFG_KEYWORDS = re.compile(r"(homomorphism|decomposition|endlsystem|lsystem|derivation\s+length|axiom"
+                            r"|consider|ignore|define|include|endhomomorphism|enddecomposition)\b", re.I)
 
 
 @dataclass
@@ -99,6 +131,8 @@ class Rule:
     right: list = field(default_factory=list)
     condition: Expression | None = None
     probability: float | None = None
+    #: The cpfg-style weight suffix (``A -> B : 0.3``); normalised into ``probability``.
+    weight: float | None = None
 
     @property
     def formals(self):
@@ -150,23 +184,53 @@ class Grammar:
 
 
 def strip_comments(text):
-    """Blank out ``//`` and ``/* */`` comments, keeping every other column in place."""
-    out, i, n = [], 0, len(text)
+    """Blank out comments, keeping every other column (and every newline) in place.
+
+    ``/* ... */`` anywhere (it may span lines).  ``//`` runs to the end of the
+    line only where it cannot be a turtle symbol: on a line of its own, or
+    after a directive (``#...``), ``n:`` or a ``p:`` with no rule on its line.
+    In an axiom or a rule ``/`` is the roll symbol, so ``/////`` stays five modules.
+
+    >>> strip_comments("w: A/////B // rolls\\n// note\\n#angle 30 // degrees")
+    'w: A/////B // rolls\\n       \\n#angle 30           '
+    """
+    out, in_block = [], False
+    for line in text.split("\n"):
+        chars, in_block = _strip_line(line, in_block)
+        out.append("".join(chars))
+    return "\n".join(out)
+
+
+def _strip_line(line, in_block):
+    """One line of :func:`strip_comments`: its characters and whether a block comment stays open."""
+    chars, i, n, kind = list(line), 0, len(line), None
     while i < n:
-        if text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            j = n if j < 0 else j + 2
-            out.append("".join("\n" if c == "\n" else " " for c in text[i:j]))
-            i = j
-        elif text.startswith("//", i):
-            j = text.find("\n", i)
-            j = n if j < 0 else j
-            out.append(" " * (j - i))
-            i = j
+        if in_block:
+            j = line.find("*/", i)
+            end = n if j < 0 else j + 2
+            chars[i:end] = " " * (end - i)
+            in_block, i = j < 0, end
+        elif line.startswith("/*", i):
+            chars[i:i + 2] = "  "
+            in_block, i = True, i + 2
+        elif line.startswith("//", i) and kind in (None, "value"):
+            chars[i:] = " " * (n - i)
+            break
         else:
-            out.append(text[i])
+            if kind is None and not line[i].isspace():
+                kind = _line_kind(line, i)
             i += 1
-    return "".join(out)
+    return chars, in_block
+
+
+def _line_kind(line, i):
+    """'value' for lines without modules (directives, ``n:``, a bare ``p:``), else 'modules'."""
+    rest = line[i:]
+    if rest.startswith("#") or re.match(r"n\s*:", rest):
+        return "value"
+    if re.match(r"p\s*:", rest) and "->" not in rest and "\u2192" not in rest:
+        return "value"
+    return "modules"
 
 
 class _Line:
@@ -196,18 +260,21 @@ class _GrammarParser:
         self.amap = []
         self.n = None
         self.axiom = None
-        self.rule_lines = []  # list of [line, start column, list of (line, start) continuations]
+        self.rule_lines = []  # [line, start, end, continuation pieces (line, start, end)] per rule
+        self._token_key, self._token_re = None, None
 
     # -- line level --------------------------------------------------------
     def parse(self):
         # Lines end at \n, \r\n or \r only (as editors count them); other Unicode
         # separators stay inside a line, so a '//' comment never runs to the end of file.
         text = self.text.replace("\r\n", "\n").replace("\r", "\n")
-        originals = text.split("\n")
-        stripped = strip_comments(text).split("\n")
-        in_rules = False
-        for number, (text, original) in enumerate(zip(stripped, originals), start=1):
-            line = _Line(number, text, original)
+        lines = [_Line(number, t, o) for number, (t, o) in
+                 enumerate(zip(strip_comments(text).split("\n"), text.split("\n")), start=1)]
+        in_rules, k = False, 0
+        while k < len(lines):
+            line = lines[k]
+            k += 1
+            text = line.text
             body = text.strip()
             if not body:
                 continue
@@ -215,25 +282,28 @@ class _GrammarParser:
             if body.startswith("#"):
                 self.directive(line, start)
                 in_rules = False
-            elif re.match(r"n\s*:", body):
-                self.n = self.derivation_count(line, start + text[start:].index(":") + 1)
-                in_rules = False
-            elif re.match(r"(w|ω)\s*:", body):
-                colon = start + text[start:].index(":") + 1
-                self.axiom = self.modules_at(line, colon, None, formal=False)
-                if not self.axiom:
-                    raise line.error("the axiom is empty", colon + 1)
-                _check_brackets(self.axiom, "axiom")
-                in_rules = False
             elif re.match(r"p\s*:", body):
                 in_rules = True
                 rest = start + text[start:].index(":") + 1
                 if text[rest:].strip():
-                    self.rule_lines.append([line, rest, []])
-            elif in_rules and ("->" in text or "→" in text):
-                self.rule_lines.append([line, start, []])
-            elif in_rules and self.rule_lines:
-                self.rule_lines[-1][2].append((line, start))
+                    end, pieces, k = _continued(lines, k, line)
+                    self.rule_lines.append([line, rest, end, pieces])
+            elif in_rules and _find_arrow(text, start)[0] >= 0:
+                end, pieces, k = _continued(lines, k, line)
+                self.rule_lines.append([line, start, end, pieces])
+            elif re.match(r"n\s*:", body):
+                self.n = self.derivation_count(line, start + text[start:].index(":") + 1)
+                in_rules = False
+            elif re.match(r"(w|\u03c9)\s*:", body):
+                colon = start + text[start:].index(":") + 1
+                end, pieces, k = _continued(lines, k, line)
+                self.axiom = self.modules_at(line, colon, end, formal=False, pieces=pieces)
+                if not self.axiom:
+                    raise line.error("the axiom is empty", colon + 1)
+                _check_brackets(self.axiom, "axiom")
+                in_rules = False
+            elif in_rules:
+                raise _not_a_rule(line, start)
             else:
                 raise line.error(
                     "expected a directive (#define, #module, ...), 'n:', 'w:', 'p:' or a rule "
@@ -293,8 +363,9 @@ class _GrammarParser:
                 if name.startswith("organ") and word.group() not in self.organs:
                     self.organs.append(word.group())
             self.modules.sort(key=len, reverse=True)
-        elif name == "ignore":
-            self.ignore.update(p.symbol for p in self.modules_at(line, rest, None, formal=True))
+        elif name == "ignore":  # ABOP writes '#ignore: +-F'; commas between symbols are allowed
+            listed = _Line(line.number, _blank_top_level_commas(text), line.original)
+            self.ignore.update(p.symbol for p in self.modules_at(listed, rest, None, formal=True))
         elif name in self.settings:
             self.settings[name] = self.constant(line, rest)
         elif name == "amap":  # architecture roles, checked by ramure.lsys.amap once every module is known
@@ -308,6 +379,7 @@ class _GrammarParser:
             if len(words) != 4:
                 raise line.error("#tropism takes four numbers: tx ty tz e", rest + 1)
             self.tropism = tuple(self.constant(line, col, col + len(w)) for w, col in words)
+            _check_tropism(line, rest, self.tropism)
         else:
             raise line.error(
                 f"unknown directive '#{m.group(1)}' (known: #define, #module, #organ, #ignore, "
@@ -323,26 +395,32 @@ class _GrammarParser:
 
     def _scan(self, line, start, end, formal):
         text = line.text if end is None else line.text[:end]
-        i, out = start, []
-        while i < len(text):
-            ch = text[i]
-            if ch.isspace():
-                i += 1
-                continue
-            if ch in "),":
-                raise line.error(f"unexpected '{ch}'", i + 1)
-            if ch == "(":
-                raise line.error("'(' must follow a module name directly, as in A(1,2)", i + 1)
-            symbol = next((m for m in self.modules if text.startswith(m, i)), ch)
-            column = i + 1
-            i += len(symbol)
+        out, token = [], self._token()
+        make = Pattern if formal else ModuleSpec
+        m = token.search(text, start)
+        while m is not None:
+            symbol, i = m.group(), m.end()
+            if symbol in "),":
+                raise line.error(_comma_message(symbol), m.start() + 1)
+            if symbol == "(":
+                raise line.error("'(' must follow a module name directly, as in A(1,2)", m.start() + 1)
             args = []
             if i < len(text) and text[i] == "(":
                 close = _matching_paren(line, text, i)
                 args = self._arguments(line, i + 1, close, formal, symbol)
                 i = close + 1
-            out.append((Pattern if formal else ModuleSpec)(symbol, args, column, line))
+            out.append(make(symbol, args, m.start() + 1, line))
+            m = token.search(text, i)
         return out
+
+    def _token(self):
+        """A regex for one module symbol: a declared name (longest first) or one character."""
+        key = tuple(self.modules)
+        if self._token_key != key:
+            names = sorted(key, key=len, reverse=True)
+            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), r"\S"]))
+            self._token_key = key
+        return self._token_re
 
     def _arguments(self, line, start, close, formal, symbol):
         pieces, depth, begin = [], 0, start
@@ -356,6 +434,9 @@ class _GrammarParser:
         pieces.append((begin, close))
         if len(pieces) == 1 and not line.text[start:close].strip():
             raise line.error(f"empty parameter list after {symbol}", start + 1)
+        if len(pieces) > MAX_PARAMETERS:
+            raise line.error(f"{symbol} has {len(pieces)} parameters; a module may have at most "
+                             f"{MAX_PARAMETERS}", start)
         args = []
         for a, b in pieces:
             piece = line.text[a:b]
@@ -373,8 +454,8 @@ class _GrammarParser:
         return args
 
     # -- rules -------------------------------------------------------------
-    def rule(self, index, line, start, continuations):
-        text = line.text
+    def rule(self, index, line, start, end, continuations):
+        text = line.text if end is None else line.text[:end]
         arrow, width = _find_arrow(text, start)
         if arrow < 0:
             raise line.error("a rule needs '->'", start + 1)
@@ -398,11 +479,14 @@ class _GrammarParser:
         right = self.modules_at(line, gt + 1, pattern_end, formal=True) if gt >= 0 else []
         if len(pred) != 1:
             raise line.error("a rule's predecessor must be exactly one module", pred_start + 1)
+        left, right = _context(line, left), _context(line, right)
         for ctx in (left, right):
             for p in ctx:
                 if p.symbol in "[]":
                     raise line.error("brackets inside a context are not supported", p.column)
-        rule = Rule(index, line.number, text[start:], line.original, pred[0], [], left, right,
+        pieces = [(line, arrow + width, end), *continuations]
+        rule_text = " ".join(pl.text[a:b].strip() for pl, a, b in [(line, start, end), *continuations])
+        rule = Rule(index, line.number, rule_text, line.original, pred[0], [], left, right,
                     None, probability)
         formals = rule.formals
         dup = {f for f in formals if formals.count(f) > 1}
@@ -414,13 +498,125 @@ class _GrammarParser:
             if cond.strip() not in ("", "*"):
                 rule.condition = parse_expression(line.source(colon + 1, arrow))
                 compile_expression(rule.condition, formals, self.constants)
-        pieces = [(cl, cs, None) for cl, cs in continuations]
-        rule.successor = self.modules_at(line, arrow + width, None, formal=False, pieces=pieces)
+        pieces, rule.weight = self._weight(pieces)
+        if rule.weight is not None and probability is not None:
+            raise line.error("a rule has either a probability prefix ('.5 A -> B') or a weight suffix "
+                             "('A -> B : 0.5'), not both", m.start(1) + 1)
+        for pl, a, b in pieces:
+            second, _ = _find_arrow(pl.text if b is None else pl.text[:b], a)
+            if second >= 0:
+                raise pl.error("a second '->' in one rule: write one rule per line", second + 1)
+        (first, a, b), *rest = pieces
+        rule.successor = self.modules_at(first, a, b, formal=False, pieces=rest)
         for spec in rule.successor:
             for arg in spec.args:
                 compile_expression(arg, formals, self.constants)
         _check_brackets(rule.successor, "successor")
         return rule
+
+    def _weight(self, pieces):
+        """Split a cpfg/L-studio weight suffix ``: w`` off a successor's pieces: (pieces, weight or None)."""
+        for k, (pl, a, b) in enumerate(pieces):
+            text = pl.text if b is None else pl.text[:b]
+            c = _top_level(text, ":", a, len(text))
+            if c < 0:
+                continue
+            if k < len(pieces) - 1:
+                raise pl.error("a weight suffix ': w' must end the rule (it is followed by a continued line)",
+                               c + 1)
+            if not text[c + 1:].strip():
+                raise pl.error("':' in a successor starts a weight: write 'A -> B : 0.5' (a number > 0)",
+                               c + 1)
+            weight = self.constant(pl, c + 1, b)
+            if not weight > 0:
+                raise pl.error(f"a rule weight must be a number > 0, not {weight:g}", c + 2)
+            return [*pieces[:k], (pl, a, c)], weight
+        return pieces, None
+
+
+def _continued(lines, k, line):
+    """Follow ``...`` continuations from ``line`` (``lines[k]`` is the next line).
+
+    Returns (end of ``line``'s own text, continuation pieces as (line, start, end),
+    index of the first line after them).  A continuation must be the rest of a
+    successor or axiom: a directive, ``n:``/``w:``/``p:`` or another rule there
+    is an error naming the ``...`` that asked for it.
+    """
+    pieces, current = [], line
+    end = _continuation_at(line)
+    while True:
+        cont = _continuation_at(current)
+        if cont is None:
+            return end, pieces, k
+        while k < len(lines) and not lines[k].text.strip():
+            k += 1
+        if k == len(lines):
+            raise current.error(f"the line ends with '{CONTINUATION}' but no line follows to continue it",
+                                cont + 1)
+        nxt, k = lines[k], k + 1
+        body = nxt.text.strip()
+        if body.startswith("#") or re.match(r"[nwp\u03c9]\s*:", body) or _find_arrow(nxt.text, 0)[0] >= 0:
+            raise nxt.error(f"line {current.number} ends with '{CONTINUATION}', but this line is not the "
+                            "rest of its successor (remove the '...' or join the lines)",
+                            len(nxt.text) - len(nxt.text.lstrip()) + 1)
+        start = len(nxt.text) - len(nxt.text.lstrip())
+        pieces.append((nxt, start, _continuation_at(nxt)))
+        current = nxt
+
+
+def _continuation_at(line):
+    """Column (0-based) of the ``...`` ending ``line``'s text, or None."""
+    text = line.text.rstrip()
+    return len(text) - len(CONTINUATION) if text.endswith(CONTINUATION) else None
+
+
+def _not_a_rule(line, start):
+    """The error for a line of the rules section that is not a rule."""
+    text = line.text
+    if "=>" in text:
+        return line.error("'=>' is not a rule arrow: write '->'", text.index("=>") + 1)
+    m = _CPFG_KEYWORDS.match(text, start)
+    if m:
+        return line.error(f"'{m.group()}' is a cpfg keyword that Ramure does not read here: "
+                          "directives start with '#' and rules have '->'", start + 1)
+    return line.error(f"this line is not a rule (no '->'): a rule is 'predecessor -> successor' on one "
+                      f"line; end a line with '{CONTINUATION}' to continue its successor on the next",
+                      start + 1)
+
+
+def _context(line, patterns):
+    """A left or right context; ABOP's ``*`` as the whole context means any neighbour (or none)."""
+    stars = [p for p in patterns if p.symbol == "*"]
+    if not stars:
+        return patterns
+    if len(patterns) == 1 and not stars[0].params:
+        return []
+    raise line.error("'*' stands for a whole context (any neighbour, or none): it cannot be combined "
+                     "with other modules or take parameters", stars[0].column)
+
+
+def _comma_message(symbol):
+    if symbol == ",":
+        return ("unexpected ',': a comma only separates parameters, as in A(1,2); modules follow "
+                "each other without one (write AB, not A,B)")
+    return f"unexpected '{symbol}'"
+
+
+def _blank_top_level_commas(text):
+    out, depth = [], 0
+    for c in text:
+        depth += (c == "(") - (c == ")")
+        out.append(" " if c == "," and depth == 0 else c)
+    return "".join(out)
+
+
+def _check_tropism(line, column, tropism):
+    """``#tropism tx ty tz e``: the bend e·|T| must be a usable number of radians per F."""
+    tx, ty, tz, e = tropism
+    size = math.sqrt(tx * tx + ty * ty + tz * tz) if math.isfinite(tx * tx + ty * ty + tz * tz) else math.inf
+    if not math.isfinite(size) or abs(e) * size > MAX_TROPISM_BEND:
+        raise line.error(f"#tropism bends by e*|T| = {abs(e) * size:g} radians per F; it may be at most "
+                         f"{MAX_TROPISM_BEND:g} (use a unit direction T and a small e such as 0.2)", column + 1)
 
 
 def _matching_paren(line, text, i):
@@ -473,26 +669,13 @@ def _check(grammar):
     for rule in grammar.rules:
         groups.setdefault(rule.group_key(), []).append(rule)
     for rules in groups.values():
-        probs = [r.probability for r in rules]
-        if all(p is None for p in probs):
-            continue
-        first = rules[0]
-        if any(p is None for p in probs):
-            missing = next(r for r in rules if r.probability is None)
-            raise GrammarError(
-                f"rules for {first.pred} mix probabilities and none: give every rule for "
-                f"{first.pred} a probability", missing.line, 1, missing.source_line)
-        total = sum(probs)
-        if abs(total - 1.0) > 1e-6:
-            raise GrammarError(
-                f"the probabilities of the rules for {first.pred} sum to {total:g}, not 1",
-                first.line, 1, first.source_line)
+        _check_probabilities(rules)
     arities = {}
     for rule in grammar.rules:
         arities.setdefault(rule.pred.symbol, set()).add(len(rule.pred.params))
     written = [(spec, None) for spec in grammar.axiom]
     written += [(spec, rule) for rule in grammar.rules for spec in rule.successor]
-    for spec, rule in written:
+    for spec, _rule in written:
         expected = arities.get(spec.symbol)
         if expected and len(spec.args) not in expected:
             want = " or ".join(str(a) for a in sorted(expected))
@@ -510,6 +693,34 @@ def _check(grammar):
     grammar.symbols = symbols
 
 
+def _check_probabilities(rules):
+    """One group of competing rules: prefix probabilities sum to 1; suffix weights are normalised."""
+    weighted = [r for r in rules if r.weight is not None]
+    prefixed = [r for r in rules if r.probability is not None]
+    if not weighted and not prefixed:
+        return
+    first = rules[0]
+    if weighted and prefixed:
+        raise GrammarError(
+            f"rules for {first.pred} mix probability prefixes ('.5 A -> B') and weight suffixes "
+            "('A -> B : 0.5'): use one form", weighted[0].line, 1, weighted[0].source_line)
+    if len(weighted) + len(prefixed) < len(rules):
+        missing = next(r for r in rules if r.probability is None and r.weight is None)
+        what, one = ("weights", "a weight") if weighted else ("probabilities", "a probability")
+        raise GrammarError(f"rules for {first.pred} mix {what} and none: give every rule for {first.pred} {one}",
+                           missing.line, 1, missing.source_line)
+    if weighted:
+        total = sum(r.weight for r in weighted)
+        for r in weighted:
+            r.probability = r.weight / total
+        return
+    total = sum(r.probability for r in prefixed)
+    if abs(total - 1.0) > 1e-6:
+        raise GrammarError(
+            f"the probabilities of the rules for {first.pred} sum to {total:g}, not 1",
+            first.line, 1, first.source_line)
+
+
 def parse_grammar(text, filename=None) -> Grammar:
     """Parse grammar text.  Raises :class:`~ramure.lsys.errors.GrammarError` with line and column.
 
@@ -517,6 +728,10 @@ def parse_grammar(text, filename=None) -> Grammar:
     >>> [str(r.pred) for r in g.rules]
     ['A(x)', 'B(y)']
     """
+    if len(text) > MAX_TEXT_CHARS:
+        raise GrammarError(f"the grammar text has {len(text):,} characters, more than the limit of "
+                           f"{MAX_TEXT_CHARS:,}: a grammar is a few rules, not a derived string",
+                           filename=filename)
     try:
         return _GrammarParser(text, filename).parse()
     except GrammarError as err:

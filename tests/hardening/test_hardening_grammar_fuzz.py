@@ -188,7 +188,7 @@ def test_bad_seed_or_constant_is_refused(kwargs, message):
 
 
 def test_classic_mac_line_endings_keep_comments_on_their_line():
-    d = LSystem.from_text("n: 1\r// comment\rw: A\rp:\rA -> AB // growth\r").derive()
+    d = LSystem.from_text("n: 1 // steps\r// comment\rw: A\rp:\rA -> AB /* growth */\r").derive()
     assert d.to_string() == "AB"
 
 

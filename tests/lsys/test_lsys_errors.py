@@ -17,7 +17,7 @@ BAD = [
     ("#angel 30\nn: 1\nw: A\n", 1, "unknown directive"),
     ("n: 2\nw: A(1,2)\np:\n A(x) -> A(x)\n", 2, "written with 2 parameter"),
     ("n: 2\nw: A(1)\np:\n A(x) -> A(x+)\n", 4, "expected a number"),
-    ("n: 1\nw: A\np:\n A B\n", 4, "expected a directive"),
+    ("n: 1\nw: A\np:\n A B\n", 4, "not a rule"),
     ("n: 1.5\nw: A\n", 1, "whole number"),
     ("n: 1\nw: A(1)\np:\n A(1) -> B\n", 4, "must be names"),
 ]
