@@ -143,3 +143,13 @@ def test_stochastic_probabilities_must_stay_in_range():
     with pytest.raises(GrammarError, match="add up"):
         for seed in range(20):
             s.derive(1, seed=seed)
+
+
+def test_split_operator_makes_two_volumes_and_the_new_ones_wait():
+    text = "axiom: A(4, 0, 0, 0, 2, 1, 1)\n(p1) A ->^O B C\n(p2) C -> C[D]_E\n"
+    one = G3LSystem.from_text(text).derive(1)
+    assert one.gm.volume_data["label"].tolist() == ["B", "C"] and one.gm.n_darts == 96
+    two = G3LSystem.from_text(text).derive(2)
+    assert two.gm.volume_data["label"].tolist() == ["B", "C", "D"]
+    assert two.provenance(2) == [("p2", 1), ("p1", 0), ("axiom", 0)]
+    assert_solid(two.gm)
