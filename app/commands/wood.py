@@ -191,7 +191,9 @@ def run_wood(args):
             look = -np.asarray(normal)
             if species is not None:
                 record["plank_map"] = _plank_map_facts(gm, normal, offset, thickness)
-        if (plane or plank) and species is not None:
+        if plane and species is not None:          # rings and knots on the cut face itself
+            record.update(W.cut_facts(grid.slice(normal=tuple(plane[0]), origin=tuple(plane[1]))))
+        elif plank and species is not None:
             record.update(W.cut_facts(shown))
     record.update(report)
     record["seconds"] = round(seconds, 6)

@@ -26,6 +26,8 @@ def test_cut_reports_rings_and_knots(capsys, tmp_path):
     out = tmp_path / "slice.vtu"
     r = run_json(capsys, "--years", "5", "--cut", "z=0.2", "-o", str(out))
     assert r["rings"] == 5 and r["knots"] >= 0 and out.exists()
+    higher = run_json(capsys, "--years", "5", "--set", "branches=0", "--cut", "z=1.25")
+    assert higher["rings"] == 5 - 2                  # level 2 of 5 (0.5 m a year): 3 years old
     grid = pv.read(str(out))
     assert grid.n_cells > 0 and grid.bounds[5] <= 0.2 + 1e-9
     assert not list(tmp_path.glob(".*"))          # the temporary file was renamed
