@@ -513,6 +513,14 @@ class G3LDerivation:
             self.corner[gm.dart_volume == new] = -1
             vd["label"][v], vd["label"][new] = inner, outer
             vd["shape"][v] = vd["shape"][new] = -1            # manual embedding from now on
+            if code_name in ("O", "E"):                       # halves along H: children frame on them
+                half = 0.5 * vd["size"][v, 0]
+                heading = vd["frame"][v, 0]
+                vd["size"][v, 0] = vd["size"][new, 0] = half
+                if code_name == "O":
+                    vd["origin"][new] = vd["origin"][v] + half * heading
+                else:
+                    vd["origin"][v] = vd["origin"][v] + half * heading
             vd["rule"][new], vd["born"][new], vd["parent"][new] = rule.index, self.stage, v
             vd["key"][new] = mix(int(vd["key"][v]), rule.index, self.stage, 99)
 

@@ -153,3 +153,5 @@ def test_split_operator_makes_two_volumes_and_the_new_ones_wait():
     assert two.gm.volume_data["label"].tolist() == ["B", "C", "D"]
     assert two.provenance(2) == [("p2", 1), ("p1", 0), ("axiom", 0)]
     assert_solid(two.gm)
+    # the halves split the axiom's height 2 along its heading z; D (height 1 by default) sits on C
+    np.testing.assert_allclose(two.gm.volume_centroids()[:, 2], [0.5, 1.5, 2.5], atol=1e-12)
