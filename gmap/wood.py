@@ -622,7 +622,7 @@ class Wood:
     #: a knot's radius at the trunk's pith, as a fraction of the branch's radius at its first node
     KNOT_BASE = 0.3
     #: how far a knot's slot walls move onto the knot (1: all the way)
-    FIT = 0.4
+    FIT = 0.7
 
     def _tapers(self, ax, cells, t, k, radii, rp):
         """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
@@ -756,7 +756,7 @@ class Wood:
             z = rel @ f[t, 0]
             ang = np.arctan2(rel @ f[t, 2], rel @ f[t, 1])
             du = np.angle(np.exp(1j * (ang - 2 * np.pi * br.sector / n)))
-            box = np.maximum(np.abs(du) / (np.pi / n), np.abs(z - 0.5 * h[t]) / (0.5 * h[t]))
+            box = ((np.abs(du) / (np.pi / n)) ** 4 + (np.abs(z - 0.5 * h[t]) / (0.5 * h[t])) ** 4) ** 0.25
             rel_b = flat - p0
             s = rel_b @ d
             near = (box < 2) & (s > 0)
