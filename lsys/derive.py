@@ -73,6 +73,9 @@ class LSystem:
     #: The derivation history (every module ever made) may not grow past this many
     #: nodes either: a small string rewritten at every step grows it without bound.
     max_history = 60_000_000
+    #: ... and may not hold more than this many parameter values (history nodes times the
+    #: grammar's widest module, 8 bytes each): 100-parameter modules reach it at 1.2 M nodes.
+    max_values = 120_000_000
     #: More derivation steps than this are refused: a grammar whose string stops
     #: growing would otherwise loop for hours on an absurd ``n``.
     max_steps = 10_000
@@ -310,6 +313,11 @@ class LSystem:
                 f"step {step} would make the derivation history {history:,} modules long, more than "
                 f"the limit of {self.max_history:,}: use fewer derivation steps "
                 "(or raise LSystem.max_history)")
+        if history * tree.max_params > self.max_values:
+            raise DerivationError(
+                f"step {step} would make the derivation history hold {history * tree.max_params:,} parameter "
+                f"values ({history:,} modules x {tree.max_params} parameters), more than the limit of "
+                f"{self.max_values:,}: use fewer derivation steps or parameters (or raise LSystem.max_values)")
         out = np.empty(total, np.int64)
         keep = chosen < 0
         out[offsets[keep]] = string[keep]

@@ -224,7 +224,8 @@ def _skeleton(lsys, tree, leaves, segs, orgs, trace):
     seg_at, start, end, width, order, color, normal, parent = segs
     base = width * (lsys.grammar.width_scale / 2.0)
     leaf = leaves[seg_at]
-    _check_finite(lsys, tree, leaf, np.isfinite(start).all(1) & np.isfinite(end).all(1) & np.isfinite(base))
+    _check_finite(lsys, tree, leaf, _usable(start).all(1) & _usable(end).all(1) & _usable(base))
+    _check_color(lsys, tree, leaf, color)
     organs = _organs(lsys, tree, leaves, orgs)
     return Skeleton(start, end, base, top_radius(base, order, parent), order.astype(np.int32), leaf,
                     color.astype(np.int32), normal, parent, organs, {"trace": trace})
@@ -252,13 +253,33 @@ def top_radius(base, order, parent):
     return top
 
 
+#: Turtle coordinates and radii beyond this magnitude are refused: the lengths, volumes and
+#: moments computed from them (metrics, bounds) would overflow floating point.
+MAX_COORDINATE = 1e30
+
+
+def _usable(values):
+    """Finite and within ±:data:`MAX_COORDINATE`."""
+    return np.isfinite(values) & (np.abs(values) <= MAX_COORDINATE)
+
+
 def _check_finite(lsys, tree, leaf, ok):
-    """Refuse a plant whose turtle overflowed (e.g. F(1e308)F(1e308)): no inf/NaN geometry."""
+    """Refuse a plant whose turtle overflowed (e.g. F(1e308)F(1e308) or F+f(1e308)F): checked on the
+    turtle's output arrays, the first bad point names the module that drew it."""
     if ok.all():
         return
     module = lsys.module_text(tree, int(leaf[int(np.argmin(ok))]))
-    raise DerivationError(f"the turtle geometry is not finite at module {module} (a length, width or "
-                          "angle too large for floating point): use smaller values")
+    raise DerivationError(f"the turtle geometry is not finite or beyond ±{MAX_COORDINATE:g} at module {module} "
+                          "(a length, width or move too large to measure): use smaller values")
+
+
+def _check_color(lsys, tree, leaf, color):
+    """Colour indices are stored as int32: refuse ``'(c)`` with |c| >= 2^31 instead of wrapping it."""
+    bad = np.flatnonzero((color >= 2 ** 31) | (color <= -2 ** 31))  # abs() would wrap INT64_MIN
+    if bad.size:
+        module = lsys.module_text(tree, int(leaf[bad[0]]))
+        raise DerivationError(f"the colour index of the segment drawn by {module} is {int(color[bad[0]])}, "
+                              "out of range: a colour index is a whole number below 2^31 in size")
 
 
 def _organs(lsys, tree, leaves, orgs):
@@ -266,7 +287,7 @@ def _organs(lsys, tree, leaves, orgs):
     leaf_id = leaves[org_at]
     kind = np.array(lsys.symbols, dtype=object)[tree.symbol[leaf_id]] if len(leaf_id) else \
         np.array([], dtype=object)
-    _check_finite(lsys, tree, leaf_id, np.isfinite(position).all(1) & np.isfinite(size))
+    _check_finite(lsys, tree, leaf_id, _usable(position).all(1) & _usable(size))
     return Organs(kind, position, frame, size, tree.params[leaf_id], leaf_id)
 
 
@@ -422,8 +443,9 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
     parent[coded] = np.searchsorted(seg_at, -2 - parent[coded])
     leaf = leaves[seg_at]
     fresh = ~is_kept
-    _check_finite(lsys, tree, leaf[fresh], np.isfinite(start[fresh]).all(1) & np.isfinite(end[fresh]).all(1)
-                  & np.isfinite(base[fresh]))
+    _check_finite(lsys, tree, leaf[fresh], _usable(start[fresh]).all(1) & _usable(end[fresh]).all(1)
+                  & _usable(base[fresh]))
+    _check_color(lsys, tree, leaf[fresh], color[fresh])
     top = top_radius(base, order, parent)
     same = is_kept.copy()
     same[is_kept] = top[is_kept] == sk.top_radius[old_index]
