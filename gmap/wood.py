@@ -532,7 +532,7 @@ class Wood:
             return self._node
         years = self.final_years or (self.year + 1)
         probe = Branch(0, 0, 0)
-        self._node = 2.4 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
+        self._node = 1.6 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
         return self._node
 
     def branch_frame(self, br):
