@@ -223,6 +223,17 @@ def _strip_line(line, in_block):
     return chars, in_block
 
 
+def starts_line_comment(line: str, i: int) -> bool:
+    """Whether the ``//`` at column ``i`` (0-based) of ``line`` starts a comment (for editors).
+
+    >>> starts_line_comment("  // note", 2), starts_line_comment("A -> B//", 6), starts_line_comment("n: 3 // x", 5)
+    (True, False, True)
+    """
+    before = line[:i]
+    return line.startswith("//", i) and (not before.strip() or _line_kind(line, len(before) - len(before.lstrip()))
+                                         == "value")
+
+
 def _line_kind(line, i):
     """'value' for lines without modules (directives, ``n:``, a bare ``p:``), else 'modules'."""
     rest = line[i:]

@@ -16,6 +16,8 @@ from PySide6.QtGui import (QColor, QFont, QFontDatabase, QKeySequence, QSyntaxHi
                            QTextCursor)
 from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
 
+from ramure.lsys.grammar import starts_line_comment
+
 DEBOUNCE_MS = 350
 
 
@@ -60,7 +62,7 @@ class GrammarHighlighter(QSyntaxHighlighter):
                 pos, inside = end + 2, False
                 continue
             block, line = text.find("/*", pos), text.find("//", pos)
-            if line >= 0 and (block < 0 or line < block):
+            if line >= 0 and (block < 0 or line < block) and starts_line_comment(text, line):
                 self.setFormat(line, len(text) - line, self.COMMENT)
                 return
             if block < 0:
