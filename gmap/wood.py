@@ -37,17 +37,19 @@ corners of the volumes around each vertex (spec decision 3).  Default
 corners depend only on attributes, so embedding every step or once gives the
 same positions.
 
-*Knots.*  A branch born in year ``j`` starts on the trunk's pith face of
-level ``j`` in sector ``k`` (the trunk grows no stack there, as in Table 3.4
-``A -> A[F]_E [B]_Ci [R1]_C*-i``): a square *joint* prism (the thesis's UJ)
-sewn to that face, then an axis of ``branch_sides``-prisms along the branch
-direction with its own stacks.  The branch base has ``Y - j`` years of rings
-around its pith.  The trunk's rings bend around the knot: trunk ring corners
-near the branch axis are pushed out of the branch's nominal cone, ``rho' =
-rho + R(s) exp(-rho / R(s))`` (``R`` from the law's mean widths, so it does not
-depend on the seed).  The thesis gets this bending from averaging over glued
-neighbours; here the branch sits in its slot without being sewn to the slot's
-walls (only the joint's base is sewn), which keeps the solid a ball.
+*Knots.*  A year with new branches grows a short *node* level (1.6 times
+the branch's final base radius) under its internode.  A branch born in year
+``j`` starts on the node's pith face in sector ``k`` (the trunk grows no stack
+there, as in Table 3.4 ``A -> A[F]_E [B]_Ci [R1]_C*-i``): a square *joint*
+prism (the thesis's UJ) sewn to that face, then an axis of
+``branch_sides``-prisms along the branch direction with its own stacks, so
+the branch base has ``Y - j`` years of rings around its pith.  Its first level
+spans the trunk's radius and opens from the pith as a cone (a knot).  The
+trunk's rings bend around the knot: corners near the slot move towards the
+knot's surface (see :meth:`Wood._push`; radii from the law's means, so they do
+not depend on the seed).  The thesis gets this bending from averaging over
+glued neighbours; here the branch sits in its slot without being sewn to the
+slot's walls (only the joint's base is sewn), which keeps the solid a ball.
 
 >>> w = grow_wood("pine", years=2, branches=0)
 >>> w.gm.n_darts == trunk_darts(16, 2), w.gm.euler_characteristic()
