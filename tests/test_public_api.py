@@ -86,13 +86,18 @@ def _own_private_names(tree):
     return own
 
 
+def _private(name):
+    """``_x`` is private; ``__x__`` and protocol names such as ``_repr_png_`` are not."""
+    return name.startswith("_") and not name.startswith("__") and not name.endswith("_")
+
+
 def _foreign_private_attributes(tree):
     """``obj._x`` where ``obj`` is not ``self``/``cls`` and this module defines no ``_x``:
     reading another module's object through its private attributes."""
     own = _own_private_names(tree)
     bad = []
     for node in ast.walk(tree):
-        if (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")
+        if (isinstance(node, ast.Attribute) and _private(node.attr)
                 and node.attr not in own and not (isinstance(node.value, ast.Name)
                                                   and node.value.id in ("self", "cls", "super"))):
             bad.append(f"line {node.lineno}: .{node.attr} (a private attribute of another module's object)")

@@ -9,7 +9,7 @@ import json
 import time
 
 from ramure.app.cli import UserError
-from ramure.app.commands.lichen import _substrate
+from ramure.app.commands.lichen import substrate
 from ramure.app.commands.plant import output_file, parse_size
 from ramure.gmap.cracks import add_noise, carve, pattern_from_skeleton, random_pattern, smooth, symmetric
 
@@ -46,7 +46,7 @@ def _pattern(args):
 def run_crack(args):
     out = output_file(args.output, (".png", ".stl", ".vtp", ".ply")) if args.output else None
     size = parse_size(args.size)
-    model = _substrate(args.on)
+    model = substrate(args.on)
     bounds = model.bounds
     anchor = _vector(args.anchor, "--anchor") if args.anchor else (
         (bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, bounds[5])

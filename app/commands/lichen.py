@@ -32,7 +32,8 @@ def stone(seed=0):
     return sphere
 
 
-def _substrate(text):
+def substrate(text: str):
+    """The surface to grow on: the lumpy test stone, or a mesh file read with pyvista."""
     if text == "stone":
         return stone()
     path = pathlib.Path(text)
@@ -49,7 +50,7 @@ def _substrate(text):
 def run_lichen(args):
     out = output_file(args.output, (".png", ".vtp")) if args.output else None
     size = parse_size(args.size)
-    mesh = from_polydata(_substrate(args.on))
+    mesh = from_polydata(substrate(args.on))
     t0 = time.perf_counter()
     growth = grow_lichen(mesh, clusters=args.clusters, particles=args.particles, r=args.r, habit=args.habit,
                          seed=args.seed)
