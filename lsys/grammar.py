@@ -24,6 +24,10 @@ Directives (one per line):
 ``#define NAME expr``
     a constant; may use earlier constants.  Constants are what the variant
     explorer varies and what the UI shows as sliders.
+``#include FILE``
+    reads FILE (a path relative to the including file; quotes optional) as if
+    its lines stood here: constants, modules, rules.  Cycles are refused
+    naming both files; an error inside FILE names FILE and its line.
 ``#module Name1 Name2 ...``
     multi-letter module names.  Any other letter is a module on its own, so
     ``FF-[-F+F]`` is ten modules.  ``Leaf`` and ``Fruit`` are always declared.
@@ -32,6 +36,9 @@ Directives (one per line):
 ``#ignore: + - F``
     symbols skipped when matching left/right contexts (commas between them
     are allowed: ``#ignore: +, -, F``).
+``#consider: A B``
+    the dual of ``#ignore`` (L-Py, cpfg): contexts see only these symbols
+    (and the brackets); every other symbol is skipped.  Not with ``#ignore``.
 ``#angle deg``
     the angle of ``+ - & ^ \\ /`` written without a parameter (default 90).
 ``#step len`` / ``#width w``
@@ -67,6 +74,7 @@ Limits, refused with a clear error: a grammar text of more than
 from __future__ import annotations
 
 import math
+import pathlib
 import re
 from dataclasses import dataclass, field
 
@@ -85,6 +93,8 @@ MAX_TEXT_CHARS = 4_000_000
 MAX_PARAMETERS = 100
 #: The largest tropism bend e·‖T‖ (radians per F) accepted.
 MAX_TROPISM_BEND = 1000.0
+#: How many files deep ``#include`` may nest.
+MAX_INCLUDE_DEPTH = 16
 #: A rule or axiom line ending with this mark continues on the next non-blank line.
 CONTINUATION = "..."
 _NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*$")
@@ -247,11 +257,12 @@ def _line_kind(line, i):
 class _Line:
     """One source line (comments blanked) with its number and original text."""
 
-    def __init__(self, number, text, original):
+    def __init__(self, number, text, original, filename=None):
         self.number, self.text, self.original = number, text, original
+        self.filename = filename  # set for lines of an #include'd file
 
     def error(self, message, column):
-        return GrammarError(message, self.number, column, self.original)
+        return GrammarError(message, self.number, column, self.original, filename=self.filename)
 
     def source(self, start, end=None):
         return Source(self.text[start:end], self.number, start + 1, self.original)
@@ -264,7 +275,8 @@ class _GrammarParser:
         self.constants = {}
         self.modules = list(DEFAULT_MODULES)
         self.organs = list(DEFAULT_ORGANS)
-        self.ignore = set()
+        self.context_filter = {"ignore": set(), "consider": set()}
+        self.includes = [str(pathlib.Path(filename).resolve())] if filename else []
         self.settings = {"angle": DEFAULT_ANGLE, "step": DEFAULT_STEP, "width": DEFAULT_WIDTH,
                          "widthscale": 1.0}
         self.tropism = None
@@ -276,11 +288,25 @@ class _GrammarParser:
 
     # -- line level --------------------------------------------------------
     def parse(self):
+        self.read(self.text, None)
+        return self.finish()
+
+    def read(self, text, filename):
+        """Read the lines of ``text`` (the grammar, or an ``#include``'d file named ``filename``)."""
         # Lines end at \n, \r\n or \r only (as editors count them); other Unicode
         # separators stay inside a line, so a '//' comment never runs to the end of file.
-        text = self.text.replace("\r\n", "\n").replace("\r", "\n")
-        lines = [_Line(number, t, o) for number, (t, o) in
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+        lines = [_Line(number, t, o, filename) for number, (t, o) in
                  enumerate(zip(strip_comments(text).split("\n"), text.split("\n")), start=1)]
+        try:
+            self._read_lines(lines)
+        except GrammarError as err:
+            if filename and not err.filename:  # e.g. an expression error on an #include'd line
+                err.filename = filename
+                err.args = (err._format(),)
+            raise
+
+    def _read_lines(self, lines):
         in_rules, k = False, 0
         while k < len(lines):
             line = lines[k]
@@ -319,20 +345,24 @@ class _GrammarParser:
                 raise line.error(
                     "expected a directive (#define, #module, ...), 'n:', 'w:', 'p:' or a rule "
                     "with '->'", start + 1)
+    def finish(self):
+        """The :class:`Grammar` of every line read."""
         if self.axiom is None:
             raise GrammarError("the grammar has no axiom: add a line 'w: ...'", filename=self.filename)
         if self.n is None:
             raise GrammarError("the grammar has no derivation count: add a line 'n: ...'",
                                filename=self.filename)
-        rules = [self.rule(i, *entry) for i, entry in enumerate(self.rule_lines)]
+        rules = [_located(self.rule, entry[0], i, *entry) for i, entry in enumerate(self.rule_lines)]
         grammar = Grammar(
             text=self.text, constants=dict(self.constants), axiom=self.axiom, rules=rules, n=self.n,
-            modules=tuple(self.modules), organs=tuple(self.organs), ignore=frozenset(self.ignore),
+            modules=tuple(self.modules), organs=tuple(self.organs), ignore=frozenset(self.context_filter["ignore"]),
             angle=self.settings["angle"], step=self.settings["step"], width=self.settings["width"],
             width_scale=self.settings["widthscale"],
             tropism=self.tropism, filename=self.filename, amap=tuple(self.amap),
         )
         _check(grammar)
+        if self.context_filter["consider"]:  # the dual of #ignore: every other symbol but brackets
+            grammar.ignore = frozenset(set(grammar.symbols) - self.context_filter["consider"] - {"[", "]"})
         if grammar.amap:
             from .amap import check_annotations
 
@@ -374,9 +404,15 @@ class _GrammarParser:
                 if name.startswith("organ") and word.group() not in self.organs:
                     self.organs.append(word.group())
             self.modules.sort(key=len, reverse=True)
-        elif name == "ignore":  # ABOP writes '#ignore: +-F'; commas between symbols are allowed
+        elif name == "include":
+            self.include(line, rest)
+        elif name in ("ignore", "consider"):  # ABOP writes '#ignore: +-F'; commas are allowed too
+            other = "consider" if name == "ignore" else "ignore"
+            if self.context_filter[other]:
+                raise line.error(f"#{name} and #{other} cannot both be used: #consider lists the only "
+                                 "symbols contexts see, #ignore the symbols they skip", start + 1)
             listed = _Line(line.number, _blank_top_level_commas(text), line.original)
-            self.ignore.update(p.symbol for p in self.modules_at(listed, rest, None, formal=True))
+            self.context_filter[name].update(p.symbol for p in self.modules_at(listed, rest, None, formal=True))
         elif name in self.settings:
             self.settings[name] = self.constant(line, rest)
         elif name == "amap":  # architecture roles, checked by ramure.lsys.amap once every module is known
@@ -393,8 +429,38 @@ class _GrammarParser:
             _check_tropism(line, rest, self.tropism)
         else:
             raise line.error(
-                f"unknown directive '#{m.group(1)}' (known: #define, #module, #organ, #ignore, "
+                f"unknown directive '#{m.group(1)}' (known: #define, #include, #module, #organ, #ignore, #consider, "
                 "#angle, #step, #width, #widthscale, #tropism)", start + 1)
+
+    def include(self, line, start):
+        """``#include FILE``: read FILE (relative to the including file) as if its lines stood here."""
+        word = line.text[start:].strip()
+        quoted = len(word) >= 2 and (word[0] + word[-1]) in ('""', "''", "<>")
+        name = word[1:-1] if quoted else word
+        if not name:
+            raise line.error("#include needs a file name, e.g. #include \"leaves.lsys\"", start + 1)
+        including = line.filename or self.filename
+        folder = pathlib.Path(including).parent if including else pathlib.Path.cwd()
+        path = (folder / name).resolve()
+        chain = self.includes
+        if str(path) in chain:
+            raise line.error(f"#include cycle: {including or 'the grammar'} includes {name}, which "
+                             f"(directly or not) includes {including or 'the grammar'} again", start + 1)
+        if len(chain) > MAX_INCLUDE_DEPTH:
+            raise line.error(f"#include nests more than {MAX_INCLUDE_DEPTH} files deep", start + 1)
+        try:
+            text = path.read_text(encoding="utf-8-sig")
+        except (OSError, UnicodeDecodeError) as exc:
+            reason = "it is not UTF-8 text" if isinstance(exc, UnicodeDecodeError) else \
+                (exc.strerror or type(exc).__name__).lower()
+            raise line.error(f"cannot #include {name} ({path}): {reason}", start + 1) from None
+        if len(text) > MAX_TEXT_CHARS:
+            raise line.error(f"#include {name}: more than {MAX_TEXT_CHARS:,} characters", start + 1)
+        chain.append(str(path))
+        try:
+            self.read(text, str(path))
+        finally:
+            chain.pop()
 
     # -- module strings ----------------------------------------------------
     def modules_at(self, line, start, end, formal, pieces=None):
@@ -593,6 +659,17 @@ def _not_a_rule(line, start):
     return line.error(f"this line is not a rule (no '->'): a rule is 'predecessor -> successor' on one "
                       f"line; end a line with '{CONTINUATION}' to continue its successor on the next",
                       start + 1)
+
+
+def _located(parse, line, *args):
+    """Call ``parse(*args)``; an error from an #include'd line names that file."""
+    try:
+        return parse(*args)
+    except GrammarError as err:
+        if line.filename and not err.filename:
+            err.filename = line.filename
+            err.args = (err._format(),)
+        raise
 
 
 def _context(line, patterns):
