@@ -269,8 +269,8 @@ def _check_finite(lsys, tree, leaf, ok):
     if ok.all():
         return
     module = lsys.module_text(tree, int(leaf[int(np.argmin(ok))]))
-    raise DerivationError(f"the turtle geometry is not finite or beyond ±{MAX_COORDINATE:g} at module {module} "
-                          "(a length, width or move too large to measure): use smaller values")
+    raise DerivationError(f"the turtle geometry is not finite at module {module} (or beyond ±{MAX_COORDINATE:g}: "
+                          "a length, width or move too large to measure): use smaller values")
 
 
 def _check_color(lsys, tree, leaf, color):
