@@ -28,7 +28,7 @@ from pyvistaqt import QtInteractor
 from ramure.app.desktop.lod import MotionLevelOfDetail
 from ramure.app.desktop.state import points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
-from ramure.app.render import frame_camera
+from ramure.app.desktop import scene
 
 CLICK_SLOP = 4  # pixels a click may move and still be a click
 PICK_TOLERANCE = 0.002
@@ -54,6 +54,8 @@ class _MouseFilter(QObject):
     def eventFilter(self, obj, event):  # noqa: N802 (Qt API)
         kind = event.type()
         view = self.view
+        if kind == QEvent.Type.Wheel:
+            view.auto_framed = False  # the user zooms: keep their view
         if kind == QEvent.Type.MouseButtonPress:
             pos = event.position().toPoint()
             button = event.button()
@@ -67,6 +69,8 @@ class _MouseFilter(QObject):
                 view.band.show()
                 return True
             return False
+        if kind == QEvent.Type.MouseMove and self.press is not None and not self.press[2]:
+            view.auto_framed = False  # the user turns or pans the view: keep it
         if kind == QEvent.Type.MouseMove and self.press is not None and self.press[2]:
             view.band.setGeometry(QRect(self.press[0], event.position().toPoint()).normalized())
             return True
@@ -106,8 +110,7 @@ class PlantView(QWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
-        self.plotter.set_background("white")
-        self.plotter.enable_trackball_style()
+        scene.apply_look(self.plotter)  # light kit, gradient, FXAA, turntable orbit (Z up)
         if self.plotter.iren is not None:
             self.plotter.iren.clear_key_event_callbacks()
         layout = QVBoxLayout(self)
@@ -128,6 +131,10 @@ class PlantView(QWidget):
         self.hide_fruit_spheres = False  # True while volumetric fruit replace the spheres
         self.lod = MotionLevelOfDetail(self.plotter)
         self._diag = None
+        self.view_name = "front"  # the camera preset Home returns to
+        self.auto_framed = True  # False once the user moves the camera
+        self.hairlines = scene.Hairlines(self.plotter)
+        self.ground = scene.Ground(self.plotter)
 
     # -- drawing ---------------------------------------------------------------
     def show_plant(self, snap, colors, reset_camera=None):
@@ -154,20 +161,37 @@ class PlantView(QWidget):
                                                smooth_shading=False, show_scalar_bar=False, render=False,
                                                pickable=True)
         self.lod.show(self.actor, snap.skeleton, self.mesh, colors)
+        scene.smooth_normals(self.mesh)
+        self.hairlines.show(snap.skeleton, self.mesh, colors)
+        self.ground.show(mesh.bounds)
         self.picker = None
         diag = float(np.linalg.norm(np.subtract(*np.reshape(mesh.bounds, (3, 2)).T)))
-        if reset_camera is None:
-            reset_camera = self._diag is None or not (0.4 < diag / max(self._diag, 1e-12) < 2.5)
+        if reset_camera is None:  # frame again when the plant leaves the view or shrinks a lot
+            reset_camera = (self._diag is None or self.auto_framed or diag / max(self._diag, 1e-12) < 0.4
+                            or scene.outside_view(self.plotter, mesh.bounds))
         if reset_camera:
             self.reset_camera()
-            self._diag = diag
         self.redraw()
 
-    def reset_camera(self):
+    def reset_camera(self, view=None):
+        """Frame the whole plant from preset ``view`` (front, side, top, iso; default: the last)."""
+        self.view_name = view or self.view_name
         if self.mesh is not None:
-            frame_camera(self.plotter, self.mesh.bounds, "front")
-            self.plotter.camera.zoom(1.25)
+            scene.fit_camera(self.plotter, self.mesh.bounds, self.view_name)
             self._diag = float(np.linalg.norm(np.subtract(*np.reshape(self.mesh.bounds, (3, 2)).T)))
+        self.auto_framed = True
+        self.redraw()
+
+    def resizeEvent(self, event):  # noqa: N802 (Qt API)
+        """A new size (the window's first layout, a dock moved): keep the plant framed until the
+        user moves the camera."""
+        super().resizeEvent(event)
+        if self.auto_framed and self.mesh is not None:
+            self.reset_camera()
+
+    def set_selected_segments(self, segments):
+        """Thick red lines over the selected segments (visible on hairline twigs)."""
+        self.hairlines.set_selection(segments)
         self.redraw()
 
     def set_colors(self, colors):
@@ -177,6 +201,7 @@ class PlantView(QWidget):
         self.mesh.cell_data["rgb"][:] = colors
         self.mesh.Modified()
         self.lod.set_colors(colors)
+        self.hairlines.set_colors(self.mesh, colors)
         self.redraw()
 
     def set_box(self, lines):

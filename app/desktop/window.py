@@ -180,7 +180,14 @@ class MainWindow(QMainWindow):
                                         checkable=True, tip="Right drag always draws a rectangle")
         self.kinship_action = self._action(v, "Kinship colours", self.set_kinship, "K", checkable=True,
                                            tip="Colour the plant by derivation kinship to one selected leaf")
-        self._action(v, "Reset camera", self.view.reset_camera, "Home")
+        self._action(v, "Frame the whole plant", lambda: self.view.reset_camera(), "Home")
+        camera = v.addMenu("Camera")
+        for name, key in (("front", "Ctrl+1"), ("side", "Ctrl+2"), ("top", "Ctrl+3"), ("iso", "Ctrl+4")):
+            self._action(camera, name.capitalize(), lambda _=False, n=name: self.view.reset_camera(n), key,
+                         tip=f"Look at the whole plant from the {name} (Z up)")
+        self.ground_action = self._action(v, "Ground grid", self.view.ground.set_visible, "G", checkable=True,
+                                          tip="A grid under the plant; its spacing is written bottom left")
+        self.ground_action.setChecked(True)
         v.addSeparator()
         for dock in self.docks.values():
             v.addAction(dock.toggleViewAction())
@@ -273,6 +280,8 @@ class MainWindow(QMainWindow):
                 kin = None
         self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors))
         self.view.set_fruit_selection(selection)
+        self.view.set_selected_segments(np.flatnonzero(state.leaf_mask(snap.segment_leaf, selection))
+                                        if len(selection) and kin is None else [])
         try:
             self.view.set_box(self.controller.selection_box() if selection else None)
         except RamureError:

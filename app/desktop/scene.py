@@ -1,0 +1,244 @@
+"""How the 3D view looks: light, background, camera presets, the ground grid, hairline twigs.
+
+Choices the issue leaves open, stated here:
+
+* **Light**: VTK's light kit (a key, a fill, two back lights and a head
+  light, the classic three-point setup) shows the tubes' roundness; no
+  image-based lighting (it needs an HDR file and a GPU).
+* **Background**: a vertical gradient from a light neutral grey at the bottom
+  to a soft blue-grey at the top, so bark, leaves, the red selection and the
+  orange fruit all stand out, and screenshots read well on paper.
+* **Anti-aliasing**: FXAA (a cheap screen-space pass that works on software
+  OpenGL, where multisampling is often refused).
+* **Thin branches**: every segment is also drawn as a 1.5-pixel line of its
+  own colour under the tubes; a twig thinner than a pixel still shows as a
+  line instead of vanishing.  Selected segments get a 3-pixel red line on
+  top, so a selected hairline twig is plainly visible.
+* **Camera**: presets front, side, top and iso, all with Z up; the view
+  orbits like a turntable (VTK's terrain style: azimuth about Z and
+  elevation, never any roll).  Framing fits the plant's 8 box corners into
+  90 % of the view, whatever its shape (tall plants are not cropped).
+* **Ground**: a grid on the plane under the plant, its spacing a round
+  number (1, 2 or 5 times a power of ten) about a tenth of the plant's size,
+  labelled in a corner ("grid: 0.5 units"; the grammar's units are not
+  metres unless the grammar says so).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pyvista as pv
+
+BACKGROUND_BOTTOM = "#eef0f2"
+BACKGROUND_TOP = "#b9c6d3"
+GRID_RGB = (0.55, 0.58, 0.62)
+SELECTION_RGB = (255, 0, 0)
+LINE_WIDTH = 1.5  # pixels: the least a branch is drawn with
+SELECTED_LINE_WIDTH = 3.0
+SMOOTH_CELLS = 400_000  # smooth shading (point normals) up to this many cells
+VIEWS = {"front": (0.0, -1.0, 0.12), "side": (1.0, 0.0, 0.12), "top": (0.0, -1e-3, 1.0),
+         "iso": (0.7, -0.7, 0.45)}
+
+
+def apply_look(plotter) -> None:
+    """Light kit, gradient background, FXAA and turntable orbiting on ``plotter``."""
+    plotter.set_background(BACKGROUND_BOTTOM, top=BACKGROUND_TOP)
+    plotter.enable_lightkit()
+    try:
+        plotter.enable_anti_aliasing("fxaa")
+    except Exception:  # noqa: BLE001 - an OpenGL without the pass: plain lines, still correct
+        pass
+    plotter.enable_terrain_style(mouse_wheel_zooms=True, shift_pans=True)
+
+
+def nice_step(size: float) -> float:
+    """A round grid spacing (1, 2 or 5 x 10^k) close to ``size / 10``.
+
+    >>> nice_step(10.0), nice_step(3.7), nice_step(0.8)
+    (1.0, 0.5, 0.1)
+    """
+    target = max(float(size), 1e-9) / 10.0
+    power = 10.0 ** math.floor(math.log10(target))
+    for m in (1.0, 2.0, 5.0, 10.0):
+        if target <= m * power * 1.5:
+            return m * power
+    return 10.0 * power
+
+
+def fit_camera(plotter, bounds, view: str = "front", margin: float = 0.9) -> None:
+    """Look at ``bounds`` from preset ``view`` (Z up) so the whole box fills ``margin`` of the view."""
+    b = np.asarray(bounds, float).reshape(3, 2)
+    center = b.mean(axis=1)
+    size = float(np.max(b[:, 1] - b[:, 0])) or 1.0
+    d = np.asarray(VIEWS[view], float)
+    d /= np.linalg.norm(d)
+    up = (0.0, 1.0, 0.0) if view == "top" else (0.0, 0.0, 1.0)
+    plotter.camera_position = [tuple(center + d * size * 3.0), tuple(center), up]
+    plotter.reset_camera(bounds=tuple(b.ravel()))
+    corners = np.array(np.meshgrid(*b, indexing="ij")).reshape(3, -1).T
+    renderer = plotter.renderer
+    camera = renderer.GetActiveCamera()
+    for _ in range(3):  # perspective: the fit converges in a step or two
+        m = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+        matrix = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        clip = np.c_[corners, np.ones(len(corners))] @ matrix.T
+        extent = float(np.max(np.abs(clip[:, :2] / clip[:, 3:4])))
+        if not np.isfinite(extent) or extent <= 0:
+            break
+        camera.Zoom(margin / extent)
+    renderer.ResetCameraClippingRange()
+
+
+def outside_view(plotter, bounds, slack: float = 1.02) -> bool:
+    """True if a corner of ``bounds`` projects outside the view (the plant grew out of sight)."""
+    b = np.asarray(bounds, float).reshape(3, 2)
+    corners = np.array(np.meshgrid(*b, indexing="ij")).reshape(3, -1).T
+    renderer = plotter.renderer
+    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+    matrix = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    clip = np.c_[corners, np.ones(len(corners))] @ matrix.T
+    if (clip[:, 3] <= 0).any():
+        return True
+    return bool(np.max(np.abs(clip[:, :2] / clip[:, 3:4])) > slack)
+
+
+def smooth_normals(mesh) -> None:
+    """Give ``mesh`` point normals (smooth shading of the tubes), in place; skipped above
+    :data:`SMOOTH_CELLS` cells, where flat shading keeps a regrow quick."""
+    if mesh.n_cells == 0 or mesh.n_cells > SMOOTH_CELLS:
+        return
+    normals = mesh.compute_normals(cell_normals=False, point_normals=True, split_vertices=False,
+                                   consistent_normals=False, auto_orient_normals=False)
+    mesh.point_data["Normals"] = normals.point_data["Normals"]
+    mesh.point_data.active_normals_name = "Normals"
+
+
+def segment_colors(mesh, colors, count):
+    """Per-segment RGB from per-cell ``colors``: each segment takes its first tube cell's colour."""
+    seg = np.asarray(mesh.cell_data["segment"])
+    on = np.flatnonzero(seg >= 0)
+    out = np.zeros((count, 3), np.uint8)
+    out[seg[on][::-1]] = np.asarray(colors)[on][::-1]  # reversed: the first cell wins
+    return out
+
+
+class Hairlines:
+    """Every segment as a thin line under the tubes, and the selected ones as thick red lines."""
+
+    def __init__(self, plotter):
+        self.plotter = plotter
+        self.lines = None
+        self.actor = None
+        self.selected = None
+        self.selected_actor = None
+        self.skeleton = None
+
+    def show(self, skeleton, mesh, colors) -> None:
+        """Lines for a new plant (``colors``: the tubes' per-cell RGB)."""
+        self.skeleton = skeleton
+        if skeleton is None or len(skeleton) == 0:
+            self._hide()
+            return
+        n = len(skeleton)
+        points = np.concatenate([np.asarray(skeleton.start), np.asarray(skeleton.end)])
+        cells = np.c_[np.full(n, 2), np.arange(n), np.arange(n) + n].ravel()
+        lines = pv.PolyData(points, lines=cells)
+        lines.cell_data["rgb"] = segment_colors(mesh, colors, n)
+        if self.actor is None:
+            self.lines = lines
+            self.actor = self.plotter.add_mesh(lines, scalars="rgb", rgb=True, name="hairlines",
+                                               reset_camera=False, render=False, pickable=False,
+                                               show_scalar_bar=False, lighting=False, line_width=LINE_WIDTH)
+        else:
+            self.lines.copy_from(lines, deep=False)
+            self.lines.cell_data.active_scalars_name = "rgb"
+            self.actor.SetVisibility(True)
+
+    def set_colors(self, mesh, colors) -> None:
+        if self.lines is not None and self.skeleton is not None:
+            self.lines.cell_data["rgb"][:] = segment_colors(mesh, colors, len(self.skeleton))
+            self.lines.Modified()
+
+    def set_selection(self, segments) -> None:
+        """Thick red lines over the selected ``segments`` (indices), drawn above the tubes."""
+        segments = np.asarray(segments, np.int64)
+        if self.skeleton is None or not len(segments):
+            if self.selected_actor is not None:
+                self.selected_actor.SetVisibility(False)
+            return
+        sk = self.skeleton
+        k = len(segments)
+        points = np.concatenate([np.asarray(sk.start)[segments], np.asarray(sk.end)[segments]])
+        cells = np.c_[np.full(k, 2), np.arange(k), np.arange(k) + k].ravel()
+        selected = pv.PolyData(points, lines=cells)
+        if self.selected_actor is None:
+            self.selected = selected
+            self.selected_actor = self.plotter.add_mesh(selected, color=np.array(SELECTION_RGB) / 255,
+                                                        name="selected_lines", reset_camera=False,
+                                                        render=False, pickable=False, lighting=False,
+                                                        line_width=SELECTED_LINE_WIDTH)
+            mapper = self.selected_actor.GetMapper()
+            # drawn a little towards the camera, so the red wins over the tube it runs inside
+            mapper.SetResolveCoincidentTopologyToPolygonOffset()
+            mapper.SetRelativeCoincidentTopologyLineOffsetParameters(0, -66000)
+        else:
+            self.selected.copy_from(selected, deep=False)
+        self.selected_actor.SetVisibility(True)
+
+    def _hide(self):
+        for actor in (self.actor, self.selected_actor):
+            if actor is not None:
+                actor.SetVisibility(False)
+
+
+class Ground:
+    """A grid under the plant with its spacing written in a corner."""
+
+    def __init__(self, plotter):
+        self.plotter = plotter
+        self.grid = None
+        self.actor = None
+        self.label = None
+        self.step = None
+        self.visible = True
+
+    def show(self, bounds) -> None:
+        b = np.asarray(bounds, float).reshape(3, 2)
+        size = float(np.max(b[:2, 1] - b[:2, 0]))
+        size = max(size, float(b[2, 1] - b[2, 0]) * 0.6, 1e-6)
+        step = nice_step(size)
+        half = math.ceil(0.75 * size / step) * step
+        cx = round(float(b[0].mean()) / step) * step
+        cy = round(float(b[1].mean()) / step) * step
+        ticks = np.arange(-half, half + step / 2, step)
+        z = float(b[2, 0])
+        xs = np.c_[cx + ticks, np.full(len(ticks), cy - half), cx + ticks, np.full(len(ticks), cy + half)]
+        ys = np.c_[np.full(len(ticks), cx - half), cy + ticks, np.full(len(ticks), cx + half), cy + ticks]
+        segs = np.concatenate([xs, ys])
+        points = np.zeros((2 * len(segs), 3))
+        points[0::2, :2], points[1::2, :2] = segs[:, :2], segs[:, 2:]
+        points[:, 2] = z
+        cells = np.c_[np.full(len(segs), 2), np.arange(0, 2 * len(segs), 2), np.arange(1, 2 * len(segs), 2)]
+        grid = pv.PolyData(points, lines=cells.ravel())
+        if self.actor is None:
+            self.grid = grid
+            self.actor = self.plotter.add_mesh(grid, color=GRID_RGB, name="ground", reset_camera=False,
+                                               render=False, pickable=False, lighting=False, line_width=1,
+                                               opacity=0.6)
+        else:
+            self.grid.copy_from(grid, deep=False)
+        self.step = step
+        text = f"grid: {step:g} unit{'s' if step != 1 else ''}"
+        if self.label is None:
+            self.label = self.plotter.add_text(text, position="lower_left", font_size=9, color="#3c4650",
+                                               name="ground_label", render=False)
+        else:
+            self.label.SetText(0, text)
+        self.set_visible(self.visible)
+
+    def set_visible(self, on: bool) -> None:
+        self.visible = bool(on)
+        for actor in (self.actor, self.label):
+            if actor is not None:
+                actor.SetVisibility(self.visible)

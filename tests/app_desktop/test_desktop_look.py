@@ -1,0 +1,56 @@
+"""The 3D view frames the whole plant, offers Z-up presets, a ground grid, and shows hairline twigs."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt
+from PySide6.QtTest import QTest
+
+from ramure.app.desktop import scene
+from desktop_helpers import settle
+
+pytestmark = pytest.mark.gui
+
+
+def image_array(qimage):
+    qimage = qimage.convertToFormat(qimage.Format.Format_RGB888)
+    w, h = qimage.width(), qimage.height()
+    return np.frombuffer(qimage.constBits(), np.uint8).reshape(h, qimage.bytesPerLine())[:, :3 * w].reshape(h, w, 3)
+
+
+def test_a_tall_plant_is_framed_at_1024x700_and_presets_keep_z_up(make_window, qtbot, artifacts):
+    w = make_window(n=10)
+    w.resize(1024, 700)
+    settle(qtbot, w)
+    qtbot.wait(50)
+    bounds = w.view.mesh.bounds
+    assert not scene.outside_view(w.view.plotter, bounds, slack=1.0)  # every box corner on screen
+    for key, name in ((Qt.Key.Key_2, "side"), (Qt.Key.Key_3, "top"), (Qt.Key.Key_4, "iso")):
+        QTest.keyClick(w.view.plotter, key, Qt.KeyboardModifier.ControlModifier)
+        settle(qtbot, w)
+        assert w.view.view_name == name and not scene.outside_view(w.view.plotter, bounds, slack=1.0)
+        up = np.asarray(w.view.plotter.camera.up)
+        assert name == "top" or abs(up[2]) > 0.9  # Z up, no roll
+    w.view.grab_image().save(str(artifacts / "desktop_iso.png"))
+    assert w.view.ground.actor.GetVisibility() and w.view.ground.step > 0
+    QTest.keyClick(w.view.plotter, Qt.Key.Key_1, Qt.KeyboardModifier.ControlModifier)
+    settle(qtbot, w)
+    w.grab_window().save(str(artifacts / "desktop_1024x700.png"))
+
+
+def test_a_selected_hairline_twig_shows_red(make_window, qtbot, artifacts):
+    w = make_window(n=10)
+    snap = w.controller.snapshot
+    radius = np.asarray(snap.skeleton.base_radius)
+    twig = int(np.argmin(radius))
+    w.controller.select([int(snap.segment_leaf[twig])])
+    settle(qtbot, w)
+    assert w.view.hairlines.selected_actor.GetVisibility()
+    x, y = w.view.project(snap.midpoints[[twig]])[0]
+    pixels = image_array(w.view.grab_image())
+    scale = w.view.plotter.devicePixelRatioF()
+    row, col = int(round(pixels.shape[0] - 1 - y / scale)), int(round(x / scale))
+    patch = pixels[max(row - 3, 0):row + 4, max(col - 3, 0):col + 4].reshape(-1, 3).astype(int)
+    reddish = (patch[:, 0] > 180) & (patch[:, 1] < 90) & (patch[:, 2] < 90)
+    assert reddish.any()  # the selection is visible on a twig far thinner than a pixel
+    w.view.grab_image().save(str(artifacts / "desktop_hairline_selection.png"))
