@@ -1,0 +1,177 @@
+"""Fruit defects: shrinkage, rot, hail, grade (issue 17)."""
+import numpy as np
+import pytest
+
+from ramure.gmap import GMap3, topology
+from ramure.gmap import defects as D
+from ramure.gmap.errors import GMapError
+from ramure.gmap.fruit import build_fruit
+from ramure.gmap.tissue import CODES
+
+
+@pytest.fixture(scope="module")
+def fruit():
+    return build_fruit("round_tomato", volume_levels=2, seeds=20, seed=3)
+
+
+def check_after(before, after):
+    """Invariants after every defect."""
+    topology.assert_solid(after)
+    sign = D.orientation(before)
+    vols = D.cell_volumes(after, sign)
+    assert vols.min() > 0
+    assert vols.sum() <= D.cell_volumes(before, sign).sum() + 1e-9
+
+
+def unchanged(gm, copy):
+    assert np.array_equal(gm.points, copy.points)
+    assert np.array_equal(gm.alpha, copy.alpha)
+    assert "transpiration" not in gm.volume_data or np.array_equal(
+        gm.volume_data["transpiration"], copy.volume_data["transpiration"])
+
+
+def test_cube_edge_rate_keeps_0729():
+    gm = GMap3(); gm.add_prisms(4, sizes=[[2.0, 3.0, 1.5]])
+    assert D.cell_volumes(gm)[0] == pytest.approx(9.0)
+    out, facts = D.shrink(gm, 0.1)
+    assert facts["volume_kept"] == pytest.approx(0.729, abs=1e-12)
+    assert D.cell_volumes(out)[0] == pytest.approx(9.0 * 0.729)
+    check_after(gm, out)
+    vol, facts = D.shrink(gm, 0.1, rate_kind="volume")
+    assert facts["volume_kept"] == pytest.approx(0.9, abs=1e-12)
+
+
+def test_uniform_shrink_is_homothety(fruit):
+    ref = fruit.copy()
+    rates = {"seed": 1.0}
+    out, facts = D.shrink(fruit, 0.1, steps=2, rates=rates)
+    unchanged(fruit, ref)
+    assert facts["volume_kept"] == pytest.approx(0.9 ** 6, abs=1e-9)
+    _, p0 = fruit.vertex_positions()
+    _, p1 = out.vertex_positions()
+    c0 = p0.mean(axis=0)
+    assert np.abs((p1 - c0) - 0.81 * (p0 - c0)).max() < 1e-7 * np.abs(p0).max()
+    check_after(fruit, out)
+
+
+def test_seeds_with_k0_keep_their_thickness(fruit):
+    out, facts = D.shrink(fruit, 0.1, steps=3)
+    check_after(fruit, out)
+    seeds = np.flatnonzero(fruit.volume_data["tissue"] == CODES["seed"])
+    sign = D.orientation(fruit)
+    v0, v1 = D.cell_volumes(fruit, sign), D.cell_volumes(out, sign)
+    seed_ratio = v1[seeds].sum() / v0[seeds].sum()
+    flesh = fruit.volume_data["tissue"] == CODES["mesocarp"]
+    flesh_ratio = v1[flesh].sum() / v0[flesh].sum()
+    assert flesh_ratio < 0.9 ** 9 * 1.1            # the flesh lost about 1 - 0.9^9
+    assert seed_ratio > 0.9                         # seeds nearly keep their size
+    assert 0.9 ** 9 < facts["volume_kept"] < 1
+
+
+def test_shrink_refusals(fruit):
+    ref = fruit.copy()
+    with pytest.raises(GMapError, match="rate x K"):
+        D.shrink(fruit, 0.5, rates={"exocarp": 2.0})
+    with pytest.raises(GMapError, match="unknown tissue"):
+        D.shrink(fruit, 0.1, rates={"peel": 1.0})
+    with pytest.raises(GMapError, match="steps"):
+        D.shrink(fruit, 0.1, steps=0)
+    unchanged(fruit, ref)
+
+
+def test_rot_multipliers_on_rings(fruit):
+    site = equator_site(fruit)
+    out, facts = D.rot(fruit, vertex=site)
+    k0 = D._transpiration(fruit.copy())
+    k1 = out.volume_data["transpiration"]
+    rings = D.rot_rings(out, site)
+    assert [len(r) for r in rings] == facts["ring_cells"]
+    assert len(rings[0]) == 4                       # a regular skin vertex touches 4 cells
+    inc = set(np.flatnonzero(np.isin(np.arange(fruit.n_volumes), rings[0])).tolist())
+    vid, _ = fruit.cells(0)
+    assert inc == set(np.unique(fruit.dart_volume[vid == site]).tolist())
+    for ring, c in zip(rings, (2.5, 2.0, 1.5)):
+        assert np.array_equal(k1[ring], k0[ring] * c)
+    rest = np.ones(fruit.n_volumes, bool); rest[np.concatenate(rings)] = False
+    assert np.array_equal(k1[rest], k0[rest])
+    assert len(np.unique(np.concatenate(rings))) == sum(map(len, rings))
+    shrunk, _ = D.shrink(out, 0.05)
+    check_after(fruit, shrunk)
+    with pytest.raises(GMapError, match=">= 0"):
+        D.rot(fruit, vertex=site, coefficients=(2.5, -1, 1.5))
+    assert "transpiration" not in fruit.volume_data
+
+
+def equator_site(gm):
+    sites = D.hail_sites(gm)
+    _, pos = gm.vertex_positions()
+    centre = 0.5 * (pos.min(axis=0) + pos.max(axis=0))
+    return int(sites[np.argmin(np.abs(pos[sites, 2] - centre[2]))])
+
+
+def test_targeted_hail_depth_and_stop(fruit):
+    ref = fruit.copy()
+    site = equator_site(fruit)
+    out, facts = D.hail(fruit, vertices=[site], depth_mm=1.0, stop="endocarp")
+    unchanged(fruit, ref)
+    check_after(fruit, out)
+    c = facts["craters"][0]
+    assert not c["widened"] and c["actual_depth_mm"] == pytest.approx(1.0)
+    _, p0 = fruit.vertex_positions(); _, p1 = out.vertex_positions()
+    moved = np.linalg.norm(p1[site] - p0[site]) * D.mm_per_unit(fruit)
+    assert moved == pytest.approx(1.0, rel=0.05)
+    # a deep crater stops above the endocarp: no endocarp cell has a moved vertex
+    deep, facts = D.hail(fruit, vertices=[site], depth_mm=40.0, stop="endocarp")
+    check_after(fruit, deep)
+    assert facts["craters"][0]["widened"]
+    assert facts["craters"][0]["actual_depth_mm"] < 40.0
+    _, p2 = deep.vertex_positions()
+    moved = np.flatnonzero(np.linalg.norm(p2 - p0, axis=1) > 1e-9 * np.abs(p0).max())
+    vid, _ = fruit.cells(0)
+    endo = fruit.volume_data["tissue"][fruit.dart_volume] == CODES["endocarp"]
+    assert not np.isin(moved, vid[endo]).any()
+    assert facts["volume_lost"] == pytest.approx(sum(x["volume"] for x in facts["craters"]))
+
+
+def test_random_hail_count_distinct_and_volume(fruit):
+    out, facts = D.hail(fruit, count=5, depth_mm=(2.0, 6.0), stop="endocarp", seed=7)
+    check_after(fruit, out)
+    verts = [c["vertex"] for c in facts["craters"]]
+    assert len(verts) == 5 and len(set(verts)) == 5
+    assert all(2.0 <= c["depth_mm"] <= 6.0 for c in facts["craters"])
+    assert all(c["volume"] > 0 for c in facts["craters"])
+    sign = D.orientation(fruit)
+    lost = D.cell_volumes(fruit, sign).sum() - D.cell_volumes(out, sign).sum()
+    assert facts["volume_lost"] == pytest.approx(lost, rel=1e-9)
+    assert facts["volume_lost"] == pytest.approx(sum(c["volume"] for c in facts["craters"]), rel=1e-9)
+    again, f2 = D.hail(fruit, count=5, depth_mm=(2.0, 6.0), stop="endocarp", seed=7)
+    assert np.array_equal(again.points, out.points) and f2 == facts
+
+
+def test_hail_refusals(fruit):
+    ref = fruit.copy()
+    n = len(D.hail_sites(fruit))
+    with pytest.raises(GMapError, match="above the"):
+        D.hail(fruit, count=n + 1)
+    with pytest.raises(GMapError, match="unknown stop tissue"):
+        D.hail(fruit, count=1, stop="rind")
+    with pytest.raises(GMapError, match="> 0"):
+        D.hail(fruit, count=1, depth_mm=0)
+    with pytest.raises(GMapError, match="size"):
+        D.hail(fruit, count=1, size_mm=float("nan"))
+    unchanged(fruit, ref)
+
+
+def test_grade_rule():
+    ok = {"kind": "crack", "length_mm": 30.0, "depth_layers": 1, "healed_layers": 1}
+    assert D.grade([ok])["marketable"]
+    long = dict(ok, length_mm=31.0)
+    g = D.grade([long])
+    assert not g["marketable"] and "31.0 mm" in g["reasons"][0]
+    g = D.grade([dict(ok, healed_layers=0)])
+    assert not g["marketable"] and "healed" in g["reasons"][0]
+    g = D.grade([dict(ok, depth_layers=3, healed_layers=3)])
+    assert g["reasons"] == ["crack 3 layers deep, not shallow"]
+    g = D.grade([{"kind": "hail", "count": 1}])
+    assert not g["marketable"] and "hail" in g["reasons"][0]
+    assert D.grade([{"kind": "shrink"}])["marketable"]
