@@ -13,7 +13,7 @@ import re
 
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtGui import (QColor, QFont, QFontDatabase, QKeySequence, QSyntaxHighlighter, QTextCharFormat,
-                           QTextCursor)
+                           QTextCursor, QTextOption)
 from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
 
 from ramure.lsys.grammar import starts_line_comment
@@ -102,7 +102,9 @@ class GrammarEditor(QWidget):
         font = QFontDatabase.systemFont(QFontDatabase.SystemFont.FixedFont)
         font.setPointSize(max(font.pointSize(), 10))
         self.edit.setFont(font)
-        self.edit.setLineWrapMode(QPlainTextEdit.LineWrapMode.NoWrap)
+        # long lines wrap at the dock's width: the whole grammar reads without scrolling sideways
+        self.edit.setLineWrapMode(QPlainTextEdit.LineWrapMode.WidgetWidth)
+        self.edit.setWordWrapMode(QTextOption.WrapMode.WrapAtWordBoundaryOrAnywhere)
         self.edit.setTabStopDistance(4 * self.edit.fontMetrics().horizontalAdvance(" "))
         self.edit.setUndoRedoEnabled(False)  # one history: the window's (see _WindowUndo)
         self._undo_keys = _WindowUndo(self)

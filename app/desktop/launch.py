@@ -66,6 +66,10 @@ def main(argv=None):
 
     headless = args.screenshot is not None or args.quit_after is not None
     window = MainWindow(explorer, ask=not headless)
+    screen = app.primaryScreen()
+    if screen is not None:  # a small screen gets the compact layout (the 3D view keeps most room)
+        area = screen.availableGeometry()
+        window.fit_screen(area.width(), area.height())
     window.show()
     sys.excepthook = window.report_unexpected  # a bug in a slot shows a dialog, the window stays
     if args.screenshot:

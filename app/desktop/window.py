@@ -115,6 +115,7 @@ class MainWindow(QMainWindow):
         self._actions()
         self._connect()
         self.resize(1400, 880)
+        self.compact = False
         warm_up()
         self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330],
                          Qt.Orientation.Horizontal)
@@ -124,6 +125,51 @@ class MainWindow(QMainWindow):
         self.shown_text = self.controller.snapshot.text
         self.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
+
+    def use_compact_layout(self):
+        """Small screens (under 1300 px wide, e.g. 1024x700): every dock in one right-hand column,
+        two tab groups (the plant's tools above, grammar, constants and the string below), so the
+        3D view keeps most of the window.  Docks can still be moved and floated."""
+        if self.compact:
+            return
+        self.compact = True
+        right = Qt.DockWidgetArea.RightDockWidgetArea
+        top = ["regeneration", "pca", "architecture", "wood"]
+        bottom = ["grammar", "constants", "string", "cut", "gallery"]
+        for key in top + bottom:
+            if key in self.docks:
+                self.removeDockWidget(self.docks[key])
+        first = self.docks[top[0]]
+        self.addDockWidget(right, first)
+        lower = self.docks[bottom[0]]
+        self.addDockWidget(right, lower)
+        self.splitDockWidget(first, lower, Qt.Orientation.Vertical)
+        for group in (top, bottom):
+            for a, b in zip(group, group[1:]):
+                if a in self.docks and b in self.docks:
+                    self.tabifyDockWidget(self.docks[a], self.docks[b])
+            for key in group:
+                if key in self.docks:
+                    self.docks[key].show()
+        self.docks["regeneration"].raise_()
+        self.docks["grammar"].raise_()
+        self.resizeDocks([first], [340], Qt.Orientation.Horizontal)
+        self.resizeDocks([first, lower], [390, 260], Qt.Orientation.Vertical)
+        QTimer.singleShot(0, self._full_tab_titles)
+
+    def _full_tab_titles(self):
+        """Dock tabs show whole titles (scroll arrows when they do not fit), never "Gra…"."""
+        from PySide6.QtWidgets import QTabBar
+
+        for bar in self.findChildren(QTabBar):
+            bar.setElideMode(Qt.TextElideMode.ElideNone)
+            bar.setUsesScrollButtons(True)
+
+    def fit_screen(self, width, height):
+        """Size the window for a screen of ``width`` x ``height`` pixels (compact below 1300 wide)."""
+        if width < 1300:
+            self.use_compact_layout()
+        self.resize(min(width, 1400), min(height, 880))
 
     # -- construction ----------------------------------------------------------------
     def _dock(self, key, title, widget, area):

@@ -20,8 +20,13 @@ def image_array(qimage):
 
 def test_a_tall_plant_is_framed_at_1024x700_and_presets_keep_z_up(make_window, qtbot, artifacts):
     w = make_window(n=10)
-    w.resize(1024, 700)
+    w.fit_screen(1024, 700)
     settle(qtbot, w)
+    qtbot.wait(50)
+    view = w.view.size()
+    assert view.width() * view.height() > 0.5 * w.width() * w.height()  # the 3D view gets most
+    editor = w.editor.edit
+    assert not editor.horizontalScrollBar().isVisible()  # the grammar reads without side scrolling
     qtbot.wait(50)
     bounds = w.view.mesh.bounds
     assert not scene.outside_view(w.view.plotter, bounds, slack=1.0)  # every box corner on screen
