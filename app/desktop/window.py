@@ -243,6 +243,9 @@ class MainWindow(QMainWindow):
         from ramure.app.desktop.study import StudyMenu
 
         self.study_menu = StudyMenu(self, bar.addMenu("&Study"))
+        from ramure.app.desktop.help import HelpMenu
+
+        self.help_menu = HelpMenu(self, bar.addMenu("&Help"))
 
         tools = self.addToolBar("Plant")
         tools.setObjectName("plantToolbar")

@@ -59,3 +59,17 @@ def test_a_selected_hairline_twig_shows_red(make_window, qtbot, artifacts):
     reddish = (patch[:, 0] > 180) & (patch[:, 1] < 90) & (patch[:, 2] < 90)
     assert reddish.any()  # the selection is visible on a twig far thinner than a pixel
     w.view.grab_image().save(str(artifacts / "desktop_hairline_selection.png"))
+
+
+def test_f1_opens_the_mouse_and_key_reference_and_help_has_the_grammar(make_window, qtbot, artifacts):
+    w = make_window(n=5)
+    QTest.keyClick(w.view.plotter, Qt.Key.Key_F1)
+    qtbot.waitUntil(lambda: w.help_menu.dialog is not None and w.help_menu.dialog.isVisible(), timeout=3000)
+    text = w.help_menu.browser.toPlainText()
+    assert "Ctrl+Y" in text and "Right drag" in text and w.help_menu.shown == "Mouse and keys"
+    help_top = next(a for a in w.menuBar().actions() if a.text() == "&Help")
+    titles = [a.text() for a in help_top.menu().actions()]
+    assert titles == ["Mouse and keys", "Grammar reference", "About Ramure"]
+    help_top.menu().actions()[1].trigger()
+    assert "#define" in w.help_menu.browser.toPlainText()
+    w.help_menu.dialog.close()
