@@ -23,6 +23,7 @@ turtle angles.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,6 +77,8 @@ MAX_DEPTH = 64
 #: Deepest nesting of parentheses, unary signs and right-associative powers the
 #: (recursive) parser follows before refusing.
 MAX_NESTING = 100
+#: Most operations an expression may expand to once user functions are inlined.
+MAX_NODES = 10_000
 _OPERATORS = sorted(_BINARY, key=len, reverse=True) + ["!"]
 
 
@@ -90,11 +93,21 @@ class Token:
 class Node:
     """One expression node: ``kind`` is num, name, call, unary or binary."""
 
-    kind: str
+    kind: str  # num, name, const (a constant named in a user function), call, unary, binary
     value: object
     args: tuple = ()
     offset: int = 0
     depth: int = 1
+    size: int = 1
+
+
+@dataclass(frozen=True)
+class Function:
+    """A user function (``#function f(x, y) = expr``): parameter names and body, inlined where called."""
+
+    name: str
+    params: tuple
+    body: Node
 
 
 class Source:
@@ -159,19 +172,25 @@ def tokenize(src: Source):
 
 
 class _Parser:
-    def __init__(self, src: Source):
+    def __init__(self, src: Source, functions=None, defining=None):
         self.src = src
         self.tokens = tokenize(src)
         self.pos = 0
         self.nesting = 0
+        self.functions = functions or {}
+        self.defining = defining  # the name of the #function being defined (recursion is refused)
 
     def node(self, kind, value, args, offset):
-        """A new node; refuses trees deeper than :data:`MAX_DEPTH`."""
+        """A new node; refuses trees deeper than :data:`MAX_DEPTH` or larger than :data:`MAX_NODES`."""
         depth = 1 + max((a.depth for a in args), default=0)
         if depth > MAX_DEPTH:
             raise self.src.error(f"expression is too deeply nested (more than {MAX_DEPTH} levels of "
                                  "operators and calls); split it with #define constants", offset)
-        return Node(kind, value, args, offset, depth)
+        size = 1 + sum(a.size for a in args)
+        if size > MAX_NODES:
+            raise self.src.error(f"expression expands to more than {MAX_NODES:,} operations "
+                                 "(user functions are inlined)", offset)
+        return Node(kind, value, args, offset, depth, size)
 
     def peek(self):
         return self.tokens[self.pos]
@@ -254,6 +273,11 @@ class _Parser:
                 args.append(self.expression(0))
         self.expect(")", "')' closing the call")
         name = name_tok.text
+        if name == self.defining:
+            raise self.src.error(f"function '{name}' calls itself: recursive functions are not allowed",
+                                 name_tok.offset)
+        if name in self.functions:
+            return self.inline(self.functions[name], args, name_tok.offset)
         if name not in FUNCTIONS:
             raise self.src.error(f"unknown function '{name}'", name_tok.offset)
         arity = FUNCTIONS[name][0]
@@ -263,6 +287,64 @@ class _Parser:
                 name_tok.offset,
             )
         return self.node("call", name, tuple(args), name_tok.offset)
+
+
+    def inline(self, function, args, offset):
+        """The body of a user function with its parameters replaced by the call's arguments."""
+        if len(args) != len(function.params):
+            raise self.src.error(f"{function.name}() takes {len(function.params)} argument(s), got {len(args)}",
+                                 offset)
+        bound = dict(zip(function.params, args))
+
+        def substitute(node):
+            if node.kind == "name":
+                return bound[node.value]
+            if not node.args:
+                return Node(node.kind, node.value, (), offset)
+            return self.node(node.kind, node.value, tuple(substitute(a) for a in node.args), offset)
+
+        return substitute(function.body)
+
+
+def define_function(text, line=None, column=1, source_line=None, functions=None, constants=()) -> Function:
+    """Parse ``f(x, y) = expr`` (the text of a ``#function`` directive) into a :class:`Function`.
+
+    The body may use its parameters, ``#define`` constants and earlier functions; a call
+    to itself is refused (no recursion), so every function is a pure, finite expression.
+
+    >>> f = define_function("sq(x) = x * x")
+    >>> e = parse_expression("sq(a + 1)", functions={"sq": f})
+    >>> compile_expression(e, ["a"], {})({"a": np.array([1.0, 2.0])}, {}, None, 2).tolist()
+    [4.0, 9.0]
+    """
+    src = text if isinstance(text, Source) else Source(text, line, column, source_line)
+    head, eq, body = src.text.partition("=")
+    m = re.match(r"\s*([A-Za-z_]\w*)\s*\(([^()]*)\)\s*$", head)
+    if not eq or not m:
+        raise src.error("#function takes 'name(x, y) = expression'", 0)
+    name, params = m.group(1), tuple(p.strip() for p in m.group(2).split(",") if p.strip())
+    if name in FUNCTIONS:
+        raise src.error(f"'{name}' is a built-in function", m.start(1))
+    bad = [p for p in params if not re.match(r"[A-Za-z_]\w*$", p)]
+    if bad or len(set(params)) != len(params):
+        raise src.error(f"the parameters of {name} must be distinct names", m.start(2))
+    body_src = Source(body, src.line, src.column + len(head) + 1, src.source_line)
+    node = _Parser(body_src, functions, defining=name).parse()
+    for used, at in names_used(node):
+        if used not in params and used not in constants:
+            raise body_src.error(f"unknown name '{used}' in function {name}: a function sees its "
+                                 "parameters and #define constants", at)
+    return Function(name, params, _constants_fixed(node, set(params)))
+
+
+def _constants_fixed(node, params):
+    """Mark a function body's constant names as constants, so a rule's formal of the same name cannot capture them."""
+    if node.kind == "name" and node.value not in params:
+        return Node("const", node.value, (), node.offset, node.depth, node.size)
+    if not node.args:
+        return node
+    return Node(node.kind, node.value, tuple(_constants_fixed(a, params) for a in node.args), node.offset,
+                node.depth, node.size)
 
 
 @dataclass(frozen=True)
@@ -277,16 +359,19 @@ class Expression:
         return self.src.text
 
 
-def parse_expression(text, line=None, column=1, source_line=None) -> Expression:
-    """Parse ``text`` into an :class:`Expression`; errors point at line and column."""
+def parse_expression(text, line=None, column=1, source_line=None, functions=None) -> Expression:
+    """Parse ``text`` into an :class:`Expression`; errors point at line and column.
+
+    ``functions`` maps names to user :class:`Function` s, inlined where called.
+    """
     src = text if isinstance(text, Source) else Source(text, line, column, source_line)
-    return Expression(_Parser(src).parse(), src)
+    return Expression(_Parser(src, functions).parse(), src)
 
 
 def names_used(node):
     """All variable names an expression reads, with their offsets."""
     node = getattr(node, "node", node)
-    if node.kind == "name":
+    if node.kind in ("name", "const"):
         return [(node.value, node.offset)]
     out = []
     for arg in node.args:
@@ -310,6 +395,10 @@ def _source(node, params, constants, src):
         if node.value in constants:
             return f"C[{node.value!r}]"
         raise src.error(f"unknown name '{node.value}'", node.offset)
+    if node.kind == "const":
+        if node.value not in constants:
+            raise src.error(f"unknown constant '{node.value}'", node.offset)
+        return f"C[{node.value!r}]"
     parts = [_source(a, params, constants, src) for a in node.args]
     if node.kind == "unary":
         return {"-": "(-{0})", "+": "(+{0})", "!": "_f(np.logical_not({0}))"}[node.value].format(*parts)

@@ -24,6 +24,10 @@ Directives (one per line):
 ``#define NAME expr``
     a constant; may use earlier constants.  Constants are what the variant
     explorer varies and what the UI shows as sliders.
+``#function f(x, y) = expr``
+    a pure user function, inlined where it is called (in rules, conditions
+    and constants).  Its body sees its parameters, ``#define`` constants and
+    earlier functions; a function cannot call itself (no recursion).
 ``#include FILE``
     reads FILE (a path relative to the including file; quotes optional) as if
     its lines stood here: constants, modules, rules.  Cycles are refused
@@ -79,7 +83,7 @@ import re
 from dataclasses import dataclass, field
 
 from .errors import GrammarError
-from .expr import Expression, Source, compile_expression, evaluate_constant, parse_expression
+from .expr import Expression, Source, compile_expression, define_function, evaluate_constant, parse_expression
 
 DEFAULT_MODULES = ("Leaf", "Fruit")
 DEFAULT_ORGANS = ("Leaf", "Fruit")
@@ -273,6 +277,7 @@ class _GrammarParser:
         self.text = text
         self.filename = filename
         self.constants = {}
+        self.functions = {}  # #function name -> expr.Function, inlined where called
         self.modules = list(DEFAULT_MODULES)
         self.organs = list(DEFAULT_ORGANS)
         self.context_filter = {"ignore": set(), "consider": set()}
@@ -370,7 +375,8 @@ class _GrammarParser:
         return grammar
 
     def constant(self, line, start, end=None):
-        return evaluate_constant(parse_expression(line.source(start, end)), self.constants)
+        return evaluate_constant(parse_expression(line.source(start, end), functions=self.functions),
+                                 self.constants)
 
     def derivation_count(self, line, start):
         value = self.constant(line, start)
@@ -406,6 +412,9 @@ class _GrammarParser:
             self.modules.sort(key=len, reverse=True)
         elif name == "include":
             self.include(line, rest)
+        elif name == "function":
+            function = define_function(line.source(rest), functions=self.functions, constants=self.constants)
+            self.functions[function.name] = function
         elif name in ("ignore", "consider"):  # ABOP writes '#ignore: +-F'; commas are allowed too
             other = "consider" if name == "ignore" else "ignore"
             if self.context_filter[other]:
@@ -429,8 +438,8 @@ class _GrammarParser:
             _check_tropism(line, rest, self.tropism)
         else:
             raise line.error(
-                f"unknown directive '#{m.group(1)}' (known: #define, #include, #module, #organ, #ignore, #consider, "
-                "#angle, #step, #width, #widthscale, #tropism)", start + 1)
+                f"unknown directive '#{m.group(1)}' (known: #define, #function, #include, #module, #organ, "
+                "#ignore, #consider, #angle, #step, #width, #widthscale, #tropism, #amap)", start + 1)
 
     def include(self, line, start):
         """``#include FILE``: read FILE (relative to the including file) as if its lines stood here."""
@@ -527,7 +536,7 @@ class _GrammarParser:
                         a + 1 + len(piece) - len(piece.lstrip()))
                 args.append(name)
             else:
-                args.append(parse_expression(line.source(a, b)))
+                args.append(parse_expression(line.source(a, b), functions=self.functions))
         return args
 
     # -- rules -------------------------------------------------------------
@@ -573,7 +582,7 @@ class _GrammarParser:
         if colon >= 0:
             cond = text[colon + 1:arrow]
             if cond.strip() not in ("", "*"):
-                rule.condition = parse_expression(line.source(colon + 1, arrow))
+                rule.condition = parse_expression(line.source(colon + 1, arrow), functions=self.functions)
                 compile_expression(rule.condition, formals, self.constants)
         pieces, rule.weight = self._weight(pieces)
         if rule.weight is not None and probability is not None:

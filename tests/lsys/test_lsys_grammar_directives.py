@@ -74,3 +74,44 @@ def test_an_error_inside_an_included_file_names_that_file(tmp_path):
         LSystem.from_file(tmp_path / "a.lsys")
     assert info.value.filename.endswith("bad.lsys") and info.value.line == 2
     assert "unknown name 'r'" in info.value.message
+
+
+# -- #function: pure user functions ----------------------------------------------------
+
+FUNCTIONS = "#define k 2\n#function sq(x) = x*x\n#function g(a, b) = sq(a) + b*k\n#define c sq(3)\n"
+
+
+def test_user_functions_inline_in_rules_conditions_and_constants():
+    ls = LSystem.from_text(FUNCTIONS + "n: 2\nw: A(1)\np:\n A(x) : sq(x) < 5 -> A(x+1)B(g(x, c))\n")
+    assert ls.constants == {"k": 2.0, "c": 9.0}
+    # step 1: A(2)B(1 + 18); step 2: sq(2) = 4 < 5, A(3)B(4 + 18)
+    assert ls.derive().to_string() == "A(3)B(22)B(19)"
+
+
+def test_a_function_body_constant_is_not_captured_by_a_rule_parameter():
+    # the rule's formal is named k too; g's k is still the constant 2
+    ls = LSystem.from_text(FUNCTIONS + "n: 1\nw: A(1)\np:\n A(k) -> B(g(k, 1))\n")
+    assert ls.derive().to_string() == "B(3)"
+    ls.constants["k"] = 5  # constants stay live: no re-parse needed
+    assert ls.derive().to_string() == "B(6)"
+
+
+@pytest.mark.parametrize("lines, line, column, fragment", [
+    ("#function f(x) = f(x - 1)\n", 1, 18, "calls itself"),
+    ("#function f(x) = y\n", 1, 18, "unknown name 'y'"),
+    ("#function sin(x) = x\n", 1, 11, "built-in"),
+    ("#function f(x) = x\n#define z f(1, 2)\n", 2, 11, "takes 1 argument"),
+    ("#function f x = 1\n", 1, 11, "name(x, y) = expression"),
+    ("#function f(x, x) = x\n", 1, 13, "distinct names"),
+])
+def test_bad_functions_are_grammar_errors(lines, line, column, fragment):
+    with pytest.raises(GrammarError) as info:
+        parse_grammar(lines + "n: 1\nw: A\n")
+    assert (info.value.line, info.value.column) == (line, column) and fragment in info.value.message
+
+
+def test_exponential_inlining_is_refused():
+    lines = "#function f0(x) = x + 1\n" + "".join(f"#function f{i}(x) = f{i - 1}(x) * f{i - 1}(x)\n"
+                                                   for i in range(1, 20))
+    with pytest.raises(GrammarError, match="operations"):
+        parse_grammar(lines + "n: 1\nw: A\n")
