@@ -32,6 +32,7 @@ is every vertex that cannot reach the sink in the residual graph.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import networkx as nx
 import numpy as np
@@ -66,21 +67,70 @@ def alpha_table(n, rho=0.5, alpha0=None, kmax=None):
 
 
 def initial_capacities(tree):
-    """Capacity of every node with no selection: leaf 1, internal 2 x sum of children."""
-    if "capacity" in tree._cache:
-        return tree._cache["capacity"]
-    cap = np.zeros(tree.size)
-    child_sum = np.zeros(tree.size)
-    is_leaf = tree.child_count == 0
-    for nodes in reversed(tree._by_step()):
-        cap[nodes] = np.where(is_leaf[nodes], 1.0, 2.0 * child_sum[nodes])
-        has_parent = tree.parent[nodes] >= 0
-        np.add.at(child_sum, tree.parent[nodes[has_parent]], cap[nodes[has_parent]])
-    in_string = np.zeros(tree.size, bool)
-    in_string[tree.leaves] = True
-    cap[is_leaf & ~in_string] = 0.0  # modules deleted by an empty successor
-    tree._cache["capacity"] = cap
-    return cap
+    """Capacity of every node with no selection: leaf 1, internal 2 x sum of children.
+
+    Returned as floats for display; the cut itself uses :func:`exact_capacities`
+    (floats lose whole units above 2**53, reached on deep histories).
+    """
+    def make():
+        cap = np.zeros(tree.size)
+        child_sum = np.zeros(tree.size)
+        is_leaf = tree.child_count == 0
+        for nodes in reversed(tree.nodes_by_step()):
+            cap[nodes] = np.where(is_leaf[nodes], 1.0, 2.0 * child_sum[nodes])
+            has_parent = tree.parent[nodes] >= 0
+            np.add.at(child_sum, tree.parent[nodes[has_parent]], cap[nodes[has_parent]])
+        in_string = np.zeros(tree.size, bool)
+        in_string[tree.leaves] = True
+        cap[is_leaf & ~in_string] = 0.0  # modules deleted by an empty successor
+        return cap
+    return tree.cached("cut_capacity", make)
+
+
+def _leaf_weight_prefix(tree):
+    """Prefix sums of ``2**depth`` over the current string (int64 when exact, else Python ints)."""
+    def make():
+        depth = tree.depth[tree.leaves].astype(np.int64)
+        top = int(depth.max()) if depth.size else 0
+        if top + int(np.ceil(np.log2(depth.size + 1))) < 62:
+            prefix = np.zeros(depth.size + 1, np.int64)
+            np.cumsum(np.left_shift(np.int64(1), depth), out=prefix[1:])
+            return prefix
+        prefix, total = [0], 0
+        for d in depth.tolist():
+            total += 1 << d
+            prefix.append(total)
+        return np.array(prefix, dtype=object)
+    return tree.cached("cut_leaf_prefix", make)
+
+
+def exact_capacities(tree, nodes) -> list:
+    """Initial capacities of ``nodes`` as exact Python integers.
+
+    A node's capacity is ``sum(2**(depth(leaf) - depth(node)))`` over the leaves
+    of the current string below it (leaf 1, internal twice the sum of its
+    children, modules deleted by an empty successor 0); leaves below a node are
+    contiguous in the string, so one prefix sum serves every node.
+    """
+    nodes = np.asarray(nodes, np.int64)
+    first, last = tree.leaf_spans()
+    prefix = _leaf_weight_prefix(tree)
+    depth = tree.depth
+    out = []
+    for v, a, b, d in zip(nodes.tolist(), first[nodes].tolist(), last[nodes].tolist(),
+                          depth[nodes].tolist()):
+        out.append(0 if b < 0 else int(prefix[b + 1] - prefix[a]) >> d)
+    return out
+
+
+def _as_fraction(value, what):
+    """An exact rational for a user number: decimal floats as written (0.9 is 9/10)."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        return Fraction(int(value))
+    value = float(value)
+    if not np.isfinite(value):
+        raise ValueRefused(f"{what} must be a finite number, got {value}")
+    return Fraction(repr(value))
 
 
 @dataclass
@@ -91,7 +141,10 @@ class CutResult:
     ``cut_roots``: those the cut chose; ``min_roots``: those added by the
     minimum ascension for selected leaves the cut left in place;
     ``cut_nodes``: every node whose node edge is cut (kept leaves included);
-    ``cut_value``: the flow value, equal to ``sum(cut_edges.values())``.
+    ``cut_value``: the minimum cut's value, exactly ``sum(cut_edges.values())``
+    computed in rationals (so on every axiom module, selected or not);
+    ``from_axiom``: a root is an axiom module, so the regrowth restarts from
+    the axiom (:data:`FROM_AXIOM_MESSAGE` is what front ends say).
     """
 
     roots: np.ndarray
@@ -103,10 +156,18 @@ class CutResult:
     graph: nx.DiGraph = field(repr=False)
     source_side: set = field(repr=False)
     selected: np.ndarray = field(repr=False, default=None)
+    from_axiom: bool = False
+
+
+#: What front ends and the CLI say when a selection's regrowth starts at an axiom module.
+FROM_AXIOM_MESSAGE = "this selection regrows from the axiom: the whole plant"
 
 
 def _validate_selection(tree, selected):
-    selected = np.unique(np.asarray(list(selected), np.int64))
+    try:
+        selected = np.unique(np.asarray(list(selected), np.int64))
+    except (OverflowError, TypeError, ValueError):
+        raise ValueRefused("the selection must be a list of leaf ids (whole numbers)") from None
     if selected.size == 0:
         raise ValueRefused("the selection is empty: select at least one branch or organ")
     bad = (selected < 0) | (selected >= tree.size)
@@ -130,56 +191,82 @@ def path_nodes(tree, selected):
     return np.unique(np.concatenate(nodes))
 
 
+def _scale(rho, alpha0, n):
+    """``(S, alpha0 * S, q / p * S)``: every capacity times ``S`` is a whole number.
+
+    Capacities are whole numbers plus ``alpha_k = alpha0 - (2**k - 1) / rho``;
+    with ``rho = p / q`` and ``alpha0 = a / b`` (as written in decimal),
+    ``S = p * b`` makes every ``alpha_k * S`` an integer, so the cut is decided
+    in exact integer arithmetic however deep the history (floats lose whole
+    units above 2**53, i.e. from n of about 28 on a branching plant).
+    """
+    r = _as_fraction(rho, "rho")
+    a0 = Fraction(2) ** int(n) if alpha0 is None else _as_fraction(alpha0, "alpha0")
+    scale = r.numerator * a0.denominator
+    return scale, int(a0 * scale), int(scale / r)
+
+
 def build_graph(tree, selected, rho=0.5, alpha0=None, n=None, reduce=True):
     """The directed graph of the spec, restricted to what the cut can touch.
 
-    Returns ``(G, selected, merged_edges)``.  With ``reduce`` (the default),
-    nodes that no minimum cut can pass through (capacity at least the cheapest
-    cut below them, found by the tree's own bottom-up recursion) and whose
-    ancestors are all such nodes are merged into the source; the sink edges
-    they carried become ``merged_edges`` (always cut, their sum is added to the
-    cut value).  This keeps the graph to the few levels above the selection.
+    Returns ``(G, selected, merged_edges)``.  Each finite edge carries its
+    capacity twice: ``capacity`` (a float, for display) and ``exact`` (the
+    capacity times ``G.graph["scale"]``, a Python integer: what the solver
+    uses).  With ``reduce`` (the default), nodes that no minimum cut can pass
+    through (capacity at least the cheapest cut below them, found by the
+    tree's own bottom-up recursion) and whose ancestors are all such nodes are
+    merged into the source; the sink edges they carried become
+    ``merged_edges`` (always cut; ``edge -> exact scaled capacity``), as do the
+    leaves of axiom modules that hold no selected leaf.
     """
     rho = check_rho(rho)
     selected = _validate_selection(tree, selected)
     depth = tree.depth
     n = int(depth.max()) if n is None else int(n)
+    scale, alpha_s, step_s = _scale(rho, alpha0, n)
     nodes = path_nodes(tree, selected)
-    cap = initial_capacities(tree)[nodes].copy()
-    alphas = alpha_table(n, rho, alpha0, kmax=int(depth[selected].max()))
+    cap = np.array([c * scale for c in exact_capacities(tree, nodes)] or [0], dtype=object)[:len(nodes)]
     current, k = selected.copy(), 0
     while current.size:
-        np.add.at(cap, np.searchsorted(nodes, current), alphas[k])
+        np.add.at(cap, np.searchsorted(nodes, current), alpha_s - ((1 << k) - 1) * step_s)
         current = tree.parent[current]
         current = current[current >= 0]
         k += 1
-    cap = np.maximum(cap, 0.0)
+    cap = np.array([max(int(c), 0) for c in cap] or [0], dtype=object)[:len(nodes)]
     counts = tree.leaf_counts()
     parent = tree.parent[nodes]
     has_parent = parent >= 0
     parent_idx = np.where(has_parent, np.searchsorted(nodes, parent), -1)
-    on_path_children = np.zeros(len(nodes))
+    on_path_children = np.zeros(len(nodes), np.int64)
     np.add.at(on_path_children, parent_idx[has_parent], counts[nodes[has_parent]])
     is_selected = np.isin(nodes, selected)
-    off_path = np.where(is_selected, 0.0, counts[nodes] - on_path_children)
+    off_path = np.where(is_selected, 0, counts[nodes] - on_path_children).astype(object) * scale
     merged = _never_cut_from_source(nodes, depth[nodes], cap, off_path, parent_idx, is_selected) \
         if reduce else np.zeros(len(nodes), bool)
 
-    G = nx.DiGraph()
+    G = nx.DiGraph(scale=scale)
     keep = ~merged
     ids, par = nodes.tolist(), parent.tolist()
     from_source = keep & ((parent_idx < 0) | merged[np.maximum(parent_idx, 0)])
-    G.add_edges_from(((v, "in"), (v, "out"), {"capacity": c})
+    G.add_edges_from(((v, "in"), (v, "out"), {"capacity": c / scale, "exact": c})
                      for v, c in zip(nodes[keep].tolist(), cap[keep].tolist()))
     G.add_edges_from(((p, "out"), (v, "in")) for v, p, ok, src in
                      zip(ids, par, keep.tolist(), from_source.tolist()) if ok and not src)
     G.add_edges_from((SOURCE, (v, "in")) for v in nodes[from_source].tolist())
     G.add_edges_from(((v, "out"), SINK) for v in selected.tolist())
-    G.add_edges_from(((v, "out"), SINK, {"capacity": c}) for v, c, ok in
+    G.add_edges_from(((v, "out"), SINK, {"capacity": c / scale, "exact": c}) for v, c, ok in
                      zip(ids, off_path.tolist(), keep.tolist()) if ok and c > 0)
     merged_edges = {((v, "out"), SINK): c for v, c, m in zip(ids, off_path.tolist(), merged.tolist())
                     if m and c > 0}
+    merged_edges.update(_unselected_axiom_modules(tree, nodes, counts, scale))
     return G, selected, merged_edges
+
+
+def _unselected_axiom_modules(tree, nodes, counts, scale):
+    """Axiom modules holding no selected leaf: their cheapest cut is their leaves, always cut."""
+    axiom = np.flatnonzero((tree.parent == -1) & tree.alive)
+    axiom = axiom[~np.isin(axiom, nodes) & (counts[axiom] > 0)]
+    return {((v, "out"), SINK): int(c) * scale for v, c in zip(axiom.tolist(), counts[axiom].tolist())}
 
 
 def _never_cut_from_source(nodes, depth, cap, off_path, parent_idx, is_selected):
@@ -188,16 +275,17 @@ def _never_cut_from_source(nodes, depth, cap, off_path, parent_idx, is_selected)
     Bottom-up: ``best[v] = min(cap[v], off_path[v] + sum(best[children]))``; a
     node whose capacity is at least the cheapest cut below it is never cut (ties
     go to the lower cut).  Top-down: merge it only if its parent is merged too.
+    Capacities are exact integers (object arrays), so a tie is a tie.
     """
     below = off_path.copy()
-    best = np.where(is_selected, cap, 0.0)
+    best = np.where(is_selected, cap, 0).astype(object)
     levels = [np.flatnonzero(depth == d) for d in range(int(depth.max()) + 1)]
     for idx in reversed(levels):
         inner = idx[~is_selected[idx]]
         best[inner] = np.minimum(cap[inner], below[inner])
         up = idx[parent_idx[idx] >= 0]
         np.add.at(below, parent_idx[up], best[up])
-    never = ~is_selected & (cap >= below)
+    never = ~is_selected & (cap >= below).astype(bool)
     merged = np.zeros(len(nodes), bool)
     for idx in levels:
         top = parent_idx[idx] < 0
@@ -206,33 +294,35 @@ def _never_cut_from_source(nodes, depth, cap, off_path, parent_idx, is_selected)
 
 
 def _lower_cut(R):
-    """Vertices that can reach the sink in the residual graph R (the sink side, largest source set)."""
+    """Vertices that cannot reach the sink in the residual graph R (the lower cut).
+
+    Capacities are exact integers, so an edge is saturated exactly when its
+    residual is zero: no tolerance, however large the capacities grow.
+    """
     sink_side = {SINK}
     stack = [SINK]
     pred = R.pred
     while stack:
         v = stack.pop()
         for u, attrs in pred[v].items():
-            if u in sink_side:
-                continue
-            residual = attrs["capacity"] - attrs["flow"]
-            if residual > 1e-9 * max(1.0, abs(attrs["capacity"])):
+            if u not in sink_side and attrs["capacity"] - attrs["flow"] > 0:
                 sink_side.add(u)
                 stack.append(u)
     return set(R) - sink_side
 
 
 def solve(G, flow_func=None):
-    """Max flow / min cut on ``G``; returns ``(cut_value, source_side)`` with the lower cut.
+    """Max flow / min cut on ``G``; returns ``(scaled cut value, source_side)`` with the lower cut.
 
-    The default solver is preflow-push: on the graphs built here it measured
-    about 3x faster than Boykov-Kolmogorov (``benchmarks/bench_regen.py``).
+    The solver runs on the ``exact`` (scaled integer) capacities.  The default
+    is preflow-push: on the graphs built here it measured about 3x faster than
+    Boykov-Kolmogorov (``benchmarks/bench_regen.py``).
     """
     if G.number_of_edges() == 0 or SOURCE not in G or SINK not in G:
-        return 0.0, set(G) | {SOURCE}
+        return 0, set(G) | {SOURCE}
     flow_func = flow_func or flow.preflow_push
-    R = flow_func(G, SOURCE, SINK, capacity="capacity")
-    return float(R.graph["flow_value"]), _lower_cut(R)
+    R = flow_func(G, SOURCE, SINK, capacity="exact")
+    return R.graph["flow_value"], _lower_cut(R)
 
 
 def select_roots(tree, selected, rho=0.5, alpha0=None, n=None, min_ascend=1, flow_func=None,
@@ -241,16 +331,21 @@ def select_roots(tree, selected, rho=0.5, alpha0=None, n=None, min_ascend=1, flo
 
     ``min_ascend``: a selected leaf that the cut leaves in place still regrows
     from its ``min_ascend``-th ancestor, so a selection always changes
-    something (0 turns this off).  ``flow_func`` is any networkx max-flow
-    function (default preflow-push, the faster here).  ``reduce=False`` solves
-    the unreduced graph (same answer, slower; kept for checking).
+    something (0 turns this off; values above the tree's depth mean the axiom
+    module).  ``flow_func`` is any networkx max-flow function (default
+    preflow-push, the faster here).  ``reduce=False`` solves the unreduced
+    graph (same answer, slower; kept for checking).
     """
+    min_ascend = _check_min_ascend(min_ascend, tree)
     G, selected, merged_edges = build_graph(tree, selected, rho, alpha0, n, reduce=reduce)
-    value, source_side = solve(G, flow_func)
-    cut_edges = {(u, v): d.get("capacity", float("inf")) for u, v, d in G.edges(data=True)
-                 if u in source_side and v not in source_side}
-    cut_edges.update(merged_edges)
-    value += sum(merged_edges.values())
+    scale = G.graph["scale"]
+    _, source_side = solve(G, flow_func)
+    exact = {(u, v): d.get("exact") for u, v, d in G.edges(data=True)
+             if u in source_side and v not in source_side}
+    exact.update(merged_edges)
+    finite = [c for c in exact.values() if c is not None]
+    value = float(Fraction(sum(finite), scale)) if len(finite) == len(exact) else float("inf")
+    cut_edges = {e: float("inf") if c is None else float(Fraction(c, scale)) for e, c in exact.items()}
     cut_nodes = np.array(sorted(u[0] for u, v in cut_edges
                                 if isinstance(u, tuple) and u[1] == "in"), np.int64)
     internal = tree.child_count[cut_nodes] > 0
@@ -264,7 +359,19 @@ def select_roots(tree, selected, rho=0.5, alpha0=None, n=None, min_ascend=1, flo
     roots = collapse_nested(tree, np.union1d(cut_roots, min_roots))
     return CutResult(roots, np.intersect1d(cut_roots, roots),
                      np.intersect1d(np.setdiff1d(min_roots, cut_roots), roots),
-                     cut_nodes, value, cut_edges, G, source_side, selected)
+                     cut_nodes, value, cut_edges, G, source_side, selected,
+                     from_axiom=bool(roots.size and (tree.parent[roots] < 0).any()))
+
+
+def _check_min_ascend(min_ascend, tree):
+    """A whole number >= 0, clamped to the tree's depth (more climbs no higher than the axiom)."""
+    if isinstance(min_ascend, bool) or not isinstance(min_ascend, (int, np.integer)):
+        if not (isinstance(min_ascend, float) and min_ascend.is_integer()):
+            raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
+    if min_ascend < 0:
+        raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
+    top = int(tree.depth.max()) if tree.size else 0
+    return int(min(int(min_ascend), top + 1))
 
 
 def _axiom_root(tree, nodes):

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cut import ascend, check_rho, collapse_nested, select_roots
+from .cut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots
 from .cut import _validate_selection
 from .derive import LSystem, check_constants, check_seed
 from .errors import GrammarError, RamureError, ValueRefused
@@ -58,8 +58,8 @@ class Change:
 
     def apply(self, tree, forward=True):
         kill, revive = (self.removed, self.added) if forward else (self.added, self.removed)
-        tree._alive[kill] = False
-        tree._alive[revive] = True
+        tree.set_alive(kill, False)
+        tree.set_alive(revive, True)
         start, count = self.new_children if forward else self.old_children
         tree.set_children(self.roots, start, count)
         tree.leaves = self.new_leaves if forward else self.old_leaves
@@ -80,12 +80,22 @@ class RegenResult:
     seconds: float
     cut: object = field(default=None, repr=False)
     change: Change | None = field(default=None, repr=False)
+    #: A root is an axiom module: the regrowth restarts from the axiom (the whole plant).
+    from_axiom: bool = False
+
+    @property
+    def warning(self) -> str | None:
+        """What a status line should say about this edit, if anything (e.g. regrown from the axiom)."""
+        return FROM_AXIOM_MESSAGE if self.from_axiom and self.op in ("regrow", "prune") else None
 
     def to_dict(self):
-        return {"op": self.op, "roots": self.roots.tolist(), "cut_roots": self.cut_roots.tolist(),
-                "min_roots": self.min_roots.tolist(), "removed_modules": self.removed,
-                "added_modules": self.added, "cut_value": self.cut_value,
-                "seconds": round(self.seconds, 6)}
+        out = {"op": self.op, "roots": self.roots.tolist(), "cut_roots": self.cut_roots.tolist(),
+               "min_roots": self.min_roots.tolist(), "removed_modules": self.removed,
+               "added_modules": self.added, "cut_value": self.cut_value,
+               "seconds": round(self.seconds, 6), "from_axiom": self.from_axiom}
+        if self.warning:
+            out["warning"] = self.warning
+        return out
 
 
 def _replace_spans(old, first, last, pieces):
@@ -131,14 +141,13 @@ def regenerate(derivation, roots, seed=0, constants=None, rule_constants=None, p
                                          rule_constants, prune)
     except BaseException:
         # Loses nothing: forget the half-grown nodes and point the roots at their old children.
-        tree.size = first_new
+        tree.truncate(first_new)
         tree.set_children(roots, *old_children)
-        tree.changed()
         raise
     if prune:
         tree.set_children(roots, -1, 0)
     new_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
-    tree._alive[removed] = False
+    tree.set_alive(removed, False)
     new_leaves = _replace_spans(old_leaves, np.array(starts, np.int64), np.array(ends, np.int64), pieces)
     change = Change(roots, old_children, new_children, removed,
                     np.arange(first_new, tree.size, dtype=np.int64), old_leaves, new_leaves,
@@ -347,7 +356,9 @@ class Session:
                             rule_constants=rule_constants, prune=edit["op"] == "prune")
         return RegenResult(edit["op"], change.roots, cut_roots, min_roots, change.removed_leaves,
                            change.added_leaves, cut.cut_value if cut else None,
-                           time.perf_counter() - t0, cut, change)
+                           time.perf_counter() - t0, cut, change,
+                           from_axiom=bool(edit["selection"]) and bool(
+                               change.roots.size and (tree.parent[change.roots] < 0).any()))
 
     def undo(self):
         """Undo the last edit; returns it (None when there is nothing to undo)."""

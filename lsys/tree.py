@@ -107,6 +107,28 @@ class DerivationTree:
         """Forget cached spans/depths after an in-place edit."""
         self._cache.clear()
 
+    def set_alive(self, nodes, alive: bool = True) -> None:
+        """Mark ``nodes`` alive (or dead, removed by a regeneration); caches are dropped."""
+        self._alive[np.asarray(nodes, np.int64)] = bool(alive)
+        self._cache.clear()
+
+    def truncate(self, size: int) -> None:
+        """Forget every node appended at or after id ``size`` (a regeneration that failed)."""
+        if not 0 <= int(size) <= self.size:
+            raise ValueError(f"cannot truncate a tree of {self.size} nodes to {size}")
+        self.size = int(size)
+        self._cache.clear()
+
+    def cached(self, key: str, make):
+        """``make()`` computed once per tree state: the cache is dropped by every edit.
+
+        For per-tree results other modules derive from the public arrays (e.g. the
+        min-cut's leaf weights), so they never reach into the tree's private state.
+        """
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
     # -- navigation --------------------------------------------------------
     def children(self, node):
         """Ids of a node's children (empty for a leaf)."""
@@ -127,10 +149,16 @@ class DerivationTree:
         return np.array(out, dtype=np.int64)
 
     def ancestor(self, nodes, k):
-        """The ``k``-th ancestor of each node (vectorised; -1 above a root)."""
+        """The ``k``-th ancestor of each node (vectorised; -1 above a root).
+
+        ``k`` may be huge (a session's ``min_ascend``): the walk stops once every
+        node has gone above its root, so it costs at most the tree's depth.
+        """
         nodes = np.asarray(nodes, np.int64).copy()
-        for _ in range(k):
+        for _ in range(max(int(k), 0)):
             ok = nodes >= 0
+            if not ok.any():
+                break
             nodes[ok] = self._parent[nodes[ok]]
         return nodes
 
@@ -139,13 +167,13 @@ class DerivationTree:
         """Depth of every node (roots 0), one vectorised pass per step."""
         if "depth" not in self._cache:
             depth = np.zeros(self.size, np.int32)
-            for nodes in self._by_step()[1:]:
+            for nodes in self.nodes_by_step()[1:]:
                 depth[nodes] = depth[self.parent[nodes]] + 1
             self._cache["depth"] = depth
         return self._cache["depth"]
 
-    def _by_step(self):
-        """Alive node ids grouped by creation step: list index = step."""
+    def nodes_by_step(self) -> list:
+        """Alive node ids grouped by creation step: list index = step (cached)."""
         if "by_step" not in self._cache:
             alive = np.flatnonzero(self.alive)
             steps = self.step[alive]
@@ -168,7 +196,7 @@ class DerivationTree:
             pos = np.arange(len(self.leaves), dtype=np.int64)
             first[self.leaves] = pos
             last[self.leaves] = pos
-            for nodes in reversed(self._by_step()[1:]):
+            for nodes in reversed(self.nodes_by_step()[1:]):
                 np.minimum.at(first, self.parent[nodes], first[nodes])
                 np.maximum.at(last, self.parent[nodes], last[nodes])
             first[last < 0] = -1

@@ -80,6 +80,8 @@ def run_regen(args):
         print(f"roots {record['roots']} (cut {record['cut_roots']}, minimum ascension "
               f"{record['min_roots']}); removed {result.removed} modules, added {result.added}; "
               f"cut value {result.cut_value:g}")
+        if result.warning:
+            print(result.warning)
     return 0
 
 
