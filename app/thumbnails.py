@@ -78,11 +78,9 @@ def render_picks(exploration, directory, size=(256, 256), view="front") -> list:
     rel = [f"{THUMB_DIR}/pick_{i:02d}.png" for i in range(1, 28)]
     sweep = exploration.sweep
     skeletons = [sweep.derive(int(v)).skeleton() for v in exploration.picks.variant]
-    captions = []
-    for i, sk in enumerate(skeletons, start=1):
-        lo, hi = sk.bounds() if len(sk) else (np.zeros(3), np.zeros(3))
-        captions.append(f"h {hi[2] - lo[2]:.3g}")
-    _render_many(skeletons, [directory / p for p in rel], size, view, captions)
+    # no caption: these images are what study participants sort, and a metric written on
+    # them ("h 5.42") would bias the grouping
+    _render_many(skeletons, [directory / p for p in rel], size, view)
     return rel
 
 

@@ -167,6 +167,11 @@ class Study:
             raise StudyInputError(f"no grammar {name!r} in this study (known: {known})")
         return row[0]
 
+    def grammar_source(self, name) -> str | None:
+        """Where grammar ``name``'s picks came from (an exploration directory), or None."""
+        row = self.conn.execute("SELECT source FROM grammars WHERE id = ?", (self.grammar_id(name),)).fetchone()
+        return row[0] if row and row[0] else None
+
     def picks(self, grammar) -> list[Pick]:
         """The 27 picks of ``grammar``, by id."""
         rows = self.conn.execute(

@@ -18,10 +18,8 @@ THUMB = 96
 
 
 def _fruit_presets():
-    try:
-        from ramure.gmap.fruit import PRESETS
-    except ImportError:
-        return []
+    from ramure.gmap.fruit import PRESETS
+
     return list(PRESETS)
 
 

@@ -124,7 +124,10 @@ def status_line(explorer):
     if explorer.selection:
         base += f", {len(explorer.selection):,} selected"
     r = explorer.last_result
-    return base if r is None else f"{base} — last edit: {edit_words(r)}"
+    if r is None:
+        return base
+    warning = getattr(r, "warning", None)  # e.g. "this selection regrows from the axiom: ..."
+    return f"{base} — last edit: {edit_words(r)}" + (f" — {warning}" if isinstance(warning, str) else "")
 
 
 def edit_words(result):
@@ -364,11 +367,9 @@ def selection_box_lines(skeleton, selection):
     segments = np.flatnonzero(leaf_mask(skeleton.leaf_id, selection))
     if not len(segments):
         return None
-    try:
-        from ramure.metrics import plant_obb
-        from ramure.metrics.obb import EDGES
-    except ImportError:  # metrics not installed or being rebuilt: no box, the selection still shows
-        return None
+    from ramure.metrics import plant_obb
+    from ramure.metrics.obb import EDGES
+
     corners = plant_obb(skeleton, segments=segments).corners()
     return corners[EDGES]
 

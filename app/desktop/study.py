@@ -60,12 +60,14 @@ def pick_images(study, grammar, size=ICON, grammars_dir=None):
     from ramure.app.desktop.variants import variant_skeleton
 
     for pick in picks:
-        image = QImage(pick.image) if pick.image and pathlib.Path(pick.image).is_file() else QImage()
-        if image.isNull() and lsystem is not None:
+        image = QImage()
+        if lsystem is not None:  # drawn here, unlabelled: older pick files carry metric captions
             try:
                 image = skeleton_image(variant_skeleton(lsystem, n, seed, pick.params), size)
             except (RamureError, ValueError, KeyError, ArithmeticError):
                 image = QImage()
+        if image.isNull() and pick.image and pathlib.Path(pick.image).is_file():
+            image = QImage(pick.image)
         if image.isNull():
             image = placeholder_image(size, str(pick.id), "")
         images[pick.id] = image.scaled(size, size, Qt.AspectRatioMode.KeepAspectRatio,
@@ -79,8 +81,11 @@ def _study_grammar(study, grammar, grammars_dir=None):
 
     from ramure.lsys import LSystem
 
-    row = study.conn.execute("SELECT source FROM grammars WHERE name = ?", (grammar,)).fetchone()
-    source = pathlib.Path(row[0]) if row and row[0] else None
+    try:
+        recorded = study.grammar_source(grammar)
+    except RamureError:
+        return None, None, 0
+    source = pathlib.Path(recorded) if recorded else None
     info = {}
     if source is not None and (source / "pca.json").is_file():
         try:

@@ -7,8 +7,8 @@ qualifier in PCA space.  It comes from :func:`explore_plant` (runs the sweep,
 cancellable, with progress) or :func:`load_exploration` (a directory written
 by ``ramure explore`` / :func:`ramure.metrics.write_exploration`).
 
-Everything degrades gracefully: if a part of :mod:`ramure.metrics` is missing, the
-corresponding feature reports "not available" instead of failing.
+Ramure's own packages are imported directly: a missing one is a broken install, not a
+feature to hide.
 """
 from __future__ import annotations
 
@@ -54,19 +54,14 @@ class VariantSet:
 
 
 def metrics_available():
-    """None if :mod:`ramure.metrics` can explore, else the reason (shown in the docks)."""
-    try:
-        from ramure.metrics import explore  # noqa: F401
-    except ImportError as exc:
-        return f"metrics is not available yet ({exc})"
+    """None: :mod:`ramure.metrics` is part of Ramure (kept so the docks can say why a feature is
+    off, should one ever depend on an optional package)."""
     return None
 
 
 def _vocabulary():
-    try:
-        from ramure.metrics.qualifiers import VOCABULARY
-    except ImportError:
-        return {}
+    from ramure.metrics.qualifiers import VOCABULARY
+
     return VOCABULARY
 
 
@@ -100,10 +95,8 @@ def explore_plant(lsystem, n, seed, progress=None, cancel=None, n_jobs=None):
 
 def qualifier_boxes(exploration, per_qualifier=10):
     """One PCA-space box per vocabulary qualifier: around its ``per_qualifier`` best variants."""
-    try:
-        from ramure.metrics.qualifiers import QualifierRegions, ranked_variants
-    except ImportError:
-        return {}
+    from ramure.metrics.qualifiers import QualifierRegions, ranked_variants
+
     points = {}
     for name in _vocabulary():
         try:

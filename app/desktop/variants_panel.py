@@ -21,12 +21,7 @@ THUMB = 150
 
 
 def fruit_available():
-    """True if the 3G-map layer can build volumetric fruit."""
-    try:
-        from ramure.gmap.plant import fruits_from_skeleton  # noqa: F401
-        from ramure.gmap.pyvista import boundary_polydata  # noqa: F401
-    except ImportError:
-        return False
+    """True: the 3G-map layer (part of Ramure) builds volumetric fruit."""
     return True
 
 
