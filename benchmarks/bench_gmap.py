@@ -59,3 +59,76 @@ def bench_million_darts():
 def bench_tomato_with_tissues():
     """Round tomato, two volume subdivisions, tissues and 120 rounded seeds (no thesis figure)."""
     return _bench_build(lambda: build_fruit("round_tomato", volume_levels=2), 3, 3.0)
+
+
+# ---------------------------------------------------------------- kernel (issue 13)
+def _timings(fn, repeats):
+    times, result = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+    times.sort()
+    return times, result
+
+
+def bench_cut_map():
+    """cut_map on a 90,000-dart tomato (precision 15, 100 sides; the issue's reference wood has ~86,400).
+
+    Oblique plane through the centre; median of 7 after one warm-up; the kept volume is checked
+    against the VTK clip of the same model.
+    """
+    from ramure.gmap.cut import cut_map, plane_cut
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    gm = build_fruit("round_tomato", precision=15, ph=100)
+    gm.cells(0)
+    normal = (0.3, 0.2, 1.0)
+    cut_map(gm, normal)
+    times, cut = _timings(lambda: cut_map(gm, normal), 7)
+    median = times[len(times) // 2]
+    got = to_unstructured_grid(cut).volume
+    ref = plane_cut(gm, normal, None, mode="clip").volume
+    valid = cut.is_valid()
+    return {"seconds": round(median, 6), "best_seconds": round(times[0], 6), "target_seconds": 0.100,
+            "ok": bool(valid and median <= 0.100), "darts": gm.n_darts, "kept_darts": cut.n_darts,
+            "darts_per_second": round(gm.n_darts / median), "volume_error": abs(got - ref) / ref,
+            "valid": bool(valid)}
+
+
+def _ring_trunk(units=10, sides=16, layers=20, embed_each=True):
+    """A wood-like map: ``units`` stacked ``sides``-prisms, ``layers`` cube rings grown and joined."""
+    import numpy as np
+
+    from ramure.gmap import GMap3
+    from ramure.gmap.embedding import grow
+    from ramure.gmap.topology import assert_solid
+
+    gm = GMap3()
+    trunk = gm.add_prisms(sides, units, origins=[[i, 0.0, 0.0] for i in range(units)],
+                          sizes=[[1.0, 1.0, 1.0]] * units)
+    ids = gm.dart_volume[trunk].astype(np.int64)
+    gm.sew3(gm.face_of(ids[:-1], "E"), gm.face_of(ids[1:], "O"))
+    labels = [f"C{j + 1}" for j in range(sides)] * units
+    faces = gm.face_of(np.repeat(ids, sides), labels)
+    below = None
+    for _ in range(layers):
+        ring = grow(gm, faces, 4, height=0.1).reshape(units, sides)
+        gm.identify(gm.face_of(ring.ravel(), "C2"), gm.face_of(np.roll(ring, -1, axis=1).ravel(), "C4"))
+        gm.identify(gm.face_of(ring[:-1].ravel(), "C3"), gm.face_of(ring[1:].ravel(), "C1"))
+        faces = gm.face_of(ring.ravel(), "E")
+        if embed_each:
+            gm.embed()
+            assert_solid(gm)
+    gm.embed()
+    return gm
+
+
+def bench_ring_growth():
+    """Kernel part of wood growth: 10 units x 16 sides x 20 ring layers (grow + 2 identify per layer),
+    embedding, validity and chi checks after every layer (the engine adds its rule matching on top).
+    Median of 3."""
+    times, gm = _timings(_ring_trunk, 3)
+    median = times[len(times) // 2]
+    return {"seconds": round(median, 6), "target_seconds": 0.5, "ok": bool(median <= 0.5),
+            "darts": gm.n_darts, "volumes": gm.n_volumes, "darts_per_second": round(gm.n_darts / median)}

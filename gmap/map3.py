@@ -315,6 +315,15 @@ class GMap3(Operations):
         """
         return _Atomic(self, local)
 
+    def reserve(self, n_darts):
+        """Make room for ``n_darts`` darts in all arrays (avoids regrowing during a batch of operations)."""
+        self._darts.reserve(int(n_darts))
+        cap = self._darts.capacity
+        if self._alpha.shape[1] < cap:
+            grown = np.empty((4, cap), np.int32)
+            grown[:, : self.n_darts] = self._alpha[:, : self.n_darts]
+            self._alpha = grown
+
     def _new_darts(self, count):
         """Append ``count`` free darts (each alpha points to itself); return their ids."""
         rows = self._darts.extend(count)
@@ -343,6 +352,7 @@ class GMap3(Operations):
         other._darts = self._darts.copy()
         other._volumes = self._volumes.copy()
         other._rules = dict(self._rules)
+        other._cache = dict(self._cache)      # cached labels are replaced on change, never edited
         other.meta = dict(self.meta)
         return other
 
@@ -437,37 +447,49 @@ class GMap3(Operations):
 
         ``members`` is sorted; ``labels[i]`` is the index in ``starts`` of the
         orbit holding ``members[i]``.  The work is proportional to the orbits'
-        size, not to the map's.  With ``strict``, two starts in one orbit
-        raise :class:`GMapError`.
+        size, not to the map's (a per-map scratch array of marks is set and
+        reset only where the walk goes).  With ``strict``, two starts in one
+        orbit raise :class:`GMapError`; without, darts reached from several
+        starts keep one of their indices.
         """
         starts = _as_darts(starts)
         if starts.size and (starts.min() < 0 or starts.max() >= self.n_darts):
             raise GMapError(f"dart ids must be in 0..{self.n_darts - 1}")
         if strict and len(np.unique(starts)) != len(starts):
             raise GMapError("two of the given darts are the same dart")
+        mark = self._marks()
         rows = [self._alpha[i] for i in key]
-        order = np.argsort(starts, kind="stable")
-        members, labels = starts[order], order.astype(np.int64)
-        frontier, flab = starts, np.arange(len(starts), dtype=np.int64)
-        while frontier.size:
-            nb = np.concatenate([r[frontier] for r in rows]).astype(np.int64)
-            lab = np.tile(flab, len(key))
-            pos = np.minimum(np.searchsorted(members, nb), len(members) - 1)
-            seen = members[pos] == nb
-            if strict and np.any(labels[pos[seen]] != lab[seen]):
-                raise GMapError("two of the given darts lie in the same orbit")
-            nb, lab = nb[~seen], lab[~seen]
-            if strict and nb.size:
-                o = np.lexsort((lab, nb))
-                if np.any((nb[o][1:] == nb[o][:-1]) & (lab[o][1:] != lab[o][:-1])):
+        frontier = np.unique(starts)
+        mark[starts[::-1]] = np.arange(len(starts))[::-1]     # a repeated start keeps its first index
+        touched = [frontier]
+        try:
+            while frontier.size:
+                nb = np.concatenate([r[frontier] for r in rows]).astype(np.int64)
+                lab = np.tile(mark[frontier], len(key))
+                m = mark[nb]
+                seen = m >= 0
+                if strict and np.any(m[seen] != lab[seen]):
                     raise GMapError("two of the given darts lie in the same orbit")
-            nb, first = np.unique(nb, return_index=True)
-            lab = lab[first]
-            merged = np.concatenate([members, nb])
-            order = np.argsort(merged, kind="stable")
-            members, labels = merged[order], np.concatenate([labels, lab])[order]
-            frontier, flab = nb, lab
+                nb, lab = nb[~seen], lab[~seen]
+                if nb.size:
+                    mark[nb] = lab
+                    if strict and np.any(mark[nb] != lab):
+                        raise GMapError("two of the given darts lie in the same orbit")
+                    nb = np.unique(nb)
+                    touched.append(nb)
+                frontier = nb
+            members = np.sort(np.concatenate(touched))
+            labels = mark[members].astype(np.int64)
+        finally:
+            mark[np.concatenate(touched)] = -1
         return members, labels
+
+    def _marks(self):
+        """A per-dart scratch array of -1 (orbit walks set and reset only what they touch)."""
+        n = self._alpha.shape[1]
+        if getattr(self, "_scratch", None) is None or len(self._scratch) < n:
+            self._scratch = np.full(max(n, 16), -1, np.int64)
+        return self._scratch
 
     def orbit_ids(self, involutions):
         """``(ids, count)``: the orbit of every dart under the given involutions.

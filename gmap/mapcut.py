@@ -25,6 +25,8 @@ and a plane that does not cross the model (it would keep all or nothing).
 from __future__ import annotations
 
 import numpy as np
+from scipy import sparse
+from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap.errors import GMapError, ValueRefused
 from ramure.gmap.prism import FACE_CUT
@@ -63,89 +65,90 @@ def cut_map(gm, normal, origin=None):
     if s.max() <= 0 or s.min() >= 0:
         side = "behind" if s.max() <= 0 else "in front of"
         raise ValueRefused(f"the cut plane misses the model (the whole model lies {side} it): nothing to cut")
-    _split_crossing_edges(out, s[vid])
-    _split_crossing_faces(out, tol, n, o)
-    _split_crossing_volumes(out, tol, n, o)
-    _drop_front(out, tol, n, o)
+    sd = s[vid]
+    vol = out.dart_volume
+    out.reserve(out.n_darts + 4 * max(int(np.count_nonzero((sd < 0) & (sd[out.alpha[0]] > 0))), 1) * 6)
+    crossing = (np.bincount(vol, sd < 0, minlength=out.n_volumes) > 0) & (
+        np.bincount(vol, sd > 0, minlength=out.n_volumes) > 0)
+    sd = _split_crossing_edges(out, sd, vid)
+    sd = _split_crossing_faces(out, sd, crossing)
+    sd = _split_crossing_volumes(out, sd, crossing)
+    front = np.bincount(out.dart_volume, sd > 0, minlength=out.n_volumes) > 0
+    out.remove_volumes(np.flatnonzero(front))
     _manual(out)
     out.meta = dict(gm.meta, cut=list(out.meta.get("cut", [])) + [{"normal": n.tolist(), "origin": o.tolist()}])
     return out
 
 
-def _signed(gm, tol, n, o):
-    vid, pos = gm.vertex_positions()
-    s = (pos - o) @ n
-    s[np.abs(s) <= tol] = 0.0
-    return s[vid]
+def _grown(sd, gm):
+    """``sd`` extended with zeros for the darts made since (every new dart lies on the plane)."""
+    return np.concatenate([sd, np.zeros(gm.n_darts - len(sd))])
 
 
-def _split_crossing_edges(gm, sd):
+def _split_crossing_edges(gm, sd, vid):
+    """Split every edge from s < 0 to s > 0 at the plane; one dart per edge (by its vertex pair)."""
     a0 = gm.alpha[0]
-    cross = (sd < 0) & (sd[a0] > 0)                    # one dart per (edge, face side), the negative end
-    d = np.flatnonzero(cross)
-    if d.size == 0:
-        return
-    eid, _ = gm.cells(1)
-    _, first = np.unique(eid[d], return_index=True)
-    d = d[first]
-    t = sd[d] / (sd[d] - sd[a0[d]])
-    gm.split_edge(d, t)
+    d = np.flatnonzero((sd < 0) & (sd[a0] > 0))
+    if d.size:
+        key = vid[d].astype(np.int64) * (int(vid.max()) + 1) + vid[a0[d]]
+        _, first = np.unique(key, return_index=True)
+        d = d[first]
+        gm.split_edge(d, sd[d] / (sd[d] - sd[a0[d]]))
+    return _grown(sd, gm)
 
 
-def _face_signs(gm, sd, side, ns):
-    neg = np.bincount(side, sd < 0, minlength=ns) > 0
-    pos = np.bincount(side, sd > 0, minlength=ns) > 0
+def _band_sides(gm, crossing):
+    """Face sides ``<a0,a1>`` of the darts of the crossing volumes, labelled locally."""
+    darts = np.flatnonzero(crossing[gm.dart_volume])
+    m = len(darts)
+    nb = np.stack([np.searchsorted(darts, gm.alpha[0][darts]), np.searchsorted(darts, gm.alpha[1][darts])], 1)
+    graph = sparse.csr_matrix((np.ones(2 * m, np.bool_), nb.ravel(), np.arange(0, 2 * m + 1, 2)), shape=(m, m))
+    count, labels = connected_components(graph, directed=True, connection="strong")
+    return darts, labels, count
+
+
+def _signs(labels, count, sd_band):
+    neg = np.bincount(labels, sd_band < 0, minlength=count) > 0
+    pos = np.bincount(labels, sd_band > 0, minlength=count) > 0
     return neg, pos
 
 
-def _split_crossing_faces(gm, tol, n, o):
-    sd = _signed(gm, tol, n, o)
-    side, ns = gm.orbit_ids("01")
-    neg, pos = _face_signs(gm, sd, side, ns)
+def _split_crossing_faces(gm, sd, crossing):
+    darts, labels, count = _band_sides(gm, crossing)
+    neg, pos = _signs(labels, count, sd[darts])
     both = neg & pos
     if not both.any():
-        return
-    # one face side per 2-cell: the side whose id is not larger than its alpha3 partner's
-    reps = np.full(ns, -1, np.int64)
-    reps[side[::-1]] = np.arange(gm.n_darts)[::-1]      # smallest dart of each side
-    partner = side[gm.alpha[3][reps]]
-    todo = np.flatnonzero(both & (np.arange(ns) <= partner))
-    walk, length = gm.face_walk(reps[todo])
+        return sd
+    rep = np.full(count, -1, np.int64)
+    rep[labels[::-1]] = darts[::-1]                     # smallest dart of each side
+    cand = np.flatnonzero(both)                        # their partners' volumes hold both signs too
+    at = np.minimum(np.searchsorted(darts, gm.alpha[3][rep[cand]]), len(darts) - 1)
+    partner = np.where(darts[at] == gm.alpha[3][rep[cand]], labels[at], cand)
+    todo = cand[cand <= partner]
+    walk, _ = gm.face_walk(rep[todo])
     corners = walk[:, 0::2]
     ok = corners >= 0
     zero = ok & (sd[np.maximum(corners, 0)] == 0)
-    count = zero.sum(axis=1)
-    if np.any(count != 2):
+    if np.any(zero.sum(axis=1) != 2):
         raise GMapError("cut_map: a face crosses the plane more than twice (a strongly non-convex face); "
                         "subdivide the model or move the plane")
     k = np.argsort(~zero, axis=1, kind="stable")[:, :2]   # the two on-plane corners, in walk order
     rows = np.arange(len(todo))
-    d1 = corners[rows, k[:, 0]]
-    k2 = k[:, 1] - k[:, 0]
-    gm._split_faces(d1, k2)
+    gm._split_faces(corners[rows, k[:, 0]], k[:, 1] - k[:, 0])
+    return _grown(sd, gm)
 
 
-def _split_crossing_volumes(gm, tol, n, o):
-    sd = _signed(gm, tol, n, o)
-    side, ns = gm.orbit_ids("01")
-    neg, pos = _face_signs(gm, sd, side, ns)
+def _split_crossing_volumes(gm, sd, crossing):
+    darts, labels, count = _band_sides(gm, crossing)
+    neg, pos = _signs(labels, count, sd[darts])
     a0, a2 = gm.alpha[0], gm.alpha[2]
-    d = np.arange(gm.n_darts)
-    on_plane = (sd == 0) & (sd[a0] == 0)
-    path = on_plane & neg[side] & pos[side[a2]] & (d < a0)
-    p = np.flatnonzero(path)
-    if p.size == 0:
-        return
-    gm._split_volume(p, (FACE_CUT, FACE_CUT), many=True)
-
-
-def _drop_front(gm, tol, n, o):
-    sd = _signed(gm, tol, n, o)
-    vol = gm.dart_volume
-    front = np.bincount(vol, sd > 0, minlength=gm.n_volumes) > 0
-    if front.all():
-        raise ValueRefused("the cut keeps nothing")
-    gm.remove_volumes(np.flatnonzero(front))
+    side_of = labels
+    other = labels[np.searchsorted(darts, a2[darts])]
+    on_plane = (sd[darts] == 0) & (sd[a0[darts]] == 0)
+    path = darts[on_plane & neg[side_of] & pos[other] & (darts < a0[darts])]
+    if path.size:
+        gm._split_volume(path, (FACE_CUT, FACE_CUT), many=True)
+    return _grown(sd, gm)
 
 
 def _manual(gm):

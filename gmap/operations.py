@@ -160,21 +160,25 @@ class Operations:
         """
         starts = _darts(starts)
         a0, a1 = self._alpha[0], self._alpha[1]
+        k = len(starts)
+        idx = np.arange(k)
         cur = starts.copy()
-        active = np.ones(len(starts), bool)
-        lengths = np.zeros(len(starts), np.int64)
-        columns = []
+        lengths = np.zeros(k, np.int64)
+        steps = []
         step = 0
-        while active.any():
-            columns.append(np.where(active, cur, -1))
-            lengths += active
-            cur = np.where(active, (a0 if step % 2 == 0 else a1)[cur], cur)
+        while idx.size:                     # only faces still open are walked on
+            steps.append((idx, cur))
+            lengths[idx] += 1
+            cur = (a0 if step % 2 == 0 else a1)[cur].astype(np.int64)
             step += 1
             if step % 2 == 0:
-                active &= cur != starts
+                go = cur != starts[idx]
+                idx, cur = idx[go], cur[go]
             if step > self.n_darts + 2:
                 raise GMapError("face walk does not close: the map is not valid")
-        walk = np.stack(columns, axis=1) if columns else np.zeros((len(starts), 0), np.int64)
+        walk = np.full((k, step), -1, np.int64)
+        for j, (rows, values) in enumerate(steps):
+            walk[rows, j] = values
         return walk, lengths
 
     def sew3(self, a, b):
@@ -591,7 +595,9 @@ class Operations:
         volumes = np.unique(_darts(volumes))
         if volumes.size and (volumes.min() < 0 or volumes.max() >= self.n_volumes):
             raise GMapError(f"volume ids must be in 0..{self.n_volumes - 1}")
-        gone = np.isin(self._darts["volume"], volumes)
+        gone_volume = np.zeros(self.n_volumes, bool)
+        gone_volume[volumes] = True
+        gone = gone_volume[self._darts["volume"]]
         alpha = self.alpha
         partners = alpha[3][gone]
         alpha[3][partners] = partners
