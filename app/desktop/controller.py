@@ -26,7 +26,7 @@ from PySide6.QtCore import QObject, Signal
 from ramure.app.desktop import state
 from ramure.app.desktop.history import Timeline
 from ramure.app.desktop.workers import JobQueue
-from ramure.app.model import Explorer
+from ramure.app.model import Explorer, leaves_in_rectangle
 from ramure.errors import RamureError
 
 
@@ -249,12 +249,16 @@ class Controller(QObject):
         self._select(run)
         return picked[0]
 
-    def select_rectangle(self, screen_xy, rect, mode="replace"):
-        """Select the leaves whose projected segment midpoints fall in ``rect`` (x0, y0, x1, y1)."""
+    def select_rectangle(self, screen_xy, rect, mode="replace", leaf_ids=None):
+        """Select the leaves whose projected points fall in ``rect`` (x0, y0, x1, y1): the segment
+        midpoints, or the points of ``leaf_ids`` (midpoints then organ centres, as the window gives)."""
         found = []
 
         def run(ex):
-            found.extend(ex.leaves_in_rectangle(screen_xy, rect))
+            if leaf_ids is None:
+                found.extend(ex.leaves_in_rectangle(screen_xy, rect))
+            else:
+                found.extend(leaves_in_rectangle(leaf_ids, screen_xy, rect))
             ex.select(found, mode)
         self._select(run)
         return found

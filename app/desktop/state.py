@@ -54,6 +54,8 @@ class Snapshot:
     edits: int = 0
     extra: dict = field(default_factory=dict)
     job: str = ""  # the job that took this snapshot ("grammar" when the editor's text made it)
+    organ_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # leaf and fruit centres
+    organ_leaves: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # their history leaves
 
 
 def take_snapshot(explorer, previous=None, timeline=None, job=""):
@@ -79,7 +81,10 @@ def take_snapshot(explorer, previous=None, timeline=None, job=""):
     cut = getattr(result, "cut", None)
     layout = (cut_graph_layout(cut, explorer.derivation.tree, result.roots, explorer.lsystem.symbols)
               if cut is not None else None)
+    organs = skeleton.organs
     return Snapshot(version=explorer.version, mesh=mesh, skeleton=skeleton,
+                    organ_points=np.asarray(organs.position, float).reshape(-1, 3),
+                    organ_leaves=np.asarray(organs.leaf_id, np.int64),
                     segment_leaf=np.asarray(skeleton.leaf_id), midpoints=explorer.segment_midpoints(),
                     n_modules=len(explorer.derivation), string_preview=string_preview(explorer),
                     cut_layout=layout, **light)
@@ -275,6 +280,7 @@ def base_colors(mesh):
 
 
 KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (lsys.geometry.KIND_FRUIT)
+FRUIT_SELECTED = (40, 110, 255)  # a selected fruit: blue, never mistaken for a ripe one
 
 
 def fruit_leaves(mesh):
@@ -333,7 +339,10 @@ def cell_colors(mesh, selection=(), kinship_rgb=None, base=None):
         return kinship_rgb
     rgb = base_colors(mesh) if base is None else base.copy()
     if len(selection):
-        rgb[leaf_mask(mesh.cell_data["leaf_id"], selection)] = (255, 0, 0)
+        chosen = leaf_mask(mesh.cell_data["leaf_id"], selection)
+        fruit = np.asarray(mesh.cell_data["kind"]) == KIND_FRUIT
+        rgb[chosen & ~fruit] = (255, 0, 0)
+        rgb[chosen & fruit] = FRUIT_SELECTED  # red on orange would read as ripe fruit
     return rgb
 
 

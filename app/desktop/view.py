@@ -26,7 +26,7 @@ from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
 from ramure.app.desktop.lod import MotionLevelOfDetail
-from ramure.app.desktop.state import points_without_fruit, project_to_display
+from ramure.app.desktop.state import FRUIT_SELECTED, points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
 from ramure.app.desktop import scene
 
@@ -272,7 +272,7 @@ class PlantView(QWidget):
 
         rgb = np.empty((self.fruit.n_cells, 3), np.uint8)
         rgb[:] = FRUIT_RGB
-        rgb[leaf_mask(self.fruit.cell_data["leaf_id"], selection)] = (255, 0, 0)
+        rgb[leaf_mask(self.fruit.cell_data["leaf_id"], selection)] = FRUIT_SELECTED
         return rgb
 
     def set_fruit_selection(self, selection):

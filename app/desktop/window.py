@@ -29,6 +29,7 @@ from ramure.app.desktop.qt_fix import protect_none
 from ramure.app.desktop.regen_panel import RegenPanel
 from ramure.app.desktop.architecture_panel import ArchitecturePanel
 from ramure.app.desktop.wood_panel import WoodPanel
+from ramure.app.desktop.details_panel import DetailsPanel
 from ramure.app.desktop.string_dock import StringView
 from ramure.app.desktop.variants_panel import VariantsController
 from ramure.app.desktop.view import PlantView
@@ -92,12 +93,15 @@ class MainWindow(QMainWindow):
         self._dock("architecture", "Architecture", ArchitecturePanel(self.controller),
                    Qt.DockWidgetArea.RightDockWidgetArea)
         self._dock("wood", "Wood", WoodPanel(self.controller), Qt.DockWidgetArea.RightDockWidgetArea)
+        self._dock("details", "Details", DetailsPanel(self.controller, self),
+                   Qt.DockWidgetArea.RightDockWidgetArea)
         self.tabifyDockWidget(self.docks["string"], self.docks["cut"])
         self.tabifyDockWidget(self.docks["cut"], self.docks["gallery"])
         self.docks["string"].raise_()
         self.tabifyDockWidget(self.docks["regeneration"], self.docks["pca"])
         self.tabifyDockWidget(self.docks["pca"], self.docks["architecture"])
         self.tabifyDockWidget(self.docks["architecture"], self.docks["wood"])
+        self.tabifyDockWidget(self.docks["wood"], self.docks["details"])
         self.docks["regeneration"].raise_()
 
         self.status_label = QLabel("")
@@ -134,7 +138,7 @@ class MainWindow(QMainWindow):
             return
         self.compact = True
         right = Qt.DockWidgetArea.RightDockWidgetArea
-        top = ["regeneration", "pca", "architecture", "wood"]
+        top = ["regeneration", "pca", "architecture", "wood", "details"]
         bottom = ["grammar", "constants", "string", "cut", "gallery"]
         for key in top + bottom:
             if key in self.docks:
@@ -455,8 +459,10 @@ class MainWindow(QMainWindow):
         snap = self.controller.snapshot
         if self.drawn_version != snap.version:
             return None
-        xy = self.view.project(snap.midpoints)
-        found = self._select(self.controller.select_rectangle, xy, rect, mode)
+        # branches by their midpoints, leaves and fruit by their centres
+        xy = self.view.project(np.concatenate([snap.midpoints, snap.organ_points]))
+        leaves = np.concatenate([snap.segment_leaf, snap.organ_leaves])
+        found = self._select(self.controller.select_rectangle, xy, rect, mode, leaves)
         if found is not None:
             self.status(f"Rectangle: {len(found)} leaves ({mode})")
         return found

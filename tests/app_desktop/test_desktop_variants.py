@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QPoint, Qt
 
+from ramure.app.desktop.state import FRUIT_SELECTED
 from ramure.app.desktop.thumbnails import pixel_variance
 from desktop_helpers import ROOT, settle
 
@@ -151,7 +152,7 @@ def test_volumetric_fruit_can_be_picked(make_window, qtbot):
     w.view.click_at(*w.view.project(centre[None])[0])
     assert w.controller.explorer.selection == [target]
     rgb = np.asarray(w.view.fruit.cell_data["rgb"])
-    assert (rgb[leaves == target] == [255, 0, 0]).all()
+    assert (rgb[leaves == target] == FRUIT_SELECTED).all()  # blue: red on orange reads as ripe
     w.fruit_action.setChecked(False)
     assert w.view.fruit is None
 
@@ -198,3 +199,24 @@ def test_volumes_hide_the_fruit_spheres_and_regrow_fruit_with_a_preset(make_wind
     w.grab_window().save(str(artifacts / "desktop_fruit_volumes.png"))
     w.fruit_action.setChecked(False)
     assert fruit_sphere_area(w.view.mesh) == pytest.approx(full)
+
+
+def test_a_rectangle_selects_fruit_and_they_turn_blue(make_window, qtbot):
+    from PySide6.QtTest import QTest
+
+    w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=4)
+    total = len(w.fruit_leaves)
+    assert total > 0
+    size = w.view.plotter.size()
+    QTest.mousePress(w.view.plotter, Qt.MouseButton.RightButton, Qt.KeyboardModifier.NoModifier,
+                     w.view.plotter.rect().topLeft() + QPoint(2, 2))
+    QTest.mouseMove(w.view.plotter, QPoint(size.width() - 3, size.height() - 3))
+    QTest.mouseRelease(w.view.plotter, Qt.MouseButton.RightButton, Qt.KeyboardModifier.NoModifier,
+                       QPoint(size.width() - 3, size.height() - 3))
+    settle(qtbot, w)
+    selected = set(w.controller.explorer.selection)
+    assert set(w.fruit_leaves.tolist()) <= selected  # every fruit, not 0 of 20
+    assert f"{total} of {total} fruit selected" in w.regen.fruit_note.text()
+    mesh = w.view.mesh
+    fruit = np.asarray(mesh.cell_data["kind"]) == 2
+    assert (np.asarray(mesh.cell_data["rgb"])[fruit] == FRUIT_SELECTED).all()
