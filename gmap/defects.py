@@ -42,7 +42,7 @@ import math
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
-from scipy.sparse.linalg import cg
+from scipy.sparse.linalg import splu
 
 from ramure.gmap import incidence as _incidence
 from ramure.gmap.errors import GMapError
@@ -223,14 +223,8 @@ def _reembed(gm, cell_factor, stiffness):
     mean_f = float(np.average(f, weights=wt))
     lap = lap + eps * sparse.identity(nv, format="csr")
     rhs = inc.T @ (wt[:, None] * rest) + eps * mean_f * q
-    diag = lap.diagonal()
-    precond = sparse.diags(1.0 / diag)
-    new = np.empty_like(q)
-    scale = float(np.abs(q).max()) or 1.0
-    for j in range(3):
-        x0 = mean_f * q[:, j]
-        x, info = cg(lap, rhs[:, j], x0=x0, rtol=1e-13, atol=1e-13 * scale, maxiter=2000, M=precond)
-        new[:, j] = x
+    lu = splu(lap.tocsc(), permc_spec="MMD_AT_PLUS_A")
+    new = lu.solve(rhs)
     _set_vertices(gm, new + centre)
 
 
@@ -355,6 +349,9 @@ def hail(gm: GMap3, vertices=None, depth_mm=(2.0, 6.0), count: int | None = None
     lo, hi = (depth_mm, depth_mm) if np.isscalar(depth_mm) else (float(depth_mm[0]), float(depth_mm[1]))
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise GMapError(f"hail depth must be > 0 mm (a range low..high with low <= high), got {depth_mm}")
+    if not np.any(gm.volume_data["tissue"] == CODES[stop]):
+        raise GMapError(f"hail: this fruit has no {stop} cells to stop at; layered defects need a fruit "
+                        "with tissues (--subdivide volume:2 builds exocarp, mesocarp, endocarp, locules)")
     scale = mm_per_unit(gm, size_mm)
     skin = hail_sites(gm)
     rng = np.random.default_rng(seed)
@@ -464,3 +461,91 @@ def grade(facts: list[dict]) -> dict:
             reasons.append("rot: produce affected by rotting is excluded")
     return {"marketable": not reasons, "grade": "marketable" if not reasons else "rejected",
             "reasons": reasons}
+
+
+# ---------------------------------------------------------------- text specs (CLI, notebook, desktop)
+#: Defect kinds and the options each accepts (``kind:name=value,...``).
+DEFECT_OPTIONS = {
+    "shrink": ("rate", "steps", "kind"),
+    "rot": ("vertex", "coefficients", "rate", "steps"),
+    "hail": ("count", "depth_mm", "stop", "vertex"),
+}
+
+
+def parse_defect(spec: str) -> tuple[str, dict]:
+    """``"hail:count=5,depth_mm=2..6,stop=endocarp"`` -> ``("hail", {...})``, checked.
+
+    Ranges are ``low..high``; rot coefficients are ``2.5/2/1.5``.
+
+    >>> parse_defect("hail:count=5,depth_mm=2..6")
+    ('hail', {'count': 5, 'depth_mm': (2.0, 6.0)})
+    """
+    kind, _, rest = spec.partition(":")
+    kind = kind.strip().lower()
+    if kind not in DEFECT_OPTIONS:
+        raise GMapError(f"unknown defect {kind!r} in '{spec}'; known: {', '.join(DEFECT_OPTIONS)}")
+    opts = {}
+    for item in filter(None, (x.strip() for x in rest.split(","))):
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or name not in DEFECT_OPTIONS[kind]:
+            raise GMapError(f"defect {kind}: expected NAME=VALUE with NAME in "
+                            f"{', '.join(DEFECT_OPTIONS[kind])}, got '{item}'")
+        opts[name] = _option_value(kind, name, value.strip())
+    return kind, opts
+
+
+def _option_value(kind, name, value):
+    try:
+        if name in ("steps", "count", "vertex"):
+            number = float(value)
+            if number != int(number):
+                raise ValueError
+            return int(number)
+        if name == "depth_mm":
+            lo, sep, hi = value.partition("..")
+            return (float(lo), float(hi)) if sep else float(value)
+        if name == "coefficients":
+            return tuple(float(x) for x in value.split("/"))
+        if name in ("stop", "kind"):
+            return value
+        return float(value)
+    except ValueError:
+        raise GMapError(f"defect {kind}: {name}={value!r} is not a valid value") from None
+
+
+def apply_defects(gm: GMap3, specs, size_mm: float | None = None, seed: int = 0
+                  ) -> tuple[GMap3, dict]:
+    """Apply defect specs in order; returns the map and the facts.
+
+    Facts: ``defects`` (one record per defect), ``volume_before``,
+    ``volume_after``, ``volume_lost`` (fraction too), ``size_mm`` and
+    ``grade`` (:func:`grade`).  Every spec is parsed before anything is
+    applied; ``seed`` is offset per defect so two hail specs differ.
+    """
+    parsed = [parse_defect(s) if isinstance(s, str) else s for s in specs]
+    mm_per_unit(gm, size_mm)
+    sign = orientation(gm)
+    before = float(_signed_volumes(gm, sign).sum())
+    out, records = gm, []
+    for i, (kind, opts) in enumerate(parsed):
+        out, facts = _apply_one(out, kind, dict(opts), size_mm, seed + 1000 * i)
+        records.append(facts)
+    after = float(_signed_volumes(out, sign).sum())
+    return out, {"defects": records, "size_mm": DEFAULT_SIZE_MM if size_mm is None else float(size_mm),
+                 "volume_before": before, "volume_after": after, "volume_lost": before - after,
+                 "volume_lost_fraction": (before - after) / before, "grade": grade(records)}
+
+
+def _apply_one(gm, kind, opts, size_mm, seed):
+    if kind == "shrink":
+        return shrink(gm, opts.get("rate", 0.1), opts.get("steps", 1), rate_kind=opts.get("kind", "edge"))
+    if kind == "rot":
+        out, facts = rot(gm, opts.get("vertex"), opts.get("coefficients", ROT_COEFFICIENTS), seed=seed)
+        if opts.get("rate", 0.0) > 0:
+            out, dried = shrink(out, opts["rate"], opts.get("steps", 1))
+            facts.update(rate=dried["rate"], steps=dried["steps"], volume_lost=dried["volume_lost"])
+        return out, facts
+    vertices = None if "vertex" not in opts else [opts["vertex"]]
+    return hail(gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"),
+                opts.get("stop", "endocarp"), size_mm, seed)

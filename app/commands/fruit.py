@@ -6,10 +6,14 @@ Examples::
     ramure fruit --preset ribbed_tomato --set nbprotus=8 -o ribbed.png
     ramure fruit --subdivide volume:2 --cut z=0 -o tomato.png
     ramure fruit --subdivide volume:2 -o tomato.vtu
+    ramure fruit --subdivide volume:2 --defect hail:count=5,depth_mm=2..6,stop=endocarp \
+        --defect shrink:rate=0.1,steps=3 --size-mm 65 --json
 
 JSON keys: preset, seed, darts, vertices, edges, faces (2-cells), faces_per_volume
 (the thesis's count), volumes, tissues (volumes per tissue), valid, seconds
-(build + validity check), and output when a file was written.
+(build + validity check), and output when a file was written.  With ``--defect``
+(see :func:`ramure.gmap.defects.apply_defects`): ``defects`` holds the per-defect
+facts, the volume lost and the grade with its reasons.
 """
 from __future__ import annotations
 
@@ -106,6 +110,7 @@ def render_fruit(grid, path, size=(800, 800), cut_normal=None, title=None):
 
 def run_fruit(args):
     from ramure.gmap.cut import plane_cut
+    from ramure.gmap.defects import apply_defects, parse_defect
     from ramure.gmap.fruit import build_fruit
     from ramure.gmap.pyvista import to_unstructured_grid
     from ramure.gmap.tissue import tissue_counts
@@ -113,8 +118,12 @@ def run_fruit(args):
     levels = parse_subdivide(args.subdivide)
     plane = parse_plane(args.cut) if args.cut else None  # checked even without -o
     size = parse_size(args.size)
+    defects = [parse_defect(spec) for spec in args.defect]   # checked before building
     t0 = time.perf_counter()
     gm = build_fruit(args.preset, seed=args.seed, **levels, **parse_sets(args.set))
+    defect_facts = None
+    if defects:
+        gm, defect_facts = apply_defects(gm, defects, size_mm=args.size_mm, seed=args.seed)
     valid = gm.is_valid()
     seconds = time.perf_counter() - t0
     out = None
@@ -138,6 +147,8 @@ def run_fruit(args):
         c = gm.counts()
         record = {"preset": args.preset, "seed": args.seed, **c, "tissues": tissue_counts(gm),
                   "valid": bool(valid), "seconds": round(seconds, 6)}
+        if defect_facts is not None:
+            record["defects"] = defect_facts
         if out is not None:
             record["output"] = str(out)
         print(json.dumps(record))
@@ -147,6 +158,10 @@ def run_fruit(args):
         c = gm.counts()
         print(f"{args.preset}: {c['darts']} darts, {c['vertices']} vertices, {c['volumes']} volumes, "
               f"{'valid' if valid else 'INVALID'}, {seconds * 1000:.1f} ms")
+        if defect_facts is not None:
+            g = defect_facts["grade"]
+            print(f"defects: {len(defects)}, volume lost {100 * defect_facts['volume_lost_fraction']:.1f} %, "
+                  f"{g['grade']}" + (f" ({'; '.join(g['reasons'])})" if g["reasons"] else ""))
     return 0 if valid else 1
 
 
@@ -166,6 +181,12 @@ def register(sub):
     p.add_argument("--cut-mode", default="clip", choices=["clip", "cells"],
                    help="clip cells flat (default) or drop whole cells in front of the plane")
     p.add_argument("--size", default="800x800", help="PNG size WIDTHxHEIGHT (default 800x800)")
+    p.add_argument("--defect", action="append", default=[], metavar="KIND:NAME=VALUE,...",
+                   help="apply a defect in order (repeatable): shrink:rate=0.1,steps=3; "
+                        "rot:vertex=N,coefficients=2.5/2/1.5,rate=0.1; "
+                        "hail:count=5,depth_mm=2..6,stop=endocarp (needs --subdivide volume:N for tissues)")
+    p.add_argument("--size-mm", type=float, default=None,
+                   help="fruit size in millimetres for defect depths and the grade (default 65)")
     p.add_argument("--json", action="store_true", help="print the facts as one JSON object")
     p.add_argument("-o", "--output", default=None, help="write a .png picture or a .vtu grid")
     p.set_defaults(func=run_fruit)

@@ -175,3 +175,38 @@ def test_grade_rule():
     g = D.grade([{"kind": "hail", "count": 1}])
     assert not g["marketable"] and "hail" in g["reasons"][0]
     assert D.grade([{"kind": "shrink"}])["marketable"]
+
+
+def test_hail_needs_the_stop_tissue():
+    flat = build_fruit("round_tomato")
+    with pytest.raises(GMapError, match="no endocarp cells"):
+        D.hail(flat, count=1)
+
+
+def test_parse_defect_specs():
+    assert D.parse_defect("shrink:rate=0.1,steps=3") == ("shrink", {"rate": 0.1, "steps": 3})
+    assert D.parse_defect("rot:coefficients=3/2/1") == ("rot", {"coefficients": (3.0, 2.0, 1.0)})
+    with pytest.raises(GMapError, match="unknown defect"):
+        D.parse_defect("mould:rate=1")
+    with pytest.raises(GMapError, match="not a valid value"):
+        D.parse_defect("hail:count=2.5")
+
+
+def test_cli_defects_json(capsys):
+    from ramure.app.cli import main
+    import json
+    argv = ["fruit", "--subdivide", "volume:2", "--set", "seeds=5", "--defect", "hail:count=3,depth_mm=1..2",
+            "--defect", "shrink:rate=0.1,steps=2", "--size-mm", "65", "--json"]
+    assert main(argv) == 0
+    rec = json.loads(capsys.readouterr().out)["defects"]
+    assert [d["kind"] for d in rec["defects"]] == ["hail", "shrink"]
+    assert rec["defects"][0]["count"] == 3
+    assert rec["volume_lost"] == pytest.approx(rec["defects"][0]["volume_lost"] + rec["defects"][1]["volume_lost"])
+    assert 0.45 < rec["volume_lost_fraction"] < 1 - 0.9 ** 6 + 0.005   # seeds (K = 0) keep theirs
+    assert rec["grade"]["marketable"] is False and "hail" in rec["grade"]["reasons"][0]
+    for bad, msg in ((["--defect", "hail:count=x"], "not a valid value"),
+                     (["--defect", "shrink", "--size-mm", "-1"], "millimetres > 0"),
+                     (["--defect", "shrink:rate=1.5"], "[0, 1)")):
+        assert main(["fruit", *bad]) == 2
+        err = capsys.readouterr().err
+        assert msg in err and "Traceback" not in err
