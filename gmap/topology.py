@@ -50,3 +50,28 @@ def assert_solid(gm, solids: int = 1) -> None:
     if r["components"] != solids or r["chi"] != solids or r["boundary_chi"] != 2 * solids:
         raise GMapError(f"expected {solids} solid ball(s) (chi {solids}, boundary chi {2 * solids}), got "
                         f"{r['components']} component(s), chi {r['chi']}, boundary chi {r['boundary_chi']}")
+
+
+def orientation_parity(gm):
+    """Per-dart orientation class (0/1), consistent inside each volume ``<a0,a1,a2>``.
+
+    Every involution flips the class, so walking a face from a dart of class
+    0 (``d -> a0 d -> ...``) orients all faces of a volume the same way
+    (inward or outward for the whole volume).  Computed with one connected-
+    components pass on the double cover (dart, class).  For a non-orientable
+    volume the classes are arbitrary.
+    """
+    from scipy import sparse
+    from scipy.sparse.csgraph import connected_components
+    import numpy as np
+
+    n = gm.n_darts
+    if n == 0:
+        return np.zeros(0, np.int8)
+    alpha = gm.alpha.astype(np.int64)
+    nb0 = alpha[:3].T + n                 # (d, 0) -> (alpha_i d, 1)
+    nb1 = alpha[:3].T                     # (d, 1) -> (alpha_i d, 0)
+    idx = np.concatenate([nb0, nb1]).ravel()
+    graph = sparse.csr_matrix((np.ones(6 * n, np.bool_), idx, np.arange(0, 6 * n + 1, 3)), shape=(2 * n, 2 * n))
+    _, comp = connected_components(graph, directed=True, connection="strong")
+    return (comp[:n] < comp[n:]).astype(np.int8)

@@ -6,6 +6,7 @@ from hypothesis import strategies as st
 
 from ramure.gmap import GMap3, GMapError
 from ramure.errors import RamureError, ValueRefused
+from ramure.gmap.topology import assert_solid
 
 
 def cube_pair(sizes=((1.0, 1.0, 1.0), (1.0, 1.0, 1.0))):
@@ -133,6 +134,7 @@ def test_sewing_faces_of_different_degrees_splits_the_smaller_face():
     quad = gm.add_prisms(4, origins=[[-1, 0, 0]])[0]
     gm.sew3(gm.prism_face(tri, 3, "O"), gm.prism_face(quad, 4, "E"))
     assert gm.is_valid(), gm.validity_problems()
+    assert_solid(gm)
     walk, length = gm.face_walk([gm.prism_face(tri, 3, "O")])
     assert length[0] == 8                                       # the triangle became a 4-gon
     assert gm.counts()["volumes"] == 2
@@ -147,6 +149,7 @@ def test_split_edge_puts_the_vertex_on_the_segment_in_every_volume_around():
     before = gm.points[[d, gm.alpha[0][d]]].copy()
     (new,) = gm.split_edge([d], t=0.25)
     assert gm.is_valid(), gm.validity_problems()
+    assert_solid(gm)
     assert counts(gm) == (13, 21, 11, 2)
     assert np.allclose(gm.points[new], before[0] + 0.25 * (before[1] - before[0]))
     vid, _ = gm.cells(0)
@@ -162,6 +165,7 @@ def test_split_face_splits_both_sides_of_a_sewn_face():
     walk, _ = gm.face_walk([d1])
     gm.split_face(d1, int(walk[0, 4]))                          # the opposite corner
     assert gm.is_valid(), gm.validity_problems()
+    assert_solid(gm)
     assert counts(gm) == (12, 21, 12, 2)
     assert gm.counts()["faces_per_volume"] == 14
     with pytest.raises(GMapError):
@@ -174,6 +178,7 @@ def test_split_prism_makes_two_stacked_prisms(n):
     gm.add_prisms(n, sizes=[[2.0, 1.0, 1.0]])
     upper = gm.split_prism(0, t=0.25)
     assert gm.is_valid(), gm.validity_problems()
+    assert_solid(gm)
     assert counts(gm) == (3 * n, 5 * n, 2 * n + 3, 2)
     assert upper == 1
     cent = gm.volume_centroids()
@@ -193,6 +198,7 @@ def test_split_volume_refuses_an_open_path():
 def test_remove_volume_frees_the_faces_it_was_sewn_to():
     gm, a, b = cube_pair()
     gm.remove_volumes([1])
+    assert_solid(gm)
     assert gm.n_darts == 48 and gm.n_volumes == 1
     assert np.all(gm.alpha[3] == np.arange(48))
     assert gm.is_valid()
@@ -228,6 +234,7 @@ def test_merge_offsets_darts_and_volumes():
     assert merged.n_darts == 2 * gm.n_darts and merged.n_volumes == 4
     assert counts(merged) == (24, 40, 22, 4)
     assert merged.is_valid()
+    assert_solid(merged, solids=2)
 
 
 def test_transform_moves_points_and_frames():

@@ -56,6 +56,15 @@ def test_cut_map_is_one_solid_and_keeps_the_clip_volume(model, normal, origin, t
     assert s.max() < 1e-9 * max(1.0, np.abs(gm.points).max())
 
 
+def test_dart_oriented_volumes_match_vtk_on_the_crown_cut():
+    from ramure.gmap.measure import total_volume, volumes
+    gm = crown()
+    assert abs(total_volume(gm) - to_unstructured_grid(gm).volume) < 1e-9
+    cut = cut_map(gm, (0.3, 0.2, 1.0))
+    assert abs(total_volume(cut) - plane_cut(gm, (0.3, 0.2, 1.0), None, mode="clip").volume) < 1e-9
+    assert np.all(volumes(cut) > 0)
+
+
 def test_two_cuts_commute(tomato):
     a = cut_map(cut_map(tomato, (1, 0, 0), (5.0, 0, 0)), (0.2, 1, 0.1), (0, -3.0, 0))
     b = cut_map(cut_map(tomato, (0.2, 1, 0.1), (0, -3.0, 0)), (1, 0, 0), (5.0, 0, 0))
