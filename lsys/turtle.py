@@ -149,7 +149,7 @@ class Trace:
     """What a skeleton keeps of its turtle run so an edit re-interprets only what it changed.
 
     ``leaves`` is the string interpreted (node ids); ``acts``, ``nps``,
-    ``par`` its action codes, parameter counts and first parameters;
+    ``par`` its action codes, has-parameters flags and first parameters;
     ``segment_at`` / ``organ_at`` the string position of each segment's ``F``
     / each organ; ``match`` the bracket matches (None when some bracket is
     unmatched: edits then re-interpret the whole string).  The turtle state
@@ -184,9 +184,9 @@ def action_table(lsys):
 
 
 def module_arrays(lsys, tree, leaves):
-    """Per module of ``leaves``: action code, parameter count and first parameter."""
+    """Per module of ``leaves``: action code, whether it has parameters, and its first parameter."""
     acts = action_table(lsys)[tree.symbol[leaves]]
-    nps = tree.nparams[leaves]
+    nps = tree.nparams[leaves] > 0  # a fixed dtype whatever the tree stores (one compiled kernel)
     par = tree.params[leaves, 0]
     return acts, nps, par
 
