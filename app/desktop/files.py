@@ -157,8 +157,13 @@ class FileActions:
         if path is None:
             return None
         self.controller.wait_idle()
+        from ramure.app.desktop.export import export_plant
+
+        window = self.window
+        fruit = window.view.fruit if window.variants.show_fruit else None  # the volumes, when shown
+        yup = window.yup_action.isChecked()
         try:
-            out = self.controller.read(lambda ex: ex.export(path), wait=None)
+            out = export_plant(self.controller.snapshot.mesh, path, fruit, yup)
         except (OSError, RamureError, ValueError) as exc:
             self.window.report_refused(f"cannot export to {path}: {exc}")
             return None

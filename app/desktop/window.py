@@ -208,6 +208,8 @@ class MainWindow(QMainWindow):
         f.addSeparator()
         self._action(f, "Export PNG screenshot…", lambda: self.files.screenshot())
         self._action(f, "Export plant (VTK, OBJ, glTF)…", lambda: self.files.export_mesh())
+        self.yup_action = self._action(f, "Export with Y up", lambda on: None, checkable=True,
+                                       tip="Swap axes on export for tools that take Y as up (Blender, glTF)")
         f.addSeparator()
         self.recent_menu = f.addMenu("Recent files")
         self.update_recent_menu()

@@ -93,3 +93,28 @@ def test_unsaved_changes_prompt(make_window, qtbot, monkeypatch):
     monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
     assert w.confirm_discard()
     w.ask = False
+
+
+def test_obj_export_has_groups_materials_normals_volumetric_fruit_and_y_up(make_window, qtbot, tmp_path):
+    w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=4)
+    w.fruit_action.setChecked(True)  # volumetric fruit on screen: the export carries them
+    qtbot.waitUntil(lambda: w.view.fruit is not None, timeout=30000)
+    settle(qtbot, w)
+    w.yup_action.trigger()  # File > Export with Y up
+    assert w.yup_action.isChecked()
+    obj = w.files.export_mesh(tmp_path / "plant.obj")
+    text = obj.read_text()
+    lines = text.splitlines()
+    assert "mtllib plant.mtl" in text and (tmp_path / "plant.mtl").read_text().count("newmtl") == 3
+    groups = [ln.split()[1] for ln in lines if ln.startswith("g ")]
+    assert groups[0] == "bark" and groups[-1] == "fruit"
+    vertices = np.array([[float(v) for v in ln.split()[1:]] for ln in lines if ln.startswith("v ")])
+    normals = np.array([[float(v) for v in ln.split()[1:]] for ln in lines if ln.startswith("vn ")])
+    assert len(normals) == len(vertices) and np.allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-2)
+    start = lines.index("g fruit")
+    fruit_vertices = sum(1 for ln in lines[start:] if ln.startswith("v "))
+    assert fruit_vertices == w.view.fruit.extract_surface(algorithm="dataset_surface").n_points  # the volumes, not the spheres
+    bounds = np.asarray(w.view.mesh.bounds).reshape(3, 2)
+    height = bounds[2, 1] - bounds[2, 0]
+    assert abs((vertices[:, 1].max() - vertices[:, 1].min()) - height) < 0.05 * height + 1e-6  # Y up
+    assert " " in lines[-1] and lines[-1].startswith("f ") and "//" in lines[-1]
