@@ -94,17 +94,26 @@ def orientation(gm: GMap3) -> np.ndarray:
     return sign * flip[vol]
 
 
-def _signed_volumes(gm, sign):
+def _signed_volumes(gm, sign, darts=None):
+    """Signed cell volumes from the darts ``darts`` (all by default; pass whole volumes).
+
+    A closed cell's volume does not depend on the fan's apex, so the apex is
+    the mean of the cell's dart points (cheap, and close to the cell).
+    """
     pts = gm.points
     a0 = gm.alpha[0]
     vol = gm.dart_volume.astype(np.int64)
     fid, nf = gm.orbit_ids("01")
-    fc = np.stack([np.bincount(fid, pts[:, j], minlength=nf) for j in range(3)], 1)
-    fc /= np.bincount(fid, minlength=nf)[:, None]
-    vc = gm.volume_means(pts)
-    c = vc[vol]
-    det = np.einsum("ij,ij->i", pts - c, np.cross(pts[a0] - c, fc[fid] - c))
-    return np.bincount(vol, sign * det, minlength=gm.n_volumes) / 12.0
+    nv = gm.n_volumes
+    d = np.arange(gm.n_darts) if darts is None else darts
+    p, f, v = pts[d], fid[d], vol[d]
+    count_f = np.bincount(f, minlength=nf)
+    fc = np.stack([np.bincount(f, p[:, j], minlength=nf) for j in range(3)], 1) / np.maximum(count_f, 1)[:, None]
+    count_v = np.bincount(v, minlength=nv)
+    vc = np.stack([np.bincount(v, p[:, j], minlength=nv) for j in range(3)], 1) / np.maximum(count_v, 1)[:, None]
+    c = vc[v]
+    det = np.einsum("ij,ij->i", p - c, np.cross(pts[a0[d]] - c, fc[f] - c))
+    return np.bincount(v, sign[d] * det, minlength=nv) / 12.0
 
 
 def cell_volumes(gm: GMap3, sign: np.ndarray | None = None) -> np.ndarray:
@@ -364,6 +373,8 @@ def hail(gm: GMap3, vertices=None, depth_mm=(2.0, 6.0), count: int | None = None
                             "of this fruit")
         vertices = rng.choice(skin, int(n), replace=False)
     vertices = np.atleast_1d(np.asarray(vertices, np.int64))
+    if vertices.size == 0:
+        raise GMapError("hail: no vertex to hit")
     bad = vertices[~np.isin(vertices, skin)]
     if bad.size:
         raise GMapError(f"hail: vertex {int(bad[0])} is not a skin vertex with one inward edge")
@@ -384,17 +395,29 @@ def hail(gm: GMap3, vertices=None, depth_mm=(2.0, 6.0), count: int | None = None
     volume = float(_signed_volumes(out, sign).sum())
     before = volume
     craters = []
+    vid, _ = out.cells(0)
+    order = np.argsort(vid, kind="stable")
+    starts = np.searchsorted(vid[order], np.arange(len(pos) + 1))
+    by_volume = np.argsort(out.dart_volume, kind="stable")
+    vstarts = np.searchsorted(out.dart_volume[by_volume], np.arange(out.n_volumes + 1))
     for v, d_mm in zip(vertices.tolist(), depths.tolist()):   # one step per crater
         moves, actual, widened = _crater(graph, pos, on_skin, stop_vertex, v, d_mm / scale)
-        for x, p in moves.items():
-            pos[x] = p
-        _set_vertices(out, pos)
-        now = float(_signed_volumes(out, sign).sum())
+        moved = np.array(sorted(moves), np.int64)
+        darts = np.concatenate([order[starts[x]:starts[x + 1]] for x in moved])
+        cells = np.unique(out.dart_volume[darts])
+        local = np.concatenate([by_volume[vstarts[c]:vstarts[c + 1]] for c in cells])
+        old_vol = _signed_volumes(out, sign, local)[cells]
+        pos[moved] = np.array([moves[x] for x in moved.tolist()])
+        out.points[darts] = pos[vid[darts]]
+        out.corners[darts] = pos[vid[darts]]
+        new_vol = _signed_volumes(out, sign, local)[cells]
+        if np.any(new_vol <= 0):
+            raise GMapError(f"hail: the crater at vertex {v} ({d_mm:.3g} mm) turns a cell inside out; "
+                            "use shallower craters")
+        lost = float(old_vol.sum() - new_vol.sum())
         craters.append({"vertex": int(v), "depth_mm": float(d_mm), "actual_depth_mm": actual * scale,
-                        "widened": widened, "volume": volume - now, "moved": len(moves)})
-        volume = now
-    if np.any(_signed_volumes(out, sign) <= 0):
-        raise GMapError("hail: a cell turned inside out; use shallower craters")
+                        "widened": widened, "volume": lost, "moved": len(moves)})
+        volume -= lost
     return out, {"kind": "hail", "count": len(craters), "stop": stop, "craters": craters,
                  "volume_before": before, "volume_after": volume, "volume_lost": before - volume}
 
