@@ -19,6 +19,8 @@ import pathlib
 
 import numpy as np
 
+import ramure.io as atomic
+
 from ramure.lsys import GrammarError, LSystem
 from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import kinship
@@ -334,12 +336,16 @@ class Explorer:
             return f"{base} — {len(r.roots)} fruit regrown"
         if r.op == "constants":
             return f"{base} — constants changed, plant re-derived"
-        return (f"{base} — last {r.op}: roots {r.roots.tolist()[:8]}{'…' if len(r.roots) > 8 else ''}, "
+        line = (f"{base} — last {r.op}: roots {r.roots.tolist()[:8]}{'…' if len(r.roots) > 8 else ''}, "
                 f"{r.removed} modules replaced by {r.added}")
+        warning = getattr(r, "warning", None)  # e.g. the selection regrew from the axiom
+        return f"{line} — {warning}" if warning else line
 
     # -- files -------------------------------------------------------------
     def save_grammar(self, path):
-        pathlib.Path(path).write_text(self.text, encoding="utf-8")
+        """Save the grammar text atomically (temporary file, fsync, rename): a crash or a
+        full disk leaves the previous file whole and raises RamureError."""
+        atomic.write_text(path, self.text)
         self.path = pathlib.Path(path)
 
     def save_session(self, path):
@@ -358,13 +364,13 @@ class Explorer:
         suffix = path.suffix.lower()
         mesh = self.mesh
         if suffix in (".vtp", ".vtk", ".ply", ".stl"):
-            mesh.save(str(path))
+            atomic.save_mesh(mesh, path)
         elif suffix == ".obj":
             write_obj(mesh, path)
         elif suffix in (".gltf", ".glb"):
             from ramure.app.render import export_gltf
 
-            export_gltf(mesh, path)
+            atomic.write_with(path, lambda tmp: export_gltf(mesh, tmp))
         else:
             raise ValueRefused(f"cannot export to '{suffix}': use .vtp, .obj, .gltf, .ply or .stl")
         return path
@@ -402,7 +408,7 @@ def write_obj(mesh, path):
     """Wavefront OBJ of a polygonal mesh (vertices and faces), vectorised formatting."""
     mesh = mesh.triangulate()
     faces = mesh.faces.reshape(-1, 4)[:, 1:] + 1
-    with open(path, "w", encoding="utf-8") as f:
+    with atomic.open_atomic(path, "w", encoding="utf-8") as f:
         f.write("# Ramure plant\n")
         np.savetxt(f, mesh.points, fmt="v %.6g %.6g %.6g")
         np.savetxt(f, faces, fmt="f %d %d %d")

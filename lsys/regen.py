@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ramure.io import write_text
+
 from .cut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots
 from .cut import _validate_selection
 from .derive import LSystem, check_constants, check_seed
@@ -404,13 +406,10 @@ class Session:
         path = pathlib.Path(path)
         if path.is_dir():
             raise RamureError(f"cannot save the session to {path}: it is a directory")
-        tmp = path.with_name(path.name + ".tmp")
         try:
-            tmp.write_text(json.dumps(self.to_dict(), indent=1), encoding="utf-8")
-            tmp.replace(path)
-        except OSError as exc:
-            tmp.unlink(missing_ok=True) if tmp.parent.is_dir() else None
-            raise RamureError(f"cannot save the session to {path}: {exc.strerror or exc}") from None
+            write_text(path, json.dumps(self.to_dict(), indent=1))
+        except RamureError as exc:
+            raise RamureError(f"cannot save the session: {exc}") from None
         return path
 
     @classmethod

@@ -18,11 +18,13 @@ facts, the volume lost and the grade with its reasons.
 from __future__ import annotations
 
 import json
+import math
 import pathlib
 import time
 
 import numpy as np
 
+import ramure.io as atomic
 from ramure.app.cli import UserError
 from ramure.app.commands.plant import parse_size
 from ramure.gmap.cut import parse_plane
@@ -55,8 +57,24 @@ def parse_sets(pairs):
         name, sep, value = pair.partition("=")
         if not sep or not name.strip():
             raise UserError(f"--set expects NAME=VALUE, got '{pair}'")
-        out[name.strip()] = value.strip()
+        out[name.strip()] = _finite_or_text(name.strip(), value.strip())
     return out
+
+
+#: Largest magnitude a numeric fruit setting may have (mm, degrees, counts): beyond is a typo.
+MAX_FRUIT_VALUE = 1e6
+
+
+def _finite_or_text(name, value):
+    """Numbers must be finite and within +-MAX_FRUIT_VALUE (nan, inf, 1e308 are refused)."""
+    try:
+        number = float(value)
+    except ValueError:
+        return value  # a word (e.g. a preset name): the fruit builder checks it
+    if not math.isfinite(number) or abs(number) > MAX_FRUIT_VALUE:
+        raise UserError(f"--set {name}={value}: must be a finite number within "
+                        f"+-{MAX_FRUIT_VALUE:g}")
+    return value
 
 
 def tissue_rgb(tissue):
@@ -140,9 +158,10 @@ def run_fruit(args):
             if grid.n_cells == 0:
                 raise UserError(f"--cut {args.cut}: the plane leaves nothing of the fruit")
         if out.suffix.lower() == ".vtu":
-            grid.save(str(out))
+            atomic.save_mesh(grid, out)  # in memory first: a full disk is a clear error
         else:
-            render_fruit(grid, out, size=size, cut_normal=normal, title=args.preset.replace("_", " "))
+            atomic.write_with(out, lambda tmp: render_fruit(grid, tmp, size=size, cut_normal=normal,
+                                                            title=args.preset.replace("_", " ")))
     if args.json:
         c = gm.counts()
         record = {"preset": args.preset, "seed": args.seed, **c, "tissues": tissue_counts(gm),

@@ -271,3 +271,14 @@ def test_cli_reports_cut_value_clamp_and_axiom():
     record = json.loads(out.stdout)
     assert out.returncode == 0 and record["from_axiom"] is True
     assert record["warning"] == FROM_AXIOM_MESSAGE
+
+
+def test_status_lines_say_the_selection_regrows_from_the_axiom():
+    from ramure.app.desktop.state import status_line
+    from ramure.app.model import Explorer
+    import ramure.grammars
+    ex = Explorer(ramure.grammars.path("ternary_branching"), n=4)
+    ex.selection = ex.derivation.tree.leaves.tolist()
+    ex.regrow(seed=2)
+    assert FROM_AXIOM_MESSAGE in ex.status()
+    assert FROM_AXIOM_MESSAGE in status_line(ex)

@@ -1,0 +1,189 @@
+"""Every file Ramure writes goes through here: temporary file in the same folder, fsync, rename.
+
+A crash, a ``kill -9`` or a full disk at any moment leaves either the previous
+file or the new one, complete, and never a partial file: the data goes to a
+hidden temporary file next to the target (``.NAME.XXXX.tmp``, same file system
+so the rename is atomic), is flushed and fsynced, then ``os.replace`` puts it
+in place and the folder is fsynced so the rename itself survives a power cut.
+Any failure removes the temporary file and raises :class:`RamureError` with one
+line naming the file and the cause ("No space left on device", "Permission
+denied", ...): never a traceback, never a half-written file.
+
+Writers that only know how to write to a path (VTK, matplotlib, Qt, PIL) use
+:func:`write_with`, which hands them the temporary path.  A writer that would
+abort the process on a full disk (VTK's C++ writers do) should serialise to
+bytes in memory first and use :func:`write_bytes` (see :func:`save_mesh`).
+
+>>> import tempfile, pathlib
+>>> folder = pathlib.Path(tempfile.mkdtemp())
+>>> write_text(folder / "a.txt", "hello").read_text()
+'hello'
+>>> sorted(p.name for p in folder.iterdir())  # no temporary file left behind
+['a.txt']
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import pathlib
+import tempfile
+from typing import Callable, Iterator
+
+from ramure.errors import RamureError
+
+
+def _refuse(path: pathlib.Path, exc: OSError) -> RamureError:
+    reason = exc.strerror or str(exc)
+    return RamureError(f"cannot write {path}: {reason}; the previous file, if any, is unchanged")
+
+
+def _check_target(path) -> pathlib.Path:
+    path = pathlib.Path(path)
+    if path.is_dir():
+        raise RamureError(f"cannot write {path}: it is a folder")
+    if not path.parent.is_dir():
+        raise RamureError(f"cannot write {path}: the folder {path.parent} does not exist")
+    return path
+
+
+def _fsync_folder(folder: pathlib.Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return  # some file systems do not open folders: the rename is still atomic
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _temporary(path: pathlib.Path) -> str:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    return tmp
+
+
+def _commit(tmp: str, path: pathlib.Path) -> None:
+    with open(tmp, "rb+") as f:
+        os.fsync(f.fileno())
+    try:  # keep the previous file's permissions (mkstemp makes 0600)
+        os.chmod(tmp, path.stat().st_mode & 0o7777)
+    except FileNotFoundError:
+        os.chmod(tmp, 0o666 & ~_umask())
+    os.replace(tmp, path)
+    _fsync_folder(path.parent)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_with(path, writer: Callable[[str], object]) -> pathlib.Path:
+    """Call ``writer(tmp_path)``, then fsync and rename the temporary file onto ``path``.
+
+    The temporary file keeps ``path``'s suffix in its name's middle only, so a
+    writer that picks its format from the suffix (pyvista, matplotlib) is given
+    ``.NAME.XXXX.tmp.SUFFIX``.
+    """
+    path = _check_target(path)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}")
+        os.close(fd)
+    except OSError as exc:
+        raise _refuse(path, exc) from None
+    try:
+        writer(tmp)
+        if os.path.getsize(tmp) == 0 and not _allow_empty(writer):
+            raise RamureError(f"cannot write {path}: the writer produced an empty file")
+        _commit(tmp, path)
+    except OSError as exc:
+        _discard(tmp)
+        raise _refuse(path, exc) from None
+    except BaseException:
+        _discard(tmp)
+        raise
+    return path
+
+
+def _allow_empty(writer) -> bool:
+    return getattr(writer, "allow_empty", False)
+
+
+def _discard(tmp: str) -> None:
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
+
+
+def write_bytes(path, data: bytes) -> pathlib.Path:
+    """Write ``data`` to ``path`` atomically (see the module docstring)."""
+    with open_atomic(path, "wb") as out:
+        out.write(data)
+    return pathlib.Path(path)
+
+
+def write_text(path, text: str, encoding: str = "utf-8") -> pathlib.Path:
+    """Write ``text`` to ``path`` atomically; line endings are written as given."""
+    with open_atomic(path, "w", encoding=encoding, newline="") as out:
+        out.write(text)
+    return pathlib.Path(path)
+
+
+@contextlib.contextmanager
+def open_atomic(path, mode: str = "w", **kwargs) -> Iterator:
+    """``with open_atomic(path, "w") as f:`` — a file object whose content replaces ``path``
+    only if the block finishes without an exception."""
+    if mode not in ("w", "wb", "wt"):
+        raise ValueError(f"open_atomic writes whole files: mode 'w' or 'wb', not {mode!r}")
+    path = _check_target(path)
+    try:
+        tmp = _temporary(path)
+    except OSError as exc:
+        raise _refuse(path, exc) from None
+    try:
+        with open(tmp, mode, **kwargs) as out:
+            yield out
+            out.flush()
+        _commit(tmp, path)
+    except OSError as exc:
+        _discard(tmp)
+        raise _refuse(path, exc) from None
+    except BaseException:
+        _discard(tmp)
+        raise
+
+
+def save_mesh(mesh, path) -> pathlib.Path:
+    """Save a pyvista mesh (``.vtu``, ``.vtp``, ``.vtk``, ...) atomically.
+
+    XML formats are serialised in memory by VTK and written by Python, so a full
+    disk is a clear :class:`RamureError` (VTK's own file output aborts the
+    process on a write error); other formats go through :func:`write_with`.
+    """
+    path = pathlib.Path(path)
+    data = _vtk_xml_bytes(mesh, path.suffix.lower())
+    if data is None:
+        return write_with(path, lambda tmp: mesh.save(tmp))
+    return write_bytes(path, data)
+
+
+def _vtk_xml_bytes(mesh, suffix: str):
+    try:
+        from vtkmodules.vtkIOXML import (vtkXMLPolyDataWriter, vtkXMLUnstructuredGridWriter,
+                                         vtkXMLImageDataWriter, vtkXMLMultiBlockDataWriter)
+    except ImportError:  # pragma: no cover - vtk is a dependency of the 3D features
+        return None
+    writers = {".vtu": vtkXMLUnstructuredGridWriter, ".vtp": vtkXMLPolyDataWriter,
+               ".vti": vtkXMLImageDataWriter, ".vtm": vtkXMLMultiBlockDataWriter}
+    if suffix not in writers or suffix == ".vtm":
+        return None
+    writer = writers[suffix]()
+    writer.SetInputData(mesh)
+    writer.SetDataModeToBinary()  # inline base64: the in-memory string is ASCII, not raw bytes
+    writer.WriteToOutputStringOn()
+    if not writer.Write():
+        raise RamureError(f"VTK could not serialise the mesh as {suffix}")
+    return writer.GetOutputString().encode("ascii")  # binary mode is base64: plain ASCII

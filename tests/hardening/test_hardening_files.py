@@ -1,0 +1,149 @@
+"""Files Ramure writes survive crashes, kill -9 and full disks (issue 11, "Files and databases")."""
+import errno
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import ramure.io as atomic
+from ramure.errors import RamureError
+
+GRAMMAR = pathlib.Path(__file__).resolve().parents[2] / "grammars" / "ternary_branching.lsys"
+
+
+def no_space(*_args, **_kwargs):
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def test_write_text_replaces_whole_and_leaves_no_temporary(tmp_path):
+    target = tmp_path / "g.lsys"
+    target.write_text("old")
+    atomic.write_text(target, "new text")
+    assert target.read_text() == "new text"
+    assert [p.name for p in tmp_path.iterdir()] == ["g.lsys"]
+
+
+@pytest.mark.parametrize("how", ["write_text", "save_mesh", "write_with"])
+def test_full_disk_is_a_clear_error_and_keeps_the_previous_file(tmp_path, monkeypatch, how):
+    import pyvista as pv
+    target = tmp_path / ("m.vtu" if how == "save_mesh" else "g.txt")
+    target.write_bytes(b"previous")
+    monkeypatch.setattr(os, "fsync", no_space)
+    with pytest.raises(RamureError, match="No space left on device"):
+        if how == "write_text":
+            atomic.write_text(target, "x" * 100000)
+        elif how == "save_mesh":
+            atomic.save_mesh(pv.Sphere().cast_to_unstructured_grid(), target)
+        else:
+            atomic.write_with(target, lambda tmp: pathlib.Path(tmp).write_text("y"))
+    assert target.read_bytes() == b"previous"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+
+
+def test_a_failing_writer_keeps_the_previous_file(tmp_path):
+    target = tmp_path / "a.png"
+    target.write_bytes(b"png")
+
+    def broken(tmp):
+        pathlib.Path(tmp).write_bytes(b"half")
+        raise RuntimeError("renderer died")
+    with pytest.raises(RuntimeError):
+        atomic.write_with(target, broken)
+    assert target.read_bytes() == b"png" and len(list(tmp_path.iterdir())) == 1
+
+
+def test_save_mesh_vtu_reads_back(tmp_path):
+    import pyvista as pv
+    grid = pv.Sphere().cast_to_unstructured_grid()
+    path = atomic.save_mesh(grid, tmp_path / "s.vtu")
+    back = pv.read(path)
+    assert back.n_points == grid.n_points and np.allclose(back.points, grid.points)
+
+
+def test_explorer_save_grammar_full_disk_keeps_the_original(tmp_path, monkeypatch):
+    from ramure.app.model import Explorer
+    target = tmp_path / "plant.lsys"
+    target.write_text(GRAMMAR.read_text())
+    ex = Explorer(target)
+    ex.text = ex.text + "\n/* edited */\n"
+    monkeypatch.setattr(os, "fsync", no_space)
+    with pytest.raises(RamureError, match="No space"):
+        ex.save_grammar(target)
+    assert target.read_text() == GRAMMAR.read_text()
+
+
+def test_session_save_goes_through_the_atomic_writer(tmp_path, monkeypatch):
+    from ramure.lsys import LSystem
+    from ramure.lsys.regen import Session
+    path = tmp_path / "s.json"
+    path.write_text("{}")
+    monkeypatch.setattr(os, "fsync", no_space)
+    with pytest.raises(RamureError, match="No space"):
+        Session(LSystem.from_file(GRAMMAR), n=2).save(path)
+    assert path.read_text() == "{}"
+
+
+def run_cli(*args, **kw):
+    return subprocess.run([sys.executable, "-m", "ramure.app.cli", *args], capture_output=True,
+                          text=True, timeout=300, **kw)
+
+
+@pytest.mark.parametrize("setting", ["rotx=nan", "longueur=inf", "rotz=1e308", "rotx=-inf"])
+def test_fruit_refuses_non_finite_settings(setting, tmp_path):
+    out = run_cli("fruit", "--set", setting, "-o", str(tmp_path / "f.vtu"), "--json")
+    assert out.returncode == 2 and "finite" in out.stderr and "Traceback" not in out.stderr
+    assert not (tmp_path / "f.vtu").exists()
+
+
+KILLER = r"""
+import sys, pathlib
+from ramure.app.model import Explorer
+target, kind, text = sys.argv[1], sys.argv[2], sys.argv[3]
+ex = Explorer(pathlib.Path(text))
+print("ready", flush=True)
+i = 0
+while True:
+    i += 1
+    if kind == "grammar":
+        ex.text = pathlib.Path(text).read_text() + "/* " + "x" * (200000 + i % 7) + " */\n"
+        ex.save_grammar(target)
+    else:
+        ex.export(target)
+"""
+
+
+@pytest.mark.parametrize("kind,suffix", [("grammar", ".lsys"), ("export", ".vtp")])
+def test_kill_9_during_saves_leaves_a_whole_file(tmp_path, kind, suffix):
+    """50 kill -9 at random moments of a save loop: the file is always a complete version."""
+    target = tmp_path / f"plant{suffix}"
+    grammar = tmp_path / "g.lsys"
+    grammar.write_text(GRAMMAR.read_text().replace("n: 6", "n: 3"))
+    if kind == "grammar":
+        target.write_text(grammar.read_text())
+    else:
+        from ramure.app.model import Explorer
+        Explorer(grammar).export(target)
+    rng = np.random.default_rng(7)
+    deadline = time.monotonic() + 240
+    kills = 0
+    while kills < 50 and time.monotonic() < deadline:
+        proc = subprocess.Popen([sys.executable, "-c", KILLER, str(target), kind, str(grammar)],
+                                stdout=subprocess.PIPE, text=True)
+        assert proc.stdout.readline().strip() == "ready"
+        time.sleep(float(rng.uniform(0.0, 0.25)))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        kills += 1
+        if kind == "grammar":
+            text = target.read_text()
+            assert text == grammar.read_text() or (text.endswith(" */\n") and text.startswith(
+                grammar.read_text()) and len(text) > 200000)
+        else:
+            import pyvista as pv
+            assert pv.read(target).n_points > 0
+    assert kills >= 20  # bounded time on a loaded machine; 50 when it has room
