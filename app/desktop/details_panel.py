@@ -1,0 +1,409 @@
+"""The Details dock: leaves that age and fall, lichen and cracks on a fruit (issue 18).
+
+* **Season**: a slider over the time steps of :func:`ramure.lsys.seasons.age_leaves` with the
+  heat, humidity and wind it runs in.  The whole season (every step) is computed once per
+  plant and environment, in the controller's worker; moving the slider then only recolours:
+  each attached leaf takes its Markov state's colour (:attr:`LeafChain.colors`) in the main
+  view, through the view's public :meth:`~ramure.app.desktop.view.PlantView.set_colors`.
+  The view has no way to hide cells, so a **fallen leaf's cells take the background's
+  colour** (:data:`FALLEN_RGB`, pale ghosts against the sky) and the leaf is drawn again as a disc in its state's colour where it
+  landed on the ground (an overlay actor named ``details_fallen``).  Step 0 gives the plant
+  its own colours back.  The selection stays red on top of the season colours.
+* **Lichen** and **Crack** act on the selected fruit's closed surface (the volumetric fruit
+  of :meth:`ramure.app.model.Explorer.fruit_surface`, subdivided once so a crack has
+  triangles to cut): Open-DLA lichen discs coloured by age class
+  (:func:`ramure.gmap.lichen.grow_lichen`), or a random crack pattern carved from the top of
+  the fruit (:func:`ramure.gmap.cracks.carve`).  Both run in the worker and are shown in the
+  dock's own 3D view, with their facts.  Without a selected fruit, or on a surface that is not
+  closed, the action is refused with one line in the dock (and the window's usual message).
+
+Sizes chosen here (the issue is silent): lichen particle radius = fruit diagonal / 120;
+crack arcs = diagonal / 25 long, profiles diagonal / 80 wide and diagonal / 40 deep; the crack's
+dock view looks down on the fruit's top, where the crack starts.
+"""
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import Qt, QTimer
+from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel,
+                               QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget)
+
+from ramure.app.desktop import state
+from ramure.errors import RamureError, ValueRefused
+
+SEASON_STEPS = 24
+FALLEN_RGB = (211, 219, 226)  # the sky behind the plant: a fallen leaf's cells fade into it
+SELECTED_RGB = (255, 0, 0)
+AGE_RGB = np.array([[107, 128, 77], [153, 173, 92], [204, 209, 128]], np.uint8)  # old inside .. young rim
+FRUIT_RGB = (235, 120, 40)
+STONE_RGB = (190, 184, 173)
+KIND_LEAF = 1
+
+
+# -- pure helpers (tested without widgets) ---------------------------------------------------
+def season_cell_colors(mesh, season, chain, step, base):
+    """Per-cell RGB (uint8) at ``step``: leaf cells in their state's colour, fallen ones ground-coloured.
+
+    Returns ``(rgb, fallen_cells)``; ``base`` is the plant's own colours (copied).
+    """
+    rgb = np.array(base, np.uint8, copy=True)
+    ids = np.asarray(mesh.cell_data["leaf_id"], np.int64)
+    leaf_cells = np.flatnonzero(np.asarray(mesh.cell_data["kind"]) == KIND_LEAF)
+    order = np.argsort(season.leaf_ids, kind="stable")
+    sorted_ids = season.leaf_ids[order]
+    at = np.searchsorted(sorted_ids, ids[leaf_cells])
+    found = at < len(sorted_ids)
+    found[found] = sorted_ids[at[found]] == ids[leaf_cells][found]
+    cells, leaf = leaf_cells[found], order[at[found]]
+    colours = np.round(chain.colors[season.states[step][leaf]] * 255).astype(np.uint8)
+    rgb[cells] = colours
+    down = fallen_by(season, step)[leaf]
+    rgb[cells[down]] = FALLEN_RGB
+    fallen_cells = np.zeros(mesh.n_cells, bool)
+    fallen_cells[cells[down]] = True
+    return rgb, fallen_cells
+
+
+def fallen_by(season, step):
+    """Leaves (season order) that have fallen at or before ``step``."""
+    return season.fallen & (season.fall_step <= step)
+
+
+def season_text(season, chain, step):
+    """One line of facts: leaves, fallen by this step, leaves per state."""
+    states = season.states[step]
+    down = int(fallen_by(season, step).sum())
+    counts = ", ".join(f"{int((states == i).sum())} {name}" for i, name in enumerate(chain.states)
+                       if (states == i).any())
+    return f"Step {step}/{len(season.states) - 1}: {len(season.leaf_ids)} leaves, {down} fallen; {counts}"
+
+
+def selected_fruit_surface(ex):
+    """The first selected fruit's closed surface as (PolyData, TriMesh); refusals name the fix."""
+    from ramure.gmap.errors import GMapError
+    from ramure.gmap.trimesh import from_polydata
+
+    fruit = ex.fruit_ids()
+    if not fruit:
+        raise ValueRefused("this plant has no fruit: lichen and cracks grow on a fruit's closed surface "
+                           "(try grammars/fruit_tree.lsys)")
+    chosen = [leaf for leaf in ex.selection if leaf in set(fruit)]
+    if not chosen:
+        raise ValueRefused("select a fruit first (click one): lichen and cracks grow on its closed surface")
+    surface = ex.fruit_surface()
+    cells = np.flatnonzero(np.asarray(surface.cell_data["leaf_id"]) == chosen[0])
+    one = surface.extract_cells(cells).extract_surface(algorithm="dataset_surface").triangulate().clean()
+    try:
+        from_polydata(one)  # refuses an open or non-manifold surface before subdividing
+        one = one.subdivide(1, "loop")
+        return one, from_polydata(one)
+    except GMapError as err:
+        raise ValueRefused(f"the fruit's surface cannot carry lichen or cracks: {err}") from None
+
+
+def _diagonal(poly):
+    return float(np.linalg.norm(np.subtract(*np.reshape(poly.bounds, (3, 2)).T)))
+
+
+def lichen_on_fruit(ex, clusters=5, particles=300, habit="crustose", seed=0):
+    """Grow lichen on the selected fruit; returns a dict with surface, discs and facts."""
+    from ramure.gmap.lichen import age_classes, grow_lichen, to_polydata
+
+    poly, mesh = selected_fruit_surface(ex)
+    if not 1 <= clusters <= particles:
+        raise ValueRefused(f"need 1 <= clusters <= particles, not {clusters} clusters for {particles} particles")
+    growth = grow_lichen(mesh, clusters=clusters, particles=particles, r=_diagonal(poly) / 120, habit=habit,
+                         seed=seed)
+    discs = to_polydata(growth, mesh, lift=growth.r * 0.2)
+    per_disc = discs.n_cells // max(growth.count, 1)
+    discs.cell_data["rgb"] = np.repeat(AGE_RGB[age_classes(growth, 3)], per_disc, axis=0)
+    return {"surface": poly, "discs": discs, "facts": {"triangles": len(mesh.triangles), "habit": habit,
+                                                       **growth.facts()}}
+
+
+def crack_on_fruit(ex, nodes=15, seed=0):
+    """Carve a random crack pattern into the selected fruit from its top; dict with result and facts."""
+    from ramure.gmap.cracks import carve, random_pattern
+
+    poly, mesh = selected_fruit_surface(ex)
+    if not 2 <= nodes <= 500:
+        raise ValueRefused(f"a crack needs 2..500 nodes, not {nodes}")
+    d = _diagonal(poly)
+    pattern = random_pattern(nodes, seed=seed, length=d / 25, width=d / 80, depth=d / 40)
+    b = poly.bounds
+    anchor = ((b[0] + b[1]) / 2, (b[2] + b[3]) / 2, b[5])
+    crack = carve(mesh, pattern, anchor, (1.0, 0.0, 0.0))
+    return {"surface": crack.result, "facts": crack.facts(), "points": crack.points}
+
+
+# -- the dock ------------------------------------------------------------------------------
+class DetailsPanel(QWidget):
+    """Season slider with heat, humidity and wind; Lichen and Crack buttons on the selected fruit."""
+
+    def __init__(self, controller, window=None, parent=None, plotter_factory=None):
+        super().__init__(parent)
+        from ramure.lsys.seasons import autumn_chain
+
+        self.controller = controller
+        self.window = window
+        self.chain = autumn_chain()
+        self.season = None
+        self.season_key = None  # (plant version, heat, humidity, wind, seed) the season was run for
+        self.fallen_actor = None
+        self.shown = None  # "lichen" or "crack": what the dock's view shows
+        self.last_facts = None
+        self._build()
+        self.plotter = (plotter_factory or _interactor)(self)
+        self.layout().addWidget(getattr(self.plotter, "interactor", self.plotter), 1)
+        controller.job_done.connect(self._job_done)
+        controller.plant_changed.connect(self._plant_changed)
+        controller.selection_changed.connect(lambda _sel: QTimer.singleShot(0, self._reapply))
+
+    def _build(self):
+        self.slider = QSlider(Qt.Orientation.Horizontal)
+        self.slider.setObjectName("detailsSeason")
+        self.slider.setRange(0, SEASON_STEPS)
+        self.slider.valueChanged.connect(self.show_step)
+        self.heat, self.humidity = _unit_box("detailsHeat", 0.5), _unit_box("detailsHumidity", 0.5)
+        self.wind = QDoubleSpinBox()
+        self.wind.setObjectName("detailsWind")
+        self.wind.setRange(0.0, 2.0)
+        self.wind.setSingleStep(0.05)
+        self.wind.setDecimals(2)
+        self.wind.setToolTip("wind strength along x, in plant units per step (leaves fall and drift)")
+        self.seed = QSpinBox()
+        self.seed.setObjectName("detailsSeed")
+        self.seed.setRange(0, 2**31 - 1)
+        for box in (self.heat, self.humidity, self.wind, self.seed):
+            box.valueChanged.connect(self._environment_changed)
+        self.season_label = QLabel("Move the slider to age the leaves (step 0: as grown).")
+        self.season_label.setObjectName("detailsSeasonFacts")
+        self.season_label.setWordWrap(True)
+        season = QGroupBox("Season")
+        form = QFormLayout(season)
+        form.addRow("Step", self.slider)
+        form.addRow("Heat", self.heat)
+        form.addRow("Humidity", self.humidity)
+        form.addRow("Wind", self.wind)
+        form.addRow("Seed", self.seed)
+        form.addRow(self.season_label)
+
+        self.clusters, self.particles = _count_box("detailsClusters", 1, 200, 5), _count_box(
+            "detailsParticles", 1, 20_000, 300)
+        self.habit = QComboBox()
+        self.habit.setObjectName("detailsHabit")
+        from ramure.gmap.lichen import HABITS
+
+        self.habit.addItems(list(HABITS))
+        self.nodes = _count_box("detailsNodes", 2, 500, 15)
+        self.lichen_button = QPushButton("Lichen on the fruit")
+        self.lichen_button.setObjectName("detailsLichen")
+        self.lichen_button.clicked.connect(self.grow_lichen)
+        self.crack_button = QPushButton("Crack the fruit")
+        self.crack_button.setObjectName("detailsCrack")
+        self.crack_button.clicked.connect(self.carve_crack)
+        self.fruit_label = QLabel("Select a fruit, then grow lichen on it or crack it.")
+        self.fruit_label.setObjectName("detailsFruitFacts")
+        self.fruit_label.setWordWrap(True)
+        fruit = QGroupBox("On the selected fruit")
+        ff = QFormLayout(fruit)
+        row = QHBoxLayout()
+        row.addWidget(self.clusters)
+        row.addWidget(QLabel("clusters"))
+        row.addWidget(self.particles)
+        row.addWidget(QLabel("particles"))
+        ff.addRow("Lichen", row)
+        ff.addRow("Habit", self.habit)
+        ff.addRow("Crack nodes", self.nodes)
+        buttons = QHBoxLayout()
+        buttons.addWidget(self.lichen_button)
+        buttons.addWidget(self.crack_button)
+        ff.addRow(buttons)
+        ff.addRow(self.fruit_label)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addWidget(season)
+        layout.addWidget(fruit)
+
+    # -- season ----------------------------------------------------------------------------
+    def _key(self):
+        return (self.controller.snapshot.version, round(self.heat.value(), 4), round(self.humidity.value(), 4),
+                round(self.wind.value(), 4), int(self.seed.value()))
+
+    def compute_season(self):
+        """Age the plant's leaves over every step in the worker; the slider then shows a step."""
+        from ramure.lsys.seasons import age_leaves
+
+        key, chain = self._key(), self.chain
+        _, heat, humidity, wind, seed = key
+
+        def run(ex):
+            return key, age_leaves(ex.skeleton.organs, chain, steps=SEASON_STEPS, seed=seed, heat=heat,
+                                   humidity=humidity, wind=wind)
+        return self.controller.submit("details season", run, key="details-season")
+
+    def show_step(self, step=None):
+        """Colour the plant for the slider's step (computing the season first if needed)."""
+        step = self.slider.value() if step is None else int(step)
+        if step == 0:
+            self._restore()
+            self.season_label.setText("Step 0: the leaves as grown.")
+            return
+        if self.season is None or self.season_key != self._key():
+            self.season_label.setText("Ageing the leaves…")
+            self.compute_season()
+            return
+        self._paint(step)
+
+    def _paint(self, step):
+        view, snap = self._view(), self.controller.snapshot
+        if snap.mesh is None or snap.mesh.n_cells == 0:
+            return
+        if not len(self.season.leaf_ids):
+            self.season_label.setText("This plant has no leaves (no 'Leaf' organs) to age.")
+            return
+        base = state.base_colors(snap.mesh)
+        rgb, _ = season_cell_colors(snap.mesh, self.season, self.chain, step, base)
+        if len(snap.selection):
+            rgb[state.leaf_mask(snap.mesh.cell_data["leaf_id"], snap.selection)] = SELECTED_RGB
+        self.season_rgb = rgb
+        if view is not None:
+            view.set_colors(rgb)
+            self._show_fallen(view, step)
+        self.season_label.setText(season_text(self.season, self.chain, step))
+
+    def _show_fallen(self, view, step):
+        import pyvista as pv
+
+        down = fallen_by(self.season, step)
+        if not down.any():
+            if self.fallen_actor is not None:
+                view.plotter.remove_actor("details_fallen", render=False)
+                self.fallen_actor = None
+            view.redraw()
+            return
+        size = 0.012 * _diagonal(self.controller.snapshot.mesh)
+        cloud = pv.PolyData(self.season.ground[down])
+        cloud.point_data["rgb"] = np.round(self.chain.colors[self.season.states[step][down]] * 255).astype(np.uint8)
+        discs = cloud.glyph(geom=pv.Disc(inner=0.0, outer=size, c_res=8), orient=False, scale=False)
+        self.fallen_actor = view.plotter.add_mesh(discs, scalars="rgb", rgb=True, name="details_fallen",
+                                                  reset_camera=False, render=False, pickable=False,
+                                                  show_scalar_bar=False)
+        view.redraw()
+
+    def _restore(self):
+        view, snap = self._view(), self.controller.snapshot
+        self.season_rgb = None
+        if view is None or snap.mesh is None or snap.mesh.n_cells == 0:
+            return
+        if self.fallen_actor is not None:
+            view.plotter.remove_actor("details_fallen", render=False)
+            self.fallen_actor = None
+        view.set_colors(state.cell_colors(snap.mesh, snap.selection, base=state.base_colors(snap.mesh)))
+
+    def _environment_changed(self, *_):
+        if self.slider.value() > 0:
+            self.show_step()
+
+    def _plant_changed(self, _snap):
+        self.season = None
+        if self.slider.value() > 0:
+            QTimer.singleShot(0, self.show_step)  # after the window has drawn the new plant
+
+    def _reapply(self):
+        """A new selection recoloured the plant: put the season colours back under it."""
+        if self.slider.value() > 0 and self.season is not None and self.season_key == self._key():
+            self._paint(self.slider.value())
+
+    def _view(self):
+        return getattr(self.window, "view", None)
+
+    # -- lichen and cracks -----------------------------------------------------------------
+    def grow_lichen(self):
+        clusters, particles = int(self.clusters.value()), int(self.particles.value())
+        habit, seed = self.habit.currentText(), int(self.seed.value())
+        self.fruit_label.setText("Growing lichen…")
+        return self.controller.submit(
+            "details lichen", lambda ex: lichen_on_fruit(ex, clusters, particles, habit, seed), key="details-fruit")
+
+    def carve_crack(self):
+        nodes, seed = int(self.nodes.value()), int(self.seed.value())
+        self.fruit_label.setText("Carving the crack…")
+        return self.controller.submit("details crack", lambda ex: crack_on_fruit(ex, nodes, seed),
+                                      key="details-fruit")
+
+    # -- results ---------------------------------------------------------------------------
+    def _job_done(self, job):
+        if not job.name.startswith("details ") or job.stale:
+            return
+        label = self.season_label if job.name == "details season" else self.fruit_label
+        if job.error is not None:
+            text = str(job.error) if isinstance(job.error, RamureError) else f"{type(job.error).__name__}: {job.error}"
+            label.setText(f"Refused: {text}")
+            return
+        if job.name == "details season":
+            self.season_key, self.season = job.result
+            if self.season_key == self._key() and self.slider.value() > 0:
+                self._paint(self.slider.value())
+            elif self.slider.value() > 0:
+                self.show_step()
+            return
+        self.last_facts = job.result["facts"]
+        if job.name == "details lichen":
+            self.shown = "lichen"
+            self._show_result(job.result["surface"], FRUIT_RGB, job.result["discs"])
+            f = self.last_facts
+            self.fruit_label.setText(f"Lichen ({f['habit']}): {f['particles']} particles in {f['clusters']} "
+                                     f"clusters on {f['triangles']} triangles, {f['intersection_tests']:,} "
+                                     "distance tests. Old discs dark, young rims light.")
+        else:
+            self.shown = "crack"
+            self._show_result(job.result["surface"], FRUIT_RGB)
+            f = self.last_facts
+            self.fruit_label.setText(f"Crack: {f['nodes']} nodes, length {f['length']:.3g}, "
+                                     f"{f['triangles_object']} -> {f['triangles_result']} triangles, "
+                                     f"{'watertight' if f['watertight'] else 'NOT watertight'}.")
+
+    def _show_result(self, surface, colour, discs=None):
+        p = self.plotter
+        for name in ("details_surface", "details_discs"):  # not clear(): that removes the light kit too
+            p.remove_actor(name, render=False)
+        p.add_mesh(surface, color=np.array(colour) / 255, smooth_shading=discs is not None, name="details_surface")
+        if discs is not None:
+            p.add_mesh(discs, scalars="rgb", rgb=True, name="details_discs", show_scalar_bar=False)
+            p.view_isometric()
+        else:  # from above and a little aside: the crack starts at the top of the fruit
+            b = np.reshape(surface.bounds, (3, 2))
+            centre, size = b.mean(axis=1), float(np.ptp(b, axis=1).max())
+            p.camera_position = [tuple(centre + np.array([0.3, -0.5, 1.0]) * size * 2), tuple(centre), (0, 1, 0)]
+        p.reset_camera()
+        if hasattr(p, "render"):
+            p.render()
+
+
+def _unit_box(name, value):
+    box = QDoubleSpinBox()
+    box.setObjectName(name)
+    box.setRange(0.0, 1.0)
+    box.setSingleStep(0.1)
+    box.setDecimals(2)
+    box.setValue(value)
+    return box
+
+
+def _count_box(name, low, high, value):
+    box = QSpinBox()
+    box.setObjectName(name)
+    box.setRange(low, high)
+    box.setValue(value)
+    return box
+
+
+def _interactor(parent):
+    from pyvistaqt import QtInteractor
+
+    from ramure.app.desktop import scene
+
+    plotter = QtInteractor(parent, auto_update=False, multi_samples=0)
+    scene.apply_look(plotter)
+    return plotter

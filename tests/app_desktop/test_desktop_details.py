@@ -1,0 +1,125 @@
+"""The Details dock: the season slider recolours leaves; lichen and cracks on the selected fruit."""
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+from PySide6.QtCore import Qt
+
+from desktop_helpers import ROOT, settle
+
+pytestmark = pytest.mark.gui
+FRUIT_TREE = ROOT / "grammars" / "fruit_tree.lsys"
+
+
+@pytest.fixture
+def window(make_window):
+    win = make_window(FRUIT_TREE, n=5)
+    win.docks["details"].show()
+    win.docks["details"].raise_()
+    return win
+
+
+def _panel(window):
+    return window.docks["details"].widget()
+
+
+def _wait(qtbot, window, panel, text):
+    settle(qtbot, window)
+    qtbot.waitUntil(lambda: text in panel.season_label.text() or text in panel.fruit_label.text(), timeout=20000)
+
+
+def test_the_season_slider_paints_leaves_in_their_state_colours_and_grounds_fallen_ones(qtbot, window):
+    from ramure.lsys.seasons import age_leaves, autumn_chain
+
+    panel = _panel(window)
+    panel.slider.setFocus()
+    qtbot.keyClick(panel.slider, Qt.Key.Key_End)  # the last step, as a user would
+    _wait(qtbot, window, panel, "Step 24/24")
+    mesh = window.view.mesh
+    expected = age_leaves(window.controller.explorer.skeleton.organs, autumn_chain(), steps=24, seed=0,
+                          heat=0.5, humidity=0.5, wind=0.0)
+    rgb = np.asarray(mesh.cell_data["rgb"])
+    ids, kind = np.asarray(mesh.cell_data["leaf_id"]), np.asarray(mesh.cell_data["kind"])
+    chain = autumn_chain()
+    attached = fallen = 0
+    for leaf, st, down in zip(expected.leaf_ids, expected.states[-1], expected.fallen):
+        cells = np.flatnonzero((ids == leaf) & (kind == 1))
+        assert len(cells)
+        want = (211, 219, 226) if down else tuple(np.round(chain.colors[st] * 255).astype(int))
+        assert (rgb[cells] == want).all(), (leaf, st, down)
+        attached, fallen = attached + (not down), fallen + bool(down)
+    assert fallen == int(expected.fallen.sum()) and 0 < fallen < len(expected.leaf_ids)
+    assert f"{len(expected.leaf_ids)} leaves, {fallen} fallen" in panel.season_label.text()
+    # the fallen leaves lie on the ground as discs, one per leaf
+    assert panel.fallen_actor is not None
+    # bark keeps its colour
+    bark = np.flatnonzero(kind == 0)
+    assert (rgb[bark] == rgb[bark[0]]).all()
+    # back to step 0: the plant's own colours, no discs
+    panel.slider.setValue(0)  # (Home is the window's "frame the plant" shortcut)
+    settle(qtbot, window)
+    assert panel.season_label.text().startswith("Step 0")
+    from ramure.app.desktop.state import base_colors
+
+    assert (np.asarray(window.view.mesh.cell_data["rgb"]) == base_colors(mesh)).all()
+    assert panel.fallen_actor is None
+
+
+def test_heat_changes_the_season_and_wind_makes_more_leaves_fall(qtbot, window):
+    panel = _panel(window)
+    panel.slider.setValue(10)
+    _wait(qtbot, window, panel, "Step 10/24")
+    still = int(panel.season.fallen.sum())
+    panel.wind.setValue(1.5)
+    qtbot.waitUntil(lambda: panel.season is not None and panel.season_key[3] == 1.5, timeout=20000)
+    _wait(qtbot, window, panel, "Step 10/24")
+    assert int(panel.season.fallen.sum()) > still
+    before = panel.season.states[10].copy()
+    panel.heat.setValue(1.0)
+    qtbot.waitUntil(lambda: panel.season_key[1] == 1.0, timeout=20000)
+    assert not np.array_equal(before, panel.season.states[10])
+
+
+def test_lichen_without_a_selected_fruit_is_refused_in_one_line(qtbot, window):
+    panel = _panel(window)
+    qtbot.mouseClick(panel.lichen_button, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Refused")
+    assert "select a fruit first" in panel.fruit_label.text()
+    assert panel.shown is None
+
+
+def test_lichen_and_crack_on_the_selected_fruit(qtbot, window, artifacts):
+    panel = _panel(window)
+    fruit = window.controller.explorer.fruit_ids()[0]
+    window.controller.select([fruit])
+    panel.particles.setValue(200)
+    panel.clusters.setValue(4)
+    qtbot.mouseClick(panel.lichen_button, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "particles in")
+    facts = panel.last_facts
+    assert panel.shown == "lichen" and facts["clusters"] == 4 and facts["particles"] == 200
+    assert "200 particles in 4 clusters" in panel.fruit_label.text()
+    panel.plotter.render()
+    image = panel.plotter.screenshot(return_img=True)
+    assert image.reshape(-1, image.shape[-1]).std(axis=0).max() > 10  # not blank: a fruit with discs
+    panel.plotter.screenshot(str(artifacts / "details-lichen.png"))
+
+    qtbot.mouseClick(panel.crack_button, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Crack:")
+    facts = panel.last_facts
+    assert panel.shown == "crack" and facts["nodes"] == 15 and facts["watertight"]
+    assert facts["triangles_result"] > facts["triangles_object"] and facts["volume_removed"] > 0
+    panel.plotter.render()
+    panel.plotter.screenshot(str(artifacts / "details-crack.png"))
+    panel.slider.setValue(20)
+    _wait(qtbot, window, panel, "Step 20/24")
+    window.view.redraw(now=True)
+    path = artifacts / "details-window.png"
+    window.grab_window().save(str(path))
+    assert path.stat().st_size > 10_000
+    notes = ROOT.parent / "notes"
+    if notes.is_dir():
+        for name in ("details-window.png", "details-lichen.png", "details-crack.png"):
+            shutil.copy(artifacts / name, notes / name)
