@@ -406,6 +406,30 @@ def fruit_surface(explorer):
     return explorer.fruit_surface()
 
 
+def fruit_cut_surface(explorer, normal):
+    """The volumetric fruit cut open: each fruit loses the half in front of a plane through its
+    own centre (``normal`` points at the viewer), so every fruit shows its inside.
+
+    Whole cells are kept or dropped (no clipping): the exposed faces are the cells' own walls,
+    so skin, flesh and locules read as the 3G-map's volumes.  Returns a surface with
+    ``leaf_id`` and ``tissue`` per cell, or None without fruit.
+    """
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    if not explorer.fruit_ids():
+        return None
+    grid = to_unstructured_grid(explorer.fruit_volumes())
+    leaf = np.asarray(grid.cell_data["leaf_id"], np.int64)
+    centres = np.asarray(grid.cell_centers().points)
+    ids, inverse = np.unique(leaf, return_inverse=True)
+    count = np.bincount(inverse)
+    middle = np.stack([np.bincount(inverse, centres[:, k]) for k in range(3)], axis=1) / count[:, None]
+    n = np.asarray(normal, float)
+    n = n / (np.linalg.norm(n) or 1.0)
+    keep = np.einsum("ij,j->i", centres - middle[inverse], n) <= 0
+    return grid.extract_cells(np.flatnonzero(keep)).extract_surface(algorithm="dataset_surface")
+
+
 # -- the cut graph -----------------------------------------------------------------
 @dataclass
 class GraphLayout:

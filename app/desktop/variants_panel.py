@@ -9,6 +9,7 @@ The computations themselves are in :mod:`ramure.app.desktop.variants` and
 """
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import QFileDialog
 
@@ -37,6 +38,8 @@ class VariantsController:
         self.last_qualifier = None  # the last metrics.apply.QualifierResult
         self.tasks = {}
         self.show_fruit = False
+        self.cut_fruit = False  # fruit drawn cut open (a plane through each fruit, facing the viewer)
+        self.fruit_job_cut = False
         self.fruit_ok = fruit_available()
         w = window
         w.gallery.pick_clicked.connect(self.apply_pick)
@@ -83,6 +86,13 @@ class VariantsController:
         action.toggled.connect(self.set_fruit)
         menu.addAction(action)
         self.fruit_toggle = action
+        cut = QAction("Cut fruit open", self.window)
+        cut.setCheckable(True)
+        cut.setStatusTip("Halve every fruit with a plane facing you (turn the view, then toggle again "
+                         "to cut along the new direction)")
+        cut.toggled.connect(self.set_cut)
+        menu.addAction(cut)
+        self.cut_toggle = cut
         return action
 
     # -- tasks ------------------------------------------------------------------
@@ -298,15 +308,29 @@ class VariantsController:
 
     def draw_fruit(self, snap):
         """Build the fruit volumes in the worker (the model caches them) and draw their surface."""
-        from ramure.app.desktop.state import fruit_surface
+        from ramure.app.desktop.state import fruit_cut_surface, fruit_surface
 
-        job = self.controller.submit("fruit", fruit_surface, key="fruit")
+        if self.cut_fruit:
+            camera = self.window.view.plotter.camera
+            normal = np.subtract(camera.position, camera.focal_point)
+            job = self.controller.submit("fruit", lambda ex: fruit_cut_surface(ex, normal), key="fruit")
+        else:
+            job = self.controller.submit("fruit", fruit_surface, key="fruit")
         self.fruit_job = job.id
+
+    def set_cut(self, on):
+        """Cut every fruit open (the volumes are shown, halved facing the viewer), or close them."""
+        self.cut_fruit = bool(on)
+        if self.cut_fruit and not self.show_fruit:
+            self.fruit_toggle.setChecked(True)  # draws the (cut) volumes
+        elif self.show_fruit:
+            self.draw_fruit(self.controller.snapshot)
 
     def fruit_ready(self, job):
         if job.name != "fruit" or job.stale or job.error is not None or not self.show_fruit:
             return
         self.window.view.set_fruit(job.result, self.controller.snapshot.selection)
+        self.fruit_job_cut = self.cut_fruit  # what is on screen (tests)
         if job.result is None:
             self.window.status("This plant has no fruit")
 

@@ -272,6 +272,9 @@ class PlantView(QWidget):
 
         rgb = np.empty((self.fruit.n_cells, 3), np.uint8)
         rgb[:] = FRUIT_RGB
+        if "tissue" in self.fruit.cell_data:  # a cut fruit: inner tissues paler than the skin
+            level = np.clip(np.asarray(self.fruit.cell_data["tissue"], float), 0, 3)[:, None] * 0.22
+            rgb[:] = np.asarray(FRUIT_RGB) + (255 - np.asarray(FRUIT_RGB)) * level
         rgb[leaf_mask(self.fruit.cell_data["leaf_id"], selection)] = FRUIT_SELECTED
         return rgb
 

@@ -220,3 +220,23 @@ def test_a_rectangle_selects_fruit_and_they_turn_blue(make_window, qtbot):
     mesh = w.view.mesh
     fruit = np.asarray(mesh.cell_data["kind"]) == 2
     assert (np.asarray(mesh.cell_data["rgb"])[fruit] == FRUIT_SELECTED).all()
+
+
+def test_cut_fruit_open_shows_their_inside(make_window, qtbot, artifacts):
+    w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=4)
+    w.variants.cut_toggle.trigger()  # View > Cut fruit open (turns the volumes on)
+    qtbot.waitUntil(lambda: w.view.fruit is not None and w.variants.fruit_job_cut, timeout=30000)
+    settle(qtbot, w)
+    cut = w.view.fruit
+    whole = w.controller.read(lambda ex: ex.fruit_surface(), wait=None)
+    assert set(np.unique(cut.cell_data["leaf_id"])) == set(np.unique(whole.cell_data["leaf_id"]))  # every fruit
+    camera = w.view.plotter.camera
+    toward = np.subtract(camera.position, camera.focal_point)
+    assert np.asarray(cut.bounds).reshape(3, 2)[:, 1] @ np.abs(toward) <= \
+        np.asarray(whole.bounds).reshape(3, 2)[:, 1] @ np.abs(toward) + 1e-9
+    assert len(np.unique(cut.cell_data["tissue"])) > 1  # inner tissues exposed
+    w.view.reset_camera()
+    settle(qtbot, w)
+    w.view.grab_image().save(str(artifacts / "desktop_fruit_cut.png"))
+    w.variants.cut_toggle.trigger()
+    qtbot.waitUntil(lambda: w.view.fruit is not None and w.view.fruit.n_cells == whole.n_cells, timeout=30000)
