@@ -6,9 +6,10 @@
   each attached leaf takes its Markov state's colour (:attr:`LeafChain.colors`) in the main
   view, through the view's public :meth:`~ramure.app.desktop.view.PlantView.set_colors`.
   The view has no way to hide cells, so a **fallen leaf's cells take the background's
-  colour** (:data:`FALLEN_RGB`, pale ghosts against the sky) and the leaf is drawn again as a disc in its state's colour where it
-  landed on the ground (an overlay actor named ``details_fallen``).  Step 0 gives the plant
-  its own colours back.  The selection stays red on top of the season colours.
+  colour** (:data:`FALLEN_RGB`, pale ghosts against the sky) and the leaf is drawn again as
+  a disc in its state's colour where it landed on the ground (an overlay actor named
+  ``details_fallen``).  Step 0 gives the plant its own colours back.  The selection stays red
+  on top of the season colours.
 * **Lichen** and **Crack** act on the selected fruit's closed surface (the volumetric fruit
   of :meth:`ramure.app.model.Explorer.fruit_surface`, subdivided once so a crack has
   triangles to cut): Open-DLA lichen discs coloured by age class
@@ -17,9 +18,8 @@
   dock's own 3D view, with their facts.  Without a selected fruit, or on a surface that is not
   closed, the action is refused with one line in the dock (and the window's usual message).
 
-Sizes chosen here (the issue is silent): lichen particle radius = fruit diagonal / 120;
-crack arcs = diagonal / 25 long, profiles diagonal / 80 wide and diagonal / 40 deep; the crack's
-dock view looks down on the fruit's top, where the crack starts.
+The work itself (fruit surface, lichen, crack, their sizes) is :mod:`ramure.app.details`, shared
+with the Jupyter tab; the crack's dock view looks down on the fruit's top, where the crack starts.
 """
 from __future__ import annotations
 
@@ -29,12 +29,12 @@ from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox
                                QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget)
 
 from ramure.app.desktop import state
-from ramure.errors import RamureError, ValueRefused
+from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit
+from ramure.errors import RamureError
 
 SEASON_STEPS = 24
 FALLEN_RGB = (211, 219, 226)  # the sky behind the plant: a fallen leaf's cells fade into it
 SELECTED_RGB = (255, 0, 0)
-AGE_RGB = np.array([[107, 128, 77], [153, 173, 92], [204, 209, 128]], np.uint8)  # old inside .. young rim
 FRUIT_RGB = (235, 120, 40)
 STONE_RGB = (190, 184, 173)
 KIND_LEAF = 1
@@ -76,64 +76,6 @@ def season_text(season, chain, step):
     counts = ", ".join(f"{int((states == i).sum())} {name}" for i, name in enumerate(chain.states)
                        if (states == i).any())
     return f"Step {step}/{len(season.states) - 1}: {len(season.leaf_ids)} leaves, {down} fallen; {counts}"
-
-
-def selected_fruit_surface(ex):
-    """The first selected fruit's closed surface as (PolyData, TriMesh); refusals name the fix."""
-    from ramure.gmap.errors import GMapError
-    from ramure.gmap.trimesh import from_polydata
-
-    fruit = ex.fruit_ids()
-    if not fruit:
-        raise ValueRefused("this plant has no fruit: lichen and cracks grow on a fruit's closed surface "
-                           "(try grammars/fruit_tree.lsys)")
-    chosen = [leaf for leaf in ex.selection if leaf in set(fruit)]
-    if not chosen:
-        raise ValueRefused("select a fruit first (click one): lichen and cracks grow on its closed surface")
-    surface = ex.fruit_surface()
-    cells = np.flatnonzero(np.asarray(surface.cell_data["leaf_id"]) == chosen[0])
-    one = surface.extract_cells(cells).extract_surface(algorithm="dataset_surface").triangulate().clean()
-    try:
-        from_polydata(one)  # refuses an open or non-manifold surface before subdividing
-        one = one.subdivide(1, "loop")
-        return one, from_polydata(one)
-    except GMapError as err:
-        raise ValueRefused(f"the fruit's surface cannot carry lichen or cracks: {err}") from None
-
-
-def _diagonal(poly):
-    return float(np.linalg.norm(np.subtract(*np.reshape(poly.bounds, (3, 2)).T)))
-
-
-def lichen_on_fruit(ex, clusters=5, particles=300, habit="crustose", seed=0):
-    """Grow lichen on the selected fruit; returns a dict with surface, discs and facts."""
-    from ramure.gmap.lichen import age_classes, grow_lichen, to_polydata
-
-    poly, mesh = selected_fruit_surface(ex)
-    if not 1 <= clusters <= particles:
-        raise ValueRefused(f"need 1 <= clusters <= particles, not {clusters} clusters for {particles} particles")
-    growth = grow_lichen(mesh, clusters=clusters, particles=particles, r=_diagonal(poly) / 120, habit=habit,
-                         seed=seed)
-    discs = to_polydata(growth, mesh, lift=growth.r * 0.2)
-    per_disc = discs.n_cells // max(growth.count, 1)
-    discs.cell_data["rgb"] = np.repeat(AGE_RGB[age_classes(growth, 3)], per_disc, axis=0)
-    return {"surface": poly, "discs": discs, "facts": {"triangles": len(mesh.triangles), "habit": habit,
-                                                       **growth.facts()}}
-
-
-def crack_on_fruit(ex, nodes=15, seed=0):
-    """Carve a random crack pattern into the selected fruit from its top; dict with result and facts."""
-    from ramure.gmap.cracks import carve, random_pattern
-
-    poly, mesh = selected_fruit_surface(ex)
-    if not 2 <= nodes <= 500:
-        raise ValueRefused(f"a crack needs 2..500 nodes, not {nodes}")
-    d = _diagonal(poly)
-    pattern = random_pattern(nodes, seed=seed, length=d / 25, width=d / 80, depth=d / 40)
-    b = poly.bounds
-    anchor = ((b[0] + b[1]) / 2, (b[2] + b[3]) / 2, b[5])
-    crack = carve(mesh, pattern, anchor, (1.0, 0.0, 0.0))
-    return {"surface": crack.result, "facts": crack.facts(), "points": crack.points}
 
 
 # -- the dock ------------------------------------------------------------------------------
@@ -282,7 +224,7 @@ class DetailsPanel(QWidget):
                 self.fallen_actor = None
             view.redraw()
             return
-        size = 0.012 * _diagonal(self.controller.snapshot.mesh)
+        size = 0.012 * diagonal(self.controller.snapshot.mesh)
         cloud = pv.PolyData(self.season.ground[down])
         cloud.point_data["rgb"] = np.round(self.chain.colors[self.season.states[step][down]] * 255).astype(np.uint8)
         discs = cloud.glyph(geom=pv.Disc(inner=0.0, outer=size, c_res=8), orient=False, scale=False)

@@ -11,7 +11,29 @@ from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QIcon, QPixmap
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QVBoxLayout, QWidget
 
-ICON = 110
+ICON = 150  # large enough to tell the picks apart
+
+
+def pick_label(pick, base, limit=2):
+    r"""The thumbnail's caption: its number and the constants that differ from ``base``.
+
+    >>> pick_label({"id": 5, "params": {"rule": 1, "constants": {"a2": 66.0, "r1": 0.9}}},
+    ...            {"a2": 60.0, "r1": 0.9})
+    '#5  rule 1\na2 66 (+10%)'
+    """
+    params = pick.get("params") or {}
+    rule = params.get("rule")
+    lines = [f"#{pick.get('id')}" + ("" if rule is None else f"  rule {rule}")]
+    changes = []
+    for name, value in (params.get("constants") or {}).items():
+        old = (base or {}).get(name)
+        if old is None:
+            changes.append(f"{name} {float(value):.3g}")
+        elif abs(float(value) - float(old)) > 1e-9 * max(1.0, abs(float(old))):
+            pct = f" ({(float(value) / float(old) - 1) * 100:+.0f}%)" if float(old) else ""
+            changes.append(f"{name} {float(value):.3g}{pct}")
+    lines += changes[:limit] + (["…"] if len(changes) > limit else [])
+    return "\n".join(lines)
 
 
 class GalleryView(QWidget):
@@ -52,15 +74,16 @@ class GalleryView(QWidget):
         self.picks = []
         self.note.setText(message)
 
-    def set_picks(self, picks, images=None, note=""):
-        """Show the picks (records) with QImages (or placeholders until :meth:`set_images`)."""
+    def set_picks(self, picks, images=None, note="", base=None):
+        """Show the picks (records) with QImages (or placeholders until :meth:`set_images`),
+        each captioned with the constants that differ from ``base`` (the plant's values)."""
         self.list.clear()
         self.picks = list(picks)
         for i, pick in enumerate(self.picks):
             params = pick.get("params", {})
             rule = params.get("rule")
             tip = "\n".join(f"{k} = {v:g}" for k, v in params.get("constants", {}).items())
-            item = QListWidgetItem(f"#{pick.get('id', i + 1)}")
+            item = QListWidgetItem(pick_label({"id": i + 1, **pick}, base))
             item.setToolTip(f"pick {pick.get('id')} — variant {pick.get('variant')}"
                             f"{'' if rule is None else f', rule {rule}'}\n{tip}\n(click to apply)")
             item.setData(Qt.ItemDataRole.UserRole, i)

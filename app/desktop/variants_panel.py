@@ -205,7 +205,8 @@ class VariantsController:
         """Show a variant set: gallery (placeholders, then thumbnails), PCA cloud, qualifiers."""
         self.variant_set = vs
         w = self.window
-        w.gallery.set_picks(vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks])
+        w.gallery.set_picks(vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks],
+                            base=self.constants)
         w.pca_view.set_variants(vs)
         qualifier_map.attach(w).set_variants(vs)
         w.regen.qualifier_note.setText("" if vs.exploration is not None else
