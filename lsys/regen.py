@@ -431,8 +431,8 @@ class Session:
                 session._apply(_check_edit(edit, i, session))
         except RamureError as exc:
             raise RamureError(f"{where} cannot be replayed: {exc}") from None
-        except (KeyError, TypeError, ValueError) as exc:
-            raise RamureError(f"{where} is corrupt: {exc!r}") from None
+        except (KeyError, TypeError, ValueError, OverflowError, RecursionError) as exc:
+            raise RamureError(f"{where} is a corrupt session file: {type(exc).__name__}") from None
         session._undo.clear()  # a loaded session starts a fresh undo history
         return session
 
@@ -447,6 +447,12 @@ class Session:
                               f"{exc.msg}); is the file truncated?") from None
         except UnicodeDecodeError:
             raise RamureError(f"{path} is not a text file") from None
+        except RecursionError:
+            raise RamureError(f"{path} is a corrupt session file (nested too deeply)") from None
+        except ValueError as exc:  # e.g. an integer of thousands of digits
+            raise RamureError(f"{path} is a corrupt session file ({exc})") from None
+        except OSError as exc:
+            raise RamureError(f"cannot read {path}: {exc.strerror or exc}") from None
         return cls.from_dict(data, where=str(path))
 
 
@@ -474,8 +480,14 @@ def _check_values(values, lsystem, where=""):
     return {k: float(v) for k, v in values.items()}
 
 
-def _is_whole(value, low=0):
-    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= low
+#: Largest whole number a session file may hold (ids, seeds, n): node ids are int64.
+MAX_WHOLE = 2 ** 63 - 1
+
+
+def _is_whole(value, low=0, high=MAX_WHOLE):
+    """A whole number in [low, high] (``high=None``: unbounded, e.g. a min_ascend clamped later)."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) and \
+        low <= value and (high is None or value <= high)
 
 
 def _check_session_fields(data, where):
@@ -521,10 +533,10 @@ def _check_edit(edit, i, session):
     selection = edit["selection"]
     if not isinstance(selection, list) or not all(_is_whole(x) for x in selection):
         raise RamureError(f"{what}: 'selection' must be a list of leaf ids")
-    if not _is_whole(edit["seed"]) or not _is_whole(edit["min_ascend"]):
+    if not _is_whole(edit["seed"]) or not _is_whole(edit["min_ascend"], high=None):
         raise RamureError(f"{what}: 'seed' and 'min_ascend' must be whole numbers >= 0")
     ascend_levels = edit.get("ascend")
-    if ascend_levels is not None and not _is_whole(ascend_levels):
+    if ascend_levels is not None and not _is_whole(ascend_levels, high=None):
         raise RamureError(f"{what}: 'ascend' must be null or a whole number >= 0")
     try:
         constants = _check_values(edit["constants"], session.lsystem)

@@ -282,3 +282,27 @@ def test_status_lines_say_the_selection_regrows_from_the_axiom():
     ex.regrow(seed=2)
     assert FROM_AXIOM_MESSAGE in ex.status()
     assert FROM_AXIOM_MESSAGE in status_line(ex)
+
+
+def _session_text(**edit):
+    s = Session(LSystem.from_file("ternary_branching"), n=2)
+    data = s.to_dict()
+    data["edits"] = [{"op": "regrow", "selection": [int(s.tree.leaves[-1])], "rho": 0.5, "seed": 1,
+                      "constants": {}, "params": None, "min_ascend": 1, "ascend": None, **edit}]
+    return json.dumps(data)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: "[" * 200000 + "]" * 200000,                                   # nesting
+    lambda: '{"format": "ramure-session", "version": 1, "n": ' + "9" * 5000 + "}",  # huge int
+    lambda: _session_text(selection=[2 ** 70]),                            # leaf id beyond int64
+    lambda: _session_text(seed=2 ** 70),
+    lambda: _session_text(selection=[-2 ** 70]),
+])
+def test_corrupt_session_files_are_refused_in_one_line(tmp_path, make):
+    from ramure.errors import RamureError
+    path = tmp_path / "s.json"
+    path.write_text(make())
+    with pytest.raises(RamureError) as info:
+        Session.load(path)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 300
