@@ -509,8 +509,8 @@ class GMap3(Operations):
             alpha = self.alpha
             k = len(key)
             indices = alpha[list(key)].T.ravel()
-            graph = sparse.csr_matrix(
-                (np.ones(n * k, np.bool_), indices, np.arange(0, n * k + 1, k)), shape=(n, n)
+            graph = sparse.csr_matrix(      # float data: scipy would convert a bool graph first
+                (np.ones(n * k), indices, np.arange(0, n * k + 1, k)), shape=(n, n)
             )
             count, ids = connected_components(graph, directed=True, connection="strong")
             self._cache[key] = (ids.astype(np.int32), int(count))

@@ -152,3 +152,29 @@ def test_a_refused_operation_leaves_the_map_exactly_as_it_was(ops):
         except GMapError:
             assert_same(before, gm)
         assert gm.is_valid(), gm.validity_problems()
+
+
+def test_batch_split_of_joined_ring_cubes_splits_shared_edges_once():
+    from ramure.gmap.embedding import grow
+    from ramure.gmap.measure import total_volume
+
+    gm = GMap3()
+    gm.add_prisms(6, sizes=[[2.0, 2.0, 2.0]])
+    cubes = grow(gm, gm.face_of(np.zeros(6, int), [f"C{j + 1}" for j in range(6)]), 4, height=0.5)
+    gm.identify(gm.face_of(cubes, "C2"), gm.face_of(np.roll(cubes, -1), "C4"))
+    gm.embed()
+    v0, vol0 = gm.counts()["vertices"], total_volume(gm)
+    new = gm.split_prisms(cubes, 0.25)
+    assert_solid(gm)
+    # 6 cubes x 4 lateral edges, each shared by two neighbours: 12 new vertices, not 24
+    assert gm.counts()["vertices"] == v0 + 12
+    assert len(new) == 6 and gm.n_volumes == 13
+    assert set(gm.volume_data["parent"][new].tolist()) == {0}              # attributes copied
+    gm.embed()
+    assert abs(total_volume(gm) - vol0) < 1e-9
+    before = arrays(gm)
+    with pytest.raises(GMapError):
+        gm.split_prisms([1, 1], 0.5)
+    with pytest.raises(GMapError):
+        gm.split_prisms([1], 1.5)
+    assert_same(before, gm)
