@@ -10,7 +10,7 @@ import itertools
 import numpy as np
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
-from PySide6.QtCore import Qt
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QIcon, QPixmap
 from PySide6.QtWidgets import QLabel, QListWidget, QListWidgetItem, QSplitter, QVBoxLayout, QWidget
 
@@ -27,8 +27,18 @@ def box_edges(lo, hi):
     return corners[np.array(edges)]
 
 
+def explained_ratios(variant_set):
+    """The share of variance of PC1-3 (None when unknown, e.g. an opened exploration folder)."""
+    exploration = getattr(variant_set, "exploration", None)
+    ratio = getattr(getattr(exploration, "pca", None), "explained_variance_ratio_", None)
+    return None if ratio is None else [float(r) for r in ratio[:3]]
+
+
 class PcaCloudView(QWidget):
-    """A 3D scatter of the variant cloud with toggleable qualifier boxes."""
+    """A 3D scatter of the variant cloud with toggleable qualifier boxes; a click on a pick
+    emits :attr:`pick_clicked` (the window applies it, as a gallery click does)."""
+
+    pick_clicked = Signal(dict)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -54,6 +64,8 @@ class PcaCloudView(QWidget):
         self.figure.subplots_adjust(left=0.02, right=0.92, bottom=0.06, top=0.98)
         self._arrange()
         self.variant_set = None
+        self.pick_artist = None
+        self.canvas.mpl_connect("pick_event", self._picked)
         self.set_unavailable("No exploration yet (Variants ▸ Explore).")
 
     def resizeEvent(self, event):  # noqa: N802 (Qt API)
@@ -108,6 +120,16 @@ class PcaCloudView(QWidget):
             if item.text() == name:
                 item.setCheckState(Qt.CheckState.Checked if on else Qt.CheckState.Unchecked)
 
+    def _picked(self, event):
+        """A click on a pick's dot: apply that pick (to the selection or the whole plant)."""
+        if event.artist is not self.pick_artist or self.variant_set is None or not len(event.ind):
+            return
+        ind = np.asarray(event.ind, int)
+        shown = self.axes.transData.transform(np.asarray(self.pick_artist.get_offsets())[ind])
+        mouse = np.array([event.mouseevent.x, event.mouseevent.y], float)
+        nearest = int(ind[np.argmin(np.linalg.norm(shown - mouse, axis=1))])  # dots may overlap
+        self.pick_clicked.emit(self.variant_set.picks[nearest])
+
     def redraw(self):
         ax = self.axes
         ax.cla()
@@ -119,10 +141,12 @@ class PcaCloudView(QWidget):
             ok = np.all(np.isfinite(vs.points), axis=1)
             ax.scatter(*vs.points[ok].T, s=3, c="#9a9a9a", alpha=0.4, depthshade=False)
         picks = np.array([p.get("pca", [np.nan] * 3) for p in vs.picks], float)
+        self.pick_artist = None
         if len(picks):
-            ax.scatter(*picks.T, s=18, c=np.arange(len(picks)), cmap="viridis", depthshade=False)
+            self.pick_artist = ax.scatter(*picks.T, s=30, c=np.arange(len(picks)), cmap="viridis",
+                                          depthshade=False, picker=5)
             for p, rec in zip(picks, vs.picks):
-                ax.text(*p, str(rec.get("id", "")), fontsize=6)
+                ax.text(*p, f" {rec.get('id', '')}", fontsize=8)
         ax.scatter([0], [0], [0], marker="x", s=40, c="black")
         colors = {self.boxes_list.item(i).text(): self.boxes_list.item(i).data(Qt.ItemDataRole.UserRole)
                   for i in range(self.boxes_list.count())}
@@ -131,8 +155,8 @@ class PcaCloudView(QWidget):
             for a, b in box_edges(lo, hi):
                 ax.plot(*np.c_[a, b], color=colors[name], linewidth=1.2)
             ax.text(*hi, name, color=colors[name], fontsize=7)
-        ax.set_xlabel("PC1", fontsize=7)
-        ax.set_ylabel("PC2", fontsize=7)
-        ax.set_zlabel("PC3", fontsize=7)
-        ax.tick_params(labelsize=6)
+        ratios = explained_ratios(vs)
+        for axis, k in ((ax.set_xlabel, 0), (ax.set_ylabel, 1), (ax.set_zlabel, 2)):
+            axis(f"PC{k + 1}" + (f" ({ratios[k]:.0%})" if ratios else ""), fontsize=9)
+        ax.tick_params(labelsize=7)
         self.canvas.draw_idle()

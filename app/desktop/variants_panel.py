@@ -43,6 +43,7 @@ class VariantsController:
         self.fruit_ok = fruit_available()
         w = window
         w.gallery.pick_clicked.connect(self.apply_pick)
+        w.pca_view.pick_clicked.connect(self.apply_pick)
         w.gallery.explore_requested.connect(self.explore)
         w.gallery.open_requested.connect(self.open_exploration)
         w.regen.qualifier_chosen.connect(self.preview_qualifier)

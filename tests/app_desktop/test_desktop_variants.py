@@ -58,6 +58,25 @@ def test_explore_fills_the_gallery_and_the_pca_dock(make_window, qtbot, artifact
     w.docks["pca"].raise_()
     settle(qtbot, w)
     w.grab_window().save(str(artifacts / "desktop_variants.png"))
+    assert "%" in w.pca_view.axes.get_xlabel()  # explained variance on the axes
+    # a click on a pick's dot in the PCA cloud applies that pick
+    from mpl_toolkits.mplot3d import proj3d
+    from PySide6.QtCore import QPoint
+    from PySide6.QtTest import QTest
+
+    ax, canvas = w.pca_view.axes, w.pca_view.canvas
+    canvas.draw()
+    x, y, z = vs.picks[7]["pca"]
+    px, py, _ = proj3d.proj_transform(x, y, z, ax.get_proj())
+    dx, dy = ax.transData.transform((px, py))
+    ratio = canvas.device_pixel_ratio
+    point = QPoint(int(round(dx / ratio)), int(round(canvas.height() - dy / ratio)))
+    edits = len(w.controller.explorer.session.edits)
+    QTest.mouseClick(canvas, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, point)
+    settle(qtbot, w)
+    session = w.controller.explorer.session
+    assert len(session.edits) == edits + 1 and session.edits[-1]["params"]["constants"] == {
+        k: float(v) for k, v in vs.picks[7]["params"]["constants"].items()}
 
 
 def test_gallery_click_applies_the_pick(make_window, qtbot):
