@@ -44,14 +44,14 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except _user_errors() as exc:
-        print(f"ramure {args.command}: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:  # e.g. `ramure leaves ... | head`
+    except BrokenPipeError:  # e.g. `ramure leaves ... | head`: before OSError, a quiet exit
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except _user_errors() as exc:
+        print(f"ramure {args.command}: {exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("ramure: interrupted", file=sys.stderr)
         return 130

@@ -147,3 +147,13 @@ def test_kill_9_during_saves_leaves_a_whole_file(tmp_path, kind, suffix):
             import pyvista as pv
             assert pv.read(target).n_points > 0
     assert kills >= 20  # bounded time on a loaded machine; 50 when it has room
+
+
+def test_closed_pipe_is_a_quiet_exit():
+    """`ramure leaves ... | head -1`: no "Broken pipe", exit 0."""
+    proc = subprocess.Popen([sys.executable, "-m", "ramure.app.cli", "leaves", "honda_sympodial",
+                             "-n", "12"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.readline()
+    proc.stdout.close()  # what head does after its first line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0 and "Broken pipe" not in err and "Traceback" not in err
