@@ -572,3 +572,157 @@ def _apply_one(gm, kind, opts, size_mm, seed):
     vertices = None if "vertex" not in opts else [opts["vertex"]]
     return hail(gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"),
                 opts.get("stop", "endocarp"), size_mm, seed)
+
+
+# ---------------------------------------------------------------- cracks
+CRACK_KINDS = ("longitudinal", "transverse", "concentric")
+#: An opening moves a vertex at most this fraction of its shortest edge off the crack.
+CRACK_CAP = 0.3
+
+
+def radial_layers(gm: GMap3) -> tuple[int, np.ndarray]:
+    """``(layers, layer per volume)``: radial layers of a volume-subdivided fruit, 0 = skin."""
+    vd = gm.volume_data
+    branch = vd["order"] >= 1
+    rho = gm.volume_means(gm.dart_data["radial"])
+    if not branch.any():
+        return 0, np.zeros(gm.n_volumes, np.int64)
+    layers = int(round(1.0 / (2.0 * max(1.0 - rho[branch].max(), 1e-9))))
+    layer = np.clip(np.floor((1.0 - rho) * max(layers, 1)).astype(np.int64), 0, max(layers - 1, 0))
+    return layers, np.where(branch, layer, -1)
+
+
+def crack(gm: GMap3, kind: str = "longitudinal", sector: int = 0, rings=(3, 6), depth: int = 1,
+          width_mm: float = 1.0, healed: int = 0, size_mm: float | None = None) -> tuple[GMap3, dict]:
+    """Open a crack along inter-branch faces: unsew the strip, let its inner vertices split, open it.
+
+    ``longitudinal``: between sectors ``sector`` and ``sector + 1`` over rings
+    ``rings = (first, last)``; ``transverse``: between ring ``rings[0]`` and
+    the next one over sectors ``sector .. sector + span`` where span is
+    ``rings[1] - rings[0]`` (a short arc); ``concentric``: between ring
+    ``rings[0]`` and the next one all around.  ``depth`` radial layers from
+    the skin are opened; the strip's bottom and end edges stay sewn (the tips
+    stay shared), so the crack is a notch.  Each split vertex moves
+    ``width_mm / 2`` off the crack along the strip normal, capped at
+    :data:`CRACK_CAP` of its shortest edge.  The faces exposed in the first
+    ``healed`` layers get the dart attribute ``healed = 1`` (rule copy, kept by
+    later subdivision).  Refused: an unknown kind, depth < 1 or deeper than
+    the pericarp, width <= 0, healed outside 0..depth, rings or sector out of
+    range or reversed, a fruit without radial layers.
+    """
+    if kind not in CRACK_KINDS:
+        raise GMapError(f"crack kind must be one of {', '.join(CRACK_KINDS)}, got {kind!r}")
+    layers, layer = radial_layers(gm)
+    if layers < 2:
+        raise GMapError("crack: a layered defect needs a volume-subdivided fruit (needs --subdivide volume:N)")
+    if int(depth) != depth or not 1 <= depth < layers:
+        raise GMapError(f"crack depth must be 1..{layers - 1} layers (the pericarp has {layers}), got {depth}")
+    if not (math.isfinite(width_mm) and width_mm > 0):
+        raise GMapError(f"crack width must be > 0 mm, got {width_mm}")
+    if int(healed) != healed or not 0 <= healed <= depth:
+        raise GMapError(f"crack healed layers must be in 0..depth ({depth}), got {healed}")
+    vd = gm.volume_data
+    ring, sec = vd["ring"].astype(np.int64), vd["sector"].astype(np.int64)
+    n_rings, ph = int(ring.max()) + 1, int(sec.max()) + 1
+    r0, r1 = int(rings[0]), int(rings[1])
+    if not (0 <= r0 <= r1 < n_rings) or not 0 <= sector < ph:
+        raise GMapError(f"crack: rings {r0}-{r1} and sector {sector} must lie in rings 0..{n_rings - 1} "
+                        f"(first <= last) and sectors 0..{ph - 1}")
+    if kind != "longitudinal" and r0 + 1 >= n_rings:
+        raise GMapError(f"crack: a {kind} crack needs a ring after ring {r0}")
+    scale = mm_per_unit(gm, size_mm)
+    shallow = (layer >= 0) & (layer < depth)
+    if kind == "longitudinal":
+        side_a = shallow & (sec == sector) & (ring >= r0) & (ring <= r1)
+        side_b = shallow & (sec == (sector + 1) % ph) & (ring >= r0) & (ring <= r1)
+    else:
+        if kind == "concentric":
+            arc = np.ones(gm.n_volumes, bool)
+        else:
+            arc = np.isin(sec, (sector + np.arange(r1 - r0 + 1)) % ph)
+        side_a = shallow & (ring == r0) & arc
+        side_b = shallow & (ring == r0 + 1) & arc
+    out = gm.copy()
+    n = out.n_darts
+    a3 = out.alpha[3]
+    vol = out.dart_volume.astype(np.int64)
+    strip = np.flatnonzero((a3 != np.arange(n)) & side_a[vol] & side_b[vol[a3]])
+    if strip.size == 0:
+        raise GMapError("crack: no sewn faces between the chosen cells")
+    sign = orientation(out)
+    before = float(_signed_volumes(out, sign).sum())
+    vid0, nv0 = out.cells(0)
+    _, pos0 = out.vertex_positions()
+    length = _strip_skin_length(out, strip, pos0, vid0) * scale
+    partner = a3[strip].copy()
+    fid, _ = out.orbit_ids("01")
+    _, first = np.unique(fid[strip], return_index=True)
+    out.unsew3(strip[first])
+    if "healed" not in out.dart_data:
+        out.add_dart_attribute("healed", np.int8, rule="copy")
+    exposed = np.r_[strip, partner]
+    heal = exposed[layer[vol[exposed]] < healed]
+    out.dart_data["healed"][heal] = 1
+    vid, nv = out.cells(0)
+    split = np.unique(vid[exposed])
+    moved_count, opening = _open(out, exposed, side_a, pos0, vid0, vid, nv, 0.5 * width_mm / scale)
+    after_cells = _signed_volumes(out, sign)
+    if np.any(after_cells <= 0):
+        raise GMapError("crack: opening turned a cell inside out; use a narrower crack")
+    after = float(after_cells.sum())
+    return out, {"kind": "crack", "crack_kind": kind, "sector": int(sector), "rings": [r0, r1],
+                 "depth_layers": int(depth), "healed_layers": int(healed), "width_mm": float(width_mm),
+                 "opening_mm": opening * scale, "length_mm": length, "faces": int(len(first)), "duplicated_vertices": int(nv - nv0),
+                 "opened_vertices": int(moved_count), "crack_vertices": int(len(split)),
+                 "volume_before": before, "volume_after": after, "volume_lost": before - after}
+
+
+def _strip_skin_length(gm, strip, pos, vid):
+    """Length of the strip's edges on the skin (each edge once)."""
+    a0, a3 = gm.alpha[0], gm.alpha[3]
+    d = strip
+    e_u, e_w = vid[d], vid[a0[d]]
+    edge_ids, _ = gm.cells(1)
+    free = a3 == np.arange(gm.n_darts)
+    on_skin_edge = np.zeros(int(edge_ids.max()) + 1, bool)
+    on_skin_edge[edge_ids[free]] = True
+    keep = on_skin_edge[edge_ids[d]]
+    edges, first = np.unique(edge_ids[d][keep], return_index=True)
+    u, w = e_u[keep][first], e_w[keep][first]
+    return float(np.linalg.norm(pos[u] - pos[w], axis=1).sum())
+
+
+def _open(gm, exposed, side_a, pos0, vid0, vid, nv, half):
+    """Move every split vertex of the crack off it (side A one way, side B the other)."""
+    vol = gm.dart_volume.astype(np.int64)
+    old_of_new = np.zeros(nv, np.int64)
+    old_of_new[vid] = vid0
+    copies = np.bincount(old_of_new, minlength=len(pos0))
+    ex_new = np.unique(vid[exposed])
+    split = ex_new[copies[old_of_new[ex_new]] > 1]
+    if split.size == 0:
+        return 0, 0.0
+    ca = gm.volume_means(gm.points)
+    # strip normal per split vertex: from side A cells' centroid towards side B
+    a_darts = exposed[side_a[vol[exposed]]]
+    b_darts = exposed[~side_a[vol[exposed]]]
+    normal = np.zeros((nv, 3))
+    for darts in (a_darts, b_darts):              # cell centre -> crack face, per side
+        np.add.at(normal, vid[darts], gm.points[darts] - ca[vol[darts]])
+    # shortest edge at each vertex
+    u, w = vid, vid[gm.alpha[0]]
+    _, pos = gm.vertex_positions()
+    elen = np.linalg.norm(pos[u] - pos[w], axis=1)
+    elen[elen == 0] = np.inf
+    shortest = np.full(nv, np.inf)
+    np.minimum.at(shortest, u, elen)
+    new = pos.copy()
+    nrm = normal[split]
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+    step = np.minimum(half, CRACK_CAP * shortest[split])
+    # a vertex of side A moves into A (against its outward normal towards B): -normal
+    new[split] = pos[split] - step[:, None] * nrm
+    take = np.isin(vid, split)
+    gm.points[take] = new[vid[take]]
+    gm.corners[take] = new[vid[take]]
+    return int(split.size), float(2.0 * step.max())

@@ -210,3 +210,81 @@ def test_cli_defects_json(capsys):
         assert main(["fruit", *bad]) == 2
         err = capsys.readouterr().err
         assert msg in err and "Traceback" not in err
+
+
+def strip_expectation(gm, kind, sector, rings, depth):
+    """Strip vertices minus its tips (vertices on strip border edges that are not skin), computed apart."""
+    layers, layer = D.radial_layers(gm)
+    vd = gm.volume_data
+    ring, sec = vd["ring"], vd["sector"]
+    ph = int(sec.max()) + 1
+    shallow = (layer >= 0) & (layer < depth)
+    in_rings = (ring >= rings[0]) & (ring <= rings[1])
+    if kind == "longitudinal":
+        a, b = shallow & (sec == sector) & in_rings, shallow & (sec == (sector + 1) % ph) & in_rings
+    else:
+        arc = np.ones(len(ring), bool) if kind == "concentric" else np.isin(
+            sec, [(sector + j) % ph for j in range(rings[1] - rings[0] + 1)])
+        a, b = shallow & (ring == rings[0]) & arc, shallow & (ring == rings[0] + 1) & arc
+    vol = gm.dart_volume
+    a3 = gm.alpha[3]
+    d = np.flatnonzero((a3 != np.arange(gm.n_darts)) & a[vol] & b[vol[a3]])
+    vid, _ = gm.cells(0)
+    eid, _ = gm.cells(1)
+    fid, _ = gm.orbit_ids("01")
+    free = a3 == np.arange(gm.n_darts)
+    skin_edge = np.zeros(eid.max() + 1, bool); skin_edge[eid[free]] = True
+    pairs = np.unique(np.c_[eid[d], fid[d]], axis=0)
+    faces_per_edge = np.bincount(pairs[:, 0], minlength=eid.max() + 1)
+    border = (faces_per_edge[eid[d]] == 1) & ~skin_edge[eid[d]]
+    tips = set(vid[d[border]].tolist()) | set(vid[gm.alpha[0][d[border]]].tolist())
+    return len(set(vid[d].tolist()) - tips), d
+
+
+@pytest.mark.parametrize("kind", ["longitudinal", "transverse", "concentric"])
+def test_crack_duplicates_interior_vertices(fruit, kind):
+    ref = fruit.copy()
+    out, facts = D.crack(fruit, kind, sector=3, rings=(3, 5), depth=2, width_mm=1.0, healed=1)
+    unchanged(fruit, ref)
+    check_after(fruit, out)
+    expected, strip = strip_expectation(fruit, kind, 3, (3, 5), 2)
+    assert facts["duplicated_vertices"] == expected > 0
+    assert out.cells(0)[1] - fruit.cells(0)[1] == expected
+    assert facts["volume_lost"] > 0
+    assert 0 < facts["opening_mm"] <= 1.0 + 1e-9
+    # reported length = sum of the strip's skin edge lengths
+    vid, _ = fruit.cells(0)
+    eid, _ = fruit.cells(1)
+    _, pos = fruit.vertex_positions()
+    free = fruit.alpha[3] == np.arange(fruit.n_darts)
+    skin_edges = np.zeros(eid.max() + 1, bool); skin_edges[eid[free]] = True
+    on = strip[skin_edges[eid[strip]]]
+    _, first = np.unique(eid[on], return_index=True)
+    d = on[first]
+    length = np.linalg.norm(pos[vid[d]] - pos[vid[fruit.alpha[0][d]]], axis=1).sum() * D.mm_per_unit(fruit)
+    assert facts["length_mm"] == pytest.approx(length, rel=1e-12) and length > 0
+
+
+def test_healed_faces_survive_subdivision(fruit):
+    from ramure.gmap import subdivide
+    out, facts = D.crack(fruit, "longitudinal", sector=2, rings=(4, 4), depth=2, width_mm=0.5, healed=1)
+    healed = out.dart_data["healed"] == 1
+    assert healed.any() and np.all(out.alpha[3][healed] == np.flatnonzero(healed))
+    finer = subdivide.surface(out, 1)
+    h2 = finer.dart_data["healed"] == 1
+    assert h2.sum() == 4 * healed.sum()             # each healed quad face becomes 4
+    assert np.all(finer.alpha[3][h2] == np.flatnonzero(h2))
+    g = D.grade([facts])
+    assert not g["marketable"] and any("healed" in r for r in g["reasons"])
+
+
+def test_crack_refusals(fruit):
+    ref = fruit.copy()
+    for kwargs, msg in ((dict(depth=0), "depth"), (dict(depth=4), "depth"), (dict(width_mm=0), "width"),
+                        (dict(healed=3, depth=2), "healed"), (dict(rings=(6, 3)), "rings"),
+                        (dict(sector=99), "sector"), (dict(kind="spiral"), "kind")):
+        with pytest.raises(GMapError, match=msg):
+            D.crack(fruit, **kwargs)
+    unchanged(fruit, ref)
+    with pytest.raises(GMapError, match="subdivide volume"):
+        D.crack(build_fruit("round_tomato"))
