@@ -28,6 +28,7 @@ import ipywidgets as W
 import ramure.grammars as grammar_files
 from ramure.app.jupyter.architecture import ArchitectureBrowser
 from ramure.app.jupyter.wood import WoodTab
+from ramure.app.jupyter.details import DetailsTab
 from ramure.app.jupyter._ui import Fallback, MessageLine, button, on_value, png_tag
 from ramure.app.jupyter.grammar import GrammarPanel
 from ramure.app.jupyter.selection import SelectionPanel, TreeBrowser
@@ -165,9 +166,10 @@ class Explorer:
                       layout=W.Layout(width="30%", min_width="320px"))
         left = W.VBox([self.grammar.widget], layout=W.Layout(width="30%", min_width="280px"))
         self.wood = WoodTab(self)
+        self.details = DetailsTab(self)
         self.tabs = W.Tab(children=[self.tree.widget, self.architecture.widget, self.variants.widget,
-                                    self.variants.pca_widget, self.wood.widget],
-                          titles=("Derivation tree", "Architecture", "Variants", "PCA & qualifiers", "Wood"))
+                                    self.variants.pca_widget, self.wood.widget, self.details.widget],
+                          titles=("Derivation tree", "Architecture", "Variants", "PCA & qualifiers", "Wood", "Details"))
         self.widget = W.VBox([self.title, self.status_line, self.message.widget,
                               W.HBox([left, centre, side],
                                      layout=W.Layout(flex_flow="row wrap", align_items="flex-start")),

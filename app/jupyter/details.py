@@ -1,0 +1,174 @@
+"""The Details tab: the plant's leaves through a season; lichen and a crack on the selected fruit.
+
+The notebook counterpart of the desktop's Details dock (issue 18).  A **season** slider (0..24
+steps) with heat, humidity and wind: the leaves of the explorer's plant age along the open
+Markov chain of :mod:`ramure.lsys.seasons` (computed once per plant and environment; the
+slider only redraws), and the picture shows the plant at that step as ``ramure autumn``
+draws it: attached leaves in their state's colour, fallen ones gone from the branches and
+lying on the ground.  **Lichen** and **Crack** act on the selected fruit's closed surface
+(:mod:`ramure.app.details`) and show it in the same picture, with their facts.
+
+>>> from ramure.app.jupyter.details import DetailsTab
+>>> tab = DetailsTab(None)
+>>> tab.season_slider.value = 3
+>>> "select" in tab.facts.value or "explorer" in tab.facts.value
+True
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+
+import ipywidgets as W
+import numpy as np
+
+from ramure.app.jupyter._ui import button, on_value, png_image
+from ramure.errors import RamureError
+
+STEPS = 24
+
+
+class DetailsTab:
+    """Season slider, heat, humidity, wind; Lichen and Crack buttons; facts and a picture."""
+
+    def __init__(self, app, size=(420, 420)):
+        from ramure.lsys.seasons import autumn_chain
+
+        self.app = app
+        self.size = size
+        self.chain = autumn_chain()
+        self.season = None
+        self.season_key = None
+        self.shown = None  # "season", "lichen" or "crack"
+        self.last_facts = None
+        self.season_slider = W.IntSlider(value=0, min=0, max=STEPS, description="season step")
+        self.heat = W.BoundedFloatText(value=0.5, min=0.0, max=1.0, step=0.1, description="heat")
+        self.humidity = W.BoundedFloatText(value=0.5, min=0.0, max=1.0, step=0.1, description="humidity")
+        self.wind = W.BoundedFloatText(value=0.0, min=0.0, max=2.0, step=0.05, description="wind")
+        self.seed = W.BoundedIntText(value=0, min=0, max=2**31 - 1, description="seed")
+        for box in (self.season_slider, self.heat, self.humidity, self.wind, self.seed):
+            on_value(box, lambda _v: self.show_season())
+        self.facts = W.HTML("<small>Move the slider to age the leaves; select a fruit for lichen or a crack."
+                            "</small>")
+        self.picture = png_image(width=size[0])
+        self.widget = W.VBox([W.HBox([self.season_slider, self.heat, self.humidity]),
+                              W.HBox([self.wind, self.seed, button("Lichen on the fruit", self.grow_lichen),
+                                      button("Crack the fruit", self.carve_crack)]),
+                              self.facts, self.picture])
+
+    # -- season ------------------------------------------------------------------------
+    def _model(self):
+        model = getattr(self.app, "model", None)
+        if model is None:
+            raise RamureError("this tab needs an explorer's plant (DetailsTab(explorer))")
+        return model
+
+    def compute_season(self):
+        """The whole season of the plant's leaves for the current environment (cached)."""
+        from ramure.lsys.seasons import age_leaves
+
+        model = self._model()
+        key = (model.version, id(model.session), self.heat.value, self.humidity.value, self.wind.value,
+               self.seed.value)
+        if self.season is None or key != self.season_key:
+            self.season = age_leaves(model.skeleton.organs, self.chain, steps=STEPS, seed=self.seed.value,
+                                     heat=self.heat.value, humidity=self.humidity.value, wind=self.wind.value)
+            self.season_key = key
+        return self.season
+
+    def show_season(self):
+        """Draw the plant at the slider's step (leaves in state colours, fallen ones on the ground)."""
+        from ramure.app.details import season_at
+
+        try:
+            season = self.compute_season()
+        except RamureError as err:
+            self._refused(err)
+            return
+        step = self.season_slider.value
+        now = season_at(season, step)
+        states = now.states[-1]
+        counts = ", ".join(f"{int((states == i).sum())} {name}" for i, name in enumerate(self.chain.states)
+                           if (states == i).any())
+        self.last_facts = {"step": step, "leaves": len(season.leaf_ids), "fallen_leaves": int(now.fallen.sum())}
+        self.facts.value = (f"<small>Step {step}/{STEPS}: {len(season.leaf_ids)} leaves, "
+                            f"{int(now.fallen.sum())} fallen; {counts}</small>")
+        self.shown = "season"
+        self.picture.value = _png(lambda path: _render_autumn(self._model().skeleton, now, self.chain, path,
+                                                              self.size))
+
+    # -- lichen and cracks ---------------------------------------------------------------
+    def grow_lichen(self):
+        from ramure.app.details import lichen_on_fruit
+
+        try:
+            out = lichen_on_fruit(self._model(), seed=self.seed.value)
+        except RamureError as err:
+            self._refused(err)
+            return
+        f = self.last_facts = out["facts"]
+        self.shown = "lichen"
+        self.facts.value = (f"<small>Lichen ({f['habit']}): {f['particles']} particles in {f['clusters']} clusters "
+                            f"on {f['triangles']} triangles; old discs dark, young rims light</small>")
+        self.picture.value = _png(lambda path: _render_surface(out["surface"], path, self.size, out["discs"]))
+
+    def carve_crack(self):
+        from ramure.app.details import crack_on_fruit
+
+        try:
+            out = crack_on_fruit(self._model(), seed=self.seed.value)
+        except RamureError as err:
+            self._refused(err)
+            return
+        f = self.last_facts = out["facts"]
+        self.shown = "crack"
+        self.facts.value = (f"<small>Crack: {f['nodes']} nodes, length {f['length']:.3g}, "
+                            f"{f['triangles_object']} → {f['triangles_result']} triangles, "
+                            f"{'watertight' if f['watertight'] else 'not watertight'}</small>")
+        self.picture.value = _png(lambda path: _render_surface(out["surface"], path, self.size))
+
+    def _refused(self, err):
+        self.facts.value = f"<small style='color:#b00020'>refused: {err}</small>"
+
+
+def _png(render) -> bytes:
+    """Run ``render(path)`` under the explorer's render lock and return the PNG's bytes."""
+    from ramure.app.jupyter.view import RENDER_LOCK
+
+    fd, path = tempfile.mkstemp(suffix=".png")
+    os.close(fd)
+    try:
+        with RENDER_LOCK:
+            render(path)
+        with open(path, "rb") as f:
+            return f.read()
+    finally:
+        os.unlink(path)
+
+
+def _render_autumn(skeleton, season, chain, path, size):
+    from ramure.app.commands.autumn import render_autumn
+
+    render_autumn(skeleton, season, chain, path, size)
+
+
+def _render_surface(surface, path, size, discs=None):
+    """A fruit (orange) with lichen discs, or carved, seen from above and aside."""
+    from ramure.app.render import headless_setup
+
+    headless_setup()
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    try:
+        plotter.set_background("white", top="lightsteelblue")
+        plotter.add_mesh(surface, color=(0.92, 0.47, 0.16), smooth_shading=discs is not None)
+        if discs is not None:
+            plotter.add_mesh(discs, scalars="rgb", rgb=True, show_scalar_bar=False)
+        b = np.reshape(surface.bounds, (3, 2))
+        centre, span = b.mean(axis=1), float(np.ptp(b, axis=1).max())
+        plotter.camera_position = [tuple(centre + np.array([0.5, -0.7, 0.9]) * span * 2), tuple(centre), (0, 0, 1)]
+        plotter.reset_camera()
+        plotter.screenshot(str(path))
+    finally:
+        plotter.close()

@@ -1,0 +1,78 @@
+"""The Jupyter Details tab: the season slider redraws the plant; lichen and a crack on a fruit."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from jupyter_helpers import ROOT
+
+FRUIT_TREE = str(ROOT / "grammars" / "fruit_tree.lsys")
+
+
+@pytest.fixture
+def explorer():
+    from ramure.app.jupyter import Explorer
+
+    return Explorer(FRUIT_TREE, n=5, view="static", size=(200, 200), cache=False)
+
+
+def _rgb(png):
+    from matplotlib.image import imread
+
+    return imread(io.BytesIO(png), format="png")[..., :3]
+
+
+def _near(rgb, colour, tol=0.1):
+    """Pixels within ``tol`` of an RGB colour in [0, 1] (shading darkens, so a loose match)."""
+    return int(np.sum(np.abs(rgb - np.asarray(colour)).max(axis=2) < tol))
+
+
+def test_the_season_slider_ages_the_leaves_and_redraws(explorer):
+    from ramure.lsys.seasons import age_leaves, autumn_chain
+
+    tab = explorer.details
+    assert explorer.tabs.get_title(len(explorer.tabs.children) - 1) == "Details"
+    tab.season_slider.value = 24
+    expected = age_leaves(explorer.model.skeleton.organs, autumn_chain(), steps=24, seed=0)
+    fallen = int(expected.fallen.sum())
+    assert 0 < fallen < len(expected.leaf_ids)
+    assert tab.last_facts == {"step": 24, "leaves": len(expected.leaf_ids), "fallen_leaves": fallen}
+    assert f"{fallen} fallen" in tab.facts.value and tab.shown == "season"
+    late = _rgb(tab.picture.value)
+    tab.season_slider.value = 0
+    assert tab.last_facts["fallen_leaves"] == 0
+    early = _rgb(tab.picture.value)
+    green = autumn_chain().colors[0]
+    assert _near(early, green) > _near(late, green)  # every leaf green at step 0, few at the end
+    assert tab.season is not None and tab.season.states.shape == (25, len(expected.leaf_ids))
+    notes = ROOT.parent / "notes"
+    if notes.is_dir():
+        tab.season_slider.value = 16
+        (notes / "details-jupyter-season.png").write_bytes(tab.picture.value)
+
+
+def test_wind_makes_more_leaves_fall_by_mid_season(explorer):
+    tab = explorer.details
+    tab.season_slider.value = 10
+    still = tab.last_facts["fallen_leaves"]
+    tab.wind.value = 1.5
+    assert tab.last_facts["fallen_leaves"] > still
+
+
+def test_lichen_needs_a_selected_fruit_then_grows_on_it(explorer):
+    tab = explorer.details
+    before = tab.picture.value
+    tab.grow_lichen()
+    assert "refused: select a fruit first" in tab.facts.value and tab.picture.value == before
+    explorer.select([explorer.model.fruit_ids()[0]])
+    tab.grow_lichen()
+    assert tab.shown == "lichen" and tab.last_facts["particles"] == 300 and tab.last_facts["clusters"] == 5
+    assert _rgb(tab.picture.value).std(axis=(0, 1)).max() > 0.05  # a fruit, not a blank picture
+    tab.carve_crack()
+    f = tab.last_facts
+    assert tab.shown == "crack" and f["watertight"] and f["triangles_result"] > f["triangles_object"]
+    notes = ROOT.parent / "notes"
+    if notes.is_dir():
+        (notes / "details-jupyter-crack.png").write_bytes(tab.picture.value)
