@@ -46,3 +46,9 @@ def bench_defect_rot():
 def bench_defect_hail_5():
     gm = _fruit()
     return _result(_median(lambda: D.hail(gm, count=5, depth_mm=(2.0, 6.0), seed=1)), gm)
+
+
+def bench_defect_crack():
+    gm = _fruit()
+    return _result(_median(lambda: D.crack(gm, "longitudinal", sector=3, rings=(3, 6), depth=2,
+                                           width_mm=1.0, healed=1)), gm)

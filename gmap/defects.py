@@ -492,13 +492,14 @@ DEFECT_OPTIONS = {
     "shrink": ("rate", "steps", "kind"),
     "rot": ("vertex", "coefficients", "rate", "steps"),
     "hail": ("count", "depth_mm", "stop", "vertex"),
+    "crack": ("kind", "sector", "rings", "depth", "width_mm", "healed"),
 }
 
 
 def parse_defect(spec: str) -> tuple[str, dict]:
     """``"hail:count=5,depth_mm=2..6,stop=endocarp"`` -> ``("hail", {...})``, checked.
 
-    Ranges are ``low..high``; rot coefficients are ``2.5/2/1.5``.
+    Ranges are ``low..high``, ring spans ``3-6``; rot coefficients are ``2.5/2/1.5``.
 
     >>> parse_defect("hail:count=5,depth_mm=2..6")
     ('hail', {'count': 5, 'depth_mm': (2.0, 6.0)})
@@ -520,7 +521,10 @@ def parse_defect(spec: str) -> tuple[str, dict]:
 
 def _option_value(kind, name, value):
     try:
-        if name in ("steps", "count", "vertex"):
+        if name == "rings":
+            lo, sep, hi = value.partition("-")
+            return (int(lo), int(hi if sep else lo))
+        if name in ("steps", "count", "vertex", "sector", "depth", "healed"):
             number = float(value)
             if number != int(number):
                 raise ValueError
@@ -569,6 +573,9 @@ def _apply_one(gm, kind, opts, size_mm, seed):
             out, dried = shrink(out, opts["rate"], opts.get("steps", 1))
             facts.update(rate=dried["rate"], steps=dried["steps"], volume_lost=dried["volume_lost"])
         return out, facts
+    if kind == "crack":
+        return crack(gm, opts.get("kind", "longitudinal"), opts.get("sector", 0), opts.get("rings", (3, 6)),
+                     opts.get("depth", 1), opts.get("width_mm", 1.0), opts.get("healed", 0), size_mm)
     vertices = None if "vertex" not in opts else [opts["vertex"]]
     return hail(gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"),
                 opts.get("stop", "endocarp"), size_mm, seed)

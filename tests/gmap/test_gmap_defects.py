@@ -288,3 +288,15 @@ def test_crack_refusals(fruit):
     unchanged(fruit, ref)
     with pytest.raises(GMapError, match="subdivide volume"):
         D.crack(build_fruit("round_tomato"))
+
+
+def test_crack_spec_and_grade_through_apply(fruit):
+    spec = "crack:kind=longitudinal,sector=3,rings=4-4,depth=1,width_mm=0.5,healed=1"
+    assert D.parse_defect(spec)[1]["rings"] == (4, 4)
+    out, facts = D.apply_defects(fruit, [spec], size_mm=65)
+    check_after(fruit, out)
+    c = facts["defects"][0]
+    assert c["length_mm"] < 30 and facts["grade"]["marketable"], facts["grade"]
+    big, facts = D.apply_defects(fruit, [spec], size_mm=650)    # ten times the fruit: a long crack
+    assert facts["defects"][0]["length_mm"] == pytest.approx(10 * c["length_mm"])
+    assert not facts["grade"]["marketable"] and "mm long" in facts["grade"]["reasons"][0]
