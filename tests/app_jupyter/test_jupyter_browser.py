@@ -29,7 +29,7 @@ from browser_helpers import Lab, chromium_available, launch_chromium, picture_st
 pytestmark = [pytest.mark.browser, pytest.mark.timeout(420)]
 
 ARTIFACTS = ROOT / "tests" / "artifacts" / "browser"
-KERNEL_IDLE = """() => { const w = window.jupyterapp.shell.currentWidget;
+KERNEL_IDLE = """() => { const w = window.jupyterapp && window.jupyterapp.shell.currentWidget;
   const k = w && w.sessionContext && w.sessionContext.session && w.sessionContext.session.kernel;
   return !!k && k.status === 'idle'; }"""
 ALL_RAN = """() => { const w = window.jupyterapp.shell.currentWidget;
