@@ -60,6 +60,60 @@ def schema_sql() -> str:
     return resources.files(__package__).joinpath("schema.sql").read_text(encoding="utf-8")
 
 
+#: SQLite ``PRAGMA application_id`` of a Ramure study ("RAMU"); files made before it hold 0.
+APPLICATION_ID = 0x52414D55
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+
+def _schema_tables() -> set:
+    return set(re.findall(r"CREATE TABLE IF NOT EXISTS (\w+)", schema_sql()))
+
+
+def check_study_file(path) -> None:
+    """Refuse, with one line, a file that is not a study database of this version.
+
+    Read-only: the header is read as bytes, then SQLite is opened with
+    ``mode=ro``, so another application's database or an empty file is never
+    changed (no WAL switch, no header written).  Checked: the SQLite magic,
+    ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before
+    it), ``user_version`` == :data:`SCHEMA_VERSION`, and every table of the schema.
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise StudyInputError(f"{path}: no such study file")
+    try:
+        with open(path, "rb") as f:
+            head = f.read(len(_SQLITE_MAGIC))
+    except OSError as exc:
+        raise StudyInputError(f"{path}: cannot read it ({exc.strerror or exc})") from None
+    if not head:
+        raise StudyInputError(f"{path}: empty file, not a Ramure study database")
+    if head != _SQLITE_MAGIC:
+        raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database")
+    try:
+        conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=10.0)
+    except sqlite3.Error as exc:
+        raise StudyInputError(f"{path}: cannot open it read-only ({exc})") from None
+    try:
+        app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+        version = conn.execute("PRAGMA user_version").fetchone()[0]
+        tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    except sqlite3.Error as exc:
+        raise StudyInputError(f"{path}: not a readable SQLite database ({exc})") from None
+    finally:
+        conn.close()
+    if app_id not in (0, APPLICATION_ID):
+        raise StudyInputError(f"{path}: belongs to another application (application_id "
+                              f"{app_id:#x}), not a Ramure study")
+    missing = _schema_tables() - tables
+    if missing:
+        raise StudyInputError(f"{path}: not a Ramure study database (no table "
+                              f"{', '.join(sorted(missing))})")
+    if version != SCHEMA_VERSION:
+        raise StudyInputError(f"{path}: study database version {version}; this Ramure reads "
+                              f"version {SCHEMA_VERSION}")
+
+
 def _has_study(conn) -> bool:
     row = conn.execute("SELECT name FROM sqlite_master WHERE type='table' AND name='study'").fetchone()
     return row is not None and conn.execute("SELECT count(*) FROM study").fetchone()[0] == 1
@@ -115,6 +169,7 @@ class Study:
         conn.executescript(schema_sql())
         with conn:
             conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
             conn.execute("INSERT INTO study (id, name, budget_seconds, created_at) VALUES (1, ?, ?, ?)",
                          (name or path.stem, 60.0 * budget, now_iso()))
             for gname, (source, picks) in loaded.items():
@@ -125,11 +180,10 @@ class Study:
     def open(cls, path, clock=time.monotonic, durable=True) -> "Study":
         """Open an existing study file (refused with a clear message otherwise)."""
         path = pathlib.Path(path)
-        if not path.is_file():
-            raise StudyInputError(f"{path}: no such study file")
+        check_study_file(path)  # read-only: a file that is not ours is never changed
         conn = None
         try:
-            conn = connect(path, durable)  # the WAL pragma already fails on a non-database
+            conn = connect(path, durable)
             ok = _has_study(conn)
         except sqlite3.DatabaseError:
             ok = False

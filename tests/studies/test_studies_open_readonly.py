@@ -1,0 +1,80 @@
+"""Opening a file that is not a study database never changes it (issue 11)."""
+import hashlib
+import sqlite3
+
+import pytest
+
+from ramure.studies.errors import StudyInputError
+from ramure.studies.picks import lattice_picks
+from ramure.studies.storage import APPLICATION_ID, Study
+
+
+def digest(path):
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def other_app_db(path):
+    conn = sqlite3.connect(path)
+    conn.execute("CREATE TABLE notes (id INTEGER PRIMARY KEY, body TEXT)")
+    conn.execute("INSERT INTO notes (body) VALUES ('keep me')")
+    conn.commit()
+    conn.close()
+    return path
+
+
+@pytest.mark.parametrize("kind", ["other", "empty", "text"])
+def test_foreign_files_are_refused_and_left_byte_for_byte(tmp_path, kind):
+    path = tmp_path / "x.db"
+    if kind == "other":
+        other_app_db(path)
+    elif kind == "empty":
+        path.write_bytes(b"")
+    else:
+        path.write_text("hello")
+    before = digest(path)
+    with pytest.raises(StudyInputError) as info:
+        Study.open(path)
+    assert "\n" not in str(info.value)
+    assert digest(path) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.db"]  # no -wal / -shm left
+    if kind == "other":
+        conn = sqlite3.connect(path)
+        assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "delete"
+
+
+def make_study(tmp_path):
+    path = tmp_path / "study.db"
+    Study.create(path, grammars={"honda": lattice_picks(seed=1)}).close()
+    return path
+
+
+def test_new_studies_carry_the_application_id(tmp_path):
+    path = make_study(tmp_path)
+    conn = sqlite3.connect(path)
+    assert conn.execute("PRAGMA application_id").fetchone()[0] == APPLICATION_ID
+    conn.close()
+    with Study.open(path) as study:
+        assert study.grammars == ["honda"]
+
+
+@pytest.mark.parametrize("pragma,match", [("user_version = 99", "version 99"),
+                                          ("application_id = 1234", "another application")])
+def test_unknown_versions_and_other_applications_are_refused(tmp_path, pragma, match):
+    path = make_study(tmp_path)
+    conn = sqlite3.connect(path)
+    conn.execute(f"PRAGMA {pragma}")
+    conn.commit()
+    conn.close()
+    with pytest.raises(StudyInputError, match=match):
+        Study.open(path)
+
+
+def test_wrong_schema_is_refused(tmp_path):
+    path = tmp_path / "s.db"
+    conn = sqlite3.connect(path)
+    conn.execute("CREATE TABLE study (id INTEGER)")  # one table of ours, not the schema
+    conn.execute("PRAGMA user_version = 1")
+    conn.commit()
+    conn.close()
+    with pytest.raises(StudyInputError, match="no table"):
+        Study.open(path)
