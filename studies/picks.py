@@ -94,8 +94,24 @@ def load_picks(directory) -> list[Pick]:
     except json.JSONDecodeError as exc:
         raise StudyInputError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
     picks = picks_from_data(items, where=str(path))
-    return [Pick(p.id, p.variant, p.pca, p.params,
-                 str((directory / p.image).resolve()) if p.image else None) for p in picks]
+    return [Pick(p.id, p.variant, p.pca, p.params, inside_folder(directory, p.image, str(path)))
+            for p in picks]
+
+
+def inside_folder(folder, image, where) -> str | None:
+    """``image`` resolved against ``folder``; refused unless it lies inside ``folder``.
+
+    Symbolic links and ``..`` are resolved first, so a picks file (or a study
+    database) can never make Ramure read ``/etc/...`` or another user's files.
+    """
+    if not image:
+        return None
+    root = pathlib.Path(folder).resolve()
+    path = (root / str(image)).resolve()
+    if not path.is_relative_to(root):
+        raise StudyInputError(f"{where}: picture {image!r} lies outside {root}; pictures must be "
+                              "inside the study's own folder")
+    return str(path)
 
 
 def lattice_index(levels) -> np.ndarray:

@@ -30,7 +30,7 @@ import zlib
 from importlib import resources
 
 from ramure.studies.errors import StudyInputError
-from ramure.studies.picks import Pick, load_picks, picks_from_data
+from ramure.studies.picks import Pick, inside_folder, load_picks, picks_from_data
 
 SCHEMA_VERSION = 1
 DEFAULT_BUDGET_MINUTES = 30.0
@@ -231,7 +231,19 @@ class Study:
         rows = self.conn.execute(
             "SELECT pick_id, variant_id, pc1, pc2, pc3, params, image FROM picks "
             "WHERE grammar_id = ? ORDER BY pick_id", (self.grammar_id(grammar),))
-        return [Pick(r[0], r[1], (r[2], r[3], r[4]), json.loads(r[5]), r[6]) for r in rows]
+        return [Pick(r[0], r[1], (r[2], r[3], r[4]), json.loads(r[5]), self._picture(r[6]))
+                for r in rows]
+
+    def _picture(self, image):
+        """A pick's picture path if it lies inside the study's folder, else None (never shown).
+
+        A database can name any file; only pictures under the folder holding the
+        database are ever read (symbolic links and ``..`` resolved first).
+        """
+        try:
+            return inside_folder(self.path.parent, image, str(self.path))
+        except StudyInputError:
+            return None
 
     # -- participants --------------------------------------------------------
     def add_participant(self, code=None, consent=False, seed=None) -> str:

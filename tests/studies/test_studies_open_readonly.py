@@ -78,3 +78,33 @@ def test_wrong_schema_is_refused(tmp_path):
     conn.close()
     with pytest.raises(StudyInputError, match="no table"):
         Study.open(path)
+
+
+def test_pictures_outside_the_study_folder_are_never_read(tmp_path):
+    folder = tmp_path / "study"
+    folder.mkdir()
+    (folder / "pick1.png").write_bytes(b"\x89PNG")
+    path = folder / "study.db"
+    Study.create(path, grammars={"honda": lattice_picks(seed=1)}).close()
+    conn = sqlite3.connect(path)
+    conn.execute("UPDATE picks SET image = '/etc/passwd' WHERE pick_id = 1")
+    conn.execute("UPDATE picks SET image = ? WHERE pick_id = 2", (str(folder / ".." / "x.png"),))
+    conn.execute("UPDATE picks SET image = ? WHERE pick_id = 3", (str(folder / "pick1.png"),))
+    conn.commit()
+    conn.close()
+    with Study.open(path) as study:
+        images = {p.id: p.image for p in study.picks("honda")}
+    assert images[1] is None and images[2] is None
+    assert images[3] == str((folder / "pick1.png").resolve())
+
+
+def test_picks_json_naming_a_file_outside_its_folder_is_refused(tmp_path):
+    import json
+    from ramure.studies.picks import load_picks
+    items = [{"id": i, "variant": i, "pca": [0, 0, 0], "params": {"rule": None, "constants": {}},
+              "image": f"p{i}.png"}
+             for i in range(1, 28)]
+    items[4]["image"] = "../../etc/passwd"
+    (tmp_path / "picks.json").write_text(json.dumps(items))
+    with pytest.raises(StudyInputError, match="outside"):
+        load_picks(tmp_path)
