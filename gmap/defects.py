@@ -583,7 +583,8 @@ def _apply_one(gm, kind, opts, size_mm, seed):
 
 # ---------------------------------------------------------------- cracks
 CRACK_KINDS = ("longitudinal", "transverse", "concentric")
-#: An opening moves a vertex at most this fraction of its shortest edge off the crack.
+#: An opening moves a vertex at most this fraction of its shortest edge leaving the crack
+#: plane (the neighbouring cell's size across the crack).
 CRACK_CAP = 0.3
 
 
@@ -611,7 +612,7 @@ def crack(gm: GMap3, kind: str = "longitudinal", sector: int = 0, rings=(3, 6), 
     the skin are opened; the strip's bottom and end edges stay sewn (the tips
     stay shared), so the crack is a notch.  Each split vertex moves
     ``width_mm / 2`` off the crack along the strip normal, capped at
-    :data:`CRACK_CAP` of its shortest edge.  The faces exposed in the first
+    :data:`CRACK_CAP` of its shortest edge leaving the crack plane.  The faces exposed in the first
     ``healed`` layers get the dart attribute ``healed = 1`` (rule copy, kept by
     later subdivision).  Refused: an unknown kind, depth < 1 or deeper than
     the pericarp, width <= 0, healed outside 0..depth, rings or sector out of
@@ -716,16 +717,17 @@ def _open(gm, exposed, side_a, pos0, vid0, vid, nv, half):
     normal = np.zeros((nv, 3))
     for darts in (a_darts, b_darts):              # cell centre -> crack face, per side
         np.add.at(normal, vid[darts], gm.points[darts] - ca[vol[darts]])
-    # shortest edge at each vertex
-    u, w = vid, vid[gm.alpha[0]]
+    # the cells' size across the crack: shortest edge at each vertex leaving the crack plane
     _, pos = gm.vertex_positions()
-    elen = np.linalg.norm(pos[u] - pos[w], axis=1)
-    elen[elen == 0] = np.inf
+    unit = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    u, w = vid, vid[gm.alpha[0]]
+    vec = pos[w] - pos[u]
+    elen = np.linalg.norm(vec, axis=1)
+    across = np.abs(np.einsum("ij,ij->i", vec, unit[u])) > 0.5 * elen
     shortest = np.full(nv, np.inf)
-    np.minimum.at(shortest, u, elen)
+    np.minimum.at(shortest, u[across], elen[across])
     new = pos.copy()
-    nrm = normal[split]
-    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+    nrm = unit[split]
     step = np.minimum(half, CRACK_CAP * shortest[split])
     # a vertex of side A moves into A (against its outward normal towards B): -normal
     new[split] = pos[split] - step[:, None] * nrm
