@@ -29,15 +29,18 @@ from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox
                                QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget)
 
 from ramure.app.desktop import state
-from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit
+from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit, paint_adhesion, selected_fruit_surface
 from ramure.errors import RamureError
 
 SEASON_STEPS = 24
 FALLEN_RGB = (211, 219, 226)  # the sky behind the plant: a fallen leaf's cells fade into it
 SELECTED_RGB = (255, 0, 0)
 FRUIT_RGB = (235, 120, 40)
+PAINT_RGB = (60, 150, 60)  # painted adhesion on the fruit
 STONE_RGB = (190, 184, 173)
 KIND_LEAF = 1
+TOOLS = ("turn the view", "paint where lichen may start", "place the crack")
+BRUSH = 0.15  # brush radius, a fraction of the fruit's diagonal
 
 
 # -- pure helpers (tested without widgets) ---------------------------------------------------
@@ -94,9 +97,13 @@ class DetailsPanel(QWidget):
         self.fallen_actor = None
         self.shown = None  # "lichen" or "crack": what the dock's view shows
         self.last_facts = None
+        self.fruit = None  # the selected fruit's surface shown below (uncarved), for the tools
+        self.adhesion = None  # painted per fruit vertex, or None (lichen may start anywhere)
         self._build()
         self.plotter = (plotter_factory or _interactor)(self)
         self.layout().addWidget(getattr(self.plotter, "interactor", self.plotter), 1)
+        if hasattr(self.plotter, "track_click_position"):
+            self.plotter.track_click_position(self.clicked_at, side="left")
         controller.job_done.connect(self._job_done)
         controller.plant_changed.connect(self._plant_changed)
         controller.selection_changed.connect(lambda _sel: QTimer.singleShot(0, self._reapply))
@@ -143,7 +150,18 @@ class DetailsPanel(QWidget):
         self.lichen_button.clicked.connect(self.grow_lichen)
         self.crack_button = QPushButton("Crack the fruit")
         self.crack_button.setObjectName("detailsCrack")
-        self.crack_button.clicked.connect(self.carve_crack)
+        self.crack_button.clicked.connect(lambda: self.carve_crack())
+        self.show_button = QPushButton("Show the fruit")
+        self.show_button.setObjectName("detailsShowFruit")
+        self.show_button.clicked.connect(self.load_fruit)
+        self.tool = QComboBox()
+        self.tool.setObjectName("detailsTool")
+        self.tool.addItems(list(TOOLS))
+        self.tool.setToolTip("what a left click on the fruit below does: the lichen brush paints adhesion "
+                             "(clusters start only where painted), the crack tool carves a crack from the click")
+        self.clear_button = QPushButton("Clear paint")
+        self.clear_button.setObjectName("detailsClearPaint")
+        self.clear_button.clicked.connect(self.clear_paint)
         self.fruit_label = QLabel("Select a fruit, then grow lichen on it or crack it.")
         self.fruit_label.setObjectName("detailsFruitFacts")
         self.fruit_label.setWordWrap(True)
@@ -161,6 +179,11 @@ class DetailsPanel(QWidget):
         buttons.addWidget(self.lichen_button)
         buttons.addWidget(self.crack_button)
         ff.addRow(buttons)
+        tools = QHBoxLayout()
+        tools.addWidget(self.show_button)
+        tools.addWidget(self.tool, 1)
+        tools.addWidget(self.clear_button)
+        ff.addRow("Click", tools)
         ff.addRow(self.fruit_label)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
@@ -265,14 +288,58 @@ class DetailsPanel(QWidget):
         clusters, particles = int(self.clusters.value()), int(self.particles.value())
         habit, seed = self.habit.currentText(), int(self.seed.value())
         self.fruit_label.setText("Growing lichen…")
+        adhesion = None if self.adhesion is None else self.adhesion.copy()
         return self.controller.submit(
-            "details lichen", lambda ex: lichen_on_fruit(ex, clusters, particles, habit, seed), key="details-fruit")
+            "details lichen", lambda ex: lichen_on_fruit(ex, clusters, particles, habit, seed, adhesion),
+            key="details-fruit")
 
-    def carve_crack(self):
+    def carve_crack(self, anchor=None):
+        """Carve a crack from ``anchor`` (a point on the fruit; default: the fruit's top)."""
         nodes, seed = int(self.nodes.value()), int(self.seed.value())
         self.fruit_label.setText("Carving the crack…")
-        return self.controller.submit("details crack", lambda ex: crack_on_fruit(ex, nodes, seed),
+        return self.controller.submit("details crack", lambda ex: crack_on_fruit(ex, nodes, seed, anchor),
                                       key="details-fruit")
+
+    def load_fruit(self):
+        """Show the selected fruit below, ready for the brush or the crack tool."""
+        self.fruit_label.setText("Loading the fruit…")
+        return self.controller.submit("details fruit", lambda ex: {"fruit": selected_fruit_surface(ex)[0]},
+                                      key="details-fruit")
+
+    def clicked_at(self, point):
+        """A left click on the dock's view at world ``point``: paint adhesion or place the crack."""
+        tool = self.tool.currentText()
+        if tool == TOOLS[0] or point is None:
+            return None
+        if self.fruit is None:
+            self.fruit_label.setText("Refused: show a fruit first (select one, press 'Show the fruit')")
+            return None
+        points = np.asarray(self.fruit.points)
+        nearest = points[int(np.argmin(np.linalg.norm(points - np.asarray(point, float), axis=1)))]
+        if tool == TOOLS[2]:
+            return self.carve_crack(tuple(nearest))
+        self.adhesion = paint_adhesion(points, self.adhesion, nearest, BRUSH * diagonal(self.fruit))
+        painted = int((self.adhesion > 0).sum())
+        self.fruit_label.setText(f"Painted {painted} of {len(points)} vertices: lichen clusters start there "
+                                 "(press 'Lichen on the fruit').")
+        self._show_fruit()
+        return self.adhesion
+
+    def clear_paint(self):
+        self.adhesion = None
+        if self.fruit is not None:
+            self._show_fruit()
+        self.fruit_label.setText("Paint cleared: lichen may start anywhere on the fruit.")
+
+    def _show_fruit(self):
+        """The fruit in its colour, painted adhesion in green."""
+        rgb = np.tile(np.array(FRUIT_RGB, float), (self.fruit.n_points, 1))
+        if self.adhesion is not None:
+            rgb += self.adhesion[:, None] * (np.array(PAINT_RGB, float) - rgb)
+        shown = self.fruit.copy(deep=False)
+        shown.point_data["rgb"] = rgb.astype(np.uint8)
+        self._show_result(shown, None, scalars="rgb", keep_camera=self.shown == "fruit")
+        self.shown = "fruit"
 
     # -- results ---------------------------------------------------------------------------
     def _job_done(self, job):
@@ -290,6 +357,16 @@ class DetailsPanel(QWidget):
             elif self.slider.value() > 0:
                 self.show_step()
             return
+        fruit = job.result["fruit"]
+        if self.fruit is None or self.fruit.n_points != fruit.n_points or not np.allclose(self.fruit.bounds,
+                                                                                         fruit.bounds):
+            self.adhesion = None  # another fruit: the paint was for the old one
+        self.fruit = fruit
+        if job.name == "details fruit":
+            self.shown = None
+            self._show_fruit()
+            self.fruit_label.setText(f"Fruit: {fruit.n_cells} triangles. Choose what a click does, then click on it.")
+            return
         self.last_facts = job.result["facts"]
         if job.name == "details lichen":
             self.shown = "lichen"
@@ -306,19 +383,28 @@ class DetailsPanel(QWidget):
                                      f"{f['triangles_object']} -> {f['triangles_result']} triangles, "
                                      f"{'watertight' if f['watertight'] else 'NOT watertight'}.")
 
-    def _show_result(self, surface, colour, discs=None):
+    def _show_result(self, surface, colour, discs=None, scalars=None, keep_camera=False):
         p = self.plotter
         for name in ("details_surface", "details_discs"):  # not clear(): that removes the light kit too
             p.remove_actor(name, render=False)
-        p.add_mesh(surface, color=np.array(colour) / 255, smooth_shading=discs is not None, name="details_surface")
+        if scalars is not None:
+            p.add_mesh(surface, scalars=scalars, rgb=True, smooth_shading=True, name="details_surface",
+                       show_scalar_bar=False)
+        else:
+            p.add_mesh(surface, color=np.array(colour) / 255, smooth_shading=discs is not None,
+                       name="details_surface")
         if discs is not None:
             p.add_mesh(discs, scalars="rgb", rgb=True, name="details_discs", show_scalar_bar=False)
+        if keep_camera:  # painting: the camera stays where the user turned it
+            pass
+        elif discs is not None or scalars is not None:
             p.view_isometric()
         else:  # from above and a little aside: the crack starts at the top of the fruit
             b = np.reshape(surface.bounds, (3, 2))
             centre, size = b.mean(axis=1), float(np.ptp(b, axis=1).max())
             p.camera_position = [tuple(centre + np.array([0.3, -0.5, 1.0]) * size * 2), tuple(centre), (0, 1, 0)]
-        p.reset_camera()
+        if not keep_camera:
+            p.reset_camera()
         if hasattr(p, "render"):
             p.render()
 

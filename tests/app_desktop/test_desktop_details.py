@@ -123,3 +123,40 @@ def test_lichen_and_crack_on_the_selected_fruit(qtbot, window, artifacts):
     if notes.is_dir():
         for name in ("details-window.png", "details-lichen.png", "details-crack.png"):
             shutil.copy(artifacts / name, notes / name)
+
+
+def test_the_brush_paints_where_lichen_starts_and_a_click_places_the_crack(qtbot, window, artifacts):
+    panel = _panel(window)
+    fruit = window.controller.explorer.fruit_ids()[0]
+    window.controller.select([fruit])
+    panel.tool.setCurrentText("paint where lichen may start")
+    assert panel.clicked_at((0.0, 0.0, 0.0)) is None and "show a fruit first" in panel.fruit_label.text()
+    qtbot.mouseClick(panel.show_button, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Fruit:")
+    points = np.asarray(panel.fruit.points)
+    top = points[np.argmax(points[:, 2])]
+    adhesion = panel.clicked_at(top + (0.0, 0.0, 0.001))  # a click just above the top vertex
+    assert adhesion[np.argmax(points[:, 2])] == 1.0
+    radius = 0.15 * np.linalg.norm(np.ptp(points, axis=0))
+    far = np.linalg.norm(points - top, axis=1) >= radius
+    assert far.any() and (adhesion[far] == 0).all() and 0 < (adhesion > 0).sum() < len(points)
+    panel.particles.setValue(120)
+    panel.clusters.setValue(2)
+    qtbot.mouseClick(panel.lichen_button, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "particles in")
+    assert panel.last_facts["painted"] and panel.last_facts["particles"] == 120
+    panel.plotter.render()
+    panel.plotter.screenshot(str(artifacts / "details-painted-lichen.png"))
+
+    panel.tool.setCurrentText("place the crack")
+    side = points[np.argmin(points[:, 0])]  # the fruit's -x side, not its top
+    panel.clicked_at(side)
+    _wait(qtbot, window, panel, "Crack:")
+    assert panel.shown == "crack" and panel.last_facts["watertight"]
+    carved = np.asarray(window.docks["details"].widget().plotter.renderer.actors["details_surface"]
+                        .GetMapper().GetInput().GetPoints().GetData())
+    new = carved[np.linalg.norm(carved[:, None, :] - points[None, :, :], axis=2).min(axis=1) > 1e-6]
+    assert len(new) and np.linalg.norm(new.mean(axis=0) - side) < np.linalg.norm(new.mean(axis=0) - top)
+    notes = ROOT.parent / "notes"
+    if notes.is_dir():
+        shutil.copy(artifacts / "details-painted-lichen.png", notes / "details-painted-lichen.png")
