@@ -144,7 +144,11 @@ def read_table(path, row_labels=None):
     path = pathlib.Path(path)
     if not path.is_file():
         raise StudyInputError(f"{path}: no such table file")
-    text = path.read_text(encoding="utf-8-sig")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise StudyInputError(f"{path}: not UTF-8 text (byte {exc.start}); save the table as "
+                              "UTF-8") from None
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise StudyInputError(f"{path}: the table is empty")
@@ -169,10 +173,12 @@ def read_table(path, row_labels=None):
         for j, cell in enumerate(r):
             try:
                 values[i, j] = _number(cell)
+                if np.isinf(values[i, j]):
+                    raise ValueError(cell)
             except ValueError:
                 line = i + 1 + (header is not None)
                 raise StudyInputError(f"{path}: row {line}, column {j + 1 + bool(row_labels)}: "
-                                      f"{cell.strip()!r} is not a number") from None
+                                      f"{cell.strip()!r} is not a finite number") from None
     if header is not None:
         columns = [c.strip() for c in header[-width:]] if len(header) >= width else \
             [c.strip() for c in header] + [f"column {j + 1}" for j in range(len(header), width)]

@@ -108,3 +108,14 @@ def test_picks_json_naming_a_file_outside_its_folder_is_refused(tmp_path):
     (tmp_path / "picks.json").write_text(json.dumps(items))
     with pytest.raises(StudyInputError, match="outside"):
         load_picks(tmp_path)
+
+
+@pytest.mark.parametrize("content,match", [(b"image\ta\tb\n1\t\xff\xfe\t2\n", "not UTF-8"),
+                                           (b"image\ta\tb\n1\tinf\t2\n2\t3\t4\n", "finite"),
+                                           (b"image\ta\tb\n1\t-inf\t2\n2\t3\t4\n", "finite")])
+def test_anova_refuses_non_utf8_and_infinite_tables(tmp_path, content, match):
+    from ramure.studies.anova import read_table
+    path = tmp_path / "t.tsv"
+    path.write_bytes(content)
+    with pytest.raises(StudyInputError, match=match):
+        read_table(path)
