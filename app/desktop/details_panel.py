@@ -377,13 +377,13 @@ class DetailsPanel(QWidget):
                                      "distance tests. Old discs dark, young rims light.")
         else:
             self.shown = "crack"
-            self._show_result(job.result["surface"], FRUIT_RGB)
+            self._show_result(job.result["surface"], FRUIT_RGB, look_at=job.result["points"])
             f = self.last_facts
             self.fruit_label.setText(f"Crack: {f['nodes']} nodes, length {f['length']:.3g}, "
                                      f"{f['triangles_object']} -> {f['triangles_result']} triangles, "
                                      f"{'watertight' if f['watertight'] else 'NOT watertight'}.")
 
-    def _show_result(self, surface, colour, discs=None, scalars=None, keep_camera=False):
+    def _show_result(self, surface, colour, discs=None, scalars=None, keep_camera=False, look_at=None):
         p = self.plotter
         for name in ("details_surface", "details_discs"):  # not clear(): that removes the light kit too
             p.remove_actor(name, render=False)
@@ -399,10 +399,14 @@ class DetailsPanel(QWidget):
             pass
         elif discs is not None or scalars is not None:
             p.view_isometric()
-        else:  # from above and a little aside: the crack starts at the top of the fruit
+        else:  # from outside the crack (its nodes' mean), a little aside
             b = np.reshape(surface.bounds, (3, 2))
             centre, size = b.mean(axis=1), float(np.ptp(b, axis=1).max())
-            p.camera_position = [tuple(centre + np.array([0.3, -0.5, 1.0]) * size * 2), tuple(centre), (0, 1, 0)]
+            out = np.mean(look_at, axis=0) - centre if look_at is not None and len(look_at) else np.array([0, 0, 1.0])
+            out = out / max(np.linalg.norm(out), 1e-12)
+            aside = np.cross(out, (0, 0, 1.0)) if abs(out[2]) < 0.9 else np.array([0.3, -0.5, 0.0])
+            up = (0, 0, 1.0) if abs(out[2]) < 0.9 else (0, 1.0, 0)
+            p.camera_position = [tuple(centre + (out + 0.3 * aside) * size * 2), tuple(centre), up]
         if not keep_camera:
             p.reset_camera()
         if hasattr(p, "render"):

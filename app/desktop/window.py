@@ -129,6 +129,7 @@ class MainWindow(QMainWindow):
         self.shown_text = self.controller.snapshot.text
         self.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
+        QTimer.singleShot(0, self._full_tab_titles)  # dock tabs never read "Req…"
 
     def use_compact_layout(self):
         """Small screens (under 1300 px wide, e.g. 1024x700): every dock in one right-hand column,
