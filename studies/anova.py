@@ -173,12 +173,14 @@ def read_table(path, row_labels=None):
         for j, cell in enumerate(r):
             try:
                 values[i, j] = _number(cell)
-                if np.isinf(values[i, j]):
-                    raise ValueError(cell)
             except ValueError:
                 line = i + 1 + (header is not None)
                 raise StudyInputError(f"{path}: row {line}, column {j + 1 + bool(row_labels)}: "
-                                      f"{cell.strip()!r} is not a finite number") from None
+                                      f"{cell.strip()!r} is not a number") from None
+            if np.isinf(values[i, j]):
+                line = i + 1 + (header is not None)
+                raise StudyInputError(f"{path}: row {line}, column {j + 1 + bool(row_labels)}: "
+                                      f"{cell.strip()!r} is not a finite number")
     if header is not None:
         columns = [c.strip() for c in header[-width:]] if len(header) >= width else \
             [c.strip() for c in header] + [f"column {j + 1}" for j in range(len(header), width)]
