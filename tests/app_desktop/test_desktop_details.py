@@ -153,10 +153,13 @@ def test_the_brush_paints_where_lichen_starts_and_a_click_places_the_crack(qtbot
     panel.clicked_at(side)
     _wait(qtbot, window, panel, "Crack:")
     assert panel.shown == "crack" and panel.last_facts["watertight"]
+    panel.plotter.render()
+    panel.plotter.screenshot(str(artifacts / "details-placed-crack.png"))
     carved = np.asarray(window.docks["details"].widget().plotter.renderer.actors["details_surface"]
                         .GetMapper().GetInput().GetPoints().GetData())
     new = carved[np.linalg.norm(carved[:, None, :] - points[None, :, :], axis=2).min(axis=1) > 1e-6]
     assert len(new) and np.linalg.norm(new.mean(axis=0) - side) < np.linalg.norm(new.mean(axis=0) - top)
     notes = ROOT.parent / "notes"
     if notes.is_dir():
-        shutil.copy(artifacts / "details-painted-lichen.png", notes / "details-painted-lichen.png")
+        for name in ("details-painted-lichen.png", "details-placed-crack.png"):
+            shutil.copy(artifacts / name, notes / name)
