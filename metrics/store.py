@@ -41,11 +41,41 @@ SCHEMA = """CREATE TABLE IF NOT EXISTS qualifier_points (
 )"""
 
 
+_COLUMNS = ["id", "grammar", "qualifier", "variant_id", "pick_id", "pc1", "pc2", "pc3", "params",
+            "source"]
+
+
+def _check_existing(path):
+    """Refuse (one line, file untouched) a non-empty file that is not SQLite, or a database
+    with its own tables but neither a Ramure study nor a ``qualifier_points`` of our columns."""
+    if not path.is_file() or path.stat().st_size == 0:
+        return
+    with open(path, "rb") as f:
+        if f.read(16) != b"SQLite format 3\x00":
+            raise RamureError(f"{path}: not a SQLite file; give a new file or a qualifier store")
+    try:
+        conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=10.0)
+        try:
+            tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+            columns = [r[1] for r in conn.execute("PRAGMA table_info(qualifier_points)")]
+        finally:
+            conn.close()
+    except sqlite3.Error as exc:
+        raise RamureError(f"{path}: not a readable SQLite database ({exc})") from None
+    if "qualifier_points" in tables and columns != _COLUMNS:
+        raise RamureError(f"{path}: its qualifier_points table has another schema "
+                          f"({', '.join(columns)}); not a Ramure qualifier store")
+    if tables and "qualifier_points" not in tables and "study" not in tables:
+        raise RamureError(f"{path}: a database of another application (tables "
+                          f"{', '.join(sorted(tables)[:5])}); give a new file or a Ramure study")
+
+
 class QualifierStore:
     """Read and write ``qualifier_points`` in one SQLite file (created if missing)."""
 
     def __init__(self, path):
         self.path = pathlib.Path(path)
+        _check_existing(self.path)  # read-only first: a database of another schema is refused
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.conn = sqlite3.connect(os.fspath(self.path), timeout=10.0)

@@ -119,3 +119,28 @@ def test_anova_refuses_non_utf8_and_infinite_tables(tmp_path, content, match):
     path.write_bytes(content)
     with pytest.raises(StudyInputError, match=match):
         read_table(path)
+
+
+@pytest.mark.parametrize("make", ["other_table", "wrong_columns", "text"])
+def test_qualifier_store_refuses_other_schemas_untouched(tmp_path, make):
+    from ramure.errors import RamureError
+    from ramure.metrics.store import QualifierStore
+    path = tmp_path / "q.db"
+    if make == "text":
+        path.write_text("not sqlite")
+    else:
+        conn = sqlite3.connect(path)
+        conn.execute("CREATE TABLE x (a)" if make == "other_table" else "CREATE TABLE qualifier_points (a)")
+        conn.commit()
+        conn.close()
+    before = digest(path)
+    with pytest.raises(RamureError):
+        QualifierStore(path)
+    assert digest(path) == before
+
+
+def test_qualifier_store_still_opens_new_files_and_studies(tmp_path):
+    from ramure.metrics.store import QualifierStore
+    QualifierStore(tmp_path / "new.db").close()
+    QualifierStore(tmp_path / "new.db").close()  # and reopens its own
+    QualifierStore(make_study(tmp_path)).close()
