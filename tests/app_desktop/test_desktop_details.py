@@ -163,3 +163,19 @@ def test_the_brush_paints_where_lichen_starts_and_a_click_places_the_crack(qtbot
     if notes.is_dir():
         for name in ("details-painted-lichen.png", "details-placed-crack.png"):
             shutil.copy(artifacts / name, notes / name)
+
+
+def test_a_real_left_click_on_the_fruit_paints_it(qtbot, window):
+    panel = _panel(window)
+    window.controller.select([window.controller.explorer.fruit_ids()[0]])
+    panel.tool.setCurrentText("paint where lichen may start")
+    qtbot.mouseClick(panel.show_button, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Fruit:")
+    widget = panel.plotter
+    widget.render()
+    centre = widget.rect().center()
+    qtbot.mousePress(widget, Qt.MouseButton.LeftButton, pos=centre)
+    qtbot.mouseRelease(widget, Qt.MouseButton.LeftButton, pos=centre)
+    qtbot.waitUntil(lambda: panel.adhesion is not None, timeout=3000)
+    assert 0 < (panel.adhesion > 0).sum() < panel.fruit.n_points
+    assert "Painted" in panel.fruit_label.text()
