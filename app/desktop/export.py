@@ -10,14 +10,13 @@ through a temporary file in the same folder, then a rename.
 from __future__ import annotations
 
 import io
-import os
 import pathlib
-import tempfile
 
 import numpy as np
 
 from ramure.app.render import BARK, FRUIT, LEAF
 from ramure.errors import ValueRefused
+from ramure.io import save_mesh, write_text
 
 PART_COLORS = {"bark": BARK, "leaves": LEAF, "fruit": FRUIT}
 
@@ -46,20 +45,6 @@ def y_up(points):
     return np.c_[p[:, 0], p[:, 2], -p[:, 1]]
 
 
-def _write_atomic(path, data: str):
-    path = pathlib.Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(data)
-            out.flush()
-            os.fsync(out.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_obj(parts, path, yup=False):
     """Wavefront OBJ with groups, materials (``path.mtl``) and vertex normals; returns the path."""
     path = pathlib.Path(path)
@@ -83,8 +68,8 @@ def write_obj(parts, path, yup=False):
         offset += len(points)
     materials = "".join(f"newmtl {name}\nKd {c[0]:.3f} {c[1]:.3f} {c[2]:.3f}\nKa 0 0 0\nKs 0.05 0.05 0.05\n"
                         f"Ns 10\nd 1\nillum 2\n\n" for name, c in PART_COLORS.items())
-    _write_atomic(mtl, materials)
-    _write_atomic(path, out.getvalue())
+    write_text(mtl, materials)
+    write_text(path, out.getvalue())
     return path
 
 
@@ -108,12 +93,4 @@ def export_plant(mesh, path, fruit_surface=None, yup=False):
         from ramure.app.render import export_gltf
 
         return pathlib.Path(export_gltf(merged, path))
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
-    os.close(fd)
-    try:
-        merged.save(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return save_mesh(merged, path)

@@ -6,36 +6,18 @@ controller.  Recent files are kept in the window's ``QSettings``.
 """
 from __future__ import annotations
 
-import os
 import pathlib
-import tempfile
 
 from PySide6.QtWidgets import QFileDialog
 
 from ramure.errors import RamureError, ValueRefused
+from ramure.io import write_text
 
 GRAMMAR_FILTER = "L-system grammars (*.lsys);;All files (*)"
 SESSION_FILTER = "Ramure sessions (*.json);;All files (*)"
 EXPORT_FILTER = "VTK PolyData (*.vtp);;Wavefront OBJ (*.obj);;glTF (*.gltf *.glb);;PLY (*.ply);;STL (*.stl)"
 PNG_FILTER = "PNG images (*.png)"
 MAX_RECENT = 8
-
-
-def write_text_atomic(path, text):
-    """Write ``text`` to ``path`` through a temporary file in the same folder, fsync, then rename:
-    a crash or a full disk never leaves half a grammar."""
-    path = pathlib.Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as out:
-            out.write(text)
-            out.flush()
-            os.fsync(out.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
 
 
 class FileActions:
@@ -111,7 +93,7 @@ class FileActions:
         self.controller.wait_idle()
         text = self.window.editor.text()  # what is on screen (the #define lines follow the sliders)
         try:
-            write_text_atomic(path, text)
+            write_text(path, text)  # temporary file, fsync, rename
             self.controller.read(lambda ex: setattr(ex, "path", path), wait=None)
         except OSError as exc:
             self.window.report_refused(f"cannot save {path}: {exc.strerror or exc}")
