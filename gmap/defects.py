@@ -274,19 +274,17 @@ def rot(gm: GMap3, vertex: int | None = None, coefficients=ROT_COEFFICIENTS, see
 
 def rot_rings(gm: GMap3, vertex: int, count: int = 3) -> list[np.ndarray]:
     """Volume ids at graph distance 1 .. ``count`` (adjacency by vertex) around ``vertex``."""
-    inc = _incidence.vertex_volumes(gm)
-    adj = _incidence.volume_adjacency(gm, by="vertex")
+    inc = _incidence.vertex_volumes(gm).tocsr()
+    by_volume = inc.T.tocsr()                       # volume -> its vertices
     seen = np.zeros(gm.n_volumes, bool)
-    ring = inc[[vertex]].indices if hasattr(inc[[vertex]], "indices") else inc.getrow(vertex).indices
-    ring = np.unique(inc.tocsr()[[vertex], :].nonzero()[1])
+    ring = np.unique(inc.indices[inc.indptr[vertex]:inc.indptr[vertex + 1]])
     rings = []
     for _ in range(count):
         seen[ring] = True
         rings.append(ring)
-        mask = np.zeros(gm.n_volumes)
-        mask[ring] = 1.0
-        reach = adj.T @ mask > 0
-        ring = np.flatnonzero(reach & ~seen)
+        verts = np.unique(by_volume[ring].indices)
+        near = np.unique(inc[verts].indices)
+        ring = near[~seen[near]]
     return rings
 
 

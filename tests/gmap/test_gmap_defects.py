@@ -95,6 +95,11 @@ def test_rot_multipliers_on_rings(fruit):
     rest = np.ones(fruit.n_volumes, bool); rest[np.concatenate(rings)] = False
     assert np.array_equal(k1[rest], k0[rest])
     assert len(np.unique(np.concatenate(rings))) == sum(map(len, rings))
+    from ramure.gmap import incidence
+    adj = incidence.volume_adjacency(fruit, by="vertex").tocsr()   # the kernel's adjacency agrees
+    for inner, outer, before in ((rings[0], rings[1], rings[0]), (rings[1], rings[2], np.r_[rings[0], rings[1]])):
+        reach = np.unique(adj[inner].indices)
+        assert np.array_equal(np.setdiff1d(reach, before), outer)
     shrunk, _ = D.shrink(out, 0.05)
     check_after(fruit, shrunk)
     with pytest.raises(GMapError, match=">= 0"):
