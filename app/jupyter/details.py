@@ -6,7 +6,10 @@ Markov chain of :mod:`ramure.lsys.seasons` (computed once per plant and environm
 slider only redraws), and the picture shows the plant at that step as ``ramure autumn``
 draws it: attached leaves in their state's colour, fallen ones gone from the branches and
 lying on the ground.  **Lichen** and **Crack** act on the selected fruit's closed surface
-(:mod:`ramure.app.details`) and show it in the same picture, with their facts.
+(:mod:`ramure.app.details`) and show it in the same picture, with their facts.  A static
+picture cannot be clicked, so *where* stands for the desktop's brush and crack tool: lichen
+starts only near the fruit's top, side (-x) or bottom (a painted adhesion dab of 30 % of the
+fruit's diagonal), and the crack is carved from that point.
 
 >>> from ramure.app.jupyter.details import DetailsTab
 >>> tab = DetailsTab(None)
@@ -26,6 +29,7 @@ from ramure.app.jupyter._ui import button, on_value, png_image
 from ramure.errors import RamureError
 
 STEPS = 24
+PLACES = ("anywhere", "top", "side", "bottom")  # where lichen starts / the crack begins (anywhere: top)
 
 
 class DetailsTab:
@@ -41,6 +45,7 @@ class DetailsTab:
         self.season_key = None
         self.shown = None  # "season", "lichen" or "crack"
         self.last_facts = None
+        self.last_result = None  # the last lichen or crack (see ramure.app.details)
         self.season_slider = W.IntSlider(value=0, min=0, max=STEPS, description="season step")
         self.heat = W.BoundedFloatText(value=0.5, min=0.0, max=1.0, step=0.1, description="heat")
         self.humidity = W.BoundedFloatText(value=0.5, min=0.0, max=1.0, step=0.1, description="humidity")
@@ -48,11 +53,20 @@ class DetailsTab:
         self.seed = W.BoundedIntText(value=0, min=0, max=2**31 - 1, description="seed")
         for box in (self.season_slider, self.heat, self.humidity, self.wind, self.seed):
             on_value(box, lambda _v: self.show_season())
+        from ramure.gmap.lichen import HABITS
+
+        self.clusters = W.BoundedIntText(value=5, min=1, max=200, description="clusters")
+        self.particles = W.BoundedIntText(value=300, min=1, max=20_000, description="particles")
+        self.habit = W.Dropdown(options=list(HABITS), value="crustose", description="habit")
+        self.nodes = W.BoundedIntText(value=15, min=2, max=500, description="crack nodes")
+        self.where = W.Dropdown(options=PLACES, value="anywhere", description="where")
         self.facts = W.HTML("<small>Move the slider to age the leaves; select a fruit for lichen or a crack."
                             "</small>")
         self.picture = png_image(width=size[0])
         self.widget = W.VBox([W.HBox([self.season_slider, self.heat, self.humidity]),
-                              W.HBox([self.wind, self.seed, button("Lichen on the fruit", self.grow_lichen),
+                              W.HBox([self.wind, self.seed]),
+                              W.HBox([self.clusters, self.particles, self.habit]),
+                              W.HBox([self.nodes, self.where, button("Lichen on the fruit", self.grow_lichen),
                                       button("Crack the fruit", self.carve_crack)]),
                               self.facts, self.picture])
 
@@ -99,14 +113,18 @@ class DetailsTab:
 
     # -- lichen and cracks ---------------------------------------------------------------
     def grow_lichen(self):
-        from ramure.app.details import lichen_on_fruit
+        from ramure.app.details import diagonal, lichen_on_fruit, paint_adhesion
 
         try:
-            out = lichen_on_fruit(self._model(), seed=self.seed.value)
+            point, poly = self._place()
+            adhesion = None if point is None else paint_adhesion(poly.points, None, point, 0.3 * diagonal(poly))
+            out = lichen_on_fruit(self._model(), self.clusters.value, self.particles.value, self.habit.value,
+                                  self.seed.value, adhesion)
         except RamureError as err:
             self._refused(err)
             return
         f = self.last_facts = out["facts"]
+        self.last_result = out
         self.shown = "lichen"
         self.facts.value = (f"<small>Lichen ({f['habit']}): {f['particles']} particles in {f['clusters']} clusters "
                             f"on {f['triangles']} triangles; old discs dark, young rims light</small>")
@@ -116,16 +134,29 @@ class DetailsTab:
         from ramure.app.details import crack_on_fruit
 
         try:
-            out = crack_on_fruit(self._model(), seed=self.seed.value)
+            point, _ = self._place()
+            out = crack_on_fruit(self._model(), self.nodes.value, self.seed.value, point)
         except RamureError as err:
             self._refused(err)
             return
         f = self.last_facts = out["facts"]
+        self.last_result = out
         self.shown = "crack"
         self.facts.value = (f"<small>Crack: {f['nodes']} nodes, length {f['length']:.3g}, "
                             f"{f['triangles_object']} → {f['triangles_result']} triangles, "
                             f"{'watertight' if f['watertight'] else 'not watertight'}</small>")
         self.picture.value = _png(lambda path: _render_surface(out["surface"], path, self.size))
+
+    def _place(self):
+        """The chosen place on the selected fruit (None: anywhere) and the fruit's surface."""
+        from ramure.app.details import selected_fruit_surface
+
+        poly, _ = selected_fruit_surface(self._model())
+        if self.where.value == "anywhere":
+            return None, poly
+        points = np.asarray(poly.points)
+        pick = {"top": np.argmax(points[:, 2]), "bottom": np.argmin(points[:, 2]), "side": np.argmin(points[:, 0])}
+        return points[int(pick[self.where.value])], poly
 
     def _refused(self, err):
         self.facts.value = f"<small style='color:#b00020'>refused: {err}</small>"

@@ -76,3 +76,22 @@ def test_lichen_needs_a_selected_fruit_then_grows_on_it(explorer):
     notes = ROOT.parent / "notes"
     if notes.is_dir():
         (notes / "details-jupyter-crack.png").write_bytes(tab.picture.value)
+
+
+def test_where_puts_the_lichen_and_the_crack_at_the_fruit_s_bottom(explorer):
+    from ramure.app.details import selected_fruit_surface
+
+    tab = explorer.details
+    explorer.select([explorer.model.fruit_ids()[0]])
+    tab.where.value = "bottom"
+    tab.clusters.value, tab.particles.value, tab.nodes.value = 2, 100, 8
+    poly, _ = selected_fruit_surface(explorer.model)
+    b = np.reshape(poly.bounds, (3, 2))
+    lower_third = b[2, 0] + (b[2, 1] - b[2, 0]) / 3
+    tab.grow_lichen()
+    assert tab.last_facts["painted"] and tab.last_facts["particles"] == 100 and tab.last_facts["clusters"] == 2
+    assert float(np.mean(tab.last_result["discs"].points[:, 2])) < lower_third  # grown at the bottom
+    tab.carve_crack()
+    assert tab.last_facts["nodes"] == 8 and tab.last_facts["watertight"]
+    assert float(tab.last_result["points"][0, 2]) < lower_third  # the crack's root at the bottom
+    assert "refused" not in tab.facts.value
