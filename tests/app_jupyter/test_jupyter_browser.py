@@ -202,10 +202,9 @@ def test_explore_notebook_in_chromium(lab):
             cell = page.locator(".jp-CodeCell").first
             fallback = cell.locator(".ramure-fallback img").first
             sync_api.expect(fallback).to_be_visible(timeout=30_000)
-            widget_output = cell.locator(".jp-OutputArea-output[data-mime-type="
-                                         "'application/vnd.jupyter.widget-view+json']").first
-            sync_api.expect(widget_output).to_contain_text("model not found", timeout=60_000)  # no model
-            sync_api.expect(widget_output).to_be_hidden()  # ... and the error line is not shown
+            widget_output = cell.locator(".jp-OutputArea-output", has_text="model not found").first
+            widget_output.wait_for(state="attached", timeout=60_000)  # the widget output has no model
+            sync_api.expect(widget_output).to_be_hidden()  # ... and its error line is not shown
             sync_api.expect(fallback).to_be_visible()
             _save("reopened.png", cell.screenshot())
         finally:
