@@ -20,6 +20,7 @@ import csv
 import os
 import pathlib
 
+from ramure.io import open_atomic
 from ramure.studies.qualifiers import SynonymTable
 
 _QUERIES = {
@@ -75,7 +76,7 @@ def export_csv(source, out_dir, synonyms=None) -> list:
             header.append("canonical")
             rows = [(*r, ";".join(table.canonical(r[-1]))) for r in rows]
         path = out_dir / name
-        with open(path, "w", newline="", encoding="utf-8") as fh:
+        with open_atomic(path, "w", newline="", encoding="utf-8") as fh:
             writer = csv.writer(fh)
             writer.writerow(header)
             writer.writerows(rows)

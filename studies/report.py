@@ -35,6 +35,7 @@ import re
 
 import numpy as np
 
+from ramure.io import open_atomic, write_text, write_with
 from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
 from ramure.studies.anova import anova_table
 from ramure.studies.data import load_study_data
@@ -119,9 +120,9 @@ def write_report(source, out_dir, alpha=0.05, synonyms=(), min_usefulness="good"
     files += _write_csvs(data, result, out)
     if figures:
         files += _write_figures(data, result, out)
-    (out / "summary.json").write_text(json.dumps(result, indent=1, allow_nan=False), encoding="utf-8")
+    write_text(out / "summary.json", json.dumps(result, indent=1, allow_nan=False))
     files.append(out / "summary.json")
-    (out / "index.html").write_text(_html(result, [f.name for f in files], figures), encoding="utf-8")
+    write_text(out / "index.html", _html(result, [f.name for f in files], figures))
     files.append(out / "index.html")
     result["files"] = [os.fspath(f) for f in files]
     return result
@@ -129,7 +130,7 @@ def write_report(source, out_dir, alpha=0.05, synonyms=(), min_usefulness="good"
 
 # -- CSV -------------------------------------------------------------------------
 def _write_rows(path, header, rows):
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    with open_atomic(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
         w.writerow(header)
         w.writerows(rows)
@@ -145,7 +146,7 @@ def _write_csvs(data, result, out):
     for measure in RATED:
         means = np.array(result["ratings"][measure]["mean"], dtype=float).T  # 27 x grammars
         path = out / f"image_ratings_{measure}.tsv"
-        with open(path, "w", encoding="utf-8") as fh:
+        with open_atomic(path, "w", encoding="utf-8") as fh:
             fh.write("\t".join(["image", *data.grammars]) + "\n")
             for i, row in zip(ids, means):
                 fh.write("\t".join([str(i), *("" if math.isnan(v) else f"{v:.6g}" for v in row)]) + "\n")
@@ -202,7 +203,7 @@ def _collision_figure(result, path):
     image = draw_collision_matrix(ax, c["matrix"], c["names"],
                                   title=f"collision matrix (mean {c['mean']:.1f} %, 7 % trimmed)")
     fig.colorbar(image, ax=ax, shrink=0.8, label="% of A's points in B's box")
-    fig.savefig(path)
+    write_with(path, fig.savefig)
     return path
 
 
@@ -226,7 +227,7 @@ def _cooccurrence_figure(result, path):
     for ax in axes[len(panels):]:
         ax.set_visible(False)
     fig.colorbar(im, ax=axes.tolist(), shrink=0.8, label="share of tests grouping the pair")
-    fig.savefig(path)
+    write_with(path, fig.savefig)
     return path
 
 
@@ -241,7 +242,7 @@ def _grouping_figure(data, path):
         ax.set_title(title)
         ax.tick_params(axis="x", rotation=30)
         ax.grid(axis="y", alpha=0.3)
-    fig.savefig(path)
+    write_with(path, fig.savefig)
     return path
 
 
@@ -284,7 +285,7 @@ def _ratings_figure(result, path):
             if not math.isnan(v):
                 ax.text(j, i, f"{v:.1f}", ha="center", va="center", fontsize=6)
         fig.colorbar(im, ax=ax, ticks=[1, 2, 3, 4], shrink=0.9)
-    fig.savefig(path)
+    write_with(path, fig.savefig)
     return path
 
 
@@ -302,7 +303,7 @@ def _qualifier_figure(result, path):
     ax.set_yticks(y, names)
     ax.set_xlabel("groups named")
     ax.legend(loc="lower right", fontsize=8)
-    fig.savefig(path)
+    write_with(path, fig.savefig)
     return path
 
 

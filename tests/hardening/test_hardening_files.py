@@ -157,3 +157,16 @@ def test_closed_pipe_is_a_quiet_exit():
     proc.stdout.close()  # what head does after its first line
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 0 and "Broken pipe" not in err and "Traceback" not in err
+
+
+def test_study_report_full_disk_keeps_previous_files(tmp_path, monkeypatch):
+    """Reports go through the atomic writer too: a failing write leaves the old summary whole."""
+    from ramure.studies import report
+    out = tmp_path / "report"
+    out.mkdir()
+    (out / "summary.json").write_text('{"old": true}')
+    monkeypatch.setattr(os, "fsync", no_space)
+    with pytest.raises(RamureError, match="No space"):
+        report.write_text(out / "summary.json", "{}")
+    assert (out / "summary.json").read_text() == '{"old": true}'
+    assert report.write_with is atomic.write_with and report.open_atomic is atomic.open_atomic
