@@ -9,6 +9,8 @@ import os
 
 import numpy as np
 
+from ramure.io import write_with
+
 BARK = (0.45, 0.32, 0.2)
 LEAF = (0.3, 0.62, 0.22)
 FRUIT_RGB = (240, 120, 40)  # orange, so red always means "selected"
@@ -61,7 +63,7 @@ def render_mesh(mesh, path, size=(800, 800), selected=(), view="front", backgrou
         frame_camera(plotter, mesh.bounds, view)
     if title:
         plotter.add_text(title, font_size=10, color="black")
-    plotter.screenshot(str(path))
+    write_with(path, lambda tmp: plotter.screenshot(tmp))
     plotter.close()
     return path
 

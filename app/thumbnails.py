@@ -25,6 +25,7 @@ import pathlib
 import numpy as np
 
 from ramure.app.render import BARK, headless_setup, frame_camera, plant_colors
+from ramure.io import write_with
 
 THUMB_DIR = "thumbs"
 
@@ -58,7 +59,7 @@ def _render_many(skeletons, paths, size=(256, 256), view="front", captions=None,
                 plotter.camera.zoom(zoom)
             if captions is not None:
                 plotter.add_text(captions[k], position="lower_left", font_size=8, color="black")
-            plotter.screenshot(str(path))
+            write_with(path, lambda tmp: plotter.screenshot(tmp))
     finally:
         plotter.close()
     return paths
@@ -110,5 +111,5 @@ def contact_sheet(images, labels, path, columns=9, title=None, pad=6):
         draw.text((x + 4, y + 2), label, fill=(180, 0, 0), font=font)
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    sheet.save(path)
+    write_with(path, lambda tmp: sheet.save(tmp, format="PNG"))
     return path

@@ -28,6 +28,7 @@ import tempfile
 import numpy as np
 
 from ramure.errors import RamureError
+from ramure.io import write_text
 
 from .amap import Architecture, Table, rank_in_group
 
@@ -93,16 +94,7 @@ def write_mtg(arch: Architecture, path) -> pathlib.Path:
     """Write ``arch`` as an MTG file (temporary file in the same folder, fsync, then renamed)."""
     path = pathlib.Path(path)
     text = mtg_text(arch)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(text)
-            out.flush()
-            os.fsync(out.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
+    write_text(path, text)
     return path
 
 

@@ -10,6 +10,7 @@ import time
 import numpy as np
 
 from ramure.app.cli import UserError
+from ramure.io import write_with
 from ramure.app.commands.plant import add_grammar_options, load_and_derive, output_file, parse_size
 from ramure.lsys.seasons import age_leaves, autumn_chain
 
@@ -93,7 +94,7 @@ def render_autumn(skeleton, season, chain, path, size=(800, 800)):
     plane = pv.Plane(center=(*(bounds[:2].mean(axis=1)), 0.0), i_size=span[0] * 1.3 + 1, j_size=span[1] * 1.3 + 1)
     plotter.add_mesh(plane, color=(0.42, 0.52, 0.32))
     frame_camera(plotter, bounds.ravel(), "iso")
-    plotter.screenshot(str(path))
+    write_with(path, lambda tmp: plotter.screenshot(tmp))
     plotter.close()
     return path
 

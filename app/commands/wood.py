@@ -23,28 +23,17 @@ import time
 import numpy as np
 
 from ramure.app.cli import UserError
+from ramure.io import write_with
 
 SUFFIXES = (".vtu", ".png", ".glb")
 
 
 def write_atomic(path, writer):
-    """Call ``writer(tmp_path)`` on a temporary file next to ``path``, fsync it, rename it to ``path``."""
+    """Call ``writer(tmp_path)`` on a temporary file next to ``path``, fsync it, rename it to ``path``
+    (:func:`ramure.io.write_with`; the folder is created first)."""
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        writer(tmp)
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)              # mkstemp makes 0600; give the usual mode
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_with(path, writer)
 
 
 def render_wood(grid, path, size=(900, 900), look=None, title=None, legend=None, background="white"):
