@@ -136,12 +136,17 @@ def _random_operation(gm, kind, x, y, t):
         gm.identify([x % n], [y % n])
     elif kind == 3:
         gm.split_face(x % n, y % n)
-    else:
+    elif kind == 4:
         gm.split_volume([x % n, y % n])
+    elif kind == 5:
+        gm.split_prisms(np.unique([x % gm.n_volumes, y % gm.n_volumes]), t)
+    else:
+        from ramure.gmap.embedding import grow
+        grow(gm, [x % n], 3 + y % 4, height=t)
 
 
 @settings(max_examples=60, deadline=None)
-@given(ops=st.lists(st.tuples(st.integers(0, 4), st.integers(0, 10_000), st.integers(0, 10_000),
+@given(ops=st.lists(st.tuples(st.integers(0, 6), st.integers(0, 10_000), st.integers(0, 10_000),
                               st.floats(-0.5, 1.5)), min_size=1, max_size=6))
 def test_a_refused_operation_leaves_the_map_exactly_as_it_was(ops):
     gm, _ = crown(4)
