@@ -49,6 +49,8 @@ def view_colors(model, show_cut=False):
     selected), kinship hues for one selected leaf, the planned cut in orange (``show_cut``),
     the selection in red."""
     mesh = model.mesh
+    if not mesh.n_cells:  # a plant that draws nothing (e.g. algae) may carry no cell data at all
+        return np.zeros((0, 3), np.uint8)
     rgb = base_colors(mesh)
     if show_cut:
         rgb[np.isin(mesh.cell_data["leaf_id"], cut_leaves(model))] = np.multiply(CUT, 255).astype(np.uint8)
