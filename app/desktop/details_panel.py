@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import (QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel,
-                               QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget)
+                               QPushButton, QScrollArea, QSlider, QSpinBox, QVBoxLayout, QWidget)
 
 from ramure.app.desktop import state
 from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit, paint_adhesion, selected_fruit_surface
@@ -101,7 +101,9 @@ class DetailsPanel(QWidget):
         self.adhesion = None  # painted per fruit vertex, or None (lichen may start anywhere)
         self._build()
         self.plotter = (plotter_factory or _interactor)(self)
-        self.layout().addWidget(getattr(self.plotter, "interactor", self.plotter), 1)
+        shown = getattr(self.plotter, "interactor", self.plotter)
+        shown.setMinimumHeight(60)
+        self.layout().addWidget(shown, 1)
         if hasattr(self.plotter, "track_click_position"):
             self.plotter.track_click_position(self.clicked_at, side="left")
         controller.job_done.connect(self._job_done)
@@ -167,28 +169,33 @@ class DetailsPanel(QWidget):
         self.fruit_label.setWordWrap(True)
         fruit = QGroupBox("On the selected fruit")
         ff = QFormLayout(fruit)
-        row = QHBoxLayout()
-        row.addWidget(self.clusters)
-        row.addWidget(QLabel("clusters"))
-        row.addWidget(self.particles)
-        row.addWidget(QLabel("particles"))
-        ff.addRow("Lichen", row)
+        ff.addRow("Lichen clusters", self.clusters)
+        ff.addRow("Particles", self.particles)
         ff.addRow("Habit", self.habit)
         ff.addRow("Crack nodes", self.nodes)
         buttons = QHBoxLayout()
         buttons.addWidget(self.lichen_button)
         buttons.addWidget(self.crack_button)
         ff.addRow(buttons)
+        ff.addRow("A click", self.tool)
         tools = QHBoxLayout()
         tools.addWidget(self.show_button)
-        tools.addWidget(self.tool, 1)
         tools.addWidget(self.clear_button)
-        ff.addRow("Click", tools)
+        ff.addRow(tools)
         ff.addRow(self.fruit_label)
+        controls = QWidget()
+        inner = QVBoxLayout(controls)
+        inner.setContentsMargins(0, 0, 0, 0)
+        inner.addWidget(season)
+        inner.addWidget(fruit)
+        self.controls = QScrollArea()  # scrolls on small screens: the dock never forces the window taller
+        self.controls.setWidgetResizable(True)
+        self.controls.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.controls.setWidget(controls)
+        self.controls.setMinimumHeight(60)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(season)
-        layout.addWidget(fruit)
+        layout.addWidget(self.controls, 2)
 
     # -- season ----------------------------------------------------------------------------
     def _key(self):
