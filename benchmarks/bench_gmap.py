@@ -111,7 +111,7 @@ def _ring_trunk(units=10, sides=16, layers=20, embed_each=True):
     gm.sew3(gm.face_of(ids[:-1], "E"), gm.face_of(ids[1:], "O"))
     labels = [f"C{j + 1}" for j in range(sides)] * units
     faces = gm.face_of(np.repeat(ids, sides), labels)
-    below = None
+    _below = None
     for _ in range(layers):
         ring = grow(gm, faces, 4, height=0.1).reshape(units, sides)
         gm.identify(gm.face_of(ring.ravel(), "C2"), gm.face_of(np.roll(ring, -1, axis=1).ravel(), "C4"))

@@ -33,7 +33,8 @@ exp = explore(ls, n=n, n_jobs=jobs, cache=False)
 seconds = time.perf_counter() - t0
 me = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-print(json.dumps({"seconds": seconds, "sweep_seconds": exp.sweep.seconds_, "variants": exp.sweep.n_variants_, "derivations": exp.sweep.n_derived_,
+print(json.dumps({"seconds": seconds, "sweep_seconds": exp.sweep.seconds_, "variants": exp.sweep.n_variants_,
+                  "derivations": exp.sweep.n_derived_,
                   "failed": int(exp.sweep.failed_.sum()), "segments": int(exp.sweep.base_metrics_[5]),
                   "string_chars": len(ls.derive(n=n).to_string()),
                   "parent_mb": me, "worker_mb": kids, "matching": exp.matching}))

@@ -50,7 +50,7 @@ def carried(gm, src, kind, names=None):
     rules = gm.dart_rules()
     names = extra_names(gm) if names is None else names
     out = {}
-    side = vol = None
+    side = None
     for name in names:
         col = gm.dart_data[name]
         rule = rules[name]

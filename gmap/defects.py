@@ -678,7 +678,8 @@ def crack(gm: GMap3, kind: str = "longitudinal", sector: int = 0, rings=(3, 6), 
     after = float(after_cells.sum())
     return out, {"kind": "crack", "crack_kind": kind, "sector": int(sector), "rings": [r0, r1],
                  "depth_layers": int(depth), "healed_layers": int(healed), "width_mm": float(width_mm),
-                 "opening_mm": opening * scale, "length_mm": length, "faces": int(len(first)), "duplicated_vertices": int(nv - nv0),
+                 "opening_mm": opening * scale, "length_mm": length, "faces": int(len(first)),
+                 "duplicated_vertices": int(nv - nv0),
                  "opened_vertices": int(moved_count), "crack_vertices": int(len(split)),
                  "volume_before": before, "volume_after": after, "volume_lost": before - after}
 

@@ -113,15 +113,15 @@ class G3LSystem:
         self.grammar = grammar
 
     @classmethod
-    def from_file(cls, path) -> "G3LSystem":
+    def from_file(cls, path) -> G3LSystem:
         return cls(load_g3l(path))
 
     @classmethod
-    def from_text(cls, text, filename=None) -> "G3LSystem":
+    def from_text(cls, text, filename=None) -> G3LSystem:
         return cls(parse_g3l(text, filename))
 
     def derive(self, steps=None, seed=0, embed_every_step=False, check_every_step=False,
-               overrides=None, max_darts=MAX_DARTS) -> "G3LDerivation":
+               overrides=None, max_darts=MAX_DARTS) -> G3LDerivation:
         """Run ``steps`` half-year steps (default the grammar's ``#steps``, else 1).
 
         ``overrides`` maps a volume key to a seed for the branch it heads

@@ -26,7 +26,6 @@ from __future__ import annotations
 import numpy as np
 
 from ramure.gmap import prism as _prism
-from ramure.gmap.errors import GMapError
 
 
 def boundary_neighbour(gm, darts):

@@ -26,7 +26,6 @@ Random numbers (rule draws, ``uniform``/``normal``) come from one seeded
 """
 from __future__ import annotations
 
-import pathlib
 from dataclasses import dataclass
 
 import numpy as np

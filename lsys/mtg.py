@@ -20,10 +20,8 @@ True
 from __future__ import annotations
 
 import json
-import os
 import pathlib
 import re
-import tempfile
 
 import numpy as np
 

@@ -27,7 +27,7 @@ import contextlib
 import os
 import pathlib
 import tempfile
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 from ramure.errors import RamureError
 

@@ -60,7 +60,7 @@ class SynonymTable:
         self.lookup = {}     # normalised phrase -> canonical
 
     @classmethod
-    def load(cls, *paths) -> "SynonymTable":
+    def load(cls, *paths) -> SynonymTable:
         """The built-in table, extended (and overridden) by each file in ``paths``."""
         table = cls()
         builtin = resources.files(__package__).joinpath("synonyms.json").read_text(encoding="utf-8")

@@ -39,7 +39,7 @@ _CODE = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
 def now_iso() -> str:
     """The current UTC time as ISO-8601 text (seconds precision)."""
-    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    return datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
 
 
 def connect(path, durable=True) -> sqlite3.Connection:
@@ -136,7 +136,7 @@ class Study:
     # -- opening -----------------------------------------------------------
     @classmethod
     def create(cls, path, grammars=None, name=None, budget_minutes=DEFAULT_BUDGET_MINUTES,
-               clock=time.monotonic, durable=True) -> "Study":
+               clock=time.monotonic, durable=True) -> Study:
         """Create a study in a new file ``path``.
 
         ``grammars`` maps a grammar name to an exploration directory (holding
@@ -177,7 +177,7 @@ class Study:
         return cls(conn, path, clock)
 
     @classmethod
-    def open(cls, path, clock=time.monotonic, durable=True) -> "Study":
+    def open(cls, path, clock=time.monotonic, durable=True) -> Study:
         """Open an existing study file (refused with a clear message otherwise)."""
         path = pathlib.Path(path)
         check_study_file(path)  # read-only: a file that is not ours is never changed

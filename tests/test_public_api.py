@@ -111,6 +111,24 @@ def _is_module(dotted):
 MODULES = {name for name, _ in _sources()}
 
 
+# Known debt, to be paid down (a ratchet): uses of another module's private names that were
+# already there when this test was written. Anything not listed fails; a listed entry that is
+# gone must be removed from the file (the test says so).
+BASELINE = ROOT / "tests" / "public_api_baseline.txt"
+
+
+def _baseline():
+    lines = BASELINE.read_text(encoding="utf-8").splitlines() if BASELINE.exists() else []
+    return {line.strip() for line in lines if line.strip() and not line.startswith("#")}
+
+
+def _entries(name, path):
+    return {f"{name}: {v.split(': ', 1)[1].split(' (')[0]}" for v in _violations(name, path)}
+
+
 @pytest.mark.parametrize("name,path", list(_sources()), ids=[n for n, _ in _sources()])
 def test_no_private_names_across_modules(name, path):
-    assert _violations(name, path) == []
+    known = {e for e in _baseline() if e.startswith(name + ": ")}
+    found = _entries(name, path)
+    assert found - known == set(), "new uses of another module's private names"
+    assert known - found == set(), "paid-down debt: remove these lines from tests/public_api_baseline.txt"

@@ -15,9 +15,7 @@ valid, seconds (growth + checks), darts_per_second, output.
 from __future__ import annotations
 
 import json
-import os
 import pathlib
-import tempfile
 import time
 
 import numpy as np

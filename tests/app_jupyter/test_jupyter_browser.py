@@ -12,7 +12,6 @@ Screenshots go to tests/artifacts/browser/.  Select it alone with ``pytest -m br
 """
 from __future__ import annotations
 
-import pathlib
 import shutil
 import time
 

@@ -9,7 +9,6 @@ import pytest
 pytest.importorskip("metrics")
 
 from ramure.app.jupyter import Explorer  # noqa: E402
-from ramure.app.jupyter import variants as variants_module  # noqa: E402
 from jupyter_helpers import HONDA  # noqa: E402
 
 

@@ -97,7 +97,6 @@ def test_identify_splits_the_run_that_has_fewer_edges():
     assert_solid(gm)
     _, after = gm.face_walk([gm.face_of(2, "C4")])
     assert after[0] == 10                              # split too, at the partner's position
-    pts = gm.dart_data["corner"]
     split = gm.dart_data["fcorner"] == -1
     assert split.sum() > 0
 
