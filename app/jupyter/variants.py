@@ -16,10 +16,10 @@ nothing is selected) with that variant's parameter combination
 selection's metrics move the qualifier's way and keeps one undoable edit.
 
 >>> from types import SimpleNamespace as NS
->>> m = NS(branch_density=1772.5)
->>> qualifier_summary(NS(qualifier="dense", improved=True, before=m, after=NS(branch_density=2172.5),
+>>> m = NS(branch_density=1772.5, branch_count=3)
+>>> qualifier_summary(NS(qualifier="dense", improved=True, before=m, after=NS(branch_density=2137.5, branch_count=3),
 ...                      params={}, tried=1))
-'denser: density 1772 → 2172'
+'denser: density 1772 → 2138, branches 3 → 3'
 """
 from __future__ import annotations
 
