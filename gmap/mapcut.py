@@ -38,7 +38,7 @@ def _normal(normal):
 
 
 def cut_map(gm, normal, origin=None):
-    """Return a new map: the part of ``gm`` behind the plane (``(p - origin) . normal <= 0``).
+    """Return a new map: the part of ``gm`` behind the plane (``(p - origin) · normal <= 0``).
 
     ``normal`` is a 3-vector or ``'x'``, ``'y'``, ``'z'``; ``origin``
     defaults to the centre of the model's bounding box.  ``gm`` is not

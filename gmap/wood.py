@@ -963,7 +963,7 @@ def parse_plank(text):
 
 
 def plank(grid, normal, offset, thickness):
-    """The slab ``offset <= n . (x - axis) <= offset + thickness`` of a wood grid (VTK clips).
+    """The slab ``offset <= n · (x - axis) <= offset + thickness`` of a wood grid (VTK clips).
 
     ``offset`` is measured from the trunk's axis (the line x = y = 0); an
     empty slab raises :class:`ValueRefused` naming the model's extent.
