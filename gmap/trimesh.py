@@ -1,11 +1,9 @@
 """A triangle mesh with adjacency, for details that live on surfaces (lichen, cracks).
 
-:class:`TriMesh` holds ``points`` (n, 3) and ``triangles`` (t, 3) and precomputes what walks
-and neighbour queries need: unit normals, the triangle across each edge (``across``, (t, 3):
-edge k goes from corner k to corner k+1), and each triangle's **vertex 1-ring** (every
-triangle that shares a vertex with it, itself included) as CSR arrays. The source tests
-collisions against the edge 1-ring; the vertex 1-ring is a superset that also catches a
-particle sitting just past a corner, so it is used here.
+:class:`TriMesh` holds ``points`` (n, 3) and ``triangles`` (t, 3) and precomputes what surface
+walks need: unit normals, areas and the triangle across each edge (``across``, (t, 3): edge k
+goes from corner k to corner k+1). Neighbour queries between particles use a grid, not the
+mesh (see :mod:`ramure.gmap.lichen`).
 
 Triangles are oriented outward (a mesh given inside out, with a negative enclosed volume, is
 flipped), so normals point out of the solid. A substrate must be a **closed 2-manifold**:
@@ -45,13 +43,9 @@ class TriMesh:
         self.normals = cross / double_area[:, None]
         self.areas = double_area / 2
         self.across = _edge_neighbours(self.triangles)
-        self.ring_ptr, self.ring = _vertex_rings(self.triangles, len(self.points))
 
     def area(self) -> float:
         return float(self.areas.sum())
-
-    def ring_of(self, triangle: int) -> np.ndarray:
-        return self.ring[self.ring_ptr[triangle]:self.ring_ptr[triangle + 1]]
 
     def random_points(self, count: int, rng: np.random.Generator, weights=None):
         """``count`` points uniform over the surface (area-weighted), optionally times ``weights``
@@ -100,25 +94,6 @@ def _edge_neighbours(triangles):
                         "inconsistent orientation): close the model first")
     across = order[found] // 3
     return across.reshape(t, 3)
-
-
-def _vertex_rings(triangles, n_points):
-    t = len(triangles)
-    tri_of = np.repeat(np.arange(t), 3)
-    verts = triangles.ravel()
-    by_vertex = np.argsort(verts, kind="stable")
-    vptr = np.searchsorted(verts[by_vertex], np.arange(n_points + 1))
-    vtris = tri_of[by_vertex]
-    rings = []
-    for k in range(3):  # the triangles around each corner, concatenated then deduplicated per triangle
-        v = triangles[:, k]
-        counts = vptr[v + 1] - vptr[v]
-        owners = np.repeat(np.arange(t), counts)
-        offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-        rings.append(np.stack([owners, vtris[np.repeat(vptr[v], counts) + offsets]], axis=1))
-    pairs = np.unique(np.concatenate(rings), axis=0)
-    ptr = np.searchsorted(pairs[:, 0], np.arange(t + 1))
-    return ptr.astype(np.int64), pairs[:, 1].astype(np.int64)
 
 
 def from_polydata(mesh) -> TriMesh:
