@@ -8,7 +8,6 @@ about 44,000 internodes (defined below). Targets: derive + architecture tables +
 from __future__ import annotations
 
 import tempfile
-import time
 
 import numpy as np
 
@@ -16,6 +15,7 @@ from ramure.lsys import LSystem
 from ramure.lsys.amap import architecture
 from ramure.lsys.mtg import write_mtg
 from ramure.lsys.schedule import EventScheduler
+from benchtools import best
 
 TREE = """
 #amap internode F
@@ -31,15 +31,6 @@ p:
 """
 
 
-def _best(fn, repeats=3):
-    best, out = float("inf"), None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def bench_tree_to_tables_and_mesh():
     lsystem = LSystem.from_text(TREE)
 
@@ -50,7 +41,7 @@ def bench_tree_to_tables_and_mesh():
         return arch, mesh
 
     run()  # compile the turtle once
-    seconds, (arch, mesh) = _best(run)
+    seconds, (arch, mesh) = best(run)
     return {"seconds": round(seconds, 4), "target_seconds": 1.0, "ok": seconds <= 1.0,
             "internodes": len(arch.internodes), "axes": len(arch.axes), "mesh_cells": mesh.n_cells}
 
@@ -58,7 +49,7 @@ def bench_tree_to_tables_and_mesh():
 def bench_mtg_export():
     arch = architecture(LSystem.from_text(TREE).derive())
     with tempfile.TemporaryDirectory() as folder:
-        seconds, _ = _best(lambda: write_mtg(arch, f"{folder}/tree.mtg"))
+        seconds, _ = best(lambda: write_mtg(arch, f"{folder}/tree.mtg"))
     return {"seconds": round(seconds, 4), "target_seconds": 0.5, "ok": seconds <= 0.5,
             "internodes": len(arch.internodes)}
 
@@ -74,7 +65,7 @@ def bench_scheduler():
         s.add(dates, kinds, orders, nodes)
         return sum(len(batch) for _, _, batch, _ in s.run())
 
-    seconds, handled = _best(run)
+    seconds, handled = best(run)
     rate = handled / seconds
     return {"seconds": round(seconds, 4), "events": handled, "events_per_second": round(rate),
             "target_events_per_second": 1_000_000, "ok": rate >= 1_000_000}

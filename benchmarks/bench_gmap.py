@@ -10,15 +10,7 @@ import time
 
 from ramure.gmap import subdivide
 from ramure.gmap.fruit import build_fruit
-
-
-def _best(fn, repeats=5):
-    best, result = float("inf"), None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, result
+from benchtools import best
 
 
 def _bench_build(make, repeats, target, reference=None):
@@ -27,7 +19,7 @@ def _bench_build(make, repeats, target, reference=None):
         gm = make()
         return gm, gm.is_valid()
 
-    seconds, (gm, valid) = _best(run, repeats)
+    seconds, (gm, valid) = best(run, repeats)
     c = gm.counts()
     record = {"seconds": round(seconds, 6), "target_seconds": target, "ok": bool(valid and seconds <= target),
               "darts": c["darts"], "vertices": c["vertices"], "volumes": c["volumes"], "valid": bool(valid)}

@@ -6,12 +6,12 @@ the leaves' bounding cylinders; hardware not stated). Targets here: the same siz
 """
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
 from ramure.lsys import LSystem
 from ramure.lsys.seasons import age_leaves, age_states, autumn_chain
+from benchtools import best
 
 # Honda's sympodial tree with a leaf on every twig: 2^13 = 8,192 leaves at n = 13, plus the
 # leaves of the last twigs' neighbours; close to the thesis's 9,142.
@@ -30,19 +30,10 @@ p:
 """
 
 
-def _best(fn, repeats=3):
-    best, out = float("inf"), None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def bench_autumn_table_4_1():
     organs = LSystem.from_text(LEAFY).derive().skeleton().organs
     chain = autumn_chain()
-    seconds, season = _best(lambda: age_leaves(organs, chain, steps=16, seed=0, wind=(0.05, 0.02)))
+    seconds, season = best(lambda: age_leaves(organs, chain, steps=16, seed=0, wind=(0.05, 0.02)))
     facts = season.facts(chain)
     return {"seconds": round(seconds, 4), "target_seconds": 14.0, "aim_seconds": 2.0, "ok": seconds <= 14.0,
             "leaves": facts["leaves"], "fallen_leaves": facts["fallen_leaves"],
@@ -56,5 +47,5 @@ def bench_ageing_25202_leaves():
     rng = np.random.default_rng(0)
     heat, humidity = rng.uniform(0, 1, n), rng.uniform(0, 1, n)
     chain = autumn_chain()
-    seconds, _ = _best(lambda: age_states(ids, heat, humidity, chain, 16, seed=0), repeats=5)
+    seconds, _ = best(lambda: age_states(ids, heat, humidity, chain, 16, seed=0), repeats=5)
     return {"seconds": round(seconds, 4), "target_seconds": 0.1, "ok": seconds <= 0.1, "leaves": n, "steps": 16}
