@@ -28,6 +28,32 @@ def weighted_sums(ids, weight, corners, count):
 
 
 @njit(cache=True)
+def exclusive_sums(ids, weight, corners, count, vol, exclusive):
+    """:func:`weighted_sums` where a vertex touching an ``exclusive`` volume counts only those volumes.
+
+    ``vol`` is each dart's volume, ``exclusive`` a flag per volume.  The darts
+    left out would add a weight of 0 (the numpy path zeroes them), so the sums
+    are the same, in the same order.
+    """
+    at_exclusive = np.zeros(count, np.bool_)
+    for d in range(ids.size):
+        if exclusive[vol[d]]:
+            at_exclusive[ids[d]] = True
+    sums = np.zeros((count, 3))
+    total = np.zeros(count)
+    for d in range(ids.size):
+        v = ids[d]
+        if at_exclusive[v] and not exclusive[vol[d]]:
+            continue
+        w = weight[d]
+        total[v] += w
+        sums[v, 0] += w * corners[d, 0]
+        sums[v, 1] += w * corners[d, 1]
+        sums[v, 2] += w * corners[d, 2]
+    return sums, total
+
+
+@njit(cache=True)
 def scatter(points, pos, ids):
     """``points[d] = pos[ids[d]]`` for every dart, in place."""
     for d in range(ids.size):

@@ -190,6 +190,28 @@ def _validity_problems(alpha, vol, face, n_volumes, darts=None):
     return problems
 
 
+def _compiled_validity_problems(alpha, vol, face, n_volumes, darts=None):
+    """:func:`_validity_problems` by the compiled pass (same messages), or None when an id leaves the map."""
+    from ramure.gmap import _validity_kernel as K
+
+    every = darts is None
+    counts = K.problem_counts(alpha, vol, face, n_volumes, np.zeros(0, np.int64) if every else darts, every)
+    if counts[K.OUT_OF_RANGE]:
+        return None
+    problems = [f"alpha{i} is not an involution ({counts[K.INVOLUTION + i]} darts)" for i in range(4) if counts[K.INVOLUTION + i]]
+    problems += [f"alpha{i} has {counts[K.FIXED + i]} fixed points" for i in range(3) if counts[K.FIXED + i]]
+    for p, (i, j) in enumerate(K.PAIRS):
+        if counts[K.PAIR + p]:
+            problems.append(f"alpha{i}alpha{j} is not an involution ({counts[K.PAIR + p]} darts)")
+    if counts[K.VOLUME_RANGE]:
+        problems.append("some darts point to no volume")
+    elif counts[K.VOLUME_MIX]:
+        problems.append("a volume orbit <a0,a1,a2> mixes volume ids")
+    if counts[K.FACE_MIX]:
+        problems.append("a face orbit <a0,a1> mixes face labels")
+    return problems
+
+
 class _Atomic:
     def __init__(self, gm, local=None) -> None:
         self.gm = gm
@@ -874,7 +896,11 @@ class GMap3(Operations):
         if alpha.shape != (4, n):
             return [f"alpha has shape {alpha.shape}, expected (4, {n})"]
         darts = self._changed_since_valid()
-        problems = _validity_problems(alpha, self.dart_volume, self._darts["face"], self.n_volumes, darts)
+        problems = None
+        if compiled_pays(n):  # same conditions and counts, one compiled pass
+            problems = _compiled_validity_problems(alpha, self.dart_volume, self._darts["face"], self.n_volumes, darts)
+        if problems is None:
+            problems = _validity_problems(alpha, self.dart_volume, self._darts["face"], self.n_volumes, darts)
         if not problems:
             snap = self._alpha_snapshot()
             self._valid_memo = (snap, self.dart_volume.copy(), self._darts["face"].copy(), self.n_volumes)
@@ -913,6 +939,10 @@ class GMap3(Operations):
         if 3 * len(seeds) > n:  # most of the map: one full pass is cheaper
             return None
         alpha = self.alpha
+        if compiled_pays(n):
+            from ramure.gmap._validity_kernel import mark_reach
+
+            return np.flatnonzero(mask) if mark_reach(alpha, seeds, mask) else None
         a = [alpha[i][seeds] for i in range(4)]
         if seeds.size and (min(x.min() for x in a) < 0 or max(x.max() for x in a) >= n):
             return None  # let the full check name the problem
@@ -960,17 +990,24 @@ class GMap3(Operations):
             weight = self._inverse_corner_sizes()
         else:
             weight = vweight[vol].astype(float) / self._corner_sizes()
-        if exclusive.any():
+        corners, points = self._darts["corner"], self._darts["point"]
+        radial = self._darts["radial"]
+        compiled = compiled_pays(len(ids))  # both paths sum in dart order: the same positions
+        any_exclusive = bool(exclusive.any())
+        skip_in_pass = compiled and any_exclusive and not radial.any()  # the compiled pass leaves those darts out
+        if any_exclusive and not skip_in_pass:
             excl = exclusive[vol]
             at_excl = np.zeros(count, bool)
             at_excl[ids[excl]] = True
             weight = np.where(at_excl[ids] & ~excl, 0.0, weight)
-        corners, points = self._darts["corner"], self._darts["point"]
-        compiled = compiled_pays(len(ids))  # both paths sum in dart order: the same positions
         if compiled:
-            from ._embed_kernel import scatter, weighted_sums
+            from ._embed_kernel import exclusive_sums, scatter, weighted_sums
 
-            pos, total = weighted_sums(ids, np.ascontiguousarray(weight, np.float64), corners, count)
+            weight = np.ascontiguousarray(weight, np.float64)
+            if skip_in_pass:
+                pos, total = exclusive_sums(ids, weight, corners, count, vol, exclusive)
+            else:
+                pos, total = weighted_sums(ids, weight, corners, count)
         else:
             total = np.bincount(ids, weight, minlength=count)
             pos = np.column_stack([np.bincount(ids, weight * corners[:, j], minlength=count) for j in range(3)])
@@ -981,7 +1018,6 @@ class GMap3(Operations):
             scatter(points, pos, ids)
         else:
             points[:] = pos[ids]
-        radial = self._darts["radial"]
         if radial.any():  # all zero stays zero
             radial[:] = np.take(np.bincount(ids, weight * radial, minlength=count) / total, ids)
         return pos

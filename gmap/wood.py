@@ -1322,7 +1322,8 @@ def grow_wood(
             wood.embed()
         if check_every_step:
             wood.check_topology()
-    wood.embed()
+    if not embed_every_step:  # else the last step's embedding stands: nothing changed since
+        wood.embed()
     wood.seconds = time.perf_counter() - t0
     wood.gm.meta = {
         "species": species,

@@ -17,7 +17,8 @@ from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
 from ramure.gmap import graphs
-from ramure.gmap.map3 import _validity_problems
+from ramure.gmap import map3
+from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
 from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
 
 KEYS = ("123", "023", "013", "012", "0123", "12", "01", "3")
@@ -148,6 +149,18 @@ def _grown_pair(cubes=6):
 def test_incremental_validity_finds_a_defect_iff_the_full_check_does(kind, pick, other, row):
     gm = _grown_pair()
     n = gm.n_darts
+    _corrupt(gm, kind, pick, other, row)
+    darts = gm._changed_since_valid()
+    incremental = gm.validity_problems()
+    full = _validity_problems(gm.alpha, gm.dart_volume, gm.dart_data["face"], gm.n_volumes)
+    assert bool(incremental) == bool(full), (kind, darts is None, incremental, full)
+    if kind == 0:
+        assert darts is not None and len(darts) < n  # the clean case really is incremental
+
+
+def _corrupt(gm, kind, pick, other, row):
+    """One defect of kind 1..6 (0: none) in a grown map, every id kept inside the map."""
+    n = gm.n_darts
     a = gm.alpha
     free3 = np.flatnonzero(a[3] == np.arange(n))
     if kind == 1:  # a one-way link from a free dart (looks like growth)
@@ -164,12 +177,37 @@ def test_incremental_validity_finds_a_defect_iff_the_full_check_does(kind, pick,
         a[row][pick % n] = other % n
     elif kind == 6:  # a new dart's link rewritten
         a[row][n - 1 - pick % 48] = other % n
-    darts = gm._changed_since_valid()
-    incremental = gm.validity_problems()
-    full = _validity_problems(gm.alpha, gm.dart_volume, gm.dart_data["face"], gm.n_volumes)
-    assert bool(incremental) == bool(full), (kind, darts is None, incremental, full)
+
+
+@settings(max_examples=120, deadline=None)
+@given(kind=st.integers(0, 6), pick=st.integers(0, 1_000_000), other=st.integers(0, 1_000_000), row=st.integers(0, 3))
+def test_compiled_validity_equals_the_numpy_check(kind, pick, other, row):
+    """Same darts to check after growth, same messages and counts, on the whole map and on those darts."""
+    gm = _grown_pair()
+    _corrupt(gm, kind, pick, other, row)
+    with mock.patch.object(map3, "compiled_pays", lambda n: False):
+        numpy_darts = gm._changed_since_valid()
+    with mock.patch.object(map3, "compiled_pays", lambda n: True):
+        compiled_darts = gm._changed_since_valid()
+    assert (numpy_darts is None) == (compiled_darts is None)  # None: more than growth, a full check
+    args = (gm.alpha, gm.dart_volume, gm.dart_data["face"], gm.n_volumes)
+    assert _compiled_validity_problems(*args) == _validity_problems(*args)
+    if numpy_darts is not None:
+        assert np.array_equal(numpy_darts, compiled_darts)
+        assert _compiled_validity_problems(*args, numpy_darts) == _validity_problems(*args, numpy_darts)
     if kind == 0:
-        assert darts is not None and len(darts) < n  # the clean case really is incremental
+        assert _validity_problems(*args) == []
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_validity_names_ids_outside_the_map_on_both_paths(compiled, monkeypatch):
+    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
+    gm = _grown_pair()
+    gm.alpha[0][5] = gm.n_darts + 3  # the compiled pass stops there; the full numpy check names it
+    assert gm.validity_problems() == ["alpha holds dart ids outside 0..n_darts-1"]
+    gm = _grown_pair()
+    gm.alpha[3][-1] = gm.n_darts + 3  # a new dart's link: the incremental step must not read past the map
+    assert gm.validity_problems() == ["alpha holds dart ids outside 0..n_darts-1"]
 
 
 def test_incremental_validity_checks_few_darts_after_growth():
