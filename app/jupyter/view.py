@@ -330,13 +330,13 @@ class ClickPicker:
     drag that starts on a branch rotates the view and leaves the selection as it was."""
 
     def __init__(self, plotter: pv.Plotter, on_cell: Callable[[int], object], actor: Any = None) -> None:
-        import vtk
+        from vtkmodules.vtkRenderingCore import vtkCellPicker  # not ``import vtk``: every VTK module, ~60 MB
 
         self.plotter = plotter
         self.on_cell = on_cell
         self.actor = actor  # pick only this actor's cells (None: any)
         self.down = None
-        self.picker = vtk.vtkCellPicker()
+        self.picker = vtkCellPicker()
         self.picker.SetTolerance(0.004)
         iren = plotter.iren
         assert iren is not None, "an on-screen or notebook plotter has an interactor"
