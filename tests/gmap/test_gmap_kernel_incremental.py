@@ -59,8 +59,10 @@ def _row_of_cubes(gm, count, y):
     return [int(f) for f in firsts]
 
 
-def test_two_old_solids_sewn_together_merge_their_orbits():
+@pytest.mark.parametrize("compiled", [True, False])  # the compiled update and the numpy one
+def test_two_old_solids_sewn_together_merge_their_orbits(compiled, monkeypatch):
     """Old-old links (no new dart) merge old orbits: counts drop, labels stay 0..count-1."""
+    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     left = _row_of_cubes(gm, 3, 0.0)
     right = _row_of_cubes(gm, 3, 5.0)
@@ -73,7 +75,9 @@ def test_two_old_solids_sewn_together_merge_their_orbits():
     assert_solid(gm)
 
 
-def test_orbits_follow_growth_then_split_then_unsew_then_growth():
+@pytest.mark.parametrize("compiled", [True, False])  # the compiled update and the numpy one
+def test_orbits_follow_growth_then_split_then_unsew_then_growth(compiled, monkeypatch):
+    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     col = _row_of_cubes(gm, 2, 0.0)
     _assert_orbits_match_fresh(gm, "start")
@@ -92,8 +96,10 @@ def test_orbits_follow_growth_then_split_then_unsew_then_growth():
     _assert_orbits_match_fresh(gm, "grow after unsew")
 
 
-def test_copies_that_grow_differently_keep_their_own_labels():
+@pytest.mark.parametrize("compiled", [True, False])  # the compiled update and the numpy one
+def test_copies_that_grow_differently_keep_their_own_labels(compiled, monkeypatch):
     """Copies share labelling states; a state appends in place only once (else it copies)."""
+    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     col = _row_of_cubes(gm, 3, 0.0)
     for key in KEYS:
@@ -109,8 +115,26 @@ def test_copies_that_grow_differently_keep_their_own_labels():
 
 
 @settings(max_examples=40, deadline=None)
+@given(ops=st.lists(st.tuples(st.integers(0, 4), st.integers(0, 10_000)), min_size=1, max_size=8), compiled=st.booleans())
+def test_random_growth_orbit_counts_equal_a_fresh_labelling(ops, compiled):
+    with mock.patch.object(map3, "compiled_pays", lambda n: compiled):
+        _random_growth(ops)
+
+
+@settings(max_examples=30, deadline=None)
 @given(ops=st.lists(st.tuples(st.integers(0, 4), st.integers(0, 10_000)), min_size=1, max_size=8))
-def test_random_growth_orbit_counts_equal_a_fresh_labelling(ops):
+def test_compiled_orbit_update_numbers_orbits_as_the_numpy_one(ops):
+    """Not only the same partition: the same ids (embedding returns its vertices in id order)."""
+    runs = []
+    for compiled in (True, False):
+        runs.append([])
+        with mock.patch.object(map3, "compiled_pays", lambda n, compiled=compiled: compiled):
+            _random_growth(ops, runs[-1])
+    for a, b in zip(*runs):
+        assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def _random_growth(ops, record=None):
     gm = GMap3()
     row = _row_of_cubes(gm, 2, 0.0)
     cols = [[row[0], row[-1]]]  # columns of cubes: (first, top) darts
@@ -132,6 +156,8 @@ def test_random_growth_orbit_counts_equal_a_fresh_labelling(ops):
             gm.split_edge([pick % gm.n_darts], 0.5)  # not growth: full pass next
         _assert_orbits_match_fresh(gm, (kind, pick))
         assert gm.is_valid()
+        if record is not None:
+            record.append({key: gm.orbit_ids(key)[0].copy() for key in KEYS})
 
 
 def _grown_pair(cubes=6):
