@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from ramure.gmap import prism as _prism
 from ramure.gmap.errors import GMapError, ValueRefused
+from ramure.gmap.graphs import compiled_pays
 
 if TYPE_CHECKING:
     from ramure.gmap._columns import Columns
@@ -118,6 +119,7 @@ class Operations:
         if count < 0:
             raise ValueRefused(f"prism count must be at least 0, got {count}")
         t = _prism.template(n)
+        unit = origins is None and frames is None and sizes is None  # every prism gets the unit prism's corners
         origins = np.zeros((count, 3)) if origins is None else np.broadcast_to(np.asarray(origins, float), (count, 3))
         frames = (
             np.broadcast_to(np.eye(3), (count, 3, 3))
@@ -143,7 +145,10 @@ class Operations:
         d["sublabel"][rows] = 0
         per_prism(d["fcorner"])[:] = t.fcorner[None, :]
         per_prism(d["forward"])[:] = t.forward[None, :]
-        corner_points = _prism.corners(n, origins, frames, sizes)[:, t.corner, :]
+        if unit:
+            corner_points = _prism.unit_corners(n)[t.corner][None]
+        else:
+            corner_points = _prism.corners(n, origins, frames, sizes)[:, t.corner, :]
         per_prism(d["corner"])[:] = corner_points
         per_prism(d["point"])[:] = corner_points
         per_prism(d["vcorner"])[:] = t.corner[None, :]
@@ -229,6 +234,12 @@ class Operations:
         """
         starts = _darts(starts)
         a0, a1 = self._alpha[0], self._alpha[1]
+        if compiled_pays(self.n_darts):  # the same walk dart by dart: the calls, not the darts, cost here
+            from ramure.gmap._walk_kernel import face_walks
+
+            walk, lengths, ok = face_walks(a0, a1, starts, self.n_darts, self.n_darts + 2)
+            if ok:
+                return walk, lengths
         k = len(starts)
         idx: np.ndarray | None = None  # faces still open (None: all of them)
         cur, first = starts, starts

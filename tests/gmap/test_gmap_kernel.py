@@ -46,6 +46,18 @@ def test_bulk_prisms_equal_prisms_added_one_by_one():
     assert np.array_equal(bulk.dart_volume, single.dart_volume)
 
 
+@pytest.mark.parametrize("n", [3, 4, 7, 16])
+def test_prisms_without_geometry_get_the_unit_corners_bit_for_bit(n):
+    """The shortcut (one unit prism's corners for all) equals the batch computation with explicit defaults."""
+    plain, explicit = GMap3(), GMap3()
+    plain.add_prisms(n, 5)
+    explicit.add_prisms(n, 5, origins=np.zeros((5, 3)), frames=np.repeat(np.eye(3)[None], 5, 0), sizes=np.ones((5, 3)))
+    for name in ("corner", "point"):
+        a, b = plain.dart_data[name], explicit.dart_data[name]
+        assert np.array_equal(a, b) and np.array_equal(np.signbit(a), np.signbit(b))
+    assert np.ptp(plain.points[:, 0]) == 1.0  # a unit height, not a degenerate prism
+
+
 def test_prism_face_labels_and_default_corners():
     gm = GMap3()
     gm.add_prisms(4, sizes=[[2.0, 4.0, 6.0]])

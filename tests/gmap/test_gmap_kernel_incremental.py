@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
 from ramure.gmap import graphs
-from ramure.gmap import map3
+from ramure.gmap import GMapError, map3, operations
 from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
 from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
 
@@ -304,8 +304,10 @@ def test_components_of_edges_equal_scipy(size, compiled, monkeypatch):
     assert count == want_count and len(labels) == size and np.array_equal(labels, want)
 
 
-def test_face_walk_of_mixed_faces_equals_a_dart_by_dart_walk():
+@pytest.mark.parametrize("compiled", [True, False])  # the compiled walk and the batched numpy one
+def test_face_walk_of_mixed_faces_equals_a_dart_by_dart_walk(compiled, monkeypatch):
     """The batched walk (faces drop out as they close) gives each face's darts in walk order."""
+    monkeypatch.setattr(operations, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     gm.add_prisms(5, 2)
     gm.add_prisms(3)
@@ -315,6 +317,19 @@ def test_face_walk_of_mixed_faces_equals_a_dart_by_dart_walk():
         _assert_walks(gm, starts)
     empty, none = gm.face_walk([])
     assert empty.shape == (0, 0) and none.size == 0
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_face_walk_of_a_broken_face_is_refused_on_both_paths(compiled, monkeypatch):
+    monkeypatch.setattr(operations, "compiled_pays", lambda n: compiled)
+    gm = GMap3()
+    gm.add_prisms(4)
+    gm.alpha[1][1] = 1  # a0 then a1 from dart 0 stalls on dart 1: the face never closes
+    with pytest.raises(GMapError, match="does not close"):
+        gm.face_walk([0])
+    gm.alpha[1][1] = gm.n_darts + 5  # an id outside the map: the compiled walk hands over to numpy
+    with pytest.raises(IndexError):
+        gm.face_walk([0])
 
 
 def _assert_walks(gm, starts):
