@@ -119,3 +119,65 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
         for j in range(n_loc):
             out[n_raw + j] = count_old + j
     return loc, n_loc, out, count, linked
+
+
+@njit(cache=True)
+def _pair_count(p, q):
+    """Orbits of the two involutions ``p`` and ``q`` (arrays over the same nodes)."""
+    parent = np.arange(p.size)
+    for x in range(p.size):
+        _union(parent, x, p[x])
+        _union(parent, x, q[x])
+    count = 0
+    for x in range(p.size):
+        if _find(parent, x) == x:
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def boundary_counts(alpha, n):
+    """``(vertices, edges, faces, ok)`` of the boundary surface (see ``GMap3.boundary``) in one pass.
+
+    The surface's darts are the alpha3-free ones; its alpha0, alpha1 are the
+    restrictions and its alpha2 of ``d`` turns ``alpha2 alpha3`` from
+    ``alpha2(d)`` until a free dart.  ``ok`` is False when that does not
+    hold up (an id outside the map, a restriction leaving the surface, a
+    turn that never ends, a link that is not an involution): the caller then
+    builds the surface with numpy.
+    """
+    local = np.full(n, -1, np.int64)
+    m = 0
+    for d in range(n):
+        if alpha[3, d] == d:
+            local[d] = m
+            m += 1
+    darts = np.empty(m, np.int64)
+    for d in range(n):
+        if local[d] >= 0:
+            darts[local[d]] = d
+    b0 = np.empty(m, np.int64)
+    b1 = np.empty(m, np.int64)
+    b2 = np.empty(m, np.int64)
+    for j in range(m):
+        d = darts[j]
+        x0, x1, x = alpha[0, d], alpha[1, d], alpha[2, d]
+        if x0 < 0 or x0 >= n or x1 < 0 or x1 >= n or x < 0 or x >= n or local[x0] < 0 or local[x1] < 0:
+            return 0, 0, 0, False
+        b0[j], b1[j] = local[x0], local[x1]
+        turns = 0
+        while alpha[3, x] != x:
+            y = alpha[3, x]
+            if y < 0 or y >= n:
+                return 0, 0, 0, False
+            x = alpha[2, y]
+            if x < 0 or x >= n:
+                return 0, 0, 0, False
+            turns += 1
+            if turns > n:
+                return 0, 0, 0, False
+        b2[j] = local[x]
+    for j in range(m):
+        if b0[b0[j]] != j or b1[b1[j]] != j or b2[b2[j]] != j:
+            return 0, 0, 0, False
+    return _pair_count(b1, b2), _pair_count(b0, b2), _pair_count(b0, b1), True

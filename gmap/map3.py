@@ -1145,6 +1145,20 @@ class GMap3(Operations):
         sub = np.stack([local[alpha[0][darts]], local[alpha[1][darts]], local[x]])
         return Boundary(self, darts, sub)
 
+    def boundary_euler_characteristic(self) -> int:
+        """``V - E + F`` of :meth:`boundary` (2 for a sphere).
+
+        Where compiled passes pay, one pass builds the surface and counts its
+        cells without making the :class:`Boundary`; the counts are the same.
+        """
+        if compiled_pays(self.n_darts):
+            from ramure.gmap._components_kernel import boundary_counts
+
+            v, e, f, ok = boundary_counts(self.alpha, self.n_darts)
+            if ok:
+                return int(v - e + f)
+        return int(self.boundary().euler_characteristic())
+
     def __repr__(self) -> str:
         return f"GMap3(darts={self.n_darts}, volumes={self.n_volumes})"
 

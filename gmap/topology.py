@@ -30,7 +30,7 @@ def chi(gm: GMap3) -> int:
 
 def boundary_chi(gm: GMap3) -> int:
     """Euler characteristic ``V - E + F`` of the boundary surface (2 for a sphere)."""
-    return int(gm.boundary().euler_characteristic())
+    return gm.boundary_euler_characteristic()
 
 
 def components(gm: GMap3) -> int:

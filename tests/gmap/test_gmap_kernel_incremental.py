@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
 from ramure.gmap import graphs
-from ramure.gmap import GMapError, map3, operations
+from ramure.gmap import GMapError, _components_kernel, map3, operations
 from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
 from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
 
@@ -317,6 +317,44 @@ def test_face_walk_of_mixed_faces_equals_a_dart_by_dart_walk(compiled, monkeypat
         _assert_walks(gm, starts)
     empty, none = gm.face_walk([])
     assert empty.shape == (0, 0) and none.size == 0
+
+
+def _boundary_cases():
+    from ramure.gmap import wood
+
+    one = GMap3()
+    one.add_prisms(5)
+    row, pair = GMap3(), GMap3()
+    _row_of_cubes(row, 4, 0.0)
+    _row_of_cubes(pair, 2, 0.0)
+    _row_of_cubes(pair, 3, 4.0)  # two solids: chi of the boundary 4
+    loose = GMap3()
+    loose.add_prisms(4, 3)
+    loose.sew3(loose.prism_face(0, 4, "C1"), loose.prism_face(48, 4, "C3"))
+    split = GMap3()
+    _row_of_cubes(split, 3, 0.0)
+    split.split_edge([0, 60], 0.5)  # faces of different degrees sewn
+    return [one, row, pair, loose, split, wood.grow_wood("pine", years=2, branches=[(0, 3)]).gm]
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_compiled_boundary_counts_equal_the_boundary_surface(case):
+    gm = _boundary_cases()[case]
+    v, e, f, ok = _components_kernel.boundary_counts(gm.alpha, gm.n_darts)
+    c = gm.boundary().counts()
+    assert ok and (v, e, f) == (c["vertices"], c["edges"], c["faces"])
+    with mock.patch.object(map3, "compiled_pays", lambda n: True):
+        assert gm.boundary_euler_characteristic() == gm.boundary().euler_characteristic() == v - e + f
+    assert v - e + f == (4 if case in (2, 3) else 2)  # two balls in cases 2 and 3
+
+
+def test_compiled_boundary_hands_a_broken_surface_to_numpy():
+    gm = _boundary_cases()[1]
+    free = np.flatnonzero(gm.alpha[3] == np.arange(gm.n_darts))
+    gm.alpha[2][free[0]] = free[5]  # alpha2 no longer an involution on the surface
+    assert not _components_kernel.boundary_counts(gm.alpha, gm.n_darts)[3]
+    with mock.patch.object(map3, "compiled_pays", lambda n: True):
+        assert gm.boundary_euler_characteristic() == gm.boundary().euler_characteristic()
 
 
 @pytest.mark.parametrize("compiled", [True, False])
