@@ -77,10 +77,18 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
     themselves (``loc``, numbered by smallest dart), then old orbits and new
     ones (nodes ``count_old + loc``) are merged along the links between them,
     a merged orbit taking its smallest node's place; numbering as the numpy
-    path numbers them.  Returns ``(loc, n_loc, find, count, linked)``:
-    ``find`` maps old raw numbers, then the new ones, to today's orbits.
+    path numbers them.  Returns ``(loc, n_loc, find, count, linked, ok)``:
+    ``find`` maps old raw numbers, then the new ones, to today's orbits;
+    ``ok`` is False (nothing else meaningful) when a counted row of the new
+    darts is not an involution (the numpy path takes strong components then).
     """
     m = local.shape[1]
+    for i in range(4):
+        if in_key[i]:
+            for x in range(m):
+                y = local[i, x]
+                if y >= 0 and local[i, y] != x:
+                    return np.zeros(0, np.int32), 0, np.zeros(0, np.int32), 0, False, False
     parent = np.arange(m)
     for i in range(4):
         if in_key[i]:
@@ -118,7 +126,7 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
         out[:n_raw] = find
         for j in range(n_loc):
             out[n_raw + j] = count_old + j
-    return loc, n_loc, out, count, linked
+    return loc, n_loc, out, count, linked, True
 
 
 @njit(cache=True)

@@ -740,7 +740,12 @@ class GMap3(Operations):
             old = snap[1]
             n, n_old = self.n_darts, old.shape[1]
             result = None
-            if n >= n_old:
+            if n >= n_old and compiled_pays(n):  # the same entries, one compiled pass
+                from ramure.gmap._validity_kernel import alpha_changes
+
+                r, d, grew = alpha_changes(old, self._alpha)
+                result = (r, d) if grew else None
+            elif n >= n_old:
                 alpha = self._alpha
                 changed = [np.flatnonzero(old[i] != alpha[i, :n_old]) for i in range(4)]
                 r = np.repeat(np.arange(4), [len(c) for c in changed])
@@ -767,16 +772,22 @@ class GMap3(Operations):
         snap = self._alpha_snapshot()
         if d.size == 0 and n_new == 0:
             return old.moved(snap)
+        if n_new and compiled_pays(n):  # the same steps, one compiled pass
+            from ramure.gmap._components_kernel import grown_orbits
+
+            local = self._new_dart_local(n_old)
+            if local is None:
+                return None
+            loc, n_loc, find, total, linked, ok = grown_orbits(
+                local, in_key, n_old, old.raw, old.find, old.count, r, d, self.alpha
+            )
+            if ok:
+                return old.grown(n, loc, int(n_loc), None, int(total), snap, untouched=not linked, find=find)
         new_rows = self._new_dart_rows(n_old)
         if new_rows is None:
             return None
-        rows, involution, links_out, links_to, local = new_rows
+        rows, involution, links_out, links_to = new_rows
         key = list(key)
-        if n_new and compiled_pays(n) and all(involution[i] for i in key):  # the same steps, one compiled pass
-            from ramure.gmap._components_kernel import grown_orbits
-
-            loc, n_loc, find, total, linked = grown_orbits(local, in_key, n_old, old.raw, old.find, old.count, r, d, self.alpha)
-            return old.grown(n, loc, int(n_loc), None, int(total), snap, untouched=not linked, find=find)
         loc, n_loc = (
             orbit_labels(rows[key], involutions=all(involution[i] for i in key) or None) if n_new else (np.zeros(0, np.int32), 0)
         )
@@ -815,27 +826,36 @@ class GMap3(Operations):
     def _new_dart_rows(self, n_old: int):
         """The links of the darts from ``n_old`` on, shared by every key's update (cached per state).
 
-        ``(rows, involution, links_out, links_to, local)``: ``rows[i]`` alpha_i of
+        ``(rows, involution, links_out, links_to)``: ``rows[i]`` alpha_i of
         those darts in local numbers, a link to an older dart made a
         self-loop; ``involution[i]`` whether that row is an involution;
         ``links_out[i]`` the local darts whose alpha_i is older, and
-        ``links_to[i]`` those older darts; ``local`` the links in local
-        numbers, older darts negative.  None if a link leaves the map.
+        ``links_to[i]`` those older darts.  None if a link leaves the map.
         """
         cache_key = ("new_rows", n_old)
         if cache_key not in self._cache:
             n = self.n_darts
-            local = self._alpha[:, n_old:n].astype(np.int64) - n_old
+            local = self._new_dart_local(n_old)
             result = None
-            if local.size == 0 or (local.max() < n - n_old and local.min() >= -n_old):
+            if local is not None:
                 to_old = local < 0
                 ar = np.arange(n - n_old)
                 rows = np.where(to_old, ar, local)
                 involution = [bool(np.array_equal(row[row], ar)) for row in rows]
                 links_out = [np.flatnonzero(t) for t in to_old]
                 links_to = [local[i][links_out[i]] + n_old for i in range(4)]
-                result = (rows, involution, links_out, links_to, local)
+                result = (rows, involution, links_out, links_to)
             self._cache[cache_key] = result
+        return self._cache[cache_key]
+
+    def _new_dart_local(self, n_old: int):
+        """alpha of the darts from ``n_old`` on in local numbers (older darts negative), or None if a link leaves the map."""
+        cache_key = ("new_local", n_old)
+        if cache_key not in self._cache:
+            n = self.n_darts
+            local = self._alpha[:, n_old:n].astype(np.int64) - n_old
+            ok = local.size == 0 or (local.max() < n - n_old and local.min() >= -n_old)
+            self._cache[cache_key] = local if ok else None
         return self._cache[cache_key]
 
     def cells(self, i: int) -> tuple[np.ndarray, int]:

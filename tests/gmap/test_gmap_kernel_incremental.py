@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
 from ramure.gmap import graphs
-from ramure.gmap import GMapError, _components_kernel, map3, operations
+from ramure.gmap import GMapError, _components_kernel, _validity_kernel, map3, operations
 from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
 from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
 
@@ -132,6 +132,42 @@ def test_compiled_orbit_update_numbers_orbits_as_the_numpy_one(ops):
             _random_growth(ops, runs[-1])
     for a, b in zip(*runs):
         assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_compiled_orbit_update_hands_new_rows_that_are_not_involutions_to_numpy():
+    """A one-way link among the new darts: strong components (the numpy path), whichever path is asked."""
+    counts = {}
+    for compiled in (True, False):
+        gm = GMap3()
+        col = _row_of_cubes(gm, 3, 0.0)
+        for key in KEYS:
+            gm.orbit_count(key)
+        (new,) = gm.add_prisms(4, 1, origins=[[3.0, 0, 0]])
+        gm.sew3(gm.prism_face(col[-1], 4, "E"), gm.prism_face(new, 4, "O"))
+        n = gm.n_darts
+        gm.alpha[0][n - 1] = n - 7  # one way: alpha0 is no longer an involution on the new darts
+        gm.mark_changed()
+        with mock.patch.object(map3, "compiled_pays", lambda n, compiled=compiled: compiled):
+            counts[compiled] = [gm.orbit_count(key) for key in KEYS]
+        assert counts[compiled] == [_fresh(gm).orbit_count(key) for key in KEYS]
+    assert counts[True] == counts[False]
+
+
+def test_alpha_changes_equal_the_numpy_diff():
+    rng = np.random.default_rng(5)
+    old = rng.integers(0, 50, (4, 40)).astype(np.int32)
+    old[:, ::3] = np.arange(40)[::3]  # some free darts
+    for free_only in (True, False):
+        alpha = np.concatenate([old, rng.integers(0, 50, (4, 10)).astype(np.int32)], axis=1)
+        picks = rng.choice(40, 12, replace=False)
+        rows = rng.integers(0, 4, 12)
+        if free_only:
+            picks, rows = picks[picks % 3 == 0], rows[picks % 3 == 0]
+        alpha[rows, picks] = 49
+        r, d, grew = _validity_kernel.alpha_changes(old, alpha)
+        want_r, want_d = np.nonzero(old != alpha[:, :40])
+        assert np.array_equal(r, want_r) and np.array_equal(d, want_d) and len(d) > 0
+        assert grew == bool(np.all(old[want_r, want_d] == want_d)) == free_only
 
 
 def _random_growth(ops, record=None):
