@@ -86,30 +86,3 @@ def problem_counts(alpha, vol, face, n_volumes, darts, every):
         if face[alpha[0, d]] != f or face[alpha[1, d]] != f:
             out[FACE_MIX] += 1
     return out
-
-
-@njit(cache=True)
-def alpha_changes(old, alpha):
-    """``(r, d, grew)``: entries ``alpha[r, d] != old[r, d]`` (d below old's width), row by row, d ascending.
-
-    ``grew``: every changed entry was free before (``old[r, d] == d``), i.e. the map only grew.
-    """
-    n_old = old.shape[1]
-    count = 0
-    for i in range(4):
-        for x in range(n_old):
-            if old[i, x] != alpha[i, x]:
-                count += 1
-    r = np.empty(count, np.int64)
-    d = np.empty(count, np.int64)
-    grew = True
-    k = 0
-    for i in range(4):
-        for x in range(n_old):
-            if old[i, x] != alpha[i, x]:
-                r[k] = i
-                d[k] = x
-                k += 1
-                if old[i, x] != x:
-                    grew = False
-    return r, d, grew

@@ -740,12 +740,7 @@ class GMap3(Operations):
             old = snap[1]
             n, n_old = self.n_darts, old.shape[1]
             result = None
-            if n >= n_old and compiled_pays(n):  # the same entries, one compiled pass
-                from ramure.gmap._validity_kernel import alpha_changes
-
-                r, d, grew = alpha_changes(old, self._alpha)
-                result = (r, d) if grew else None
-            elif n >= n_old:
+            if n >= n_old:
                 alpha = self._alpha
                 changed = [np.flatnonzero(old[i] != alpha[i, :n_old]) for i in range(4)]
                 r = np.repeat(np.arange(4), [len(c) for c in changed])

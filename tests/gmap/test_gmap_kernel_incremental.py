@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
 from ramure.gmap import graphs
-from ramure.gmap import GMapError, _components_kernel, _validity_kernel, map3, operations
+from ramure.gmap import GMapError, _components_kernel, map3, operations
 from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
 from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
 
@@ -151,23 +151,6 @@ def test_compiled_orbit_update_hands_new_rows_that_are_not_involutions_to_numpy(
             counts[compiled] = [gm.orbit_count(key) for key in KEYS]
         assert counts[compiled] == [_fresh(gm).orbit_count(key) for key in KEYS]
     assert counts[True] == counts[False]
-
-
-def test_alpha_changes_equal_the_numpy_diff():
-    rng = np.random.default_rng(5)
-    old = rng.integers(0, 50, (4, 40)).astype(np.int32)
-    old[:, ::3] = np.arange(40)[::3]  # some free darts
-    for free_only in (True, False):
-        alpha = np.concatenate([old, rng.integers(0, 50, (4, 10)).astype(np.int32)], axis=1)
-        picks = rng.choice(40, 12, replace=False)
-        rows = rng.integers(0, 4, 12)
-        if free_only:
-            picks, rows = picks[picks % 3 == 0], rows[picks % 3 == 0]
-        alpha[rows, picks] = 49
-        r, d, grew = _validity_kernel.alpha_changes(old, alpha)
-        want_r, want_d = np.nonzero(old != alpha[:, :40])
-        assert np.array_equal(r, want_r) and np.array_equal(d, want_d) and len(d) > 0
-        assert grew == bool(np.all(old[want_r, want_d] == want_d)) == free_only
 
 
 def _random_growth(ops, record=None):
