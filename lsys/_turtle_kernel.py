@@ -139,7 +139,7 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 break
     if seek:
         n_draw = n_org = 0
-    seg_at = np.empty(n_draw, np.int64)
+    seg_at = np.empty(n_draw, np.int32)  # string positions: < 2^31 (the tree's node limit)
     seg_start = np.empty((n_draw, 3))
     seg_end = np.empty((n_draw, 3))
     seg_width = np.empty(n_draw)
@@ -147,12 +147,12 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
     seg_color = np.empty(n_draw, np.int64)
     seg_normal = np.empty((n_draw, 3))
     seg_parent = np.empty(n_draw, np.int64)
-    org_at = np.empty(n_org, np.int64)
+    org_at = np.empty(n_org, np.int32)
     org_pos = np.empty((n_org, 3))
     org_frame = np.empty((n_org, 3, 3))
     org_size = np.empty(n_org)
     org_color = np.empty(n_org, np.int64)
-    poly_at = np.empty(n_poly, np.int64)
+    poly_at = np.empty(n_poly, np.int32)
     poly_close = np.full(n_poly, -1, np.int64)
     poly_color = np.empty(n_poly, np.int64)
     poly_records = np.zeros(n_poly, np.int64)
@@ -342,9 +342,24 @@ def bracket_pairs(symbols, open_id, close_id):
 
     Returns (match, balanced); an unmatched bracket keeps -1 and makes ``balanced`` False.
     """
+    match = np.empty(len(symbols), np.int64)
+    return match, fill_bracket_pairs(symbols, open_id, close_id, match)
+
+
+@njit(cache=True, nogil=True)
+def bracket_pairs32(symbols, open_id, close_id):
+    """:func:`bracket_pairs` as int32 positions (half the bytes; the turtle's strings are shorter
+    than 2^31 modules, as the history tree refuses more nodes than that)."""
+    match = np.empty(len(symbols), np.int32)
+    return match, fill_bracket_pairs(symbols, open_id, close_id, match)
+
+
+@njit(cache=True, nogil=True)
+def fill_bracket_pairs(symbols, open_id, close_id, match):
+    """Write :func:`bracket_pairs`' matches into ``match`` (any integer dtype); returns ``balanced``."""
     n = len(symbols)
-    match = np.full(n, -1, np.int64)
-    stack = np.empty(n + 1, np.int64)
+    match[:] = -1
+    stack = np.empty(n + 1, match.dtype)  # only the deepest nesting is ever touched
     top = 0
     balanced = True
     for i in range(n):
@@ -359,7 +374,7 @@ def bracket_pairs(symbols, open_id, close_id):
                 match[i] = stack[top]
             else:
                 balanced = False
-    return match, balanced and top == 0
+    return balanced and top == 0
 
 
 @njit(cache=True, nogil=True)
