@@ -105,7 +105,10 @@ class Explorer:
     @property
     def mesh(self) -> pv.PolyData:
         """The plant's mesh; after an edit only the changed tubes are rebuilt
-        (:func:`ramure.lsys.geometry.patch_polydata`).  Tubes have :func:`mesh_sides` sides."""
+        (:func:`ramure.lsys.geometry.patch_polydata`).  Tubes have :func:`mesh_sides` sides.
+
+        Its points are float32 (what OpenGL draws; 9 MB less at 1.44 M modules), each the float64
+        value rounded once; ``skeleton.to_polydata()`` gives float64 points when they are needed."""
         plant = self._plant()
         if plant["mesh"] is None:
             sides = mesh_sides(len(plant["skeleton"]))
@@ -113,7 +116,7 @@ class Explorer:
             if previous is not None and previous[1] == sides:
                 plant["mesh"] = patch_polydata(previous[0], plant["skeleton"], sides)
             else:
-                plant["mesh"] = skeleton_to_polydata(plant["skeleton"], sides)
+                plant["mesh"] = skeleton_to_polydata(plant["skeleton"], sides, points_dtype=np.float32)
             plant["sides"] = sides
         return plant["mesh"]
 

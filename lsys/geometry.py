@@ -18,6 +18,12 @@ their triangles (:mod:`ramure.lsys.polygons`).  Every cell carries:
 ============  =======================================================================
 
 Cells come in this order: tube quads, organ triangles, polygon triangles.
+The four index arrays (``leaf_id``, ``segment``, ``organ``, ``polygon``) are
+int32: history-tree ids and counts stay below 2^31 (the tree refuses more
+nodes).  Points are float64 unless ``points_dtype`` asks for float32 (the
+explorer's on-screen mesh does: OpenGL draws float32 anyway, and a
+1.44 M-module plant's tubes take 9 MB less; every point is the float64 value
+rounded once, so a patched mesh equals a full rebuild bit for bit).
 A grammar's ``#material`` table rides along as ``field_data["material_rgb"]``
 / ``["material_rgba"]`` (see :mod:`ramure.lsys.materials`).
 
@@ -55,20 +61,41 @@ def _ring_basis(direction, normal):
     return a, b
 
 
+#: Segments computed at once by :func:`tube_points` (bounds its float64 temporaries to a few MB).
+TUBE_CHUNK = 16_384
+
+
 def tube_points(
-    start: np.ndarray, end: np.ndarray, normal: np.ndarray, base_radius: np.ndarray, top_radius: np.ndarray, sides: int = 8
+    start: np.ndarray,
+    end: np.ndarray,
+    normal: np.ndarray,
+    base_radius: np.ndarray,
+    top_radius: np.ndarray,
+    sides: int = 8,
+    dtype: type = np.float64,
 ) -> np.ndarray:
     """Points (s, 2·sides, 3) of frustums: each segment's bottom ring then its top ring.
 
     Each segment's points are contiguous, so an edit can replace the rings of
-    some segments and keep the others' bytes as they are.
+    some segments and keep the others' bytes as they are.  Computed in float64
+    by blocks of :data:`TUBE_CHUNK` segments and stored as ``dtype`` (float32:
+    each value rounded once, the same whatever the block).
     """
-    s = len(start)
-    a, b = _ring_basis(end - start, normal)
     theta = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
-    ring = np.cos(theta)[None, :, None] * a[:, None, :]
-    ring += np.sin(theta)[None, :, None] * b[:, None, :]
-    pts = np.empty((s, 2 * sides, 3))
+    cos, sin = np.cos(theta)[None, :, None], np.sin(theta)[None, :, None]
+    pts: np.ndarray = np.empty((len(start), 2 * sides, 3), dtype)
+    for lo in range(0, len(start), TUBE_CHUNK):
+        part = slice(lo, lo + TUBE_CHUNK)
+        pts[part] = _frustums(start[part], end[part], normal[part], base_radius[part], top_radius[part], cos, sin)
+    return pts
+
+
+def _frustums(start, end, normal, base_radius, top_radius, cos, sin):
+    a, b = _ring_basis(end - start, normal)
+    ring = cos * a[:, None, :]
+    ring += sin * b[:, None, :]
+    sides = ring.shape[1]
+    pts = np.empty((len(start), 2 * sides, 3))
     np.multiply(base_radius[:, None, None], ring, out=pts[:, :sides])
     pts[:, :sides] += start[:, None, :]
     np.multiply(top_radius[:, None, None], ring, out=pts[:, sides:])
@@ -187,19 +214,23 @@ def organ_arrays(
     return np.vstack(out_pts), np.vstack(out_tris), organ_idx, kinds[organ_idx]
 
 
-def skeleton_to_polydata(skeleton: Skeleton, sides: int = 8, organ_resolution: int = 8) -> pv.PolyData:
+def skeleton_to_polydata(
+    skeleton: Skeleton, sides: int = 8, organ_resolution: int = 8, points_dtype: type = np.float64
+) -> pv.PolyData:
     """One :class:`pyvista.PolyData` with tubes and organs and the cell data above.
 
     Cells: the tubes' quads segment by segment (``sides`` per segment), then
     the organs' triangles; points likewise (2·``sides`` per segment first).
+    ``points_dtype`` float32 halves the points (for drawing, see the module notes).
     """
     sk = skeleton
-    tpts = tube_points(sk.start, sk.end, sk.normal, sk.base_radius, sk.top_radius, sides).reshape(-1, 3)
+    tpts = tube_points(sk.start, sk.end, sk.normal, sk.base_radius, sk.top_radius, sides, points_dtype).reshape(-1, 3)
     return polydata_from_parts(skeleton, tpts, sides, organ_resolution)
 
 
 def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8, organ_resolution: int = 8) -> pv.PolyData:
-    """The plant's PolyData from already computed tube points (see :func:`tube_points`)."""
+    """The plant's PolyData from already computed tube points (see :func:`tube_points`); the
+    points keep ``tube_pts``' dtype."""
     import pyvista as pv
     from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonDataModel import vtkCellArray
@@ -215,7 +246,7 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
     nseg = len(skeleton)
     no, npoly = len(otris), len(ptris)
     nq, nt = nseg * sides, no + npoly
-    points = np.concatenate([tube_pts, opts, ppts]) if len(opts) or len(ppts) else tube_pts
+    points = np.concatenate([tube_pts, opts, ppts], dtype=tube_pts.dtype) if len(opts) or len(ppts) else tube_pts
     mesh = pv.PolyData()
     if not len(points):
         return mesh
@@ -233,12 +264,13 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
     cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=False), numpy_to_vtkIdTypeArray(conn, deep=False))
     mesh.points = points
     mesh.SetPolys(cells)
-    seg = np.repeat(np.arange(nseg), sides)
-    poly_leaf = polygons.leaf_id[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int64)
-    mesh.cell_data["leaf_id"] = np.concatenate([skeleton.leaf_id[seg], organs.leaf_id[organ_idx], poly_leaf])
-    mesh.cell_data["segment"] = np.concatenate([seg, np.full(nt, -1)])
-    mesh.cell_data["organ"] = np.concatenate([np.full(nq, -1), organ_idx, np.full(npoly, -1)])
-    mesh.cell_data["polygon"] = np.concatenate([np.full(nq + no, -1), poly_idx])
+    seg = np.repeat(np.arange(nseg, dtype=np.int32), sides)
+    poly_leaf = polygons.leaf_id[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
+    i32 = np.int32  # ids below 2^31 (the tree's node limit): half the bytes of int64
+    mesh.cell_data["leaf_id"] = np.concatenate([skeleton.leaf_id[seg], organs.leaf_id[organ_idx], poly_leaf], dtype=i32)
+    mesh.cell_data["segment"] = np.concatenate([seg, np.full(nt, -1, i32)])
+    mesh.cell_data["organ"] = np.concatenate([np.full(nq, -1, i32), organ_idx, np.full(npoly, -1, i32)], dtype=i32)
+    mesh.cell_data["polygon"] = np.concatenate([np.full(nq + no, -1, i32), poly_idx], dtype=i32)
     mesh.cell_data["kind"] = np.concatenate([np.full(nq, KIND_BRANCH), organ_kind, np.full(npoly, KIND_LEAF)]).astype(np.int8)
     mesh.cell_data["order"] = np.concatenate([skeleton.order[seg], np.full(nt, -1)]).astype(np.int32)
     organ_color = organs.color if organs.color is not None else np.zeros(len(organs), np.int32)
@@ -270,7 +302,7 @@ def patch_polydata(old_mesh: pv.PolyData | None, skeleton: Skeleton, sides: int 
     n_old = int(old.max(initial=-1)) + 1
     if n_old * k > len(old_pts):
         return skeleton_to_polydata(skeleton, sides, organ_resolution)
-    pts = np.empty((len(skeleton), k, 3))
+    pts = np.empty((len(skeleton), k, 3), old_pts.dtype)  # the old mesh's precision (see the module notes)
     old_tubes = old_pts[: len(old_pts) - len(old_pts) % k].reshape(-1, k, 3)
     breaks = np.flatnonzero((np.diff(new) != 1) | (np.diff(old) != 1)) + 1
     runs = zip(np.r_[0, breaks], np.r_[breaks, len(new)]) if len(new) else ()  # nothing kept: no run
@@ -280,5 +312,6 @@ def patch_polydata(old_mesh: pv.PolyData | None, skeleton: Skeleton, sides: int 
     todo[new] = False
     sk = skeleton
     if todo.any():
-        pts[todo] = tube_points(sk.start[todo], sk.end[todo], sk.normal[todo], sk.base_radius[todo], sk.top_radius[todo], sides)
+        fresh = (sk.start[todo], sk.end[todo], sk.normal[todo], sk.base_radius[todo], sk.top_radius[todo])
+        pts[todo] = tube_points(*fresh, sides, pts.dtype)
     return polydata_from_parts(skeleton, pts.reshape(-1, 3), sides, organ_resolution)

@@ -83,3 +83,42 @@ def test_an_edit_keeps_the_trace_int32_and_equal_to_a_fresh_interpretation():
         assert getattr(a, name).dtype == getattr(b, name).dtype and np.array_equal(getattr(a, name), getattr(b, name)), name
     assert a.match.dtype == np.int32 and a.nbytes() == _trace_bytes(a)
     assert np.allclose(edited.end, fresh.end, rtol=0, atol=1e-9) and np.array_equal(edited.leaf_id, fresh.leaf_id)
+
+
+def test_the_explorer_mesh_has_float32_points_and_int32_ids_and_the_library_mesh_float64():
+    from ramure.app.model import Explorer, mesh_sides
+    from ramure.lsys.geometry import skeleton_to_polydata
+
+    ex = Explorer("grammars/fruit_tree.lsys", n=5)
+    mesh = ex.mesh
+    assert mesh.points.dtype == np.float32 and len(ex.skeleton.organs) > 0  # tubes and organs
+    names = ("leaf_id", "segment", "organ", "polygon", "kind", "order", "material")
+    dtypes = [np.asarray(mesh.cell_data[k]).dtype for k in names]
+    assert dtypes == [np.int32] * 4 + [np.int8, np.int32, np.int32]
+    # 25 bytes per cell instead of 41 with int64 ids; 12 per point instead of 24
+    assert sum(np.asarray(mesh.cell_data[k]).nbytes for k in names) == 25 * mesh.n_cells
+    assert np.asarray(mesh.points).nbytes == 12 * mesh.n_points
+    full = skeleton_to_polydata(ex.skeleton, mesh_sides(len(ex.skeleton)))
+    assert full.points.dtype == np.float64
+    np.testing.assert_array_equal(np.asarray(mesh.points), np.asarray(full.points).astype(np.float32))
+    for k in names:
+        np.testing.assert_array_equal(mesh.cell_data[k], full.cell_data[k], err_msg=k)
+    leaf = ex.leaf_of_cell(mesh.n_cells - 1)  # an organ cell still picks its history leaf
+    assert isinstance(leaf, int) and leaf in ex.skeleton.organs.leaf_id.tolist()
+
+
+def test_tube_points_by_blocks_equal_one_block(monkeypatch):
+    from ramure.lsys import geometry
+
+    sk = LSystem.from_file("honda_sympodial").derive(8).skeleton()
+    args = (sk.start, sk.end, sk.normal, sk.base_radius, sk.top_radius, 5)
+    whole = geometry.tube_points(*args)
+    monkeypatch.setattr(geometry, "TUBE_CHUNK", 7)  # blocks of 7 segments, the last one short
+    assert len(sk) % 7 and whole.shape == (len(sk), 10, 3)
+    np.testing.assert_array_equal(geometry.tube_points(*args), whole)
+    small = geometry.tube_points(*args, dtype=np.float32)
+    assert small.dtype == np.float32
+    np.testing.assert_array_equal(small, whole.astype(np.float32))
+    # each ring lies at its radius around the segment's end
+    r = np.linalg.norm(whole[:, :5] - sk.start[:, None], axis=2)
+    np.testing.assert_allclose(r, np.repeat(sk.base_radius[:, None], 5, axis=1), rtol=1e-12)
