@@ -28,17 +28,32 @@ class UserError(RamureError):
     """An error caused by the user's input: printed without a traceback, exit 2."""
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``ramure`` parser; with a known ``command`` only the module that owns it is imported.
+
+    Without one (``ramure --help``, an unknown or misspelt command) every command module
+    registers, so help and argparse's "invalid choice" list are complete."""
     parser = argparse.ArgumentParser(
         prog="ramure",
         description="Explore procedural plants: derive, select, regenerate, measure.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for info in sorted(pkgutil.iter_modules(ramure.app.commands.__path__), key=lambda m: m.name):
-        module = importlib.import_module(f"ramure.app.commands.{info.name}")
-        module.register(sub)
+    for name in _command_modules(command):
+        importlib.import_module(f"ramure.app.commands.{name}").register(sub)
     return parser
+
+
+def _command_modules(command: str | None) -> list[str]:
+    owner = ramure.app.commands.OWNERS.get(command or "")
+    if owner is not None:
+        return [owner]
+    return sorted(m.name for m in pkgutil.iter_modules(ramure.app.commands.__path__))
+
+
+def _command_word(argv: list[str]) -> str | None:
+    """The sub-command the user typed: the first word, unless it is an option (``-h``)."""
+    return argv[0] if argv and not argv[0].startswith("-") else None
 
 
 def _user_errors() -> tuple[type[Exception], ...]:
@@ -48,7 +63,8 @@ def _user_errors() -> tuple[type[Exception], ...]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command_word(argv))
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
