@@ -380,6 +380,8 @@ def _nbytes(*arrays):
 
 _DESKTOP_STAGES = """
 import json, pathlib, sys, tempfile
+for name in {hide!r}:  # hidden as if not installed (pyvista imports mypy whenever it is installed)
+    sys.modules[name] = None
 
 def memory():
     fields = dict(line.split(":", 1) for line in open("/proc/self/status"))
@@ -437,7 +439,7 @@ drawn("regrow")
 window.regen.undo.emit()
 drawn("undo")
 modules = sorted(m for m in ("numba", "matplotlib", "scipy.sparse", "networkx", "mypy", "ramure.gmap", "vtkmodules.all")
-                 if m in sys.modules)
+                 if sys.modules.get(m) is not None)
 # VmHWM: this process's own peak (ru_maxrss would carry the parent's over fork and exec)
 print(json.dumps({{"peak_mb": peak, "after_pick_mb": stages["first pick"][1], "after_edits_mb": memory()[1],
                   "picked_cell": picked, "version": window.controller.snapshot.version, "stages": stages,
@@ -457,13 +459,14 @@ def _desktop_command():
     return [xvfb, "-a", "-s", "-screen 0 1400x900x24"] if xvfb else None
 
 
-def desktop_memory(n: int = 17, grammar: str | None = None) -> dict:
+def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...] = ()) -> dict:
     """Peak RSS (``VmHWM``) of a fresh process that opens the real desktop window on ``grammar``
     (default Honda sympodial) derived ``n`` steps, shows it and renders a frame (``peak_mb``),
     then picks the trunk with a click (``after_pick_mb``), regrows 10 leaves and undoes
     (``after_edits_mb``); with the RSS after each stage (``stages``: name -> [RSS, peak so
-    far] in MB).  ``{"error": ...}`` when
-    the window cannot be opened here (no Qt, no display)."""
+    far] in MB).  ``hide`` names modules the child sees as not installed (``("mypy",)``: the
+    dev venv's mypy, which pyvista imports only because it is there, 24 MB).  ``{"error": ...}``
+    when the window cannot be opened here (no Qt, no display)."""
     import json
     import subprocess
     import sys
@@ -472,7 +475,7 @@ def desktop_memory(n: int = 17, grammar: str | None = None) -> dict:
     if prefix is None:
         return {"error": "no display and no xvfb-run"}
     grammar = grammar or str(ROOT / "grammars" / "honda_sympodial.lsys")
-    code = _DESKTOP_STAGES.format(grammar=grammar, n=n)
+    code = _DESKTOP_STAGES.format(grammar=grammar, n=n, hide=tuple(hide))
     try:
         out = subprocess.run([*prefix, sys.executable, "-c", code], capture_output=True, text=True, timeout=900)
     except subprocess.SubprocessError as exc:
@@ -487,7 +490,9 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
     """Bytes per module of the history tree, the skeleton (+ trace) and the mesh, Honda n=17;
     the desktop window's peak RSS with that plant shown (<= 600 MB): median of ``repeats``
     fresh processes, the stages of the median run, and the same window on n=4 (``floor_mb``:
-    what Qt, VTK, numba and one software-OpenGL context cost before any large plant)."""
+    what Qt, VTK, numba and one software-OpenGL context cost before any large plant);
+    ``desktop_peak_without_mypy_mb``: one more run with the dev venv's mypy hidden (what a
+    user's install, without mypy, peaks at)."""
     from ramure.app.model import Explorer
 
     ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
@@ -538,6 +543,7 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
         )
     median = runs[peaks[len(peaks) // 2][1]]
     floor = desktop_memory(4)
+    user = desktop_memory(17, hide=("mypy",))
     return _plain(
         {
             **record,
@@ -547,6 +553,8 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
             "desktop_peaks_mb": [p for p, _ in peaks],
             "desktop_stages_mb": median["stages"],
             "desktop_loaded": median["loaded"],
+            "desktop_peak_without_mypy_mb": user.get("peak_mb"),
+            "desktop_stages_without_mypy_mb": user.get("stages"),
             "floor_mb": floor.get("peak_mb"),
             "floor_stages_mb": floor.get("stages"),
             "target_peak_mb": 600,
