@@ -83,19 +83,16 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
     darts is not an involution (the numpy path takes strong components then).
     """
     m = local.shape[1]
-    for i in range(4):
-        if in_key[i]:
-            for x in range(m):
-                y = local[i, x]
-                if y >= 0 and local[i, y] != x:
-                    return np.zeros(0, np.int32), 0, np.zeros(0, np.int32), 0, False, False
     parent = np.arange(m)
     for i in range(4):
         if in_key[i]:
             for x in range(m):
                 y = local[i, x]
                 if y >= 0:
-                    _union(parent, x, y)
+                    if local[i, y] != x:
+                        return np.zeros(0, np.int32), 0, np.zeros(0, np.int32), 0, False, False
+                    if y > x:  # an involution: each link once
+                        _union(parent, x, y)
     loc, n_loc = _numbered(parent)
     nodes = np.arange(count_old + n_loc)
     linked = False
@@ -133,9 +130,11 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
 def _pair_count(p, q):
     """Orbits of the two involutions ``p`` and ``q`` (arrays over the same nodes)."""
     parent = np.arange(p.size)
-    for x in range(p.size):
-        _union(parent, x, p[x])
-        _union(parent, x, q[x])
+    for x in range(p.size):  # involutions (checked by the caller): each link once
+        if p[x] > x:
+            _union(parent, x, p[x])
+        if q[x] > x:
+            _union(parent, x, q[x])
     count = 0
     for x in range(p.size):
         if _find(parent, x) == x:

@@ -61,3 +61,18 @@ def scatter(points, pos, ids):
         points[d, 0] = pos[v, 0]
         points[d, 1] = pos[v, 1]
         points[d, 2] = pos[v, 2]
+
+
+@njit(cache=True)
+def gather_corners(table, offset, vol, corner, out):
+    """``out[d] = table[offset[vol[d]] + corner[d]]`` (index clipped to the table), dart by dart."""
+    last = table.shape[0] - 1
+    for d in range(vol.size):
+        k = offset[vol[d]] + corner[d]
+        if k < 0:
+            k = 0
+        elif k > last:
+            k = last
+        out[d, 0] = table[k, 0]
+        out[d, 1] = table[k, 1]
+        out[d, 2] = table[k, 2]

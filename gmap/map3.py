@@ -355,6 +355,22 @@ class GMap3(Operations):
         """Per-dart default corners (n_darts, 3), a writable view; :meth:`embed` reads them."""
         return self._darts["corner"]
 
+    def set_corners_from_tables(self, table: np.ndarray, offset: np.ndarray, corner: np.ndarray) -> None:
+        """Default corners from per-volume tables: dart ``d`` gets ``table[offset[v] + corner[d]]``, ``v`` its volume.
+
+        ``table`` (m, 3) holds every volume's corners, volume ``v``'s from row
+        ``offset[v]``; ``corner`` is each dart's corner index in its volume.
+        An index outside the table is clipped to it (as ``np.take(mode="clip")``).
+        """
+        table = np.ascontiguousarray(table, np.float64)
+        out = self._darts["corner"]
+        if compiled_pays(self.n_darts):  # one pass, no index array
+            from ._embed_kernel import gather_corners
+
+            gather_corners(table, np.asarray(offset, np.int64), self.dart_volume, np.asarray(corner), out)
+            return
+        np.take(table, np.asarray(offset)[self.dart_volume] + corner, axis=0, out=out, mode="clip")
+
     @property
     def dart_volume(self) -> np.ndarray:
         """Volume id of every dart."""

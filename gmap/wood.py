@@ -1221,12 +1221,11 @@ class Wood:
         gm = self.gm
         self._sync_corner()
         flat, offset = self.default_corners()
-        corners = gm.corners
         tpl = self.corner
-        index = offset[gm.dart_volume] + tpl
-        np.take(flat, index, axis=0, out=corners, mode="clip")
+        gm.set_corners_from_tables(flat, offset, tpl)
         split = np.flatnonzero(tpl < 0)  # darts made by edge splits: edge midpoints
         if split.size:
+            corners = gm.corners
             a0, a1 = gm.alpha[0], gm.alpha[1]
             corners[split] = 0.5 * (corners[a0[split]] + corners[a0[a1[split]]])
         return gm.embed()

@@ -129,6 +129,22 @@ def test_compiled_embedding_equals_the_numpy_sums_bit_for_bit(weights, compiled,
     assert np.array_equal(gm.dart_data["point"], want[ids])
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_corners_from_per_volume_tables(compiled, monkeypatch):
+    """Dart d gets table[offset[volume] + corner[d]]; indices past either end are clipped (both paths alike)."""
+    monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n: compiled)
+    gm = GMap3()
+    gm.add_prisms(4, 3)
+    table = np.arange(3 * 8 * 3, dtype=float).reshape(-1, 3)
+    offset = np.array([0, 8, 16])
+    corner = gm.dart_data["vcorner"].astype(np.int64)
+    corner[[0, 5]] = [-1, 40]  # clipped to the first and the last row
+    gm.set_corners_from_tables(table, offset, corner)
+    want = table[np.clip(offset[gm.dart_volume] + corner, 0, len(table) - 1)]
+    assert np.array_equal(gm.corners, want)
+    assert np.array_equal(gm.corners[0], table[0]) and np.array_equal(gm.corners[5], table[-1])
+
+
 def test_a_small_map_is_built_and_embedded_without_loading_numba():
     # numba costs about 1 s to load: a one-shot fruit must not pay it (COMPILED_FROM darts).
     import subprocess

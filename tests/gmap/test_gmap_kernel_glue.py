@@ -112,8 +112,11 @@ def test_identify_refusals_name_both_faces_and_change_nothing():
     with pytest.raises(GMapError, match="not alpha3-free"):
         gm.identify([gm.face_of(1, "O")], [gm.face_of(2, "C4")])
     assert_same(before, gm)
-    with pytest.raises(GMapError):
+    with pytest.raises(GMapError, match="to itself or use a face twice"):
         gm.identify([gm.face_of(1, "C2")], [gm.face_of(1, "C2")])
+    assert_same(before, gm)
+    with pytest.raises(GMapError, match="to itself or use a face twice"):  # one face in two pairs
+        gm.identify([gm.face_of(1, "C2"), gm.face_of(3, "C2")], [gm.face_of(2, "C4"), gm.face_of(1, "C2")])
     assert_same(before, gm)
 
 
