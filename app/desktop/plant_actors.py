@@ -27,6 +27,11 @@ shows as anyway.  Choices, stated here:
 * **Picking** uses the full mesh through an actor that is never drawn
   (:attr:`PlantActors.pick_actor`, for a picker's pick list), so a cell id is
   the full mesh's whatever is drawn, and maps to its history leaf as before.
+* **Undo and redo draw what was drawn.**  The groups of the plant shown before
+  the last new one are kept with their actors (hidden), keyed by the model's
+  mesh; showing that mesh again (an undo, or a redo after it) brings them back
+  as they were, their GPU buffers included, instead of sorting and uploading
+  the plant again.  Only their colours are refreshed if they changed.
 * Shading is flat, as before (the tubes' facets show; no point normals are
   computed: flat interpolation ignores them).
 
@@ -109,14 +114,28 @@ class PlantActors:
         self.segment_count = 0
         self.moving = False
         self.large = False
+        self.key: Any = None  # what the shown version was drawn from (the model's mesh)
+        self.kept: dict | None = None  # the version shown before, its actors hidden
+        self._spare: list = []  # actors free for the next version's groups
         self.pick_mapper = vtkPolyDataMapper()
         self.pick_actor = vtkActor()  # never added to the renderer: picking only
         self.pick_actor.SetMapper(self.pick_mapper)
         self.renderer.AddObserver("StartEvent", self._before_frame)
 
     # -- content -------------------------------------------------------------------
-    def show(self, mesh: pv.PolyData | None, skeleton: Skeleton | None) -> None:
-        """Draw ``mesh`` (cell data ``rgb``; tubes of ``skeleton``'s segments first)."""
+    _STATE = ("key", "mesh", "groups", "sides", "segment_count", "large")
+
+    def show(self, mesh: pv.PolyData | None, skeleton: Skeleton | None, key: Any = None) -> None:
+        """Draw ``mesh`` (cell data ``rgb``; tubes of ``skeleton``'s segments first).
+
+        ``key`` names the version (the model's mesh ``mesh`` is a shallow copy of): the
+        version shown before is kept, and showing its key again brings its groups back.
+        """
+        if key is not None and self.kept is not None and self.kept["key"] is key and mesh is not None:
+            self._swap(mesh)
+            return
+        self._keep(key)
+        self.key = key
         self.mesh = mesh
         if mesh is None or mesh.n_cells == 0:
             self._set_groups([])
@@ -162,11 +181,48 @@ class PlantActors:
             groups.append(_Group(len(segs) * self.sides, r, _box_corners(lo[j] - r, hi[j] + r), segments=segs))
         return groups
 
+    def _keep(self, key: Any) -> None:
+        """Before version ``key`` is shown: keep the shown version (its groups and actors,
+        hidden) for an undo, and free the actors of the version kept before.  The shown
+        version drawn again (the same key) or unnamed (no key) is not kept: its actors are
+        reused."""
+        if self.key is None or self.key is key:
+            spare = [g.actor for g in self.groups]
+        else:
+            spare = [] if self.kept is None else [g.actor for g in self.kept["groups"]]
+            self.kept = {name: getattr(self, name) for name in self._STATE}
+            for g in self.groups:
+                g.actor.SetVisibility(False)
+        self.groups = []
+        self._spare = spare
+
+    def _swap(self, mesh: pv.PolyData) -> None:
+        """Show the kept version again (``mesh``: its shallow copy with this frame's colours)."""
+        kept = self.kept
+        assert kept is not None
+        old_mesh = kept["mesh"]
+        current = {name: getattr(self, name) for name in self._STATE}
+        for g in self.groups:
+            g.actor.SetVisibility(False)
+        for name, value in kept.items():
+            setattr(self, name, value)
+        self.kept = current if current["key"] is not None else None
+        if self.kept is None:
+            self._spare += [g.actor for g in current["groups"]]
+        self.mesh = mesh
+        self.pick_mapper.SetInputData(mesh)
+        if mesh.GetPoints() is not old_mesh.GetPoints():  # fruit spheres or cells hidden since
+            for g in self.groups:
+                g.stale_geometry = True
+        if not np.array_equal(np.asarray(mesh.cell_data["rgb"]), np.asarray(old_mesh.cell_data["rgb"])):
+            self.colors_changed()
+
     def _set_groups(self, groups: list[_Group]) -> None:
         """New groups; the actors of old groups are reused in order (no new GL objects)."""
         from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
-        actors = [g.actor for g in self.groups]
+        actors = self._spare + [g.actor for g in self.groups]
+        self._spare = []
         for actor in actors[len(groups) :]:
             self.renderer.RemoveActor(actor)
         for i, group in enumerate(groups):

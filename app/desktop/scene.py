@@ -46,6 +46,7 @@ GRID_OPACITY = 0.6
 SELECTION_RGB = (255, 0, 0)
 FXAA_ENDPOINT_STEPS = 4  # FXAA's edge-end search (VTK's default: 12)
 LINE_WIDTH = 1.5  # pixels: the least a branch is drawn with
+DRAFT_LINE_WIDTH = 1.0  # pixels: the hairlines of a draft frame (VTK's native lines, no geometry shader)
 SELECTED_LINE_WIDTH = 3.0
 VIEWS = {"front": (0.0, -1.0, 0.12), "side": (1.0, 0.0, 0.12), "top": (0.0, -1e-3, 1.0), "iso": (0.7, -0.7, 0.45)}
 
@@ -159,7 +160,12 @@ def segment_lines(start: ArrayLike, end: ArrayLike) -> pv.PolyData:
 
 
 class Hairlines:
-    """Every segment as a thin line under the tubes, and the selected ones as thick red lines."""
+    """Every segment as a thin line under the tubes, and the selected ones as thick red lines.
+
+    The lines of the plant shown before the last new one are kept (their actor hidden) with
+    the key they were shown with; showing that key again (an undo) shows them again without
+    building or uploading anything (only their colours are refreshed if they changed).
+    """
 
     def __init__(self, plotter: pv.BasePlotter) -> None:
         self.plotter = plotter
@@ -168,9 +174,31 @@ class Hairlines:
         self.selected: pv.PolyData | None = None
         self.selected_actor: pv.Actor | None = None
         self.skeleton: Skeleton | None = None
+        self.width = LINE_WIDTH
+        self.key: Any = None
+        self.kept: tuple | None = None  # (key, lines, actor, skeleton) of the plant shown before
+        self._names = iter(range(1 << 62))
 
-    def show(self, skeleton: Skeleton | None, mesh: pv.DataSet, colors: ArrayLike) -> None:
-        """Lines for a new plant (``colors``: the tubes' per-cell RGB)."""
+    def set_width(self, width: float) -> None:
+        """Draw the hairlines ``width`` pixels wide (:data:`DRAFT_LINE_WIDTH` in a draft frame)."""
+        self.width = float(width)
+        if self.actor is not None:
+            self.actor.GetProperty().SetLineWidth(self.width)
+        if self.kept is not None:
+            self.kept[2].GetProperty().SetLineWidth(self.width)
+
+    def show(self, skeleton: Skeleton | None, mesh: pv.DataSet, colors: ArrayLike, key: Any = None) -> None:
+        """Lines for a new plant (``colors``: the tubes' per-cell RGB); ``key`` names the version
+        (see the class notes)."""
+        if skeleton is not None and len(skeleton) and key is not None and self.kept is not None and self.kept[0] is key:
+            self._swap(mesh, colors)
+            return
+        if self.key is not None and key is not self.key and self.actor is not None and self.lines is not None:
+            old = self.kept
+            self.kept = (self.key, self.lines, self.actor, self.skeleton)
+            self.actor.SetVisibility(False)
+            self.lines, self.actor = (old[1], old[2]) if old is not None else (None, None)
+        self.key = key
         self.skeleton = skeleton
         if skeleton is None or len(skeleton) == 0:
             self._hide()
@@ -184,18 +212,36 @@ class Hairlines:
                 lines,
                 scalars="rgb",
                 rgb=True,
-                name="hairlines",
+                name=f"hairlines{next(self._names)}",
                 reset_camera=False,
                 render=False,
                 pickable=False,
                 show_scalar_bar=False,
                 lighting=False,
-                line_width=LINE_WIDTH,
+                line_width=self.width,
             )
         else:
             self.lines.copy_from(lines, deep=False)
             self.lines.cell_data.active_scalars_name = "rgb"
+            self.actor.GetProperty().SetLineWidth(self.width)
             self.actor.SetVisibility(True)
+
+    def _swap(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
+        """Show the kept lines again, and keep the shown ones."""
+        assert self.kept is not None
+        key, lines, actor, skeleton = self.kept
+        if self.actor is not None and self.lines is not None and self.key is not None:
+            self.kept = (self.key, self.lines, self.actor, self.skeleton)
+            self.actor.SetVisibility(False)
+        else:
+            self.kept = None
+        self.key, self.lines, self.actor, self.skeleton = key, lines, actor, skeleton
+        rgb = segment_colors(mesh, colors, len(skeleton))
+        if not np.array_equal(rgb, np.asarray(lines.cell_data["rgb"])):
+            lines.cell_data["rgb"][:] = rgb  # type: ignore[index]  # pyvista stubs
+            lines.Modified()
+        actor.GetProperty().SetLineWidth(self.width)
+        actor.SetVisibility(True)
 
     def set_colors(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
         if self.lines is not None and self.skeleton is not None:

@@ -16,6 +16,18 @@ The view only measures where the user clicked: it emits
 :class:`vtkCellPicker`) or :attr:`PlantView.rectangle_selected` (display
 coordinates), and the window asks the model which leaves those are.
 Display coordinates follow VTK: pixels, origin at the bottom left.
+
+Draft and polished frames (as ParaView and VTK draw interactive and still
+renders): on software OpenGL a large plant's full frame costs about 140 ms of
+CPU, most of it the 1.5-pixel hairlines (VTK draws wide lines with a geometry
+shader) and FXAA over a picture full of edges.  So the frame right after an
+edit (a new plant version, new colours, hidden cells) or during a camera drag
+is a *draft*: the same plant, geometry and colours, with 1-pixel hairlines and
+no FXAA (about 40 % of the cost).  When the user pauses for :data:`POLISH_MS`
+(a single-shot timer that each further edit restarts) the full-quality frame
+follows.  Plants under :data:`~ramure.app.desktop.plant_actors.LOD_SEGMENTS`
+segments are always drawn polished (their frames are cheap).  Pictures taken
+with :meth:`PlantView.grab_image` are always polished.
 """
 
 from __future__ import annotations
@@ -44,6 +56,8 @@ CLICK_SLOP = 4  # pixels a click may move and still be a click
 #: Selections of more leaves than this get their OBB after the recoloured plant is painted.
 BOX_LATER_LEAVES = 5_000
 PICK_TOLERANCE = 0.002
+#: Quiet time (ms) after an edit or a camera move before the full-quality frame is drawn.
+POLISH_MS = 250
 
 
 def selection_mode(modifiers: Qt.KeyboardModifier, rectangle: bool = False) -> str:
@@ -70,13 +84,14 @@ class _MouseFilter(QObject):
             return False
         if kind == QEvent.Type.Wheel:
             view.auto_framed = False  # the user zooms: keep their view
+            view.draft()  # the zoom's frame is a draft, polished when the wheel rests
         if kind == QEvent.Type.MouseButtonPress:
             pos = event.position().toPoint()
             button = event.button()
             band = button == Qt.MouseButton.RightButton or (button == Qt.MouseButton.LeftButton and view.rectangle_mode)
             self.press = (pos, button, band)
             if not band:
-                view.plant.set_moving(True)  # large plants: fewer tubes while the camera moves
+                view.set_moving(True)  # large plants: fewer tubes, draft look while the camera moves
             if band:
                 view.band.setGeometry(QRect(pos, QSize()))
                 view.band.show()
@@ -99,7 +114,7 @@ class _MouseFilter(QObject):
                 elif button == Qt.MouseButton.LeftButton:
                     view.click_from_widget(pos, selection_mode(event.modifiers()))
                 return True
-            view.plant.set_moving(False)
+            view.set_moving(False)
             view.redraw()
             if button == Qt.MouseButton.LeftButton and not moved:
                 view.click_from_widget(pos, selection_mode(event.modifiers()))
@@ -170,6 +185,44 @@ class PlantView(QWidget):
         self.auto_framed = True  # False once the user moves the camera
         self.hairlines = scene.Hairlines(self.plotter)
         self.ground = scene.Ground(self.plotter)
+        self.drafting = False  # True: frames are drawn in the draft look (see the module's notes)
+        self._fxaa = bool(self.plotter.renderer.GetUseFXAA())
+        self._polish_timer = QTimer(self)
+        self._polish_timer.setSingleShot(True)
+        self._polish_timer.setInterval(POLISH_MS)
+        self._polish_timer.timeout.connect(self.polish)
+
+    # -- draft and polished frames ---------------------------------------------
+    def draft(self) -> None:
+        """Draw the next frames in the draft look (a large plant only) and the polished frame
+        once nothing happened for :data:`POLISH_MS` (a further call restarts the wait)."""
+        if not self.plant.large:
+            self.polish()
+            return
+        if not self.drafting:
+            self.drafting = True
+            self._set_look(draft=True)
+        self._polish_timer.start()
+
+    def polish(self) -> None:
+        """Back to the full-quality look now, and repaint if the last frames were drafts."""
+        self._polish_timer.stop()
+        if self.drafting:
+            self.drafting = False
+            self._set_look(draft=False)
+            self.redraw()
+
+    def set_moving(self, moving: bool) -> None:
+        """The camera is dragged (True: fewer tubes, draft look) or was released (False)."""
+        self.plant.set_moving(moving)
+        self.draft()
+        if moving:
+            self._polish_timer.stop()  # polished only once the drag is over
+
+    def _set_look(self, draft: bool) -> None:
+        if self._fxaa:
+            self.plotter.renderer.SetUseFXAA(not draft)
+        self.hairlines.set_width(scene.DRAFT_LINE_WIDTH if draft else scene.LINE_WIDTH)
 
     # -- drawing ---------------------------------------------------------------
     def show_plant(self, snap: Snapshot, colors: np.ndarray, reset_camera: bool | None = None) -> None:
@@ -189,9 +242,9 @@ class PlantView(QWidget):
         self._apply_hidden()
         # The plant's actors keep their mappers and shaders; only the groups drawn in the next
         # frame gather their cells and go to the GPU again (see plant_actors).
-        self.plant.show(mesh, snap.skeleton)
+        self.plant.show(mesh, snap.skeleton, key=snap.mesh)  # an undo: the kept actors again
         self.actor = self.plant.pick_actor
-        self.hairlines.show(snap.skeleton, self.mesh, colors)
+        self.hairlines.show(snap.skeleton, self.mesh, colors, key=snap.mesh)
         self.ground.show(mesh.bounds)
         self.picker = None
         diag = float(np.linalg.norm(np.subtract(*np.reshape(mesh.bounds, (3, 2)).T)))
@@ -204,6 +257,7 @@ class PlantView(QWidget):
             )
         if reset_camera:
             self.reset_camera()
+        self.draft()
         self.redraw()
 
     def reset_camera(self, view: str | None = None) -> None:
@@ -235,6 +289,7 @@ class PlantView(QWidget):
         self.mesh.Modified()
         self.plant.colors_changed()
         self.hairlines.set_colors(self.mesh, colors)
+        self.draft()
         self.redraw()
 
     def set_box(self, lines: ArrayLike | None) -> None:
@@ -293,6 +348,7 @@ class PlantView(QWidget):
         """Hide the plant mesh's fruit spheres (so they do not show inside volumetric fruit)."""
         self.hide_fruit_spheres = bool(hidden)
         self._apply_hidden()
+        self.draft()
         self.redraw()
 
     def set_hidden_cells(self, hidden: ArrayLike | None) -> None:
@@ -307,6 +363,7 @@ class PlantView(QWidget):
             mask = None
         self.hidden_cells = mask
         self._apply_hidden()
+        self.draft()
         self.redraw()
 
     def _apply_hidden(self) -> None:
@@ -467,10 +524,12 @@ class PlantView(QWidget):
 
     # -- images -------------------------------------------------------------------
     def grab_image(self) -> QImage:
-        """The 3D view as a QImage (what is on screen)."""
+        """The 3D view as a QImage (what is on screen, polished)."""
+        self.polish()
         self.redraw(now=True)
         return self.plotter.grabFramebuffer()
 
     def close(self) -> bool:
+        self._polish_timer.stop()
         self.plotter.close()
         return super().close()

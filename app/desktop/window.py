@@ -624,7 +624,8 @@ class MainWindow(QMainWindow):
         return answer == QMessageBox.StandardButton.Discard
 
     def grab_window(self) -> QImage:
-        """The whole window as a QImage, with the 3D view freshly painted."""
+        """The whole window as a QImage, with the 3D view freshly painted (polished)."""
+        self.view.polish()
         self.view.redraw(now=True)
         return self.grab().toImage()
 
