@@ -1156,7 +1156,6 @@ class Wood:
                 continue
             s_layer, rho_layer, a_layer, lateral = profiles[b]
             cells = np.flatnonzero(np.abs(levels - br.level) <= 1)  # the slot lies in its node level
-            flat = pts[cells].reshape(-1, 3)
             t, phi = br.level, 2 * np.pi * br.sector / n
             p0, frame = self.branch_frame(br, knot=True)
             # (4, layers, 3): the four corners (-,-), (+,-), (+,+), (-,+) at once, same arithmetic per corner
@@ -1169,15 +1168,18 @@ class Wood:
             knot = p0 + s_layer[:, None] * frame[0] + rho_layer[None, :, None] * side
             disp = knot - straight
             size_layer = np.linalg.norm(disp, axis=2).max(axis=0)
-            z = (flat - o[t]) @ f[t, 0]
+            rel = pts[cells].reshape(-1, 3)
+            rel -= o[t]
+            z = rel @ f[t, 0]
             close = np.flatnonzero(np.abs(z - 0.5 * h[t]) - 0.5 * h[t] < 2 * size_layer.max())
             rows = cells[close // per] * per + close % per
-            flat, z = flat[close], z[close]  # the rest is beyond reach
-            rel = flat - o[t]
+            rel, z = rel[close], z[close]  # the rest is beyond reach
             across = z[:, None] * f[t, 0]  # np.linalg.norm of rel - across, in place
             np.subtract(rel, across, out=across)
             across *= across
-            r_h = np.sqrt(np.add.reduce(across, axis=1))
+            r_h = across[:, 0] + across[:, 1]  # add.reduce over 3 columns: left to right
+            r_h += across[:, 2]
+            np.sqrt(r_h, out=r_h)
             du = (np.arctan2(rel @ f[t, 2], rel @ f[t, 1]) - phi + np.pi) % (2 * np.pi) - np.pi
             outside = np.hypot(np.maximum(np.abs(du) - half, 0) * r_h, np.maximum(np.abs(z - 0.5 * h[t]) - 0.5 * h[t], 0))
             near = np.flatnonzero(outside < 2 * size_layer.max())
