@@ -1033,7 +1033,8 @@ class GMap3(Operations):
         radial = self._darts["radial"]
         compiled = compiled_pays(len(ids))  # both paths sum in dart order: the same positions
         any_exclusive = bool(exclusive.any())
-        skip_in_pass = compiled and any_exclusive and not radial.any()  # the compiled pass leaves those darts out
+        any_radial = bool(radial.any())  # all zero stays zero
+        skip_in_pass = compiled and any_exclusive and not any_radial  # the compiled pass leaves those darts out
         if any_exclusive and not skip_in_pass:
             excl = exclusive[vol]
             at_excl = np.zeros(count, bool)
@@ -1057,7 +1058,7 @@ class GMap3(Operations):
             scatter(points, pos, ids)
         else:
             points[:] = pos[ids]
-        if radial.any():  # all zero stays zero
+        if any_radial:
             radial[:] = np.take(np.bincount(ids, weight * radial, minlength=count) / total, ids)
         return pos
 
