@@ -425,25 +425,27 @@ def changed_spans(old: ArrayLike, new: ArrayLike, size: int) -> tuple[np.ndarray
 
 
 def _gaps(keep):
-    """Runs of False in ``keep``: (starts, ends, kept count before each run)."""
-    changed = np.r_[False, ~keep, False].astype(np.int8)
-    edges = np.diff(changed)
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
-    before = np.cumsum(keep) - keep
-    return starts, ends, before[starts] if len(starts) else np.zeros(0, np.int64)
+    """Runs of False in ``keep``: (starts, ends, kept count before each run, total length of
+    the runs before each run and of all of them); no array as long as the string but the mask's
+    edges (the kept counts come from the few runs, not a cumulative sum of the string)."""
+    edges = np.flatnonzero(np.diff(np.r_[False, ~keep, False].view(np.int8)))
+    starts, ends = edges[0::2], edges[1::2] - 1
+    gone_before = np.zeros(len(starts) + 1, np.int64)
+    np.cumsum(ends - starts + 1, out=gone_before[1:])
+    return starts, ends, starts - gone_before[:-1], gone_before
 
 
 def _paired(gaps, keep, keys):
     """One span per key (kept count before it); an empty span where this string has none."""
-    starts, ends, counts = gaps
-    kept_at = np.flatnonzero(keep)
+    starts, ends, counts, gone_before = gaps
     where = np.searchsorted(counts, keys)
     has = (
         (where < len(counts)) & (counts[np.minimum(where, max(len(counts) - 1, 0))] == keys)
         if len(counts)
         else np.zeros(len(keys), bool)
     )
-    first = np.where(keys > 0, kept_at[np.maximum(keys - 1, 0)] + 1 if len(kept_at) else 0, 0)
+    # just after the keys-th kept module: keys - 1 kept and the runs that come before it
+    first = np.where(keys > 0, keys + gone_before[np.searchsorted(counts, keys, side="left")], 0)
     out = np.stack([first, first - 1], axis=1)
     out[has] = np.stack([starts[where[has]], ends[where[has]]], axis=1)
     return out

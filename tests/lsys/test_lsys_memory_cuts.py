@@ -122,3 +122,67 @@ def test_tube_points_by_blocks_equal_one_block(monkeypatch):
     # each ring lies at its radius around the segment's end
     r = np.linalg.norm(whole[:, :5] - sk.start[:, None], axis=2)
     np.testing.assert_allclose(r, np.repeat(sk.base_radius[:, None], 5, axis=1), rtol=1e-12)
+
+
+def _spans_reference(old, new):
+    """changed_spans by hand: runs of modules not in the other string, keyed by the kept modules
+    before them; a string without a run at a key gets the empty span just after that kept module."""
+    kept = set(old) & set(new)
+
+    def runs(string):
+        out, count, i = {}, 0, 0
+        after = {0: 0}  # kept count -> the position just after that many kept modules
+        while i < len(string):
+            if string[i] in kept:
+                count += 1
+                after[count] = i + 1
+                i += 1
+                continue
+            j = i
+            while j < len(string) and string[j] not in kept:
+                j += 1
+            out[count] = (i, j - 1)
+            i = j
+        return out, after
+
+    (ro, ao), (rn, an) = runs(old), runs(new)
+    keys = sorted(set(ro) | set(rn))
+    return [[list(r.get(k, (a[k], a[k] - 1))) for k in keys] for r, a in ((ro, ao), (rn, an))]
+
+
+def test_changed_spans_match_a_reference_on_random_edits():
+    from ramure.lsys.turtle import changed_spans
+
+    rng = np.random.default_rng(3)
+    fresh = 1000
+    for _ in range(400):
+        old = rng.choice(600, size=int(rng.integers(0, 30)), replace=False).tolist()
+        new = []
+        for v in old:
+            new += list(range(fresh, fresh + int(rng.integers(0, 3) if rng.random() < 0.3 else 0)))
+            fresh += 3
+            if rng.random() < 0.7:
+                new.append(v)
+        new += list(range(fresh, fresh + int(rng.integers(0, 2))))
+        fresh += 2
+        spans = changed_spans(old, new, fresh + 1)
+        assert spans is not None
+        assert [spans[0].tolist(), spans[1].tolist()] == _spans_reference(old, new), (old, new)
+
+
+def test_changed_spans_of_a_large_plant_allocate_no_int64_copy_of_the_string():
+    from ramure.lsys.regen import Session
+    from ramure.lsys.turtle import changed_spans
+
+    session = Session(LSystem.from_file("honda_sympodial"), n=13)
+    tree = session.derivation.tree
+    before = tree.leaves
+    leaves = session.derivation.skeleton().leaf_id
+    session.regrow(leaves[len(leaves) // 3 :: len(leaves) // 6][:5].tolist(), rho=0.5, seed=1)
+    changed_spans(before, tree.leaves, tree.size)  # kernel loaded before counting
+    spans, _, peak = _traced(lambda: changed_spans(before, tree.leaves, tree.size))
+    assert spans is not None and 1 <= len(spans[0]) <= 5
+    # masks and edges only: 4.2 bytes per module; an int64 cumulative sum of each string took 20
+    assert peak < 8 * len(before)
+    for (a, b), (c, d) in zip(*spans):  # every span changed something: a removed or an added run
+        assert b >= a or d >= c
