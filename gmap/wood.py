@@ -382,6 +382,19 @@ _SU = np.array([-1.0, 1.0, 1.0, -1.0])
 _SV = np.array([-1.0, -1.0, 1.0, 1.0])
 
 
+def _put_blocks(flat: np.ndarray, rows: np.ndarray, pts: np.ndarray) -> None:
+    """``flat[rows[j] + c] = pts[j, c]`` for each of the ``c < 8`` corners of cube ``j``.
+
+    As whole 8-row blocks when every start row is a multiple of 8 (the usual
+    case: prisms of even order have 2n corners), which numpy copies about 5x
+    faster than 8 single rows each; the same values either way.
+    """
+    if len(flat) % 8 == 0 and not np.any(rows % 8):
+        flat.reshape(-1, 8, 3)[rows // 8] = pts
+    else:
+        flat[rows[:, None] + np.arange(8)[None, :]] = pts
+
+
 class Wood:
     """A growing volumetric wood: ``gm`` is the :class:`GMap3`; ``step()`` adds a half-year."""
 
@@ -911,7 +924,7 @@ class Wood:
                 pts = self._push(pts, t, profiles)
             if ax.index > 0 and ax.index - 1 in profiles:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
-            flat[offset[cells][:, None] + np.arange(8)[None, :]] = pts
+            _put_blocks(flat, offset[cells], pts)
         return flat, offset
 
     def _knot_profiles(self, radii):

@@ -462,3 +462,33 @@ def test_from_a_plant_leaves_out_a_branch_too_close_to_another_of_its_year(monke
     assert w.gm.meta["branch_leaves"] == [[5], [7], [8]]  # the refused branch's leaf is not mapped
     monkeypatch.setattr(W, "MIN_SECTOR_GAP", 1)
     assert len(W.from_skeleton(sk, 5).branches) == 4
+
+
+@pytest.mark.parametrize("aligned", [True, False])
+def test_cube_corners_written_as_blocks_equal_row_by_row(aligned):
+    """_put_blocks copies 8-row blocks when the start rows allow, single rows otherwise: same table."""
+    rng = np.random.default_rng(1)
+    rows = np.array([0, 24, 8, 40]) + (0 if aligned else 14)
+    pts = rng.random((4, 8, 3))
+    fast, slow = np.zeros((64, 3)), np.zeros((64, 3))
+    W._put_blocks(fast, rows, pts)
+    for j, r in enumerate(rows):
+        slow[r : r + 8] = pts[j]
+    assert np.array_equal(fast, slow) and np.count_nonzero(fast.any(axis=1)) == 32
+
+
+@pytest.mark.parametrize("sides", [7, 16])  # 14 corners per pith prism (unaligned blocks), 32 (aligned)
+def test_corner_table_equals_the_row_by_row_write(sides, monkeypatch):
+    w = W.grow_wood("pine", years=2, branches=[(0, 2)], sides=sides)
+    flat, offset = w.default_corners()
+    cells = offset[w.gm.volume_data["cell"] > 0]
+    assert bool(np.any(cells % 8)) == (sides == 7)
+
+    def row_by_row(table, rows, pts):
+        for j, r in enumerate(rows):
+            table[r : r + 8] = pts[j]
+
+    monkeypatch.setattr(W, "_put_blocks", row_by_row)
+    slow, _ = w.default_corners()
+    assert np.array_equal(flat, slow)
+    assert_solid(w.gm)
