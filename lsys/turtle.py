@@ -556,7 +556,7 @@ def _interleave(old, kept, new):
     """Kept old rows and new rows in turn (string order)."""
     out = []
     for i, idx in enumerate(kept):
-        out.append(old[idx])
+        out.append(old[idx[0] : idx[-1] + 1] if len(idx) else old[:0])  # a range: a slice, no gather
         if i < len(new):
             out.append(new[i])
     return np.concatenate(out)
