@@ -238,7 +238,7 @@ class Hairlines:
         self.key, self.lines, self.actor, self.skeleton = key, lines, actor, skeleton
         rgb = segment_colors(mesh, colors, len(skeleton))
         if not np.array_equal(rgb, np.asarray(lines.cell_data["rgb"])):
-            lines.cell_data["rgb"][:] = rgb  # type: ignore[index]  # pyvista stubs
+            lines.cell_data["rgb"][:] = rgb
             lines.Modified()
         actor.GetProperty().SetLineWidth(self.width)
         actor.SetVisibility(True)

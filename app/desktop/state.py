@@ -329,8 +329,19 @@ def changed_constants(edited: Mapping[str, float], current: Mapping[str, float],
 
 # -- drawing ---------------------------------------------------------------------
 def base_colors(mesh: pv.DataSet) -> np.ndarray:
-    """Per-cell RGB of the unselected plant (the shared palette: fruit in orange)."""
-    return plant_colors(mesh)
+    """Per-cell RGB of the unselected plant (the shared palette: fruit in orange).
+
+    The same colours as :func:`ramure.app.render.plant_colors`, looked up by ``kind`` in a
+    three-row palette (1 instead of 9 ms at 393k cells); meshes with ``#material`` colours
+    go through ``plant_colors`` itself.
+    """
+    from ramure.app.render import BARK, FRUIT, LEAF
+
+    if "material" in mesh.cell_data and "material_rgb" in mesh.field_data:
+        return plant_colors(mesh)
+    palette = (np.array([BARK, LEAF, FRUIT]) * 255).astype(np.uint8)  # plant_colors' own rounding
+    kind = np.asarray(mesh.cell_data["kind"])
+    return palette.take(np.clip(kind, 0, 2), axis=0)  # take: 4x faster than [] here
 
 
 KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (lsys.geometry.KIND_FRUIT)

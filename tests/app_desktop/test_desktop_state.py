@@ -150,3 +150,19 @@ def test_cut_graph_layout_is_a_tidy_tree():
         rows.setdefault(layout.positions[(v, "in")][1], []).append(xs[v])
     assert all(len(set(r)) == len(r) for r in rows.values())  # no two nodes on one spot
     assert set(layout.names) == nodes and all(layout.names.values())
+
+
+def test_base_colors_are_the_shared_palette_looked_up_by_kind():
+    """The desktop's palette lookup gives plant_colors' very bytes (bark, leaf, fruit, materials)."""
+    from ramure.app.desktop.state import base_colors
+    from ramure.app.model import Explorer
+    from ramure.app.render import plant_colors
+    import ramure.grammars as grammars
+
+    for name, n in (("fruit_tree", 5), ("apricot_tree", 4), ("honda_sympodial", 8)):
+        mesh = Explorer(str(grammars.path(name)), n=n).mesh
+        rgb = base_colors(mesh)
+        assert rgb.dtype == np.uint8 and rgb.shape == (mesh.n_cells, 3)
+        assert np.array_equal(rgb, plant_colors(mesh)), name
+    kinds = np.unique(np.asarray(Explorer(str(grammars.path("fruit_tree")), n=5).mesh.cell_data["kind"]))
+    assert {0, 1, 2} <= set(kinds.tolist())  # every palette row is checked
