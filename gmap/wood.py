@@ -1332,10 +1332,10 @@ def grow_wood(
     wood = Wood(p, seed, placed, species, years=years)
     for _ in range(2 * years):
         wood.step()
+        if check_every_step:  # first: its fresh look at what changed is then shared by the embedding's labels
+            wood.check_topology()
         if embed_every_step:
             wood.embed()
-        if check_every_step:
-            wood.check_topology()
     if not embed_every_step:  # else the last step's embedding stands: nothing changed since
         wood.embed()
     wood.seconds = time.perf_counter() - t0
