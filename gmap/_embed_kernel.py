@@ -13,12 +13,16 @@ from numba import njit
 
 
 @njit(cache=True)
-def weighted_sums(ids, weight, corners, count):
-    """``(sums (count, 3), total (count,))``: weighted corner sums and weights per vertex."""
+def weighted_sums(raw, find, weight, corners, count):
+    """``(sums (count, 3), total (count,))``: weighted corner sums and weights per vertex.
+
+    Dart ``d``'s vertex is ``find[raw[d]]`` (the kernel's two-level labels, so
+    they need not be gathered first; pass ``find = arange`` for plain ids).
+    """
     sums = np.zeros((count, 3))
     total = np.zeros(count)
-    for d in range(ids.size):
-        v = ids[d]
+    for d in range(raw.size):
+        v = find[raw[d]]
         w = weight[d]
         total[v] += w
         sums[v, 0] += w * corners[d, 0]
@@ -28,7 +32,7 @@ def weighted_sums(ids, weight, corners, count):
 
 
 @njit(cache=True)
-def exclusive_sums(ids, weight, corners, count, vol, exclusive):
+def exclusive_sums(raw, find, weight, corners, count, vol, exclusive):
     """:func:`weighted_sums` where a vertex touching an ``exclusive`` volume counts only those volumes.
 
     ``vol`` is each dart's volume, ``exclusive`` a flag per volume.  The darts
@@ -36,13 +40,13 @@ def exclusive_sums(ids, weight, corners, count, vol, exclusive):
     are the same, in the same order.
     """
     at_exclusive = np.zeros(count, np.bool_)
-    for d in range(ids.size):
+    for d in range(raw.size):
         if exclusive[vol[d]]:
-            at_exclusive[ids[d]] = True
+            at_exclusive[find[raw[d]]] = True
     sums = np.zeros((count, 3))
     total = np.zeros(count)
-    for d in range(ids.size):
-        v = ids[d]
+    for d in range(raw.size):
+        v = find[raw[d]]
         if at_exclusive[v] and not exclusive[vol[d]]:
             continue
         w = weight[d]
@@ -54,10 +58,10 @@ def exclusive_sums(ids, weight, corners, count, vol, exclusive):
 
 
 @njit(cache=True)
-def scatter(points, pos, ids):
-    """``points[d] = pos[ids[d]]`` for every dart, in place."""
-    for d in range(ids.size):
-        v = ids[d]
+def scatter(points, pos, raw, find):
+    """``points[d] = pos[find[raw[d]]]`` for every dart, in place."""
+    for d in range(raw.size):
+        v = find[raw[d]]
         points[d, 0] = pos[v, 0]
         points[d, 1] = pos[v, 1]
         points[d, 2] = pos[v, 2]

@@ -1019,9 +1019,18 @@ class GMap3(Operations):
         the same positions.  The ``radial`` scalar is averaged the same way.
         Returns the vertex positions.
         """
-        ids, count = self.cells(0)
         if not self.n_darts:
             return np.zeros((0, 3))
+        corners, points = self._darts["corner"], self._darts["point"]
+        radial = self._darts["radial"]
+        any_radial = bool(radial.any())  # all zero stays zero
+        compiled = compiled_pays(self.n_darts)  # both paths sum in dart order: the same positions
+        if compiled and not any_radial:  # the vertex labels in two levels: no per-dart gather
+            state = self._orbit_state(CELL_INVOLUTIONS[0])
+            raw, find, count = state.raw[: self.n_darts], state.find, state.count
+        else:
+            ids, count = self.cells(0)
+            raw, find = ids, np.arange(count, dtype=ids.dtype)
         vol = self.dart_volume
         vweight = self._volumes["weight"]
         exclusive = self._volumes["exclusive"]
@@ -1029,11 +1038,7 @@ class GMap3(Operations):
             weight = self._inverse_corner_sizes()
         else:
             weight = vweight[vol].astype(float) / self._corner_sizes()
-        corners, points = self._darts["corner"], self._darts["point"]
-        radial = self._darts["radial"]
-        compiled = compiled_pays(len(ids))  # both paths sum in dart order: the same positions
         any_exclusive = bool(exclusive.any())
-        any_radial = bool(radial.any())  # all zero stays zero
         skip_in_pass = compiled and any_exclusive and not any_radial  # the compiled pass leaves those darts out
         if any_exclusive and not skip_in_pass:
             excl = exclusive[vol]
@@ -1045,9 +1050,9 @@ class GMap3(Operations):
 
             weight = np.ascontiguousarray(weight, np.float64)
             if skip_in_pass:
-                pos, total = exclusive_sums(ids, weight, corners, count, vol, exclusive)
+                pos, total = exclusive_sums(raw, find, weight, corners, count, vol, exclusive)
             else:
-                pos, total = weighted_sums(ids, weight, corners, count)
+                pos, total = weighted_sums(raw, find, weight, corners, count)
         else:
             total = np.bincount(ids, weight, minlength=count)
             pos = np.column_stack([np.bincount(ids, weight * corners[:, j], minlength=count) for j in range(3)])
@@ -1055,7 +1060,7 @@ class GMap3(Operations):
             raise GMapError("embedding: a vertex has only volumes of weight 0 around it")
         pos /= total[:, None]
         if compiled:
-            scatter(points, pos, ids)
+            scatter(points, pos, raw, find)
         else:
             points[:] = pos[ids]
         if any_radial:

@@ -129,6 +129,21 @@ def test_compiled_embedding_equals_the_numpy_sums_bit_for_bit(weights, compiled,
     assert np.array_equal(gm.dart_data["point"], want[ids])
 
 
+def test_compiled_embedding_with_a_radial_scalar_equals_the_numpy_one(monkeypatch):
+    """The radial scalar takes the per-dart labels path of the compiled pass: same points, same radial."""
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n, compiled=compiled: compiled)
+        gm = GMap3()
+        gm.add_prisms(4)
+        grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
+        gm.dart_data["radial"][:] = np.random.default_rng(4).random(gm.n_darts)
+        gm.embed()
+        out.append((gm.points.copy(), gm.dart_data["radial"].copy()))
+    assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
+    assert len(np.unique(out[0][1])) < len(out[0][1])  # averaged per vertex
+
+
 @pytest.mark.parametrize("compiled", [True, False])
 def test_corners_from_per_volume_tables(compiled, monkeypatch):
     """Dart d gets table[offset[volume] + corner[d]]; indices past either end are clipped (both paths alike)."""
