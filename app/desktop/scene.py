@@ -245,8 +245,10 @@ class Hairlines:
 
     def set_colors(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
         if self.lines is not None and self.skeleton is not None:
-            self.lines.cell_data["rgb"][:] = segment_colors(mesh, colors, len(self.skeleton))  # type: ignore[index]  # pyvista stubs
-            self.lines.Modified()
+            rgb = segment_colors(mesh, colors, len(self.skeleton))
+            if not np.array_equal(rgb, np.asarray(self.lines.cell_data["rgb"])):  # else no upload again
+                self.lines.cell_data["rgb"][:] = rgb  # type: ignore[index]  # pyvista stubs
+                self.lines.Modified()
 
     def set_selection(self, segments: ArrayLike) -> None:
         """Thick red lines over the selected ``segments`` (indices), drawn above the tubes."""

@@ -12,6 +12,8 @@ from PySide6.QtCore import Qt
 if TYPE_CHECKING:
     from ramure.app.desktop.state import Snapshot
 
+MORE = " … ("  # where the string preview's "… (k more modules)" tail starts (state.string_preview)
+
 
 class StringView(QWidget):
     """Read-only views of the derived string (first modules) and of the selected leaves."""
@@ -39,8 +41,24 @@ class StringView(QWidget):
         layout.addWidget(split, 1)
 
     def show_snapshot(self, snap: Snapshot) -> None:
+        """Show the snapshot's string.  Laying out the 5,000-module preview costs 20-50 ms, so
+        an edit that leaves the shown modules as they were (most regrows, every undo of one)
+        rewrites only the "… (k more modules)" tail, or nothing, and the scroll position stays."""
         self.summary.setText(f"{snap.n_modules} modules after {snap.n} steps")
-        self.string.setPlainText(snap.string_preview)
+        text = snap.string_preview
+        shown = self.string.toPlainText()
+        if text == shown:
+            return
+        head, cut, _ = text.rpartition(MORE)
+        if cut and shown.rpartition(MORE)[0] == head:
+            from PySide6.QtGui import QTextCursor
+
+            cursor = QTextCursor(self.string.document())
+            cursor.setPosition(len(head.encode("utf-16-le")) // 2)  # Qt counts UTF-16 units
+            cursor.movePosition(QTextCursor.MoveOperation.End, QTextCursor.MoveMode.KeepAnchor)
+            cursor.insertText(text[len(head) :])
+            return
+        self.string.setPlainText(text)
 
     def show_selection(self, lines: Iterable[str]) -> None:
         self.selected.setPlainText("\n".join(lines))

@@ -282,8 +282,12 @@ class PlantView(QWidget):
         self.redraw()
 
     def set_colors(self, colors: np.ndarray) -> None:
-        """Recolour the plant in place (selection or kinship changed)."""
+        """Recolour the plant in place (selection or kinship changed); the same colours again
+        (the window recolours every new version it has just shown) cost nothing."""
         if self.mesh is None:
+            return
+        rgb = np.asarray(self.mesh.cell_data["rgb"])
+        if rgb.shape == np.shape(colors) and np.array_equal(rgb, colors):
             return
         self.mesh.cell_data["rgb"][:] = colors  # type: ignore[index]  # pyvista stubs
         self.mesh.Modified()

@@ -59,8 +59,14 @@ def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, m
     draft = drawn_now(view)
     # a further edit (re)starts the wait: one polished frame after the last edit
     view._polish_timer.stop()
-    view.set_colors(np.asarray(view.mesh.cell_data["rgb"]).copy())
+    rgb = np.asarray(view.mesh.cell_data["rgb"]).copy()
+    view.set_colors(rgb)  # the same colours: nothing to draw again
+    assert not view._polish_timer.isActive()
+    rgb[:10] = 255 - rgb[:10]
+    view.set_colors(rgb)
     assert view._polish_timer.isActive() and view.drafting
+    rgb[:10] = 255 - rgb[:10]
+    view.set_colors(rgb)
     view._polish_timer.setInterval(view_module.POLISH_MS)
     view.draft()
     qtbot.waitUntil(lambda: not view.drafting, timeout=view_module.POLISH_MS * 20)
