@@ -42,6 +42,7 @@ if TYPE_CHECKING:
     from ramure.lsys import Derivation
     from ramure.lsys.cut import CutResult
     from ramure.lsys.regen import RegenResult
+    from ramure.lsys.tree import DerivationTree
     from ramure.lsys.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
     from ramure.metrics.qualifiers import QualifierRegions
@@ -255,8 +256,7 @@ class Explorer:
         tree = self.derivation.tree
         known = (ids >= 0) & (ids < tree.size)
         is_leaf = np.zeros(ids.size, bool)
-        _, last = tree.leaf_spans()  # cached per tree state: no whole-tree pass per selection
-        is_leaf[known] = (tree.child_count[ids[known]] == 0) & (last[ids[known]] >= 0)
+        is_leaf[known] = _in_string(tree)[ids[known]]
         if not is_leaf.all():
             raise ValueRefused(not_a_leaf(ids[~is_leaf][0]))
         current = np.asarray(self.selection, np.int64)
@@ -490,6 +490,19 @@ def leaves_in_rectangle(leaf_ids: ArrayLike, screen_xy: ArrayLike, rect: Sequenc
     xy = np.asarray(screen_xy, float)
     inside = (xy[:, 0] >= min(x0, x1)) & (xy[:, 0] <= max(x0, x1)) & (xy[:, 1] >= min(y0, y1)) & (xy[:, 1] <= max(y0, y1))
     return _sorted_unique(np.asarray(leaf_ids)[inside]).tolist()
+
+
+def _in_string(tree: DerivationTree) -> np.ndarray:
+    """Whether each node of ``tree`` is a module of its current string: 1 byte per node, cached
+    per tree state (the tree's leaf spans, 16 bytes per node, are left to the cut that needs them)."""
+
+    def make():
+        mask = np.zeros(tree.size, bool)
+        mask[tree.leaves] = True
+        mask.flags.writeable = False
+        return mask
+
+    return tree.cached("in_string", make)
 
 
 def _sorted_unique(values):
