@@ -377,6 +377,9 @@ class Axis:
         return self.cells[t, k, : self.count[t, k]].tolist()
 
 
+#: codes of a trunk level's part of its year (``Axis.parts``)
+_PARTS = {"whole": 0, "node": 1, "internode": 2}
+
 #: the knot's four seam corners in slot coordinates (u, v): (-,-), (+,-), (+,+), (-,+)
 _SU = np.array([-1.0, 1.0, 1.0, -1.0])
 _SV = np.array([-1.0, -1.0, 1.0, 1.0])
@@ -787,13 +790,14 @@ class Wood:
         n_levels = len(ax.levels)
         if ax.index == 0:
             yo, yf, yh = self.year_frames()
-            o, f, h = np.zeros((n_levels, 3)), np.zeros((n_levels, 3, 3)), np.zeros(n_levels)
-            for t, (year, part) in enumerate(ax.parts[:n_levels]):  # one step per level
-                node = min(self.node_height(), 0.5 * yh[year])
-                o[t], f[t] = yo[year], yf[year]
-                h[t] = {"whole": yh[year], "node": node, "internode": yh[year] - node}[part]
-                if part == "internode":
-                    o[t] = yo[year] + node * yf[year, 0]
+            parts = ax.parts[:n_levels]
+            year = np.array([y for y, _ in parts], np.int64)
+            kind = np.array([_PARTS[part] for _, part in parts], np.int64)
+            node = np.minimum(self.node_height(), 0.5 * yh[year])  # one row per level, all levels at once
+            o, f = yo[year], yf[year]  # copies (fancy indexing)
+            h = np.where(kind == 0, yh[year], np.where(kind == 1, node, yh[year] - node))
+            inter = kind == 2
+            o[inter] = yo[year[inter]] + node[inter, None] * yf[year[inter], 0]
             return o, f, h
         br = self.branches[ax.index - 1]
         p0, knot = self.branch_frame(br, knot=True)
@@ -860,12 +864,16 @@ class Wood:
         With ``knot``, the frame of its first level inside the trunk: its rise
         is capped at ``KNOT_RISE`` degrees (a steep branch's knot would
         otherwise run along the trunk, far out of its node's slot); the
-        branch turns to its own direction where the knot ends.  Kept for the
-        step (an embedding asks for each frame several times); the arrays
-        returned are read-only.
+        branch turns to its own direction where the knot ends.  Kept while
+        the trunk level it stands on keeps its frame (an embedding asks for
+        each frame several times, and every step); the arrays returned are
+        read-only.
         """
         p = self.p
-        key = (self.steps, len(self.trunk.levels), br.level, br.sector, br.angle, bool(knot), p["pith_radius"], p["branch_angle"])
+        o, f, h = self.level_frames(self.trunk)
+        t = br.level  # the frame reads only the trunk's level t: kept while that level stays as it is
+        level = (o[t].tobytes(), f[t].tobytes(), float(h[t]), self.trunk.sides)
+        key = (level, br.level, br.sector, br.angle, bool(knot), p["pith_radius"], p["branch_angle"], self.KNOT_RISE)
         memo = self.__dict__.setdefault("_branch_frames_memo", {})
         hit = memo.get(key)
         if hit is None:

@@ -492,3 +492,19 @@ def test_corner_table_equals_the_row_by_row_write(sides, monkeypatch):
     slow, _ = w.default_corners()
     assert np.array_equal(flat, slow)
     assert_solid(w.gm)
+
+
+def test_kept_branch_frames_follow_the_trunk_level_they_stand_on():
+    """Without a final age the node height grows each year: a kept frame must be recomputed, never stale."""
+    p = W.resolve_params("pine")
+    w = W.Wood(p, 0, [W.Branch(1, 3, 7), W.Branch(2, 9, 8)], "pine")  # no final years: frames move
+    seen = set()
+    for _ in range(8):
+        w.step()
+        for br in w.branches:
+            if br.year <= w.year:
+                for knot in (False, True):
+                    kept, fresh = w.branch_frame(br, knot), w._branch_frame(br, knot)
+                    assert all(np.array_equal(a, b) for a, b in zip(kept, fresh))
+                    seen.add(kept[0].tobytes())
+    assert len(seen) > 2  # the base points did move between steps
