@@ -385,6 +385,21 @@ _SU = np.array([-1.0, 1.0, 1.0, -1.0])
 _SV = np.array([-1.0, -1.0, 1.0, 1.0])
 
 
+def _corner_blend(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``((1 + u su) (1 + v sv) / 4)`` for the four seam corners ``(su, sv)`` = (-,-), (+,-), (+,+), (-,+): (m, 4, 1).
+
+    ``u * -1`` is exact, so ``1 + u su`` is ``1 - u`` or ``1 + u``: each factor
+    is made once, and the products and the division are the ones a broadcast
+    over ``_SU``, ``_SV`` would make.
+    """
+    out = np.empty((len(u), 4, 1))
+    pu, mu, pv, mv = 1 + u, 1 - u, 1 + v, 1 - v
+    for c, (a, b) in enumerate(((mu, mv), (pu, mv), (pu, pv), (mu, pv))):
+        np.multiply(a, b, out=out[:, c, 0])
+        out[:, c, 0] /= 4
+    return out
+
+
 def _put_blocks(flat: np.ndarray, rows: np.ndarray, pts: np.ndarray) -> None:
     """``flat[rows[j] + c] = pts[j, c]`` for each of the ``c < 8`` corners of cube ``j``.
 
@@ -1213,7 +1228,7 @@ class Wood:
             hi = np.minimum(lo + 1, len(a_layer) - 1)
             frac = (lam - lo)[:, None]
             # the four corners at once, term by term as a sum over them (same rounding)
-            blend = ((1 + u[:, None] * _SU) * (1 + v[:, None] * _SV) / 4)[:, :, None]
+            blend = _corner_blend(u, v)
             by_layer = disp.transpose(1, 0, 2).copy()  # (layers, 4, 3): rows gathered whole
             terms = by_layer[lo]  # in place: (1 - f) d_lo + f d_hi, blended
             terms *= 1 - frac[:, :, None]

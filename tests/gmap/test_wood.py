@@ -508,3 +508,13 @@ def test_kept_branch_frames_follow_the_trunk_level_they_stand_on():
                     assert all(np.array_equal(a, b) for a, b in zip(kept, fresh))
                     seen.add(kept[0].tobytes())
     assert len(seen) > 2  # the base points did move between steps
+
+
+def test_corner_blend_equals_the_broadcast_formula_bit_for_bit():
+    rng = np.random.default_rng(2)
+    u = np.concatenate([rng.uniform(-1, 1, 5000), [-1.0, 1.0, 0.0, -0.0, 1e-17, -1e-17]])
+    v = rng.permutation(u)
+    want = ((1 + u[:, None] * W._SU) * (1 + v[:, None] * W._SV) / 4)[:, :, None]
+    got = W._corner_blend(u, v)
+    assert got.shape == want.shape and np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+    assert np.allclose(got.sum(axis=1), 1.0)  # a partition of unity over the four corners
