@@ -304,6 +304,7 @@ class Ground:
         self.actor: pv.Actor | None = None
         self.label: Any = None  # the corner text actor (a vtkCornerAnnotation)
         self.step: float | None = None
+        self.layout: tuple | None = None  # (step, half width, centre x, centre y, z) of the drawn grid
         self.visible = True
 
     def show(self, bounds: Sequence[float]) -> None:
@@ -314,8 +315,13 @@ class Ground:
         half = math.ceil(0.75 * size / step) * step
         cx = round(float(b[0].mean()) / step) * step
         cy = round(float(b[1].mean()) / step) * step
-        ticks = np.arange(-half, half + step / 2, step)
         z = float(b[2, 0])
+        layout = (step, half, cx, cy, z)
+        if layout == self.layout and self.actor is not None:  # the same grid (most edits): no new lines
+            self.set_visible(self.visible)
+            return
+        self.layout = layout
+        ticks = np.arange(-half, half + step / 2, step)
         xs = np.c_[cx + ticks, np.full(len(ticks), cy - half), cx + ticks, np.full(len(ticks), cy + half)]
         ys = np.c_[np.full(len(ticks), cx - half), cy + ticks, np.full(len(ticks), cx + half), cy + ticks]
         segs = np.concatenate([xs, ys])
@@ -344,7 +350,7 @@ class Ground:
             self.label = self.plotter.add_text(
                 text, position="lower_left", font_size=9, color="#3c4650", name="ground_label", render=False
             )
-        else:
+        elif self.label.GetText(0) != text:  # new text: a new texture drawn in the next frame
             self.label.SetText(0, text)
         self.set_visible(self.visible)
 

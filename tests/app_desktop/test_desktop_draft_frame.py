@@ -148,3 +148,18 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
     settle(qtbot, w)
     assert view.plant.groups[0] is not groups[0] and view.hairlines.actor is not line_actor
     assert not any(a.GetVisibility() for a in actors)
+
+
+def test_the_ground_is_built_again_only_when_its_grid_changes():
+    import pyvista as pv
+
+    plotter = pv.Plotter(off_screen=True)
+    ground = scene.Ground(plotter)
+    ground.show((0, 4, 0, 4, 0, 9))
+    grid, stamp, text = ground.grid, ground.grid.GetMTime(), ground.label.GetText(0)
+    ground.show((0, 4.01, 0, 4, 0, 9.02))  # a regrow that moved a twig: the same grid
+    assert ground.grid is grid and ground.grid.GetMTime() == stamp and ground.label.GetText(0) == text
+    ground.show((0, 40, 0, 40, 0, 90))  # a plant ten times larger: coarser lines
+    assert ground.grid.GetMTime() > stamp and ground.step == 10 * float(text.split()[1])
+    assert ground.label.GetText(0) != text
+    plotter.close()
