@@ -343,11 +343,13 @@ class MainWindow(QMainWindow):
         self.previous_geometry = None if old is None else (np.array(old.start), np.array(old.end))
         self.base_colors = state.base_colors(snap.mesh)
         self.fruit_leaves = state.fruit_leaves(snap.mesh)
-        self.view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection, base=self.base_colors), reset_camera)
+        self.view.show_plant(snap, self.plant_colors(snap.selection), reset_camera)
         self.drawn_version = snap.version
+        self.show_selection(snap.selection, recolour=False)
+        # the edit's frame first (a draft for a large plant); the docks follow in the same turn
+        self.view.redraw(now=True)
         self.string_view.show_snapshot(snap)
         self.show_state(snap)
-        self.show_selection(snap.selection)
         self.show_cut(snap)
         self.variants.plant_changed(snap)
 
@@ -375,16 +377,26 @@ class MainWindow(QMainWindow):
             return  # the editor's own text (perhaps "30." for 30), or the user is typing
         self.editor.replace_text(snap.text)
 
-    def show_selection(self, selection: Sequence[int]) -> None:
-        """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe."""
+    def plant_colors(self, selection: Sequence[int]) -> np.ndarray:
+        """Per-cell RGB of the shown plant: the selection red, or the kinship hues."""
         snap = self.controller.snapshot
-        kin = None
+        return state.cell_colors(snap.mesh, selection, self._kinship_colors(selection), base=self.base_colors)
+
+    def _kinship_colors(self, selection: Sequence[int]) -> np.ndarray | None:
         if self.kinship and len(selection) == 1:
             try:
-                kin = self.controller.kinship_colors()
+                return self.controller.kinship_colors()
             except RamureError:
-                kin = None
-        self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors))
+                return None
+        return None
+
+    def show_selection(self, selection: Sequence[int], recolour: bool = True) -> None:
+        """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe
+        (``recolour`` False: the plant was just drawn in :meth:`plant_colors`)."""
+        snap = self.controller.snapshot
+        kin = self._kinship_colors(selection) if recolour or self.kinship else None
+        if recolour:
+            self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors))
         self.view.set_fruit_selection(selection)
         self.view.set_selected_segments(
             np.flatnonzero(state.leaf_mask(snap.segment_leaf, selection)) if len(selection) and kin is None else []
