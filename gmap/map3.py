@@ -250,8 +250,9 @@ class _OrbitState:
         self.base, self.new_loc = base, new_loc
 
     @classmethod
-    def fresh(cls, ids, count, snap) -> _OrbitState:
-        raw = np.empty(max(16, len(ids) + len(ids) // 2), np.int32)
+    def fresh(cls, ids, count, snap, room=0) -> _OrbitState:
+        """A state of the labels ``ids``, with room for ``room`` darts (the map's reserve) or half as many again."""
+        raw = np.empty(max(16, len(ids) + len(ids) // 2, room), np.int32)
         raw[: len(ids)] = ids
         return cls(raw, [len(ids)], len(ids), np.arange(count, dtype=np.int32), count, snap)
 
@@ -266,15 +267,16 @@ class _OrbitState:
         """The same orbits, described against a newer snapshot."""
         return _OrbitState(self.raw, self._end, self.n, self.find, self.count, snap, self.sid, np.zeros(0, np.int32))
 
-    def grown(self, n, loc, n_loc, relabel, count, snap, untouched=False, find=None) -> _OrbitState:
+    def grown(self, n, loc, n_loc, relabel, count, snap, untouched=False, find=None, room=0) -> _OrbitState:
         """Darts ``self.n .. n - 1`` with raw numbers after ours (``loc``), orbits merged by ``relabel``.
 
         ``untouched``: no new link reaches an old orbit (old orbits are as they were).
-        ``find``: the new table, already made (then ``relabel`` is not read).
+        ``find``: the new table, already made (then ``relabel`` is not read);
+        ``room``: darts to make room for when the raw numbers must move (the map's reserve).
         """
         raw, end = self.raw, self._end
         if end[0] != self.n or len(raw) < n:  # someone else appended here, or no room: copy
-            grown = np.empty(max(n + n // 2, 16), np.int32)
+            grown = np.empty(max(n + n // 2, 16, room), np.int32)
             grown[: self.n] = raw[: self.n]
             raw, end = grown, [self.n]
         n_raw = len(self.find)
@@ -732,7 +734,7 @@ class GMap3(Operations):
             state = self._grown_orbits(key, old) if old is not None else None
             if state is None:
                 ids, count = orbit_labels(self.alpha[list(key)])
-                state = _OrbitState.fresh(ids, count, self._alpha_snapshot())
+                state = _OrbitState.fresh(ids, count, self._alpha_snapshot(), self._alpha.shape[1])
             memo[key] = self._cache[cache_key] = state
         return state
 
@@ -793,7 +795,7 @@ class GMap3(Operations):
                 local, in_key, n_old, old.raw, old.find, old.count, r, d, self.alpha
             )
             if ok:
-                return old.grown(n, loc, int(n_loc), None, int(total), snap, untouched=not linked, find=find)
+                return old.grown(n, loc, int(n_loc), None, int(total), snap, not linked, find, self._alpha.shape[1])
         new_rows = self._new_dart_rows(n_old)
         if new_rows is None:
             return None
@@ -832,7 +834,7 @@ class GMap3(Operations):
                 keep = merged == np.arange(total)
                 relabel = (np.cumsum(keep) - 1)[merged]
                 total = int(np.count_nonzero(keep))
-        return old.grown(n, loc, n_loc, relabel, total, snap, untouched=not u.size)
+        return old.grown(n, loc, n_loc, relabel, total, snap, not u.size, room=self._alpha.shape[1])
 
     def _new_dart_rows(self, n_old: int):
         """The links of the darts from ``n_old`` on, shared by every key's update (cached per state).
@@ -1091,15 +1093,18 @@ class GMap3(Operations):
             state = self._orbit_state((1, 2))
             n = self.n_darts
             memo = self.__dict__.get("_corner_memo")
-            if memo is not None and state.base == memo[0] and memo[1] <= n <= len(memo[2]):
+            if memo is not None and state.base == memo[0] and memo[1] <= n:
                 _, n_old, sizes, inverse = memo
+                if n > len(sizes):  # more room: the old values move over, they still hold
+                    room = max(n + n // 2 + 16, self._alpha.shape[1]) - n_old
+                    sizes, inverse = (np.concatenate([a[:n_old], np.empty(room)]) for a in (sizes, inverse))
                 loc = state.new_loc
                 new = np.take(np.bincount(loc, minlength=int(loc.max(initial=-1)) + 1).astype(float), loc)
                 sizes[n_old:n] = new
                 inverse[n_old:n] = 1.0 / new
             else:
                 ids = state.labels()
-                sizes = np.empty(n + n // 2 + 16)
+                sizes = np.empty(max(n + n // 2 + 16, self._alpha.shape[1]))  # room for growth (the reserve)
                 inverse = np.empty_like(sizes)
                 np.take(np.bincount(ids, minlength=state.count).astype(float), ids, out=sizes[:n])
                 np.divide(1.0, sizes[:n], out=inverse[:n])
