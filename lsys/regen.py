@@ -126,7 +126,7 @@ def _replace_spans(old, first, last, pieces):
         parts.append(pieces[i])
         cursor = last[i] + 1
     parts.append(old[cursor:])
-    return np.concatenate(parts).astype(np.int64)
+    return np.concatenate(parts).astype(np.int64, copy=False)
 
 
 def regenerate(
