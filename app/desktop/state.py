@@ -194,7 +194,9 @@ def regrown_leaves(explorer: Explorer, result: RegenResult | None) -> list[int]:
         return []
     tree = explorer.derivation.tree
     added = np.asarray(change.added, np.int64)
-    return np.sort(added[tree.leaf_positions(added) >= 0]).tolist()
+    # in the string: alive and not rewritten (a look at the added nodes only, not a position
+    # table over the whole tree: 0.1 instead of 7-20 ms at 1.5 M nodes)
+    return np.sort(added[(tree.child_count[added] == 0) & tree.alive[added]]).tolist()
 
 
 def same_plant(before: tuple[np.ndarray, np.ndarray] | None, after: Skeleton | None) -> bool:

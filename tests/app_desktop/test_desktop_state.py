@@ -166,3 +166,21 @@ def test_base_colors_are_the_shared_palette_looked_up_by_kind():
         assert np.array_equal(rgb, plant_colors(mesh)), name
     kinds = np.unique(np.asarray(Explorer(str(grammars.path("fruit_tree")), n=5).mesh.cell_data["kind"]))
     assert {0, 1, 2} <= set(kinds.tolist())  # every palette row is checked
+
+
+@pytest.mark.parametrize("grammar, n", [("honda_sympodial", 12), ("stochastic_plant", 6), ("fruit_tree", 6)])
+def test_regrown_leaves_are_the_added_nodes_in_the_string(grammar, n):
+    import ramure.grammars as grammars
+
+    ex = Explorer(str(grammars.path(grammar)), n=n)
+    for seed in range(3):
+        leaves = ex.skeleton.leaf_id
+        ex.select(sorted(int(v) for v in np.random.default_rng(seed).choice(leaves[len(leaves) // 3 :], 5, replace=False)))
+        result = ex.regrow(seed=seed)
+        tree = ex.derivation.tree
+        added = np.asarray(result.change.added, np.int64)
+        expected = np.sort(added[np.isin(added, tree.leaves)]).tolist()  # the string itself, searched
+        got = state.regrown_leaves(ex, result)
+        assert got == expected and len(got) > 0
+        ex.select(got, "replace")  # every one is a leaf the model accepts (else ValueRefused)
+        assert sorted(ex.selection) == got
