@@ -215,7 +215,10 @@ def bench_grammar_to_pixels_honda_n17():
     """Derive + turtle + mesh + first frame in the desktop's 3D view, Honda n=17: <= 1.0 s.
 
     The view (:func:`_plant_view`) is open and has painted once; ``first_frame`` is
-    :meth:`PlantView.show_plant` (colours, actors, camera framed) and the paint.
+    :meth:`PlantView.show_plant` (colours, actors, camera framed) and the paint, a draft
+    for so large a plant (see :mod:`ramure.app.desktop.view`); ``polish`` is the
+    full-quality repaint that follows when the user pauses, ``polished_seconds`` the
+    total with it (the pause itself not counted).
 
     The mesh is what the explorer shows (:func:`ramure.app.model.mesh_sides`: 3-sided
     tubes at 131k segments); ``sides8_*`` is the same with 8-sided tubes.
@@ -242,6 +245,9 @@ def bench_grammar_to_pixels_honda_n17():
         t3 = time.perf_counter()
         _show(view, SimpleNamespace(mesh=mesh, skeleton=sk, selection=()), True)
         t4 = time.perf_counter()
+        view.polish()  # the full-quality frame the polish timer draws once the user pauses
+        _paint(view)
+        t5 = time.perf_counter()
         image = view.grab_image()
         view.close()
         row = image.height() // 2
@@ -259,6 +265,8 @@ def bench_grammar_to_pixels_honda_n17():
             "turtle": round(parts[1], 3),
             "mesh": round(parts[2], 3),
             "first_frame": round(parts[3], 3),
+            "polish": round(parts[4], 3),
+            "polished_seconds": round(total + parts[4], 3),
             "modules": runs[0][2],
             "cells": runs[0][3],
             "modules_per_second": int(runs[0][2] / total),
