@@ -80,7 +80,8 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
     path numbers them.  Returns ``(loc, n_loc, find, count, linked, ok)``:
     ``find`` maps old raw numbers, then the new ones, to today's orbits;
     ``ok`` is False (nothing else meaningful) when a counted row of the new
-    darts is not an involution (the numpy path takes strong components then).
+    darts is not an involution (the numpy path takes strong components then)
+    or a new link of an old dart leaves the map.
     """
     m = local.shape[1]
     parent = np.arange(m)
@@ -108,6 +109,8 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
             linked = True
             a = d[e]
             b = alpha[r[e], a]
+            if b < 0 or b >= n_old + m:  # a link out of the map: the numpy path deals with it
+                return np.zeros(0, np.int32), 0, np.zeros(0, np.int32), 0, False, False
             nb = find[raw[b]] if b < n_old else count_old + loc[b - n_old]
             _union(nodes, find[raw[a]], nb)
     n_raw = find.size

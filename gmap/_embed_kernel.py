@@ -37,14 +37,18 @@ def exclusive_sums(raw, find, weight, corners, count, vol, exclusive):
 
     ``vol`` is each dart's volume, ``exclusive`` a flag per volume.  The darts
     left out would add a weight of 0 (the numpy path zeroes them), so the sums
-    are the same, in the same order.
+    are the same, in the same order.  ``ok`` is False (sums unset) when a
+    dart's volume is not a volume.
     """
     at_exclusive = np.zeros(count, np.bool_)
-    for d in range(raw.size):
-        if exclusive[vol[d]]:
-            at_exclusive[find[raw[d]]] = True
     sums = np.zeros((count, 3))
     total = np.zeros(count)
+    for d in range(raw.size):
+        v = vol[d]
+        if v < 0 or v >= exclusive.size:
+            return sums, total, False
+        if exclusive[v]:
+            at_exclusive[find[raw[d]]] = True
     for d in range(raw.size):
         v = find[raw[d]]
         if at_exclusive[v] and not exclusive[vol[d]]:
@@ -54,7 +58,7 @@ def exclusive_sums(raw, find, weight, corners, count, vol, exclusive):
         sums[v, 0] += w * corners[d, 0]
         sums[v, 1] += w * corners[d, 1]
         sums[v, 2] += w * corners[d, 2]
-    return sums, total
+    return sums, total, True
 
 
 @njit(cache=True)
@@ -69,10 +73,16 @@ def scatter(points, pos, raw, find):
 
 @njit(cache=True)
 def gather_corners(table, offset, vol, corner, out):
-    """``out[d] = table[offset[vol[d]] + corner[d]]`` (index clipped to the table), dart by dart."""
+    """``out[d] = table[offset[vol[d]] + corner[d]]`` (index clipped to the table), dart by dart.
+
+    Returns False (``out`` partly written) when a dart's volume has no offset.
+    """
     last = table.shape[0] - 1
     for d in range(vol.size):
-        k = offset[vol[d]] + corner[d]
+        v = vol[d]
+        if v < 0 or v >= offset.size:
+            return False
+        k = offset[v] + corner[d]
         if k < 0:
             k = 0
         elif k > last:
@@ -80,3 +90,4 @@ def gather_corners(table, offset, vol, corner, out):
         out[d, 0] = table[k, 0]
         out[d, 1] = table[k, 1]
         out[d, 2] = table[k, 2]
+    return True

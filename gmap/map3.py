@@ -369,9 +369,13 @@ class GMap3(Operations):
         if compiled_pays(self.n_darts):  # one pass, no index array
             from ._embed_kernel import gather_corners
 
-            gather_corners(table, np.asarray(offset, np.int64), self.dart_volume, np.asarray(corner), out)
+            if not gather_corners(table, np.asarray(offset, np.int64), self.dart_volume, np.asarray(corner), out):
+                raise GMapError("corners from tables: a dart's volume has no row offset")
             return
-        np.take(table, np.asarray(offset)[self.dart_volume] + corner, axis=0, out=out, mode="clip")
+        vol = self.dart_volume
+        if vol.size and (vol.min() < 0 or vol.max() >= len(offset)):
+            raise GMapError("corners from tables: a dart's volume has no row offset")
+        np.take(table, np.asarray(offset)[vol] + corner, axis=0, out=out, mode="clip")
 
     @property
     def dart_volume(self) -> np.ndarray:
@@ -1052,7 +1056,9 @@ class GMap3(Operations):
 
             weight = np.ascontiguousarray(weight, np.float64)
             if skip_in_pass:
-                pos, total = exclusive_sums(raw, find, weight, corners, count, vol, exclusive)
+                pos, total, ok = exclusive_sums(raw, find, weight, corners, count, vol, exclusive)
+                if not ok:
+                    raise GMapError("embedding: a dart points to no volume")
             else:
                 pos, total = weighted_sums(raw, find, weight, corners, count)
         else:

@@ -158,6 +158,18 @@ def test_corners_from_per_volume_tables(compiled, monkeypatch):
     want = table[np.clip(offset[gm.dart_volume] + corner, 0, len(table) - 1)]
     assert np.array_equal(gm.corners, want)
     assert np.array_equal(gm.corners[0], table[0]) and np.array_equal(gm.corners[5], table[-1])
+    with pytest.raises(GMapError, match="no row offset"):  # a volume past the offsets: refused, not read past
+        gm.set_corners_from_tables(table, offset[:2], corner)
+
+
+def test_compiled_embedding_refuses_a_dart_of_no_volume(monkeypatch):
+    monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n: True)
+    gm = GMap3()
+    gm.add_prisms(4)
+    grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
+    gm.dart_data["volume"][3] = gm.n_volumes + 7  # read past the volumes: refused
+    with pytest.raises(GMapError, match="no volume"):
+        gm.embed()
 
 
 def test_a_small_map_is_built_and_embedded_without_loading_numba():

@@ -153,6 +153,25 @@ def test_compiled_orbit_update_hands_new_rows_that_are_not_involutions_to_numpy(
     assert counts[True] == counts[False]
 
 
+def test_compiled_orbit_update_declines_a_link_out_of_the_map():
+    """An old free dart linked past the map: the compiled update says so instead of reading past its arrays."""
+    gm = GMap3()
+    col = _row_of_cubes(gm, 3, 0.0)
+    gm.orbit_count("0123")
+    old = gm._orbit_memo[(0, 1, 2, 3)]
+    (new,) = gm.add_prisms(4, 1, origins=[[3.0, 0, 0]])
+    gm.sew3(gm.prism_face(col[-1], 4, "E"), gm.prism_face(new, 4, "O"))
+    r, d = gm._growth_since(old.snap)
+    args = (gm._new_dart_local(old.n), np.ones(4, bool), old.n, old.raw, old.find, old.count, r, d, gm.alpha)
+    assert _components_kernel.grown_orbits(*args)[5]  # a clean growth: accepted
+    free = int(np.flatnonzero(gm.alpha[3][: old.n] == np.arange(old.n))[0])
+    gm.alpha[3][free] = gm.n_darts + 9
+    gm.mark_changed()
+    r, d = gm._growth_since(old.snap)
+    args = args[:6] + (r, d, gm.alpha)
+    assert not _components_kernel.grown_orbits(*args)[5]
+
+
 def _random_growth(ops, record=None):
     gm = GMap3()
     row = _row_of_cubes(gm, 2, 0.0)
