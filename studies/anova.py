@@ -23,7 +23,6 @@ import re
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import stats
 
 from ramure.studies.errors import StudyInputError
 
@@ -91,10 +90,14 @@ def one_way_anova(groups: Sequence[ArrayLike], alpha: float = 0.05) -> AnovaResu
         F = msb / msw
     else:
         F = math.inf if msb > 0 else math.nan
-    p = float(stats.f.sf(F, dfb, dfw)) if not math.isnan(F) else math.nan
+    # scipy.special's F-distribution functions are what scipy.stats.f calls (sf = fdtrc,
+    # ppf = fdtri), without scipy.stats' second of import; its edges kept: sf(0) = 1, sf(inf) = 0.
+    from scipy.special import fdtrc, fdtri
+
+    p = math.nan if math.isnan(F) else 1.0 if F <= 0 else 0.0 if math.isinf(F) else float(fdtrc(dfb, dfw, F))
     return AnovaResult(
         F=float(F),
-        F_crit=float(stats.f.ppf(1 - alpha, dfb, dfw)),
+        F_crit=float(fdtri(dfb, dfw, 1 - alpha)),
         p=p,
         alpha=alpha,
         df_between=dfb,
