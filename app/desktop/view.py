@@ -58,6 +58,8 @@ BOX_LATER_LEAVES = 5_000
 PICK_TOLERANCE = 0.002
 #: Quiet time (ms) after an edit or a camera move before the full-quality frame is drawn.
 POLISH_MS = 250
+#: The same while the model computes (:meth:`PlantView.set_busy`): its next version is coming.
+BUSY_POLISH_MS = 1000
 
 
 def selection_mode(modifiers: Qt.KeyboardModifier, rectangle: bool = False) -> str:
@@ -191,6 +193,7 @@ class PlantView(QWidget):
         self._polish_timer.setSingleShot(True)
         self._polish_timer.setInterval(POLISH_MS)
         self._polish_timer.timeout.connect(self.polish)
+        self.busy = False
 
     # -- draft and polished frames ---------------------------------------------
     def draft(self) -> None:
@@ -202,7 +205,15 @@ class PlantView(QWidget):
         if not self.drafting:
             self.drafting = True
             self._set_look(draft=True)
-        self._polish_timer.start()
+        self._polish_timer.start(BUSY_POLISH_MS if self.busy else POLISH_MS)
+
+    def set_busy(self, busy: bool) -> None:
+        """The model is computing (True: a new version is likely coming, so a polished frame now
+        would compete with it for the CPU and soon be replaced; the polish waits up to
+        :data:`BUSY_POLISH_MS`) or is idle again (False: the usual pause)."""
+        self.busy = bool(busy)
+        if self.drafting and self._polish_timer.isActive():
+            self._polish_timer.start(BUSY_POLISH_MS if self.busy else POLISH_MS)
 
     def polish(self) -> None:
         """Back to the full-quality look now, and repaint if the last frames were drafts."""

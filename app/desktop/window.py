@@ -568,6 +568,7 @@ class MainWindow(QMainWindow):
         """Show "Computing…" in its own corner of the status bar while a job runs, so it never
         hides or erases a message (a job's result is announced just before it ends)."""
         self.busy_label.setText(BUSY if busy else "")
+        self.view.set_busy(busy)  # the 3D view's polished frame waits for the next version
 
     def status(self, text: str, timeout: int = 4000) -> None:
         if text:

@@ -42,7 +42,17 @@ def regrow(w, qtbot, seed=3):
     settle(qtbot, w)
 
 
-def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, make_window, qtbot, artifacts):
+def slow_polish(monkeypatch, on):
+    """A polish that waits a minute (a loaded machine may take longer than the pause to settle)."""
+    pause = (60_000, 60_000) if on else (SHORT, BUSY)
+    monkeypatch.setattr(view_module, "POLISH_MS", pause[0])
+    monkeypatch.setattr(view_module, "BUSY_POLISH_MS", pause[1])
+
+
+SHORT, BUSY = view_module.POLISH_MS, view_module.BUSY_POLISH_MS
+
+
+def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, make_window, qtbot, artifacts, monkeypatch):
     w = make_window(n=14)
     view = w.view
     assert view.plant.large
@@ -52,7 +62,7 @@ def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, m
     renderer = view.plotter.renderer
     assert renderer.GetUseFXAA() and view.hairlines.actor.GetProperty().GetLineWidth() == scene.LINE_WIDTH
 
-    view._polish_timer.setInterval(60_000)  # a loaded machine may take longer than the pause to settle
+    slow_polish(monkeypatch, True)
     regrow(w, qtbot)
     assert view.drafting and not renderer.GetUseFXAA()
     assert view.hairlines.actor.GetProperty().GetLineWidth() == scene.DRAFT_LINE_WIDTH
@@ -67,22 +77,22 @@ def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, m
     assert view._polish_timer.isActive() and view.drafting
     rgb[:10] = 255 - rgb[:10]
     view.set_colors(rgb)
-    view._polish_timer.setInterval(view_module.POLISH_MS)
+    slow_polish(monkeypatch, False)
     view.draft()
-    qtbot.waitUntil(lambda: not view.drafting, timeout=view_module.POLISH_MS * 20)
+    qtbot.waitUntil(lambda: not view.drafting, timeout=SHORT * 20)
     assert renderer.GetUseFXAA() and view.hairlines.actor.GetProperty().GetLineWidth() == scene.LINE_WIDTH
     polished = image_array(view.grab_image())
     # the draft shows the same plant in the same colours: only line widths and edge smoothing differ
     assert draft.std() > 5 and 0 < changed(draft, polished) < 0.03
     assert np.abs(draft.mean(axis=(0, 1)) - polished.mean(axis=(0, 1))).max() < 3
     # at rest the picture is the full look: undo comes back to the very image it had
-    view._polish_timer.setInterval(60_000)
+    slow_polish(monkeypatch, True)
     w.controller.undo()
     settle(qtbot, w)
     assert view.drafting
-    view._polish_timer.setInterval(view_module.POLISH_MS)
+    slow_polish(monkeypatch, False)
     view.draft()
-    qtbot.waitUntil(lambda: not view.drafting, timeout=view_module.POLISH_MS * 20)
+    qtbot.waitUntil(lambda: not view.drafting, timeout=SHORT * 20)
     after = image_array(view.grab_image())
     from PIL import Image
 
@@ -107,6 +117,17 @@ def test_a_camera_drag_is_drafted_and_polished_after_the_release(large, make_win
     assert view.drafting and not view._polish_timer.isActive()  # no polish in the middle of a drag
     view.set_moving(False)
     assert view.drafting and view._polish_timer.isActive()
+    qtbot.waitUntil(lambda: not view.drafting, timeout=view_module.POLISH_MS * 20)
+
+
+def test_while_the_model_computes_the_polish_waits_longer(large, make_window, qtbot):
+    w = make_window(n=14)
+    view = w.view
+    w._busy_changed(True)  # what the controller says when a job starts
+    view.draft()
+    assert view._polish_timer.interval() == view_module.BUSY_POLISH_MS
+    w._busy_changed(False)  # the job is done: the usual pause from now
+    assert view._polish_timer.isActive() and view._polish_timer.interval() == view_module.POLISH_MS
     qtbot.waitUntil(lambda: not view.drafting, timeout=view_module.POLISH_MS * 20)
 
 
