@@ -27,9 +27,15 @@ SELECTED = (1.0, 0.0, 0.0)
 
 
 def headless_setup() -> None:
-    """Off-screen rendering without a display: ask VTK for an EGL window (no X needed)."""
+    """Off-screen rendering without a display: ask VTK for an EGL window (no X needed).
+
+    Also tells pyvista plotting is allowed: its first ``Plotter`` otherwise probes the
+    system (runs ``xset -q``, then opens and renders a test window, about 0.1-0.3 s)
+    only to decide whether to warn that no X server runs, a warning that never fires
+    here (a display is set, or VTK was just asked for EGL)."""
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    os.environ.setdefault("ALLOW_PLOTTING", "true")
 
 
 def plant_colors(mesh: pv.DataSet, selected: Collection[int] = ()) -> np.ndarray:

@@ -225,9 +225,19 @@ def _collision_figure(result, path):
     fig = _figure(size + 1.0, size)
     ax = fig.subplots()
     image = draw_collision_matrix(ax, c["matrix"], c["names"], title=f"collision matrix (mean {c['mean']:.1f} %, 7 % trimmed)")
+    _cell_texts_out_of_layout(ax)
     fig.colorbar(image, ax=ax, shrink=0.8, label="% of A's points in B's box")
     write_with(path, fig.savefig)
     return path
+
+
+def _cell_texts_out_of_layout(ax):
+    """Leave a heat map's cell labels out of the constrained layout.
+
+    They sit inside their cells, so the layout is the same without them, but measuring
+    each of hundreds of texts on every layout pass was half of a figure's time."""
+    for text in ax.texts:
+        text.set_in_layout(False)
 
 
 def _cooccurrence_figure(result, path):
@@ -306,7 +316,7 @@ def _ratings_figure(result, path):
         ax.set_title(f"mean {measure} per image (1 = poor ... 4 = excellent)", fontsize=10)
         for (i, j), v in np.ndenumerate(m):
             if not math.isnan(v):
-                ax.text(j, i, f"{v:.1f}", ha="center", va="center", fontsize=6)
+                ax.text(j, i, f"{v:.1f}", ha="center", va="center", fontsize=6, in_layout=False)
         fig.colorbar(im, ax=ax, ticks=[1, 2, 3, 4], shrink=0.9)
     write_with(path, fig.savefig)
     return path
