@@ -156,16 +156,18 @@ def boundary_counts(alpha, n):
     turn that never ends, a link that is not an involution): the caller then
     builds the surface with numpy.
     """
-    local = np.full(n, -1, np.int64)
+    local = np.empty(n, np.int32)  # surface number of each free dart (-1: not on the surface)
+    every = np.empty(n, np.int64)
     m = 0
+    row3 = alpha[3]
     for d in range(n):
-        if alpha[3, d] == d:
+        if row3[d] == d:
             local[d] = m
+            every[m] = d
             m += 1
-    darts = np.empty(m, np.int64)
-    for d in range(n):
-        if local[d] >= 0:
-            darts[local[d]] = d
+        else:
+            local[d] = -1
+    darts = every[:m]
     b0 = np.empty(m, np.int64)
     b1 = np.empty(m, np.int64)
     b2 = np.empty(m, np.int64)
