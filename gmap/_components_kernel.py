@@ -87,10 +87,11 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
     parent = np.arange(m)
     for i in range(4):
         if in_key[i]:
+            row = local[i]
             for x in range(m):
-                y = local[i, x]
+                y = row[x]
                 if y >= 0:
-                    if local[i, y] != x:
+                    if row[y] != x:
                         return np.zeros(0, np.int32), 0, np.zeros(0, np.int32), 0, False, False
                     if y > x:  # an involution: each link once
                         _union(parent, x, y)
@@ -99,8 +100,9 @@ def grown_orbits(local, in_key, n_old, raw, find, count_old, r, d, alpha):
     linked = False
     for i in range(4):
         if in_key[i]:
+            row = local[i]
             for x in range(m):
-                y = local[i, x]
+                y = row[x]
                 if y < 0:
                     linked = True
                     _union(nodes, count_old + loc[x], find[raw[y + n_old]])
