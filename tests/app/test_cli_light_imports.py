@@ -52,3 +52,26 @@ def test_importing_the_studies_package_is_lazy_but_complete():
     )
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
     assert done.stdout.split() == ["False", "['write_report',", "'Study',", "'one_way_anova']", "[]"]
+
+
+def test_rendering_skips_pyvista_display_probe(tmp_path):
+    # pyvista's first Plotter ran `xset -q` and a test render only to decide on a warning
+    # that cannot fire once headless_setup has run; the picture must still be drawn.
+    probe = (
+        "import subprocess, pyvista.plotting.tools as tools\n"
+        "calls = []\n"
+        "real = subprocess.Popen\n"
+        "subprocess.Popen = lambda *a, **k: calls.append(a) or real(*a, **k)\n"
+        "tools.supports_open_gl = lambda: calls.append('gl') or True\n"
+        "from ramure.app.cli import main\n"
+        "code = main(['render', 'honda_sympodial', '-n', '4', '-o', 'p.png', '--size', '64x64'])\n"
+        "print(code, len(calls))"
+    )
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True, cwd=tmp_path)
+    assert done.stdout.split()[-2:] == ["0", "0"], done.stdout + done.stderr
+    import numpy as np
+    from PIL import Image
+
+    pixels = np.asarray(Image.open(tmp_path / "p.png").convert("RGB")).reshape(-1, 3)
+    assert len(pixels) == 64 * 64
+    assert len(np.unique(pixels, axis=0)) > 1  # not a blank picture
