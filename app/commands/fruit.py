@@ -157,7 +157,6 @@ def run_fruit(args: argparse.Namespace) -> int:
     from ramure.gmap.cut import plane_cut
     from ramure.gmap.defects import apply_defects, parse_defect
     from ramure.gmap.fruit import build_fruit
-    from ramure.gmap.pyvista import to_unstructured_grid
     from ramure.gmap.tissue import tissue_counts
 
     levels = parse_subdivide(args.subdivide)
@@ -190,6 +189,8 @@ def run_fruit(args: argparse.Namespace) -> int:
         if out.suffix.lower() not in (".png", ".vtu"):
             raise UserError(f"-o: write a .png picture or a .vtu grid, not '{out.name}'")
         out.parent.mkdir(parents=True, exist_ok=True)
+        from ramure.gmap.pyvista import to_unstructured_grid  # pyvista (0.5 s) only for a file
+
         grid = to_unstructured_grid(gm)
         normal = None
         if plane:

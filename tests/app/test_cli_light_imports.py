@@ -75,3 +75,21 @@ def test_rendering_skips_pyvista_display_probe(tmp_path):
     pixels = np.asarray(Image.open(tmp_path / "p.png").convert("RGB")).reshape(-1, 3)
     assert len(pixels) == 64 * 64
     assert len(np.unique(pixels, axis=0)) > 1  # not a blank picture
+
+
+def test_fruit_facts_without_a_file_load_no_pyvista(tmp_path):
+    heavy = ("pyvista", "vtkmodules", "matplotlib")
+    loaded, printed = _loaded_after(["fruit", "--preset", "round_tomato", "--json"], tmp_path, heavy)
+    assert loaded == []
+    facts = json.loads(printed)
+    assert (facts["volumes"], facts["valid"]) == (110, True)
+    assert "output" not in facts
+
+
+def test_fruit_grid_file_still_written(tmp_path):
+    loaded, printed = _loaded_after(["fruit", "--preset", "round_tomato", "--json", "-o", "t.vtu"], tmp_path, ("pyvista",))
+    assert loaded == ["pyvista"]
+    import pyvista as pv
+
+    grid = pv.read(tmp_path / "t.vtu")
+    assert grid.n_cells == json.loads(printed)["volumes"] == 110
