@@ -158,7 +158,7 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
         cells = (g.segments[:, None] * view.plant.sides + np.arange(view.plant.sides)).ravel() if g.segments is not None else None
         if cells is not None:
             assert (np.asarray(g.poly.cell_data["rgb"]) == rgb[cells]).all()
-    assert (np.asarray(lines.cell_data["rgb"]) == scene.segment_colors(mesh, rgb, len(w.controller.snapshot.skeleton))).all()
+    assert (view.hairlines.line_colors() == scene.segment_colors(mesh, rgb, len(w.controller.snapshot.skeleton))).all()
     sk = w.controller.snapshot.skeleton
     x, y = view.project(((np.asarray(sk.start[0]) + np.asarray(sk.end[0])) / 2)[None])[0]
     cell = view.pick(x, y)
