@@ -512,7 +512,8 @@ class Wood:
         first = gm.add_prisms(n, count, axis=axis, born=self.steps, rule=rule, **values)
         self._sync_corner()
         t = _prism.template(n)
-        self.corner[first[:, None] + np.arange(t.size)[None, :]] = t.corner[None, :]
+        start = int(first[0]) if len(first) else 0  # add_prisms numbers the prisms' darts consecutively
+        self.corner[start : start + len(first) * t.size].reshape(len(first), t.size)[:] = t.corner[None, :]
         return first
 
     def _grow_length(self, ax, part: str = "whole") -> None:
