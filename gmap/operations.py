@@ -136,8 +136,9 @@ class Operations:
             return column[rows].reshape((count, t.size) + column.shape[1:])
 
         alpha = self._alpha
+        first32 = first.astype(alpha.dtype)[:, None]  # dart ids fit alpha's int32 (the dart limit)
         for i in range(3):
-            per_prism(alpha[i])[:] = first[:, None] + t.alpha[i][None, :]
+            np.add(first32, t.alpha[i][None, :], out=per_prism(alpha[i]))
         volumes = self._new_volumes(count, label=label, degree=n, origin=origins, frame=frames, size=sizes, **volume_values)
         d = self._darts
         per_prism(d["volume"])[:] = volumes[:, None]
