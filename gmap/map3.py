@@ -501,10 +501,11 @@ class GMap3(Operations):
             grown[:, : self.n_darts] = self._alpha[:, : self.n_darts]
             self._alpha = grown
 
-    def _new_darts(self, count, skip=()):
+    def _new_darts(self, count, skip=(), free=(0, 1, 2, 3)):
         """Append ``count`` free darts (each alpha points to itself); return their ids.
 
-        Per-dart columns named in ``skip`` are not filled (the caller writes them).
+        Per-dart columns named in ``skip`` are not filled (the caller writes them);
+        only the alpha rows in ``free`` are set to the identity (the caller writes the others).
         """
         rows = self._darts.extend(count, skip)
         cap = self._darts.capacity
@@ -513,7 +514,8 @@ class GMap3(Operations):
             grown[:, : rows.start] = self._alpha[:, : rows.start]
             self._alpha = grown
         ids = np.arange(rows.start, rows.stop, dtype=np.int32)
-        self._alpha[:, rows] = ids[None, :]
+        for i in free:
+            self._alpha[i, rows] = ids
         self.mark_changed()
         return ids
 
