@@ -40,6 +40,11 @@ def _darts(x: ArrayLike) -> np.ndarray:
     return np.atleast_1d(np.asarray(x, dtype=np.int64))
 
 
+def _walked(walk: np.ndarray) -> np.ndarray:
+    """The darts of face walks (rows padded with -1), row after row: a view when nothing is padded."""
+    return walk.ravel() if walk.size == 0 or walk.min() >= 0 else walk[walk >= 0]
+
+
 def _label_code(label):
     """Face label code of ``label`` (a name such as ``'C3'`` or a code), as GMapError when unknown."""
     if isinstance(label, (int, np.integer)):
@@ -343,7 +348,7 @@ class Operations:
         ``wa``, ``wb``: face walks as :meth:`face_walk` returns them (rows
         padded with -1), matched dart for dart.
         """
-        da, db = wa[wa >= 0], wb[wb >= 0]
+        da, db = _walked(wa), _walked(wb)
         a3 = self._alpha[3]
         for side, d in (("first", da), ("second", db)):
             busy = d[a3[d] != d]
@@ -364,8 +369,11 @@ class Operations:
         The caller checks first (:meth:`check_sewable`, equal degrees); this
         is the raw step :meth:`sew3` and :func:`ramure.gmap.identify.identify` share.
         """
-        keep = wa >= 0
-        da, db = wa[keep], wb[keep]
+        if wa.size == 0 or wa.min() >= 0:  # no padding: the walks as they are
+            da, db = wa.ravel(), wb.ravel()
+        else:
+            keep = wa >= 0
+            da, db = wa[keep], wb[keep]
         alpha = self._alpha
         alpha[3][da] = db
         alpha[3][db] = da
