@@ -194,6 +194,8 @@ class PlantView(QWidget):
         self._polish_timer.setInterval(POLISH_MS)
         self._polish_timer.timeout.connect(self.polish)
         self.busy = False
+        self.frames = 0  # frames the renderer has drawn (redraw(now=True) checks one was)
+        self.plotter.renderer.AddObserver("EndEvent", self._frame_drawn)
 
     # -- draft and polished frames ---------------------------------------------
     def draft(self) -> None:
@@ -353,11 +355,20 @@ class PlantView(QWidget):
         QTimer.singleShot(0, later)
 
     def redraw(self, now: bool = False) -> None:
-        """Schedule a repaint (``now``: paint before returning, e.g. for a benchmark or screenshot)."""
-        if now:
-            self.plotter.repaint()
-        else:
+        """Schedule a repaint (``now``: paint before returning, e.g. for a benchmark or screenshot).
+
+        Qt's ``repaint`` now and then returns without painting the ``QOpenGLWidget``; the
+        renderer's frame count tells, and the frame is then rendered directly."""
+        if not now:
             self.plotter.update()
+            return
+        before = self.frames
+        self.plotter.repaint()
+        if self.frames == before and self.plotter.ren_win is not None:
+            self.plotter.ren_win.Render()
+
+    def _frame_drawn(self, *_args) -> None:
+        self.frames += 1
 
     def set_fruit_spheres_hidden(self, hidden: bool) -> None:
         """Hide the plant mesh's fruit spheres (so they do not show inside volumetric fruit)."""
