@@ -184,7 +184,8 @@ def test_prune_and_regrow_with_constants(make_window, qtbot):
     settle(qtbot, w)
     w.controller.select(snap.segment_leaf[tips])
     w.regen.boxes["a2"].setValue(20.0)
-    with qtbot.waitSignal(w.controller.job_done, timeout=10000) as blocker:
+    # the Details dock may still replay its last detail for the undone version: wait for the regrow
+    with qtbot.waitSignal(w.controller.job_done, timeout=10000, check_params_cb=lambda job: job.name == "regrow") as blocker:
         qtbot.mouseClick(w.regen.with_constants_button, Qt.MouseButton.LeftButton)
     job = blocker.args[0]
     assert job.error is None and job.name == "regrow"
