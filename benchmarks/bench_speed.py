@@ -179,28 +179,12 @@ def _plant_view(size=(1000, 800)):
 
 
 def _paint(view):
-    """Paint ``view`` now and wait until the (software) GL has finished the frame.
-
-    Qt's ``repaint`` now and then returns without painting a ``QOpenGLWidget``; the
-    renderer's frame count tells, and the frame is then rendered directly.
-    """
-    renderer = view.plotter.renderer
-    frames = _frames(renderer)
+    """Paint ``view`` now (``redraw(now=True)`` renders even when Qt skips the repaint) and wait
+    until the (software) GL has finished the frame."""
     view.redraw(now=True)
     window = view.plotter.ren_win
-    if _frames(renderer) == frames:
-        window.Render()
     window.MakeCurrent()
     window.WaitForCompletion()
-
-
-def _frames(renderer):
-    """How many frames ``renderer`` has drawn (an EndEvent counter added on first use)."""
-    count = getattr(renderer, "_bench_frames", None)
-    if count is None:
-        count = renderer._bench_frames = [0]
-        renderer.AddObserver("EndEvent", lambda *_: count.__setitem__(0, count[0] + 1))
-    return count[0]
 
 
 def _show(view, snap, reset_camera=None):
