@@ -11,35 +11,35 @@ stays light (no pyvista, no Qt).
 
 from __future__ import annotations
 
-import importlib
 import os
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from ramure.errors import DerivationError, GrammarError, RamureError, ValueRefused
+from ramure.lazy import lazy_loader
 
 if TYPE_CHECKING:
     from ramure.lsys import Derivation, LSystem
 
 __version__ = "0.1.0"
 
-# name -> (module, attribute): resolved lazily by __getattr__.
+# name -> the module that defines it, imported on first use (ramure.lazy).
 _LAZY = {
-    "LSystem": ("ramure.lsys", "LSystem"),
-    "Derivation": ("ramure.lsys", "Derivation"),
-    "Session": ("ramure.lsys.regen", "Session"),
-    "regenerate": ("ramure.lsys.regen", "regenerate"),
-    "select_roots": ("ramure.lsys.cut", "select_roots"),
-    "leaves_where": ("ramure.lsys.select", "leaves_where"),
-    "apply_qualifier": ("ramure.metrics.apply", "apply_qualifier"),
-    "plant_metrics": ("ramure.metrics", "plant_metrics"),
-    "plant_obb": ("ramure.metrics", "plant_obb"),
-    "explore": ("ramure.metrics", "explore"),
-    "VariantSweep": ("ramure.metrics", "VariantSweep"),
-    "DeltaPCA": ("ramure.metrics", "DeltaPCA"),
-    "GMap3": ("ramure.gmap", "GMap3"),
-    "build_fruit": ("ramure.gmap.fruit", "build_fruit"),
-    "Study": ("ramure.studies", "Study"),
+    "LSystem": "ramure.lsys",
+    "Derivation": "ramure.lsys",
+    "Session": "ramure.lsys.regen",
+    "regenerate": "ramure.lsys.regen",
+    "select_roots": "ramure.lsys.cut",
+    "leaves_where": "ramure.lsys.select",
+    "apply_qualifier": "ramure.metrics.apply",
+    "plant_metrics": "ramure.metrics",
+    "plant_obb": "ramure.metrics",
+    "explore": "ramure.metrics",
+    "VariantSweep": "ramure.metrics",
+    "DeltaPCA": "ramure.metrics",
+    "GMap3": "ramure.gmap",
+    "build_fruit": "ramure.gmap.fruit",
+    "Study": "ramure.studies",
 }
 
 __all__ = ["DerivationError", "GrammarError", "RamureError", "ValueRefused", "derive", "load", *sorted(_LAZY)]
@@ -59,14 +59,12 @@ def derive(
     return load(grammar).derive(n=n, seed=seed, constants=constants)
 
 
+_load, _names = lazy_loader(__name__, _LAZY)
+
+
 def __getattr__(name):
-    if name in _LAZY:
-        module, attribute = _LAZY[name]
-        value = getattr(importlib.import_module(module), attribute)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'ramure' has no attribute {name!r}")
+    return _load(name)
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+    return _names()

@@ -21,8 +21,9 @@ them.  Everything is stored in SQLite, one transaction per answer.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from ramure.lazy import lazy_loader
 
 if TYPE_CHECKING:
     from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
@@ -44,44 +45,44 @@ if TYPE_CHECKING:
     from ramure.studies.simulate import SimulatedParticipant, run_simulation, simulate_study
     from ramure.studies.storage import Study, connect
 
-# name -> submodule of ramure.studies that defines it, imported on first use: ``ramure study
+# name -> submodule of ramure.studies that defines it, imported on first use (ramure.lazy): ``ramure study
 # anova`` then loads only the ANOVA module, not the report's matplotlib, metrics and scipy.
 _LAZY = {
-    "AnovaResult": "anova",
-    "Group": "session",
-    "LEVELS": "likert",
-    "Pick": "picks",
-    "SimulatedParticipant": "simulate",
-    "Study": "storage",
-    "StudyData": "data",
-    "StudyInputError": "errors",
-    "SynonymTable": "qualifiers",
-    "TestSession": "session",
-    "analyze": "report",
-    "anova_table": "anova",
-    "connect": "storage",
-    "cooccurrence": "analysis",
-    "export_csv": "export",
-    "export_qualifier_points": "qualifiers",
-    "grouping_stats": "analysis",
-    "groups_per_test": "analysis",
-    "image_order": "session",
-    "image_ratings": "analysis",
-    "images_per_group": "analysis",
-    "labelled_points": "qualifiers",
-    "lattice_picks": "picks",
-    "likert_value": "likert",
-    "load_picks": "picks",
-    "load_study_data": "data",
-    "normalise_text": "qualifiers",
-    "one_way_anova": "anova",
-    "picks_from_data": "picks",
-    "qualifier_frequencies": "qualifiers",
-    "read_table": "anova",
-    "run_simulation": "simulate",
-    "simulate_study": "simulate",
-    "synthetic_grammars": "picks",
-    "write_report": "report",
+    "AnovaResult": ".anova",
+    "Group": ".session",
+    "LEVELS": ".likert",
+    "Pick": ".picks",
+    "SimulatedParticipant": ".simulate",
+    "Study": ".storage",
+    "StudyData": ".data",
+    "StudyInputError": ".errors",
+    "SynonymTable": ".qualifiers",
+    "TestSession": ".session",
+    "analyze": ".report",
+    "anova_table": ".anova",
+    "connect": ".storage",
+    "cooccurrence": ".analysis",
+    "export_csv": ".export",
+    "export_qualifier_points": ".qualifiers",
+    "grouping_stats": ".analysis",
+    "groups_per_test": ".analysis",
+    "image_order": ".session",
+    "image_ratings": ".analysis",
+    "images_per_group": ".analysis",
+    "labelled_points": ".qualifiers",
+    "lattice_picks": ".picks",
+    "likert_value": ".likert",
+    "load_picks": ".picks",
+    "load_study_data": ".data",
+    "normalise_text": ".qualifiers",
+    "one_way_anova": ".anova",
+    "picks_from_data": ".picks",
+    "qualifier_frequencies": ".qualifiers",
+    "read_table": ".anova",
+    "run_simulation": ".simulate",
+    "simulate_study": ".simulate",
+    "synthetic_grammars": ".picks",
+    "write_report": ".report",
 }
 
 __all__ = [
@@ -123,14 +124,12 @@ __all__ = [
 ]
 
 
+_load, _names = lazy_loader(__name__, _LAZY)
+
+
 def __getattr__(name: str) -> object:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ramure.studies' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"ramure.studies.{module}"), name)
-    globals()[name] = value
-    return value
+    return _load(name)
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return _names()
