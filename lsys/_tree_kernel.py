@@ -8,7 +8,8 @@ its children.  Used for large trees; small ones keep the numpy passes by step.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True, nogil=True)
@@ -54,3 +55,26 @@ def leaf_weight_prefix(depth, leaves):
         total += np.int64(1) << np.int64(depth[leaves[i]])
         out[i + 1] = total
     return out
+
+
+@njit(cache=True, nogil=True)
+def leaf_sums(child_start, child_count, alive, flag, lo, hi, count, weight):
+    """Current-string leaves below nodes ``lo .. hi - 1`` (``count``) and ``sum(2**(depth(leaf) -
+    depth(v)))`` over them (``weight``), from their children, in reverse id order (children have
+    larger ids).  A childless node takes its in-string flag ``flag[v - lo]``; a node sums the children
+    that share its liveness (an alive node its alive children, a dead one as if it were alive)."""
+    for v in range(hi - 1, lo - 1, -1):
+        k = child_count[v]
+        if k == 0:
+            count[v] = flag[v - lo]
+            weight[v] = flag[v - lo]
+            continue
+        s = child_start[v]
+        c = 0
+        w = np.int64(0)
+        for u in range(s, s + k):
+            if alive[u] or not alive[v]:
+                c += count[u]
+                w += weight[u]
+        count[v] = c
+        weight[v] = 2 * w

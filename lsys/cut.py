@@ -131,6 +131,9 @@ def exact_capacities(tree: DerivationTree, nodes: ArrayLike) -> list[int]:
     contiguous in the string, so one prefix sum serves every node.
     """
     nodes = np.asarray(nodes, np.int64)
+    _, weights = tree.subtree_weights(nodes)  # kept by the tree across edits: no whole-tree pass
+    if weights is not None:
+        return [int(w) for w in weights.tolist()]
     first, last = tree.leaf_spans()
     prefix = _leaf_weight_prefix(tree)
     depth = tree.depth
@@ -192,11 +195,10 @@ def validate_selection(tree: DerivationTree, selected: Iterable[int]) -> np.ndar
     bad = (selected < 0) | (selected >= tree.size)
     if bad.any():
         raise ValueRefused(f"node {int(selected[bad][0])} does not exist in this plant")
-    in_string = np.zeros(tree.size, bool)
-    in_string[tree.leaves] = True
-    if not in_string[selected].all():
+    in_string = tree.in_string(selected)
+    if not in_string.all():
         raise ValueRefused(
-            f"node {int(selected[~in_string[selected]][0])} is not a leaf of the current plant (only leaves can be selected)"
+            f"node {int(selected[~in_string][0])} is not a leaf of the current plant (only leaves can be selected)"
         )
     return selected
 
@@ -248,10 +250,10 @@ def build_graph(
     """
     rho = check_rho(rho)
     selected = validate_selection(tree, selected)
-    depth = tree.depth
-    n = int(depth.max()) if n is None else int(n)
+    n = int(tree.depth.max()) if n is None else int(n)
     scale, alpha_s, step_s = _scale(rho, alpha0, n)
     nodes = path_nodes(tree, selected)
+    depth = tree.depth_of(nodes)
     cap = np.array([c * scale for c in exact_capacities(tree, nodes)] or [0], dtype=object)[: len(nodes)]
     current, k = selected.copy(), 0
     while current.size:
@@ -261,17 +263,16 @@ def build_graph(
         k += 1
     cap = np.array([max(int(c), 0) for c in cap] or [0], dtype=object)[: len(nodes)]
     counts = _LeafCounts(tree)
+    node_counts = counts[nodes]
     parent = tree.parent[nodes]
     has_parent = parent >= 0
     parent_idx = np.where(has_parent, np.searchsorted(nodes, parent), -1)
     on_path_children = np.zeros(len(nodes), np.int64)
-    np.add.at(on_path_children, parent_idx[has_parent], counts[nodes[has_parent]])
+    np.add.at(on_path_children, parent_idx[has_parent], node_counts[has_parent])
     is_selected = np.isin(nodes, selected)
-    off_path = np.where(is_selected, 0, counts[nodes] - on_path_children).astype(object) * scale
+    off_path = np.where(is_selected, 0, node_counts - on_path_children).astype(object) * scale
     merged = (
-        _never_cut_from_source(nodes, depth[nodes], cap, off_path, parent_idx, is_selected)
-        if reduce
-        else np.zeros(len(nodes), bool)
+        _never_cut_from_source(nodes, depth, cap, off_path, parent_idx, is_selected) if reduce else np.zeros(len(nodes), bool)
     )
 
     import networkx as nx
@@ -302,16 +303,15 @@ class _LeafCounts:
     """``tree.leaf_counts()[nodes]`` for the few nodes a cut reads, without a whole-tree array."""
 
     def __init__(self, tree) -> None:
-        self.first, self.last = tree.leaf_spans()
+        self.tree = tree
 
     def __getitem__(self, nodes):
-        last = self.last[nodes]
-        return np.where(last >= 0, last - self.first[nodes] + 1, 0)
+        return self.tree.subtree_weights(nodes)[0]
 
 
 def _unselected_axiom_modules(tree, nodes, counts, scale):
     """Axiom modules holding no selected leaf: their cheapest cut is their leaves, always cut."""
-    axiom = np.flatnonzero((tree.parent == -1) & tree.alive)
+    axiom = tree.axiom_modules()
     axiom = axiom[~np.isin(axiom, nodes) & (counts[axiom] > 0)]
     return {((v, "out"), SINK): int(c) * scale for v, c in zip(axiom.tolist(), counts[axiom].tolist())}
 
@@ -428,14 +428,14 @@ def select_roots(
 
 
 def _check_min_ascend(min_ascend, tree):
-    """A whole number >= 0, clamped to the tree's depth (more climbs no higher than the axiom)."""
+    """A whole number >= 0, clamped to the tree's size, more than its depth (a longer climb
+    ends at the axiom all the same)."""
     if isinstance(min_ascend, bool) or not isinstance(min_ascend, (int, np.integer)):
         if not (isinstance(min_ascend, float) and min_ascend.is_integer()):
             raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
     if min_ascend < 0:
         raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
-    top = int(tree.depth.max()) if tree.size else 0
-    return int(min(int(min_ascend), top + 1))
+    return int(min(int(min_ascend), tree.size + 1))  # > every depth (climbing stops at the axiom anyway)
 
 
 def _axiom_root(tree, nodes):

@@ -71,12 +71,14 @@ class Change:
 
     def apply(self, tree: DerivationTree, forward: bool = True) -> None:
         kill, revive = (self.removed, self.added) if forward else (self.added, self.removed)
+        sums = tree.detach_sums()  # updated under the roots only (the cut's capacities)
         tree.set_alive(kill, False)
         tree.set_alive(revive, True)
         start, count = self.new_children if forward else self.old_children
         tree.set_children(self.roots, start, count)
         tree.leaves = self.new_leaves if forward else self.old_leaves
         tree.changed()
+        tree.attach_sums(sums, self.roots, revived=revive)
 
 
 @dataclass
@@ -157,7 +159,7 @@ def regenerate(
         raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}")
     consts = check_constants({**derivation.constants, **(constants or {})})
     check_seed(seed)
-    first, last = (span[roots].copy() for span in tree.leaf_spans())
+    first, last = tree.string_spans(roots)
     order = np.argsort(first)
     roots, first, last = roots[order], first[order], last[order]
     old_leaves = tree.leaves
@@ -165,6 +167,7 @@ def regenerate(
     removed = np.concatenate([tree.subtree(r) for r in roots]) if roots.size else np.zeros(0, np.int64)
     first_new = tree.size
     rng = np.random.default_rng(seed)
+    sums = tree.detach_sums()  # kept: updated under the roots once the edit is done
     try:
         pieces, starts, ends = _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune)
     except BaseException:
@@ -190,6 +193,7 @@ def regenerate(
     )
     tree.leaves = new_leaves
     tree.changed()
+    tree.attach_sums(sums, roots, new_leaves=pieces)
     return change
 
 

@@ -61,6 +61,7 @@ class DerivationTree:
         self._cap = 0
         self.leaves = np.zeros(0, np.int64)
         self._cache: dict[str, Any] = {}
+        self._sums: _LeafSums | None = None  # kept across edits made through detach/attach_sums
         self._reserve(capacity)
 
     # -- storage -----------------------------------------------------------
@@ -121,7 +122,7 @@ class DerivationTree:
         self._child_count[sl] = 0
         self._alive[sl] = True
         self.size = start + count
-        self._cache.clear()
+        self._dropped()
         return ids
 
     def extend(self, count: int, step: int) -> int:
@@ -139,30 +140,34 @@ class DerivationTree:
         self._child_count[sl] = 0
         self._alive[sl] = True
         self.size = start + count
-        self._cache.clear()
+        self._dropped()
         return start
 
     def set_children(self, nodes: ArrayLike, first_child: ArrayLike, count: ArrayLike) -> None:
         """Record that ``nodes`` were rewritten into blocks starting at ``first_child``."""
         self._child_start[nodes] = first_child
         self._child_count[nodes] = count
-        self._cache.clear()
+        self._dropped()
 
     def changed(self) -> None:
         """Forget cached spans/depths after an in-place edit."""
+        self._dropped()
+
+    def _dropped(self) -> None:
         self._cache.clear()
+        self._sums = None
 
     def set_alive(self, nodes: ArrayLike, alive: bool = True) -> None:
         """Mark ``nodes`` alive (or dead, removed by a regeneration); caches are dropped."""
         self._alive[np.asarray(nodes, np.int64)] = bool(alive)
-        self._cache.clear()
+        self._dropped()
 
     def truncate(self, size: int) -> None:
         """Forget every node appended at or after id ``size`` (a regeneration that failed)."""
         if not 0 <= int(size) <= self.size:
             raise ValueError(f"cannot truncate a tree of {self.size} nodes to {size}")
         self.size = int(size)
-        self._cache.clear()
+        self._dropped()
 
     def cached(self, key: str, make: Callable[[], T]) -> T:
         """``make()`` computed once per tree state: the cache is dropped by every edit.
@@ -276,6 +281,174 @@ class DerivationTree:
             self._cache["counts"] = counts
         return self._cache["counts"]
 
+    # -- leaf sums, kept across edits (issue 14: a regrow costs what it touches) ----------
+    def subtree_weights(self, nodes: ArrayLike) -> tuple[np.ndarray, np.ndarray | None]:
+        """``(counts, weights)`` of ``nodes``: the current string's leaves below each node, and
+        ``sum(2**(depth(leaf) - depth(node)))`` over them (the min-cut's capacity without a
+        selection: a leaf 1, an internal node twice the sum of its children); 0 for dead nodes.
+
+        ``weights`` is None when int64 could overflow (``2**step`` times the tree's size reaches
+        2**62); the caller then sums exact integers itself.  Both come from per-node sums that an
+        edit through :meth:`detach_sums` / :meth:`attach_sums` (a regrow, its undo and redo)
+        updates under the regrown roots only; any other edit drops them.
+        """
+        nodes = np.asarray(nodes, np.int64)
+        sums = self._leaf_sums()
+        alive = self._alive[nodes]
+        counts = np.where(alive, sums.count[nodes], 0).astype(np.int64)
+        weights = np.where(alive, sums.weight[nodes], 0) if sums.exact else None
+        return counts, weights
+
+    def string_spans(self, nodes: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """``leaf_spans()`` at ``nodes`` only: ``(first, last)`` string positions of their leaves
+        (-1, -1 without leaves), from the leaf counts of their ancestors' earlier siblings,
+        without a pass over the whole tree."""
+        nodes = np.asarray(nodes, np.int64)
+        if "spans" in self._cache:
+            first, last = self._cache["spans"]
+            return first[nodes].copy(), last[nodes].copy()
+        sums = self._leaf_sums()
+        count, alive = sums.count, self._alive
+        axiom = sums.axiom[alive[sums.axiom]]
+        before = np.zeros(len(axiom) + 1, np.int64)
+        np.cumsum(count[axiom], out=before[1:])
+        first = np.zeros(len(nodes), np.int64)
+        for i, v in enumerate(nodes.tolist()):
+            pos, node = 0, v
+            parent = int(self._parent[node])
+            while parent >= 0:
+                block = slice(int(self._child_start[parent]), node)
+                pos += int(count[block][alive[block]].sum())
+                node, parent = parent, int(self._parent[parent])
+            first[i] = pos + before[np.searchsorted(axiom, node)]
+        n = np.where(alive[nodes], count[nodes], 0)
+        return np.where(n > 0, first, -1), np.where(n > 0, first + n - 1, -1)
+
+    def in_string(self, nodes: ArrayLike) -> np.ndarray:
+        """Whether each node is a module of the current string (ids must be nodes of the tree)."""
+        nodes = np.asarray(nodes, np.int64)
+        sums = self._sums
+        if sums is not None and sums.size == self.size:
+            return self._alive[nodes] & (self._child_count[nodes] == 0) & (sums.count[nodes] == 1)
+
+        def make():
+            mask = np.zeros(self.size, bool)
+            mask[self.leaves] = True
+            mask.flags.writeable = False
+            return mask
+
+        return self.cached("in_string", make)[nodes]
+
+    def axiom_modules(self) -> np.ndarray:
+        """Alive nodes without a parent (the axiom's modules), in id (string) order."""
+        sums = self._leaf_sums()
+        return sums.axiom[self._alive[sums.axiom]]
+
+    def depth_of(self, nodes: ArrayLike) -> np.ndarray:
+        """``depth[nodes]`` by walking up from these nodes only (the whole array when cached)."""
+        nodes = np.asarray(nodes, np.int64)
+        if "depth" in self._cache:
+            return self._cache["depth"][nodes]
+        out = np.zeros(len(nodes), np.int32)
+        up = self._parent[nodes].astype(np.int64)
+        while (up >= 0).any():
+            more = up >= 0
+            out += more
+            up[more] = self._parent[up[more]]
+        return np.where(self._alive[nodes], out, 0).astype(np.int32)
+
+    def detach_sums(self) -> Any:
+        """Take the leaf sums out of the tree before an in-place edit (None if none were made);
+        give them back with :meth:`attach_sums` once the edit is done, or drop them."""
+        sums, self._sums = self._sums, None
+        return sums
+
+    def attach_sums(
+        self, sums: Any, roots: ArrayLike, revived: ArrayLike = (), new_leaves: Sequence[np.ndarray] | None = None
+    ) -> None:
+        """Put back sums taken by :meth:`detach_sums` after an edit that gave ``roots`` new
+        children and set :attr:`leaves`: the nodes appended since (all alive) are summed with
+        ``new_leaves`` (the arrays of new string modules the edit made, or None to find them in
+        the string), then the roots and their ancestors.  ``revived`` (nodes marked alive again)
+        keep the sums they had when they were alive; sums of nodes that were already dead when
+        the sums were first made are not known, so reviving one drops the sums instead."""
+        if sums is None:
+            return
+        revived = np.asarray(revived, np.int64)
+        if revived.size and sums.dead_at_start[revived[revived < len(sums.dead_at_start)]].any():
+            return
+        roots = np.asarray(roots, np.int64)
+        given = None if new_leaves is None else np.concatenate([np.asarray(p, np.int64) for p in new_leaves] or [roots[:0]])
+        lo = sums.size
+        if self.size > lo:
+            fresh = self.leaves[self.leaves >= lo] if given is None else given[given >= lo]
+            flag = np.zeros(self.size - lo, np.int8)
+            flag[fresh - lo] = 1
+            sums.grow(self.size)
+            self._sum_range(sums, lo, self.size, flag)
+            sums.axiom = np.concatenate([sums.axiom, lo + np.flatnonzero(self.parent[lo:] < 0)])
+            sums.max_step = max(sums.max_step, int(self.step[lo:].max()))
+        sums.size = self.size
+        sums.exact = _weights_fit(sums.max_step, self.size)
+        leaf_roots = roots[(self._child_count[roots] == 0) & self._alive[roots]]
+        if leaf_roots.size:  # a pruned root: 1 when the string holds it
+            held = np.isin(leaf_roots, self.leaves if given is None else given)
+            sums.count[leaf_roots] = sums.weight[leaf_roots] = held
+        self._resum(sums, roots)
+        self._sums = sums
+
+    def _leaf_sums(self) -> _LeafSums:
+        if self._sums is None or self._sums.size != self.size:
+            sums = _LeafSums(self.size)
+            flag = np.zeros(self.size, np.int8)
+            flag[self.leaves] = 1
+            self._sum_range(sums, 0, self.size, flag)
+            sums.size = self.size
+            sums.axiom = np.flatnonzero(self.parent < 0)
+            sums.max_step = int(self.step.max()) if self.size else 0
+            sums.exact = _weights_fit(sums.max_step, self.size)
+            sums.dead_at_start = ~self.alive
+            self._sums = sums
+        return self._sums
+
+    def _sum_range(self, sums, lo, hi, flag) -> None:
+        """Sums of nodes ``lo .. hi - 1`` from their children (all at larger ids)."""
+        if self._compiled():
+            from ._tree_kernel import leaf_sums
+
+            leaf_sums(self._child_start, self._child_count, self._alive, flag, lo, hi, sums.count, sums.weight)
+            return
+        count, weight = sums.count, sums.weight
+        ids = np.arange(lo, hi)
+        leaf = self._child_count[lo:hi] == 0
+        count[lo:hi] = np.where(leaf, flag, 0)
+        weight[lo:hi] = np.where(leaf, flag, 0)
+        parent = self._parent[lo:hi].astype(np.int64)
+        alive = self._alive
+        up = (parent >= lo) & (alive[lo:hi] | ~alive[np.maximum(parent, 0)])
+        steps = self._step[lo:hi]
+        for s in np.unique(steps[up])[::-1]:
+            kids = ids[up & (steps == s)]
+            np.add.at(count, parent[kids - lo], count[kids])
+            np.add.at(weight, parent[kids - lo], 2 * weight[kids])
+
+    def _resum(self, sums, roots) -> None:
+        """Sums of ``roots`` and all their ancestors again, from their children (deepest first)."""
+        chain = set()
+        for v in roots.tolist():
+            while v >= 0 and v not in chain:
+                chain.add(v)
+                v = int(self._parent[v])
+        count, weight, alive = sums.count, sums.weight, self._alive
+        for v in sorted(chain, reverse=True):
+            k = int(self._child_count[v])
+            if k == 0:  # a childless root: its in-string flag, set by attach_sums
+                continue
+            block = slice(int(self._child_start[v]), int(self._child_start[v]) + k)
+            use = alive[block] | (not alive[v])
+            count[v] = int(count[block][use].sum())
+            weight[v] = 2 * int(weight[block][use].sum())
+
     def leaves_under(self, node: int) -> np.ndarray:
         """Leaf node ids under ``node`` in string order."""
         first, last = self.leaf_spans()
@@ -301,6 +474,35 @@ class DerivationTree:
             frontier = concat_ranges(starts[counts > 0], counts[counts > 0])
             out.append(frontier)
         return np.concatenate(out) if out else np.zeros(0, np.int64)
+
+
+class _LeafSums:
+    """Per-node leaf counts and weights (see :meth:`DerivationTree.subtree_weights`), valid for
+    nodes below ``size``; dead nodes keep what they had when alive (an undo revives them)."""
+
+    def __init__(self, size: int) -> None:
+        cap = max(int(size), 1024)
+        self.count = np.zeros(cap, np.int32)
+        self.weight = np.zeros(cap, np.int64)
+        self.size = 0
+        self.axiom = np.zeros(0, np.int64)
+        self.max_step = 0
+        self.exact = True
+        self.dead_at_start = np.zeros(0, bool)
+
+    def grow(self, size: int) -> None:
+        if size > len(self.count):
+            cap = max(size, 2 * len(self.count))
+            for name in ("count", "weight"):
+                old = getattr(self, name)
+                new = np.zeros(cap, old.dtype)
+                new[: len(old)] = old
+                setattr(self, name, new)
+
+
+def _weights_fit(max_step: int, size: int) -> bool:
+    """Whether ``2**depth``-weighted leaf sums stay below 2**62 (depth <= step)."""
+    return max_step + int(size).bit_length() < 62
 
 
 def concat_ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:

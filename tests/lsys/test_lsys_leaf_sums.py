@@ -1,0 +1,138 @@
+"""The tree's leaf sums (the min-cut's capacities, leaf counts, string spans) kept across edits
+equal a computation from scratch after any sequence of regrows, prunes, undos and redos."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ramure.errors import RamureError
+from ramure.lsys import LSystem
+from ramure.lsys.regen import Session
+from ramure.lsys.tree import DerivationTree
+
+GRAMMARS = {
+    "honda": ("honda_sympodial", 8),
+    "empty successors": ("n: 6\nw: A\np:\n A -> F[+A]BA : 1\n A -> F[-A]B : 1\n B -> F[-F] : 1\n B -> : 1\n", 6),
+    "cut %": ("n: 5\nw: A\np:\n A -> F[+A][-B]A\n B -> F%FF[+F]\n", 5),
+    "decomposition": (
+        "n: 5\nw: A\np:\n  A -> F[+A]B : 1\n  A -> F[-A]A : 1\n  C(x) -> C(x+1)\n"
+        "decomposition:\n  B -> C(0)[-D]\n  D -> FE\n#decomposition_depth 2\n",
+        5,
+    ),
+    "two axiom modules": ("n: 5\nw: A[+B]A\np:\n A -> F[+A]A : 1\n A -> F : 1\n B -> F[-B]B\n", 5),
+}
+
+
+def reference(tree):
+    """Counts and weights of every node from the whole-tree leaf spans (dead nodes 0)."""
+    first, last = tree.leaf_spans()
+    depth = tree.depth.astype(np.int64)
+    prefix = np.zeros(len(tree.leaves) + 1, object)
+    prefix[1:] = np.cumsum(np.array([1 << int(d) for d in depth[tree.leaves]], object))
+    counts = np.where(last >= 0, last - first + 1, 0)
+    weights = [0 if b < 0 else (prefix[b + 1] - prefix[a]) >> int(d) for a, b, d in zip(first, last, depth)]
+    return counts, weights
+
+
+def check(tree, rng):
+    nodes = np.arange(tree.size)
+    sample = np.unique(np.r_[rng.choice(tree.size, min(tree.size, 60), replace=False), tree.leaves[:5]])
+    spans = tree.string_spans(sample)  # before leaf_spans fills the cache they would read
+    depth = tree.depth_of(sample)
+    counts, weights = tree.subtree_weights(nodes)
+    in_string = tree.in_string(nodes)
+    ref_counts, ref_weights = reference(tree)
+    np.testing.assert_array_equal(counts, ref_counts)
+    assert weights is not None and weights.tolist() == ref_weights
+    first, last = tree.leaf_spans()
+    np.testing.assert_array_equal(spans[0], first[sample])
+    np.testing.assert_array_equal(spans[1], last[sample])
+    np.testing.assert_array_equal(depth, tree.depth[sample])
+    mask = np.zeros(tree.size, bool)
+    mask[tree.leaves] = True
+    np.testing.assert_array_equal(in_string, mask)
+    np.testing.assert_array_equal(tree.axiom_modules(), np.flatnonzero((tree.parent == -1) & tree.alive))
+
+
+def edit(session, rng, op):
+    tree = session.tree
+    leaves = tree.leaves
+    if op in ("undo", "redo"):
+        getattr(session, op)()
+        return
+    k = int(rng.integers(1, 6))
+    selection = rng.choice(leaves, min(k, len(leaves)), replace=False).tolist() if len(leaves) else []
+    rho = float(rng.choice([0.25, 0.5, 0.9]))
+    try:
+        if op == "prune" and selection:
+            session.prune(selection, rho=rho)
+        elif op == "whole":
+            session.regrow([], seed=int(rng.integers(1000)))
+        elif op == "leaf":  # a leaf as its own root
+            session.regrow(selection[:1], seed=int(rng.integers(1000)), ascend_levels=0)
+        else:
+            session.regrow(selection, rho=rho, seed=int(rng.integers(1000)))
+    except RamureError:
+        pass  # e.g. a prune that would leave nothing: refused, nothing changed
+
+
+OPS = st.lists(st.sampled_from(["regrow", "regrow", "prune", "undo", "undo", "redo", "whole", "leaf"]), min_size=1, max_size=12)
+
+
+@pytest.mark.parametrize("name", list(GRAMMARS))
+@pytest.mark.parametrize("compiled", [True, False])
+@settings(max_examples=8, deadline=None)
+@given(ops=OPS, seed=st.integers(0, 2**16))
+def test_kept_sums_equal_a_fresh_computation(name, compiled, ops, seed):
+    source, n = GRAMMARS[name]
+    ls = LSystem.from_file(source) if "\n" not in source else LSystem.from_text(source)
+    session = Session(ls, n=n, seed=seed % 7)
+    rng = np.random.default_rng(seed)
+    session.tree.use_kernels = compiled
+    check(session.tree, rng)
+    for op in ops:
+        edit(session, rng, op)
+        session.tree.use_kernels = compiled
+        check(session.tree, rng)
+
+
+def test_a_regrow_its_undo_and_redo_keep_the_sums_they_update():
+    session = Session(LSystem.from_file("honda_sympodial"), n=9)
+    tree = session.tree
+    tree.subtree_weights([0])  # made once, from the whole tree
+    kept = tree.detach_sums()
+    assert kept is not None
+    tree.attach_sums(kept, [])
+    rng = np.random.default_rng(3)
+    for op in ("regrow", "undo", "redo", "regrow", "prune", "undo", "undo"):
+        edit(session, rng, op)
+        held = tree.detach_sums()
+        assert held is kept  # updated in place under the roots, not made again
+        tree.attach_sums(held, [])
+    check(tree, rng)
+
+
+def test_other_edits_drop_the_sums_and_reviving_unknown_nodes_does_too():
+    session = Session(LSystem.from_file("honda_sympodial"), n=7)
+    tree = session.tree
+    session.regrow(tree.leaves[-3:].tolist(), seed=1)
+    tree.changed()  # an edit the sums do not follow: dropped
+    assert tree.detach_sums() is None
+    tree.subtree_weights([0])  # made again now: the nodes the regrow removed are dead, their sums unknown
+    session.undo()  # revives them: the sums are dropped and made again when asked
+    assert tree.detach_sums() is None
+    check(tree, np.random.default_rng(0))
+    tree.subtree_weights([0])
+    tree.set_children([0], tree.child_start[[0]], tree.child_count[[0]])  # any other edit
+    assert tree.detach_sums() is None
+
+
+def test_weights_are_none_where_int64_could_overflow():
+    tree = DerivationTree(max_params=1)
+    tree.append([0], [0], [[0.0]], parent=[-1], step=0, rule=-1, index=[0])
+    kids = tree.append([0, 0], [0, 0], [[0.0], [0.0]], parent=[0, 0], step=61, rule=0, index=[0, 1])
+    tree.set_children([0], kids[:1], 2)
+    tree.leaves = kids
+    counts, weights = tree.subtree_weights([0, 1])
+    assert counts.tolist() == [2, 1] and weights is None
