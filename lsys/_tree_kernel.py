@@ -8,8 +8,7 @@ its children.  Used for large trees; small ones keep the numpy passes by step.
 from __future__ import annotations
 
 import numpy as np
-
-from ramure.jit import njit
+from numba import njit
 
 
 @njit(cache=True, nogil=True)
