@@ -148,7 +148,10 @@ class Explorer:
         skeleton = None
         if same_tree:
             old = plant["skeleton"]
-            spans = changed_spans(old.extra["trace"].leaves, d.tree.leaves, d.tree.size) if "trace" in old.extra else None
+            spans = None
+            if "trace" in old.extra:  # the edit's own spans, else found by comparing the strings
+                before = old.extra["trace"].leaves
+                spans = self.session.edit_spans(before, d.tree.leaves) or changed_spans(before, d.tree.leaves, d.tree.size)
             if spans is not None:
                 skeleton = reinterpret(d.lsystem, d.tree, old, d.tree.leaves, *spans)
         fresh = {

@@ -68,6 +68,20 @@ class Change:
     new_leaves: np.ndarray
     removed_leaves: int = 0  # modules taken out of the string
     added_leaves: int = 0  # modules put in
+    #: (k, 2) inclusive [first, last] string positions each run of regrown roots replaced in
+    #: ``old_leaves`` and took in ``new_leaves`` (see :meth:`spans`); None when not known.
+    old_spans: np.ndarray | None = None
+    new_spans: np.ndarray | None = None
+
+    def spans(self, forward: bool = True) -> tuple[np.ndarray, np.ndarray] | None:
+        """What :func:`ramure.lsys.turtle.changed_spans` finds between the strings before and after
+        this change (``forward``) or its undo, without comparing them: touching spans merged, an
+        empty span as ``last = first - 1``.  None when that cannot be told from the spans alone
+        (a root that was a module of the string before, or a root without leaves)."""
+        if self.old_spans is None or self.new_spans is None:
+            return None
+        a, b = (self.old_spans, self.new_spans) if forward else (self.new_spans, self.old_spans)
+        return a.copy(), b.copy()
 
     def apply(self, tree: DerivationTree, forward: bool = True) -> None:
         kill, revive = (self.removed, self.added) if forward else (self.added, self.removed)
@@ -180,6 +194,7 @@ def regenerate(
     new_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
     tree.set_alive(removed, False)
     new_leaves = _replace_spans(old_leaves, np.array(starts, np.int64), np.array(ends, np.int64), pieces)
+    spans = _edit_spans(starts, ends, pieces) if (old_children[1] > 0).all() else None
     change = Change(
         roots,
         old_children,
@@ -190,11 +205,29 @@ def regenerate(
         new_leaves,
         int((last - first + 1).sum()),
         int(sum(len(p) for p in pieces)),
+        *(spans if spans is not None else (None, None)),
     )
     tree.leaves = new_leaves
     tree.changed()
     tree.attach_sums(sums, roots, new_leaves=pieces)
     return change
+
+
+def _edit_spans(starts, ends, pieces):
+    """``(old_spans, new_spans)`` of an edit that replaced ``[starts[i], ends[i]]`` by ``pieces[i]``
+    (sorted runs), spans that touch in the old string merged: the runs
+    :func:`ramure.lsys.turtle.changed_spans` finds.  None for a span without modules."""
+    starts, ends = np.asarray(starts, np.int64), np.asarray(ends, np.int64)
+    lengths = np.array([len(p) for p in pieces], np.int64)
+    if not len(starts) or (starts < 0).any() or (ends < starts).any():
+        return None
+    runs = np.flatnonzero(np.r_[True, starts[1:] != ends[:-1] + 1])
+    last = np.r_[runs[1:], len(starts)] - 1
+    old = np.stack([starts[runs], ends[last]], axis=1)
+    grown = np.add.reduceat(lengths, runs)
+    shift = np.cumsum(grown - (old[:, 1] - old[:, 0] + 1)) - (grown - (old[:, 1] - old[:, 0] + 1))
+    first = old[:, 0] + shift
+    return old, np.stack([first, first + grown - 1], axis=1)
 
 
 def _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune):
@@ -479,6 +512,18 @@ class Session:
             change,
             from_axiom=bool(edit["selection"]) and bool(change.roots.size and (tree.parent[change.roots] < 0).any()),
         )
+
+    def edit_spans(self, old: np.ndarray, new: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The spans (as :func:`ramure.lsys.turtle.changed_spans` gives them) of the regrow, prune,
+        undo or redo that made the string ``new`` (the tree's leaves array itself) from ``old``
+        (the very array before it), or None when the last edit did not (then compare the strings)."""
+        for stack, forward in ((self._undo, True), (self._redo, False)):
+            if stack and stack[-1][1][0] == "change":
+                change = stack[-1][1][1]
+                before, after = (change.old_leaves, change.new_leaves) if forward else (change.new_leaves, change.old_leaves)
+                if before is old and after is new:
+                    return change.spans(forward)
+        return None
 
     def undo(self) -> dict | None:
         """Undo the last edit; returns it (None when there is nothing to undo)."""

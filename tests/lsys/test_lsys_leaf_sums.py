@@ -136,3 +136,46 @@ def test_weights_are_none_where_int64_could_overflow():
     tree.leaves = kids
     counts, weights = tree.subtree_weights([0, 1])
     assert counts.tolist() == [2, 1] and weights is None
+
+
+@pytest.mark.parametrize("name", list(GRAMMARS))
+@settings(max_examples=10, deadline=None)
+@given(ops=OPS, seed=st.integers(0, 2**16))
+def test_an_edits_own_spans_are_what_comparing_the_strings_finds(name, ops, seed):
+    from ramure.lsys.turtle import changed_spans
+
+    source, n = GRAMMARS[name]
+    ls = LSystem.from_file(source) if "\n" not in source else LSystem.from_text(source)
+    session = Session(ls, n=n, seed=seed % 5)
+    rng = np.random.default_rng(seed)
+    for op in ops:
+        before = session.tree.leaves
+        edit(session, rng, op)
+        after = session.tree.leaves
+        spans = session.edit_spans(before, after)
+        if after is before:
+            continue  # refused, or nothing to undo
+        found = changed_spans(before, after, session.tree.size)
+        if spans is not None:
+            assert found is not None
+            np.testing.assert_array_equal(spans[0], found[0])
+            np.testing.assert_array_equal(spans[1], found[1])
+        assert session.edit_spans(after, before) is None
+
+
+def test_the_spans_of_a_regrow_its_undo_and_redo():
+    session = Session(LSystem.from_file("honda_sympodial"), n=9)
+    first = session.tree.leaves
+    leaves = session.leaves_with_symbol("F")
+    session.regrow([int(leaves[5]), int(leaves[-7])], seed=3)
+    second = session.tree.leaves
+    forward = session.edit_spans(first, second)
+    assert forward is not None and len(forward[0]) == 2
+    assert session.edit_spans(second, first) is None  # not what the last edit did
+    session.undo()
+    back = session.edit_spans(second, session.tree.leaves)
+    np.testing.assert_array_equal(back[0], forward[1])
+    np.testing.assert_array_equal(back[1], forward[0])
+    session.redo()
+    again = session.edit_spans(first, session.tree.leaves)
+    np.testing.assert_array_equal(again[0], forward[0])
