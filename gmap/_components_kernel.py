@@ -10,7 +10,8 @@ search numbers them, so labels are the same whichever path ran.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True)

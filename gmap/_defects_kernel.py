@@ -7,7 +7,8 @@ numba because a cell volume is a short sum over each face's fan of triangles; nu
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True)

@@ -8,7 +8,8 @@ without a Python loop per step.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True)

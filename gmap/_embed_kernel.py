@@ -9,7 +9,8 @@ there. The sums run in dart order, as ``np.bincount`` runs them, so positions ar
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True)

@@ -11,7 +11,8 @@ check, which names that problem).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 #: rows of the counts :func:`problem_counts` returns
 INVOLUTION, FIXED, PAIR, VOLUME_RANGE, VOLUME_MIX, FACE_MIX, OUT_OF_RANGE = 0, 4, 7, 10, 11, 12, 13

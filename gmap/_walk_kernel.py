@@ -9,7 +9,8 @@ the calls, not the darts, were the cost.  Same walk, same padding.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True)

@@ -13,7 +13,8 @@ branching (a walk over 20,000 sibling branches is one jump per branch, once).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True, nogil=True)

@@ -5,7 +5,8 @@ needs it."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True, nogil=True)

@@ -7,7 +7,7 @@ Both give the same arrays (tests/lsys/test_lsys_derive_assemble.py).
 
 from __future__ import annotations
 
-from numba import njit
+from ramure.jit import njit
 
 
 @njit(cache=True, nogil=True)

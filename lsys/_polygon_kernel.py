@@ -5,7 +5,8 @@ importing :mod:`ramure.lsys` does not load numba (about 65 MB): only a plant tha
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 from .polygons import MAX_EAR_CLIP
 

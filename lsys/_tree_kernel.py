@@ -8,7 +8,8 @@ its children.  Used for large trees; small ones keep the numpy passes by step.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 
 @njit(cache=True, nogil=True)

@@ -26,7 +26,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from ramure.jit import njit
 
 STATE_SIZE = 17
 

@@ -321,7 +321,7 @@ class LSystem:
             if "reach" not in cache:
                 cache["reach"] = reach(
                     symbols,
-                    *(-1 if b is None else b for b in self.bracket_ids),  # type: ignore[call-arg]  # numba Dispatcher
+                    *(-1 if b is None else b for b in self.bracket_ids),
                     _ignored_table(symbols, self.ignore_ids),
                 )
             left, right = cache["reach"]

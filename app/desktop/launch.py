@@ -18,6 +18,10 @@ if TYPE_CHECKING:
     from PySide6.QtWidgets import QApplication
 
 DEFAULT_GRAMMAR = "grammars/honda_sympodial.lsys"
+FIRST_COMPILE = (
+    "ramure desktop: compiling the plant kernels (first run after an install or an upgrade, "
+    "10-25 s, once; later runs load them from numba's cache)"
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -65,6 +69,9 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 2
+    from ramure.jit import on_first_compile
+
+    on_first_compile(lambda _name: print(FIRST_COMPILE, file=sys.stderr, flush=True))
     try:
         explorer = Explorer(path, n=args.n, seed=args.seed)
     except (OSError, RamureError) as exc:
