@@ -90,8 +90,11 @@ FULL, SEEK, REGION = 0, 1, 2
 
 
 @njit(cache=True, nogil=True)
-def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_base):
+def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_base, pidx=None):
     """Interpret ``acts[begin:end]`` from ``state`` (updated in place); returns where it stopped.
+
+    Module ``i``'s first parameter is ``par[i]``, or ``par[pidx[i]]`` with ``pidx`` (the string's
+    node ids and the tree's parameter column: no gathered copy of the string's parameters).
 
     ``mode`` FULL draws everything (a ``]`` with nothing to pop is ignored);
     SEEK only moves the turtle to ``end`` (no output), jumping over every
@@ -188,7 +191,7 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
             i += 1
             continue
         k = nps[i]
-        p = par[i]
+        p = par[i] if pidx is None else par[pidx[i]]
         if (a == DRAW or a == MOVE) and pdepth > 0:  # in a polygon: move, record a vertex
             d = p if k else step
             px, py, pz = px + hx * d, py + hy * d, pz + hz * d

@@ -481,7 +481,7 @@ def reinterpret(
     old_spans, new_spans = old_spans[order], new_spans[order]
     pieces = [module_arrays(lsys, tree, leaves[a : b + 1]) for a, b in new_spans]
     acts, nps = (_splice(old, old_spans, [p[k] for p in pieces]) for k, old in enumerate((trace.acts, trace.nps)))
-    par = tree.params[leaves, 0]  # read again, not kept in the trace
+    par = tree.params[:, 0]  # read through the string's node ids (not kept in the trace, not gathered)
     match, balanced = bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
     if len(acts) != len(leaves) or not balanced:
         return interpret_string(lsys, tree, leaves)
@@ -498,8 +498,8 @@ def reinterpret(
             regions[-1][1] = regions[-1][4] - delta[i]  # merged: the old stop shifts by this span too
             continue
         state = start_state.copy()
-        walk(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0)
-        stop, segs, orgs, poly, err = walk(acts, nps, par, a, len(acts), match, REGION, state, angle, step, trop, 0)
+        walk(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0, leaves)
+        stop, segs, orgs, poly, err = walk(acts, nps, par, a, len(acts), match, REGION, state, angle, step, trop, 0, leaves)
         if stop <= b:
             return interpret_string(lsys, tree, leaves)
         check_walk(lsys, tree, leaves, poly, err)
