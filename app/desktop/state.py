@@ -535,7 +535,7 @@ def cut_graph_layout(
     """
     graph = cut.graph
     nodes = sorted({v[0] for v in graph if isinstance(v, tuple)})
-    depth = tree.depth
+    depth = dict(zip(nodes, tree.depth_of(np.asarray(nodes, np.int64)).tolist()))  # these nodes only
     parent = tree.parent
     members = set(nodes)
     children: dict[int, list[int]] = {}
