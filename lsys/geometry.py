@@ -264,18 +264,25 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
     cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=False), numpy_to_vtkIdTypeArray(conn, deep=False))
     mesh.points = points
     mesh.SetPolys(cells)
-    seg = np.repeat(np.arange(nseg, dtype=np.int32), sides)
     poly_leaf = polygons.leaf_id[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
     i32 = np.int32  # ids below 2^31 (the tree's node limit): half the bytes of int64
-    mesh.cell_data["leaf_id"] = np.concatenate([skeleton.leaf_id[seg], organs.leaf_id[organ_idx], poly_leaf], dtype=i32)
-    mesh.cell_data["segment"] = np.concatenate([seg, np.full(nt, -1, i32)])
-    mesh.cell_data["organ"] = np.concatenate([np.full(nq, -1, i32), organ_idx, np.full(npoly, -1, i32)], dtype=i32)
-    mesh.cell_data["polygon"] = np.concatenate([np.full(nq + no, -1, i32), poly_idx], dtype=i32)
-    mesh.cell_data["kind"] = np.concatenate([np.full(nq, KIND_BRANCH), organ_kind, np.full(npoly, KIND_LEAF)]).astype(np.int8)
-    mesh.cell_data["order"] = np.concatenate([skeleton.order[seg], np.full(nt, -1)]).astype(np.int32)
+
+    def cells(per_segment, dtype, *rest):  # each segment's value on its `sides` quads, then organs, polygons
+        out = np.empty(nq + nt, dtype)
+        out[:nq].reshape(nseg, sides)[:] = np.asarray(per_segment).reshape(-1, 1)
+        if nt:
+            out[nq:] = np.concatenate(rest)
+        return out
+
+    mesh.cell_data["leaf_id"] = cells(skeleton.leaf_id, i32, organs.leaf_id[organ_idx], poly_leaf)
+    mesh.cell_data["segment"] = cells(np.arange(nseg), i32, np.full(nt, -1))
+    mesh.cell_data["organ"] = cells(-1, i32, organ_idx, np.full(npoly, -1))
+    mesh.cell_data["polygon"] = cells(-1, i32, np.full(no, -1), poly_idx)
+    mesh.cell_data["kind"] = cells(KIND_BRANCH, np.int8, organ_kind, np.full(npoly, KIND_LEAF))
+    mesh.cell_data["order"] = cells(skeleton.order, i32, np.full(nt, -1))
     organ_color = organs.color if organs.color is not None else np.zeros(len(organs), np.int32)
     poly_color = polygons.color[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
-    mesh.cell_data["material"] = np.concatenate([skeleton.color[seg], organ_color[organ_idx], poly_color]).astype(np.int32)
+    mesh.cell_data["material"] = cells(skeleton.color, i32, organ_color[organ_idx], poly_color)
     materials = skeleton.extra.get("materials")
     if materials:
         from .materials import table_arrays

@@ -544,7 +544,7 @@ def _pieces(at, regions, slot):
     """Kept old rows (index ranges) between the regions, and each region's new arrays (``slot``)."""
     kept, new, cursor = [], [], 0
     for r in regions:
-        lo, hi = np.searchsorted(at, r[0]), np.searchsorted(at, r[1])
+        lo, hi = np.searchsorted(at, np.array([r[0], r[1]], at.dtype))  # at's dtype: no int64 copy of it
         kept.append(np.arange(cursor, lo))
         new.append(r[slot])
         cursor = hi
