@@ -479,6 +479,10 @@ modules = sorted(m for m in ("numba", "matplotlib", "scipy.sparse", "networkx", 
 print(json.dumps({{"peak_mb": peak, "after_pick_mb": stages["first pick"][1], "after_edits_mb": memory()[1],
                   "picked_cell": picked, "version": window.controller.snapshot.version, "stages": stages,
                   "modules": len(explorer.derivation), "loaded": modules}}))
+# what the resident pages are at that moment: private memory, mapped files (libraries' code and
+# relocations, shared with other processes), shared memory (the X server's window image)
+fields = dict(line.split(":", 1) for line in open("/proc/self/status"))
+composition = {{k[3:].lower(): round(int(fields[k].split()[0]) / 1024, 1) for k in ("RssAnon", "RssFile", "RssShmem")}}
 """
 
 
@@ -494,17 +498,21 @@ def _desktop_command():
     return [xvfb, "-a", "-s", "-screen 0 1400x900x24"] if xvfb else None
 
 
-def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...] = ()) -> dict:
+def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...] = (), numba_cache: str | None = None) -> dict:
     """Peak RSS (``VmHWM``) of a fresh process that opens the real desktop window on ``grammar``
     (default Honda sympodial) derived ``n`` steps, shows it and renders a frame (``peak_mb``),
     then picks the trunk with a click (``after_pick_mb``), regrows 10 leaves and undoes
     (``after_edits_mb``); with the RSS after each stage (``stages``: name -> [RSS, peak so
     far] in MB).  ``hide`` names modules the child sees as not installed (``("mypy",)``: the
-    dev venv's mypy, which pyvista imports only because it is there, 24 MB).  ``{"error": ...}``
-    when the window cannot be opened here (no Qt, no display)."""
+    dev venv's mypy, which pyvista imports only because it is there, 24 MB).  ``numba_cache``:
+    the child's ``NUMBA_CACHE_DIR`` (an empty folder: a first run, every kernel compiled).
+    ``peak_composition_mb``: the resident pages at the first frame by kind (``anon``: private
+    memory; ``file``: mapped libraries; ``shmem``: the X server's window image).
+    ``{"error": ...}`` when the window cannot be opened here (no Qt, no display)."""
     import json
     import subprocess
     import sys
+                  "peak_composition_mb": composition,
 
     prefix = _desktop_command()
     if prefix is None:
@@ -512,7 +520,8 @@ def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...
     grammar = grammar or str(ROOT / "grammars" / "honda_sympodial.lsys")
     code = _DESKTOP_STAGES.format(grammar=grammar, n=n, hide=tuple(hide))
     try:
-        out = subprocess.run([*prefix, sys.executable, "-c", code], capture_output=True, text=True, timeout=900)
+        env = {**os.environ, **({"NUMBA_CACHE_DIR": numba_cache} if numba_cache else {})}
+        out = subprocess.run([*prefix, sys.executable, "-c", code], capture_output=True, text=True, timeout=900, env=env)
     except subprocess.SubprocessError as exc:
         return {"error": repr(exc)}
     lines = [line for line in out.stdout.splitlines() if line.startswith("{")]
@@ -527,10 +536,16 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
     fresh processes, the stages of the median run, and the same window on n=4 (``floor_mb``:
     what Qt, VTK, numba and one software-OpenGL context cost before any large plant);
     ``desktop_peak_without_mypy_mb``: one more run with the dev venv's mypy hidden (what a
-    user's install, without mypy, peaks at)."""
+    user's install, without mypy, peaks at).
+
+    The desktop runs load the kernels from numba's cache, as every run after the first does.
+    ``first_run``: the first run after an install (an empty ``NUMBA_CACHE_DIR``): the seconds
+    to a plant with its mesh (fresh process, every kernel compiled) against the same with the
+    cache it wrote, and the desktop's peak while compiling (numba's whole compiler loaded)."""
     from ramure.app.model import Explorer
 
     ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
+    import os
     tree = ex.derivation.tree
     modules = len(ex.derivation)
     tree_bytes = (
@@ -549,6 +564,43 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
                 "params",
             )
         )
+_PLANT_SECONDS = """
+import sys, time
+t0 = time.perf_counter()
+from ramure.app.model import Explorer
+ex = Explorer({grammar!r}, n={n})
+ex.mesh
+print(round(time.perf_counter() - t0, 2))
+"""
+
+
+def _first_run(n: int = 17) -> dict:
+    """Seconds to Honda ``n`` with its mesh in a fresh process whose numba cache is empty (every
+    kernel compiled: the first run after an install), then in one that loads that cache; and
+    the desktop's peak on such a first run.  The cache folder is removed afterwards."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    folder = tempfile.mkdtemp(prefix="ramure-numba-")
+    try:
+        code = _PLANT_SECONDS.format(grammar=str(ROOT / "grammars" / "honda_sympodial.lsys"), n=n)
+        env = {**os.environ, "NUMBA_CACHE_DIR": folder}
+
+        def seconds():
+            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=900, env=env)
+            return float(out.stdout.split()[-1]) if out.returncode == 0 else None
+
+        compiled, cached = seconds(), seconds()
+        shutil.rmtree(folder)
+        desktop = desktop_memory(n, hide=("mypy",), numba_cache=folder)
+        return {"compile_seconds": compiled, "cached_seconds": cached, "desktop_peak_mb": desktop.get("peak_mb")}
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
         + tree.leaves.nbytes
     )
     sk = ex.skeleton
@@ -596,3 +648,6 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
             "ok": median["peak_mb"] <= 600,
         }
     )
+    first_run = _first_run(17)
+            "desktop_peak_composition_mb": user.get("peak_composition_mb"),
+            "first_run": first_run,
