@@ -451,6 +451,10 @@ for _ in range(5):
     app.processEvents()
 stage("frame rendered")
 peak = memory()[1]
+# what the resident pages are at that moment: private memory, mapped files (libraries' code and
+# relocations, shared with other processes), shared memory (the X server's window image)
+fields = dict(line.split(":", 1) for line in open("/proc/self/status"))
+composition = {{k[3:].lower(): round(int(fields[k].split()[0]) / 1024, 1) for k in ("RssAnon", "RssFile", "RssShmem")}}
 # a click on the trunk: the picker and its cell locator, the selection recoloured, its box drawn
 x, y = window.view.project(window.controller.snapshot.midpoints[:1])[0]
 picked = window.view.click_at(float(x), float(y))
@@ -477,12 +481,9 @@ modules = sorted(m for m in ("numba", "matplotlib", "scipy.sparse", "networkx", 
                  if sys.modules.get(m) is not None)
 # VmHWM: this process's own peak (ru_maxrss would carry the parent's over fork and exec)
 print(json.dumps({{"peak_mb": peak, "after_pick_mb": stages["first pick"][1], "after_edits_mb": memory()[1],
+                  "peak_composition_mb": composition,
                   "picked_cell": picked, "version": window.controller.snapshot.version, "stages": stages,
                   "modules": len(explorer.derivation), "loaded": modules}}))
-# what the resident pages are at that moment: private memory, mapped files (libraries' code and
-# relocations, shared with other processes), shared memory (the X server's window image)
-fields = dict(line.split(":", 1) for line in open("/proc/self/status"))
-composition = {{k[3:].lower(): round(int(fields[k].split()[0]) / 1024, 1) for k in ("RssAnon", "RssFile", "RssShmem")}}
 """
 
 
@@ -510,9 +511,9 @@ def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...
     memory; ``file``: mapped libraries; ``shmem``: the X server's window image).
     ``{"error": ...}`` when the window cannot be opened here (no Qt, no display)."""
     import json
+    import os
     import subprocess
     import sys
-                  "peak_composition_mb": composition,
 
     prefix = _desktop_command()
     if prefix is None:
@@ -530,40 +531,6 @@ def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...
     return json.loads(lines[-1])
 
 
-def bench_memory_per_module_honda_n17(repeats: int = 3):
-    """Bytes per module of the history tree, the skeleton (+ trace) and the mesh, Honda n=17;
-    the desktop window's peak RSS with that plant shown (<= 600 MB): median of ``repeats``
-    fresh processes, the stages of the median run, and the same window on n=4 (``floor_mb``:
-    what Qt, VTK, numba and one software-OpenGL context cost before any large plant);
-    ``desktop_peak_without_mypy_mb``: one more run with the dev venv's mypy hidden (what a
-    user's install, without mypy, peaks at).
-
-    The desktop runs load the kernels from numba's cache, as every run after the first does.
-    ``first_run``: the first run after an install (an empty ``NUMBA_CACHE_DIR``): the seconds
-    to a plant with its mesh (fresh process, every kernel compiled) against the same with the
-    cache it wrote, and the desktop's peak while compiling (numba's whole compiler loaded)."""
-    from ramure.app.model import Explorer
-
-    ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
-    import os
-    tree = ex.derivation.tree
-    modules = len(ex.derivation)
-    tree_bytes = (
-        sum(
-            getattr(tree, name).nbytes
-            for name in (
-                "symbol",
-                "nparams",
-                "parent",
-                "step",
-                "rule",
-                "index_in_rule",
-                "child_start",
-                "child_count",
-                "alive",
-                "params",
-            )
-        )
 _PLANT_SECONDS = """
 import sys, time
 t0 = time.perf_counter()
@@ -601,6 +568,39 @@ def _first_run(n: int = 17) -> dict:
         shutil.rmtree(folder, ignore_errors=True)
 
 
+def bench_memory_per_module_honda_n17(repeats: int = 3):
+    """Bytes per module of the history tree, the skeleton (+ trace) and the mesh, Honda n=17;
+    the desktop window's peak RSS with that plant shown (<= 600 MB): median of ``repeats``
+    fresh processes, the stages of the median run, and the same window on n=4 (``floor_mb``:
+    what Qt, VTK, numba and one software-OpenGL context cost before any large plant);
+    ``desktop_peak_without_mypy_mb``: one more run with the dev venv's mypy hidden (what a
+    user's install, without mypy, peaks at).
+
+    The desktop runs load the kernels from numba's cache, as every run after the first does.
+    ``first_run``: the first run after an install (an empty ``NUMBA_CACHE_DIR``): the seconds
+    to a plant with its mesh (fresh process, every kernel compiled) against the same with the
+    cache it wrote, and the desktop's peak while compiling (numba's whole compiler loaded)."""
+    from ramure.app.model import Explorer
+
+    ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
+    tree = ex.derivation.tree
+    modules = len(ex.derivation)
+    tree_bytes = (
+        sum(
+            getattr(tree, name).nbytes
+            for name in (
+                "symbol",
+                "nparams",
+                "parent",
+                "step",
+                "rule",
+                "index_in_rule",
+                "child_start",
+                "child_count",
+                "alive",
+                "params",
+            )
+        )
         + tree.leaves.nbytes
     )
     sk = ex.skeleton
@@ -631,6 +631,7 @@ def _first_run(n: int = 17) -> dict:
     median = runs[peaks[len(peaks) // 2][1]]
     floor = desktop_memory(4)
     user = desktop_memory(17, hide=("mypy",))
+    first_run = _first_run(17)
     return _plain(
         {
             **record,
@@ -642,12 +643,11 @@ def _first_run(n: int = 17) -> dict:
             "desktop_loaded": median["loaded"],
             "desktop_peak_without_mypy_mb": user.get("peak_mb"),
             "desktop_stages_without_mypy_mb": user.get("stages"),
+            "desktop_peak_composition_mb": user.get("peak_composition_mb"),
             "floor_mb": floor.get("peak_mb"),
             "floor_stages_mb": floor.get("stages"),
+            "first_run": first_run,
             "target_peak_mb": 600,
             "ok": median["peak_mb"] <= 600,
         }
     )
-    first_run = _first_run(17)
-            "desktop_peak_composition_mb": user.get("peak_composition_mb"),
-            "first_run": first_run,
