@@ -269,7 +269,12 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
 
     def cells(per_segment, dtype, *rest):  # each segment's value on its `sides` quads, then organs, polygons
         out = np.empty(nq + nt, dtype)
-        out[:nq].reshape(nseg, sides)[:] = np.asarray(per_segment).reshape(-1, 1)
+        if np.ndim(per_segment):
+            quads = out[:nq].reshape(nseg, sides)
+            for j in range(sides):  # a column at a time: faster than one broadcast over rows of `sides`
+                quads[:, j] = per_segment
+        else:
+            out[:nq] = per_segment
         if nt:
             out[nq:] = np.concatenate(rest)
         return out
