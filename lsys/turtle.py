@@ -485,7 +485,9 @@ def reinterpret(
     match, balanced = bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
     if len(acts) != len(leaves) or not balanced:
         return interpret_string(lsys, tree, leaves)
-    if (len(trace.polygon_at) or _has_polygons(acts)) and not _polygons_allow(trace.acts, acts, old_spans, new_spans):
+    # whether the string has polygon actions: an edit of a string without any only looks at its new pieces
+    drawn = any(_has_polygons(p[0]) for p in pieces) if skeleton.extra.get("polygon_acts") is False else _has_polygons(acts)
+    if (len(trace.polygon_at) or drawn) and not _polygons_allow(trace.acts, acts, old_spans, new_spans):
         return interpret_string(lsys, tree, leaves)  # a polygon crosses a branch or an edit: drawn whole
     angle, step, trop = _settings(lsys)
     start_state = initial_state(lsys.grammar.width)
@@ -504,7 +506,9 @@ def reinterpret(
             return interpret_string(lsys, tree, leaves)
         check_walk(lsys, tree, leaves, poly, err)
         regions.append([old_spans[i, 0], stop - delta[i], segs, orgs, stop, poly])
-    return _patched(lsys, tree, skeleton, trace, leaves, (acts, nps, match), regions, old_spans, delta)
+    out = _patched(lsys, tree, skeleton, trace, leaves, (acts, nps, match), regions, old_spans, delta)
+    out.extra["polygon_acts"] = drawn
+    return out
 
 
 def _has_polygons(acts):

@@ -1,0 +1,49 @@
+"""The model's part of an edit (issue 14) gives exactly what a full rebuild gives."""
+
+import numpy as np
+
+from ramure.app.model import Explorer, mesh_sides
+from ramure.lsys.geometry import skeleton_to_polydata
+from ramure.lsys.turtle import interpret_string
+
+from test_lsys_turtle_edits import assert_same, assert_same_mesh
+
+#: Polygons are rare: the first plant (seed 0) has none, regrown branches may grow some.
+RARE_POLYGONS = "#angle 30\nn: 3\nw: A\np:\n A -> F[+A][-A]FA : 40\n A -> F[&{+f-ff-f+|+f-ff-f}]A : 1\n"
+
+
+def test_polygons_that_only_regrown_branches_grow_are_drawn_as_a_rebuild_draws_them():
+    ex = Explorer(RARE_POLYGONS, n=3, seed=0)
+    assert len(ex.skeleton.polygons) == 0
+    ex.mesh  # noqa: B018 - patched by the edits below
+    rng = np.random.default_rng(1)
+    grew = False
+    for step in range(40):
+        leaves = ex.skeleton.leaf_id
+        ex.select(rng.choice(leaves, size=min(3, len(leaves)), replace=False).tolist())
+        ex.regrow(seed=step)
+        incremental = ex.skeleton
+        assert "reuse" in incremental.extra
+        assert incremental.extra["polygon_acts"] == bool(len(incremental.polygons))
+        full = interpret_string(ex.lsystem, ex.derivation.tree, ex.derivation.tree.leaves)
+        assert_same(incremental, full)
+        assert_same_mesh(ex.mesh, skeleton_to_polydata(full, mesh_sides(len(full))))
+        if len(incremental.polygons):
+            grew = True
+            ex.undo()  # back to a plant without polygons, whose flag says so
+            assert len(ex.skeleton.polygons) == 0 and ex.skeleton.extra.get("polygon_acts") in (False, None)
+    assert grew
+
+
+def test_undo_and_redo_after_many_regrows_give_the_rebuilt_plant():
+    ex = Explorer("honda_sympodial.lsys", n=10)
+    rng = np.random.default_rng(5)
+    for step in range(6):
+        leaves = ex.skeleton.leaf_id
+        ex.select(rng.choice(leaves, size=10, replace=False).tolist())
+        ex.regrow(seed=step)
+    for op in ("undo", "undo", "redo", "undo", "undo", "undo", "redo", "redo"):
+        getattr(ex, op)()
+        full = interpret_string(ex.lsystem, ex.derivation.tree, ex.derivation.tree.leaves)
+        assert_same(ex.skeleton, full)
+        assert_same_mesh(ex.mesh, skeleton_to_polydata(full, mesh_sides(len(full))))
