@@ -78,3 +78,22 @@ def leaf_sums(child_start, child_count, alive, flag, lo, hi, count, weight):
                 w += weight[u]
         count[v] = c
         weight[v] = 2 * w
+
+
+@njit(cache=True, nogil=True)
+def resum(nodes, child_start, child_count, alive, count, weight):
+    """:func:`leaf_sums` again for ``nodes`` (in decreasing id order, so children come first),
+    each from its children; childless nodes keep theirs."""
+    for v in nodes:
+        k = child_count[v]
+        if k == 0:
+            continue
+        s = child_start[v]
+        c = 0
+        w = np.int64(0)
+        for u in range(s, s + k):
+            if alive[u] or not alive[v]:
+                c += count[u]
+                w += weight[u]
+        count[v] = c
+        weight[v] = 2 * w

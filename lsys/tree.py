@@ -439,8 +439,14 @@ class DerivationTree:
             while v >= 0 and v not in chain:
                 chain.add(v)
                 v = int(self._parent[v])
+        order = sorted(chain, reverse=True)
+        if self._compiled():
+            from ._tree_kernel import resum
+
+            resum(np.array(order, np.int64), self._child_start, self._child_count, self._alive, sums.count, sums.weight)
+            return
         count, weight, alive = sums.count, sums.weight, self._alive
-        for v in sorted(chain, reverse=True):
+        for v in order:
             k = int(self._child_count[v])
             if k == 0:  # a childless root: its in-string flag, set by attach_sums
                 continue
