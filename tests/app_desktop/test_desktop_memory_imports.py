@@ -1,13 +1,19 @@
-"""The desktop imports the VTK classes it uses, never the ``vtk`` package (issue 14).
+"""What the desktop loads at start (issue 14, memory).
 
-``import vtk`` loads every VTK module: about 60 MB more resident memory in
-the window (measured by ``benchmarks/bench_speed.py``'s desktop memory),
-where ``from vtkmodules.vtkRenderingCore import vtkActor`` loads one.
+It imports the VTK classes it uses, never the ``vtk`` package: ``import vtk`` loads every VTK
+module, about 60 MB more resident memory in the window (measured by
+``benchmarks/bench_speed.py``'s desktop memory), where ``from vtkmodules.vtkRenderingCore
+import vtkActor`` loads one.  And a plant drawn from numba's cache does not load numba's
+compiler registries (about 50 MB with the ``scipy.linalg`` they import), nor what only an edit
+needs (networkx for the cut graph) nor packages the desktop never uses at start.
 """
 
 from __future__ import annotations
 
 import ast
+import json
+import subprocess
+import sys
 
 from desktop_helpers import ROOT
 
@@ -26,3 +32,26 @@ def _whole_vtk_imports(path):
 def test_no_desktop_module_imports_the_whole_vtk_package():
     found = [f"{path.name}:{line}" for path in sorted(DESKTOP.glob("*.py")) for line in _whole_vtk_imports(path)]
     assert found == []
+
+
+_START = """
+import json, sys
+import ramure.app.desktop.window
+from ramure.app.model import Explorer
+explorer = Explorer({grammar!r}, n=8)
+explorer.skeleton, explorer.mesh
+watch = ("numba", "numba.np.arraymath", "scipy.linalg", "scipy.sparse", "networkx", "vtkmodules.all",
+         "sklearn", "pandas", "ramure.gmap", "ramure.studies")
+print(json.dumps({{name: name in sys.modules for name in watch}}))
+"""
+
+
+def test_a_plant_drawn_from_the_kernel_cache_loads_no_compiler_and_nothing_an_edit_needs():
+    from desktop_helpers import HONDA
+
+    code = _START.format(grammar=str(HONDA))
+    runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300) for _ in range(2)]
+    assert all(r.returncode == 0 for r in runs), runs[-1].stderr
+    loaded = json.loads(runs[1].stdout.strip().splitlines()[-1])  # the first run may have compiled (fresh clone)
+    assert loaded.pop("numba")  # the turtle ran its kernel...
+    assert not any(loaded.values()), loaded  # ...loaded from the cache: no numba registries, no scipy.linalg
