@@ -589,7 +589,7 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
     fresh = ~is_kept
     _check_finite(lsys, tree, leaf[fresh], _usable(start[fresh]).all(1) & _usable(end[fresh]).all(1) & _usable(base[fresh]))
     _check_color(lsys, tree, leaf[fresh], color[fresh])
-    top = top_radius(base, order, parent)
+    top = _patched_top(sk, base, order, parent, is_kept, old_index, new_index)
     same = is_kept.copy()
     same[is_kept] = top[is_kept] == sk.top_radius[old_index]
     okept, onew = _pieces(trace.organ_at, regions, 3)
@@ -622,6 +622,34 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
             polygons,
         ),
     )
+
+
+def _patched_top(old, base, order, parent, is_kept, old_index, new_index):
+    """:func:`top_radius` after an edit from the old skeleton's: computed again only for the new
+    segments and the kept ones that gained or lost a child (the others keep theirs)."""
+    top = np.empty(len(base), base.dtype)
+    top[is_kept] = old.top_radius[old_index]
+    gone = np.ones(len(old), bool)
+    gone[old_index] = False
+    fresh = np.flatnonzero(~is_kept)
+    targets = np.unique(np.concatenate([fresh, parent[fresh], new_index[old.parent[gone]]]))
+    targets = targets[targets >= 0]
+    mark = np.zeros(len(base), bool)
+    mark[targets] = True
+    kids = np.flatnonzero((parent >= 0) & mark[np.maximum(parent, 0)])
+    at = np.searchsorted(targets, parent[kids])
+    out = base[targets].copy()
+    widest = np.full(len(targets), -1.0)
+    np.maximum.at(widest, at, base[kids])
+    fork = widest >= 0
+    out[fork] = widest[fork]
+    cont = order[kids] == order[parent[kids]]  # a continuation: the first child on the same order
+    first = np.full(len(targets), len(base), np.int64)
+    np.minimum.at(first, at[cont], kids[cont])
+    has = first < len(base)
+    out[has] = base[first[has]]
+    top[targets] = out
+    return top
 
 
 def _spliced_polygons(lsys, tree, skeleton, trace, leaves, regions, old_spans, delta):
