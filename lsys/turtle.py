@@ -566,6 +566,18 @@ def _interleave(old, kept, new):
     return np.concatenate(out)
 
 
+def _interleave_shifted(old, kept, new, old_spans, delta):
+    """``_interleave(_shift(old, old_spans, delta), kept, new)``: the kept rows between two regions
+    all move by the same amount, so each kept run is shifted by one constant (no search per row)."""
+    out = []
+    for i, idx in enumerate(kept):
+        run = old[idx[0] : idx[-1] + 1] if len(idx) else old[:0]
+        out.append(run.astype(np.int64) + (_shift(run[:1], old_spans, delta) - run[:1]).sum())
+        if i < len(new):
+            out.append(new[i])
+    return np.concatenate(out)
+
+
 def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, delta):
     sk, scale = skeleton, lsys.grammar.width_scale / 2.0
     kept, new = _pieces(trace.segment_at, regions, 2)
@@ -573,7 +585,7 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
     def field(old, k, convert=None):
         return _interleave(old, kept, [p[k] if convert is None else convert(p[k]) for p in new])
 
-    seg_at = field(_shift(trace.segment_at, old_spans, delta), 0)
+    seg_at = _interleave_shifted(trace.segment_at, kept, [p[0] for p in new], old_spans, delta)
     start, end, order, color, normal = (
         field(old, k) for old, k in ((sk.start, 1), (sk.end, 2), (sk.order, 4), (sk.color, 5), (sk.normal, 6))
     )
@@ -585,10 +597,11 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
     parent = field(new_index[sk.parent], 7)
     coded = parent <= -2  # a parent given by its string position (see _turtle_kernel.walk)
     parent[coded] = np.searchsorted(seg_at, -2 - parent[coded])
-    leaf = leaves[seg_at]
-    fresh = ~is_kept
-    _check_finite(lsys, tree, leaf[fresh], _usable(start[fresh]).all(1) & _usable(end[fresh]).all(1) & _usable(base[fresh]))
-    _check_color(lsys, tree, leaf[fresh], color[fresh])
+    leaf = field(sk.leaf_id, 0, lambda a: leaves[a])  # a kept segment's module is the same node
+    drawn = [np.concatenate([p[k] for p in new]) if new else old[:0] for k, old in enumerate((seg_at, start, end, base))]
+    fresh_leaf = leaves[drawn[0]]
+    _check_finite(lsys, tree, fresh_leaf, _usable(drawn[1]).all(1) & _usable(drawn[2]).all(1) & _usable(drawn[3] * scale))
+    _check_color(lsys, tree, fresh_leaf, np.concatenate([p[5] for p in new]) if new else color[:0])
     top = _patched_top(sk, base, order, parent, is_kept, old_index, new_index)
     same = is_kept.copy()
     same[is_kept] = top[is_kept] == sk.top_radius[old_index]

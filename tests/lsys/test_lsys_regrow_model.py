@@ -47,3 +47,19 @@ def test_undo_and_redo_after_many_regrows_give_the_rebuilt_plant():
         full = interpret_string(ex.lsystem, ex.derivation.tree, ex.derivation.tree.leaves)
         assert_same(ex.skeleton, full)
         assert_same_mesh(ex.mesh, skeleton_to_polydata(full, mesh_sides(len(full))))
+
+
+def test_a_regrow_that_overflows_names_the_module_a_full_turtle_names():
+    from ramure.errors import RamureError
+
+    ex = Explorer("#define L 1\nn: 4\nw: A\np:\n A -> F(L)[+A]F(L)A\n", n=4)
+    ex.mesh  # noqa: B018 - the edit below is re-interpreted in part
+    ex.select(ex.skeleton.leaf_id[-3:].tolist())
+    ex.regrow(seed=1, constants={"L": 1e308})
+    messages = []
+    for draw in (lambda: ex.skeleton, lambda: interpret_string(ex.lsystem, ex.derivation.tree, ex.derivation.tree.leaves)):
+        try:
+            draw()
+        except RamureError as exc:
+            messages.append(str(exc))
+    assert len(messages) == 2 and messages[0] == messages[1] and "F(1e+308)" in messages[0]
