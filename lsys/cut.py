@@ -454,6 +454,15 @@ def collapse_nested(tree: DerivationTree, roots: ArrayLike) -> np.ndarray:
     roots = np.unique(np.asarray(roots, np.int64))
     if roots.size < 2:
         return roots
+    if roots.size <= 256:  # a few roots: walk up from each (a set lookup per ancestor, no pass per level)
+        members, parent = set(roots.tolist()), tree.parent
+        keep = []
+        for r in roots.tolist():
+            p = int(parent[r])
+            while p >= 0 and p not in members:
+                p = int(parent[p])
+            keep.append(p < 0)
+        return roots[np.array(keep, bool)]
     inside = np.zeros(roots.size, bool)
     current = tree.parent[roots]
     while (current >= 0).any():

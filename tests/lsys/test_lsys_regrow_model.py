@@ -63,3 +63,19 @@ def test_a_regrow_that_overflows_names_the_module_a_full_turtle_names():
         except RamureError as exc:
             messages.append(str(exc))
     assert len(messages) == 2 and messages[0] == messages[1] and "F(1e+308)" in messages[0]
+
+
+def test_collapse_nested_keeps_the_highest_roots_of_few_or_many():
+    from ramure.lsys import LSystem
+    from ramure.lsys.cut import collapse_nested
+
+    tree = LSystem.from_file("honda_sympodial").derive(n=10).tree
+    rng = np.random.default_rng(0)
+    alive = np.flatnonzero(tree.alive)
+    for size in (0, 1, 2, 10, 200, 256, 257, 600):
+        roots = rng.choice(alive, size)
+        roots = np.r_[roots, tree.parent[roots[: size // 3]]]
+        roots = np.unique(roots[roots >= 0])
+        above = [set(tree.ancestors(int(r)).tolist()) for r in roots]
+        expected = [int(r) for r, up in zip(roots, above) if not up & set(roots.tolist())]
+        assert collapse_nested(tree, roots).tolist() == expected
