@@ -20,6 +20,10 @@ Python 3.11) and :mod:`~ramure.app.desktop.launch` (the command).
 Qt is imported only inside this package.
 """
 
+from ramure.app.desktop.qt_fix import skip_source_scan as _skip_source_scan
+
+_skip_source_scan()  # before anything else is imported: PySide6 would keep every module's source
+
 
 def main(argv: list[str] | None = None) -> int:
     """Run the desktop explorer (see :mod:`ramure.app.desktop.launch`)."""

@@ -55,3 +55,24 @@ def test_a_plant_drawn_from_the_kernel_cache_loads_no_compiler_and_nothing_an_ed
     loaded = json.loads(runs[1].stdout.strip().splitlines()[-1])  # the first run may have compiled (fresh clone)
     assert loaded.pop("numba")  # the turtle ran its kernel...
     assert not any(loaded.values()), loaded  # ...loaded from the cache: no numba registries, no scipy.linalg
+
+
+_SCAN = """
+import json, linecache, sys
+import ramure.app.desktop.window
+flags = sys.modules["shibokensupport.feature"].pyside_feature_dict
+modules = ("ramure.app.desktop.view", "qtpy.QtCore", "pyvista.core.pointset", "numpy.linalg", "matplotlib.figure")
+print(json.dumps({"cached_files": len(linecache.cache), "flags": [flags.get(name) for name in modules]}))
+"""
+
+
+def test_pyside_does_not_keep_the_source_of_every_module_imported_after_it():
+    # PySide6's import hook read each new module's source through linecache (760 files, about
+    # 50 MB kept in the desktop); qt_fix.skip_source_scan reads the file without keeping it
+    done = subprocess.run([sys.executable, "-c", _SCAN], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout.strip().splitlines()[-1])
+    assert found["cached_files"] < 20  # over 500 without the fix
+    # the same answers as PySide6's own test: modules that mention PySide6 can use __feature__ (0),
+    # the others are ignored by feature switching (-1)
+    assert found["flags"] == [0, 0, -1, -1, -1]
