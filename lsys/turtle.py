@@ -465,7 +465,9 @@ def reinterpret(
     and jumping over the branches in between.  The rest keeps its arrays.
 
     The result's ``extra["reuse"]`` is ``(new, old)``: segments whose tube is
-    unchanged (same geometry, same radii), for :func:`ramure.lsys.geometry.patch_polydata`.
+    unchanged (same geometry, same radii), for :func:`ramure.lsys.geometry.patch_polydata`;
+    ``extra["reuse_of"]`` is ``id(skeleton)``, the skeleton ``old`` indexes (a holder of it can
+    tell that it is the one).
     Falls back to a full interpretation (no ``reuse``) when the strings do not
     allow it (unbalanced brackets, no trace).
     """
@@ -631,7 +633,7 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
             normal,
             parent,
             organs,
-            {"trace": new_trace, "reuse": reuse},
+            {"trace": new_trace, "reuse": reuse, "reuse_of": id(skeleton)},
             polygons,
         ),
     )

@@ -116,6 +116,7 @@ class PlantActors:
         self.large = False
         self.key: Any = None  # what the shown version was drawn from (the model's mesh)
         self.kept: dict | None = None  # the version shown before, its actors hidden
+        self._classes: dict | None = None  # the last skeleton's radius classes and their boxes
         self._spare: list = []  # actors free for the next version's groups
         self.pick_mapper = vtkPolyDataMapper()
         self.pick_actor = vtkActor()  # never added to the renderer: picking only
@@ -161,24 +162,23 @@ class PlantActors:
     def _tube_groups(self, sk: Skeleton) -> list[_Group]:
         radius = np.maximum(np.asarray(sk.base_radius, float), np.asarray(sk.top_radius, float))
         top = float(radius.max(initial=0.0))
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            ratio = top / radius if top > 0 else np.ones(len(radius))
-        # floor(log2(top / r)) from the float's exponent; r = 0 (inf) and nan go to the last class
-        level = np.where(np.isfinite(ratio), np.frexp(ratio)[1] - 1, MAX_CLASSES - 1)
-        level = np.clip(level, 0, MAX_CLASSES - 1).astype(np.int8)
+        last = self._classes
+        reuse = sk.extra.get("reuse")
+        if last is not None and reuse is not None and sk.extra.get("reuse_of") == id(last["skeleton"]) and top == last["top"]:
+            level, lo, hi = _classes_after_edit(last, sk, radius, top, reuse)
+        else:
+            level = _levels(radius, top)
+            lo, hi = _class_boxes(sk, level, np.arange(MAX_CLASSES))
+        self._classes = {"skeleton": sk, "top": top, "level": level, "lo": lo, "hi": hi}
         order = np.argsort(level, kind="stable")  # int8: a radix sort, ascending segment ids per class
         starts = np.searchsorted(level[order], np.arange(MAX_CLASSES + 1))
         present = np.flatnonzero(np.diff(starts))
-        start = np.take(np.asarray(sk.start, float), order, axis=0)
-        end = np.take(np.asarray(sk.end, float), order, axis=0)
-        lo = np.minimum.reduceat(np.minimum(start, end), starts[present])
-        hi = np.maximum.reduceat(np.maximum(start, end), starts[present])
         biggest = np.maximum.reduceat(np.take(radius, order), starts[present])
         groups = []
         for j, k in enumerate(present):
             segs = order[starts[k] : starts[k + 1]]
             r = float(biggest[j])
-            groups.append(_Group(len(segs) * self.sides, r, _box_corners(lo[j] - r, hi[j] + r), segments=segs))
+            groups.append(_Group(len(segs) * self.sides, r, _box_corners(lo[k] - r, hi[k] + r), segments=segs))
         return groups
 
     def _keep(self, key: Any) -> None:
@@ -376,6 +376,71 @@ class PlantActors:
         g.keep = [conn, offsets]
         poly.SetPoints(pv.vtk_points(np.ascontiguousarray(pts), deep=False))
         poly.SetPolys(cells)
+
+
+def _levels(radius: np.ndarray, top: float) -> np.ndarray:
+    """Each segment's radius class: floor(log2(top / r)), at most MAX_CLASSES - 1 (int8)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        ratio = top / radius if top > 0 else np.ones(len(radius))
+    # floor(log2(top / r)) from the float's exponent; r = 0 (inf) and nan go to the last class
+    level = np.where(np.isfinite(ratio), np.frexp(ratio)[1] - 1, MAX_CLASSES - 1)
+    return np.clip(level, 0, MAX_CLASSES - 1).astype(np.int8)
+
+
+def _class_boxes(sk: Skeleton, level: np.ndarray, classes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(MAX_CLASSES, 3) lowest and highest segment end per class (inf / -inf for an empty one),
+    computed for ``classes`` only (the other rows are inf / -inf)."""
+    lo, hi = np.full((MAX_CLASSES, 3), np.inf), np.full((MAX_CLASSES, 3), -np.inf)
+    if not len(classes) or not len(level):
+        return lo, hi
+    if len(classes) < MAX_CLASSES:
+        members = np.flatnonzero(np.isin(level, classes))
+        level = level[members]
+    else:
+        members = np.arange(len(level))
+    order = members[np.argsort(level, kind="stable")]
+    sorted_level = np.sort(level, kind="stable")
+    starts = np.searchsorted(sorted_level, np.arange(MAX_CLASSES + 1))
+    present = np.flatnonzero(np.diff(starts))
+    start = np.take(np.asarray(sk.start, float), order, axis=0)
+    end = np.take(np.asarray(sk.end, float), order, axis=0)
+    lo[present] = np.minimum.reduceat(np.minimum(start, end), starts[present])
+    hi[present] = np.maximum.reduceat(np.maximum(start, end), starts[present])
+    return lo, hi
+
+
+def _classes_after_edit(last: dict, sk: Skeleton, radius: np.ndarray, top: float, reuse: tuple) -> tuple:
+    """Levels and class boxes of ``sk``, patched from ``last`` (the skeleton it was edited from,
+    with the same thickest radius): reused segments keep their class; a class box grows by the
+    new segments and is computed again only if a removed segment touched it."""
+    new, old = reuse
+    before = last["skeleton"]
+    level = np.empty(len(radius), np.int8)
+    level[new] = last["level"][old]
+    added = np.ones(len(radius), bool)
+    added[new] = False
+    added = np.flatnonzero(added)
+    level[added] = _levels(radius[added], top)
+    gone = np.ones(len(before), bool)
+    gone[old] = False
+    gone = np.flatnonzero(gone)
+    lo, hi = last["lo"].copy(), last["hi"].copy()
+    g_lo, g_hi = _class_boxes(_Ends(before, gone), last["level"][gone], np.arange(MAX_CLASSES))
+    touched = ((g_lo <= lo) | (g_hi >= hi)).any(axis=1)  # a removed end on the box: recompute it
+    a_lo, a_hi = _class_boxes(_Ends(sk, added), level[added], np.arange(MAX_CLASSES))
+    lo, hi = np.minimum(lo, a_lo), np.maximum(hi, a_hi)
+    redo = np.flatnonzero(touched)
+    if redo.size:
+        r_lo, r_hi = _class_boxes(sk, level, redo)
+        lo[redo], hi[redo] = r_lo[redo], r_hi[redo]
+    return level, lo, hi
+
+
+class _Ends:
+    """The ``start`` and ``end`` rows ``rows`` of a skeleton (what :func:`_class_boxes` reads)."""
+
+    def __init__(self, sk: Skeleton, rows: np.ndarray) -> None:
+        self.start, self.end = np.asarray(sk.start)[rows], np.asarray(sk.end)[rows]
 
 
 def _bounds(points: np.ndarray) -> list[float]:
