@@ -267,7 +267,7 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
     poly_leaf = polygons.leaf_id[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
     i32 = np.int32  # ids below 2^31 (the tree's node limit): half the bytes of int64
 
-    def cells(per_segment, dtype, *rest):  # each segment's value on its `sides` quads, then organs, polygons
+    def per_cell(per_segment, dtype, *rest):  # each segment's value on its `sides` quads, then organs, polygons
         out = np.empty(nq + nt, dtype)
         if np.ndim(per_segment):
             quads = out[:nq].reshape(nseg, sides)
@@ -279,15 +279,15 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
             out[nq:] = np.concatenate(rest)
         return out
 
-    mesh.cell_data["leaf_id"] = cells(skeleton.leaf_id, i32, organs.leaf_id[organ_idx], poly_leaf)
-    mesh.cell_data["segment"] = cells(np.arange(nseg), i32, np.full(nt, -1))
-    mesh.cell_data["organ"] = cells(-1, i32, organ_idx, np.full(npoly, -1))
-    mesh.cell_data["polygon"] = cells(-1, i32, np.full(no, -1), poly_idx)
-    mesh.cell_data["kind"] = cells(KIND_BRANCH, np.int8, organ_kind, np.full(npoly, KIND_LEAF))
-    mesh.cell_data["order"] = cells(skeleton.order, i32, np.full(nt, -1))
+    mesh.cell_data["leaf_id"] = per_cell(skeleton.leaf_id, i32, organs.leaf_id[organ_idx], poly_leaf)
+    mesh.cell_data["segment"] = per_cell(np.arange(nseg), i32, np.full(nt, -1))
+    mesh.cell_data["organ"] = per_cell(-1, i32, organ_idx, np.full(npoly, -1))
+    mesh.cell_data["polygon"] = per_cell(-1, i32, np.full(no, -1), poly_idx)
+    mesh.cell_data["kind"] = per_cell(KIND_BRANCH, np.int8, organ_kind, np.full(npoly, KIND_LEAF))
+    mesh.cell_data["order"] = per_cell(skeleton.order, i32, np.full(nt, -1))
     organ_color = organs.color if organs.color is not None else np.zeros(len(organs), np.int32)
     poly_color = polygons.color[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
-    mesh.cell_data["material"] = cells(skeleton.color, i32, organ_color[organ_idx], poly_color)
+    mesh.cell_data["material"] = per_cell(skeleton.color, i32, organ_color[organ_idx], poly_color)
     materials = skeleton.extra.get("materials")
     if materials:
         from .materials import table_arrays

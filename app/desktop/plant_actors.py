@@ -387,7 +387,7 @@ def _levels(radius: np.ndarray, top: float) -> np.ndarray:
     return np.clip(level, 0, MAX_CLASSES - 1).astype(np.int8)
 
 
-def _class_boxes(sk: Skeleton, level: np.ndarray, classes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _class_boxes(sk: Skeleton | _Ends, level: np.ndarray, classes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(MAX_CLASSES, 3) lowest and highest segment end per class (inf / -inf for an empty one),
     computed for ``classes`` only (the other rows are inf / -inf)."""
     lo, hi = np.full((MAX_CLASSES, 3), np.inf), np.full((MAX_CLASSES, 3), -np.inf)
