@@ -31,20 +31,19 @@ from typing import Any
 __all__ = ["njit", "on_first_compile"]
 
 
-def njit(function: Callable[..., Any] | None = None, **options: Any) -> Any:
-    """``numba.njit`` (same options), with the light cache loading described above when
-    ``cache=True``.  Usable bare (``@njit``) or with options (``@njit(cache=True)``)."""
+def njit(*args: Any, **options: Any) -> Any:
+    """``numba.njit`` (same arguments), with the light cache loading described above when
+    ``cache=True``.  Usable bare (``@njit``), with options (``@njit(cache=True)``) or with
+    signatures (compiled, or loaded from the cache, when decorating, as numba does)."""
     import numba
 
-    def decorate(f: Callable[..., Any]) -> Any:
-        dispatcher = numba.njit(**options)(f)
-        _load_lightly(dispatcher)
-        return dispatcher
-
-    return decorate if function is None else decorate(function)
+    if len(args) == 1 and callable(args[0]) and not options:  # bare @njit
+        return _load_lightly(numba.njit(args[0]))
+    decorator = numba.njit(*args, **options)
+    return lambda f: _load_lightly(decorator(f))
 
 
-def _load_lightly(dispatcher: Any) -> None:
+def _load_lightly(dispatcher: Any) -> Any:
     """Replace the dispatcher's cache loader (numba's ``Cache.load_overload``, which refreshes
     the whole compiler first) by one that initialises only numba's runtime.  Left as it is when
     numba's cache does not have the expected shape (another numba version)."""
@@ -53,6 +52,7 @@ def _load_lightly(dispatcher: Any) -> None:
     cache = getattr(dispatcher, "_cache", None)
     if isinstance(cache, Cache) and hasattr(cache, "_load_overload") and hasattr(cache, "_guard_against_spurious_io_errors"):
         cache.load_overload = types.MethodType(_load_overload, cache)  # type: ignore[method-assign]  # this instance only
+    return dispatcher
 
 
 def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:

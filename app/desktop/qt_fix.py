@@ -65,7 +65,7 @@ def skip_source_scan() -> bool:
     feature = sys.modules.get("shibokensupport.feature")
     if feature is None or not callable(getattr(feature, "_mod_uses_pyside", None)):
         return False
-    feature._mod_uses_pyside = _mentions_pyside
+    feature._mod_uses_pyside = _mentions_pyside  # type: ignore[attr-defined]  # PySide6's module, replaced here
     return True
 
 
