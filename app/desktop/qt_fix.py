@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ctypes
 import sys
+from collections.abc import Callable
 
 RESERVE = 1 << 40
 _PROTECTED = False
@@ -52,30 +53,38 @@ def skip_source_scan() -> bool:
     Importing PySide6 (``shiboken6``) replaces ``__import__``: each module imported afterwards is
     asked whether it uses PySide6 (for ``from __feature__ import snake_case``) by
     ``inspect.getsource(module)``, and ``linecache`` then keeps that source, split into lines,
-    for the life of the process: pyvista, VTK's wrappers, matplotlib, numba... 760 files and
+    for the life of the process: pyvista, VTK's wrappers, matplotlib, numba... 500-760 files and
     about 50 MB of the desktop's resident memory (Honda n = 17: 733 -> 679 MB at the first
-    frame).  The same test ("PySide6" in the module's source file) is made here by reading the
-    file once, without caching it; a module without a ``.py`` file does not use PySide6, as in
-    PySide6's own test.  Called when the desktop package is imported; returns True if applied
-    (False without PySide6, or a PySide6 whose feature module has another shape)."""
+    frame).  The same test ("PySide6" in the module's source) is made here by reading the
+    module's ``.py`` file once, without caching it; a module without one (an extension, a
+    zipped module) gets PySide6's own test.  Called when the desktop package is imported;
+    returns True if applied (False without PySide6, or a PySide6 whose feature module has
+    another shape)."""
+    global _PYSIDE_TEST
     try:
         import PySide6  # noqa: F401  (installs the import hook and its feature module, not Qt's libraries)
     except ImportError:
         return False
     feature = sys.modules.get("shibokensupport.feature")
-    if feature is None or not callable(getattr(feature, "_mod_uses_pyside", None)):
+    test = getattr(feature, "_mod_uses_pyside", None)
+    if feature is None or not callable(test):
         return False
-    feature._mod_uses_pyside = _mentions_pyside  # type: ignore[attr-defined]  # PySide6's module, replaced here
+    if test is not _mentions_pyside:
+        _PYSIDE_TEST = test
+        feature._mod_uses_pyside = _mentions_pyside  # type: ignore[attr-defined]  # PySide6's module, replaced here
     return True
 
 
+_PYSIDE_TEST: Callable[[object], bool] | None = None  # PySide6's own test, for modules without a .py file
+
+
 def _mentions_pyside(module: object) -> bool:
-    """Whether ``module``'s source file contains "PySide6" (read, not kept)."""
+    """Whether ``module``'s source contains "PySide6" (its file read, not kept)."""
     path = getattr(module, "__file__", None)
-    if not isinstance(path, str) or not path.endswith(".py"):
-        return False
-    try:
-        with open(path, "rb") as source:
-            return b"PySide6" in source.read()
-    except OSError:
-        return False
+    if isinstance(path, str) and path.endswith(".py"):
+        try:
+            with open(path, "rb") as source:
+                return b"PySide6" in source.read()
+        except OSError:
+            pass
+    return bool(_PYSIDE_TEST(module)) if _PYSIDE_TEST is not None else False
