@@ -84,22 +84,19 @@ def test_processes_compiling_at_the_same_time_leave_a_usable_cache(tmp_path):
     assert (after["misses"], after["hits"], after["match"]) == (0, 1, EXPECTED_MATCH)
 
 
-def test_every_kernel_loads_its_cache_lightly_and_writes_it_in_our_own_folders():
-    from ramure.gmap import (
-        _components_kernel,
-        _defects_kernel,
-        _dla_kernel,
-        _embed_kernel,
-        _validity_kernel,
-        _walk_kernel,
-    )
-    from ramure.jit import _load_overload
-    from ramure.lsys import _context_kernel, _cut_kernel, _derive_kernel, _polygon_kernel, _tree_kernel, _turtle_kernel
+def _kernel_modules():
+    import importlib
 
-    modules = [_context_kernel, _cut_kernel, _derive_kernel, _polygon_kernel, _tree_kernel, _turtle_kernel]
-    modules += [_components_kernel, _defects_kernel, _dla_kernel, _embed_kernel, _validity_kernel, _walk_kernel]
+    for package in ("lsys", "gmap"):
+        for path in sorted((ROOT / package).glob("_*kernel.py")):
+            yield importlib.import_module(f"ramure.{package}.{path.stem}")
+
+
+def test_every_kernel_loads_its_cache_lightly_and_writes_it_in_our_own_folders():
+    from ramure.jit import _load_overload
+
     kernels = 0
-    for module in modules:
+    for module in _kernel_modules():
         folder = pathlib.Path(module.__file__).parent
         for name, value in vars(module).items():
             cache = getattr(value, "_cache", None)
@@ -113,6 +110,17 @@ def test_every_kernel_loads_its_cache_lightly_and_writes_it_in_our_own_folders()
             else:  # next to the module (its __pycache__), or numba's own per-user folder when that is read-only
                 assert path == folder / "__pycache__" or "numba" in path.parts, path
     assert kernels >= 40
+
+
+def test_no_module_uses_numbas_njit_directly():
+    # a kernel decorated with numba.njit would load its cache through numba's whole compiler
+    found = []
+    for package in ("lsys", "gmap", "metrics", "studies", "app", "ramure"):
+        for path in (ROOT / package).rglob("*.py"):
+            text = path.read_text(encoding="utf-8")
+            if path != ROOT / "ramure" / "jit.py" and ("from numba import" in text or "numba.njit" in text):
+                found.append(str(path.relative_to(ROOT)))
+    assert found == []
 
 
 def test_git_ignores_the_cache_files():
