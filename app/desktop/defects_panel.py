@@ -132,7 +132,7 @@ class DefectsPanel(QWidget):
         """Show the selected fruit with its recorded defects (nothing selected: say so)."""
         from ramure.app.fruit_defects import damaged_fruit
 
-        if not self.isVisible():  # hidden behind another tab: shown when raised
+        if not self.isVisible() or self.visibleRegion().isEmpty():  # hidden, or behind another tab: shown when raised
             return None
 
         def run(ex):
@@ -184,7 +184,7 @@ class DefectsPanel(QWidget):
 
 
 def _interactor(parent):
-    from pyvistaqt import QtInteractor
+    from ramure.app.desktop.native_view import make_plotter as QtInteractor  # native window on X11
 
     plotter = QtInteractor(parent)
     plotter.set_background("white")

@@ -605,7 +605,7 @@ def _count_box(name, low, high, value):
 
 
 def _interactor(parent):
-    from pyvistaqt import QtInteractor
+    from ramure.app.desktop.native_view import make_plotter as QtInteractor  # native window on X11
 
     from ramure.app.desktop import scene
 

@@ -1,4 +1,11 @@
-"""The 3D view: the plant in a pyvistaqt ``QtInteractor``, click and rubber-band picking.
+"""The 3D view: the plant in a pyvista plotter widget, click and rubber-band picking.
+
+The plotter is a :class:`~ramure.app.desktop.native_view.NativeInteractor` on X11: VTK
+draws and swaps each frame straight into the widget's own X window, without the
+QOpenGLWidget's copies and Qt's OpenGL composition of pyvistaqt's ``QtInteractor``
+(about 10 ms of CPU less per frame on llvmpipe, 40 ms less for the polished frame, whose
+1.5-pixel hairlines are then the driver's wide lines; see that module).  Elsewhere
+(Wayland, Qt's offscreen platform, or ``RAMURE_GL_WIDGET=1``) it is the ``QtInteractor``.
 
 Mouse:
 
@@ -42,6 +49,7 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, QTimer, Si
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
+from ramure.app.desktop.native_view import NativeInteractor, native_windows
 from ramure.app.desktop.plant_actors import PlantActors
 from ramure.app.desktop.state import FRUIT_SELECTED, points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
@@ -151,16 +159,21 @@ def _collapse_cells(mesh, points, hidden):
 
 
 class PlantView(QWidget):
-    """The plant, its selection in red, the selection's OBB as a red wireframe."""
+    """The plant, its selection in red, the selection's OBB as a red wireframe.
+
+    ``native``: VTK in a native window (True), pyvistaqt's QOpenGLWidget (False), or as
+    :func:`~ramure.app.desktop.native_view.native_windows` says (None, the default).
+    """
 
     cell_clicked = Signal(int, str)  # cell id (-1: nothing under the cursor), mode
     leaf_clicked = Signal(int, str)  # a volumetric fruit's history leaf, mode
     rectangle_selected = Signal(object, str)  # (x0, y0, x1, y1) display coords, mode
     escape = Signal()
 
-    def __init__(self, parent: QWidget | None = None) -> None:
+    def __init__(self, parent: QWidget | None = None, native: bool | None = None) -> None:
         super().__init__(parent)
-        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
+        self.native = native_windows() if native is None else bool(native)
+        self.plotter = NativeInteractor(self) if self.native else QtInteractor(self, auto_update=False, multi_samples=0)
         scene.apply_look(self.plotter)  # light kit, gradient, FXAA, turntable orbit (Z up)
         if self.plotter.iren is not None:
             self.plotter.iren.clear_key_event_callbacks()
@@ -357,15 +370,17 @@ class PlantView(QWidget):
     def redraw(self, now: bool = False) -> None:
         """Schedule a repaint (``now``: paint before returning, e.g. for a benchmark or screenshot).
 
-        Qt's ``repaint`` now and then returns without painting the ``QOpenGLWidget``; the
-        renderer's frame count tells, and the frame is then rendered directly."""
+        The native view's frame is on the screen when ``redraw(now=True)`` returns.  Qt's
+        ``repaint`` now and then returns without painting the ``QOpenGLWidget``; the
+        renderer's frame count tells, and the frame is then rendered directly (Qt composes
+        the QOpenGLWidget's frame into the window later, in the event loop)."""
         if not now:
             self.plotter.update()
             return
         before = self.frames
         self.plotter.repaint()
         if self.frames == before and self.plotter.ren_win is not None:
-            self.plotter.ren_win.Render()
+            self.plotter.render()
 
     def _frame_drawn(self, *_args) -> None:
         self.frames += 1
@@ -553,6 +568,12 @@ class PlantView(QWidget):
         """The 3D view as a QImage (what is on screen, polished)."""
         self.polish()
         self.redraw(now=True)
+        return self.frame_image()
+
+    def frame_image(self) -> QImage:
+        """The last frame drawn, in whatever look (:meth:`grab_image` polishes first)."""
+        if isinstance(self.plotter, NativeInteractor):
+            return self.plotter.grab_frame()
         return self.plotter.grabFramebuffer()
 
     def close(self) -> bool:

@@ -640,7 +640,9 @@ class MainWindow(QMainWindow):
         """The whole window as a QImage, with the 3D view freshly painted (polished)."""
         self.view.polish()
         self.view.redraw(now=True)
-        return self.grab().toImage()
+        from ramure.app.desktop.native_view import grab_with_frames  # VTK's native windows painted in
+
+        return grab_with_frames(self)
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
         if not self.confirm_discard():

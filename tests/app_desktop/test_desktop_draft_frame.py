@@ -21,7 +21,7 @@ def image_array(qimage):
 def drawn_now(view):
     """The frame as drawn now, in whatever look (``grab_image`` would polish it first)."""
     view.redraw(now=True)
-    return image_array(view.plotter.grabFramebuffer())
+    return image_array(view.frame_image())
 
 
 def changed(a, b, level=40):
