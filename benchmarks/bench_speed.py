@@ -156,11 +156,13 @@ def bench_context_20000_siblings():
     )
 
 
-def _plant_view(size=(1000, 800)):
+def _plant_view(size=(1000, 800), native=None):
     """The desktop's 3D view (:class:`~ramure.app.desktop.view.PlantView`: its look, plant actors
     with level of detail, hairlines, ground), shown at ``size`` and painted once (an open window).
 
-    The benchmarks draw through it, so they measure what the desktop user gets.
+    The benchmarks draw through it, so they measure what the desktop user gets.  ``native``:
+    VTK in a native window (:mod:`ramure.app.desktop.native_view`, the default on X11) or
+    pyvistaqt's QOpenGLWidget (False; None: as the desktop chooses).
     """
     from ramure.app.desktop.launch import make_application
     from ramure.app.desktop.view import PlantView
@@ -168,7 +170,7 @@ def _plant_view(size=(1000, 800)):
     from PySide6.QtTest import QTest
 
     app = make_application()
-    view = PlantView()
+    view = PlantView(native=native)
     view.resize(*size)
     view.show()
     QTest.qWaitForWindowExposed(view, 10_000)  # a view not yet on screen skips its paints
@@ -180,11 +182,31 @@ def _plant_view(size=(1000, 800)):
 
 def _paint(view):
     """Paint ``view`` now (``redraw(now=True)`` renders even when Qt skips the repaint) and wait
-    until the (software) GL has finished the frame."""
+    until the frame is on the screen.
+
+    The native view renders and swaps the frame into its X window within ``redraw(now=True)``
+    (synchronously); ``WaitForCompletion`` then waits for the (software) GL to finish.  The
+    QOpenGLWidget view's frame reaches the screen only when Qt has composed the window
+    afterwards, in the event loop: its ``frameSwapped`` signal is waited for (at most 1 s).
+    """
+    from PySide6.QtWidgets import QApplication
+
+    swapped = []
+
+    def done():
+        swapped.append(True)
+
+    if not view.native:
+        view.plotter.frameSwapped.connect(done)
     view.redraw(now=True)
     window = view.plotter.ren_win
     window.MakeCurrent()
     window.WaitForCompletion()
+    if not view.native:
+        deadline = time.perf_counter() + 1.0
+        while not swapped and time.perf_counter() < deadline:
+            QApplication.processEvents()
+        view.plotter.frameSwapped.disconnect(done)
 
 
 def _show(view, snap, reset_camera=None):
@@ -195,7 +217,7 @@ def _show(view, snap, reset_camera=None):
     _paint(view)
 
 
-def bench_grammar_to_pixels_honda_n17():
+def bench_grammar_to_pixels_honda_n17(native=None):
     """Derive + turtle + mesh + first frame in the desktop's 3D view, Honda n=17: <= 1.0 s.
 
     The view (:func:`_plant_view`) is open and has painted once; ``first_frame`` is
@@ -205,7 +227,8 @@ def bench_grammar_to_pixels_honda_n17():
     total with it (the pause itself not counted).
 
     The mesh is what the explorer shows (:func:`ramure.app.model.mesh_sides`: 3-sided
-    tubes at 131k segments); ``sides8_*`` is the same with 8-sided tubes.
+    tubes at 131k segments); ``sides8_*`` is the same with 8-sided tubes.  ``native``: the
+    view's window (see :func:`_plant_view`).
     """
     from types import SimpleNamespace
 
@@ -213,13 +236,13 @@ def bench_grammar_to_pixels_honda_n17():
     from ramure.lsys.geometry import skeleton_to_polydata
 
     ls = LSystem.from_file("honda_sympodial")
-    app, warm = _plant_view()
+    app, warm = _plant_view(native=native)
     small = ls.derive(n=4).skeleton()  # numba kernels and shaders loaded
     _show(warm, SimpleNamespace(mesh=skeleton_to_polydata(small), skeleton=small, selection=()), True)
     warm.close()
 
     def run(sides=None):
-        _, view = _plant_view()  # the window is open, as in the desktop: its first paint is not counted
+        _, view = _plant_view(native=native)  # the window is open, as in the desktop: its first paint is not counted
         t0 = time.perf_counter()
         d = ls.derive(n=17)
         t1 = time.perf_counter()
@@ -245,6 +268,7 @@ def bench_grammar_to_pixels_honda_n17():
     return _plain(
         {
             "seconds": round(total, 3),
+            "window": "native" if warm.native else "QOpenGLWidget",
             "derive": round(parts[0], 3),
             "turtle": round(parts[1], 3),
             "mesh": round(parts[2], 3),
@@ -263,7 +287,7 @@ def bench_grammar_to_pixels_honda_n17():
     )
 
 
-def bench_regrow_and_undo_honda_n17():
+def bench_regrow_and_undo_honda_n17(native=None):
     """Regrow 10 leaves on Honda n=17 to the redrawn frame (<= 100 ms); undo (<= 50 ms).
 
     Drawn as the desktop draws (:func:`_plant_view`, 1000x800): ``regen_seconds`` is the
@@ -276,14 +300,17 @@ def bench_regrow_and_undo_honda_n17():
     (the wait itself is not counted: it is idle time in which further edits merge).
     ``still_frame_seconds``: a polished repaint with nothing changed; ``still_draft_*`` the
     same in the draft look.  CPU seconds (``*_cpu_seconds``) count this process's threads,
-    llvmpipe's included.
+    llvmpipe's included.  "The frame" is on the screen (see :func:`_paint`): the native view
+    (``window``: ``native``, the desktop's default on X11) swaps it within the paint; the
+    QOpenGLWidget view (``native=False``) after Qt has composed the window.
     """
     from ramure.app.desktop import state
     from ramure.app.desktop.view import POLISH_MS
     from ramure.app.model import Explorer
 
     ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
-    app, view = _plant_view()
+    app, view = _plant_view(native=native)
+    kind = "native" if view.native else "QOpenGLWidget"
     snap = state.take_snapshot(ex)
     _show(view, snap, True)
     view.polish()
@@ -301,10 +328,10 @@ def bench_regrow_and_undo_honda_n17():
         snap = state.take_snapshot(ex, snap)
         t1, c1 = time.perf_counter(), time.process_time()
         view.show_plant(snap, state.cell_colors(snap.mesh, snap.selection, base=state.base_colors(snap.mesh)))
+        assert view.drafting or not view.plant.large
         t2 = time.perf_counter()
         _paint(view)
         t3, c3 = time.perf_counter(), time.process_time()
-        assert view.drafting or not view.plant.large
         view.polish()  # what the polish timer does once the user pauses
         _paint(view)
         t4, c4 = time.perf_counter(), time.process_time()
@@ -327,6 +354,7 @@ def bench_regrow_and_undo_honda_n17():
         redraw()
     view.close()
     out = {
+        "window": kind,
         "still_frame_seconds": round(still, 4),
         "still_frame_cpu_seconds": round(still_cpu, 4),
         "still_draft_seconds": round(draft, 4),
