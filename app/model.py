@@ -290,7 +290,9 @@ class Explorer:
 
     def segment_midpoints(self) -> np.ndarray:
         sk = self.skeleton
-        return (sk.start + sk.end) / 2.0
+        mid = np.add(sk.start, sk.end)
+        mid *= 0.5  # the same bits as / 2.0 (a power of two), one array fewer
+        return mid
 
     def leaves_where(
         self, min_order: int | None = None, min_height: float | None = None, max_height: float | None = None

@@ -322,8 +322,9 @@ def patch_polydata(old_mesh: pv.PolyData | None, skeleton: Skeleton, sides: int 
         pts[new[a] : new[a] + b - a] = old_tubes[old[a] : old[a] + b - a]
     todo = np.ones(len(skeleton), bool)
     todo[new] = False
+    todo = np.flatnonzero(todo)  # the few new tubes: gathered by index, not by a mask over all
     sk = skeleton
-    if todo.any():
+    if todo.size:
         fresh = (sk.start[todo], sk.end[todo], sk.normal[todo], sk.base_radius[todo], sk.top_radius[todo])
         pts[todo] = tube_points(*fresh, sides, pts.dtype)
     return polydata_from_parts(skeleton, pts.reshape(-1, 3), sides, organ_resolution)
