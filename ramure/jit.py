@@ -24,11 +24,12 @@ touched.
 
 from __future__ import annotations
 
+import pathlib
 import types
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["njit", "on_first_compile"]
+__all__ = ["initialize_runtime", "njit", "on_first_compile"]
 
 
 def njit(*args: Any, **options: Any) -> Any:
@@ -59,13 +60,98 @@ def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:
     """Cached machine code for ``sig``, or None (then numba compiles, refreshing its compiler).
 
     The runtime (NRT) must be up: the cached code calls its allocation and reference
-    counting, which ``rtsys.initialize`` compiles and registers with the JIT linker."""
-    from numba.core.runtime import rtsys
-
-    rtsys.initialize(target_context)
+    counting (:func:`initialize_runtime`)."""
+    initialize_runtime(target_context)
     with cache._guard_against_spurious_io_errors():
         return cache._load_overload(sig, target_context)
     return None  # the guard swallowed an I/O error: numba then compiles
+
+
+def initialize_runtime(target_context: Any) -> None:
+    """numba's ``rtsys.initialize``, with its runtime module loaded as cached machine code.
+
+    Every process that runs a compiled kernel needs numba's runtime: C helpers registered with
+    the JIT linker, and a small LLVM module (atomic reference counts) that numba compiles anew
+    in each process, through LLVM's optimiser and code generator (about 28 MB of
+    ``libllvmlite`` pages touched, 0.05 s).  Here that module is compiled once and its machine
+    code kept next to the kernels' caches (the folder numba picks for this file: its
+    ``__pycache__``, numba's per-user folder, or ``NUMBA_CACHE_DIR``), in a file named by
+    numba's and llvmlite's versions and the CPU, as numba's own cache files are; later
+    processes load it (about 9 MB).  Any failure falls back to numba's own initialisation."""
+    from numba.core.runtime import rtsys
+
+    if rtsys._init:
+        return
+    try:
+        _runtime_from_cache(rtsys, target_context)
+    except Exception:  # another numba's internals, a cache that does not load: numba's own way
+        rtsys.initialize(target_context)
+
+
+def _runtime_anchor() -> None:
+    """Names this file to numba's cache locator (where the runtime's machine code is kept)."""
+
+
+def _runtime_file() -> pathlib.Path:
+    import hashlib
+    import sys
+
+    import llvmlite
+    import llvmlite.binding as ll
+    import numba
+    from numba.core import caching, config
+
+    key = repr(
+        (
+            numba.__version__,
+            llvmlite.__version__,
+            sys.version_info[:2],
+            ll.get_process_triple(),
+            ll.get_host_cpu_name(),
+            ll.get_host_cpu_features().flatten(),
+            config.CPU_NAME,
+            config.CPU_FEATURES,
+            config.OPT,
+        )
+    )
+    folder = caching.FunctionCache(_runtime_anchor).cache_path
+    return pathlib.Path(folder) / f"numba_runtime-{hashlib.sha256(key.encode()).hexdigest()[:20]}.bin"
+
+
+def _runtime_from_cache(rtsys: Any, target_context: Any) -> None:
+    """What ``rtsys.initialize`` does, with the runtime module's machine code read from
+    :func:`_runtime_file` (or compiled with object caching on, and written there)."""
+    import pickle
+
+    import llvmlite.binding as ll
+    from numba.core import config
+    from numba.core.compiler_lock import global_compiler_lock
+    from numba.core.runtime import _nrt_python, nrtdynmod
+
+    from ramure.errors import RamureError
+    from ramure.io import write_bytes
+
+    with global_compiler_lock:
+        if config.NRT_STATS:
+            _nrt_python.memsys_enable_stats()
+        for name, address in _nrt_python.c_helpers.items():
+            ll.add_symbol(name if name.startswith("_") else "NRT_" + name, address)
+        path = _runtime_file()
+        codegen = target_context.codegen()
+        try:
+            library = codegen.unserialize_library(pickle.loads(path.read_bytes()))
+        except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):
+            ir_module, library = nrtdynmod.create_nrt_module(target_context)
+            library.enable_object_caching()
+            library.add_ir_module(ir_module)
+            library.finalize()
+            try:
+                write_bytes(path, pickle.dumps(library.serialize_using_object_code()))
+            except RamureError:
+                pass  # a read-only folder: compiled again next time, as numba would
+        library.get_pointer_to_function("nrt_unresolved_abort")  # linked now, not in a kernel
+        rtsys._library = library
+        rtsys._init = True
 
 
 def on_first_compile(callback: Callable[[str], None]) -> None:

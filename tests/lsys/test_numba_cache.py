@@ -20,6 +20,13 @@ import numpy as np
 from ramure.jit import on_first_compile
 compiled = []
 on_first_compile(compiled.append)
+if "--runtime-from-cache" in sys.argv:  # numba's runtime module must come from its cached machine code
+    from numba.core.runtime import nrtdynmod
+
+    def refuse(*args):
+        raise AssertionError("the runtime module was compiled")
+
+    nrtdynmod.create_nrt_module = refuse
 from ramure.lsys import _turtle_kernel as K
 symbols = np.array([5, 1, 5, 1, 5, 2, 2, 5, 1, 5, 2], np.int8)   # x [ x [ x ] ] x [ x ]
 match = np.empty(len(symbols), np.int32)
@@ -61,10 +68,11 @@ def test_a_second_process_loads_the_kernel_from_the_cache_without_numbas_compile
     assert first["compiled"] == ["fill_bracket_pairs"]  # the "first run" notice fires on a compile
     assert first["registries"]  # compiling needs the whole compiler
     written = [p for p in tmp_path.rglob("*") if p.is_file()]
-    assert {p.suffix for p in written} == {".nbi", ".nbc"}  # index and machine code, no temporary left
-    assert all("fill_bracket_pairs" in p.name for p in written)
+    # index and machine code of the kernel, numba's runtime module (ramure.jit), no temporary left
+    assert {p.suffix for p in written} == {".nbi", ".nbc", ".bin"}
+    assert all("fill_bracket_pairs" in p.name or p.name.startswith("numba_runtime-") for p in written)
 
-    second = _run(tmp_path, "--then-compile")
+    second = _run(tmp_path, "--then-compile", "--runtime-from-cache")
     assert second["match"] == EXPECTED_MATCH
     assert (second["misses"], second["hits"]) == (0, 1)
     assert second["compiled"] == []
@@ -74,13 +82,23 @@ def test_a_second_process_loads_the_kernel_from_the_cache_without_numbas_compile
     assert second["dot"] == 5.0 and second["compiled_after"] == ["<lambda>"]
 
 
+def test_a_runtime_cache_that_does_not_load_is_compiled_again(tmp_path):
+    _run(tmp_path)
+    (runtime,) = tmp_path.rglob("numba_runtime-*.bin")
+    runtime.write_bytes(b"not a pickle")
+    again = _run(tmp_path)
+    assert (again["misses"], again["hits"], again["match"]) == (0, 1, EXPECTED_MATCH)
+    assert runtime.read_bytes() != b"not a pickle"  # written again, whole
+    assert _run(tmp_path, "--runtime-from-cache")["match"] == EXPECTED_MATCH
+
+
 def test_processes_compiling_at_the_same_time_leave_a_usable_cache(tmp_path):
     procs = [_run(tmp_path, wait=False) for _ in range(3)]
     results = [_result(p) for p in procs]
     assert all(r["match"] == EXPECTED_MATCH for r in results)
     assert sum(r["misses"] for r in results) >= 1
     assert not [p for p in tmp_path.rglob("*") if ".tmp." in p.name]  # numba writes a temporary, then renames
-    after = _run(tmp_path)
+    after = _run(tmp_path, "--runtime-from-cache")
     assert (after["misses"], after["hits"], after["match"]) == (0, 1, EXPECTED_MATCH)
 
 
