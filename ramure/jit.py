@@ -109,9 +109,9 @@ def _runtime_file() -> pathlib.Path:
             ll.get_process_triple(),
             ll.get_host_cpu_name(),
             ll.get_host_cpu_features().flatten(),
-            config.CPU_NAME,
-            config.CPU_FEATURES,
-            config.OPT,
+            getattr(config, "CPU_NAME", None),
+            getattr(config, "CPU_FEATURES", None),
+            getattr(config, "OPT", None),
         )
     )
     folder = caching.FunctionCache(_runtime_anchor).cache_path
@@ -126,13 +126,13 @@ def _runtime_from_cache(rtsys: Any, target_context: Any) -> None:
     import llvmlite.binding as ll
     from numba.core import config
     from numba.core.compiler_lock import global_compiler_lock
-    from numba.core.runtime import _nrt_python, nrtdynmod
+    from numba.core.runtime import _nrt_python, nrtdynmod  # type: ignore[attr-defined]  # numba's C extension
 
     from ramure.errors import RamureError
     from ramure.io import write_bytes
 
     with global_compiler_lock:
-        if config.NRT_STATS:
+        if getattr(config, "NRT_STATS", False):
             _nrt_python.memsys_enable_stats()
         for name, address in _nrt_python.c_helpers.items():
             ll.add_symbol(name if name.startswith("_") else "NRT_" + name, address)
