@@ -142,6 +142,10 @@ def test_no_module_uses_numbas_njit_directly():
 
 
 def test_git_ignores_the_cache_files():
-    paths = ["lsys/__pycache__/_turtle_kernel.walk-91.py311.nbi", "gmap/__pycache__/_dla_kernel.grow-14.py311.1.nbc"]
+    paths = [
+        "lsys/__pycache__/_turtle_kernel.walk-91.py311.nbi",
+        "gmap/__pycache__/_dla_kernel.grow-14.py311.1.nbc",
+        "ramure/__pycache__/numba_runtime-0123456789abcdef0123.bin",
+    ]
     done = subprocess.run(["git", "-C", str(ROOT), "check-ignore", *paths], capture_output=True, text=True, timeout=60)
     assert done.stdout.split() == paths, done.stderr
