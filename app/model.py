@@ -42,7 +42,6 @@ if TYPE_CHECKING:
     from ramure.lsys import Derivation
     from ramure.lsys.cut import CutResult
     from ramure.lsys.regen import RegenResult
-    from ramure.lsys.tree import DerivationTree
     from ramure.lsys.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
     from ramure.metrics.qualifiers import QualifierRegions
@@ -259,7 +258,7 @@ class Explorer:
         tree = self.derivation.tree
         known = (ids >= 0) & (ids < tree.size)
         is_leaf = np.zeros(ids.size, bool)
-        is_leaf[known] = _in_string(tree)[ids[known]]
+        is_leaf[known] = tree.in_string(ids[known])  # after an edit: from the tree's kept leaf sums
         if not is_leaf.all():
             raise ValueRefused(not_a_leaf(ids[~is_leaf][0]))
         current = np.asarray(self.selection, np.int64)
@@ -495,19 +494,6 @@ def leaves_in_rectangle(leaf_ids: ArrayLike, screen_xy: ArrayLike, rect: Sequenc
     xy = np.asarray(screen_xy, float)
     inside = (xy[:, 0] >= min(x0, x1)) & (xy[:, 0] <= max(x0, x1)) & (xy[:, 1] >= min(y0, y1)) & (xy[:, 1] <= max(y0, y1))
     return _sorted_unique(np.asarray(leaf_ids)[inside]).tolist()
-
-
-def _in_string(tree: DerivationTree) -> np.ndarray:
-    """Whether each node of ``tree`` is a module of its current string: 1 byte per node, cached
-    per tree state (the tree's leaf spans, 16 bytes per node, are left to the cut that needs them)."""
-
-    def make():
-        mask = np.zeros(tree.size, bool)
-        mask[tree.leaves] = True
-        mask.flags.writeable = False
-        return mask
-
-    return tree.cached("in_string", make)
 
 
 def _sorted_unique(values):
