@@ -40,6 +40,8 @@ if "--then-compile" in sys.argv:  # a function compiled after a light load: numb
     from ramure.jit import njit
     dot = njit(lambda a, b: np.dot(a, b))
     record["dot"] = float(dot(np.arange(3.0), np.arange(3.0)))
+    doubled = njit(lambda n: np.arange(n) * 2.0)  # allocates and returns an array: the runtime's calls
+    record["doubled"] = doubled(4).tolist()
     record["compiled_after"] = compiled
 print(json.dumps(record))
 """
@@ -79,7 +81,8 @@ def test_a_second_process_loads_the_kernel_from_the_cache_without_numbas_compile
     # the cached machine code was loaded without numba's registries (and the scipy.linalg they import)
     assert not second["registries"] and not second["scipy_linalg"]
     # a function compiled afterwards in the same process still gets the full compiler
-    assert second["dot"] == 5.0 and second["compiled_after"] == ["<lambda>"]
+    assert second["dot"] == 5.0 and second["doubled"] == [0.0, 2.0, 4.0, 6.0]
+    assert second["compiled_after"] == ["<lambda>"]
 
 
 def test_a_runtime_cache_that_does_not_load_is_compiled_again(tmp_path):
