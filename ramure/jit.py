@@ -81,7 +81,7 @@ def initialize_runtime(target_context: Any) -> None:
     processes load it (about 9 MB).  Any failure falls back to numba's own initialisation."""
     from numba.core.runtime import rtsys
 
-    if not (hasattr(rtsys, "_init") and hasattr(rtsys, "_library")):  # another numba: its own way
+    if not (hasattr(rtsys, "_init") and hasattr(type(rtsys), "library")):  # another numba: its own way
         rtsys.initialize(target_context)
         return
     if rtsys._init:
