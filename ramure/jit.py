@@ -25,6 +25,8 @@ from cached machine code as well (:func:`initialize_runtime`: about 20 MB less).
 
 from __future__ import annotations
 
+import errno
+import os
 import pathlib
 import types
 from collections.abc import Callable
@@ -52,7 +54,7 @@ def _load_lightly(dispatcher: Any) -> Any:
     from numba.core.caching import Cache
 
     cache = getattr(dispatcher, "_cache", None)
-    if isinstance(cache, Cache) and hasattr(cache, "_load_overload") and hasattr(cache, "_guard_against_spurious_io_errors"):
+    if isinstance(cache, Cache) and hasattr(cache, "_load_overload"):
         cache.load_overload = types.MethodType(_load_overload, cache)  # type: ignore[method-assign]  # this instance only
     return dispatcher
 
@@ -63,9 +65,12 @@ def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:
     The runtime (NRT) must be up: the cached code calls its allocation and reference
     counting (:func:`initialize_runtime`)."""
     initialize_runtime(target_context)
-    with cache._guard_against_spurious_io_errors():
+    try:
         return cache._load_overload(sig, target_context)
-    return None  # the guard swallowed an I/O error: numba then compiles
+    except OSError as exc:  # as numba's own loader: on Windows, another process may hold the file
+        if os.name == "nt" and exc.errno == errno.EACCES:
+            return None  # numba then compiles
+        raise
 
 
 def initialize_runtime(target_context: Any) -> None:
