@@ -58,6 +58,20 @@ def leaf_weight_prefix(depth, leaves):
 
 
 @njit(cache=True, nogil=True)
+def _sum_children(v, start, k, alive, count, weight):
+    """``count[v]`` and ``weight[v]`` from children ``start .. start + k - 1`` that share ``v``'s
+    liveness (all of them when ``v`` is dead)."""
+    c = 0
+    w = np.int64(0)
+    for u in range(start, start + k):
+        if alive[u] or not alive[v]:
+            c += count[u]
+            w += weight[u]
+    count[v] = c
+    weight[v] = 2 * w
+
+
+@njit(cache=True, nogil=True)
 def leaf_sums(child_start, child_count, alive, flag, lo, hi, count, weight):
     """Current-string leaves below nodes ``lo .. hi - 1`` (``count``) and ``sum(2**(depth(leaf) -
     depth(v)))`` over them (``weight``), from their children, in reverse id order (children have
@@ -69,15 +83,7 @@ def leaf_sums(child_start, child_count, alive, flag, lo, hi, count, weight):
             count[v] = flag[v - lo]
             weight[v] = flag[v - lo]
             continue
-        s = child_start[v]
-        c = 0
-        w = np.int64(0)
-        for u in range(s, s + k):
-            if alive[u] or not alive[v]:
-                c += count[u]
-                w += weight[u]
-        count[v] = c
-        weight[v] = 2 * w
+        _sum_children(v, child_start[v], k, alive, count, weight)
 
 
 @njit(cache=True, nogil=True)
@@ -88,12 +94,4 @@ def resum(nodes, child_start, child_count, alive, count, weight):
         k = child_count[v]
         if k == 0:
             continue
-        s = child_start[v]
-        c = 0
-        w = np.int64(0)
-        for u in range(s, s + k):
-            if alive[u] or not alive[v]:
-                c += count[u]
-                w += weight[u]
-        count[v] = c
-        weight[v] = 2 * w
+        _sum_children(v, child_start[v], k, alive, count, weight)
