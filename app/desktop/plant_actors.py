@@ -75,8 +75,13 @@ class _Group:
     keep: list = field(default_factory=list)  # numpy arrays VTK reads without a copy
 
 
+#: Which end (0: lo, 1: hi) of x, y and z each box corner takes, in ``np.meshgrid(..., indexing="ij")`` order.
+_CORNER_ENDS = np.array([[i >> 2 & 1, i >> 1 & 1, i & 1] for i in range(8)])
+
+
 def _box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    return np.array(np.meshgrid(*np.c_[lo, hi], indexing="ij")).reshape(3, -1).T
+    """(8, 3) corners of the box ``lo``-``hi`` (as a meshgrid of its ends, without one)."""
+    return np.c_[lo, hi][np.arange(3), _CORNER_ENDS]
 
 
 def tube_layout(mesh: pv.PolyData, segments: int) -> int:
@@ -117,6 +122,8 @@ class PlantActors:
         self.key: Any = None  # what the shown version was drawn from (the model's mesh)
         self.kept: dict | None = None  # the version shown before, its actors hidden
         self._classes: dict | None = None  # the last skeleton's radius classes and their boxes
+        self.bounds: tuple | None = None  # the model mesh's bounds (VTK's order), known without VTK
+        self.segment_bounds: tuple | None = None  # the bounds of the shown skeleton's segment ends (its hairlines)
         self._spare: list = []  # actors free for the next version's groups
         self.pick_mapper = vtkPolyDataMapper()
         self.pick_actor = vtkActor()  # never added to the renderer: picking only
@@ -124,7 +131,7 @@ class PlantActors:
         self.renderer.AddObserver("StartEvent", self._before_frame)
 
     # -- content -------------------------------------------------------------------
-    _STATE = ("key", "mesh", "groups", "sides", "segment_count", "large")
+    _STATE = ("key", "mesh", "groups", "sides", "segment_count", "large", "_classes", "bounds", "segment_bounds")
 
     def show(self, mesh: pv.PolyData | None, skeleton: Skeleton | None, key: Any = None) -> None:
         """Draw ``mesh`` (cell data ``rgb``; tubes of ``skeleton``'s segments first).
@@ -135,9 +142,11 @@ class PlantActors:
         if key is not None and self.kept is not None and self.kept["key"] is key and mesh is not None:
             self._swap(mesh)
             return
+        last = self._classes
         self._keep(key)
         self.key = key
         self.mesh = mesh
+        self.bounds = self.segment_bounds = None
         if mesh is None or mesh.n_cells == 0:
             self._set_groups([])
             self.pick_mapper.RemoveAllInputs()
@@ -152,17 +161,59 @@ class PlantActors:
             self._set_groups([_Group(mesh.n_cells, np.inf, _box_corners(b[:, 0], b[:, 1]))])
             return
         assert skeleton is not None
-        groups = self._tube_groups(skeleton)
+        groups = self._tube_groups(skeleton, last)
         quads = count * self.sides
+        source = key if hasattr(key, "GetPoints") and key.n_points == mesh.n_points else mesh
+        tube_lo, tube_hi = self._tube_bounds(np.asarray(source.points), skeleton, last)
+        lo, hi = tube_lo, tube_hi
         if mesh.n_cells > quads:
             b = np.reshape(_bounds(np.asarray(mesh.points)[quads * 2 :]), (3, 2))
             groups.append(_Group(mesh.n_cells - quads, np.inf, _box_corners(b[:, 0], b[:, 1])))
+            if source is not mesh:
+                b = np.reshape(_bounds(np.asarray(source.points)[quads * 2 :]), (3, 2))
+            lo, hi = np.minimum(lo, b[:, 0]), np.maximum(hi, b[:, 1])
+        self.bounds = _as_bounds(lo, hi)
         self._set_groups(groups)
 
-    def _tube_groups(self, sk: Skeleton) -> list[_Group]:
+    def _tube_bounds(self, points: np.ndarray, sk: Skeleton, last: dict | None) -> tuple[np.ndarray, np.ndarray]:
+        """Lowest and highest tube point of the mesh whose ``points`` are given: patched from
+        ``last`` (the version ``sk`` was re-interpreted from, drawn with as many sides) as its
+        classes are; computed again when a removed tube touched the old box."""
+        k = 2 * self.sides
+        tubes = points[: len(sk) * k].reshape(-1, k, 3)
+        reuse = sk.extra.get("reuse")
+        lo = hi = None
+        if (
+            last is not None
+            and reuse is not None
+            and sk.extra.get("reuse_of") == id(last["skeleton"])
+            and last.get("sides") == self.sides
+            and last["points"].dtype == points.dtype
+        ):
+            new, old = reuse
+            lo, hi = last["tube_lo"], last["tube_hi"]
+            gone = _others(old, len(last["skeleton"]))
+            if gone.size:
+                g = last["points"][: len(last["skeleton"]) * k].reshape(-1, k, 3)[gone]
+                if (g.min(axis=(0, 1)) <= lo).any() or (g.max(axis=(0, 1)) >= hi).any():
+                    lo = hi = None  # a removed tube was on the box: computed again
+            added = tubes[_others(new, len(sk))]
+            if lo is not None and hi is not None and len(added):
+                lo, hi = np.minimum(lo, added.min(axis=(0, 1))), np.maximum(hi, added.max(axis=(0, 1)))
+        if lo is None or hi is None:
+            import pyvista as pv
+
+            b = np.reshape(pv.vtk_points(np.ascontiguousarray(tubes.reshape(-1, 3)), deep=False).GetBounds(), (3, 2))
+            lo, hi = b[:, 0].copy(), b[:, 1].copy()
+        assert self._classes is not None
+        self._classes.update(sides=self.sides, points=points, tube_lo=lo, tube_hi=hi)
+        return lo, hi
+
+    def _tube_groups(self, sk: Skeleton, last: dict | None) -> list[_Group]:
+        """The radius classes of ``sk`` (patched from ``last``, the classes of the version
+        shown before, when ``sk`` was re-interpreted from it)."""
         radius = np.maximum(np.asarray(sk.base_radius, float), np.asarray(sk.top_radius, float))
         top = float(radius.max(initial=0.0))
-        last = self._classes
         reuse = sk.extra.get("reuse")
         if last is not None and reuse is not None and sk.extra.get("reuse_of") == id(last["skeleton"]) and top == last["top"]:
             level, lo, hi = _classes_after_edit(last, sk, radius, top, reuse)
@@ -170,6 +221,8 @@ class PlantActors:
             level = _levels(radius, top)
             lo, hi = _class_boxes(sk, level, np.arange(MAX_CLASSES))
         self._classes = {"skeleton": sk, "top": top, "level": level, "lo": lo, "hi": hi}
+        if len(sk):  # the segment ends' bounds: the classes' boxes together
+            self.segment_bounds = _as_bounds(lo.min(axis=0), hi.max(axis=0))
         order = np.argsort(level, kind="stable")  # int8: a radix sort, ascending segment ids per class
         starts = np.searchsorted(level[order], np.arange(MAX_CLASSES + 1))
         present = np.flatnonzero(np.diff(starts))
@@ -441,6 +494,18 @@ class _Ends:
 
     def __init__(self, sk: Skeleton, rows: np.ndarray) -> None:
         self.start, self.end = np.asarray(sk.start)[rows], np.asarray(sk.end)[rows]
+
+
+def _others(rows: np.ndarray, count: int) -> np.ndarray:
+    """The indices below ``count`` that are not in ``rows``."""
+    keep = np.ones(count, bool)
+    keep[rows] = False
+    return np.flatnonzero(keep)
+
+
+def _as_bounds(lo: np.ndarray, hi: np.ndarray) -> tuple[float, ...]:
+    """VTK's bounds order (xmin, xmax, ymin, ymax, zmin, zmax) as Python floats."""
+    return tuple(float(v) for v in np.c_[lo, hi].ravel())
 
 
 def _bounds(points: np.ndarray) -> list[float]:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -79,8 +80,19 @@ def nice_step(size: float) -> float:
     return 10.0 * power
 
 
-def fit_camera(plotter: pv.BasePlotter, bounds: Sequence[float], view: str = "front", margin: float = 0.9) -> None:
-    """Look at ``bounds`` from preset ``view`` (Z up) so the whole box fills ``margin`` of the view."""
+def fit_camera(
+    plotter: pv.BasePlotter,
+    bounds: Sequence[float],
+    view: str = "front",
+    margin: float = 0.9,
+    clip_bounds: Sequence[float] | None = None,
+) -> None:
+    """Look at ``bounds`` from preset ``view`` (Z up) so the whole box fills ``margin`` of the view.
+
+    ``clip_bounds``: the shown props' bounds, when the caller knows them (what VTK's
+    ``ComputeVisiblePropBounds`` gives); the clipping range is then set from them without
+    VTK's pass over every shown prop.
+    """
     b = np.asarray(bounds, float).reshape(3, 2)
     center = b.mean(axis=1)
     size = float(np.max(b[:, 1] - b[:, 0])) or 1.0
@@ -107,7 +119,10 @@ def fit_camera(plotter: pv.BasePlotter, bounds: Sequence[float], view: str = "fr
         if not np.isfinite(extent) or extent <= 0:
             break
         camera.Zoom(margin / extent)
-    renderer.ResetCameraClippingRange()
+    if clip_bounds is None:
+        renderer.ResetCameraClippingRange()
+    else:
+        renderer.ResetCameraClippingRange(*clip_bounds)
 
 
 def outside_view(plotter: pv.BasePlotter, bounds: Sequence[float], slack: float = 1.02) -> bool:
@@ -123,10 +138,19 @@ def outside_view(plotter: pv.BasePlotter, bounds: Sequence[float], slack: float 
     return bool(np.max(np.abs(clip[:, :2] / clip[:, 3:4])) > slack)
 
 
-def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int) -> np.ndarray:
-    """Per-segment RGB from per-cell ``colors``: each segment takes its first tube cell's colour."""
-    seg = np.asarray(mesh.cell_data["segment"])
+def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int, sides: int = 0) -> np.ndarray:
+    """Per-segment RGB from per-cell ``colors``: each segment takes its first tube cell's colour.
+
+    ``sides``: the mesh is known to be laid out as ``count`` tubes of ``sides`` quads first
+    (:func:`ramure.app.desktop.plant_actors.tube_layout`), so the layout is not checked again.
+    """
     colors = np.asarray(colors)
+    if sides:
+        out = np.empty((count, 3), np.uint8)
+        for c in range(3):  # a column at a time: 10x faster than gathering 3-byte rows
+            out[:, c] = colors[0 : count * sides : sides, c]
+        return out
+    seg = np.asarray(mesh.cell_data["segment"])
     quads = int(np.count_nonzero(seg >= 0))
     sides = quads // count if count else 0
     ids = np.arange(count)
@@ -143,26 +167,73 @@ def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int) -> np.ndarra
     return out
 
 
-def segment_lines(start: ArrayLike, end: ArrayLike) -> pv.PolyData:
+_COUNT = np.zeros(0, np.int64)  # 0, 1, 2, ... (read-only), kept for every line set
+_EVENS = np.zeros(0, np.int64)  # 0, 2, 4, ... (read-only): line sets' offsets, a prefix of it
+
+
+def _counting(n: int) -> None:
+    global _COUNT, _EVENS
+    if len(_COUNT) < 2 * n + 1:
+        _COUNT = np.arange(max(4 * n + 2, 1024), dtype=np.int64)
+        _EVENS = _COUNT[: len(_COUNT) // 2] * 2
+        _COUNT.flags.writeable = _EVENS.flags.writeable = False
+
+
+@dataclass
+class LineBuffers:
+    """Memory a line set of up to ``capacity`` lines is written into (:func:`segment_lines`):
+    a new plant version's hairlines go into the buffers of the version dropped, so the 131k
+    lines' 8 MB are written into memory already touched (fresh pages cost this machine
+    several ms)."""
+
+    points: np.ndarray  # (2 capacity, 3) float
+    conn: np.ndarray  # (2 capacity,) int64
+    colors: np.ndarray  # (2 capacity, 3) uint8
+
+    @classmethod
+    def make(cls, n: int) -> LineBuffers:
+        """Buffers for ``n`` lines and 10 % more."""
+        cap = n + n // 10 + 16
+        return cls(np.empty((2 * cap, 3)), np.empty(2 * cap, np.int64), np.empty((2 * cap, 3), np.uint8))
+
+    @property
+    def capacity(self) -> int:
+        return len(self.conn) // 2
+
+
+def segment_lines(start: ArrayLike, end: ArrayLike, buffers: LineBuffers | None = None) -> pv.PolyData:
     """Line cells from ``start[i]`` to ``end[i]`` (points: the starts, then the ends); the cell
-    arrays are handed to VTK as they are (no legacy-format import: 6 ms at 131k segments)."""
+    arrays are handed to VTK as they are (no legacy-format import: 6 ms at 131k segments).
+    ``buffers``: where the points and connectivity are written (large enough), else new arrays."""
     from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonDataModel import vtkCellArray
 
     start, end = np.asarray(start, float).reshape(-1, 3), np.asarray(end, float).reshape(-1, 3)
     n = len(start)
+    if buffers is None:
+        buffers = LineBuffers(np.empty((2 * n, 3)), np.empty(2 * n, np.int64), np.empty((0, 3), np.uint8))
+    points, conn = buffers.points[: 2 * n], buffers.conn[: 2 * n].reshape(n, 2)
+    points[:n] = start
+    points[n:] = end
+    _counting(n)
+    conn[:, 0] = _COUNT[:n]
+    conn[:, 1] = _COUNT[n : 2 * n]
     lines = pv.PolyData()  # points without vertex cells
-    lines.SetPoints(pv.vtk_points(np.concatenate([start, end]), deep=False))
-    conn = np.empty((n, 2), np.int64)
-    conn[:, 0] = np.arange(n)
-    conn[:, 1] = conn[:, 0] + n
+    lines.SetPoints(pv.vtk_points(points, deep=False))
     cells = vtkCellArray()
-    cells.SetData(
-        numpy_to_vtkIdTypeArray(np.arange(0, 2 * n + 1, 2, dtype=np.int64), deep=False),
-        numpy_to_vtkIdTypeArray(conn.ravel(), deep=False),
-    )
+    cells.SetData(numpy_to_vtkIdTypeArray(_EVENS[: n + 1], deep=False), numpy_to_vtkIdTypeArray(conn.ravel(), deep=False))
     lines.SetLines(cells)
     return lines
+
+
+def point_colors(rgb: np.ndarray, buffers: LineBuffers | None = None) -> np.ndarray:
+    """The per-point colours of :func:`segment_lines`' lines coloured ``rgb`` (both ends),
+    written into ``buffers`` if given."""
+    n = len(rgb)
+    both = np.empty((2 * n, 3), np.uint8) if buffers is None else buffers.colors[: 2 * n]
+    both[:n] = rgb
+    both[n:] = rgb
+    return both
 
 
 class Hairlines:
@@ -182,7 +253,9 @@ class Hairlines:
         self.skeleton: Skeleton | None = None
         self.width = LINE_WIDTH
         self.key: Any = None
-        self.kept: tuple | None = None  # (key, lines, actor, skeleton) of the plant shown before
+        self.kept: tuple | None = None  # (key, lines, actor, skeleton, sides) of the plant shown before
+        self.sides = 0  # the shown mesh's tube sides when it is laid out tubes first (0: unknown)
+        self.buffers: dict[int, LineBuffers] = {}  # id(line set) -> the memory its arrays use
         self._names = iter(range(1 << 62))
 
     def set_width(self, width: float) -> None:
@@ -193,26 +266,29 @@ class Hairlines:
         if self.kept is not None:
             self.kept[2].GetProperty().SetLineWidth(self.width)
 
-    def show(self, skeleton: Skeleton | None, mesh: pv.DataSet, colors: ArrayLike, key: Any = None) -> None:
+    def show(self, skeleton: Skeleton | None, mesh: pv.DataSet, colors: ArrayLike, key: Any = None, sides: int = 0) -> None:
         """Lines for a new plant (``colors``: the tubes' per-cell RGB); ``key`` names the version
-        (see the class notes)."""
+        (see the class notes); ``sides``: see :func:`segment_colors` (0: the layout is checked)."""
         if skeleton is not None and len(skeleton) and key is not None and self.kept is not None and self.kept[0] is key:
             self._swap(mesh, colors)
             return
         if self.key is not None and key is not self.key and self.actor is not None and self.lines is not None:
             old = self.kept
-            self.kept = (self.key, self.lines, self.actor, self.skeleton)
+            self.kept = (self.key, self.lines, self.actor, self.skeleton, self.sides)
             self.actor.SetVisibility(False)
             self.lines, self.actor = (old[1], old[2]) if old is not None else (None, None)
         self.key = key
         self.skeleton = skeleton
+        self.sides = sides
         if skeleton is None or len(skeleton) == 0:
             self._hide()
             return
         n = len(skeleton)
-        lines = segment_lines(skeleton.start, skeleton.end)
-        rgb = segment_colors(mesh, colors, n)
-        lines.point_data["rgb"] = np.concatenate([rgb, rgb])  # see line_colors
+        buffers = self.buffers.get(id(self.lines)) if self.lines is not None else None
+        if buffers is None or buffers.capacity < n:
+            buffers = LineBuffers.make(n)
+        lines = segment_lines(skeleton.start, skeleton.end, buffers)
+        lines.point_data["rgb"] = point_colors(segment_colors(mesh, colors, n, sides), buffers)  # see line_colors
         if self.actor is None or self.lines is None:
             self.lines = lines
             self.actor = self.plotter.add_mesh(
@@ -232,17 +308,20 @@ class Hairlines:
             self.lines.point_data.active_scalars_name = "rgb"
             self.actor.GetProperty().SetLineWidth(self.width)
             self.actor.SetVisibility(True)
+        self.buffers[id(self.lines)] = buffers
+        live = (id(self.lines), id(self.kept[1]) if self.kept is not None else None)
+        self.buffers = {k: v for k, v in self.buffers.items() if k in live}  # a dropped line set's memory goes
 
     def _swap(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
         """Show the kept lines again, and keep the shown ones."""
         assert self.kept is not None
-        key, lines, actor, skeleton = self.kept
+        key, lines, actor, skeleton, sides = self.kept
         if self.actor is not None and self.lines is not None and self.key is not None:
-            self.kept = (self.key, self.lines, self.actor, self.skeleton)
+            self.kept = (self.key, self.lines, self.actor, self.skeleton, self.sides)
             self.actor.SetVisibility(False)
         else:
             self.kept = None
-        self.key, self.lines, self.actor, self.skeleton = key, lines, actor, skeleton
+        self.key, self.lines, self.actor, self.skeleton, self.sides = key, lines, actor, skeleton, sides
         self._recolor(mesh, colors)
         actor.GetProperty().SetLineWidth(self.width)
         actor.SetVisibility(True)
@@ -260,7 +339,7 @@ class Hairlines:
 
     def _recolor(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
         assert self.lines is not None and self.skeleton is not None
-        rgb = segment_colors(mesh, colors, len(self.skeleton))
+        rgb = segment_colors(mesh, colors, len(self.skeleton), self.sides)
         if not np.array_equal(rgb, self.line_colors()):  # else no upload again
             both = np.asarray(self.lines.point_data["rgb"])
             both[: len(rgb)] = rgb

@@ -195,6 +195,11 @@ class PlantView(QWidget):
         self.hide_fruit_spheres = False  # True while volumetric fruit replace the spheres
         self.hidden_cells: np.ndarray | None = None  # bool per mesh cell, or None: cells drawn as nothing
         self.plant = PlantActors(self.plotter)  # tubes grouped by thickness, level of detail
+        # No frustum culler: it asked every shown prop for its bounds before each frame, so a
+        # new version's 131k hairlines paid VTK's pass over their cells (~3 ms) although the
+        # view knows their bounds; the plant's groups are culled by level of detail, and a
+        # prop outside the frustum draws nothing either way (the same pixels).
+        self.plotter.renderer.GetCullers().RemoveAllItems()
         self._diag: float | None = None
         self.view_name = "front"  # the camera preset Home returns to
         self.auto_framed = True  # False once the user moves the camera
@@ -270,28 +275,57 @@ class PlantView(QWidget):
         # frame gather their cells and go to the GPU again (see plant_actors).
         self.plant.show(mesh, snap.skeleton, key=snap.mesh)  # an undo: the kept actors again
         self.actor = self.plant.pick_actor
-        self.hairlines.show(snap.skeleton, self.mesh, colors, key=snap.mesh)
-        self.ground.show(mesh.bounds)
+        self.hairlines.show(snap.skeleton, self.mesh, colors, key=snap.mesh, sides=self.plant.sides)
+        bounds = self.plant_bounds()
+        self.ground.show(bounds)
         self.picker = None
-        diag = float(np.linalg.norm(np.subtract(*np.reshape(mesh.bounds, (3, 2)).T)))
+        diag = float(np.linalg.norm(np.subtract(*np.reshape(bounds, (3, 2)).T)))
         if reset_camera is None:  # frame again when the plant leaves the view or shrinks a lot
             reset_camera = (
                 self._diag is None
                 or self.auto_framed
                 or diag / max(self._diag, 1e-12) < 0.4
-                or scene.outside_view(self.plotter, mesh.bounds)
+                or scene.outside_view(self.plotter, bounds)
             )
         if reset_camera:
             self.reset_camera()
         self.draft()
         self.redraw()
 
+    def plant_bounds(self) -> tuple[float, ...]:
+        """The shown mesh's bounds (VTK's order): the plant actors' own (patched after an edit,
+        see :mod:`~ramure.app.desktop.plant_actors`) while the mesh shows the model's points,
+        else VTK's."""
+        assert self.mesh is not None
+        known = self.plant.bounds
+        if known is not None and self.snapshot is not None and self.mesh.GetPoints() is self.snapshot.mesh.GetPoints():
+            return known
+        return tuple(self.mesh.bounds)
+
+    def shown_bounds(self) -> tuple[float, ...] | None:
+        """What VTK's ``ComputeVisiblePropBounds`` gives, with the hairlines' bounds taken from
+        the plant actors instead of a pass over their cells; None when they are unknown."""
+        lines = self.hairlines.actor
+        known = self.plant.segment_bounds
+        shown = self.snapshot.skeleton if self.snapshot is not None else None
+        if lines is None or known is None or not lines.GetVisibility() or self.hairlines.skeleton is not shown:
+            return None
+        lines.VisibilityOff()  # the other props' bounds: a few small ones, cached by VTK
+        try:
+            others = self.plotter.renderer.ComputeVisiblePropBounds()
+        finally:
+            lines.VisibilityOn()
+        lo = np.minimum(np.array(others[0::2]), known[0::2])
+        hi = np.maximum(np.array(others[1::2]), known[1::2])
+        return tuple(float(v) for v in np.c_[lo, hi].ravel())
+
     def reset_camera(self, view: str | None = None) -> None:
         """Frame the whole plant from preset ``view`` (front, side, top, iso; default: the last)."""
         self.view_name = view or self.view_name
         if self.mesh is not None:
-            scene.fit_camera(self.plotter, self.mesh.bounds, self.view_name)
-            self._diag = float(np.linalg.norm(np.subtract(*np.reshape(self.mesh.bounds, (3, 2)).T)))
+            bounds = self.plant_bounds()
+            scene.fit_camera(self.plotter, bounds, self.view_name, clip_bounds=self.shown_bounds())
+            self._diag = float(np.linalg.norm(np.subtract(*np.reshape(bounds, (3, 2)).T)))
         self.auto_framed = True
         self.redraw()
 
