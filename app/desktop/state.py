@@ -415,6 +415,8 @@ def leaf_mask(leaf_ids: np.ndarray, selection: Collection[int]) -> np.ndarray:
         return np.zeros(len(leaf_ids), bool)
     table = np.zeros(max(int(leaf_ids.max()), int(sel.max())) + 1, bool)
     table[sel[sel >= 0]] = True
+    if int(leaf_ids.min()) >= 0:  # every cell has a leaf (the usual case): one gather
+        return table[leaf_ids]
     return table[np.maximum(leaf_ids, 0)] & (leaf_ids >= 0)
 
 
@@ -427,12 +429,12 @@ def cell_colors(
     """
     if kinship_rgb is not None:
         return kinship_rgb
-    rgb = base_colors(mesh) if base is None else base.copy()
+    rgb = (base_colors(mesh) if base is None else base).copy()
     if len(selection):
-        chosen = leaf_mask(mesh.cell_data["leaf_id"], selection)
-        fruit = np.asarray(mesh.cell_data["kind"]) == KIND_FRUIT
-        rgb[chosen & ~fruit] = (255, 0, 0)
-        rgb[chosen & fruit] = FRUIT_SELECTED  # red on orange would read as ripe fruit
+        chosen = np.flatnonzero(leaf_mask(mesh.cell_data["leaf_id"], selection))  # few: recoloured by index
+        fruit = np.asarray(mesh.cell_data["kind"])[chosen] == KIND_FRUIT
+        rgb[chosen[~fruit]] = (255, 0, 0)
+        rgb[chosen[fruit]] = FRUIT_SELECTED  # red on orange would read as ripe fruit
     return rgb
 
 

@@ -90,8 +90,8 @@ class MainWindow(QMainWindow):
         self.last_message: str | None = None
         self.drawn_version: int | None = None
         self.shown_text = explorer.text  # the model's grammar text the editor last showed
-        # (start, end) of the plant drawn before the current one
-        self.previous_geometry: tuple[np.ndarray, np.ndarray] | None = None
+        # the current plant draws what the plant drawn before it drew (see after_regrow)
+        self.same_as_before = False
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
@@ -339,15 +339,16 @@ class MainWindow(QMainWindow):
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap: Snapshot, reset_camera: bool | None = None) -> None:
         """A new plant version: redraw the 3D view and every view of the plant."""
-        old = getattr(self.view.snapshot, "skeleton", None)  # copied: an edit may reuse its arrays
-        self.previous_geometry = None if old is None else (np.array(old.start), np.array(old.end))
+        old = getattr(self.view.snapshot, "skeleton", None)  # compared after the frame (no copy)
         self.base_colors = state.base_colors(snap.mesh)
         self.fruit_leaves = state.fruit_leaves(snap.mesh)
         self.view.show_plant(snap, self.plant_colors(snap.selection), reset_camera)
         self.drawn_version = snap.version
-        self.show_selection(snap.selection, recolour=False)
+        self.show_selection(snap.selection, recolour=False, docks=False)
         # the edit's frame first (a draft for a large plant); the docks follow in the same turn
         self.view.redraw(now=True)
+        self.same_as_before = old is not None and state.same_plant((old.start, old.end), snap.skeleton)
+        self.show_selection_docks(snap.selection)
         self.string_view.show_snapshot(snap)
         self.show_state(snap)
         self.show_cut(snap)
@@ -390,9 +391,10 @@ class MainWindow(QMainWindow):
                 return None
         return None
 
-    def show_selection(self, selection: Sequence[int], recolour: bool = True) -> None:
+    def show_selection(self, selection: Sequence[int], recolour: bool = True, docks: bool = True) -> None:
         """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe
-        (``recolour`` False: the plant was just drawn in :meth:`plant_colors`)."""
+        (``recolour`` False: the plant was just drawn in :meth:`plant_colors`); ``docks``: the
+        panels' part too (:meth:`show_selection_docks`; a new version's frame comes first)."""
         snap = self.controller.snapshot
         kin = self._kinship_colors(selection) if recolour or self.kinship else None
         if recolour:
@@ -405,6 +407,12 @@ class MainWindow(QMainWindow):
             self.view.set_box_for(self.controller.selection_box if selection else None, len(selection))
         except RamureError:
             self.view.set_box(None)
+        if docks:
+            self.show_selection_docks(selection)
+
+    def show_selection_docks(self, selection: Sequence[int]) -> None:
+        """The selection in the panels: counts, status line, the string dock's modules."""
+        snap = self.controller.snapshot
         self.regen.set_selection_size(len(selection))
         self.regen.set_fruit_selection(
             int(np.isin(self.fruit_leaves, selection).sum()), len(self.fruit_leaves), self.variants.fruit_ok
@@ -556,7 +564,7 @@ class MainWindow(QMainWindow):
         """Say what the regrow did; on a deterministic grammar, say why nothing changed."""
         snap = self.controller.snapshot
         note = ""
-        if job.name == "regrow" and state.same_plant(self.previous_geometry, snap.skeleton):
+        if job.name == "regrow" and self.same_as_before:
             note = SAME_PLANT
         elif job.name == "regrow" and snap.selection:
             note = REGROWN

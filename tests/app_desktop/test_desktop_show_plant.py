@@ -138,3 +138,21 @@ def test_base_colors_are_kept_per_mesh_and_read_only():
     assert np.array_equal(first, state.base_colors(ex.mesh.copy(deep=True)))  # computed again: the same
     ex.mesh.cell_data["kind"] = np.zeros(ex.mesh.n_cells, np.int8)  # another kind array: not the kept colours
     assert state.base_colors(ex.mesh) is not first and (state.base_colors(ex.mesh) == first[0]).all()
+
+
+def test_selection_colours_and_leaf_masks_equal_their_definition():
+    ex = Explorer("fruit_tree.lsys", n=6)
+    mesh = ex.mesh
+    leaf, kind = np.asarray(mesh.cell_data["leaf_id"]), np.asarray(mesh.cell_data["kind"])
+    fruit_leaves = np.unique(leaf[kind == state.KIND_FRUIT])
+    rng = np.random.default_rng(11)
+    for size in (1, 5, 60):
+        sel = np.r_[rng.choice(np.unique(leaf), size, replace=False), rng.choice(fruit_leaves, 2)].tolist()
+        expected = state.base_colors(mesh).copy()
+        chosen = np.isin(leaf, sel)
+        expected[chosen & (kind != state.KIND_FRUIT)] = (255, 0, 0)
+        expected[chosen & (kind == state.KIND_FRUIT)] = state.FRUIT_SELECTED
+        got = state.cell_colors(mesh, sel, base=state.base_colors(mesh))
+        assert got.flags.writeable and np.array_equal(got, expected)
+        with_unknown = np.where(rng.random(len(leaf)) < 0.1, -1, leaf)  # cells of no leaf
+        assert np.array_equal(state.leaf_mask(with_unknown, [*sel, -1]), np.isin(with_unknown, sel))
