@@ -47,9 +47,12 @@ def make_application(argv: list[str] | None = None) -> QApplication:
     protect_none()
     app = QApplication.instance()
     if app is None:
-        import pyvistaqt  # noqa: F401  (sets the default surface format before the first window)
-
         app = QApplication(list(argv or sys.argv[:1]))
+        from ramure.app.desktop.native_view import native_windows
+
+        if not native_windows():  # pyvistaqt's QOpenGLWidget fallback only (6-12 MB less otherwise)
+            import pyvistaqt  # noqa: F401  (loaded before the first window, as before)
+
         app.setApplicationName("Ramure")
         app.setOrganizationName("Ramure")
     return cast("QApplication", app)  # a QApplication: this function is what creates it

@@ -47,7 +47,6 @@ from numpy.typing import ArrayLike
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, QTimer, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
-from pyvistaqt import QtInteractor
 
 from ramure.app.desktop.native_view import NativeInteractor, native_windows
 from ramure.app.desktop.plant_actors import PlantActors
@@ -58,6 +57,7 @@ from ramure.app.desktop import scene
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage, QKeyEvent, QResizeEvent
+    from pyvistaqt import QtInteractor
     from ramure.app.desktop.state import Snapshot
 
 CLICK_SLOP = 4  # pixels a click may move and still be a click
@@ -173,7 +173,13 @@ class PlantView(QWidget):
     def __init__(self, parent: QWidget | None = None, native: bool | None = None) -> None:
         super().__init__(parent)
         self.native = native_windows() if native is None else bool(native)
-        self.plotter = NativeInteractor(self) if self.native else QtInteractor(self, auto_update=False, multi_samples=0)
+        self.plotter: NativeInteractor | QtInteractor
+        if self.native:
+            self.plotter = NativeInteractor(self)
+        else:  # pyvistaqt only in this fallback (Wayland, offscreen): 6-12 MB not loaded otherwise
+            from pyvistaqt import QtInteractor
+
+            self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
         scene.apply_look(self.plotter)  # light kit, gradient, FXAA, turntable orbit (Z up)
         if self.plotter.iren is not None:
             self.plotter.iren.clear_key_event_callbacks()

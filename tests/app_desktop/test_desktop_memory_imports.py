@@ -61,7 +61,8 @@ _SCAN = """
 import json, linecache, sys
 import ramure.app.desktop.window
 flags = sys.modules["shibokensupport.feature"].pyside_feature_dict
-modules = ("ramure.app.desktop.view", "qtpy.QtCore", "pyvista.core.pointset", "numpy.linalg", "matplotlib.figure")
+modules = ("ramure.app.desktop.view", "matplotlib.backends.qt_compat", "pyvista.core.pointset", "numpy.linalg",
+           "matplotlib.figure")
 print(json.dumps({"cached_files": len(linecache.cache), "flags": [flags.get(name) for name in modules]}))
 """
 
@@ -76,3 +77,31 @@ def test_pyside_does_not_keep_the_source_of_every_module_imported_after_it():
     # the same answers as PySide6's own test: modules that mention PySide6 can use __feature__ (0),
     # the others are ignored by feature switching (-1)
     assert found["flags"] == [0, 0, -1, -1, -1]
+
+
+_FALLBACK = """
+import json, sys
+from ramure.app.desktop.launch import make_application
+from ramure.app.desktop.view import PlantView
+app = make_application([])
+view = PlantView()
+print(json.dumps({"native": view.native, "pyvistaqt": "pyvistaqt" in sys.modules,
+                  "kind": type(view.plotter).__name__}))
+"""
+
+
+def _plant_view_in(platform):
+    import os
+
+    env = dict(os.environ, QT_QPA_PLATFORM=platform, RAMURE_GL_WIDGET="0")
+    done = subprocess.run([sys.executable, "-c", _FALLBACK], capture_output=True, text=True, timeout=300, env=env)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_pyvistaqt_is_loaded_only_for_its_qopenglwidget_fallback():
+    # the native view (X11) does not need pyvistaqt: 6-12 MB less in the desktop
+    native = _plant_view_in("xcb")
+    assert native == {"native": True, "pyvistaqt": False, "kind": "NativeInteractor"}
+    fallback = _plant_view_in("offscreen")  # Qt's offscreen platform: pyvistaqt's QOpenGLWidget
+    assert fallback == {"native": False, "pyvistaqt": True, "kind": "QtInteractor"}
