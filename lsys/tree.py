@@ -399,7 +399,7 @@ class DerivationTree:
 
     def _leaf_sums(self) -> _LeafSums:
         if self._sums is None or self._sums.size != self.size:
-            sums = _LeafSums(self.size)
+            sums = _LeafSums(max(self.size, self._cap))  # the tree's headroom: zeroed pages cost nothing until used
             flag = np.zeros(self.size, np.int8)
             flag[self.leaves] = 1
             self._sum_range(sums, 0, self.size, flag)

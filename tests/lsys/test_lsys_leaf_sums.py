@@ -113,6 +113,25 @@ def test_a_regrow_its_undo_and_redo_keep_the_sums_they_update():
     check(tree, rng)
 
 
+def test_the_sums_take_the_trees_headroom_so_a_regrow_copies_nothing():
+    # the sums are made as long as the tree's arrays (zeroed pages cost nothing until used):
+    # a first regrow on Honda n = 17 otherwise copied them into 2x arrays (+36 MB allocated)
+    session = Session(LSystem.from_file("honda_sympodial"), n=9)
+    tree = session.tree
+    tree.subtree_weights([0])
+    kept = tree.detach_sums()
+    assert kept is not None
+    tree.attach_sums(kept, [])
+    arrays = (kept.count, kept.weight)
+    assert len(kept.count) == len(kept.weight) == len(tree._parent) > tree.size  # the tree's capacity
+    rng = np.random.default_rng(5)
+    for op in ("regrow", "regrow", "undo", "redo"):
+        edit(session, rng, op)
+        tree.attach_sums(tree.detach_sums(), [])
+    assert tree.size > len(arrays[0]) or (kept.count is arrays[0] and kept.weight is arrays[1])
+    check(tree, rng)
+
+
 def test_other_edits_drop_the_sums_and_reviving_unknown_nodes_does_too():
     session = Session(LSystem.from_file("honda_sympodial"), n=7)
     tree = session.tree
