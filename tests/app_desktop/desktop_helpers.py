@@ -16,3 +16,21 @@ def settle(qtbot, window, timeout=20.0):
     qtbot.waitUntil(lambda: not window.variants.busy(), timeout=int(timeout * 1000))
     window.view.redraw(now=True)
     qtbot.wait(10)
+
+
+class BarePlotter:
+    """What PlantActors needs of a plotter: a renderer (never drawn here)."""
+
+    def __init__(self) -> None:
+        from vtkmodules.vtkRenderingCore import vtkRenderer
+
+        self.renderer = vtkRenderer()
+
+
+def show_model_plant(actors, ex) -> None:
+    """What the view gives PlantActors: a shallow copy of the model's mesh with colours, keyed by it."""
+    import numpy as np
+
+    mesh = ex.mesh.copy(deep=False)
+    mesh.cell_data["rgb"] = np.zeros((mesh.n_cells, 3), np.uint8)
+    actors.show(mesh, ex.skeleton, key=ex.mesh)

@@ -10,22 +10,7 @@ import pytest
 from ramure.app.desktop import plant_actors, scene, state
 from ramure.app.desktop.plant_actors import PlantActors
 from ramure.app.model import Explorer
-from desktop_helpers import HONDA
-
-
-class _Plotter:
-    """What PlantActors needs of a plotter: a renderer (never drawn here)."""
-
-    def __init__(self) -> None:
-        from vtkmodules.vtkRenderingCore import vtkRenderer
-
-        self.renderer = vtkRenderer()
-
-
-def show(actors, ex):
-    mesh = ex.mesh.copy(deep=False)
-    mesh.cell_data["rgb"] = np.zeros((mesh.n_cells, 3), np.uint8)
-    actors.show(mesh, ex.skeleton, key=ex.mesh)
+from desktop_helpers import HONDA, BarePlotter, show_model_plant
 
 
 def edit(ex, op, rng, step):
@@ -51,12 +36,12 @@ def test_patched_bounds_equal_vtk_bounds(grammar, n, monkeypatch):
     real = plant_actors._others
     monkeypatch.setattr(plant_actors, "_others", lambda *a: patched.append(1) or real(*a))
     ex = Explorer(grammar, n=n)
-    shown = PlantActors(_Plotter())
-    show(shown, ex)
+    shown = PlantActors(BarePlotter())
+    show_model_plant(shown, ex)
     rng = np.random.default_rng(5)
     for step, op in enumerate(OPS):
         edit(ex, op, rng, step)
-        show(shown, ex)
+        show_model_plant(shown, ex)
         assert shown.sides and shown.bounds == tuple(ex.mesh.GetBounds()), (step, op)
         start, end = np.asarray(ex.skeleton.start, float), np.asarray(ex.skeleton.end, float)
         cells_bounds = [0.0] * 6

@@ -8,22 +8,7 @@ import numpy as np
 from ramure.app.desktop import plant_actors
 from ramure.app.desktop.plant_actors import PlantActors
 from ramure.app.model import Explorer
-
-
-class _Plotter:
-    """What PlantActors needs of a plotter: a renderer (never drawn here)."""
-
-    def __init__(self) -> None:
-        from vtkmodules.vtkRenderingCore import vtkRenderer
-
-        self.renderer = vtkRenderer()
-
-
-def show(actors, ex):
-    """What the view gives PlantActors: a shallow copy of the model's mesh with colours, keyed by it."""
-    mesh = ex.mesh.copy(deep=False)
-    mesh.cell_data["rgb"] = np.zeros((mesh.n_cells, 3), np.uint8)
-    actors.show(mesh, ex.skeleton, key=ex.mesh)
+from desktop_helpers import BarePlotter, show_model_plant
 
 
 def groups_of(actors):
@@ -46,8 +31,8 @@ def test_patched_classes_equal_classes_sorted_from_scratch(monkeypatch):
     real = plant_actors._classes_after_edit
     monkeypatch.setattr(plant_actors, "_classes_after_edit", lambda *a: patched.append(1) or real(*a))
     ex = Explorer("honda_sympodial.lsys", n=11)
-    shown = PlantActors(_Plotter())
-    show(shown, ex)
+    shown = PlantActors(BarePlotter())
+    show_model_plant(shown, ex)
     rng = np.random.default_rng(2)
     ops = ["regrow", "regrow", "prune", "regrow", "undo", "redo", "regrow", "undo", "undo", "regrow", "regrow"]
     for step, op in enumerate(ops):
@@ -57,22 +42,22 @@ def test_patched_classes_equal_classes_sorted_from_scratch(monkeypatch):
             ex.regrow(seed=step) if op == "regrow" else ex.prune()
         else:
             getattr(ex, op)()
-        show(shown, ex)
-        fresh = PlantActors(_Plotter())
-        show(fresh, ex)
+        show_model_plant(shown, ex)
+        fresh = PlantActors(BarePlotter())
+        show_model_plant(fresh, ex)
         assert_same_groups(groups_of(shown), groups_of(fresh))
     assert len(patched) >= 4  # the regrows were patched, not sorted again
 
 
 def test_a_regrow_that_grows_a_thicker_branch_sorts_again():
     ex = Explorer("#define W 0.5\nn: 6\nw: !(1)FA\np:\n A -> !(W)F[+A][-A]A\n", n=6)
-    shown = PlantActors(_Plotter())
-    show(shown, ex)
+    shown = PlantActors(BarePlotter())
+    show_model_plant(shown, ex)
     before = shown._classes["top"]
     ex.select(ex.skeleton.leaf_id[-20:].tolist())
     ex.regrow(seed=1, constants={"W": 4})  # the regrown branches are thicker than the trunk
-    show(shown, ex)
-    fresh = PlantActors(_Plotter())
-    show(fresh, ex)
+    show_model_plant(shown, ex)
+    fresh = PlantActors(BarePlotter())
+    show_model_plant(fresh, ex)
     assert_same_groups(groups_of(shown), groups_of(fresh))
     assert shown._classes["top"] > before
