@@ -341,23 +341,24 @@ def _skeleton(lsys, tree, leaves, segs, orgs, trace):
 
 def top_radius(base: np.ndarray, order: np.ndarray, parent: np.ndarray) -> np.ndarray:
     """Each segment's top radius: its continuation's base radius, else its widest fork's, else its own."""
-    s = len(base)
-    top = base.copy()
+    kids = np.flatnonzero(parent >= 0)
+    return _tops(base.copy(), base, order, parent, kids, parent[kids])
+
+
+def _tops(top, base, order, parent, kids, at):
+    """:func:`top_radius` of some segments, written over ``top`` (their own base radii): ``kids``
+    are all their child segments, ``kids[j]`` a child of the segment at ``top[at[j]]``."""
     # Without a continuation, taper to the widest child segment (a fork), if any.
-    child = np.flatnonzero(parent >= 0)
-    if child.size:
-        widest = np.full(s, -1.0)
-        np.maximum.at(widest, parent[child], base[child])
-        fork = widest >= 0
-        top[fork] = widest[fork]
+    widest = np.full(len(top), -1.0)
+    np.maximum.at(widest, at, base[kids])
+    fork = widest >= 0
+    top[fork] = widest[fork]
     # A segment's continuation: the first child segment on the same branch order.
-    cont = np.flatnonzero((parent >= 0) & (order == order[np.maximum(parent, 0)]))
-    if cont.size:
-        par = parent[cont]
-        first_child = np.full(s, s, np.int64)
-        np.minimum.at(first_child, par, cont)  # the earliest continuing child wins
-        has = first_child < s
-        top[has] = base[first_child[has]]
+    cont = order[kids] == order[parent[kids]]
+    first = np.full(len(top), len(base), np.int64)
+    np.minimum.at(first, at[cont], kids[cont])  # the earliest continuing child wins
+    has = first < len(base)
+    top[has] = base[first[has]]
     return top
 
 
@@ -652,18 +653,7 @@ def _patched_top(old, base, order, parent, is_kept, old_index, new_index):
     mark = np.zeros(len(base), bool)
     mark[targets] = True
     kids = np.flatnonzero((parent >= 0) & mark[np.maximum(parent, 0)])
-    at = np.searchsorted(targets, parent[kids])
-    out = base[targets].copy()
-    widest = np.full(len(targets), -1.0)
-    np.maximum.at(widest, at, base[kids])
-    fork = widest >= 0
-    out[fork] = widest[fork]
-    cont = order[kids] == order[parent[kids]]  # a continuation: the first child on the same order
-    first = np.full(len(targets), len(base), np.int64)
-    np.minimum.at(first, at[cont], kids[cont])
-    has = first < len(base)
-    out[has] = base[first[has]]
-    top[targets] = out
+    top[targets] = _tops(base[targets], base, order, parent, kids, np.searchsorted(targets, parent[kids]))
     return top
 
 
