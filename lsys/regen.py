@@ -225,8 +225,8 @@ def _edit_spans(starts, ends, pieces):
     last = np.r_[runs[1:], len(starts)] - 1
     old = np.stack([starts[runs], ends[last]], axis=1)
     grown = np.add.reduceat(lengths, runs)
-    shift = np.cumsum(grown - (old[:, 1] - old[:, 0] + 1)) - (grown - (old[:, 1] - old[:, 0] + 1))
-    first = old[:, 0] + shift
+    delta = grown - (old[:, 1] - old[:, 0] + 1)  # each run's change of length
+    first = old[:, 0] + np.cumsum(delta) - delta  # shifted by the runs before it
     return old, np.stack([first, first + grown - 1], axis=1)
 
 

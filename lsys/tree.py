@@ -307,9 +307,8 @@ class DerivationTree:
         if "spans" in self._cache:
             first, last = self._cache["spans"]
             return first[nodes].copy(), last[nodes].copy()
-        sums = self._leaf_sums()
-        count, alive = sums.count, self._alive
-        axiom = sums.axiom[alive[sums.axiom]]
+        count, alive = self._leaf_sums().count, self._alive
+        axiom = self.axiom_modules()
         before = np.zeros(len(axiom) + 1, np.int64)
         np.cumsum(count[axiom], out=before[1:])
         first = np.zeros(len(nodes), np.int64)

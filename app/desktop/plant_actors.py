@@ -451,8 +451,8 @@ def _class_boxes(sk: Skeleton | _Ends, level: np.ndarray, classes: np.ndarray) -
         level = level[members]
     else:
         members = np.arange(len(level))
-    order = members[np.argsort(level, kind="stable")]
-    sorted_level = np.sort(level, kind="stable")
+    by_level = np.argsort(level, kind="stable")
+    order, sorted_level = members[by_level], level[by_level]
     starts = np.searchsorted(sorted_level, np.arange(MAX_CLASSES + 1))
     present = np.flatnonzero(np.diff(starts))
     start = np.take(np.asarray(sk.start, float), order, axis=0)
@@ -470,13 +470,9 @@ def _classes_after_edit(last: dict, sk: Skeleton, radius: np.ndarray, top: float
     before = last["skeleton"]
     level = np.empty(len(radius), np.int8)
     level[new] = last["level"][old]
-    added = np.ones(len(radius), bool)
-    added[new] = False
-    added = np.flatnonzero(added)
+    added = _others(new, len(radius))
     level[added] = _levels(radius[added], top)
-    gone = np.ones(len(before), bool)
-    gone[old] = False
-    gone = np.flatnonzero(gone)
+    gone = _others(old, len(before))
     lo, hi = last["lo"].copy(), last["hi"].copy()
     g_lo, g_hi = _class_boxes(_Ends(before, gone), last["level"][gone], np.arange(MAX_CLASSES))
     touched = ((g_lo <= lo) | (g_hi >= hi)).any(axis=1)  # a removed end on the box: recompute it
