@@ -184,8 +184,8 @@ class DefectsPanel(QWidget):
 
 
 def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter as QtInteractor  # native window on X11
+    from ramure.app.desktop.native_view import make_plotter  # native window on X11
 
-    plotter = QtInteractor(parent)
+    plotter = make_plotter(parent)
     plotter.set_background("white")
     return plotter

@@ -605,10 +605,10 @@ def _count_box(name, low, high, value):
 
 
 def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter as QtInteractor  # native window on X11
+    from ramure.app.desktop.native_view import make_plotter  # native window on X11
 
     from ramure.app.desktop import scene
 
-    plotter = QtInteractor(parent, auto_update=False, multi_samples=0)
+    plotter = make_plotter(parent, auto_update=False, multi_samples=0)
     scene.apply_look(plotter)
     return plotter

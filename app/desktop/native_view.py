@@ -141,6 +141,9 @@ class _SurfaceWatch(QObject):
         return False
 
 
+_BUTTON_NAMES = {Qt.MouseButton.LeftButton: "Left", Qt.MouseButton.RightButton: "Right", Qt.MouseButton.MiddleButton: "Middle"}
+
+
 class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both define update()
     """A pyvista plotter drawn by VTK into this widget's native window (see the module's notes).
 
@@ -274,21 +277,19 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
             return
         self._event_info(event, int(event.type() == QEvent.Type.MouseButtonDblClick))
         self._button = event.button()
-        {
-            Qt.MouseButton.LeftButton: self._Iren.LeftButtonPressEvent,
-            Qt.MouseButton.RightButton: self._Iren.RightButtonPressEvent,
-            Qt.MouseButton.MiddleButton: self._Iren.MiddleButtonPressEvent,
-        }.get(self._button, lambda: None)()
+        self._button_event("Press")
 
     def mouseReleaseEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
         if self._Iren is None:
             return
         self._event_info(event)
-        {
-            Qt.MouseButton.LeftButton: self._Iren.LeftButtonReleaseEvent,
-            Qt.MouseButton.RightButton: self._Iren.RightButtonReleaseEvent,
-            Qt.MouseButton.MiddleButton: self._Iren.MiddleButtonReleaseEvent,
-        }.get(self._button, lambda: None)()
+        self._button_event("Release")
+
+    def _button_event(self, kind: str) -> None:
+        """VTK's ``<Left|Right|Middle>Button<kind>Event`` for the button last pressed (others: none)."""
+        side = _BUTTON_NAMES.get(self._button)
+        if side is not None and self._Iren is not None:
+            getattr(self._Iren, f"{side}Button{kind}Event")()
 
     def mouseMoveEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
         if self._Iren is None:

@@ -177,6 +177,6 @@ class WoodPanel(QWidget):
 
 
 def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter as QtInteractor  # native window on X11
+    from ramure.app.desktop.native_view import make_plotter  # native window on X11
 
-    return QtInteractor(parent, auto_update=False, multi_samples=0)
+    return make_plotter(parent, auto_update=False, multi_samples=0)
