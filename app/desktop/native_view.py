@@ -175,6 +175,10 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
         self.interactor = self
         self.ren_win = self._RenderWindow
         self.ren_win.SetMultiSamples(multi_samples)
+        # VTK's default (BlitToHardware) also copies the depth buffer into the window through a
+        # full-window shader pass, for drawing after VTK; nothing draws into this window but VTK
+        # (about 3 ms less per 1000x800 frame on llvmpipe)
+        self.ren_win.SetFrameBlitModeToBlitToCurrent()
         for renderer in self.renderers:
             renderer.view_isometric()
             self.ren_win.AddRenderer(renderer)
