@@ -79,7 +79,22 @@ class _Group:
 _CORNER_ENDS = np.array([[i >> 2 & 1, i >> 1 & 1, i & 1] for i in range(8)])
 
 
-def _box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def pixels_per_unit(renderer: Any, corners: np.ndarray) -> float:
+    """The most pixels one unit of length spans anywhere in the box with ``corners`` ((8, 3)),
+    seen from ``renderer``'s camera: at the box's nearest depth along the view direction
+    (perspective), or everywhere alike (parallel projection); inf when the box reaches the
+    camera's plane."""
+    camera = renderer.GetActiveCamera()
+    height = max(int(renderer.GetSize()[1]), 1)
+    if camera.GetParallelProjection():
+        return height / (2.0 * max(camera.GetParallelScale(), 1e-300))
+    depth = float(((corners - np.array(camera.GetPosition())) @ np.array(camera.GetDirectionOfProjection())).min())
+    if depth <= 1e-12:
+        return float("inf")
+    return float(height / (2.0 * depth * np.tan(np.radians(camera.GetViewAngle()) / 2)))
+
+
+def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """(8, 3) corners of the box ``lo``-``hi`` (as a meshgrid of its ends, without one)."""
     return np.c_[lo, hi][np.arange(3), _CORNER_ENDS]
 
@@ -158,7 +173,7 @@ class PlantActors:
         self.large = count >= LOD_SEGMENTS
         if not self.sides:
             b = np.reshape(mesh.bounds, (3, 2))
-            self._set_groups([_Group(mesh.n_cells, np.inf, _box_corners(b[:, 0], b[:, 1]))])
+            self._set_groups([_Group(mesh.n_cells, np.inf, box_corners(b[:, 0], b[:, 1]))])
             return
         assert skeleton is not None
         groups = self._tube_groups(skeleton, last)
@@ -168,7 +183,7 @@ class PlantActors:
         lo, hi = tube_lo, tube_hi
         if mesh.n_cells > quads:
             b = np.reshape(_bounds(np.asarray(mesh.points)[quads * 2 :]), (3, 2))
-            groups.append(_Group(mesh.n_cells - quads, np.inf, _box_corners(b[:, 0], b[:, 1])))
+            groups.append(_Group(mesh.n_cells - quads, np.inf, box_corners(b[:, 0], b[:, 1])))
             if source is not mesh:
                 b = np.reshape(_bounds(np.asarray(source.points)[quads * 2 :]), (3, 2))
             lo, hi = np.minimum(lo, b[:, 0]), np.maximum(hi, b[:, 1])
@@ -231,7 +246,7 @@ class PlantActors:
         for j, k in enumerate(present):
             segs = order[starts[k] : starts[k + 1]]
             r = float(biggest[j])
-            groups.append(_Group(len(segs) * self.sides, r, _box_corners(lo[k] - r, hi[k] + r), segments=segs))
+            groups.append(_Group(len(segs) * self.sides, r, box_corners(lo[k] - r, hi[k] + r), segments=segs))
         return groups
 
     def _keep(self, key: Any) -> None:
@@ -331,25 +346,11 @@ class PlantActors:
         """The groups to draw from the renderer's camera now."""
         if not self.groups:
             return []
-        camera = self.renderer.GetActiveCamera()
-        height = max(int(self.renderer.GetSize()[1]), 1)
-        position = np.array(camera.GetPosition())
-        direction = np.array(camera.GetDirectionOfProjection())
-        shown = []
-        for i, g in enumerate(self.groups):
-            if not np.isfinite(g.radius):
-                shown.append(i)
-                continue
-            if camera.GetParallelProjection():
-                per_unit = height / (2.0 * max(camera.GetParallelScale(), 1e-300))
-            else:
-                depth = float(((g.corners - position) @ direction).min())
-                if depth <= 1e-12:
-                    shown.append(i)
-                    continue
-                per_unit = height / (2.0 * depth * np.tan(np.radians(camera.GetViewAngle()) / 2))
-            if 2.0 * g.radius * per_unit >= MIN_PIXELS:
-                shown.append(i)
+        shown = [
+            i
+            for i, g in enumerate(self.groups)
+            if not np.isfinite(g.radius) or 2.0 * g.radius * pixels_per_unit(self.renderer, g.corners) >= MIN_PIXELS
+        ]
         if self.moving and self.large:
             shown = self._within_budget(shown)
         return shown

@@ -259,7 +259,7 @@ class PlantView(QWidget):
     def _set_look(self, draft: bool) -> None:
         if self._fxaa:
             self.plotter.renderer.SetUseFXAA(not draft)
-        self.hairlines.set_width(scene.DRAFT_LINE_WIDTH if draft else scene.LINE_WIDTH)
+        self.hairlines.set_draft(draft)
 
     # -- drawing ---------------------------------------------------------------
     def show_plant(self, snap: Snapshot, colors: np.ndarray, reset_camera: bool | None = None) -> None:

@@ -171,6 +171,55 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
     assert not any(a.GetVisibility() for a in actors)
 
 
+def lines_drawn(view):
+    """The line set the hairline actor draws now, and each of its lines' (start, end) point ids."""
+    drawn = view.hairlines.actor.GetMapper().GetInput()
+    conn = np.asarray(drawn.GetLines().GetConnectivityArray()).reshape(-1, 2)
+    return drawn, conn
+
+
+def screen_lengths(view, conn):
+    points = np.asarray(view.hairlines.lines.points)
+    ends = view.project(points[conn.ravel()]).reshape(-1, 2, 2)
+    return np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
+
+
+def test_a_draft_leaves_out_the_hairlines_shorter_than_its_threshold_on_screen(large, make_window, qtbot, monkeypatch):
+    w = make_window(n=14)
+    view = w.view
+    lines = view.hairlines.lines
+    every = np.asarray(lines.GetLines().GetConnectivityArray()).reshape(-1, 2)
+    slow_polish(monkeypatch, True)
+    view.plotter.camera.Zoom(0.3)  # n = 14 seen from as far as n = 17 fills the view
+    view.draft()
+    view.redraw(now=True)
+    drawn, conn = lines_drawn(view)
+    assert drawn is not lines and 0 < len(conn) < (1 - scene.DRAFT_MIN_LEFT_OUT) * len(every)
+    # the same points and colour array: one upload, and a recolour shows in the draft too
+    assert drawn.GetPoints() is lines.GetPoints()
+    assert drawn.GetPointData().GetScalars() is lines.GetPointData().GetArray("rgb")
+    left_out = np.setdiff1d(every[:, 0], conn[:, 0])
+    assert (screen_lengths(view, every[left_out]) < scene.DRAFT_MIN_LINE_PIXELS).all()
+    draft = image_array(view.frame_image())
+    monkeypatch.setattr(scene, "DRAFT_MIN_LEFT_OUT", 1.0)  # a draft with every line
+    view.hairlines.drafts.clear()
+    view.redraw(now=True)
+    assert lines_drawn(view)[0] is lines
+    assert changed(draft, image_array(view.frame_image()), level=8) < 0.005
+    monkeypatch.undo()
+    slow_polish(monkeypatch, True)
+    # closer: more lines are long enough on screen, and the rule still holds
+    view.plotter.camera.Zoom(6.0)
+    view.redraw(now=True)
+    closer, conn6 = lines_drawn(view)
+    assert len(conn6) > len(conn)
+    left_out = np.setdiff1d(every[:, 0], conn6[:, 0])
+    assert (screen_lengths(view, every[left_out]) < scene.DRAFT_MIN_LINE_PIXELS).all()
+    view.polish()
+    view.redraw(now=True)
+    assert lines_drawn(view)[0] is lines  # the polished frame draws them all
+
+
 def test_the_ground_is_built_again_only_when_its_grid_changes():
     import pyvista as pv
 
