@@ -178,7 +178,9 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
         # VTK's default (BlitToHardware) also copies the depth buffer into the window through a
         # full-window shader pass, for drawing after VTK; nothing draws into this window but VTK
         # (about 3 ms less per 1000x800 frame on llvmpipe)
-        self.ren_win.SetFrameBlitModeToBlitToCurrent()
+        blit = getattr(self.ren_win, "SetFrameBlitModeToBlitToCurrent", None)  # OpenGL render windows
+        if blit is not None:
+            blit()
         for renderer in self.renderers:
             renderer.view_isometric()
             self.ren_win.AddRenderer(renderer)
