@@ -20,12 +20,11 @@ Choices the issue leaves open, stated here:
   elevation, never any roll).  Framing fits the plant's 8 box corners into
   90 % of the view, whatever its shape (tall plants are not cropped).
 * **Draft frames** (see :mod:`ramure.app.desktop.view`) leave out the hairlines shorter
-  than :data:`DRAFT_MIN_LINE_PIXELS` on screen wherever they lie (their world length
-  against the pixels a unit spans at the plant's nearest point, so zooming in brings them
-  back).  Software OpenGL pays about 0.15 microseconds per line however short: Honda
-  n = 17 framed whole leaves out about 45 % of its 131k lines, 10 ms of a 41 ms draft
-  frame, and 0.1 % of the pixels change (a twig's last pixel, which its parent's line
-  mostly covers).  The polished frame draws them all.
+  than :data:`DRAFT_MIN_LINE_PIXELS` on screen (chosen again when the camera moves, so
+  zooming in brings them back).  Software OpenGL pays about 0.15 microseconds per line
+  however short: Honda n = 17 framed whole leaves out about half of its 131k lines, about
+  10 ms of a 41 ms draft frame, and 0.1 % of the pixels change (a twig's last pixel, which
+  its parent's line mostly covers).  The polished frame draws them all.
 * **Ground**: a grid on the plane under the plant, its spacing a round
   number (1, 2 or 5 times a power of ten) about a tenth of the plant's size,
   labelled in a corner ("grid: 0.5 units"; the grammar's units are not
@@ -424,60 +423,47 @@ class Hairlines:
 
     def draft_lines(self) -> pv.PolyData:
         """The lines a draft frame draws now: those at least :data:`DRAFT_MIN_LINE_PIXELS` long
-        on screen at the lines' nearest point to the camera (all of them when that leaves out
-        fewer than :data:`DRAFT_MIN_LEFT_OUT`).  The subset shares the lines' points and colours
-        (one upload for both); it is made again only when the threshold, rounded down to a
-        power of the square root of 2, changes (a zoom) or the lines do."""
-        from ramure.app.desktop.plant_actors import pixels_per_unit
-
+        on screen (all of them when that leaves out fewer than :data:`DRAFT_MIN_LEFT_OUT`).
+        The subset shares the lines' points and colours (one upload for both); it is made
+        again only when the camera or the window size changes, or the lines do."""
         assert self.lines is not None and self.skeleton is not None
         draft = self.drafts.get(id(self.lines))
         if draft is None:
-            draft = self.drafts[id(self.lines)] = DraftLines.measure(self.lines, len(self.skeleton))
-        per_unit = pixels_per_unit(self.plotter.renderer, draft.corners)
-        if not np.isfinite(per_unit) or per_unit <= 0:
-            return self.lines
-        draft.update(2.0 ** (math.floor(2.0 * math.log2(DRAFT_MIN_LINE_PIXELS / per_unit)) / 2.0), self.lines)
+            draft = self.drafts[id(self.lines)] = DraftLines()
+        draft.update(self.plotter.renderer, self.lines, len(self.skeleton))
         return self.lines if draft.lines is None else draft.lines
 
 
 @dataclass
 class DraftLines:
-    """The hairlines a draft frame draws: one line set's lines longer than ``threshold``."""
+    """The hairlines a draft frame draws: one line set's lines at least
+    :data:`DRAFT_MIN_LINE_PIXELS` long from the camera they were chosen for."""
 
-    squares: np.ndarray  # each line's length squared
-    corners: np.ndarray  # (8, 3): the corners of the lines' box
-    threshold: float = math.nan
+    view: tuple = ()  # the camera's projection (the rows that place points on screen) and viewport size
     lines: pv.PolyData | None = None  # None: every line
     keep: list = field(default_factory=list)  # numpy arrays VTK reads without a copy
 
-    @classmethod
-    def measure(cls, lines: pv.PolyData, count: int) -> DraftLines:
-        """The lengths and box of the first ``count`` lines of ``lines`` (:func:`segment_lines`).
-        The box a column at a time: numpy's reductions over the rows of an (n, 3) array are
-        20x slower."""
-        from ramure.app.desktop.plant_actors import box_corners
+    def update(self, renderer: Any, lines: pv.PolyData, count: int) -> None:
+        """Choose among the first ``count`` lines of ``lines`` (:func:`segment_lines`) for
+        ``renderer``'s camera, unless they were chosen for the same view."""
+        from ramure.app.desktop._lines_kernel import long_lines
 
-        points = np.asarray(lines.points)[: 2 * count]
-        step = points[count:] - points[:count]
-        squares = np.square(step) @ np.ones(3)
-        lo = np.array([points[:, k].min() if count else 0.0 for k in range(3)])
-        hi = np.array([points[:, k].max() if count else 0.0 for k in range(3)])
-        return cls(squares, box_corners(lo, hi))
-
-    def update(self, threshold: float, lines: pv.PolyData) -> None:
-        """Keep the lines of ``lines`` at least ``threshold`` long (unchanged if it is the same)."""
-        if threshold == self.threshold:
+        camera = renderer.GetActiveCamera()
+        m = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+        matrix = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        width, height = renderer.GetSize()
+        view = (*matrix[[0, 1, 3]].ravel().tolist(), width, height)  # the clipping range (row 2) does not move lines
+        if view == self.view:
             return
-        self.threshold = threshold
-        kept = np.flatnonzero(self.squares >= threshold * threshold)
-        n = len(self.squares)
-        if n - len(kept) < DRAFT_MIN_LEFT_OUT * n:
+        self.view = view
+        points = np.asarray(lines.points)
+        kept = long_lines(points, count, matrix, 0.5 * width, 0.5 * height, DRAFT_MIN_LINE_PIXELS)
+        if count - len(kept) < DRAFT_MIN_LEFT_OUT * count:
             self.lines, self.keep = None, []
             return
         conn = np.empty((len(kept), 2), np.int64)
         conn[:, 0] = kept
-        conn[:, 1] = kept + n
+        conn[:, 1] = kept + count
         subset = pv.PolyData()
         subset.SetPoints(lines.GetPoints())
         subset.GetPointData().SetScalars(lines.GetPointData().GetArray("rgb"))

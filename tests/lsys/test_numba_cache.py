@@ -108,9 +108,9 @@ def test_processes_compiling_at_the_same_time_leave_a_usable_cache(tmp_path):
 def _kernel_modules():
     import importlib
 
-    for package in ("lsys", "gmap"):
+    for package in ("lsys", "gmap", "app/desktop"):
         for path in sorted((ROOT / package).glob("_*kernel.py")):
-            yield importlib.import_module(f"ramure.{package}.{path.stem}")
+            yield importlib.import_module(f"ramure.{package.replace('/', '.')}.{path.stem}")
 
 
 def test_every_kernel_loads_its_cache_lightly_and_writes_it_in_our_own_folders():
