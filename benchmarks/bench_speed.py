@@ -293,8 +293,8 @@ def bench_regrow_and_undo_honda_n17(native=None):
     Drawn as the desktop draws (:func:`_plant_view`, 1000x800): ``regen_seconds`` is the
     session's part (cut + re-derivation), ``plant_seconds`` the window's snapshot (incremental
     turtle + mesh patch, string preview), ``frame_seconds`` :meth:`PlantView.show_plant` and
-    the paint (``paint_seconds``) of the first frame, a draft (1-pixel hairlines, no FXAA: see
-    :mod:`ramure.app.desktop.view`).  ``*_seconds`` is the time to that draft frame, the
+    the paint (``paint_seconds``) of the first frame, a draft (1-pixel hairlines, none shorter than
+    1.5 pixels on screen, no FXAA: see :mod:`ramure.app.desktop.view`).  ``*_seconds`` is the time to that draft frame, the
     figure the targets are about.  ``*_polished_seconds`` adds the full-quality repaint
     (``*_polish_seconds``) that follows once the user pauses for ``polish_delay_seconds``
     (the wait itself is not counted: it is idle time in which further edits merge).

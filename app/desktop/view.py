@@ -29,8 +29,9 @@ renders): on software OpenGL a large plant's full frame costs about 140 ms of
 CPU, most of it the 1.5-pixel hairlines (VTK draws wide lines with a geometry
 shader) and FXAA over a picture full of edges.  So the frame right after an
 edit (a new plant version, new colours, hidden cells) or during a camera drag
-is a *draft*: the same plant, geometry and colours, with 1-pixel hairlines and
-no FXAA (about 40 % of the cost).  When the user pauses for :data:`POLISH_MS`
+is a *draft*: the same plant, geometry and colours, with 1-pixel hairlines, no
+FXAA, and no hairline shorter than 1.5 pixels on screen (see
+:data:`~ramure.app.desktop.scene.DRAFT_MIN_LINE_PIXELS`; about 30 % of the cost).  When the user pauses for :data:`POLISH_MS`
 (a single-shot timer that each further edit restarts) the full-quality frame
 follows.  Plants under :data:`~ramure.app.desktop.plant_actors.LOD_SEGMENTS`
 segments are always drawn polished (their frames are cheap).  Pictures taken
