@@ -1,18 +1,18 @@
 """The PCA dock: the variant cloud in 3D, the 27 picks, qualifier boxes toggled by check boxes.
 
 Drawn with matplotlib's 3D axes on a Qt canvas (drag to rotate).  The base
-plant is the origin (all deltas zero).
+plant is the origin (all deltas zero).  The canvas is made when the first
+variants come: until then the dock says there is no exploration, and the
+desktop does not import matplotlib (about 48 MB of memory).
 """
 
 from __future__ import annotations
 
 import itertools
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-from matplotlib.figure import Figure
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QIcon, QPixmap
 from PySide6.QtWidgets import QLabel, QListWidget, QListWidgetItem, QSplitter, QVBoxLayout, QWidget
@@ -61,18 +61,17 @@ class PcaCloudView(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.figure = Figure(figsize=(4, 3), dpi=90)
-        self.canvas = FigureCanvasQTAgg(self.figure)
-        self.axes = self.figure.add_subplot(projection="3d")
+        self.figure: Any = None  # the matplotlib figure, its canvas and 3D axes: made by _plot()
+        self.canvas: Any = None
+        self.axes: Any = None
         self.note = QLabel("")
         self.note.setWordWrap(True)
         self.boxes_list = QListWidget()
         self.boxes_list.setObjectName("qualifierBoxes")
         self.boxes_list.itemChanged.connect(lambda _: self.redraw())
         self.boxes_list.setToolTip("Tick a qualifier to draw its box: where its best variants lie in PCA space")
-        self.canvas.setMinimumSize(180, 180)
         self.split = split = QSplitter(Qt.Orientation.Horizontal)
-        split.addWidget(self.canvas)
+        split.addWidget(QWidget())  # the canvas's place
         split.addWidget(self.boxes_list)
         split.setStretchFactor(0, 1)
         split.setStretchFactor(1, 0)
@@ -80,12 +79,25 @@ class PcaCloudView(QWidget):
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.note)
         layout.addWidget(split, 1)
-        self.figure.subplots_adjust(left=0.02, right=0.92, bottom=0.06, top=0.98)
         self._arrange()
         self.variant_set: VariantSet | None = None
         self.pick_artist = None
-        self.canvas.mpl_connect("pick_event", self._picked)
         self.set_unavailable("No exploration yet (Variants ▸ Explore).")
+
+    def _plot(self) -> Any:
+        """The 3D axes, with the figure and its canvas made (and matplotlib imported) the first time."""
+        if self.axes is None:
+            from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+            from matplotlib.figure import Figure
+
+            self.figure = Figure(figsize=(4, 3), dpi=90)
+            self.canvas = FigureCanvasQTAgg(self.figure)
+            self.canvas.setMinimumSize(180, 180)
+            self.axes = self.figure.add_subplot(projection="3d")
+            self.figure.subplots_adjust(left=0.02, right=0.92, bottom=0.06, top=0.98)
+            self.canvas.mpl_connect("pick_event", self._picked)
+            self.split.replaceWidget(0, self.canvas).deleteLater()
+        return self.axes
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
         super().resizeEvent(event)
@@ -105,8 +117,9 @@ class PcaCloudView(QWidget):
         self.variant_set = None
         self.boxes_list.clear()
         self.note.setText(message)
-        self.axes.cla()
-        self.canvas.draw_idle()
+        if self.axes is not None:
+            self.axes.cla()
+            self.canvas.draw_idle()
 
     def set_variants(self, variant_set: VariantSet) -> None:
         self.variant_set = variant_set
@@ -154,12 +167,14 @@ class PcaCloudView(QWidget):
         self.pick_clicked.emit(self.variant_set.picks[nearest])
 
     def redraw(self) -> None:
-        ax = self.axes
-        ax.cla()
         vs = self.variant_set
         if vs is None:
-            self.canvas.draw_idle()
+            if self.axes is not None:
+                self.axes.cla()
+                self.canvas.draw_idle()
             return
+        ax = self._plot()
+        ax.cla()
         if vs.points is not None:
             ok = np.all(np.isfinite(vs.points), axis=1)
             ax.scatter(*vs.points[ok].T, s=3, c="#9a9a9a", alpha=0.4, depthshade=False)

@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-from matplotlib.figure import Figure
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QCheckBox, QDockWidget, QLabel, QVBoxLayout, QWidget
 
@@ -34,6 +32,10 @@ class QualifierMapView(QWidget):
     """The collision-matrix heat map with a one-line summary and an English/French toggle."""
 
     def __init__(self, parent: QWidget | None = None) -> None:
+        # matplotlib (about 48 MB) is imported with the view, made when variants are first shown
+        from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+        from matplotlib.figure import Figure
+
         super().__init__(parent)
         self.figure = Figure(figsize=(5, 4.6), dpi=90)  # fixed margins: a docked canvas can be tiny
         self.canvas = FigureCanvasQTAgg(self.figure)

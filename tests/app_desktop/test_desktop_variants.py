@@ -38,6 +38,8 @@ def menu_action(window, menu_title, text):
 
 def test_explore_fills_the_gallery_and_the_pca_dock(make_window, qtbot, artifacts):
     w = make_window(n=4)
+    # no exploration yet: the dock says so, and has no (empty) matplotlib canvas yet
+    assert w.pca_view.canvas is None and "No exploration yet" in w.pca_view.note.text()
     menu_action(w, "Variants", "Explore variants of this grammar").trigger()  # once said "n_jobs ... False"
     assert w.last_message is None and w.progress.isVisible()
     qtbot.waitUntil(lambda: w.variants.variant_set is not None and not w.variants.busy(), timeout=60000)
@@ -51,6 +53,7 @@ def test_explore_fills_the_gallery_and_the_pca_dock(make_window, qtbot, artifact
     assert sum("%" in t for t in labels) >= 20  # captioned with the constants that differ
     assert not w.progress.isVisible()
     assert w.pca_view.boxes_list.count() >= 10  # one box per vocabulary qualifier
+    assert w.pca_view.split.widget(0) is w.pca_view.canvas  # in the placeholder's place
     w.pca_view.set_box_checked("dense")
     assert w.pca_view.checked_boxes() == ["dense"]
     lines = [ln for ln in w.pca_view.axes.get_lines() if ln.get_color() != "black"]
