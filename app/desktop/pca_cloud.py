@@ -96,7 +96,9 @@ class PcaCloudView(QWidget):
             self.axes = self.figure.add_subplot(projection="3d")
             self.figure.subplots_adjust(left=0.02, right=0.92, bottom=0.06, top=0.98)
             self.canvas.mpl_connect("pick_event", self._picked)
-            self.split.replaceWidget(0, self.canvas).deleteLater()
+            placeholder = self.split.replaceWidget(0, self.canvas)
+            if placeholder is not None:
+                placeholder.deleteLater()
         return self.axes
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
