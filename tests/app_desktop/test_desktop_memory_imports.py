@@ -60,6 +60,7 @@ def test_a_plant_drawn_from_the_kernel_cache_loads_no_compiler_and_nothing_an_ed
 _SCAN = """
 import json, linecache, sys
 import ramure.app.desktop.window
+import matplotlib.backends.backend_qtagg  # what the PCA dock imports with its first variants
 flags = sys.modules["shibokensupport.feature"].pyside_feature_dict
 modules = ("ramure.app.desktop.view", "matplotlib.backends.qt_compat", "pyvista.core.pointset", "numpy.linalg",
            "matplotlib.figure")
