@@ -110,6 +110,27 @@ def test_small_plants_are_always_drawn_polished(make_window, qtbot):
     assert w.view.plotter.renderer.GetUseFXAA()
 
 
+def test_a_small_plant_turned_by_the_mouse_is_drafted_until_the_release(make_window, qtbot):
+    from PySide6.QtCore import QPoint, Qt
+    from PySide6.QtTest import QTest
+
+    w = make_window(n=8)
+    view = w.view
+    assert not view.plant.large and not view.drafting
+    widget = view.plotter
+    centre = QPoint(widget.width() // 2, widget.height() // 2)
+    camera = view.plotter.camera.GetPosition()
+    QTest.mousePress(widget, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, centre)
+    for step in range(1, 6):
+        QTest.mouseMove(widget, centre + QPoint(12 * step, 4 * step))
+        qtbot.wait(5)
+    assert view.plotter.camera.GetPosition() != camera  # the drag turned the view
+    assert view.drafting and not view.plotter.renderer.GetUseFXAA() and not view._polish_timer.isActive()
+    QTest.mouseRelease(widget, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, centre + QPoint(60, 20))
+    assert not view.drafting and view.plotter.renderer.GetUseFXAA()  # a small plant: polished at once
+    assert w.controller.snapshot.selection == ()  # a drag is not a click
+
+
 def test_a_camera_drag_is_drafted_and_polished_after_the_release(large, make_window, qtbot):
     w = make_window(n=14)
     view = w.view
