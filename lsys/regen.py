@@ -29,6 +29,7 @@ import json
 import os
 import pathlib
 import time
+import weakref
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Self
@@ -52,26 +53,70 @@ if TYPE_CHECKING:
 SESSION_FORMAT = "ramure-session"
 #: Neighbouring modules kept as read-only context when regrowing a context-sensitive grammar.
 CONTEXT_WINDOW = 256
+#: The last edits in the undo history that keep both whole strings (see :class:`Change`);
+#: older ones keep what they replaced only.
+KEEP_STRINGS = 1
 SESSION_VERSION = 1
 
 
 @dataclass
 class Change:
-    """One in-place change of the tree: enough to undo and redo it exactly."""
+    """One in-place change of the tree: enough to undo and redo it exactly.
+
+    A fresh change keeps both strings (``old_leaves``, ``new_leaves``): undoing and redoing it
+    swaps the very arrays, so whoever kept the plant of either string gets it back as it was.
+    :meth:`compact` keeps only what the edit replaced and what it put in (``old_pieces``,
+    ``new_pieces``): an older edit in the undo history then costs what it touched (a regrow of
+    10 leaves of Honda n = 17 kept 11.5 MB, its whole new string; a few kB now), and undoing
+    it splices the current string instead.
+    """
 
     roots: np.ndarray
     old_children: tuple  # (child_start, child_count) of the roots before
     new_children: tuple
     removed: np.ndarray  # node ids marked dead
     added: np.ndarray  # node ids appended
-    old_leaves: np.ndarray
-    new_leaves: np.ndarray
+    old_leaves: np.ndarray | None  # None once compacted
+    new_leaves: np.ndarray | None
     removed_leaves: int = 0  # modules taken out of the string
     added_leaves: int = 0  # modules put in
     #: (k, 2) inclusive [first, last] string positions each run of regrown roots replaced in
     #: ``old_leaves`` and took in ``new_leaves`` (see :meth:`spans`); None when not known.
     old_spans: np.ndarray | None = None
     new_spans: np.ndarray | None = None
+    #: Once compacted: the modules of each ``old_spans`` row in the old string, and of each
+    #: ``new_spans`` row in the new one.
+    old_pieces: list[np.ndarray] | None = None
+    new_pieces: list[np.ndarray] | None = None
+    _made: tuple | None = field(default=None, repr=False)  # (forward, weakrefs to the strings before and after)
+
+    def compact(self) -> None:
+        """Keep only the modules the edit replaced and put in, not both whole strings (nothing
+        happens when the spans are not known)."""
+        if self.old_leaves is None or self.new_leaves is None or self.old_spans is None or self.new_spans is None:
+            return
+        self.old_pieces = [self.old_leaves[a : b + 1].copy() for a, b in self.old_spans]
+        self.new_pieces = [self.new_leaves[a : b + 1].copy() for a, b in self.new_spans]
+        self.old_leaves = self.new_leaves = None
+
+    def leaves_after(self, current: np.ndarray, forward: bool = True) -> np.ndarray:
+        """The string after applying this change (``forward``) or undoing it to ``current`` (the
+        string before that): the kept array, or ``current`` spliced."""
+        kept = self.new_leaves if forward else self.old_leaves
+        if kept is not None:
+            return kept
+        spans, pieces = (self.old_spans, self.new_pieces) if forward else (self.new_spans, self.old_pieces)
+        assert spans is not None and pieces is not None
+        return _replace_spans(current, spans[:, 0], spans[:, 1], pieces)
+
+    def made(self, old: np.ndarray, new: np.ndarray, forward: bool = True) -> bool:
+        """True if applying this change (``forward``) or undoing it turned the array ``old`` into
+        ``new`` (the very arrays)."""
+        made = self._made  # the last apply: its arrays (a spliced string is a new array)
+        if made is not None and made[0] == forward and made[1]() is old and made[2]() is new:
+            return True
+        before, after = (self.old_leaves, self.new_leaves) if forward else (self.new_leaves, self.old_leaves)
+        return before is not None and before is old and after is new
 
     def spans(self, forward: bool = True) -> tuple[np.ndarray, np.ndarray] | None:
         """What :func:`ramure.lsys.turtle.changed_spans` finds between the strings before and after
@@ -90,7 +135,9 @@ class Change:
         tree.set_alive(revive, True)
         start, count = self.new_children if forward else self.old_children
         tree.set_children(self.roots, start, count)
-        tree.leaves = self.new_leaves if forward else self.old_leaves
+        before = tree.leaves
+        tree.leaves = self.leaves_after(before, forward)
+        self._made = (forward, weakref.ref(before), weakref.ref(tree.leaves))
         tree.changed()
         tree.attach_sums(sums, self.roots, revived=revive)
 
@@ -480,6 +527,10 @@ class Session:
         self.edits.append(edit)
         self._undo.append((edit, undo))
         self._redo.clear()
+        if len(self._undo) > KEEP_STRINGS:
+            how = self._undo[-KEEP_STRINGS - 1][1]
+            if how[0] == "change":
+                how[1].compact()
         self.last_result = result
         return result
 
@@ -520,8 +571,7 @@ class Session:
         for stack, forward in ((self._undo, True), (self._redo, False)):
             if stack and stack[-1][1][0] == "change":
                 change = stack[-1][1][1]
-                before, after = (change.old_leaves, change.new_leaves) if forward else (change.new_leaves, change.old_leaves)
-                if before is old and after is new:
+                if change.made(old, new, forward):
                     return change.spans(forward)
         return None
 

@@ -131,3 +131,39 @@ def test_whole_plant_regrow_equals_a_fresh_derivation_even_with_context():
         ls = LSystem.from_file(path)
         fresh = ls.derive(n=n, constants={"a": 30} if "context" in path else {"a2": 30})
         assert s.derivation.to_string() == fresh.to_string()
+
+
+def test_older_edits_keep_only_what_they_replaced_and_undo_redo_stay_exact():
+    from ramure.lsys.regen import KEEP_STRINGS
+    from ramure.lsys.turtle import changed_spans
+
+    s = Session(HONDA, n=9)
+    rng = np.random.default_rng(5)
+    strings = [s.tree.leaves.copy()]
+    for k in range(6):
+        leaves = s.leaves_with_symbol("F")
+        if k == 3:
+            s.prune(leaves[-3:])
+        else:
+            s.regrow([int(v) for v in rng.choice(leaves, 3, replace=False)], seed=k)
+        strings.append(s.tree.leaves.copy())
+    changes = [how[1] for _, how in s._undo]
+    whole = [c for c in changes if c.old_leaves is not None]
+    assert len(whole) == KEEP_STRINGS and whole[0] is changes[-1]  # the last edit keeps both strings
+    for c in changes[:-KEEP_STRINGS]:  # what the edit touched, nothing more
+        assert c.new_leaves is None and c.old_pieces is not None and c.new_pieces is not None
+        assert sum(map(len, c.old_pieces)) == c.removed_leaves and sum(map(len, c.new_pieces)) == c.added_leaves
+    for expected in reversed(strings[:-1]):
+        before = s.tree.leaves
+        s.undo()
+        np.testing.assert_array_equal(s.tree.leaves, expected)
+        spans = s.edit_spans(before, s.tree.leaves)  # known without comparing the strings
+        assert spans is not None
+        found = changed_spans(before, s.tree.leaves, s.tree.size)
+        np.testing.assert_array_equal(spans[0], found[0])
+        np.testing.assert_array_equal(spans[1], found[1])
+    for expected in strings[1:]:
+        before = s.tree.leaves
+        s.redo()
+        np.testing.assert_array_equal(s.tree.leaves, expected)
+        assert s.edit_spans(before, s.tree.leaves) is not None
