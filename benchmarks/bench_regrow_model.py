@@ -64,3 +64,55 @@ def bench_regrow_model_honda_n17():
         **{f"{k}_seconds": round(v, 4) for k, v in med.items()},
         "edits": len(rows["regen"]),
     }
+
+
+def _held_bytes(session) -> int:
+    """Bytes of the string arrays and pieces the session's undo history holds (each array once)."""
+    arrays = {}
+    for _, how in session._undo:
+        if how[0] != "change":
+            continue
+        change = how[1]
+        for a in (change.old_leaves, change.new_leaves, *(change.old_pieces or ()), *(change.new_pieces or ())):
+            if a is not None:
+                arrays[id(a)] = a.nbytes
+    return sum(arrays.values())
+
+
+def bench_undo_history_honda_n17(edits: int = 20):
+    """What the undo history holds after ``edits`` 10-leaf regrows on Honda n = 17 (the strings
+    its edits keep, :class:`ramure.lsys.regen.Change`): ``history_mb`` in all, ``per_edit_kb`` for
+    each edit but the last (which keeps both whole strings, for a fast undo); and the process's
+    resident memory growth over the edits (``rss_growth_mb``, after the first edit, which makes
+    the kept previous plant).  Before the history kept differences, each regrow held its whole
+    new string: 11.5 MB."""
+    from ramure.app.model import Explorer
+
+    def rss_mb() -> float:
+        fields = dict(line.split(":", 1) for line in open("/proc/self/status"))
+        return int(fields["VmRSS"].split()[0]) / 1024
+
+    ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
+    _ = ex.mesh  # the plant as the window shows it
+    rng = np.random.default_rng(0)
+    t0 = time.perf_counter()
+    after_first = None
+    for k in range(edits):
+        leaves = ex.skeleton.leaf_id
+        ex.select(rng.choice(leaves[len(leaves) // 3 :], 10, replace=False))
+        ex.regrow(seed=k)
+        _ = ex.mesh
+        after_first = after_first if after_first is not None else rss_mb()
+    seconds = time.perf_counter() - t0
+    session = ex.session
+    last = session._undo[-1][1][1]
+    whole = last.old_leaves.nbytes + last.new_leaves.nbytes if last.old_leaves is not None else 0
+    held = _held_bytes(session)
+    return {
+        "seconds": round(seconds, 3),
+        "edits": edits,
+        "history_mb": round(held / 2**20, 2),
+        "per_edit_kb": round((held - whole) / max(edits - 1, 1) / 1024, 1),
+        "rss_growth_mb": round(rss_mb() - after_first, 1),
+        "string_mb": round(ex.derivation.tree.leaves.nbytes / 2**20, 1),
+    }
