@@ -206,9 +206,10 @@ class Trace:
     action codes and has-parameters flags (the first parameters are not kept:
     an edit reads them again from the tree, a gather as fast as splicing a
     copy, and 8 bytes per module less); ``segment_at`` / ``organ_at`` the
-    string position (int32) of each segment's ``F`` / each organ; ``match``
-    the bracket matches (int32; None when some bracket is unmatched: edits
-    then re-interpret the whole string).  The turtle state
+    string position (int32) of each segment's ``F`` / each organ; ``balanced``
+    whether every bracket is matched (else edits re-interpret the whole string;
+    an edit finds the new string's bracket matches itself, so none are kept:
+    4 bytes per module less).  The turtle state
     at any position is found again by walking from the root and jumping over
     the branches in between (:func:`ramure.lsys._turtle_kernel.walk`, SEEK).
     """
@@ -218,13 +219,13 @@ class Trace:
     nps: np.ndarray
     segment_at: np.ndarray
     organ_at: np.ndarray
-    match: np.ndarray | None
+    balanced: bool
     #: String position of each polygon's ``{`` (empty without polygons).
     polygon_at: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
 
     def nbytes(self) -> int:
-        arrays = (self.acts, self.nps, self.segment_at, self.organ_at, self.match, self.polygon_at)
-        return sum(a.nbytes for a in arrays if a is not None)
+        arrays = (self.acts, self.nps, self.segment_at, self.organ_at, self.polygon_at)
+        return sum(a.nbytes for a in arrays)
 
 
 def _settings(lsys):
@@ -278,7 +279,7 @@ def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> 
     state = initial_state(lsys.grammar.width)
     _, segs, orgs, poly, err = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)
     check_walk(lsys, tree, leaves, poly, err)
-    trace = Trace(leaves, acts, nps, segs[0], orgs[0], _matches(acts), poly[0])
+    trace = Trace(leaves, acts, nps, segs[0], orgs[0], _balanced(acts), poly[0])
     skeleton = _skeleton(lsys, tree, leaves, segs, orgs, trace)
     _check_color(lsys, tree, leaves[poly[0]], poly[2])  # before from_walk makes colours int32
     skeleton.polygons = _checked(lsys, tree, from_walk(leaves, poly))
@@ -309,12 +310,11 @@ def _with_drawing(lsys, skeleton):
 _NO_MATCH = np.zeros(0, np.int32)  # the dtype of the trace's matches: one compiled walk
 
 
-def _matches(acts):
-    """Bracket matches of the string from its actions; None if some bracket is unmatched."""
+def _balanced(acts):
+    """Whether every bracket of the string (its actions) is matched."""
     from ._turtle_kernel import bracket_pairs32
 
-    match, balanced = bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
-    return match if balanced else None
+    return bool(bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))[1])
 
 
 def _skeleton(lsys, tree, leaves, segs, orgs, trace):
@@ -478,7 +478,7 @@ def reinterpret(
     leaves = np.asarray(leaves, np.int64)
     old_spans = np.asarray(old_spans, np.int64).reshape(-1, 2)
     new_spans = np.asarray(new_spans, np.int64).reshape(-1, 2)
-    if trace is None or trace.match is None or not len(old_spans):
+    if trace is None or not trace.balanced or not len(old_spans):
         return interpret_string(lsys, tree, leaves)
     order = np.argsort(old_spans[:, 0], kind="stable")
     old_spans, new_spans = old_spans[order], new_spans[order]
@@ -509,7 +509,7 @@ def reinterpret(
             return interpret_string(lsys, tree, leaves)
         check_walk(lsys, tree, leaves, poly, err)
         regions.append([old_spans[i, 0], stop - delta[i], segs, orgs, stop, poly])
-    out = _patched(lsys, tree, skeleton, trace, leaves, (acts, nps, match), regions, old_spans, delta)
+    out = _patched(lsys, tree, skeleton, trace, leaves, (acts, nps), regions, old_spans, delta)
     out.extra["polygon_acts"] = drawn
     return out
 
@@ -618,8 +618,8 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
     )
     organs = _organs(lsys, tree, leaves, (org_at, position, frame, size, ocolor))
     polygon_at, polygons = _spliced_polygons(lsys, tree, skeleton, trace, leaves, regions, old_spans, delta)
-    acts, nps, match = arrays
-    new_trace = Trace(leaves, acts, nps, seg_at.astype(np.int32), org_at.astype(np.int32), match, polygon_at)
+    acts, nps = arrays
+    new_trace = Trace(leaves, acts, nps, seg_at.astype(np.int32), org_at.astype(np.int32), True, polygon_at)
     reuse = (np.flatnonzero(same), old_index[same[is_kept]])
     return _with_drawing(
         lsys,

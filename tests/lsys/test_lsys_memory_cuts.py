@@ -38,7 +38,7 @@ def _traced(fn):
 
 
 def _trace_bytes(trace):
-    return 6 * len(trace.acts) + 4 * (len(trace.segment_at) + len(trace.organ_at) + len(trace.polygon_at))
+    return 2 * len(trace.acts) + 4 * (len(trace.segment_at) + len(trace.organ_at) + len(trace.polygon_at))
 
 
 def test_the_turtle_trace_keeps_int32_positions_and_no_copy_of_the_parameters():
@@ -52,14 +52,14 @@ def test_the_turtle_trace_keeps_int32_positions_and_no_copy_of_the_parameters():
     sk, held, peak = _traced(lambda: interpret_string(ls, tree, tree.leaves))
     modules, trace = len(tree.leaves), sk.extra["trace"]
     assert modules == 90_101 and len(sk) == 8_191
-    assert [a.dtype for a in (trace.segment_at, trace.organ_at, trace.match, trace.polygon_at)] == [np.int32] * 4
-    assert not hasattr(trace, "par")
-    # action codes (1 byte), has-parameters flags (1) and bracket matches (4) per module
+    assert [a.dtype for a in (trace.segment_at, trace.organ_at, trace.polygon_at)] == [np.int32] * 3
+    assert not hasattr(trace, "par") and not hasattr(trace, "match") and trace.balanced
+    # action codes (1 byte) and has-parameters flags (1) per module: an edit finds the new
+    # string's bracket matches itself
     assert trace.nbytes() == _trace_bytes(trace)
-    assert trace.match[trace.match[trace.acts == 11]].tolist() == np.flatnonzero(trace.acts == 11).tolist()
-    # skeleton + trace held: 16.6 bytes per module (29.0 with int64 matches and the parameter copy);
-    # peak 28.7 (35.9 before)
-    assert held < 20 * modules and peak < 32 * modules
+    # skeleton + trace held: 12.6 bytes per module (16.6 with the bracket matches, 29.0 with int64
+    # matches and the parameter copy); peak 28.7 (35.9 before)
+    assert held < 16 * modules and peak < 32 * modules
 
 
 def test_an_edit_keeps_the_trace_int32_and_equal_to_a_fresh_interpretation():
@@ -79,9 +79,9 @@ def test_an_edit_keeps_the_trace_int32_and_equal_to_a_fresh_interpretation():
     fresh = interpret_string(ls, tree, tree.leaves)
     assert "reuse" in edited.extra  # re-interpreted in regions, not whole
     a, b = edited.extra["trace"], fresh.extra["trace"]
-    for name in ("acts", "nps", "segment_at", "organ_at", "match", "polygon_at"):
+    for name in ("acts", "nps", "segment_at", "organ_at", "polygon_at"):
         assert getattr(a, name).dtype == getattr(b, name).dtype and np.array_equal(getattr(a, name), getattr(b, name)), name
-    assert a.match.dtype == np.int32 and a.nbytes() == _trace_bytes(a)
+    assert a.balanced and b.balanced and a.nbytes() == _trace_bytes(a)
     assert np.allclose(edited.end, fresh.end, rtol=0, atol=1e-9) and np.array_equal(edited.leaf_id, fresh.leaf_id)
 
 
