@@ -394,9 +394,7 @@ class PlantActors:
 
     def _build(self, g: _Group) -> None:
         """``g``'s points and cells gathered from the full mesh."""
-        from ramure.lsys.geometry import tube_quads
-        from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
-        from vtkmodules.vtkCommonDataModel import vtkCellArray
+        from ramure.lsys.geometry import cell_array, tube_quads
         import pyvista as pv
 
         mesh = self.mesh
@@ -411,7 +409,7 @@ class PlantActors:
             count = len(g.segments)
             pts = points[: self.segment_count * k].reshape(-1, k * 3).take(g.segments, axis=0).reshape(-1, 3)
             conn = tube_quads(count, self.sides).ravel()
-            offsets = np.arange(0, len(conn) + 1, 4, dtype=np.int64)
+            offsets = np.arange(0, len(conn) + 1, 4, dtype=conn.dtype)
         else:
             quads = mesh.n_cells - g.count
             polys = mesh.GetPolys()
@@ -423,13 +421,11 @@ class PlantActors:
             conn = all_conn[first:] - 2 * quads
             offsets = all_offsets[quads:] - first
             pts = points[2 * quads :]
-        conn = np.ascontiguousarray(conn, dtype=np.int64)
-        offsets = np.ascontiguousarray(offsets, dtype=np.int64)
-        cells = vtkCellArray()
-        cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=False), numpy_to_vtkIdTypeArray(conn, deep=False))
+        conn = np.ascontiguousarray(conn)
+        offsets = np.ascontiguousarray(offsets, dtype=conn.dtype)  # the full mesh's ids: int32 (see geometry.id_dtype)
         g.keep = [conn, offsets]
         poly.SetPoints(pv.vtk_points(np.ascontiguousarray(pts), deep=False))
-        poly.SetPolys(cells)
+        poly.SetPolys(cell_array(offsets, conn))
 
 
 def _levels(radius: np.ndarray, top: float) -> np.ndarray:

@@ -178,14 +178,14 @@ def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int, sides: int =
     return out
 
 
-_COUNT = np.zeros(0, np.int64)  # 0, 1, 2, ... (read-only), kept for every line set
-_EVENS = np.zeros(0, np.int64)  # 0, 2, 4, ... (read-only): line sets' offsets, a prefix of it
+_COUNT = np.zeros(0, np.int32)  # 0, 1, 2, ... (read-only), kept for every line set
+_EVENS = np.zeros(0, np.int32)  # 0, 2, 4, ... (read-only): line sets' offsets, a prefix of it
 
 
 def _counting(n: int) -> None:
     global _COUNT, _EVENS
     if len(_COUNT) < 2 * n + 1:
-        _COUNT = np.arange(max(4 * n + 2, 1024), dtype=np.int64)
+        _COUNT = np.arange(max(4 * n + 2, 1024), dtype=np.int32)
         _EVENS = _COUNT[: len(_COUNT) // 2] * 2
         _COUNT.flags.writeable = _EVENS.flags.writeable = False
 
@@ -198,14 +198,14 @@ class LineBuffers:
     several ms)."""
 
     points: np.ndarray  # (2 capacity, 3) float
-    conn: np.ndarray  # (2 capacity,) int64
+    conn: np.ndarray  # (2 capacity,) int32
     colors: np.ndarray  # (2 capacity, 3) uint8
 
     @classmethod
     def make(cls, n: int) -> LineBuffers:
         """Buffers for ``n`` lines and 10 % more."""
         cap = n + n // 10 + 16
-        return cls(np.empty((2 * cap, 3)), np.empty(2 * cap, np.int64), np.empty((2 * cap, 3), np.uint8))
+        return cls(np.empty((2 * cap, 3)), np.empty(2 * cap, np.int32), np.empty((2 * cap, 3), np.uint8))
 
     @property
     def capacity(self) -> int:
@@ -219,7 +219,7 @@ def segment_lines(start: ArrayLike, end: ArrayLike, buffers: LineBuffers | None 
     start, end = np.asarray(start, float).reshape(-1, 3), np.asarray(end, float).reshape(-1, 3)
     n = len(start)
     if buffers is None:
-        buffers = LineBuffers(np.empty((2 * n, 3)), np.empty(2 * n, np.int64), np.empty((0, 3), np.uint8))
+        buffers = LineBuffers(np.empty((2 * n, 3)), np.empty(2 * n, np.int32), np.empty((0, 3), np.uint8))
     points, conn = buffers.points[: 2 * n], buffers.conn[: 2 * n].reshape(n, 2)
     points[:n] = start
     points[n:] = end
@@ -233,15 +233,12 @@ def segment_lines(start: ArrayLike, end: ArrayLike, buffers: LineBuffers | None 
 
 
 def line_cells(conn: np.ndarray) -> Any:
-    """A ``vtkCellArray`` of lines between the point ids ``conn`` ((n, 2) int64, C order), read
+    """A ``vtkCellArray`` of lines between the point ids ``conn`` ((n, 2) int32, C order), read
     by VTK in place (the caller keeps ``conn`` alive)."""
-    from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
-    from vtkmodules.vtkCommonDataModel import vtkCellArray
+    from ramure.lsys.geometry import cell_array
 
     _counting(len(conn))
-    cells = vtkCellArray()
-    cells.SetData(numpy_to_vtkIdTypeArray(_EVENS[: len(conn) + 1], deep=False), numpy_to_vtkIdTypeArray(conn.ravel(), deep=False))
-    return cells
+    return cell_array(_EVENS[: len(conn) + 1], conn.ravel())
 
 
 def point_colors(rgb: np.ndarray, buffers: LineBuffers | None = None) -> np.ndarray:
@@ -461,7 +458,7 @@ class DraftLines:
         if count - len(kept) < DRAFT_MIN_LEFT_OUT * count:
             self.lines, self.keep = None, []
             return
-        conn = np.empty((len(kept), 2), np.int64)
+        conn = np.empty((len(kept), 2), np.int32)
         conn[:, 0] = kept
         conn[:, 1] = kept + count
         subset = pv.PolyData()
