@@ -121,7 +121,7 @@ _OFFSETS: list[np.ndarray] = []  # the quad offsets 0, 4, 8 ... of the largest p
 def _quad_offsets(quads: int) -> np.ndarray:
     """Read-only cell offsets (quads + 1,) of ``quads`` quads (a prefix of a cached array)."""
     if not _OFFSETS or len(_OFFSETS[0]) < quads + 1:
-        offsets = np.arange(0, 4 * quads + 1, 4, dtype=id_dtype(4 * quads))
+        offsets: np.ndarray = np.arange(0, 4 * quads + 1, 4, dtype=id_dtype(4 * quads))
         offsets.flags.writeable = False
         _OFFSETS[:] = [offsets]
     return _OFFSETS[0][: quads + 1]
@@ -273,7 +273,7 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
         return mesh
     if nt:
         dtype = id_dtype(max(len(points), 4 * nq + 3 * nt))
-        conn = np.empty(4 * nq + 3 * nt, dtype)
+        conn: np.ndarray = np.empty(4 * nq + 3 * nt, dtype)
         conn[: 4 * nq] = tube_quads(nseg, sides).ravel()
         conn[4 * nq : 4 * nq + 3 * no] = (otris + len(tube_pts)).ravel()
         conn[4 * nq + 3 * no :] = (ptris + len(tube_pts) + len(opts)).ravel()
