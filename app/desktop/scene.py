@@ -136,14 +136,18 @@ def fit_camera(
         renderer.ResetCameraClippingRange(*clip_bounds)
 
 
+def projection_matrix(renderer: Any) -> np.ndarray:
+    """The 4x4 matrix from world to clip coordinates of ``renderer``'s camera (VTK's composite
+    projection for the renderer's aspect ratio)."""
+    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+
+
 def outside_view(plotter: pv.BasePlotter, bounds: Sequence[float], slack: float = 1.02) -> bool:
     """True if a corner of ``bounds`` projects outside the view (the plant grew out of sight)."""
     b = np.asarray(bounds, float).reshape(3, 2)
     corners = np.array(np.meshgrid(*b, indexing="ij")).reshape(3, -1).T
-    renderer = plotter.renderer
-    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
-    matrix = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
-    clip = np.c_[corners, np.ones(len(corners))] @ matrix.T
+    clip = np.c_[corners, np.ones(len(corners))] @ projection_matrix(plotter.renderer).T
     if (clip[:, 3] <= 0).any():
         return True
     return bool(np.max(np.abs(clip[:, :2] / clip[:, 3:4])) > slack)
@@ -445,9 +449,7 @@ class DraftLines:
         ``renderer``'s camera, unless they were chosen for the same view."""
         from ramure.app.desktop._lines_kernel import long_lines
 
-        camera = renderer.GetActiveCamera()
-        m = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
-        matrix = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        matrix = projection_matrix(renderer)
         width, height = renderer.GetSize()
         view = (*matrix[[0, 1, 3]].ravel().tolist(), width, height)  # the clipping range (row 2) does not move lines
         if view == self.view:

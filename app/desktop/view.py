@@ -533,10 +533,7 @@ class PlantView(QWidget):
         return QPoint(int(round(x / scale)), int(round(self.plotter.height() - 1 - y / scale)))
 
     def projection_matrix(self) -> np.ndarray:
-        renderer = self.plotter.renderer
-        camera = renderer.GetActiveCamera()
-        m = camera.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
-        return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        return scene.projection_matrix(self.plotter.renderer)
 
     def project(self, points: ArrayLike) -> np.ndarray:
         """Display coordinates (k, 2) of world points (vectorised: one matrix, no VTK call per point)."""
