@@ -455,6 +455,7 @@ class LSystem:
                 f"{self.max_values:,}: use fewer derivation steps or parameters (or raise LSystem.max_values)"
             )
         params = self._successor_params(tree, string, chosen, counts, rng, constants, rule_constants, context)
+        self._widen(tree, table)
         start = tree.extend(new, step)
         base = start + np.cumsum(made) - made
         out = np.empty(total, np.int64)
@@ -483,6 +484,16 @@ class LSystem:
         tree.params[start:] = params
         tree.changed()
         return out
+
+    @staticmethod
+    def _widen(tree, table) -> None:
+        """Let the tree's int16 fields hold what a step of this grammar writes
+        (:meth:`DerivationTree.widen`): its rule indices, successor symbols, slots and lengths."""
+        longest = int(table.length.max())
+        tree.widen("rule", 0, len(table.length) - 2)
+        tree.widen("index_in_rule", 0, max(longest - 1, 0))
+        tree.widen("child_count", 0, longest)
+        tree.widen("symbol", 0, int(table.symbol.max()))
 
     @staticmethod
     def _assemble_numpy(tree, string, chosen, table, start, out) -> None:

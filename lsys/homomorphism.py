@@ -83,7 +83,9 @@ def interpreted(
         string = new
     made = scratch.size > len(leaves)
     if made:  # modules an interpretation rule wrote: rule index -2 - r (see interpretation_rule)
-        scratch.rule[len(leaves) :] = -2 - scratch.rule[len(leaves) :]
+        written = scratch.rule[len(leaves) :].astype(np.int64)
+        scratch.widen("rule", -2 - int(written.max()), -2 - int(written.min()))
+        scratch.rule[len(leaves) :] = -2 - written
     return scratch, string, leaves[_roots(scratch)[string]]
 
 

@@ -38,16 +38,22 @@ T = TypeVar("T")
 # nodes, issue 14).  Arrays of ids the tree hands out (leaves, children, subtree) are int64.
 _MAX_NODES = int(np.iinfo(np.int32).max)
 _FIELDS = {
-    "symbol": np.int32,
+    "symbol": np.int16,
     "nparams": np.int8,
     "parent": np.int32,
     "step": np.int16,
-    "rule": np.int32,
-    "index_in_rule": np.int32,
+    "rule": np.int16,
+    "index_in_rule": np.int16,
     "child_start": np.int32,
-    "child_count": np.int32,
+    "child_count": np.int16,
     "alive": np.bool_,
 }
+# Symbols, rules, slots in a successor and child counts start as int16 (issue 14: 8 bytes per
+# node less than int32, 12 MB at 1.57 M nodes): grammars have far fewer than 32,767 symbols and
+# rules, and successors that much shorter.  A tree widens one of these fields to int32 the first
+# time it is asked to hold a value that does not fit (:meth:`DerivationTree.widen`: a long axiom,
+# successor or decomposition, a huge generated grammar), so every grammar derives as before.
+WIDENABLE = ("symbol", "rule", "index_in_rule", "child_count")
 
 
 class DerivationTree:
@@ -59,6 +65,7 @@ class DerivationTree:
         self.max_params = max(int(max_params), 1)
         self.size = 0
         self._cap = 0
+        self._dtypes = dict(_FIELDS)  # per tree: a field widens on its own (see WIDENABLE)
         self.leaves = np.zeros(0, np.int64)
         self._cache: dict[str, Any] = {}
         self._sums: _LeafSums | None = None  # kept across edits made through detach/attach_sums
@@ -73,7 +80,7 @@ class DerivationTree:
                 f"a derivation history of {need:,} modules is more than the {_MAX_NODES:,} a tree holds (its node ids are int32)"
             )
         cap = max(need, 2 * self._cap, 1024)
-        for name, dtype in _FIELDS.items():
+        for name, dtype in self._dtypes.items():
             old = getattr(self, "_" + name, None)
             arr = np.empty(cap, dtype)
             if old is not None:
@@ -85,6 +92,31 @@ class DerivationTree:
             params[: self.size] = old[: self.size]
         self._params = params
         self._cap = cap
+
+    def widen(self, name: str, low: int, high: int) -> None:
+        """Make the field ``name`` (one of :data:`WIDENABLE`) able to hold every value from ``low``
+        to ``high``: an int16 field that cannot becomes int32 (one copy of its used part); past
+        int32 a :class:`DerivationError` says which field and value.  Whoever writes a field
+        through its public view calls this first: numpy would wrap a value that does not fit."""
+        if name not in WIDENABLE:
+            raise ValueError(f"{name!r} is not a field a tree widens (one of {', '.join(WIDENABLE)})")
+        low, high = int(low), int(high)
+        if _fits(self._dtypes[name], low, high):
+            return
+        if not _fits(np.int32, low, high):
+            value = high if high > np.iinfo(np.int32).max else low
+            raise DerivationError(f"the history tree cannot store {value:,} as a node's {name} (int32 at most)")
+        old = self.__dict__["_" + name]
+        wide = np.empty(self._cap, np.int32)  # the headroom stays untouched (no resident pages)
+        wide[: self.size] = old[: self.size]
+        setattr(self, "_" + name, wide)
+        self._dtypes[name] = np.int32
+
+    def _widen_for(self, name, values) -> None:
+        """:meth:`widen` ``name`` for the values about to be written (an array or a scalar)."""
+        values = np.asarray(values)
+        if values.size and values.dtype.kind in "iu" and not np.can_cast(values.dtype, self._dtypes[name]):
+            self.widen(name, values.min(), values.max())
 
     def __getattr__(self, name):
         # Public views trimmed to the used size: tree.parent, tree.symbol, ...
@@ -108,6 +140,8 @@ class DerivationTree:
         """Append nodes (arrays of equal length, scalars broadcast); return their ids."""
         count = len(symbol)
         start = self.size
+        for name, values in (("symbol", symbol), ("rule", rule), ("index_in_rule", index)):
+            self._widen_for(name, values)
         self._reserve(start + count)
         ids = np.arange(start, start + count, dtype=np.int64)
         sl = slice(start, start + count)
@@ -145,6 +179,7 @@ class DerivationTree:
 
     def set_children(self, nodes: ArrayLike, first_child: ArrayLike, count: ArrayLike) -> None:
         """Record that ``nodes`` were rewritten into blocks starting at ``first_child``."""
+        self._widen_for("child_count", count)
         self._child_start[nodes] = first_child
         self._child_count[nodes] = count
         self._dropped()
@@ -503,6 +538,11 @@ class _LeafSums:
                 new = np.zeros(cap, old.dtype)
                 new[: len(old)] = old
                 setattr(self, name, new)
+
+
+def _fits(dtype, low: int, high: int) -> bool:
+    info = np.iinfo(dtype)
+    return info.min <= low and high <= info.max
 
 
 def _weights_fit(max_step: int, size: int) -> bool:

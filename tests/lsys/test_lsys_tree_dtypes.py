@@ -31,3 +31,40 @@ def test_a_tree_past_the_int32_ids_is_refused_and_left_as_it_was():
     with pytest.raises(DerivationError, match="int32"):
         t.extend(2**31, step=1)  # refused before any memory is asked for
     assert len(t) == 1 and t.parent.tolist() == [-1]
+
+
+def test_symbols_rules_slots_and_child_counts_are_int16_for_a_usual_grammar():
+    t = LSystem.from_file("honda_sympodial").derive(8).tree
+    assert {t.symbol.dtype, t.rule.dtype, t.index_in_rule.dtype, t.child_count.dtype} == {np.dtype(np.int16)}
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_successor_longer_than_int16_widens_the_tree_and_derives_the_same(compiled):
+    long = 40_000  # child counts and slots past 32,767
+    ls = LSystem.from_text(f"n: 2\nw: A\np:\n A -> {'F' * long}A\n")
+    if compiled:
+        ls.kernel_min_modules = ls.kernel_loaded_min_modules = 0
+    t = ls.derive().tree
+    assert t.child_count.dtype == np.int32 and t.index_in_rule.dtype == np.int32
+    assert t.symbol.dtype == np.int16  # the fields that fit stay narrow
+    assert t.child_count.max() == long + 1 and t.index_in_rule.max() == long
+    last_a, first_a = int(t.leaves[-1]), int(t.parent[t.leaves[-1]])
+    assert t.index_in_rule[last_a] == long and t.symbol[first_a] == t.symbol[last_a]
+    assert t.children(first_a)[-1] == last_a and len(t.children(first_a)) == long + 1
+    assert ls.derive().to_string() == "F" * long + "F" * long + "A"
+
+
+def test_appending_values_past_int16_widens_and_past_int32_is_refused():
+    t = DerivationTree(max_params=1)
+    t.append([0, 70_000], [0, 0], [[0.0], [0.0]], parent=[-1, -1], step=0, rule=-1, index=[0, 1])
+    assert t.symbol.dtype == np.int32 and t.symbol.tolist() == [0, 70_000]
+    kids = t.append([1] * 3, [0] * 3, [[0.0]] * 3, parent=[0] * 3, step=1, rule=-40_000, index=[0, 1, 2])
+    assert t.rule.dtype == np.int32 and t.rule[kids].tolist() == [-40_000] * 3
+    t.set_children([0], [int(kids[0])], [3])
+    assert t.child_count.dtype == np.int16 and t.children(0).tolist() == kids.tolist()
+    t.set_children([1], [int(kids[0])], np.array([50_000], np.int64))
+    assert t.child_count.dtype == np.int32 and t.child_count.tolist()[:2] == [3, 50_000]
+    with pytest.raises(DerivationError, match="symbol"):
+        t.widen("symbol", 0, 2**31)
+    with pytest.raises(ValueError, match="parent"):
+        t.widen("parent", 0, 1)
