@@ -18,9 +18,12 @@ their triangles (:mod:`ramure.lsys.polygons`).  Every cell carries:
 ============  =======================================================================
 
 Cells come in this order: tube quads, organ triangles, polygon triangles.
-The four index arrays (``leaf_id``, ``segment``, ``organ``, ``polygon``) are
-int32: history-tree ids and counts stay below 2^31 (the tree refuses more
-nodes).  Points are float64 unless ``points_dtype`` asks for float32 (the
+``leaf_id`` and ``segment`` are int32: history-tree ids and counts stay below
+2^31 (the tree refuses more nodes).  ``organ``, ``polygon``, ``order`` and
+``material`` take the smallest of int8, int16, int32 that holds their values
+(:func:`value_dtype`; ``kind`` is int8): a plant without organs or polygons, a
+dozen branch orders and a few materials stores them in a byte each, 4.7 MB
+less for Honda n = 17's 393k cells.  Points are float64 unless ``points_dtype`` asks for float32 (the
 explorer's on-screen mesh does: OpenGL draws float32 anyway, and a
 1.44 M-module plant's tubes take 9 MB less; every point is the float64 value
 rounded once, so a patched mesh equals a full rebuild bit for bit).
@@ -142,6 +145,29 @@ def id_dtype(largest: int) -> type:
     arrays as they are, half the bytes: 7.9 MB less for Honda n = 17's 393k quads), int64 past
     2^31 - 1."""
     return np.int32 if largest < 2**31 - 1 else np.int64
+
+
+def value_dtype(low: int, high: int) -> type:
+    """The smallest of int8, int16 and int32 that holds every value from ``low`` to ``high``
+    (cell data whose range is known only at run time: organ and polygon indices, branch orders,
+    material indices).
+
+    >>> value_dtype(-1, 12).__name__, value_dtype(-1, 1000).__name__, value_dtype(0, 70_000).__name__
+    ('int8', 'int16', 'int32')
+    """
+    for dtype in (np.int8, np.int16):
+        info = np.iinfo(dtype)
+        if info.min <= low and high <= info.max:
+            return dtype
+    return np.int32
+
+
+def _dtype_holding(*arrays):
+    """:func:`value_dtype` of the values in ``arrays`` (int8 when there are none)."""
+    full = [a for a in arrays if len(a)]
+    if not full:
+        return np.int8
+    return value_dtype(min(int(a.min()) for a in full), max(int(a.max()) for a in full))
 
 
 def cell_array(offsets: np.ndarray, conn: np.ndarray) -> Any:
@@ -288,6 +314,8 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
     i32 = np.int32  # ids below 2^31 (the tree's node limit): half the bytes of int64
 
     def per_cell(per_segment, dtype, *rest):  # each segment's value on its `sides` quads, then organs, polygons
+        if dtype is None:  # the smallest that holds the values (see the module notes)
+            dtype = _dtype_holding(np.atleast_1d(per_segment) if nq else rest[0][:0], *rest)
         out = np.empty(nq + nt, dtype)
         if np.ndim(per_segment):
             quads = out[:nq].reshape(nseg, sides)
@@ -301,13 +329,13 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
 
     mesh.cell_data["leaf_id"] = per_cell(skeleton.leaf_id, i32, organs.leaf_id[organ_idx], poly_leaf)
     mesh.cell_data["segment"] = per_cell(np.arange(nseg), i32, np.full(nt, -1))
-    mesh.cell_data["organ"] = per_cell(-1, i32, organ_idx, np.full(npoly, -1))
-    mesh.cell_data["polygon"] = per_cell(-1, i32, np.full(no, -1), poly_idx)
+    mesh.cell_data["organ"] = per_cell(-1, None, organ_idx, np.full(npoly, -1))
+    mesh.cell_data["polygon"] = per_cell(-1, None, np.full(no, -1), poly_idx)
     mesh.cell_data["kind"] = per_cell(KIND_BRANCH, np.int8, organ_kind, np.full(npoly, KIND_LEAF))
-    mesh.cell_data["order"] = per_cell(skeleton.order, i32, np.full(nt, -1))
+    mesh.cell_data["order"] = per_cell(skeleton.order, None, np.full(nt, -1))
     organ_color = organs.color if organs.color is not None else np.zeros(len(organs), np.int32)
     poly_color = polygons.color[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
-    mesh.cell_data["material"] = per_cell(skeleton.color, i32, organ_color[organ_idx], poly_color)
+    mesh.cell_data["material"] = per_cell(skeleton.color, None, organ_color[organ_idx], poly_color)
     materials = skeleton.extra.get("materials")
     if materials:
         from .materials import table_arrays

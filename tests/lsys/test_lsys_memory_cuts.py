@@ -94,9 +94,10 @@ def test_the_explorer_mesh_has_float32_points_and_int32_ids_and_the_library_mesh
     assert mesh.points.dtype == np.float32 and len(ex.skeleton.organs) > 0  # tubes and organs
     names = ("leaf_id", "segment", "organ", "polygon", "kind", "order", "material")
     dtypes = [np.asarray(mesh.cell_data[k]).dtype for k in names]
-    assert dtypes == [np.int32] * 4 + [np.int8, np.int32, np.int32]
-    # 25 bytes per cell instead of 41 with int64 ids; 12 per point instead of 24
-    assert sum(np.asarray(mesh.cell_data[k]).nbytes for k in names) == 25 * mesh.n_cells
+    # ids int32; organ, polygon, order and material in a byte each (a few organs, orders, materials)
+    assert dtypes == [np.int32] * 2 + [np.int8] * 5
+    # 13 bytes per cell instead of 41 with int64 ids and 25 with int32 ones; 12 per point instead of 24
+    assert sum(np.asarray(mesh.cell_data[k]).nbytes for k in names) == 13 * mesh.n_cells
     assert np.asarray(mesh.points).nbytes == 12 * mesh.n_points
     full = skeleton_to_polydata(ex.skeleton, mesh_sides(len(ex.skeleton)))
     assert full.points.dtype == np.float64
@@ -186,3 +187,18 @@ def test_changed_spans_of_a_large_plant_allocate_no_int64_copy_of_the_string():
     assert peak < 8 * len(before)
     for (a, b), (c, d) in zip(*spans):  # every span changed something: a removed or an added run
         assert b >= a or d >= c
+
+
+def test_cell_data_past_a_byte_takes_int16_and_keeps_its_values():
+    from ramure.lsys import LSystem
+    from ramure.lsys.geometry import skeleton_to_polydata, value_dtype
+
+    deep = 200  # branch orders 0 .. 200 and 200 leaves: past int8
+    sk = LSystem.from_text("n: 0\n#organ Leaf\nw: " + "F[" * deep + "F" + "Leaf(1)]" * deep + "\n").derive().skeleton()
+    mesh = skeleton_to_polydata(sk, sides=3)
+    order, organ = np.asarray(mesh.cell_data["order"]), np.asarray(mesh.cell_data["organ"])
+    assert order.dtype == np.int16 and organ.dtype == np.int16
+    assert np.array_equal(order[: 3 * len(sk)], np.repeat(sk.order, 3)) and order.max() == deep
+    assert sorted(set(organ.tolist())) == list(range(-1, deep)) and (order[organ >= 0] == -1).all()
+    assert np.asarray(mesh.cell_data["polygon"]).dtype == np.int8  # all -1: no polygons
+    assert value_dtype(-(2**15) - 1, 0) is np.int32 and value_dtype(-128, 127) is np.int8
