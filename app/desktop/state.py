@@ -499,6 +499,94 @@ def project_to_display(matrix: ArrayLike, points: ArrayLike, size: tuple[int, in
     return out
 
 
+def cells_near_line(
+    points: ArrayLike,
+    offsets: ArrayLike,
+    conn: ArrayLike,
+    origin: ArrayLike,
+    direction: ArrayLike,
+    reach: float,
+    tubes: tuple[int, int] = (0, 0),
+) -> np.ndarray:
+    """Ids (ascending) of the polygons that may come within ``reach`` of the line through
+    ``origin`` along ``direction``: those whose box's circumscribed sphere does.
+
+    ``offsets`` and ``conn`` are VTK's cell arrays over ``points``.  Every cell a ray pick
+    with a tolerance up to ``reach`` can hit is among them (and a few more), so a picker run
+    on them alone finds what it finds on the whole mesh.  ``tubes``: (count, sides) when the
+    mesh starts with ``count`` tubes of ``sides`` quads over ``2 sides`` points each, segment
+    by segment (:func:`ramure.app.desktop.plant_actors.tube_layout`): a tube is tested as a
+    whole, from its points in place.  Read in chunks of :data:`NEAR_LINE_CHUNK` (a few MB of
+    temporaries whatever the mesh's size).
+
+    >>> pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 0], [6, 5, 0], [5, 6, 0]], float)
+    >>> cells_near_line(pts, [0, 3, 6], [0, 1, 2, 3, 4, 5], [0.2, 0.2, -1], [0, 0, 1], 0.01).tolist()
+    [0]
+    """
+    pts, offsets, conn = np.asarray(points), np.asarray(offsets), np.asarray(conn)
+    d = np.asarray(direction, float)
+    o, u, r = np.asarray(origin, float), d / np.linalg.norm(d), float(reach)
+    count, sides = tubes
+    found = []
+    if count and sides:
+        ends = pts[: 2 * sides * count].reshape(count, 2 * sides, 3)
+        for first in range(0, count, NEAR_LINE_CHUNK):
+            part = ends[first : first + NEAR_LINE_CHUNK]
+            near = np.flatnonzero(_boxes_near_line(*_boxes(part), o, u, r)) + first
+            found.append((near[:, None] * sides + np.arange(sides)).ravel())
+    rest = np.arange(count * sides if sides else 0, len(offsets) - 1)
+    size = offsets[rest + 1] - offsets[rest]
+    for k in np.unique(size):  # cells of one size at a time: their corners as a (cells, k, 3) array
+        cells = rest[size == k]
+        for first in range(0, len(cells), NEAR_LINE_CHUNK):
+            some = cells[first : first + NEAR_LINE_CHUNK]
+            corners = pts[conn[offsets[some][:, None] + np.arange(k)]]
+            found.append(some[_boxes_near_line(*_boxes(corners), o, u, r)])
+    return np.sort(np.concatenate(found)) if found else np.zeros(0, np.int64)
+
+
+#: Tubes or cells read at a time by :func:`cells_near_line`.
+NEAR_LINE_CHUNK = 1 << 15
+
+
+def _boxes(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest and highest corner of each row of ``corners`` ((n, k, 3)), one column of k at a
+    time (numpy's reduction over a short middle axis is 10x slower)."""
+    lo, hi = corners[:, 0].copy(), corners[:, 0].copy()
+    for j in range(1, corners.shape[1]):
+        np.minimum(lo, corners[:, j], out=lo)
+        np.maximum(hi, corners[:, j], out=hi)
+    return lo, hi
+
+
+def _boxes_near_line(lo: np.ndarray, hi: np.ndarray, origin: np.ndarray, unit: np.ndarray, reach: float) -> np.ndarray:
+    """True for the boxes ``lo``-``hi`` whose circumscribed sphere comes within ``reach`` of the
+    line through ``origin`` along ``unit`` (a unit vector)."""
+    lo, hi = lo.astype(float), hi.astype(float)
+    rel = 0.5 * (lo + hi) - origin
+    along = rel @ unit
+    off_line = np.einsum("ij,ij->i", rel, rel) - along * along
+    span = hi - lo
+    radius = 0.5 * np.sqrt(np.einsum("ij,ij->i", span, span)) + reach
+    return off_line <= radius * radius
+
+
+def cell_subset(offsets: ArrayLike, conn: ArrayLike, cells: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """VTK's cell arrays (offsets, connectivity; the dtype of ``conn``) of the polygons ``cells``
+    of the cell arrays ``offsets``, ``conn``, in that order, over the same points.
+
+    >>> o, c = cell_subset([0, 3, 7], [0, 1, 2, 3, 4, 5, 6], [1])
+    >>> o.tolist(), c.tolist()
+    ([0, 4], [3, 4, 5, 6])
+    """
+    offsets, conn, cells = np.asarray(offsets), np.asarray(conn), np.asarray(cells, np.int64)
+    begin, size = offsets[cells], offsets[cells + 1] - offsets[cells]
+    sub_offsets = np.zeros(len(cells) + 1, conn.dtype)
+    np.cumsum(size, out=sub_offsets[1:])
+    where = np.repeat(begin - sub_offsets[:-1], size) + np.arange(int(sub_offsets[-1]))
+    return sub_offsets, np.ascontiguousarray(conn[where])
+
+
 # -- volumetric fruit ---------------------------------------------------------------
 def fruit_surface(explorer: Explorer) -> pv.PolyData | None:
     """The plant's volumetric fruit as a surface (see :meth:`ramure.app.model.Explorer.fruit_surface`)."""

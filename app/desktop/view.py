@@ -51,6 +51,7 @@ from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 
 from ramure.app.desktop.native_view import NativeInteractor, native_windows
 from ramure.app.desktop.plant_actors import PlantActors
+from ramure.app.desktop import state
 from ramure.app.desktop.state import FRUIT_SELECTED, points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
 from ramure.errors import RamureError
@@ -160,6 +161,91 @@ def _collapse_cells(mesh, points, hidden):
     return out
 
 
+#: A pick ray's candidate cells come within this many pick tolerances of it (any number
+#: above 1 finds the same cells; the margin covers rounding).
+NEAR_REACH = 2.0
+
+
+def _near_bins(mesh: pv.PolyData | None) -> tuple[int, int, int] | None:
+    """The bins (divisions along x, y, z) a ``vtkStaticCellLocator`` over the whole of ``mesh``
+    takes, if a locator given them over some of its cells (and all its points) bins those
+    cells alike: its box is then the same.  None when ``mesh`` has cells other than polygons,
+    or a side too thin for VTK's box to be the mesh's bounds (:class:`_NearCells` is not used)."""
+    from vtkmodules.vtkCommonDataModel import vtkBoundingBox, vtkStaticCellLocator
+
+    if mesh is None or mesh.GetNumberOfVerts() or mesh.GetNumberOfLines() or mesh.GetNumberOfStrips():
+        return None
+    bounds = list(mesh.GetBounds())
+    probe = vtkStaticCellLocator()
+    bins = min(int(float(mesh.GetNumberOfCells()) / float(probe.GetNumberOfCellsPerNode())), probe.GetMaxNumberOfBuckets())
+    automatic, divisions = [0.0] * 6, [0, 0, 0]
+    vtkBoundingBox(bounds).ComputeDivisions(bins, automatic, divisions)  # what BuildLocator computes
+    given = vtkBoundingBox(bounds)
+    given.Inflate()  # what BuildLocator does with given divisions
+    inflated = [0.0] * 6
+    given.GetBounds(inflated)
+    return (divisions[0], divisions[1], divisions[2]) if automatic == bounds == inflated else None
+
+
+def _locator(data: Any, divisions: tuple[int, int, int] | None = None) -> Any:
+    """A built ``vtkStaticCellLocator`` over ``data`` (with these bins, else VTK's choice)."""
+    from vtkmodules.vtkCommonDataModel import vtkStaticCellLocator
+
+    locator = vtkStaticCellLocator()
+    if divisions is not None:
+        locator.AutomaticOff()
+        locator.SetDivisions(*divisions)
+    locator.SetDataSet(data)
+    locator.BuildLocator()
+    return locator
+
+
+class _NearCells:
+    """The plant's cells near one pick ray, as a data set a ``vtkCellPicker`` picks from.
+
+    A picker with a cell locator over the whole mesh keeps 48 bytes of cell bounds per cell
+    and its bins (28 MB at 393k cells) from the first click on.  The cells whose boxes'
+    spheres come within :data:`NEAR_REACH` pick tolerances of the ray
+    (:func:`~ramure.app.desktop.state.cells_near_line`) hold every cell the picker can hit.
+    Their locator is given the whole mesh's points and bins (:func:`_near_bins`), so it meets
+    them in the same order along the ray and the picker answers the same cell as with the
+    whole mesh's locator (where several cells lie within the tolerance too).  Their ids in the
+    mesh are :attr:`cells`; the points are the mesh's own (no copy).
+    """
+
+    def __init__(self) -> None:
+        from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+        self.mapper = vtkPolyDataMapper()
+        self.actor = vtkActor()  # never added to a renderer: picking only
+        self.actor.SetMapper(self.mapper)
+        self.cells = np.zeros(0, np.int64)
+        self.locator: Any = None
+        self.keep: tuple = ()  # the cell arrays VTK reads in place
+
+    def gather(
+        self, mesh: pv.PolyData, line: tuple[np.ndarray, np.ndarray, float], bins: tuple[int, int, int], tubes: tuple[int, int]
+    ) -> Any:
+        """Take ``mesh``'s cells near ``line`` (two world points and the pick tolerance in world
+        units; ``tubes``: see :func:`~ramure.app.desktop.state.cells_near_line`); returns the
+        locator over them (``bins``: :func:`_near_bins`) for the picker, None if there are none."""
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        from ramure.lsys.geometry import cell_array
+
+        start, end, tolerance = line
+        polys = mesh.GetPolys()
+        offsets, conn = vtk_to_numpy(polys.GetOffsetsArray()), vtk_to_numpy(polys.GetConnectivityArray())
+        points = np.asarray(mesh.points)
+        self.cells = state.cells_near_line(points, offsets, conn, start, end - start, NEAR_REACH * tolerance, tubes)
+        self.keep = state.cell_subset(offsets, conn, self.cells)
+        part = pv.PolyData()
+        part.SetPoints(mesh.GetPoints())
+        part.SetPolys(cell_array(*self.keep))
+        self.mapper.SetInputData(part)
+        self.locator = _locator(part, bins) if len(self.cells) else None
+        return self.locator
+
+
 class PlantView(QWidget):
     """The plant, its selection in red, the selection's OBB as a red wireframe.
 
@@ -196,6 +282,9 @@ class PlantView(QWidget):
         self.actor: Any = None  # the plant's pick actor (never drawn), None without a plant
         self.snapshot: Snapshot | None = None
         self.picker: Any = None  # a vtkCellPicker over the plant and fruit, built on the first pick
+        self._locators: list = []  # the picker's cell locators over whole data sets (the fruit)
+        self._near_at: tuple | None = None  # the plant's locator bins, when picked near the ray
+        self._near = _NearCells()  # the plant's cells near the last pick ray
         self.box: pv.PolyData | None = None
         self.box_actor: pv.Actor | None = None
         self.fruit: pv.PolyData | None = None
@@ -546,32 +635,68 @@ class PlantView(QWidget):
     def _picker(self):
         if self.picker is None:
             # the two classes only: ``import vtk`` loads every VTK module (about 60 MB)
-            from vtkmodules.vtkCommonDataModel import vtkStaticCellLocator
             from vtkmodules.vtkRenderingCore import vtkCellPicker
 
             picker = vtkCellPicker()
             picker.SetTolerance(PICK_TOLERANCE)
             picker.PickFromListOn()
-            for actor in (self.actor, self.fruit_actor):
-                if actor is not None:
+            self._near_at = _near_bins(self.mesh) if self.actor is not None else None
+            self._locators = []
+            for actor in (self.actor, self.fruit_actor):  # the plant first: it wins a tie
+                if actor is self.actor and self._near_at is not None:
+                    picker.AddPickList(self._near.actor)  # its cells near each ray, see pick_any
+                elif actor is not None:
                     picker.AddPickList(actor)
-                    locator = vtkStaticCellLocator()
-                    locator.SetDataSet(actor.GetMapper().GetInput())
-                    locator.BuildLocator()
-                    picker.AddLocator(locator)
+                    self._locators.append(_locator(actor.GetMapper().GetInput()))
             self.picker = picker
         return self.picker
 
     def pick_any(self, x: float, y: float) -> tuple[str | None, int]:
-        """``("plant" | "fruit", cell id)`` under display ``(x, y)``, or ``(None, -1)``."""
+        """``("plant" | "fruit", cell id)`` under display ``(x, y)``, or ``(None, -1)``.
+
+        The plant's cells are picked from those near the pick ray (:class:`_NearCells`): the
+        cell a picker over the whole mesh finds, without that mesh's locator."""
         if self.actor is None:
             return None, -1
         picker = self._picker()
-        if not picker.Pick(float(x), float(y), 0.0, self.plotter.renderer):
+        near = self._near_at is not None and self.mesh is not None
+        picker.RemoveAllLocators()
+        for locator in self._locators:
+            picker.AddLocator(locator)
+        if near:
+            assert self.mesh is not None and self._near_at is not None
+            tubes = (self.plant.segment_count, self.plant.sides) if self.plant.sides else (0, 0)
+            locator = self._near.gather(self.mesh, self._pick_ray(x, y), self._near_at, tubes)
+            if locator is not None:
+                picker.AddLocator(locator)
+        found = picker.Pick(float(x), float(y), 0.0, self.plotter.renderer)
+        picker.RemoveAllLocators()
+        if not found:
             return None, -1
         hit = picker.GetActor()
-        kind = "fruit" if self.fruit_actor is not None and hit is self.fruit_actor else "plant"
-        return kind, int(picker.GetCellId())
+        cell = int(picker.GetCellId())
+        if self.fruit_actor is not None and hit is self.fruit_actor:
+            return "fruit", cell
+        return "plant", int(self._near.cells[cell]) if near and hit is self._near.actor and cell >= 0 else cell
+
+    def _pick_ray(self, x: float, y: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """Two world points on the line through display ``(x, y)`` and the pick tolerance in
+        world units, as :class:`vtkPicker` computes it: the view's diagonal at the focal
+        point's depth times :data:`PICK_TOLERANCE`."""
+        renderer = self.plotter.renderer
+        renderer.SetWorldPoint(*renderer.GetActiveCamera().GetFocalPoint(), 1.0)
+        renderer.WorldToDisplay()
+        depth = renderer.GetDisplayPoint()[2]
+
+        def world(dx: float, dy: float, dz: float) -> np.ndarray:
+            renderer.SetDisplayPoint(dx, dy, dz)
+            renderer.DisplayToWorld()
+            return np.array(renderer.GetWorldPoint()[:3])
+
+        w, h = self.display_size()
+        x0, y0, x1, y1 = renderer.GetViewport()
+        diagonal = np.linalg.norm(world(x1 * w, y1 * h, depth) - world(x0 * w, y0 * h, depth))
+        return world(x, y, 0.0), world(x, y, 1.0), PICK_TOLERANCE * float(diagonal)
 
     def pick(self, x: float, y: float) -> int:
         """The plant's mesh cell at display ``(x, y)``, or -1 (volumetric fruit are not plant cells)."""
