@@ -666,7 +666,8 @@ class PlantView(QWidget):
         if near:
             assert self.mesh is not None and self._near_at is not None
             tubes = (self.plant.segment_count, self.plant.sides) if self.plant.sides else (0, 0)
-            locator = self._near.gather(self.mesh, self._pick_ray(x, y), self._near_at, tubes)
+            bins = _near_bins(self.mesh) or self._near_at  # this mesh's points now (cells hidden since?)
+            locator = self._near.gather(self.mesh, self._pick_ray(x, y), bins, tubes)
             if locator is not None:
                 picker.AddLocator(locator)
         found = picker.Pick(float(x), float(y), 0.0, self.plotter.renderer)
