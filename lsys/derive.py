@@ -458,7 +458,7 @@ class LSystem:
         self._widen(tree, table)
         start = tree.extend(new, step)
         base = start + np.cumsum(made) - made
-        out = np.empty(total, np.int64)
+        out = np.empty(total, np.int32)  # the string's node ids, as the tree keeps them
         if self._use_kernels(len(string)):
             from ._derive_kernel import assemble
 

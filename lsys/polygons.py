@@ -121,7 +121,7 @@ def from_walk(leaves: np.ndarray, poly: tuple) -> Polygons:
     from ._polygon_kernel import gather  # numba loads on first use only
 
     offsets, points = gather(vtx, tag, len(poly_at))
-    return Polygons(leaves[poly_at], color.astype(np.int32), offsets, points)
+    return Polygons(leaves[poly_at].astype(np.int64), color.astype(np.int32), offsets, points)  # ids handed out: int64
 
 
 def concatenate(parts: Iterable[Polygons]) -> Polygons:

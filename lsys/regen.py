@@ -189,7 +189,7 @@ def _replace_spans(old, first, last, pieces):
         parts.append(pieces[i])
         cursor = last[i] + 1
     parts.append(old[cursor:])
-    return np.concatenate(parts).astype(np.int64, copy=False)
+    return np.concatenate(parts, dtype=np.int32)  # the tree's string dtype: no int64 copy
 
 
 def regenerate(

@@ -256,6 +256,13 @@ def module_arrays(lsys: LSystem, tree: DerivationTree, leaves: np.ndarray) -> tu
     return acts, nps, par
 
 
+def node_ids(ids: ArrayLike) -> np.ndarray:
+    """``ids`` as an integer array: a string of the tree (int32) or any int64 ids as they are (no
+    copy of a 1.44 M-module string), anything else as int64."""
+    ids = np.asarray(ids)
+    return ids if ids.dtype in (np.int32, np.int64) else ids.astype(np.int64)
+
+
 def interpret(derivation: Derivation) -> Skeleton:
     """Run the turtle over a derivation's current string and return its :class:`Skeleton`.
 
@@ -273,7 +280,7 @@ def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> 
     """The :class:`Skeleton` of the string ``leaves`` (node ids of ``tree``), with its :class:`Trace`."""
     from ._turtle_kernel import FULL, initial_state, walk  # numba loads on first use only
 
-    leaves = np.asarray(leaves, np.int64)
+    leaves = node_ids(leaves)
     acts, nps, par = module_arrays(lsys, tree, leaves)
     angle, step, trop = _settings(lsys)
     state = initial_state(lsys.grammar.width)
@@ -320,7 +327,7 @@ def _balanced(acts):
 def _skeleton(lsys, tree, leaves, segs, orgs, trace):
     seg_at, start, end, width, order, color, normal, parent = segs
     base = width * (lsys.grammar.width_scale / 2.0)
-    leaf = leaves[seg_at]
+    leaf = leaves[seg_at].astype(np.int64)  # the string is int32; the ids a skeleton hands out int64
     _check_finite(lsys, tree, leaf, _usable(start).all(1) & _usable(end).all(1) & _usable(base))
     _check_color(lsys, tree, leaf, color)
     organs = _organs(lsys, tree, leaves, orgs)
@@ -397,7 +404,7 @@ def _check_color(lsys, tree, leaf, color):
 
 def _organs(lsys, tree, leaves, orgs):
     org_at, position, frame, size, color = orgs
-    leaf_id = leaves[org_at]
+    leaf_id = leaves[org_at].astype(np.int64)
     kind = np.array(lsys.symbols, dtype=object)[tree.symbol[leaf_id]] if len(leaf_id) else np.array([], dtype=object)
     _check_finite(lsys, tree, leaf_id, _usable(position).all(1) & _usable(size))
     _check_color(lsys, tree, leaf_id, color)
@@ -416,7 +423,7 @@ def changed_spans(old: ArrayLike, new: ArrayLike, size: int) -> tuple[np.ndarray
     """
     from ._turtle_kernel import kept_modules
 
-    old, new = np.asarray(old, np.int64), np.asarray(new, np.int64)
+    old, new = node_ids(old), node_ids(new)
     keep_old, keep_new, same_order = kept_modules(old, new, int(size))
     if not same_order:
         return None
@@ -475,7 +482,7 @@ def reinterpret(
     from ._turtle_kernel import REGION, SEEK, bracket_pairs32, initial_state, walk
 
     trace = skeleton.extra.get("trace")
-    leaves = np.asarray(leaves, np.int64)
+    leaves = node_ids(leaves)
     old_spans = np.asarray(old_spans, np.int64).reshape(-1, 2)
     new_spans = np.asarray(new_spans, np.int64).reshape(-1, 2)
     if trace is None or not trace.balanced or not len(old_spans):
@@ -600,7 +607,7 @@ def _patched(lsys, tree, skeleton, trace, leaves, arrays, regions, old_spans, de
     parent = field(new_index[sk.parent], 7)
     coded = parent <= -2  # a parent given by its string position (see _turtle_kernel.walk)
     parent[coded] = np.searchsorted(seg_at, -2 - parent[coded])
-    leaf = field(sk.leaf_id, 0, lambda a: leaves[a])  # a kept segment's module is the same node
+    leaf = field(sk.leaf_id, 0, lambda a: leaves[a].astype(np.int64))  # a kept segment's module is the same node
     drawn = [np.concatenate([p[k] for p in new]) if new else old[:0] for k, old in enumerate((seg_at, start, end, base))]
     fresh_leaf = leaves[drawn[0]]
     _check_finite(lsys, tree, fresh_leaf, _usable(drawn[1]).all(1) & _usable(drawn[2]).all(1) & _usable(drawn[3] * scale))

@@ -10,11 +10,11 @@ from ramure.lsys import LSystem
 from ramure.lsys.tree import DerivationTree
 
 
-def test_parent_and_child_start_are_int32_and_ids_handed_out_are_int64():
+def test_parent_child_start_and_the_string_are_int32_and_ids_handed_out_are_int64():
     d = LSystem.from_file("honda_sympodial").derive(8)
     t = d.tree
     assert t.parent.dtype == np.int32 and t.child_start.dtype == np.int32
-    assert t.leaves.dtype == np.int64
+    assert t.leaves.dtype == np.int32
     inner = int(np.flatnonzero(t.child_count > 0)[-1])
     assert t.children(inner).dtype == np.int64 and t.subtree(0).dtype == np.int64
     assert t.ancestor(t.leaves[:5], 2).dtype == np.int64
@@ -68,3 +68,22 @@ def test_appending_values_past_int16_widens_and_past_int32_is_refused():
         t.widen("symbol", 0, 2**31)
     with pytest.raises(ValueError, match="parent"):
         t.widen("parent", 0, 1)
+
+
+def test_the_string_stays_int32_through_edits_and_undo_swaps_back_the_very_array():
+    from ramure.lsys.regen import Session
+
+    s = Session(LSystem.from_file("honda_sympodial"), n=9)
+    t = s.derivation.tree
+    before = t.leaves
+    s.regrow(s.leaves_with_symbol("F")[[5, 50, 500]].tolist(), rho=0.5, seed=3)
+    after = t.leaves
+    assert after.dtype == np.int32 and after is not before
+    s.prune(s.leaves_with_symbol("F")[-3:].tolist(), rho=0.5)
+    assert t.leaves.dtype == np.int32
+    s.undo()
+    assert t.leaves is after
+    s.undo()  # an older edit keeps only what it replaced (Change.compact): the string is spliced
+    assert t.leaves.dtype == np.int32 and np.array_equal(t.leaves, before)
+    t.leaves = np.array([0, 1], np.int64)  # given as int64: kept as int32
+    assert t.leaves.dtype == np.int32 and t.leaves.tolist() == [0, 1]
