@@ -596,18 +596,9 @@ def _first_run(n: int = 17) -> dict:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def bench_memory_per_module_honda_n17(repeats: int = 3):
-    """Bytes per module of the history tree, the skeleton (+ trace) and the mesh, Honda n=17;
-    the desktop window's peak RSS with that plant shown (<= 600 MB): median of ``repeats``
-    fresh processes, the stages of the median run, and the same window on n=4 (``floor_mb``:
-    what Qt, VTK, numba and one software-OpenGL context cost before any large plant);
-    ``desktop_peak_without_mypy_mb``: one more run with the dev venv's mypy hidden (what a
-    user's install, without mypy, peaks at).
-
-    The desktop runs load the kernels from numba's cache, as every run after the first does.
-    ``first_run``: the first run after an install (an empty ``NUMBA_CACHE_DIR``): the seconds
-    to a plant with its mesh (fresh process, every kernel compiled) against the same with the
-    cache it wrote, and the desktop's peak while compiling (numba's whole compiler loaded)."""
+def _model_record() -> dict:
+    """The model's bytes for Honda n = 17: history tree (with the string), skeleton (+ trace) and
+    mesh per module, and the mesh's cell data per cell."""
     from ramure.app.model import Explorer
 
     ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)
@@ -647,9 +638,25 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
         "tree_bytes_per_module": round(tree_bytes / modules, 1),
         "skeleton_bytes_per_module": round(skeleton_bytes / modules, 1),
         "mesh_bytes_per_module": round(mesh_bytes / modules, 1),
+        "cell_data_bytes_per_cell": round(sum(np.asarray(a).nbytes for a in mesh.cell_data.values()) / mesh.n_cells, 1),
         "total_mb": round((tree_bytes + skeleton_bytes + mesh_bytes) / 2**20, 1),
     }
-    del ex, tree, sk, mesh
+    return record
+
+
+def bench_memory_per_module_honda_n17(repeats: int = 3):
+    """Bytes per module of the history tree, the skeleton (+ trace) and the mesh, Honda n=17;
+    the desktop window's peak RSS with that plant shown (<= 600 MB): median of ``repeats``
+    fresh processes, the stages of the median run, and the same window on n=4 (``floor_mb``:
+    what Qt, VTK, numba and one software-OpenGL context cost before any large plant);
+    ``desktop_peak_without_mypy_mb``: one more run with the dev venv's mypy hidden (what a
+    user's install, without mypy, peaks at).
+
+    The desktop runs load the kernels from numba's cache, as every run after the first does.
+    ``first_run``: the first run after an install (an empty ``NUMBA_CACHE_DIR``): the seconds
+    to a plant with its mesh (fresh process, every kernel compiled) against the same with the
+    cache it wrote, and the desktop's peak while compiling (numba's whole compiler loaded)."""
+    record = _model_record()
     runs = [desktop_memory(17) for _ in range(repeats)]
     peaks = sorted((r["peak_mb"], i) for i, r in enumerate(runs) if "peak_mb" in r)
     if not peaks:
