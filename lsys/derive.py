@@ -265,6 +265,7 @@ class LSystem:
         ``frozen`` (a boolean mask) marks modules that serve only as context:
         they are never rewritten.
         """
+        string = string.astype(np.int32, copy=False)  # the tree's string dtype: one compiled assemble
         symbols = tree.symbol[string]
         nparams = tree.nparams[string]
         chosen = np.full(len(string), -1, np.int32)

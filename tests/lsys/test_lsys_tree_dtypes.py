@@ -87,3 +87,21 @@ def test_the_string_stays_int32_through_edits_and_undo_swaps_back_the_very_array
     assert t.leaves.dtype == np.int32 and np.array_equal(t.leaves, before)
     t.leaves = np.array([0, 1], np.int64)  # given as int64: kept as int32
     assert t.leaves.dtype == np.int32 and t.leaves.tolist() == [0, 1]
+
+
+def test_every_step_hands_the_compiled_assemble_an_int32_string(monkeypatch):
+    """Decomposed strings and regrown roots come as int64 ids: a step takes them as the tree's
+    int32 string, so the compiled pass has one signature to load (and the string one dtype)."""
+    import ramure.lsys._derive_kernel as kernel
+
+    seen = []
+    compiled = kernel.assemble
+    monkeypatch.setattr(kernel, "assemble", lambda string, *rest: seen.append(string.dtype) or compiled(string, *rest))
+    grammar = (
+        "n: 5\nw: A\np:\n  A -> F[+A]B : 1\n  A -> F[-A]A : 1\n  C(x) -> C(x+1)\n"
+        "decomposition:\n  B -> C(0)[-D]\n  D -> FE\n#decomposition_depth 2\n"
+    )
+    ls = LSystem.from_text(grammar)
+    ls.kernel_min_modules = ls.kernel_loaded_min_modules = 0
+    d = ls.derive()
+    assert seen and set(seen) == {np.dtype(np.int32)} and d.tree.leaves.dtype == np.int32
