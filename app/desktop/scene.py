@@ -14,7 +14,9 @@ Choices the issue leaves open, stated here:
 * **Thin branches**: every segment is also drawn as a 1.5-pixel line of its
   own colour under the tubes; a twig thinner than a pixel still shows as a
   line instead of vanishing.  Selected segments get a 3-pixel red line on
-  top, so a selected hairline twig is plainly visible.
+  top, so a selected hairline twig is plainly visible.  The lines are drawn
+  in chunks of :data:`CHUNK_LINES`, each once the last is drawn (see
+  :class:`LineChunks`: software OpenGL's memory for a frame).
 * **Camera**: presets front, side, top and iso, all with Z up; the view
   orbits like a turntable (VTK's terrain style: azimuth about Z and
   elevation, never any roll).  Framing fits the plant's 8 box corners into
@@ -185,6 +187,9 @@ def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int, sides: int =
 _COUNT = np.zeros(0, np.int32)  # 0, 1, 2, ... (read-only), kept for every line set
 _EVENS = np.zeros(0, np.int32)  # 0, 2, 4, ... (read-only): line sets' offsets, a prefix of it
 
+#: A frame draws a line set in chunks of at most this many lines, one actor each (see :class:`LineChunks`).
+CHUNK_LINES = 32_768
+
 
 def _counting(n: int) -> None:
     global _COUNT, _EVENS
@@ -203,13 +208,13 @@ class LineBuffers:
 
     points: np.ndarray  # (2 capacity, 3) float
     conn: np.ndarray  # (2 capacity,) int32
-    colors: np.ndarray  # (2 capacity, 3) uint8
+    colors: np.ndarray  # (2 capacity, 4) uint8: RGBA, alpha 255 (see point_colors)
 
     @classmethod
     def make(cls, n: int) -> LineBuffers:
         """Buffers for ``n`` lines and 10 % more."""
         cap = n + n // 10 + 16
-        return cls(np.empty((2 * cap, 3)), np.empty(2 * cap, np.int32), np.empty((2 * cap, 3), np.uint8))
+        return cls(np.empty((2 * cap, 3)), np.empty(2 * cap, np.int32), np.empty((2 * cap, 4), np.uint8))
 
     @property
     def capacity(self) -> int:
@@ -223,7 +228,7 @@ def segment_lines(start: ArrayLike, end: ArrayLike, buffers: LineBuffers | None 
     start, end = np.asarray(start, float).reshape(-1, 3), np.asarray(end, float).reshape(-1, 3)
     n = len(start)
     if buffers is None:
-        buffers = LineBuffers(np.empty((2 * n, 3)), np.empty(2 * n, np.int32), np.empty((0, 3), np.uint8))
+        buffers = LineBuffers(np.empty((2 * n, 3)), np.empty(2 * n, np.int32), np.empty((0, 4), np.uint8))
     points, conn = buffers.points[: 2 * n], buffers.conn[: 2 * n].reshape(n, 2)
     points[:n] = start
     points[n:] = end
@@ -246,39 +251,179 @@ def line_cells(conn: np.ndarray) -> Any:
 
 
 def point_colors(rgb: np.ndarray, buffers: LineBuffers | None = None) -> np.ndarray:
-    """The per-point colours of :func:`segment_lines`' lines coloured ``rgb`` (both ends),
-    written into ``buffers`` if given."""
+    """The per-point RGBA of :func:`segment_lines`' lines coloured ``rgb`` (both ends, alpha
+    255), written into ``buffers`` if given.  Four bytes a point: VTK draws direct RGBA
+    scalars as they are, where three-byte colours are copied to RGBA by every mapper that
+    draws them (each chunk of :class:`LineChunks`)."""
     n = len(rgb)
-    both = np.empty((2 * n, 3), np.uint8) if buffers is None else buffers.colors[: 2 * n]
-    both[:n] = rgb
-    both[n:] = rgb
+    both = np.empty((2 * n, 4), np.uint8) if buffers is None else buffers.colors[: 2 * n]
+    both[:n, :3] = rgb
+    both[n:, :3] = rgb
+    both[:, 3] = 255
     return both
+
+
+def _chunks(lines: int) -> int:
+    """How many chunks of at most :data:`CHUNK_LINES` ``lines`` lines take (at least one)."""
+    return max(1, -(-lines // CHUNK_LINES))
+
+
+class LineChunks:
+    """The actors that draw one line set, a consecutive chunk of its lines each, in order.
+
+    Software OpenGL (llvmpipe) bins a whole frame before it rasterises it: 131k hairlines in
+    one draw held about 29 MB of binned scene at each frame, most of the desktop's own share
+    of its peak memory.  Here the lines are drawn :data:`CHUNK_LINES` at a time, and before
+    each chunk after the first the frame waits for what was given so far to be drawn (the
+    render window's ``WaitForCompletion``, a ``glFinish``, from the chunk mapper's
+    ``UpdateShaderEvent``, which VTK fires just before the draw): the scene then holds one
+    chunk at a time.  On Honda n = 17 (4 chunks) the desktop's peak is 20 MB lower (616 to
+    596 MB); a polished frame takes about 5 ms more (75 to 80 ms, medians), a draft, whose
+    shorter line list fills fewer chunks, about 2 ms more (40 to 42 ms).  The pixels are the
+    same: the same lines in the same order, in one renderer (one clipping range, one FXAA
+    pass).  The chunks share the line set's points and colour arrays (uploaded once: VTK
+    keeps one buffer per array) and have cells of their own.  On a GPU the waits cost little
+    (4 chunks: three waits a frame) and the binned scene does not exist; they are kept
+    there too, one code path.
+    """
+
+    def __init__(self, renderer: Any, width: float) -> None:
+        self.renderer = renderer
+        self.width = float(width)
+        self.actors: list[Any] = []
+        self.visible = True
+        self._drawn: tuple = ()  # (source, conn) the chunks were made from
+        self._keep: list[np.ndarray] = []  # the chunks' cells, read by VTK in place
+
+    def draw(self, source: pv.PolyData, conn: np.ndarray) -> None:
+        """Draw the lines ``conn`` ((m, 2) int32 point ids of ``source``'s points, whose point
+        data ``rgb`` colours them; every line of ``source`` or a subset) from the next frame
+        on; nothing is done for the same pair.  There are as many actors as ``source``'s lines
+        need chunks; a subset (a draft's) takes the first chunks it needs, the other actors
+        draw nothing (and wait for nothing)."""
+        if len(self._drawn) == 2 and self._drawn[0] is source and self._drawn[1] is conn:
+            return
+        self._drawn = (source, conn)
+        count = _chunks(int(source.GetNumberOfLines()))
+        while len(self.actors) < count:
+            self._add_actor()
+        for actor in self.actors[count:]:
+            self.renderer.RemoveActor(actor)
+        del self.actors[count:]
+        used = _chunks(len(conn))
+        bounds = np.r_[np.linspace(0, len(conn), used + 1).astype(int), np.full(count - used, len(conn))]
+        self._keep = [np.ascontiguousarray(conn[a:b]) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        points, colors = source.GetPoints(), source.GetPointData().GetArray("rgb")
+        for actor, cells in zip(self.actors, self._keep, strict=True):
+            chunk = pv.PolyData()
+            chunk.SetPoints(points)
+            chunk.GetPointData().SetScalars(colors)
+            chunk.SetLines(line_cells(cells))
+            actor.GetMapper().SetInputData(chunk)
+
+    def _add_actor(self) -> None:
+        from vtkmodules.vtkCommonCore import vtkCommand
+        from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+        mapper = vtkPolyDataMapper()
+        mapper.SetColorModeToDirectScalars()
+        mapper.SetScalarModeToUsePointData()
+        mapper.ScalarVisibilityOn()
+        if self.actors:  # what the chunks before it gave is drawn first
+            mapper.AddObserver(vtkCommand.UpdateShaderEvent, self._wait)
+        actor = vtkActor()
+        actor.SetMapper(mapper)
+        prop = actor.GetProperty()
+        prop.LightingOff()
+        prop.SetLineWidth(self.width)
+        actor.PickableOff()
+        actor.SetVisibility(self.visible)
+        self.renderer.AddActor(actor)
+        self.actors.append(actor)
+
+    def _wait(self, *_args: Any) -> None:
+        window = self.renderer.GetRenderWindow()
+        if window is not None:
+            window.WaitForCompletion()
+
+    def modified(self) -> None:
+        """The source's points or colours changed: the chunks upload them again."""
+        for actor in self.actors:
+            actor.GetMapper().GetInput().Modified()
+
+    def inputs(self) -> list[pv.PolyData]:
+        """The chunks' line sets, in drawing order."""
+        return [actor.GetMapper().GetInput() for actor in self.actors]
+
+    def remove(self) -> None:
+        """Take the actors out of the renderer (the line set is dropped)."""
+        for actor in self.actors:
+            self.renderer.RemoveActor(actor)
+        self.actors = []
+        self._drawn = ()
+
+    def set_visible(self, on: bool) -> None:
+        self.visible = bool(on)
+        for actor in self.actors:
+            actor.SetVisibility(self.visible)
+
+    def set_width(self, width: float) -> None:
+        self.width = float(width)
+        for actor in self.actors:
+            actor.GetProperty().SetLineWidth(self.width)
+
+
+@dataclass(eq=False)
+class LineSet:
+    """One plant version's hairlines: every segment's line, the memory they are written in, the
+    actors that draw them, and the subset a draft frame draws."""
+
+    lines: pv.PolyData  # every line: points (the starts, then the ends), point data ``rgb``, cells
+    conn: np.ndarray  # (n, 2) the lines' point ids (the cells of ``lines``)
+    buffers: LineBuffers
+    chunks: LineChunks
+    draft: DraftLines = field(default_factory=lambda: DraftLines())
+    skeleton: Any = None
+    sides: int = 0
+    key: Any = None
 
 
 class Hairlines:
     """Every segment as a thin line under the tubes, and the selected ones as thick red lines.
 
-    The lines of the plant shown before the last new one are kept (their actor hidden) with
+    The lines of the plant shown before the last new one are kept (their actors hidden) with
     the key they were shown with; showing that key again (an undo) shows them again without
-    building or uploading anything (only their colours are refreshed if they changed).
+    building or uploading anything (only their colours are refreshed if they changed).  A new
+    version's lines are written into the memory and actors of the version dropped.
     """
 
     def __init__(self, plotter: pv.BasePlotter) -> None:
         self.plotter = plotter
-        self.lines: pv.PolyData | None = None
-        self.actor: pv.Actor | None = None
+        self.shown: LineSet | None = None
+        self.kept: LineSet | None = None  # the plant shown before
         self.selected: pv.PolyData | None = None
         self.selected_actor: pv.Actor | None = None
-        self.skeleton: Skeleton | None = None
+        self._spare: LineSet | None = None  # a line set no longer shown, its memory and actors free
         self.width = LINE_WIDTH
-        self.key: Any = None
-        self.kept: tuple | None = None  # (key, lines, actor, skeleton, sides) of the plant shown before
-        self.sides = 0  # the shown mesh's tube sides when it is laid out tubes first (0: unknown)
-        self.buffers: dict[int, LineBuffers] = {}  # id(line set) -> the memory its arrays use
         self.drafting = False  # True: frames leave out the shortest lines (see the module's notes)
-        self.drafts: dict[int, DraftLines] = {}  # id(line set) -> the lines a draft frame draws
-        self._names = iter(range(1 << 62))
         plotter.renderer.AddObserver("StartEvent", self._before_frame)
+
+    @property
+    def lines(self) -> pv.PolyData | None:
+        """The shown version's line set (every line), or None."""
+        return None if self.shown is None else self.shown.lines
+
+    @property
+    def skeleton(self) -> Skeleton | None:
+        return None if self.shown is None else self.shown.skeleton
+
+    @property
+    def actors(self) -> list[Any]:
+        """The actors drawing the shown version's lines ([] when none is shown)."""
+        return [] if self.shown is None else self.shown.chunks.actors
+
+    def visible(self) -> bool:
+        return self.shown is not None and self.shown.chunks.visible
 
     def set_draft(self, draft: bool) -> None:
         """Draw the next frames in the draft look (True: 1-pixel lines, the shortest left out)."""
@@ -288,95 +433,83 @@ class Hairlines:
     def set_width(self, width: float) -> None:
         """Draw the hairlines ``width`` pixels wide (:data:`DRAFT_LINE_WIDTH` in a draft frame)."""
         self.width = float(width)
-        if self.actor is not None:
-            self.actor.GetProperty().SetLineWidth(self.width)
-        if self.kept is not None:
-            self.kept[2].GetProperty().SetLineWidth(self.width)
+        for line_set in (self.shown, self.kept):
+            if line_set is not None:
+                line_set.chunks.set_width(self.width)
 
     def show(self, skeleton: Skeleton | None, mesh: pv.DataSet, colors: ArrayLike, key: Any = None, sides: int = 0) -> None:
         """Lines for a new plant (``colors``: the tubes' per-cell RGB); ``key`` names the version
         (see the class notes); ``sides``: see :func:`segment_colors` (0: the layout is checked)."""
-        if skeleton is not None and len(skeleton) and key is not None and self.kept is not None and self.kept[0] is key:
+        if skeleton is not None and len(skeleton) and key is not None and self.kept is not None and self.kept.key is key:
             self._swap(mesh, colors)
             return
-        if self.key is not None and key is not self.key and self.actor is not None and self.lines is not None:
-            old = self.kept
-            self.kept = (self.key, self.lines, self.actor, self.skeleton, self.sides)
-            self.actor.SetVisibility(False)
-            self.lines, self.actor = (old[1], old[2]) if old is not None else (None, None)
-        self.key = key
-        self.skeleton = skeleton
-        self.sides = sides
+        spare = self._keep(key)
+        if spare is None:
+            spare = self._spare
+        elif self._spare is not None:
+            self._spare.chunks.remove()
+        self._spare = None
         if skeleton is None or len(skeleton) == 0:
-            self._hide()
+            self._hide(spare)
+            self._spare = spare  # its memory and actors serve the next plant
             return
         n = len(skeleton)
-        buffers = self.buffers.get(id(self.lines)) if self.lines is not None else None
-        if buffers is None or buffers.capacity < n:
-            buffers = LineBuffers.make(n)
+        buffers = spare.buffers if spare is not None and spare.buffers.capacity >= n else LineBuffers.make(n)
         lines = segment_lines(skeleton.start, skeleton.end, buffers)
         lines.point_data["rgb"] = point_colors(segment_colors(mesh, colors, n, sides), buffers)  # see line_colors
-        if self.actor is None or self.lines is None:
-            self.lines = lines
-            self.actor = self.plotter.add_mesh(
-                lines,
-                scalars="rgb",
-                rgb=True,
-                name=f"hairlines{next(self._names)}",
-                reset_camera=False,
-                render=False,
-                pickable=False,
-                show_scalar_bar=False,
-                lighting=False,
-                line_width=self.width,
-            )
-        else:
-            self.lines.copy_from(lines, deep=False)
-            self.lines.point_data.active_scalars_name = "rgb"
-            self.actor.GetProperty().SetLineWidth(self.width)
-            self.actor.SetVisibility(True)
-        self.buffers[id(self.lines)] = buffers
-        self.drafts.pop(id(self.lines), None)  # new lines in this line set
-        live = (id(self.lines), id(self.kept[1]) if self.kept is not None else None)
-        self.buffers = {k: v for k, v in self.buffers.items() if k in live}  # a dropped line set's memory goes
-        self.drafts = {k: v for k, v in self.drafts.items() if k in live}
+        chunks = spare.chunks if spare is not None else LineChunks(self.plotter.renderer, self.width)
+        chunks.set_width(self.width)
+        chunks.set_visible(True)
+        self.shown = LineSet(lines, buffers.conn[: 2 * n].reshape(n, 2), buffers, chunks, skeleton=skeleton, sides=sides, key=key)
+        chunks.draw(lines, self.shown.conn)  # every line (the actors exist, VTK knows the bounds)
+
+    def _keep(self, key: Any) -> LineSet | None:
+        """Before version ``key`` is shown: keep the shown version for an undo (unless it is the
+        same key, or unnamed), and give back the line set whose memory and actors are free."""
+        shown, self.shown = self.shown, None
+        if shown is None or shown.key is None or shown.key is key:
+            return shown
+        spare, self.kept = self.kept, shown
+        shown.chunks.set_visible(False)
+        return spare
 
     def _swap(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
         """Show the kept lines again, and keep the shown ones."""
         assert self.kept is not None
-        key, lines, actor, skeleton, sides = self.kept
-        if self.actor is not None and self.lines is not None and self.key is not None:
-            self.kept = (self.key, self.lines, self.actor, self.skeleton, self.sides)
-            self.actor.SetVisibility(False)
-        else:
-            self.kept = None
-        self.key, self.lines, self.actor, self.skeleton, self.sides = key, lines, actor, skeleton, sides
+        back, shown = self.kept, self.shown
+        self.kept = shown if shown is not None and shown.key is not None else None
+        if shown is not None:
+            shown.chunks.set_visible(False)
+            if self.kept is None:
+                if self._spare is not None:
+                    self._spare.chunks.remove()
+                self._spare = shown
+        self.shown = back
         self._recolor(mesh, colors)
-        actor.GetProperty().SetLineWidth(self.width)
-        actor.SetVisibility(True)
+        back.chunks.set_width(self.width)
+        back.chunks.set_visible(True)
 
     def set_colors(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
-        if self.lines is not None and self.skeleton is not None:
+        if self.shown is not None and self.shown.skeleton is not None:
             self._recolor(mesh, colors)
 
     def line_colors(self) -> np.ndarray:
         """Each shown hairline's RGB.  The colours are stored per point (each line has its own
         two points, both of its colour): VTK then reads no per-cell colour texture for every
         fragment, 4 ms less per draft frame at 131k lines, the same pixels."""
-        assert self.lines is not None and self.skeleton is not None
-        return np.asarray(self.lines.point_data["rgb"])[: len(self.skeleton)]
+        assert self.shown is not None
+        return np.asarray(self.shown.lines.point_data["rgb"])[: len(self.shown.skeleton), :3]
 
     def _recolor(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
-        assert self.lines is not None and self.skeleton is not None
-        rgb = segment_colors(mesh, colors, len(self.skeleton), self.sides)
+        shown = self.shown
+        assert shown is not None and shown.skeleton is not None
+        rgb = segment_colors(mesh, colors, len(shown.skeleton), shown.sides)
         if not np.array_equal(rgb, self.line_colors()):  # else no upload again
-            both = np.asarray(self.lines.point_data["rgb"])
-            both[: len(rgb)] = rgb
-            both[len(rgb) :] = rgb
-            self.lines.Modified()
-            draft = self.drafts.get(id(self.lines))
-            if draft is not None and draft.lines is not None:
-                draft.lines.Modified()  # the same colour array
+            both = np.asarray(shown.lines.point_data["rgb"])
+            both[: len(rgb), :3] = rgb
+            both[len(rgb) :, :3] = rgb
+            shown.lines.Modified()
+            shown.chunks.modified()
 
     def set_selection(self, segments: ArrayLike) -> None:
         """Thick red lines over the selected ``segments`` (indices), drawn above the tubes."""
@@ -407,32 +540,29 @@ class Hairlines:
             self.selected.copy_from(selected, deep=False)
         self.selected_actor.SetVisibility(True)
 
-    def _hide(self) -> None:
-        for actor in (self.actor, self.selected_actor):
-            if actor is not None:
-                actor.SetVisibility(False)
+    def _hide(self, line_set: LineSet | None) -> None:
+        if line_set is not None:
+            line_set.chunks.set_visible(False)
+        if self.selected_actor is not None:
+            self.selected_actor.SetVisibility(False)
 
     # -- draft frames ----------------------------------------------------------------
     def _before_frame(self, *_args: Any) -> None:
-        """Before each frame: the shown actor draws every line, or a draft's subset."""
-        if self.actor is None or self.lines is None or self.skeleton is None or not self.actor.GetVisibility():
+        """Before each frame: the shown chunks draw every line, or a draft's subset."""
+        shown = self.shown
+        if shown is None or shown.skeleton is None or not shown.chunks.visible:
             return
-        drawn = self.draft_lines() if self.drafting else self.lines
-        mapper = self.actor.GetMapper()
-        if mapper.GetInput() is not drawn:
-            mapper.SetInputData(drawn)
+        shown.chunks.draw(shown.lines, self.draft_conn() if self.drafting else shown.conn)
 
-    def draft_lines(self) -> pv.PolyData:
-        """The lines a draft frame draws now: those at least :data:`DRAFT_MIN_LINE_PIXELS` long
-        on screen (all of them when that leaves out fewer than :data:`DRAFT_MIN_LEFT_OUT`).
-        The subset shares the lines' points and colours (one upload for both); it is made
-        again only when the camera or the window size changes, or the lines do."""
-        assert self.lines is not None and self.skeleton is not None
-        draft = self.drafts.get(id(self.lines))
-        if draft is None:
-            draft = self.drafts[id(self.lines)] = DraftLines()
-        draft.update(self.plotter.renderer, self.lines, len(self.skeleton))
-        return self.lines if draft.lines is None else draft.lines
+    def draft_conn(self) -> np.ndarray:
+        """The lines a draft frame draws now ((m, 2) point ids): those at least
+        :data:`DRAFT_MIN_LINE_PIXELS` long on screen (all of them when that leaves out fewer
+        than :data:`DRAFT_MIN_LEFT_OUT`).  Chosen again only when the camera or the window
+        size changes, or the lines do."""
+        shown = self.shown
+        assert shown is not None and shown.skeleton is not None
+        shown.draft.update(self.plotter.renderer, shown.lines, len(shown.skeleton))
+        return shown.conn if shown.draft.conn is None else shown.draft.conn
 
 
 @dataclass
@@ -441,33 +571,29 @@ class DraftLines:
     :data:`DRAFT_MIN_LINE_PIXELS` long from the camera they were chosen for."""
 
     view: tuple = ()  # the camera's projection (the rows that place points on screen) and viewport size
-    lines: pv.PolyData | None = None  # None: every line
-    keep: list = field(default_factory=list)  # numpy arrays VTK reads without a copy
+    conn: np.ndarray | None = None  # (m, 2) their point ids; None: every line
+    lines: Any = None  # the line set they were chosen from
 
     def update(self, renderer: Any, lines: pv.PolyData, count: int) -> None:
         """Choose among the first ``count`` lines of ``lines`` (:func:`segment_lines`) for
-        ``renderer``'s camera, unless they were chosen for the same view."""
+        ``renderer``'s camera, unless they were chosen for the same view and lines."""
         from ramure.app.desktop._lines_kernel import long_lines
 
         matrix = projection_matrix(renderer)
         width, height = renderer.GetSize()
         view = (*matrix[[0, 1, 3]].ravel().tolist(), width, height)  # the clipping range (row 2) does not move lines
-        if view == self.view:
+        if view == self.view and lines is self.lines:
             return
-        self.view = view
+        self.view, self.lines = view, lines
         points = np.asarray(lines.points)
         kept = long_lines(points, count, matrix, 0.5 * width, 0.5 * height, DRAFT_MIN_LINE_PIXELS)
         if count - len(kept) < DRAFT_MIN_LEFT_OUT * count:
-            self.lines, self.keep = None, []
+            self.conn = None
             return
         conn = np.empty((len(kept), 2), np.int32)
         conn[:, 0] = kept
         conn[:, 1] = kept + count
-        subset = pv.PolyData()
-        subset.SetPoints(lines.GetPoints())
-        subset.GetPointData().SetScalars(lines.GetPointData().GetArray("rgb"))
-        subset.SetLines(line_cells(conn))
-        self.lines, self.keep = subset, [conn]
+        self.conn = conn
 
 
 def grid_color() -> tuple[float, float, float]:

@@ -410,16 +410,16 @@ class PlantView(QWidget):
     def shown_bounds(self) -> tuple[float, ...] | None:
         """What VTK's ``ComputeVisiblePropBounds`` gives, with the hairlines' bounds taken from
         the plant actors instead of a pass over their cells; None when they are unknown."""
-        lines = self.hairlines.actor
+        lines = self.hairlines.shown
         known = self.plant.segment_bounds
         shown = self.snapshot.skeleton if self.snapshot is not None else None
-        if lines is None or known is None or not lines.GetVisibility() or self.hairlines.skeleton is not shown:
+        if lines is None or known is None or not lines.chunks.visible or lines.skeleton is not shown:
             return None
-        lines.VisibilityOff()  # the other props' bounds: a few small ones, cached by VTK
+        lines.chunks.set_visible(False)  # the other props' bounds: a few small ones, cached by VTK
         try:
             others = self.plotter.renderer.ComputeVisiblePropBounds()
         finally:
-            lines.VisibilityOn()
+            lines.chunks.set_visible(True)
         lo = np.minimum(np.array(others[0::2]), known[0::2])
         hi = np.maximum(np.array(others[1::2]), known[1::2])
         return tuple(float(v) for v in np.c_[lo, hi].ravel())

@@ -60,12 +60,12 @@ def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, m
     qtbot.waitUntil(lambda: not view.drafting, timeout=5000)
     before = image_array(view.grab_image())
     renderer = view.plotter.renderer
-    assert renderer.GetUseFXAA() and view.hairlines.actor.GetProperty().GetLineWidth() == scene.LINE_WIDTH
+    assert renderer.GetUseFXAA() and line_widths(view) == {scene.LINE_WIDTH}
 
     slow_polish(monkeypatch, True)
     regrow(w, qtbot)
     assert view.drafting and not renderer.GetUseFXAA()
-    assert view.hairlines.actor.GetProperty().GetLineWidth() == scene.DRAFT_LINE_WIDTH
+    assert line_widths(view) == {scene.DRAFT_LINE_WIDTH}
     draft = drawn_now(view)
     # a further edit (re)starts the wait: one polished frame after the last edit
     view._polish_timer.stop()
@@ -80,7 +80,7 @@ def test_an_edit_is_drawn_as_a_draft_then_polished_when_the_user_pauses(large, m
     slow_polish(monkeypatch, False)
     view.draft()
     qtbot.waitUntil(lambda: not view.drafting, timeout=SHORT * 20)
-    assert renderer.GetUseFXAA() and view.hairlines.actor.GetProperty().GetLineWidth() == scene.LINE_WIDTH
+    assert renderer.GetUseFXAA() and line_widths(view) == {scene.LINE_WIDTH}
     polished = image_array(view.grab_image())
     # the draft shows the same plant in the same colours: only line widths and edge smoothing differ
     assert draft.std() > 5 and 0 < changed(draft, polished) < 0.03
@@ -156,11 +156,11 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
     w = make_window(n=14)
     view = w.view
     groups, actors = list(view.plant.groups), [g.actor for g in view.plant.groups]
-    lines, line_actor = view.hairlines.lines, view.hairlines.actor
+    lines, line_actors = view.hairlines.lines, list(view.hairlines.actors)
     regrow(w, qtbot)
-    assert view.plant.groups[0] is not groups[0] and view.hairlines.actor is not line_actor
+    assert view.plant.groups[0] is not groups[0] and not set(line_actors) & set(view.hairlines.actors)
     assert not set(map(id, actors)) & {id(g.actor) for g in view.plant.groups}  # the kept actors are left alone
-    assert not any(a.GetVisibility() for a in actors) and not line_actor.GetVisibility()
+    assert not any(a.GetVisibility() for a in actors + line_actors)
 
     built, made = [], []
     monkeypatch.setattr(plant_actors.PlantActors, "_build", lambda self, g: built.append(g))
@@ -169,7 +169,8 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
     w.controller.undo()
     settle(qtbot, w)
     assert view.plant.groups == groups and [g.actor for g in groups] == actors
-    assert view.hairlines.lines is lines and view.hairlines.actor is line_actor and line_actor.GetVisibility()
+    assert view.hairlines.lines is lines and view.hairlines.actors == line_actors
+    assert all(a.GetVisibility() for a in line_actors)
     assert not built and not made  # nothing gathered, no line set built again
     # what is drawn carries the mesh's colours, and a click still finds full-mesh cells
     mesh = view.mesh
@@ -188,14 +189,19 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
     monkeypatch.undo()
     w.controller.redo()
     settle(qtbot, w)
-    assert view.plant.groups[0] is not groups[0] and view.hairlines.actor is not line_actor
-    assert not any(a.GetVisibility() for a in actors)
+    assert view.plant.groups[0] is not groups[0] and not set(line_actors) & set(view.hairlines.actors)
+    assert not any(a.GetVisibility() for a in actors + line_actors)
+
+
+def line_widths(view):
+    return {a.GetProperty().GetLineWidth() for a in view.hairlines.actors}
 
 
 def lines_drawn(view):
-    """The line set the hairline actor draws now, and each of its lines' (start, end) point ids."""
-    drawn = view.hairlines.actor.GetMapper().GetInput()
-    conn = np.asarray(drawn.GetLines().GetConnectivityArray()).reshape(-1, 2)
+    """The line sets the hairline actors draw now (a chunk each), and the (start, end) point
+    ids of all their lines in drawing order."""
+    drawn = view.hairlines.shown.chunks.inputs()
+    conn = np.concatenate([np.asarray(d.GetLines().GetConnectivityArray()).reshape(-1, 2) for d in drawn])
     return drawn, conn
 
 
@@ -215,17 +221,17 @@ def test_a_draft_leaves_out_the_hairlines_shorter_than_its_threshold_on_screen(l
     view.draft()
     view.redraw(now=True)
     drawn, conn = lines_drawn(view)
-    assert drawn is not lines and 0 < len(conn) < (1 - scene.DRAFT_MIN_LEFT_OUT) * len(every)
+    assert 0 < len(conn) < (1 - scene.DRAFT_MIN_LEFT_OUT) * len(every)
     # the same points and colour array: one upload, and a recolour shows in the draft too
-    assert drawn.GetPoints() is lines.GetPoints()
-    assert drawn.GetPointData().GetScalars() is lines.GetPointData().GetArray("rgb")
+    assert all(d.GetPoints() is lines.GetPoints() for d in drawn)
+    assert all(d.GetPointData().GetScalars() is lines.GetPointData().GetArray("rgb") for d in drawn)
     left_out = np.setdiff1d(every[:, 0], conn[:, 0])
     assert (screen_lengths(view, every[left_out]) < scene.DRAFT_MIN_LINE_PIXELS).all()
     draft = image_array(view.frame_image())
     monkeypatch.setattr(scene, "DRAFT_MIN_LEFT_OUT", 1.0)  # a draft with every line
-    view.hairlines.drafts.clear()
+    view.hairlines.shown.draft = scene.DraftLines()
     view.redraw(now=True)
-    assert lines_drawn(view)[0] is lines
+    assert np.array_equal(lines_drawn(view)[1], every)
     assert changed(draft, image_array(view.frame_image()), level=8) < 0.005
     monkeypatch.undo()
     slow_polish(monkeypatch, True)
@@ -238,7 +244,7 @@ def test_a_draft_leaves_out_the_hairlines_shorter_than_its_threshold_on_screen(l
     assert (screen_lengths(view, every[left_out]) < scene.DRAFT_MIN_LINE_PIXELS).all()
     view.polish()
     view.redraw(now=True)
-    assert lines_drawn(view)[0] is lines  # the polished frame draws them all
+    assert np.array_equal(lines_drawn(view)[1], every)  # the polished frame draws them all
 
 
 def test_the_ground_is_built_again_only_when_its_grid_changes():

@@ -79,6 +79,11 @@ def test_the_shown_props_bounds_and_clipping_range_are_vtks(qtbot):
     view.close()
 
 
+def line_sets(lines):
+    """The line sets ``lines`` (a :class:`scene.Hairlines`) holds memory and actors for."""
+    return [s for s in (lines.shown, lines.kept, lines._spare) if s is not None]
+
+
 def test_hairlines_written_in_place_equal_lines_built_afresh(qtbot):
     """After random regrows, undos and redos the shown hairlines (points, cells, colours) equal
     a line set built from scratch; a new version reuses the memory of the one dropped, never
@@ -96,22 +101,25 @@ def test_hairlines_written_in_place_equal_lines_built_afresh(qtbot):
         mesh, sk = ex.mesh, ex.skeleton
         rgb = np.random.default_rng(step).integers(0, 256, (mesh.n_cells, 3)).astype(np.uint8)
         kept = lines.kept
-        kept_points = None if kept is None else np.array(kept[1].points)
-        before = {id(b.points) for b in lines.buffers.values()}
+        kept_points = None if kept is None else np.array(kept.lines.points)
+        before = {id(s.buffers.points) for s in line_sets(lines)}
         lines.show(sk, mesh, rgb, key=mesh, sides=plant_actors.tube_layout(mesh, len(sk)))
         fresh = scene.segment_lines(sk.start, sk.end)
         shown = lines.lines
-        assert shown is not None and lines.actor is not None and lines.actor.GetVisibility()
+        assert shown is not None and lines.visible() and all(a.GetVisibility() for a in lines.actors)
         np.testing.assert_array_equal(shown.points, fresh.points)
         np.testing.assert_array_equal(shown.lines, fresh.lines)
         np.testing.assert_array_equal(lines.line_colors(), scene.segment_colors(mesh, rgb, len(sk)))
-        np.testing.assert_array_equal(shown.point_data["rgb"], np.concatenate([lines.line_colors()] * 2))
-        if kept is not None and lines.kept is not None and lines.kept[0] is kept[0]:
-            np.testing.assert_array_equal(lines.kept[1].points, kept_points)  # the kept version untouched
+        rgba = np.asarray(shown.point_data["rgb"])
+        np.testing.assert_array_equal(rgba[:, :3], np.concatenate([lines.line_colors()] * 2))
+        assert (rgba[:, 3] == 255).all()
+        if kept is not None and lines.kept is not None and lines.kept.key is kept.key:
+            np.testing.assert_array_equal(lines.kept.lines.points, kept_points)  # the kept version untouched
         if kept is not None and op != "undo":
-            reused += id(lines.buffers[id(shown)].points) in before
-            assert lines.kept is not None and not np.shares_memory(shown.points, lines.kept[1].points)
-        assert len(lines.buffers) <= 2
+            reused += id(lines.shown.buffers.points) in before
+            assert lines.kept is not None and not np.shares_memory(shown.points, lines.kept.lines.points)
+        assert len(line_sets(lines)) <= 2
+        assert not any(a.GetVisibility() for a in lines.kept.chunks.actors) if lines.kept is not None else True
     assert reused >= 3  # new versions were written into memory already used
     plotter.close()
 
