@@ -201,12 +201,11 @@ def _counting(n: int) -> None:
 
 @dataclass
 class LineBuffers:
-    """Memory a line set of up to ``capacity`` lines is written into (:func:`segment_lines`):
-    a new plant version's hairlines go into the buffers of the version dropped, so the 131k
-    lines' 8 MB are written into memory already touched (fresh pages cost this machine
-    several ms)."""
+    """Memory the cells and colours of a line set of up to ``capacity`` lines are written into
+    (:func:`skeleton_lines`): a new plant version's hairlines go into the buffers of the version
+    dropped, so they are written into memory already touched (fresh pages cost this machine
+    several ms).  The points are the skeleton's own (:meth:`ramure.lsys.turtle.Skeleton.ends`)."""
 
-    points: np.ndarray  # (2 capacity, 3) float
     conn: np.ndarray  # (2 capacity,) int32
     colors: np.ndarray  # (2 capacity, 4) uint8: RGBA, alpha 255 (see point_colors)
 
@@ -214,24 +213,32 @@ class LineBuffers:
     def make(cls, n: int) -> LineBuffers:
         """Buffers for ``n`` lines and 10 % more."""
         cap = n + n // 10 + 16
-        return cls(np.empty((2 * cap, 3)), np.empty(2 * cap, np.int32), np.empty((2 * cap, 4), np.uint8))
+        return cls(np.empty(2 * cap, np.int32), np.empty((2 * cap, 4), np.uint8))
 
     @property
     def capacity(self) -> int:
         return len(self.conn) // 2
 
 
-def segment_lines(start: ArrayLike, end: ArrayLike, buffers: LineBuffers | None = None) -> pv.PolyData:
-    """Line cells from ``start[i]`` to ``end[i]`` (points: the starts, then the ends); the cell
-    arrays are handed to VTK as they are (no legacy-format import: 6 ms at 131k segments).
-    ``buffers``: where the points and connectivity are written (large enough), else new arrays."""
+def segment_lines(start: ArrayLike, end: ArrayLike) -> pv.PolyData:
+    """Line cells from ``start[i]`` to ``end[i]`` (points: the starts, then the ends, copied)."""
     start, end = np.asarray(start, float).reshape(-1, 3), np.asarray(end, float).reshape(-1, 3)
-    n = len(start)
-    if buffers is None:
-        buffers = LineBuffers(np.empty((2 * n, 3)), np.empty(2 * n, np.int32), np.empty((0, 4), np.uint8))
-    points, conn = buffers.points[: 2 * n], buffers.conn[: 2 * n].reshape(n, 2)
-    points[:n] = start
-    points[n:] = end
+    return point_lines(np.concatenate([start, end]))
+
+
+def skeleton_lines(skeleton: Skeleton, buffers: LineBuffers | None = None) -> pv.PolyData:
+    """Every segment of ``skeleton`` as a line (:func:`point_lines`): its points are the
+    skeleton's :meth:`~ramure.lsys.turtle.Skeleton.ends`, read by VTK in place."""
+    return point_lines(skeleton.ends(), buffers)
+
+
+def point_lines(points: np.ndarray, buffers: LineBuffers | None = None) -> pv.PolyData:
+    """Lines from ``points[i]`` to ``points[n + i]`` (``points`` (2n, 3) float64, read by VTK
+    in place: the caller keeps it alive); the cell arrays are handed to VTK as they are (no
+    legacy-format import: 6 ms at 131k segments), written into ``buffers`` if given (large
+    enough)."""
+    n = len(points) // 2
+    conn = (np.empty(2 * n, np.int32) if buffers is None else buffers.conn[: 2 * n]).reshape(n, 2)
     _counting(n)
     conn[:, 0] = _COUNT[:n]
     conn[:, 1] = _COUNT[n : 2 * n]
@@ -251,7 +258,7 @@ def line_cells(conn: np.ndarray) -> Any:
 
 
 def point_colors(rgb: np.ndarray, buffers: LineBuffers | None = None) -> np.ndarray:
-    """The per-point RGBA of :func:`segment_lines`' lines coloured ``rgb`` (both ends, alpha
+    """The per-point RGBA of :func:`point_lines`' lines coloured ``rgb`` (both ends, alpha
     255), written into ``buffers`` if given.  Four bytes a point: VTK draws direct RGBA
     scalars as they are, where three-byte colours are copied to RGBA by every mapper that
     draws them (each chunk of :class:`LineChunks`)."""
@@ -455,7 +462,7 @@ class Hairlines:
             return
         n = len(skeleton)
         buffers = spare.buffers if spare is not None and spare.buffers.capacity >= n else LineBuffers.make(n)
-        lines = segment_lines(skeleton.start, skeleton.end, buffers)
+        lines = skeleton_lines(skeleton, buffers)
         lines.point_data["rgb"] = point_colors(segment_colors(mesh, colors, n, sides), buffers)  # see line_colors
         chunks = spare.chunks if spare is not None else LineChunks(self.plotter.renderer, self.width)
         chunks.set_width(self.width)
@@ -575,7 +582,7 @@ class DraftLines:
     lines: Any = None  # the line set they were chosen from
 
     def update(self, renderer: Any, lines: pv.PolyData, count: int) -> None:
-        """Choose among the first ``count`` lines of ``lines`` (:func:`segment_lines`) for
+        """Choose among the first ``count`` lines of ``lines`` (:func:`point_lines`) for
         ``renderer``'s camera, unless they were chosen for the same view and lines."""
         from ramure.app.desktop._lines_kernel import long_lines
 

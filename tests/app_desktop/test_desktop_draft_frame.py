@@ -164,8 +164,8 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
 
     built, made = [], []
     monkeypatch.setattr(plant_actors.PlantActors, "_build", lambda self, g: built.append(g))
-    real = scene.segment_lines
-    monkeypatch.setattr(scene, "segment_lines", lambda *a: made.append(1) or real(*a))
+    real = scene.point_lines
+    monkeypatch.setattr(scene, "point_lines", lambda *a: made.append(1) or real(*a))
     w.controller.undo()
     settle(qtbot, w)
     assert view.plant.groups == groups and [g.actor for g in groups] == actors

@@ -102,12 +102,13 @@ def test_hairlines_written_in_place_equal_lines_built_afresh(qtbot):
         rgb = np.random.default_rng(step).integers(0, 256, (mesh.n_cells, 3)).astype(np.uint8)
         kept = lines.kept
         kept_points = None if kept is None else np.array(kept.lines.points)
-        before = {id(s.buffers.points) for s in line_sets(lines)}
+        before = {id(s.buffers.conn) for s in line_sets(lines)}
         lines.show(sk, mesh, rgb, key=mesh, sides=plant_actors.tube_layout(mesh, len(sk)))
         fresh = scene.segment_lines(sk.start, sk.end)
         shown = lines.lines
         assert shown is not None and lines.visible() and all(a.GetVisibility() for a in lines.actors)
         np.testing.assert_array_equal(shown.points, fresh.points)
+        assert np.shares_memory(shown.points, sk.start) and np.shares_memory(shown.points, sk.end)  # no copy
         np.testing.assert_array_equal(shown.lines, fresh.lines)
         np.testing.assert_array_equal(lines.line_colors(), scene.segment_colors(mesh, rgb, len(sk)))
         rgba = np.asarray(shown.point_data["rgb"])
@@ -116,8 +117,9 @@ def test_hairlines_written_in_place_equal_lines_built_afresh(qtbot):
         if kept is not None and lines.kept is not None and lines.kept.key is kept.key:
             np.testing.assert_array_equal(lines.kept.lines.points, kept_points)  # the kept version untouched
         if kept is not None and op != "undo":
-            reused += id(lines.shown.buffers.points) in before
+            reused += id(lines.shown.buffers.conn) in before
             assert lines.kept is not None and not np.shares_memory(shown.points, lines.kept.lines.points)
+            assert not np.shares_memory(lines.shown.buffers.conn, lines.kept.buffers.conn)
         assert len(line_sets(lines)) <= 2
         assert not any(a.GetVisibility() for a in lines.kept.chunks.actors) if lines.kept is not None else True
     assert reused >= 3  # new versions were written into memory already used

@@ -73,6 +73,10 @@ def test_random_edits_then_full_rebuild_give_identical_skeleton_and_mesh(source,
         incremental = ex.skeleton
         assert "reuse" in incremental.extra  # re-interpreted in part, not rebuilt
         full = interpret_string(ex.lsystem, ex.derivation.tree, ex.derivation.tree.leaves)
+        for sk in (incremental, full):  # start and end: the halves of one array, handed out as it is
+            ends = sk.ends()
+            assert ends is sk.start.base and ends is sk.end.base and ends is sk.ends()
+            np.testing.assert_array_equal(ends, np.concatenate([sk.start, sk.end]))
         assert_same(incremental, full)
         assert_same_mesh(ex.mesh, skeleton_to_polydata(full, mesh_sides(len(full))))
 
@@ -125,3 +129,15 @@ def test_undo_and_redo_put_back_the_stored_plant_arrays():
     ex.undo()
     ex.undo()  # nothing more to undo: the plant stays
     assert ex.skeleton is before_skeleton
+
+
+def test_ends_of_separate_start_and_end_arrays_are_a_new_array():
+    import dataclasses
+
+    sk = Explorer(str(LSystem.from_file("honda_sympodial").grammar.filename), n=5).skeleton
+    apart = dataclasses.replace(sk, start=sk.start.copy(), end=sk.end.copy())
+    ends = apart.ends()
+    assert not np.shares_memory(ends, apart.start) and ends.shape == (2 * len(sk), 3)
+    np.testing.assert_array_equal(ends, sk.ends())
+    swapped = dataclasses.replace(sk, start=sk.end, end=sk.start)  # the halves, the other way round
+    np.testing.assert_array_equal(swapped.ends(), np.concatenate([sk.end, sk.start]))
