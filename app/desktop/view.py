@@ -282,8 +282,9 @@ class PlantView(QWidget):
         self.actor: Any = None  # the plant's pick actor (never drawn), None without a plant
         self.snapshot: Snapshot | None = None
         self.picker: Any = None  # a vtkCellPicker over the plant and fruit, built on the first pick
-        self._locators: list = []  # the picker's cell locators over whole data sets (the fruit)
-        self._near_at: tuple | None = None  # the plant's locator bins, when picked near the ray
+        #: The picker's cell locators over whole data sets (the fruit; the plant's mesh only when
+        #: its cells cannot be picked near the ray), by actor: (the data set's state, locator).
+        self._locators: dict[int, tuple[tuple, Any]] = {}
         self._near = _NearCells()  # the plant's cells near the last pick ray
         self.box: pv.PolyData | None = None
         self.box_actor: pv.Actor | None = None
@@ -640,36 +641,46 @@ class PlantView(QWidget):
             picker = vtkCellPicker()
             picker.SetTolerance(PICK_TOLERANCE)
             picker.PickFromListOn()
-            self._near_at = _near_bins(self.mesh) if self.actor is not None else None
-            self._locators = []
-            for actor in (self.actor, self.fruit_actor):  # the plant first: it wins a tie
-                if actor is self.actor and self._near_at is not None:
-                    picker.AddPickList(self._near.actor)  # its cells near each ray, see pick_any
-                elif actor is not None:
-                    picker.AddPickList(actor)
-                    self._locators.append(_locator(actor.GetMapper().GetInput()))
+            self._locators = {}
             self.picker = picker
         return self.picker
+
+    def _whole_locator(self, actor: Any) -> Any:
+        """A locator over the whole of ``actor``'s data set, made again only when it changed."""
+        data = actor.GetMapper().GetInput()
+        points = data.GetPoints()
+        stamp = (data.__this__, points.__this__ if points is not None else None, data.GetMTime())  # C++ objects
+        known = self._locators.get(id(actor))
+        if known is None or known[0] != stamp:
+            known = self._locators[id(actor)] = (stamp, _locator(data))
+        return known[1]
 
     def pick_any(self, x: float, y: float) -> tuple[str | None, int]:
         """``("plant" | "fruit", cell id)`` under display ``(x, y)``, or ``(None, -1)``.
 
         The plant's cells are picked from those near the pick ray (:class:`_NearCells`): the
-        cell a picker over the whole mesh finds, without that mesh's locator."""
-        if self.actor is None:
+        cell a picker over the whole mesh finds, without that mesh's locator.  A mesh whose box
+        that locator could not share (:func:`_near_bins` None: cells other than polygons, or a
+        side too thin, e.g. after cells were hidden) is picked with its own whole locator,
+        made once for its points."""
+        if self.actor is None or self.mesh is None:
             return None, -1
         picker = self._picker()
-        near = self._near_at is not None and self.mesh is not None
+        picker.InitializePickList()
         picker.RemoveAllLocators()
-        for locator in self._locators:
-            picker.AddLocator(locator)
-        if near:
-            assert self.mesh is not None and self._near_at is not None
+        bins = _near_bins(self.mesh)  # this mesh's points now (cells hidden since?)
+        if bins is not None:
             tubes = (self.plant.segment_count, self.plant.sides) if self.plant.sides else (0, 0)
-            bins = _near_bins(self.mesh) or self._near_at  # this mesh's points now (cells hidden since?)
             locator = self._near.gather(self.mesh, self._pick_ray(x, y), bins, tubes)
+            picker.AddPickList(self._near.actor)
             if locator is not None:
                 picker.AddLocator(locator)
+        else:
+            picker.AddPickList(self.actor)
+            picker.AddLocator(self._whole_locator(self.actor))
+        if self.fruit_actor is not None:  # after the plant: the plant wins a tie
+            picker.AddPickList(self.fruit_actor)
+            picker.AddLocator(self._whole_locator(self.fruit_actor))
         found = picker.Pick(float(x), float(y), 0.0, self.plotter.renderer)
         picker.RemoveAllLocators()
         if not found:
@@ -678,7 +689,7 @@ class PlantView(QWidget):
         cell = int(picker.GetCellId())
         if self.fruit_actor is not None and hit is self.fruit_actor:
             return "fruit", cell
-        return "plant", int(self._near.cells[cell]) if near and hit is self._near.actor and cell >= 0 else cell
+        return "plant", int(self._near.cells[cell]) if hit is self._near.actor and cell >= 0 else cell
 
     def _pick_ray(self, x: float, y: float) -> tuple[np.ndarray, np.ndarray, float]:
         """Two world points on the line through display ``(x, y)`` and the pick tolerance in

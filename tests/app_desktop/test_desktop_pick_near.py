@@ -48,8 +48,35 @@ def test_a_pick_finds_the_whole_mesh_pickers_cell_without_its_locator(make_windo
     assert sum(c >= 0 for c in picked) > len(points) // 2  # most clicks hit a branch
     # no locator over the plant's mesh: only the cells near the last ray have one
     view.pick(*points[picked.index(max(picked))])
-    assert view._near_at is not None and not view._locators
+    assert not view._locators
     assert 0 < view._near.locator.GetDataSet().GetNumberOfCells() < view.mesh.n_cells // 10
+
+
+def test_a_mesh_whose_box_the_near_locator_cannot_share_is_picked_whole(make_window, qtbot, monkeypatch):
+    """Where :func:`_near_bins` gives no bins (a flat side, other cells, cells hidden), the
+    plant's mesh gets its own whole locator, made once for its points: the same cells."""
+    w = make_window(n=12)
+    view = w.view
+    rng = np.random.default_rng(5)
+    points = clicks(view, w.controller.snapshot, rng, 60)
+    near = [view.pick(x, y) for x, y in points]
+    monkeypatch.setattr(view_module, "_near_bins", lambda mesh: None)
+    made = []
+    real = view_module._locator
+    monkeypatch.setattr(view_module, "_locator", lambda *a: made.append(1) or real(*a))
+    whole = [view.pick(x, y) for x, y in points]
+    assert whole == near == [whole_mesh_pick(view, x, y) for x, y in points]
+    assert sum(c >= 0 for c in whole) > len(points) // 2
+    assert len(view._locators) == 1 and len(made) == 1 + len(points)  # the view's one, then the reference's
+    # hidden cells (a whole tube: its own points collapse): a new whole locator, and they are
+    # not picked
+    cell = next(c for c in whole if c >= 0)
+    segment = np.asarray(view.mesh.cell_data["segment"])
+    hidden = segment == segment[cell]
+    view.set_hidden_cells(hidden)
+    x, y = points[whole.index(cell)]
+    assert view.pick(x, y) != cell and view.pick(x, y) == whole_mesh_pick(view, x, y)
+    assert len(view._locators) == 1
 
 
 def test_fruit_plants_pick_their_organs_and_volumetric_fruit_as_before(make_window, qtbot):
