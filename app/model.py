@@ -288,10 +288,7 @@ class Explorer:
         return leaves_in_rectangle(self.skeleton.leaf_id, screen_xy, rect)
 
     def segment_midpoints(self) -> np.ndarray:
-        sk = self.skeleton
-        mid = np.add(sk.start, sk.end)
-        mid *= 0.5  # the same bits as / 2.0 (a power of two), one array fewer
-        return mid
+        return self.skeleton.midpoints()
 
     def leaves_where(
         self, min_order: int | None = None, min_height: float | None = None, max_height: float | None = None

@@ -49,7 +49,6 @@ class Snapshot:
     mesh: pv.PolyData  # cell data leaf_id, segment, kind, order
     skeleton: Skeleton
     segment_leaf: np.ndarray  # (s,) history leaf of each segment
-    midpoints: np.ndarray  # (s, 3) segment midpoints
     text: str
     error: GrammarError | None  # the last one
     constants: dict  # current values (grammar #define plus edits)
@@ -71,6 +70,12 @@ class Snapshot:
     job: str = ""  # the job that took this snapshot ("grammar" when the editor's text made it)
     organ_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # leaf and fruit centres
     organ_leaves: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # their history leaves
+
+    @property
+    def midpoints(self) -> np.ndarray:
+        """(s, 3) the segments' midpoints, computed when asked (a rectangle selection): not
+        kept with every version (3 MB at 131k segments), about 1 ms to compute."""
+        return self.skeleton.midpoints()
 
 
 def take_snapshot(
@@ -119,7 +124,6 @@ def take_snapshot(
         organ_points=np.asarray(organs.position, float).reshape(-1, 3),
         organ_leaves=np.asarray(organs.leaf_id, np.int64),
         segment_leaf=np.asarray(skeleton.leaf_id),
-        midpoints=explorer.segment_midpoints(),
         n_modules=len(explorer.derivation),
         string_preview=string_preview(explorer),
         cut_layout=layout,
