@@ -213,7 +213,9 @@ class LineBuffers:
     def make(cls, n: int) -> LineBuffers:
         """Buffers for ``n`` lines and 10 % more."""
         cap = n + n // 10 + 16
-        return cls(np.empty(2 * cap, np.int32), np.empty((2 * cap, 4), np.uint8))
+        colors = np.empty((2 * cap, 4), np.uint8)
+        colors[:, 3] = 255  # written once: point_colors writes the RGB only
+        return cls(np.empty(2 * cap, np.int32), colors)
 
     @property
     def capacity(self) -> int:
@@ -263,10 +265,13 @@ def point_colors(rgb: np.ndarray, buffers: LineBuffers | None = None) -> np.ndar
     scalars as they are, where three-byte colours are copied to RGBA by every mapper that
     draws them (each chunk of :class:`LineChunks`)."""
     n = len(rgb)
-    both = np.empty((2 * n, 4), np.uint8) if buffers is None else buffers.colors[: 2 * n]
+    if buffers is None:
+        both = np.empty((2 * n, 4), np.uint8)
+        both[:, 3] = 255
+    else:
+        both = buffers.colors[: 2 * n]  # alpha 255 from LineBuffers.make
     both[:n, :3] = rgb
     both[n:, :3] = rgb
-    both[:, 3] = 255
     return both
 
 
