@@ -242,6 +242,7 @@ class LSystem:
             if progress is not None:
                 progress(step, n)
         tree.leaves = string
+        tree.compact_params()  # the later parameters kept only where a node has them
         tree.changed()
         return Derivation(self, tree, n=n, seed=seed, constants=consts, params=combo)
 
@@ -525,7 +526,8 @@ class LSystem:
     def _successor_params(self, tree, string, chosen, counts, rng, constants, rule_constants, context):
         """Parameters of the new modules (rows in new-node order, NaN where unused), rule by rule."""
         table = self._successor_table()
-        params = np.full((int(counts @ table.length[:-1]), tree.max_params), np.nan)
+        # column by column in memory (a transposed view): the tree stores parameters by column
+        params = np.full((tree.max_params, int(counts @ table.length[:-1])), np.nan).T
         active = np.flatnonzero(counts).tolist()
         if not any(any(self._rules[r].succ_args) for r in active):
             return params
