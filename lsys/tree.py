@@ -607,9 +607,10 @@ class ParamTable:
     (:meth:`DerivationTree.compact_params`, which :meth:`ramure.lsys.LSystem.derive` calls)
     only for the nodes that have any: their ids, ascending, and values.  Honda sympodial
     n = 17 has 1.57 M nodes, of which 786k have no parameter and 262k have two: 3 MB for the
-    second parameters instead of 12.6 MB.  A compact table reads a later column by looking
-    the rows up among those ids (a binary search: 15 ms for 360k rows, where a dense column
-    takes 1.4 ms), which edits (a few hundred rows) do not notice."""
+    second parameters instead of 12.6 MB.  A compact table reads a later column for a few rows
+    by looking them up among those ids (a binary search; an edit reads a few hundred), and for
+    many rows (more than an eighth of the nodes: a whole string) through the column made dense
+    for that read."""
 
     def __init__(self, tree: DerivationTree) -> None:
         self.tree = tree
@@ -674,6 +675,10 @@ class ParamTable:
         ids = _row_ids(rows, tree.size)
         n = tree._n_more
         known = tree._more_ids[:n]
+        if np.size(ids) > tree.size // 8:  # many rows (a whole string): the column made dense, once
+            column = np.full(tree.size, np.nan)
+            column[known] = tree._more[:n, j - 1]
+            return column[ids]
         pos = np.minimum(np.searchsorted(known, ids.astype(np.int32)), max(n - 1, 0))  # int32: no copy of the ids kept
         if n == 0:
             out = np.full(np.shape(ids), np.nan)
