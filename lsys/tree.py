@@ -68,13 +68,12 @@ class DerivationTree:
         self.size = 0
         self._cap = 0
         self._dtypes = dict(_FIELDS)  # per tree: a field widens on its own (see WIDENABLE)
-        # parameters after the first (see ParamTable): every node's while the tree grows, then
-        # (compact_params) only for the nodes that have any
-        self._rest: np.ndarray | None = None
+        # parameters after the first (see ParamTable): every node's while the tree grows (None
+        # once compact, or without any), then only for the nodes that have any
+        self._rest: np.ndarray | None = np.zeros((0, self.max_params - 1)) if self.max_params > 1 else None
         self._more_ids = np.zeros(0, np.int32)  # compact: their node ids, ascending
         self._more = np.zeros((0, self.max_params - 1))  # compact: their values (NaN beyond a node's count)
         self._n_more = 0
-        self._compact = self.max_params == 1
         self._leaves = np.zeros(0, np.int32)
         self._cache: dict[str, Any] = {}
         self._sums: _LeafSums | None = None  # kept across edits made through detach/attach_sums
@@ -100,10 +99,9 @@ class DerivationTree:
         if old is not None:
             first[: self.size] = old[: self.size]
         self._param0 = first
-        if not self._compact:
+        if self._rest is not None:
             rest = np.empty((cap, self.max_params - 1))
-            if self._rest is not None:
-                rest[: self.size] = self._rest[: self.size]
+            rest[: self.size] = self._rest[: self.size]
             self._rest = rest
         self._cap = cap
 
@@ -111,10 +109,8 @@ class DerivationTree:
         """Keep the parameters after the first only for the nodes that have any (see
         :class:`ParamTable`); a derivation does this once its steps are done.  Nodes appended
         later are kept so too."""
-        if self._compact:
+        if self._rest is None:
             return
-        assert self._rest is not None
-        self._compact = True
         rest, self._rest = self._rest, None
         self._n_more = 0
         self._keep_rest(0, rest[: self.size])
@@ -675,14 +671,14 @@ class ParamTable:
         ids = _row_ids(rows, tree.size)
         n = tree._n_more
         known = tree._more_ids[:n]
-        if np.size(ids) > tree.size // 8:  # many rows (a whole string): the column made dense, once
-            column = np.full(tree.size, np.nan)
-            column[known] = tree._more[:n, j - 1]
-            return column[ids]
-        pos = np.minimum(np.searchsorted(known, ids.astype(np.int32)), max(n - 1, 0))  # int32: no copy of the ids kept
         if n == 0:
             out = np.full(np.shape(ids), np.nan)
+        elif np.size(ids) > tree.size // 8:  # many rows (a whole string): the column made dense, once
+            column = np.full(tree.size, np.nan)
+            column[known] = tree._more[:n, j - 1]
+            out = column[ids]
         else:
+            pos = np.minimum(np.searchsorted(known, ids.astype(np.int32)), n - 1)  # int32: no copy of the ids kept
             out = np.where(known[pos] == ids, tree._more[pos, j - 1], np.nan)
         return out[()] if np.ndim(ids) == 0 else out
 
@@ -697,9 +693,13 @@ def _row_ids(rows: Any, size: int) -> np.ndarray:
         if ids.shape != (size,):
             raise IndexError(f"a mask of {ids.shape} for {size} rows")
         return np.flatnonzero(ids)
-    if ids.size and (int(ids.min()) < -size or int(ids.max()) >= size):
-        raise IndexError(f"row {int(ids.max()) if int(ids.max()) >= size else int(ids.min())} of {size}")
-    return np.where(ids < 0, ids + size, ids) if ids.size and int(ids.min()) < 0 else ids
+    if ids.size:
+        low, high = int(ids.min()), int(ids.max())
+        if low < -size or high >= size:
+            raise IndexError(f"row {high if high >= size else low} of {size}")
+        if low < 0:
+            return np.where(ids < 0, ids + size, ids)
+    return ids
 
 
 class _LeafSums:
