@@ -455,16 +455,12 @@ class Hairlines:
         if skeleton is not None and len(skeleton) and key is not None and self.kept is not None and self.kept.key is key:
             self._swap(mesh, colors)
             return
-        spare = self._keep(key)
-        if spare is None:
-            spare = self._spare
-        elif self._spare is not None:
-            self._spare.chunks.remove()
-        self._spare = None
+        self._keep(key)
         if skeleton is None or len(skeleton) == 0:
-            self._hide(spare)
-            self._spare = spare  # its memory and actors serve the next plant
+            if self.selected_actor is not None:
+                self.selected_actor.SetVisibility(False)
             return
+        spare, self._spare = self._spare, None
         n = len(skeleton)
         buffers = spare.buffers if spare is not None and spare.buffers.capacity >= n else LineBuffers.make(n)
         lines = skeleton_lines(skeleton, buffers)
@@ -475,27 +471,39 @@ class Hairlines:
         self.shown = LineSet(lines, buffers.conn[: 2 * n].reshape(n, 2), buffers, chunks, skeleton=skeleton, sides=sides, key=key)
         chunks.draw(lines, self.shown.conn)  # every line (the actors exist, VTK knows the bounds)
 
-    def _keep(self, key: Any) -> LineSet | None:
-        """Before version ``key`` is shown: keep the shown version for an undo (unless it is the
-        same key, or unnamed), and give back the line set whose memory and actors are free."""
+    def _keep(self, key: Any) -> None:
+        """Before version ``key`` is shown: keep the shown version for an undo (the one kept
+        before is freed), unless it is the same key or unnamed (then it is freed itself)."""
         shown, self.shown = self.shown, None
-        if shown is None or shown.key is None or shown.key is key:
-            return shown
-        spare, self.kept = self.kept, shown
+        if shown is None:
+            return
+        if shown.key is None or shown.key is key:
+            self._free(shown)
+            return
+        self._free(self.kept)
+        self.kept = shown
         shown.chunks.set_visible(False)
-        return spare
+
+    def _free(self, line_set: LineSet | None) -> None:
+        """``line_set`` is neither shown nor kept any more: hidden, it is the spare whose memory
+        and actors the next version takes (the spare before is dropped)."""
+        if line_set is None or line_set is self._spare:
+            return
+        line_set.chunks.set_visible(False)
+        if self._spare is not None:
+            self._spare.chunks.remove()
+        self._spare = line_set
 
     def _swap(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
         """Show the kept lines again, and keep the shown ones."""
         assert self.kept is not None
         back, shown = self.kept, self.shown
-        self.kept = shown if shown is not None and shown.key is not None else None
-        if shown is not None:
+        self.kept = None
+        if shown is not None and shown.key is not None:
+            self.kept = shown
             shown.chunks.set_visible(False)
-            if self.kept is None:
-                if self._spare is not None:
-                    self._spare.chunks.remove()
-                self._spare = shown
+        else:
+            self._free(shown)
         self.shown = back
         self._recolor(mesh, colors)
         back.chunks.set_width(self.width)
@@ -551,12 +559,6 @@ class Hairlines:
         else:
             self.selected.copy_from(selected, deep=False)
         self.selected_actor.SetVisibility(True)
-
-    def _hide(self, line_set: LineSet | None) -> None:
-        if line_set is not None:
-            line_set.chunks.set_visible(False)
-        if self.selected_actor is not None:
-            self.selected_actor.SetVisibility(False)
 
     # -- draft frames ----------------------------------------------------------------
     def _before_frame(self, *_args: Any) -> None:
