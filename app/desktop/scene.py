@@ -358,10 +358,12 @@ class LineChunks:
         if window is not None:
             window.WaitForCompletion()
 
-    def modified(self) -> None:
-        """The source's points or colours changed: the chunks upload them again."""
-        for actor in self.actors:
-            actor.GetMapper().GetInput().Modified()
+    def colors_changed(self) -> None:
+        """The source's colours were written in place: the next frame uploads them again.  VTK
+        keeps one buffer per array and uploads it again only when the array itself is marked
+        modified (four-byte colours are drawn as they are, without a mapped copy to refresh)."""
+        if self._drawn:
+            self._drawn[0].GetPointData().GetArray("rgb").Modified()
 
     def inputs(self) -> list[pv.PolyData]:
         """The chunks' line sets, in drawing order."""
@@ -528,8 +530,7 @@ class Hairlines:
             both = np.asarray(shown.lines.point_data["rgb"])
             both[: len(rgb), :3] = rgb
             both[len(rgb) :, :3] = rgb
-            shown.lines.Modified()
-            shown.chunks.modified()
+            shown.chunks.colors_changed()
 
     def set_selection(self, segments: ArrayLike) -> None:
         """Thick red lines over the selected ``segments`` (indices), drawn above the tubes."""

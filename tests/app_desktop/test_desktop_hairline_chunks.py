@@ -90,3 +90,50 @@ def test_a_draft_takes_the_first_chunks_it_needs_of_the_same_actors(make_window,
     del waits[:]
     view.redraw(now=True)
     assert len(waits) == used - 1  # the empty chunks draw nothing and wait for nothing
+
+
+def test_new_colours_show_in_the_next_frame_in_every_chunk(qtbot, monkeypatch):
+    """Colours written in place are uploaded again (VTK draws four-byte colours as they are, from
+    one buffer per array): a recolour, and the recolour of a version an undo shows again."""
+    import pyvista as pv
+
+    from ramure.app.desktop import plant_actors
+    from ramure.app.model import Explorer
+    from desktop_helpers import HONDA
+
+    monkeypatch.setattr(scene, "CHUNK_LINES", 100)
+    plotter = pv.Plotter(off_screen=True, window_size=(400, 400))
+    lines = scene.Hairlines(plotter)
+    ex = Explorer(str(HONDA), n=9)
+
+    def paint(rgb):
+        return np.tile(np.array([rgb], np.uint8), (ex.mesh.n_cells, 1))
+
+    def shown_in(picture, channel):  # pixels of a saturated red (0) or blue (2)
+        other = 2 - channel
+        return int(((picture[..., channel] > 150) & (picture[..., other] < 80)).sum())
+
+    def frame():
+        plotter.render()
+        return plotter.screenshot(return_img=True).astype(int)
+
+    first, skeleton = ex.mesh, ex.skeleton
+    sides = plant_actors.tube_layout(first, len(skeleton))
+    lines.show(skeleton, first, paint((200, 0, 0)), key=first, sides=sides)
+    assert len(lines.actors) == 6  # 511 lines
+    plotter.reset_camera()
+    red = shown_in(frame(), 0)
+    assert red > 500
+    lines.set_colors(first, paint((0, 0, 200)))
+    picture = frame()
+    assert shown_in(picture, 2) == red and shown_in(picture, 0) == 0
+    # another version, then back to the first (an undo) in new colours
+    ex.select(ex.skeleton.leaf_id[::50].tolist())
+    ex.regrow(seed=1)
+    lines.show(ex.skeleton, ex.mesh, paint((0, 0, 200)), key=ex.mesh, sides=plant_actors.tube_layout(ex.mesh, len(ex.skeleton)))
+    frame()
+    lines.show(skeleton, first, paint((200, 0, 0)), key=first, sides=sides)  # the kept version again
+    assert lines.shown is not None and lines.shown.key is first
+    picture = frame()
+    assert shown_in(picture, 0) == red and shown_in(picture, 2) == 0
+    plotter.close()
