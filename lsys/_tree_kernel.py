@@ -58,40 +58,61 @@ def leaf_weight_prefix(depth, leaves):
 
 
 @njit(cache=True, nogil=True)
-def _sum_children(v, start, k, alive, count, weight):
-    """``count[v]`` and ``weight[v]`` from children ``start .. start + k - 1`` that share ``v``'s
-    liveness (all of them when ``v`` is dead)."""
+def _first_at_least(sorted_ids, x):
+    """The first position in ``sorted_ids`` whose id is at least ``x`` (a binary search written
+    out: numba's ``np.searchsorted`` costs about 11 MB more each time a process loads it)."""
+    lo, hi = 0, len(sorted_ids)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if sorted_ids[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight):
+    """``count[i]`` and ``weight[i]`` of inner node ``v`` from its children that share its
+    liveness (all of them when ``v`` is dead): a childless child counts its flag, an inner one
+    its entry (children are consecutive ids, so their entries are met in order)."""
+    start = child_start[v]
+    q = _first_at_least(inner, start)
     c = 0
     w = np.int64(0)
-    for u in range(start, start + k):
+    for u in range(start, start + child_count[v]):
         if alive[u] or not alive[v]:
-            c += count[u]
-            w += weight[u]
-    count[v] = c
-    weight[v] = 2 * w
+            if child_count[u] == 0:
+                c += flag[u]
+                w += flag[u]
+            else:
+                while inner[q] < u:
+                    q += 1
+                c += count[q]
+                w += weight[q]
+    count[i] = c
+    weight[i] = 2 * w
 
 
 @njit(cache=True, nogil=True)
-def leaf_sums(child_start, child_count, alive, flag, lo, hi, count, weight):
+def leaf_sums(child_start, child_count, alive, lo, hi, flag, inner, count, weight):
     """Current-string leaves below nodes ``lo .. hi - 1`` (``count``) and ``sum(2**(depth(leaf) -
     depth(v)))`` over them (``weight``), from their children, in reverse id order (children have
-    larger ids).  A childless node takes its in-string flag ``flag[v - lo]``; a node sums the children
-    that share its liveness (an alive node its alive children, a dead one as if it were alive)."""
+    larger ids), for the nodes with children; their entries are the last ones of ``inner``
+    (ascending ids).  Childless nodes hold their in-string flags already; a node sums the
+    children that share its liveness (an alive node its alive children, a dead one as if it were
+    alive)."""
+    i = len(inner) - 1
     for v in range(hi - 1, lo - 1, -1):
-        k = child_count[v]
-        if k == 0:
-            count[v] = flag[v - lo]
-            weight[v] = flag[v - lo]
+        if child_count[v] == 0:
             continue
-        _sum_children(v, child_start[v], k, alive, count, weight)
+        _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight)
+        i -= 1
 
 
 @njit(cache=True, nogil=True)
-def resum(nodes, child_start, child_count, alive, count, weight):
-    """:func:`leaf_sums` again for ``nodes`` (in decreasing id order, so children come first),
-    each from its children; childless nodes keep theirs."""
+def resum(nodes, child_start, child_count, alive, flag, inner, count, weight):
+    """:func:`leaf_sums` again for ``nodes`` (with children, in decreasing id order, so children
+    come first), each from its children."""
     for v in nodes:
-        k = child_count[v]
-        if k == 0:
-            continue
-        _sum_children(v, child_start[v], k, alive, count, weight)
+        _sum_children(v, _first_at_least(inner, v), child_start, child_count, alive, flag, inner, count, weight)

@@ -114,22 +114,66 @@ def test_a_regrow_its_undo_and_redo_keep_the_sums_they_update():
 
 
 def test_the_sums_take_the_trees_headroom_so_a_regrow_copies_nothing():
-    # the sums are made as long as the tree's arrays (zeroed pages cost nothing until used):
-    # a first regrow on Honda n = 17 otherwise copied them into 2x arrays (+36 MB allocated)
+    # the flags are made as long as the tree's arrays, the inner entries twice as many as the
+    # inner nodes (zeroed pages cost nothing until used): a first regrow on Honda n = 17
+    # otherwise copied them into 2x arrays
     session = Session(LSystem.from_file("honda_sympodial"), n=9)
     tree = session.tree
     tree.subtree_weights([0])
     kept = tree.detach_sums()
     assert kept is not None
     tree.attach_sums(kept, [])
-    arrays = (kept.count, kept.weight)
-    assert len(kept.count) == len(kept.weight) == len(tree._parent) > tree.size  # the tree's capacity
+    arrays = (kept.flag, kept.inner, kept.count, kept.weight)
+    assert len(kept.flag) == len(tree._parent) > tree.size  # the tree's capacity
+    inner = int((tree.child_count > 0).sum())
+    assert kept.n_inner == inner and len(kept.inner) == len(kept.count) == len(kept.weight) == max(2 * inner, 1024)
     rng = np.random.default_rng(5)
     for op in ("regrow", "regrow", "undo", "redo"):
         edit(session, rng, op)
         tree.attach_sums(tree.detach_sums(), [])
-    assert tree.size > len(arrays[0]) or (kept.count is arrays[0] and kept.weight is arrays[1])
+    if tree.size <= len(arrays[0]):
+        assert kept.flag is arrays[0]
+    assert all(a is b for a, b in zip((kept.inner, kept.count, kept.weight), arrays[1:]))
     check(tree, rng)
+
+
+def test_the_sums_keep_entries_for_inner_nodes_only():
+    # Honda n = 17 holds 1.57 M nodes, one in twelve with children: 3 MB of sums instead of 19
+    session = Session(LSystem.from_file("honda_sympodial"), n=12)
+    tree = session.tree
+    tree.subtree_weights([0])
+    sums = tree.detach_sums()
+    tree.attach_sums(sums, [])
+    np.testing.assert_array_equal(sums.inner[: sums.n_inner], np.flatnonzero(tree.child_count > 0))
+    assert sums.n_inner < tree.size / 5
+    rng = np.random.default_rng(4)
+    for op in ("regrow", "prune", "undo", "regrow"):
+        edit(session, rng, op)
+        held = sums.inner[: sums.n_inner]
+        assert tree._sums is sums and (np.diff(held) > 0).all()
+        assert np.isin(np.flatnonzero(tree.child_count > 0), held).all()  # every inner node has its entry
+    check(tree, rng)
+
+
+def test_an_entry_for_a_node_that_gains_children_is_inserted_in_order():
+    from ramure.lsys.tree import _LeafSums
+
+    sums = _LeafSums(100, np.array([3, 8, 20], np.int32))
+    sums.count[:3], sums.weight[:3] = [1, 2, 3], [10, 20, 30]
+    inner = sums.inner
+    sums.add_inner(np.array([8, 30, 31], np.int32))  # 8 held already, the others appended: no copy
+    assert sums.inner is inner and sums.n_inner == 5
+    sums.add_inner(np.array([0, 10], np.int32))  # inserted before held ids
+    assert sums.n_inner == 7
+    assert sums.inner[:7].tolist() == [0, 3, 8, 10, 20, 30, 31]
+    assert sums.count[:7].tolist() == [0, 1, 2, 0, 3, 0, 0] and sums.weight[:7].tolist() == [0, 10, 20, 0, 30, 0, 0]
+    sums.add_inner(np.arange(40, 40 + 1100, dtype=np.int32))  # past the capacity: grown, kept in order
+    assert sums.n_inner == 1107 and len(sums.inner) >= 1107 and sums.count[1] == 1 and sums.inner[1106] == 1139
+    child_count = np.zeros(2000, np.int32)
+    child_count[[3, 8]] = 1
+    sums.flag[[5, 3]] = 1
+    count, weight = sums.of(np.array([5, 3, 8, 6]), child_count)
+    assert count.tolist() == [1, 1, 2, 0] and weight.tolist() == [1, 10, 20, 0]  # childless: the flag
 
 
 def test_other_edits_drop_the_sums_and_reviving_unknown_nodes_does_too():
