@@ -112,10 +112,16 @@ _QUADS: dict[int, np.ndarray] = {}  # sides -> the quads of the largest plant so
 def tube_quads(count: int, sides: int = 8) -> np.ndarray:
     """Quad indices (count·sides, 4) of ``count`` frustums laid out as :func:`tube_points`."""
     cached = _QUADS.get(sides)
-    if cached is not None and len(cached) >= count * sides:
-        return cached[: count * sides]
-    _QUADS[sides] = quads = _make_quads(count, sides)
-    return quads
+    if cached is None or len(cached) < count * sides:
+        _QUADS[sides] = cached = _make_quads(_with_headroom(count), sides)
+    return cached[: count * sides]
+
+
+def _with_headroom(count: int) -> int:
+    """A cached index array's length for ``count``: an eighth more, so that an edit that adds a
+    few segments (a stochastic regrow) shares the array with the version before instead of
+    holding a second one (7.9 MB of quads and offsets for Honda n = 17)."""
+    return count + count // 8
 
 
 _OFFSETS: list[np.ndarray] = []  # the quad offsets 0, 4, 8 ... of the largest plant so far
@@ -124,7 +130,8 @@ _OFFSETS: list[np.ndarray] = []  # the quad offsets 0, 4, 8 ... of the largest p
 def _quad_offsets(quads: int) -> np.ndarray:
     """Read-only cell offsets (quads + 1,) of ``quads`` quads (a prefix of a cached array)."""
     if not _OFFSETS or len(_OFFSETS[0]) < quads + 1:
-        offsets: np.ndarray = np.arange(0, 4 * quads + 1, 4, dtype=id_dtype(4 * quads))
+        room = _with_headroom(quads)
+        offsets: np.ndarray = np.arange(0, 4 * room + 1, 4, dtype=id_dtype(4 * room))
         offsets.flags.writeable = False
         _OFFSETS[:] = [offsets]
     return _OFFSETS[0][: quads + 1]

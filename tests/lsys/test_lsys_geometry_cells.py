@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from ramure.lsys import LSystem
+from ramure.lsys import LSystem, geometry
 from ramure.lsys.geometry import skeleton_to_polydata, tube_quads
 
 
@@ -27,6 +27,21 @@ def test_tube_only_meshes_wrap_the_cached_quads_and_list_each_segments_quads():
     s, j = 3, 4
     assert quads[s * 5 + j].tolist() == [s * 10 + 4, s * 10 + 0, s * 10 + 5, s * 10 + 9]
     assert not tube_quads(len(small), 5).flags.writeable  # shared: nobody may write into it
+
+
+def test_a_mesh_a_few_segments_larger_shares_the_cached_indices_too():
+    # an edit that adds segments (a stochastic regrow) finds room in the cached arrays
+    small = LSystem.from_text("n: 5\nw: A\np: A -> F[+A]A").derive().skeleton()
+    grown = LSystem.from_text("n: 5\nw: A[-FF]\np: A -> F[+A]A").derive().skeleton()
+    assert len(small) + 2 == len(grown) <= len(small) * 9 // 8
+    geometry._QUADS.pop(7, None)  # made anew for the smaller plant, as in a fresh process
+    geometry._OFFSETS.clear()
+    a, b = skeleton_to_polydata(small, 7), skeleton_to_polydata(grown, 7)
+    (oa, ca), (ob, cb) = _cells(a), _cells(b)
+    assert np.shares_memory(ca, cb) and np.shares_memory(oa, ob)
+    assert np.array_equal(ob, np.arange(0, 4 * 7 * len(grown) + 1, 4))
+    assert np.array_equal(cb.reshape(-1, 4)[-7:], tube_quads(len(grown), 7)[-7:])
+    assert cb.max() == b.n_points - 1
 
 
 def test_meshes_with_organs_get_their_own_index_arrays():
