@@ -57,6 +57,10 @@ class Controller(QObject):
     refused = Signal(str)  # a user error's message
     crashed = Signal(str, str)  # message, traceback
     busy_changed = Signal(bool)
+    # A regrow or a prune was asked for: after it, Undo goes back to the plant shown now, so
+    # whatever a view keeps of the plant before it (for an instant undo) can go at once, before
+    # the edit makes its new version (the view then holds two versions during the edit, not three).
+    edit_started = Signal()
 
     def __init__(self, explorer: Explorer, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -179,9 +183,11 @@ class Controller(QObject):
                 ex.select(state.regrown_leaves(ex, result))
             return result
 
+        self.edit_started.emit()
         return self.submit("regrow", run)
 
     def prune(self) -> Job:
+        self.edit_started.emit()
         return self.submit("prune", lambda ex: ex.prune())
 
     def undo(self) -> Job:

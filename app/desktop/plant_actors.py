@@ -262,7 +262,18 @@ class PlantActors:
             for g in self.groups:
                 g.actor.SetVisibility(False)
         self.groups = []
-        self._spare = spare
+        self._spare += spare
+
+    def forget_kept(self) -> None:
+        """Drop the kept version: its actors become spares, their cells and points let go."""
+        if self.kept is None:
+            return
+        for g in self.kept["groups"]:
+            if g.poly is not None:
+                g.poly.Initialize()
+            g.keep = []
+        self._spare += [g.actor for g in self.kept["groups"]]
+        self.kept = None
 
     def _swap(self, mesh: pv.PolyData) -> None:
         """Show the kept version again (``mesh``: its shallow copy with this frame's colours)."""

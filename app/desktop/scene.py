@@ -369,6 +369,14 @@ class LineChunks:
         """The chunks' line sets, in drawing order."""
         return [actor.GetMapper().GetInput() for actor in self.actors]
 
+    def release(self) -> None:
+        """Let go of the lines drawn (their points and cells); the actors stay, drawing nothing,
+        for the next :meth:`draw`."""
+        for actor in self.actors:
+            actor.GetMapper().SetInputData(pv.PolyData())
+        self._drawn = ()
+        self._keep = []
+
     def remove(self) -> None:
         """Take the actors out of the renderer (the line set is dropped)."""
         for actor in self.actors:
@@ -400,6 +408,16 @@ class LineSet:
     skeleton: Any = None
     sides: int = 0
     key: Any = None
+
+    def release(self) -> None:
+        """Keep only the memory and the actors (a spare's): the version's points (its
+        skeleton's, read in place), skeleton and draft subset are let go."""
+        self.chunks.release()
+        self.lines = pv.PolyData()
+        self.conn = self.buffers.conn[:0].reshape(0, 2)
+        self.draft = DraftLines()
+        self.skeleton = None
+        self.key = None
 
 
 class Hairlines:
@@ -486,14 +504,21 @@ class Hairlines:
         self.kept = shown
         shown.chunks.set_visible(False)
 
+    def forget_kept(self) -> None:
+        """Drop the kept version (see :meth:`ramure.app.desktop.view.PlantView.forget_kept`):
+        its memory and actors become the spare."""
+        kept, self.kept = self.kept, None
+        self._free(kept)
+
     def _free(self, line_set: LineSet | None) -> None:
         """``line_set`` is neither shown nor kept any more: hidden, it is the spare whose memory
-        and actors the next version takes (the spare before is dropped)."""
+        and actors the next version takes (the spare before is dropped); what it drew is let go."""
         if line_set is None or line_set is self._spare:
             return
         line_set.chunks.set_visible(False)
         if self._spare is not None:
             self._spare.chunks.remove()
+        line_set.release()
         self._spare = line_set
 
     def _swap(self, mesh: pv.DataSet, colors: ArrayLike) -> None:

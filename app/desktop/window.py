@@ -320,6 +320,7 @@ class MainWindow(QMainWindow):
         c.refused.connect(self.report_refused)
         c.crashed.connect(self.report_crash)
         c.busy_changed.connect(self._busy_changed)
+        c.edit_started.connect(self.view.forget_kept)
         self.editor.text_settled.connect(self._text_settled)
         self.constants_panel.constant_changed.connect(self._constant)
         self.constants_panel.derivation_changed.connect(self._derivation)

@@ -193,6 +193,47 @@ def test_an_undo_shows_the_kept_actors_without_rebuilding_them(large, make_windo
     assert not any(a.GetVisibility() for a in actors + line_actors)
 
 
+def test_an_edit_lets_go_of_the_version_kept_for_undo_before_it_makes_its_own(large, make_window, qtbot, monkeypatch):
+    # after the edit Undo comes back to the plant shown now, so the one kept from before is of no
+    # use: the view drops it when the edit is asked for, and the model has dropped it too when
+    # it re-interprets (the edit holds two versions, not three: about 35 MB at n = 17)
+    import gc
+    import weakref
+
+    from ramure.app import model
+
+    w = make_window(n=14)
+    view = w.view
+    first = weakref.ref(w.controller.snapshot.skeleton)
+    regrow(w, qtbot)
+    assert view.hairlines.kept is not None and view.hairlines.kept.skeleton is first()
+    assert view.plant.kept is not None
+    second = w.controller.snapshot.version
+    alive_when_reinterpreting = []
+    real = model.reinterpret
+
+    def watched(*args):
+        gc.collect()
+        alive_when_reinterpreting.append(first() is not None)
+        return real(*args)
+
+    monkeypatch.setattr(model, "reinterpret", watched)
+    w.controller.select([int(v) for v in w.controller.snapshot.segment_leaf[:5]])
+    settle(qtbot, w)
+    w.controller.regrow(seed=9)
+    assert view.plant.kept is None and view.hairlines.kept is None  # at once, in the GUI thread
+    spare = view.hairlines._spare
+    assert spare is not None and spare.skeleton is None and not len(spare.conn)
+    assert all(d.GetNumberOfPoints() == 0 for d in spare.chunks.inputs())  # its points let go
+    settle(qtbot, w)
+    assert alive_when_reinterpreting == [False]
+    assert view.hairlines.kept is not None and view.plant.kept is not None  # the plant before, for Undo
+    w.controller.undo()
+    settle(qtbot, w)
+    assert w.controller.snapshot.version > second and view.hairlines.kept is not None
+    assert view.hairlines.skeleton is w.controller.snapshot.skeleton and all(a.GetVisibility() for a in view.hairlines.actors)
+
+
 def line_widths(view):
     return {a.GetProperty().GetLineWidth() for a in view.hairlines.actors}
 
