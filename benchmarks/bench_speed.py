@@ -505,10 +505,25 @@ window.regen.regrow.emit()
 drawn("regrow")
 window.regen.undo.emit()
 drawn("undo")
+after_edits = memory()[1]
+# four more edits of 10 leaves each (300-1,100 modules regrown), as a user makes them: redo,
+# select, regrow, undo (what an editing session holds)
+for k in range(4):
+    window.regen.redo.emit()
+    drawn(f"redo {{k + 1}}")
+    leaves = window.controller.snapshot.segment_leaf
+    step = max(1, len(leaves) // 15)
+    window.controller.select(sorted(set(int(v) for v in leaves[len(leaves) // 3 + 101 * (k + 1) :: step][:10])))
+    window.controller.wait_idle()
+    window.regen.regrow.emit()
+    drawn(f"regrow {{k + 2}}")
+    window.regen.undo.emit()
+    drawn(f"undo {{k + 2}}")
 modules = sorted(m for m in ("numba", "matplotlib", "scipy.sparse", "networkx", "mypy", "ramure.gmap", "vtkmodules.all")
                  if sys.modules.get(m) is not None)
 # VmHWM: this process's own peak (ru_maxrss would carry the parent's over fork and exec)
-print(json.dumps({{"peak_mb": peak, "after_pick_mb": stages["first pick"][1], "after_edits_mb": memory()[1],
+print(json.dumps({{"peak_mb": peak, "after_pick_mb": stages["first pick"][1], "after_edits_mb": after_edits,
+                  "after_five_edits_mb": memory()[1],
                   "peak_composition_mb": composition,
                   "picked_cell": picked, "version": window.controller.snapshot.version, "stages": stages,
                   "modules": len(explorer.derivation), "loaded": modules}}))
@@ -531,7 +546,8 @@ def desktop_memory(n: int = 17, grammar: str | None = None, hide: tuple[str, ...
     """Peak RSS (``VmHWM``) of a fresh process that opens the real desktop window on ``grammar``
     (default Honda sympodial) derived ``n`` steps, shows it and renders a frame (``peak_mb``),
     then picks the trunk with a click (``after_pick_mb``), regrows 10 leaves and undoes
-    (``after_edits_mb``); with the RSS after each stage (``stages``: name -> [RSS, peak so
+    (``after_edits_mb``), then redoes, regrows 10 other leaves and undoes four times more
+    (``after_five_edits_mb``: what an editing session holds); with the RSS after each stage (``stages``: name -> [RSS, peak so
     far] in MB).  ``hide`` names modules the child sees as not installed (``("mypy",)``: the
     dev venv's mypy, which pyvista imports only because it is there, 24 MB).  ``numba_cache``:
     the child's ``NUMBA_CACHE_DIR`` (an empty folder: a first run, every kernel compiled).
@@ -673,6 +689,7 @@ def bench_memory_per_module_honda_n17(repeats: int = 3):
             "desktop_peak_mb": median["peak_mb"],
             "after_first_pick_mb": median["after_pick_mb"],
             "after_regrow_undo_mb": median["after_edits_mb"],
+            "after_five_edits_mb": median.get("after_five_edits_mb"),
             "desktop_peaks_mb": [p for p, _ in peaks],
             "desktop_stages_mb": median["stages"],
             "desktop_loaded": median["loaded"],
