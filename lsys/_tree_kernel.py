@@ -75,7 +75,8 @@ def _first_at_least(sorted_ids, x):
 def _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight):
     """``count[i]`` and ``weight[i]`` of inner node ``v`` from its children that share its
     liveness (all of them when ``v`` is dead): a childless child counts its flag, an inner one
-    its entry (children are consecutive ids, so their entries are met in order)."""
+    its entry (children are consecutive ids, so their entries are met in order).  False, and
+    nothing written, when a child with children has no entry (the sums are then made again)."""
     start = child_start[v]
     q = _first_at_least(inner, start)
     c = 0
@@ -86,12 +87,15 @@ def _sum_children(v, i, child_start, child_count, alive, flag, inner, count, wei
                 c += flag[u]
                 w += flag[u]
             else:
-                while inner[q] < u:
+                while q < len(inner) and inner[q] < u:
                     q += 1
+                if q == len(inner) or inner[q] != u:
+                    return False
                 c += count[q]
                 w += weight[q]
     count[i] = c
     weight[i] = 2 * w
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -101,18 +105,27 @@ def leaf_sums(child_start, child_count, alive, lo, hi, flag, inner, count, weigh
     larger ids), for the nodes with children; their entries are the last ones of ``inner``
     (ascending ids).  Childless nodes hold their in-string flags already; a node sums the
     children that share its liveness (an alive node its alive children, a dead one as if it were
-    alive)."""
+    alive).  False when an entry is missing (see :func:`_sum_children`)."""
     i = len(inner) - 1
     for v in range(hi - 1, lo - 1, -1):
         if child_count[v] == 0:
             continue
-        _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight)
+        if i < 0 or inner[i] != v or not _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight):
+            return False
         i -= 1
+    return True
 
 
 @njit(cache=True, nogil=True)
 def resum(nodes, child_start, child_count, alive, flag, inner, count, weight):
     """:func:`leaf_sums` again for ``nodes`` (with children, in decreasing id order, so children
-    come first), each from its children."""
+    come first), each from its children.  False when an entry is missing."""
     for v in nodes:
-        _sum_children(v, _first_at_least(inner, v), child_start, child_count, alive, flag, inner, count, weight)
+        i = _first_at_least(inner, v)
+        if (
+            i == len(inner)
+            or inner[i] != v
+            or not _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight)
+        ):
+            return False
+    return True

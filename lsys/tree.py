@@ -500,7 +500,8 @@ class DerivationTree:
             sums.grow(self.size)
             sums.flag[lo : self.size] = 0
             sums.flag[fresh] = 1
-            self._sum_range(sums, lo, self.size)
+            if not self._sum_range(sums, lo, self.size):
+                return  # an inner node without its entry: dropped, made again when asked
             sums.axiom = np.concatenate([sums.axiom, lo + np.flatnonzero(self.parent[lo:] < 0)])
             sums.max_step = max(sums.max_step, int(self.step[lo:].max()))
         sums.size = self.size
@@ -509,15 +510,16 @@ class DerivationTree:
         if leaf_roots.size:  # a pruned root: 1 when the string holds it
             sums.flag[leaf_roots] = np.isin(leaf_roots, self.leaves if given is None else given)
         sums.add_inner(np.unique(roots[self._child_count[roots] > 0]))  # a leaf regrown: inner now
-        self._resum(sums, roots)
-        self._sums = sums
+        if self._resum(sums, roots):
+            self._sums = sums
 
     def _leaf_sums(self) -> _LeafSums:
         if self._sums is None or self._sums.size != self.size:
             inner = np.flatnonzero(self._child_count[: self.size] > 0).astype(np.int32)
             sums = _LeafSums(max(self.size, self._cap), inner)  # the tree's headroom: zeroed pages cost nothing until used
             sums.flag[self.leaves] = 1
-            self._sum_range(sums, 0, self.size, inner_known=True)
+            made = self._sum_range(sums, 0, self.size, inner_known=True)
+            assert made, "every node with children has an entry"  # by construction
             sums.size = self.size
             sums.axiom = np.flatnonzero(self.parent < 0)
             sums.max_step = int(self.step.max()) if self.size else 0
@@ -526,20 +528,22 @@ class DerivationTree:
             self._sums = sums
         return self._sums
 
-    def _sum_range(self, sums, lo, hi, inner_known=False) -> None:
+    def _sum_range(self, sums, lo, hi, inner_known=False) -> bool:
         """Sums of nodes ``lo .. hi - 1`` from their children (all at larger ids; childless nodes
         hold their flags already).  Those with children get entries, after every id held
-        (``inner_known``: they have them)."""
+        (``inner_known``: they have them).  False when a node with children has no entry (an
+        edit the sums did not follow)."""
         if not inner_known:
             sums.add_inner((lo + np.flatnonzero(self._child_count[lo:hi] > 0)).astype(np.int32))
         if self._compiled():
             from ._tree_kernel import leaf_sums
 
             n = sums.n_inner
-            leaf_sums(
-                self._child_start, self._child_count, self._alive, lo, hi, sums.flag, sums.inner[:n], sums.count, sums.weight
+            return bool(
+                leaf_sums(
+                    self._child_start, self._child_count, self._alive, lo, hi, sums.flag, sums.inner[:n], sums.count, sums.weight
+                )
             )
-            return
         # numpy: dense sums of the range, by step from the deepest, then kept for its inner nodes
         ids = np.arange(lo, hi)
         flag = sums.flag[lo:hi].astype(np.int64)
@@ -556,9 +560,11 @@ class DerivationTree:
             np.add.at(weight, parent[kids - lo] - lo, 2 * weight[kids - lo])
         pos = sums.position(ids[inner])
         sums.count[pos], sums.weight[pos] = count[inner], weight[inner]
+        return True
 
-    def _resum(self, sums, roots) -> None:
-        """Sums of ``roots`` and all their ancestors again, from their children (deepest first)."""
+    def _resum(self, sums, roots) -> bool:
+        """Sums of ``roots`` and all their ancestors again, from their children (deepest first);
+        False when one of them, or a child of one, has children but no entry."""
         chain = set()
         for v in roots.tolist():
             while v >= 0 and v not in chain:
@@ -570,14 +576,20 @@ class DerivationTree:
             from ._tree_kernel import resum
 
             n = sums.n_inner
-            resum(order, self._child_start, self._child_count, self._alive, sums.flag, sums.inner[:n], sums.count, sums.weight)
-            return
+            return bool(
+                resum(
+                    order, self._child_start, self._child_count, self._alive, sums.flag, sums.inner[:n], sums.count, sums.weight
+                )
+            )
         alive = self._alive
         for v, i in zip(order.tolist(), sums.position(order).tolist()):
             block = np.arange(int(self._child_start[v]), int(self._child_start[v]) + int(self._child_count[v]))
             block = block[alive[block] | (not alive[v])]
+            if not sums.holds(np.r_[v, block[self._child_count[block] > 0]]):
+                return False
             count, weight = sums.of(block, self._child_count)
             sums.count[i], sums.weight[i] = int(count.sum()), 2 * int(weight.sum())
+        return True
 
     def leaves_under(self, node: int) -> np.ndarray:
         """Leaf node ids under ``node`` in string order."""
@@ -768,6 +780,16 @@ class _LeafSums:
             self.inner[self.n_inner : need] = nodes
             self.count[self.n_inner : need] = self.weight[self.n_inner : need] = 0
         self.n_inner = need
+
+    def holds(self, nodes: np.ndarray) -> bool:
+        """Whether every one of ``nodes`` has an entry."""
+        pos = self.position(nodes)
+        have = self.inner[: self.n_inner]
+        return (
+            bool(np.all(pos < self.n_inner) and np.array_equal(have[np.minimum(pos, self.n_inner - 1)], nodes))
+            if len(nodes)
+            else True
+        )
 
     def position(self, nodes: np.ndarray) -> np.ndarray:
         """Where each of ``nodes`` (inner ones) is kept."""

@@ -155,6 +155,30 @@ def test_the_sums_keep_entries_for_inner_nodes_only():
     check(tree, rng)
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_sums_that_miss_an_inner_node_are_dropped_not_read_wrong(compiled):
+    # an inner node without its entry (a tree edited behind the sums' back) would read another
+    # node's sums: attach_sums drops them instead, and they are made again when asked
+    session = Session(LSystem.from_file("honda_sympodial"), n=9)
+    tree = session.tree
+    tree.use_kernels = compiled
+    tree.subtree_weights([0])
+    sums = tree.detach_sums()
+    inner = sums.inner[: sums.n_inner]
+    victim = int(inner[len(inner) // 2])
+    keep = inner != victim
+    n = int(keep.sum())
+    sums.inner[:n], sums.count[:n], sums.weight[:n] = (
+        inner[keep],
+        sums.count[: sums.n_inner][keep],
+        sums.weight[: sums.n_inner][keep],
+    )
+    sums.n_inner = n
+    tree.attach_sums(sums, [int(tree.parent[victim])])
+    assert tree.detach_sums() is None
+    check(tree, np.random.default_rng(3))
+
+
 def test_an_entry_for_a_node_that_gains_children_is_inserted_in_order():
     from ramure.lsys.tree import _LeafSums
 
