@@ -72,29 +72,37 @@ def _first_at_least(sorted_ids, x):
 
 
 @njit(cache=True, nogil=True)
-def _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight):
-    """``count[i]`` and ``weight[i]`` of inner node ``v`` from its children that share its
-    liveness (all of them when ``v`` is dead): a childless child counts its flag, an inner one
-    its entry (children are consecutive ids, so their entries are met in order).  False, and
-    nothing written, when a child with children has no entry (the sums are then made again)."""
-    start = child_start[v]
-    q = _first_at_least(inner, start)
-    c = 0
-    w = np.int64(0)
-    for u in range(start, start + child_count[v]):
-        if alive[u] or not alive[v]:
-            if child_count[u] == 0:
-                c += flag[u]
-                w += flag[u]
-            else:
-                while q < len(inner) and inner[q] < u:
-                    q += 1
-                if q == len(inner) or inner[q] != u:
-                    return False
-                c += count[q]
-                w += weight[q]
-    count[i] = c
-    weight[i] = 2 * w
+def _sum_entries(first, stop, q, child_start, child_count, alive, flag, inner, count, weight):
+    """``count[i]`` and ``weight[i]`` for the entries ``i`` from ``stop - 1`` down to ``first``
+    (node ``inner[i]``), from each node's children that share its liveness (all of them when it
+    is dead): a childless child counts its flag, an inner one its entry.  The entries are found
+    by walking ``inner`` from position ``q`` (a derivation's nodes have their children in id
+    order, so each walk is a few steps).  False, when a child with children has no entry (the
+    sums are then made again)."""
+    n = len(inner)
+    for i in range(stop - 1, first - 1, -1):
+        v = inner[i]
+        dead = not alive[v]
+        c = 0
+        w = np.int64(0)
+        start = child_start[v]
+        for u in range(start, start + child_count[v]):
+            if dead or alive[u]:
+                if child_count[u] == 0:
+                    f = flag[u]
+                    c += f
+                    w += f
+                else:
+                    while q > 0 and inner[q - 1] >= u:
+                        q -= 1
+                    while q < n and inner[q] < u:
+                        q += 1
+                    if q == n or inner[q] != u:
+                        return False
+                    c += count[q]
+                    w += weight[q]
+        count[i] = c
+        weight[i] = 2 * w
     return True
 
 
@@ -102,18 +110,12 @@ def _sum_children(v, i, child_start, child_count, alive, flag, inner, count, wei
 def leaf_sums(child_start, child_count, alive, lo, hi, flag, inner, count, weight):
     """Current-string leaves below nodes ``lo .. hi - 1`` (``count``) and ``sum(2**(depth(leaf) -
     depth(v)))`` over them (``weight``), from their children, in reverse id order (children have
-    larger ids), for the nodes with children; their entries are the last ones of ``inner``
+    larger ids), for the nodes with children: their entries are the last ones of ``inner``
     (ascending ids).  Childless nodes hold their in-string flags already; a node sums the
     children that share its liveness (an alive node its alive children, a dead one as if it were
-    alive).  False when an entry is missing (see :func:`_sum_children`)."""
-    i = len(inner) - 1
-    for v in range(hi - 1, lo - 1, -1):
-        if child_count[v] == 0:
-            continue
-        if i < 0 or inner[i] != v or not _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight):
-            return False
-        i -= 1
-    return True
+    alive).  False when an entry is missing (see :func:`_sum_entries`)."""
+    n = len(inner)
+    return _sum_entries(_first_at_least(inner, lo), n, n, child_start, child_count, alive, flag, inner, count, weight)
 
 
 @njit(cache=True, nogil=True)
@@ -122,10 +124,9 @@ def resum(nodes, child_start, child_count, alive, flag, inner, count, weight):
     come first), each from its children.  False when an entry is missing."""
     for v in nodes:
         i = _first_at_least(inner, v)
-        if (
-            i == len(inner)
-            or inner[i] != v
-            or not _sum_children(v, i, child_start, child_count, alive, flag, inner, count, weight)
-        ):
+        if i == len(inner) or inner[i] != v:
+            return False
+        q = _first_at_least(inner, child_start[v])
+        if not _sum_entries(i, i + 1, q, child_start, child_count, alive, flag, inner, count, weight):
             return False
     return True

@@ -419,24 +419,29 @@ class DerivationTree:
         if "spans" in self._cache:
             first, last = self._cache["spans"]
             return first[nodes].copy(), last[nodes].copy()
-        sums, alive = self._leaf_sums(), self._alive
-
-        def count(ids):
-            return sums.of(ids, self._child_count)[0]
-
+        sums, alive, child_count = self._leaf_sums(), self._alive, self._child_count
         axiom = self.axiom_modules()
         before = np.zeros(len(axiom) + 1, np.int64)
-        np.cumsum(count(axiom), out=before[1:])
-        first = np.zeros(len(nodes), np.int64)
+        np.cumsum(sums.of(axiom, child_count)[0], out=before[1:])
+        # the earlier siblings of each node and of its ancestors: one block of ids per step up
+        owner, starts, stops = [], [], []
+        tops = np.zeros(len(nodes), np.int64)
         for i, v in enumerate(nodes.tolist()):
-            pos, node = 0, v
-            parent = int(self._parent[node])
+            node, parent = v, int(self._parent[v])
             while parent >= 0:
-                block = np.arange(int(self._child_start[parent]), node)
-                pos += int(count(block[alive[block]]).sum())
+                owner.append(i)
+                starts.append(int(self._child_start[parent]))
+                stops.append(node)
                 node, parent = parent, int(self._parent[parent])
-            first[i] = pos + before[np.searchsorted(axiom, node)]
-        n = np.where(alive[nodes], count(nodes), 0)
+            tops[i] = node
+        sizes = np.maximum(np.array(stops, np.int64) - np.array(starts, np.int64), 0)  # a dead child: none
+        siblings = concat_ranges(np.array(starts, np.int64), sizes)
+        whose = np.repeat(np.array(owner, np.int64), sizes)
+        held = alive[siblings]
+        first = np.zeros(len(nodes), np.int64)
+        np.add.at(first, whose[held], sums.of(siblings[held], child_count)[0])  # all in one lookup
+        first += before[np.searchsorted(axiom, tops)]
+        n = np.where(alive[nodes], sums.of(nodes, child_count)[0], 0)
         return np.where(n > 0, first, -1), np.where(n > 0, first + n - 1, -1)
 
     def in_string(self, nodes: ArrayLike) -> np.ndarray:
