@@ -143,7 +143,7 @@ class MainWindow(QMainWindow):
         self.variants = VariantsController(self)
         self._actions()
         self._connect()
-        self.resize(1400, 880)
+        self.fit_size(1400, 880)
         self.compact = False
         warm_up()
         self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330], Qt.Orientation.Horizontal)
@@ -198,7 +198,17 @@ class MainWindow(QMainWindow):
         """Size the window for a screen of ``width`` x ``height`` pixels (compact below 1300 wide)."""
         if width < 1300:
             self.use_compact_layout()
-        self.resize(min(width, 1400), min(height, 880))
+        self.fit_size(min(width, 1400), min(height, 880))
+
+    def fit_size(self, width: int, height: int) -> None:
+        """Resize to ``width`` x ``height`` as the docks stand now.  Qt keeps the window's minimum
+        size from the layout's last activation: built dock by dock, before the tabs group them,
+        that was the docks' heights stacked (1338 px), and ``resize`` never went below it, so the
+        window came out taller than a 900- or 1080-pixel screen.  The layout is activated first."""
+        layout = self.layout()
+        if layout is not None:
+            layout.activate()
+        self.resize(width, height)
 
     # -- construction ----------------------------------------------------------------
     def _dock(self, key, title, widget, area):

@@ -44,6 +44,16 @@ def test_a_tall_plant_is_framed_at_1024x700_and_presets_keep_z_up(make_window, q
     w.grab_window().save(str(artifacts / "desktop_1024x700.png"))
 
 
+@pytest.mark.parametrize("screen", [(1400, 900), (1920, 1080)])
+def test_the_window_takes_the_size_asked_for_within_the_screen(make_window, qtbot, screen):
+    w = make_window(n=6)
+    assert (w.width(), w.height()) == (1200, 800)  # make_window's size: not the docks stacked (1338 px)
+    w.fit_screen(*screen)
+    settle(qtbot, w)
+    assert (w.width(), w.height()) == (1400, 880)
+    assert w.height() <= screen[1] and w.view.height() > 400
+
+
 def test_a_selected_hairline_twig_shows_red(make_window, qtbot, artifacts):
     w = make_window(n=10)
     snap = w.controller.snapshot
