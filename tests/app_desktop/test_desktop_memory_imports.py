@@ -14,6 +14,7 @@ import ast
 import json
 import subprocess
 import sys
+import pytest
 
 from desktop_helpers import ROOT
 
@@ -106,3 +107,38 @@ def test_pyvistaqt_is_loaded_only_for_its_qopenglwidget_fallback():
     assert native == {"native": True, "pyvistaqt": False, "kind": "NativeInteractor"}
     fallback = _plant_view_in("offscreen")  # Qt's offscreen platform: pyvistaqt's QOpenGLWidget
     assert fallback == {"native": False, "pyvistaqt": True, "kind": "QtInteractor"}
+
+
+_ARENAS = """
+import ctypes, os, re, sys, tempfile, threading
+{setup}
+def grow():  # small blocks from a second thread: glibc gives it an arena of its own by default
+    blocks = [bytearray(200) for _ in range(20_000)]
+    del blocks
+thread = threading.Thread(target=grow)
+thread.start()
+thread.join()
+libc = ctypes.CDLL("libc.so.6")
+libc.fopen.restype = ctypes.c_void_p
+path = os.path.join(tempfile.mkdtemp(), "info.xml")
+out = libc.fopen(path.encode(), b"w")
+libc.malloc_info(0, ctypes.c_void_p(out))
+libc.fclose(ctypes.c_void_p(out))
+print(len(re.findall('<heap nr=', open(path).read())))
+"""
+
+
+def _arenas(setup: str) -> int:
+    run = subprocess.run([sys.executable, "-c", _ARENAS.format(setup=setup)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    return int(run.stdout.split()[-1])
+
+
+def test_the_desktop_serves_its_threads_from_one_malloc_arena():
+    import ctypes.util
+
+    if ctypes.util.find_library("c") != "libc.so.6":
+        pytest.skip("glibc's malloc only")
+    assert _arenas("") == 2  # the check sees a thread's own arena when nothing is asked
+    setup = "from ramure.app.desktop.launch import one_malloc_arena\nassert one_malloc_arena()"
+    assert _arenas(setup) == 1
