@@ -188,3 +188,50 @@ def test_select_refuses_erased_and_dead_modules_like_leaf_positions():
     assert dead.size
     with pytest.raises(RamureError, match="not a leaf"):
         ex.select([int(dead[-1])])
+
+
+_WARM_UP = """
+import json, sys, time
+from numba.core import dispatcher
+from ramure.app.model import Explorer, warm_up_edits
+ex = Explorer("grammars/honda_sympodial.lsys", n=12)
+ex.mesh
+ex.select(ex.skeleton.leaf_id[len(ex.skeleton.leaf_id) // 3 :: 500][:10])
+before = "networkx" in sys.modules
+warmed = {warm} and warm_up_edits(ex.text, ex.session.n)
+loads = []
+original = dispatcher.Dispatcher._compile_for_args
+def counted(self, *args, **kwargs):
+    loads.append(self.py_func.__name__)
+    return original(self, *args, **kwargs)
+dispatcher.Dispatcher._compile_for_args = counted
+ex.regrow(seed=1)
+ex.mesh
+print(json.dumps({{"before": before, "warmed": warmed, "loads": loads}}))
+"""
+
+
+@pytest.mark.parametrize("warm", [False, True])
+def test_after_the_warm_up_the_first_regrow_imports_and_loads_nothing(warm):
+    import pathlib
+    import subprocess
+    import sys
+
+    code = _WARM_UP.format(warm=warm)
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=pathlib.Path(__file__).resolve().parents[2]
+    )
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    assert out["before"] is False  # a plant drawn and a selection made: networkx not needed yet
+    if warm:
+        assert out["warmed"] is True and out["loads"] == []
+    else:  # without it, the first regrow loads the edit kernels (and imports networkx)
+        assert {"leaf_sums", "walk"} <= set(out["loads"])
+
+
+def test_a_warm_up_on_text_that_gives_no_plant_says_so_and_raises_nothing():
+    from ramure.app.model import warm_up_edits
+
+    assert warm_up_edits("n: 2\nw: A\np: A -> ((", 2) is False
+    assert warm_up_edits("n: 1\nw: A\np: A -> A\n", 1) is False  # no segment to select

@@ -52,6 +52,18 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(skip)
 
 
+@pytest.fixture(autouse=True)
+def no_edit_warm_up(monkeypatch):
+    """The edit warm-up (a background thread at the first selection) counts as done: it would
+    otherwise run beside whichever test selects first, reading what that test patches.
+    ``test_desktop_regrow`` checks it with this undone."""
+    import threading
+
+    from ramure.app.desktop import controller
+
+    monkeypatch.setattr(controller, "_warm_up", [threading.Thread()])
+
+
 @pytest.fixture(scope="session")
 def artifacts():
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
