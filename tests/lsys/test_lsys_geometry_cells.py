@@ -52,3 +52,21 @@ def test_meshes_with_organs_get_their_own_index_arrays():
     assert mesh.n_cells == len(offsets) - 1 > tubes
     assert np.all(np.diff(offsets)[:tubes] == 4) and np.all(np.diff(offsets)[tubes:] == 3)
     assert conn.flags.writeable and conn.max() == mesh.n_points - 1
+
+
+def test_tube_only_meshes_share_their_constant_cell_data_and_it_reads_as_before():
+    small = LSystem.from_text("n: 3\nw: F\np: F -> F[+F]F").derive().skeleton()
+    big = LSystem.from_text("n: 4\nw: F\np: F -> F[+F]F").derive().skeleton()
+    a, b = skeleton_to_polydata(big, 6), skeleton_to_polydata(small, 6)
+    cells = np.arange(b.n_cells)
+    expected = {"segment": cells // 6, "organ": np.full(b.n_cells, -1), "polygon": np.full(b.n_cells, -1), "kind": 0 * cells}
+    for name, values in expected.items():
+        mine, theirs = np.asarray(b.cell_data[name]), np.asarray(a.cell_data[name])
+        assert np.array_equal(mine, values), name
+        assert np.shares_memory(mine, theirs), name  # one copy for every version of a plant
+        assert mine.dtype == (np.int32 if name == "segment" else np.int8)
+    assert np.array_equal(np.asarray(b.cell_data["leaf_id"]), np.repeat(small.leaf_id, 6))  # per plant
+    assert not geometry._tube_cells("segment", len(small), 6).flags.writeable
+    with_organs = skeleton_to_polydata(LSystem.from_text("n: 2\nw: F\np: F -> F[+F@O(0.2)]F").derive().skeleton(), 6)
+    organ = np.asarray(with_organs.cell_data["organ"])
+    assert organ.max() >= 0 and not np.shares_memory(organ, geometry._tube_cells("organ", 1, 6))  # its own
