@@ -488,6 +488,9 @@ def mesh_sides(segments: int) -> int:
 #: The warm-up plant: the first derivation of the user's grammar with at least this many tree
 #: nodes (where the tree passes run compiled once numba is loaded, as for a large plant).
 WARM_UP_NODES = 2_000
+#: ... and at most this many: a grammar that jumps past it in one step is not warmed up (the
+#: warm-up would cost about what the edit does).
+WARM_UP_MAX_NODES = 100_000
 
 
 def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
@@ -496,14 +499,15 @@ def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
 
     A process's first regrow imports networkx (the minimum cut, about 0.1 s) and loads the
     compiled kernels only edits use (leaf sums, the re-interpreting turtle walk) from numba's
-    cache; on Honda n = 17 that made the first regrow about 0.3 s against 0.1 s for the next
-    ones.  A front end calls this in a background thread when the user first selects something
-    (a regrow usually follows), so the cost falls in the time the user takes to reach the
-    button.  The small plant (the first of steps 1 .. ``n`` with :data:`WARM_UP_NODES` tree
-    nodes or more, else step ``n``) has the same symbols and parameters, so the kernels
-    specialise for the same array types.  Nothing of the user's plant is read or changed.
-    Returns False, and does nothing more, if the text does not give a plant (a warm-up never
-    reports errors: the real edit will).
+    cache; on Honda n = 17 that made the desktop's first regrow 0.36-0.49 s to the frame against
+    about 0.1 s for the next ones (0.13-0.18 s after the warm-up).  A front end calls this in a
+    background thread when the user first selects something (a regrow usually follows), so the
+    cost falls in the time the user takes to reach the button.  The small plant (the first of
+    steps 1 .. ``n`` with :data:`WARM_UP_NODES` tree nodes or more, else step ``n``) has the
+    same symbols and parameters, so the kernels specialise for the same array types.  Nothing of
+    the user's plant is read or changed.  Returns False, and does nothing more, if the text does
+    not give a plant (a warm-up never reports errors: the real edit will), or the small plant
+    would have more than :data:`WARM_UP_MAX_NODES` nodes.
     """
     try:
         last = LSystem.from_text(text).n if n is None else int(n)
@@ -511,6 +515,8 @@ def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
             ex = Explorer(text, n=step, seed=seed)
             if len(ex.derivation.tree) >= WARM_UP_NODES:
                 break
+        if len(ex.derivation.tree) > WARM_UP_MAX_NODES:
+            return False
         leaves = ex.skeleton.leaf_id
         if not len(leaves):
             return False

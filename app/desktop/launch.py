@@ -44,10 +44,12 @@ def one_malloc_arena() -> bool:
 
     The desktop makes each plant version in its worker thread and frees the version before it
     in the GUI thread.  With an arena per thread (glibc's default, up to 8 per core), what one
-    thread frees is not reused by the other, so each edit mapped fresh pages: on Honda n = 17,
-    after five edits the window held 713-719 MB, with one arena 694-702 MB, and the first edits'
-    page faults made a regrow 20-60 ms slower.  Called before the worker and OpenGL's threads
-    start; arenas made before keep serving their threads.  Same as ``MALLOC_ARENA_MAX=1``.
+    thread frees is not reused by the other, so each edit mapped fresh pages.  On Honda n = 17
+    (alternated, 3 runs each) the window held 645-648 MB after a regrow and its undo and
+    694-698 MB after five edits; with one arena 636-642 and 680-681 MB; the edits' times to
+    the frame stayed within this machine's noise.  Called before the worker and OpenGL's
+    threads start; arenas made before keep serving their threads.  Same as
+    ``MALLOC_ARENA_MAX=1``.
     """
     import ctypes
     import ctypes.util

@@ -235,3 +235,6 @@ def test_a_warm_up_on_text_that_gives_no_plant_says_so_and_raises_nothing():
 
     assert warm_up_edits("n: 2\nw: A\np: A -> ((", 2) is False
     assert warm_up_edits("n: 1\nw: A\np: A -> A\n", 1) is False  # no segment to select
+    jump = "n: 2\nw: A\np:\n  A -> " + "B" * 400 + "\n  B -> " + "F" * 400 + "\n"  # 401 nodes, then 160,401
+    assert warm_up_edits(jump, 2) is False  # as costly as an edit: not warmed up
+    assert warm_up_edits(jump.replace("F" * 400, "F" * 20), 2) is True  # 8,401 nodes
