@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import os
 import pathlib
+import threading
 from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -530,6 +531,21 @@ def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
     return True
 
 
+_warm_up: list[threading.Thread] = []  # the process's edit warm-up, once started
+
+
+def warm_up_in_background(text: str, n: int | None) -> threading.Thread:
+    """Start :func:`warm_up_edits` for ``text`` in a background thread, once per process (what it
+    warms up, networkx and numba's kernels, is the process's, not a plant's); returns that
+    thread.  It reads nothing of the caller's plant, so it needs no lock and never makes a
+    click wait.  The desktop and the notebook explorer call it at the first selection."""
+    if not _warm_up:
+        thread = threading.Thread(target=warm_up_edits, args=(text, n), name="ramure-warm-up", daemon=True)
+        _warm_up.append(thread)
+        thread.start()
+    return _warm_up[0]
+
+
 def leaves_in_rectangle(leaf_ids: ArrayLike, screen_xy: ArrayLike, rect: Sequence[float]) -> list[int]:
     """Unique leaf ids whose screen points fall inside the rectangle (any corner order)."""
     x0, y0, x1, y1 = rect
@@ -562,4 +578,12 @@ def finite_number(value: float | str, name: str) -> float:
     return value
 
 
-__all__ = ["Explorer", "RamureError", "finite_number", "leaves_in_rectangle", "warm_up_edits", "write_obj"]
+__all__ = [
+    "Explorer",
+    "RamureError",
+    "finite_number",
+    "leaves_in_rectangle",
+    "warm_up_edits",
+    "warm_up_in_background",
+    "write_obj",
+]

@@ -30,7 +30,7 @@ from PySide6.QtCore import QObject, Signal
 from ramure.app.desktop import state
 from ramure.app.desktop.history import Timeline
 from ramure.app.desktop.workers import JobQueue
-from ramure.app.model import Explorer, leaves_in_rectangle, warm_up_edits
+from ramure.app.model import Explorer, leaves_in_rectangle, warm_up_in_background
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
@@ -41,21 +41,6 @@ if TYPE_CHECKING:
     from ramure.lsys.cut import CutResult
 
 T = TypeVar("T")
-
-
-_warm_up: list[threading.Thread] = []  # the process's edit warm-up, once started
-
-
-def warm_up_once(text: str, n: int | None) -> threading.Thread:
-    """Start :func:`ramure.app.model.warm_up_edits` for ``text`` in a background thread, once
-    per process (what it warms up, networkx and numba's kernels, is the process's, not a
-    plant's); returns that thread.  It reads nothing of the model, so it needs no lock and
-    never makes a click wait."""
-    if not _warm_up:
-        thread = threading.Thread(target=warm_up_edits, args=(text, n), name="ramure-warm-up", daemon=True)
-        _warm_up.append(thread)
-        thread.start()
-    return _warm_up[0]
 
 
 class Busy(RamureError):
@@ -283,7 +268,7 @@ class Controller(QObject):
         self.snapshot = self.read(run)
         self.selection_changed.emit(self.snapshot.selection)
         if self.snapshot.selection:  # a regrow usually follows: make it as fast as the later ones
-            warm_up_once(*grammar[0])
+            warm_up_in_background(*grammar[0])
         return self.snapshot.selection
 
     def select(self, leaf_ids: int | Iterable[int], mode: str = "replace") -> tuple[int, ...]:

@@ -42,6 +42,7 @@ from ramure.app.jupyter.variants import VariantPanel, qualifier_summary
 from ramure.app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
 from ramure.app.model import Explorer as Model
 from ramure.app.model import finite_number as _number  # a finite number or a refusal naming it
+from ramure.app.model import warm_up_in_background
 from ramure.errors import GrammarError, RamureError, ValueRefused
 
 if TYPE_CHECKING:
@@ -390,6 +391,13 @@ class Explorer:
     # -- selection -------------------------------------------------------------------
     def select(self, leaf_ids: int | Iterable[int], mode: str = "replace") -> None:
         self.run(lambda: self.model.select(leaf_ids, mode))
+        self.warm_up()
+
+    def warm_up(self) -> None:
+        """Prepare the first edit once something is selected (a regrow usually follows): see
+        :func:`ramure.app.model.warm_up_in_background`."""
+        if self.model.selection:
+            warm_up_in_background(self.model.text, self.model.session.n)
 
     def select_where(
         self,
@@ -400,6 +408,7 @@ class Explorer:
     ) -> None:
         """Select by branch order and height, e.g. every branch of order ≥ 3 above height h."""
         self.run(lambda: self.model.select(self.model.leaves_where(min_order, min_height, max_height), mode))
+        self.warm_up()
 
     def clear_selection(self) -> None:
         self.run(self.model.clear_selection)
@@ -408,6 +417,7 @@ class Explorer:
         """Select the leaf that drew mesh cell ``cell_id`` (what a click in the 3D view does)."""
         mode = mode or self.selection_panel.mode.value
         self.run(lambda: self.model.select([self.model.leaf_of_cell(cell_id)], mode))
+        self.warm_up()
 
     # -- edits --------------------------------------------------------------------------
     def regrow(

@@ -79,6 +79,7 @@ class SelectionPanel:
     def select_ids(self) -> None:
         model = self.app.model
         self.app.run(lambda: model.select(resolve_ids(self.ids.value, model.derivation.tree.leaves), self.mode.value))
+        self.app.warm_up()
 
     def select_where(self) -> None:
         lo, hi = self.height.value

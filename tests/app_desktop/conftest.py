@@ -59,9 +59,9 @@ def no_edit_warm_up(monkeypatch):
     ``test_desktop_regrow`` checks it with this undone."""
     import threading
 
-    from ramure.app.desktop import controller
+    from ramure.app import model
 
-    monkeypatch.setattr(controller, "_warm_up", [threading.Thread()])
+    monkeypatch.setattr(model, "_warm_up", [threading.Thread()])
 
 
 @pytest.fixture(scope="session")

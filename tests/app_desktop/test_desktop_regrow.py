@@ -55,17 +55,17 @@ def test_the_regrown_part_stays_selected_and_again_regrows_it(make_window, qtbot
 def test_the_first_selection_warms_up_edits_once_in_the_background(make_window, monkeypatch):
     import threading
 
-    from ramure.app.desktop import controller
+    from ramure.app import model
 
     started = []
-    monkeypatch.setattr(controller, "_warm_up", [])
-    monkeypatch.setattr(controller, "warm_up_edits", lambda text, n: started.append((text, n, threading.current_thread().name)))
+    monkeypatch.setattr(model, "_warm_up", [])
+    monkeypatch.setattr(model, "warm_up_edits", lambda text, n: started.append((text, n, threading.current_thread().name)))
     w = make_window(n=5)
     w.controller.clear_selection()
-    assert started == [] and controller._warm_up == []  # nothing selected: no edit to prepare for
+    assert started == [] and model._warm_up == []  # nothing selected: no edit to prepare for
     w.controller.select(tips(w, 2))
-    controller._warm_up[0].join(10)
+    model._warm_up[0].join(10)
     ex = w.controller.explorer
     assert started == [(ex.text, 5, "ramure-warm-up")]
     w.controller.select(tips(w, 3))
-    assert len(controller._warm_up) == 1 and len(started) == 1  # once per process
+    assert len(model._warm_up) == 1 and len(started) == 1  # once per process

@@ -109,6 +109,29 @@ def test_parse_ids():
         parse_ids("9-7")
 
 
+def test_the_first_selection_warms_up_edits_once_in_the_background(explorer, monkeypatch):
+    import threading
+
+    from ramure.app import model
+
+    started = []
+    monkeypatch.setattr(model, "_warm_up", [])
+    monkeypatch.setattr(model, "warm_up_edits", lambda text, n: started.append((text, n, threading.current_thread().name)))
+    ex = explorer
+    ex.clear_selection()
+    ex.selection_panel.ids.value = "abc"
+    ex.selection_panel.select_ids()  # refused: nothing selected, nothing started
+    assert started == [] and model._warm_up == []
+    leaves = ex.model.session.leaves_with_symbol("F").tolist()
+    ex.selection_panel.ids.value = str(leaves[0])
+    ex.selection_panel.select_ids()
+    model._warm_up[0].join(10)
+    assert started == [(ex.model.text, 5, "ramure-warm-up")]
+    ex.select(leaves[1:3])
+    ex.pick(0)
+    assert len(model._warm_up) == 1 and len(started) == 1  # once per process
+
+
 def test_select_where_matches_order_and_height(explorer):
     ex = explorer
     sp = ex.selection_panel
