@@ -391,6 +391,12 @@ def bench_regrow_and_undo_honda_n17(native=None):
     )
 
 
+def _median_ms(values) -> float | None:
+    """The median of the figures that were measured (None: not measured), to 0.1 ms."""
+    values = [v for v in values if v is not None]
+    return round(statistics.median(values), 1) if values else None
+
+
 def bench_desktop_edits_honda_n17(runs: int = 2):
     """Regrow 10 leaves, undo and redo in the real desktop window on Honda n = 17, each timed from
     the button's signal to the end of the first frame drawn with the new version (the worker's
@@ -404,14 +410,10 @@ def bench_desktop_edits_honda_n17(runs: int = 2):
     if not good:
         return {"seconds": None, "error": results[0].get("error"), "ok": False}
 
-    def median(values):
-        values = [v for v in values if v is not None]
-        return round(statistics.median(values), 1) if values else None
-
-    first = median([f["regrow"][0] for f in good])
-    regrow = median([v for f in good for v in f["regrow"][1:]])
-    undo = median([v for f in good for v in f["undo"]])
-    redo = median([v for f in good for v in f["redo"]])
+    first = _median_ms([f["regrow"][0] for f in good])
+    regrow = _median_ms([v for f in good for v in f["regrow"][1:]])
+    undo = _median_ms([v for f in good for v in f["undo"]])
+    redo = _median_ms([v for f in good for v in f["redo"]])
     return _plain(
         {
             "seconds": None if regrow is None else regrow / 1000,
@@ -440,18 +442,14 @@ def bench_memory_limit_honda_n17():
             return {"seconds": None, "error": record["error"], "ok": False}
         frames = record.get("frame_ms") or {}
 
-        def median(values):
-            values = [v for v in values if v is not None]
-            return round(statistics.median(values), 1) if values else None
-
         runs[name] = {
             "completed": "after_five_edits_mb" in record,
             "oom_kills": record["oom_kills"],
             "charged_peak_mb": record["charged_peak_mb"],
             "vmhwm_mb": {k: record.get(k) for k in ("peak_mb", "after_edits_mb", "after_five_edits_mb")},
             "first_regrow_ms": (frames.get("regrow") or [None])[0],
-            "regrow_ms": median((frames.get("regrow") or [])[1:]),
-            "undo_ms": median(frames.get("undo") or []),
+            "regrow_ms": _median_ms((frames.get("regrow") or [])[1:]),
+            "undo_ms": _median_ms(frames.get("undo") or []),
             "seconds": record["seconds"],
         }
     limited = runs["limited"]
