@@ -106,7 +106,6 @@ def bench_memory_limit_honda_n17():
         if "error" in record:
             return {"seconds": None, "error": record["error"], "ok": False}
         frames = record.get("frame_ms") or {}
-
         runs[name] = {
             "completed": "after_five_edits_mb" in record,
             "oom_kills": record["oom_kills"],

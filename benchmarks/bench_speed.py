@@ -558,8 +558,6 @@ def drawn(name):  # the job finished, its events handled, the view repainted: th
     stage(name)
 
 
-
-
 def pause(seconds):
     loop = QEventLoop()
     QTimer.singleShot(int(seconds * 1000), loop.quit)

@@ -361,10 +361,8 @@ def polydata_from_parts(skeleton: Skeleton, tube_pts: np.ndarray, sides: int = 8
         mesh.cell_data["polygon"] = per_cell(-1, None, np.full(no, -1), poly_idx)
         mesh.cell_data["kind"] = per_cell(KIND_BRANCH, np.int8, organ_kind, np.full(npoly, KIND_LEAF))
     else:  # tubes only: the same values for every plant of as many segments (shared, see _tube_cells)
-        mesh.cell_data["segment"] = _tube_cells("segment", nseg, sides)
-        mesh.cell_data["organ"] = _tube_cells("organ", nseg, sides)
-        mesh.cell_data["polygon"] = _tube_cells("polygon", nseg, sides)
-        mesh.cell_data["kind"] = _tube_cells("kind", nseg, sides)
+        for name in ("segment", "organ", "polygon", "kind"):
+            mesh.cell_data[name] = _tube_cells(name, nseg, sides)
     mesh.cell_data["order"] = per_cell(skeleton.order, None, np.full(nt, -1))
     organ_color = organs.color if organs.color is not None else np.zeros(len(organs), np.int32)
     poly_color = polygons.color[poly_idx] if polygons is not None and npoly else np.zeros(0, np.int32)
