@@ -148,9 +148,12 @@ def bench_context_20000_siblings():
         {
             "seconds": round(seconds, 4),
             "modules": len(d),
+            "modules_per_second": int(len(d) / seconds),
             "chain_seconds": round(chain_seconds, 4),
             "chain_rewritten": c.count("B"),
+            "chain_modules_per_second": int(len(c) / chain_seconds),
             "target_seconds": 0.5,
+            "peak_mb": _peak_mb(),
             "ok": max(seconds, chain_seconds) <= 0.5,
         }
     )
@@ -383,6 +386,8 @@ def bench_regrow_and_undo_honda_n17(native=None):
         {
             "seconds": out["regrow_seconds"],
             **out,
+            "modules": len(ex.derivation),
+            "modules_per_second": int(len(ex.derivation) / out["regrow_seconds"]),
             "segments": len(ex.skeleton),
             "cells": ex.mesh.n_cells,
             "peak_mb": _peak_mb(),
@@ -404,7 +409,9 @@ def bench_desktop_edits_honda_n17(runs: int = 2):
     user waits.  ``first_regrow_ms`` is a process's first edit (after a pause for the user to
     reach the button, in which the window warms the edit path up); ``regrow_ms`` the median of
     the four that follow, ``undo_ms`` / ``redo_ms`` the medians of five and four.  Median over
-    ``runs`` fresh processes (:func:`desktop_memory`'s session, the dev venv's mypy hidden)."""
+    ``runs`` fresh processes (:func:`desktop_memory`'s session, the dev venv's mypy hidden).
+    ``peak_mb``: the largest of those processes' peaks (``VmHWM`` after the five edits), with
+    the modules of the plant edited and regrown per second of the median regrow."""
     results = [desktop_memory(17, hide=("mypy",)) for _ in range(runs)]
     good = [r["frame_ms"] for r in results if "frame_ms" in r]
     if not good:
@@ -414,9 +421,13 @@ def bench_desktop_edits_honda_n17(runs: int = 2):
     regrow = _median_ms([v for f in good for v in f["regrow"][1:]])
     undo = _median_ms([v for f in good for v in f["undo"]])
     redo = _median_ms([v for f in good for v in f["redo"]])
+    modules = [r["modules"] for r in results if "modules" in r]
     return _plain(
         {
             "seconds": None if regrow is None else regrow / 1000,
+            "modules": modules[0] if modules else None,
+            "modules_per_second": int(modules[0] / (regrow / 1000)) if modules and regrow else None,
+            "peak_mb": max(r["after_five_edits_mb"] for r in results if "after_five_edits_mb" in r),
             "first_regrow_ms": first,
             "regrow_ms": regrow,
             "undo_ms": undo,
@@ -460,6 +471,8 @@ def bench_rectangle_select_131k():
         {
             "seconds": round(seconds, 4),
             "box_seconds": round(statistics.median(boxes), 4),
+            "modules": len(ex.derivation),
+            "modules_per_second": int(len(ex.derivation) / seconds),
             "segments": len(snap.midpoints),
             "cells": snap.mesh.n_cells,
             "selected_max": max(found),
