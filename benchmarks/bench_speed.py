@@ -424,7 +424,7 @@ def bench_desktop_edits_honda_n17(runs: int = 2):
     modules = [r["modules"] for r in results if "modules" in r]
     return _plain(
         {
-            "seconds": None if regrow is None else regrow / 1000,
+            "seconds": None if regrow is None else round(regrow / 1000, 4),
             "modules": modules[0] if modules else None,
             "modules_per_second": int(modules[0] / (regrow / 1000)) if modules and regrow else None,
             "peak_mb": max(r["after_five_edits_mb"] for r in results if "after_five_edits_mb" in r),
