@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 import ramure.io as atomic
 
 from ramure.lsys import GrammarError, LSystem
+from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import kinship
 import ramure.grammars as grammar_files
@@ -66,7 +67,7 @@ class Explorer:
         )
         path = grammar_files.resolve(given) if given else None
         self.path = path
-        self.text = path.read_text(encoding="utf-8") if path else str(source)
+        self.text = read_grammar_file(path) if path else str(source)
         self.error: GrammarError | None = None  # the last grammar error, shown by the front end
         self.rho = 0.5
         self.selection: list[int] = []
@@ -459,11 +460,16 @@ class Explorer:
         return self.session.save(path)
 
     def load_session(self, path: str | os.PathLike) -> None:
-        """Load a session file; on error the current plant is untouched."""
+        """Load a session file; on error the current plant is untouched.
+
+        The loaded plant is drawn before it replaces the current one (as the constructor and
+        :meth:`set_text` do): a session whose plant cannot be drawn (``F(1e300)``) is refused."""
         session = Session.load(path)
+        skeleton = session.derivation.skeleton()  # a turtle error leaves the current plant as it is
         self.session, self.text = session, session.lsystem.text
         self.selection, self.last_result, self.error = [], None, None
         self._changed()
+        self._drawn(skeleton)
 
     def export(self, path: str | os.PathLike) -> pathlib.Path:
         """Export the plant mesh by suffix (:mod:`ramure.app.export`): .glb/.gltf (binary or JSON

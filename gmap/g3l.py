@@ -55,7 +55,10 @@ from dataclasses import dataclass, field
 from typing import NoReturn
 
 from ramure.errors import GrammarError
+from ramure.io import FileRefused, read_regular
 
+#: The largest ``.g3l`` file read (a grammar is a few rules).
+MAX_G3L_BYTES = 16 * 2**20
 #: Positional parameter names of a volume symbol and their defaults.
 PARAM_NAMES = ("O", "x", "y", "z", "H", "L", "W")
 PARAM_DEFAULTS = (4.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
@@ -512,9 +515,9 @@ def load_g3l(path: str | os.PathLike) -> Grammar:
         if ".." not in pathlib.PurePosixPath(name).parts and cand.is_file():
             p = cand
     try:
-        raw = p.read_bytes()
-    except OSError as err:
-        raise GrammarError(f"cannot read {path}: {err.strerror or err}", filename=str(path)) from None
+        raw = read_regular(p, MAX_G3L_BYTES, ".g3l grammar")
+    except FileRefused as err:
+        raise GrammarError(f"cannot read {path}: {err.reason}", filename=str(path)) from None
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as err:

@@ -38,7 +38,7 @@ import numpy as np
 import ramure.grammars as grammar_files
 from .errors import DerivationError, GrammarError, ValueRefused
 from .expr import compile_expression, evaluate_constant
-from .grammar import Grammar, parse_grammar
+from .grammar import Grammar, parse_grammar, read_grammar_file
 from .branch_cut import cut_string
 from .combination import split as split_combination
 from .decompose import decompose
@@ -123,15 +123,7 @@ class LSystem:
         back to the shipped grammar of that name, so examples work from any directory.
         """
         file = grammar_files.resolve(path)
-        try:
-            text = file.read_text(encoding="utf-8-sig")  # -sig: a BOM (Windows editors) is not text
-        except UnicodeDecodeError as exc:
-            line = file.read_bytes()[: exc.start].count(b"\n") + 1
-            raise GrammarError(
-                f"the file is not UTF-8 text (byte 0x{exc.object[exc.start]:02x} cannot be decoded); save it as UTF-8",
-                line,
-                filename=str(file),
-            ) from None
+        text = read_grammar_file(file)
         return cls.from_text(text, filename=str(file))
 
     @property

@@ -31,7 +31,12 @@ Directives (one per line):
 ``#include FILE``
     reads FILE (a path relative to the including file; quotes optional) as if
     its lines stood here: constants, modules, rules.  Cycles are refused
-    naming both files; an error inside FILE names FILE and its line.
+    naming both files; an error inside FILE names FILE and its line.  FILE
+    must be a regular file in the grammar's own folder or below it (links and
+    ``..`` resolved); anything else is refused unread, and so is any file
+    named by text that was typed or loaded without a file of its own.  The
+    grammar and its included files hold at most :data:`MAX_TEXT_CHARS`
+    characters together.  ``#surface NAME "FILE"`` files follow the same rule.
 ``#module Name1 Name2 ...``
     multi-letter module names.  Any other letter is a module on its own, so
     ``FF-[-F+F]`` is ten modules.  ``Leaf`` and ``Fruit`` are always declared.
@@ -88,10 +93,13 @@ Limits, refused with a clear error: a grammar text of more than
 from __future__ import annotations
 
 import math
+import os
 import pathlib
 import re
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
+
+from ramure.io import FileRefused, read_regular
 
 from .errors import GrammarError
 from .expr import Expression, Source, compile_expression, define_function, evaluate_constant, parse_expression
@@ -331,6 +339,11 @@ class GrammarParser:
         self.organs = list(DEFAULT_ORGANS)
         self.context_filter: dict[str, set[str]] = {"ignore": set(), "consider": set()}
         self.includes = [str(pathlib.Path(filename).resolve())] if filename else []
+        #: The folder ``#include`` and ``#surface "FILE"`` files must lie in (symbolic links and
+        #: ``..`` resolved): the grammar file's own folder, as the user opened it.  Text with no
+        #: file name reads no file at all.
+        self.root = confinement_root(filename)
+        self.chars_read = len(text)  # the grammar and its #include files: MAX_TEXT_CHARS in all
         self.settings = {"angle": DEFAULT_ANGLE, "step": DEFAULT_STEP, "width": DEFAULT_WIDTH, "widthscale": 1.0}
         self.tropism: tuple[float, ...] | None = None
         self.amap: list[tuple] = []
@@ -547,15 +560,19 @@ class GrammarParser:
             )
 
     def include(self, line: SourceLine, start: int) -> None:
-        """``#include FILE``: read FILE (relative to the including file) as if its lines stood here."""
+        """``#include FILE``: read FILE (relative to the including file) as if its lines stood here.
+
+        FILE must be a regular file in the grammar's folder or below it (:attr:`root`): an
+        absolute path elsewhere, a ``..`` or a symbolic link out of it is refused without
+        reading it, and so is a device or a pipe.  The grammar and all its included files hold
+        at most :data:`MAX_TEXT_CHARS` characters together."""
         word = line.text[start:].strip()
         quoted = len(word) >= 2 and (word[0] + word[-1]) in ('""', "''", "<>")
         name = word[1:-1] if quoted else word
         if not name:
             raise line.error('#include needs a file name, e.g. #include "leaves.lsys"', start + 1)
         including = line.filename or self.filename
-        folder = pathlib.Path(including).parent if including else pathlib.Path.cwd()
-        path = (folder / name).resolve()
+        path = self.confined(line, start, "#include", name, including)
         chain = self.includes
         if str(path) in chain:
             raise line.error(
@@ -566,19 +583,39 @@ class GrammarParser:
         if len(chain) > MAX_INCLUDE_DEPTH:
             raise line.error(f"#include nests more than {MAX_INCLUDE_DEPTH} files deep", start + 1)
         try:
-            text = path.read_text(encoding="utf-8-sig")
-        except (OSError, UnicodeDecodeError) as exc:
-            reason = (
-                "it is not UTF-8 text" if isinstance(exc, UnicodeDecodeError) else (exc.strerror or type(exc).__name__).lower()
-            )
+            text = read_regular(path, 4 * MAX_TEXT_CHARS, "#include").decode("utf-8-sig")
+        except (FileRefused, UnicodeDecodeError) as exc:
+            reason = exc.reason if isinstance(exc, FileRefused) else "it is not UTF-8 text"
             raise line.error(f"cannot #include {name} ({path}): {reason}", start + 1) from None
-        if len(text) > MAX_TEXT_CHARS:
-            raise line.error(f"#include {name}: more than {MAX_TEXT_CHARS:,} characters", start + 1)
+        self.chars_read += len(text)
+        if len(text) > MAX_TEXT_CHARS or self.chars_read > MAX_TEXT_CHARS:
+            raise line.error(
+                f"#include {name}: the grammar and its included files have more than {MAX_TEXT_CHARS:,} characters",
+                start + 1,
+            )
         chain.append(str(path))
         try:
             self.read(text, str(path))
         finally:
             chain.pop()
+
+    def confined(self, line: SourceLine, start: int, directive: str, name: str, including: str | None) -> pathlib.Path:
+        """The resolved path of file ``name`` named by ``directive`` on ``line``, relative to the
+        ``including`` file's folder; refused (line, column) unless it lies in :attr:`root`."""
+        if self.root is None or including is None:
+            raise line.error(
+                f"{directive} {name}: a grammar typed or loaded without a file reads no other file; "
+                "save it in a folder beside the files it names",
+                start + 1,
+            )
+        path = (pathlib.Path(including).absolute().parent / name).resolve()
+        if not path.is_relative_to(self.root):
+            raise line.error(
+                f"{directive} {name}: the file is outside the grammar's folder {self.root}; "
+                "a grammar reads files in its own folder and below only",
+                start + 1,
+            )
+        return path
 
     # -- module strings ----------------------------------------------------
     def modules_at(self, line: SourceLine, start: int, end: int | None, formal: bool, pieces: list[Piece] | None = None) -> list:
@@ -954,6 +991,30 @@ def _check_probabilities(rules):
         raise GrammarError(
             f"the probabilities of the rules for {first.pred} sum to {total:g}, not 1", first.line, 1, first.source_line
         )
+
+
+def read_grammar_file(path: str | os.PathLike) -> str:
+    """The text of grammar file ``path``: a regular UTF-8 file (a BOM is dropped) of at most
+    :data:`MAX_TEXT_CHARS` characters; anything else is a :class:`GrammarError` naming the file
+    (never a device or a pipe read without end)."""
+    try:
+        raw = read_regular(path, 4 * MAX_TEXT_CHARS, "grammar")
+    except FileRefused as exc:
+        raise GrammarError(f"cannot read the grammar: {exc.reason}", filename=str(path)) from None
+    try:
+        return raw.decode("utf-8-sig")  # -sig: a BOM (Windows editors) is not text
+    except UnicodeDecodeError as exc:
+        raise GrammarError(
+            f"the file is not UTF-8 text (byte 0x{raw[exc.start]:02x} cannot be decoded); save it as UTF-8",
+            raw[: exc.start].count(b"\n") + 1,
+            filename=str(path),
+        ) from None
+
+
+def confinement_root(filename: str | os.PathLike | None) -> pathlib.Path | None:
+    """The folder a grammar named ``filename`` may read ``#include`` and ``#surface`` files
+    from: the folder it stands in (resolved), or None for text with no file name."""
+    return pathlib.Path(filename).absolute().parent.resolve() if filename else None
 
 
 def parse_grammar(text: str, filename: str | None = None) -> Grammar:

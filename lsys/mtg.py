@@ -27,11 +27,13 @@ import re
 import numpy as np
 
 from ramure.errors import RamureError
-from ramure.io import write_text
+from ramure.io import FileRefused, read_regular, write_text
 
 from .amap import Architecture, Table, rank_in_group
 import os
 
+#: The largest MTG file read (a plant of a million entities is about 60 MB).
+MAX_MTG_BYTES = 512 * 2**20
 SCALES = {"P": 1, "A": 2, "S": 3, "U": 4, "I": 5}
 _EVENTS = "# ramure-events: "
 _TOKEN = re.compile(r"([/<+])([A-Za-z$]+)(\d*)")
@@ -112,7 +114,9 @@ def read_mtg(path: str | os.PathLike) -> Architecture:
     """Read an MTG file written by :func:`write_mtg` (or any FORM-A file with these scales)."""
     path = pathlib.Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_regular(path, MAX_MTG_BYTES, "MTG file").decode("utf-8")
+    except FileRefused as exc:
+        raise MTGError(str(exc)) from None
     except UnicodeDecodeError:
         raise MTGError(f"{path}: not a UTF-8 text file") from None
     return parse_mtg(text, str(path))
@@ -123,10 +127,21 @@ def parse_mtg(text: str, where: str = "MTG") -> Architecture:
     lines = text.replace("\r\n", "\n").split("\n")
     events = {}
     if lines and lines[0].startswith(_EVENTS):
-        events = json.loads(lines[0][len(_EVENTS) :])
+        events = _events(lines[0][len(_EVENTS) :], where)
     classes, start = _classes(lines, where)
     entities = _entities(lines, start, classes, where)
     return _to_architecture(entities, events, where)
+
+
+def _events(text, where):
+    """The ``# ramure-events:`` header: a JSON object, else an MTGError naming line 1."""
+    try:
+        events = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise MTGError(f"{where}, line 1: the '# ramure-events:' header is not valid JSON ({exc})") from None
+    if not isinstance(events, dict):
+        raise MTGError(f"{where}, line 1: the '# ramure-events:' header must be a JSON object")
+    return events
 
 
 def _classes(lines, where):
@@ -213,7 +228,16 @@ def _add(entities, relation, symbol, ref, fine, number, where):
             raise MTGError(f"{where}, line {number}: '{relation}{symbol}' follows or branches from nothing at scale {scale}")
         complex_ = entities[other]["complex"]
     entities.append(
-        {"symbol": symbol, "scale": scale, "complex": complex_, "relation": relation, "other": other, "fine": fine, "node": None}
+        {
+            "symbol": symbol,
+            "scale": scale,
+            "complex": complex_,
+            "relation": relation,
+            "other": other,
+            "fine": fine,
+            "node": None,
+            "line": number,
+        }
     )
     return len(entities) - 1
 
@@ -223,7 +247,11 @@ def _to_architecture(entities, events, where):
     row = {s: {e: r for r, e in enumerate(index[s])} for s in SCALES}
 
     def up(i, symbol):
-        return row[symbol][_ancestor(entities, i, SCALES[symbol])]
+        found = _ancestor(entities, i, SCALES[symbol])
+        if found is None:
+            e = entities[i]
+            raise MTGError(f"{where}, line {e['line']}: this '{e['symbol']}' lies in no '{symbol}' (scale {SCALES[symbol]})")
+        return row[symbol][found]
 
     inter = index["I"]
     nodes = [entities[i]["node"] for i in inter]

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any, Self
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ramure.io import write_text
+from ramure.io import read_regular, write_text
 
 from .cut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots
 from .combination import split as split_combination
@@ -633,7 +633,13 @@ class Session:
         return path
 
     @classmethod
-    def from_dict(cls, data: dict, where: str = "session") -> Self:
+    def from_dict(cls, data: dict, where: str = "session", folder: str | os.PathLike | None = None) -> Self:
+        """The session ``data`` describes (edits replayed).
+
+        The stored ``"filename"`` is metadata only, never where files are read from: the
+        grammar is parsed as if it stood, under that file's name, in ``folder`` (the session
+        file's folder, see :meth:`load`), so its ``#include`` and ``#surface`` files are read
+        from that folder and below only; with no ``folder`` it reads no file at all."""
         if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:
             raise RamureError(f'{where} is not a Ramure session (no \'"format": "{SESSION_FORMAT}"\')')
         if data.get("version") != SESSION_VERSION:
@@ -643,7 +649,7 @@ class Session:
             raise RamureError(f"{where} is incomplete: missing {', '.join(missing)}")
         _check_session_fields(data, where)
         try:
-            ls = LSystem.from_text(data["grammar"], filename=data.get("filename"))
+            ls = LSystem.from_text(data["grammar"], filename=_beside(folder, data.get("filename")))
             session = cls(ls, n=data["n"], seed=data["seed"], constants=data["constants"], filename=data.get("filename"))
             for i, edit in enumerate(data["edits"]):
                 session._apply(_check_edit(edit, i, session))
@@ -659,7 +665,7 @@ class Session:
         """Read a session file; a corrupt or truncated file raises RamureError, nothing else changes."""
         path = pathlib.Path(path)
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+            data = json.loads(read_regular(path, MAX_SESSION_BYTES, "session file").decode("utf-8"))
         except json.JSONDecodeError as exc:
             raise RamureError(
                 f"{path} is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg}); is the file truncated?"
@@ -672,7 +678,15 @@ class Session:
             raise RamureError(f"{path} is a corrupt session file ({exc})") from None
         except OSError as exc:
             raise RamureError(f"cannot read {path}: {exc.strerror or exc}") from None
-        return cls.from_dict(data, where=str(path))
+        return cls.from_dict(data, where=str(path), folder=path.absolute().parent)
+
+
+def _beside(folder, stored):
+    """Where a session's grammar is parsed from: its stored file name, in ``folder``."""
+    if folder is None:
+        return None
+    name = stored.replace("\\", "/").rsplit("/", 1)[-1] if stored else ""
+    return str(pathlib.Path(folder) / (name or "session.lsys"))
 
 
 def _check_params(params, lsystem):
@@ -702,6 +716,8 @@ def _check_values(values, lsystem, where: str = ""):
 
 #: Largest whole number a session file may hold (ids, seeds, n): node ids are int64.
 MAX_WHOLE = 2**63 - 1
+#: The largest session file read (a session of a thousand edits is well under 1 MB).
+MAX_SESSION_BYTES = 64 * 2**20
 
 
 def _is_whole(value, low=0, high=MAX_WHOLE):

@@ -248,9 +248,7 @@ def parse_directive(parser: GrammarParser, line: SourceLine, start: int) -> Surf
         raise line.error(f'#surface {name} has no definition: a module string {{ . }} or a "file.lsys"', rest + 1)
     at = rest + len(text[rest:]) - len(text[rest:].lstrip())
     if body[0] in "\"'" and len(body) >= 2 and body[-1] == body[0]:
-        including = line.filename or parser.filename
-        folder = pathlib.Path(including).parent if including else pathlib.Path.cwd()
-        path = (folder / body[1:-1]).resolve()
+        path = parser.confined(line, at, f"#surface {name}", body[1:-1], line.filename or parser.filename)
         if not path.is_file():
             raise line.error(f"#surface {name}: no grammar file {body[1:-1]} ({path})", at + 1)
         return SurfaceDefinition(name, line, at + 1, path=path)

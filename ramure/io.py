@@ -1,4 +1,6 @@
 """Every file Ramure writes goes through here: temporary file in the same folder, fsync, rename.
+Files from others are read through here too (:func:`read_regular`): regular files only, size
+checked before reading.
 
 A crash, a ``kill -9`` or a full disk at any moment leaves either the previous
 file or the new one, complete, and never a partial file: the data goes to a
@@ -25,8 +27,10 @@ bytes in memory first and use :func:`write_bytes` (see :func:`save_mesh`).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import pathlib
+import stat
 import tempfile
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
@@ -189,3 +193,67 @@ def _vtk_xml_bytes(mesh, suffix: str):
     if not writer.Write():
         raise RamureError(f"VTK could not serialise the mesh as {suffix}")
     return writer.GetOutputString().encode("ascii")  # binary mode is base64: plain ASCII
+
+
+def read_regular(path: str | os.PathLike, limit: int, what: str = "file") -> bytes:
+    """The bytes of ``path``, refused unless it is a regular file of at most ``limit`` bytes.
+
+    A device (``/dev/zero``), a named pipe or a folder is refused without reading a byte: the
+    file is opened non-blocking (a pipe with no writer would otherwise block for good) and
+    checked with ``fstat`` on that very descriptor, so a file swapped in between a check and
+    the read cannot slip through.  The size is checked before reading and again while
+    reading (a file that grows).  Errors are :class:`RamureError` naming ``what`` and the path.
+
+    >>> import tempfile, pathlib
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "g.lsys"
+    >>> _ = f.write_text("n: 1")
+    >>> read_regular(f, 100)
+    b'n: 1'
+    >>> read_regular("/dev/zero", 100, "grammar")
+    Traceback (most recent call last):
+    ramure.io.FileRefused: cannot read grammar /dev/zero: it is a device, not a regular file
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except OSError as exc:
+        raise FileRefused(what, path, exc.strerror or type(exc).__name__) from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise FileRefused(what, path, _not_regular(info.st_mode))
+        if info.st_size > limit:
+            raise FileRefused(what, path, f"{info.st_size:,} bytes, more than the limit of {limit:,}")
+        with os.fdopen(os.dup(fd), "rb") as f:
+            data = f.read(limit + 1)
+    finally:
+        os.close(fd)
+    if len(data) > limit:
+        raise FileRefused(what, path, f"more than the limit of {limit:,} bytes")
+    return data
+
+
+def _not_regular(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return os.strerror(errno.EISDIR)  # "Is a directory", as the system words it
+    if stat.S_ISFIFO(mode):
+        return "it is a named pipe, not a regular file"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "it is a device, not a regular file"
+    return "it is not a regular file"
+
+
+class FileRefused(RamureError):
+    """A file :func:`read_regular` does not read; ``reason`` says why in a few words."""
+
+    def __init__(self, what: str, path: str | os.PathLike, reason: str) -> None:
+        self.path, self.reason = path, reason
+        super().__init__(f"cannot read {what} {path}: {reason}")
+
+
+def inside(path: str | os.PathLike, folder: str | os.PathLike) -> bool:
+    """Whether ``path``, with every symbolic link and ``..`` resolved, lies in ``folder``.
+
+    >>> inside("/tmp/a/../b.lsys", "/tmp"), inside("/tmp/../etc/passwd", "/tmp")
+    (True, False)
+    """
+    return pathlib.Path(path).resolve().is_relative_to(pathlib.Path(folder).resolve())

@@ -32,6 +32,7 @@ from ramure.app.desktop.history import Timeline
 from ramure.app.desktop.workers import JobQueue
 from ramure.app.model import Explorer, leaves_in_rectangle, warm_up_in_background
 from ramure.errors import RamureError
+from ramure.lsys.grammar import read_grammar_file
 
 if TYPE_CHECKING:
     import numpy as np
@@ -219,10 +220,7 @@ class Controller(QObject):
         path = pathlib.Path(path)
 
         def run(ex):
-            try:
-                text = path.read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError) as exc:
-                raise RamureError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
+            text = read_grammar_file(path)  # a regular UTF-8 file only, never a device or a pipe
             old = ex.path
             ex.path = path
             err = ex.set_text(text)
