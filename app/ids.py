@@ -90,7 +90,7 @@ def resolve_ids(text: str, leaves: Iterable[int]) -> list[int]:
     ...
     ramure.errors.ValueRefused: the range 18-30 holds no leaf of the current plant
     """
-    known = np.unique(np.asarray(list(leaves), np.int64))
+    known = np.unique(np.asarray(leaves if isinstance(leaves, np.ndarray) else list(leaves), np.int64))
     chosen: list[int] = []
     for a, b in parse_items(text):
         if a == b:

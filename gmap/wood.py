@@ -193,6 +193,13 @@ PARAMETERS = {
     "height_jitter": "relative random variation of the yearly height growth",
 }
 
+#: Lengths (m) among the parameters, and the largest accepted: growth of a kilometre a year or
+#: a ring a kilometre wide is a typo, and 1e308 would make coordinates that are not finite.
+LENGTHS = ("pith_radius", "height", "early_min", "early_max", "late_min", "late_max", "bark_min", "bark_max", "branch_length")
+MAX_LENGTH = 1000.0
+#: Most faces of the trunk's pith prisms (a round trunk needs tens, not thousands).
+MAX_SIDES = 1024
+
 
 def trunk_darts(sides: int, years: int) -> int:
     """Darts of a branch-free trunk after ``years`` years (closed form).
@@ -223,11 +230,14 @@ def resolve_params(species: str = "pine", **params: Any) -> dict[str, Any]:
             raise ValueRefused(f"unknown wood parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
         default = SPECIES[species][name]
         try:
-            out[name] = int(float(value)) if isinstance(default, int) else float(value)
+            number = float(value)
         except (TypeError, ValueError):
             raise ValueRefused(f"wood parameter {name}={value!r} is not a number") from None
-        if isinstance(default, int) and float(value) != int(float(value)):
+        if not math.isfinite(number):
+            raise ValueRefused(f"wood parameter {name} must be a finite number, got {value!r}")
+        if isinstance(default, int) and not number.is_integer():
             raise ValueRefused(f"wood parameter {name} must be a whole number, got {value!r}")
+        out[name] = int(number) if isinstance(default, int) else number
     _check(out)
     return out
 
@@ -269,6 +279,9 @@ def _check(p) -> None:
         need(p[lo] <= p[hi], f"{lo} must not exceed {hi}, got {p[lo]} > {p[hi]}")
     for name in ("pith_radius", "height", "decay", "branch_length", "branch_scale"):
         need(p[name] > 0, f"{name} must be > 0, got {p[name]}")
+    for name in LENGTHS:  # a wood of finite, drawable size: never 1e308 m a year
+        need(p[name] <= MAX_LENGTH, f"{name} must be at most {MAX_LENGTH:g} m, got {p[name]:g}")
+    need(p["sides"] <= MAX_SIDES, f"sides must be at most {MAX_SIDES}, got {p['sides']}")
     need(0 < p["width_floor"] <= 1, f"width_floor must be in (0, 1], got {p['width_floor']}")
     need(p["reaction"] >= 0, f"reaction must be >= 0, got {p['reaction']}")
     need(0 <= p["height_jitter"] < 1, f"height_jitter must be in [0, 1), got {p['height_jitter']}")
@@ -1301,6 +1314,10 @@ def place_branches(p: Mapping[str, Any], years: int, seed: int, count: int | np.
     span = years - 1 - first
     if count <= 0 or span < 0:
         return []
+    faces = (span + 1) * int(p["sides"])  # one branch per trunk face and year: checked before placing
+    if count > faces:
+        shown = f"{count:,}" if count < 10**9 else f"{float(count):.3g}"
+        raise ValueRefused(f"{shown} branches do not fit: {span + 1} years of {p['sides']} trunk faces hold at most {faces:,}")
     n = int(p["sides"])
     turn = int(mix(seed, 11) % n)
     out = []

@@ -7,7 +7,9 @@ import json
 import time
 
 
+from ramure.app import ids
 from ramure.app.cli import UserError
+from ramure.errors import ValueRefused
 from ramure.app.commands.plant import add_grammar_options, output_file, parse_sets
 from ramure.lsys import LSystem
 from ramure.lsys.regen import Session
@@ -17,25 +19,26 @@ if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
 
 
-#: Most ids one --select may name (a typo such as 0-99999999999 must not exhaust memory).
-MAX_IDS = 10_000_000
-
-
 def parse_ids(text: str) -> list[int]:
-    """``"12,15,20-23"`` -> ``[12, 15, 20, 21, 22, 23]``."""
-    ids: list[int] = []
-    for part in filter(None, (p.strip() for p in text.split(","))):
-        first, dash, last = part.partition("-")
-        try:
-            lo, hi = int(first), int(last) if dash else int(first)
-        except ValueError:
-            raise UserError(f"--select expects leaf ids like 12,15,20-23; got '{part}'") from None
-        if hi < lo:
-            raise UserError(f"--select: the range '{part}' is reversed; write {hi}-{lo}")
-        if hi - lo >= MAX_IDS or len(ids) + hi - lo >= MAX_IDS:
-            raise UserError(f"--select: more than {MAX_IDS:,} ids in '{part}'")
-        ids.extend(range(lo, hi + 1))
-    return ids
+    """``"12,15,20-23"`` -> ``[12, 15, 20, 21, 22, 23]``: the front ends' parser
+    (:func:`ramure.app.ids.parse_ids`), its refusals as ``--select`` errors."""
+    try:
+        return ids.parse_ids(text)
+    except ValueRefused as exc:
+        raise UserError(f"--select: {exc}") from None
+
+
+def select_leaves(text: str, session: Session) -> list[int]:
+    """The leaves ``--select`` names in ``session``'s plant, read as the front ends read it
+    (:func:`ramure.app.ids.resolve_ids`): a range means the leaves inside it, so it is
+    measured against the plant before a single id is listed."""
+    try:
+        chosen = ids.resolve_ids(text, session.derivation.tree.leaves)
+    except ValueRefused as exc:
+        raise UserError(f"--select: {exc}") from None
+    if not chosen:
+        raise UserError("--select needs at least one leaf id (see 'ramure leaves FILE')")
+    return chosen
 
 
 def run_leaves(args: argparse.Namespace) -> int:
@@ -70,9 +73,7 @@ def run_regen(args: argparse.Namespace) -> int:
         output_file(args.output, ())
     ls = LSystem.from_file(args.file)
     session = Session(ls, n=args.n, seed=args.seed, filename=args.file)
-    selection = parse_ids(args.select)
-    if not selection:
-        raise UserError("--select needs at least one leaf id (see 'ramure leaves FILE')")
+    selection = select_leaves(args.select, session)
     constants = parse_sets(args.set, ls.constants)
     rho = args.rho / 100.0 if args.rho > 1 else args.rho
     op = session.prune if args.prune else session.regrow
@@ -84,6 +85,7 @@ def run_regen(args: argparse.Namespace) -> int:
         session.save(args.output)
     record = {
         **result.to_dict(),
+        "selection": selection,  # the leaves --select named (a range: those inside it)
         "modules": len(session.derivation),
         "seconds": round(time.perf_counter() - t0, 6),
         "regen_seconds": round(result.seconds, 6),

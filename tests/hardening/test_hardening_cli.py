@@ -70,10 +70,10 @@ def _cases(t):
         (["render", G, "-n", "2", "-o", f"{t}/x.png", "--size", "axb"], "WIDTHxHEIGHT"),
         (["render", G, "-n", "2", "-o", "/proc/nope/x.png"], "No such file"),
         (["leaves", G, "-n", "-1"], "must be >= 0"),
-        (["regen", G, "-n", "3", "--select", "abc"], "leaf ids"),
-        (["regen", G, "-n", "3", "--select", "99999"], "does not exist"),
+        (["regen", G, "-n", "3", "--select", "abc"], "is not a leaf id or a range"),
+        (["regen", G, "-n", "3", "--select", "99999"], "99999 is not a leaf of the current plant"),
         (["regen", G, "-n", "3", "--select", "0"], "not a leaf"),
-        (["regen", G, "-n", "3", "--select", "10-5"], "reversed"),
+        (["regen", G, "-n", "3", "--select", "10-5"], "goes backwards: write 5-10"),
         (["regen", G, "-n", "3", "--select", "0-99999999999"], "more than"),
         (["regen", G, "-n", "3", "--select", ","], "at least one leaf"),
         (["regen", G, "-n", "3", "--select", "70", "--rho", "0"], "rho"),
@@ -84,7 +84,7 @@ def _cases(t):
         (["regen", G, "-n", "3", "--select", "70", "-o", "/proc/nope/s.json"], "cannot save"),
         (["metrics", G, "-n", "3", "--select", "99999"], "not leaf id"),
         (["metrics", G, "-n", "3", "--segments", "999"], "out of range"),
-        (["metrics", G, "-n", "3", "--segments", "5-1"], "reversed"),
+        (["metrics", G, "-n", "3", "--segments", "5-1"], "goes backwards: write 1-5"),
         (["explore", G, "-n", "2", "-o", f"{t}/afile", "--no-thumbnails", "--no-cache"], "not a directory"),
         (["explore", G, "-n", "2", "-o", f"{t}/e", "--beta", "nan", "--no-cache"], "beta"),
         (["explore", G, "-n", "2", "-o", f"{t}/e", "--thumb-size", "0", "--no-cache"], "--thumb-size"),
@@ -151,7 +151,7 @@ def test_nothing_is_left_behind_by_refused_outputs(places):
     "argv, words",
     [
         (["derive", G, "--set", "r1=nan"], "not a finite number"),
-        (["regen", G, "-n", "3", "--select", "10-5"], "reversed"),
+        (["regen", G, "-n", "3", "--select", "10-5"], "goes backwards: write 5-10"),
     ],
 )
 def test_real_command_prints_one_line_and_exits_2(argv, words):

@@ -75,7 +75,7 @@ def test_unknown_constant_override_refused():
     "argv,fragment",
     [
         (["derive", "grammars/algae.lsys", "--set", "x=1"], "no constant 'x'"),
-        (["regen", "grammars/algae.lsys", "--select", "a,b"], "--select expects"),
+        (["regen", "grammars/algae.lsys", "--select", "a,b"], "--select: 'a' is not a leaf id"),
         (["derive", "missing.lsys"], "No such file"),
     ],
 )

@@ -1,0 +1,96 @@
+"""Bounds before work (issue 37, item 6): a value that cannot give a result is refused before
+anything is built, with a message naming the value, and never runs out of time or memory."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import pytest
+
+from ramure.app.cli import main
+from ramure.errors import ValueRefused
+from ramure.gmap import wood as W
+
+
+def run_cli(argv):
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            rc = main(argv)
+        except SystemExit as exc:
+            rc = exc.code
+    return rc, err.getvalue()
+
+
+@pytest.fixture
+def no_wood_built(monkeypatch):
+    """Fail the test if a Wood is ever constructed: the refusal must come first."""
+
+    def built(*_args, **_kwargs):
+        raise AssertionError("a Wood was built before the values were checked")
+
+    monkeypatch.setattr(W, "Wood", built)
+
+
+@pytest.mark.parametrize(
+    "setting, words",
+    [
+        ({"branches": "1e308"}, "branches do not fit: 9 years of 16 trunk faces hold at most 144"),
+        ({"branches": "1e7"}, "10,000,000 branches do not fit"),
+        ({"branches": "inf"}, "branches must be a finite number"),
+        ({"height": "1e308"}, "height must be at most 1000 m"),
+        ({"height": "nan"}, "height must be a finite number"),
+        ({"pith_radius": "5e3"}, "pith_radius must be at most 1000 m"),
+        ({"sides": "1e9"}, "sides must be at most 1024"),
+        ({"branches": "2.5"}, "branches must be a whole number"),
+    ],
+)
+def test_wood_values_are_refused_before_growing(no_wood_built, setting, words):
+    with pytest.raises(ValueRefused, match=words):
+        W.grow_wood("pine", years=10, **setting)
+
+
+def test_the_largest_branch_count_that_fits_is_still_placed():
+    p = W.resolve_params("pine")
+    placed = W.place_branches(p, years=10, seed=0, count=144)
+    assert len(placed) == 144
+    with pytest.raises(ValueRefused, match="145 branches do not fit"):
+        W.place_branches(p, years=10, seed=0, count=145)
+
+
+@pytest.mark.parametrize(
+    "setting, words",
+    [("branches=1e308", "branches do not fit"), ("branches=inf", "finite"), ("height=1e308", "at most 1000 m")],
+)
+def test_ramure_wood_refuses_with_exit_2(tmp_path, setting, words):
+    out = tmp_path / "w.png"
+    rc, err = run_cli(["wood", "--set", setting, "-o", str(out)])
+    assert rc == 2 and words in err and "Traceback" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "select, words",
+    [
+        ("0-9999999", "the range '0-9999999' names more than 100,000 ids"),  # refused from the text alone
+        ("99999", "99999 is not a leaf of the current plant"),
+        ("50000-60000", "the range 50000-60000 holds no leaf"),  # measured against the plant
+    ],
+)
+def test_ramure_regen_reads_select_against_the_plant(select, words):
+    rc, err = run_cli(["regen", "honda_sympodial", "-n", "5", "--select", select])
+    assert rc == 2 and f"--select: {words}" in err
+
+
+def test_ramure_regen_range_means_the_leaves_inside_it(capsys):
+    import json
+
+    from ramure.lsys import LSystem
+
+    tree = LSystem.from_file("honda_sympodial").derive(n=5).tree
+    leaves = sorted(int(i) for i in tree.leaves)
+    a, b = leaves[-6], leaves[-1]
+    assert main(["regen", "honda_sympodial", "-n", "5", "--select", f"{a}-{b}", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert set(record["selection"]) == {i for i in leaves if a <= i <= b}
