@@ -68,7 +68,6 @@ def schema_sql() -> str:
 
 #: SQLite ``PRAGMA application_id`` of a Ramure study ("RAMU"); files made before it hold 0.
 APPLICATION_ID = 0x52414D55
-_SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
 def _schema_tables() -> set:
@@ -78,24 +77,20 @@ def _schema_tables() -> set:
 def check_study_file(path: str | os.PathLike) -> None:
     """Refuse, with one line, a file that is not a study database of this version.
 
-    Read-only: the header is read as bytes, then SQLite is opened with
-    ``mode=ro``, so another application's database or an empty file is never
-    changed (no WAL switch, no header written).  Checked: the SQLite magic,
-    ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before
-    it), ``user_version`` == :data:`SCHEMA_VERSION`, and every table of the schema.
+    Read-only: SQLite is opened with ``mode=ro``, so another application's
+    database or an empty file is never changed (no WAL switch, no header
+    written).  The file is never opened with a plain descriptor: on POSIX,
+    closing one drops every lock this process holds on the file, those of its
+    open study connections too, and another process would then checkpoint and
+    delete the WAL they still write into.  Checked: a SQLite file,
+    ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before it),
+    ``user_version`` == :data:`SCHEMA_VERSION`, and every table of the schema.
     """
     path = pathlib.Path(path)
     if not path.is_file():
         raise StudyInputError(f"{path}: no such study file")
-    try:
-        with open(path, "rb") as f:
-            head = f.read(len(_SQLITE_MAGIC))
-    except OSError as exc:
-        raise StudyInputError(f"{path}: cannot read it ({exc.strerror or exc})") from None
-    if not head:
+    if path.stat().st_size == 0:
         raise StudyInputError(f"{path}: empty file, not a Ramure study database")
-    if head != _SQLITE_MAGIC:
-        raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database")
     try:
         conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=10.0)
     except sqlite3.Error as exc:
@@ -104,7 +99,9 @@ def check_study_file(path: str | os.PathLike) -> None:
         app_id = conn.execute("PRAGMA application_id").fetchone()[0]
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-    except sqlite3.Error as exc:
+    except sqlite3.DatabaseError as exc:
+        if getattr(exc, "sqlite_errorcode", None) == sqlite3.SQLITE_NOTADB:
+            raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database") from None
         raise StudyInputError(f"{path}: not a readable SQLite database ({exc})") from None
     finally:
         conn.close()
@@ -115,6 +112,24 @@ def check_study_file(path: str | os.PathLike) -> None:
         raise StudyInputError(f"{path}: not a Ramure study database (no table {', '.join(sorted(missing))})")
     if version != SCHEMA_VERSION:
         raise StudyInputError(f"{path}: study database version {version}; this Ramure reads version {SCHEMA_VERSION}")
+
+
+def is_database_file(db: str | os.PathLike, path: str | os.PathLike) -> bool:
+    """Whether ``path`` is the database ``db`` or one of its journals (``-wal``, ``-shm``,
+    ``-journal``), by name or as the same file (a link): never open those with a plain
+    descriptor while a connection is open (its close drops the connection's locks).
+
+    Only ``stat`` is used, which takes no descriptor.
+    """
+    db = pathlib.Path(db)
+    for name in (db, *(db.with_name(db.name + tail) for tail in ("-wal", "-shm", "-journal"))):
+        try:
+            if os.path.samefile(name, path):
+                return True
+        except OSError:
+            if pathlib.Path(name).resolve() == pathlib.Path(path).resolve():
+                return True
+    return False
 
 
 def _has_study(conn) -> bool:
@@ -250,12 +265,16 @@ class Study:
         """A pick's picture path if it lies inside the study's folder, else None (never shown).
 
         A database can name any file; only pictures under the folder holding the
-        database are ever read (symbolic links and ``..`` resolved first).
+        database are ever read (symbolic links and ``..`` resolved first), and never
+        the database or its journals: reading them would drop this process's locks.
         """
         try:
-            return inside_folder(self.path.parent, image, str(self.path))
+            picture = inside_folder(self.path.parent, image, str(self.path))
         except StudyInputError:
             return None
+        if picture is not None and is_database_file(self.path, picture):
+            return None
+        return picture
 
     # -- participants --------------------------------------------------------
     def add_participant(self, code: str | None = None, consent: bool = False, seed: int | None = None) -> str:
