@@ -38,7 +38,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from ramure.studies.session import TestSession
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: The schema version each table appeared in (the others are in version 1).
+TABLE_SINCE = {"events": 2}
 DEFAULT_BUDGET_MINUTES = 30.0
 _CODE = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
@@ -70,8 +72,46 @@ def schema_sql() -> str:
 APPLICATION_ID = 0x52414D55
 
 
-def _schema_tables() -> set:
-    return set(re.findall(r"CREATE TABLE IF NOT EXISTS (\w+)", schema_sql()))
+def _schema_tables(version: int = SCHEMA_VERSION) -> set:
+    names = set(re.findall(r"CREATE TABLE IF NOT EXISTS (\w+)", schema_sql()))
+    return {name for name in names if TABLE_SINCE.get(name, 1) <= version}
+
+
+def migrate(conn: sqlite3.Connection) -> None:
+    """Bring an open study database to :data:`SCHEMA_VERSION`, in one transaction.
+
+    Version 1 lacks the ``events`` table; ``schema.sql`` creates only what is
+    missing, so running it migrates, and answers already stored are untouched.
+    Two processes migrating at once are serialised by ``BEGIN IMMEDIATE``.
+    """
+    if conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION:
+        return
+    try:
+        conn.executescript(f"BEGIN IMMEDIATE; {schema_sql()} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;")
+    except sqlite3.Error:
+        if conn.in_transaction:
+            conn.rollback()
+        raise
+
+
+def event_time() -> str:
+    """The current UTC time as ISO-8601 text, to the millisecond (event log)."""
+    return datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds")
+
+
+def log_event(
+    conn: sqlite3.Connection,
+    participant_id: int,
+    action: str,
+    detail: dict | None = None,
+    test_id: int | None = None,
+    elapsed_seconds: float | None = None,
+) -> None:
+    """Append one participant action to the ``events`` table (call it inside the change's transaction)."""
+    conn.execute(
+        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) VALUES (?, ?, ?, ?, ?, ?)",
+        (participant_id, test_id, event_time(), elapsed_seconds, action, json.dumps(detail or {}, sort_keys=True)),
+    )
 
 
 def check_study_file(path: str | os.PathLike) -> None:
@@ -84,7 +124,8 @@ def check_study_file(path: str | os.PathLike) -> None:
     open study connections too, and another process would then checkpoint and
     delete the WAL they still write into.  Checked: a SQLite file,
     ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before it),
-    ``user_version`` == :data:`SCHEMA_VERSION`, and every table of the schema.
+    ``user_version`` 1 to :data:`SCHEMA_VERSION` (older ones are migrated by
+    :meth:`Study.open`), and every table of that version.
     """
     path = pathlib.Path(path)
     if not path.is_file():
@@ -107,11 +148,11 @@ def check_study_file(path: str | os.PathLike) -> None:
         conn.close()
     if app_id not in (0, APPLICATION_ID):
         raise StudyInputError(f"{path}: belongs to another application (application_id {app_id:#x}), not a Ramure study")
-    missing = _schema_tables() - tables
+    missing = _schema_tables(version if 1 <= version <= SCHEMA_VERSION else 1) - tables
     if missing:
         raise StudyInputError(f"{path}: not a Ramure study database (no table {', '.join(sorted(missing))})")
-    if version != SCHEMA_VERSION:
-        raise StudyInputError(f"{path}: study database version {version}; this Ramure reads version {SCHEMA_VERSION}")
+    if not 1 <= version <= SCHEMA_VERSION:
+        raise StudyInputError(f"{path}: study database version {version}; this Ramure reads versions 1 to {SCHEMA_VERSION}")
 
 
 def is_database_file(db: str | os.PathLike, path: str | os.PathLike) -> bool:
@@ -205,13 +246,18 @@ class Study:
 
     @classmethod
     def open(cls, path: str | os.PathLike, clock: Callable[[], float] = time.monotonic, durable: bool = True) -> Study:
-        """Open an existing study file (refused with a clear message otherwise)."""
+        """Open an existing study file (refused with a clear message otherwise).
+
+        A file of an older schema version is migrated in place (see :func:`migrate`).
+        """
         path = pathlib.Path(path)
         check_study_file(path)  # read-only: a file that is not ours is never changed
         conn: sqlite3.Connection | None = None
         try:
             conn = connect(path, durable)
             ok = _has_study(conn)
+            if ok:
+                migrate(conn)
         except sqlite3.DatabaseError:
             ok = False
         if not ok or conn is None:
@@ -298,10 +344,12 @@ class Study:
         stamp = now_iso()
         try:
             with self.conn:
-                self.conn.execute(
+                pid = self.conn.execute(
                     "INSERT INTO participants (code, seed, consent, consent_at, created_at) VALUES (?, ?, ?, ?, ?)",
                     (code, int(seed), int(bool(consent)), stamp if consent else None, stamp),
-                )
+                ).lastrowid
+                if consent:
+                    log_event(self.conn, pid, "consent", {"given": True})
         except sqlite3.IntegrityError:
             raise StudyInputError(f"participant code {code!r} is already used") from None
         return code
@@ -313,11 +361,12 @@ class Study:
         answers are left out of the analysis and exports (but kept on disk; use
         :meth:`delete_participant` to erase them).
         """
-        self._participant(code)
+        pid = self._participant(code)[0]
         with self.conn:
             self.conn.execute(
                 "UPDATE participants SET consent = ?, consent_at = ? WHERE code = ?", (int(bool(given)), now_iso(), code)
             )
+            log_event(self.conn, pid, "consent", {"given": bool(given)})
 
     def delete_participant(self, code: str) -> None:
         """Erase participant ``code`` and every answer they gave (one transaction)."""
@@ -368,7 +417,9 @@ class Study:
         gid = self.grammar_id(grammar)
         if not consent:
             raise StudyInputError(f"participant {code!r} has not given consent; record it first")
-        row = self.conn.execute("SELECT id FROM tests WHERE participant_id = ? AND grammar_id = ?", (pid, gid)).fetchone()
+        row = self.conn.execute(
+            "SELECT id, finished_at, elapsed_seconds FROM tests WHERE participant_id = ? AND grammar_id = ?", (pid, gid)
+        ).fetchone()
         if row is None:
             if self.remaining_seconds(code) <= 0:
                 raise StudyInputError(
@@ -378,11 +429,31 @@ class Study:
                 cur = self.conn.execute(
                     "INSERT INTO tests (participant_id, grammar_id, started_at) VALUES (?, ?, ?)", (pid, gid, now_iso())
                 )
-            test_id = cur.lastrowid
-            assert test_id is not None  # set by the INSERT just made
+                test_id = cur.lastrowid
+                assert test_id is not None  # set by the INSERT just made
+                log_event(self.conn, pid, "start", {"grammar": grammar}, test_id, 0.0)
         else:
             test_id = row[0]
+            if row[1] is None:
+                with self.conn:
+                    log_event(self.conn, pid, "resume", {"grammar": grammar}, test_id, row[2])
         return TestSession(self, test_id, str(code), grammar, seed)
+
+    def events(self, code: str | None = None) -> list[dict]:
+        """The event log, oldest first: every accepted action of participant ``code`` (or of all).
+
+        Each event: participant, grammar (None for consent), ``at`` (UTC, ms), the
+        test's ``elapsed_seconds`` then, ``action`` and its ``detail`` (a dict).
+        """
+        where, args = ("WHERE p.code = ?", (str(code),)) if code is not None else ("", ())
+        rows = self.conn.execute(
+            "SELECT p.code, g.name, e.at, e.elapsed_seconds, e.action, e.detail FROM events e "
+            "JOIN participants p ON p.id = e.participant_id LEFT JOIN tests t ON t.id = e.test_id "
+            f"LEFT JOIN grammars g ON g.id = t.grammar_id {where} ORDER BY e.id",
+            args,
+        )
+        keys = ("participant", "grammar", "at", "elapsed_seconds", "action")
+        return [dict(zip(keys, r[:5]), detail=json.loads(r[5])) for r in rows]
 
     def tests(self) -> list[dict]:
         """Every test: participant, grammar, finished or not, elapsed seconds."""
