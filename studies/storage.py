@@ -439,6 +439,15 @@ class Study:
                     log_event(self.conn, pid, "resume", {"grammar": grammar}, test_id, row[2])
         return TestSession(self, test_id, str(code), grammar, seed)
 
+    def finished(self, code: str, grammar: str) -> bool:
+        """Whether participant ``code`` has finished their test on ``grammar``."""
+        row = self.conn.execute(
+            "SELECT t.finished_at FROM tests t JOIN participants p ON p.id = t.participant_id "
+            "JOIN grammars g ON g.id = t.grammar_id WHERE p.code = ? AND g.name = ?",
+            (str(code), grammar),
+        ).fetchone()
+        return row is not None and row[0] is not None
+
     def events(self, code: str | None = None) -> list[dict]:
         """The event log, oldest first: every accepted action of participant ``code`` (or of all).
 

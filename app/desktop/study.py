@@ -622,7 +622,7 @@ class ParticipantWindow(QWidget):
             self.next_grammar()
 
     def _finished(self, grammar) -> bool:
-        return any(t["participant"] == self.code and t["grammar"] == grammar and t["finished_at"] for t in self.study.tests())
+        return self.study.finished(self.code, grammar)
 
     def update_timer(self) -> None:
         if self.is_closed:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import datetime
 import sqlite3
 
+from study_helpers import complete
+
 from ramure.studies.picks import lattice_picks
 from ramure.studies.storage import SCHEMA_VERSION, Study
 
@@ -120,3 +122,11 @@ def test_a_version_1_study_is_migrated_with_its_answers(tmp_path):
         assert [e["action"] for e in study.events()] == ["resume", "add_qualifier"]
     with Study.open(db) as study:  # a second open finds it migrated already
         assert study.session("P1", "honda").groups()[0].qualifiers == ["petit", "rond"]
+
+
+def test_finished_is_per_participant_and_grammar(study):
+
+    a, b = study.add_participant(consent=True), study.add_participant(consent=True)
+    complete(study.session(a, "honda"))
+    study.session(b, "honda")
+    assert [study.finished(a, "honda"), study.finished(a, "tree2"), study.finished(b, "honda")] == [True, False, False]
