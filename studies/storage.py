@@ -348,7 +348,7 @@ class Study:
                     "INSERT INTO participants (code, seed, consent, consent_at, created_at) VALUES (?, ?, ?, ?, ?)",
                     (code, int(seed), int(bool(consent)), stamp if consent else None, stamp),
                 ).lastrowid
-                if consent:
+                if consent and pid is not None:  # pid: set by the INSERT just made
                     log_event(self.conn, pid, "consent", {"given": True})
         except sqlite3.IntegrityError:
             raise StudyInputError(f"participant code {code!r} is already used") from None
