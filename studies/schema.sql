@@ -69,7 +69,6 @@ CREATE TABLE IF NOT EXISTS events (  -- every accepted action of a participant, 
   action TEXT NOT NULL,           -- consent, start, resume, group, representative, rate, ...
   detail TEXT NOT NULL DEFAULT '{}'  -- JSON: the answer, and any answer it dropped
 );
-CREATE INDEX IF NOT EXISTS events_by_participant ON events (participant_id);
 CREATE INDEX IF NOT EXISTS tests_by_participant ON tests (participant_id);
 CREATE INDEX IF NOT EXISTS groups_by_test ON groups (test_id);
 CREATE INDEX IF NOT EXISTS qualifiers_by_group ON qualifiers (group_id);

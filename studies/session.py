@@ -36,7 +36,7 @@ import numpy as np
 from ramure.studies.errors import StudyInputError
 from ramure.studies.likert import likert_value
 from ramure.studies.picks import N_PICKS, PICK_IDS
-from ramure.studies.storage import log_event, now_iso
+from ramure.studies.storage import log_test_event, now_iso
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -237,10 +237,7 @@ class TestSession:
                     "UPDATE tests SET elapsed_seconds = elapsed_seconds + ? WHERE id = ?",
                     (max(0.0, now - self._tick), self.test_id),
                 )
-                pid, elapsed = self.conn.execute(
-                    "SELECT participant_id, elapsed_seconds FROM tests WHERE id = ?", (self.test_id,)
-                ).fetchone()
-                log_event(self.conn, pid, action, detail, self.test_id, elapsed)
+                log_test_event(self.conn, self.test_id, action, detail)
         except sqlite3.IntegrityError as exc:  # a check the validation above missed
             raise StudyInputError(f"answer refused by the database: {exc}") from None
         self._tick = now

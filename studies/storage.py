@@ -99,6 +99,16 @@ def event_time() -> str:
     return datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds")
 
 
+def log_test_event(conn: sqlite3.Connection, test_id: int, action: str, detail: dict) -> None:
+    """Append an action on test ``test_id`` to the ``events`` table, with the test's participant and
+    elapsed time read in the same statement (call it inside the change's transaction)."""
+    conn.execute(
+        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) "
+        "SELECT participant_id, id, ?, elapsed_seconds, ?, ? FROM tests WHERE id = ?",
+        (event_time(), action, json.dumps(detail, sort_keys=True), test_id),
+    )
+
+
 def log_event(
     conn: sqlite3.Connection,
     participant_id: int,
