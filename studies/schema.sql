@@ -1,4 +1,5 @@
--- Ramure user study on variant relevance (schema version 1).
+-- Ramure user study on variant relevance (schema version 2: version 1 plus the events table).
+-- Every statement is idempotent: running the whole file on a version-1 file migrates it.
 -- Likert answers are stored as 1..4 (poor, fair, good, excellent).
 CREATE TABLE IF NOT EXISTS study (
   id INTEGER PRIMARY KEY CHECK (id = 1),
@@ -58,6 +59,15 @@ CREATE TABLE IF NOT EXISTS qualifiers (
   id INTEGER PRIMARY KEY,
   group_id INTEGER NOT NULL REFERENCES groups(id) ON DELETE CASCADE,
   text TEXT NOT NULL CHECK (length(trim(text)) > 0)
+);
+CREATE TABLE IF NOT EXISTS events (  -- every accepted action of a participant, in order
+  id INTEGER PRIMARY KEY,
+  participant_id INTEGER NOT NULL REFERENCES participants(id) ON DELETE CASCADE,
+  test_id INTEGER REFERENCES tests(id) ON DELETE CASCADE,  -- NULL for consent
+  at TEXT NOT NULL,               -- UTC ISO-8601, milliseconds
+  elapsed_seconds REAL,           -- the test's time spent when it happened
+  action TEXT NOT NULL,           -- consent, start, resume, group, representative, rate, ...
+  detail TEXT NOT NULL DEFAULT '{}'  -- JSON: the answer, and any answer it dropped
 );
 CREATE INDEX IF NOT EXISTS tests_by_participant ON tests (participant_id);
 CREATE INDEX IF NOT EXISTS groups_by_test ON groups (test_id);

@@ -29,14 +29,14 @@ import contextlib
 import numbers
 import sqlite3
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from ramure.studies.errors import StudyInputError
 from ramure.studies.likert import likert_value
 from ramure.studies.picks import N_PICKS, PICK_IDS
-from ramure.studies.storage import now_iso
+from ramure.studies.storage import log_test_event, now_iso
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -96,6 +96,37 @@ def _check_partition(groups):
             owner[image] = label
         checked.append(sorted(seen))
     return checked
+
+
+def continued_groups(old: Sequence[Sequence[int]], new: Sequence[Sequence[int]]) -> dict[int, int]:
+    """Which old group each new group continues: ``{new index: old index}`` (0-based).
+
+    A new group continues the old group it shares the most images with; each old
+    group is continued at most once, the largest overlaps first (ties: the older
+    group, then the earlier new one).  So a group that gained or lost a few images
+    keeps its answers, and of a split group the larger part does.
+
+    >>> continued_groups([[1, 2, 3], [4, 5]], [[1, 2], [3, 4, 5]])  # image 3 moved
+    {0: 0, 1: 1}
+    >>> continued_groups([[1, 2, 3, 4]], [[1], [2, 3, 4]])  # split: the larger part continues
+    {1: 0}
+    """
+    olds = [set(images) for images in old]
+    pairs = sorted((-len(o & set(n)), i, j) for i, o in enumerate(olds) for j, n in enumerate(new) if o & set(n))
+    result: dict[int, int] = {}
+    used: set[int] = set()
+    for _, i, j in pairs:
+        if i not in used and j not in result:
+            result[j] = i
+            used.add(i)
+    return dict(sorted(result.items()))
+
+
+def _answered(group: Group) -> bool:
+    """Whether ``group`` holds any answer beyond its images (a single's own representative aside)."""
+    chosen = group.representative is not None and len(group.images) > 1
+    ratings = (group.usefulness, group.difference, group.representative_quality)
+    return chosen or any(r is not None for r in ratings) or bool(group.qualifiers)
 
 
 class TestSession:
@@ -191,8 +222,9 @@ class TestSession:
 
     # -- writing ------------------------------------------------------------------
     @contextlib.contextmanager
-    def _write(self):
-        """One transaction holding the change and the time spent since the last one."""
+    def _write(self, action: str, detail: dict):
+        """One transaction holding the change, the time spent since the last one and the
+        event ``action`` with ``detail`` (which the change may still fill in)."""
         if self.finished:
             raise StudyInputError(
                 f"the test of {self.participant!r} on {self.grammar!r} is finished; its answers can no longer change"
@@ -205,6 +237,7 @@ class TestSession:
                     "UPDATE tests SET elapsed_seconds = elapsed_seconds + ? WHERE id = ?",
                     (max(0.0, now - self._tick), self.test_id),
                 )
+                log_test_event(self.conn, self.test_id, action, detail)
         except sqlite3.IntegrityError as exc:  # a check the validation above missed
             raise StudyInputError(f"answer refused by the database: {exc}") from None
         self._tick = now
@@ -225,36 +258,52 @@ class TestSession:
     def set_groups(self, groups: Sequence[Sequence[int]]) -> None:
         """Replace the grouping with ``groups``: a list of groups of image ids 1-27.
 
-        Images may stay unsorted until :meth:`finish`.  A group whose image set
-        is unchanged keeps its representative, ratings and qualifiers (under its
-        new label); the answers of changed groups are dropped, since they were
-        about other images.  A single-image group's representative is its image.
+        Images may stay unsorted until :meth:`finish`.  Moving images keeps the
+        answers that still apply: each new group continues the old group it
+        shares most images with (:func:`continued_groups`) and keeps its ratings
+        and qualifiers under its new label; its representative is cleared (with
+        its rating) only if it left the group.  Only old groups that no new group
+        continues lose their answers; the event log keeps them.  A single-image
+        group's representative is its image.
         Refused: an empty group, an image outside 1-27, an image twice.
         """
         checked = _check_partition(groups)
-        old: dict[int, set[int]] = {}
-        for gid, image in self.conn.execute("SELECT group_id, pick_id FROM group_images WHERE test_id = ?", (self.test_id,)):
-            old.setdefault(gid, set()).add(image)
-        by_set = {frozenset(images): gid for gid, images in old.items()}
-        with self._write() as conn:
-            keep = {by_set.get(frozenset(images)) for images in checked} - {None}
+        before = self.groups()
+        rows = self.conn.execute("SELECT id, label FROM groups WHERE test_id = ? ORDER BY label", (self.test_id,)).fetchall()
+        gid_of = {label: gid for gid, label in rows}
+        links = continued_groups([g.images for g in before], checked)
+        detail: dict = {"groups": checked, "continued": {}, "dropped": [], "representative_cleared": []}
+        with self._write("group", detail) as conn:
             conn.execute("DELETE FROM group_images WHERE test_id = ?", (self.test_id,))
-            conn.executemany("DELETE FROM groups WHERE id = ?", [(gid,) for gid in old if gid not in keep])
+            kept = {before[i].label for i in links.values()}
+            dropped = [g for g in before if g.label not in kept]
+            conn.executemany("DELETE FROM groups WHERE id = ?", [(gid_of[g.label],) for g in dropped])
             # Kept groups move to new labels: free the old ones first (labels are unique per test).
             conn.execute("UPDATE groups SET label = -label WHERE test_id = ?", (self.test_id,))
             for label, images in enumerate(checked, start=1):
-                gid = by_set.get(frozenset(images))
-                if gid is None:
+                single = images[0] if len(images) == 1 else None
+                if label - 1 not in links:
                     gid = conn.execute(
-                        "INSERT INTO groups (test_id, label, representative) VALUES (?, ?, ?)",
-                        (self.test_id, label, images[0] if len(images) == 1 else None),
+                        "INSERT INTO groups (test_id, label, representative) VALUES (?, ?, ?)", (self.test_id, label, single)
                     ).lastrowid
                 else:
-                    conn.execute("UPDATE groups SET label = ? WHERE id = ?", (label, gid))
+                    old = before[links[label - 1]]
+                    gid = gid_of[old.label]
+                    detail["continued"][label] = old.label
+                    if len(old.images) > 1 and old.representative is not None and old.representative not in images:
+                        detail["representative_cleared"].append(label)
+                    chosen = old.representative if len(old.images) > 1 and old.representative in images else None
+                    representative = single or chosen  # a single's own image was never chosen
+                    conn.execute(
+                        "UPDATE groups SET label = ?, representative = ?, representative_quality = "
+                        "CASE WHEN ? IS NULL AND representative = ? THEN representative_quality END WHERE id = ?",
+                        (label, representative, single, representative, gid),
+                    )
                 conn.executemany(
                     "INSERT INTO group_images (group_id, test_id, pick_id) VALUES (?, ?, ?)",
                     [(gid, self.test_id, image) for image in images],
                 )
+            detail["dropped"] = [asdict(g) for g in dropped if _answered(g)]
 
     def set_representative(self, group: int, image: int) -> None:
         """Choose ``image`` (which must be in ``group``) as the group's representative.
@@ -264,7 +313,7 @@ class TestSession:
         gid, images = self._group(group)
         if image not in images:
             raise StudyInputError(f"image {image!r} is not in group {group} (it holds {', '.join(map(str, images))})")
-        with self._write() as conn:
+        with self._write("representative", {"group": int(group), "image": int(image)}) as conn:
             conn.execute(
                 "UPDATE groups SET representative_quality = CASE WHEN representative = ? "
                 "THEN representative_quality END, representative = ? WHERE id = ?",
@@ -290,7 +339,7 @@ class TestSession:
             chosen = self.conn.execute("SELECT representative FROM groups WHERE id = ?", (gid,)).fetchone()[0]
             if chosen is None:
                 raise StudyInputError(f"group {group}: choose its representative before rating it")
-        with self._write() as conn:
+        with self._write("rate", {"group": int(group), **answers}) as conn:
             conn.execute(f"UPDATE groups SET {', '.join(f'{c} = ?' for c in answers)} WHERE id = ?", (*answers.values(), gid))
 
     def add_qualifier(self, group: int, text: str) -> None:
@@ -298,7 +347,7 @@ class TestSession:
         gid, _ = self._group(group)
         if not isinstance(text, str) or not text.strip():
             raise StudyInputError(f"group {group}: a qualifier must be non-empty text, got {text!r}")
-        with self._write() as conn:
+        with self._write("add_qualifier", {"group": int(group), "text": text.strip()}) as conn:
             conn.execute("INSERT INTO qualifiers (group_id, text) VALUES (?, ?)", (gid, text.strip()))
 
     def remove_qualifier(self, group: int, text: str) -> None:
@@ -309,7 +358,7 @@ class TestSession:
         ).fetchone()
         if row is None:
             raise StudyInputError(f"group {group} has no qualifier {text!r}")
-        with self._write() as conn:
+        with self._write("remove_qualifier", {"group": int(group), "text": str(text).strip()}) as conn:
             conn.execute("DELETE FROM qualifiers WHERE id = ?", (row[0],))
 
     def finish(self) -> None:
@@ -317,5 +366,5 @@ class TestSession:
         todo = self.missing()
         if todo:
             raise StudyInputError("the test is not complete: " + "; ".join(todo))
-        with self._write() as conn:
+        with self._write("finish", {}) as conn:
             conn.execute("UPDATE tests SET finished_at = ? WHERE id = ?", (now_iso(), self.test_id))

@@ -38,7 +38,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from ramure.studies.session import TestSession
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: The schema version each table appeared in (the others are in version 1).
+TABLE_SINCE = {"events": 2}
 DEFAULT_BUDGET_MINUTES = 30.0
 _CODE = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
@@ -68,34 +70,78 @@ def schema_sql() -> str:
 
 #: SQLite ``PRAGMA application_id`` of a Ramure study ("RAMU"); files made before it hold 0.
 APPLICATION_ID = 0x52414D55
-_SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
-def _schema_tables() -> set:
-    return set(re.findall(r"CREATE TABLE IF NOT EXISTS (\w+)", schema_sql()))
+def _schema_tables(version: int = SCHEMA_VERSION) -> set:
+    names = set(re.findall(r"CREATE TABLE IF NOT EXISTS (\w+)", schema_sql()))
+    return {name for name in names if TABLE_SINCE.get(name, 1) <= version}
+
+
+def migrate(conn: sqlite3.Connection) -> None:
+    """Bring an open study database to :data:`SCHEMA_VERSION`, in one transaction.
+
+    Version 1 lacks the ``events`` table; ``schema.sql`` creates only what is
+    missing, so running it migrates, and answers already stored are untouched.
+    Two processes migrating at once are serialised by ``BEGIN IMMEDIATE``.
+    """
+    if conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION:
+        return
+    try:
+        conn.executescript(f"BEGIN IMMEDIATE; {schema_sql()} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;")
+    except sqlite3.Error:
+        if conn.in_transaction:
+            conn.rollback()
+        raise
+
+
+def event_time() -> str:
+    """The current UTC time as ISO-8601 text, to the millisecond (event log)."""
+    return datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds")
+
+
+def log_test_event(conn: sqlite3.Connection, test_id: int, action: str, detail: dict) -> None:
+    """Append an action on test ``test_id`` to the ``events`` table, with the test's participant and
+    elapsed time read in the same statement (call it inside the change's transaction)."""
+    conn.execute(
+        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) "
+        "SELECT participant_id, id, ?, elapsed_seconds, ?, ? FROM tests WHERE id = ?",
+        (event_time(), action, json.dumps(detail, sort_keys=True), test_id),
+    )
+
+
+def log_event(
+    conn: sqlite3.Connection,
+    participant_id: int,
+    action: str,
+    detail: dict | None = None,
+    test_id: int | None = None,
+    elapsed_seconds: float | None = None,
+) -> None:
+    """Append one participant action to the ``events`` table (call it inside the change's transaction)."""
+    conn.execute(
+        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) VALUES (?, ?, ?, ?, ?, ?)",
+        (participant_id, test_id, event_time(), elapsed_seconds, action, json.dumps(detail or {}, sort_keys=True)),
+    )
 
 
 def check_study_file(path: str | os.PathLike) -> None:
     """Refuse, with one line, a file that is not a study database of this version.
 
-    Read-only: the header is read as bytes, then SQLite is opened with
-    ``mode=ro``, so another application's database or an empty file is never
-    changed (no WAL switch, no header written).  Checked: the SQLite magic,
-    ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before
-    it), ``user_version`` == :data:`SCHEMA_VERSION`, and every table of the schema.
+    Read-only: SQLite is opened with ``mode=ro``, so another application's
+    database or an empty file is never changed (no WAL switch, no header
+    written).  The file is never opened with a plain descriptor: on POSIX,
+    closing one drops every lock this process holds on the file, those of its
+    open study connections too, and another process would then checkpoint and
+    delete the WAL they still write into.  Checked: a SQLite file,
+    ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before it),
+    ``user_version`` 1 to :data:`SCHEMA_VERSION` (older ones are migrated by
+    :meth:`Study.open`), and every table of that version.
     """
     path = pathlib.Path(path)
     if not path.is_file():
         raise StudyInputError(f"{path}: no such study file")
-    try:
-        with open(path, "rb") as f:
-            head = f.read(len(_SQLITE_MAGIC))
-    except OSError as exc:
-        raise StudyInputError(f"{path}: cannot read it ({exc.strerror or exc})") from None
-    if not head:
+    if path.stat().st_size == 0:
         raise StudyInputError(f"{path}: empty file, not a Ramure study database")
-    if head != _SQLITE_MAGIC:
-        raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database")
     try:
         conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=10.0)
     except sqlite3.Error as exc:
@@ -104,17 +150,37 @@ def check_study_file(path: str | os.PathLike) -> None:
         app_id = conn.execute("PRAGMA application_id").fetchone()[0]
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-    except sqlite3.Error as exc:
+    except sqlite3.DatabaseError as exc:
+        if getattr(exc, "sqlite_errorcode", None) == sqlite3.SQLITE_NOTADB:
+            raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database") from None
         raise StudyInputError(f"{path}: not a readable SQLite database ({exc})") from None
     finally:
         conn.close()
     if app_id not in (0, APPLICATION_ID):
         raise StudyInputError(f"{path}: belongs to another application (application_id {app_id:#x}), not a Ramure study")
-    missing = _schema_tables() - tables
+    missing = _schema_tables(version if 1 <= version <= SCHEMA_VERSION else 1) - tables
     if missing:
         raise StudyInputError(f"{path}: not a Ramure study database (no table {', '.join(sorted(missing))})")
-    if version != SCHEMA_VERSION:
-        raise StudyInputError(f"{path}: study database version {version}; this Ramure reads version {SCHEMA_VERSION}")
+    if not 1 <= version <= SCHEMA_VERSION:
+        raise StudyInputError(f"{path}: study database version {version}; this Ramure reads versions 1 to {SCHEMA_VERSION}")
+
+
+def is_database_file(db: str | os.PathLike, path: str | os.PathLike) -> bool:
+    """Whether ``path`` is the database ``db`` or one of its journals (``-wal``, ``-shm``,
+    ``-journal``), by name or as the same file (a link): never open those with a plain
+    descriptor while a connection is open (its close drops the connection's locks).
+
+    Only ``stat`` is used, which takes no descriptor.
+    """
+    db = pathlib.Path(db)
+    for name in (db, *(db.with_name(db.name + tail) for tail in ("-wal", "-shm", "-journal"))):
+        try:
+            if os.path.samefile(name, path):
+                return True
+        except OSError:
+            if pathlib.Path(name).resolve() == pathlib.Path(path).resolve():
+                return True
+    return False
 
 
 def _has_study(conn) -> bool:
@@ -190,13 +256,18 @@ class Study:
 
     @classmethod
     def open(cls, path: str | os.PathLike, clock: Callable[[], float] = time.monotonic, durable: bool = True) -> Study:
-        """Open an existing study file (refused with a clear message otherwise)."""
+        """Open an existing study file (refused with a clear message otherwise).
+
+        A file of an older schema version is migrated in place (see :func:`migrate`).
+        """
         path = pathlib.Path(path)
         check_study_file(path)  # read-only: a file that is not ours is never changed
         conn: sqlite3.Connection | None = None
         try:
             conn = connect(path, durable)
             ok = _has_study(conn)
+            if ok:
+                migrate(conn)
         except sqlite3.DatabaseError:
             ok = False
         if not ok or conn is None:
@@ -250,12 +321,16 @@ class Study:
         """A pick's picture path if it lies inside the study's folder, else None (never shown).
 
         A database can name any file; only pictures under the folder holding the
-        database are ever read (symbolic links and ``..`` resolved first).
+        database are ever read (symbolic links and ``..`` resolved first), and never
+        the database or its journals: reading them would drop this process's locks.
         """
         try:
-            return inside_folder(self.path.parent, image, str(self.path))
+            picture = inside_folder(self.path.parent, image, str(self.path))
         except StudyInputError:
             return None
+        if picture is not None and is_database_file(self.path, picture):
+            return None
+        return picture
 
     # -- participants --------------------------------------------------------
     def add_participant(self, code: str | None = None, consent: bool = False, seed: int | None = None) -> str:
@@ -279,10 +354,12 @@ class Study:
         stamp = now_iso()
         try:
             with self.conn:
-                self.conn.execute(
+                pid = self.conn.execute(
                     "INSERT INTO participants (code, seed, consent, consent_at, created_at) VALUES (?, ?, ?, ?, ?)",
                     (code, int(seed), int(bool(consent)), stamp if consent else None, stamp),
-                )
+                ).lastrowid
+                if consent and pid is not None:  # pid: set by the INSERT just made
+                    log_event(self.conn, pid, "consent", {"given": True})
         except sqlite3.IntegrityError:
             raise StudyInputError(f"participant code {code!r} is already used") from None
         return code
@@ -294,11 +371,12 @@ class Study:
         answers are left out of the analysis and exports (but kept on disk; use
         :meth:`delete_participant` to erase them).
         """
-        self._participant(code)
+        pid = self._participant(code)[0]
         with self.conn:
             self.conn.execute(
                 "UPDATE participants SET consent = ?, consent_at = ? WHERE code = ?", (int(bool(given)), now_iso(), code)
             )
+            log_event(self.conn, pid, "consent", {"given": bool(given)})
 
     def delete_participant(self, code: str) -> None:
         """Erase participant ``code`` and every answer they gave (one transaction)."""
@@ -349,7 +427,9 @@ class Study:
         gid = self.grammar_id(grammar)
         if not consent:
             raise StudyInputError(f"participant {code!r} has not given consent; record it first")
-        row = self.conn.execute("SELECT id FROM tests WHERE participant_id = ? AND grammar_id = ?", (pid, gid)).fetchone()
+        row = self.conn.execute(
+            "SELECT id, finished_at, elapsed_seconds FROM tests WHERE participant_id = ? AND grammar_id = ?", (pid, gid)
+        ).fetchone()
         if row is None:
             if self.remaining_seconds(code) <= 0:
                 raise StudyInputError(
@@ -359,11 +439,40 @@ class Study:
                 cur = self.conn.execute(
                     "INSERT INTO tests (participant_id, grammar_id, started_at) VALUES (?, ?, ?)", (pid, gid, now_iso())
                 )
-            test_id = cur.lastrowid
-            assert test_id is not None  # set by the INSERT just made
+                test_id = cur.lastrowid
+                assert test_id is not None  # set by the INSERT just made
+                log_event(self.conn, pid, "start", {"grammar": grammar}, test_id, 0.0)
         else:
             test_id = row[0]
+            if row[1] is None:
+                with self.conn:
+                    log_event(self.conn, pid, "resume", {"grammar": grammar}, test_id, row[2])
         return TestSession(self, test_id, str(code), grammar, seed)
+
+    def finished(self, code: str, grammar: str) -> bool:
+        """Whether participant ``code`` has finished their test on ``grammar``."""
+        row = self.conn.execute(
+            "SELECT t.finished_at FROM tests t JOIN participants p ON p.id = t.participant_id "
+            "JOIN grammars g ON g.id = t.grammar_id WHERE p.code = ? AND g.name = ?",
+            (str(code), grammar),
+        ).fetchone()
+        return row is not None and row[0] is not None
+
+    def events(self, code: str | None = None) -> list[dict]:
+        """The event log, oldest first: every accepted action of participant ``code`` (or of all).
+
+        Each event: participant, grammar (None for consent), ``at`` (UTC, ms), the
+        test's ``elapsed_seconds`` then, ``action`` and its ``detail`` (a dict).
+        """
+        where, args = ("WHERE p.code = ?", (str(code),)) if code is not None else ("", ())
+        rows = self.conn.execute(
+            "SELECT p.code, g.name, e.at, e.elapsed_seconds, e.action, e.detail FROM events e "
+            "JOIN participants p ON p.id = e.participant_id LEFT JOIN tests t ON t.id = e.test_id "
+            f"LEFT JOIN grammars g ON g.id = t.grammar_id {where} ORDER BY e.id",
+            args,
+        )
+        keys = ("participant", "grammar", "at", "elapsed_seconds", "action")
+        return [dict(zip(keys, r[:5]), detail=json.loads(r[5])) for r in rows]
 
     def tests(self) -> list[dict]:
         """Every test: participant, grammar, finished or not, elapsed seconds."""

@@ -8,7 +8,9 @@ A participant session (:class:`ParticipantWindow`) walks through:
    order, dragged into groups (drop on "New group" to start one);
 3. per group, a **representative** (click an image, "Make representative"),
    the **three Likert questions** and free-text **qualifiers**;
-4. **Finish** — refused, listing what is missing, until everything is answered.
+4. **Finish** — refused, listing what is missing, until everything is answered; then
+   a short page ("Grammar 1 of 3 done", Continue) before the next grammar, so a
+   double click on Finish never reaches the next test.  "Grammar N of M" stays in view.
 
 Every answer goes straight to :class:`ramure.studies.TestSession` (one SQLite
 transaction each), and the screen is rebuilt from what is stored, so a crash
@@ -28,6 +30,7 @@ from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QPixmap
 from PySide6.QtWidgets import (
     QAbstractItemView,
+    QApplication,
     QButtonGroup,
     QCheckBox,
     QGridLayout,
@@ -450,9 +453,13 @@ class ParticipantWindow(QWidget):
         self.timer_label = QLabel("")
         self.timer_label.setObjectName("studyTimer")
         self.timer_label.setStyleSheet("font-size: 14pt; font-weight: bold;")
+        self.progress_label = QLabel("")
+        self.progress_label.setObjectName("studyProgress")
         self.stack = QStackedWidget()
         top = QHBoxLayout()
         top.addWidget(QLabel(f"Participant <b>{code}</b>"), 1)
+        top.addWidget(self.progress_label)
+        top.addSpacing(24)
         top.addWidget(self.timer_label)
         layout = QVBoxLayout(self)
         layout.addLayout(top)
@@ -462,6 +469,8 @@ class ParticipantWindow(QWidget):
         self.done_page = QLabel("<h2>Thank you!</h2><p>All your answers are saved.</p>")
         self.done_page.setAlignment(Qt.AlignmentFlag.AlignCenter)
         self.stack.addWidget(self.done_page)
+        self.between_page = self._between_page()
+        self.stack.addWidget(self.between_page)
         self.tick = QTimer(self)
         self.tick.timeout.connect(self.update_timer)
         self.tick.start(1000)
@@ -501,6 +510,49 @@ class ParticipantWindow(QWidget):
         layout.addStretch(1)
         return page
 
+    def _between_page(self):
+        """'Grammar 1 of 3 done' and a Continue button, shown between two tests.
+
+        Continue is placed away from where Finish was and enabled only after a
+        double-click interval, so the second click of a double click on Finish
+        cannot finish (or start) the next test.
+        """
+        page = QWidget()
+        self.between_label = QLabel("")
+        self.between_label.setObjectName("betweenTests")
+        self.between_label.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.continue_button = QPushButton("Continue")
+        self.continue_button.setObjectName("continueButton")
+        self.continue_button.setMinimumHeight(36)
+        self.continue_button.clicked.connect(self.continue_tests)
+        column = QVBoxLayout()
+        column.addStretch(1)
+        column.addWidget(self.between_label)
+        column.addWidget(self.continue_button)
+        column.addStretch(3)
+        layout = QHBoxLayout(page)
+        layout.addStretch(2)
+        layout.addLayout(column, 1)
+        layout.addStretch(2)
+        return page
+
+    def progress(self, grammar: str) -> tuple[int, int]:
+        """``(n, m)``: ``grammar`` is test n of the participant's m."""
+        return self.grammars.index(grammar) + 1, len(self.grammars)
+
+    def show_between(self, grammar: str) -> None:
+        """The page between tests, after ``grammar``'s test was finished."""
+        n, m = self.progress(grammar)
+        self.between_label.setText(f"<h2>Grammar {n} of {m} done</h2><p>Your answers are saved.</p>")
+        self.continue_button.setEnabled(False)
+        self.stack.setCurrentWidget(self.between_page)
+        delay = QApplication.styleHints().mouseDoubleClickInterval() + 100
+        QTimer.singleShot(delay, lambda: self.continue_button.setEnabled(not self.is_closed))
+
+    def continue_tests(self) -> None:
+        if self.stack.currentWidget() is self.between_page:
+            self.next_grammar()
+
     def give_consent(self) -> None:
         try:
             self.study.record_consent(self.code, True)
@@ -524,6 +576,8 @@ class ParticipantWindow(QWidget):
         return None
 
     def open_test(self, session: TestSession) -> TestPage:
+        n, m = self.progress(session.grammar)
+        self.progress_label.setText(f"Grammar {n} of {m}")
         pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, str(i), "…")) for i in range(1, 28)}
         page = TestPage(self, session, pixmaps)
         page.finished.connect(self._test_finished)
@@ -560,7 +614,15 @@ class ParticipantWindow(QWidget):
         self.page.refresh()
 
     def _test_finished(self) -> None:
-        self.next_grammar()
+        page = self.page
+        left = [g for g in self.grammars if page is None or g != page.session.grammar]
+        if page is not None and any(not self._finished(g) for g in left):
+            self.show_between(page.session.grammar)
+        else:
+            self.next_grammar()
+
+    def _finished(self, grammar) -> bool:
+        return self.study.finished(self.code, grammar)
 
     def update_timer(self) -> None:
         if self.is_closed:

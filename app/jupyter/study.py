@@ -1,4 +1,4 @@
-"""Study mode in the notebook: one participant's test on one grammar.
+"""Study mode in the notebook: one participant's tests, one grammar at a time.
 
 :class:`StudyPanel` drives a :class:`ramure.studies.TestSession`, so every answer is
 checked and stored in the study's SQLite file as it is given (one
@@ -9,7 +9,9 @@ transaction each, timed).  The participant
 2. for each group chooses a representative, rates usefulness, difference and
    the representative (poor / fair / good / excellent) and names it with one
    or more qualifiers,
-3. presses *Finish*; anything missing is listed instead.
+3. presses *Finish*; anything missing is listed instead.  Between two grammars a
+   short page ("Grammar 1 of 3 done", *Continue*) stops a double click on *Finish*
+   from reaching the next test; the header shows "N of M".
 
 The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answer`,
 :meth:`~StudyPanel.finish`) that set the widgets and run their handlers.
@@ -29,7 +31,7 @@ The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answe
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, TypeVar
 
 import ipywidgets as W
@@ -153,17 +155,42 @@ class GroupQuestions:
 
 
 class StudyPanel:
-    """A participant's test on ``grammar`` of an open :class:`ramure.studies.Study`."""
+    """A participant's tests of an open :class:`ramure.studies.Study`, one grammar at a time.
 
-    def __init__(self, study: Study, participant: str, grammar: str, thumb_size: int = 96) -> None:
+    ``grammar`` is one grammar name, a list of them, or None for all the study's
+    grammars, in order; the panel opens the first whose test is unfinished.  After
+    each finished test but the last a short page says "Grammar 1 of 3 done" with a
+    *Continue* button, so a double click on *Finish* never reaches the next test.
+    """
+
+    def __init__(self, study: Study, participant: str, grammar: str | Sequence[str] | None = None, thumb_size: int = 96) -> None:
         self.study = study
-        self.session = study.session(participant, grammar)
+        self.participant = participant
+        self.grammars = [grammar] if isinstance(grammar, str) else list(grammar or study.grammars)
         self.quiet = False
         self.message = MessageLine()
         self.header = W.HTML()
+        self._thumb_size = thumb_size
+        self.between = W.HTML()
+        self.continue_button = button("Continue", self.next_test, style="primary", tooltip="start the next grammar")
+        self.widget = W.VBox()
+        unfinished = [g for g in self.grammars if not self._finished(g)]
+        self.open(unfinished[0] if unfinished else self.grammars[-1])
+
+    def _finished(self, grammar: str) -> bool:
+        return self.study.finished(self.participant, grammar)
+
+    def progress(self) -> tuple[int, int]:
+        """``(n, m)``: the open test is grammar n of the participant's m."""
+        return self.grammars.index(self.session.grammar) + 1, len(self.grammars)
+
+    def open(self, grammar: str) -> None:
+        """Start, or resume, the test on ``grammar`` (refused without consent or budget)."""
+        self.session = self.study.session(self.participant, grammar)
         picks = {p.id: p for p in self.session.picks()}
         self.group_of = {}
-        self._picks, self._thumb_size = picks, thumb_size
+        self._picks = picks
+        thumb_size = self._thumb_size
         cards = []
         options = [("–", 0)] + [(str(g), g) for g in range(1, MAX_GROUPS + 1)]
         for image in self.session.order():
@@ -186,25 +213,36 @@ class StudyPanel:
             "Finish test", self.finish, style="primary", tooltip="store the test as finished (refused while answers are missing)"
         )
         self.todo = W.HTML()
-        self.widget = W.VBox(
-            [
-                self.header,
-                self.message.widget,
-                W.HTML(
-                    "<b>1. Sort the trees</b>: give each image a group number; trees in a group look "
-                    "alike, groups look different (a group may hold one image)."
-                ),
-                self.grid,
-                W.HTML(
-                    "<b>2. For each group</b>: choose a representative, rate, and name it "
-                    "(several qualifiers separated by commas)."
-                ),
-                self.questions,
-                W.HBox([self.finish_button]),
-                self.todo,
-            ]
-        )
+        self.widget.children = [
+            self.header,
+            self.message.widget,
+            W.HTML(
+                "<b>1. Sort the trees</b>: give each image a group number; trees in a group look "
+                "alike, groups look different (a group may hold one image)."
+            ),
+            self.grid,
+            W.HTML(
+                "<b>2. For each group</b>: choose a representative, rate, and name it (several qualifiers separated by commas)."
+            ),
+            self.questions,
+            W.HBox([self.finish_button]),
+            self.todo,
+        ]
         self.refresh()
+
+    def next_test(self) -> None:
+        """Continue: open the next grammar whose test is unfinished (from the page between tests)."""
+        if self.widget.children[-1] is not self.continue_button:
+            return
+        left = [g for g in self.grammars if not self._finished(g)]
+        if left:
+            self.run(lambda: self.open(left[0]))
+
+    def _show_between(self) -> None:
+        n, m = self.progress()
+        self.between.value = f"<h3>Grammar {n} of {m} done</h3><p>Your answers are saved.</p>"
+        self.header.value = ""
+        self.widget.children = [self.message.widget, self.between, self.continue_button]
 
     # -- actions -------------------------------------------------------------
     def run(self, action: Callable[[], T]) -> T | None:
@@ -275,10 +313,17 @@ class StudyPanel:
             form.qualifiers.value = qualifiers if isinstance(qualifiers, str) else ", ".join(qualifiers)
 
     def finish(self) -> None:
-        """Finish the test; refused, listing what is missing, while it is incomplete."""
+        """Finish the test; refused, listing what is missing, while it is incomplete.
+
+        A second click on a finished test does nothing (it never reaches the next one).
+        """
+        if self.session.finished:
+            return
         self.run(self.session.finish)
         if self.session.finished:
             self.message.show("test finished and stored — thank you", "info")
+            if any(not self._finished(g) for g in self.grammars):
+                self._show_between()
 
     # -- display -------------------------------------------------------------
     def _ipython_display_(self) -> None:
@@ -336,9 +381,10 @@ class StudyPanel:
             self.quiet = False
         minutes = s.remaining_seconds() / 60
         state = "finished" if s.finished else f"{minutes:.0f} min left"
+        n, m = self.progress()
         self.header.value = (
             f"<h3 style='margin:4px 0'>Study “{self.study.name}” — participant {s.participant}, "
-            f"grammar {s.grammar} ({state})</h3>"
+            f"grammar {s.grammar}: {n} of {m} ({state})</h3>"
         )
         todo = [] if s.finished else s.missing()
         self.todo.value = (

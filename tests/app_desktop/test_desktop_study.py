@@ -143,3 +143,102 @@ def test_analyst_view_shows_the_report(make_window, qtbot, study_path, artifacts
     win.open_study(study_path.parent / "nothing.db")
     assert "no such study" in win.last_message
     win.close()
+
+
+@pytest.fixture
+def three_grammars(tmp_path):
+    """A study of three grammars with no grammar file (placeholder pictures: quick to show)."""
+    path = tmp_path / "three.db"
+    with Study.create(path, grammars={f"g{i}": lattice_picks(seed=i) for i in (1, 2, 3)}) as study:
+        study.add_participant("P1", consent=True)
+    return path
+
+
+def participant_window(qtbot, path, code="P1"):
+    from ramure.app.desktop.study import ParticipantWindow
+
+    study = Study.open(path)
+    win = ParticipantWindow(study, code, ask=False)
+    win.closed.connect(study.close)
+    qtbot.addWidget(win)
+    win.show()
+    qtbot.waitExposed(win)
+    qtbot.waitUntil(lambda: not win.image_task.running, timeout=20000)
+    qtbot.wait(50)  # the pictures' arrival rebuilds the page once more
+    return win
+
+
+def click(qtbot, find):
+    """Click the widget ``find()`` returns once it is shown (the panels are rebuilt after each answer)."""
+    qtbot.waitUntil(lambda: find().isVisible(), timeout=3000)
+    qtbot.mouseClick(find(), Qt.MouseButton.LeftButton)
+
+
+def answer_group(qtbot, page, label, rep, word):
+    """Representative, three ratings and a word, through the group panel's widgets."""
+    qtbot.waitUntil(lambda: page.panels[label].make_rep.isVisible(), timeout=3000)
+    panel = page.panels[label]  # select and click on the same panel, with no event in between
+    panel.images.item(panel.images.image_ids().index(rep)).setSelected(True)
+    qtbot.mouseClick(panel.make_rep, Qt.MouseButton.LeftButton)
+    for key, level in (("usefulness", 4), ("difference", 2), ("representative", 3)):
+        click(qtbot, lambda key=key, level=level: page.panels[label].rows[key].buttons.button(level))
+    qtbot.waitUntil(lambda: page.panels[label].qualifier.isVisible(), timeout=3000)
+    QTest.keyClicks(page.panels[label].qualifier, word)
+    QTest.keyClick(page.panels[label].qualifier, Qt.Key.Key_Return)
+
+
+def shown(panel):
+    """What a group panel shows: representative, the three levels checked, the words."""
+    levels = tuple(panel.rows[key].buttons.checkedId() for key in ("usefulness", "difference", "representative"))
+    words = [panel.qualifiers.item(i).text() for i in range(panel.qualifiers.count())]
+    return panel.rep_label.text(), levels, words
+
+
+def test_moving_a_picture_keeps_both_groups_answers(qtbot, three_grammars):
+    win = participant_window(qtbot, three_grammars)
+    page = win.page
+    drop(page.pool, list(range(1, 10)), page.new_group)
+    drop(page.pool, list(range(10, 19)), page.new_group)
+    answer_group(qtbot, page, 1, 5, "petit")
+    answer_group(qtbot, page, 2, 14, "grand")
+    drop(page.panels[1].images, [3], page.panels[2].images)  # a plain picture moves
+    assert shown(page.panels[1]) == ("Representative: 5", (4, 2, 3), ["petit"])
+    assert shown(page.panels[2]) == ("Representative: 14", (4, 2, 3), ["grand"])
+    drop(page.panels[2].images, [14], page.panels[1].images)  # group 2's representative moves
+    assert shown(page.panels[1]) == ("Representative: 5", (4, 2, 3), ["petit"])
+    assert shown(page.panels[2]) == ("Representative: —", (4, 2, -1), ["grand"])
+    assert "group 2: choose a representative" in page.todo.text()
+    groups = {g.label: g for g in page.session.groups()}
+    assert sorted(groups[1].images) == sorted([i for i in range(1, 10) if i != 3] + [14])
+    assert (groups[2].usefulness, groups[2].qualifiers, groups[2].representative) == (4, ["grand"], None)
+    moves = [e for e in win.study.events("P1") if e["action"] == "group"]
+    assert len(moves) == 4 and moves[-1]["detail"]["representative_cleared"] == [2]
+    win.close()
+
+
+def test_a_double_click_on_finish_cannot_finish_the_next_grammar(qtbot, three_grammars):
+    win = participant_window(qtbot, three_grammars)
+    assert win.progress_label.text() == "Grammar 1 of 3"
+    page = win.page
+    for g in range(3):
+        page.move_images(list(range(1 + 9 * g, 10 + 9 * g)), "new")
+    for label in (1, 2, 3):
+        answer_group(qtbot, page, label, 9 * label, f"word{label}")
+    assert not page.session.missing()
+    # Two quick clicks where Finish is: the second goes to whatever is there by then.
+    where = page.finish_button.mapTo(win, page.finish_button.rect().center())
+    qtbot.waitUntil(page.finish_button.isVisible, timeout=3000)
+    qtbot.mouseClick(page.finish_button, Qt.MouseButton.LeftButton)
+    target = win.childAt(where) or win
+    qtbot.mouseClick(target, Qt.MouseButton.LeftButton, pos=target.mapFrom(win, where))
+    assert win.last_message is None  # no "Not saved – images not in any group: ..."
+    assert win.stack.currentWidget() is win.between_page
+    assert "Grammar 1 of 3 done" in win.between_label.text()
+    assert [t["grammar"] for t in win.study.tests()] == ["g1"]  # the next test is not even started
+    assert target is not win.continue_button or not win.continue_button.isEnabled()
+    qtbot.waitUntil(win.continue_button.isEnabled, timeout=3000)
+    qtbot.mouseClick(win.continue_button, Qt.MouseButton.LeftButton)
+    assert win.stack.currentWidget() is win.page and win.page.session.grammar == "g2"
+    assert win.progress_label.text() == "Grammar 2 of 3"
+    assert win.page.session.groups() == [] and not win.page.session.finished
+    win.close()

@@ -143,3 +143,56 @@ def test_report_inline_is_self_contained(tmp_path):
     assert "summary.json" in links and "anova.csv" in links
     assert base64.b64decode(links["anova.csv"]) == (tmp_path / "r" / "anova.csv").read_bytes()
     assert not re.search(r"href='(?!data:|#)", html)
+
+
+def answer_both(panel):
+    """Two groups (images 1-9 and 10-18) answered through their widgets."""
+    panel.assign([range(1, 10), range(10, 19)])
+    panel.answer(1, representative=5, usefulness="good", difference="fair", quality="excellent", qualifiers="petit")
+    panel.answer(2, representative=14, usefulness="poor", difference="good", quality="fair", qualifiers="grand, dense")
+
+
+def on_screen(form):
+    return (form.representative.value, form.usefulness.value, form.difference.value, form.quality.value, form.qualifiers.value)
+
+
+def test_moving_a_picture_between_answered_groups_keeps_both(panel, study):
+    answer_both(panel)
+    panel.group_of[3].value = 2  # the participant moves picture 3 from group 1 to group 2
+    assert panel.message.kind != "error"
+    assert on_screen(panel.forms[1]) == (5, "good", "fair", "excellent", "petit")
+    assert on_screen(panel.forms[2]) == (14, "poor", "good", "fair", "grand, dense")
+    panel.group_of[14].value = 1  # group 2's representative moves: only it (and its rating) is cleared
+    assert on_screen(panel.forms[1]) == (5, "good", "fair", "excellent", "petit")
+    assert on_screen(panel.forms[2]) == (0, "poor", "good", None, "grand, dense")
+    stored = panel.session.groups()
+    assert (stored[1].representative, stored[1].usefulness, stored[1].qualifiers) == (None, 1, ["grand", "dense"])
+    assert [e["action"] for e in study.events()].count("group") == 3
+
+
+@pytest.fixture
+def three(tmp_path):
+    s = Study.create(tmp_path / "three.db", grammars={f"g{i}": lattice_picks(seed=i) for i in (1, 2, 3)})
+    yield s
+    s.close()
+
+
+def test_a_double_click_on_finish_cannot_finish_the_next_grammar(three):
+    panel = StudyPanel(three, three.add_participant(consent=True), thumb_size=32)
+    assert panel.session.grammar == "g1" and "g1: 1 of 3" in panel.header.value
+    panel.assign([range(1, 10), range(10, 19), range(19, 28)])
+    for group in (1, 2, 3):
+        panel.answer(group, representative=9 * group, usefulness="good", difference="fair", quality="good", qualifiers="x")
+    panel.finish_button.click()
+    panel.finish_button.click()  # the second click of a double click
+    assert panel.message.kind == "info" and "thank you" in panel.message.text
+    assert [(t["grammar"], t["finished_at"] is not None) for t in three.tests()] == [("g1", True)]
+    assert panel.between in panel.widget.children and "Grammar 1 of 3 done" in panel.between.value
+    assert panel.continue_button in panel.widget.children and panel.finish_button not in panel.widget.children
+    panel.continue_button.click()
+    panel.continue_button.click()  # a double click on Continue opens one test, once
+    assert panel.session.grammar == "g2" and "g2: 2 of 3" in panel.header.value
+    assert [(t["grammar"], t["finished_at"] is not None) for t in three.tests()] == [("g1", True), ("g2", False)]
+    assert panel.grid in panel.widget.children and panel.session.groups() == []
+    resumed = StudyPanel(three, panel.participant, thumb_size=32)  # a re-run cell resumes g2
+    assert resumed.session.grammar == "g2"

@@ -148,7 +148,7 @@ def test_likert_names_in_both_languages(study):
     assert (g.usefulness, g.difference, g.representative_quality) == (1, 3, 2)
 
 
-def test_regrouping_keeps_answers_of_unchanged_groups_only(study):
+def test_regrouping_keeps_the_answers_that_still_apply(study):
     s = study.session(study.add_participant(consent=True), "honda")
     s.set_groups([[1, 2, 3], [4, 5], [6]])
     s.set_representative(1, 2)
@@ -159,8 +159,9 @@ def test_regrouping_keeps_answers_of_unchanged_groups_only(study):
     g = s.groups()
     assert [x.images for x in g] == [[6, 7], [1, 2, 3], [4], [5]]
     assert (g[1].representative, g[1].usefulness, g[1].representative_quality, g[1].qualifiers) == (2, 4, 2, ["rond"])
-    assert g[0].usefulness is None and g[0].representative is None
-    assert g[2].representative == 4 and g[2].usefulness is None
+    assert g[0].usefulness is None and g[0].representative is None  # 6 was a single: never chosen
+    assert g[2].representative == 4 and g[2].usefulness == 1  # the first part of the split continues group 2
+    assert g[3].representative == 5 and g[3].usefulness is None
     assert s.unsorted() == list(range(8, 28))
 
 
