@@ -33,6 +33,11 @@ if TYPE_CHECKING:
 
 _BUILTIN_SET = {"volume", "face", "sublabel", "fcorner", "forward", "point", "radial", "corner", "vcorner", "sup", "supt"}
 #: per-dart columns :meth:`Operations.add_prisms` writes itself (no default fill first)
+#: Highest prism order: a face's corner codes and a volume's degree are int16, and a round
+#: trunk needs tens of sides, not thousands.
+MAX_PRISM_ORDER = 4096
+#: Most darts a map holds: alpha stores dart ids as int32.
+MAX_MAP_DARTS = 2**31 - 1
 _PRISM_WRITES = ("volume", "face", "sublabel", "fcorner", "forward", "corner", "point", "vcorner", "sup")
 
 
@@ -119,10 +124,12 @@ class Operations:
         ([0, 120, 240], 360, [0, 1, 2])
         """
         n, count = int(n), int(count)
-        if n < 3:
-            raise ValueRefused(f"prism order must be at least 3, got {n}")
+        if not 3 <= n <= MAX_PRISM_ORDER:
+            raise ValueRefused(f"prism order must be from 3 to {MAX_PRISM_ORDER}, got {n}")
         if count < 0:
             raise ValueRefused(f"prism count must be at least 0, got {count}")
+        if self.n_darts + 12 * n * count > MAX_MAP_DARTS:
+            raise ValueRefused(f"{count:,} prisms of order {n} would pass the map's limit of {MAX_MAP_DARTS:,} darts")
         t = _prism.template(n)
         unit = origins is None and frames is None and sizes is None  # every prism gets the unit prism's corners
         origins = np.zeros((count, 3)) if origins is None else np.broadcast_to(np.asarray(origins, float), (count, 3))
@@ -394,7 +401,7 @@ class Operations:
 
     def unsew3(self, darts: ArrayLike) -> None:
         """Make the faces of ``darts`` alpha3-free again (and their partners)."""
-        walk, _ = self.face_walk(darts)
+        walk, _ = self.face_walk(self.check_darts(darts))
         d = walk[walk >= 0]
         partners = self._alpha[3][d].copy()
         self._alpha[3][d] = d
@@ -467,7 +474,7 @@ class Operations:
         >>> gm.counts()["faces"], gm.counts()["edges"], gm.is_valid()
         (7, 13, True)
         """
-        d1, d2 = int(d1), int(d2)
+        d1, d2 = (int(d) for d in self.check_darts([d1, d2]))
         walk, length = self.face_walk([d1])
         walk = walk[0, : length[0]]
         where = np.flatnonzero(walk == d2)
@@ -513,12 +520,15 @@ class Operations:
         sides.  Returns the new darts at ``d1``'s vertex in the half holding
         ``a0(d1)``.
         """
-        d1 = np.asarray(d1, np.int64)
-        k2 = np.asarray(k2, np.int64)
+        d1 = self.check_darts(d1)
+        k2 = np.asarray(k2, np.int64).reshape(-1)
+        if k2.shape != d1.shape:
+            raise GMapError(f"split_faces needs one corner step per dart, got {len(k2)} for {len(d1)} darts")
         walk, length = self.face_walk(d1)
         deg = length // 2
         if np.any((k2 < 2) | (k2 > deg - 2)):
             raise GMapError("split_faces needs two vertices that are neither equal nor adjacent")
+        self._check_distinct_faces(walk)
         rows = np.arange(len(d1))
         x = walk[rows, 2 * k2 - 1]
         y = walk[rows, length - 1]
@@ -550,6 +560,16 @@ class Operations:
         fw[n1], fw[n2], fw[m1], fw[m2] = ~f1, f1, f1, ~f1
         self.mark_changed()
         return n1[:k]
+
+    def _check_distinct_faces(self, walk: np.ndarray) -> None:
+        """Refuse face walks (rows, -1 padded) of which two are one face ``<a0,a1,a3>``: a face
+        named twice (two of its darts, or its two sides) would be split twice over."""
+        none = np.int64(np.iinfo(np.int64).max)  # an int64 scalar: a Python int would take alpha's int32
+        darts = np.where(walk >= 0, walk, none)
+        sewn_side = np.where(walk >= 0, self._alpha[3][np.maximum(walk, 0)].astype(np.int64), none)
+        key = np.minimum(darts.min(axis=1), sewn_side.min(axis=1))  # the face's smallest dart, either side
+        if len(np.unique(key)) != len(key):
+            raise GMapError("split_faces names one face twice (two of its darts, or both of its sides)")
 
     def split_volume(self, path: ArrayLike, labels: Sequence[str | int] = ("E", "O")) -> int:
         """Cut a volume in two along a closed loop of edges on its surface.
