@@ -104,7 +104,7 @@ class Controller(QObject):
 
     def _finished(self, job) -> None:  # GUI thread
         self.last_job_seconds = time.perf_counter() - job.submitted
-        snap = job.snapshot
+        snap = self._fresh_light(job.snapshot)
         if snap is not None and not (job.stale and job.error is None):
             self._publish(snap)
         if job.error is not None and not job.stale:
@@ -113,6 +113,18 @@ class Controller(QObject):
             else:
                 self.crashed.emit(f"{type(job.error).__name__}: {job.error}", job.details)
         self.job_done.emit(job)
+
+    def _fresh_light(self, snap):
+        """``snap`` with its light parts (dirty, undo...) read again when the plant is the same: a
+        save or a selection in the GUI thread may have come between the job's end and now."""
+        if snap is None or snap.version != self.snapshot.version or not self.lock.acquire(blocking=False):
+            return snap
+        try:
+            if self.explorer.version != snap.version:
+                return snap
+            return state.take_snapshot(self.explorer, snap, snap.job)
+        finally:
+            self.lock.release()
 
     def _publish(self, snap) -> None:
         old = self.snapshot
