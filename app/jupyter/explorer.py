@@ -338,8 +338,8 @@ class Explorer:
     def set_text(self, text: str) -> GrammarError | None:
         """Parse new grammar text; a parse error is shown at its line and column."""
         model = self.model
-        if text == model.text and model.error is None:
-            return None
+        if text in (model.text, model.document_text()) and model.error is None:
+            return None  # the text shown: nothing to re-derive (regrown parts stay)
         self.grammar.show_text(text)
         err = model.set_text(text)
         if err is not None:
