@@ -215,7 +215,11 @@ class Explorer:
         """The grammar text with the current ``n``, seed and constants written in: what Save
         grammar writes and the editor shows (see :func:`ramure.app.document.document_text`)."""
         s = self.session
-        return document_text(self.text, self.lsystem, s.n, s.seed, s.constants, str(self.path) if self.path else None)
+        key = (self.text, self.path, s.lsystem, s.n, s.seed, tuple(s.constants.items()))
+        memo = self.__dict__.get("_document")  # each snapshot asks twice (the text shown, dirty)
+        if memo is None or memo[0] != key:
+            memo = self._document = (key, document_text(self.text, s.lsystem, s.n, s.seed, s.constants, _name(self.path)))
+        return memo[1]
 
     def local_edits(self) -> list[dict]:
         """The edits of parts of the plant (regrow, prune, fruit, details) that the grammar text
@@ -718,6 +722,10 @@ def write_obj(mesh: pv.PolyData, path: str | os.PathLike) -> pathlib.Path:
     from ramure.app.export import write_obj as write
 
     return write(plant_parts(mesh), path)
+
+
+def _name(path):
+    return str(path) if path else None
 
 
 def finite_number(value: float | str, name: str) -> float:
