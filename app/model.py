@@ -33,7 +33,10 @@ from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import kinship
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
+from ramure.app.document import check_round_trip, document_text
+from ramure.app.history import Timeline
 from ramure.app.ids import not_a_leaf
+from ramure.lsys.combination import split as split_combination
 from ramure.lsys.regen import Session
 from ramure.lsys.geometry import patch_polydata, skeleton_to_polydata
 from ramure.lsys.turtle import changed_spans, reinterpret
@@ -53,12 +56,21 @@ SELECT_MODES = ("replace", "add", "remove", "toggle")
 
 
 class Explorer:
-    """Edit–select–regenerate state for one plant.
+    """Edit–select–regenerate state for one plant: the document and its one undo history.
 
-    ``source`` is a grammar file path or grammar text.
+    ``source`` is a grammar file path or grammar text; ``n`` and ``seed`` default to the
+    grammar's ``n:`` and ``#seed``.
+
+    The document is the grammar text with the session's ``n``, seed and constants written
+    in (:meth:`document_text`) plus the local edits of parts of the plant (regrows, prunes,
+    fruit), which only a session file holds.  :attr:`dirty` compares it with what was last
+    saved or opened (the state the explorer started in counts as saved).  Undo and Redo walk
+    the session's edits, then the :attr:`timeline` of the sessions a new text, ``n`` or seed
+    replaced.  Opening a grammar or loading a session starts a fresh history: Undo never
+    brings back a plant the user chose to leave by opening another file.
     """
 
-    def __init__(self, source: str | os.PathLike, n: int | None = None, seed: int = 0) -> None:
+    def __init__(self, source: str | os.PathLike, n: int | None = None, seed: int | None = None) -> None:
         given = (
             pathlib.Path(source)
             if isinstance(source, pathlib.Path)
@@ -81,6 +93,9 @@ class Explorer:
             filename=str(path) if path else None,
         )
         self._drawn(self.derivation.skeleton())  # a turtle error (a polygon never closed) is raised here
+        self.timeline = Timeline()  # the sessions a new text, n or seed replaced
+        self._left = (self.checkpoint(), list(self.session.edits))  # the state after the last change
+        self.saved = self._fingerprint()  # what the file on disk holds (the start counts as saved)
 
     # -- derived views (cached per version) --------------------------------
     def _cached(self, key, make):
@@ -172,26 +187,77 @@ class Explorer:
     def constants(self) -> dict[str, float]:
         return dict(self.session.constants)
 
-    def _changed(self):
+    def _changed(self, record: bool = True) -> None:
+        """A new version.  ``record``: keep the history one line (a replaced session is
+        remembered in the timeline; a new edit ends what Redo could bring back)."""
+        if record:
+            before, edits = self._left
+            session = self.session
+            if session is not before["session"]:
+                self.timeline.leave(before, len(edits))
+            elif len(session.edits) != len(edits) or any(a is not b for a, b in zip(session.edits, edits)):
+                self.timeline.new_edit()
         self.version += 1
+        self._left = (self.checkpoint(), list(self.session.edits))
 
     def checkpoint(self) -> dict:
         """The editing state a new text, n or seed replaces: grammar text, path and the session
-        (with its own undo and redo).  :meth:`restore` brings it back (the desktop's undo)."""
+        (with its own undo and redo).  :meth:`restore` brings it back (undo across sessions)."""
         return {"text": self.text, "path": self.path, "session": self.session}
 
     def restore(self, checkpoint: dict) -> None:
         """Make a :meth:`checkpoint` current again (selection cleared, a new version)."""
         self.text, self.path, self.session = checkpoint["text"], checkpoint["path"], checkpoint["session"]
         self.selection, self.last_result, self.error = [], None, None
-        self._changed()
+        self._changed(record=False)
+
+    # -- the document and its state on disk -----------------------------------
+    def document_text(self) -> str:
+        """The grammar text with the current ``n``, seed and constants written in: what Save
+        grammar writes and the editor shows (see :func:`ramure.app.document.document_text`)."""
+        s = self.session
+        key = (self.text, self.path, s.lsystem, s.n, s.seed, tuple(s.constants.items()))
+        memo = self.__dict__.get("_document")  # each snapshot asks twice (the text shown, dirty)
+        if memo is None or memo[0] != key:
+            memo = self._document = (key, document_text(self.text, s.lsystem, s.n, s.seed, s.constants, _name(self.path)))
+        return memo[1]
+
+    def local_edits(self) -> list[dict]:
+        """The edits of parts of the plant (regrow, prune, fruit, details) that the grammar text
+        cannot hold: only a session file keeps them."""
+        return [e for e in self.session.edits if e["op"] != "constants"]
+
+    def _fingerprint(self):
+        return self.document_text(), tuple(self.local_edits())
+
+    @property
+    def dirty(self) -> bool:
+        """True when the plant differs from what was last saved or opened (undoing back to the
+        saved state makes it clean again)."""
+        text, edits = self._fingerprint()
+        return text != self.saved[0] or len(edits) != len(self.saved[1]) or any(a is not b for a, b in zip(edits, self.saved[1]))
+
+    def mark_saved(self) -> None:
+        """Take the current plant as what the file holds (after a save, or to drop the question)."""
+        self.saved = self._fingerprint()
+
+    @property
+    def can_undo(self) -> bool:
+        return self.session.can_undo or self.timeline.can_back
+
+    @property
+    def can_redo(self) -> bool:
+        return self.session.can_redo or self.timeline.can_forward
 
     # -- grammar -----------------------------------------------------------
     def set_text(self, text: str) -> GrammarError | None:
-        """Parse new grammar text.  On error keep the current plant and return the error."""
+        """Parse new grammar text.  On error keep the current plant and return the error.
+
+        The user's ``n``, seed and constants stay unless the text's own line for them changed
+        (its ``n:``, ``#seed`` or ``#define``): a comment typed in never resets them."""
         try:
             ls = LSystem.from_text(text, filename=str(self.path) if self.path else None)
-            session = Session(ls, n=None, seed=self.session.seed, filename=self.session.filename)
+            session = Session(ls, filename=self.session.filename, **self._kept_settings(ls))
             skeleton = session.derivation.skeleton()  # a turtle error (e.g. a polygon never closed) too
         except GrammarError as err:
             self.error = err
@@ -201,6 +267,37 @@ class Explorer:
         self._changed()
         self._drawn(skeleton)
         return None
+
+    def _kept_settings(self, ls: LSystem) -> dict:
+        """``n``, ``seed`` and ``constants`` for a new text ``ls``: the session's, except where the
+        text's value differs from the old text's (the user edited that line)."""
+        old, s = self.lsystem, self.session
+        constants = {k: v for k, v in s.constants.items() if k in ls.constants and ls.constants[k] == old.constants.get(k)}
+        return {
+            "n": ls.n if ls.n != old.n else s.n,
+            "seed": ls.seed if ls.grammar.seed != old.grammar.seed else s.seed,
+            "constants": constants,
+        }
+
+    def open_grammar(self, path: str | os.PathLike) -> None:
+        """Open a grammar file: a fresh plant with the file's ``n``, seed and constants, a fresh
+        history (Undo does not go back to the plant left) and a clean document.  On error
+        (RamureError) nothing changes."""
+        path = pathlib.Path(path)
+        text = read_grammar_file(path)  # a regular UTF-8 file only, never a device or a pipe
+        session = Session(LSystem.from_text(text, filename=str(path)), filename=str(path))
+        skeleton = session.derivation.skeleton()
+        self.text, self.path, self.session, self.error = text, path, session, None
+        self._fresh(skeleton)
+
+    def _fresh(self, skeleton=None) -> None:
+        """A new document: nothing selected, no history, clean."""
+        self.selection, self.last_result = [], None
+        self.timeline.clear()
+        self._changed(record=False)
+        if skeleton is not None:
+            self._drawn(skeleton)
+        self.mark_saved()
 
     def _drawn(self, skeleton):
         """Keep the skeleton a new session was checked with as this version's plant."""
@@ -239,11 +336,10 @@ class Explorer:
         self._drawn(skeleton)
 
     def set_rho(self, rho: float) -> None:
-        """ρ as a fraction in (0, 1] or a percentage in (1, 100] (the UI's slider)."""
+        """ρ, a fraction in (0, 1] (a front end's percent slider divides by 100 itself)."""
         rho = finite_number(rho, "rho")
-        rho = rho / 100.0 if rho > 1 else rho
         if not 0 < rho <= 1:
-            raise ValueRefused(f"rho must be in (0, 100], got {rho:g}")
+            raise ValueRefused(f"rho must be in (0, 1] (a fraction: 0.5 is half), not {rho:g}")
         self.rho = rho
 
     # -- selection ---------------------------------------------------------
@@ -415,19 +511,45 @@ class Explorer:
     def _after_edit(self, result):
         self.last_result = result
         self.selection = []
+        self._fold_whole_plant()
         self._changed()
         return result
 
+    def _fold_whole_plant(self) -> None:
+        """A regrow of the whole plant (nothing selected: a gallery pick, a qualifier, Regrow)
+        with constants every rule reads is the plant the grammar derives with that seed and those
+        constants: make it so (a new session of that seed and constants), so the constants panel,
+        the editor and Save show it.  A combination for one rule stays a local edit."""
+        s = self.session
+        edit = s.edits[-1] if s.edits else None
+        if edit is None or edit["op"] != "regrow" or edit["selection"]:
+            return
+        extra, per_rule = split_combination(edit["params"])
+        if per_rule:
+            return
+        constants = {**s.constants, **edit["constants"], **extra}
+        folded = Session(s.lsystem, n=s.n, seed=edit["seed"], constants=constants, filename=s.filename)
+        s.undo()  # the session left keeps the plant before (Undo goes back to it)
+        self.session = folded
+
     def undo(self) -> dict | None:
-        return self._history(self.session.undo())
+        """Undo the last edit, or go back to the text, n or seed before the last change of them.
+        Returns the edit undone (``{"op": "document"}`` for a text, n or seed), None if none."""
+        if self.session.can_undo:
+            return self._history(self.session.undo())
+        return self._history({"op": "document"} if self.timeline.back(self, len(self.session.edits)) else None)
 
     def redo(self) -> dict | None:
-        return self._history(self.session.redo())
+        """Redo what Undo took back, in the order it was done."""
+        stop = self.timeline.stop()
+        if self.session.can_redo and (stop is None or len(self.session.edits) < stop):
+            return self._history(self.session.redo())
+        return self._history({"op": "document"} if self.timeline.forward(self, len(self.session.edits)) else None)
 
     def _history(self, edit):
         if edit is not None:
             self.selection, self.last_result = [], None
-            self._changed()
+            self._changed(record=False)
         return edit
 
     def status(self) -> str:
@@ -450,26 +572,47 @@ class Explorer:
         return f"{line} — {warning}" if warning else line
 
     # -- files -------------------------------------------------------------
-    def save_grammar(self, path: str | os.PathLike) -> None:
-        """Save the grammar text atomically (temporary file, fsync, rename): a crash or a
-        full disk leaves the previous file whole and raises RamureError."""
-        atomic.write_text(path, self.text)
+    def save_grammar(self, path: str | os.PathLike, text: str | None = None) -> pathlib.Path:
+        """Save the grammar with the current ``n``, seed and constants written in
+        (:meth:`document_text`), atomically (temporary file, fsync, rename): a crash or a full
+        disk leaves the previous file whole and raises RamureError.  ``text``: write this text
+        instead (the editor's, when it holds an error); the document stays unsaved unless it is
+        the document's.
+
+        Refused (nothing written) while the plant has local edits (regrown or pruned parts,
+        fruit): a grammar cannot hold them; :meth:`save_session` does.
+        """
+        local = self.local_edits()
+        if local:
+            raise ValueRefused(local_edits_message(len(local)))
+        document = self.document_text()
+        if text is None:
+            check_round_trip(document, self.session, str(path))
+        atomic.write_text(path, document if text is None else text)
         self.path = pathlib.Path(path)
+        if text is None or text == document:
+            self.mark_saved()
+        self._left = (self.checkpoint(), self._left[1])
+        return self.path
 
     def save_session(self, path: str | os.PathLike) -> pathlib.Path:
-        return self.session.save(path)
+        """Save the session (grammar, n, seed, constants and every edit) as JSON; the plant is
+        then what is on disk."""
+        out = self.session.save(path)
+        self.mark_saved()
+        return out
 
     def load_session(self, path: str | os.PathLike) -> None:
-        """Load a session file; on error the current plant is untouched.
+        """Load a session file (a fresh history, a clean document); on error the current plant is
+        untouched.
 
         The loaded plant is drawn before it replaces the current one (as the constructor and
         :meth:`set_text` do): a session whose plant cannot be drawn (``F(1e300)``) is refused."""
         session = Session.load(path)
         skeleton = session.derivation.skeleton()  # a turtle error leaves the current plant as it is
         self.session, self.text = session, session.lsystem.text
-        self.selection, self.last_result, self.error = [], None, None
-        self._changed()
-        self._drawn(skeleton)
+        self.error = None
+        self._fresh(skeleton)
 
     def export(self, path: str | os.PathLike) -> pathlib.Path:
         """Export the plant mesh by suffix (:mod:`ramure.app.export`): .glb/.gltf (binary or JSON
@@ -477,6 +620,15 @@ class Explorer:
         from ramure.app.export import export_mesh
 
         return export_mesh(self.mesh, path)
+
+
+def local_edits_message(count: int) -> str:
+    """What Save grammar says when the plant has ``count`` local edits."""
+    return (
+        f"the plant has {count} regrown, pruned or fruit edit{'s' if count != 1 else ''} of a selection: "
+        "a grammar file cannot hold them (it only grows the whole plant again). "
+        "Use File ▸ Save session (.json) to keep them, or undo them to save the grammar"
+    )
 
 
 #: Tube quads the on-screen mesh aims at: above it, tubes get fewer sides (level of detail).
@@ -574,6 +726,10 @@ def write_obj(mesh: pv.PolyData, path: str | os.PathLike) -> pathlib.Path:
     return write(plant_parts(mesh), path)
 
 
+def _name(path):
+    return str(path) if path else None
+
+
 def finite_number(value: float | str, name: str) -> float:
     try:
         value = float(value)
@@ -589,6 +745,7 @@ __all__ = [
     "RamureError",
     "finite_number",
     "leaves_in_rectangle",
+    "local_edits_message",
     "warm_up_edits",
     "warm_up_in_background",
     "write_obj",

@@ -131,6 +131,12 @@ class LSystem:
         return self.grammar.n
 
     @property
+    def seed(self) -> int:
+        """The grammar's ``#seed`` (0 when the text has none): the seed :meth:`derive` and a
+        :class:`~ramure.lsys.regen.Session` use unless given one."""
+        return 0 if self.grammar.seed is None else int(self.grammar.seed)
+
+    @property
     def text(self) -> str:
         return self.grammar.text
 
@@ -184,12 +190,13 @@ class LSystem:
     def derive(
         self,
         n: int | None = None,
-        seed: int = 0,
+        seed: int | None = None,
         constants: Mapping[str, float] | None = None,
         params: dict | None = None,
         progress: Callable[[int, int], None] | None = None,
     ) -> Derivation:
-        """Derive ``n`` steps (default: the grammar's ``n:``) from the axiom.
+        """Derive ``n`` steps (default: the grammar's ``n:``) from the axiom, with random ``seed``
+        (default: the grammar's ``#seed``, else 0).
 
         ``constants`` overrides constant values for this derivation;
         ``params`` is a parameter combination ``{"rule": r or None, "constants": {...}}``
@@ -206,7 +213,7 @@ class LSystem:
                 f"{n} derivation steps are more than the limit of {self.max_steps:,}: "
                 "use fewer steps (or raise LSystem.max_steps)"
             )
-        check_seed(seed)
+        seed = self.seed if seed is None else check_seed(seed)
         consts = {**self.constants, **(constants or {})}
         check_constants(consts)
         unknown = set(constants or {}) - set(self.constants)

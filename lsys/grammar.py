@@ -58,6 +58,10 @@ Directives (one per line):
 ``#tropism tx ty tz e``
     ABOP tropism: after each ``F`` the heading bends toward (tx,ty,tz) by
     e·‖H×T‖.  Off by default; e·‖T‖ may be at most :data:`MAX_TROPISM_BEND`.
+``#seed N``
+    the random seed a plant of this grammar is derived with (a whole number
+    >= 0; default 0).  The explorers write it when the user changes the seed,
+    so a saved grammar grows the plant that was on screen.
 ``n: N``, ``w: axiom``, ``p:``
     derivation count, axiom, then one rule per line.
 
@@ -226,6 +230,8 @@ class Grammar:
     width_scale: float = 1.0
     tropism: tuple | None = None
     filename: str | None = None
+    #: The ``#seed`` directive's value (None: the text has none; plants derive with seed 0).
+    seed: int | None = None
     symbols: list = field(default_factory=list)
     amap: tuple = ()  # (role, symbol, line, column, source line) of each #amap annotation
     #: Rules of the ``interpretation:`` section (applied only for drawing, see
@@ -350,6 +356,7 @@ class GrammarParser:
         self.surfaces: dict[str, SurfaceDefinition] = {}
         self.materials: dict[int, tuple[float, ...]] = {}  # #surface and #material (lsys.surfaces, lsys.materials)
         self.n: int | None = None
+        self.seed: int | None = None
         self.axiom: list[ModuleSpec] | None = None
         self.rule_lines: list[list] = []  # [line, start, end, continuation pieces (line, start, end)] per rule
         self.section = "production"  # the rules section being read (production, interpretation, ...)
@@ -451,6 +458,7 @@ class GrammarParser:
             width_scale=self.settings["widthscale"],
             tropism=self.tropism,
             filename=self.filename,
+            seed=self.seed,
             amap=tuple(self.amap),
             interpretation_depth=self.depths["interpretation"],
             decomposition_depth=self.depths["decomposition"],
@@ -477,6 +485,16 @@ class GrammarParser:
         value = self.constant(line, start)
         if value != int(value) or value < 0:
             raise line.error(f"the derivation count must be a whole number >= 0, not {value:g}", start + 1)
+        return int(value)
+
+    def random_seed(self, line: SourceLine, start: int) -> int:
+        """The ``#seed`` value at ``start``: a whole number from 0 to 2^63 - 1."""
+        if not line.text[start:].strip():
+            raise line.error("#seed needs a whole number, e.g. '#seed 7'", start + 1)
+        value = self.constant(line, start)
+        if value != int(value) or not 0 <= value < 2**63:
+            at = start + 1 + len(line.text[start:]) - len(line.text[start:].lstrip())
+            raise line.error(f"the seed must be a whole number >= 0, not {value:g}", at)
         return int(value)
 
     def directive(self, line: SourceLine, start: int) -> None:
@@ -521,6 +539,8 @@ class GrammarParser:
             self.context_filter[name].update(p.symbol for p in self.modules_at(listed, rest, None, formal=True))
         elif name in self.settings:
             self.settings[name] = self.constant(line, rest)
+        elif name == "seed":
+            self.seed = self.random_seed(line, rest)
         elif name in ("interpretation_depth", "decomposition_depth"):
             depth = self.constant(line, rest)
             if depth != int(depth) or not 1 <= depth <= MAX_RULE_DEPTH:
@@ -554,7 +574,7 @@ class GrammarParser:
         else:
             raise line.error(
                 f"unknown directive '#{m.group(1)}' (known: #define, #function, #include, #module, #organ, "
-                "#ignore, #consider, #angle, #step, #width, #widthscale, #tropism, #amap, #surface, #material, "
+                "#ignore, #consider, #angle, #step, #width, #widthscale, #seed, #tropism, #amap, #surface, #material, "
                 "#interpretation_depth, #decomposition_depth)",
                 start + 1,
             )

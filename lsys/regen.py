@@ -319,7 +319,7 @@ class Session:
         self,
         lsystem: LSystem | str | pathlib.Path,
         n: int | None = None,
-        seed: int = 0,
+        seed: int | None = None,
         constants: Mapping[str, float] | None = None,
         filename: str | None = None,
     ) -> None:
@@ -329,7 +329,7 @@ class Session:
         self.lsystem = lsystem
         self.filename = filename
         self.n = lsystem.n if n is None else int(n)
-        self.seed = int(seed)
+        self.seed = lsystem.seed if seed is None else int(seed)  # default: the grammar's #seed
         self.base_constants = {**lsystem.constants, **(constants or {})}
         self.constants = dict(self.base_constants)
         self.derivation = lsystem.derive(n=self.n, seed=self.seed, constants=self.constants)

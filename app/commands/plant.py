@@ -91,7 +91,7 @@ def run_check(args: argparse.Namespace) -> int:
     g = ls.grammar
     print(
         f"{args.file}: ok — {len(g.rules)} rule(s), {len(g.constants)} constant(s), n = {g.n}, "
-        f"axiom {''.join(str(m) for m in g.axiom)}"
+        f"seed = {ls.seed}, axiom {''.join(str(m) for m in g.axiom)}"
     )
     return 0
 

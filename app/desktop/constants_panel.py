@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 SLIDER_STEPS = 1000
 SETTLE_MS = 60
 LIMIT = 1e9
+SEED_LIMIT = 2.0**53  # the largest whole number a double holds exactly
 
 
 def _spin(lo=-LIMIT, hi=LIMIT, decimals=4, width=96):
@@ -135,7 +136,7 @@ class ConstantsPanel(QWidget):
     """Sliders for the grammar's constants plus the derivation count and seed."""
 
     constant_changed = Signal(str, float, int)  # name, value, drag gesture (0: a single change)
-    derivation_changed = Signal(int, int)  # n, seed
+    derivation_changed = Signal(int, object)  # n, seed (a Python int: seeds go past 2^31)
     range_refused = Signal(str)
 
     def __init__(self, parent: QWidget | None = None) -> None:
@@ -154,9 +155,10 @@ class ConstantsPanel(QWidget):
         self.n_box.setObjectName("derivationCount")
         self.n_box.setRange(0, 30)
         self.n_box.setKeyboardTracking(False)
-        self.seed_box = QSpinBox()
+        self.seed_box = QDoubleSpinBox()  # a whole number, but beyond a QSpinBox's 2^31 (a regrow's seed)
         self.seed_box.setObjectName("seed")
-        self.seed_box.setRange(0, 2_000_000_000)
+        self.seed_box.setDecimals(0)
+        self.seed_box.setRange(0, SEED_LIMIT)
         self.seed_box.setKeyboardTracking(False)
         self.n_box.valueChanged.connect(self._derivation)
         self.seed_box.valueChanged.connect(self._derivation)
@@ -260,7 +262,7 @@ class ConstantsPanel(QWidget):
             self._flush()
 
     def _derivation(self, _) -> None:
-        self.derivation_changed.emit(self.n_box.value(), self.seed_box.value())
+        self.derivation_changed.emit(self.n_box.value(), int(self.seed_box.value()))
 
     # -- for tests and scripting ------------------------------------------------
     def set_constant(self, name: str, value: float, now: bool = True) -> None:

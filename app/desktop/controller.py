@@ -28,17 +28,16 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from PySide6.QtCore import QObject, Signal
 
 from ramure.app.desktop import state
-from ramure.app.desktop.history import Timeline
 from ramure.app.desktop.workers import JobQueue
 from ramure.app.model import Explorer, leaves_in_rectangle, warm_up_in_background
 from ramure.errors import RamureError
-from ramure.lsys.grammar import read_grammar_file
 
 if TYPE_CHECKING:
     import numpy as np
 
     from ramure.app.desktop.state import Snapshot
     from ramure.app.desktop.workers import Job
+    from ramure.app.history import Timeline
     from ramure.lsys.cut import CutResult
 
 T = TypeVar("T")
@@ -70,8 +69,7 @@ class Controller(QObject):
         self.jobs = JobQueue(self._execute, self)
         self.jobs.finished.connect(self._finished)
         self.jobs.busy_changed.connect(self.busy_changed)
-        self.timeline = Timeline()  # sessions replaced by a new text, n or seed (undo walks back)
-        self.snapshot = state.take_snapshot(explorer, timeline=self.timeline)
+        self.snapshot = state.take_snapshot(explorer)
         self.last_job_seconds = 0.0
         self._gesture_edits: dict[int, dict] = {}  # slider-drag gesture -> its edit (see set_constant)
 
@@ -87,33 +85,26 @@ class Controller(QObject):
     def _execute(self, job) -> None:  # worker thread
         with self.lock:
             ex = self.explorer
-            before, edits = ex.checkpoint(), list(ex.session.edits)
             try:
                 job.result = job.fn(ex)
             except Exception as exc:  # noqa: BLE001 - reported to the user, never fatal
                 job.error = exc
                 job.details = traceback.format_exc()
-            if job.name not in ("undo", "redo"):
-                self._record(before, edits)
-
             try:
-                job.snapshot = state.take_snapshot(ex, self.snapshot, self.timeline, job.name)
+                job.snapshot = state.take_snapshot(ex, self.snapshot, job.name)
             except Exception as exc:  # noqa: BLE001
                 if job.error is None:
                     job.error = exc
                     job.details = traceback.format_exc()
 
-    def _record(self, before, edits) -> None:  # worker thread
-        """Keep the history one line: a replaced session is remembered, a new edit ends Redo."""
-        session = self.explorer.session
-        if session is not before["session"]:
-            self.timeline.leave(before, len(edits))
-        elif len(session.edits) != len(edits) or any(a is not b for a, b in zip(session.edits, edits)):
-            self.timeline.new_edit()
+    @property
+    def timeline(self) -> Timeline:
+        """The model's history of replaced sessions (:attr:`Explorer.timeline`)."""
+        return self.explorer.timeline
 
     def _finished(self, job) -> None:  # GUI thread
         self.last_job_seconds = time.perf_counter() - job.submitted
-        snap = job.snapshot
+        snap = self._fresh_light(job.snapshot)
         if snap is not None and not (job.stale and job.error is None):
             self._publish(snap)
         if job.error is not None and not job.stale:
@@ -122,6 +113,18 @@ class Controller(QObject):
             else:
                 self.crashed.emit(f"{type(job.error).__name__}: {job.error}", job.details)
         self.job_done.emit(job)
+
+    def _fresh_light(self, snap):
+        """``snap`` with its light parts (dirty, undo...) read again when the plant is the same: a
+        save or a selection in the GUI thread may have come between the job's end and now."""
+        if snap is None or snap.version != self.snapshot.version or not self.lock.acquire(blocking=False):
+            return snap
+        try:
+            if self.explorer.version != snap.version:
+                return snap
+            return state.take_snapshot(self.explorer, snap, snap.job)
+        finally:
+            self.lock.release()
 
     def _publish(self, snap) -> None:
         old = self.snapshot
@@ -134,7 +137,7 @@ class Controller(QObject):
     def refresh(self) -> Snapshot:
         """Re-read the light parts of the model (selection, status...) in the GUI thread."""
         with self.lock:
-            snap = state.take_snapshot(self.explorer, self.snapshot, self.timeline)
+            snap = state.take_snapshot(self.explorer, self.snapshot)
         self._publish(snap)
         return snap
 
@@ -193,41 +196,23 @@ class Controller(QObject):
 
     def undo(self) -> Job:
         """Undo the last plant edit, or go back to the plant before the last text, n or seed change."""
-
-        def run(ex):
-            if ex.session.can_undo:
-                return ex.undo()
-            return self.timeline.back(ex, len(ex.session.edits)) or None
-
-        return self.submit("undo", run)
+        return self.submit("undo", lambda ex: ex.undo())
 
     def redo(self) -> Job:
         """Redo what Undo took back, in the order it was done."""
-
-        def run(ex):
-            stop = self.timeline.stop()
-            if ex.session.can_redo and (stop is None or len(ex.session.edits) < stop):
-                return ex.redo()
-            return self.timeline.forward(ex, len(ex.session.edits)) or None
-
-        return self.submit("redo", run)
+        return self.submit("redo", lambda ex: ex.redo())
 
     def load_session(self, path: str | os.PathLike) -> Job:
         return self.submit("load session", lambda ex: ex.load_session(path))
 
     def load_grammar(self, path: str | os.PathLike) -> Job:
-        """Replace the plant by a grammar file (a fresh session); the job's result is the text."""
+        """Replace the plant by a grammar file: a fresh session and a fresh history (see
+        :meth:`Explorer.open_grammar`); the job's result is the text."""
         path = pathlib.Path(path)
 
         def run(ex):
-            text = read_grammar_file(path)  # a regular UTF-8 file only, never a device or a pipe
-            old = ex.path
-            ex.path = path
-            err = ex.set_text(text)
-            if err is not None:
-                ex.path = old
-                raise err
-            return text
+            ex.open_grammar(path)
+            return ex.text
 
         return self.submit("open grammar", run, key="text")
 
@@ -261,7 +246,7 @@ class Controller(QObject):
             self._current(ex)
             fn(ex)
             grammar.append((ex.text, ex.session.n))
-            return state.take_snapshot(ex, self.snapshot, self.timeline)
+            return state.take_snapshot(ex, self.snapshot)
 
         self.snapshot = self.read(run)
         self.selection_changed.emit(self.snapshot.selection)
@@ -303,9 +288,9 @@ class Controller(QObject):
         self._select(run)
         return found
 
-    def set_rho(self, value: float) -> Job:
-        """ρ (0-100 or a fraction); a job, so a regrow asked for after it uses it."""
-        return self.submit("rho", lambda ex: ex.set_rho(value), key="rho")
+    def set_rho(self, fraction: float) -> Job:
+        """ρ, a fraction in (0, 1]; a job, so a regrow asked for after it uses it."""
+        return self.submit("rho", lambda ex: ex.set_rho(fraction), key="rho")
 
     def kinship_colors(self) -> np.ndarray | None:
         """Per-cell kinship RGB of the plant on screen (None unless exactly one leaf is selected)."""

@@ -124,8 +124,6 @@ class DefectsPanel(QWidget):
     def apply(self) -> Job:
         """Record the list on the selected fruit (one undoable edit) and show it damaged."""
         specs = self.spec_list()
-        if self.main_window is not None:
-            self.main_window.dirty = True
         return self.controller.submit(JOB, lambda ex: ("applied", ex.set_fruit_defects(specs)))
 
     def refresh(self) -> Job | None:

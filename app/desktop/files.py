@@ -11,10 +11,10 @@ import os
 import pathlib
 from typing import TYPE_CHECKING
 
-from PySide6.QtWidgets import QFileDialog
+from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from ramure.errors import RamureError, ValueRefused
-from ramure.io import write_text
+from ramure.app.model import local_edits_message
 
 if TYPE_CHECKING:
     from PySide6.QtCore import QSettings
@@ -93,7 +93,14 @@ class FileActions:
         return job
 
     def save_grammar(self, path: str | os.PathLike | None = None, ask: bool = False) -> pathlib.Path | None:
+        """Write the grammar with the plant's ``n``, seed and constants in it (what the editor
+        shows).  A plant with regrown or pruned parts cannot be a grammar: say so and offer
+        Save session instead (the window stays unsaved)."""
+        self.window.flush_edits()  # a slider or typing still in its pause is part of what is saved
+        self.controller.wait_idle()
         snap = self.controller.snapshot
+        if snap.local_edits:
+            return self._offer_session(local_edits_message(snap.local_edits))
         if path is None and (ask or snap.path is None):
             path = self._ask_save("Save grammar", GRAMMAR_FILTER, ".lsys")
             if path is None:
@@ -101,19 +108,34 @@ class FileActions:
         target = path or snap.path
         assert target is not None  # asked above when the grammar has no file yet
         path = pathlib.Path(target)
-        self.window.flush_edits()  # a slider or typing still in its pause is part of what is saved
-        self.controller.wait_idle()
-        text = self.window.editor.text()  # what is on screen (the #define lines follow the sliders)
+        text = self.window.editor.text()  # the editor's own text only when it holds an error
+        own = text if snap.error is not None and text != snap.text else None
         try:
-            write_text(path, text)  # temporary file, fsync, rename
-            self.controller.read(lambda ex: setattr(ex, "path", path), wait=None)
-        except OSError as exc:
-            self.window.report_refused(f"cannot save {path}: {exc.strerror or exc}")
+            self.controller.read(lambda ex: ex.save_grammar(path, text=own), wait=None)
+        except (OSError, RamureError) as exc:
+            self.window.report_refused(f"cannot save {path}: {getattr(exc, 'strerror', None) or exc}")
             return None
         self.window.mark_saved()
         self.remember(path)
         self.window.status(f"Saved {path}")
         return path
+
+    def _offer_session(self, message: str) -> pathlib.Path | None:
+        """Say why the grammar cannot be saved; when the window may ask, offer Save session."""
+        if not self.window.ask:
+            self.window.report_refused(message)
+            return None
+        self.window.status(message, 8000)
+        answer = QMessageBox.question(
+            self.window,
+            "Save grammar",
+            message + "\n\nSave a session instead?",
+            QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Cancel,
+            QMessageBox.StandardButton.Save,
+        )
+        if answer == QMessageBox.StandardButton.Save:
+            return self.save_session()
+        return None
 
     # -- session ----------------------------------------------------------------
     def save_session(self, path: str | os.PathLike | None = None) -> pathlib.Path | None:

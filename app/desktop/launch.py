@@ -32,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
         "grammar", nargs="?", default=DEFAULT_GRAMMAR, help="an .lsys grammar file or a shipped grammar's name (honda_sympodial)"
     )
     p.add_argument("-n", type=int, default=None, help="derivation steps (default: the grammar's n:)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int, default=None, help="random seed (default: the grammar's #seed, else 0)")
     p.add_argument("--screenshot", metavar="PATH", help="save a PNG of the window once the plant is drawn")
     p.add_argument("--quit-after", metavar="SECONDS", type=float, default=None, help="close the window after this many seconds")
     return p

@@ -18,7 +18,6 @@ few rules that are the window's own (the range a constant's slider offers).
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -26,11 +25,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ramure.app.document import DEFINE_LINE, format_constant, text_with_constants  # noqa: F401 (the desktop's names)
 from ramure.app.render import plant_colors
 
 if TYPE_CHECKING:
     import pyvista as pv
-    from ramure.app.desktop.history import Timeline
     from ramure.app.model import Explorer
     from ramure.lsys import GrammarError
     from ramure.lsys.cut import CutResult
@@ -68,6 +67,8 @@ class Snapshot:
     edits: int = 0
     extra: dict = field(default_factory=dict)
     job: str = ""  # the job that took this snapshot ("grammar" when the editor's text made it)
+    dirty: bool = False  # the plant differs from the file last saved or opened
+    local_edits: int = 0  # regrows, prunes and fruit edits of parts (a grammar file cannot hold them)
     organ_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # leaf and fruit centres
     organ_leaves: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # their history leaves
 
@@ -78,17 +79,9 @@ class Snapshot:
         return self.skeleton.midpoints()
 
 
-def take_snapshot(
-    explorer: Explorer, previous: Snapshot | None = None, timeline: Timeline | None = None, job: str = ""
-) -> Snapshot:
-    """A :class:`Snapshot` of ``explorer``; reuses ``previous``'s heavy parts if the version is the same.
-
-    ``timeline`` (a :class:`~ramure.app.desktop.history.Timeline`) adds the sessions
-    left behind to what Undo and Redo can reach.
-    """
+def take_snapshot(explorer: Explorer, previous: Snapshot | None = None, job: str = "") -> Snapshot:
+    """A :class:`Snapshot` of ``explorer``; reuses ``previous``'s heavy parts if the version is the same."""
     session = explorer.session
-    back = timeline is not None and timeline.can_back
-    forward = timeline is not None and timeline.can_forward
     light: dict[str, Any] = dict(
         text=shown_text(explorer),
         error=explorer.error,
@@ -99,8 +92,10 @@ def take_snapshot(
         rho=explorer.rho,
         selection=tuple(explorer.selection),
         status=status_line(explorer),
-        can_undo=session.can_undo or back,
-        can_redo=session.can_redo or forward,
+        can_undo=explorer.can_undo,
+        can_redo=explorer.can_redo,
+        dirty=explorer.dirty,
+        local_edits=len(explorer.local_edits()),
         last_result=explorer.last_result,
         path=explorer.path,
         edits=len(session.edits),
@@ -132,9 +127,10 @@ def take_snapshot(
 
 
 def shown_text(explorer: Explorer) -> str:
-    """The grammar text as the editor shows it: the ``#define`` lines carry the session's current
-    constants (a slider edit rewrites its line; undoing it puts the old value back)."""
-    return text_with_constants(explorer.text, explorer.constants, explorer.lsystem.constants)
+    """The grammar text as the editor shows it: the ``n:``, ``#seed`` and ``#define`` lines carry
+    the session's current values (a slider edit rewrites its line; undoing it puts the old value
+    back): :meth:`~ramure.app.model.Explorer.document_text`, what Save writes."""
+    return explorer.document_text()
 
 
 def set_constants_from_text(explorer: Explorer, text: str) -> GrammarError | None:
@@ -246,45 +242,10 @@ def selected_modules(explorer: Explorer, limit: int = 200) -> list[str]:
 
 
 # -- constants -------------------------------------------------------------------
-_DEFINE = re.compile(r"^(\s*#\s*define\s+)([A-Za-z_][A-Za-z_0-9]*)(\s+)(.*?)(\s*(?://.*|/\*.*)?)$")
-
-
-def format_constant(value: float) -> str:
-    """A constant as the grammar text writes it: ``60``, ``0.9``, ``1e-05`` (10 significant digits)."""
-    return f"{float(value):.10g}"
-
-
-def text_with_constants(text: str, constants: Mapping[str, float], written: Mapping[str, float]) -> str:
-    r"""``text`` with each ``#define`` whose value differs from ``written`` (what the text says)
-    rewritten to ``constants``' value; unchanged lines (expressions included) stay as typed.
-
-    The comment after a rewritten value keeps its column where the spaces allow.
-
-    >>> text_with_constants("#define a2 60   // angle\n#define r 0.9", {"a2": 30.0, "r": 0.9},
-    ...                     {"a2": 60.0, "r": 0.9})
-    '#define a2 30   // angle\n#define r 0.9'
-    """
-    changed = {k: v for k, v in constants.items() if k in written and float(v) != float(written[k])}
-    if not changed:
-        return text
-    lines = text.split("\n")
-    for i, line in enumerate(lines):
-        m = _DEFINE.match(line)
-        if not m or m.group(2) not in changed:
-            continue
-        head, name, gap, value, tail = m.groups()
-        new = format_constant(changed[name])
-        if tail.strip():  # keep the comment's column: pad or trim the spaces before it
-            spaces = len(tail) - len(tail.lstrip())
-            tail = " " * max(1, spaces + len(value) - len(new)) + tail.lstrip()
-        lines[i] = head + name + gap + new + tail
-    return "\n".join(lines)
-
-
 def without_define_values(text: str) -> str:
     """``text`` with every ``#define`` value blanked: equal for two texts that differ only there."""
     return "\n".join(
-        _DEFINE.sub(lambda m: m.group(1) + m.group(2) + " _" + _comment(m.group(5)), line) for line in text.split("\n")
+        DEFINE_LINE.sub(lambda m: m.group(1) + m.group(2) + " _" + _comment(m.group(5)), line) for line in text.split("\n")
     )
 
 

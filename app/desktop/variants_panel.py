@@ -291,7 +291,6 @@ class VariantsController:
     # -- applying -----------------------------------------------------------------
     def apply_pick(self, pick: Mapping[str, Any]) -> Job:
         """Regrow the selection (or whole plant) with a gallery pick's parameter combination."""
-        self.window.dirty = True
         return self.controller.regrow(params=pick.get("params"))
 
     def apply_qualifier(self, name: str) -> Job | Task:
@@ -305,7 +304,6 @@ class VariantsController:
             return self.explore(then=lambda: self.apply_qualifier(name))
         assert self.variant_set is not None and self.variant_set.exploration is not None  # explored()
         sweep = self.variant_set.exploration.sweep
-        self.window.dirty = True
         job = self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep))
         self.window.status(
             f"Applying '{name}': trying the best variants on the "  # after "Computing…"
@@ -388,7 +386,6 @@ class VariantsController:
 
     def regrow_fruit(self, preset: str = "") -> Job:
         """New seed (and ``preset`` shape, if given) for the selected fruit; shows the volumes."""
-        self.window.dirty = True
         job = self.controller.submit("regrow fruit", lambda ex: ex.regrow_fruit(preset=preset) if preset else ex.regrow_fruit())
         if not self.show_fruit:
             self.fruit_toggle.setChecked(True)  # fruit settings show on the volumes

@@ -83,7 +83,6 @@ class MainWindow(QMainWindow):
         self.controller = Controller(explorer, self)
         self.files = FileActions(self, self.settings)
         self.kinship = False
-        self.dirty = False
         self.pending_open: tuple[int, pathlib.Path] | None = None
         self.after_load: int | None = None
         self.message_box: QMessageBox | None = None
@@ -473,15 +472,12 @@ class MainWindow(QMainWindow):
 
     # -- user actions -------------------------------------------------------------------
     def _text_settled(self, text) -> None:
-        self.dirty = True
         self.controller.set_text(text)
 
     def _constant(self, name, value, gesture=0) -> None:
-        self.dirty = True
         self.controller.set_constant(name, value, gesture)
 
     def _derivation(self, n, seed) -> None:
-        self.dirty = True
         self.controller.set_derivation(n, seed)
 
     def flush_edits(self) -> None:
@@ -499,25 +495,23 @@ class MainWindow(QMainWindow):
         self.flush_edits()
         return self.controller.redo()
 
-    def _rho(self, value) -> None:
-        self.controller.set_rho(value)
+    def _rho(self, percent) -> None:
+        """The slider's percent, as the fraction the model takes."""
+        self.controller.set_rho(percent / 100.0)
 
     def _regrow(self) -> None:
-        self.dirty = True
         self.controller.regrow()
 
     def _regrow_with_constants(self, constants) -> None:
         if not constants:
             self.status("Change a value under 'Constants for the selection' first.")
             return
-        self.dirty = True
         self.controller.regrow(constants=constants)
 
     def _prune(self) -> None:
         if not self.controller.snapshot.selection:
             self.report_refused("select the branches to prune first")
             return
-        self.dirty = True
         self.controller.prune()
 
     def _clear_selection(self) -> None:
@@ -637,11 +631,29 @@ class MainWindow(QMainWindow):
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
     def mark_saved(self) -> None:
-        self.dirty = False
-        self.show_state(self.controller.snapshot)
+        """Show the model's state after a save or an open (the title loses its "*")."""
+        self.controller.refresh()
+
+    @property
+    def dirty(self) -> bool:
+        """Unsaved changes: the model's plant differs from the file (see
+        :attr:`Explorer.dirty <ramure.app.model.Explorer.dirty>`), or typing not yet sent or
+        not parsed."""
+        snap = self.controller.snapshot
+        return snap.dirty or self.editor.pending() or snap.error is not None
+
+    @dirty.setter
+    def dirty(self, value: bool) -> None:
+        """``False`` takes the plant as saved (no question on closing: tests, scripts); the model
+        says when it is dirty, so ``True`` changes nothing."""
+        if not value:
+            self.controller.read(lambda ex: ex.mark_saved(), wait=None)
+            self.controller.refresh()
 
     def confirm_discard(self) -> bool:
         """True if there are no unsaved changes or the user agrees to lose them."""
+        self.flush_edits()  # a change still in its pause or its job counts
+        self.controller.wait_idle()
         if not self.dirty or not self.ask:
             return True
         answer = QMessageBox.question(

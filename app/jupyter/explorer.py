@@ -164,8 +164,8 @@ class EditPanel:
 
     def refresh(self) -> None:
         model = self.app.model
-        self.undo.disabled = not model.session.can_undo
-        self.redo.disabled = not model.session.can_redo
+        self.undo.disabled = not model.can_undo
+        self.redo.disabled = not model.can_redo
         self.prune.disabled = not model.selection
         has_fruit = bool(model.selection) and bool(set(model.selection) & set(model.fruit_ids()))
         self.regrow_fruit.disabled = not has_fruit or not fruit_presets()
@@ -338,8 +338,8 @@ class Explorer:
     def set_text(self, text: str) -> GrammarError | None:
         """Parse new grammar text; a parse error is shown at its line and column."""
         model = self.model
-        if text == model.text and model.error is None:
-            return None
+        if text in (model.text, model.document_text()) and model.error is None:
+            return None  # the text shown: nothing to re-derive (regrown parts stay)
         self.grammar.show_text(text)
         err = model.set_text(text)
         if err is not None:
@@ -384,9 +384,16 @@ class Explorer:
 
         self.run(apply)
 
-    def set_rho(self, rho: float) -> None:
-        """ρ as a percentage (1-100) or a fraction."""
-        self.run(lambda: self.model.set_rho(rho), note=f"ρ = {rho}")
+    def set_rho(self, percent: float) -> None:
+        """ρ as a percentage (1-100, the slider's unit); the model takes the fraction."""
+
+        def apply():
+            value = _number(percent, "ρ %")
+            if not 0 < value <= 100:
+                raise ValueRefused(f"rho must be in (0, 100] %, not {value:g}")
+            self.model.set_rho(value / 100.0)
+
+        self.run(apply, note=f"ρ = {percent} %")
 
     # -- selection -------------------------------------------------------------------
     def select(self, leaf_ids: int | Iterable[int], mode: str = "replace") -> None:

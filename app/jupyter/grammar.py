@@ -52,7 +52,7 @@ class GrammarPanel:
         self.app = app
         model = app.model
         self.text = W.Textarea(
-            value=model.text if text is None else text, rows=14, continuous_update=False, layout=W.Layout(width="98%")
+            value=model.document_text() if text is None else text, rows=14, continuous_update=False, layout=W.Layout(width="98%")
         )
         self.text.add_class("ramure-grammar")
         self.error = W.HTML()
@@ -158,8 +158,9 @@ class GrammarPanel:
         model = self.app.model
         err = model.error
         self.error.value = message_html(err) if err is not None else ""
-        if err is None and self.text.value != model.text:
-            self.show_text(model.text)  # e.g. after loading a session
+        shown = model.document_text()  # the text with the plant's n, seed and constants: what Save writes
+        if err is None and self.text.value != shown:
+            self.show_text(shown)  # e.g. after loading a session, a gallery pick
         for w, v in ((self.n, model.session.n), (self.seed, model.session.seed)):
             if w.value != v:
                 w.value = v

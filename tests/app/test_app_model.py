@@ -72,7 +72,7 @@ def test_bad_values_refused_and_nothing_changes(ex):
 
 def test_regrow_undo_redo_and_version(ex):
     before = ex.derivation.to_string()
-    ex.set_rho(80)
+    ex.set_rho(0.8)
     assert ex.rho == 0.8
     ex.select(ex.session.leaves_with_symbol("F")[-6:])
     v = ex.version

@@ -126,6 +126,7 @@ def test_set_constant_merging_replaces_only_its_own_last_edit():
     with pytest.raises(RamureError):
         state.set_constant_merging(ex, "a2", float("nan"), previous=second)
     assert len(ex.session.edits) == 1 and ex.constants["a2"] == 40  # refused: history as it was
+    ex.select(ex.session.leaves_with_symbol("F")[-3:])
     ex.regrow(seed=1)  # another edit in between: the drag's next value is a new step
     state.set_constant_merging(ex, "a2", 30, previous=second)
     assert [e["op"] for e in ex.session.edits] == ["constants", "regrow", "constants"]

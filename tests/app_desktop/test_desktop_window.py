@@ -206,7 +206,7 @@ def test_invalid_grammar_shows_the_error_and_keeps_the_plant(make_window, qtbot)
     assert "zz" in w.editor.message.text()
     assert w.editor.underlined() == (line, column)
     assert w.drawn_version == version and w.view.mesh.n_cells == cells
-    assert w.controller.explorer.text == text  # the model kept the last good grammar
+    assert w.controller.explorer.document_text() == text  # the model kept the last good grammar
     # fixing it derives the new text and clears the underline
     w.editor.edit.setPlainText(text.replace("#define a2 60", "#define a2 45"))
     qtbot.waitUntil(lambda: w.editor.error is None and w.drawn_version != version, timeout=5000)

@@ -219,6 +219,25 @@ def test_rho_slider(explorer):
     assert ex.message.kind == "error" and ex.model.rho == pytest.approx(0.3)
 
 
+def test_rho_slider_is_a_percent_the_model_a_fraction(explorer):
+    ex = explorer
+    ex.edits.rho.value = 1  # the slider's minimum: 1 %, not ρ = 1 (issue 34)
+    assert ex.model.rho == pytest.approx(0.01)
+    ex.edits.rho.value = 100
+    assert ex.model.rho == pytest.approx(1.0)
+
+
+def test_grammar_box_shows_n_and_seed_and_keeps_the_plant_when_sent_back(explorer):
+    ex = explorer
+    ex.set_derivation(seed=9)
+    assert "#seed 9" in ex.grammar.text.value  # what Save writes
+    ex.select(ex.model.session.leaves_with_symbol("F")[-2:])
+    ex.regrow()
+    edits = list(ex.model.session.edits)
+    ex.set_text(ex.grammar.text.value)  # the shown text, unchanged: the regrown part stays
+    assert ex.model.session.edits == edits and ex.model.session.seed == 9
+
+
 def test_rho_changes_the_cut():
     # with ρ low the cut climbs above a partly selected parent; with ρ high it stays low
     ex = Explorer(HONDA, n=5, view="static", size=(120, 120))

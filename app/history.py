@@ -1,4 +1,7 @@
-"""One undo history for the whole window: grammar text, constants, n, seed and plant edits.
+"""One undo history for the explorer: grammar text, constants, n, seed and plant edits.
+
+:class:`~ramure.app.model.Explorer` keeps one :class:`Timeline` (both front ends undo
+through it).
 
 The model's :class:`~ramure.lsys.regen.Session` keeps the plant edits
 (regrow, prune, constants, fruit) with their own undo and redo.  Changing the
