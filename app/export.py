@@ -20,9 +20,12 @@ with numpy; the writers only lay those arrays out:
            (one self-contained file: nothing is written beside it).
 ``.obj``   one group per organ kind (``g bark``, ``g leaves``...), ``usemtl``
            per material, ``v``/``vn``/``f a//a`` lines; the materials go to
-           ``NAME.mtl`` beside it (``Kd`` the colour).  Both files are
-           written atomically, the ``.mtl`` first, so the OBJ never names a
-           material file that is not there.
+           ``NAME.XXXXXXXX.mtl`` beside it (``Kd`` the colour; ``XXXXXXXX``
+           the first 8 hex digits of the materials' SHA-256).  Both files are
+           written atomically, the ``.mtl`` first under its new name, so at
+           every moment, a crash included, the OBJ on disk names a material
+           file that is there and holds its materials; material files of
+           earlier exports of NAME (that pattern) go once the OBJ is in place.
 ``.vtp``/``.vtk``  the mesh as it is (quads stay quads), with cell data
            ``leaf_id``, ``kind`` (organ kind), ``material`` (index into the
            material table, -1 for the default colour of the kind) and ``rgb``.
@@ -47,10 +50,13 @@ glTF, Blender and Unity expect (a rotation, handedness kept).
 from __future__ import annotations
 
 import base64
+import glob
+import hashlib
 import io
 import json
 import os
 import pathlib
+import re
 import struct
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -458,18 +464,36 @@ def mtl_text(parts: Sequence[Part]) -> str:
 
 
 def write_obj(parts: Sequence[Part], path: str | os.PathLike, yup: bool = False) -> pathlib.Path:
-    """Write ``path`` (.obj) and ``path.mtl`` beside it, each atomically, the material file first."""
+    """Write ``path`` (.obj) and its material file beside it, each atomically, the material file
+    first under a name of its own (see the module docstring): a ``kill -9`` between the two
+    leaves the previous OBJ with the previous materials, never an OBJ beside a material file
+    that lacks its materials."""
     path = pathlib.Path(path)
     parts = [p for p in parts if len(p.triangles)]
     if not parts:
         raise ValueRefused("nothing to export: the mesh has no surface")
     if path.is_dir():
         raise RamureError(f"cannot write {path}: it is a folder")
-    mtl = path.with_suffix(".mtl")
+    materials = mtl_text(parts)
+    mtl = material_file(path, materials)
     body = obj_text(parts, mtl.name, yup)
-    write_text(mtl, mtl_text(parts))
+    write_text(mtl, materials)
     write_text(path, body)
+    for old in path.parent.glob(f"{glob.escape(path.stem)}.*.mtl"):
+        if old != mtl and re.fullmatch(r"[0-9a-f]{8}", old.name[len(path.stem) + 1 : -len(".mtl")]):
+            old.unlink(missing_ok=True)  # an earlier export's materials: no OBJ names them now
     return path
+
+
+def material_file(path: pathlib.Path, materials: str) -> pathlib.Path:
+    """The material file of OBJ ``path`` for ``materials``: ``NAME.XXXXXXXX.mtl``, named by the
+    content, so new materials never replace the file the OBJ on disk still names.
+
+    >>> material_file(pathlib.Path("out/plant.obj"), "newmtl bark\\n").name
+    'plant.0739fd26.mtl'
+    """
+    digest = hashlib.sha256(materials.encode("utf-8")).hexdigest()[:8]
+    return path.with_name(f"{path.stem}.{digest}.mtl")
 
 
 # -- VTK ---------------------------------------------------------------------------

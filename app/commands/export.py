@@ -3,7 +3,7 @@
 Examples::
 
     ramure export grammars/abop/plant_1_26.lsys -o plant.glb
-    ramure export fruit_tree -n 5 -o tree.obj --yup      # tree.obj + tree.mtl, Y up for Blender
+    ramure export fruit_tree -n 5 -o tree.obj --yup      # tree.obj + tree.XXXXXXXX.mtl, Y up for Blender
 
 The format follows the suffix (see :mod:`ramure.app.export`); a suffix
 Ramure does not write is refused before anything is derived.

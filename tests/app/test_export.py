@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import pathlib
 import struct
 
 import numpy as np
@@ -133,8 +134,9 @@ def test_material_table_from_the_mesh_field_data():
 def test_obj_has_groups_materials_normals(mesh, tmp_path):
     path = E.export_mesh(mesh, tmp_path / "plant.obj")
     lines = path.read_text().splitlines()
-    mtl = (tmp_path / "plant.mtl").read_text()
-    assert "mtllib plant.mtl" in lines and mtl.count("newmtl") == 3
+    (mtl_path,) = tmp_path.glob("plant.*.mtl")
+    mtl = mtl_path.read_text()
+    assert f"mtllib {mtl_path.name}" in lines and mtl.count("newmtl") == 3
     assert [ln.split()[1] for ln in lines if ln.startswith("g ")] == ["bark", "leaves", "fruit"]
     assert f"Kd {BARK[0]:.4f} {BARK[1]:.4f} {BARK[2]:.4f}" in mtl
     v = sum(ln.startswith("v ") for ln in lines)
@@ -180,7 +182,7 @@ def test_failed_export_keeps_the_previous_file(tmp_path):
     (tmp_path / "folder.obj").mkdir()
     with pytest.raises(RamureError, match="it is a folder"):
         E.export_mesh(pv.Cube(), tmp_path / "folder.obj")
-    assert not (tmp_path / "folder.mtl").exists()  # refused before the material file is written
+    assert not list(tmp_path.glob("*.mtl"))  # refused before the material file is written
 
 
 def test_glb_replaces_atomically(mesh, tmp_path, monkeypatch):
@@ -263,8 +265,44 @@ def test_wood_export_writes_one_material_per_tissue_colour(tmp_path):
     grid = pv.ImageData(dimensions=(3, 2, 2)).cast_to_unstructured_grid()  # two hexahedra
     grid.cell_data["rgb"] = np.array([[214, 170, 110], [110, 70, 40]], np.uint8)
     obj = export_glb(grid, tmp_path / "wood.obj")
-    assert (tmp_path / "wood.mtl").read_text().count("newmtl") == 2
+    (mtl,) = tmp_path.glob("wood.*.mtl")
+    assert mtl.read_text().count("newmtl") == 2
     faces = [ln for ln in obj.read_text().splitlines() if ln.startswith("f ")]
     assert len(faces) == 2 * 10  # 10 boundary quads (the shared face is inside), 2 triangles each
     doc, _ = E.read_glb(export_glb(grid, tmp_path / "wood.glb"))
     assert sorted(m["name"] for m in doc["materials"]) == ["color_6e4628", "color_d6aa6e"]
+
+
+def test_obj_and_materials_change_together(mesh, tmp_path, monkeypatch):
+    """Issue 37, item 10: a crash between the two files never leaves an OBJ beside a material
+    file that lacks its materials; the next export leaves one material file, no debris."""
+    target = tmp_path / "plant.obj"
+    E.export_mesh(mesh, target)
+    old_obj = target.read_text()
+    other = mesh.copy()
+    other.field_data["material_rgba"] = np.array([[7, 0.9, 0.1, 0.1, 1.0]])
+    other.cell_data["material"] = np.full(other.n_cells, 7)
+    written = []
+
+    def killed_at_the_obj(path, text, *args, **kwargs):
+        if str(path).endswith(".obj"):
+            raise RamureError("killed")  # as a kill -9 right after the material file
+        written.append(pathlib.Path(path))
+        return real(path, text, *args, **kwargs)
+
+    real = E.write_text
+    monkeypatch.setattr(E, "write_text", killed_at_the_obj)
+    with pytest.raises(RamureError, match="killed"):
+        E.export_mesh(other, target)
+    assert target.read_text() == old_obj
+    named = tmp_path / next(ln.split()[1] for ln in old_obj.splitlines() if ln.startswith("mtllib"))
+    used = {ln.split()[1] for ln in old_obj.splitlines() if ln.startswith("usemtl")}
+    assert used <= {ln.split()[1] for ln in named.read_text().splitlines() if ln.startswith("newmtl")}
+    assert written and written[0] != named  # the new materials went to a file of their own
+    monkeypatch.setattr(E, "write_text", real)
+    E.export_mesh(other, target)
+    (mtl,) = tmp_path.glob("plant.*.mtl")  # the earlier ones are gone
+    assert f"mtllib {mtl.name}" in target.read_text() and "material7" in mtl.read_text()
+    (tmp_path / "plant.mtl").write_text("a user's own file")  # not of our pattern: left alone
+    E.export_mesh(mesh, target)
+    assert (tmp_path / "plant.mtl").read_text() == "a user's own file"
