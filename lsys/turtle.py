@@ -47,6 +47,7 @@ re-interprets only the part of the string it changed (:func:`reinterpret`).
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum
@@ -305,14 +306,44 @@ def interpret(derivation: Derivation) -> Skeleton:
     return interpret_string(derivation.lsystem, derivation.tree, derivation.tree.leaves)
 
 
+#: Strings at least this long are walked by the compiled turtle (numba); shorter ones by the
+#: same loop in plain Python (:mod:`._turtle_walk`: the same arrays), which spares a new
+#: process loading numba and the compiled walk (about 0.2 s against 10 ms for Honda's
+#: sympodial tree at n = 10, 11,253 modules).  Once numba is loaded, the compiled walk takes
+#: strings from :data:`KERNEL_LOADED_MIN_MODULES` modules on.
+KERNEL_MIN_MODULES = 100_000
+KERNEL_LOADED_MIN_MODULES = 2_000
+#: True / False force the compiled / plain walk (tests compare them); None chooses by length.
+use_kernels: bool | None = None
+
+
+def compiled_walk(length: int) -> bool:
+    """Whether a string of ``length`` modules is walked by the compiled turtle."""
+    if use_kernels is not None:
+        return use_kernels
+    return length >= KERNEL_MIN_MODULES or ("numba" in sys.modules and length >= KERNEL_LOADED_MIN_MODULES)
+
+
+def _walker(length):
+    """The ``walk`` function for a string of ``length`` modules (see :func:`compiled_walk`)."""
+    if compiled_walk(length):
+        from ._turtle_kernel import walk  # numba loads on first use only
+
+        return walk
+    from ._turtle_walk import walk
+
+    return walk
+
+
 def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> Skeleton:
     """The :class:`Skeleton` of the string ``leaves`` (node ids of ``tree``), with its :class:`Trace`."""
-    from ._turtle_kernel import FULL, initial_state, walk  # numba loads on first use only
+    from ._turtle_walk import FULL, initial_state
 
     leaves = node_ids(leaves)
     acts, nps, par = module_arrays(lsys, tree, leaves)
     angle, step, trop = _settings(lsys)
     state = initial_state(lsys.grammar.width)
+    walk = _walker(len(acts))
     _, segs, orgs, poly, err = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)
     check_walk(lsys, tree, leaves, poly, err)
     trace = Trace(leaves, acts, nps, segs[0], orgs[0], _balanced(acts), poly[0])
@@ -348,6 +379,9 @@ _NO_MATCH = np.zeros(0, np.int32)  # the dtype of the trace's matches: one compi
 
 def _balanced(acts):
     """Whether every bracket of the string (its actions) is matched."""
+    if not compiled_walk(len(acts)):  # the nesting depth never below 0, and 0 at the end
+        depth = np.cumsum((acts == TurtleAction.PUSH).view(np.int8) - (acts == TurtleAction.POP).view(np.int8), dtype=np.int64)
+        return not len(depth) or bool(depth.min() >= 0 and depth[-1] == 0)
     from ._turtle_kernel import bracket_pairs32
 
     return bool(bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))[1])

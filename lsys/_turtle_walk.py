@@ -1,0 +1,273 @@
+"""The turtle's walk in plain Python, for short strings: no numba to load.
+
+:func:`walk` is :func:`ramure.lsys._turtle_kernel.walk` line for line, on Python floats and
+lists instead of compiled arrays, with the arithmetic written in the same order, so both give
+the same arrays bit for bit (tests/lsys/test_lsys_turtle_walk.py).  A new process loads
+numba and the compiled walk from its cache in about 0.2 s; this loop walks Honda's
+sympodial tree at n = 10 (11,253 modules) in about 10 ms, so strings below
+:data:`ramure.lsys.turtle.KERNEL_MIN_MODULES` modules take it while numba is not loaded.
+
+This module also holds what both walks share and that needs no numba: the action codes
+(the values of :class:`ramure.lsys.turtle.TurtleAction`) and :func:`initial_state`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+STATE_SIZE = 17
+
+# Action codes: the values of ramure.lsys.turtle.TurtleAction (numba needs plain ints).
+DRAW, MOVE, TURN_LEFT, TURN_RIGHT, PITCH_DOWN, PITCH_UP, ROLL_LEFT, ROLL_RIGHT = 1, 2, 3, 4, 5, 6, 7, 8
+TURN_AROUND, ROLL_HORIZONTAL, PUSH, POP, WIDTH, COLOR_UP, COLOR_DOWN, ORGAN = 9, 10, 11, 12, 13, 14, 15, 16
+POLY_START, POLY_END, POLY_VERTEX, POLY_MOVE, SPHERE, SURFACE, ELASTICITY = 17, 18, 19, 20, 21, 22, 23
+
+# Error codes of walk's ``err`` output: (code, string position) of the first problem.
+ERR_CLOSE_WITHOUT_OPEN, ERR_VERTEX_OUTSIDE, ERR_UNCLOSED = 1, 2, 3
+
+FULL, SEEK, REGION = 0, 1, 2
+
+
+def initial_state(width: float) -> np.ndarray:
+    """The turtle at the origin heading up +z with L = +x, U = +y, no segment drawn yet."""
+    state = np.zeros(STATE_SIZE)
+    state[5] = 1.0  # H = +z
+    state[6] = 1.0  # L = +x
+    state[10] = 1.0  # U = +y
+    state[12] = width
+    state[15] = -1.0
+    state[16] = np.nan
+    return state
+
+
+def _int64(x):
+    """``np.int64(x)`` of a float as compiled code converts it (x86: out of range or NaN gives
+    the smallest int64)."""
+    if x != x or not -9.223372036854775808e18 <= x < 9.223372036854775808e18:
+        return -(2**63)
+    return int(x)
+
+
+def _pair(ax, ay, az, bx, by, bz, c, s):
+    """(a c + b s, b c - a s): a rotation of the frame pair (a, b) by (c, s)."""
+    return (ax * c + bx * s, ay * c + by * s, az * c + bz * s, bx * c - ax * s, by * c - ay * s, bz * c - az * s)
+
+
+def _rodrigues(vx, vy, vz, kx, ky, kz, c, s):
+    cx, cy, cz = ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx
+    kv = kx * vx + ky * vy + kz * vz
+    return (vx * c + cx * s + kx * kv * (1 - c), vy * c + cy * s + ky * kv * (1 - c), vz * c + cz * s + kz * kv * (1 - c))
+
+
+def _same(ax, ay, az, bx, by, bz):
+    """Two vertices equal up to rounding (1e-9 relative): an outline back at its start."""
+    d = abs(ax - bx) + abs(ay - by) + abs(az - bz)
+    return d <= 1e-9 * (1.0 + abs(ax) + abs(ay) + abs(az))
+
+
+class _Polygons:
+    """The polygon lists of one walk (the kernel's ``poly_*`` and ``vtx*`` arrays)."""
+
+    def __init__(self):
+        self.at, self.close, self.color, self.records, self.first, self.last = [], [], [], [], [], []
+        self.vtx, self.tag = [], []
+
+    def start(self, i, color, px, py, pz):
+        p = len(self.at)
+        self.at.append(i)
+        self.close.append(-1)
+        self.color.append(color)
+        self.records.append(0)
+        self.first.append(len(self.tag))
+        self.last.append(-1)
+        self.vertex(p, px, py, pz)
+        return p
+
+    def vertex(self, p, px, py, pz):
+        """Record the turtle position as a vertex of polygon ``p`` (a repeat of its last vertex
+        is counted as a record but not stored)."""
+        self.records[p] += 1
+        last = self.last[p]
+        if last >= 0 and _same(*self.vtx[last], px, py, pz):
+            return
+        self.last[p] = len(self.tag)
+        self.vtx.append((px, py, pz))
+        self.tag.append(p)
+
+    def end(self, q, i):
+        self.close[q] = i
+        f, g = self.first[q], self.last[q]
+        if g > f and _same(*self.vtx[f], *self.vtx[g]):
+            self.tag[g] = -1  # the outline came back to its start: not a vertex twice
+
+    def arrays(self):
+        return (
+            np.array(self.at, np.int32),
+            np.array(self.close, np.int64),
+            np.array(self.color, np.int64),
+            np.array(self.records, np.int64),
+            np.array(self.vtx, float).reshape(-1, 3),
+            np.array(self.tag, np.int64),
+        )
+
+
+def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_base, pidx=None):
+    """:func:`ramure.lsys._turtle_kernel.walk` (same arguments, same results), in plain Python."""
+    acts = acts.tolist()
+    nps = nps.tolist()
+    par = (par if pidx is None else par[pidx]).tolist()
+    match = match.tolist()
+    seek = mode == SEEK
+    seg, org, polys = [], [], _Polygons()
+    err = [-1, -1]
+    px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width = state[:13].tolist()
+    color, order, last = _int64(float(state[13])), _int64(float(state[14])), _int64(float(state[15]))
+    tx, ty, tz, te = 0.0, 0.0, -1.0, 0.0  # @Ts without #tropism bends toward -z (gravity)
+    if trop.size == 4:
+        tx, ty, tz, te = trop.tolist()
+    if not math.isnan(state[16]):
+        te = float(state[16])
+    stack = []
+    pstack = []
+    cos, sin, radians, sqrt = math.cos, math.sin, math.radians, math.sqrt
+    stop = end
+    i = begin
+    while i < end:
+        a = acts[i]
+        if a == 0:
+            i += 1
+            continue
+        k = nps[i]
+        p = par[i]
+        if (a == DRAW or a == MOVE) and pstack:  # in a polygon: move, record a vertex
+            d = p if k else step
+            px, py, pz = px + hx * d, py + hy * d, pz + hz * d
+            if not seek:
+                polys.vertex(pstack[-1], px, py, pz)
+        elif a == DRAW or a == MOVE:
+            d = p if k else step
+            ex, ey, ez = px + hx * d, py + hy * d, pz + hz * d
+            if a == DRAW and seek:
+                last = -2 - i
+            elif a == DRAW:
+                seg.append((i, px, py, pz, ex, ey, ez, width, order, color, lx, ly, lz, last))
+                last = seg_base + len(seg) - 1 if mode == FULL else -2 - i
+            if a == DRAW and te != 0.0:
+                ax, ay, az = hy * tz - hz * ty, hz * tx - hx * tz, hx * ty - hy * tx
+                size = sqrt(0.0 + ax * ax + ay * ay + az * az)
+                if size >= 1e-12:
+                    rad = te * size
+                    kx, ky, kz = ax / size, ay / size, az / size
+                    c, s = cos(rad), sin(rad)
+                    hx, hy, hz = _rodrigues(hx, hy, hz, kx, ky, kz, c, s)
+                    lx, ly, lz = _rodrigues(lx, ly, lz, kx, ky, kz, c, s)
+                    ux, uy, uz = _rodrigues(ux, uy, uz, kx, ky, kz, c, s)
+            px, py, pz = ex, ey, ez
+        elif a <= TURN_AROUND:
+            deg = p if k else angle
+            if a == TURN_RIGHT or a == PITCH_UP or a == ROLL_RIGHT:
+                deg = -deg
+            elif a == TURN_AROUND:
+                deg = 180.0
+            c, s = cos(radians(deg)), sin(radians(deg))
+            if a == TURN_LEFT or a == TURN_RIGHT or a == TURN_AROUND:  # about U
+                hx, hy, hz, lx, ly, lz = _pair(hx, hy, hz, lx, ly, lz, c, -s)
+            elif a == PITCH_DOWN or a == PITCH_UP:  # about L
+                hx, hy, hz, ux, uy, uz = _pair(hx, hy, hz, ux, uy, uz, c, s)
+            else:  # about H
+                lx, ly, lz, ux, uy, uz = _pair(lx, ly, lz, ux, uy, uz, c, s)
+        elif a == ROLL_HORIZONTAL:
+            vx, vy, vz = 0.0 * hz - 1.0 * hy, 1.0 * hx - 0.0 * hz, 0.0 * hy - 0.0 * hx
+            norm = sqrt(vx * vx + vy * vy + vz * vz)
+            if norm > 1e-12:
+                lx, ly, lz = vx / norm, vy / norm, vz / norm
+                ux, uy, uz = hy * lz - hz * ly, hz * lx - hx * lz, hx * ly - hy * lx
+        elif a == PUSH:
+            if seek and match[i] > i and match[i] < end:
+                i = match[i] + 1  # a whole branch before the target: the state after it is the one before
+                continue
+            # the compiled stack rows are floats: the whole numbers go through float as there
+            stack.append((px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, float(color), float(order), float(last), te))
+            order += 1
+        elif a == POP:
+            if stack:
+                px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, color, order, last, te = stack.pop()
+                color, order, last = _int64(color), _int64(order), _int64(last)
+            elif mode == REGION:
+                stop = i
+                break
+        elif a == WIDTH:
+            width = p if k else width * 0.7
+        elif a == COLOR_UP:
+            color = _int64(p) if k else color + 1
+        elif a == COLOR_DOWN:
+            color = _int64(p) if k else color - 1
+        elif a == ELASTICITY:
+            te = p if k else 0.0
+        elif a == POLY_MOVE and pstack:
+            d = p if k else step
+            px, py, pz = px + hx * d, py + hy * d, pz + hz * d
+        elif a == POLY_START:
+            pstack.append(-1 if seek else polys.start(i, color, px, py, pz))
+        elif a == POLY_END:
+            if not pstack:
+                if err[0] < 0 and not seek:
+                    err = [ERR_CLOSE_WITHOUT_OPEN, i]
+            else:
+                q = pstack.pop()
+                if not seek:
+                    polys.end(q, i)
+        elif a == POLY_VERTEX and not seek:
+            if not pstack:
+                if err[0] < 0:
+                    err = [ERR_VERTEX_OUTSIDE, i]
+            else:
+                polys.vertex(pstack[-1], px, py, pz)
+        elif (a == ORGAN or a == SPHERE or a == SURFACE) and not seek:
+            if a == SPHERE:  # @O(r): a sphere of radius r (diameter 2r); @O alone: the width
+                size = 2.0 * p if k else width
+            else:
+                size = p if k else 1.0
+            org.append((i, px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, size, color))
+        i += 1
+    if pstack and not seek and err[0] < 0:
+        err = [ERR_UNCLOSED, polys.at[pstack[-1]]]
+    state[:13] = px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width
+    state[13:] = color, order, last, te
+    return stop, _segments(seg), _organs(org), polys.arrays(), np.array(err, np.int64)
+
+
+def _columns(rows, width):
+    """The tuples ``rows`` as one float array (n, width)."""
+    return np.array(rows, float).reshape(-1, width)
+
+
+def _segments(rows):
+    """The kernel's segment arrays from the rows (position, start, end, width, order, colour,
+    normal, parent); the whole numbers are taken apart from the floats, exactly."""
+    table = _columns(rows, 14)
+    ints = np.array([(r[0], r[8], r[9], r[13]) for r in rows], np.int64).reshape(-1, 4)
+    return (
+        ints[:, 0].astype(np.int32),
+        table[:, 1:4].copy(),
+        table[:, 4:7].copy(),
+        table[:, 7].copy(),
+        ints[:, 1].astype(np.int32),
+        ints[:, 2].copy(),
+        table[:, 10:13].copy(),
+        ints[:, 3].copy(),
+    )
+
+
+def _organs(rows):
+    table = _columns(rows, 15)
+    ints = np.array([(r[0], r[14]) for r in rows], np.int64).reshape(-1, 2)
+    return (
+        ints[:, 0].astype(np.int32),
+        table[:, 1:4].copy(),
+        table[:, 4:13].reshape(-1, 3, 3).copy(),
+        table[:, 13].copy(),
+        ints[:, 1].copy(),
+    )
