@@ -14,6 +14,7 @@ This module also holds what both walks share and that needs no numba: the action
 from __future__ import annotations
 
 import math
+from itertools import chain
 
 import numpy as np
 
@@ -50,9 +51,9 @@ def _int64(x):
     return int(x)
 
 
-def _pair(ax, ay, az, bx, by, bz, c, s):
-    """(a c + b s, b c - a s): a rotation of the frame pair (a, b) by (c, s)."""
-    return (ax * c + bx * s, ay * c + by * s, az * c + bz * s, bx * c - ax * s, by * c - ay * s, bz * c - az * s)
+#: Whole numbers up to this size go through a float unchanged (order and segment numbers always
+#: do; a colour index may not).
+_EXACT = 2**53
 
 
 def _rodrigues(vx, vy, vz, kx, ky, kz, c, s):
@@ -171,13 +172,37 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 deg = -deg
             elif a == TURN_AROUND:
                 deg = 180.0
-            c, s = cos(radians(deg)), sin(radians(deg))
+            rad = radians(deg)
+            c, s = cos(rad), sin(rad)
+            # the kernel's _pair written out: (a c + b s, b c - a s)
             if a == TURN_LEFT or a == TURN_RIGHT or a == TURN_AROUND:  # about U
-                hx, hy, hz, lx, ly, lz = _pair(hx, hy, hz, lx, ly, lz, c, -s)
+                s = -s
+                hx, hy, hz, lx, ly, lz = (
+                    hx * c + lx * s,
+                    hy * c + ly * s,
+                    hz * c + lz * s,
+                    lx * c - hx * s,
+                    ly * c - hy * s,
+                    lz * c - hz * s,
+                )
             elif a == PITCH_DOWN or a == PITCH_UP:  # about L
-                hx, hy, hz, ux, uy, uz = _pair(hx, hy, hz, ux, uy, uz, c, s)
+                hx, hy, hz, ux, uy, uz = (
+                    hx * c + ux * s,
+                    hy * c + uy * s,
+                    hz * c + uz * s,
+                    ux * c - hx * s,
+                    uy * c - hy * s,
+                    uz * c - hz * s,
+                )
             else:  # about H
-                lx, ly, lz, ux, uy, uz = _pair(lx, ly, lz, ux, uy, uz, c, s)
+                lx, ly, lz, ux, uy, uz = (
+                    lx * c + ux * s,
+                    ly * c + uy * s,
+                    lz * c + uz * s,
+                    ux * c - lx * s,
+                    uy * c - ly * s,
+                    uz * c - lz * s,
+                )
         elif a == ROLL_HORIZONTAL:
             vx, vy, vz = 0.0 * hz - 1.0 * hy, 1.0 * hx - 0.0 * hz, 0.0 * hy - 0.0 * hx
             norm = sqrt(vx * vx + vy * vy + vz * vz)
@@ -188,13 +213,12 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
             if seek and match[i] > i and match[i] < end:
                 i = match[i] + 1  # a whole branch before the target: the state after it is the one before
                 continue
-            # the compiled stack rows are floats: the whole numbers go through float as there
-            stack.append((px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, float(color), float(order), float(last), te))
+            saved = color if -_EXACT <= color <= _EXACT else _int64(float(color))  # the compiled rows are floats
+            stack.append((px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, saved, order, last, te))
             order += 1
         elif a == POP:
             if stack:
                 px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, color, order, last, te = stack.pop()
-                color, order, last = _int64(color), _int64(order), _int64(last)
             elif mode == REGION:
                 stop = i
                 break
@@ -241,33 +265,36 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
 
 def _columns(rows, width):
     """The tuples ``rows`` as one float array (n, width)."""
-    return np.array(rows, float).reshape(-1, width)
+    return np.fromiter(chain.from_iterable(rows), float, len(rows) * width).reshape(-1, width)
+
+
+def _colors(rows, column):
+    """Column ``column`` of ``rows`` as int64 (colour indices: whole numbers a float may not hold)."""
+    return np.fromiter((r[column] for r in rows), np.int64, len(rows))
 
 
 def _segments(rows):
     """The kernel's segment arrays from the rows (position, start, end, width, order, colour,
-    normal, parent); the whole numbers are taken apart from the floats, exactly."""
+    normal, parent); positions, orders and parents are exact as floats (below 2^53)."""
     table = _columns(rows, 14)
-    ints = np.array([(r[0], r[8], r[9], r[13]) for r in rows], np.int64).reshape(-1, 4)
     return (
-        ints[:, 0].astype(np.int32),
+        table[:, 0].astype(np.int32),
         table[:, 1:4].copy(),
         table[:, 4:7].copy(),
         table[:, 7].copy(),
-        ints[:, 1].astype(np.int32),
-        ints[:, 2].copy(),
+        table[:, 8].astype(np.int32),
+        _colors(rows, 9),
         table[:, 10:13].copy(),
-        ints[:, 3].copy(),
+        table[:, 13].astype(np.int64),
     )
 
 
 def _organs(rows):
     table = _columns(rows, 15)
-    ints = np.array([(r[0], r[14]) for r in rows], np.int64).reshape(-1, 2)
     return (
-        ints[:, 0].astype(np.int32),
+        table[:, 0].astype(np.int32),
         table[:, 1:4].copy(),
         table[:, 4:13].reshape(-1, 3, 3).copy(),
         table[:, 13].copy(),
-        ints[:, 1].copy(),
+        _colors(rows, 14),
     )

@@ -124,6 +124,8 @@ EDGE_CASES = {
     + [(A.TURN_LEFT, 90.0), (A.MOVE, 1.0), (A.TURN_LEFT, 90.0), (A.MOVE, 1.0), (A.POLY_END, None)],
     "colours": [(A.COLOR_UP, 3.0), (A.DRAW, None), (A.COLOR_DOWN, None), (A.DRAW, None), (A.COLOR_UP, 1e300)]
     + [(A.DRAW, None), (A.COLOR_UP, float("nan")), (A.DRAW, None)],
+    "huge colours": [(A.COLOR_UP, 2.0**60), (A.COLOR_UP, None), (A.PUSH, None), (A.DRAW, None), (A.ORGAN, None)]
+    + [(A.POP, None), (A.DRAW, None), (A.COLOR_DOWN, -(2.0**62)), (A.DRAW, None)],
     "unbalanced": [(A.DRAW, None), (A.POP, None), (A.DRAW, None), (A.PUSH, None), (A.DRAW, None)],
     "widths and spheres": [(A.WIDTH, 2.0), (A.DRAW, None), (A.SPHERE, 1.0), (A.SPHERE, None), (A.WIDTH, None)]
     + [(A.DRAW, 2.0), (A.ORGAN, None), (A.SURFACE, 3.0)],
