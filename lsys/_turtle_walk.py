@@ -298,3 +298,38 @@ def _organs(rows):
         table[:, 13].copy(),
         _colors(rows, 14),
     )
+
+
+def bracket_pairs32(symbols, open_id, close_id):
+    """:func:`ramure.lsys._turtle_kernel.bracket_pairs32` (same results) in numpy steps.
+
+    A ``]`` that would take the nesting below 0 is unmatched (as with the kernel's stack);
+    among the others, each bracket has a level (the nesting inside an ``[``, before a ``]``),
+    and the brackets of one level, in string order, alternate ``[ ] [ ] ...``, possibly ending
+    with an unmatched ``[``: consecutive ones pair up."""
+    n = len(symbols)
+    opens, closes = symbols == open_id, symbols == close_id
+    match = np.full(n, -1, np.int32)
+    raw = np.cumsum(opens.view(np.int8) - closes.view(np.int8), dtype=np.int64)
+    floor = np.minimum.accumulate(np.minimum(raw, 0)) if n else raw
+    unmatched = closes & (floor < np.r_[0, floor[:-1]])  # a new low: nothing open to close
+    depth = raw - floor  # the stack's size after each position
+    at = np.flatnonzero(opens | (closes & ~unmatched))
+    level = depth[at] + closes[at]
+    at = at[np.argsort(level * (n + 1) + at, kind="stable")]
+    level = depth[at] + closes[at]
+    pair = opens[at[:-1]] & closes[at[1:]] & (level[:-1] == level[1:])
+    first, second = at[:-1][pair], at[1:][pair]
+    match[first], match[second] = second, first
+    balanced = not unmatched.any() and (not n or depth[-1] == 0)
+    return match, balanced
+
+
+def kept_modules(old, new, size):
+    """:func:`ramure.lsys._turtle_kernel.kept_modules` (same results) in numpy steps."""
+    in_old = np.zeros(size, np.bool_)
+    in_new = np.zeros(size, np.bool_)
+    in_old[old] = True
+    in_new[new] = True
+    keep_old, keep_new = in_new[old], in_old[new]
+    return keep_old, keep_new, bool(np.array_equal(old[keep_old], new[keep_new]))

@@ -181,3 +181,84 @@ def test_a_new_process_draws_a_small_plant_without_loading_numba():
     assert done.returncode == 0, done.stderr
     record = json.loads(done.stdout)
     assert record == {"segments": 1023, "numba": False}
+
+
+def test_numpy_bracket_pairs_equal_the_kernels():
+    from ramure.lsys import _turtle_walk
+
+    rng = np.random.default_rng(4)
+    cases = [np.zeros(0, np.int8), np.array([11, 12], np.int8), np.array([12, 11], np.int8)]
+    for n in (1, 2, 5, 17, 60, 300):
+        for _ in range(40):
+            cases.append(rng.choice(np.array([0, 1, 11, 12], np.int8), n, p=[0.3, 0.2, 0.25, 0.25]))
+    balanced_seen = set()
+    for acts in cases:
+        expected, ok = bracket_pairs32(acts, 11, 12)
+        got, got_ok = _turtle_walk.bracket_pairs32(acts, 11, 12)
+        assert got.dtype == expected.dtype
+        np.testing.assert_array_equal(got, expected, err_msg=str(acts.tolist()))
+        assert got_ok == bool(ok)
+        balanced_seen.add(got_ok)
+    assert balanced_seen == {True, False}
+
+
+def test_numpy_kept_modules_equal_the_kernels():
+    from ramure.lsys import _turtle_kernel, _turtle_walk
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        old = rng.permutation(40)[: rng.integers(0, 30)].astype(np.int32)
+        new = old.copy()
+        if rng.random() < 0.5:  # a splice: drop a run, insert new ids
+            a = int(rng.integers(0, len(old) + 1))
+            b = int(rng.integers(a, len(old) + 1))
+            new = np.concatenate([old[:a], np.arange(40, 40 + int(rng.integers(0, 5)), dtype=np.int32), old[b:]])
+        else:
+            rng.shuffle(new)
+        for x, y in zip(_turtle_walk.kept_modules(old, new, 50), _turtle_kernel.kept_modules(old, new, 50)):
+            np.testing.assert_array_equal(x, y)
+
+
+_EDIT = """
+import json, sys
+from ramure.app.model import Explorer
+ex = Explorer("grammars/honda_sympodial.lsys", n=10)
+ex.mesh
+ex.select(ex.skeleton.leaf_id[100::97][:8])
+ex.regrow(seed=1)
+reused = "reuse" in ex.skeleton.extra
+ex.mesh
+ex.undo()
+ex.mesh
+print(json.dumps({"numba": "numba" in sys.modules, "networkx": "networkx" in sys.modules, "reused": reused}))
+"""
+
+
+def test_a_new_process_edits_a_small_plant_without_numba_or_networkx():
+    import pathlib
+
+    root = pathlib.Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-c", _EDIT], capture_output=True, text=True, timeout=300, cwd=root)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == {"numba": False, "networkx": False, "reused": True}
+
+
+@pytest.mark.parametrize("name", ["honda_sympodial", "apricot_tree", "abop/bush_1_25"])
+def test_an_edit_reinterprets_alike_with_either_walk(name, monkeypatch):
+    from ramure.lsys.regen import Session
+
+    skeletons = []
+    for compiled in (True, False):
+        monkeypatch.setattr(turtle, "use_kernels", compiled)
+        s = Session(LSystem.from_file(name), seed=2)
+        old = turtle.interpret_string(s.lsystem, s.tree, s.tree.leaves)
+        before = s.tree.leaves.copy()
+        s.regrow(before[len(before) // 3 :: 41][:6], rho=0.5, seed=3)
+        spans = s.edit_spans(before, s.tree.leaves) or turtle.changed_spans(before, s.tree.leaves, s.tree.size)
+        skeletons.append(turtle.reinterpret(s.lsystem, s.tree, old, s.tree.leaves, *spans))
+    compiled, plain = (_arrays(sk) for sk in skeletons)
+    for key, value in compiled.items():
+        assert plain[key].dtype == value.dtype, key
+        np.testing.assert_array_equal(plain[key], value, err_msg=key)
+    if name != "abop/bush_1_25":  # (its polygons may make an edit draw the whole string)
+        assert all("reuse" in sk.extra for sk in skeletons)  # both re-interpreted only the change
