@@ -73,7 +73,8 @@ class _Polygons:
 
     def __init__(self):
         self.at, self.close, self.color, self.records, self.first, self.last = [], [], [], [], [], []
-        self.vtx, self.tag = [], []
+        self.vtx: list[tuple[float, float, float]] = []
+        self.tag: list[int] = []
 
     def start(self, i, color, px, py, pz):
         p = len(self.at)
@@ -91,8 +92,10 @@ class _Polygons:
         is counted as a record but not stored)."""
         self.records[p] += 1
         last = self.last[p]
-        if last >= 0 and _same(*self.vtx[last], px, py, pz):
-            return
+        if last >= 0:
+            ax, ay, az = self.vtx[last]
+            if _same(ax, ay, az, px, py, pz):
+                return
         self.last[p] = len(self.tag)
         self.vtx.append((px, py, pz))
         self.tag.append(p)
@@ -130,8 +133,8 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
         tx, ty, tz, te = trop.tolist()
     if not math.isnan(state[16]):
         te = float(state[16])
-    stack = []
-    pstack = []
+    stack: list[tuple] = []
+    pstack: list[int] = []
     cos, sin, radians, sqrt = math.cos, math.sin, math.radians, math.sqrt
     stop = end
     i = begin

@@ -430,7 +430,7 @@ def _tree_cut(tree: DerivationTree, path: _Path) -> dict:
         reached[idx] = (path.parent_idx[idx] < 0) | (reached[up] & ~cut[up])
         cut[idx] = reached[idx] & cut_here[idx]
     cut |= ~reached & (path.cap == 0).astype(bool) & ~_free_below(path, levels)
-    edges = {((v, "in"), (v, "out")): c for v, c in zip(path.nodes[cut].tolist(), path.cap[cut].tolist())}
+    edges: dict[tuple, int] = {((v, "in"), (v, "out")): c for v, c in zip(path.nodes[cut].tolist(), path.cap[cut].tolist())}
     open_ = reached & ~cut & (path.off_path > 0).astype(bool)
     edges.update({((v, "out"), SINK): c for v, c in zip(path.nodes[open_].tolist(), path.off_path[open_].tolist())})
     edges.update(_unselected_axiom_modules(tree, path.nodes, _LeafCounts(tree), path.scale))
