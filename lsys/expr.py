@@ -461,7 +461,7 @@ class SeededGenerator:
         self._generator: np.random.Generator | None = None
 
     def __getattr__(self, name: str) -> Any:
-        if name.startswith("__"):  # copy, pickle and the like: not the generator's
+        if name.startswith("__") or name in ("_seed", "_generator"):  # copy, pickle: not the generator's
             raise AttributeError(name)
         if self._generator is None:
             self._generator = np.random.default_rng(self._seed)
