@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 import ramure.io as atomic
 
-from ramure.lsys import GrammarError, LSystem
+from ramure.lsys import GrammarError, LSystem, load_kernels
 from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import kinship
@@ -644,8 +644,9 @@ def mesh_sides(segments: int) -> int:
     return int(np.clip(MESH_QUAD_BUDGET // max(int(segments), 1), 3, 8))
 
 
-#: The warm-up plant: the first derivation of the user's grammar with at least this many tree
-#: nodes (where the tree passes run compiled once numba is loaded, as for a large plant).
+#: The warm-up plant: the first derivation of the user's grammar with at least this many
+#: modules (where the turtle and the tree passes run compiled once numba is loaded, as for a
+#: large plant).
 WARM_UP_NODES = 2_000
 #: ... and at most this many: a grammar that jumps past it in one step is not warmed up (the
 #: warm-up would cost about what the edit does).
@@ -662,7 +663,7 @@ def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
     about 0.1 s for the next ones (0.13-0.18 s after the warm-up).  A front end calls this in a
     background thread when the user first selects something (a regrow usually follows), so the
     cost falls in the time the user takes to reach the button.  The small plant (the first of
-    steps 1 .. ``n`` with :data:`WARM_UP_NODES` tree nodes or more, else step ``n``) has the
+    steps 1 .. ``n`` with :data:`WARM_UP_NODES` modules or more, else step ``n``) has the
     same symbols and parameters, so the kernels specialise for the same array types.  Nothing of
     the user's plant is read or changed.  Returns False, and does nothing more, if the text does
     not give a plant (a warm-up never reports errors: the real edit will), or the small plant
@@ -670,9 +671,10 @@ def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
     """
     try:
         last = LSystem.from_text(text).n if n is None else int(n)
+        load_kernels()  # a small plant is drawn without numba: load it, so the passes below run compiled
         for step in range(1, max(last, 1) + 1):
             ex = Explorer(text, n=step, seed=seed)
-            if len(ex.derivation.tree) >= WARM_UP_NODES:
+            if len(ex.derivation) >= WARM_UP_NODES:
                 break
         if len(ex.derivation.tree) > WARM_UP_MAX_NODES:
             return False

@@ -64,3 +64,18 @@ def bench_mincut_1000_leaves_on_1M_modules_preflow_push():
         "graph_nodes": cut.graph.number_of_nodes(),
         "roots": len(cut.roots),
     }
+
+
+def bench_mincut_1000_leaves_on_1M_modules_tree_recursion():
+    """The default cut (the tree's own recursion, no max flow, no networkx): the same cut."""
+    seconds, modules, cut = _big_cut(None)
+    _, _, solved = _big_cut(flow.preflow_push)
+    same = cut.cut_edges == solved.cut_edges and cut.roots.tolist() == solved.roots.tolist()
+    return {
+        "seconds": round(seconds, 3),
+        "target_seconds": 1.0,
+        "ok": seconds <= 1.0 and same,
+        "same_cut_as_preflow_push": same,
+        "modules": modules,
+        "roots": len(cut.roots),
+    }

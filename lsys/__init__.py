@@ -32,5 +32,22 @@ __all__ = [
     "leaves_where",
     "parse_grammar",
     "regenerate",
+    "load_kernels",
     "select_roots",
 ]
+
+#: The compiled kernels of this package (numba), loaded on first use only.
+KERNEL_MODULES = ("_context_kernel", "_cut_kernel", "_derive_kernel", "_polygon_kernel", "_tree_kernel", "_turtle_kernel")
+
+
+def load_kernels() -> None:
+    """Load numba and the compiled kernels' modules now (about 0.2 s in a new process).
+
+    A small plant is derived and drawn without them (numpy and plain-Python passes give the
+    same arrays); once numba is loaded, the compiled passes take over from a few thousand
+    modules.  A long-lived front end calls this in a background thread before the edits
+    whose kernels it wants warm (:func:`ramure.app.model.warm_up_edits`)."""
+    import importlib
+
+    for name in KERNEL_MODULES:
+        importlib.import_module(f"{__name__}.{name}")

@@ -29,27 +29,40 @@ import numpy as np
 
 from ramure.jit import njit
 
-STATE_SIZE = 17
+from ._turtle_walk import (  # shared with the plain-Python walk (no numba there)
+    COLOR_DOWN,
+    COLOR_UP,
+    DRAW,
+    ELASTICITY,
+    ERR_CLOSE_WITHOUT_OPEN,
+    ERR_UNCLOSED,
+    ERR_VERTEX_OUTSIDE,
+    FULL,
+    MOVE,
+    ORGAN,
+    PITCH_DOWN,
+    PITCH_UP,
+    POLY_END,
+    POLY_MOVE,
+    POLY_START,
+    POLY_VERTEX,
+    POP,
+    PUSH,
+    REGION,
+    ROLL_HORIZONTAL,
+    ROLL_RIGHT,
+    SEEK,
+    SPHERE,
+    STATE_SIZE,
+    SURFACE,
+    TURN_AROUND,
+    TURN_LEFT,
+    TURN_RIGHT,
+    WIDTH,
+    initial_state,
+)
 
-# Action codes: the values of ramure.lsys.turtle.TurtleAction (numba needs plain ints).
-DRAW, MOVE, TURN_LEFT, TURN_RIGHT, PITCH_DOWN, PITCH_UP, ROLL_LEFT, ROLL_RIGHT = 1, 2, 3, 4, 5, 6, 7, 8
-TURN_AROUND, ROLL_HORIZONTAL, PUSH, POP, WIDTH, COLOR_UP, COLOR_DOWN, ORGAN = 9, 10, 11, 12, 13, 14, 15, 16
-POLY_START, POLY_END, POLY_VERTEX, POLY_MOVE, SPHERE, SURFACE, ELASTICITY = 17, 18, 19, 20, 21, 22, 23
-
-# Error codes of walk's ``err`` output: (code, string position) of the first problem.
-ERR_CLOSE_WITHOUT_OPEN, ERR_VERTEX_OUTSIDE, ERR_UNCLOSED = 1, 2, 3
-
-
-def initial_state(width):
-    """The turtle at the origin heading up +z with L = +x, U = +y, no segment drawn yet."""
-    state = np.zeros(STATE_SIZE)
-    state[5] = 1.0  # H = +z
-    state[6] = 1.0  # L = +x
-    state[10] = 1.0  # U = +y
-    state[12] = width
-    state[15] = -1.0
-    state[16] = np.nan
-    return state
+__all__ = ["FULL", "REGION", "SEEK", "STATE_SIZE", "initial_state", "walk"]
 
 
 @njit(cache=True, inline="always")
@@ -84,9 +97,6 @@ def _vertex(px, py, pz, p, vtx, vtx_poly, poly_last, poly_records, k_vtx):
     vtx_poly[k_vtx] = p
     poly_last[p] = k_vtx
     return k_vtx + 1
-
-
-FULL, SEEK, REGION = 0, 1, 2
 
 
 @njit(cache=True, nogil=True)

@@ -47,6 +47,7 @@ if TYPE_CHECKING:
     from .tree import DerivationTree
 
 from .errors import ValueRefused
+from .tree import sorted_unique
 
 SOURCE, SINK = "s", "t"
 
@@ -173,10 +174,27 @@ class CutResult:
     cut_nodes: np.ndarray
     cut_value: float
     cut_edges: dict
-    graph: nx.DiGraph = field(repr=False)
-    source_side: set = field(repr=False)
     selected: np.ndarray | None = field(repr=False, default=None)
     from_axiom: bool = False
+    #: ``() -> (graph, source_side)``: the flow network and its solved source side, made on first
+    #: use when the cut came from the tree's own recursion (networkx is not imported before).
+    network: Callable[[], tuple[nx.DiGraph, set]] | None = field(repr=False, default=None, compare=False)
+
+    @property
+    def graph(self) -> nx.DiGraph:
+        """The flow network of the cut (reduced; see :func:`build_graph`)."""
+        return self._solved()[0]
+
+    @property
+    def source_side(self) -> set:
+        """The vertices of :attr:`graph` on the source side of the (lower) minimum cut."""
+        return self._solved()[1]
+
+    def _solved(self):
+        solved = self.__dict__.get("_network")
+        if solved is None:
+            solved = self.__dict__["_network"] = self.network() if self.network else (None, set())
+        return solved
 
 
 #: What front ends and the CLI say when a selection's regrowth starts at an axiom module.
@@ -187,7 +205,7 @@ def validate_selection(tree: DerivationTree, selected: Iterable[int]) -> np.ndar
     """``selected`` as sorted unique leaf ids of ``tree``; :class:`ValueRefused` for an empty
     selection, an id that is not a node, or a node that is not a leaf of the current string."""
     try:
-        selected = np.unique(np.asarray(list(selected), np.int64))
+        selected = sorted_unique(np.asarray(list(selected), np.int64))
     except (OverflowError, TypeError, ValueError):
         raise ValueRefused("the selection must be a list of leaf ids (whole numbers)") from None
     if selected.size == 0:
@@ -207,10 +225,10 @@ def path_nodes(tree: DerivationTree, selected: np.ndarray) -> np.ndarray:
     """The selected leaves and all their ancestors, sorted."""
     nodes, frontier = [selected], selected
     while frontier.size:
-        frontier = np.unique(tree.parent[frontier])
+        frontier = sorted_unique(tree.parent[frontier])
         frontier = frontier[frontier >= 0]
         nodes.append(frontier)
-    return np.unique(np.concatenate(nodes))
+    return sorted_unique(np.concatenate(nodes))
 
 
 def _scale(rho, alpha0, n):
@@ -226,6 +244,54 @@ def _scale(rho, alpha0, n):
     a0 = Fraction(2) ** int(n) if alpha0 is None else _as_fraction(alpha0, "alpha0")
     scale = r.numerator * a0.denominator
     return scale, int(a0 * scale), int(scale / r)
+
+
+@dataclass
+class _Path:
+    """What the cut reads of the tree: the selected leaves and their ancestors (``nodes``, sorted)
+    with their depths, parents (ids and positions in ``nodes``, -1 for none), exact scaled
+    capacities (``cap``, Python ints, clamped at 0) and scaled unselected leaves below them that
+    no path child holds (``off_path``); all copies, so an edit of the tree leaves them as they are."""
+
+    selected: np.ndarray
+    scale: int
+    nodes: np.ndarray
+    depth: np.ndarray
+    parent: np.ndarray
+    parent_idx: np.ndarray
+    cap: np.ndarray
+    off_path: np.ndarray
+    is_selected: np.ndarray
+
+    def levels(self) -> list[np.ndarray]:
+        """Positions in ``nodes`` by depth, the axiom modules' first."""
+        return [np.flatnonzero(self.depth == d) for d in range(int(self.depth.max()) + 1)]
+
+
+def _path(tree, selected, rho, alpha0, n) -> _Path:
+    rho = check_rho(rho)
+    selected = validate_selection(tree, selected)
+    n = int(tree.depth.max()) if n is None else int(n)
+    scale, alpha_s, step_s = _scale(rho, alpha0, n)
+    nodes = path_nodes(tree, selected)
+    depth = tree.depth_of(nodes)
+    cap = np.array([c * scale for c in exact_capacities(tree, nodes)] or [0], dtype=object)[: len(nodes)]
+    current, k = selected.copy(), 0
+    while current.size:
+        np.add.at(cap, np.searchsorted(nodes, current), alpha_s - ((1 << k) - 1) * step_s)
+        current = tree.parent[current]
+        current = current[current >= 0]
+        k += 1
+    cap = np.array([max(int(c), 0) for c in cap] or [0], dtype=object)[: len(nodes)]
+    node_counts = _LeafCounts(tree)[nodes]
+    parent = tree.parent[nodes]
+    has_parent = parent >= 0
+    parent_idx = np.where(has_parent, np.searchsorted(nodes, parent), -1)
+    on_path_children = np.zeros(len(nodes), np.int64)
+    np.add.at(on_path_children, parent_idx[has_parent], node_counts[has_parent])
+    is_selected = np.isin(nodes, selected, assume_unique=True)
+    off_path = np.where(is_selected, 0, node_counts - on_path_children).astype(object) * scale
+    return _Path(selected, scale, nodes, depth, parent, parent_idx, cap, off_path, is_selected)
 
 
 def build_graph(
@@ -248,38 +314,23 @@ def build_graph(
     ``merged_edges`` (always cut; ``edge -> exact scaled capacity``), as do the
     leaves of axiom modules that hold no selected leaf.
     """
-    rho = check_rho(rho)
-    selected = validate_selection(tree, selected)
-    n = int(tree.depth.max()) if n is None else int(n)
-    scale, alpha_s, step_s = _scale(rho, alpha0, n)
-    nodes = path_nodes(tree, selected)
-    depth = tree.depth_of(nodes)
-    cap = np.array([c * scale for c in exact_capacities(tree, nodes)] or [0], dtype=object)[: len(nodes)]
-    current, k = selected.copy(), 0
-    while current.size:
-        np.add.at(cap, np.searchsorted(nodes, current), alpha_s - ((1 << k) - 1) * step_s)
-        current = tree.parent[current]
-        current = current[current >= 0]
-        k += 1
-    cap = np.array([max(int(c), 0) for c in cap] or [0], dtype=object)[: len(nodes)]
-    counts = _LeafCounts(tree)
-    node_counts = counts[nodes]
-    parent = tree.parent[nodes]
-    has_parent = parent >= 0
-    parent_idx = np.where(has_parent, np.searchsorted(nodes, parent), -1)
-    on_path_children = np.zeros(len(nodes), np.int64)
-    np.add.at(on_path_children, parent_idx[has_parent], node_counts[has_parent])
-    is_selected = np.isin(nodes, selected)
-    off_path = np.where(is_selected, 0, node_counts - on_path_children).astype(object) * scale
-    merged = (
-        _never_cut_from_source(nodes, depth, cap, off_path, parent_idx, is_selected) if reduce else np.zeros(len(nodes), bool)
-    )
+    path = _path(tree, selected, rho, alpha0, n)
+    merged = _never_cut_from_source(path) if reduce else np.zeros(len(path.nodes), bool)
+    ids, off_path, scale = path.nodes.tolist(), path.off_path.tolist(), path.scale
+    merged_edges = {((v, "out"), SINK): c for v, c, m in zip(ids, off_path, merged.tolist()) if m and c > 0}
+    merged_edges.update(_unselected_axiom_modules(tree, path.nodes, _LeafCounts(tree), scale))
+    return _network(path, merged), path.selected, merged_edges
 
+
+def _network(path: _Path, merged: np.ndarray) -> nx.DiGraph:
+    """The flow network of ``path`` with the ``merged`` nodes in the source."""
     import networkx as nx
 
+    nodes, cap, scale = path.nodes, path.cap, path.scale
     G = nx.DiGraph(scale=scale)
     keep = ~merged
-    ids, par = nodes.tolist(), parent.tolist()
+    ids, par = nodes.tolist(), path.parent.tolist()
+    parent_idx = path.parent_idx
     from_source = keep & ((parent_idx < 0) | merged[np.maximum(parent_idx, 0)])
     G.add_edges_from(
         ((v, "in"), (v, "out"), {"capacity": c / scale, "exact": c}) for v, c in zip(nodes[keep].tolist(), cap[keep].tolist())
@@ -288,15 +339,13 @@ def build_graph(
         ((p, "out"), (v, "in")) for v, p, ok, src in zip(ids, par, keep.tolist(), from_source.tolist()) if ok and not src
     )
     G.add_edges_from((SOURCE, (v, "in")) for v in nodes[from_source].tolist())
-    G.add_edges_from(((v, "out"), SINK) for v in selected.tolist())
+    G.add_edges_from(((v, "out"), SINK) for v in path.selected.tolist())
     G.add_edges_from(
         ((v, "out"), SINK, {"capacity": c / scale, "exact": c})
-        for v, c, ok in zip(ids, off_path.tolist(), keep.tolist())
+        for v, c, ok in zip(ids, path.off_path.tolist(), keep.tolist())
         if ok and c > 0
     )
-    merged_edges = {((v, "out"), SINK): c for v, c, m in zip(ids, off_path.tolist(), merged.tolist()) if m and c > 0}
-    merged_edges.update(_unselected_axiom_modules(tree, nodes, counts, scale))
-    return G, selected, merged_edges
+    return G
 
 
 class _LeafCounts:
@@ -312,32 +361,80 @@ class _LeafCounts:
 def _unselected_axiom_modules(tree, nodes, counts, scale):
     """Axiom modules holding no selected leaf: their cheapest cut is their leaves, always cut."""
     axiom = tree.axiom_modules()
-    axiom = axiom[~np.isin(axiom, nodes) & (counts[axiom] > 0)]
+    axiom = axiom[~np.isin(axiom, nodes, assume_unique=True) & (counts[axiom] > 0)]
     return {((v, "out"), SINK): int(c) * scale for v, c in zip(axiom.tolist(), counts[axiom].tolist())}
 
 
-def _never_cut_from_source(nodes, depth, cap, off_path, parent_idx, is_selected):
-    """Path nodes that no (lower) minimum cut crosses, reachable from the source through such nodes.
-
-    Bottom-up: ``best[v] = min(cap[v], off_path[v] + sum(best[children]))``; a
-    node whose capacity is at least the cheapest cut below it is never cut (ties
-    go to the lower cut).  Top-down: merge it only if its parent is merged too.
-    Capacities are exact integers (object arrays), so a tie is a tie.
-    """
-    below = off_path.copy()
+def _bottom_up(path: _Path):
+    """``(below, levels)``: the cheapest cut strictly below each path node, ``below[v] =
+    off_path[v] + sum(best[children])`` with ``best[v] = min(cap[v], below[v])`` (a selected
+    leaf: ``cap[v]``, its sink edge being infinite), in exact integers, so a tie is a tie."""
+    cap, is_selected, parent_idx = path.cap, path.is_selected, path.parent_idx
+    below = path.off_path.copy()
     best = np.where(is_selected, cap, 0).astype(object)
-    levels = [np.flatnonzero(depth == d) for d in range(int(depth.max()) + 1)]
+    levels = path.levels()
     for idx in reversed(levels):
         inner = idx[~is_selected[idx]]
         best[inner] = np.minimum(cap[inner], below[inner])
         up = idx[parent_idx[idx] >= 0]
         np.add.at(below, parent_idx[up], best[up])
-    never = ~is_selected & (cap >= below).astype(bool)
-    merged = np.zeros(len(nodes), bool)
+    return below, levels
+
+
+def _never_cut_from_source(path: _Path) -> np.ndarray:
+    """Path nodes that no (lower) minimum cut crosses, reachable from the source through such nodes.
+
+    Bottom-up (:func:`_bottom_up`): a node whose capacity is at least the cheapest cut below
+    it is never cut (ties go to the lower cut).  Top-down: merge it only if its parent is
+    merged too.
+    """
+    below, levels = _bottom_up(path)
+    never = ~path.is_selected & (path.cap >= below).astype(bool)
+    merged = np.zeros(len(path.nodes), bool)
     for idx in levels:
-        top = parent_idx[idx] < 0
-        merged[idx] = never[idx] & (top | merged[np.maximum(parent_idx[idx], 0)])
+        top = path.parent_idx[idx] < 0
+        merged[idx] = never[idx] & (top | merged[np.maximum(path.parent_idx[idx], 0)])
     return merged
+
+
+def _free_below(path: _Path, levels: list[np.ndarray]) -> np.ndarray:
+    """Nodes whose ``(v, "out")`` reaches the sink only through edges of capacity 0 (unselected,
+    no unselected leaves of their own, and each path child of capacity 0 or free itself): below
+    a cut node they sit on the source side of the lower cut, at no cost."""
+    free = np.zeros(len(path.nodes), bool)
+    blocked = np.zeros(len(path.nodes), np.int64)  # path children neither of capacity 0 nor free
+    zero = (path.cap == 0).astype(bool)
+    open_ = ~path.is_selected & (path.off_path == 0).astype(bool)
+    for idx in reversed(levels):
+        free[idx] = open_[idx] & (blocked[idx] == 0)
+        up = idx[(path.parent_idx[idx] >= 0) & ~(zero[idx] | free[idx])]
+        np.add.at(blocked, path.parent_idx[up], 1)
+    return free
+
+
+def _tree_cut(tree: DerivationTree, path: _Path) -> dict:
+    """The lower minimum cut's edges (``edge -> exact scaled capacity``) by the tree's own
+    recursion, what the max flow on :func:`build_graph`'s network finds (the network is a tree
+    between source and sink): top-down, a node reached from the source is cut when its
+    capacity is below the cheapest cut under it (a tie goes lower), a selected leaf always;
+    the unselected leaves of a reached node that is not cut are cut below it.  Below a cut node,
+    the max flow's residual graph also leaves on the source side every vertex that reaches the
+    sink through no edge of capacity above 0 (see :func:`_free_below`): so a node edge of
+    capacity 0 under a cut node is cut too, unless its node's whole subtree is free."""
+    below, levels = _bottom_up(path)
+    cut_here = path.is_selected | (path.cap < below).astype(bool)
+    reached = np.zeros(len(path.nodes), bool)
+    cut = np.zeros(len(path.nodes), bool)
+    for idx in levels:
+        up = np.maximum(path.parent_idx[idx], 0)
+        reached[idx] = (path.parent_idx[idx] < 0) | (reached[up] & ~cut[up])
+        cut[idx] = reached[idx] & cut_here[idx]
+    cut |= ~reached & (path.cap == 0).astype(bool) & ~_free_below(path, levels)
+    edges: dict[tuple, int] = {((v, "in"), (v, "out")): c for v, c in zip(path.nodes[cut].tolist(), path.cap[cut].tolist())}
+    open_ = reached & ~cut & (path.off_path > 0).astype(bool)
+    edges.update({((v, "out"), SINK): c for v, c in zip(path.nodes[open_].tolist(), path.off_path[open_].tolist())})
+    edges.update(_unselected_axiom_modules(tree, path.nodes, _LeafCounts(tree), path.scale))
+    return edges
 
 
 def _lower_cut(R):
@@ -390,41 +487,65 @@ def select_roots(
     ``min_ascend``: a selected leaf that the cut leaves in place still regrows
     from its ``min_ascend``-th ancestor, so a selection always changes
     something (0 turns this off; values above the tree's depth mean the axiom
-    module).  ``flow_func`` is any networkx max-flow function (default
-    preflow-push, the faster here).  ``reduce=False`` solves the unreduced
-    graph (same answer, slower; kept for checking).
+    module).  By default the cut comes from the tree's own recursion (the
+    network is a tree between source and sink: no max flow to run, no networkx
+    to import); the network and its solved source side (``graph``,
+    ``source_side``) are made on first use.  ``flow_func``, any networkx
+    max-flow function (e.g. preflow-push), solves the network instead, as does
+    ``reduce=False`` on the unreduced network (same answer, slower; kept for
+    checking).
     """
     min_ascend = _check_min_ascend(min_ascend, tree)
-    G, selected, merged_edges = build_graph(tree, selected, rho, alpha0, n, reduce=reduce)
-    scale = G.graph["scale"]
-    _, source_side = solve(G, flow_func)
-    exact = {(u, v): d.get("exact") for u, v, d in G.edges(data=True) if u in source_side and v not in source_side}
-    exact.update(merged_edges)
+    if flow_func is None and reduce:
+        path = _path(tree, selected, rho, alpha0, n)
+        selected, scale = path.selected, path.scale
+        exact = _tree_cut(tree, path)
+        network = _solver(path, flow_func)
+    else:
+        G, selected, merged_edges = build_graph(tree, selected, rho, alpha0, n, reduce=reduce)
+        scale = G.graph["scale"]
+        _, source_side = solve(G, flow_func)
+        exact = {(u, v): d.get("exact") for u, v, d in G.edges(data=True) if u in source_side and v not in source_side}
+        exact.update(merged_edges)
+        network = _solved(G, source_side)
     finite = [c for c in exact.values() if c is not None]
     value = float(Fraction(sum(finite), scale)) if len(finite) == len(exact) else float("inf")
     cut_edges = {e: float("inf") if c is None else float(Fraction(c, scale)) for e, c in exact.items()}
     cut_nodes = np.array(sorted(u[0] for u, v in cut_edges if isinstance(u, tuple) and u[1] == "in"), np.int64)
     internal = tree.child_count[cut_nodes] > 0
     cut_roots = cut_nodes[internal]
-    kept = np.intersect1d(cut_nodes[~internal], selected)
+    kept = np.intersect1d(cut_nodes[~internal], selected, assume_unique=True)
     min_roots = np.zeros(0, np.int64)
     if min_ascend > 0 and kept.size:
         up = tree.ancestor(kept, min_ascend)
         top = np.where(up < 0, _axiom_root(tree, kept), up)
-        min_roots = np.unique(top[tree.child_count[top] > 0])
-    roots = collapse_nested(tree, np.union1d(cut_roots, min_roots))
+        min_roots = sorted_unique(top[tree.child_count[top] > 0])
+    roots = collapse_nested(tree, np.concatenate([cut_roots, min_roots]))
     return CutResult(
         roots,
-        np.intersect1d(cut_roots, roots),
-        np.intersect1d(np.setdiff1d(min_roots, cut_roots), roots),
+        np.intersect1d(cut_roots, roots, assume_unique=True),
+        np.intersect1d(np.setdiff1d(min_roots, cut_roots, assume_unique=True), roots, assume_unique=True),
         cut_nodes,
         value,
         cut_edges,
-        G,
-        source_side,
         selected,
         from_axiom=bool(roots.size and (tree.parent[roots] < 0).any()),
+        network=network,
     )
+
+
+def _solved(G, source_side):
+    return lambda: (G, source_side)
+
+
+def _solver(path, flow_func):
+    """``() -> (reduced network, its solved source side)`` of ``path``."""
+
+    def network():
+        G = _network(path, _never_cut_from_source(path))
+        return G, solve(G, flow_func)[1]
+
+    return network
 
 
 def _check_min_ascend(min_ascend, tree):
@@ -451,7 +572,7 @@ def _axiom_root(tree, nodes):
 
 def collapse_nested(tree: DerivationTree, roots: ArrayLike) -> np.ndarray:
     """Drop every root that lies under another root."""
-    roots = np.unique(np.asarray(roots, np.int64))
+    roots = sorted_unique(np.asarray(roots, np.int64))
     if roots.size < 2:
         return roots
     if roots.size <= 256:  # a few roots: walk up from each (a set lookup per ancestor, no pass per level)

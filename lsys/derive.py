@@ -37,7 +37,7 @@ import numpy as np
 
 import ramure.grammars as grammar_files
 from .errors import DerivationError, GrammarError, ValueRefused
-from .expr import compile_expression, evaluate_constant
+from .expr import compile_expression, evaluate_constant, seeded_generator
 from .grammar import Grammar, parse_grammar, read_grammar_file
 from .branch_cut import cut_string
 from .combination import split as split_combination
@@ -233,7 +233,7 @@ class LSystem:
             [self._sym[m.symbol] for m in axiom], [len(m.args) for m in axiom], values, -1, 0, -1, np.arange(len(axiom))
         )
         tree.leaves = ids
-        rng = np.random.default_rng(seed)
+        rng = seeded_generator(seed)
         string = decompose(self, tree, ids, 0, 0, rng, consts)  # the axiom too (no decomposition: ids)
         string = cut_string(self, tree, string)  # '%' cuts the rest of its branch (lsys.branch_cut)
         for step in range(1, n + 1):
@@ -400,7 +400,7 @@ class LSystem:
         with np.errstate(all="raise"):
             for i in range(n):
                 try:
-                    fn({k: v[i : i + 1] for k, v in V.items()}, C, np.random.default_rng(0), 1)
+                    fn({k: v[i : i + 1] for k, v in V.items()}, C, seeded_generator(0), 1)
                 except (FloatingPointError, ZeroDivisionError, ValueError, OverflowError):
                     return i
         return 0

@@ -40,6 +40,7 @@ refuses what it can already see (see :func:`check_grammar`).
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Collection, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -118,10 +119,27 @@ def triangle_areas(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
 def from_walk(leaves: np.ndarray, poly: tuple) -> Polygons:
     """The :class:`Polygons` of one turtle walk (see :func:`ramure.lsys._turtle_kernel.walk`)."""
     poly_at, _close, color, _records, vtx, tag = poly
-    from ._polygon_kernel import gather  # numba loads on first use only
+    if "numba" in sys.modules and len(tag) >= GATHER_KERNEL_MIN:
+        from ._polygon_kernel import gather  # numba loads on first use only
 
-    offsets, points = gather(vtx, tag, len(poly_at))
+        offsets, points = gather(vtx, tag, len(poly_at))
+    else:
+        offsets, points = _gather(vtx, tag, len(poly_at))
     return Polygons(leaves[poly_at].astype(np.int64), color.astype(np.int32), offsets, points)  # ids handed out: int64
+
+
+#: Walks with at least this many vertices (and numba loaded) gather them in one compiled pass.
+GATHER_KERNEL_MIN = 100_000
+
+
+def _gather(vtx, tag, n_poly):
+    """What :func:`ramure.lsys._polygon_kernel.gather` does, with a stable sort (no numba)."""
+    kept = np.flatnonzero(tag >= 0)
+    owner = tag[kept]
+    order = np.argsort(owner, kind="stable")
+    offsets = np.zeros(n_poly + 1, np.int64)
+    np.cumsum(np.bincount(owner, minlength=n_poly), out=offsets[1:])
+    return offsets, vtx[kept[order]].reshape(-1, 3)
 
 
 def concatenate(parts: Iterable[Polygons]) -> Polygons:

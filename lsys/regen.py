@@ -44,6 +44,7 @@ from .combination import split as split_combination
 from .cut import validate_selection
 from .derive import LSystem, check_constants, check_seed
 from .errors import GrammarError, RamureError, ValueRefused
+from .expr import seeded_generator
 
 if TYPE_CHECKING:
     from .cut import CutResult
@@ -227,7 +228,7 @@ def regenerate(
     old_children = (tree.child_start[roots].copy(), tree.child_count[roots].copy())
     removed = np.concatenate([tree.subtree(r) for r in roots]) if roots.size else np.zeros(0, np.int64)
     first_new = tree.size
-    rng = np.random.default_rng(seed)
+    rng = seeded_generator(seed)
     sums = tree.detach_sums()  # kept: updated under the roots once the edit is done
     try:
         pieces, starts, ends = _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune)

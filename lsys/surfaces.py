@@ -153,7 +153,7 @@ _CACHE: dict = {}
 
 def _from_modules(grammar, definition, constants):
     """Run the turtle over a ``#surface``'s module string (no derivation)."""
-    from ._turtle_kernel import FULL, initial_state, walk
+    from ._turtle_walk import FULL, initial_state, walk  # a few modules: the plain walk, no numba
     from .expr import evaluate_constant
     from .polygons import from_walk
     from .turtle import SYMBOL_ACTIONS, TurtleAction

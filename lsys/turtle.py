@@ -39,14 +39,17 @@ Tropism (``#tropism tx ty tz e``) bends H toward T by ``e*|H x T|`` after each
 
 Branch order is the number of ``[`` open around a segment (the trunk is 0).
 
-The interpreter is one compiled loop (:mod:`numba`, see :func:`_walk`) over
-arrays of the string: actions, parameter counts and first parameters.  It
+The interpreter is one loop over arrays of the string: actions, parameter
+counts and first parameters; compiled (:mod:`numba`) for long strings, the
+same loop in plain Python for short ones, which then need no numba
+(:data:`KERNEL_MIN_MODULES`; both give the same arrays).  It
 also records the turtle state at every ``[`` (a :class:`Trace`), so an edit
 re-interprets only the part of the string it changed (:func:`reinterpret`).
 """
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum
@@ -305,14 +308,44 @@ def interpret(derivation: Derivation) -> Skeleton:
     return interpret_string(derivation.lsystem, derivation.tree, derivation.tree.leaves)
 
 
+#: Strings at least this long are walked by the compiled turtle (numba); shorter ones by the
+#: same loop in plain Python (:mod:`._turtle_walk`: the same arrays), which spares a new
+#: process loading numba and the compiled walk (about 0.2 s against 10 ms for Honda's
+#: sympodial tree at n = 10, 11,253 modules).  Once numba is loaded, the compiled walk takes
+#: strings from :data:`KERNEL_LOADED_MIN_MODULES` modules on.
+KERNEL_MIN_MODULES = 100_000
+KERNEL_LOADED_MIN_MODULES = 2_000
+#: True / False force the compiled / plain walk (tests compare them); None chooses by length.
+use_kernels: bool | None = None
+
+
+def compiled_walk(length: int) -> bool:
+    """Whether a string of ``length`` modules is walked by the compiled turtle."""
+    if use_kernels is not None:
+        return use_kernels
+    return length >= KERNEL_MIN_MODULES or ("numba" in sys.modules and length >= KERNEL_LOADED_MIN_MODULES)
+
+
+def _walker(length):
+    """The ``walk`` function for a string of ``length`` modules (see :func:`compiled_walk`)."""
+    if compiled_walk(length):
+        from ._turtle_kernel import walk  # numba loads on first use only
+
+        return walk
+    from ._turtle_walk import walk
+
+    return walk
+
+
 def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> Skeleton:
     """The :class:`Skeleton` of the string ``leaves`` (node ids of ``tree``), with its :class:`Trace`."""
-    from ._turtle_kernel import FULL, initial_state, walk  # numba loads on first use only
+    from ._turtle_walk import FULL, initial_state
 
     leaves = node_ids(leaves)
     acts, nps, par = module_arrays(lsys, tree, leaves)
     angle, step, trop = _settings(lsys)
     state = initial_state(lsys.grammar.width)
+    walk = _walker(len(acts))
     _, segs, orgs, poly, err = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)
     check_walk(lsys, tree, leaves, poly, err)
     trace = Trace(leaves, acts, nps, segs[0], orgs[0], _balanced(acts), poly[0])
@@ -348,9 +381,16 @@ _NO_MATCH = np.zeros(0, np.int32)  # the dtype of the trace's matches: one compi
 
 def _balanced(acts):
     """Whether every bracket of the string (its actions) is matched."""
-    from ._turtle_kernel import bracket_pairs32
+    return bool(_bracket_pairs(acts)[1])
 
-    return bool(bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))[1])
+
+def _bracket_pairs(acts):
+    """(match, balanced): bracket matches of the string (int32, -1 unmatched), compiled or numpy."""
+    if compiled_walk(len(acts)):
+        from ._turtle_kernel import bracket_pairs32
+    else:
+        from ._turtle_walk import bracket_pairs32
+    return bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
 
 
 def paired(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -459,9 +499,11 @@ def changed_spans(old: ArrayLike, new: ArrayLike, size: int) -> tuple[np.ndarray
     first - 1`` for an empty span), or None when the kept modules are not in
     the same order in both strings.
     """
-    from ._turtle_kernel import kept_modules
-
     old, new = node_ids(old), node_ids(new)
+    if compiled_walk(max(len(old), len(new))):
+        from ._turtle_kernel import kept_modules
+    else:
+        from ._turtle_walk import kept_modules
     keep_old, keep_new, same_order = kept_modules(old, new, int(size))
     if not same_order:
         return None
@@ -517,7 +559,7 @@ def reinterpret(
     Falls back to a full interpretation (no ``reuse``) when the strings do not
     allow it (unbalanced brackets, no trace).
     """
-    from ._turtle_kernel import REGION, SEEK, bracket_pairs32, initial_state, walk
+    from ._turtle_walk import REGION, SEEK, initial_state
 
     trace = skeleton.extra.get("trace")
     leaves = node_ids(leaves)
@@ -530,7 +572,7 @@ def reinterpret(
     pieces = [module_arrays(lsys, tree, leaves[a : b + 1]) for a, b in new_spans]
     acts, nps = (_splice(old, old_spans, [p[k] for p in pieces]) for k, old in enumerate((trace.acts, trace.nps)))
     par = tree.params[:, 0]  # read through the string's node ids (not kept in the trace, not gathered)
-    match, balanced = bracket_pairs32(acts, int(TurtleAction.PUSH), int(TurtleAction.POP))
+    match, balanced = _bracket_pairs(acts)
     if len(acts) != len(leaves) or not balanced:
         return interpret_string(lsys, tree, leaves)
     # whether the string has polygon actions: an edit of a string without any only looks at its new pieces
@@ -539,6 +581,7 @@ def reinterpret(
         return interpret_string(lsys, tree, leaves)  # a polygon crosses a branch or an edit: drawn whole
     angle, step, trop = _settings(lsys)
     start_state = initial_state(lsys.grammar.width)
+    walk = _walker(len(acts))
     delta = np.cumsum((new_spans[:, 1] - new_spans[:, 0]) - (old_spans[:, 1] - old_spans[:, 0]))
     regions: list[list] = []  # (old start, old stop, segment arrays, organ arrays)
     for i, (a, b) in enumerate(new_spans):

@@ -31,7 +31,6 @@ import errno
 import os
 import pathlib
 import stat
-import tempfile
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
@@ -104,6 +103,8 @@ def write_with(path: str | os.PathLike, writer: Callable[[str], object]) -> path
 def _replacing(path: pathlib.Path, suffix: str = ".tmp") -> Iterator[str]:
     """Yield a temporary path beside ``path``; on success commit it onto ``path``, else discard it."""
     try:
+        import tempfile  # here: the readers (the grammar parser's includes) need not import it
+
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
         os.close(fd)
     except OSError as exc:

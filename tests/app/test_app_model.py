@@ -192,13 +192,14 @@ def test_select_refuses_erased_and_dead_modules_like_leaf_positions():
 
 _WARM_UP = """
 import json, sys, time
-from numba.core import dispatcher
 from ramure.app.model import Explorer, warm_up_edits
 ex = Explorer("grammars/honda_sympodial.lsys", n=12)
 ex.mesh
 ex.select(ex.skeleton.leaf_id[len(ex.skeleton.leaf_id) // 3 :: 500][:10])
 before = "networkx" in sys.modules
+numba_before = "numba" in sys.modules
 warmed = {warm} and warm_up_edits(ex.text, ex.session.n)
+from numba.core import dispatcher
 loads = []
 original = dispatcher.Dispatcher._compile_for_args
 def counted(self, *args, **kwargs):
@@ -207,7 +208,7 @@ def counted(self, *args, **kwargs):
 dispatcher.Dispatcher._compile_for_args = counted
 ex.regrow(seed=1)
 ex.mesh
-print(json.dumps({{"before": before, "warmed": warmed, "loads": loads}}))
+print(json.dumps({{"before": before, "numba_before": numba_before, "warmed": warmed, "loads": loads}}))
 """
 
 
@@ -224,6 +225,7 @@ def test_after_the_warm_up_the_first_regrow_imports_and_loads_nothing(warm):
     assert run.returncode == 0, run.stderr
     out = json.loads(run.stdout.strip().splitlines()[-1])
     assert out["before"] is False  # a plant drawn and a selection made: networkx not needed yet
+    assert out["numba_before"] is False  # nor numba, for 45,045 modules (issue 34: a fast first call)
     if warm:
         assert out["warmed"] is True and out["loads"] == []
     else:  # without it, the first regrow loads the edit kernels (and imports networkx)

@@ -39,7 +39,7 @@ _START = """
 import json, sys
 import ramure.app.desktop.window
 from ramure.app.model import Explorer
-explorer = Explorer({grammar!r}, n=8)
+explorer = Explorer({grammar!r}, n={n})
 explorer.skeleton, explorer.mesh
 watch = ("numba", "numba.np.arraymath", "scipy.linalg", "scipy.sparse", "networkx", "vtkmodules.all",
          "sklearn", "pandas", "ramure.gmap", "ramure.studies")
@@ -47,15 +47,17 @@ print(json.dumps({{name: name in sys.modules for name in watch}}))
 """
 
 
-def test_a_plant_drawn_from_the_kernel_cache_loads_no_compiler_and_nothing_an_edit_needs():
+@pytest.mark.parametrize("n", [8, 14])
+def test_a_plant_drawn_from_the_kernel_cache_loads_no_compiler_and_nothing_an_edit_needs(n):
     from desktop_helpers import HONDA
 
-    code = _START.format(grammar=str(HONDA))
+    code = _START.format(grammar=str(HONDA), n=n)
     runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300) for _ in range(2)]
     assert all(r.returncode == 0 for r in runs), runs[-1].stderr
     loaded = json.loads(runs[1].stdout.strip().splitlines()[-1])  # the first run may have compiled (fresh clone)
-    assert loaded.pop("numba")  # the turtle ran its kernel...
-    assert not any(loaded.values()), loaded  # ...loaded from the cache: no numba registries, no scipy.linalg
+    # n = 14 (180,213 modules): the turtle ran its kernel; n = 8 (2,805): the plain walk, no numba at all
+    assert loaded.pop("numba") is (n == 14)
+    assert not any(loaded.values()), loaded  # kernels loaded from the cache: no numba registries, no scipy.linalg
 
 
 _SCAN = """

@@ -143,7 +143,7 @@ def test_kinship_hues():
     assert np.allclose(rgb[0], [1, 0, 0]) and np.allclose(rgb[-1], [0, 0, 1])
 
 
-def test_networkx_loads_on_the_first_cut_not_on_import():
+def test_networkx_loads_when_the_network_is_looked_at_not_for_a_cut():
     import subprocess
     import sys
 
@@ -151,7 +151,55 @@ def test_networkx_loads_on_the_first_cut_not_on_import():
         "import sys; from ramure.lsys import LSystem; import ramure.lsys.regen; "
         "a = 'networkx' in sys.modules; "
         "from ramure.lsys.regen import Session; s = Session(LSystem.from_file('honda_sympodial'), n=4); "
-        "s.regrow(s.tree.leaves[:2], rho=0.5, seed=1); print(a, 'networkx' in sys.modules)"
+        "cut = s.plan(s.tree.leaves[:2], rho=0.5)[0]; s.regrow(s.tree.leaves[:2], rho=0.5, seed=1); "
+        "b = 'networkx' in sys.modules; print(a, b, cut.graph.number_of_nodes() > 2, 'networkx' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert out.stdout.split() == ["False", "True"], out.stderr
+    assert out.stdout.split() == ["False", "False", "True", "True"], out.stderr
+
+
+def _same_cut(a, b):
+    assert a.cut_edges == b.cut_edges  # the same edges with the same capacities, exactly
+    assert a.cut_value == b.cut_value
+    for name in ("roots", "cut_roots", "min_roots", "cut_nodes", "selected"):
+        assert getattr(a, name).tolist() == getattr(b, name).tolist(), name
+    assert a.from_axiom == b.from_axiom
+
+
+@pytest.mark.parametrize(
+    ("name", "n"), [("honda_sympodial", 7), ("stochastic_plant", None), ("context_plant", None), ("abop/bush_1_25", 4)]
+)
+def test_the_trees_own_recursion_finds_the_max_flows_cut(name, n):
+    ls = LSystem.from_file(name)
+    d = ls.derive(n=n, seed=2)
+    t, steps = d.tree, d.n
+    rng = np.random.default_rng(len(name))
+    sizes = (1, 2, 3, 5, 12, 40, 200, len(t.leaves) // 2, len(t.leaves))
+    for size, rho in zip(sizes, (1.0, 0.5, 0.3, 0.5, 0.9, 0.25, 0.5, 0.5, 0.1)):
+        sel = rng.choice(t.leaves, min(size, len(t.leaves)), replace=False)
+        for alpha0 in (None, 3.5):
+            fast = select_roots(t, sel, rho=rho, n=steps, alpha0=alpha0)
+            for check in (dict(flow_func=flow.preflow_push), dict(reduce=False)):
+                _same_cut(fast, select_roots(t, sel, rho=rho, n=steps, alpha0=alpha0, **check))
+            # the network made on first use is the one the solver would have cut
+            solved = select_roots(t, sel, rho=rho, n=steps, alpha0=alpha0, flow_func=flow.preflow_push)
+            assert fast.source_side == solved.source_side
+            assert sorted(fast.graph.edges(data=True), key=repr) == sorted(solved.graph.edges(data=True), key=repr)
+
+
+def test_the_recursion_after_edits_and_with_ties():
+    from ramure.lsys.regen import Session
+
+    s = Session(LSystem.from_file("honda_sympodial"), n=6, seed=0)
+    leaves = s.tree.leaves
+    s.regrow(leaves[10:30], rho=0.5, seed=1)
+    s.prune(s.tree.leaves[40:45], rho=0.5)  # dead nodes and deleted modules in the tree
+    t = s.tree
+    found = set()
+    for start in range(0, len(t.leaves), 7):
+        sel = t.leaves[start : start + 4]
+        for rho in (0.5, 1.0, 0.26):  # 0.5: ties at the parents of pairs
+            fast = select_roots(t, sel, rho=rho, n=6, min_ascend=0)
+            _same_cut(fast, select_roots(t, sel, rho=rho, n=6, min_ascend=0, reduce=False))
+            found.add(fast.cut_roots.size > 0)
+    assert found == {True, False}  # both cuts above the selection and cuts on it
