@@ -10,7 +10,17 @@ train a sorting system.  :func:`make_dataset` writes, for fruit ``i`` of ``count
   lopsidedness, ribbing), every defect's facts, volume lost, the OECD/UNECE grade with
   its reasons, and the files.
 
-and ``dataset.json`` (the settings, one summary row per fruit, the marketable count).
+and ``dataset.json``, the manifest: the settings, ``"complete"``, one summary row per fruit
+and the marketable count.
+
+**Nothing half-done.**  The manifest is written first, ``"complete": false``, and rewritten
+``true`` last; a fruit's labels are its last file, so a fruit with labels is whole.  A folder
+that is not empty is refused unless told: ``resume=True`` (``--resume``) finishes the dataset
+there (same settings, only the fruit without labels are made), ``overwrite=True``
+(``--overwrite``) removes the dataset files there first (``fruit_NNNN*`` and the manifest;
+nothing else).  Labels and manifest hold no timings, so one seed gives byte-identical files.
+Workers end when the process that started them dies (``kill -9`` included), instead of
+writing on into a folder the user has seen the command give up on.
 
 **Deterministic and independent.**  Fruit ``i`` draws all its random numbers from
 ``numpy.random.SeedSequence([seed, i])``: the same seed gives the same dataset, fruit
@@ -31,16 +41,20 @@ columella; 2 adds endocarp, locules and seeds, at about 40 times the cost).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import pathlib
+import re
+import sys
 import time
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import ramure.io as atomic
-from ramure.errors import ValueRefused
+from ramure.errors import RamureError, ValueRefused
 
 if TYPE_CHECKING:
     from ramure.gmap.map3 import GMap3
@@ -202,7 +216,6 @@ def write_one(
     from ramure.gmap.cut import plane_cut
     from ramure.gmap.pyvista import to_unstructured_grid
 
-    t0 = time.perf_counter()
     gm, labels = build_one(recipe, levels, size_mm)
     folder = pathlib.Path(folder)
     stem = f"fruit_{index:04d}"
@@ -215,16 +228,20 @@ def write_one(
     del grid.cell_data["rgb"]
     atomic.save_mesh(grid, folder / f"{stem}.vtu")
     files = {"picture": f"{stem}.png", "cut_picture": f"{stem}_cut.png", "grid": f"{stem}.vtu", "labels": f"{stem}.json"}
-    record = {"index": index, **labels, "files": files, "seconds": round(time.perf_counter() - t0, 4)}
-    atomic.write_text(folder / f"{stem}.json", json.dumps(_plain(record), indent=1))
+    record = {"index": index, **labels, "files": files}
+    atomic.write_text(folder / f"{stem}.json", json.dumps(_plain(record), indent=1))  # last: the fruit is whole
+    return summary_row(record)
+
+
+def summary_row(record: Mapping[str, Any]) -> dict:
+    """The manifest's row for a fruit, from its labels."""
+    malformation = record["malformation"]
     return {
-        "index": index,
-        "grade": labels["grade"]["grade"],
-        "defects": [d["kind"] for d in labels["defects"]],
-        "malformation": None
-        if not labels["malformation"]
-        else (labels["malformation"]["shape"] or f"rate={labels['malformation']['rate']}"),
-        "labels": files["labels"],
+        "index": int(record["index"]),
+        "grade": record["grade"]["grade"],
+        "defects": [d["kind"] for d in record["defects"]],
+        "malformation": None if not malformation else (malformation["shape"] or f"rate={malformation['rate']}"),
+        "labels": record["files"]["labels"],
     }
 
 
@@ -240,8 +257,30 @@ def _plain(value):
 
 
 def _job(args):
+    _end_if_orphaned()
     index, recipe, folder, levels, size_mm, picture = args
     return write_one(index, recipe, folder, levels, size_mm, picture)
+
+
+_PARENT: list[int] = []  # in a worker: the pid of the process that started it
+
+
+def _worker_start(parent: int) -> None:
+    """Worker initializer: end this worker when ``parent`` dies (Linux: the kernel sends SIGTERM
+    at once, even to a worker blocked on the dead queue; elsewhere each job checks first)."""
+    _PARENT[:] = [parent]
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))  # PR_SET_PDEATHSIG
+    _end_if_orphaned()
+
+
+def _end_if_orphaned() -> None:
+    if _PARENT and os.getppid() != _PARENT[0]:
+        os._exit(1)  # the command died: write nothing more into its folder
 
 
 def make_dataset(
@@ -254,11 +293,15 @@ def make_dataset(
     size_mm: float = 65.0,
     workers: int = 2,
     picture: tuple[int, int] = PICTURE,
+    resume: bool = False,
+    overwrite: bool = False,
 ) -> dict:
-    """Write ``count`` labelled fruit into ``folder`` (see the module docstring); the summary.
+    """Write ``count`` labelled fruit into ``folder`` (see the module docstring); the summary
+    (the manifest, plus ``"seconds"``).
 
     Refused before anything is written: count outside 1..100000, an unknown
-    ``defects`` mode or preset, levels outside 1..2, workers < 1.
+    ``defects`` mode or preset, levels outside 1..2, workers < 1, a folder that is not empty
+    without ``resume`` or ``overwrite``, a ``resume`` with other settings than the folder's.
     """
     from ramure.gmap.fruit import PRESETS
 
@@ -274,33 +317,91 @@ def make_dataset(
         raise ValueRefused(f"--workers must be >= 1, got {workers}")
     if not (np.isfinite(size_mm) and size_mm > 0):
         raise ValueRefused(f"--size-mm must be a finite number > 0, got {size_mm}")
+    if resume and overwrite:
+        raise ValueRefused("--resume and --overwrite exclude each other")
     folder = pathlib.Path(folder)
     if folder.exists() and not folder.is_dir():
         raise ValueRefused(f"-o {folder}: exists and is not a folder")
-    folder.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    recipes = []
-    for i in range(int(count)):
-        rng = fruit_rng(seed, i)
-        recipe = random_recipe(rng, preset, levels)
-        if defects == "none":
-            recipe.update(malform=None, defects=[])
-        recipes.append(recipe)
-    jobs = [(i, r, str(folder), levels, float(size_mm), tuple(picture)) for i, r in enumerate(recipes)]
-    rows = _run(jobs, int(workers))
-    summary = {
+    settings = {
         "count": int(count),
         "seed": int(seed),
         "defects": defects,
         "preset": preset,
         "levels": levels,
         "size_mm": float(size_mm),
-        "marketable": sum(r["grade"] == "marketable" for r in rows),
-        "fruit": rows,
-        "seconds": round(time.perf_counter() - t0, 3),
+        "picture": [int(v) for v in picture],
     }
-    atomic.write_text(folder / "dataset.json", json.dumps(_plain(summary), indent=1))
+    _prepare(folder, settings, resume, overwrite)
+    t0 = time.perf_counter()
+    write_manifest(folder, settings, [], complete=False)
+    done = {i for i in range(int(count)) if resume and (folder / f"fruit_{i:04d}.json").is_file()}
+    jobs = []
+    for i in range(int(count)):
+        if i in done:
+            continue
+        recipe = random_recipe(fruit_rng(seed, i), preset, levels)
+        if defects == "none":
+            recipe.update(malform=None, defects=[])
+        jobs.append((i, recipe, str(folder), levels, float(size_mm), tuple(picture)))
+    rows = (_run(jobs, int(workers)) if jobs else []) + [_row_of(folder, i) for i in sorted(done)]
+    summary = write_manifest(folder, settings, sorted(rows, key=lambda r: r["index"]), complete=True)
+    return {**summary, "seconds": round(time.perf_counter() - t0, 3)}
+
+
+MANIFEST = "dataset.json"
+_OURS = re.compile(r"fruit_\d{4,}(_cut)?\.(png|vtu|json)|" + re.escape(MANIFEST))
+
+
+def write_manifest(folder: pathlib.Path, settings: Mapping[str, Any], rows: Sequence[dict], complete: bool) -> dict:
+    """Write ``dataset.json`` (atomically) and return what it holds."""
+    summary = {
+        "format": "ramure-fruit-dataset",
+        **settings,
+        "complete": complete,
+        "marketable": sum(r["grade"] == "marketable" for r in rows),
+        "fruit": list(rows),
+    }
+    atomic.write_text(folder / MANIFEST, json.dumps(_plain(summary), indent=1))
     return summary
+
+
+def _prepare(folder: pathlib.Path, settings: Mapping[str, Any], resume: bool, overwrite: bool) -> None:
+    """Make ``folder`` ready: created, or checked for ``resume``, or cleared of ours for ``overwrite``."""
+    entries = sorted(folder.iterdir()) if folder.is_dir() else []
+    if resume:
+        old = _read_manifest(folder)
+        if old is None:
+            raise ValueRefused(f"--resume: {folder} holds no dataset to finish (no readable {MANIFEST})")
+        differ = [k for k in settings if old.get(k) != settings[k]]
+        if differ:
+            raise ValueRefused(
+                f"--resume: the dataset in {folder} was made with other settings ({', '.join(differ)}); "
+                "give the same ones, or --overwrite"
+            )
+        return
+    if entries and not overwrite:
+        raise ValueRefused(f"-o {folder} is not empty: --resume finishes the dataset there, --overwrite replaces it")
+    for entry in entries:
+        if entry.is_file() and _OURS.fullmatch(entry.name):
+            entry.unlink()
+    folder.mkdir(parents=True, exist_ok=True)
+
+
+def _read_manifest(folder: pathlib.Path) -> dict | None:
+    try:
+        data = json.loads(atomic.read_regular(folder / MANIFEST, 64 * 2**20, MANIFEST))
+    except (RamureError, ValueError):
+        return None
+    return data if isinstance(data, dict) and data.get("format") == "ramure-fruit-dataset" else None
+
+
+def _row_of(folder: pathlib.Path, index: int) -> dict:
+    """The manifest row of fruit ``index`` made before a resume, from its labels."""
+    path = folder / f"fruit_{index:04d}.json"
+    try:
+        return summary_row(json.loads(atomic.read_regular(path, 64 * 2**20, "fruit labels")))
+    except (ValueError, KeyError, TypeError) as exc:
+        raise RamureError(f"--resume: {path} is not a fruit's labels ({type(exc).__name__}); --overwrite remakes them") from None
 
 
 def _warm() -> None:
@@ -330,5 +431,5 @@ def _run(jobs, workers):
 
     ctx = mp.get_context("fork" if hasattr(os, "fork") else "spawn")
     chunk = max(1, len(jobs) // (4 * workers))
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_start, initargs=(os.getpid(),)) as pool:
         return list(pool.map(_job, jobs, chunksize=chunk))

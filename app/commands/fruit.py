@@ -313,7 +313,9 @@ def register(sub: Subparsers) -> None:
     b.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     b.add_argument("--size", default="256x256", help="picture size WIDTHxHEIGHT (default 256x256)")
     b.add_argument("--json", action="store_true", help="print the dataset summary as JSON")
-    b.add_argument("-o", "--output", required=True, help="dataset folder (created)")
+    b.add_argument("-o", "--output", required=True, help="dataset folder (created; must be empty unless --resume/--overwrite)")
+    b.add_argument("--resume", action="store_true", help="finish the dataset in the folder (same settings)")
+    b.add_argument("--overwrite", action="store_true", help="remove the dataset files in the folder first")
     b.set_defaults(func=run_batch)
 
 
@@ -331,6 +333,8 @@ def run_batch(args: argparse.Namespace) -> int:
         size_mm=args.size_mm,
         workers=args.workers,
         picture=size,
+        resume=args.resume,
+        overwrite=args.overwrite,
     )
     if args.json:
         print(json.dumps({k: v for k, v in summary.items() if k != "fruit"}))
