@@ -143,7 +143,9 @@ def test_kinship_hues():
     assert np.allclose(rgb[0], [1, 0, 0]) and np.allclose(rgb[-1], [0, 0, 1])
 
 
-def test_networkx_loads_on_the_first_cut_not_on_import():
+def test_networkx_loads_for_the_cut_graph_only():
+    """The cut is the tree's own recursion: a regrow never imports networkx; reading the cut's
+    graph (the desktop's cut-graph view) does."""
     import subprocess
     import sys
 
@@ -151,7 +153,28 @@ def test_networkx_loads_on_the_first_cut_not_on_import():
         "import sys; from ramure.lsys import LSystem; import ramure.lsys.regen; "
         "a = 'networkx' in sys.modules; "
         "from ramure.lsys.regen import Session; s = Session(LSystem.from_file('honda_sympodial'), n=4); "
-        "s.regrow(s.tree.leaves[:2], rho=0.5, seed=1); print(a, 'networkx' in sys.modules)"
+        "r = s.regrow(s.tree.leaves[:2], rho=0.5, seed=1); b = 'networkx' in sys.modules; "
+        "r.cut.graph; print(a, b, 'networkx' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert out.stdout.split() == ["False", "True"], out.stderr
+    assert out.stdout.split() == ["False", "False", "True"], out.stderr
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_tree_recursion_matches_the_flow_solver(seed):
+    """The default cut (the tree's bottom-up recursion, no graph) gives networkx preflow-push's
+    answer: the same roots, cut nodes, value and cut edges, for any selection and rho."""
+    d = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8)
+    t = d.tree
+    rng = np.random.default_rng(seed)
+    sel = rng.choice(t.leaves, int(rng.integers(1, 300)), replace=False)
+    rho = float(rng.choice([0.05, 0.2, 0.5, 0.75, 1.0]))
+    tree_cut = select_roots(t, sel, rho=rho, n=8)
+    flow_cut = select_roots(t, sel, rho=rho, n=8, flow_func=flow.preflow_push)
+    assert tree_cut.roots.tolist() == flow_cut.roots.tolist()
+    assert tree_cut.min_roots.tolist() == flow_cut.min_roots.tolist()
+    assert tree_cut.cut_nodes.tolist() == flow_cut.cut_nodes.tolist()
+    assert tree_cut.cut_value == flow_cut.cut_value == pytest.approx(sum(tree_cut.cut_edges.values()))
+    assert tree_cut.cut_edges == flow_cut.cut_edges
+    assert tree_cut.source_side == flow_cut.source_side
+    assert set(tree_cut.graph.edges) == set(flow_cut.graph.edges)
