@@ -214,13 +214,14 @@ class Explorer:
         }
 
     def set_constant(self, name: str, value: float) -> None:
-        """Change one ``#define`` (an undoable edit that re-derives the plant)."""
+        """Change one ``#define`` (an undoable edit that re-derives the plant).
+
+        It becomes the last edit (:attr:`last_result`): the edit before it, a regrow or a prune,
+        named nodes of the tree this one replaces (its cut, drawn by the desktop's cut graph)."""
         value = finite_number(value, name)
         if name not in self.lsystem.constants:
             raise ValueRefused(f"the grammar has no constant '{name}'")
-        self.session.set_constants({name: value})
-        self.selection = []
-        self._changed()
+        self._after_edit(self.session.set_constants({name: value}))
 
     def set_derivation(self, n: float | None = None, seed: float | None = None) -> None:
         """Change the derivation count or seed: a fresh session (clears undo history)."""
