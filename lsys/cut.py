@@ -166,7 +166,8 @@ class CutResult:
     ``cut_value``: the minimum cut's value, exactly ``sum(cut_edges.values())``
     computed in rationals (so on every axiom module, selected or not);
     ``from_axiom``: a root is an axiom module, so the regrowth restarts from
-    the axiom (:data:`FROM_AXIOM_MESSAGE` is what front ends say).
+    the axiom (:data:`FROM_AXIOM_MESSAGE` is what front ends say);
+    ``graph_size``: the tree nodes in ``graph`` (each two vertices), known without making it.
 
     ``cut_edges`` (edge -> capacity), ``graph`` (the networkx graph of
     :func:`build_graph`) and ``source_side`` (its vertices on the source side)
@@ -182,6 +183,7 @@ class CutResult:
     make_details: Callable[[], tuple[dict, nx.DiGraph, set]] = field(repr=False)
     selected: np.ndarray | None = field(repr=False, default=None)
     from_axiom: bool = False
+    graph_size: int = 0
 
     def _details(self):
         if "_made" not in self.__dict__:
@@ -508,8 +510,10 @@ def select_roots(
         value += sum(_unselected_axiom_modules(tree, a.nodes, a.counts, a.scale).values())
         value = float(Fraction(value, a.scale))
         details = partial(_tree_details, a, cut, passed, source)
+        graph_size = int(len(a.nodes) - passed.sum())
     else:
         cut_nodes, value, details, selected = _flow_cut(tree, selected, rho, alpha0, n, flow_func, reduce)
+        graph_size = len({v[0] for v in details()[1] if isinstance(v, tuple)})
     internal = tree.child_count[cut_nodes] > 0
     cut_roots = cut_nodes[internal]
     kept = np.intersect1d(cut_nodes[~internal], selected)
@@ -528,6 +532,7 @@ def select_roots(
         details,
         selected,
         from_axiom=bool(roots.size and (tree.parent[roots] < 0).any()),
+        graph_size=graph_size,
     )
 
 

@@ -39,6 +39,10 @@ if TYPE_CHECKING:
     from ramure.lsys.turtle import Skeleton
 
 STRING_PREVIEW_MODULES = 5000  # the string dock shows at most this many modules
+#: The cut-graph dock draws a cut of at most this many tree nodes.  A quarter of Honda n = 17
+#: (32,626 leaves) cuts a graph of about 65,000: laying it out took seconds in the worker and
+#: drawing it (half a million scene items) tens of seconds and gigabytes in the window.
+CUT_GRAPH_MAX_NODES = 3000
 
 
 @dataclass(frozen=True)
@@ -113,7 +117,7 @@ def take_snapshot(
     result = explorer.last_result
     layout = (
         cut_graph_layout(result.cut, explorer.derivation.tree, result.roots, explorer.lsystem.symbols)
-        if result is not None and result.cut is not None
+        if result is not None and drawable_cut(result.cut)
         else None
     )
     organs = skeleton.organs
@@ -634,6 +638,25 @@ class GraphLayout:
     selected: set  # selected leaves
     names: dict = field(default_factory=dict)  # tree node -> symbol name (tooltips)
     depths: dict = field(default_factory=dict)  # tree node -> derivation depth
+
+
+def drawable_cut(cut: CutResult | None) -> bool:
+    """Whether the cut-graph dock draws ``cut``: at most :data:`CUT_GRAPH_MAX_NODES` tree nodes."""
+    return cut is not None and cut.graph_size <= CUT_GRAPH_MAX_NODES
+
+
+def cut_too_large_words(cut: CutResult) -> str:
+    """What the cut-graph dock says instead of drawing a cut too large to read.
+
+    >>> from types import SimpleNamespace as NS
+    >>> cut_too_large_words(NS(graph_size=65_254, roots=np.arange(44)))
+    'The cut spans 65,254 nodes of the derivation tree (44 roots): too many to draw here (at most 3,000).'
+    """
+    roots = len(cut.roots)
+    return (
+        f"The cut spans {cut.graph_size:,} nodes of the derivation tree ({roots:,} root{'s' if roots != 1 else ''}): "
+        f"too many to draw here (at most {CUT_GRAPH_MAX_NODES:,})."
+    )
 
 
 def cut_graph_layout(

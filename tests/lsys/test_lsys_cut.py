@@ -178,3 +178,15 @@ def test_tree_recursion_matches_the_flow_solver(seed):
     assert tree_cut.cut_edges == flow_cut.cut_edges
     assert tree_cut.source_side == flow_cut.source_side
     assert set(tree_cut.graph.edges) == set(flow_cut.graph.edges)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_graph_size_counts_the_graph_nodes_without_making_the_graph(seed):
+    t = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8).tree
+    sel = np.random.default_rng(seed).choice(t.leaves, 40, replace=False)
+    tree_cut = select_roots(t, sel, n=8)
+    size = tree_cut.graph_size
+    assert "_made" not in tree_cut.__dict__  # the graph, its edges and source side: not made yet
+    flow_cut = select_roots(t, sel, n=8, flow_func=flow.preflow_push)
+    for cut in (tree_cut, flow_cut):
+        assert cut.graph_size == size == len({v[0] for v in cut.graph if isinstance(v, tuple)}) > 0
