@@ -190,3 +190,26 @@ def test_graph_size_counts_the_graph_nodes_without_making_the_graph(seed):
     flow_cut = select_roots(t, sel, n=8, flow_func=flow.preflow_push)
     for cut in (tree_cut, flow_cut):
         assert cut.graph_size == size == len({v[0] for v in cut.graph if isinstance(v, tuple)}) > 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkeypatch):
+    """path_nodes marks a tree-sized mask for large selections: the same nodes and roots as
+    sorting each level (forced both ways here); collapse_nested (300 roots: its climb of all
+    roots at once) keeps exactly the roots with no other root above them."""
+    from ramure.lsys import cut as cut_module
+    from ramure.lsys.cut import collapse_nested, path_nodes
+
+    t = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8).tree
+    rng = np.random.default_rng(seed)
+    sel = np.unique(rng.choice(t.leaves, int(rng.integers(2, 120)), replace=False))
+    some = np.unique(rng.choice(np.arange(t.size), 300, replace=False))
+    answers = []
+    for mask_from in (10**9, 0):
+        monkeypatch.setattr(cut_module, "MASK_FROM", mask_from)
+        answers.append((path_nodes(t, sel).tolist(), collapse_nested(t, some).tolist(), select_roots(t, sel, n=8).roots.tolist()))
+    assert answers[0] == answers[1]
+    nodes = set(answers[0][0])
+    assert all(int(t.parent[v]) in nodes for v in nodes if t.parent[v] >= 0) and set(sel.tolist()) <= nodes
+    members = set(some.tolist())
+    assert answers[0][1] == [r for r in some.tolist() if not members & set(t.ancestors(r).tolist())]
