@@ -227,8 +227,8 @@ def validate_selection(tree: DerivationTree, selected: Iterable[int]) -> np.ndar
     return selected
 
 
-#: From this many selected leaves on, :func:`path_nodes` and :func:`collapse_nested` mark nodes in
-#: a tree-sized mask (a few ms on a million-node tree) instead of sorting each level's ids.
+#: From this many selected leaves on, :func:`path_nodes` marks the ancestors in a tree-sized mask
+#: (a few ms on a million-node tree) instead of sorting each level's ids.
 MASK_FROM = 2_000
 
 
