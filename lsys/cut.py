@@ -520,18 +520,18 @@ def select_roots(
     if flow_func is None and reduce:
         a = _cut_arrays(tree, selected, rho, alpha0, n)
         cut, passed, source = _tree_cut(a)
-        selected, cut_nodes = a.selected, a.nodes[cut]
+        chosen, cut_nodes = a.selected, a.nodes[cut]
         value = sum(a.cap[cut].tolist()) + sum(a.off_path[passed].tolist())
         value += sum(_unselected_axiom_modules(tree, a.nodes, a.counts, a.scale).values())
         value = float(Fraction(value, a.scale))
         details = partial(_tree_details, a, cut, passed, source)
         graph_size = int(len(a.nodes) - passed.sum())
     else:
-        cut_nodes, value, details, selected = _flow_cut(tree, selected, rho, alpha0, n, flow_func, reduce)
+        cut_nodes, value, details, chosen = _flow_cut(tree, selected, rho, alpha0, n, flow_func, reduce)
         graph_size = len({v[0] for v in details()[1] if isinstance(v, tuple)})
     internal = tree.child_count[cut_nodes] > 0
     cut_roots = cut_nodes[internal]
-    kept = np.intersect1d(cut_nodes[~internal], selected)
+    kept = np.intersect1d(cut_nodes[~internal], chosen)
     min_roots = np.zeros(0, np.int64)
     if min_ascend > 0 and kept.size:
         up = tree.ancestor(kept, min_ascend)
@@ -545,7 +545,7 @@ def select_roots(
         cut_nodes,
         value,
         details,
-        selected,
+        chosen,
         from_axiom=bool(roots.size and (tree.parent[roots] < 0).any()),
         graph_size=graph_size,
     )

@@ -117,7 +117,7 @@ def take_snapshot(
     result = explorer.last_result
     layout = (
         cut_graph_layout(result.cut, explorer.derivation.tree, result.roots, explorer.lsystem.symbols)
-        if result is not None and drawable_cut(result.cut)
+        if result is not None and result.cut is not None and drawable_cut(result.cut)
         else None
     )
     organs = skeleton.organs
