@@ -3,9 +3,10 @@ and regrown, then one branch clicked, pruned (Delete) and a2 set to 45.
 
 Targets: the regrow under 2 s, the process's peak RSS under 1.2 GB.  Before the min cut was the
 tree's own recursion (no networkx flow) and the cut-graph dock stopped drawing cuts of more than
-3,000 nodes, the model took 12.9-18.8 s for the regrow alone and the desktop 72 s and 4.3 GB (or
-was killed for lack of memory); the constant raised ``IndexError`` (the prune's cut drawn on the
-re-derived tree).
+3,000 nodes, the model's regrow took 42.6 s (16.9 s of CPU, a loaded machine; 12.9 s in the issue)
+with a 736 MB peak, and the desktop 72 s and 4.3 GB (here: killed for lack of memory); the
+constant raised ``IndexError`` (the prune's cut drawn on the re-derived tree).  After: the model
+0.9-1.4 s (0.56-0.58 s of CPU), 524 MB; the desktop 1.6-2.4 s to the frame (0.85 s of CPU), 833 MB.
 
 The rectangle (:func:`quarter_rect`) is the lower half of the front view, from the left, as wide as
 holds 24 % of the segment midpoints: 21,000-32,000 leaves, as a user's rubber band over a quarter.
