@@ -441,7 +441,13 @@ class MainWindow(QMainWindow):
         if result is None:
             return
         if snap.cut_layout is None:
-            self.cut_view.clear(f"Last {result.op}: the whole plant (no cut).")
+            cut = result.cut
+            words = state.edit_words(result)
+            self.cut_view.clear(
+                f"Last edit: {words}. {state.cut_too_large_words(cut)}"
+                if cut is not None
+                else f"Last {result.op}: the whole plant (no cut)."
+            )
             return
         self.cut_view.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; cut capacity {result.cut_value:g}")
 
@@ -449,7 +455,9 @@ class MainWindow(QMainWindow):
         def plan(ex):
             cut = ex.plan()
             return cut, (
-                state.cut_graph_layout(cut, ex.derivation.tree, cut.roots, ex.lsystem.symbols) if cut is not None else None
+                state.cut_graph_layout(cut, ex.derivation.tree, cut.roots, ex.lsystem.symbols)
+                if state.drawable_cut(cut)
+                else None
             )
 
         try:
@@ -459,6 +467,10 @@ class MainWindow(QMainWindow):
             return
         if cut is None:
             self.cut_view.clear("Select branches first: the cut is planned for the selection.")
+            return
+        if layout is None:
+            self.cut_view.clear(f"Planned cut for the selection, cut value {cut.cut_value:g}. {state.cut_too_large_words(cut)}")
+            self.docks["cut"].raise_()
             return
         self.cut_view.show_layout(
             layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, cut value {cut.cut_value:g}"

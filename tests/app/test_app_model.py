@@ -240,3 +240,34 @@ def test_a_warm_up_on_text_that_gives_no_plant_says_so_and_raises_nothing():
     jump = "n: 2\nw: A\np:\n  A -> " + "B" * 400 + "\n  B -> " + "F" * 400 + "\n"  # 401 nodes, then 160,401
     assert warm_up_edits(jump, 2) is False  # as costly as an edit: not warmed up
     assert warm_up_edits(jump.replace("F" * 400, "F" * 20), 2) is True  # 8,401 nodes
+
+
+def test_a_constant_after_pruning_a_regrown_branch_forgets_the_old_cut():
+    """Issue 34 §3: regrow a quarter, prune one regrown branch, set a2 = 45.  The constant
+    re-derives the plant into a new tree (as large as the first); the prune's cut names nodes of
+    the regrown tree, past its end.  The constant edit is the last edit now: the snapshot the
+    desktop takes after it drew the stale cut's graph and raised IndexError."""
+    from ramure.app.desktop import state
+
+    ex = Explorer(HONDA, n=9)
+    first_size = ex.derivation.tree.size
+    leaves = ex.skeleton.leaf_id
+    ex.select(leaves[: len(leaves) // 4])
+    result = ex.regrow(seed=1)
+    ex.select(state.regrown_leaves(ex, result))
+    regrown = np.asarray(ex.selection)
+    drawn = np.intersect1d(regrown, ex.skeleton.leaf_id)
+    ex.select([int(drawn[len(drawn) // 2])])  # one regrown branch: a node past the first tree's end
+    assert ex.selection[0] >= first_size
+    pruned = ex.prune()
+    assert pruned.op == "prune" and pruned.cut is not None
+    pruned_modules = len(ex.derivation)
+    ex.set_constant("a2", 45)
+    assert ex.derivation.tree.size == first_size  # the new tree ends before the pruned leaf's id
+    assert ex.last_result.op == "constants" and ex.last_result.cut is None
+    assert "constants changed" in ex.status()
+    snap = state.take_snapshot(ex)
+    assert snap.cut_layout is None and snap.n_modules == len(ex.derivation)
+    assert "constants changed, whole plant re-derived" in snap.status
+    ex.undo()  # back to the pruned plant: no edit result shown, as after any undo
+    assert ex.last_result is None and state.take_snapshot(ex).n_modules == pruned_modules

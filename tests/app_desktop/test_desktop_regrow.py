@@ -69,3 +69,55 @@ def test_the_first_selection_warms_up_edits_once_in_the_background(make_window, 
     assert started == [(ex.text, 5, "ramure-warm-up")]
     w.controller.select(tips(w, 3))
     assert len(model._warm_up) == 1 and len(started) == 1  # once per process
+
+
+def test_quarter_regrow_then_delete_a_regrown_branch_then_a_constant(make_window, qtbot, monkeypatch):
+    """Issue 34 §3 with real events on a smaller Honda: rubber-band a quarter (right drag),
+    Regrow, click one regrown branch, Delete, type a2 = 45.  The constant used to crash the
+    worker's snapshot (IndexError: the prune's cut drawn on the re-derived, smaller tree).  A
+    cut larger than the dock draws is said, not drawn (the limit lowered here to this plant)."""
+    from PySide6.QtTest import QTest
+
+    from ramure.app.desktop import state
+
+    monkeypatch.setattr(state, "CUT_GRAPH_MAX_NODES", 10)
+    w = make_window(n=9)
+    crashes = []
+    w.controller.crashed.connect(lambda message, _details: crashes.append(message))
+    ex = w.controller.explorer
+    first_size = ex.derivation.tree.size
+    xy = w.view.project(w.controller.snapshot.midpoints)
+    lo, hi = np.nanmin(xy, axis=0), np.nanmax(xy, axis=0)
+    mid = (lo + hi) / 2
+    plotter = w.view.plotter
+    a, b = w.view.to_widget(mid[0], mid[1]), w.view.to_widget(hi[0] + 5, hi[1] + 5)  # the upper right
+    QTest.mousePress(plotter, Qt.MouseButton.RightButton, Qt.KeyboardModifier.NoModifier, a)
+    QTest.mouseMove(plotter, (a + b) / 2)
+    QTest.mouseRelease(plotter, Qt.MouseButton.RightButton, Qt.KeyboardModifier.NoModifier, b)
+    assert len(ex.selection) > 10
+    qtbot.mouseClick(w.regen.regrow_button, Qt.MouseButton.LeftButton)
+    settle(qtbot, w)
+    cut = w.controller.snapshot.last_result.cut
+    assert not cut.from_axiom and cut.graph_size > 10 and w.cut_view.layout_data is None
+    assert f"spans {cut.graph_size:,} nodes" in w.cut_view.title.text()
+    snap = w.controller.snapshot
+    regrown = np.flatnonzero(np.isin(snap.segment_leaf, snap.selection))
+    xy = w.view.project(snap.midpoints)
+    gaps = [np.min(np.linalg.norm(np.delete(xy, i, axis=0) - xy[i], axis=1)) for i in regrown]
+    segment = int(regrown[int(np.argmax(gaps))])  # the regrown branch farthest from the others
+    QTest.mouseClick(plotter, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, w.view.to_widget(*xy[segment]))
+    assert ex.selection == [int(snap.segment_leaf[segment])] and ex.selection[0] >= first_size
+    QTest.keyClick(plotter, Qt.Key.Key_Delete)
+    settle(qtbot, w)
+    assert w.controller.snapshot.last_result.op == "prune"
+    box = w.constants_panel.rows["a2"].value
+    box.setFocus()
+    box.selectAll()
+    QTest.keyClicks(box, "45")
+    QTest.keyClick(box, Qt.Key.Key_Return)
+    qtbot.waitUntil(lambda: ex.constants["a2"] == 45.0, timeout=10_000)
+    settle(qtbot, w)
+    assert crashes == []
+    assert ex.derivation.tree.size == first_size and w.drawn_version == w.controller.snapshot.version
+    assert "constants changed, whole plant re-derived" in w.status_label.text()
+    assert w.view.mesh.n_cells == w.controller.snapshot.mesh.n_cells > 0

@@ -203,3 +203,58 @@ def test_the_recursion_after_edits_and_with_ties():
             _same_cut(fast, select_roots(t, sel, rho=rho, n=6, min_ascend=0, reduce=False))
             found.add(fast.cut_roots.size > 0)
     assert found == {True, False}  # both cuts above the selection and cuts on it
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_tree_recursion_matches_the_flow_solver(seed):
+    """The default cut (the tree's bottom-up recursion, no graph) gives networkx preflow-push's
+    answer: the same roots, cut nodes, value and cut edges, for any selection and rho."""
+    d = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8)
+    t = d.tree
+    rng = np.random.default_rng(seed)
+    sel = rng.choice(t.leaves, int(rng.integers(1, 300)), replace=False)
+    rho = float(rng.choice([0.05, 0.2, 0.5, 0.75, 1.0]))
+    tree_cut = select_roots(t, sel, rho=rho, n=8)
+    flow_cut = select_roots(t, sel, rho=rho, n=8, flow_func=flow.preflow_push)
+    assert tree_cut.roots.tolist() == flow_cut.roots.tolist()
+    assert tree_cut.min_roots.tolist() == flow_cut.min_roots.tolist()
+    assert tree_cut.cut_nodes.tolist() == flow_cut.cut_nodes.tolist()
+    assert tree_cut.cut_value == flow_cut.cut_value == pytest.approx(sum(tree_cut.cut_edges.values()))
+    assert tree_cut.cut_edges == flow_cut.cut_edges
+    assert tree_cut.source_side == flow_cut.source_side
+    assert set(tree_cut.graph.edges) == set(flow_cut.graph.edges)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_graph_size_counts_the_graph_nodes_without_making_the_graph(seed):
+    t = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8).tree
+    sel = np.random.default_rng(seed).choice(t.leaves, 40, replace=False)
+    tree_cut = select_roots(t, sel, n=8)
+    size = tree_cut.graph_size
+    assert "_made" not in tree_cut.__dict__  # the graph, its edges and source side: not made yet
+    flow_cut = select_roots(t, sel, n=8, flow_func=flow.preflow_push)
+    for cut in (tree_cut, flow_cut):
+        assert cut.graph_size == size == len({v[0] for v in cut.graph if isinstance(v, tuple)}) > 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkeypatch):
+    """path_nodes marks a tree-sized mask for large selections: the same nodes and roots as
+    sorting each level (forced both ways here); collapse_nested (300 roots: its climb of all
+    roots at once) keeps exactly the roots with no other root above them."""
+    from ramure.lsys import cut as cut_module
+    from ramure.lsys.cut import collapse_nested, path_nodes
+
+    t = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8).tree
+    rng = np.random.default_rng(seed)
+    sel = np.unique(rng.choice(t.leaves, int(rng.integers(2, 120)), replace=False))
+    some = np.unique(rng.choice(np.arange(t.size), 300, replace=False))
+    answers = []
+    for mask_from in (10**9, 0):
+        monkeypatch.setattr(cut_module, "MASK_FROM", mask_from)
+        answers.append((path_nodes(t, sel).tolist(), collapse_nested(t, some).tolist(), select_roots(t, sel, n=8).roots.tolist()))
+    assert answers[0] == answers[1]
+    nodes = set(answers[0][0])
+    assert all(int(t.parent[v]) in nodes for v in nodes if t.parent[v] >= 0) and set(sel.tolist()) <= nodes
+    members = set(some.tolist())
+    assert answers[0][1] == [r for r in some.tolist() if not members & set(t.ancestors(r).tolist())]
