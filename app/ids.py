@@ -26,6 +26,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from ramure.errors import ValueRefused
+from ramure.lsys.tree import sorted_unique
 
 #: Most ids one typed range may name (a typo such as 0-99999999999 must not exhaust memory).
 MAX_RANGE = 100_000
@@ -90,7 +91,7 @@ def resolve_ids(text: str, leaves: Iterable[int]) -> list[int]:
     ...
     ramure.errors.ValueRefused: the range 18-30 holds no leaf of the current plant
     """
-    known = np.unique(np.asarray(leaves if isinstance(leaves, np.ndarray) else list(leaves), np.int64))
+    known = sorted_unique(np.asarray(leaves if isinstance(leaves, np.ndarray) else list(leaves), np.int64))
     chosen: list[int] = []
     for a, b in parse_items(text):
         if a == b:
@@ -114,7 +115,7 @@ def id_example(leaves: Iterable[int], span: int = 4) -> str:
     """An example for an id field made of the plant's own ``leaves`` (e.g. those that draw):
     one leaf and a range from a leaf to the ``span``-th leaf after it (``"17, 40-52"``), so that
     typing the example selects ``span + 1`` leaves."""
-    known = np.unique(np.asarray(list(leaves), np.int64))
+    known = sorted_unique(np.asarray(list(leaves), np.int64))
     if not known.size:
         return ""
     if known.size <= span + 1:

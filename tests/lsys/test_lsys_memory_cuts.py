@@ -45,6 +45,10 @@ def test_the_turtle_trace_keeps_int32_positions_and_no_copy_of_the_parameters():
     from ramure.lsys.regen import Session
     from ramure.lsys.turtle import interpret_string
 
+    from ramure.lsys import load_kernels
+
+    load_kernels()  # the compiled walk, whatever ran before in this process (below 100,000
+    # modules a process without numba takes the plain walk)
     ls = LSystem.from_file("honda_sympodial")
     session = Session(ls, n=13)
     tree = session.derivation.tree
