@@ -10,7 +10,13 @@ no selection the cut sits on the leaves.  A selected leaf adds
 ``alpha_k = alpha_0 - (2**k - 1) / rho`` to its k-th ancestor (k = 0 is the
 leaf), ``alpha_0 = 2**n`` by default; a capacity that would go negative is
 clamped at 0 (spec §4.5).  One level above the leaves this makes the parent a
-root exactly when more than ``rho`` of its leaf children are selected.
+root exactly when more than ``rho`` of its leaf children are selected.  Higher
+up it weighs leaves, not children: against cutting all its children a node is
+cut when more than ``rho`` of its leaves (weighted by ``2**depth`` below it)
+are selected, so the cut can stay below the spec's child-count rule
+(docs/cut.md; tests/lsys/test_lsys_cut_threshold.py).  A selected leaf the cut
+keeps regrows from its parent only when that parent carries nothing derived
+after it (:func:`minimum_ascension`).
 
 Only what the cut can touch is built: the selected leaves and their ancestors.
 The children of those nodes that hold no selection are merged into one edge
@@ -47,6 +53,7 @@ if TYPE_CHECKING:
     from .tree import DerivationTree
 
 from .errors import ValueRefused
+from .tree import concat_ranges
 
 SOURCE, SINK = "s", "t"
 
@@ -181,6 +188,19 @@ class CutResult:
 
 #: What front ends and the CLI say when a selection's regrowth starts at an axiom module.
 FROM_AXIOM_MESSAGE = "this selection regrows from the axiom: the whole plant"
+
+
+def stranded_words(count: int) -> str:
+    """Why selected leaves regrow nothing (a segment carrying branches grown after it).
+
+    >>> stranded_words(1)[:46]
+    'the selected leaf carries branches grown after'
+    """
+    leaf, it = ("leaf carries", "it") if count == 1 else ("leaves carry", "them")
+    return (
+        f"the selected {leaf} branches grown after {it}, which the cut keeps (no more than ρ of them is "
+        f"selected); select those branches too to regrow {it}"
+    )
 
 
 def validate_selection(tree: DerivationTree, selected: Iterable[int]) -> np.ndarray:
@@ -384,6 +404,7 @@ def select_roots(
     min_ascend: int = 1,
     flow_func: Callable | None = None,
     reduce: bool = True,
+    whole_branches: bool = False,
 ) -> CutResult:
     """Decide which subtrees a selection regrows.  See the module docstring.
 
@@ -392,7 +413,8 @@ def select_roots(
     something (0 turns this off; values above the tree's depth mean the axiom
     module).  ``flow_func`` is any networkx max-flow function (default
     preflow-push, the faster here).  ``reduce=False`` solves the unreduced
-    graph (same answer, slower; kept for checking).
+    graph (same answer, slower; kept for checking).  ``whole_branches``: see
+    :func:`minimum_ascension`.
     """
     min_ascend = _check_min_ascend(min_ascend, tree)
     G, selected, merged_edges = build_graph(tree, selected, rho, alpha0, n, reduce=reduce)
@@ -409,8 +431,7 @@ def select_roots(
     kept = np.intersect1d(cut_nodes[~internal], selected)
     min_roots = np.zeros(0, np.int64)
     if min_ascend > 0 and kept.size:
-        up = tree.ancestor(kept, min_ascend)
-        top = np.where(up < 0, _axiom_root(tree, kept), up)
+        top = minimum_ascension(tree, kept, min_ascend, whole_branches)
         min_roots = np.unique(top[tree.child_count[top] > 0])
     roots = collapse_nested(tree, np.union1d(cut_roots, min_roots))
     return CutResult(
@@ -427,15 +448,30 @@ def select_roots(
     )
 
 
-def _check_min_ascend(min_ascend, tree):
-    """A whole number >= 0, clamped to the tree's size, more than its depth (a longer climb
-    ends at the axiom all the same)."""
-    if isinstance(min_ascend, bool) or not isinstance(min_ascend, (int, np.integer)):
-        if not (isinstance(min_ascend, float) and min_ascend.is_integer()):
-            raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
-    if min_ascend < 0:
-        raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
-    return int(min(int(min_ascend), tree.size + 1))  # > every depth (climbing stops at the axiom anyway)
+def minimum_ascension(tree: DerivationTree, leaves: ArrayLike, k: int, whole_branches: bool = False) -> np.ndarray:
+    """Where each of ``leaves`` (selected leaves the cut left in place) regrows from.
+
+    ``k`` = 1, the default: its parent, when nothing under that parent was derived deeper
+    than the leaf (the parent's children are all modules of the string: a tip and the modules
+    its rule made with it), else the leaf itself (nothing regrows).  The cut's threshold rule
+    keeps a lone selected leaf in place; this minimum ascension still regrows it with its
+    siblings, but never takes branches the leaf did not grow with: a trunk segment made at
+    step 2 would otherwise regrow every branch made on it after (one click on Honda n = 6
+    replaced 342 of its 693 modules).  The preview says which leaves stay
+    (:func:`climb_levels` gives them -1).
+
+    ``k`` > 1 is an explicit request (a session's ``min_ascend``, a qualifier told to climb):
+    the ``k``-th ancestor, or the axiom module above a shallower leaf.  So is
+    ``whole_branches`` (what ``k`` = 1 did before issue 34: sessions saved then replay with it).
+    """
+    leaves = np.asarray(leaves, np.int64)
+    if int(k) > 1 or whole_branches:
+        up = tree.ancestor(leaves, k)
+        return np.where(up < 0, _axiom_root(tree, leaves), up)
+    up = tree.parent[leaves].astype(np.int64)
+    ok = up >= 0
+    ok[ok] = _no_deeper_than(tree, up[ok], 1)
+    return np.where(ok, up, leaves)
 
 
 def _axiom_root(tree, nodes):
@@ -447,6 +483,58 @@ def _axiom_root(tree, nodes):
         if not more.any():
             return out
         out[more] = up[more]
+
+
+def _no_deeper_than(tree, nodes, levels):
+    """Whether each node's subtree ends within ``levels`` levels below it (its leaves no deeper)."""
+    owner = np.arange(len(nodes))
+    frontier = np.asarray(nodes, np.int64)
+    for _ in range(int(levels)):
+        counts = tree.child_count[frontier].astype(np.int64)
+        has = counts > 0
+        frontier = concat_ranges(tree.child_start[frontier[has]].astype(np.int64), counts[has])
+        owner = np.repeat(owner[has], counts[has])
+        if not frontier.size:
+            break
+    ok = np.ones(len(nodes), bool)
+    ok[owner[tree.child_count[frontier] > 0]] = False
+    return ok
+
+
+def climb_levels(tree: DerivationTree, leaves: ArrayLike, roots: ArrayLike) -> np.ndarray:
+    """How many levels above each of ``leaves`` its regrown root is (-1: under no root, the
+    leaf stays).  Walks up the parent links, which an edit keeps for the nodes it removed, so
+    this answers before and after the regrow alike; one pass per level, no whole-tree array.
+
+    >>> from ramure.lsys import LSystem
+    >>> t = LSystem.from_text("n: 2\\nw: A\\np:\\n A -> BB\\n B -> CC").derive().tree
+    >>> climb_levels(t, t.leaves, [1]).tolist()  # the first B holds the first two leaves
+    [1, 1, -1, -1]
+    """
+    up = np.asarray(leaves, np.int64).copy()
+    roots = np.unique(np.asarray(roots, np.int64))
+    levels = np.full(len(up), -1, np.int64)
+    open_ = np.ones(len(up), bool)
+    k = 0
+    while open_.any():
+        hit = open_ & np.isin(up, roots)
+        levels[hit] = k
+        open_ &= ~hit
+        up[open_] = tree.parent[up[open_]]
+        open_ &= up >= 0
+        k += 1
+    return levels
+
+
+def _check_min_ascend(min_ascend, tree):
+    """A whole number >= 0, clamped to the tree's size, more than its depth (a longer climb
+    ends at the axiom all the same)."""
+    if isinstance(min_ascend, bool) or not isinstance(min_ascend, (int, np.integer)):
+        if not (isinstance(min_ascend, float) and min_ascend.is_integer()):
+            raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
+    if min_ascend < 0:
+        raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
+    return int(min(int(min_ascend), tree.size + 1))  # > every depth (climbing stops at the axiom anyway)
 
 
 def collapse_nested(tree: DerivationTree, roots: ArrayLike) -> np.ndarray:
