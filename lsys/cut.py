@@ -15,8 +15,9 @@ up it weighs leaves, not children: against cutting all its children a node is
 cut when more than ``rho`` of its leaves (weighted by ``2**depth`` below it)
 are selected, so the cut can stay below the spec's child-count rule
 (docs/cut.md; tests/lsys/test_lsys_cut_threshold.py).  A selected leaf the cut
-keeps regrows from its parent only when that parent carries nothing derived
-after it (:func:`minimum_ascension`).
+keeps regrows from its parent when that parent carries no branch grown later,
+or when at least ``rho`` of its leaves of the selected kinds are selected
+(:func:`minimum_ascension`).
 
 Only what the cut can touch is built: the selected leaves and their ancestors.
 The children of those nodes that hold no selection are merged into one edge
@@ -431,7 +432,7 @@ def select_roots(
     kept = np.intersect1d(cut_nodes[~internal], selected)
     min_roots = np.zeros(0, np.int64)
     if min_ascend > 0 and kept.size:
-        top = minimum_ascension(tree, kept, min_ascend, whole_branches)
+        top = minimum_ascension(tree, kept, min_ascend, whole_branches, selected, rho)
         min_roots = np.unique(top[tree.child_count[top] > 0])
     roots = collapse_nested(tree, np.union1d(cut_roots, min_roots))
     return CutResult(
@@ -448,17 +449,26 @@ def select_roots(
     )
 
 
-def minimum_ascension(tree: DerivationTree, leaves: ArrayLike, k: int, whole_branches: bool = False) -> np.ndarray:
+def minimum_ascension(
+    tree: DerivationTree,
+    leaves: ArrayLike,
+    k: int,
+    whole_branches: bool = False,
+    selected: ArrayLike | None = None,
+    rho: float = 0.5,
+) -> np.ndarray:
     """Where each of ``leaves`` (selected leaves the cut left in place) regrows from.
 
-    ``k`` = 1, the default: its parent, when nothing under that parent was derived deeper
-    than the leaf (the parent's children are all modules of the string: a tip and the modules
-    its rule made with it), else the leaf itself (nothing regrows).  The cut's threshold rule
-    keeps a lone selected leaf in place; this minimum ascension still regrows it with its
-    siblings, but never takes branches the leaf did not grow with: a trunk segment made at
-    step 2 would otherwise regrow every branch made on it after (one click on Honda n = 6
-    replaced 342 of its 693 modules).  The preview says which leaves stay
-    (:func:`climb_levels` gives them -1).
+    ``k`` = 1, the default: its parent, when the parent's children are all leaves (a tip and
+    the modules its rule made with it) or at least ``rho`` of the parent's leaves *of the
+    selected kinds* (the symbols of ``selected``, e.g. the segments ``F`` a click or a
+    rectangle picks) are selected; else the leaf itself (nothing regrows).  The cut's
+    threshold rule counts every module (brackets and turns too, which no click selects), so
+    it keeps a lone picked leaf in place; this minimum ascension still regrows a tip with the
+    modules its rule made with it (its parent holds one segment, the tip) and a rubber-banded
+    branch with its parents, but never takes branches the user did not pick: one click on a
+    segment made at step 2 of Honda n = 6 once replaced the 342 of its 693 modules grown on
+    it.  The preview says which leaves stay (:func:`climb_levels` gives them -1).
 
     ``k`` > 1 is an explicit request (a session's ``min_ascend``, a qualifier told to climb):
     the ``k``-th ancestor, or the axiom module above a shallower leaf.  So is
@@ -470,8 +480,41 @@ def minimum_ascension(tree: DerivationTree, leaves: ArrayLike, k: int, whole_bra
         return np.where(up < 0, _axiom_root(tree, leaves), up)
     up = tree.parent[leaves].astype(np.int64)
     ok = up >= 0
-    ok[ok] = _no_deeper_than(tree, up[ok], 1)
+    selected = leaves if selected is None else np.asarray(selected, np.int64)
+    ok[ok] = _only_leaves_below(tree, up[ok]) | (_picked_share(tree, up[ok], selected) >= rho)
     return np.where(ok, up, leaves)
+
+
+def _only_leaves_below(tree, nodes):
+    """Whether each node's children are all leaves (a group one rule made, nothing grown on it)."""
+    counts = tree.child_count[nodes].astype(np.int64)
+    children = concat_ranges(tree.child_start[nodes].astype(np.int64), counts)
+    inner = np.zeros(len(nodes), bool)
+    np.logical_or.at(inner, np.repeat(np.arange(len(nodes)), counts), tree.child_count[children] > 0)
+    return ~inner
+
+
+def _picked_share(tree, nodes, selected):
+    """For each node, the share of its leaves of the selected symbols that are selected."""
+    string = np.asarray(tree.leaves)
+    kinds = np.isin(tree.symbol[string], np.unique(tree.symbol[selected]))
+    picked = np.zeros(len(string), bool)
+    picked[tree.leaf_positions(selected)] = True
+    kind_sum = np.zeros(len(string) + 1, np.int64)
+    np.cumsum(kinds, out=kind_sum[1:])
+    picked_sum = np.zeros(len(string) + 1, np.int64)
+    np.cumsum(picked, out=picked_sum[1:])
+    unique, back = np.unique(nodes, return_inverse=True)
+    if len(unique) > 256:
+        first, last = tree.leaf_spans()
+        first, last = first[unique], last[unique]
+    else:
+        first, last = tree.string_spans(unique)
+    has = last >= 0
+    a, b = np.where(has, first, 0), np.where(has, last + 1, 0)
+    total = kind_sum[b] - kind_sum[a]
+    share = np.where(total > 0, (picked_sum[b] - picked_sum[a]) / np.maximum(total, 1), 0.0)
+    return share[back]
 
 
 def _axiom_root(tree, nodes):
@@ -483,22 +526,6 @@ def _axiom_root(tree, nodes):
         if not more.any():
             return out
         out[more] = up[more]
-
-
-def _no_deeper_than(tree, nodes, levels):
-    """Whether each node's subtree ends within ``levels`` levels below it (its leaves no deeper)."""
-    owner = np.arange(len(nodes))
-    frontier = np.asarray(nodes, np.int64)
-    for _ in range(int(levels)):
-        counts = tree.child_count[frontier].astype(np.int64)
-        has = counts > 0
-        frontier = concat_ranges(tree.child_start[frontier[has]].astype(np.int64), counts[has])
-        owner = np.repeat(owner[has], counts[has])
-        if not frontier.size:
-            break
-    ok = np.ones(len(nodes), bool)
-    ok[owner[tree.child_count[frontier] > 0]] = False
-    return ok
 
 
 def climb_levels(tree: DerivationTree, leaves: ArrayLike, roots: ArrayLike) -> np.ndarray:
