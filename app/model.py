@@ -664,8 +664,8 @@ def unchanged_by_constants(explorer: Explorer, result: RegenResult, constants: M
     from ramure.metrics.variants import rule_constant_names
 
     used = rule_constant_names(explorer.lsystem)
-    rules = np.unique(tree.rule[np.asarray(result.change.added, np.int64)]) if result.change is not None else []
-    rules = [int(r) for r in rules if r >= 0]
+    added = np.asarray(result.change.added if result.change is not None else [], np.int64)
+    rules = [int(r) for r in np.unique(tree.rule[added]) if r >= 0]
     if not any(set(constants) & used[r] for r in rules if r < len(used)):
         grammar = explorer.lsystem.grammar.rules
         which = ", ".join(f"{grammar[r].pred} (line {grammar[r].line})" for r in rules)
