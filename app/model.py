@@ -356,7 +356,7 @@ class Explorer:
             self.selection, rho=self.rho, seed=seed, constants=constants, params=params, refuse_empty=True
         )
         self._after_edit(result, keep=True)
-        if drawn is not None and _same_drawing(drawn, self.skeleton):
+        if drawn is not None and self._draws_the_same(drawn):
             self.note = unchanged_by_constants(self, result, constants)
         return result
 
@@ -449,6 +449,14 @@ class Explorer:
         surface.cell_data["leaf_id"] = np.asarray(gm.volume_data["leaf_id"])[surface.cell_data["volume"]]
         return surface
 
+    def _draws_the_same(self, drawn) -> bool:
+        """Whether the plant now draws what ``drawn`` drew (False when it cannot be drawn: the
+        turtle's error is the front end's to show, when it draws)."""
+        try:
+            return _same_drawing(drawn, self.skeleton)
+        except RamureError:
+            return False
+
     def _after_edit(self, result, keep: bool = False):
         """Record an edit; ``keep``: what grew back stays selected when something was selected
         (so Regrow again, or another qualifier, acts on the same part)."""
@@ -475,7 +483,10 @@ class Explorer:
         leaf (a selection made in the derivation tree)."""
         new = np.asarray(regrown_leaves(self.derivation.tree, result), np.int64)
         if np.isin(np.asarray(had, np.int64), drawn_before).all():
-            new = np.intersect1d(new, self._drawn_leaves())
+            try:
+                new = np.intersect1d(new, self._drawn_leaves())
+            except RamureError:  # the new plant cannot be drawn: the front end says why when it draws
+                pass
         return new.tolist()
 
     def undo(self) -> dict | None:
