@@ -20,6 +20,7 @@ import os
 import pathlib
 import threading
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -30,7 +31,8 @@ import ramure.io as atomic
 from ramure.lsys import GrammarError, LSystem, load_kernels
 from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
-from ramure.lsys.cut import kinship
+from ramure.lsys.cut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
+from ramure.lsys.tree import concat_ranges
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
 from ramure.app.document import check_round_trip, document_text
@@ -84,6 +86,8 @@ class Explorer:
         self.rho = 0.5
         self.selection: list[int] = []
         self.last_result: RegenResult | None = None
+        self.summary: str | None = None  # what the last edit changed (edit_summary)
+        self.note: str | None = None  # why the last edit changed nothing on screen, if it did not
         self.version = 0
         self._cache: dict[str, Any] = {}
         self.session = Session(
@@ -363,7 +367,7 @@ class Explorer:
         current = np.asarray(self.selection, np.int64)
         new = {
             "replace": lambda: ids,
-            "add": lambda: np.union1d(current, ids),
+            "add": lambda: _sorted_unique(np.concatenate([current, ids])),
             "remove": lambda: np.setdiff1d(current, ids, assume_unique=True),
             "toggle": lambda: np.setxor1d(current, ids, assume_unique=True),
         }[mode]()
@@ -408,8 +412,36 @@ class Explorer:
         """The cut the current selection would use (nothing changes)."""
         if not self.selection:
             return None
-        cut, *_ = self.session.plan(self.selection, self.rho)
-        return cut
+        key = ("plan", self.rho, len(self.selection), hash(np.asarray(self.selection, np.int64).tobytes()))
+        return self._cached(key, lambda: self.session.plan(self.selection, self.rho)[0])
+
+    def preview(self) -> CutPreview | None:
+        """What a Regrow (or a qualifier) of the current selection would change, before it
+        changes anything: the cut's roots, the leaves of the string they hold, how many of the
+        plant's modules that is, how far the cut climbs above the selected leaves, and the
+        sentence both front ends show ("12 of 693 modules (1.7 %) will change ...").  None
+        without a selection (a Regrow then regrows the whole plant).  Array code throughout:
+        the leaves come from the roots' string spans, the climb from a walk up the parent links.
+        """
+        cut = self.plan()
+        if cut is None:
+            return None
+        tree = self.derivation.tree
+        first, last = tree.string_spans(cut.roots)
+        has = last >= 0
+        positions = concat_ranges(first[has], (last - first + 1)[has])
+        leaves = np.asarray(tree.leaves)[positions]
+        selected = np.asarray(self.selection, np.int64)
+        levels = climb_levels(tree, selected, cut.roots)
+        return CutPreview(
+            roots=cut.roots,
+            leaves=leaves,
+            changed=int(len(leaves)),
+            total=int(len(tree.leaves)),
+            climb=_climb_range(levels),
+            stranded=selected[(levels < 0) & (tree.parent[selected] >= 0)],
+            from_axiom=bool(cut.from_axiom),
+        )
 
     # -- edits -------------------------------------------------------------
     def regrow(
@@ -417,13 +449,19 @@ class Explorer:
     ) -> RegenResult:
         """Regrow the selection's cut subtrees (the whole plant when nothing is selected)."""
         constants = {k: finite_number(v, k) for k, v in (constants or {}).items()}
-        result = self.session.regrow(self.selection, rho=self.rho, seed=seed, constants=constants, params=params)
-        return self._after_edit(result)
+        drawn = self.skeleton if constants and self.selection else None
+        result = self.session.regrow(
+            self.selection, rho=self.rho, seed=seed, constants=constants, params=params, refuse_empty=True
+        )
+        self._after_edit(result, keep=True)
+        if drawn is not None and self._draws_the_same(drawn):
+            self.note = unchanged_by_constants(self, result, constants)
+        return result
 
     def prune(self) -> RegenResult:
         if not self.selection:
             raise ValueRefused("select the branches to prune first")
-        return self._after_edit(self.session.prune(self.selection, rho=self.rho))
+        return self._after_edit(self.session.prune(self.selection, rho=self.rho, refuse_empty=True))
 
     def variant_lsystem(self) -> LSystem:
         """The grammar with the session's current constants: what variant sweeps should vary."""
@@ -451,7 +489,7 @@ class Explorer:
             self.session, name, sweep, self.selection, rho=self.rho, points=points, regions=regions, tries=tries
         )
         if out.regen is not None:  # not improved: the plant and the selection stay as they were
-            self._after_edit(out.regen)
+            self._after_edit(out.regen, keep=True)
         return out
 
     def fruit_ids(self) -> list[int]:
@@ -509,11 +547,27 @@ class Explorer:
         surface.cell_data["leaf_id"] = np.asarray(gm.volume_data["leaf_id"])[surface.cell_data["volume"]]
         return surface
 
-    def _after_edit(self, result):
+    def _draws_the_same(self, drawn) -> bool:
+        """Whether the plant now draws what ``drawn`` drew (False when it cannot be drawn: the
+        turtle's error is the front end's to show, when it draws)."""
+        try:
+            return _same_drawing(drawn, self.skeleton)
+        except RamureError:
+            return False
+
+    def _after_edit(self, result, keep: bool = False):
+        """Record an edit; ``keep``: what grew back stays selected when something was selected
+        (so Regrow again, or another qualifier, acts on the same part)."""
+        had = self.selection
+        drawn_before = self._drawn_leaves() if keep and had else None
         self.last_result = result
         self.selection = []
+        self.summary = edit_summary(self.derivation.tree, result)  # the tree the cut was made in
+        self.note = None
         self._fold_whole_plant()
         self._changed()
+        if drawn_before is not None:
+            self.selection = self._regrown_selection(had, drawn_before, result)
         return result
 
     def _fold_whole_plant(self) -> None:
@@ -533,6 +587,24 @@ class Explorer:
         s.undo()  # the session left keeps the plant before (Undo goes back to it)
         self.session = folded
 
+    def _drawn_leaves(self) -> np.ndarray:
+        """Leaves that draw something (a segment or an organ), sorted."""
+        sk = self.skeleton
+        return _sorted_unique(np.concatenate([sk.leaf_id, sk.organs.leaf_id]).astype(np.int64))
+
+    def _regrown_selection(self, had, drawn_before, result) -> list[int]:
+        """The regrown part as a selection of the same kind as the one regrown: the leaves that
+        draw, when only such leaves were selected (picks, rectangles: their cut then gives the
+        same roots again, where every new module selected would climb higher), else every new
+        leaf (a selection made in the derivation tree)."""
+        new = np.asarray(regrown_leaves(self.derivation.tree, result), np.int64)
+        if np.isin(np.asarray(had, np.int64), drawn_before).all():
+            try:
+                new = np.intersect1d(new, self._drawn_leaves())
+            except RamureError:  # the new plant cannot be drawn: the front end says why when it draws
+                pass
+        return new.tolist()
+
     def undo(self) -> dict | None:
         """Undo the last edit, or go back to the text, n or seed before the last change of them.
         Returns the edit undone (``{"op": "document"}`` for a text, n or seed), None if none."""
@@ -550,6 +622,7 @@ class Explorer:
     def _history(self, edit):
         if edit is not None:
             self.selection, self.last_result = [], None
+            self.summary = self.note = None
             self._changed(record=False)
         return edit
 
@@ -565,12 +638,8 @@ class Explorer:
             return f"{base} — {len(r.roots)} fruit regrown"
         if r.op == "constants":
             return f"{base} — constants changed, plant re-derived"
-        line = (
-            f"{base} — last {r.op}: roots {r.roots.tolist()[:8]}{'…' if len(r.roots) > 8 else ''}, "
-            f"{r.removed} modules replaced by {r.added}"
-        )
-        warning = getattr(r, "warning", None)  # e.g. the selection regrew from the axiom
-        return f"{line} — {warning}" if warning else line
+        line = f"{base} — {self.summary or edit_summary(self.derivation.tree, r)}"
+        return f"{line} — {self.note}" if self.note else line
 
     # -- files -------------------------------------------------------------
     def save_grammar(self, path: str | os.PathLike, text: str | None = None) -> pathlib.Path:
@@ -632,6 +701,154 @@ def local_edits_message(count: int) -> str:
     )
 
 
+@dataclass(frozen=True)
+class CutPreview:
+    """What a regrow of the selection would change (:meth:`Explorer.preview`).
+
+    ``roots``: the cut's roots; ``leaves``: the modules of the string they hold (what will
+    change, in string order); ``changed`` of ``total`` modules; ``climb``: the fewest and most
+    levels the cut climbs above a selected leaf (None when nothing regrows); ``stranded``:
+    selected leaves nothing regrows (see :func:`ramure.lsys.cut.minimum_ascension`);
+    ``from_axiom``: a root is an axiom module.
+    """
+
+    roots: np.ndarray
+    leaves: np.ndarray
+    changed: int
+    total: int
+    climb: tuple[int, int] | None
+    stranded: np.ndarray
+    from_axiom: bool
+
+    @property
+    def share(self) -> float:
+        """``changed / total`` (0 for an empty plant)."""
+        return self.changed / self.total if self.total else 0.0
+
+    @property
+    def message(self) -> str:
+        """The sentence both front ends show next to the highlighted part."""
+        if not self.changed:
+            return f"nothing will change: {stranded_words(len(self.stranded))}"
+        line = f"{self.changed:,} of {self.total:,} modules ({percent(self.share)}) will change"
+        line += f", {climb_words(self.climb)}"
+        if self.from_axiom:
+            line += f" — {FROM_AXIOM_MESSAGE}"
+        if len(self.stranded):
+            count = len(self.stranded)
+            line += f"; {_leaves(count)} stay{'s' if count == 1 else ''}: {stranded_words(count)}"
+        return line
+
+
+def percent(share: float) -> str:
+    """A share as the user reads it: ``"1.7 %"``, ``"49 %"``, ``"0.02 %"``, never ``"0 %"`` for a change.
+
+    >>> percent(0.017), percent(0.4935), percent(0.0002), percent(0.0), percent(1.0), percent(1e-7)
+    ('1.7 %', '49 %', '0.02 %', '0 %', '100 %', '< 0.01 %')
+    """
+    p = 100.0 * share
+    if 0 < p < 0.01:
+        return "< 0.01 %"
+    return f"{p:.0f} %" if p == 0 or p >= 9.95 else f"{float(f'{p:.2g}'):g} %"
+
+
+def climb_words(climb: tuple[int, int] | None) -> str:
+    """``"the cut climbs 1 level above the selected leaves"`` (or ``"1-3 levels"``).
+
+    >>> climb_words((1, 1)), climb_words((0, 2))
+    ('the cut climbs 1 level above the selected leaves', 'the cut climbs 0-2 levels above the selected leaves')
+    """
+    if climb is None:
+        return "nothing regrows"
+    lo, hi = climb
+    span = f"{lo}" if lo == hi else f"{lo}-{hi}"
+    return f"the cut climbs {span} level{'' if span == '1' else 's'} above the selected leaves"
+
+
+def _leaves(count: int) -> str:
+    return f"{count:,} selected lea{'f' if count == 1 else 'ves'}"
+
+
+def _climb_range(levels: np.ndarray) -> tuple[int, int] | None:
+    climbed = levels[levels >= 0]
+    return (int(climbed.min()), int(climbed.max())) if climbed.size else None
+
+
+def regrown_leaves(tree: Any, result: RegenResult | None) -> list[int]:
+    """The leaves a regrow put in the string (what stays selected after it), sorted."""
+    change = getattr(result, "change", None)
+    if change is None or not len(change.added):
+        return []
+    added = np.asarray(change.added, np.int64)
+    # alive and not rewritten: a look at the added nodes only, no table over the whole tree
+    return np.sort(added[(tree.child_count[added] == 0) & tree.alive[added]]).tolist()
+
+
+def edit_summary(tree: Any, result: RegenResult) -> str:
+    """What a regrow or prune changed, in the user's words: the share of the plant and how far
+    the cut climbed above the selected leaves, e.g. "regrew 12 of 693 modules (1.7 %) as 12;
+    the cut climbed 1 level above the selected leaves"."""
+    if result.op not in ("regrow", "prune"):
+        return f"last edit: {result.op}"
+    total = len(tree.leaves) - result.added + result.removed  # the plant before the edit
+    done = "regrew" if result.op == "regrow" else "pruned"
+    cut = getattr(result, "cut", None)
+    if cut is None:
+        return f"{done} the whole plant ({result.removed:,} modules replaced by {result.added:,})"
+    line = f"{done} {result.removed:,} of {total:,} modules ({percent(result.removed / total if total else 0.0)})"
+    if result.op == "regrow":
+        line += f" as {result.added:,}"
+    selected = cut.selected if cut.selected is not None else np.zeros(0, np.int64)
+    levels = climb_levels(tree, selected, result.roots)
+    line += "; " + climb_words(_climb_range(levels)).replace("climbs", "climbed")
+    if result.from_axiom:
+        line += f" — {FROM_AXIOM_MESSAGE}"
+    stranded = int(((levels < 0) & (tree.parent[selected] >= 0)).sum())
+    if stranded:
+        line += f"; {_leaves(stranded)} stayed: {stranded_words(stranded)}"
+    return line
+
+
+def _same_drawing(before: Skeleton, after: Skeleton) -> bool:
+    """Whether two skeletons draw the same segments at the same places."""
+    return len(before) == len(after) and bool(np.array_equal(before.start, after.start) and np.array_equal(before.end, after.end))
+
+
+def unchanged_by_constants(explorer: Explorer, result: RegenResult, constants: Mapping[str, float]) -> str:
+    """Why a regrow with new constants drew the same plant, precisely (never "press Regrow with
+    constants": the user just did).  Nothing regrew; or the part was made in the last step, so
+    the new values reach only modules no later step rewrites; or the rules that regrew it do
+    not read those constants."""
+    names = ", ".join(sorted(constants))
+    tree, n = explorer.derivation.tree, explorer.session.n
+    if not len(result.roots):
+        count = len(result.cut.selected) if result.cut is not None and result.cut.selected is not None else 2
+        return f"nothing regrew, so the new {names} changed nothing: {stranded_words(count)}"
+    steps_left = int(n - tree.step[result.roots].min())
+    if steps_left <= 1:
+        return (
+            f"this part was made in the last derivation step: the new values of {names} only reach modules that no "
+            "later step rewrites, so nothing is left to regrow with new constants. Select a larger part "
+            "(or lower ρ) so the cut starts a step earlier, or change the constant for the whole plant"
+        )
+    from ramure.metrics.variants import rule_constant_names
+
+    used = rule_constant_names(explorer.lsystem)
+    added = np.asarray(result.change.added if result.change is not None else [], np.int64)
+    rules = [int(r) for r in np.unique(tree.rule[added]) if r >= 0]
+    if not any(set(constants) & used[r] for r in rules if r < len(used)):
+        grammar = explorer.lsystem.grammar.rules
+        which = ", ".join(f"{grammar[r].pred} (line {grammar[r].line})" for r in rules)
+        return (
+            f"the {steps_left} steps that regrew this part apply the rules for {which}, which read none of "
+            f"{names}: nothing is left to regrow with these constants. Select a part grown by a rule that reads them"
+        )
+    return (
+        f"the new {names} did not change how this part is drawn ({steps_left} steps regrown): "
+        "they reach only modules that draw nothing"
+    )
+
+
 #: Tube quads the on-screen mesh aims at: above it, tubes get fewer sides (level of detail).
 MESH_QUAD_BUDGET = 400_000
 
@@ -683,7 +900,10 @@ def warm_up_edits(text: str, n: int | None = None, seed: int = 0) -> bool:
         if not len(leaves):
             return False
         meshes = [ex.mesh]
-        ex.select(leaves[len(leaves) // 2 :: max(1, len(leaves) // 8)][:4])
+        tree = ex.derivation.tree  # a leaf and its siblings: a selection that regrows something
+        ex.select(
+            tree.leaves_under(int(tree.parent[int(leaves[len(leaves) // 2])])) if tree.depth_of([leaves[0]])[0] else leaves[:4]
+        )
         for edit in (lambda: ex.regrow(seed=seed + 1), ex.undo, ex.redo):
             edit()
             meshes.append(ex.mesh)  # the re-interpreting turtle and the mesh patch
@@ -748,6 +968,7 @@ def finite_number(value: float | str, name: str) -> float:
 
 
 __all__ = [
+    "CutPreview",
     "Explorer",
     "RamureError",
     "finite_number",

@@ -10,7 +10,14 @@ no selection the cut sits on the leaves.  A selected leaf adds
 ``alpha_k = alpha_0 - (2**k - 1) / rho`` to its k-th ancestor (k = 0 is the
 leaf), ``alpha_0 = 2**n`` by default; a capacity that would go negative is
 clamped at 0 (spec §4.5).  One level above the leaves this makes the parent a
-root exactly when more than ``rho`` of its leaf children are selected.
+root exactly when more than ``rho`` of its leaf children are selected.  Higher
+up it weighs leaves, not children: against cutting all its children a node is
+cut when more than ``rho`` of its leaves (weighted by ``2**depth`` below it)
+are selected, so the cut can stay below the spec's child-count rule
+(docs/cut.md; tests/lsys/test_lsys_cut_threshold.py).  A selected leaf the cut
+keeps regrows from its parent when that parent carries no branch grown later,
+or when at least ``rho`` of its leaves of the selected kinds are selected
+(:func:`minimum_ascension`).
 
 Only what the cut can touch is built: the selected leaves and their ancestors.
 The children of those nodes that hold no selection are merged into one edge
@@ -49,7 +56,7 @@ if TYPE_CHECKING:
     from .tree import DerivationTree
 
 from .errors import ValueRefused
-from .tree import sorted_unique
+from .tree import concat_ranges, sorted_unique
 
 SOURCE, SINK = "s", "t"
 
@@ -206,6 +213,19 @@ class CutResult:
 
 #: What front ends and the CLI say when a selection's regrowth starts at an axiom module.
 FROM_AXIOM_MESSAGE = "this selection regrows from the axiom: the whole plant"
+
+
+def stranded_words(count: int) -> str:
+    """Why selected leaves regrow nothing (a segment carrying branches grown after it).
+
+    >>> stranded_words(1)[:46]
+    'the selected leaf carries branches grown after'
+    """
+    leaf, it = ("leaf carries", "it") if count == 1 else ("leaves carry", "them")
+    return (
+        f"the selected {leaf} branches grown after {it}, which the cut keeps (no more than ρ of them is "
+        f"selected); select those branches too to regrow {it}"
+    )
 
 
 def validate_selection(tree: DerivationTree, selected: Iterable[int]) -> np.ndarray:
@@ -505,6 +525,7 @@ def select_roots(
     min_ascend: int = 1,
     flow_func: Callable | None = None,
     reduce: bool = True,
+    whole_branches: bool = False,
 ) -> CutResult:
     """Decide which subtrees a selection regrows.  See the module docstring.
 
@@ -516,6 +537,7 @@ def select_roots(
     plant in a fraction of a second, where preflow-push took 17 s).  ``flow_func``
     (any networkx max-flow function) or ``reduce=False`` (the unreduced graph)
     solve the graph with networkx instead: same answer, slower; kept for checking.
+    ``whole_branches``: see :func:`minimum_ascension`.
     """
     min_ascend = _check_min_ascend(min_ascend, tree)
     if flow_func is None and reduce:
@@ -535,8 +557,7 @@ def select_roots(
     kept = np.intersect1d(cut_nodes[~internal], chosen, assume_unique=True)
     min_roots = np.zeros(0, np.int64)
     if min_ascend > 0 and kept.size:
-        up = tree.ancestor(kept, min_ascend)
-        top = np.where(up < 0, _axiom_root(tree, kept), up)
+        top = minimum_ascension(tree, kept, min_ascend, whole_branches, chosen, rho)
         min_roots = sorted_unique(top[tree.child_count[top] > 0])
     roots = collapse_nested(tree, np.concatenate([cut_roots, min_roots]))  # it sorts and dedupes
     return CutResult(
@@ -568,15 +589,82 @@ def _flow_cut(tree, selected, rho, alpha0, n, flow_func, reduce):
     return cut_nodes, value, lambda: (cut_edges, G, source_side), selected
 
 
-def _check_min_ascend(min_ascend, tree):
-    """A whole number >= 0, clamped to the tree's size, more than its depth (a longer climb
-    ends at the axiom all the same)."""
-    if isinstance(min_ascend, bool) or not isinstance(min_ascend, (int, np.integer)):
-        if not (isinstance(min_ascend, float) and min_ascend.is_integer()):
-            raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
-    if min_ascend < 0:
-        raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
-    return int(min(int(min_ascend), tree.size + 1))  # > every depth (climbing stops at the axiom anyway)
+def minimum_ascension(
+    tree: DerivationTree,
+    leaves: ArrayLike,
+    k: int,
+    whole_branches: bool = False,
+    selected: ArrayLike | None = None,
+    rho: float = 0.5,
+) -> np.ndarray:
+    """Where each of ``leaves`` (selected leaves the cut left in place) regrows from.
+
+    ``k`` = 1, the default: its parent, when the parent's children are all leaves (a tip and
+    the modules its rule made with it) or at least ``rho`` of the parent's leaves *of the
+    selected kinds* (the symbols of ``selected``, e.g. the segments ``F`` a click or a
+    rectangle picks) are selected; else the leaf itself (nothing regrows).  The cut's
+    threshold rule counts every module (brackets and turns too, which no click selects), so
+    it keeps a lone picked leaf in place; this minimum ascension still regrows a tip with the
+    modules its rule made with it (its parent holds one segment, the tip) and a rubber-banded
+    branch with its parents, but never takes branches the user did not pick: one click on a
+    segment made at step 2 of Honda n = 6 once replaced the 342 of its 693 modules grown on
+    it.  The preview says which leaves stay (:func:`climb_levels` gives them -1).
+
+    ``k`` > 1 is an explicit request (a session's ``min_ascend``, a qualifier told to climb):
+    the ``k``-th ancestor, or the axiom module above a shallower leaf.  So is
+    ``whole_branches`` (what ``k`` = 1 did before issue 34: sessions saved then replay with it).
+    """
+    leaves = np.asarray(leaves, np.int64)
+    if int(k) > 1 or whole_branches:
+        up = tree.ancestor(leaves, k)
+        return np.where(up < 0, _axiom_root(tree, leaves), up)
+    up = tree.parent[leaves].astype(np.int64)
+    ok = up >= 0
+    selected = leaves if selected is None else np.asarray(selected, np.int64)
+    ok[ok] = _only_leaves_below(tree, up[ok]) | (_picked_share(tree, up[ok], selected) >= rho)
+    return np.where(ok, up, leaves)
+
+
+def _only_leaves_below(tree, nodes):
+    """Whether each node's children are all leaves (a group one rule made, nothing grown on it)."""
+    counts = tree.child_count[nodes].astype(np.int64)
+    children = concat_ranges(tree.child_start[nodes].astype(np.int64), counts)
+    inner = np.zeros(len(nodes), bool)
+    np.logical_or.at(inner, np.repeat(np.arange(len(nodes)), counts), tree.child_count[children] > 0)
+    return ~inner
+
+
+def _picked_share(tree, nodes, selected):
+    """For each node, the share of its leaves of the selected symbols that are selected."""
+    string = np.asarray(tree.leaves)
+    kinds = np.isin(tree.symbol[string], sorted_unique(tree.symbol[selected]))
+    picked = np.zeros(len(string), bool)
+    picked[tree.leaf_positions(selected)] = True
+    kind_sum = np.zeros(len(string) + 1, np.int64)
+    np.cumsum(kinds, out=kind_sum[1:])
+    picked_sum = np.zeros(len(string) + 1, np.int64)
+    np.cumsum(picked, out=picked_sum[1:])
+    unique, back = _unique_inverse(np.asarray(nodes, np.int64))
+    if len(unique) > 256:
+        first, last = tree.leaf_spans()
+        first, last = first[unique], last[unique]
+    else:
+        first, last = tree.string_spans(unique)
+    has = last >= 0
+    a, b = np.where(has, first, 0), np.where(has, last + 1, 0)
+    total = kind_sum[b] - kind_sum[a]
+    share = np.where(total > 0, (picked_sum[b] - picked_sum[a]) / np.maximum(total, 1), 0.0)
+    return share[back]
+
+
+def _unique_inverse(values):
+    """``np.unique(values, return_inverse=True)`` by one sort (no numpy.ma import)."""
+    order = np.argsort(values, kind="stable")
+    ordered = values[order]
+    first = np.r_[True, ordered[1:] != ordered[:-1]] if len(ordered) else np.zeros(0, bool)
+    back = np.empty(len(values), np.int64)
+    back[order] = np.cumsum(first) - 1
+    return ordered[first], back
 
 
 def _axiom_root(tree, nodes):
@@ -588,6 +676,42 @@ def _axiom_root(tree, nodes):
         if not more.any():
             return out
         out[more] = up[more]
+
+
+def climb_levels(tree: DerivationTree, leaves: ArrayLike, roots: ArrayLike) -> np.ndarray:
+    """How many levels above each of ``leaves`` its regrown root is (-1: under no root, the
+    leaf stays).  Walks up the parent links, which an edit keeps for the nodes it removed, so
+    this answers before and after the regrow alike; one pass per level, no whole-tree array.
+
+    >>> from ramure.lsys import LSystem
+    >>> t = LSystem.from_text("n: 2\\nw: A\\np:\\n A -> BB\\n B -> CC").derive().tree
+    >>> climb_levels(t, t.leaves, [1]).tolist()  # the first B holds the first two leaves
+    [1, 1, -1, -1]
+    """
+    up = np.asarray(leaves, np.int64).copy()
+    roots = sorted_unique(np.asarray(roots, np.int64))
+    levels = np.full(len(up), -1, np.int64)
+    open_ = np.ones(len(up), bool)
+    k = 0
+    while open_.any():
+        hit = open_ & np.isin(up, roots)
+        levels[hit] = k
+        open_ &= ~hit
+        up[open_] = tree.parent[up[open_]]
+        open_ &= up >= 0
+        k += 1
+    return levels
+
+
+def _check_min_ascend(min_ascend, tree):
+    """A whole number >= 0, clamped to the tree's size, more than its depth (a longer climb
+    ends at the axiom all the same)."""
+    if isinstance(min_ascend, bool) or not isinstance(min_ascend, (int, np.integer)):
+        if not (isinstance(min_ascend, float) and min_ascend.is_integer()):
+            raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
+    if min_ascend < 0:
+        raise ValueRefused(f"min_ascend must be a whole number >= 0, not {min_ascend!r}")
+    return int(min(int(min_ascend), tree.size + 1))  # > every depth (climbing stops at the axiom anyway)
 
 
 def collapse_nested(tree: DerivationTree, roots: ArrayLike) -> np.ndarray:

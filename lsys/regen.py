@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 
 from ramure.io import read_regular, write_text
 
-from .cut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots
+from .cut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots, stranded_words
 from .combination import split as split_combination
 from .cut import validate_selection
 from .derive import LSystem, check_constants, check_seed
@@ -94,6 +94,11 @@ class Change:
     def compact(self) -> None:
         """Keep only the modules the edit replaced and put in, not both whole strings (nothing
         happens when the spans are not known)."""
+        if not len(self.roots) and self.old_leaves is not None:  # regrew nothing (every leaf stayed)
+            empty = np.zeros((0, 2), np.int64)
+            self.old_spans, self.new_spans, self.old_pieces, self.new_pieces = empty, empty.copy(), [], []
+            self.old_leaves = self.new_leaves = None
+            return
         if self.old_leaves is None or self.new_leaves is None or self.old_spans is None or self.new_spans is None:
             return
         self.old_pieces = [self.old_leaves[a : b + 1].copy() for a, b in self.old_spans]
@@ -124,7 +129,7 @@ class Change:
         this change (``forward``) or its undo, without comparing them: touching spans merged, an
         empty span as ``last = first - 1``.  None when that cannot be told from the spans alone
         (a root that was a module of the string before, or a root without leaves)."""
-        if self.old_spans is None or self.new_spans is None:
+        if self.old_spans is None or self.new_spans is None or not len(self.old_spans):
             return None
         a, b = (self.old_spans, self.new_spans) if forward else (self.new_spans, self.old_spans)
         return a.copy(), b.copy()
@@ -358,8 +363,10 @@ class Session:
         min_ascend: int = 1,
         ascend_levels: int | None = None,
         flow_func: Callable | None = None,
+        whole_branches: bool = False,
     ) -> tuple[CutResult | None, np.ndarray, np.ndarray, np.ndarray]:
-        """The cut for a selection, without changing anything."""
+        """The cut for a selection, without changing anything (``whole_branches``: see
+        :func:`ramure.lsys.cut.minimum_ascension`)."""
         if ascend_levels is not None:
             levels = ascend_levels
             if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
@@ -367,7 +374,9 @@ class Session:
             sel = validate_selection(self.tree, selection)
             roots = collapse_nested(self.tree, [ascend(self.tree, leaf, ascend_levels) for leaf in sel])
             return None, roots, roots, np.zeros(0, np.int64)
-        cut = select_roots(self.tree, selection, rho=rho, n=self.n, min_ascend=min_ascend, flow_func=flow_func)
+        cut = select_roots(
+            self.tree, selection, rho=rho, n=self.n, min_ascend=min_ascend, flow_func=flow_func, whole_branches=whole_branches
+        )
         return cut, cut.roots, cut.cut_roots, cut.min_roots
 
     # -- edits -------------------------------------------------------------
@@ -380,12 +389,15 @@ class Session:
         params: dict | None = None,
         min_ascend: int = 1,
         ascend_levels: int | None = None,
+        refuse_empty: bool = False,
     ) -> RegenResult:
         """Regrow the selection's cut subtrees (or the whole plant if ``selection`` is empty).
 
         ``seed`` None draws the next seed of this session (recorded in the edit);
         ``constants`` apply to this regeneration only; ``params`` is a
         parameter combination ``{"rule": r or None, "constants": {...}}``.
+        ``refuse_empty``: a selection whose cut regrows nothing (every selected leaf
+        stays) is refused with :class:`ValueRefused` instead of making an empty edit.
         """
         edit = {
             "op": "regrow",
@@ -396,13 +408,20 @@ class Session:
             "params": _check_params(params, self.lsystem),
             "min_ascend": int(min_ascend),
             "ascend": ascend_levels,
+            "whole_branches": False,
         }
-        return self._apply(edit)
+        return self._apply(edit, refuse_empty)
 
     def prune(
-        self, selection: Iterable[int], rho: float = 0.5, min_ascend: int = 1, ascend_levels: int | None = None
+        self,
+        selection: Iterable[int],
+        rho: float = 0.5,
+        min_ascend: int = 1,
+        ascend_levels: int | None = None,
+        refuse_empty: bool = False,
     ) -> RegenResult:
-        """Delete the cut subtrees without regrowing them (their roots become leaves)."""
+        """Delete the cut subtrees without regrowing them (their roots become leaves);
+        ``refuse_empty`` as for :meth:`regrow`."""
         edit = {
             "op": "prune",
             "selection": [int(x) for x in selection],
@@ -412,8 +431,9 @@ class Session:
             "params": None,
             "min_ascend": int(min_ascend),
             "ascend": ascend_levels,
+            "whole_branches": False,
         }
-        return self._apply(edit)
+        return self._apply(edit, refuse_empty)
 
     def regrow_fruit(self, leaf_ids: Iterable[int], seed: int | None = None, **settings: Any) -> RegenResult:
         """Give selected ``Fruit`` organs new volumetric-fruit settings (an undoable edit).
@@ -499,7 +519,7 @@ class Session:
     def _next_seed(self):
         return self.seed * 1_000_003 + len(self.edits) + 1
 
-    def _apply(self, edit):
+    def _apply(self, edit, refuse_empty=False):
         t0 = time.perf_counter()
         undo: tuple[Any, ...]
         if edit["op"] in ("fruit", "detail"):  # data only: read by fruit_overrides() / details()
@@ -523,7 +543,7 @@ class Session:
                 "constants", *(np.zeros(0, np.int64),) * 3, len(undo[1]), len(self.derivation), None, time.perf_counter() - t0
             )
         else:
-            result = self._regrow_or_prune(edit, t0)
+            result = self._regrow_or_prune(edit, t0, refuse_empty)
             undo = ("change", result.change)
         self.edits.append(edit)
         self._undo.append((edit, undo))
@@ -535,10 +555,16 @@ class Session:
         self.last_result = result
         return result
 
-    def _regrow_or_prune(self, edit, t0):
+    def _regrow_or_prune(self, edit, t0, refuse_empty=False):
         tree = self.tree
         if edit["selection"]:
-            cut, roots, cut_roots, min_roots = self.plan(edit["selection"], edit["rho"], edit["min_ascend"], edit["ascend"])
+            # a session saved before issue 34 has no "whole_branches": its minimum ascension took them
+            whole = edit.get("whole_branches", True)
+            cut, roots, cut_roots, min_roots = self.plan(
+                edit["selection"], edit["rho"], edit["min_ascend"], edit["ascend"], whole_branches=whole
+            )
+            if refuse_empty and not len(roots):
+                raise ValueRefused(f"nothing regrows: {stranded_words(len(edit['selection']))}")
         else:  # the whole plant: regrow from every axiom module
             cut = None
             roots = np.flatnonzero((tree.parent == -1) & tree.alive)
@@ -819,6 +845,8 @@ def _check_edit(edit, i, session):
     ascend_levels = edit.get("ascend")
     if ascend_levels is not None and not _is_whole(ascend_levels, high=None):
         raise RamureError(f"{what}: 'ascend' must be null or a whole number >= 0")
+    if not isinstance(edit.get("whole_branches", True), bool):
+        raise RamureError(f"{what}: 'whole_branches' must be true or false")
     try:
         constants = _check_values(edit["constants"], session.lsystem)
         params = _check_params(edit.get("params"), session.lsystem)

@@ -9,12 +9,18 @@ min-cut selects.  Here the choice is checked, not assumed:
    changes a constant that rule reads, ranked by
    :meth:`~ramure.metrics.qualifiers.QualifierModel.rank` (variants the
    qualifier owns on the whole plant first).
-2. **Climb when nothing can move.**  When the selected leaves' own rules
-   read none of the varied constants (typically a few tips: the last step
-   only copies parameters), or no candidate changes the regrown part, the
-   regrowth climbs: the cut's minimum ascension grows one level at a time
-   (``min_ascend`` 1, 2, ...) until a rule that reads them is regrown and
-   the part changes.  ``climbed`` says how many levels above the default.
+2. **The selection's part only, unless asked to climb.**  On a selection
+   the qualifier regrows exactly the part a Regrow would (the cut the
+   front ends preview): 3 selected tips never replace the whole plant.
+   When that part cannot move (its rules read none of the varied
+   constants, typically a few tips whose last step only copies
+   parameters, or no candidate changes it) the result says so and why,
+   and the plant stays as it was.  Only with ``max_climb`` > 0 does the
+   regrowth climb: the cut's minimum ascension grows one level at a time
+   (``min_ascend`` 1, 2, ... ``max_climb`` + 1) until a rule that reads
+   them is regrown and the part changes; ``climbed`` says how many levels
+   above the default.  (Climbing by default replaced the whole plant for
+   7 of 22 qualifiers on 3 tips of a conifer, issue 34.)
    A part can answer a constant the other way from the whole plant, so
    when every candidate moves it the wrong way the antonym's best
    candidates are tried at the same level.  If they fail too, it climbs on
@@ -37,9 +43,10 @@ min-cut selects.  Here the choice is checked, not assumed:
    set widens (up to :data:`WIDEN` times ``tries``) while tries move
    forward without dominating; each level above tries ``tries`` (a higher
    level widens the set by regrowing more rules); after
-   :data:`MAX_CROWDED_LEVELS` such levels it goes to the whole plant (where a
-   variant the qualifier owns is dominant, the sweep having measured it so:
-   ``climbed`` then says the selection grew to the whole plant).  A grammar where no variant is
+   :data:`MAX_CROWDED_LEVELS` such levels it goes to the whole plant, when
+   ``max_climb`` reaches the plant's ``n`` (where a variant the qualifier
+   owns is dominant, the sweep having measured it so: ``climbed`` then says
+   the selection grew to the whole plant).  A grammar where no variant is
    dominant for the qualifier on the whole plant (it owns none) is refused
    at once, saying which qualifiers move more.  When no try anywhere is
    dominant (or :data:`BUDGET` regrowths are spent), the plant is left as
@@ -364,7 +371,9 @@ def apply_qualifier(
     grammar; ``regions`` (a study's, with the sweep's PCA cloud ``points``)
     refine the directions; ``directions`` (``{qualifier: {metric: weight}}``,
     e.g. learnt on another grammar) replace them.  ``max_climb`` bounds the
-    extra ascension levels (default: up to the axiom).  See the module docstring.
+    extra ascension levels above the selection's cut (default 0: the part a
+    Regrow of the selection would change, nothing more; ``session.n`` or more
+    lets it climb to the whole plant).  See the module docstring.
     """
     model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
     with _same_cut(session):
@@ -382,10 +391,10 @@ def _same_cut(session):
     """
     plan, memo = session.plan, {}
 
-    def cached(selection, rho: float = 0.5, min_ascend=1, ascend_levels=None, flow_func=None):
-        key = (tuple(int(x) for x in selection), float(rho), int(min_ascend), ascend_levels, flow_func)
+    def cached(selection, rho: float = 0.5, min_ascend=1, ascend_levels=None, flow_func=None, whole_branches=False):
+        key = (tuple(int(x) for x in selection), float(rho), int(min_ascend), ascend_levels, flow_func, whole_branches)
         if key not in memo:
-            memo[key] = plan(selection, rho, min_ascend, ascend_levels, flow_func)
+            memo[key] = plan(selection, rho, min_ascend, ascend_levels, flow_func, whole_branches=whole_branches)
         return memo[key]
 
     session.plan = cached
@@ -424,7 +433,8 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
     unreachable = _unreachable(model, key)
     if unreachable:
         return _not_improved(session, model, key, source, selection, rho, [], [unreachable], varied)
-    top = session.n + 1 if max_climb is None else 1 + max(int(max_climb), 0)
+    climb = 0 if max_climb is None else max(int(max_climb), 0)
+    top = 1 + climb
     levels = [1] if not selection else range(1, top + 1)
     tried: list[_Try] = []
     last_roots: np.ndarray | None = None
@@ -467,7 +477,7 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
         tried += level_tries
         if accepted is not None:
             return _result(session, key, source, accepted, regen, m0, s0, before, len(tried), level, True)
-        reasons.append(_level_reason(key, level, level_tries))
+        reasons.append(_level_reason(key, level, level_tries, session.n - int(session.tree.step[roots].min())))
         if level_tries and not any(t.score > 0 for t in level_tries) and any(t.changed for t in level_tries):
             wrong_way += 1
         elif level_tries:
@@ -476,7 +486,7 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
             break
     whole = _roots(session, [], rho)
     tried_whole = last_roots is not None and np.array_equal(last_roots, whole)
-    if selection and (max_climb is None or max_climb >= session.n) and not tried_whole:
+    if selection and climb >= session.n and not tried_whole:
         # the last level: the whole plant, where a variant the qualifier owns is dominant by construction
         m0, s0, before = _measure(session, whole)
         level_tries, accepted, regen = _try_level(
@@ -490,8 +500,9 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
     return _not_improved(session, model, key, source, selection, rho, tried, reasons, varied)
 
 
-def _level_reason(key, level, tries) -> str:
-    """Why no try at one level was kept (one clause)."""
+def _level_reason(key, level, tries, steps_left=None) -> str:
+    """Why no try at one level was kept (one clause); ``steps_left``: the derivation steps that
+    regrow the part (1: it was made in the last step)."""
     forward = [t for t in tries if t.score > 0]
     if forward:
         best = max(forward, key=lambda t: t.score)
@@ -502,6 +513,11 @@ def _level_reason(key, level, tries) -> str:
         )
     if any(t.changed for t in tries):
         return f"ascension {level}: {len(tries)} tries moved it the other way"
+    if steps_left == 1:
+        return (
+            f"ascension {level}: none of {len(tries)} tries changed the part regrown: it was made in the last "
+            "derivation step, so the varied constants reach only modules that no later step rewrites"
+        )
     return f"ascension {level}: none of {len(tries)} tries changed the part regrown"
 
 
@@ -542,8 +558,9 @@ def _not_improved(session, model, key, source, selection, rho, tried, reasons, v
     is None, since no edit is kept.
     """
     suggestion = (
-        "select a larger part, lower rho (e.g. --rho 0.1), or vary constants the selected "
-        f"rules read (varied now: {', '.join(varied) or 'none'})"
+        "select a larger part (the branch that carries the selection), lower rho (e.g. --rho 0.1), "
+        f"let the qualifier climb above the selection (--climb), or vary constants the selected rules read "
+        f"(varied now: {', '.join(varied) or 'none'})"
     )
     roots = _roots(session, selection, rho)
     m0, s0, before = _measure(session, roots)

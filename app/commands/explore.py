@@ -339,6 +339,8 @@ def run_qualify(args: argparse.Namespace) -> int:
         _load_directions(args.directions)  # refuse a bad file before the sweep
     if args.tries < 1:
         raise RamureError(f"--tries must be at least 1, not {args.tries}")
+    if args.climb < 0:
+        raise RamureError(f"--climb must be a whole number of levels >= 0, not {args.climb}")
     if not 0 <= args.trim < 1:
         raise RamureError(f"--trim is the share of points trimmed, in [0, 1), not {args.trim}")
     ls = LSystem.from_file(args.file)
@@ -380,6 +382,7 @@ def run_qualify(args: argparse.Namespace) -> int:
         points=exp.points,
         regions=regions,
         tries=args.tries,
+        max_climb=args.climb,
         directions=directions,
     )
     if args.output:
@@ -470,6 +473,14 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--select", default=None, metavar="LEAF_IDS", help="leaf ids (default: the whole plant)")
     p.add_argument("--rho", type=float, default=0.5, help="cut threshold in (0, 1] (or 0-100)")
     p.add_argument("--tries", type=int, default=5, help="candidate combinations to try per level (default 5)")
+    p.add_argument(
+        "--climb",
+        type=int,
+        default=0,
+        metavar="LEVELS",
+        help="on a selection, levels the qualifier may climb above the selection's cut when that part "
+        "cannot move (default 0: only what a regrow of the selection changes)",
+    )
     p.add_argument("--store", default=None, metavar="SQLITE", help="qualifier store with study regions")
     p.add_argument("--source", default="study:%", help="store rows to use (default 'study:%%')")
     p.add_argument("--trim", type=float, default=0.07, help="share of extreme points trimmed (default 0.07)")

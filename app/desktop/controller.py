@@ -43,6 +43,10 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 
 
+#: Plants up to this many tree nodes get their cut preview at once, in the GUI thread.
+INLINE_PREVIEW_NODES = 200_000
+
+
 class Busy(RamureError):
     """The model is being changed by a job; the request was not applied."""
 
@@ -181,11 +185,7 @@ class Controller(QObject):
         next Regrow ("again, another seed") regrows the same part."""
 
         def run(ex):
-            had_selection = bool(ex.selection)
-            result = ex.regrow(seed=seed, constants=constants, params=params)
-            if had_selection:
-                ex.select(state.regrown_leaves(ex, result))
-            return result
+            return ex.regrow(seed=seed, constants=constants, params=params)  # the model keeps the part selected
 
         self.edit_started.emit()
         return self.submit("regrow", run)
@@ -311,6 +311,25 @@ class Controller(QObject):
 
     def plan(self) -> CutResult | None:
         return self.read(lambda ex: ex.plan(), wait=2.0)
+
+    def preview(self, inline: bool = True) -> Job | tuple:
+        """The cut preview of the selection: ``(version, selection, rho, CutPreview or None)``.
+
+        On a plant of at most :data:`INLINE_PREVIEW_NODES` nodes it is computed here at once
+        (``inline``, a few ms: a job would hold the plant while the user clicks on); else, or
+        when the plant is busy, in the worker: the job's result is that tuple."""
+
+        def run(ex):
+            return ex.version, tuple(ex.selection), ex.rho, ex.preview()
+
+        if inline:
+            try:
+                return self.read(lambda ex: run(ex) if len(ex.derivation.tree) <= INLINE_PREVIEW_NODES else None, wait=0.05) or (
+                    self.submit("preview", run, key="preview")
+                )
+            except Busy:
+                pass
+        return self.submit("preview", run, key="preview")
 
     def wait_idle(self, timeout: float = 30.0) -> bool:
         """Process events until every job is delivered (tests, shutdown, file saves)."""

@@ -94,6 +94,11 @@ class RegenPanel(QWidget):
         self.note.setWordWrap(True)
         self.note.setStyleSheet("color: #7a4d00;")
         self.note.hide()
+        self.cut_preview = QLabel("")  # what a regrow of the selection would change (orange in the view)
+        self.cut_preview.setObjectName("cutPreview")
+        self.cut_preview.setWordWrap(True)
+        self.cut_preview.setStyleSheet("color: #a05000;")
+        self.cut_preview.hide()
 
         self.constants_box = QGroupBox("Constants for the selection")
         self.constants_form = QFormLayout()
@@ -156,6 +161,7 @@ class RegenPanel(QWidget):
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(rho_row)
         layout.addLayout(buttons)
+        layout.addWidget(self.cut_preview)
         layout.addWidget(self.note)
         layout.addWidget(qual)
         layout.addWidget(self.fruit_box)
@@ -175,6 +181,11 @@ class RegenPanel(QWidget):
         """A word under the buttons about the last regrow (hidden when empty)."""
         self.note.setText(text)
         self.note.setVisible(bool(text))
+
+    def set_cut_preview(self, text: str) -> None:
+        """The cut preview's sentence ("12 of 693 modules (1.7 %) will change ..."); hidden when empty."""
+        self.cut_preview.setText(text)
+        self.cut_preview.setVisible(bool(text))
 
     def set_history(self, can_undo: bool, can_redo: bool) -> None:
         self.undo_button.setEnabled(can_undo)

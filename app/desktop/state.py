@@ -75,6 +75,7 @@ class Snapshot:
     local_edits: int = 0  # regrows, prunes and fruit edits of parts (a grammar file cannot hold them)
     organ_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # leaf and fruit centres
     organ_leaves: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # their history leaves
+    note: str | None = None  # why the last edit drew the same plant, in the model's words (or None)
 
     @property
     def midpoints(self) -> np.ndarray:
@@ -104,6 +105,7 @@ def take_snapshot(explorer: Explorer, previous: Snapshot | None = None, job: str
         path=explorer.path,
         edits=len(session.edits),
         job=job,
+        note=getattr(explorer, "note", None),
     )
     if previous is not None and previous.version == explorer.version:
         return Snapshot(**{**previous.__dict__, **light})
@@ -172,6 +174,10 @@ def status_line(explorer: Explorer) -> str:
     r = explorer.last_result
     if r is None:
         return base
+    summary = getattr(explorer, "summary", None)  # the model's words: share changed, climb (issue 34)
+    if isinstance(summary, str) and r.op in ("regrow", "prune"):
+        note = getattr(explorer, "note", None)
+        return f"{base} — last edit: {summary}" + (f" — {note}" if isinstance(note, str) and note else "")
     warning = getattr(r, "warning", None)  # e.g. "this selection regrows from the axiom: ..."
     return f"{base} — last edit: {edit_words(r)}" + (f" — {warning}" if isinstance(warning, str) else "")
 
@@ -192,15 +198,10 @@ def edit_words(result: RegenResult) -> str:
 
 
 def regrown_leaves(explorer: Explorer, result: RegenResult | None) -> list[int]:
-    """The leaves a regrow put in the string (what stays selected after it), sorted."""
-    change = getattr(result, "change", None)
-    if change is None or not len(change.added):
-        return []
-    tree = explorer.derivation.tree
-    added = np.asarray(change.added, np.int64)
-    # in the string: alive and not rewritten (a look at the added nodes only, not a position
-    # table over the whole tree: 0.1 instead of 7-20 ms at 1.5 M nodes)
-    return np.sort(added[(tree.child_count[added] == 0) & tree.alive[added]]).tolist()
+    """The leaves a regrow put in the string, sorted (:func:`ramure.app.model.regrown_leaves`)."""
+    from ramure.app.model import regrown_leaves as model_regrown_leaves
+
+    return model_regrown_leaves(explorer.derivation.tree, result)
 
 
 def same_plant(before: tuple[np.ndarray, np.ndarray] | None, after: Skeleton | None) -> bool:
@@ -411,16 +412,27 @@ def leaf_mask(leaf_ids: np.ndarray, selection: Collection[int]) -> np.ndarray:
     return table[np.maximum(leaf_ids, 0)] & (leaf_ids >= 0)
 
 
+#: The cut preview: what a regrow of the selection would change and is not selected (orange).
+CUT_PREVIEW = (255, 153, 0)
+
+
 def cell_colors(
-    mesh: pv.DataSet, selection: Collection[int] = (), kinship_rgb: np.ndarray | None = None, base: np.ndarray | None = None
+    mesh: pv.DataSet,
+    selection: Collection[int] = (),
+    kinship_rgb: np.ndarray | None = None,
+    base: np.ndarray | None = None,
+    cut: Collection[int] = (),
 ) -> np.ndarray:
-    """RGB (uint8) per cell: bark/leaf/fruit with the selection red, or the kinship colours.
+    """RGB (uint8) per cell: bark/leaf/fruit with the selection red, or the kinship colours;
+    ``cut`` (the preview's leaves, :meth:`ramure.app.model.Explorer.preview`) orange under it.
 
     ``base`` is :func:`base_colors` computed once per plant (saves a pass per selection).
     """
     if kinship_rgb is not None:
         return kinship_rgb
     rgb = (base_colors(mesh) if base is None else base).copy()
+    if len(cut):
+        rgb[leaf_mask(mesh.cell_data["leaf_id"], cut)] = CUT_PREVIEW
     if len(selection):
         chosen = np.flatnonzero(leaf_mask(mesh.cell_data["leaf_id"], selection))  # few: recoloured by index
         fruit = np.asarray(mesh.cell_data["kind"])[chosen] == KIND_FRUIT

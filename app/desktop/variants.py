@@ -198,7 +198,8 @@ def qualifier_message(result: QualifierResult) -> str:
     change = f"{METRIC_LABELS.get(metric, metric)} {_short(before)} → {_short(after)}"
     if result.improved:
         return f"{name}: {change}{tries}"
-    return f"{name}: no variant moved the selection that way; kept the closest try, {change}{tries}"
+    why = f": {result.reason}" if getattr(result, "reason", None) else ""
+    return f"{name}: no variant moved the selection that way{tries}; the plant is as it was ({change}){why}"
 
 
 def _relative_change(result, metric):

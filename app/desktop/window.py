@@ -91,6 +91,9 @@ class MainWindow(QMainWindow):
         self.shown_text = explorer.text  # the model's grammar text the editor last showed
         # the current plant draws what the plant drawn before it drew (see after_regrow)
         self.same_as_before = False
+        # the cut preview: (version, selection, rho) it was computed for, and its leaves (orange)
+        self.preview_key: tuple | None = None
+        self.cut_leaves: np.ndarray = np.zeros(0, np.int64)
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
@@ -352,8 +355,11 @@ class MainWindow(QMainWindow):
         old = getattr(self.view.snapshot, "skeleton", None)  # compared after the frame (no copy)
         self.base_colors = state.base_colors(snap.mesh)
         self.fruit_leaves = state.fruit_leaves(snap.mesh)
+        self.set_cut_preview(None)  # a new plant: the preview of the old one is gone
         self.view.show_plant(snap, self.plant_colors(snap.selection), reset_camera)
         self.drawn_version = snap.version
+        if snap.selection:
+            self.request_preview()  # e.g. the part a regrow kept selected
         self.show_selection(snap.selection, recolour=False, docks=False)
         # the edit's frame first (a draft for a large plant); the docks follow in the same turn
         self.view.redraw(now=True)
@@ -391,7 +397,36 @@ class MainWindow(QMainWindow):
     def plant_colors(self, selection: Sequence[int]) -> np.ndarray:
         """Per-cell RGB of the shown plant: the selection red, or the kinship hues."""
         snap = self.controller.snapshot
-        return state.cell_colors(snap.mesh, selection, self._kinship_colors(selection), base=self.base_colors)
+        return state.cell_colors(
+            snap.mesh, selection, self._kinship_colors(selection), base=self.base_colors, cut=self._cut_for(snap, selection)
+        )
+
+    def _cut_for(self, snap: Snapshot, selection: Sequence[int]) -> np.ndarray:
+        """The preview's leaves when they were computed for this plant, selection and ρ."""
+        key = (snap.version, tuple(selection), snap.rho)
+        return self.cut_leaves if self.preview_key == key else np.zeros(0, np.int64)
+
+    def request_preview(self) -> None:
+        """Show the selection's cut preview: at once on a small plant, else when its job is done."""
+        result = self.controller.preview()
+        if isinstance(result, tuple):
+            self.set_cut_preview(result)
+
+    def set_cut_preview(self, result: tuple | None) -> None:
+        """Show a preview job's result ``(version, selection, rho, CutPreview)``: the leaves a regrow
+        would change in orange, the sentence in the regeneration panel (nothing for a stale one)."""
+        snap = self.controller.snapshot
+        if result is None or result[3] is None:
+            self.preview_key, self.cut_leaves = None, np.zeros(0, np.int64)
+            self.regen.set_cut_preview("")
+            return
+        version, selection, rho, preview = result
+        if (version, selection, rho) != (snap.version, tuple(snap.selection), snap.rho):
+            return  # the selection or ρ changed since: a newer preview job follows
+        self.preview_key, self.cut_leaves = (version, selection, rho), preview.leaves
+        self.regen.set_cut_preview(preview.message)
+        if self.drawn_version == snap.version:
+            self.show_selection(snap.selection, docks=False)
 
     def _kinship_colors(self, selection: Sequence[int]) -> np.ndarray | None:
         if self.kinship and len(selection) == 1:
@@ -407,8 +442,13 @@ class MainWindow(QMainWindow):
         panels' part too (:meth:`show_selection_docks`; a new version's frame comes first)."""
         snap = self.controller.snapshot
         kin = self._kinship_colors(selection) if recolour or self.kinship else None
+        if docks and tuple(selection) != (self.preview_key or (None, ()))[1]:
+            self.regen.set_cut_preview("")  # the selection changed: its preview is on its way
+            if len(selection):
+                self.request_preview()
         if recolour:
-            self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors))
+            cut = self._cut_for(snap, selection)
+            self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors, cut=cut))
         self.view.set_fruit_selection(selection)
         self.view.set_selected_segments(
             np.flatnonzero(state.leaf_mask(snap.segment_leaf, selection)) if len(selection) and kin is None else []
@@ -510,6 +550,8 @@ class MainWindow(QMainWindow):
     def _rho(self, percent) -> None:
         """The slider's percent, as the fraction the model takes."""
         self.controller.set_rho(percent / 100.0)
+        if self.controller.snapshot.selection:
+            self.controller.preview(inline=False)  # a job after the ρ job: the cut it gives
 
     def _regrow(self) -> None:
         self.controller.regrow()
@@ -576,12 +618,18 @@ class MainWindow(QMainWindow):
             self.view.reset_camera()
         elif job.name.startswith(("regrow", "prune")) and job.error is None:
             self.after_regrow(job)
+        elif job.name == "preview" and job.error is None:
+            self.set_cut_preview(job.result)
+        elif job.name == "rho" and job.error is None:
+            self.set_cut_preview(None)  # the preview of the old ρ: a new one follows
 
     def after_regrow(self, job: Job) -> None:
         """Say what the regrow did; on a deterministic grammar, say why nothing changed."""
         snap = self.controller.snapshot
         note = ""
-        if job.name == "regrow" and self.same_as_before:
+        if job.name == "regrow" and snap.note:  # e.g. new constants on a part made in the last step
+            note = snap.note[0].upper() + snap.note[1:] + "."
+        elif job.name == "regrow" and self.same_as_before:
             note = SAME_PLANT
         elif job.name == "regrow" and snap.selection:
             note = REGROWN

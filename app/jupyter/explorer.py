@@ -225,14 +225,18 @@ class Explorer:
             layout=W.Layout(width="130px"),
         )
         on_value(self.camera, self.set_view)
-        self.show_cut = W.Checkbox(value=False, description="show the cut (orange)", indent=False)
+        # the cut preview is on by default: what a regrow would change is orange, and said
+        self.show_cut = W.Checkbox(value=True, description="preview the cut (orange)", indent=False)
         on_value(self.show_cut, self.set_show_cut)
+        self.preview_line = W.HTML()
         picking = (
             "click a branch to select it"
             if self.view.picking
             else "picture view: select with the tools on the right or the derivation tree"
         )
-        centre = W.VBox([self.view.widget, W.HBox([self.camera, self.show_cut]), W.HTML(f"<small>{picking}</small>")])
+        centre = W.VBox(
+            [self.view.widget, W.HBox([self.camera, self.show_cut]), self.preview_line, W.HTML(f"<small>{picking}</small>")]
+        )
         side = W.VBox([self.selection_panel.widget, self.edits.widget], layout=W.Layout(width="30%", min_width="320px"))
         left = W.VBox([self.grammar.widget], layout=W.Layout(width="30%", min_width="280px"))
         self.wood = WoodTab(self)
@@ -327,12 +331,25 @@ class Explorer:
         name = model.path.name if model.path else "grammar text"
         self.title.value = f"<h3 style='margin:4px 0'>Ramure explorer — {name}</h3>"
         self.status_line.value = f"<small>{model.status()}</small>"
+        self.preview_line.value = self._preview_html()
         for panel in (self.grammar, self.view, self.selection_panel, self.tree, self.architecture, self.edits):
             panel.refresh()
         self.variants.refresh_note()
         if self.fallback.handle is not None and self._fallback_key != self.view.key():
             self._fallback_key = self.view.key()
             self.fallback.update()  # a saved notebook shows the plant as it is now
+
+    def _preview_html(self) -> str:
+        """The cut preview's sentence ("12 of 693 modules (1.7 %) will change ..."), orange when
+        the view shows the cut, empty without a selection."""
+        try:
+            preview = self.model.preview()
+        except RamureError as err:
+            return f"<small>{html.escape(str(err))}</small>"
+        if preview is None:
+            return ""
+        colour = "#c06000" if self.view.show_cut else "#444"
+        return f"<small style='color:{colour}'>{html.escape(preview.message)}</small>"
 
     # -- grammar and constants ---------------------------------------------------
     def set_text(self, text: str) -> GrammarError | None:

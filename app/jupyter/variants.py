@@ -88,7 +88,8 @@ def qualifier_summary(result: QualifierResult) -> str:
     if result.improved:
         word = COMPARATIVES.get(name, f"more {name}")
         return f"{word}: {moves}"
-    return f"'{name}' did not move the selection its way after {result.tried} tries ({moves}); kept the closest"
+    why = f": {result.reason}" if result.reason else ""
+    return f"'{name}' did not move the selection its way after {result.tried} tries ({moves}); the plant is as it was{why}"
 
 
 class Stopped(RamureError):

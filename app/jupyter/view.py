@@ -45,12 +45,10 @@ RENDER_LOCK = threading.Lock()  # one off-screen render at a time (thumbnail thr
 
 
 def cut_leaves(model: Model) -> np.ndarray:
-    """Leaf ids the current selection's cut would regrow (empty without a selection)."""
-    cut = model.plan()
-    if cut is None or not len(cut.roots):
-        return np.zeros(0, np.int64)
-    tree = model.derivation.tree
-    return np.concatenate([tree.leaves_under(int(r)) for r in cut.roots])
+    """Leaf ids the current selection's cut would regrow (empty without a selection): the
+    model's :meth:`~ramure.app.model.Explorer.preview`, the same the desktop highlights."""
+    preview = model.preview()
+    return np.zeros(0, np.int64) if preview is None else preview.leaves
 
 
 def view_colors(model: Model, show_cut: bool = False) -> np.ndarray:
@@ -277,7 +275,7 @@ class PlantView:
         width, height = size
         self.size = (width, height)
         self.view = view
-        self.show_cut = False
+        self.show_cut = True  # the cut preview, on by default (the explorer's check box)
         self.backend = resolve_backend(backend)
         self.image = png_image()
         self._shown: tuple | None = None  # the key of what the view shows

@@ -77,8 +77,14 @@ def test_regrow_undo_redo_and_version(ex):
     ex.select(ex.session.leaves_with_symbol("F")[-6:])
     v = ex.version
     result = ex.regrow(constants={"a2": 20})
-    assert ex.version == v + 1 and result.roots.size and ex.selection == []
-    assert "roots" in ex.status()
+    assert ex.version == v + 1 and result.roots.size
+    tree = ex.derivation.tree
+    added = np.asarray(result.change.added)
+    drawn = np.union1d(ex.skeleton.leaf_id, ex.skeleton.organs.leaf_id)
+    new = added[tree.child_count[added] == 0]
+    assert ex.selection == sorted(new[np.isin(new, drawn)].tolist()) and ex.selection  # its segments stay selected
+    assert ex.preview().roots.tolist() == result.roots.tolist()  # so Regrow again regrows the same part
+    assert f"regrew {result.removed} of " in ex.status()
     assert ex.undo() is not None and ex.derivation.to_string() == before
     assert ex.redo() is not None and ex.derivation.to_string() != before
 
@@ -157,10 +163,16 @@ def test_apply_qualifier_makes_the_selection_denser_and_undoes():
     assert ls.constants["a2"] == 50 and ex.lsystem.constants["a2"] == 60
     sweep = VariantSweep(n=5, n_jobs=1, cache=False).fit(ls)
     before = ex.derivation.to_string()
-    ex.select(ex.session.leaves_with_symbol("F")[-12:])
+    tree = ex.derivation.tree
+    twig = np.flatnonzero((tree.depth == 2) & tree.alive & (tree.child_count > 0))[-1]
+    ex.select(tree.leaves_under(int(twig)).tolist())  # a twig three steps from the tips
+    shown = ex.preview()
     out = ex.apply_qualifier("denser", sweep)
     assert out.improved and out.after.branch_density > out.before.branch_density
-    assert ex.selection == [] and ex.derivation.to_string() != before
+    assert out.roots.tolist() == shown.roots.tolist() == [twig]  # what the preview showed, nothing more
+    added = np.asarray(out.regen.change.added)
+    assert ex.selection == sorted(added[tree.child_count[added] == 0].tolist())  # kept selected, as Regrow does
+    assert ex.derivation.to_string() != before
     ex.undo()
     assert ex.derivation.to_string() == before
 
@@ -182,7 +194,7 @@ def test_select_refuses_erased_and_dead_modules_like_leaf_positions():
             with pytest.raises(RamureError, match="not a leaf"):
                 ex.select([node])
     leaves = ex.derivation.tree.leaves
-    ex.select([int(leaves[2])])
+    ex.select([int(leaves[np.argmax(ex.derivation.tree.depth[leaves])])])  # a tip: it regrows with its siblings
     ex.regrow(seed=1)
     dead = np.flatnonzero(~ex.derivation.tree.alive)
     assert dead.size

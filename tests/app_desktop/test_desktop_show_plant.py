@@ -22,6 +22,9 @@ def edit(ex, op, rng, step):
         ex.prune()
     elif op in ("regrow", "prune"):
         ex.select(rng.choice(leaves, size=min(int(rng.integers(1, 40)), len(leaves) // 2), replace=False).tolist())
+        if not ex.preview().changed:  # segments carrying later branches only: add a tip (issue 34)
+            tree = ex.derivation.tree
+            ex.select([int(leaves[np.argmax(tree.depth[leaves])])], "add")
         ex.regrow(seed=step) if op == "regrow" else ex.prune()
     else:
         getattr(ex, op)()

@@ -103,8 +103,10 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
     assert w.regen.qualifier.count() >= 10
     w.constants_panel.set_constant("a2", 30.0)  # the sweep must start from the session's values
     settle(qtbot, w)
-    snap = w.controller.snapshot
-    w.controller.select(snap.segment_leaf[-4:])
+    tree = w.controller.explorer.derivation.tree
+    branch = int(np.flatnonzero((tree.depth == 1) & tree.alive & (tree.child_count > 0))[-1])
+    chosen = tree.leaves_under(branch).tolist()  # a main branch: tips alone cannot show new constants
+    w.controller.select(chosen)
     w.regen.qualifier.setCurrentText("dense")
     tip = w.regen.qualifier.itemData(w.regen.qualifier.currentIndex(), Qt.ItemDataRole.ToolTipRole)
     assert "more branches" in tip  # each qualifier says what it does
@@ -116,7 +118,8 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
     session = w.controller.explorer.session
     edit = session.edits[-1]
     assert len(session.edits) == 2  # the constant, then one qualifier edit (rejected tries undone)
-    assert edit["params"] is not None and edit["selection"] == sorted(snap.segment_leaf[-4:].tolist())
+    assert edit["params"] is not None and edit["selection"] == sorted(chosen)
+    assert w.variants.last_qualifier.roots.tolist() == [branch]  # the selection's cut, nothing more
     result = w.variants.last_qualifier
     assert result.improved and result.after.branch_density > result.before.branch_density
     message = w.statusBar().currentMessage()

@@ -156,7 +156,8 @@ def test_regrow_changes_only_the_cut_subtrees_and_undo_restores(make_window, qtb
     kept_after = [v for v in after.tolist() if v < size_before]
     assert kept_before == kept_after  # every module outside the cut subtrees is untouched, in order
     assert sorted(w.controller.snapshot.last_result.roots.tolist()) == sorted(cut.roots.tolist())
-    assert "regrew" in w.status_label.text() and "replaced" in w.status_label.text()
+    result = w.controller.snapshot.last_result
+    assert f"regrew {result.removed} of {len(before_leaves)} modules" in w.status_label.text()  # the share
     assert "roots [" not in w.status_label.text()  # the user's words, not the algorithm's
     assert w.drawn_version == w.controller.snapshot.version
     assert w.cut_view.layout_data is not None  # the cut graph dock shows the last cut

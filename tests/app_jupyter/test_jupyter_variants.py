@@ -67,7 +67,9 @@ def test_gallery_button_applies_the_pick(ex):
 def test_qualifier_dropdown_makes_the_selection_denser(ex):
     from ramure.metrics.apply import active_rules, roots_metrics
 
-    ex.select_where(min_order=2)
+    tree = ex.plant.tree
+    branch = int(np.flatnonzero((tree.depth == 1) & tree.alive & (tree.child_count > 0))[-1])
+    ex.tree.select(branch)  # the derivation tree's Select: every leaf under a main branch
     roots = ex.model.plan().roots
     rules = active_rules(ex.plant.tree, roots)
     before = roots_metrics(ex.session, roots).branch_density
@@ -76,14 +78,17 @@ def test_qualifier_dropdown_makes_the_selection_denser(ex):
     result = ex.model.last_result
     after = roots_metrics(ex.session, result.roots).branch_density
     assert ex.history[-1]["params"]["rule"] in rules and len(ex.history) == 1  # one undoable edit
-    assert ex.selection == [] and ex.message.kind == "info"
+    assert result.roots.tolist() == roots.tolist()  # the selection's cut, what the preview shows
+    added = np.asarray(result.change.added)
+    assert ex.selection == sorted(added[ex.plant.tree.child_count[added] == 0].tolist())  # kept selected
+    assert ex.message.kind == "info"
     message = ex.message.text
     assert ex.variants.chosen is not None  # the applied variant is marked in the PCA view
     ex.undo()
     assert ex.history == []
-    # the part regrown (the default cut, or the larger part it climbed to) really got denser
+    # the part regrown really got denser
     part_before = roots_metrics(ex.session, result.roots).branch_density
-    assert part_before == before or not np.array_equal(result.roots, roots)
+    assert part_before == before
     assert after > part_before and message.startswith(f"denser: density {part_before:.4g} → {after:.4g}")
 
 

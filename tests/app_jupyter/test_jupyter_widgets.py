@@ -182,10 +182,12 @@ def test_regrow_with_constants_changes_only_the_cut(explorer):
     ex.grammar.sliders["a2"].value = 25.0
     ex.edits.regrow_constants.click()
     assert ex.history[-1]["op"] == "regrow" and ex.history[-1]["constants"] == {"a2": 25.0}
-    assert ex.selection == [] and ex.model.constants["a2"] == 60.0  # scoped to the cut
+    added = set(np.asarray(ex.model.last_result.change.added).tolist())
+    assert ex.selection and set(ex.selection) <= added  # the regrown part stays selected
+    assert ex.model.constants["a2"] == 60.0  # scoped to the cut
     tree = ex.plant.tree
     assert [ex.model.lsystem.module_text(tree, n) for n in tree.leaves[:lo]] == before
-    assert "last regrow" in ex.status_line.value
+    assert f"regrew {ex.model.last_result.removed} of " in ex.status_line.value
 
 
 def test_regrow_with_constants_needs_a_moved_slider(explorer):

@@ -203,7 +203,8 @@ def test_an_entry_for_a_node_that_gains_children_is_inserted_in_order():
 def test_other_edits_drop_the_sums_and_reviving_unknown_nodes_does_too():
     session = Session(LSystem.from_file("honda_sympodial"), n=7)
     tree = session.tree
-    session.regrow(tree.leaves[-3:].tolist(), seed=1)
+    f = session.leaves_with_symbol("F")
+    session.regrow(f[tree.step[f] == session.n][-3:].tolist(), seed=1)  # three tips: they regrow
     tree.changed()  # an edit the sums do not follow: dropped
     assert tree.detach_sums() is None
     tree.subtree_weights([0])  # made again now: the nodes the regrow removed are dead, their sums unknown
@@ -254,6 +255,7 @@ def test_the_spans_of_a_regrow_its_undo_and_redo():
     session = Session(LSystem.from_file("honda_sympodial"), n=9)
     first = session.tree.leaves
     leaves = session.leaves_with_symbol("F")
+    leaves = leaves[session.tree.step[leaves] == session.n]  # tips: each regrows with its siblings
     session.regrow([int(leaves[5]), int(leaves[-7])], seed=3)
     second = session.tree.leaves
     forward = session.edit_spans(first, second)

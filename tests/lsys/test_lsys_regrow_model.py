@@ -19,8 +19,9 @@ def test_polygons_that_only_regrown_branches_grow_are_drawn_as_a_rebuild_draws_t
     rng = np.random.default_rng(1)
     grew = False
     for step in range(40):
-        leaves = ex.skeleton.leaf_id
-        ex.select(rng.choice(leaves, size=min(3, len(leaves)), replace=False).tolist())
+        tree = ex.derivation.tree  # every leaf under a random node (the derivation tree's Select)
+        inner = np.flatnonzero(tree.alive & (tree.child_count > 0))
+        ex.select(tree.leaves_under(int(rng.choice(inner))).tolist())
         ex.regrow(seed=step)
         incremental = ex.skeleton
         assert "reuse" in incremental.extra
@@ -54,7 +55,8 @@ def test_a_regrow_that_overflows_names_the_module_a_full_turtle_names():
 
     ex = Explorer("#define L 1\nn: 4\nw: A\np:\n A -> F(L)[+A]F(L)A\n", n=4)
     ex.mesh  # noqa: B018 - the edit below is re-interpreted in part
-    ex.select(ex.skeleton.leaf_id[-3:].tolist())
+    leaves, depth = ex.skeleton.leaf_id, ex.derivation.tree.depth
+    ex.select(leaves[np.argsort(depth[leaves], kind="stable")[-3:]].tolist())  # the deepest segments: they regrow
     ex.regrow(seed=1, constants={"L": 1e308})
     messages = []
     for draw in (lambda: ex.skeleton, lambda: interpret_string(ex.lsystem, ex.derivation.tree, ex.derivation.tree.leaves)):
