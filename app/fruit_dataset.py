@@ -280,7 +280,9 @@ def _worker_start(parent: int) -> None:
 
 def _end_if_orphaned() -> None:
     if _PARENT and os.getppid() != _PARENT[0]:
-        os._exit(1)  # the command died: write nothing more into its folder
+        import signal
+
+        os.kill(os.getpid(), signal.SIGTERM)  # the command died: write nothing more into its folder
 
 
 def make_dataset(

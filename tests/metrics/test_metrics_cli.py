@@ -145,7 +145,7 @@ def test_qualify_saves_a_session_that_replays(tmp_path, capsys):
         (["qualify", HONDA, "--qualifier", "fluffy"], "unknown qualifier"),
         (["qualify", "grammars/algae.lsys", "--qualifier", "dense"], "no non-zero #define"),
         (["metrics", HONDA, "--select", "999999"], "not leaf id"),
-        (["metrics", HONDA, "--segments", "1,x"], "--segments expects"),
+        (["metrics", HONDA, "--segments", "1,x"], "--segments: 'x' is not a leaf id"),
     ],
 )
 def test_user_errors_exit_2_without_traceback(argv, message, capsys, tmp_path, monkeypatch):
