@@ -130,6 +130,8 @@ def test_qualify_saves_a_session_that_replays(tmp_path, capsys):
             cache,
             "--select",
             ",".join(map(str, leaves)),
+            "--climb",
+            "2",  # the tips alone cannot grow taller; climbing above the cut is asked for
             "--json",
         ],
     )
