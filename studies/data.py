@@ -76,7 +76,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
     from ramure.studies.storage import Study
 
     if isinstance(source, (str, os.PathLike)):
-        with Study.open(source) as study:
+        with Study.open(source, readonly=True) as study:
             return load_study_data(study, finished_only)
     conn = source.conn
     grammars = [r for r in conn.execute("SELECT id, name FROM grammars ORDER BY id")]

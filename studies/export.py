@@ -75,7 +75,7 @@ def export_csv(
     from ramure.studies.storage import Study
 
     if isinstance(source, (str, os.PathLike)):
-        with Study.open(source) as study:
+        with Study.open(source, readonly=True) as study:
             return export_csv(study, out_dir, synonyms)
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -265,13 +265,20 @@ def export_qualifier_points(rows: list[dict], store: str | os.PathLike) -> int:
 
     Rows of the same ``source`` already there are replaced, in one transaction,
     so exporting twice gives the same table.  Returns the number of rows written.
+    ``store`` must be new, a qualifier store or a Ramure study: a database of
+    another application is refused unchanged
+    (:func:`ramure.metrics.store.check_store_file`).
     """
+    from ramure.metrics.store import open_store
+    from ramure.studies.storage import check_study_file
+
     store = pathlib.Path(store)
-    store.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        conn = sqlite3.connect(os.fspath(store), timeout=10.0)
-    except sqlite3.Error as exc:
-        raise StudyInputError(f"{store}: cannot open the qualifier store ({exc})") from None
+    try:  # a Ramure study, even one made before the application id, may hold the points
+        check_study_file(store)
+        study = True
+    except StudyInputError:
+        study = False
+    conn = open_store(store, study)
     try:
         with conn:
             conn.execute(QUALIFIER_POINTS_SQL)

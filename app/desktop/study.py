@@ -596,7 +596,7 @@ class ParticipantWindow(QWidget):
         def work(progress, cancelled):
             from ramure.studies import Study
 
-            study = Study.open(path)  # a connection of this thread
+            study = Study.open(path, readonly=True)  # a connection of this thread, that only reads
             try:
                 return pick_images(study, grammar, grammars_dir=self.grammars_dir)
             finally:
