@@ -308,3 +308,65 @@ def test_mutated_studies_raise_only_ramure_errors(real_study, tmp_path):
         except RamureError:
             refused += 1
     assert refused > 20 and accepted > 0, (refused, accepted)
+
+
+# -- item 7: synonym files; item 6: qualifier text bounded -------------------------------------
+SYNONYM_FILES = [
+    (b'{"qualifiers": {"petit\xff": {"synonyms": []}}}', "not UTF-8 text (byte 22)"),
+    (b"[" * 100_000 + b"]" * 100_000, "nested too deeply"),
+    (b'{"qualifiers": {"small": {"synonyms": [1, 2]}}}', "synonym 1 must be text"),
+    (b'{"qualifiers": {"small": {"synonyms": [["nested"]]}}}', "synonym 1 must be text"),
+    (b'{"qualifiers": {"small": {"fr": {"x": 1}}}}', "'fr' must be text"),
+    (b'{"qualifiers": {"small": "petit"}}', "must be an object"),
+    (b'{"qualifiers": ["small"]}', "expected an object with a 'qualifiers' object"),
+    (b"[1, 2, 3]", "expected an object with a 'qualifiers' object"),
+    (b'{"qualifiers": {"small": {"synonyms": ["' + b"x" * 300 + b'"]}}}', "at most 200 characters"),
+    (b" " * (2 << 20), "more than the limit"),
+]
+
+
+@pytest.mark.parametrize("content, words", SYNONYM_FILES, ids=range(len(SYNONYM_FILES)))
+def test_bad_synonym_files_are_refused_in_one_line(real_study, tmp_path, capsys, content, words):
+    from ramure.studies.qualifiers import SynonymTable
+
+    path = tmp_path / "syn.json"
+    path.write_bytes(content)
+    with pytest.raises(RamureError) as info:
+        SynonymTable.load(path)
+    assert words in str(info.value) and "\n" not in str(info.value)
+    refused_in_one_line(*cli(["study", "export-csv", real_study, "-o", tmp_path / "csv", "--synonyms", path], capsys), words)
+    assert not (tmp_path / "csv").exists()
+
+
+@pytest.mark.parametrize("kind", ["pipe", "device"])
+def test_a_synonym_file_that_is_a_pipe_or_a_device_is_refused_at_once(tmp_path, capsys, real_study, kind):
+    import os
+
+    path = tmp_path / "syn.json"
+    if kind == "pipe":
+        os.mkfifo(path)  # no writer: a plain open would block for good
+    else:
+        path = "/dev/zero"
+    refused_in_one_line(
+        *cli(["study", "analyze", real_study, "-o", tmp_path / "r", "--no-figures", "--synonyms", path], capsys),
+        "not a regular file",
+    )
+
+
+def test_qualifier_text_is_bounded_when_written_and_when_read(study_copy):
+    from ramure.studies.data import load_study_data
+    from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS
+
+    conn = sqlite3.connect(study_copy)  # a megabyte of text in one answer, as a tampered file may hold
+    conn.execute("UPDATE qualifiers SET text = ? WHERE id = 1", ("petit " * 200_000,))
+    conn.commit()
+    conn.close()
+    data = load_study_data(study_copy)
+    assert max(map(len, data.qualifier_text)) == MAX_QUALIFIER_CHARS == 200
+    with Study.open(study_copy) as study:
+        code = study.add_participant(consent=True)
+        session = study.session(code, study.grammars[0])
+        session.set_groups([list(range(1, 28))])
+        with pytest.raises(StudyInputError, match="at most 200 characters"):
+            session.add_qualifier(1, "x" * 201)
+        session.add_qualifier(1, "x" * 200)
