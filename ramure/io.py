@@ -271,7 +271,9 @@ def open_sqlite_readonly(path: str | os.PathLike) -> sqlite3.Connection:
     SQLite's ``mode=ro`` alone creates ``-wal`` and ``-shm`` files beside a WAL-mode
     file and leaves them there.  When no ``-wal`` file exists no writer has the file
     open in WAL mode, so it is opened ``immutable=1`` (no locks, no side files);
-    otherwise ``mode=ro`` reads it alongside the live writer.  The caller closes it.
+    otherwise ``mode=ro`` reads it alongside the live writer.  The caller closes it, soon: a
+    writer arriving later writes its WAL, which an immutable reader does not see, and the
+    main file changes only when that WAL is checkpointed (at 1000 pages, or its last close).
     """
     path = pathlib.Path(path)
     live = path.with_name(path.name + "-wal").exists()
