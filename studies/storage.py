@@ -193,6 +193,8 @@ def check_study_file(path: str | os.PathLike) -> int:
     ``schema.sql``, one ``study`` row, and every stored value (:func:`check_values`).
     """
     path = pathlib.Path(path)
+    if path.exists() and not path.is_file():  # a folder, a pipe (opening it would block), a device
+        raise StudyInputError(f"{path}: not a regular file, so not a Ramure study database")
     if not path.is_file():
         raise StudyInputError(f"{path}: no such study file")
     if path.stat().st_size == 0:

@@ -109,6 +109,20 @@ def test_a_truncated_study_is_refused_with_no_debris(study_copy, keep, capsys):
     assert digest(study_copy) == before and only_file(study_copy)
 
 
+@pytest.mark.parametrize("kind", ["pipe", "folder", "device"])
+def test_a_study_that_is_a_pipe_a_folder_or_a_device_is_refused_at_once(tmp_path, capsys, kind):
+    import os
+
+    path = tmp_path / "study.db"
+    if kind == "pipe":
+        os.mkfifo(path)  # no writer: opening it would block for good
+    elif kind == "folder":
+        path.mkdir()
+    else:
+        path = "/dev/zero"
+    refused_in_one_line(*cli(["study", "status", path], capsys), "not a regular file")
+
+
 def to_rollback_journal(path):
     conn = sqlite3.connect(path)
     assert conn.execute("PRAGMA journal_mode = DELETE").fetchone()[0] == "delete"
