@@ -82,6 +82,8 @@ def check_store_file(path: str | os.PathLike, study: bool = False) -> None:
         if getattr(exc, "sqlite_errorcode", None) == sqlite3.SQLITE_NOTADB:
             raise RamureError(f"{path}: not a SQLite file; give a new file or a qualifier store") from None
         raise RamureError(f"{path}: not a readable SQLite database ({exc})") from None
+    except UnicodeDecodeError:  # SQLite's own message quotes a damaged schema's bytes
+        raise RamureError(f"{path}: a damaged SQLite database (its schema is not UTF-8)") from None
     if "qualifier_points" in tables and columns != _COLUMNS:
         raise RamureError(
             f"{path}: its qualifier_points table has another schema ({', '.join(columns)}); not a Ramure qualifier store"

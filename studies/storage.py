@@ -203,6 +203,7 @@ def check_study_file(path: str | os.PathLike) -> int:
         conn = open_readonly(path)
     except sqlite3.Error as exc:
         raise StudyInputError(f"{path}: cannot open it read-only ({exc})") from None
+    conn.text_factory = strict_text(path)
     try:
         version = _recognise(conn, path)
         check_values(conn, path, version)
@@ -210,9 +211,26 @@ def check_study_file(path: str | os.PathLike) -> int:
         if getattr(exc, "sqlite_errorcode", None) == sqlite3.SQLITE_NOTADB:
             raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database") from None
         raise StudyInputError(f"{path}: not a readable SQLite database ({exc})") from None
+    except UnicodeDecodeError:  # SQLite's own message quotes a damaged schema's bytes
+        raise StudyInputError(f"{path}: a damaged SQLite database (its schema is not UTF-8); not read") from None
     finally:
         conn.close()
     return version
+
+
+def strict_text(path: str | os.PathLike) -> Callable[[bytes], str]:
+    """A ``text_factory`` for study connections: SQLite stores any bytes as text, so a text that
+    is not UTF-8 (a damaged file) is refused with one line instead of an ``OperationalError``."""
+
+    def decode(data: bytes) -> str:
+        try:
+            return data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            near = data[max(0, exc.start - 12) : exc.start + 4]
+            message = f"a text stored in the study is not UTF-8 (near {near!r}); the file is damaged"
+            raise StudyInputError(f"{path}: {message}") from None
+
+    return decode
 
 
 def _recognise(conn: sqlite3.Connection, path: pathlib.Path) -> int:
@@ -381,6 +399,7 @@ class Study:
         self.conn = conn
         self.path = pathlib.Path(path)
         self.clock = clock
+        conn.text_factory = strict_text(self.path)
         self.readonly = readonly  # opened by a read command: every change is refused
         self.version = version  # a version-1 file read read-only stays version 1 (no events)
         row = conn.execute("SELECT name, budget_seconds FROM study WHERE id = 1").fetchone()
