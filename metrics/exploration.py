@@ -16,8 +16,18 @@
 >>> exp = explore("grammars/honda_sympodial.lsys", n=3, n_jobs=1, cache=False)
 >>> exp.picks.variant.shape, sorted(exp.matching)
 ((27,), ['greedy', 'optimal', 'sequential'])
->>> sorted(p.name for p in write_exploration(exp, tempfile.mkdtemp()).values())
+>>> folder = tempfile.mkdtemp()
+>>> sorted(p.name for p in write_exploration(exp, folder).values())
 ['pca.json', 'picks.json', 'variants.csv']
+>>> info = read_exploration_info(folder)
+>>> info.name, info.grammar_file.name, info.n, info.seed
+('honda_sympodial', 'honda_sympodial.lsys', 3, 0)
+
+An exploration folder may come from someone else: :func:`read_exploration_info`
+reads its ``pca.json`` as a regular UTF-8 file of bounded size, refuses values
+of the wrong type, and finds the grammar it names only among the shipped
+grammars (or a grammars folder the caller gives) or inside the exploration
+folder itself: ``"../outside/evil"`` or ``"/etc/x"`` is refused, never read.
 """
 
 from __future__ import annotations
@@ -34,7 +44,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ramure.io import open_atomic, write_text
+from ramure.errors import RamureError
+from ramure.io import inside, open_atomic, read_regular, write_text
 
 from .pca import DeltaPCA
 from .picks import Picks, match_totals, pick_variants
@@ -201,3 +212,105 @@ def write_exploration(
     write_text(paths["pca"], json.dumps(doc, indent=1))
     write_text(paths["picks"], json.dumps(exp.pick_records(images), indent=1))
     return paths
+
+
+#: Largest ``pca.json`` read (bytes); one holds a few kilobytes.
+MAX_PCA_JSON_BYTES = 4 << 20
+#: Largest derivation step count ``pca.json`` may name (the derivation has its own limits too).
+MAX_EXPLORATION_N = 1000
+
+
+@dataclass(frozen=True)
+class ExplorationInfo:
+    """What an exploration folder's ``pca.json`` says: the grammar's ``name``, its file when it
+    is found where files may be read (``grammar_file``, else None), ``n`` (None: unknown) and ``seed``."""
+
+    name: str
+    grammar_file: pathlib.Path | None
+    n: int | None
+    seed: int
+
+
+def read_exploration_info(
+    directory: str | os.PathLike, grammars_dir: str | os.PathLike | None = None, name: str | None = None
+) -> ExplorationInfo:
+    """Read and check ``directory/pca.json`` (see the module docstring); refused with one
+    :class:`~ramure.errors.RamureError` line naming the file and the value.
+
+    ``grammar`` must be text: a shipped grammar name (``"honda_sympodial"``, ``"amap/rauh"``),
+    a name of a ``.lsys`` file in ``grammars_dir`` when given, or a ``.lsys`` file inside
+    ``directory``; each resolved (links and ``..``) and checked to lie inside its folder.  A
+    name found nowhere is kept as the display name with no file.  ``n`` is an integer 0 to
+    :data:`MAX_EXPLORATION_N` or null, ``seed`` an integer or null.  Without ``pca.json``:
+    ``name`` (default: the folder's name), no n, seed 0.
+    """
+    directory = pathlib.Path(directory)
+    path = directory / "pca.json"
+    doc = _read_json(path) if path.exists() else {}
+    where = str(path)
+    if not isinstance(doc, dict):
+        raise RamureError(f"{where}: expected a JSON object, not {type(doc).__name__}")
+    grammar = doc.get("grammar", name or directory.name)
+    if not isinstance(grammar, str) or not grammar.strip() or len(grammar) > 255:
+        raise RamureError(f"{where}: 'grammar' must be a grammar name (text), not {_shown(grammar)}")
+    n, seed = doc.get("n"), doc.get("seed")
+    if n is not None and not _is_int(n, 0, MAX_EXPLORATION_N):
+        raise RamureError(f"{where}: 'n' must be an integer from 0 to {MAX_EXPLORATION_N}, not {_shown(n)}")
+    if seed is not None and not _is_int(seed, -(2**63), 2**63 - 1):
+        raise RamureError(f"{where}: 'seed' must be an integer, not {_shown(seed)}")
+    return ExplorationInfo(grammar, find_grammar(grammar, grammars_dir, directory, where), n, int(seed or 0))
+
+
+def _read_json(path: pathlib.Path) -> object:
+    data = read_regular(path, MAX_PCA_JSON_BYTES, "exploration file")
+    try:
+        return json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise RamureError(f"{path}: not UTF-8 text (byte {exc.start})") from None
+    except json.JSONDecodeError as exc:
+        raise RamureError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    except RecursionError:
+        raise RamureError(f"{path}: nested too deeply") from None
+
+
+def _is_int(value: object, low: int, high: int) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and low <= value <= high
+
+
+def _shown(value: object) -> str:
+    text = json.dumps(value) if not isinstance(value, str) else repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def find_grammar(
+    grammar: str,
+    grammars_dir: str | os.PathLike | None = None,
+    directory: str | os.PathLike | None = None,
+    where: str = "grammar",
+) -> pathlib.Path | None:
+    """The ``.lsys`` file grammar name ``grammar`` stands for, confined, or None if there is none.
+
+    Looked up among the shipped grammars (or in ``grammars_dir`` when given), then inside
+    ``directory``; a file is taken only if, links and ``..`` resolved, it lies in that folder.
+    An absolute path, ``..`` or ``~`` is refused (:class:`~ramure.errors.RamureError`).
+
+    >>> find_grammar("amap/rauh").name, find_grammar("no_such_grammar")
+    ('rauh.lsys', None)
+    """
+    from ramure import grammars
+
+    relative = pathlib.PurePosixPath(grammar.replace("\\", "/"))
+    if relative.is_absolute() or ".." in relative.parts or grammar.startswith("~"):
+        raise RamureError(
+            f"{where}: grammar {grammar!r} is not a grammar name; it must name a shipped grammar "
+            "or a file inside the exploration folder"
+        )
+    stem = str(relative)[: -len(".lsys")] if relative.suffix == ".lsys" else str(relative)
+    folders = [pathlib.Path(grammars_dir) if grammars_dir else grammars.FOLDER]
+    if directory is not None:
+        folders.append(pathlib.Path(directory))
+    for folder in folders:
+        candidate = folder / f"{stem}.lsys"
+        if candidate.is_file() and inside(candidate, folder):
+            return candidate.resolve()
+    return None

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ramure.errors import RamureError
+from ramure.io import APPLICATION_ID, open_sqlite_readonly
 
 from .qualifiers import VOCABULARY, QualifierRegions, canonical_name, rank_variants
 
@@ -51,47 +52,78 @@ SCHEMA = """CREATE TABLE IF NOT EXISTS qualifier_points (
 _COLUMNS = ["id", "grammar", "qualifier", "variant_id", "pick_id", "pc1", "pc2", "pc3", "params", "source"]
 
 
-def _check_existing(path):
-    """Refuse (one line, file untouched) a non-empty file that is not SQLite, or a database
-    with its own tables but neither a Ramure study nor a ``qualifier_points`` of our columns."""
-    if not path.is_file() or path.stat().st_size == 0:
+def check_store_file(path: str | os.PathLike, study: bool = False) -> None:
+    """Refuse, with one line and the file left byte for byte, a file Ramure did not create.
+
+    Accepted: no file, an empty one, a SQLite file carrying Ramure's application id
+    (:data:`ramure.io.APPLICATION_ID`: a study, or a store made by this version) whose
+    ``qualifier_points``, if any, has our columns, and a store made before the id
+    (application id 0 and no table but a ``qualifier_points`` of our columns).
+    ``study=True`` says the caller recognised the file as a Ramure study
+    (:func:`ramure.studies.storage.check_study_file`), also one made before the id.
+    Read with :func:`ramure.io.open_sqlite_readonly`, which writes nothing.
+    """
+    path = pathlib.Path(path)
+    if not path.exists():
         return
-    with open(path, "rb") as f:
-        if f.read(16) != b"SQLite format 3\x00":
-            raise RamureError(f"{path}: not a SQLite file; give a new file or a qualifier store")
+    if not path.is_file():
+        raise RamureError(f"{path}: not a regular file; give a new file or a qualifier store")
+    if path.stat().st_size == 0:
+        return
     try:
-        conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=10.0)
+        conn = open_sqlite_readonly(path)
         try:
+            app_id = conn.execute("PRAGMA application_id").fetchone()[0]
             tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
             columns = [r[1] for r in conn.execute("PRAGMA table_info(qualifier_points)")]
         finally:
             conn.close()
-    except sqlite3.Error as exc:
+    except sqlite3.DatabaseError as exc:
+        if getattr(exc, "sqlite_errorcode", None) == sqlite3.SQLITE_NOTADB:
+            raise RamureError(f"{path}: not a SQLite file; give a new file or a qualifier store") from None
         raise RamureError(f"{path}: not a readable SQLite database ({exc})") from None
+    except UnicodeDecodeError:  # SQLite's own message quotes a damaged schema's bytes
+        raise RamureError(f"{path}: a damaged SQLite database (its schema is not UTF-8)") from None
     if "qualifier_points" in tables and columns != _COLUMNS:
         raise RamureError(
             f"{path}: its qualifier_points table has another schema ({', '.join(columns)}); not a Ramure qualifier store"
         )
-    if tables and "qualifier_points" not in tables and "study" not in tables:
-        raise RamureError(
-            f"{path}: a database of another application (tables "
-            f"{', '.join(sorted(tables)[:5])}); give a new file or a Ramure study"
-        )
+    if app_id == APPLICATION_ID or study or tables <= {"qualifier_points"}:
+        return
+    raise RamureError(
+        f"{path}: a database Ramure did not create (application_id {app_id:#x}, tables "
+        f"{', '.join(sorted(tables)[:5])}); give a new file, a qualifier store or a Ramure study"
+    )
+
+
+def open_store(path: str | os.PathLike, study: bool = False) -> sqlite3.Connection:
+    """A connection to qualifier store ``path``, refused (unchanged) unless Ramure made it
+    (:func:`check_store_file`); a new store gets the table and Ramure's application id."""
+    path = pathlib.Path(path)
+    check_store_file(path, study)  # read-only first: a database of another application is refused
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        conn = sqlite3.connect(os.fspath(path), timeout=10.0)
+    except (sqlite3.Error, OSError) as exc:
+        raise RamureError(f"{path}: cannot open the qualifier store ({exc})") from None
+    try:
+        with conn:
+            if conn.execute("SELECT count(*) FROM sqlite_master").fetchone()[0] == 0:
+                conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+            conn.execute(SCHEMA)
+    except sqlite3.Error as exc:
+        conn.close()
+        raise RamureError(f"{path}: cannot open the qualifier store ({exc})") from None
+    return conn
 
 
 class QualifierStore:
-    """Read and write ``qualifier_points`` in one SQLite file (created if missing)."""
+    """Read and write ``qualifier_points`` in one SQLite file (created if missing; an existing
+    file only if Ramure made it, see :func:`check_store_file`)."""
 
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = pathlib.Path(path)
-        _check_existing(self.path)  # read-only first: a database of another schema is refused
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.conn = sqlite3.connect(os.fspath(self.path), timeout=10.0)
-            with self.conn:
-                self.conn.execute(SCHEMA)
-        except (sqlite3.Error, OSError) as exc:
-            raise RamureError(f"{self.path}: cannot open the qualifier store ({exc})") from None
+        self.conn = open_store(self.path)
 
     def close(self) -> None:
         self.conn.close()

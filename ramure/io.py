@@ -1,6 +1,6 @@
 """Every file Ramure writes goes through here: temporary file in the same folder, fsync, rename.
 Files from others are read through here too (:func:`read_regular`): regular files only, size
-checked before reading.
+checked before reading; SQLite files through :func:`open_sqlite_readonly`, which writes nothing.
 
 A crash, a ``kill -9`` or a full disk at any moment leaves either the previous
 file or the new one, complete, and never a partial file: the data goes to a
@@ -30,6 +30,7 @@ import contextlib
 import errno
 import os
 import pathlib
+import sqlite3
 import stat
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
@@ -258,3 +259,23 @@ def inside(path: str | os.PathLike, folder: str | os.PathLike) -> bool:
     (True, False)
     """
     return pathlib.Path(path).resolve().is_relative_to(pathlib.Path(folder).resolve())
+
+
+#: ``PRAGMA application_id`` of every SQLite file Ramure creates ("RAMU"): studies and qualifier
+#: stores.  A file holding another id belongs to another application and is never written.
+APPLICATION_ID = 0x52414D55
+
+
+def open_sqlite_readonly(path: str | os.PathLike) -> sqlite3.Connection:
+    """A read-only connection to SQLite file ``path`` that writes nothing, not even beside it.
+
+    SQLite's ``mode=ro`` alone creates ``-wal`` and ``-shm`` files beside a WAL-mode
+    file and leaves them there.  When no ``-wal`` file exists no writer has the file
+    open in WAL mode, so it is opened ``immutable=1`` (no locks, no side files);
+    otherwise ``mode=ro`` reads it alongside the live writer.  The caller closes it, soon: a
+    writer arriving later writes its WAL, which an immutable reader does not see, and the
+    main file changes only when that WAL is checkpointed (at 1000 pages, or its last close).
+    """
+    path = pathlib.Path(path)
+    live = path.with_name(path.name + "-wal").exists()
+    return sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro{'' if live else '&immutable=1'}", uri=True, timeout=10.0)

@@ -2,7 +2,10 @@
 
 Groups are rows of a boolean membership matrix (groups x 27); tests, grammars
 and participants are integer indices.  Likert answers are floats 1-4, NaN when
-unanswered.  By default only finished tests are read: an unfinished test is
+unanswered.  Qualifier texts are cut to
+:data:`~ramure.studies.qualifiers.MAX_QUALIFIER_CHARS` characters as they are read
+(a participant cannot type more), so the analysis time is bounded by the number
+of answers.  By default only finished tests are read: an unfinished test is
 work in progress, not an answer.  Tests of participants whose consent is not
 recorded (or was withdrawn) are never read.
 
@@ -27,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ramure.studies.picks import N_PICKS
+from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS
 
 if TYPE_CHECKING:
     from ramure.studies.storage import Study
@@ -76,7 +80,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
     from ramure.studies.storage import Study
 
     if isinstance(source, (str, os.PathLike)):
-        with Study.open(source) as study:
+        with Study.open(source, readonly=True) as study:
             return load_study_data(study, finished_only)
     conn = source.conn
     grammars = [r for r in conn.execute("SELECT id, name FROM grammars ORDER BY id")]
@@ -119,7 +123,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         rows = np.array([gid_row[g] for g in pairs[:, 0].tolist()])
         membership[rows, pairs[:, 1] - 1] = True
     quals = conn.execute(
-        f"SELECT q.group_id, q.text FROM qualifiers q JOIN groups g ON g.id = q.group_id "
+        f"SELECT q.group_id, substr(q.text, 1, {MAX_QUALIFIER_CHARS}) FROM qualifiers q JOIN groups g ON g.id = q.group_id "
         f"JOIN tests t ON t.id = g.test_id {where} ORDER BY q.id"
     ).fetchall()
     name = conn.execute("SELECT name FROM study").fetchone()[0]

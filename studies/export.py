@@ -25,7 +25,7 @@ import os
 import pathlib
 
 from ramure.io import open_atomic
-from ramure.studies.qualifiers import SynonymTable
+from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS, SynonymTable
 
 if TYPE_CHECKING:
     from ramure.studies.storage import Study
@@ -75,11 +75,11 @@ def export_csv(
     from ramure.studies.storage import Study
 
     if isinstance(source, (str, os.PathLike)):
-        with Study.open(source) as study:
+        with Study.open(source, readonly=True) as study:
             return export_csv(study, out_dir, synonyms)
+    table = SynonymTable.load(*(synonyms or []))  # a bad synonym file is refused before any folder is made
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    table = SynonymTable.load(*(synonyms or []))
     written = []
     for name, sql in _QUERIES.items():
         cur = source.conn.execute(sql)
@@ -87,7 +87,7 @@ def export_csv(
         rows = cur.fetchall()
         if name == "qualifiers.csv":
             header.append("canonical")
-            rows = [(*r, ";".join(table.canonical(r[-1]))) for r in rows]
+            rows = [(*r, ";".join(table.canonical(r[-1][:MAX_QUALIFIER_CHARS]))) for r in rows]
         path = out_dir / name
         with open_atomic(path, "w", newline="", encoding="utf-8") as fh:
             writer = csv.writer(fh)

@@ -26,10 +26,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ramure.io import read_regular
 from ramure.studies.errors import StudyInputError
 
 N_PICKS = 27
 PICK_IDS = tuple(range(1, N_PICKS + 1))
+#: Largest ``picks.json`` read (bytes); 27 picks take a few kilobytes.
+MAX_PICKS_JSON_BYTES = 4 << 20
 
 
 @dataclass(frozen=True)
@@ -91,15 +94,21 @@ def picks_from_data(items: Sequence[dict | Pick], where: str = "picks") -> list[
 
 
 def load_picks(directory: str | os.PathLike) -> list[Pick]:
-    """Read ``directory/picks.json``; image paths become absolute."""
+    """Read ``directory/picks.json`` (a regular UTF-8 file of at most :data:`MAX_PICKS_JSON_BYTES`);
+    image paths become absolute, and must lie inside ``directory``."""
     directory = pathlib.Path(directory)
     path = directory / "picks.json"
-    if not path.is_file():
+    if not path.exists():
         raise StudyInputError(f"{directory}: no picks.json (run the exploration first)")
+    data = read_regular(path, MAX_PICKS_JSON_BYTES, "picks file")  # no pipe, no device, bounded
     try:
-        items = json.loads(path.read_text(encoding="utf-8"))
+        items = json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise StudyInputError(f"{path}: not UTF-8 text (byte {exc.start})") from None
     except json.JSONDecodeError as exc:
         raise StudyInputError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    except RecursionError:
+        raise StudyInputError(f"{path}: nested too deeply") from None
     picks = picks_from_data(items, where=str(path))
     return [Pick(p.id, p.variant, p.pca, p.params, inside_folder(directory, p.image, str(path))) for p in picks]
 

@@ -40,6 +40,13 @@ if TYPE_CHECKING:
 
 NEGATIONS = {"pas", "not", "non", "peu", "moins", "less", "sans", "without", "ni", "no"}
 MAX_PHRASE = 4
+#: Longest qualifier text (characters) a participant may give; a stored text is cut to it when read,
+#: so the analysis of a study is bounded by its number of answers, not by the bytes in its file.
+MAX_QUALIFIER_CHARS = 200
+#: Largest synonym file read (bytes); a synonym table is a few kilobytes.
+MAX_SYNONYM_BYTES = 1 << 20
+#: Longest phrase (characters) in a synonym file.
+MAX_SYNONYM_CHARS = 200
 
 QUALIFIER_POINTS_SQL = """CREATE TABLE IF NOT EXISTS qualifier_points (
   id INTEGER PRIMARY KEY,
@@ -58,6 +65,49 @@ def normalise_text(text: str) -> str:
     return " ".join(re.sub(r"[^0-9a-z]+", " ", fold(text)).split())
 
 
+def read_synonym_file(path: str | os.PathLike) -> dict:
+    """The JSON document of synonym file ``path``, refused in one line unless it is a regular
+    UTF-8 JSON file of at most :data:`MAX_SYNONYM_BYTES` (devices, pipes and deep nesting too)."""
+    from ramure.io import read_regular
+
+    if not pathlib.Path(path).exists():
+        raise StudyInputError(f"{path}: no such synonym file")
+    data = read_regular(path, MAX_SYNONYM_BYTES, "synonym file")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise StudyInputError(f"{path}: not UTF-8 text (byte {exc.start}); save the synonym file as UTF-8") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise StudyInputError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    except RecursionError:
+        raise StudyInputError(f"{path}: nested too deeply to be a synonym table") from None
+
+
+def _check_entry(name: object, entry: object, where: str) -> None:
+    """Refuse a ``qualifiers`` entry whose name, French name or synonyms are not short text."""
+
+    def phrase(value: object) -> bool:
+        return isinstance(value, str) and len(value) <= MAX_SYNONYM_CHARS
+
+    if not phrase(name):
+        raise StudyInputError(f"{where}: qualifier name {str(name)[:40]!r} must be at most {MAX_SYNONYM_CHARS} characters")
+    if entry is None:
+        return
+    synonyms = entry.get("synonyms", []) if isinstance(entry, dict) else None
+    if not isinstance(entry, dict) or not isinstance(synonyms, list):
+        raise StudyInputError(f"{where}: qualifier {name!r} must be an object with 'fr' and a 'synonyms' list")
+    if entry.get("fr") is not None and not phrase(entry["fr"]):
+        raise StudyInputError(f"{where}: qualifier {name!r}: 'fr' must be text of at most {MAX_SYNONYM_CHARS} characters")
+    for i, value in enumerate(synonyms):
+        if not phrase(value):
+            raise StudyInputError(
+                f"{where}: qualifier {name!r}: synonym {i + 1} must be text of at most {MAX_SYNONYM_CHARS} characters, "
+                f"not {type(value).__name__}"
+            )
+
+
 class SynonymTable:
     """Canonical qualifier names with their French names and synonyms."""
 
@@ -74,13 +124,7 @@ class SynonymTable:
         for path in paths:
             if path is None:
                 continue
-            path = pathlib.Path(path)
-            if not path.is_file():
-                raise StudyInputError(f"{path}: no such synonym file")
-            try:
-                table.update(json.loads(path.read_text(encoding="utf-8")), str(path))
-            except json.JSONDecodeError as exc:
-                raise StudyInputError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+            table.update(read_synonym_file(path), str(path))
         return table
 
     def update(self, doc: dict, where: str = "synonyms") -> None:
@@ -96,12 +140,12 @@ class SynonymTable:
         entries = doc.get("qualifiers") if isinstance(doc, dict) else None
         if not isinstance(entries, dict):
             raise StudyInputError(f"{where}: expected an object with a 'qualifiers' object")
+        for name, entry in entries.items():
+            _check_entry(name, entry, where)
         english = {normalise_text(name) for name in entries} | set(self.names)
         seen: dict[str, str] = {}
         for name, entry in entries.items():
             entry = entry or {}
-            if not isinstance(entry, dict) or not isinstance(entry.get("synonyms", []), list):
-                raise StudyInputError(f"{where}: qualifier {name!r} must be an object with 'fr' and a 'synonyms' list")
             canonical = normalise_text(name).replace(" ", "-")
             if not canonical:
                 raise StudyInputError(f"{where}: empty qualifier name {name!r}")
@@ -265,13 +309,20 @@ def export_qualifier_points(rows: list[dict], store: str | os.PathLike) -> int:
 
     Rows of the same ``source`` already there are replaced, in one transaction,
     so exporting twice gives the same table.  Returns the number of rows written.
+    ``store`` must be new, a qualifier store or a Ramure study: a database of
+    another application is refused unchanged
+    (:func:`ramure.metrics.store.check_store_file`).
     """
+    from ramure.metrics.store import open_store
+    from ramure.studies.storage import check_study_file
+
     store = pathlib.Path(store)
-    store.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        conn = sqlite3.connect(os.fspath(store), timeout=10.0)
-    except sqlite3.Error as exc:
-        raise StudyInputError(f"{store}: cannot open the qualifier store ({exc})") from None
+    try:  # a Ramure study, even one made before the application id, may hold the points
+        check_study_file(store)
+        study = True
+    except StudyInputError:
+        study = False
+    conn = open_store(store, study)
     try:
         with conn:
             conn.execute(QUALIFIER_POINTS_SQL)

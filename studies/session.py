@@ -36,6 +36,7 @@ import numpy as np
 from ramure.studies.errors import StudyInputError
 from ramure.studies.likert import likert_value
 from ramure.studies.picks import N_PICKS, PICK_IDS
+from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS
 from ramure.studies.storage import log_test_event, now_iso
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -347,6 +348,10 @@ class TestSession:
         gid, _ = self._group(group)
         if not isinstance(text, str) or not text.strip():
             raise StudyInputError(f"group {group}: a qualifier must be non-empty text, got {text!r}")
+        if len(text.strip()) > MAX_QUALIFIER_CHARS:
+            raise StudyInputError(
+                f"group {group}: a qualifier is a word or a short phrase, at most {MAX_QUALIFIER_CHARS} characters"
+            )
         with self._write("add_qualifier", {"group": int(group), "text": text.strip()}) as conn:
             conn.execute("INSERT INTO qualifiers (group_id, text) VALUES (?, ?)", (gid, text.strip()))
 

@@ -4,6 +4,26 @@ Every write is one transaction (``with conn:``), foreign keys are on and the
 journal is WAL, so a crash loses at most the answer being written.  The schema
 is ``studies/schema.sql``.
 
+What makes a file Ramure's, and what is ever written to it:
+
+- A study Ramure creates carries ``PRAGMA application_id`` :data:`APPLICATION_ID`
+  ("RAMU") and ``user_version`` :data:`SCHEMA_VERSION`.  A file made before the
+  application id holds 0 there; it is recognised by its schema alone.
+- Every file is first opened read-only (:func:`open_readonly`: SQLite's
+  ``mode=ro``, and ``immutable=1`` when no ``-wal`` file exists, so that SQLite
+  creates no ``-wal``/``-shm`` beside a file it only reads) and checked
+  (:func:`check_study_file`): a whole SQLite file (``quick_check``), an
+  application id of 0 or ours, a version this Ramure reads, every table of that
+  version with exactly the columns of ``schema.sql`` (name, type, NOT NULL,
+  key), one row in ``study``, then every stored value (:data:`VALUE_RULES`,
+  the foreign keys, 27 picks per grammar).  Anything else is refused with
+  one line naming the table, row and column, and the file is left byte for byte.
+- Only then may :meth:`Study.open` reopen it for writing, switch it to WAL and
+  migrate it (stamping the application id).  ``Study.open(path, readonly=True)``,
+  used by every read command (``status``, ``analyze``, ``export-csv``, the
+  analyst window), never writes: no WAL switch, no migration (a version-1 file
+  is read as version 1, with no events).
+
 >>> import tempfile, pathlib
 >>> from ramure.studies.picks import lattice_picks
 >>> db = pathlib.Path(tempfile.mkdtemp()) / "study.db"
@@ -15,6 +35,9 @@ is ``studies/schema.sql``.
 >>> sorted(session.order()) == list(range(1, 28))
 True
 >>> study.close()
+>>> with Study.open(db, readonly=True) as study:
+...     study.participants()[0]["code"]
+'P101'
 """
 
 from __future__ import annotations
@@ -30,6 +53,7 @@ import time
 import zlib
 from importlib import resources
 
+from ramure.io import APPLICATION_ID as RAMURE_ID, open_sqlite_readonly
 from ramure.studies.errors import StudyInputError
 from ramure.studies.picks import Pick, inside_folder, load_picks, picks_from_data
 from collections.abc import Callable
@@ -68,8 +92,9 @@ def schema_sql() -> str:
     return resources.files(__package__).joinpath("schema.sql").read_text(encoding="utf-8")
 
 
-#: SQLite ``PRAGMA application_id`` of a Ramure study ("RAMU"); files made before it hold 0.
-APPLICATION_ID = 0x52414D55
+#: SQLite ``PRAGMA application_id`` of a Ramure study (:data:`ramure.io.APPLICATION_ID`, "RAMU");
+#: files made before it hold 0.
+APPLICATION_ID = RAMURE_ID
 
 
 def _schema_tables(version: int = SCHEMA_VERSION) -> set:
@@ -77,17 +102,41 @@ def _schema_tables(version: int = SCHEMA_VERSION) -> set:
     return {name for name in names if TABLE_SINCE.get(name, 1) <= version}
 
 
+def _columns(conn: sqlite3.Connection, table: str) -> list[tuple]:
+    """(name, declared type, NOT NULL, key position) of each column of ``table``."""
+    return [(r[1], r[2].upper(), r[3], r[5]) for r in conn.execute(f"PRAGMA table_info({table})")]
+
+
+_SIGNATURE: dict[str, list[tuple]] = {}
+
+
+def _signature() -> dict[str, list[tuple]]:
+    """The columns of every table of ``schema.sql``, read from an in-memory database (cached)."""
+    if not _SIGNATURE:
+        mem = sqlite3.connect(":memory:")
+        mem.executescript(schema_sql())
+        _SIGNATURE.update({name: _columns(mem, name) for name in _schema_tables()})
+        mem.close()
+    return _SIGNATURE
+
+
 def migrate(conn: sqlite3.Connection) -> None:
     """Bring an open study database to :data:`SCHEMA_VERSION`, in one transaction.
 
     Version 1 lacks the ``events`` table; ``schema.sql`` creates only what is
     missing, so running it migrates, and answers already stored are untouched.
+    A study made before the application id gets it.  Call it only on a file
+    :func:`check_study_file` accepted: it writes.
     Two processes migrating at once are serialised by ``BEGIN IMMEDIATE``.
     """
-    if conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION:
+    version, app_id = (conn.execute(f"PRAGMA {name}").fetchone()[0] for name in ("user_version", "application_id"))
+    if version == SCHEMA_VERSION and app_id == APPLICATION_ID:
         return
     try:
-        conn.executescript(f"BEGIN IMMEDIATE; {schema_sql()} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;")
+        conn.executescript(
+            f"BEGIN IMMEDIATE; {schema_sql()} PRAGMA user_version = {SCHEMA_VERSION}; "
+            f"PRAGMA application_id = {APPLICATION_ID}; COMMIT;"
+        )
     except sqlite3.Error:
         if conn.in_transaction:
             conn.rollback()
@@ -124,38 +173,70 @@ def log_event(
     )
 
 
-def check_study_file(path: str | os.PathLike) -> None:
-    """Refuse, with one line, a file that is not a study database of this version.
+def open_readonly(path: str | os.PathLike) -> sqlite3.Connection:
+    """A read-only connection to study ``path`` that writes nothing (:func:`ramure.io.open_sqlite_readonly`)."""
+    return open_sqlite_readonly(path)
 
-    Read-only: SQLite is opened with ``mode=ro``, so another application's
-    database or an empty file is never changed (no WAL switch, no header
-    written).  The file is never opened with a plain descriptor: on POSIX,
+
+def check_study_file(path: str | os.PathLike) -> int:
+    """Refuse, with one line, a file that is not a Ramure study database; return its version.
+
+    Read-only (:func:`open_readonly`): another application's database, a
+    truncated file or an empty one is never changed and gets no ``-wal``/``-shm``.
+    The file is never opened with a plain descriptor: on POSIX,
     closing one drops every lock this process holds on the file, those of its
     open study connections too, and another process would then checkpoint and
-    delete the WAL they still write into.  Checked: a SQLite file,
+    delete the WAL they still write into.  Checked: a whole SQLite file,
     ``application_id`` (:data:`APPLICATION_ID`, or 0 for files made before it),
     ``user_version`` 1 to :data:`SCHEMA_VERSION` (older ones are migrated by
-    :meth:`Study.open`), and every table of that version.
+    :meth:`Study.open`), every table of that version with the columns of
+    ``schema.sql``, one ``study`` row, and every stored value (:func:`check_values`).
     """
     path = pathlib.Path(path)
+    if path.exists() and not path.is_file():  # a folder, a pipe (opening it would block), a device
+        raise StudyInputError(f"{path}: not a regular file, so not a Ramure study database")
     if not path.is_file():
         raise StudyInputError(f"{path}: no such study file")
     if path.stat().st_size == 0:
         raise StudyInputError(f"{path}: empty file, not a Ramure study database")
     try:
-        conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=10.0)
+        conn = open_readonly(path)
     except sqlite3.Error as exc:
         raise StudyInputError(f"{path}: cannot open it read-only ({exc})") from None
+    conn.text_factory = strict_text(path)
     try:
-        app_id = conn.execute("PRAGMA application_id").fetchone()[0]
-        version = conn.execute("PRAGMA user_version").fetchone()[0]
-        tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        version = _recognise(conn, path)
+        check_values(conn, path, version)
     except sqlite3.DatabaseError as exc:
         if getattr(exc, "sqlite_errorcode", None) == sqlite3.SQLITE_NOTADB:
             raise StudyInputError(f"{path}: not a SQLite file, so not a Ramure study database") from None
         raise StudyInputError(f"{path}: not a readable SQLite database ({exc})") from None
+    except UnicodeDecodeError:  # SQLite's own message quotes a damaged schema's bytes
+        raise StudyInputError(f"{path}: a damaged SQLite database (its schema is not UTF-8); not read") from None
     finally:
         conn.close()
+    return version
+
+
+def strict_text(path: str | os.PathLike) -> Callable[[bytes], str]:
+    """A ``text_factory`` for study connections: SQLite stores any bytes as text, so a text that
+    is not UTF-8 (a damaged file) is refused with one line instead of an ``OperationalError``."""
+
+    def decode(data: bytes) -> str:
+        try:
+            return data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            near = data[max(0, exc.start - 12) : exc.start + 4]
+            message = f"a text stored in the study is not UTF-8 (near {near!r}); the file is damaged"
+            raise StudyInputError(f"{path}: {message}") from None
+
+    return decode
+
+
+def _recognise(conn: sqlite3.Connection, path: pathlib.Path) -> int:
+    app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+    version = conn.execute("PRAGMA user_version").fetchone()[0]
+    tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
     if app_id not in (0, APPLICATION_ID):
         raise StudyInputError(f"{path}: belongs to another application (application_id {app_id:#x}), not a Ramure study")
     missing = _schema_tables(version if 1 <= version <= SCHEMA_VERSION else 1) - tables
@@ -163,6 +244,123 @@ def check_study_file(path: str | os.PathLike) -> None:
         raise StudyInputError(f"{path}: not a Ramure study database (no table {', '.join(sorted(missing))})")
     if not 1 <= version <= SCHEMA_VERSION:
         raise StudyInputError(f"{path}: study database version {version}; this Ramure reads versions 1 to {SCHEMA_VERSION}")
+    for table in sorted(_schema_tables(version)):
+        if _columns(conn, table) != _signature()[table]:
+            raise StudyInputError(f"{path}: not a Ramure study database (table {table} has other columns)")
+    problems = [r[0] for r in conn.execute("PRAGMA quick_check(5)")]
+    if problems != ["ok"]:
+        raise StudyInputError(f"{path}: damaged database ({problems[0]}); not read")
+    if conn.execute("SELECT count(*), sum(id = 1) FROM study").fetchone() != (1, 1):
+        raise StudyInputError(f"{path}: table study must hold exactly one row, with id 1")
+    return version
+
+
+def _number(column: str, low: str = "-1e300", high: str = "1e300") -> str:
+    return f"typeof({column}) IN ('integer', 'real') AND {column} BETWEEN {low} AND {high}"
+
+
+def _integer(column: str, low: int, high: int) -> str:
+    return f"typeof({column}) = 'integer' AND {column} BETWEEN {low} AND {high}"
+
+
+def _text(column: str) -> str:
+    return f"typeof({column}) = 'text' AND length(trim({column})) > 0"
+
+
+def _optional(column: str, rule: str) -> str:
+    return f"{column} IS NULL OR ({rule})"
+
+
+_LIKERT = "an integer from 1 to 4, or empty"
+_TIME = "non-empty text (a UTC time)"
+_ROW_ID = 2**53
+
+#: What every stored value must be, checked at each open: (table, column, SQL condition, wording).
+#: SQLite keeps any type in any column and a CHECK can be bypassed, so the schema alone proves nothing.
+VALUE_RULES: tuple[tuple[str, str, str, str], ...] = (
+    ("study", "name", _text("name"), "non-empty text"),
+    ("study", "budget_seconds", _number("budget_seconds", "1e-3", "1e9"), "a number of seconds from 0.001 to 1e9"),
+    ("study", "created_at", _text("created_at"), _TIME),
+    ("grammars", "id", _integer("id", 1, _ROW_ID), "a positive integer"),
+    ("grammars", "name", _text("name"), "non-empty text"),
+    ("grammars", "source", _optional("source", "typeof(source) = 'text'"), "text (a folder), or empty"),
+    ("picks", "grammar_id", "typeof(grammar_id) = 'integer'", "an integer"),
+    ("picks", "pick_id", _integer("pick_id", 1, 27), "an integer from 1 to 27"),
+    ("picks", "variant_id", _integer("variant_id", 0, _ROW_ID), "a non-negative integer"),
+    *((("picks", pc, _number(pc), "a finite number")) for pc in ("pc1", "pc2", "pc3")),
+    ("picks", "params", "typeof(params) = 'text'", "JSON text"),
+    ("picks", "image", _optional("image", "typeof(image) = 'text'"), "text (a path), or empty"),
+    ("participants", "id", _integer("id", 1, _ROW_ID), "a positive integer"),
+    ("participants", "code", "typeof(code) = 'text' AND length(code) BETWEEN 1 AND 32", "text of 1 to 32 characters"),
+    ("participants", "seed", _integer("seed", -(2**63), 2**63 - 1), "an integer"),
+    ("participants", "consent", _integer("consent", 0, 1), "0 or 1"),
+    ("participants", "created_at", _text("created_at"), _TIME),
+    ("tests", "id", _integer("id", 1, _ROW_ID), "a positive integer"),
+    ("tests", "participant_id", "typeof(participant_id) = 'integer'", "an integer"),
+    ("tests", "grammar_id", "typeof(grammar_id) = 'integer'", "an integer"),
+    ("tests", "started_at", _text("started_at"), _TIME),
+    ("tests", "finished_at", _optional("finished_at", _text("finished_at")), "a UTC time, or empty"),
+    ("tests", "elapsed_seconds", _number("elapsed_seconds", "0", "1e9"), "a number of seconds from 0 to 1e9"),
+    ("groups", "id", _integer("id", 1, _ROW_ID), "a positive integer"),
+    ("groups", "test_id", "typeof(test_id) = 'integer'", "an integer"),
+    ("groups", "label", _integer("label", 1, 27), "an integer from 1 to 27"),
+    ("groups", "representative", _optional("representative", _integer("representative", 1, 27)), "a pick from 1 to 27, or empty"),
+    *(("groups", name, _optional(name, _integer(name, 1, 4)), _LIKERT) for name in ("usefulness", "difference")),
+    ("groups", "representative_quality", _optional("representative_quality", _integer("representative_quality", 1, 4)), _LIKERT),
+    ("group_images", "group_id", "typeof(group_id) = 'integer'", "an integer"),
+    ("group_images", "pick_id", _integer("pick_id", 1, 27), "an integer from 1 to 27"),
+    (
+        "group_images",
+        "test_id",
+        "test_id IS (SELECT g.test_id FROM groups g WHERE g.id = group_images.group_id)",
+        "the test of its group",
+    ),
+    ("qualifiers", "group_id", "typeof(group_id) = 'integer'", "an integer"),
+    ("qualifiers", "text", _text("text"), "non-empty text"),
+    ("events", "participant_id", "typeof(participant_id) = 'integer'", "an integer"),
+    ("events", "test_id", _optional("test_id", "typeof(test_id) = 'integer'"), "an integer, or empty"),
+    ("events", "at", _text("at"), _TIME),
+    ("events", "elapsed_seconds", _optional("elapsed_seconds", _number("elapsed_seconds", "0", "1e9")), "seconds, or empty"),
+    ("events", "action", _text("action"), "non-empty text"),
+    ("events", "detail", "typeof(detail) = 'text'", "JSON text"),
+)
+
+
+def _refuse_value(path, table, row, column, wording, value) -> StudyInputError:
+    shown = value if len(str(value)) <= 40 else f"{str(value)[:37]}..."
+    return StudyInputError(f"{path}: table {table}, row {row}: {column} must be {wording}, not {shown}")
+
+
+def check_values(conn: sqlite3.Connection, path: str | os.PathLike, version: int = SCHEMA_VERSION) -> None:
+    """Refuse a study whose stored values are not what Ramure writes, naming table, row and column.
+
+    Checks :data:`VALUE_RULES`, the foreign keys, the 27 picks of each grammar and
+    each pick's ``params`` (a JSON object with a ``rule``), in a few queries.
+    """
+    tables = _schema_tables(version)
+    for table, column, rule, wording in VALUE_RULES:
+        if table not in tables:
+            continue
+        bad = conn.execute(f"SELECT rowid, quote({column}) FROM {table} WHERE ({rule}) IS NOT 1 LIMIT 1").fetchone()
+        if bad is not None:
+            raise _refuse_value(path, table, bad[0], column, wording, bad[1])
+    for table, row, parent, key in conn.execute("PRAGMA foreign_key_check"):
+        if table in tables:
+            column = next(r[3] for r in conn.execute(f"PRAGMA foreign_key_list({table})") if r[0] == key)
+            raise StudyInputError(f"{path}: table {table}, row {row}: {column} names no row of table {parent}")
+    short = conn.execute(
+        "SELECT g.name, count(p.pick_id) FROM grammars g LEFT JOIN picks p ON p.grammar_id = g.id "
+        "GROUP BY g.id HAVING count(DISTINCT p.pick_id) != 27 LIMIT 1"
+    ).fetchone()
+    if short is not None:
+        raise StudyInputError(f"{path}: table picks: grammar {short[0]!r} has {short[1]} picks, not the 27 ids 1-27")
+    for row, params in conn.execute("SELECT rowid, params FROM picks"):
+        try:
+            decoded = json.loads(params)
+        except ValueError:
+            decoded = None
+        if not isinstance(decoded, dict) or "rule" not in decoded or not isinstance(decoded.get("constants", {}), dict):
+            raise _refuse_value(path, "picks", row, "params", "a JSON object with a 'rule'", repr(params))
 
 
 def is_database_file(db: str | os.PathLike, path: str | os.PathLike) -> bool:
@@ -183,11 +381,6 @@ def is_database_file(db: str | os.PathLike, path: str | os.PathLike) -> bool:
     return False
 
 
-def _has_study(conn) -> bool:
-    row = conn.execute("SELECT name FROM sqlite_master WHERE type='table' AND name='study'").fetchone()
-    return row is not None and conn.execute("SELECT count(*) FROM study").fetchone()[0] == 1
-
-
 class Study:
     """A study database: grammars x 27 picks, participants, one test per grammar each.
 
@@ -195,10 +388,20 @@ class Study:
     ``clock`` (seconds, monotonic) times the participants' budget; tests pass a fake.
     """
 
-    def __init__(self, conn: sqlite3.Connection, path: str | os.PathLike, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        conn: sqlite3.Connection,
+        path: str | os.PathLike,
+        clock: Callable[[], float] = time.monotonic,
+        readonly: bool = False,
+        version: int = SCHEMA_VERSION,
+    ) -> None:
         self.conn = conn
         self.path = pathlib.Path(path)
         self.clock = clock
+        conn.text_factory = strict_text(self.path)
+        self.readonly = readonly  # opened by a read command: every change is refused
+        self.version = version  # a version-1 file read read-only stays version 1 (no events)
         row = conn.execute("SELECT name, budget_seconds FROM study WHERE id = 1").fetchone()
         self.name, self.budget_seconds = row[0], float(row[1])
 
@@ -230,16 +433,12 @@ class Study:
         # Read every grammar before touching the disk, so a bad one leaves no file.
         loaded = {gname: _read_grammar(gname, spec) for gname, spec in (grammars or {}).items()}
         if path.exists() and path.stat().st_size > 0:
-            conn = sqlite3.connect(os.fspath(path))
             try:
-                exists = _has_study(conn)
-            except sqlite3.DatabaseError:
-                raise StudyInputError(f"{path}: exists and is not a SQLite file") from None
-            finally:
-                conn.close()
-            if exists:
-                raise StudyInputError(f"{path}: already holds a study; open it instead")
-            raise StudyInputError(f"{path}: exists and is not a study; choose a new file")
+                check_study_file(path)
+            except StudyInputError as exc:
+                kind = "is not a SQLite file" if "not a SQLite file" in str(exc) else "is not a study"
+                raise StudyInputError(f"{path}: exists and {kind}; choose a new file") from None
+            raise StudyInputError(f"{path}: already holds a study; open it instead")
         path.parent.mkdir(parents=True, exist_ok=True)
         conn = connect(path, durable)
         conn.executescript(schema_sql())
@@ -255,26 +454,35 @@ class Study:
         return cls(conn, path, clock)
 
     @classmethod
-    def open(cls, path: str | os.PathLike, clock: Callable[[], float] = time.monotonic, durable: bool = True) -> Study:
+    def open(
+        cls, path: str | os.PathLike, clock: Callable[[], float] = time.monotonic, durable: bool = True, readonly: bool = False
+    ) -> Study:
         """Open an existing study file (refused with a clear message otherwise).
 
-        A file of an older schema version is migrated in place (see :func:`migrate`).
+        The file is checked read-only first (:func:`check_study_file`): a file that
+        is not a Ramure study is refused unchanged.  ``readonly=True`` (read
+        commands) keeps that read-only connection: nothing is ever written.
+        Otherwise the file is reopened for writing, in WAL mode, and a file of an
+        older schema version is migrated in place (see :func:`migrate`).
         """
         path = pathlib.Path(path)
-        check_study_file(path)  # read-only: a file that is not ours is never changed
-        conn: sqlite3.Connection | None = None
+        version = check_study_file(path)  # read-only: a file that is not ours is never changed
         try:
+            if readonly:
+                return cls(open_readonly(path), path, clock, readonly=True, version=version)
             conn = connect(path, durable)
-            ok = _has_study(conn)
-            if ok:
-                migrate(conn)
-        except sqlite3.DatabaseError:
-            ok = False
-        if not ok or conn is None:
-            if conn is not None:
-                conn.close()
-            raise StudyInputError(f"{path}: not a Ramure study database")
-        return cls(conn, path, clock)
+        except sqlite3.Error as exc:
+            raise StudyInputError(f"{path}: cannot open the study ({exc})") from None
+        try:
+            migrate(conn)
+            return cls(conn, path, clock)
+        except sqlite3.Error as exc:
+            conn.close()
+            raise StudyInputError(f"{path}: cannot open the study for writing ({exc})") from None
+
+    def _writable(self) -> None:
+        if self.readonly:
+            raise StudyInputError(f"{self.path}: opened read-only; open it again for writing to change it")
 
     def close(self) -> None:
         self.conn.close()
@@ -293,6 +501,7 @@ class Study:
 
     def add_grammar(self, name: str, spec: object) -> None:
         """Add one grammar (exploration directory or plain pick data)."""
+        self._writable()
         source, picks = _read_grammar(name, spec)
         with self.conn:
             _insert_grammar(self.conn, name, source, picks)
@@ -338,6 +547,7 @@ class Study:
 
         ``seed`` fixes the image order of their tests (default: from the code).
         """
+        self._writable()
         if code is None:
             taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
             number = 101
@@ -371,6 +581,7 @@ class Study:
         answers are left out of the analysis and exports (but kept on disk; use
         :meth:`delete_participant` to erase them).
         """
+        self._writable()
         pid = self._participant(code)[0]
         with self.conn:
             self.conn.execute(
@@ -380,6 +591,7 @@ class Study:
 
     def delete_participant(self, code: str) -> None:
         """Erase participant ``code`` and every answer they gave (one transaction)."""
+        self._writable()
         pid = self._participant(code)[0]
         with self.conn:
             self.conn.execute("DELETE FROM participants WHERE id = ?", (pid,))
@@ -423,6 +635,7 @@ class Study:
         """
         from ramure.studies.session import TestSession
 
+        self._writable()
         pid, seed, consent = self._participant(code)
         gid = self.grammar_id(grammar)
         if not consent:
@@ -464,15 +677,26 @@ class Study:
         Each event: participant, grammar (None for consent), ``at`` (UTC, ms), the
         test's ``elapsed_seconds`` then, ``action`` and its ``detail`` (a dict).
         """
+        if self.version < TABLE_SINCE["events"]:
+            return []  # a version-1 study read read-only: it logged no events
         where, args = ("WHERE p.code = ?", (str(code),)) if code is not None else ("", ())
         rows = self.conn.execute(
-            "SELECT p.code, g.name, e.at, e.elapsed_seconds, e.action, e.detail FROM events e "
+            "SELECT p.code, g.name, e.at, e.elapsed_seconds, e.action, e.detail, e.id FROM events e "
             "JOIN participants p ON p.id = e.participant_id LEFT JOIN tests t ON t.id = e.test_id "
             f"LEFT JOIN grammars g ON g.id = t.grammar_id {where} ORDER BY e.id",
             args,
         )
         keys = ("participant", "grammar", "at", "elapsed_seconds", "action")
-        return [dict(zip(keys, r[:5]), detail=json.loads(r[5])) for r in rows]
+        return [dict(zip(keys, r[:5]), detail=self._detail(r[6], r[5])) for r in rows]
+
+    def _detail(self, row: int, text: str) -> dict:
+        try:
+            detail = json.loads(text)
+        except ValueError:
+            detail = None
+        if not isinstance(detail, dict):
+            raise _refuse_value(self.path, "events", row, "detail", "a JSON object", repr(text))
+        return detail
 
     def tests(self) -> list[dict]:
         """Every test: participant, grammar, finished or not, elapsed seconds."""

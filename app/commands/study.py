@@ -177,7 +177,7 @@ def run_export_qualifiers(args: argparse.Namespace) -> int:
 def run_status(args: argparse.Namespace) -> int:
     from ramure.studies.storage import Study
 
-    with Study.open(args.db) as study:
+    with Study.open(args.db, readonly=True) as study:
         tests = study.tests()
         return _print(
             dict(

@@ -91,7 +91,7 @@ class AnalystWindow(QWidget):
         if path is None:
             return None
         try:
-            with Study.open(path) as study:
+            with Study.open(path, readonly=True) as study:
                 people = study.participants()
                 name, grammars = study.name, study.grammars
         except RamureError as exc:

@@ -110,31 +110,32 @@ def pick_images(study: Study, grammar: str, size: int = ICON, grammars_dir: str 
 
 
 def _study_grammar(study, grammar, grammars_dir=None):
-    """The LSystem, n and seed to draw a study grammar's picks with (None if not found)."""
-    import json
+    """The LSystem, n and seed to draw a study grammar's picks with (None if not found).
 
+    The exploration folder's ``pca.json`` is read by
+    :func:`ramure.metrics.exploration.read_exploration_info`: the grammar it names is read
+    only from the grammars folder or from inside the exploration folder, and that folder
+    (named by the database) only if it lies inside the study's own folder, as its pictures
+    do; otherwise the grammar is looked up by its name.  A participant's window does not
+    show the experimenter's file errors: a refused ``pca.json`` draws nothing, and the
+    stored pictures (or placeholders) stand in.
+    """
+    from ramure.io import inside
     from ramure.lsys import LSystem
+    from ramure.metrics.exploration import ExplorationInfo, find_grammar, read_exploration_info
 
     try:
         recorded = study.grammar_source(grammar)
+        if recorded and inside(recorded, study.path.parent):
+            info = read_exploration_info(recorded, grammars_dir, name=grammar)
+        else:
+            info = ExplorationInfo(grammar, find_grammar(grammar, grammars_dir), None, 0)
+        if info.grammar_file is None:
+            return None, None, 0
+        lsystem = LSystem.from_file(info.grammar_file)
     except RamureError:
         return None, None, 0
-    source = pathlib.Path(recorded) if recorded else None
-    info = {}
-    if source is not None and (source / "pca.json").is_file():
-        try:
-            info = json.loads((source / "pca.json").read_text(encoding="utf-8"))
-        except ValueError:
-            info = {}
-    folder = pathlib.Path(grammars_dir) if grammars_dir else pathlib.Path(__file__).resolve().parents[2] / "grammars"
-    path = folder / f"{info.get('grammar', grammar)}.lsys"
-    if not path.is_file():
-        return None, None, 0
-    try:
-        lsystem = LSystem.from_file(path)
-    except RamureError:
-        return None, None, 0
-    return lsystem, int(info.get("n") or lsystem.n), int(info.get("seed") or 0)
+    return lsystem, info.n if info.n is not None else lsystem.n, info.seed
 
 
 # -- drag and drop lists -----------------------------------------------------------------
@@ -596,7 +597,7 @@ class ParticipantWindow(QWidget):
         def work(progress, cancelled):
             from ramure.studies import Study
 
-            study = Study.open(path)  # a connection of this thread
+            study = Study.open(path, readonly=True)  # a connection of this thread, that only reads
             try:
                 return pick_images(study, grammar, grammars_dir=self.grammars_dir)
             finally:

@@ -14,7 +14,7 @@ feature to hide.
 from __future__ import annotations
 
 import csv
-import json
+import io
 import os
 import pathlib
 import threading
@@ -132,7 +132,9 @@ def qualifier_boxes(exploration: Exploration, per_qualifier: int = 10) -> dict[s
 
 def load_exploration(directory: str | os.PathLike) -> VariantSet:
     """Read an exploration directory: ``picks.json`` (required, read by :func:`ramure.studies.load_picks`),
-    ``variants.csv`` (the cloud) and ``pca.json`` (grammar name, n, seed)."""
+    ``variants.csv`` (the cloud) and ``pca.json`` (grammar name, n, seed: read by
+    :func:`ramure.metrics.exploration.read_exploration_info`)."""
+    from ramure.metrics.exploration import read_exploration_info
     from ramure.studies import load_picks
 
     directory = pathlib.Path(directory)
@@ -140,29 +142,31 @@ def load_exploration(directory: str | os.PathLike) -> VariantSet:
         {"id": p.id, "variant": p.variant, "pca": list(p.pca), "params": p.params, **({"image": p.image} if p.image else {})}
         for p in load_picks(directory)
     ]
-    info = {}
-    pca = directory / "pca.json"
-    if pca.is_file():
-        try:
-            info = json.loads(pca.read_text(encoding="utf-8"))
-        except json.JSONDecodeError:
-            info = {}
+    info = read_exploration_info(directory)  # checked: a value of the wrong type is refused in one line
     points = _cloud(directory / "variants.csv")
-    return VariantSet(
-        str(info.get("grammar", directory.name)), picks, points, info.get("n"), int(info.get("seed", 0) or 0), directory=directory
-    )
+    return VariantSet(info.name, picks, points, info.n, info.seed, directory=directory)
+
+
+#: Largest ``variants.csv`` read (bytes): a sweep of 100,000 variants is about 60 MB.
+MAX_VARIANTS_CSV_BYTES = 256 << 20
 
 
 def _cloud(path):
-    if not path.is_file():
+    from ramure.io import read_regular
+
+    if not path.exists():
         return None
+    data = read_regular(path, MAX_VARIANTS_CSV_BYTES, "variants file")  # no pipe, no device, bounded
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise RamureError(f"{path}: not UTF-8 text (byte {exc.start})") from None
     rows = []
-    with open(path, newline="", encoding="utf-8") as f:
-        for row in csv.DictReader(f):
-            try:
-                rows.append([float(row["pc1"]), float(row["pc2"]), float(row["pc3"])])
-            except (KeyError, ValueError):
-                rows.append([np.nan] * 3)
+    for row in csv.DictReader(io.StringIO(text, newline="")):
+        try:
+            rows.append([float(row["pc1"]), float(row["pc2"]), float(row["pc3"])])
+        except (KeyError, TypeError, ValueError):  # a missing column, a short row, not a number
+            rows.append([np.nan] * 3)
     return np.asarray(rows, float) if rows else None
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import warnings
 
@@ -242,3 +243,43 @@ def test_a_double_click_on_finish_cannot_finish_the_next_grammar(qtbot, three_gr
     assert win.progress_label.text() == "Grammar 2 of 3"
     assert win.page.session.groups() == [] and not win.page.session.finished
     win.close()
+
+
+# -- issue 37, item 4: pca.json confined ------------------------------------------------------
+def exploration_study(folders, doc, db="study.db"):
+    """A study ``folders/db`` whose grammar's picks come from ``folders/explore`` (its ``pca.json`` is ``doc``)."""
+    explore = folders / "explore"
+    picks = [dict(id=p.id, variant=p.variant, pca=list(p.pca), params={"rule": None, "constants": {}}) for p in lattice_picks()]
+    (explore / "picks.json").write_text(json.dumps(picks))
+    (explore / "pca.json").write_text(json.dumps(doc))
+    (folders / db).parent.mkdir(exist_ok=True)
+    return Study.create(folders / db, grammars={"honda": explore})
+
+
+@pytest.mark.parametrize(
+    "doc, db, reads",
+    [
+        ({"grammar": "../outside/evil", "n": 2}, "study.db", False),
+        ({"grammar": "evil", "n": "lots"}, "study.db", False),
+        ({"grammar": "evil", "n": 2}, "study.db", True),
+        ({"grammar": "evil", "n": 2}, "elsewhere/study.db", False),  # the exploration is outside the study's folder
+    ],
+)
+def test_the_study_panel_reads_no_grammar_outside_its_folders(qapp, tmp_path, monkeypatch, doc, db, reads):
+    """The grammars folder here is ``outside``: ``evil`` names a grammar there, ``../outside/evil`` does not."""
+    folders = tmp_path
+    for sub in ("explore", "outside"):
+        (folders / sub).mkdir()
+    (folders / "outside" / "evil.lsys").write_text("n: 2\nw: A\np:\n  A -> F[+A]A\n")
+    from ramure.app.desktop.study import pick_images
+    from ramure.lsys import LSystem
+
+    read = []
+    real = LSystem.from_file.__func__
+    monkeypatch.setattr(
+        LSystem, "from_file", classmethod(lambda cls, path, *a, **k: read.append(path) or real(cls, path, *a, **k))
+    )
+    with exploration_study(folders, doc, db) as study:
+        images = pick_images(study, "honda", size=16, grammars_dir=folders / "outside")
+    assert sorted(images) == list(range(1, 28))
+    assert [p.name for p in read] == (["evil.lsys"] if reads else [])  # refused: placeholders, the file never read

@@ -273,3 +273,23 @@ def test_cut_fruit_open_shows_their_inside(make_window, qtbot, artifacts):
     w.view.grab_image().save(str(artifacts / "desktop_fruit_cut.png"))
     w.variants.cut_toggle.trigger()
     qtbot.waitUntil(lambda: w.view.fruit is not None and w.view.fruit.n_cells == whole.n_cells, timeout=30000)
+
+
+@pytest.mark.parametrize(
+    "doc, words",
+    [({"seed": "abc"}, "'seed' must be an integer, not 'abc'"), ({"n": [3]}, "'n' must be an integer"), ([], "JSON object")],
+)
+def test_open_exploration_refuses_pca_json_values_of_the_wrong_type(make_window, tmp_path, doc, words):
+    import json
+
+    from ramure.studies import lattice_picks
+
+    picks = [dict(id=p.id, variant=p.variant, pca=list(p.pca), params=p.params) for p in lattice_picks()]
+    (tmp_path / "picks.json").write_text(json.dumps(picks))
+    (tmp_path / "pca.json").write_text(json.dumps(doc))
+    w = make_window(n=2)
+    assert w.variants.open_exploration(tmp_path) is None and words in w.last_message
+    assert w.variants.variant_set is None
+    (tmp_path / "pca.json").write_text(json.dumps({"grammar": "mine", "n": 3, "seed": 2}))
+    vs = w.variants.open_exploration(tmp_path)
+    assert (vs.name, vs.n, vs.seed, vs.points) == ("mine", 3, 2, None)
