@@ -372,7 +372,8 @@ class PlantView(QWidget):
         self.hairlines.forget_kept()
 
     def show_plant(self, snap: Snapshot, colors: np.ndarray, reset_camera: bool | None = None) -> None:
-        """Draw ``snap``'s mesh with per-cell ``colors`` (uint8 RGB)."""
+        """Draw ``snap``'s mesh with per-cell ``colors`` (uint8 RGB); ``reset_camera``: frame the
+        whole plant (else the camera stays where it is, except for the first plant)."""
         if snap is not self.snapshot:
             self.hidden_cells = None  # another plant version: other cells
         self.snapshot = snap
@@ -394,16 +395,12 @@ class PlantView(QWidget):
         bounds = self.plant_bounds()
         self.ground.show(bounds)
         self.picker = None
-        diag = float(np.linalg.norm(np.subtract(*np.reshape(bounds, (3, 2)).T)))
-        if reset_camera is None:  # frame again when the plant leaves the view or shrinks a lot
-            reset_camera = (
-                self._diag is None
-                or self.auto_framed
-                or diag / max(self._diag, 1e-12) < 0.4
-                or scene.outside_view(self.plotter, bounds)
-            )
-        if reset_camera:
+        # The camera holds still on an edit, so the plant before and after can be compared; it
+        # frames the plant only when asked (Home, an opened file, a change of n) or the first time.
+        if reset_camera or self._diag is None:
             self.reset_camera()
+        else:  # the same camera sees the whole new plant: nothing of it clipped away
+            self.reset_clipping()
         self.draft()
         self.redraw()
 
@@ -443,6 +440,14 @@ class PlantView(QWidget):
             self._diag = float(np.linalg.norm(np.subtract(*np.reshape(bounds, (3, 2)).T)))
         self.auto_framed = True
         self.redraw()
+
+    def reset_clipping(self) -> None:
+        """The camera's near and far planes around everything shown (the camera does not move)."""
+        clip = self.shown_bounds()
+        if clip is None:
+            self.plotter.renderer.ResetCameraClippingRange()
+        else:
+            self.plotter.renderer.ResetCameraClippingRange(*clip)
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
         """A new size (the window's first layout, a dock moved): keep the plant framed until the

@@ -348,8 +348,13 @@ class MainWindow(QMainWindow):
 
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap: Snapshot, reset_camera: bool | None = None) -> None:
-        """A new plant version: redraw the 3D view and every view of the plant."""
-        old = getattr(self.view.snapshot, "skeleton", None)  # compared after the frame (no copy)
+        """A new plant version: redraw the 3D view and every view of the plant.  The camera
+        stays where it is on an edit; ``reset_camera`` None frames the plant again only when
+        the derivation count changed (a plant of another size)."""
+        shown = self.view.snapshot
+        old = getattr(shown, "skeleton", None)  # compared after the frame (no copy)
+        if reset_camera is None:
+            reset_camera = shown is not None and shown.n != snap.n
         self.base_colors = state.base_colors(snap.mesh)
         self.fruit_leaves = state.fruit_leaves(snap.mesh)
         self.view.show_plant(snap, self.plant_colors(snap.selection), reset_camera)
@@ -564,6 +569,19 @@ class MainWindow(QMainWindow):
             self.view.reset_camera()
         elif job.name.startswith(("regrow", "prune")) and job.error is None:
             self.after_regrow(job)
+        elif job.name in ("undo", "redo") and job.error is None:
+            self.after_history(job.result)
+
+    def after_history(self, note: str) -> None:
+        """After Undo or Redo: say what it did; the editor shows the model's text again, without
+        the error of text typed since (an undo took that text back)."""
+        snap = self.controller.snapshot
+        if snap.error is None and not self.editor.pending():
+            self.shown_text = snap.text
+            self.editor.replace_text(snap.text)
+            self.editor.show_error(None)
+        self.regen.set_note(note)
+        self.status(note, 8000)
 
     def after_regrow(self, job: Job) -> None:
         """Say what the regrow did; on a deterministic grammar, say why nothing changed."""
