@@ -107,3 +107,48 @@ def test_a_stale_grammar_error_goes_with_an_undo_that_fixed_the_text(make_window
     assert w.editor.text() == ex.document_text() and "zz" not in w.editor.text()
     assert w.editor.error is None and w.editor.message.text() == "" and w.editor.underlined() is None
     assert not w.windowTitle().endswith("* — Ramure") and "*" not in w.windowTitle()
+
+
+def pick_only(view, actor, x, y):
+    """(cell, world point) of ``actor`` alone under display ``(x, y)``, or (-1, None)."""
+    from vtkmodules.vtkRenderingCore import vtkCellPicker
+
+    from ramure.app.desktop import view as view_module
+
+    picker = vtkCellPicker()
+    picker.SetTolerance(view_module.PICK_TOLERANCE)
+    picker.PickFromListOn()
+    picker.AddPickList(actor)
+    picker.AddLocator(view_module._locator(actor.GetMapper().GetInput()))
+    if not picker.Pick(float(x), float(y), 0.0, view.plotter.renderer):
+        return -1, None
+    return int(picker.GetCellId()), np.array(picker.GetPickPosition())
+
+
+def test_a_click_on_a_fruit_where_its_twig_crosses_it_picks_the_fruit(make_window, qtbot):
+    from desktop_helpers import ROOT
+
+    w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=5)
+    w.fruit_action.setChecked(True)  # volumetric fruit replace the spheres
+    qtbot.waitUntil(lambda: w.view.fruit is not None, timeout=60000)
+    QTest.keyClick(w.view.plotter, Qt.Key.Key_4, CTRL)  # the iso view: twigs cross their fruit
+    settle(qtbot, w)
+    view, ex = w.view, w.controller.explorer
+    leaf = np.asarray(view.fruit.cell_data["leaf_id"])
+    centres = np.asarray(view.fruit.cell_centers().points)
+    kind = np.asarray(view.mesh.cell_data["kind"])
+    crossings = []  # display points on a fruit where a branch inside the fruit's box is hit first
+    for f in np.unique(leaf):
+        box = centres[leaf == f]
+        lo, hi = view.project(box).min(axis=0), view.project(box).max(axis=0)
+        for fx in (0.3, 0.5, 0.7):
+            for fy in (0.3, 0.5, 0.7):
+                x, y = lo + (hi - lo) * (fx, fy)
+                cell, point = pick_only(view, view.actor, x, y)
+                if cell >= 0 and kind[cell] == 0 and (point >= box.min(axis=0)).all() and (point <= box.max(axis=0)).all():
+                    if pick_only(view, view.fruit_actor, x, y)[0] >= 0:
+                        crossings.append((int(f), x, y))
+    assert len(crossings) >= 3
+    for f, x, y in crossings:
+        QTest.mouseClick(view.plotter, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, view.to_widget(x, y))
+        assert ex.selection == [f]  # before: the twig's leaf
