@@ -66,13 +66,13 @@ class GalleryView(QWidget):
         self.list.setMovement(QListView.Movement.Static)
         self.list.setSpacing(4)
         self.list.itemClicked.connect(self._clicked)
-        top = QHBoxLayout()
-        top.addWidget(self.note, 1)
-        top.addWidget(self.explore_button)
-        top.addWidget(self.open_button)
+        buttons = QHBoxLayout()  # under the note: the dock stays narrow beside the plant
+        buttons.addWidget(self.explore_button)
+        buttons.addWidget(self.open_button)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(top)
+        layout.addWidget(self.note)
+        layout.addLayout(buttons)
         layout.addWidget(self.list, 1)
         self.picks: list[dict] = []
 

@@ -244,6 +244,7 @@ class VariantsController:
             vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks], base=self.constants
         )
         w.pca_view.set_variants(vs)
+        w.open_dock("gallery")  # the picks, in front of the regeneration panel
         qualifier_map.attach(w).set_variants(vs)
         w.regen.qualifier_note.setText(
             "" if vs.exploration is not None else "A qualifier explores this grammar's variants first."

@@ -53,6 +53,15 @@ KINSHIP_HINT = (
     "to blue = related only through the first derivation steps"
 )
 T = TypeVar("T")
+#: The docks by task: tabs in each group (the first one raised).
+DOCK_GROUPS = {
+    "left": ("grammar", "constants"),
+    "right": ("regeneration", "gallery", "details", "pca", "architecture", "wood", "defects"),
+    "bottom": ("string", "cut"),  # side by side when both are open
+}
+DOCK_WIDTH = 280  # each side column at the default size: the plant keeps over half of 1400 x 880
+#: Docks used less often: closed at start, opened from the View menu.
+CLOSED_AT_START = ("pca", "architecture", "wood", "defects", "string", "cut")
 
 BUSY = "Computing…"
 SAME_PLANT = (
@@ -104,26 +113,23 @@ class MainWindow(QMainWindow):
         self.qualifier_map: QualifierMapView | None = None  # made by qualifier_map.attach when first used
         self.docks: dict[str, QDockWidget] = {}
         self.setTabPosition(Qt.DockWidgetArea.AllDockWidgetAreas, QTabWidget.TabPosition.North)
-        self._dock("grammar", "Grammar", self.editor, Qt.DockWidgetArea.LeftDockWidgetArea)
-        self._dock("constants", "Constants", self.constants_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
-        self._dock("regeneration", "Regeneration", self.regen, Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("string", "String", self.string_view, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._dock("cut", "Cut graph", self.cut_view, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._dock("gallery", "Variant gallery", self.gallery, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._dock("pca", "PCA cloud", self.pca_view, Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("architecture", "Architecture", ArchitecturePanel(self.controller), Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("wood", "Wood", WoodPanel(self.controller), Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("details", "Details", DetailsPanel(self.controller, self), Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("defects", "Defects", DefectsPanel(self.controller, self), Qt.DockWidgetArea.RightDockWidgetArea)
-        self.tabifyDockWidget(self.docks["string"], self.docks["cut"])
-        self.tabifyDockWidget(self.docks["cut"], self.docks["gallery"])
-        self.docks["string"].raise_()
-        self.tabifyDockWidget(self.docks["regeneration"], self.docks["pca"])
-        self.tabifyDockWidget(self.docks["pca"], self.docks["architecture"])
-        self.tabifyDockWidget(self.docks["architecture"], self.docks["wood"])
-        self.tabifyDockWidget(self.docks["wood"], self.docks["details"])
-        self.tabifyDockWidget(self.docks["details"], self.docks["defects"])
-        self.docks["regeneration"].raise_()
+        left, right, bottom = (
+            Qt.DockWidgetArea.LeftDockWidgetArea,
+            Qt.DockWidgetArea.RightDockWidgetArea,
+            Qt.DockWidgetArea.BottomDockWidgetArea,
+        )
+        self._dock("grammar", "Grammar", self.editor, left)
+        self._dock("constants", "Constants", self.constants_panel, left)
+        self._dock("regeneration", "Regeneration", self.regen, right)
+        self._dock("gallery", "Gallery", self.gallery, right)
+        self._dock("details", "Details", DetailsPanel(self.controller, self), right)
+        self._dock("pca", "PCA cloud", self.pca_view, right)
+        self._dock("architecture", "Architecture", ArchitecturePanel(self.controller), right)
+        self._dock("wood", "Wood", WoodPanel(self.controller), right)
+        self._dock("defects", "Defects", DefectsPanel(self.controller, self), right)
+        self._dock("string", "String", self.string_view, bottom)
+        self._dock("cut", "Cut graph", self.cut_view, bottom)
+        self._group_docks()
 
         self.status_label = QLabel("")
         self.status_label.setObjectName("plantStatus")
@@ -145,14 +151,27 @@ class MainWindow(QMainWindow):
         self.fit_size(1400, 880)
         self.compact = False
         warm_up()
-        self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330], Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [360, 390], Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [DOCK_WIDTH, DOCK_WIDTH], Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [400, 380], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
         self.editor.set_text(self.controller.snapshot.text)
         self.shown_text = self.controller.snapshot.text
         self.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
         QTimer.singleShot(0, self._full_tab_titles)  # dock tabs never read "Req…"
+
+    def _group_docks(self) -> None:
+        """The docks by task, so the plant keeps at least half of the window: writing the grammar
+        on the left (the text above its constants), changing a part on the right (regrowth, the
+        variant gallery, natural details, as tabs).  The docks used less often start closed, each
+        in its group, and the View menu opens them: the variants' PCA cloud, architecture, wood
+        and defects on the right, the module string and the cut graph below the plant."""
+        group = DOCK_GROUPS["right"]  # (a group with every dock closed would leave its tab bar)
+        for a, b in zip(group, group[1:]):
+            self.tabifyDockWidget(self.docks[a], self.docks[b])
+        for key in CLOSED_AT_START:
+            self.docks[key].hide()
+        self.docks["regeneration"].raise_()
 
     def use_compact_layout(self) -> None:
         """Small screens (under 1300 px wide, e.g. 1024x700): every dock in one right-hand column,
@@ -468,7 +487,12 @@ class MainWindow(QMainWindow):
         self.cut_view.show_layout(
             layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, cut value {cut.cut_value:g}"
         )
-        self.docks["cut"].raise_()
+        self.open_dock("cut")
+
+    def open_dock(self, key: str) -> None:
+        """Show dock ``key`` (perhaps closed at start) in front of its tab group."""
+        self.docks[key].show()
+        self.docks[key].raise_()
 
     def set_kinship(self, on: bool) -> None:
         self.kinship = bool(on)
