@@ -285,7 +285,7 @@ class MainWindow(QMainWindow):
         self.clear_action = self._action(e, "Clear selection", self._clear_selection, "Esc")
         self.clear_action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
 
-        v = bar.addMenu("&View")
+        v = self.view_menu = bar.addMenu("&View")
         self.rect_action = self._action(
             v,
             "Rectangle selection (left drag)",

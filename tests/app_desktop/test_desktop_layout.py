@@ -51,3 +51,39 @@ def test_the_constants_list_shows_its_last_row(window):
     for name, row in panel.rows.items():
         box = QRect(row.value.mapTo(viewport, row.value.rect().topLeft()), row.value.size())
         assert viewport.rect().contains(box), name  # before: the last row (wr) was cut off
+
+
+def test_gallery_captions_show_whole_at_the_default_size(window, qtbot):
+    from ramure.app.desktop.thumbnails import skeleton_image
+
+    w = window
+    w.open_dock("gallery")
+    settle(qtbot, w)
+    picks = [{"id": i + 1, "params": {"rule": None, "constants": {"a2": 40.0 + i, "r1": 0.8}}} for i in range(27)]
+    image = skeleton_image(w.controller.snapshot.skeleton, 150)
+    w.gallery.set_picks(picks, [image] * 27, base={"a2": 60.0, "r1": 0.9})
+    qtbot.wait(50)
+    gallery = w.gallery.list
+    viewport = gallery.viewport().rect()
+    first, second = gallery.visualItemRect(gallery.item(0)), gallery.visualItemRect(gallery.item(1))
+    assert second.top() == first.top()  # two thumbnails a row in the narrow dock
+    caption = gallery.item(0).text().split("\n")
+    assert caption == ["#1", "a2-33% r1-11%"]  # which constants changed
+    lines = gallery.fontMetrics().height() * len(caption)
+    for rect in (first, second):
+        assert viewport.contains(rect) and rect.height() >= gallery.iconSize().height() + lines
+        assert rect.width() >= max(gallery.fontMetrics().horizontalAdvance(t) for t in caption)
+
+
+def test_thumbnails_show_the_part_that_differs_from_the_plant(window):
+    from ramure.app.desktop import variants
+    from ramure.app.desktop.thumbnails import same_segments
+
+    ex = window.controller.explorer
+    ls = ex.lsystem
+    base = variants.variant_skeleton(ls, 6, 0, None)
+    same = same_segments(variants.variant_skeleton(ls, 6, 0, None), base)
+    assert same.all()  # the plant itself: nothing differs
+    changed = variants.variant_skeleton(ls, 6, 0, {"rule": None, "constants": {"a2": 45.0}})
+    same = same_segments(changed, base)
+    assert same[0] and not same.all() and same.sum() < len(same) // 2  # the trunk is shared, a2's branches differ

@@ -48,7 +48,7 @@ def test_explore_fills_the_gallery_and_the_pca_dock(make_window, qtbot, artifact
     assert w.gallery.list.count() == 27 and len(vs.picks) == 27
     icon = w.gallery.list.item(0).icon().pixmap(100, 100).toImage()
     assert pixel_variance(icon) > 10  # a drawn plant, not a blank tile
-    assert w.gallery.list.iconSize().width() >= 150  # large enough to tell apart
+    assert w.gallery.list.iconSize().width() >= 100  # two columns in the narrow dock, drawn at 150
     labels = [w.gallery.list.item(i).text() for i in range(27)]
     assert sum("%" in t for t in labels) >= 20  # captioned with the constants that differ
     assert not w.progress.isVisible()
