@@ -179,7 +179,7 @@ class ConstantsPanel(QWidget):
         self.grid.setColumnStretch(1, 1)
         self.empty = QLabel("The grammar has no #define constants.")
         self.empty.setWordWrap(True)
-        scroll = self.scroll = QScrollArea()
+        scroll = self.list_area = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setWidget(self.grid_host)
         consts = QGroupBox("Constants (#define)")
@@ -237,8 +237,8 @@ class ConstantsPanel(QWidget):
             items = [grid.itemAtPosition(r, c) for c in range(3)]
             height += max((i.sizeHint().height() for i in items if i is not None), default=0) + grid.verticalSpacing()
         margins = grid.contentsMargins()
-        frame = 2 * self.scroll.frameWidth()
-        self.scroll.setMinimumHeight(height + margins.top() + margins.bottom() + frame)
+        frame = 2 * self.list_area.frameWidth()
+        self.list_area.setMinimumHeight(height + margins.top() + margins.bottom() + frame)
 
     def _show_ranges(self, on) -> None:
         for row in self.rows.values():

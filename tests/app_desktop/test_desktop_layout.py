@@ -47,7 +47,7 @@ def test_a_closed_dock_opens_from_the_view_menu_among_its_group(window, qtbot):
 
 def test_the_constants_list_shows_its_last_row(window):
     panel = window.constants_panel
-    viewport = panel.scroll.viewport()
+    viewport = panel.list_area.viewport()
     for name, row in panel.rows.items():
         box = QRect(row.value.mapTo(viewport, row.value.rect().topLeft()), row.value.size())
         assert viewport.rect().contains(box), name  # before: the last row (wr) was cut off
