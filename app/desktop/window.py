@@ -197,7 +197,7 @@ class MainWindow(QMainWindow):
                     self.tabifyDockWidget(self.docks[a], self.docks[b])
             for key in group:
                 if key in self.docks:
-                    self.docks[key].show()
+                    self.docks[key].setVisible(key not in CLOSED_AT_START)  # those the View menu opens stay closed
         self.docks["regeneration"].raise_()
         self.docks["grammar"].raise_()
         self.resizeDocks([first], [340], Qt.Orientation.Horizontal)
