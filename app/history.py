@@ -94,3 +94,63 @@ class Timeline:
     def clear(self) -> None:
         self.past.clear()
         self.future.clear()
+
+
+def history_words(verb: str, edit: dict | None, old: dict | None = None, new: dict | None = None) -> str:
+    """What an Undo or Redo did, in the user's words: ``verb`` ("Undid", "Redid") and the step.
+
+    ``edit``: the session edit it took back or brought again (``{"op": "document"}`` for a text,
+    ``n`` or seed change, described from ``old`` and ``new``: the document states, dicts of
+    text, n, seed and constants, before and after that change).
+
+    >>> history_words("Undid", {"op": "regrow", "selection": [4, 7, 9], "constants": {}, "params": None})
+    'Undid: regrow of 3 leaves'
+    >>> history_words("Redid", {"op": "constants", "values": {"a2": 45.0}})
+    'Redid: a2 = 45'
+    >>> history_words("Undid", {"op": "document"}, {"text": "t", "n": 10, "seed": 0, "constants": {}},
+    ...               {"text": "t", "n": 12, "seed": 0, "constants": {}})
+    'Undid: n = 12'
+    >>> history_words("Redid", None)
+    'Nothing to redo'
+    """
+    if edit is None:
+        return f"Nothing to {'undo' if verb == 'Undid' else 'redo'}"
+    return f"{verb}: {_step_words(edit, old or {}, new or {})}"
+
+
+def _count(items, one: str, many: str) -> str:
+    return f"{len(items)} {one if len(items) == 1 else many}"
+
+
+def _values(values: dict) -> str:
+    return ", ".join(f"{name} = {float(value):g}" for name, value in values.items())
+
+
+def _step_words(edit: dict, old: dict, new: dict) -> str:
+    op = edit.get("op")
+    if op == "regrow":
+        where = _count(edit["selection"], "leaf", "leaves") if edit.get("selection") else "the whole plant"
+        constants = {**((edit.get("params") or {}).get("constants") or {}), **(edit.get("constants") or {})}
+        return f"regrow of {where}" + (f" with {_values(constants)}" if constants else "")
+    if op == "prune":
+        return f"prune of {_count(edit['selection'], 'leaf', 'leaves')}"
+    if op == "constants":
+        return _values(edit["values"])
+    if op == "fruit":
+        return f"new fruit for {_count(edit['leaves'], 'fruit', 'fruit')}"
+    if op == "detail":
+        leaves = edit.get("leaves") or []
+        return f"{edit.get('kind', 'detail')}" + (f" on {_count(leaves, 'leaf', 'leaves')}" if leaves else "")
+    return _document_words(old, new)
+
+
+def _document_words(old: dict, new: dict) -> str:
+    """A change of the document: its ``n``, seed, constants, or else its text."""
+    parts = [f"{key} = {new[key]}" for key in ("n", "seed") if key in new and old.get(key) != new[key]]
+    constants = new.get("constants") or {}
+    changed = {k: v for k, v in constants.items() if (old.get("constants") or {}).get(k) != v}
+    if changed and old.get("text") == new.get("text"):
+        parts.append(_values(changed))
+    if not parts:
+        return "a change of the grammar text" if old.get("text") != new.get("text") else "a change of the plant"
+    return ", ".join(parts)

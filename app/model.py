@@ -36,7 +36,7 @@ from ramure.lsys.tree import concat_ranges
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
 from ramure.app.document import check_round_trip, document_text
-from ramure.app.history import Timeline
+from ramure.app.history import Timeline, history_words
 from ramure.app.ids import not_a_leaf
 from ramure.lsys.combination import split as split_combination
 from ramure.lsys.regen import Session
@@ -98,6 +98,7 @@ class Explorer:
         )
         self._drawn(self.derivation.skeleton())  # a turtle error (a polygon never closed) is raised here
         self.timeline = Timeline()  # the sessions a new text, n or seed replaced
+        self.history_note = ""  # what the last Undo or Redo did ("Undid: a2 = 45"), "" after any other change
         self._left = (self.checkpoint(), list(self.session.edits))  # the state after the last change
         self.saved = self._fingerprint()  # what the file on disk holds (the start counts as saved)
 
@@ -194,6 +195,7 @@ class Explorer:
     def _changed(self, record: bool = True) -> None:
         """A new version.  ``record``: keep the history one line (a replaced session is
         remembered in the timeline; a new edit ends what Redo could bring back)."""
+        self.history_note = ""  # an undo or redo sets it again after this
         if record:
             before, edits = self._left
             session = self.session
@@ -607,23 +609,42 @@ class Explorer:
 
     def undo(self) -> dict | None:
         """Undo the last edit, or go back to the text, n or seed before the last change of them.
-        Returns the edit undone (``{"op": "document"}`` for a text, n or seed), None if none."""
+        Returns the edit undone (``{"op": "document"}`` for a text, n or seed), None if none;
+        :attr:`history_note` says what was undone ("Undid: a2 = 45")."""
+        before = self._document_state()
         if self.session.can_undo:
-            return self._history(self.session.undo())
-        return self._history({"op": "document"} if self.timeline.back(self, len(self.session.edits)) else None)
+            edit = self.session.undo()
+        else:
+            edit = {"op": "document"} if self.timeline.back(self, len(self.session.edits)) else None
+        return self._history(edit, "Undid", before, before)
 
     def redo(self) -> dict | None:
-        """Redo what Undo took back, in the order it was done."""
+        """Redo what Undo took back, in the order it was done (:attr:`history_note` says what)."""
+        before = self._document_state()
         stop = self.timeline.stop()
         if self.session.can_redo and (stop is None or len(self.session.edits) < stop):
-            return self._history(self.session.redo())
-        return self._history({"op": "document"} if self.timeline.forward(self, len(self.session.edits)) else None)
+            edit = self.session.redo()
+        else:
+            edit = {"op": "document"} if self.timeline.forward(self, len(self.session.edits)) else None
+        return self._history(edit, "Redid", before, None)
 
-    def _history(self, edit):
-        if edit is not None:
-            self.selection, self.last_result = [], None
-            self.summary = self.note = None
-            self._changed(record=False)
+    def _document_state(self) -> dict:
+        s = self.session
+        return {"text": self.text, "n": s.n, "seed": s.seed, "constants": dict(s.constants)}
+
+    def _history(self, edit, verb, before, changed):
+        """After an undo or redo: nothing selected, the model's text shown (a grammar error typed
+        since is gone with the text that had it) and :attr:`history_note` set.  ``changed``:
+        the document state the step took away (Undo) or None (Redo: the state it brought)."""
+        if edit is None:
+            self.history_note = history_words(verb, None)
+            return None
+        self.selection, self.last_result, self.error = [], None, None
+        self.summary = self.note = None
+        self._changed(record=False)
+        after = self._document_state()
+        old, new = (after, before) if changed is not None else (before, after)
+        self.history_note = history_words(verb, edit, old, new)
         return edit
 
     def status(self) -> str:

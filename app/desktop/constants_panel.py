@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 SLIDER_STEPS = 1000
 SETTLE_MS = 60
 LIMIT = 1e9
+ROWS_SHOWN = 8  # constants shown without scrolling
 SEED_LIMIT = 2.0**53  # the largest whole number a double holds exactly
 
 
@@ -160,6 +161,7 @@ class ConstantsPanel(QWidget):
         self.seed_box.setDecimals(0)
         self.seed_box.setRange(0, SEED_LIMIT)
         self.seed_box.setKeyboardTracking(False)
+        self.seed_box.setMinimumWidth(70)  # its hint fits 2^53: the dock would be 40 px wider
         self.n_box.valueChanged.connect(self._derivation)
         self.seed_box.valueChanged.connect(self._derivation)
         derivation = QGroupBox("Derivation")
@@ -177,7 +179,7 @@ class ConstantsPanel(QWidget):
         self.grid.setColumnStretch(1, 1)
         self.empty = QLabel("The grammar has no #define constants.")
         self.empty.setWordWrap(True)
-        scroll = QScrollArea()
+        scroll = self.list_area = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setWidget(self.grid_host)
         consts = QGroupBox("Constants (#define)")
@@ -224,6 +226,19 @@ class ConstantsPanel(QWidget):
         self.grid.setRowStretch(len(constants) + 1, 1)
         self.empty.setVisible(not constants)
         self._show_ranges(self.edit_ranges.isChecked())
+        self._fit_rows()
+
+    def _fit_rows(self) -> None:
+        """The list is tall enough for its header and :data:`ROWS_SHOWN` rows (a longer list
+        scrolls): the last constant is never cut off by a dock squeezed below it."""
+        grid = self.grid
+        height = 0
+        for r in range(min(len(self.rows), ROWS_SHOWN) + 1):
+            items = [grid.itemAtPosition(r, c) for c in range(3)]
+            height += max((i.sizeHint().height() for i in items if i is not None), default=0) + grid.verticalSpacing()
+        margins = grid.contentsMargins()
+        frame = 2 * self.list_area.frameWidth()
+        self.list_area.setMinimumHeight(height + margins.top() + margins.bottom() + frame)
 
     def _show_ranges(self, on) -> None:
         for row in self.rows.values():

@@ -195,12 +195,13 @@ class Controller(QObject):
         return self.submit("prune", lambda ex: ex.prune())
 
     def undo(self) -> Job:
-        """Undo the last plant edit, or go back to the plant before the last text, n or seed change."""
-        return self.submit("undo", lambda ex: ex.undo())
+        """Undo the last plant edit, or go back to the plant before the last text, n or seed
+        change; the job's result says what was undone (:attr:`Explorer.history_note`)."""
+        return self.submit("undo", lambda ex: _noted(ex.undo, ex))
 
     def redo(self) -> Job:
-        """Redo what Undo took back, in the order it was done."""
-        return self.submit("redo", lambda ex: ex.redo())
+        """Redo what Undo took back, in the order it was done; the job's result says what."""
+        return self.submit("redo", lambda ex: _noted(ex.redo, ex))
 
     def load_session(self, path: str | os.PathLike) -> Job:
         return self.submit("load session", lambda ex: ex.load_session(path))
@@ -345,3 +346,9 @@ class Controller(QObject):
         # job are separate queued calls: run them too before saying "idle"
         QCoreApplication.processEvents()
         return True
+
+
+def _noted(step: Callable[[], object], explorer: Explorer) -> str:
+    """Run an undo or redo ``step``; what it did, in the user's words."""
+    step()
+    return explorer.history_note

@@ -61,6 +61,9 @@ if TYPE_CHECKING:
     from ramure.app.desktop.workers import Job
     from ramure.lsys.seasons import LeafChain, Season
 
+#: The lichen habits of :data:`ramure.gmap.lichen.HABITS`, listed without loading gmap.
+HABIT_NAMES = ("crustose", "foliose", "fruticose")
+
 SEASON_STEPS = 24
 FALLEN_RGB = (211, 219, 226)  # the sky behind the plant: a fallen leaf's cells fade into it
 SELECTED_RGB = (255, 0, 0)
@@ -152,8 +155,9 @@ class DetailsPanel(QWidget):
         return self.view_slot.plotter()
 
     def list_habits(self) -> None:
-        """Put the lichen habits into their list (once).  They come from ramure.gmap.lichen: gmap
-        loads (with scipy.sparse, about 25 MB) when the dock is first on screen, not with the window."""
+        """Add any lichen habit :data:`HABIT_NAMES` lacks to the list (once).  The habits come
+        from ramure.gmap.lichen: gmap loads (with scipy.sparse, about 25 MB) when the dock is
+        first on screen, not with the window."""
         if self.habits_listed:
             return
         from ramure.gmap.lichen import HABITS
@@ -199,6 +203,7 @@ class DetailsPanel(QWidget):
         self.clusters, self.particles = _count_box("detailsClusters", 1, 200, 5), _count_box("detailsParticles", 1, 20_000, 300)
         self.habit = QComboBox()
         self.habit.setObjectName("detailsHabit")
+        self.habit.addItems(HABIT_NAMES)  # filled from the start; list_habits adds any other
         self.nodes = _count_box("detailsNodes", 2, 500, 15)
         self.lichen_button = QPushButton("Lichen on the fruit")
         self.lichen_button.setObjectName("detailsLichen")

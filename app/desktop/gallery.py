@@ -16,31 +16,52 @@ from PySide6.QtGui import QIcon, QPixmap
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QVBoxLayout, QWidget
 
 if TYPE_CHECKING:
-    from PySide6.QtGui import QImage
+    from PySide6.QtGui import QImage, QResizeEvent
 
-ICON = 150  # large enough to tell the picks apart
+ICON = 150  # the largest thumbnail (a wide dock)
+MIN_ICON = 100  # two columns in a 280-pixel dock rather than one of 150
+CAPTION_LINES = 4  # pick_label's most: the number, two constants and "…"
 
 
-def pick_label(pick: Mapping[str, Any], base: Mapping[str, float] | None, limit: int = 2) -> str:
-    r"""The thumbnail's caption: its number and the constants that differ from ``base``.
+def pick_label(pick: Mapping[str, Any], base: Mapping[str, float] | None, limit: int = 6, first: Sequence[str] = ()) -> str:
+    r"""The thumbnail's caption: its number and every constant that differs from ``base`` (at
+    most ``limit``, then "…"), two a line, as the change in percent (the value where ``base``
+    has none or 0), those named in ``first`` (the ones that tell the picks apart) first.
+    The constants a pick leaves as they are are not named: the caption says how it differs.
 
     >>> pick_label({"id": 5, "params": {"rule": 1, "constants": {"a2": 66.0, "r1": 0.9}}},
     ...            {"a2": 60.0, "r1": 0.9})
-    '#5  rule 1\na2 66 (+10%)'
+    '#5  rule 1\na2+10%'
+    >>> pick_label({"id": 2, "params": {"constants": {"r1": 0.99, "r2": 0.77, "a2": 54.0, "s": 2}}},
+    ...            {"r1": 0.9, "r2": 0.7, "a2": 60.0}, first=["a2"])
+    '#2\na2-10% r1+10%\nr2+10% s=2'
     """
     params = pick.get("params") or {}
     rule = params.get("rule")
-    lines = [f"#{pick.get('id')}" + ("" if rule is None else f"  rule {rule}")]
     changes = []
-    for name, value in (params.get("constants") or {}).items():
-        old = (base or {}).get(name)
-        if old is None:
-            changes.append(f"{name} {float(value):.3g}")
-        elif abs(float(value) - float(old)) > 1e-9 * max(1.0, abs(float(old))):
-            pct = f" ({(float(value) / float(old) - 1) * 100:+.0f}%)" if float(old) else ""
-            changes.append(f"{name} {float(value):.3g}{pct}")
-    lines += changes[:limit] + (["…"] if len(changes) > limit else [])
+    constants = params.get("constants") or {}
+    order = list(first)
+    for name in sorted(constants, key=lambda k: order.index(k) if k in order else len(order)):
+        value, old = float(constants[name]), (base or {}).get(name)
+        if old is None or not float(old):
+            changes.append(f"{name}={value:.3g}")
+        elif abs(value - float(old)) > 1e-9 * max(1.0, abs(float(old))):
+            changes.append(f"{name}{(value / float(old) - 1) * 100:+.0f}%")
+    shown = changes[:limit] + (["…"] if len(changes) > limit else [])
+    lines = [f"#{pick.get('id')}" + ("" if rule is None else f"  rule {rule}")]
+    lines += [" ".join(shown[i : i + 2]) for i in range(0, len(shown), 2)]
     return "\n".join(lines)
+
+
+def varying_constants(picks: Iterable[Mapping[str, Any]]) -> list[str]:
+    """The constants whose values differ between ``picks``, the most varied first: what a
+    caption shows to tell the picks apart (one all picks share says nothing)."""
+    values: dict[str, set] = {}
+    for pick in picks:
+        for name, value in ((pick.get("params") or {}).get("constants") or {}).items():
+            values.setdefault(name, set()).add(round(float(value), 9))
+    varied = [name for name, seen in values.items() if len(seen) > 1]
+    return sorted(varied, key=lambda name: -len(values[name]))
 
 
 class GalleryView(QWidget):
@@ -65,16 +86,35 @@ class GalleryView(QWidget):
         self.list.setResizeMode(QListView.ResizeMode.Adjust)
         self.list.setMovement(QListView.Movement.Static)
         self.list.setSpacing(4)
+        self.list.setWordWrap(True)
+        self.list.setUniformItemSizes(True)
         self.list.itemClicked.connect(self._clicked)
-        top = QHBoxLayout()
-        top.addWidget(self.note, 1)
-        top.addWidget(self.explore_button)
-        top.addWidget(self.open_button)
+        buttons = QHBoxLayout()  # under the note: the dock stays narrow beside the plant
+        buttons.addWidget(self.explore_button)
+        buttons.addWidget(self.open_button)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(top)
+        layout.addWidget(self.note)
+        layout.addLayout(buttons)
         layout.addWidget(self.list, 1)
         self.picks: list[dict] = []
+
+    def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
+        super().resizeEvent(event)
+        self.fit_thumbnails()
+
+    def fit_thumbnails(self) -> None:
+        """Thumbnails as large as the dock's width allows (at most :data:`ICON`), in as many
+        columns as fit at :data:`MIN_ICON`, each with room for its whole caption."""
+        pad = 2 * self.list.spacing() + 8
+        scrollbar = self.list.verticalScrollBar().sizeHint().width()  # shown or not: the same columns
+        width = self.list.width() - 2 * self.list.frameWidth() - scrollbar - 2 * self.list.spacing() - 2
+        columns = max(1, width // (MIN_ICON + pad))
+        icon = max(48, min(ICON, width // columns - pad))
+        lines = self.list.fontMetrics().lineSpacing() * CAPTION_LINES
+        self.list.setIconSize(QSize(icon, icon))
+        self.list.setGridSize(QSize(icon + pad, icon + lines + pad))
+        self.list.doItemsLayout()  # the rows again, for this width
 
     def set_unavailable(self, message: str) -> None:
         self.list.clear()
@@ -92,11 +132,12 @@ class GalleryView(QWidget):
         each captioned with the constants that differ from ``base`` (the plant's values)."""
         self.list.clear()
         self.picks = list(picks)
+        varying = varying_constants(self.picks)
         for i, pick in enumerate(self.picks):
             params = pick.get("params", {})
             rule = params.get("rule")
             tip = "\n".join(f"{k} = {v:g}" for k, v in params.get("constants", {}).items())
-            item = QListWidgetItem(pick_label({"id": i + 1, **pick}, base))
+            item = QListWidgetItem(pick_label({"id": i + 1, **pick}, base, first=varying))
             item.setToolTip(
                 f"pick {pick.get('id')} — variant {pick.get('variant')}"
                 f"{'' if rule is None else f', rule {rule}'}\n{tip}\n(click to apply)"
@@ -105,6 +146,7 @@ class GalleryView(QWidget):
             self.list.addItem(item)
         if images is not None:
             self.set_images(images)
+        self.fit_thumbnails()
         self.note.setText(note or f"{len(self.picks)} picks — click one to apply it to the selection (or to the whole plant).")
 
     def set_images(self, images: Sequence[QImage | None]) -> None:

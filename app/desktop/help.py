@@ -31,7 +31,7 @@ KEYS = [
     ("Delete", "prune the selection"),
     ("Ctrl+Z", "undo: typing, a constant, n, seed, regrow, prune"),
     ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
-    ("Home", "frame the whole plant"),
+    ("Home", "frame the whole plant (an edit leaves the camera where it is)"),
     ("Ctrl+1 / 2 / 3 / 4", "front, side, top, iso view"),
     ("G", "ground grid on or off"),
     ("K", "kinship colours (select one branch)"),

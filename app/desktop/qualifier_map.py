@@ -102,5 +102,10 @@ def attach(window: MainWindow) -> QualifierMapView:
     docks = getattr(window, "docks", {})
     if "pca" in docks:
         window.tabifyDockWidget(docks["pca"], dock)
+        if not docks["pca"].isVisible():  # closed with the PCA cloud (the View menu opens it)
+            dock.hide()
+    menu = getattr(window, "view_menu", None)
+    if menu is not None:
+        menu.addAction(dock.toggleViewAction())
     docks["qualifier_map"] = dock
     return view

@@ -31,8 +31,27 @@ def _qcolor(rgb):
     return QColor.fromRgbF(*rgb)
 
 
-def skeleton_image(skeleton: Skeleton, size: int = 160, label: str | None = None, background: str = "white") -> QImage:
-    """A ``size`` x ``size`` QImage of a skeleton, front view, with an optional corner label."""
+#: The colour of a variant's segments that are the plant's own (:func:`same_segments`).
+SAME_RGB = (0.78, 0.76, 0.74)
+
+
+def same_segments(skeleton: Skeleton, base: Skeleton, decimals: int = 5) -> np.ndarray:
+    """Bool per segment of ``skeleton``: True where ``base`` has a segment at the same place (the
+    same start and end to ``decimals`` places), so a variant's thumbnail can grey out what it
+    shares with the plant and show the part that differs."""
+
+    def rows(sk):
+        ends = np.round(np.c_[np.asarray(sk.start), np.asarray(sk.end)].astype(np.float64), decimals) + 0.0  # no -0.0
+        return np.ascontiguousarray(ends).view(np.dtype((np.void, ends.dtype.itemsize * 6))).ravel()
+
+    return np.isin(rows(skeleton), rows(base))
+
+
+def skeleton_image(
+    skeleton: Skeleton, size: int = 160, label: str | None = None, background: str = "white", same: np.ndarray | None = None
+) -> QImage:
+    """A ``size`` x ``size`` QImage of a skeleton, front view, with an optional corner label.
+    ``same``: bool per segment, drawn pale (the plant's own), so the part that differs stands out."""
     image = QImage(size, size, QImage.Format.Format_RGB32)
     image.fill(QColor(background))
     painter = QPainter(image)
@@ -59,9 +78,12 @@ def skeleton_image(skeleton: Skeleton, size: int = 160, label: str | None = None
     widths = np.clip(2 * np.asarray(skeleton.base_radius) * scale, 0.6, size / 12)
     pen = QPen(_qcolor(BARK))
     pen.setCapStyle(Qt.PenCapStyle.RoundCap)
-    order = np.argsort(-widths)  # thick first, thin on top
+    pale = np.zeros(len(widths), bool) if same is None else np.asarray(same, bool)
+    order = np.lexsort((-widths, ~pale))  # the shared part first, then the differing part; thick first
+    bark, shared = _qcolor(BARK), _qcolor(SAME_RGB)
     for i in order.tolist():
         pen.setWidthF(float(widths[i]))
+        pen.setColor(shared if pale[i] else bark)
         painter.setPen(pen)
         painter.drawLine(QLineF(a[i, 0], a[i, 1], b[i, 0], b[i, 1]))
     if polygons is not None and len(polygons):

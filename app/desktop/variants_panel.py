@@ -19,13 +19,14 @@ from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import QFileDialog
 
 from ramure.app.desktop import qualifier_map, variants
-from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
+from ramure.app.desktop.thumbnails import placeholder_image, same_segments, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
     from ramure.metrics.apply import QualifierResult
     from ramure.lsys import LSystem
+    from ramure.lsys.turtle import Skeleton
     from PySide6.QtWidgets import QMenu
     from ramure.app.desktop.controller import Controller
     from ramure.app.desktop.state import Snapshot
@@ -244,6 +245,7 @@ class VariantsController:
             vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks], base=self.constants
         )
         w.pca_view.set_variants(vs)
+        w.open_dock("gallery")  # the picks, in front of the regeneration panel
         qualifier_map.attach(w).set_variants(vs)
         w.regen.qualifier_note.setText(
             "" if vs.exploration is not None else "A qualifier explores this grammar's variants first."
@@ -260,14 +262,16 @@ class VariantsController:
 
         def work(progress, cancelled):
             images = []
+            base = _base_skeleton(ls, n, seed)
             for i, pick in enumerate(vs.picks):
                 progress(i, len(vs.picks), "thumbnails")
                 path = vs.image_path(pick)
-                image = QImage(str(path)) if path else QImage()
+                image = QImage(str(path)) if path and base is None else QImage()
                 if image.isNull():
                     try:
                         sk = variants.variant_skeleton(ls, n, seed, pick.get("params"))
-                        image = skeleton_image(sk, THUMB)
+                        # what the pick shares with the plant pale: the part that differs stands out
+                        image = skeleton_image(sk, THUMB, same=None if base is None else same_segments(sk, base))
                     except RamureError:
                         image = placeholder_image(THUMB, f"#{pick.get('id')}", "cannot derive")
                 images.append(image)
@@ -391,3 +395,11 @@ class VariantsController:
             self.fruit_toggle.setChecked(True)  # fruit settings show on the volumes
             self.window.status("Volumetric fruit shown: fruit shapes and seeds apply to the volumes", 6000)
         return job
+
+
+def _base_skeleton(lsystem: LSystem, n: int | None, seed: int) -> Skeleton | None:
+    """The plant the variants are compared with (no pick applied), None if it cannot derive."""
+    try:
+        return variants.variant_skeleton(lsystem, n, seed, None)
+    except RamureError:
+        return None

@@ -372,7 +372,8 @@ class PlantView(QWidget):
         self.hairlines.forget_kept()
 
     def show_plant(self, snap: Snapshot, colors: np.ndarray, reset_camera: bool | None = None) -> None:
-        """Draw ``snap``'s mesh with per-cell ``colors`` (uint8 RGB)."""
+        """Draw ``snap``'s mesh with per-cell ``colors`` (uint8 RGB); ``reset_camera``: frame the
+        whole plant (else the camera stays where it is, except for the first plant)."""
         if snap is not self.snapshot:
             self.hidden_cells = None  # another plant version: other cells
         self.snapshot = snap
@@ -394,16 +395,12 @@ class PlantView(QWidget):
         bounds = self.plant_bounds()
         self.ground.show(bounds)
         self.picker = None
-        diag = float(np.linalg.norm(np.subtract(*np.reshape(bounds, (3, 2)).T)))
-        if reset_camera is None:  # frame again when the plant leaves the view or shrinks a lot
-            reset_camera = (
-                self._diag is None
-                or self.auto_framed
-                or diag / max(self._diag, 1e-12) < 0.4
-                or scene.outside_view(self.plotter, bounds)
-            )
-        if reset_camera:
+        # The camera holds still on an edit, so the plant before and after can be compared; it
+        # frames the plant only when asked (Home, an opened file, a change of n) or the first time.
+        if reset_camera or self._diag is None:
             self.reset_camera()
+        else:  # the same camera sees the whole new plant: nothing of it clipped away
+            self.reset_clipping()
         self.draft()
         self.redraw()
 
@@ -443,6 +440,14 @@ class PlantView(QWidget):
             self._diag = float(np.linalg.norm(np.subtract(*np.reshape(bounds, (3, 2)).T)))
         self.auto_framed = True
         self.redraw()
+
+    def reset_clipping(self) -> None:
+        """The camera's near and far planes around everything shown (the camera does not move)."""
+        clip = self.shown_bounds()
+        if clip is None:
+            self.plotter.renderer.ResetCameraClippingRange()
+        else:
+            self.plotter.renderer.ResetCameraClippingRange(*clip)
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
         """A new size (the window's first layout, a dock moved): keep the plant framed until the
@@ -698,7 +703,37 @@ class PlantView(QWidget):
         cell = int(picker.GetCellId())
         if self.fruit_actor is not None and hit is self.fruit_actor:
             return "fruit", cell
-        return "plant", int(self._near.cells[cell]) if hit is self._near.actor and cell >= 0 else cell
+        cell = int(self._near.cells[cell]) if hit is self._near.actor and cell >= 0 else cell
+        fruit = self._fruit_behind_twig(x, y, np.array(picker.GetPickPosition()), cell)
+        return ("fruit", fruit) if fruit >= 0 else ("plant", cell)
+
+    def _fruit_behind_twig(self, x: float, y: float, point: np.ndarray, cell: int) -> int:
+        """The volumetric fruit cell under display ``(x, y)`` when the branch cell ``cell`` hit at
+        ``point`` lies within that fruit's radius in front of it (its stalk or the twig it hangs
+        on, crossing the fruit on screen): a click in the fruit's middle means the fruit.  -1 when
+        the plant's cell is a leaf, or the branch is well in front of the fruit."""
+        if self.fruit is None or self.fruit_actor is None or cell < 0 or self.mesh is None:
+            return -1
+        if int(self.mesh.cell_data["kind"][cell]) != 0:  # a leaf lying on the fruit: the leaf
+            return -1
+        from vtkmodules.vtkRenderingCore import vtkCellPicker
+
+        picker = vtkCellPicker()
+        picker.SetTolerance(PICK_TOLERANCE)
+        picker.PickFromListOn()
+        picker.AddPickList(self.fruit_actor)
+        picker.AddLocator(self._whole_locator(self.fruit_actor))
+        found = picker.Pick(float(x), float(y), 0.0, self.plotter.renderer)
+        picker.RemoveAllLocators()
+        if not found:
+            return -1
+        fruit_cell = int(picker.GetCellId())
+        leaf = np.asarray(self.fruit.cell_data["leaf_id"])
+        points = np.asarray(self.fruit.cell_centers().points)[leaf == leaf[fruit_cell]]
+        radius = float(np.max(points.max(axis=0) - points.min(axis=0))) / 2
+        eye = np.array(self.plotter.renderer.GetActiveCamera().GetPosition())
+        gap = np.linalg.norm(np.array(picker.GetPickPosition()) - eye) - np.linalg.norm(point - eye)
+        return fruit_cell if gap <= radius else -1
 
     def _pick_ray(self, x: float, y: float) -> tuple[np.ndarray, np.ndarray, float]:
         """Two world points on the line through display ``(x, y)`` and the pick tolerance in

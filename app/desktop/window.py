@@ -53,6 +53,15 @@ KINSHIP_HINT = (
     "to blue = related only through the first derivation steps"
 )
 T = TypeVar("T")
+#: The docks by task: tabs in each group (the first one raised).
+DOCK_GROUPS = {
+    "left": ("grammar", "constants"),
+    "right": ("regeneration", "gallery", "details", "pca", "architecture", "wood", "defects"),
+    "bottom": ("string", "cut"),  # side by side when both are open
+}
+DOCK_WIDTH = 280  # each side column at the default size: the plant keeps over half of 1400 x 880
+#: Docks used less often: closed at start, opened from the View menu.
+CLOSED_AT_START = ("pca", "architecture", "wood", "defects", "string", "cut")
 
 BUSY = "Computing…"
 SAME_PLANT = (
@@ -107,26 +116,23 @@ class MainWindow(QMainWindow):
         self.qualifier_map: QualifierMapView | None = None  # made by qualifier_map.attach when first used
         self.docks: dict[str, QDockWidget] = {}
         self.setTabPosition(Qt.DockWidgetArea.AllDockWidgetAreas, QTabWidget.TabPosition.North)
-        self._dock("grammar", "Grammar", self.editor, Qt.DockWidgetArea.LeftDockWidgetArea)
-        self._dock("constants", "Constants", self.constants_panel, Qt.DockWidgetArea.LeftDockWidgetArea)
-        self._dock("regeneration", "Regeneration", self.regen, Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("string", "String", self.string_view, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._dock("cut", "Cut graph", self.cut_view, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._dock("gallery", "Variant gallery", self.gallery, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._dock("pca", "PCA cloud", self.pca_view, Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("architecture", "Architecture", ArchitecturePanel(self.controller), Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("wood", "Wood", WoodPanel(self.controller), Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("details", "Details", DetailsPanel(self.controller, self), Qt.DockWidgetArea.RightDockWidgetArea)
-        self._dock("defects", "Defects", DefectsPanel(self.controller, self), Qt.DockWidgetArea.RightDockWidgetArea)
-        self.tabifyDockWidget(self.docks["string"], self.docks["cut"])
-        self.tabifyDockWidget(self.docks["cut"], self.docks["gallery"])
-        self.docks["string"].raise_()
-        self.tabifyDockWidget(self.docks["regeneration"], self.docks["pca"])
-        self.tabifyDockWidget(self.docks["pca"], self.docks["architecture"])
-        self.tabifyDockWidget(self.docks["architecture"], self.docks["wood"])
-        self.tabifyDockWidget(self.docks["wood"], self.docks["details"])
-        self.tabifyDockWidget(self.docks["details"], self.docks["defects"])
-        self.docks["regeneration"].raise_()
+        left, right, bottom = (
+            Qt.DockWidgetArea.LeftDockWidgetArea,
+            Qt.DockWidgetArea.RightDockWidgetArea,
+            Qt.DockWidgetArea.BottomDockWidgetArea,
+        )
+        self._dock("grammar", "Grammar", self.editor, left)
+        self._dock("constants", "Constants", self.constants_panel, left)
+        self._dock("regeneration", "Regeneration", self.regen, right)
+        self._dock("gallery", "Gallery", self.gallery, right)
+        self._dock("details", "Details", DetailsPanel(self.controller, self), right)
+        self._dock("pca", "PCA cloud", self.pca_view, right)
+        self._dock("architecture", "Architecture", ArchitecturePanel(self.controller), right)
+        self._dock("wood", "Wood", WoodPanel(self.controller), right)
+        self._dock("defects", "Defects", DefectsPanel(self.controller, self), right)
+        self._dock("string", "String", self.string_view, bottom)
+        self._dock("cut", "Cut graph", self.cut_view, bottom)
+        self._group_docks()
 
         self.status_label = QLabel("")
         self.status_label.setObjectName("plantStatus")
@@ -148,14 +154,27 @@ class MainWindow(QMainWindow):
         self.fit_size(1400, 880)
         self.compact = False
         warm_up()
-        self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [380, 330], Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [360, 390], Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [DOCK_WIDTH, DOCK_WIDTH], Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [400, 380], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
         self.editor.set_text(self.controller.snapshot.text)
         self.shown_text = self.controller.snapshot.text
         self.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
         QTimer.singleShot(0, self._full_tab_titles)  # dock tabs never read "Req…"
+
+    def _group_docks(self) -> None:
+        """The docks by task, so the plant keeps at least half of the window: writing the grammar
+        on the left (the text above its constants), changing a part on the right (regrowth, the
+        variant gallery, natural details, as tabs).  The docks used less often start closed, each
+        in its group, and the View menu opens them: the variants' PCA cloud, architecture, wood
+        and defects on the right, the module string and the cut graph below the plant."""
+        group = DOCK_GROUPS["right"]  # (a group with every dock closed would leave its tab bar)
+        for a, b in zip(group, group[1:]):
+            self.tabifyDockWidget(self.docks[a], self.docks[b])
+        for key in CLOSED_AT_START:
+            self.docks[key].hide()
+        self.docks["regeneration"].raise_()
 
     def use_compact_layout(self) -> None:
         """Small screens (under 1300 px wide, e.g. 1024x700): every dock in one right-hand column,
@@ -181,7 +200,7 @@ class MainWindow(QMainWindow):
                     self.tabifyDockWidget(self.docks[a], self.docks[b])
             for key in group:
                 if key in self.docks:
-                    self.docks[key].show()
+                    self.docks[key].setVisible(key not in CLOSED_AT_START)  # those the View menu opens stay closed
         self.docks["regeneration"].raise_()
         self.docks["grammar"].raise_()
         self.resizeDocks([first], [340], Qt.Orientation.Horizontal)
@@ -269,7 +288,7 @@ class MainWindow(QMainWindow):
         self.clear_action = self._action(e, "Clear selection", self._clear_selection, "Esc")
         self.clear_action.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
 
-        v = bar.addMenu("&View")
+        v = self.view_menu = bar.addMenu("&View")
         self.rect_action = self._action(
             v,
             "Rectangle selection (left drag)",
@@ -351,8 +370,13 @@ class MainWindow(QMainWindow):
 
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap: Snapshot, reset_camera: bool | None = None) -> None:
-        """A new plant version: redraw the 3D view and every view of the plant."""
-        old = getattr(self.view.snapshot, "skeleton", None)  # compared after the frame (no copy)
+        """A new plant version: redraw the 3D view and every view of the plant.  The camera
+        stays where it is on an edit; ``reset_camera`` None frames the plant again only when
+        the derivation count changed (a plant of another size)."""
+        shown = self.view.snapshot
+        old = getattr(shown, "skeleton", None)  # compared after the frame (no copy)
+        if reset_camera is None:
+            reset_camera = shown is not None and shown.n != snap.n
         self.base_colors = state.base_colors(snap.mesh)
         self.fruit_leaves = state.fruit_leaves(snap.mesh)
         self.set_cut_preview(None)  # a new plant: the preview of the old one is gone
@@ -515,7 +539,12 @@ class MainWindow(QMainWindow):
         self.cut_view.show_layout(
             layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, cut value {cut.cut_value:g}"
         )
-        self.docks["cut"].raise_()
+        self.open_dock("cut")
+
+    def open_dock(self, key: str) -> None:
+        """Show dock ``key`` (perhaps closed at start) in front of its tab group."""
+        self.docks[key].show()
+        self.docks[key].raise_()
 
     def set_kinship(self, on: bool) -> None:
         self.kinship = bool(on)
@@ -622,6 +651,19 @@ class MainWindow(QMainWindow):
             self.set_cut_preview(job.result)
         elif job.name == "rho" and job.error is None:
             self.set_cut_preview(None)  # the preview of the old ρ: a new one follows
+        elif job.name in ("undo", "redo") and job.error is None:
+            self.after_history(job.result)
+
+    def after_history(self, note: str) -> None:
+        """After Undo or Redo: say what it did; the editor shows the model's text again, without
+        the error of text typed since (an undo took that text back)."""
+        snap = self.controller.snapshot
+        if snap.error is None and not self.editor.pending():
+            self.shown_text = snap.text
+            self.editor.replace_text(snap.text)
+            self.editor.show_error(None)
+        self.regen.set_note(note)
+        self.status(note, 8000)
 
     def after_regrow(self, job: Job) -> None:
         """Say what the regrow did; on a deterministic grammar, say why nothing changed."""

@@ -304,8 +304,9 @@ class Explorer:
         return self.model.status()
 
     # -- running actions -------------------------------------------------------
-    def run(self, action: Callable[[], T], note: str | None = None) -> T | None:
-        """Run ``action()`` against the model; a RamureError is shown inline and None returned."""
+    def run(self, action: Callable[[], T], note: str | Callable[[], str] | None = None) -> T | None:
+        """Run ``action()`` against the model; a RamureError is shown inline and None returned.
+        ``note``: the message shown after it (a callable: read once the action has run)."""
         try:
             result = action()
         except RamureError as err:
@@ -317,7 +318,7 @@ class Explorer:
             self.refresh()
             return None
         self.error = None
-        self.message.show(note or self.model.status(), "info")
+        self.message.show((note() if callable(note) else note) or self.model.status(), "info")
         self.refresh()
         return result
 
@@ -518,10 +519,12 @@ class Explorer:
         return self.run(self.model.prune)
 
     def undo(self) -> dict | None:
-        return self.run(self.model.undo)
+        """Undo the last change; the message line says what was undone ("Undid: a2 = 45")."""
+        return self.run(self.model.undo, note=lambda: self.model.history_note)
 
     def redo(self) -> dict | None:
-        return self.run(self.model.redo)
+        """Redo what Undo took back; the message line says what ("Redid: regrow of 3 leaves")."""
+        return self.run(self.model.redo, note=lambda: self.model.history_note)
 
     # -- variants -----------------------------------------------------------------------
     def explore_variants(

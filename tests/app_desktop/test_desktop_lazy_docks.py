@@ -1,9 +1,9 @@
 """The Wood, Details and Defects docks make their 3D view (an OpenGL context) when first shown (issue 14).
 
-Built hidden behind other tabs, they hold no view (and the Wood and Details
-docks no gmap lists: species, lichen habits); raised, each makes its view, and
-that view draws the dock's result: a picture that differs from the empty
-view's in many pixels.
+Built hidden behind other tabs, they hold no view (and the Wood dock no gmap
+list of species; the Details dock's habit list is filled from the start, without
+gmap); raised, each makes its view, and that view draws the dock's result: a
+picture that differs from the empty view's in many pixels.
 """
 
 from __future__ import annotations
@@ -51,7 +51,8 @@ def test_each_dock_makes_its_view_when_first_shown_and_draws_in_it(qtbot, window
     for key in LAZY:
         assert not window.docks[key].widget().view_slot.made, key
     assert window.docks["wood"].widget().species.count() == 0
-    assert window.docks["details"].widget().habit.count() == 0
+    habit = window.docks["details"].widget().habit
+    assert [habit.itemText(i) for i in range(habit.count())] == ["crustose", "foliose", "fruticose"]  # from the start
     fruit = window.controller.explorer.fruit_ids()[0]
     window.controller.select([fruit])
     settle(qtbot, window)
@@ -85,3 +86,10 @@ def test_each_dock_makes_its_view_when_first_shown_and_draws_in_it(qtbot, window
     shown = _picture(panel.plotter)
     panel.plotter.clear_actors()
     assert _changed(_picture(panel.plotter), shown) > 0.02
+
+
+def test_the_habit_names_listed_at_start_are_the_gmap_habits():
+    from ramure.app.desktop.details_panel import HABIT_NAMES
+    from ramure.gmap.lichen import HABITS
+
+    assert list(HABIT_NAMES) == list(HABITS)

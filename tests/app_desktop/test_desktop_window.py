@@ -373,7 +373,7 @@ def test_wide_cut_graph_stays_readable(make_window, qtbot, artifacts):
     w.controller.select(snap.segment_leaf[len(snap.segment_leaf) // 3 :])
     w.controller.regrow(seed=3)
     settle(qtbot, w)
-    w.docks["cut"].raise_()
+    w.open_dock("cut")  # closed at start: opened as the View menu does
     settle(qtbot, w)
     cut = w.cut_view
     layout = cut.layout_data
