@@ -102,9 +102,17 @@ def test_quarter_regrow_then_delete_a_regrown_branch_then_a_constant(make_window
     assert f"spans {cut.graph_size:,} nodes" in w.cut_view.title.text()
     snap = w.controller.snapshot
     regrown = np.flatnonzero(np.isin(snap.segment_leaf, snap.selection))
+    tree = ex.derivation.tree
+
+    def tip(i):  # a click on a tip prunes it; a lone segment that carries branches is kept
+        p = int(tree.parent[int(snap.segment_leaf[i])])
+        kids = np.arange(tree.child_start[p], tree.child_start[p] + tree.child_count[p])
+        return bool((tree.child_count[kids] == 0).all())
+
+    regrown = np.array([i for i in regrown if tip(i)])
     xy = w.view.project(snap.midpoints)
     gaps = [np.min(np.linalg.norm(np.delete(xy, i, axis=0) - xy[i], axis=1)) for i in regrown]
-    segment = int(regrown[int(np.argmax(gaps))])  # the regrown branch farthest from the others
+    segment = int(regrown[int(np.argmax(gaps))])  # the regrown tip farthest from the others
     QTest.mouseClick(plotter, Qt.MouseButton.LeftButton, Qt.KeyboardModifier.NoModifier, w.view.to_widget(*xy[segment]))
     assert ex.selection == [int(snap.segment_leaf[segment])] and ex.selection[0] >= first_size
     QTest.keyClick(plotter, Qt.Key.Key_Delete)
