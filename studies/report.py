@@ -37,9 +37,12 @@ import re
 import numpy as np
 
 from ramure.io import open_atomic, write_text, write_with
-from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
+from ramure.studies.agreement import cooccurrence_order, grouping_agreement, qualifier_agreement
+from ramure.studies.analysis import MEASURES, cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
 from ramure.studies.anova import anova_table
 from ramure.studies.data import StudyData, load_study_data
+from ramure.studies.inference import inference
+from ramure.studies.quality import quality_summary, representatives
 from ramure.studies.likert import LEVELS
 from ramure.metrics.heatmap import collision_summary, draw_collision_matrix
 from ramure.metrics.qualifiers import QualifierRegions
@@ -63,7 +66,7 @@ def analyze(
         means, counts = image_ratings(data, measure, with_counts=True)
         ratings[measure] = dict(mean=_listify(means), count=counts.tolist())
         anova[measure] = anova_table(means.T, alpha)
-    return dict(
+    result = dict(
         study=data.name,
         grammars=list(data.grammars),
         participants=int(len(set(data.test_participant.tolist()))),
@@ -80,7 +83,60 @@ def analyze(
             min_usefulness=min_usefulness,
         ),
         collision=collision_matrices(data, table, min_usefulness),
+        anova_label=ANOVA_LABEL,
+        inference=inference(data, alpha),
+        agreement=agreement(data, table),
+        representatives=representatives(data),
+        quality=quality_summary(data),
+        answers=likert_counts(data),
     )
+    return _jsonable(result)
+
+
+#: What the thesis-style ANOVA is, wherever it is shown (report, JSON, CSV).
+ANOVA_LABEL = (
+    "Reproduction of the thesis's ANOVA tables (\u00a77.3), which treat the 27 per-image mean ratings as independent "
+    "values: its degrees of freedom do not depend on the number of participants. Not an inference; see the "
+    "participant-level tests."
+)
+
+
+def agreement(data: StudyData, table: SynonymTable) -> dict:
+    """Grouping agreement (ARI) per grammar, co-occurrence orders and qualifier agreement."""
+    orders = {}
+    for key in [*data.grammars, "all"]:
+        order, linkage = cooccurrence_order(cooccurrence(data, None if key == "all" else key))
+        orders[key] = dict(order=(order + 1).tolist(), linkage=linkage.tolist())
+    return dict(
+        groupings={g: grouping_agreement(data, g) for g in data.grammars},
+        order=orders,
+        qualifiers=qualifier_agreement(data, table),
+    )
+
+
+def likert_counts(data: StudyData) -> dict:
+    """Answers per level (1-4) of each question and grammar: ``{measure: {grammar: [n1..n4]}}``."""
+    out = {}
+    for measure in MEASURES:
+        values = getattr(data, measure)
+        out[measure] = {
+            g: np.bincount(values[(data.group_grammar == i) & ~np.isnan(values)].astype(int), minlength=5)[1:].tolist()
+            for i, g in enumerate(data.grammars)
+        }
+    return out
+
+
+def _jsonable(value):
+    """``value`` with every non-finite float made None and numpy scalars made plain."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def collision_matrices(data: StudyData, table: SynonymTable | None = None, min_usefulness: str | int = "good") -> dict:
