@@ -369,10 +369,10 @@ def _verdict(res, alpha):
 def _eta_ci(F, df1, df2, level=0.95):
     """CI of partial eta squared by inverting the noncentral F in its noncentrality (Steiger 2004)."""
     from scipy.optimize import brentq
-    from scipy.stats import ncf
+    from scipy.special import ncfdtr
 
     def bound(q):
-        f = lambda lam: ncf.cdf(F, df1, df2, lam) - q  # noqa: E731
+        f = lambda lam: ncfdtr(df1, df2, lam, F) - q  # noqa: E731
         if f(0.0) < 0:
             return 0.0
         hi = max(10.0, 10 * F * df1)
@@ -389,12 +389,12 @@ def _eta_ci(F, df1, df2, level=0.95):
 def _dz_ci(t, n, level=0.95):
     """Exact CI of Cohen's d_z = t / sqrt(n) from the noncentral t (NaN where it cannot be bracketed)."""
     from scipy.optimize import brentq
-    from scipy.stats import nct
+    from scipy.special import nctdtr
 
     df, tail = n - 1, (1 - level) / 2
 
     def bound(q):
-        f = lambda nc: nct.cdf(t, df, nc) - q  # noqa: E731
+        f = lambda nc: nctdtr(df, nc, t) - q  # noqa: E731
         lo, hi, step = t - 1.0, t + 1.0, 1.0
         while f(lo) < 0 or f(hi) > 0:  # cdf falls as nc grows: bracket the root
             step *= 2

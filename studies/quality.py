@@ -1,6 +1,6 @@
 """The answers the ratings leave out: time on task, data-quality flags, representatives.
 
-* :func:`test_quality` -- one row per test: time on task, groups formed, share of
+* :func:`per_test_quality` -- one row per test: time on task, groups formed, share of
   groups fully rated, and flags a reviewer asks about:
 
   - ``too_fast``: under :data:`TOO_FAST_SECONDS` or under a third of the study's
@@ -19,7 +19,7 @@
 
 >>> from ramure.studies.simulate import simulate_study
 >>> data = simulate_study(participants=3, grammars=1, seed=0)
->>> rows = test_quality(data)
+>>> rows = per_test_quality(data)
 >>> len(rows), rows[0]["seconds"] > 60, any(r["flags"] for r in rows)
 (3, True, False)
 """
@@ -39,7 +39,7 @@ TOO_FAST_SECONDS = 60.0
 FLAGS = ("too_fast", "single_group", "all_alone", "straight_lining", "unrated")
 
 
-def test_quality(data: StudyData) -> list[dict]:
+def per_test_quality(data: StudyData) -> list[dict]:
     """One dict per test: participant, grammar, seconds, groups, rated share and ``flags``."""
     n = data.n_tests
     seconds = data.test_seconds if len(data.test_seconds) == n else np.full(n, np.nan)
@@ -75,7 +75,7 @@ def test_quality(data: StudyData) -> list[dict]:
 
 def quality_summary(data: StudyData) -> dict:
     """Time on task (seconds) per grammar and overall, the flag counts, and the flagged tests."""
-    rows = test_quality(data)
+    rows = per_test_quality(data)
     time = {g: summary([r["seconds"] for r in rows if r["grammar"] == g and np.isfinite(r["seconds"])]) for g in data.grammars}
     time["all"] = summary([r["seconds"] for r in rows if np.isfinite(r["seconds"])])
     return dict(

@@ -83,7 +83,8 @@ class SimulatedParticipant:
 
     def __post_init__(self):
         self.rng = np.random.default_rng(self.seed)
-        self.leniency = float(self.rng.normal(0.0, self.leniency_sd))
+        # its own stream, so the sorting and answers draw the same numbers as before it existed
+        self.leniency = float(np.random.default_rng([self.seed, 1]).normal(0.0, self.leniency_sd))
         self.said: list[tuple[str, str | None]] = []
 
     def sort(self, points: np.ndarray) -> list:
