@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ramure.studies.errors import StudyInputError
     from ramure.studies.agreement import grouping_agreement, pairwise_ari
     from ramure.studies.export import export_csv, write_codebook
-    from ramure.studies.inference import inference
+    from ramure.studies.inference import rating_inference
     from ramure.studies.quality import quality_summary, representatives, per_test_quality
     from ramure.studies.likert import LEVELS, likert_value
     from ramure.studies.picks import Pick, lattice_picks, load_picks, picks_from_data, synthetic_grammars
@@ -73,7 +73,6 @@ _LAZY = {
     "image_order": ".session",
     "image_ratings": ".analysis",
     "images_per_group": ".analysis",
-    "inference": ".inference",
     "labelled_points": ".qualifiers",
     "lattice_picks": ".picks",
     "likert_value": ".likert",
@@ -86,6 +85,7 @@ _LAZY = {
     "picks_from_data": ".picks",
     "qualifier_frequencies": ".qualifiers",
     "quality_summary": ".quality",
+    "rating_inference": ".inference",
     "read_table": ".anova",
     "representatives": ".quality",
     "run_simulation": ".simulate",
@@ -118,7 +118,6 @@ __all__ = [
     "image_order",
     "image_ratings",
     "images_per_group",
-    "inference",
     "labelled_points",
     "lattice_picks",
     "likert_value",
@@ -131,6 +130,7 @@ __all__ = [
     "picks_from_data",
     "qualifier_frequencies",
     "quality_summary",
+    "rating_inference",
     "read_table",
     "representatives",
     "run_simulation",

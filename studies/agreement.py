@@ -72,7 +72,7 @@ def grouping_agreement(data: StudyData, grammar: str, n_boot: int = 2000, seed: 
     """Mean pairwise ARI of ``grammar`` with a percentile bootstrap 95 % CI over participants.
 
     Each bootstrap sample draws participants with replacement and averages the ARI
-    of every pair of distinct draws of distinct participants.
+    of every pair of draws of distinct participants.
     """
     ari = pairwise_ari(data, grammar)
     n = len(ari)
@@ -80,12 +80,13 @@ def grouping_agreement(data: StudyData, grammar: str, n_boot: int = 2000, seed: 
         return dict(n=n, pairs=0, mean=None, ci=[None, None], error=f"needs 2 participants, got {n}")
     upper = ari[np.triu_indices(n, 1)]
     rng = np.random.default_rng(seed)
-    draws = rng.integers(0, n, size=(n_boot, n))
-    sub = ari[draws[:, :, None], draws[:, None, :]]  # (n_boot, n, n)
-    distinct = draws[:, :, None] != draws[:, None, :]
-    with np.errstate(invalid="ignore"):
-        means = (sub * distinct).sum(axis=(1, 2)) / distinct.sum(axis=(1, 2))
-    means = means[np.isfinite(means)]
+    # A resample is how many times each participant was drawn (c); its ordered pairs of draws
+    # of distinct participants sum to c A c - sum(c_i^2 A_ii) over n^2 - sum(c_i^2) pairs.
+    counts = rng.multinomial(n, np.full(n, 1.0 / n), size=n_boot).astype(float)
+    square = (counts**2).sum(axis=1)
+    pairs_drawn = n * n - square
+    sums = ((counts @ ari) * counts).sum(axis=1) - square * np.diag(ari)[0]
+    means = sums[pairs_drawn > 0] / pairs_drawn[pairs_drawn > 0]
     low, high = np.percentile(means, [2.5, 97.5]) if len(means) else (np.nan, np.nan)
     return dict(
         n=n, pairs=int(len(upper)), mean=float(upper.mean()), ci=[float(low), float(high)], median=float(np.median(upper))

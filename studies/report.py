@@ -47,7 +47,7 @@ from ramure.studies.agreement import cooccurrence_order, grouping_agreement, qua
 from ramure.studies.analysis import MEASURES, cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
 from ramure.studies.anova import anova_table
 from ramure.studies.data import StudyData, load_study_data
-from ramure.studies.inference import inference
+from ramure.studies.inference import rating_inference
 from ramure.studies.quality import quality_summary, representatives
 from ramure.studies.likert import LEVELS
 from ramure.metrics.heatmap import collision_summary, draw_collision_matrix
@@ -90,7 +90,7 @@ def analyze(
         ),
         collision=collision_matrices(data, table, min_usefulness),
         anova_label=ANOVA_LABEL,
-        inference=inference(data, alpha),
+        inference=rating_inference(data, alpha),
         agreement=agreement(data, table),
         representatives=representatives(data),
         quality=quality_summary(data),
@@ -338,6 +338,7 @@ def _write_figures(data, result, out):
 
 def _dendrogram_figure(result, path):
     """Per grammar (and pooled): the average-linkage dendrogram over the co-occurrence in its order."""
+    from matplotlib.collections import LineCollection
     from scipy.cluster.hierarchy import dendrogram
 
     panels = ["all", *result["grammars"]]
@@ -347,8 +348,9 @@ def _dendrogram_figure(result, path):
         tree = result["agreement"]["order"][key]
         d = dendrogram(np.array(tree["linkage"], dtype=float), no_plot=True)
         top, ax = axes[0, col], axes[1, col]
-        for xs, ys in zip(d["icoord"], d["dcoord"]):
-            top.plot(xs, ys, color="#345", lw=0.8)
+        links = [np.column_stack([xs, ys]) for xs, ys in zip(d["icoord"], d["dcoord"])]
+        top.add_collection(LineCollection(links, colors="#345", linewidths=0.8))
+        top.set_ylim(0, max(1e-9, max(max(ys) for ys in d["dcoord"])) * 1.05)
         top.set_xlim(0, 10 * 27)
         top.set_xticks([])
         top.set_ylabel("1 − share grouped", fontsize=8)
@@ -357,7 +359,7 @@ def _dendrogram_figure(result, path):
         m = np.array(result["cooccurrence"][key], dtype=float)
         n = max(m.diagonal().max(), 1)
         ax.imshow((m / n)[np.ix_(order, order)], cmap="magma", vmin=0, vmax=1, interpolation="nearest")
-        ax.set_xticks(range(27), order + 1, fontsize=5, rotation=90)
+        ax.set_xticks([])  # same order as the rows; 27 more labels per panel doubled the figure's time
         ax.set_yticks(range(27), order + 1, fontsize=5)
     write_with(path, fig.savefig)
     return path
@@ -539,7 +541,7 @@ def _inference_html(result):
         "repeated-measures ANOVA, Friedman's test and the paired contrasts (Holm-corrected). The mixed "
         "model takes every rated group, with random intercepts for the participant and for the test "
         "(the participant's pass over one grammar's pictures); the ordinal model treats the levels as "
-        f"ordered categories, participant as a fixed effect. Below {inf['min_participants']} participants who "
+        f"ordered categories, with standard errors clustered by participant. Below {inf['min_participants']} participants who "
         "rated every grammar no verdict is drawn: that is the N at which a paired comparison detects a "
         "large effect (d<sub>z</sub> = 0.8) with 80 % power.</p>",
     ]

@@ -176,8 +176,9 @@ def run_simulation(
     Each does ``tests_per_participant`` grammars drawn at random (default:
     every grammar), in random order.  ``effects`` maps grammar names to a shift
     of the usefulness answers (Likert points; others 0).  Each test takes a
-    log-normal time with median ``test_minutes`` on a simulated clock, so time on
-    task is recorded as people would spend it.  Returns the new participant codes.
+    log-normal time with median ``test_minutes`` on a simulated clock (shortened so
+    that every test fits the study's time budget), so time on task is recorded as
+    people would spend it.  Returns the new participant codes.
     """
     rng = np.random.default_rng(seed)
     grammars = study.grammars
@@ -190,6 +191,9 @@ def run_simulation(
     points = {g: np.array([p.pca for p in study.picks(g)]) for g in grammars}
     count = len(grammars) if tests_per_participant is None else min(int(tests_per_participant), len(grammars))
     codes = []
+    # Time on task within the participant's budget, as the front ends keep it.
+    longest = 0.95 * study.budget_seconds / max(count, 1)
+    median = min(60.0 * test_minutes, 0.6 * longest)
     machine_clock, clock = study.clock, SimulatedClock(study.clock())
     study.clock = clock
     try:
@@ -198,7 +202,7 @@ def run_simulation(
             person = SimulatedParticipant(noise=noise, seed=int(rng.integers(2**31)))
             for grammar in rng.permutation(grammars)[:count].tolist():
                 session = study.session(code, grammar)
-                clock.advance(60.0 * test_minutes * float(np.exp(rng.normal(0.0, 0.35))))
+                clock.advance(min(median * float(np.exp(rng.normal(0.0, 0.35))), longest))
                 person.answer(session, points[grammar], effects.get(grammar, 0.0))
             codes.append(code)
     finally:
