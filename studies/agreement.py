@@ -133,7 +133,7 @@ def qualifier_agreement(data: StudyData, table: SynonymTable, min_tests: int = 2
             for name in names:
                 said.setdefault(name, np.zeros((len(tests), N_PICKS), dtype=bool))
                 said[name][np.searchsorted(tests, t)] |= data.membership[row]
-        rows = []
+        rows: list[dict] = []
         for name, yes in sorted(said.items()):
             users = int(yes.any(axis=1).sum())
             if users < min_tests or len(tests) < 2:

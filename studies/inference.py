@@ -282,7 +282,7 @@ def rating_inference(data: StudyData, alpha: float = 0.05, measures: tuple[str, 
     for measure in measures:
         wide = participant_means(data, measure)
         frame = answers_frame(data, measure)
-        res = dict(n=int(len(wide)), dropped=sorted(set(frame["participant"]) - set(wide.index)))
+        res: dict = dict(n=int(len(wide)), dropped=sorted(set(frame["participant"]) - set(wide.index)))
         res["rm_anova"] = rm_anova(wide, alpha)
         res["friedman"] = friedman(wide)
         res["pairwise"] = pairwise(wide, alpha)

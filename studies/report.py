@@ -657,8 +657,8 @@ def _quality_html(result):
         "(the image nearest the group's centre in PCA space), against choosing at random, and the "
         "representative rating (1–4) of each kind of choice.</p>"
     ]
-    keys = ("medoid_share", "chance", "quality_medoid", "quality_other")
-    rows = [[e(g), r["groups"], *(_fmt(r[k], 2) for k in keys)] for g, r in reps.items()]
+    shares = ("medoid_share", "chance", "quality_medoid", "quality_other")
+    rows = [[e(g), r["groups"], *(_fmt(r[k], 2) for k in shares)] for g, r in reps.items()]
     parts.append(_table(["grammar", "groups", "medoid share", "chance", "rating (medoid)", "rating (other)"], rows))
     parts.append("<h2>Time on task and data quality</h2>")
     keys = ("n", "median", "q1", "q3", "min", "max")
