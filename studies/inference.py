@@ -275,7 +275,8 @@ def rating_inference(data: StudyData, alpha: float = 0.05, measures: tuple[str, 
     """Every participant-level test of each rated measure, with warnings and a verdict.
 
     ``significant`` is True only when the repeated-measures ANOVA rejects at ``alpha``
-    with at least :data:`MIN_PARTICIPANTS` complete participants.  ``models`` False
+    with at least :data:`MIN_PARTICIPANTS` complete participants (the mixed model's
+    Wald test, with that many participants, when too few rated every grammar).  ``models`` False
     skips the mixed and ordinal models (the slow part).
     """
     out: dict = dict(alpha=alpha, min_participants=MIN_PARTICIPANTS, unit="participant")
@@ -290,9 +291,8 @@ def rating_inference(data: StudyData, alpha: float = 0.05, measures: tuple[str, 
             res["mixed_model"] = _guarded(mixed_model, frame, list(data.grammars))
             res["ordinal_model"] = _guarded(ordinal_model, frame, list(data.grammars))
         res["warnings"] = _warnings(res)
-        p = res["rm_anova"].get("p")
-        res["significant"] = bool(p is not None and p < alpha and res["n"] >= MIN_PARTICIPANTS)
-        res["verdict"] = _verdict(res, alpha)
+        res["verdict"], p, n = _verdict(res, alpha)
+        res["significant"] = bool(p is not None and p < alpha and n >= MIN_PARTICIPANTS)
         out[measure] = res
     return out
 
@@ -372,7 +372,7 @@ def _warnings(res):
     n = res["n"]
     out = []
     if n < 2:
-        out.append(f"{n} participant(s) rated every grammar: nothing can be tested with participants as the unit.")
+        out.append(f"{n} participant(s) rated every grammar: the repeated-measures tests cannot run.")
     elif n < MIN_PARTICIPANTS:
         out.append(
             f"only {n} participants rated every grammar (minimum {MIN_PARTICIPANTS}, the N that detects a large "
@@ -387,17 +387,23 @@ def _warnings(res):
 
 
 def _verdict(res, alpha):
-    a = res["rm_anova"]
-    if "error" in a:
-        return f"not tested: {a['error']}"
-    if math.isnan(a["p"]):
-        return "undefined: every participant gave the same means"
-    stats = f"F({a['df1']:g}, {a['df2']:g}) = {a['F']:.2f}, p = {a['p']:.3g}"
-    if res["n"] < MIN_PARTICIPANTS:
-        return f"{stats}; N = {res['n']} is below {MIN_PARTICIPANTS}: exploratory, no verdict"
-    if a["p"] < alpha:
-        return f"{stats}: the grammars differ (alpha = {alpha:g})"
-    return f"{stats}: no evidence that the grammars differ (alpha = {alpha:g})"
+    """(verdict text, p, N) of the repeated-measures ANOVA; when some participants did not rate
+    every grammar so that it cannot run, of the mixed model, which uses every answer."""
+    a, m = res["rm_anova"], res.get("mixed_model") or {}
+    if "error" not in a:
+        stats, p, n = f"F({a['df1']:g}, {a['df2']:g}) = {a['F']:.2f}, p = {a['p']:.3g}", a["p"], res["n"]
+    elif m and "error" not in m:
+        p, n = m["p"], m["n_participants"]
+        stats = f"mixed model (not everyone rated every grammar): Wald χ²({m['wald_df']}) = {m['wald_chi2']:.2f}, p = {p:.3g}"
+    else:
+        return f"not tested: {a['error']}", None, res["n"]
+    if math.isnan(p):
+        return "undefined: every participant gave the same means", None, n
+    if n < MIN_PARTICIPANTS:
+        return f"{stats}; N = {n} is below {MIN_PARTICIPANTS}: exploratory, no verdict", p, n
+    if p < alpha:
+        return f"{stats}: the grammars differ (alpha = {alpha:g})", p, n
+    return f"{stats}: no evidence that the grammars differ (alpha = {alpha:g})", p, n
 
 
 def _eta_ci(F, df1, df2, level=0.95):

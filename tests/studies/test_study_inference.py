@@ -107,7 +107,8 @@ def test_one_participant_is_never_significant():
     for measure in ("usefulness", "difference", "representative_quality"):
         r = result[measure]
         assert r["significant"] is False and "error" in r["rm_anova"]
-        assert r["verdict"].startswith("not tested") and "nothing can be tested" in r["warnings"][0]
+        assert r["verdict"].startswith("not tested") and "cannot run" in r["warnings"][0]
+        assert "error" in r["mixed_model"] and "error" in r["ordinal_model"]
 
 
 def test_few_participants_get_a_warning_and_no_verdict():
@@ -118,6 +119,23 @@ def test_few_participants_get_a_warning_and_no_verdict():
     assert r["rm_anova"]["p"] < 0.05  # the effect is there ...
     assert r["significant"] is False and "no verdict" in r["verdict"]  # ... but 5 people decide nothing
     assert any("minimum 15" in w for w in r["warnings"])
+
+
+def test_reports_of_an_empty_study_and_of_an_incomplete_design(tmp_path):
+    from ramure.studies.storage import Study
+
+    with Study.create(tmp_path / "e.db", grammars={"a": lattice_picks(), "b": lattice_picks(seed=2)}) as study:
+        study.add_participant(consent=True)
+    empty = write_report(tmp_path / "e.db", tmp_path / "empty")
+    assert empty["tests"] == 0 and empty["inference"]["usefulness"]["significant"] is False
+    assert empty["agreement"]["groupings"]["a"]["pairs"] == 0
+    # Each participant rates 2 of 3 grammars: no repeated-measures ANOVA, the mixed model decides.
+    grammars = {name: lattice_picks(seed=1) for name in ("a", "b", "c")}
+    data = simulate_study(participants=24, grammars=grammars, tests_per_participant=2, seed=2, effects={"c": 1.5})
+    r = rating_inference(data)["usefulness"]
+    assert "error" in r["rm_anova"] and r["mixed_model"]["n_participants"] == 24
+    assert r["verdict"].startswith("mixed model") and r["significant"]
+    assert write_report(data, tmp_path / "incomplete")["files"]
 
 
 def test_simulated_grammar_effect_is_recovered():
