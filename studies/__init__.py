@@ -30,7 +30,10 @@ if TYPE_CHECKING:
     from ramure.studies.anova import AnovaResult, anova_table, one_way_anova, read_table
     from ramure.studies.data import StudyData, load_study_data
     from ramure.studies.errors import StudyInputError
-    from ramure.studies.export import export_csv
+    from ramure.studies.agreement import grouping_agreement, pairwise_ari
+    from ramure.studies.export import export_csv, write_codebook
+    from ramure.studies.inference import rating_inference
+    from ramure.studies.quality import quality_summary, representatives, per_test_quality
     from ramure.studies.likert import LEVELS, likert_value
     from ramure.studies.picks import Pick, lattice_picks, load_picks, picks_from_data, synthetic_grammars
     from ramure.studies.qualifiers import (
@@ -64,6 +67,7 @@ _LAZY = {
     "cooccurrence": ".analysis",
     "export_csv": ".export",
     "export_qualifier_points": ".qualifiers",
+    "grouping_agreement": ".agreement",
     "grouping_stats": ".analysis",
     "groups_per_test": ".analysis",
     "image_order": ".session",
@@ -76,12 +80,18 @@ _LAZY = {
     "load_study_data": ".data",
     "normalise_text": ".qualifiers",
     "one_way_anova": ".anova",
+    "pairwise_ari": ".agreement",
+    "per_test_quality": ".quality",
     "picks_from_data": ".picks",
     "qualifier_frequencies": ".qualifiers",
+    "quality_summary": ".quality",
+    "rating_inference": ".inference",
     "read_table": ".anova",
+    "representatives": ".quality",
     "run_simulation": ".simulate",
     "simulate_study": ".simulate",
     "synthetic_grammars": ".picks",
+    "write_codebook": ".export",
     "write_report": ".report",
 }
 
@@ -102,6 +112,7 @@ __all__ = [
     "cooccurrence",
     "export_csv",
     "export_qualifier_points",
+    "grouping_agreement",
     "grouping_stats",
     "groups_per_test",
     "image_order",
@@ -114,12 +125,18 @@ __all__ = [
     "load_study_data",
     "normalise_text",
     "one_way_anova",
+    "pairwise_ari",
+    "per_test_quality",
     "picks_from_data",
     "qualifier_frequencies",
+    "quality_summary",
+    "rating_inference",
     "read_table",
+    "representatives",
     "run_simulation",
     "simulate_study",
     "synthetic_grammars",
+    "write_codebook",
     "write_report",
 ]
 

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -57,6 +57,7 @@ class StudyData:
     representative_quality: np.ndarray
     qualifier_group: np.ndarray  # (n_qualifiers,) group row of each qualifier
     qualifier_text: list
+    test_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_tests,) time on task
 
     @property
     def n_tests(self) -> int:
@@ -100,8 +101,12 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         " AND t.finished_at IS NOT NULL" if finished_only else ""
     )
     tests = np.array(
-        conn.execute(f"SELECT t.id, t.grammar_id, t.participant_id FROM tests t {where} ORDER BY t.id").fetchall(), dtype=np.int64
-    ).reshape(-1, 3)
+        conn.execute(
+            f"SELECT t.id, t.grammar_id, t.participant_id, t.elapsed_seconds FROM tests t {where} ORDER BY t.id"
+        ).fetchall(),
+        dtype=float,
+    ).reshape(-1, 4)
+    seconds, tests = tests[:, 3], tests[:, :3].astype(np.int64)
     tindex = {tid: i for i, tid in enumerate(tests[:, 0].tolist())}
     groups = conn.execute(
         f"SELECT g.id, g.test_id, g.label, g.representative, g.usefulness, g.difference, "
@@ -145,6 +150,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         representative_quality=likert(cols[6]),
         qualifier_group=np.array([gid_row[g] for g, _ in quals], dtype=np.int64),
         qualifier_text=[t for _, t in quals],
+        test_seconds=seconds,
     )
 
 

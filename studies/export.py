@@ -2,7 +2,9 @@
 
 Files: ``picks.csv``, ``participants.csv``, ``tests.csv``, ``groups.csv``
 (one row per group, images joined by ``;``), ``memberships.csv`` (one row per
-image placed), ``qualifiers.csv`` (raw text plus its canonical names).  Likert
+image placed), ``qualifiers.csv`` (raw text plus its canonical names), and
+``codebook.csv`` (each column's type, levels and meaning, for R) with
+``README_R.txt`` (how to read them in R).  Likert
 answers are 1-4 (poor, fair, good, excellent); unfinished tests are included
 with an empty ``finished_at``.  Answers of participants without recorded
 consent are left out (they stay listed in ``participants.csv``).
@@ -11,8 +13,8 @@ consent are left out (they stay listed in ``participants.csv``).
 >>> from ramure.studies.simulate import simulate_study
 >>> tmp = pathlib.Path(tempfile.mkdtemp())
 >>> _ = simulate_study(tmp / "s.db", participants=2, grammars=1)
->>> sorted(p.name for p in export_csv(tmp / "s.db", tmp / "csv"))[:3]
-['groups.csv', 'memberships.csv', 'participants.csv']
+>>> sorted(p.name for p in export_csv(tmp / "s.db", tmp / "csv"))[:4]
+['README_R.txt', 'codebook.csv', 'groups.csv', 'memberships.csv']
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import csv
 import os
 import pathlib
 
-from ramure.io import open_atomic
+from ramure.io import open_atomic, write_text
 from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS, SynonymTable
 
 if TYPE_CHECKING:
@@ -64,6 +66,69 @@ _QUERIES = {
 }
 
 
+_LIKERT = "1 = poor, 2 = fair, 3 = good, 4 = excellent; empty = not answered"
+_ISO = "ISO-8601 UTC time"
+#: file, column, R type, levels or unit, meaning -- written as ``codebook.csv`` beside the CSVs.
+CODEBOOK = [
+    ("picks.csv", "grammar", "factor", "", "grammar (stimulus set) name"),
+    ("picks.csv", "pick_id", "integer", "1-27", "picture number within the grammar (PCA lattice order)"),
+    ("picks.csv", "variant_id", "integer", "", "index of the variant in the exploration's sweep"),
+    ("picks.csv", "pc1", "numeric", "PCA units", "first principal component of the variant's metrics"),
+    ("picks.csv", "pc2", "numeric", "PCA units", "second principal component"),
+    ("picks.csv", "pc3", "numeric", "PCA units", "third principal component"),
+    ("picks.csv", "params", "character", "JSON", 'parameter combination, {"rule": int, "constants": {...}}'),
+    ("picks.csv", "image", "character", "path", "thumbnail file, empty if none"),
+    ("participants.csv", "code", "factor", "", "anonymous participant code"),
+    ("participants.csv", "consent", "integer", "0 = no, 1 = yes", "consent recorded; answers without it are not exported"),
+    ("participants.csv", "consent_at", "character", _ISO, "when consent was recorded"),
+    ("participants.csv", "created_at", "character", _ISO, "when the participant was added"),
+    ("tests.csv", "test", "integer", "", "test id: one participant's pass over one grammar"),
+    ("tests.csv", "participant", "factor", "", "participant code"),
+    ("tests.csv", "grammar", "factor", "", "grammar name"),
+    ("tests.csv", "started_at", "character", _ISO, "when the test started"),
+    ("tests.csv", "finished_at", "character", _ISO, "when it was finished; empty = unfinished"),
+    ("tests.csv", "elapsed_seconds", "numeric", "seconds", "time on task"),
+    ("groups.csv", "test", "integer", "", "test id (tests.csv)"),
+    ("groups.csv", "participant", "factor", "", "participant code: the unit of analysis"),
+    ("groups.csv", "grammar", "factor", "", "grammar name: the within-participant factor"),
+    ("groups.csv", "grp", "integer", "1..", "group label within the test, in the participant's order"),
+    ("groups.csv", "size", "integer", "1-27", "number of pictures in the group"),
+    ("groups.csv", "images", "character", "pick ids joined by ;", "pictures in the group"),
+    ("groups.csv", "representative", "integer", "1-27; empty = none", "picture chosen to represent the group"),
+    ("groups.csv", "usefulness", "ordered factor", _LIKERT, "how useful the group of variants is"),
+    ("groups.csv", "difference", "ordered factor", _LIKERT, "how different the group is from the others"),
+    ("groups.csv", "representative_quality", "ordered factor", _LIKERT, "how well the representative represents it"),
+    ("memberships.csv", "test", "integer", "", "test id"),
+    ("memberships.csv", "participant", "factor", "", "participant code"),
+    ("memberships.csv", "grammar", "factor", "", "grammar name"),
+    ("memberships.csv", "grp", "integer", "1..", "group label within the test"),
+    ("memberships.csv", "pick_id", "integer", "1-27", "a picture placed in that group"),
+    ("qualifiers.csv", "test", "integer", "", "test id"),
+    ("qualifiers.csv", "participant", "factor", "", "participant code"),
+    ("qualifiers.csv", "grammar", "factor", "", "grammar name"),
+    ("qualifiers.csv", "grp", "integer", "1..", "group label within the test"),
+    ("qualifiers.csv", "text", "character", "", "the words as the participant wrote them"),
+    ("qualifiers.csv", "canonical", "character", "names joined by ;", "vocabulary qualifiers coded from the text"),
+]
+
+_R_HINT = """# Read in R:
+#   g <- read.csv("groups.csv")
+#   g$usefulness <- factor(g$usefulness, levels = 1:4, labels = c("poor", "fair", "good", "excellent"), ordered = TRUE)
+#   lme4::lmer(as.numeric(usefulness) ~ grammar + (1 | participant) + (1 | test), data = g)
+"""
+
+
+def write_codebook(out_dir: str | os.PathLike) -> pathlib.Path:
+    """Write ``codebook.csv`` (file, column, type, levels, meaning) for the exported CSVs."""
+    path = pathlib.Path(out_dir) / "codebook.csv"
+    with open_atomic(path, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["file", "column", "type", "levels", "meaning"])
+        writer.writerows(CODEBOOK)
+    write_text(pathlib.Path(out_dir) / "README_R.txt", _R_HINT)
+    return path
+
+
 def export_csv(
     source: Study | str | os.PathLike, out_dir: str | os.PathLike, synonyms: Sequence[str | os.PathLike] | None = None
 ) -> list[pathlib.Path]:
@@ -94,4 +159,6 @@ def export_csv(
             writer.writerow(header)
             writer.writerows(rows)
         written.append(path)
+    written.append(write_codebook(out_dir))
+    written.append(out_dir / "README_R.txt")
     return written

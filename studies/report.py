@@ -9,8 +9,14 @@
 * ``cooccurrence_<grammar>.csv`` and ``cooccurrence_all.csv`` (27 x 27);
 * ``image_ratings_usefulness.tsv`` / ``..._difference.tsv`` -- rows = image
   points, columns = grammars: the layout ``ramure study anova`` reads back;
-* ``grouping_stats.csv``, ``anova.csv``, ``qualifiers.csv``,
-  ``qualifiers_unmatched.csv`` and ``summary.json`` (everything above as JSON).
+* ``grouping_stats.csv``, ``anova.csv`` (the thesis's tables, labelled: not an
+  inference), ``qualifiers.csv``, ``qualifiers_unmatched.csv``;
+* ``inference.csv`` and ``pairwise.csv`` (participants as the unit,
+  :mod:`~ramure.studies.inference`), ``agreement.csv`` (adjusted Rand index per
+  grammar), ``test_quality.csv`` (time on task and flags per test);
+* ``dendrogram.png`` (co-occurrence ordered by clustering) and ``answers.png``
+  (diverging bars of every Likert answer);
+* ``summary.json`` (everything above as JSON).
 
 Figures use matplotlib's object API on the Agg canvas, never pyplot, so the
 report can be written from inside a Qt application.
@@ -37,9 +43,12 @@ import re
 import numpy as np
 
 from ramure.io import open_atomic, write_text, write_with
-from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
+from ramure.studies.agreement import cooccurrence_order, grouping_agreement, qualifier_agreement
+from ramure.studies.analysis import MEASURES, cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
 from ramure.studies.anova import anova_table
 from ramure.studies.data import StudyData, load_study_data
+from ramure.studies.inference import rating_inference
+from ramure.studies.quality import quality_summary, representatives
 from ramure.studies.likert import LEVELS
 from ramure.metrics.heatmap import collision_summary, draw_collision_matrix
 from ramure.metrics.qualifiers import QualifierRegions
@@ -63,7 +72,7 @@ def analyze(
         means, counts = image_ratings(data, measure, with_counts=True)
         ratings[measure] = dict(mean=_listify(means), count=counts.tolist())
         anova[measure] = anova_table(means.T, alpha)
-    return dict(
+    result = dict(
         study=data.name,
         grammars=list(data.grammars),
         participants=int(len(set(data.test_participant.tolist()))),
@@ -80,7 +89,60 @@ def analyze(
             min_usefulness=min_usefulness,
         ),
         collision=collision_matrices(data, table, min_usefulness),
+        anova_label=ANOVA_LABEL,
+        inference=rating_inference(data, alpha),
+        agreement=agreement(data, table),
+        representatives=representatives(data),
+        quality=quality_summary(data),
+        answers=likert_counts(data),
     )
+    return _jsonable(result)
+
+
+#: What the thesis-style ANOVA is, wherever it is shown (report, JSON, CSV).
+ANOVA_LABEL = (
+    "Reproduction of the thesis's ANOVA tables (\u00a77.3), which treat the 27 per-image mean ratings as independent "
+    "values: its degrees of freedom do not depend on the number of participants. Not an inference; see the "
+    "participant-level tests."
+)
+
+
+def agreement(data: StudyData, table: SynonymTable) -> dict:
+    """Grouping agreement (ARI) per grammar, co-occurrence orders and qualifier agreement."""
+    orders = {}
+    for key in [*data.grammars, "all"]:
+        order, linkage = cooccurrence_order(cooccurrence(data, None if key == "all" else key))
+        orders[key] = dict(order=(order + 1).tolist(), linkage=linkage.tolist())
+    return dict(
+        groupings={g: grouping_agreement(data, g) for g in data.grammars},
+        order=orders,
+        qualifiers=qualifier_agreement(data, table),
+    )
+
+
+def likert_counts(data: StudyData) -> dict:
+    """Answers per level (1-4) of each question and grammar: ``{measure: {grammar: [n1..n4]}}``."""
+    out = {}
+    for measure in MEASURES:
+        values = getattr(data, measure)
+        out[measure] = {
+            g: np.bincount(values[(data.group_grammar == i) & ~np.isnan(values)].astype(int), minlength=5)[1:].tolist()
+            for i, g in enumerate(data.grammars)
+        }
+    return out
+
+
+def _jsonable(value):
+    """``value`` with every non-finite float made None and numpy scalars made plain."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def collision_matrices(data: StudyData, table: SynonymTable | None = None, min_usefulness: str | int = "good") -> dict:
@@ -178,7 +240,9 @@ def _write_csvs(data, result, out):
     )
     keys = ("F", "F_crit", "p", "df_between", "df_within", "significant", "verdict")
     rows = [[m, d, *(r.get(k) for k in keys), r.get("error", "")] for m, res in result["anova"].items() for d, r in res.items()]
-    files.append(_write_rows(out / "anova.csv", ["measure", "test", *keys, "error"], rows))
+    rows = [[*r, "thesis reproduction: image means as independent values, not an inference"] for r in rows]
+    files.append(_write_rows(out / "anova.csv", ["measure", "test", *keys, "error", "note"], rows))
+    files += _write_inference_csvs(data, result, out)
     q = result["qualifiers"]
     rows = []
     for scope in ("kept", "all"):
@@ -192,6 +256,58 @@ def _write_csvs(data, result, out):
             out / "qualifiers_unmatched.csv", ["text", "groups"], [[r["text"], r["groups"]] for r in q["all"]["unmatched"]]
         )
     )
+    return files
+
+
+def _write_inference_csvs(data, result, out):
+    """inference.csv, pairwise.csv, agreement.csv and test_quality.csv (see the codebook)."""
+    inf = result["inference"]
+    rows = []
+    for m in MEASURES:
+        r = inf[m]
+        a, f = r["rm_anova"], r["friedman"]
+        rows.append([m, "rm_anova", r["n"], a.get("F"), a.get("df1"), a.get("df2"), a.get("p"), "partial_eta2",
+                     a.get("partial_eta2"), *(a.get("partial_eta2_ci") or [None, None]), r["verdict"]])  # fmt: skip
+        rows.append([m, "friedman", r["n"], f.get("chi2"), f.get("df"), None, f.get("p"), "kendall_w", f.get("kendall_w"),
+                     None, None, ""])  # fmt: skip
+        for key in ("mixed_model", "ordinal_model"):
+            mm = r.get(key) or {}
+            rows.append([m, key, r["n"], mm.get("wald_chi2"), mm.get("wald_df"), None, mm.get("p"), "", None, None, None,
+                         mm.get("error", "")])  # fmt: skip
+    header = ["measure", "test", "n", "statistic", "df1", "df2", "p", "effect", "effect_value", "ci_low", "ci_high", "note"]
+    files = [_write_rows(out / "inference.csv", header, rows)]
+    rows = [
+        [m, c["a"], c["b"], c["n"], c["mean_difference"], *c["ci"], c["t"], c["df"], c["p"], c["p_holm"], c["d_z"], *c["d_z_ci"]]
+        for m in MEASURES
+        for c in inf[m]["pairwise"]
+    ]
+    header = [
+        "measure",
+        "a",
+        "b",
+        "n",
+        "mean_difference",
+        "ci_low",
+        "ci_high",
+        "t",
+        "df",
+        "p",
+        "p_holm",
+        "d_z",
+        "d_z_low",
+        "d_z_high",
+    ]
+    files.append(_write_rows(out / "pairwise.csv", header, rows))
+    rows = [[g, a["n"], a["pairs"], a["mean"], *a["ci"]] for g, a in result["agreement"]["groupings"].items()]
+    files.append(_write_rows(out / "agreement.csv", ["grammar", "participants", "pairs", "mean_ari", "ci_low", "ci_high"], rows))
+    from ramure.studies.quality import per_test_quality
+
+    rows = [
+        [r["participant"], r["grammar"], r["seconds"], r["groups"], r["rated_share"], ";".join(r["flags"])]
+        for r in per_test_quality(data)
+    ]
+    header = ["participant", "grammar", "seconds", "groups", "rated_share", "flags"]
+    files.append(_write_rows(out / "test_quality.csv", header, rows))
     return files
 
 
@@ -215,7 +331,76 @@ def _write_figures(data, result, out):
         files.append(_qualifier_figure(result, out / "qualifiers.png"))
     if result["collision"].get("all"):
         files.append(_collision_figure(result, out / "collision.png"))
+    files.append(_dendrogram_figure(result, out / "dendrogram.png"))
+    files.append(_answers_figure(result, out / "answers.png"))
     return files
+
+
+def _dendrogram_figure(result, path):
+    """Per grammar (and pooled): the average-linkage dendrogram over the co-occurrence in its order."""
+    from matplotlib.collections import LineCollection
+    from scipy.cluster.hierarchy import dendrogram
+
+    panels = ["all", *result["grammars"]]
+    fig = _figure(3.4 * len(panels), 4.6)
+    axes = fig.subplots(2, len(panels), squeeze=False, height_ratios=[1, 2.2])
+    for col, key in enumerate(panels):
+        tree = result["agreement"]["order"][key]
+        d = dendrogram(np.array(tree["linkage"], dtype=float), no_plot=True)
+        top, ax = axes[0, col], axes[1, col]
+        links = [np.column_stack([xs, ys]) for xs, ys in zip(d["icoord"], d["dcoord"])]
+        top.add_collection(LineCollection(links, colors="#345", linewidths=0.8))
+        top.set_ylim(0, max(1e-9, max(max(ys) for ys in d["dcoord"])) * 1.05)
+        top.set_xlim(0, 10 * 27)
+        top.set_xticks([])
+        top.set_ylabel("1 − share grouped", fontsize=8)
+        top.set_title(f"{'all grammars' if key == 'all' else key}", fontsize=10)
+        order = np.array(tree["order"]) - 1
+        m = np.array(result["cooccurrence"][key], dtype=float)
+        n = max(m.diagonal().max(), 1)
+        ax.imshow((m / n)[np.ix_(order, order)], cmap="magma", vmin=0, vmax=1, interpolation="nearest")
+        ax.set_xticks([])  # same order as the rows; 27 more labels per panel doubled the figure's time
+        ax.set_yticks(range(27), order + 1, fontsize=5)
+    write_with(path, fig.savefig)
+    return path
+
+
+_LEVEL_COLOURS = ("#c0392b", "#f1a58f", "#9fd3a8", "#1e8449")
+
+
+def _answers_figure(result, path):
+    """Diverging stacked bars: share of each answer level per question and grammar.
+
+    Poor and fair extend left of zero, good and excellent right, so a bar's balance
+    reads at a glance; the count of answers is written at the right.
+    """
+    rows = [(m, g) for m in MEASURES for g in result["grammars"]]
+    fig = _figure(8.0, 1.2 + 0.32 * len(rows))
+    ax = fig.subplots()
+    for y, (measure, grammar) in enumerate(rows):
+        counts = np.array(result["answers"][measure][grammar], dtype=float)
+        total = counts.sum()
+        share = counts / total if total else counts
+        starts = [-share[1] - share[0], -share[1], 0.0, share[2]]
+        for level in range(4):
+            ax.barh(
+                y,
+                share[level],
+                left=starts[level],
+                color=_LEVEL_COLOURS[level],
+                height=0.7,
+                label=LEVELS[level] if y == 0 else None,
+            )
+        ax.text(1.02, y, f"n = {int(total)}", va="center", fontsize=7, in_layout=False)
+    ax.axvline(0, color="k", lw=0.8)
+    ax.set_yticks(range(len(rows)), [f"{m.replace('_', ' ')} · {g}" for m, g in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlim(-1, 1.15)
+    ax.set_xticks([-1, -0.5, 0, 0.5, 1], ["100 %", "50 %", "0", "50 %", "100 %"])
+    ax.set_xlabel("share of answers (poor, fair ← | → good, excellent)")
+    fig.legend(ncols=4, loc="outside lower center", fontsize=8, frameon=False)
+    write_with(path, fig.savefig)
+    return path
 
 
 def _collision_figure(result, path):
@@ -342,6 +527,161 @@ def _qualifier_figure(result, path):
 
 
 # -- HTML ------------------------------------------------------------------------
+def _ci(pair, digits=2):
+    low, high = pair
+    return "–" if low is None or high is None else f"[{_fmt(low, digits)}, {_fmt(high, digits)}]"
+
+
+def _inference_html(result):
+    e = html.escape
+    inf = result["inference"]
+    parts = [
+        f"<h2>Inference, participants as the unit (α = {inf['alpha']:g})</h2>",
+        "<p class='note'>Each participant's mean rating of their groups per grammar enters the "
+        "repeated-measures ANOVA, Friedman's test and the paired contrasts (Holm-corrected). The mixed "
+        "model takes every rated group, with random intercepts for the participant and for the test "
+        "(the participant's pass over one grammar's pictures); the ordinal model treats the levels as "
+        f"ordered categories, with standard errors clustered by participant. Below {inf['min_participants']} participants who "
+        "rated every grammar no verdict is drawn: that is the N at which a paired comparison detects a "
+        "large effect (d<sub>z</sub> = 0.8) with 80 % power.</p>",
+    ]
+    rows, pair_rows = [], []
+    for measure in MEASURES:
+        r = inf[measure]
+        for w in r["warnings"]:
+            parts.append(f"<p class='warn'>{e(measure.replace('_', ' '))}: {e(w)}</p>")
+        a, f = r["rm_anova"], r["friedman"]
+        label = e(measure.replace("_", " "))
+        rows.append(
+            [
+                label,
+                "RM-ANOVA",
+                *(
+                    [e(a["error"]), "", "", ""]
+                    if "error" in a
+                    else [
+                        f"F({a['df1']}, {a['df2']}) = {_fmt(a['F'])}",
+                        _fmt(a["p"]),
+                        f"η²<sub>p</sub> = {_fmt(a['partial_eta2'], 2)}",
+                        _ci(a["partial_eta2_ci"]),
+                    ]
+                ),
+            ]
+        )
+        rows.append(
+            [
+                label,
+                "Friedman",
+                *(
+                    [e(f["error"]), "", "", ""]
+                    if "error" in f
+                    else [f"χ²({f['df']}) = {_fmt(f['chi2'])}", _fmt(f["p"]), f"W = {_fmt(f['kendall_w'], 2)}", ""]
+                ),
+            ]
+        )
+        for key, name, stat in (("mixed_model", "mixed model", "estimate"), ("ordinal_model", "ordinal model", "odds_ratio")):
+            m = r.get(key, {})
+            if not m:
+                continue
+            if "error" in m:
+                rows.append([label, name, e(m["error"]), "", "", ""])
+                continue
+            ci_key = "ci" if stat == "estimate" else "odds_ratio_ci"
+            effects = "; ".join(
+                f"{e(x['grammar'])} − {e(m['reference'])}: {_fmt(x[stat], 2)} {_ci(x[ci_key])}" for x in m["effects"]
+            )
+            what = "difference" if stat == "estimate" else "odds ratio"
+            rows.append(
+                [label, name, f"Wald χ²({m['wald_df']}) = {_fmt(m['wald_chi2'])}", _fmt(m["p"]), f"{what}: {effects}", ""]
+            )
+        rows.append([label, "<strong>verdict</strong>", e(r["verdict"]), "", "", ""])
+        for c in r["pairwise"]:
+            pair_rows.append(
+                [
+                    label,
+                    f"{e(c['b'])} − {e(c['a'])}",
+                    _fmt(c["mean_difference"], 2),
+                    _ci(c["ci"]),
+                    _fmt(c["d_z"], 2),
+                    _ci(c["d_z_ci"]),
+                    _fmt(c["p"]),
+                    _fmt(c["p_holm"]),
+                    _fmt(c["reject"]),
+                ]
+            )
+    parts.append(_table(["measure", "test", "statistic", "p", "effect size", "95 % CI"], rows))
+    if pair_rows:
+        parts.append("<h3>Paired contrasts</h3>")
+        parts.append(
+            _table(["measure", "contrast", "mean diff.", "95 % CI", "d_z", "95 % CI", "p", "p (Holm)", "reject"], pair_rows)
+        )
+    return parts
+
+
+def _agreement_html(result, figures):
+    e = html.escape
+    ag = result["agreement"]
+    parts = [
+        "<h2>Agreement between participants</h2><p class='note'>Adjusted Rand index of every pair of "
+        "participants' groupings of a grammar (0 = chance, 1 = identical), with a bootstrap 95 % CI over "
+        "participants. The heat maps order the images by average-linkage clustering of the co-occurrence; "
+        "the dendrograms above them show the clustering.</p>"
+    ]
+    rows = [[e(g), a["n"], a["pairs"], _fmt(a["mean"], 3), _ci(a["ci"], 3)] for g, a in ag["groupings"].items()]
+    parts.append(_table(["grammar", "participants", "pairs", "mean ARI", "95 % CI"], rows))
+    if figures:
+        parts.append("<img src='dendrogram.png' alt='dendrograms and ordered co-occurrence'>")
+    q = ag["qualifiers"]
+    share = "–" if q["coded_share"] is None else f"{100 * q['coded_share']:.1f} %"
+    parts.append(
+        "<h3>Qualifier coding</h3><p class='note'>The synonym table coded "
+        f"{share} of the {q['texts']} qualifier texts. Fleiss' κ per qualifier: how consistently the "
+        "participants who did a grammar gave (or did not give) it to each of the 27 images.</p>"
+    )
+    rows = [
+        [e(g), e(r["qualifier"]), r["tests"], r["images_named"], _fmt(r["kappa"], 3)]
+        for g, lst in q["per_grammar"].items()
+        for r in lst
+    ]
+    if rows:
+        header = ["grammar", "qualifier", "tests using it", "images named", "κ"]
+        parts.append(f"<details><summary>Fleiss' κ per qualifier</summary>{_table(header, rows)}</details>")
+    return parts
+
+
+def _quality_html(result):
+    e = html.escape
+    q, reps = result["quality"], result["representatives"]
+    parts = [
+        "<h2>Representatives</h2><p class='note'>How often the chosen representative is the group's medoid "
+        "(the image nearest the group's centre in PCA space), against choosing at random, and the "
+        "representative rating (1–4) of each kind of choice.</p>"
+    ]
+    shares = ("medoid_share", "chance", "quality_medoid", "quality_other")
+    rows = [[e(g), r["groups"], *(_fmt(r[k], 2) for k in shares)] for g, r in reps.items()]
+    parts.append(_table(["grammar", "groups", "medoid share", "chance", "rating (medoid)", "rating (other)"], rows))
+    parts.append("<h2>Time on task and data quality</h2>")
+    keys = ("n", "median", "q1", "q3", "min", "max")
+    rows = [
+        [e(g), *(_fmt(None if s[k] is None else s[k] / 60, 2) if k != "n" else s[k] for k in keys)]
+        for g, s in q["time_on_task"].items()
+    ]
+    parts.append(_table(["grammar", "tests", "median (min)", "q1", "q3", "min", "max"], rows))
+    counts = ", ".join(f"{e(f.replace('_', ' '))}: {n}" for f, n in q["flag_counts"].items())
+    parts.append(
+        f"<p class='note'>Flags — {counts}. Too fast: under {q['too_fast_seconds']:g} s or a third of the median. "
+        "Single group / all alone: no sorting. Straight-lining: one level for every answer of three groups or more.</p>"
+    )
+    if q["flagged"]:
+        rows = [
+            [e(r["participant"]), e(r["grammar"]), _fmt(r["seconds"] / 60, 2), r["groups"], e(", ".join(r["flags"]))]
+            for r in q["flagged"]
+        ]
+        header = ["participant", "grammar", "minutes", "groups", "flags"]
+        parts.append(f"<details open><summary>flagged tests</summary>{_table(header, rows)}</details>")
+    return parts
+
+
 def _fmt(v, digits=3):
     if v is None:
         return "–"
@@ -361,7 +701,7 @@ def _table(header, rows):
 _CSS = """body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}
 table{border-collapse:collapse;margin:.5em 0 1.5em;font-size:.9em}td,th{border:1px solid #ccc;padding:.25em .6em;
 text-align:right}th{background:#eee}td:first-child{text-align:left}img{max-width:100%}
-.note{color:#555;font-size:.9em}"""
+.note{color:#555;font-size:.9em}.warn{background:#fff4d6;border-left:4px solid #e0a800;padding:.4em .8em}"""
 
 
 def _html(result, files, figures):
@@ -391,6 +731,12 @@ def _html(result, files, figures):
     ]
     parts.append(_table(["grammar", "measure", *keys], rows))
     parts.append(
+        "<h2>Answers</h2><p class='note'>Every answer to each question, per grammar: "
+        "poor and fair to the left of zero, good and excellent to the right.</p>"
+    )
+    if figures:
+        parts.append("<img src='answers.png' alt='diverging bars of the Likert answers per question and grammar'>")
+    parts.append(
         "<h2>Per-image ratings</h2><p class='note'>Each group's rating passes to each of its "
         "images; means over the tests of each grammar.</p>"
     )
@@ -400,7 +746,9 @@ def _html(result, files, figures):
         m = result["ratings"][measure]["mean"]
         rows = [[str(i + 1), *(_fmt(m[g][i], 2) for g in range(len(result["grammars"])))] for i in range(27)]
         parts.append(f"<details><summary>mean {measure} table</summary>{_table(['image', *result['grammars']], rows)}</details>")
-    parts.append(f"<h2>One-way ANOVA (α = {result['alpha']:g})</h2>")
+    parts += _inference_html(result)
+    parts.append(f"<h2>Reproduction of the thesis's ANOVA tables (α = {result['alpha']:g})</h2>")
+    parts.append(f"<p class='warn'>{e(result['anova_label'])}</p>")
     rows = []
     for measure, res in result["anova"].items():
         for test, r in res.items():
@@ -456,5 +804,7 @@ def _html(result, files, figures):
     if q["all"]["unmatched"]:
         rows = [[e(r["text"]), r["groups"]] for r in q["all"]["unmatched"][:30]]
         parts.append(f"<details><summary>texts outside the vocabulary</summary>{_table(['text', 'groups'], rows)}</details>")
+    parts += _agreement_html(result, figures)
+    parts += _quality_html(result)
     parts.append("<h2>Files</h2><ul>" + "".join(f"<li><a href='{e(f)}'>{e(f)}</a></li>" for f in files) + "</ul></body></html>")
     return "\n".join(parts)

@@ -44,7 +44,10 @@ def _grammar_specs(items):
 
 
 def _summary(result) -> dict:
-    """The short part of a report result: counts, grouping, ANOVA, top qualifiers."""
+    """The short part of a report result: counts, grouping, inference, agreement, flags, top qualifiers.
+
+    ``anova`` is the thesis's table reproduction (labelled by ``anova_label``); the verdicts are
+    in ``inference``, with participants as the unit."""
     overall = result["grouping"]["all"]
     kept = result["qualifiers"]["kept"]
     return dict(
@@ -55,7 +58,15 @@ def _summary(result) -> dict:
         groups=result["groups"],
         groups_per_test=overall["groups_per_test"],
         images_per_group=overall["images_per_group"],
+        inference={
+            m: dict(verdict=r["verdict"], significant=r["significant"], n=r["n"], warnings=r["warnings"])
+            for m, r in result["inference"].items()
+            if isinstance(r, dict)
+        },
+        agreement={g: dict(mean_ari=a["mean"], ci=a["ci"]) for g, a in result["agreement"]["groupings"].items()},
+        flags=result["quality"]["flag_counts"],
         anova=result["anova"],
+        anova_label=result["anova_label"],
         qualifiers=dict(
             observations=result["qualifiers"]["all"]["observations"],
             unique_texts=result["qualifiers"]["all"]["unique_texts"],

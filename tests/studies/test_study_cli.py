@@ -91,7 +91,7 @@ def test_create_status_analyze_export(tmp_path, capsys):
     assert again["across_grammars"]["F"] == pytest.approx(out["anova"]["usefulness"]["across_grammars"]["F"])
 
     code, out, _ = run(capsys, "export-csv", str(db), "-o", str(tmp_path / "csv"))
-    assert code == 0 and len(out["files"]) == 6
+    assert code == 0 and len(out["files"]) == 8  # six tables, the codebook and its R note
     code, out, _ = run(capsys, "export-qualifiers", str(db), "--store", str(tmp_path / "q.db"))
     assert code == 0 and out["points"] > 0 and out["source"] == "study:study"
     conn = sqlite3.connect(tmp_path / "q.db")

@@ -77,7 +77,7 @@ def test_simulate_command_end_to_end(tmp_path, capsys):
     assert 2 <= out["groups_per_test"]["mean"] <= 9
     report = tmp_path / "report"
     html = (report / "index.html").read_text()
-    for part in ("cooccurrence.png", "grouping.png", "ratings.png", "One-way ANOVA", "Qualifiers"):
+    for part in ("cooccurrence.png", "grouping.png", "ratings.png", "ANOVA tables", "Not an inference", "Qualifiers"):
         assert part in html
     for png in ("cooccurrence.png", "grouping.png", "ratings.png", "qualifiers.png"):
         assert (report / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
