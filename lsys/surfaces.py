@@ -221,6 +221,28 @@ def _local(polygons):
     return pts, tris
 
 
+_CHECKING: set = set()  # surface files being parsed now: a file that names itself is checked once
+
+
+def _check_file(line: SourceLine, at: int, name: str, path: pathlib.Path) -> None:
+    """Parse a ``#surface`` grammar file when the directive is read, so an error in it is
+    reported at once (line, column of the directive), not after the plant is derived.  A file
+    that names itself is left to the drawing, which reports the cycle."""
+    from .grammar import parse_grammar, read_grammar_file
+
+    key = str(path)
+    if key in _CHECKING:
+        return
+    _CHECKING.add(key)
+    try:
+        parse_grammar(read_grammar_file(path), key)
+    except GrammarError as err:
+        where = f"line {err.line}: " if err.line else ""
+        raise line.error(f"#surface {name}: {path.name}, {where}{err.message}", at + 1) from None
+    finally:
+        _CHECKING.discard(key)
+
+
 class SurfaceDefinition:
     """One ``#surface`` directive: a module string (``modules``) or a grammar file (``path``)."""
 
@@ -251,6 +273,7 @@ def parse_directive(parser: GrammarParser, line: SourceLine, start: int) -> Surf
         path = parser.confined(line, at, f"#surface {name}", body[1:-1], line.filename or parser.filename)
         if not path.is_file():
             raise line.error(f"#surface {name}: no grammar file {body[1:-1]} ({path})", at + 1)
+        _check_file(line, at, name, path)
         return SurfaceDefinition(name, line, at + 1, path=path)
     modules = parser.modules_at(line, at, None, formal=False)
     from .polygons import check_written_polygons

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import glob
 import os
 import pathlib
 import sqlite3
@@ -106,7 +107,8 @@ def _replacing(path: pathlib.Path, suffix: str = ".tmp") -> Iterator[str]:
     try:
         import tempfile  # here: the readers (the grammar parser's includes) need not import it
 
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+        remove_stale_temporaries(path)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.", suffix=suffix)
         os.close(fd)
     except OSError as exc:
         raise _refuse(path, exc) from None
@@ -119,6 +121,54 @@ def _replacing(path: pathlib.Path, suffix: str = ".tmp") -> Iterator[str]:
     except BaseException:
         _discard(tmp)
         raise
+
+
+#: A temporary file of ``path`` without its writer's pid (written before the pid was in the
+#: name) is stale after this many seconds.
+STALE_SECONDS = 24 * 3600
+
+
+def remove_stale_temporaries(path: str | os.PathLike) -> list[pathlib.Path]:
+    """Remove the temporary files a killed writer of ``path`` left beside it; return them.
+
+    A writer's temporary file is ``.NAME.PID.XXXX.tmp...``: one whose process ``PID`` is gone
+    (a ``kill -9``, a crash) is stale; a live writer's, another process's running write
+    included, is left.  Called before each write of ``path``, so no kill leaves debris for
+    long.  Only names of that pattern are touched (and, from before the pid was in the name,
+    ``.NAME.XXXX.tmp...`` files a day old).
+    """
+    path = pathlib.Path(path)
+    removed = []
+    for tmp in path.parent.glob(f".{glob.escape(path.name)}.*.tmp*"):
+        middle = tmp.name[len(path.name) + 2 :].split(".")
+        if middle[0].isdigit() and len(middle) >= 3:
+            stale = int(middle[0]) != os.getpid() and not _alive(int(middle[0]))
+        else:
+            stale = _age(tmp) > STALE_SECONDS
+        if stale:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+                removed.append(tmp)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True  # another user's process, or not a pid: not ours to judge
+    return True
+
+
+def _age(path: pathlib.Path) -> float:
+    import time
+
+    try:
+        return time.time() - path.stat().st_mtime
+    except OSError:
+        return 0.0
 
 
 def _allow_empty(writer) -> bool:

@@ -260,3 +260,12 @@ def test_mutated_mtg_files_raise_only_mtg_errors():
         except MTGError:
             refused += 1
     assert refused > 100  # the mutations reach the readers' checks
+
+
+def test_an_error_in_a_surface_file_is_reported_when_the_grammar_is_read(folders):
+    plants, _ = folders
+    (plants / "blade.lsys").write_text("n: 0\nw: {.f.+f.\np:\n A -> ((\n")
+    main = grammar_in(plants, '#surface blade "blade.lsys"')
+    with pytest.raises(GrammarError, match=r"#surface blade: blade.lsys, line \d+") as info:
+        LSystem.from_file(main)  # parsing only: nothing is derived
+    assert info.value.line == 1

@@ -6,6 +6,7 @@ import pathlib
 import signal
 import subprocess
 import sys
+import textwrap
 import time
 
 import numpy as np
@@ -204,3 +205,33 @@ def test_study_report_full_disk_keeps_previous_files(tmp_path, monkeypatch):
         report.write_text(out / "summary.json", "{}")
     assert (out / "summary.json").read_text() == '{"old": true}'
     assert report.write_with is atomic.write_with and report.open_atomic is atomic.open_atomic
+
+
+def test_the_next_write_removes_what_a_killed_writer_left(tmp_path):
+    """Issue 37, item 9: a writer killed mid-write leaves its temporary file; the next write of
+    the same file removes it, and leaves a live writer's temporary file alone."""
+    target = tmp_path / "big.bin"
+    child = textwrap.dedent(f"""
+        import time, ramure.io as atomic
+        def slow(tmp):
+            open(tmp, "wb").write(b"x" * 1_000_000)
+            print("written", flush=True)
+            time.sleep(60)
+        atomic.write_with({str(target)!r}, slow)
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "written"
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    left = list(tmp_path.glob(".big.bin.*"))
+    assert len(left) == 1 and left[0].stat().st_size == 1_000_000 and f".{proc.pid}." in left[0].name
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        live = tmp_path / f".big.bin.{sleeper.pid}.abcd1234.tmp"
+        live.write_bytes(b"a write still running")
+        atomic.write_bytes(target, b"new")
+        assert target.read_bytes() == b"new"
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["big.bin", live.name])
+    finally:
+        sleeper.kill()
+        sleeper.wait()
