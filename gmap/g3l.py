@@ -29,8 +29,19 @@ modulo the order).  Names usable in expressions: the predecessor's
 parameters, constants, ``stage``/``step`` (global half-year counter, from 0),
 ``season`` (0 spring, 1 summer; ``spring`` and ``summer`` are names too),
 ``age`` (steps since the volume was made), ``order`` (filiation order: the
-axiom is 1, a volume on a side face has its parent's order + 1), ``alea(a,
-b)`` (seeded uniform draw) and the usual math functions.  Context atoms
+axiom is 1, a volume on a side face has its parent's order + 1), ``pi``,
+``alea(a, b)`` (seeded uniform draw between the smaller and the larger bound)
+and the math functions of ``.lsys`` files.
+
+Expressions are read and evaluated by the one evaluator of both grammar
+languages, :mod:`ramure.lsys.expr`: floats only, ``^`` is the power
+(``2^3 == 8``), ``&& || !`` the logic, and **trigonometry is in degrees**
+(``sin(90) == 1``, ``atan2(1, 0) == 90``), like the volumes' angles.  A
+``#define`` or a parameter-free expression that overflows (``10^400``) is
+refused when the file is read; one that overflows for a volume stops the
+derivation with the rule's line and column.  Python's ``**``, ``and``,
+``or``, ``not``, strings, lists, subscripts, attributes and bit operators are
+refused with a caret.  Context atoms
 ``X_F < Y_G`` (or ``>``) hold when the volume's free face F shares an edge with a
 free face G of a ``Y`` volume; a join rule identifies that pair.
 
@@ -66,6 +77,7 @@ from ramure.lsys.expr import (
     compile_expression,
     evaluate_constant,
     make_function,
+    names_used,
     parse_expression,
     uses_random,
 )
@@ -81,8 +93,9 @@ BUILTIN_NAMES = ("stage", "step", "season", "age", "order", "spring", "summer", 
 
 _SYMBOL = r"[A-Za-z][A-Za-z0-9']*"
 _FACE_ATOM = re.compile(rf"^({_SYMBOL})_(O|E|C\d+)$")
-#: Python's words for the logical operators, read as ``&&``, ``||`` and ``!`` (same width, so columns hold).
-_PYTHON_WORDS = ((re.compile(r"\band\b"), "&& "), (re.compile(r"\bor\b"), "||"), (re.compile(r"\bnot\b"), "!  "))
+#: Python's words for the logical operators, refused with the operator to write instead.
+_PYTHON_WORDS = re.compile(r"\b(and|or|not)\b")
+_OPERATOR_FOR = {"and": "&&", "or": "||", "not": "!"}
 
 
 @dataclass
@@ -193,10 +206,10 @@ class _Parser:
             self.fail("an expression is missing", line, col)
         if "**" in src:
             self.fail("'**' is not an operator: powers are written '^'", line, col + src.index("**"))
-        words = src
-        for pattern, new in _PYTHON_WORDS:
-            words = pattern.sub(new, words)
-        return src, Source(words, line, col, self.lines[line - 1] if 0 < line <= len(self.lines) else None)
+        word = _PYTHON_WORDS.search(src)
+        if word:
+            self.fail(f"'{word.group(1)}' is not an operator: write '{_OPERATOR_FOR[word.group(1)]}'", line, col + word.start())
+        return src, Source(src, line, col, self.lines[line - 1] if 0 < line <= len(self.lines) else None)
 
     def parsed(self, text, line, column):
         """``text`` parsed by the shared evaluator's parser: (stripped text, Expression)."""
@@ -221,11 +234,15 @@ class _Parser:
         except GrammarError as err:
             self.fail(err.message, line, err.column or column)
         e = Expr(src, parsed, run, line, parsed.src.column, uses_random(parsed))
+        if not e.random and {name for name, _ in names_used(parsed)} <= set(self.constants):
+            self.value(parsed, line, column)  # no per-volume value: 10^400 or 1/0 is refused now, not at step k
         return (e, atoms) if context else e
 
     def constant(self, text, line, column) -> float:
         """The value of a ``#define`` expression: finite, or a GrammarError (overflow, 0/0, unknown name)."""
-        _, parsed = self.parsed(text, line, column)
+        return self.value(self.parsed(text, line, column)[1], line, column)
+
+    def value(self, parsed, line, column) -> float:
         values = {**self.constants, "pi": math.pi}
         try:
             return evaluate_constant(parsed, values)
