@@ -92,7 +92,8 @@ PARAM_DEFAULTS = (4.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
 BUILTIN_NAMES = ("stage", "step", "season", "age", "order", "spring", "summer", "pi")
 
 _SYMBOL = r"[A-Za-z][A-Za-z0-9']*"
-_FACE_ATOM = re.compile(rf"^({_SYMBOL})_(O|E|C\d+)$")
+_FACE = r"O|E|C[1-9]\d*"  # side faces count from C1
+_FACE_ATOM = re.compile(rf"^({_SYMBOL})_({_FACE})$")
 #: Python's words for the logical operators, refused with the operator to write instead.
 _PYTHON_WORDS = re.compile(r"\b(and|or|not)\b")
 _OPERATOR_FOR = {"and": "&&", "or": "||", "not": "!"}
@@ -407,13 +408,13 @@ class _Parser:
         self.rules.append(rule)
 
     def split_rule(self, rule, succ, no, col) -> None:
-        m = re.match(r"\s*(O|E|C\d+)\s+(" + _SYMBOL + r")\s+(" + _SYMBOL + r")\s*$", succ)
+        m = re.match(rf"\s*({_FACE})\s+({_SYMBOL})\s+({_SYMBOL})\s*$", succ)
         if not m:
             self.fail("a split is written 'A ->^F B C' (F = O, E or Ck)", no, col)
         rule.op, rule.split_face, rule.split_parts = "split", m.group(1), (m.group(2), m.group(3))
 
     def join_rule(self, rule, succ, no, col) -> None:
-        m = re.match(rf"\s*({_SYMBOL})_(O|E|C\d+)\s*\|\s*({_SYMBOL})_(O|E|C\d+)\s*$", succ)
+        m = re.match(rf"\s*({_SYMBOL})_({_FACE})\s*\|\s*({_SYMBOL})_({_FACE})\s*$", succ)
         if not m:
             self.fail("an identification is written 'X_F | Y_G'", no, col)
         if m.group(1) != rule.pred:
@@ -472,6 +473,8 @@ class _Parser:
             return FaceSpec("Cexcept", e, text, col + pos), end
         if text == "C*":
             return FaceSpec("Call", None, text, col + pos), end
+        if m.group(3) and int(m.group(3)) == 0:
+            self.fail("side faces count from C1", no, col + pos)
         expr_text = m.group(3) or m.group(4)
         e = self.expr(expr_text, no, col + pos + 1, extra=params)
         return FaceSpec("C", e, text, col + pos), end

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 from collections.abc import Mapping
 from typing import Any, SupportsInt
@@ -412,7 +413,7 @@ class G3LDerivation:
 
     def _face_code(self, v, label, rule, column):
         gm = self.gm
-        code = _prism.face_label_code(label)
+        code = _prism.face_label_code(label) if re.fullmatch(r"O|E|C[1-9]\d*", label) else -1
         n = int(gm.volume_data["degree"][v])
         shape = int(gm.volume_data["shape"][v])
         valid = {0, 1} | ({2, 3, 5} if shape == WEDGE else set(range(2, n + 2)))
