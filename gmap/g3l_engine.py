@@ -481,7 +481,7 @@ class G3LDerivation:
             faces = self._faces_of(rule, spec, vols, scope)
             template = self.grammar.templates.get(call.symbol)
             random = any(a is not None and a.random for a in call.args + (template.args if template else []))
-            params = None if random else self._params(call, scope)
+            params = np.zeros((len(vols), 7)) if random else self._params(call, scope)
             for j in range(max(map(len, faces), default=0)):
                 idx = [i for i, f in enumerate(faces) if len(f) > j]
                 if random:  # one draw per face, as the volume reads them
