@@ -168,6 +168,15 @@ class _Scope:
         return _Scope({k: v[pick] for k, v in self.V.items()}, C, self.R.take(pick), len(pick))
 
 
+def _finite_or_refuse(values: np.ndarray, what: str) -> None:
+    """Refuse a derivation whose sizes overflowed the geometry (a size near 1e308, say)."""
+    bad = ~np.isfinite(values.reshape(len(values), -1)).all(axis=1)
+    if bad.any():
+        raise ValueRefused(
+            f"the grammar's sizes overflow: {int(bad.sum())} of {len(values)} {what} are not finite numbers; use smaller sizes"
+        )
+
+
 class G3LSystem:
     """A grammar ready to derive: ``G3LSystem.from_file("wood/spiral").derive(6)``."""
 
@@ -205,12 +214,15 @@ class G3LSystem:
         d = G3LDerivation(self.grammar, int(seed), dict(overrides or {}), max_darts)
         t0 = time.perf_counter()
         for _ in range(steps):
-            d.step()
+            with np.errstate(over="ignore", invalid="ignore"):
+                d.step()
+            _finite_or_refuse(d.gm.volume_data["origin"], "volume origins")
             if embed_every_step:
                 d.embed()
             if check_every_step:
                 d.check_topology()
-        d.embed()
+        with np.errstate(over="ignore", invalid="ignore"):  # huge sizes: refused below, not warned about
+            _finite_or_refuse(d.embed(), "points")
         d.seconds = time.perf_counter() - t0
         return d
 

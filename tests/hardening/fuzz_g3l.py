@@ -60,6 +60,8 @@ HOSTILE = [
     "sqrt(-1)",
     "log(0)",
     "1e308*10",
+    "1e308",
+    "1e200",
     "stage",
     "age",
     "order",
@@ -132,6 +134,8 @@ def grow(text, seed=0, max_steps=MAX_STEPS, max_darts=MAX_DARTS):
     steps = min(system.grammar.steps if system.grammar.steps is not None else 1, max_steps)
     d = system.derive(steps, seed=seed, max_darts=max_darts)
     d.check_topology()
+    if not np.isfinite(d.gm.points).all():
+        raise AssertionError("a derivation that was not refused has non-finite points")
     if d.gm.n_volumes > 1:
         d.regrow(d.gm.n_volumes - 1, seed + 1)
     return d.gm.n_darts, d.gm.n_volumes

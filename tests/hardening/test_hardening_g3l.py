@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from ramure.app.cli import main
-from ramure.errors import DerivationError, GrammarError
+from ramure.errors import DerivationError, GrammarError, ValueRefused
 from ramure.gmap.g3l import parse_g3l
 from ramure.gmap.g3l_engine import G3LSystem
 from ramure.lsys import LSystem
@@ -102,6 +102,17 @@ def test_overflow_for_one_volume_stops_the_derivation_at_the_rule(tmp_path, caps
     path.write_text(text)
     assert main(["wood", "--grammar", str(path), "--years", "1"]) == 2
     assert "overflow" in capsys.readouterr().err
+
+
+def test_sizes_that_overflow_the_geometry_are_refused(tmp_path, capsys):
+    text = AXIOM + "(p1) A -> A[A(4, 0, 0, 0, 1e308)]_E\n"
+    with pytest.raises(ValueRefused, match="sizes overflow: 1 of 3 volume origins"):
+        G3LSystem.from_text(text).derive(2)
+    path = tmp_path / "huge.g3l"
+    path.write_text(text)
+    assert main(["wood", "--grammar", str(path), "--years", "1"]) == 2  # two half-year steps
+    err = capsys.readouterr().err.strip()
+    assert "sizes overflow" in err and "\n" not in err and "Warning" not in err
 
 
 def test_names_functions_and_draws_of_the_engine():
