@@ -29,8 +29,19 @@ modulo the order).  Names usable in expressions: the predecessor's
 parameters, constants, ``stage``/``step`` (global half-year counter, from 0),
 ``season`` (0 spring, 1 summer; ``spring`` and ``summer`` are names too),
 ``age`` (steps since the volume was made), ``order`` (filiation order: the
-axiom is 1, a volume on a side face has its parent's order + 1), ``alea(a,
-b)`` (seeded uniform draw) and the usual math functions.  Context atoms
+axiom is 1, a volume on a side face has its parent's order + 1), ``pi``,
+``alea(a, b)`` (seeded uniform draw between the smaller and the larger bound)
+and the math functions of ``.lsys`` files.
+
+Expressions are read and evaluated by the one evaluator of both grammar
+languages, :mod:`ramure.lsys.expr`: floats only, ``^`` is the power
+(``2^3 == 8``), ``&& || !`` the logic, and **trigonometry is in degrees**
+(``sin(90) == 1``, ``atan2(1, 0) == 90``), like the volumes' angles.  A
+``#define`` or a parameter-free expression that overflows (``10^400``) is
+refused when the file is read; one that overflows for a volume stops the
+derivation with the rule's line and column.  Python's ``**``, ``and``,
+``or``, ``not``, strings, lists, subscripts, attributes and bit operators are
+refused with a caret.  Context atoms
 ``X_F < Y_G`` (or ``>``) hold when the volume's free face F shares an edge with a
 free face G of a ``Y`` volume; a join rule identifies that pair.
 
@@ -46,46 +57,66 @@ volume (rule-major semantics, see :mod:`ramure.gmap.g3l_engine`).
 
 from __future__ import annotations
 
-import ast
+import dataclasses
 import math
 import os
 import pathlib
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NoReturn
 
+import numpy as np
+
 from ramure.errors import GrammarError
 from ramure.io import FileRefused, read_regular
+from ramure.lsys.expr import (
+    Expression,
+    Node,
+    Source,
+    compile_expression,
+    evaluate_constant,
+    make_function,
+    names_used,
+    parse_expression,
+    uses_random,
+)
 
 #: The largest ``.g3l`` file read (a grammar is a few rules).
 MAX_G3L_BYTES = 16 * 2**20
 #: Positional parameter names of a volume symbol and their defaults.
 PARAM_NAMES = ("O", "x", "y", "z", "H", "L", "W")
 PARAM_DEFAULTS = (4.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
-
-MATH = {
-    name: getattr(math, name)
-    for name in ("sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sqrt", "exp", "log", "floor", "ceil", "pi")
-}
-MATH.update({"abs": abs, "min": min, "max": max, "int": int, "float": float, "round": round})
-BUILTIN_NAMES = {"stage", "step", "season", "age", "order", "spring", "summer", "alea"} | set(MATH)
+#: Names every expression may read besides the predecessor's parameters and the constants;
+#: the engine supplies their values for each volume (``pi`` is the number, not an angle unit).
+BUILTIN_NAMES = ("stage", "step", "season", "age", "order", "spring", "summer", "pi")
 
 _SYMBOL = r"[A-Za-z][A-Za-z0-9']*"
-_FACE_ATOM = re.compile(rf"^({_SYMBOL})_(O|E|C\d+)$")
+_FACE = r"O|E|C[1-9]\d*"  # side faces count from C1
+_FACE_ATOM = re.compile(rf"^({_SYMBOL})_({_FACE})$")
+#: Python's words for the logical operators, refused with the operator to write instead.
+_PYTHON_WORDS = re.compile(r"\b(and|or|not)\b")
+_OPERATOR_FOR = {"and": "&&", "or": "||", "not": "!"}
 
 
 @dataclass
 class Expr:
-    """A compiled arithmetic or boolean expression with its source position."""
+    """An arithmetic or boolean expression, parsed and compiled once by :mod:`ramure.lsys.expr`.
+
+    Calling it with ``(V, C, R, n)`` evaluates it for ``n`` volumes at once: ``V`` maps
+    the predecessor's parameter names to arrays, ``C`` the constants and the built-in
+    names (:data:`BUILTIN_NAMES`) to floats or arrays, ``R`` gives the seeded draws.
+    """
 
     text: str
-    code: object
-    names: frozenset
+    parsed: Expression
+    run: Callable
     line: int
     column: int
+    random: bool
 
-    def __call__(self, env):
-        return eval(self.code, {"__builtins__": {}}, env)  # noqa: S307  (whitelisted AST)
+    def __call__(self, V: dict, C: dict, R: object, n: int) -> np.ndarray:
+        return self.run(V, C, R, n)
 
 
 @dataclass
@@ -164,42 +195,60 @@ class _Parser:
         raise GrammarError(message, line, column, src, self.filename)
 
     # -------------------------------------------------------------- expressions
-    def expr(self, text, line, column, extra=()):
+    def names(self) -> list[str]:
+        """Names an expression may read besides its rule's parameters: constants so far and the built-ins."""
+        return [*self.constants, *BUILTIN_NAMES]
+
+    def source(self, text, line, column):
+        """``text`` (its first character at ``column``) as a :class:`Source` for the shared evaluator."""
         src = text.strip()
         col = column + (len(text) - len(text.lstrip()))
-        py = src.replace("&&", " and ").replace("||", " or ")
-        py = re.sub(r"!(?!=)", " not ", py)
-        if not py.strip():
+        if not src:
             self.fail("an expression is missing", line, col)
+        if "**" in src:
+            self.fail("'**' is not an operator: powers are written '^'", line, col + src.index("**"))
+        word = _PYTHON_WORDS.search(src)
+        if word:
+            self.fail(f"'{word.group(1)}' is not an operator: write '{_OPERATOR_FOR[word.group(1)]}'", line, col + word.start())
+        return src, Source(src, line, col, self.lines[line - 1] if 0 < line <= len(self.lines) else None)
+
+    def parsed(self, text, line, column):
+        """``text`` parsed by the shared evaluator's parser: (stripped text, Expression)."""
+        src, source = self.source(text, line, column)
         try:
-            tree = ast.parse(py, mode="eval")
-        except SyntaxError as err:
-            self.fail(f"cannot read the expression {src!r}", line, col + max((err.offset or 1) - 1, 0))
-        names = set()
-        for node in ast.walk(tree):
-            if isinstance(
-                node,
-                (
-                    ast.Attribute,
-                    ast.Subscript,
-                    ast.Lambda,
-                    ast.ListComp,
-                    ast.DictComp,
-                    ast.SetComp,
-                    ast.GeneratorExp,
-                    ast.Starred,
-                    ast.NamedExpr,
-                ),
-            ):
-                self.fail(f"this expression form is not allowed: {src!r}", line, col)
-            if isinstance(node, ast.Name):
-                names.add(node.id)
-        known = set(self.constants) | set(self.functions) | BUILTIN_NAMES | set(extra)
-        for name in sorted(names):
-            if name not in known and not _FACE_ATOM.match(name):
-                where = re.search(rf"\b{re.escape(name)}\b", src)
-                self.fail(f"unknown name {name!r}", line, col + (where.start() if where else 0))
-        return Expr(src, compile(tree, "<g3l>", "eval"), frozenset(names), line, col)
+            return src, parse_expression(source, functions=self.functions)
+        except GrammarError as err:
+            self.fail(f"cannot read the expression {src!r}: {err.message}", line, err.column or source.column)
+
+    def expr(self, text, line, column, extra=(), context=False):
+        """A compiled :class:`Expr`; with ``context``, face atoms ``X_F < Y_G`` are read out.
+
+        Returns the Expr, or ``(Expr, atoms)`` with ``context``: the atoms are checked on
+        the map by the engine and stand for true in the compiled condition.
+        """
+        src, parsed = self.parsed(text, line, column)
+        atoms: list = []
+        if context:
+            parsed = Expression(_strip_atoms(parsed.node, atoms, parsed.src.column), parsed.src)
+        try:
+            run = compile_expression(parsed, extra, self.names())
+        except GrammarError as err:
+            self.fail(err.message, line, err.column or column)
+        e = Expr(src, parsed, run, line, parsed.src.column, uses_random(parsed))
+        if not e.random and {name for name, _ in names_used(parsed)} <= set(self.constants):
+            self.value(parsed, line, column)  # no per-volume value: 10^400 or 1/0 is refused now, not at step k
+        return (e, atoms) if context else e
+
+    def constant(self, text, line, column) -> float:
+        """The value of a ``#define`` expression: finite, or a GrammarError (overflow, 0/0, unknown name)."""
+        return self.value(self.parsed(text, line, column)[1], line, column)
+
+    def value(self, parsed, line, column) -> float:
+        values = {**self.constants, "pi": math.pi}
+        try:
+            return evaluate_constant(parsed, values)
+        except GrammarError as err:
+            self.fail(err.message, line, err.column or column)
 
     # -------------------------------------------------------------- lines
     def parse(self):
@@ -243,6 +292,7 @@ class _Parser:
         if not m:
             self.fail("#define expects NAME value", no, start + 2)
         name = m.group(1)
+        self.check_name(name, no, start + 1 + m.start(1))
         if m.group(2) == "(":  # a volume template B(4, ...)
             call = self.call(body, no, start + 1, params=())
             self.templates[name] = call
@@ -253,8 +303,11 @@ class _Parser:
         if pieces is None:
             self.define_many(body, no, start + 1)
             return
-        value = self.expr(rest, no, start + 1 + m.end(1) + (1 if m.group(2) else 0))
-        self.constants[name] = float(value({**MATH, **self.constants}))
+        self.constants[name] = self.constant(rest, no, start + 1 + m.end(1) + (1 if m.group(2) else 0))
+
+    def check_name(self, name, no, col) -> None:
+        if name in BUILTIN_NAMES:
+            self.fail(f"'{name}' is a built-in name ({', '.join(BUILTIN_NAMES)}): choose another", no, col)
 
     def define_many(self, body, no, col) -> None:
         for part in body.split(";"):
@@ -263,22 +316,30 @@ class _Parser:
             name, sep, value = part.partition("=")
             if not sep:
                 self.fail("#define expects NAME = value", no, col)
-            e = self.expr(value, no, col + body.index(part) + len(name) + 1)
-            self.constants[name.strip()] = float(e({**MATH, **self.constants}))
+            if not re.match(r"\s*[A-Za-z_]\w*\s*$", name):
+                self.fail(f"#define expects NAME = value, got {name.strip()!r}", no, col + body.index(part))
+            self.check_name(name.strip(), no, col + body.index(part))
+            self.constants[name.strip()] = self.constant(value, no, col + body.index(part) + len(name) + 1)
 
     def defunc(self, text, no) -> None:
         start = text.lower().index("#defunc") + len("#defunc")
+        lead = len(text[start:]) - len(text[start:].lstrip())
         body = text[start:].strip()
         m = re.match(r"([A-Za-z_]\w*)\s*\(([^)]*)\)\s*(\{)?\s*(=|return)?\s*(.*)$", body)
         if not m or not m.group(5).strip():
             self.fail("#defunc expects NAME(args) = expression", no, start + 2)
         name, args = m.group(1), [a.strip() for a in m.group(2).split(",") if a.strip()]
-        expr_text = m.group(5).strip().rstrip("}").strip().rstrip(";").strip()
+        if any(not re.match(r"[A-Za-z_]\w*$", a) for a in args) or len(set(args)) != len(args):
+            self.fail(f"the parameters of {name} must be distinct names", no, start + lead + m.start(2) + 1)
+        expr_text = m.group(5).rstrip().rstrip("}").rstrip().rstrip(";")
+        at = start + lead + m.start(5)
         if expr_text.startswith("return"):
-            expr_text = expr_text[len("return") :]
-        self.functions[name] = None  # allow recursion in names check
-        e = self.expr(expr_text, no, text.index(m.group(5)) + 1, extra=args)
-        self.functions[name] = (args, e)
+            expr_text, at = expr_text[len("return") :], at + len("return")
+        _, source = self.source(expr_text, no, at + 1)
+        try:
+            self.functions[name] = make_function(name, args, source, self.functions, self.names())
+        except GrammarError as err:
+            self.fail(err.message, no, err.column or at + 1)
 
     # -------------------------------------------------------------- symbols
     def call(self, text, no, column, params):
@@ -314,6 +375,8 @@ class _Parser:
         for p in params:
             if not re.match(r"^[A-Za-z_]\w*$", p):
                 self.fail(f"predecessor parameters must be names, got {p!r}", no, col + s.index(p))
+        if len(params) > len(PARAM_NAMES) or len(set(params)) != len(params):
+            self.fail(f"a predecessor takes at most {len(PARAM_NAMES)} distinct parameter names {PARAM_NAMES}", no, col)
         return m.group(1), params
 
     def rule(self, text, no) -> None:
@@ -332,8 +395,7 @@ class _Parser:
         rule = Rule(name or f"p{len(self.rules) + 1}", len(self.rules), pred, params, "add", no, text.strip())
         if cond_text.strip():
             ccol = lcol + len(pred_text) + 1
-            rule.condition = self.expr(cond_text, no, ccol, extra=params)
-            rule.context = self.context_atoms(rule.condition, cond_text, no, ccol)
+            rule.condition, rule.context = self.expr(cond_text, no, ccol, extra=params, context=True)
         succ, prob_text, pcol = _split_probability(right, rcol)
         if prob_text is not None:
             rule.probability = self.expr(prob_text, no, pcol, extra=params)
@@ -345,29 +407,14 @@ class _Parser:
             self.add_rule(rule, succ, no, rcol, params)
         self.rules.append(rule)
 
-    def context_atoms(self, expr, text, no, col):
-        atoms = []
-        for node in ast.walk(ast.parse(expr.text.replace("&&", " and ").replace("||", " or "), mode="eval")):
-            if (
-                isinstance(node, ast.Compare)
-                and len(node.ops) == 1
-                and isinstance(node.ops[0], (ast.Lt, ast.Gt))
-                and isinstance(node.left, ast.Name)
-                and isinstance(node.comparators[0], ast.Name)
-            ):
-                a, b = _FACE_ATOM.match(node.left.id), _FACE_ATOM.match(node.comparators[0].id)
-                if a and b:
-                    atoms.append((a.group(2), b.group(1), b.group(2), col + text.find(node.left.id)))
-        return atoms
-
     def split_rule(self, rule, succ, no, col) -> None:
-        m = re.match(r"\s*(O|E|C\d+)\s+(" + _SYMBOL + r")\s+(" + _SYMBOL + r")\s*$", succ)
+        m = re.match(rf"\s*({_FACE})\s+({_SYMBOL})\s+({_SYMBOL})\s*$", succ)
         if not m:
             self.fail("a split is written 'A ->^F B C' (F = O, E or Ck)", no, col)
         rule.op, rule.split_face, rule.split_parts = "split", m.group(1), (m.group(2), m.group(3))
 
     def join_rule(self, rule, succ, no, col) -> None:
-        m = re.match(rf"\s*({_SYMBOL})_(O|E|C\d+)\s*\|\s*({_SYMBOL})_(O|E|C\d+)\s*$", succ)
+        m = re.match(rf"\s*({_SYMBOL})_({_FACE})\s*\|\s*({_SYMBOL})_({_FACE})\s*$", succ)
         if not m:
             self.fail("an identification is written 'X_F | Y_G'", no, col)
         if m.group(1) != rule.pred:
@@ -396,6 +443,8 @@ class _Parser:
 
     def face_spec(self, s, pos, no, col, params):
         start = pos
+        if pos >= len(s):
+            self.fail("an added volume needs a face after '_': O, E, Ck, C*, C*-k or {...}", no, col + pos - 1)
         if s[pos] == "{":
             close = _matching(s, pos, "{", "}")
             if close < 0:
@@ -424,6 +473,8 @@ class _Parser:
             return FaceSpec("Cexcept", e, text, col + pos), end
         if text == "C*":
             return FaceSpec("Call", None, text, col + pos), end
+        if m.group(3) and int(m.group(3)) == 0:
+            self.fail("side faces count from C1", no, col + pos)
         expr_text = m.group(3) or m.group(4)
         e = self.expr(expr_text, no, col + pos + 1, extra=params)
         return FaceSpec("C", e, text, col + pos), end
@@ -442,6 +493,18 @@ class _Parser:
                 j += 1
             group += 1
             i = j
+
+
+def _strip_atoms(node: Node, atoms: list, column: int) -> Node:
+    """``node`` with each context atom ``X_F < Y_G`` (or ``>``) replaced by 1 (true), listed in ``atoms``."""
+    if node.kind == "binary" and node.value in ("<", ">") and all(a.kind == "name" for a in node.args):
+        a, b = (_FACE_ATOM.match(str(arg.value)) for arg in node.args)
+        if a and b:
+            atoms.append((a.group(2), b.group(1), b.group(2), column + node.args[0].offset))
+            return Node("num", 1.0, (), node.offset)
+    if not node.args:
+        return node
+    return dataclasses.replace(node, args=tuple(_strip_atoms(arg, atoms, column) for arg in node.args))
 
 
 def _split_top(text, sep):

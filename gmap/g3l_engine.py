@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 from collections.abc import Mapping
 from typing import Any, SupportsInt
@@ -51,11 +52,13 @@ from ramure.gmap import frames as _frames
 from ramure.gmap import g3l_ops as _ops
 from ramure.gmap import prism as _prism
 from ramure.gmap.errors import GMapError, ValueRefused
-from ramure.gmap.g3l import MATH, PARAM_DEFAULTS, Grammar, load_g3l, parse_g3l
+from ramure.gmap.g3l import PARAM_DEFAULTS, Grammar, load_g3l, parse_g3l
 from ramure.gmap.map3 import GMap3
 
 #: Most darts a derivation may make (about 450 bytes each).
 MAX_DARTS = 8_000_000
+#: Highest prism order a volume may have (12 darts per side).
+MAX_ORDER = 4096
 PRISM, WEDGE = 0, 1
 _MASK = (1 << 63) - 1
 
@@ -111,6 +114,69 @@ def add_wedges(gm: GMap3, count: int, **volume_values: Any) -> np.ndarray:
     return first
 
 
+class _Draws:
+    """The random streams of ``alea``, ``uniform`` and ``normal``: one seeded generator per volume.
+
+    A draw for ``n`` volumes takes the next number of each volume's stream, so evaluating
+    volumes together gives the same values as evaluating them one at a time.
+    """
+
+    def __init__(self, seed_of: Any, count: int) -> None:
+        self.seed_of = seed_of
+        self.rngs: list[Any] = [None] * count
+        self.idx = np.arange(count)
+
+    @classmethod
+    def seeded(cls, seeds: list) -> _Draws:
+        return cls(lambda i: seeds[i], len(seeds))
+
+    def take(self, idx: Any) -> _Draws:
+        """The streams of volumes ``idx`` (shared: drawing here advances them here too)."""
+        out = _Draws.__new__(_Draws)
+        out.seed_of, out.rngs, out.idx = self.seed_of, self.rngs, self.idx[idx]
+        return out
+
+    def _next(self, draw: str) -> np.ndarray:
+        out = np.empty(len(self.idx))
+        for k, i in enumerate(self.idx.tolist()):  # one step per volume that draws
+            rng = self.rngs[i]
+            if rng is None:
+                rng = self.rngs[i] = np.random.default_rng(self.seed_of(i))
+            out[k] = getattr(rng, draw)()
+        return out
+
+    def uniform(self, low: Any, high: Any, n: int) -> np.ndarray:
+        return low + (high - low) * self._next("random")
+
+    def normal(self, mean: Any, sd: Any, n: int) -> np.ndarray:
+        if np.any(np.asarray(sd) < 0):
+            raise ValueError("normal() needs a standard deviation >= 0")
+        return mean + sd * self._next("standard_normal")
+
+
+class _Scope:
+    """Values an expression reads for ``n`` volumes: parameters ``V``, constants and built-ins ``C``, draws ``R``."""
+
+    def __init__(self, V: dict, C: dict, R: _Draws, n: int) -> None:
+        self.V, self.C, self.R, self.n = V, C, R, n
+
+    def take(self, idx: Any) -> _Scope:
+        if len(idx) == self.n:
+            return self
+        pick = np.asarray(idx, np.int64)
+        C = {k: v[pick] if isinstance(v, np.ndarray) else v for k, v in self.C.items()}
+        return _Scope({k: v[pick] for k, v in self.V.items()}, C, self.R.take(pick), len(pick))
+
+
+def _finite_or_refuse(values: np.ndarray, what: str) -> None:
+    """Refuse a derivation whose sizes overflowed the geometry (a size near 1e308, say)."""
+    bad = ~np.isfinite(values.reshape(len(values), -1)).all(axis=1)
+    if bad.any():
+        raise ValueRefused(
+            f"the grammar's sizes overflow: {int(bad.sum())} of {len(values)} {what} are not finite numbers; use smaller sizes"
+        )
+
+
 class G3LSystem:
     """A grammar ready to derive: ``G3LSystem.from_file("wood/spiral").derive(6)``."""
 
@@ -148,12 +214,15 @@ class G3LSystem:
         d = G3LDerivation(self.grammar, int(seed), dict(overrides or {}), max_darts)
         t0 = time.perf_counter()
         for _ in range(steps):
-            d.step()
+            with np.errstate(over="ignore", invalid="ignore"):
+                d.step()
+            _finite_or_refuse(d.gm.volume_data["origin"], "volume origins")
             if embed_every_step:
                 d.embed()
             if check_every_step:
                 d.check_topology()
-        d.embed()
+        with np.errstate(over="ignore", invalid="ignore"):  # huge sizes: refused below, not warned about
+            _finite_or_refuse(d.embed(), "points")
         d.seconds = time.perf_counter() - t0
         return d
 
@@ -182,41 +251,36 @@ class G3LDerivation:
         self._axiom()
 
     # ------------------------------------------------------------------ bookkeeping
-    def _env(self, v, params=None):
+    def _scope(self, names, vols=None, draws=None):
+        """What the expressions of a rule read for volumes ``vols`` (``None``: the axiom), all at once.
+
+        ``names`` are the predecessor's parameter names, bound positionally to each volume's
+        parameters (``O`` rounded to a whole number); ``draws`` shares one set of random
+        streams between scopes (default: fresh streams, seeded per volume and step).
+        """
         vd = self.gm.volume_data
-        p = vd["params"][v] if params is None else params
-        env = dict(MATH)
-        env.update(self.grammar.constants)
-        env.update(
-            stage=self.stage,
-            step=self.stage,
-            season=self.stage % 2,
-            spring=0,
-            summer=1,
-            age=self.stage - int(vd["born"][v]) if v is not None else 0,
-            order=int(vd["order"][v]) if v is not None else 1,
-        )
-        rng = self._rng(v, -7)
-        env["alea"] = lambda a, b: float(min(a, b) + (max(a, b) - min(a, b)) * rng.random())
-        for name, (args, expr) in self.grammar.functions.items():
-            env[name] = self._function(args, expr, env)
-        if p is not None:
-            env["_params"] = p
-        return env
+        C = dict(self.grammar.constants)
+        C.update(stage=float(self.stage), step=float(self.stage), season=float(self.stage % 2))
+        C.update(spring=0.0, summer=1.0, pi=math.pi)
+        if vols is None:
+            C.update(age=0.0, order=1.0)
+            seeds = _Draws.seeded([[self.seed & _MASK, -7 & _MASK, self.stage]])
+            return _Scope({}, C, draws or seeds, 1)
+        vols = np.asarray(vols, np.int64)
+        p = vd["params"][vols]
+        V = {name: np.round(p[:, i]) if name == "O" else p[:, i] for i, name in enumerate(names[: p.shape[1]])}
+        C.update(age=(self.stage - vd["born"][vols]).astype(float), order=vd["order"][vols].astype(float))
+        return _Scope(V, C, draws or self._draws(vols, -7), len(vols))
 
-    def _function(self, args, expr, env):
-        def call(*values):
-            if len(values) != len(args):
-                raise self._error(f"function takes {len(args)} arguments, got {len(values)}", expr)
-            return expr({**env, **dict(zip(args, values))})
-
-        return call
+    def _draws(self, vols, rule):
+        """One seeded random stream per volume (the same seeds as :meth:`_rng`), each made on first use."""
+        vd = self.gm.volume_data
+        vseed, key = vd["vseed"][vols].tolist(), vd["key"][vols].tolist()
+        return _Draws(lambda i: [vseed[i] & _MASK, key[i] & _MASK, self.stage, rule & _MASK], len(vseed))
 
     def _rng(self, v, rule):
-        if v is None:
-            return np.random.default_rng([self.seed & _MASK, rule & _MASK, self.stage])
         vd = self.gm.volume_data
-        return np.random.default_rng([int(vd["vseed"][v]), int(vd["key"][v]), self.stage, rule & _MASK])
+        return np.random.default_rng([int(vd["vseed"][v]) & _MASK, int(vd["key"][v]) & _MASK, self.stage, rule & _MASK])
 
     def _error(self, message, expr_or_rule):
         line = getattr(expr_or_rule, "line", None)
@@ -224,37 +288,35 @@ class G3LDerivation:
         src = self.grammar.lines[line - 1] if line and line <= len(self.grammar.lines) else None
         return DerivationError(message, line, col, src, self.grammar.filename)
 
-    def _eval(self, expr, env):
+    def _eval(self, expr, scope):
+        """``expr`` for every volume of ``scope``: a float array; overflow, 0/0 or x/0 is a DerivationError."""
         try:
-            value = expr(env)
+            with np.errstate(over="raise", divide="raise", invalid="raise"):
+                return expr(scope.V, scope.C, scope.R, scope.n)
         except GrammarError:
             raise
-        except Exception as err:  # noqa: BLE001  (user arithmetic: reported with line and caret)
+        except (ArithmeticError, ValueError) as err:  # user arithmetic: reported with line and caret
             raise self._error(f"cannot evaluate {expr.text!r} at step {self.stage}: {err}", expr) from None
-        return value
 
-    def _params(self, call, env):
-        """Evaluate a Call's arguments, filling from the symbol's template, then defaults."""
-        out = list(PARAM_DEFAULTS)
+    def _params(self, call, scope):
+        """A Call's parameters for every volume of ``scope``, (n, 7): its arguments, else the symbol's template, else defaults."""
+        out = np.tile(np.array(PARAM_DEFAULTS), (scope.n, 1))
         template = self.grammar.templates.get(call.symbol)
-        if template is not None:
-            for i, a in enumerate(template.args):
+        for args in (template.args if template is not None else [], call.args):
+            for i, a in enumerate(args):
                 if a is not None:
-                    out[i] = float(self._eval(a, env))
-        for i, a in enumerate(call.args):
-            if a is not None:
-                out[i] = float(self._eval(a, env))
-        if not all(math.isfinite(x) for x in out):
-            raise self._error(f"{call.symbol}: a parameter is not finite ({out})", call.args[0] if call.args else None)
-        order = int(round(out[0]))
-        if order < 3:
-            first = call.args[0] if call.args and call.args[0] is not None else None
-            raise self._error(f"prism order must be at least 3, got {order} for {call.symbol}", first)
-        return np.array(out)
+                    out[:, i] = self._eval(a, scope)
+        first = call.args[0] if call.args and call.args[0] is not None else None
+        order = np.round(out[:, 0])
+        if not (order >= 3).all():
+            raise self._error(f"prism order must be at least 3, got {order[order < 3][0]:g} for {call.symbol}", first)
+        if not (order <= MAX_ORDER).all():
+            raise self._error(f"prism order must be at most {MAX_ORDER}, got {order.max():g} for {call.symbol}", first)
+        return out
 
     def _axiom(self) -> None:
         ax = self.grammar.axiom
-        p = self._params(ax, self._env(None))
+        p = self._params(ax, self._scope(()))[0]
         self._make(
             1,
             int(p[0]),
@@ -307,78 +369,53 @@ class G3LDerivation:
             vols = np.flatnonzero(labels == rule.pred)
             if vols.size == 0:
                 continue
-            chosen = [v for v in vols.tolist() if self._fires(rule, v, choice)]
-            if not chosen:
+            chosen = self._firing(rule, vols, choice)
+            if not chosen.size:
                 continue
             if rule.op == "add":
                 self._apply_add(rule, chosen)
             elif rule.op == "split":
-                self._apply_split(rule, chosen)
+                self._apply_split(rule, chosen.tolist())
             else:
-                self._apply_join(rule, chosen)
+                self._apply_join(rule, chosen.tolist())
         self.stage += 1
 
-    def _fires(self, rule, v, choice):
-        env = self._bind(rule, v)
+    def _firing(self, rule, vols, choice):
+        """The volumes among ``vols`` that ``rule`` rewrites: its stochastic pick, context and condition."""
+        keep = np.ones(len(vols), bool)
         if rule.group >= 0:
-            key = (rule.group, v)
-            if key not in choice:
-                choice[key] = self._pick(rule.group, v, env)
-            if choice[key] != rule.index:
-                return False
+            todo = [v for v in vols.tolist() if (rule.group, v) not in choice]
+            if todo:
+                for v, pick in zip(todo, self._pick(rule.group, np.array(todo, np.int64))):
+                    choice[(rule.group, v)] = pick
+            keep = np.array([choice[(rule.group, v)] == rule.index for v in vols.tolist()])
         if rule.condition is None:
-            return True
-        if rule.context and not self._context_ok(rule, v):
-            return False
-        return bool(self._eval(self._condition(rule), env))
+            return vols[keep]
+        if rule.context:
+            keep[keep] = [self._context_ok(rule, v) for v in vols[keep].tolist()]
+        idx = np.flatnonzero(keep)
+        if idx.size:
+            keep[idx] = self._eval(rule.condition, self._scope(rule.pred_params, vols[idx])) != 0
+        return vols[keep]
 
-    def _condition(self, rule):
-        """The rule's condition with its context atoms taken as true (topology checks them)."""
-        cache = self.__dict__.setdefault("_conditions", {})
-        if rule.index not in cache:
-            import ast
-            from dataclasses import replace
-
-            text = rule.condition.text.replace("&&", " and ").replace("||", " or ")
-            tree = ast.parse(text, mode="eval")
-
-            class Strip(ast.NodeTransformer):
-                def visit_Compare(self, node):
-                    names = [node.left] + list(node.comparators)
-                    if len(node.ops) == 1 and all(isinstance(n, ast.Name) and "_" in n.id for n in names):
-                        return ast.copy_location(ast.Constant(True), node)
-                    return self.generic_visit(node)
-
-            code = compile(ast.fix_missing_locations(Strip().visit(tree)), "<g3l>", "eval")
-            cache[rule.index] = replace(rule.condition, code=code)
-        return cache[rule.index]
-
-    def _bind(self, rule, v):
-        env = self._env(v)
-        p = self.gm.volume_data["params"][v]
-        for name, value in zip(rule.pred_params, p):
-            env[name] = float(value) if name != "O" else int(round(value))
-        return env
-
-    def _pick(self, group, v, env):
+    def _pick(self, group, vols):
+        """The rule index each volume of ``vols`` picks in a stochastic group (-1: none)."""
         rules = [r for r in self.grammar.rules if r.group == group]
-        u = self._rng(v, 1000 + group).random()
-        probs = []
-        for r in rules:
-            prob = float(self._eval(r.probability, env))
-            if not 0 <= prob <= 1:
-                raise self._error(f"a probability must be in [0, 1], got {prob}", r.probability)
-            probs.append(prob)
-        if sum(probs) > 1 + 1e-9:
-            raise self._error(
-                f"probabilities of the rules for {rules[0].pred} add up to {sum(probs):g} > 1", rules[0].probability
-            )
-        total = 0.0
+        u = np.array([self._rng(v, 1000 + group).random() for v in vols.tolist()])
+        draws = self._draws(vols, -7)  # one stream per volume for the whole group
+        probs = np.stack([self._eval(r.probability, self._scope(r.pred_params, vols, draws)) for r in rules])
         for r, prob in zip(rules, probs):
-            total += prob
-            if u < total:
-                return r.index
-        return -1
+            bad = prob[~((prob >= 0) & (prob <= 1))]
+            if bad.size:
+                raise self._error(f"a probability must be in [0, 1], got {bad[0]:g}", r.probability)
+        total = np.cumsum(probs, axis=0)  # the same sums, in the same order, as one volume at a time
+        if (total[-1] > 1 + 1e-9).any():
+            raise self._error(
+                f"probabilities of the rules for {rules[0].pred} add up to {total[-1].max():g} > 1", rules[0].probability
+            )
+        hit = u[None, :] < total
+        first = np.argmax(hit, axis=0)
+        return np.where(hit.any(axis=0), np.array([r.index for r in rules])[first], -1).tolist()
 
     def _context_ok(self, rule, v) -> bool:
         for face, sym, other, col in rule.context:
@@ -388,7 +425,7 @@ class G3LDerivation:
 
     def _face_code(self, v, label, rule, column):
         gm = self.gm
-        code = _prism.face_label_code(label)
+        code = _prism.face_label_code(label) if re.fullmatch(r"O|E|C[1-9]\d*", label) else -1
         n = int(gm.volume_data["degree"][v])
         shape = int(gm.volume_data["shape"][v])
         valid = {0, 1} | ({2, 3, 5} if shape == WEDGE else set(range(2, n + 2)))
@@ -418,41 +455,58 @@ class G3LDerivation:
         return bool(ok.any())
 
     # ------------------------------------------------------------------ operators
-    def _faces_of(self, rule, spec, v, env):
-        n = int(self.gm.volume_data["degree"][v])
-        shape = int(self.gm.volume_data["shape"][v])
-        sides = [1, 2, 4] if shape == WEDGE else list(range(1, n + 1))
+    def _faces_of(self, rule, spec, vols, scope):
+        """The face labels ``spec`` names on each volume of ``vols``: a list of lists."""
+        vd = self.gm.volume_data
+        degree, shape = vd["degree"][vols].tolist(), vd["shape"][vols].tolist()
+        sides = [[1, 2, 4] if s == WEDGE else list(range(1, n + 1)) for n, s in zip(degree, shape)]
         if spec.kind in ("O", "E"):
-            return [spec.kind]
+            return [[spec.kind] for _ in vols]
         if spec.kind == "Call":
-            return [f"C{k}" for k in sides]
-        if spec.kind == "Cexcept":
-            k = int(round(self._eval(spec.index, env)))
-            return [f"C{j}" for j in sides if j != k]
-        if spec.kind == "C":
-            k = int(round(self._eval(spec.index, env)))
+            return [[f"C{k}" for k in ks] for ks in sides]
+        if spec.kind in ("C", "Cexcept"):
+            index = np.clip(np.round(self._eval(spec.index, scope)), -(2**31), 2**31).astype(np.int64).tolist()
+            if spec.kind == "Cexcept":
+                return [[f"C{j}" for j in ks if j != k] for ks, k in zip(sides, index)]
             if spec.text[1:].isdigit():
-                self._face_code(v, f"C{k}", rule, spec.column)
-                return [f"C{k}"]
-            return [f"C{(k - 1) % n + 1}"]
-        out = []
+                for v, k in zip(vols.tolist(), index):
+                    self._face_code(v, f"C{k}", rule, spec.column)
+                return [[f"C{k}"] for k in index]
+            return [[f"C{(k - 1) % n + 1}"] for k, n in zip(index, degree)]
+        out: list[list[str]] = [[] for _ in vols]
         for sub in spec.index:
-            out.extend(self._faces_of(rule, sub, v, env))
+            for mine, more in zip(out, self._faces_of(rule, sub, vols, scope)):
+                mine.extend(more)
         return out
 
     def _apply_add(self, rule, vols) -> None:
+        """Relabel ``vols`` and add the bracketed volumes on their free faces.
+
+        Expressions are evaluated for all volumes at once, in the order a volume reads
+        them (brackets and their faces, then the head), so each volume's random stream
+        gives the same draws as evaluating one volume at a time.
+        """
         gm = self.gm
-        requests = []
-        for v in vols:  # one step per matching volume, not per dart
-            env = self._bind(rule, v)
-            for slot, (call, spec) in enumerate(rule.brackets):
-                for label in self._faces_of(rule, spec, v, env):
-                    self._face_code(v, label, rule, spec.column)
-                    requests.append((v, label, call.symbol, self._params(call, env), slot))
-            if rule.head is not None:
-                gm.volume_data["label"][v] = rule.head.symbol
-                if rule.head.args:
-                    gm.volume_data["params"][v] = self._params(rule.head, env)
+        scope = self._scope(rule.pred_params, vols)
+        mine: list[list] = [[] for _ in vols]  # each volume's requests, in order
+        for slot, (call, spec) in enumerate(rule.brackets):
+            faces = self._faces_of(rule, spec, vols, scope)
+            template = self.grammar.templates.get(call.symbol)
+            random = any(a is not None and a.random for a in call.args + (template.args if template else []))
+            params = np.zeros((len(vols), 7)) if random else self._params(call, scope)
+            for j in range(max(map(len, faces), default=0)):
+                idx = [i for i, f in enumerate(faces) if len(f) > j]
+                if random:  # one draw per face, as the volume reads them
+                    params = np.zeros((len(vols), 7))
+                    params[idx] = self._params(call, scope.take(idx))
+                for i in idx:
+                    self._face_code(int(vols[i]), faces[i][j], rule, spec.column)
+                    mine[i].append((int(vols[i]), faces[i][j], call.symbol, params[i], slot))
+        if rule.head is not None:
+            gm.volume_data["label"][vols] = rule.head.symbol
+            if rule.head.args:
+                gm.volume_data["params"][vols] = self._params(rule.head, scope)
+        requests = [r for reqs in mine for r in reqs]
         if requests:
             self._add_children(rule, requests)
 

@@ -9,10 +9,17 @@ Precedence, lowest first: ``||``; ``&&``; ``== != =``; ``< > <= >=``;
 ``+ -``; ``* / %``; unary ``- + !``; ``^`` (right-associative, so
 ``-2^2 == -4``).  ``=`` is equality, as in ABOP conditions.
 
-Functions: ``sin cos tan asin acos atan sqrt exp log abs min max floor ceil``
-and the seeded random draws ``uniform(a, b)`` and ``normal(mean, sd)``.
-**Trigonometry is in degrees** (``sin(90) == 1``, ``atan(1) == 45``), like
-turtle angles.
+Functions: ``sin cos tan asin acos atan atan2 sqrt exp log abs min max floor
+ceil round int`` (``int`` truncates toward zero, ``round`` halves to even) and
+the seeded random draws ``uniform(a, b)``, ``alea(a, b)`` (uniform between the
+smaller and the larger of ``a`` and ``b``) and ``normal(mean, sd)``.
+**Trigonometry is in degrees** (``sin(90) == 1``, ``atan(1) == 45``,
+``atan2(1, 0) == 90``), like turtle angles.
+
+Every value is a float: there are no strings, lists, attributes or bit
+operators, and a power that overflows gives ``inf`` (no big integers, so no
+hang).  This one evaluator serves both grammar languages, ``.lsys`` and the
+3Gmap L-systems of ``.g3l`` files (:mod:`ramure.gmap.g3l`).
 
 >>> e = parse_expression("x * r1 + 1")
 >>> import numpy as np
@@ -41,18 +48,22 @@ FUNCTIONS = {
     "asin": (1, "np.degrees(np.arcsin({0}))"),
     "acos": (1, "np.degrees(np.arccos({0}))"),
     "atan": (1, "np.degrees(np.arctan({0}))"),
+    "atan2": (2, "np.degrees(np.arctan2({0}, {1}))"),
     "sqrt": (1, "np.sqrt({0})"),
     "exp": (1, "np.exp({0})"),
     "log": (1, "np.log({0})"),
     "abs": (1, "np.abs({0})"),
     "floor": (1, "np.floor({0})"),
     "ceil": (1, "np.ceil({0})"),
+    "round": (1, "np.round({0})"),
+    "int": (1, "np.trunc({0})"),
     "min": (2, "np.minimum({0}, {1})"),
     "max": (2, "np.maximum({0}, {1})"),
     "uniform": (2, "R.uniform({0}, {1}, n)"),
     "normal": (2, "R.normal({0}, {1}, n)"),
+    "alea": (2, "_alea(R, {0}, {1}, n)"),
 }
-RANDOM_FUNCTIONS = {"uniform", "normal"}
+RANDOM_FUNCTIONS = {"uniform", "normal", "alea"}
 
 _BINARY = {
     # Comparisons and logic give 1.0 / 0.0 (not booleans), so -(x < 1) and
@@ -337,10 +348,32 @@ def define_function(
     if bad or len(set(params)) != len(params):
         raise src.error(f"the parameters of {name} must be distinct names", m.start(2))
     body_src = Source(body, src.line, src.column + len(head) + 1, src.source_line)
-    node = _Parser(body_src, functions, defining=name).parse()
+    return make_function(name, params, body_src, functions, constants)
+
+
+def make_function(
+    name: str,
+    params: Iterable[str],
+    body: Source,
+    functions: Mapping[str, Function] | None = None,
+    constants: Iterable[str] = (),
+) -> Function:
+    """A :class:`Function` from its name, parameter names and body text (errors point into ``body``).
+
+    The body sees its parameters, the names in ``constants`` (read when the function is
+    evaluated, never captured by a caller's parameter of the same name) and earlier
+    ``functions``; it may not call itself.
+
+    >>> f = make_function("half", ["x"], Source("x / k"), constants=["k"])
+    >>> compile_expression(parse_expression("half(4)", functions={"half": f}), [], ["k"])({}, {"k": 2.0}, None, 1).tolist()
+    [2.0]
+    """
+    params = tuple(params)
+    node = _Parser(body, functions, defining=name).parse()
+    known = set(constants)
     for used, at in names_used(node):
-        if used not in params and used not in constants:
-            raise body_src.error(
+        if used not in params and used not in known:
+            raise body.error(
                 f"unknown name '{used}' in function {name}: a function sees its parameters and #define constants", at
             )
     return Function(name, params, _constants_fixed(node, set(params)))
@@ -433,7 +466,12 @@ def compile_expression(
     """
     body = _source(expr.node, set(params), set(constants), expr.src)
     code = f"lambda V, C, R, n: _out({body}, n)"
-    return eval(code, {"np": np, "_out": _broadcast, "_f": _as_float})  # noqa: S307 - generated from our own AST
+    return eval(code, {"np": np, "_out": _broadcast, "_f": _as_float, "_alea": _alea})  # noqa: S307 - generated from our own AST
+
+
+def _alea(R, a, b, n):
+    """``alea(a, b)``: a uniform draw between the smaller and the larger bound (each argument evaluated once)."""
+    return R.uniform(np.minimum(a, b), np.maximum(a, b), n)
 
 
 def _as_float(value):

@@ -109,7 +109,7 @@ def test_provenance_and_regrow_change_only_the_branch_and_its_neighbours():
         ("axiom: A(4)\n(p1) A  A[B]_E\n", 2, 6, "needs '->'"),
         ("axiom: A(4)\n(p1) A -> A[B]_Q\n", 2, 15, "unknown face"),
         ("axiom: A(4)\n(p1) A -> A[B(4]_E\n", 2, 12, "not closed"),
-        ("#define x 1 +\naxiom: A(4)\n", 1, 9, "cannot read"),
+        ("#define x 1 +\naxiom: A(4)\n", 1, 14, "cannot read"),  # the caret at the missing operand
         ("(p1) A -> A[B]_E\n", 1, 1, "no 'axiom:'"),
     ],
 )

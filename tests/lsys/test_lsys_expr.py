@@ -34,6 +34,10 @@ def ev(text, **params):
         ("2 >= 2", 1),
         ("k * 3", 6),
         ("1.5e1", 15),
+        ("atan2(1, 0) + atan2(0, -1)", 270),
+        ("round(2.5) + round(3.5) + round(-0.4)", 6),
+        ("int(-1.7) + int(1.7)", 0),
+        ("2^3", 8),
     ],
 )
 def test_values(text, value):
@@ -56,3 +60,19 @@ def test_unknown_function_and_name():
         parse_expression("sine(3)")
     with pytest.raises(GrammarError, match="unknown name 'zz'"):
         compile_expression(parse_expression("zz + 1"), [], {})
+
+
+def test_alea_draws_between_the_smaller_and_the_larger_bound_once():
+    e = parse_expression("alea(2, 1) + alea(1, 2) * 0")
+    got = compile_expression(e, [], {})({}, {}, np.random.default_rng(7), 4)
+    u = np.random.default_rng(7).uniform(1, 2, 4)
+    np.testing.assert_array_equal(got, u)  # one draw per module per call, low = min, high = max
+
+
+def test_power_overflow_is_inf_at_run_time_and_an_error_in_a_constant():
+    from ramure.lsys.expr import evaluate_constant
+
+    with np.errstate(over="ignore"):
+        assert ev("9^9^9") == np.inf  # no big integers: no hang
+    with pytest.raises(GrammarError, match="overflow"):
+        evaluate_constant(parse_expression("10^400"), {})
