@@ -199,7 +199,15 @@ def test_each_qualifier_moves_its_own_metrics_on_random_selections(sweeps):
         for _ in range(20):
             g = able[rng.integers(len(able))]
             session = Session(_lsystem(g), n=_n(g))
-            out = apply_qualifier(session, q, sweeps[g], selection=_random_selection(session, rng), tries=3)
+            out = apply_qualifier(  # the meaning of each word, with climbing allowed (it is opt-in since
+                # issue 34: the locality of a qualifier is tested by the three-tips tests)
+                session,
+                q,
+                sweeps[g],
+                selection=_random_selection(session, rng),
+                tries=3,
+                max_climb=session.n,
+            )
             own = sum(
                 v["direction"] * abs(VOCABULARY[q].direction[m]) * (v["after"] - v["before"]) / max(abs(v["before"]), 1e-12)
                 for m, v in out.own.items()
