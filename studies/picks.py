@@ -174,3 +174,66 @@ def synthetic_grammars(count: int = 3, seed: int = 0) -> dict:
         extent = np.sort(rng.uniform(8.0, 80.0, size=3))[::-1]
         grammars[f"synth{n + 1}"] = lattice_picks(seed=seed * 1000 + n, extent=tuple(extent))
     return grammars
+
+
+#: Two picks are near-duplicates when their PCA points (their metrics) lie closer than this
+#: fraction of the diagonal of the box holding the 27 points: 0.2 %, so that picks whose metrics
+#: agree but for rounding, or a constant that changes nothing, are caught, while two honda
+#: variants 6 degrees apart in one angle (0.6 % of their cloud) are still told apart.
+NEAR_DUPLICATE_TOLERANCE = 0.002
+
+
+def _ranges(ids: Sequence[int]) -> str:
+    """``[1, 2, 3, 5]`` -> ``"1-3, 5"``."""
+    runs: list[list[int]] = []
+    for i in sorted(ids):
+        if runs and i == runs[-1][-1] + 1:
+            runs[-1].append(i)
+        else:
+            runs.append([i])
+    return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 1 else str(r[0]) for r in runs)
+
+
+def coinciding_picks(picks: Sequence[Pick], tolerance: float = NEAR_DUPLICATE_TOLERANCE) -> list[list[int]]:
+    """The sets of pick ids that show the same plant, largest first (each of two or more picks).
+
+    Two picks coincide when they are the same variant, have the same parameters
+    (rule and constants), or their PCA points are closer than ``tolerance`` times
+    the diagonal of the box holding all the points; coinciding is made transitive.
+
+    >>> picks = lattice_picks(seed=0)
+    >>> coinciding_picks(picks)
+    []
+    >>> same = [Pick(p.id, 7, (0.0, 0.0, 0.0), {"rule": 1}) for p in picks]
+    >>> [len(s) for s in coinciding_picks(same)]
+    [27]
+    """
+    points = np.array([p.pca for p in picks], dtype=float)
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(picks) else 0.0
+    near = np.linalg.norm(points[:, None] - points[None, :], axis=-1) <= tolerance * diagonal
+    keys = [json.dumps(p.params, sort_keys=True) for p in picks]
+    variants = np.array([p.variant for p in picks])
+    same = near | (variants[:, None] == variants[None, :]) | (np.array(keys)[:, None] == np.array(keys)[None, :])
+    label = np.arange(len(picks))
+    for _ in range(len(picks)):  # propagate the smallest index along the links (27 picks: at most 27 rounds)
+        spread = np.where(same, label[None, :], len(picks)).min(axis=1)
+        if (spread == label).all():
+            break
+        label = spread
+    sets = [sorted(picks[i].id for i in np.flatnonzero(label == root)) for root in np.unique(label)]
+    return sorted((s for s in sets if len(s) > 1), key=lambda s: (-len(s), s[0]))
+
+
+def check_distinct(picks: Sequence[Pick], where: str) -> None:
+    """Refuse, in one line, picks that do not show 27 different plants (see :func:`coinciding_picks`),
+    naming the picks that coincide and what to do instead."""
+    sets = coinciding_picks(picks)
+    if not sets:
+        return
+    distinct = len(picks) - sum(len(s) - 1 for s in sets)
+    shown = " | ".join(_ranges(s) for s in sets[:6]) + (" | ..." if len(sets) > 6 else "")
+    raise StudyInputError(
+        f"{where}: only {distinct} different plants among the {len(picks)} picks; these picks coincide: {shown} "
+        f"(same variant, same parameters, or PCA points within {NEAR_DUPLICATE_TOLERANCE:.1%} of the cloud's size); "
+        "explore again with another --seed, a wider --beta, more steps (-n) or other --constants, or use another grammar"
+    )

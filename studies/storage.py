@@ -55,7 +55,7 @@ from importlib import resources
 
 from ramure.io import APPLICATION_ID as RAMURE_ID, open_sqlite_readonly
 from ramure.studies.errors import StudyInputError
-from ramure.studies.picks import Pick, inside_folder, load_picks, picks_from_data
+from ramure.studies.picks import Pick, check_distinct, inside_folder, load_picks, picks_from_data
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -716,8 +716,11 @@ def _read_grammar(name, spec):
     if name.strip().casefold() == "all":
         raise StudyInputError("grammar name 'all' is reserved for the pooled statistics")
     if isinstance(spec, (str, os.PathLike)):
-        return str(pathlib.Path(spec).resolve()), load_picks(spec)
-    return None, picks_from_data(spec, where=f"grammar {name!r}")
+        source, picks = str(pathlib.Path(spec).resolve()), load_picks(spec)
+    else:
+        source, picks = None, picks_from_data(spec, where=f"grammar {name!r}")
+    check_distinct(picks, f"grammar {name!r}")
+    return source, picks
 
 
 def _insert_grammar(conn, name, source, picks):
