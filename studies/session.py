@@ -72,6 +72,29 @@ def image_order(seed: int, grammar: str) -> list[int]:
     return (rng.permutation(N_PICKS) + 1).tolist()
 
 
+#: Letters and digits of the labels participants see (no I, O, 0 or 1, which look alike).
+LABEL_LETTERS = "ABCDEFGHJKLMNPQRSTUVWXYZ"
+LABEL_DIGITS = "23456789"
+
+
+def picture_labels(seed: int, grammar: str) -> dict[int, str]:
+    """The label shown under each pick to one participant: pick id -> a letter and a digit.
+
+    Pick ids encode the PCA lattice (1-9 are PC1 low), so participants never see them:
+    each sees codes drawn at random from the participant's stored seed and the grammar
+    (another stream than :func:`image_order`), so the mapping is the same at each
+    resume and can be rebuilt from the database; the answers keep pick ids.
+
+    >>> a, b = picture_labels(7, "honda"), picture_labels(8, "honda")
+    >>> a == picture_labels(7, "honda") and a != b and len(set(a.values())) == 27
+    True
+    """
+    rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, zlib.crc32(grammar.encode()), 1])
+    codes = rng.choice(len(LABEL_LETTERS) * len(LABEL_DIGITS), size=N_PICKS, replace=False)
+    n = len(LABEL_DIGITS)
+    return {pid: LABEL_LETTERS[int(c) // n] + LABEL_DIGITS[int(c) % n] for pid, c in zip(PICK_IDS, codes)}
+
+
 def _check_partition(groups):
     """Validate ``groups`` (iterables of image ids) and return them as lists of ints."""
     if isinstance(groups, (str, bytes)) or not hasattr(groups, "__iter__"):
@@ -154,6 +177,15 @@ class TestSession:
         """The image ids 1-27 in this participant's seeded display order."""
         return image_order(self.seed, self.grammar)
 
+    def labels(self) -> dict[int, str]:
+        """What this participant sees under each picture, by pick id (:func:`picture_labels`)."""
+        return picture_labels(self.seed, self.grammar)
+
+    def in_order(self, ids: Sequence[int]) -> list[int]:
+        """``ids`` in this participant's display order (never by pick id, which encodes the lattice)."""
+        rank = {pid: i for i, pid in enumerate(self.order())}
+        return sorted(ids, key=lambda pid: rank.get(pid, N_PICKS))
+
     def picks(self) -> list[Pick]:
         """The 27 :class:`~ramure.studies.picks.Pick` of the grammar (image paths, params)."""
         return self.study.picks(self.grammar)
@@ -192,7 +224,8 @@ class TestSession:
         todo = []
         left = self.unsorted()
         if left:
-            todo.append(f"images not in any group: {', '.join(map(str, left))}")
+            labels = self.labels()
+            todo.append(f"pictures not in any group: {', '.join(labels[i] for i in self.in_order(left))}")
         for g in self.groups():
             several = len(g.images) > 1
             if several and g.representative is None:

@@ -104,7 +104,7 @@ def pick_images(study: Study, grammar: str, size: int = ICON, grammars_dir: str 
         if image.isNull() and pick.image and pathlib.Path(pick.image).is_file():
             image = QImage(pick.image)
         if image.isNull():
-            image = placeholder_image(size, str(pick.id), "")
+            image = placeholder_image(size, "", "no picture")  # never the pick id: it encodes the lattice
         images[pick.id] = image.scaled(size, size, Qt.AspectRatioMode.KeepAspectRatio, Qt.TransformationMode.SmoothTransformation)
     return images
 
@@ -194,8 +194,9 @@ class ImageList(QListWidget):
         event.accept()
         self.dropped.emit(ids, self)
 
-    def add_image(self, image_id: int, pixmap: QPixmap) -> QListWidgetItem:
-        item = QListWidgetItem(QIcon(pixmap), str(image_id))
+    def add_image(self, image_id: int, pixmap: QPixmap, label: str) -> QListWidgetItem:
+        """Show pick ``image_id`` under the participant's ``label`` (never the pick id: it encodes the lattice)."""
+        item = QListWidgetItem(QIcon(pixmap), label)
         item.setData(Qt.ItemDataRole.UserRole, int(image_id))
         self.addItem(item)
         return item
@@ -246,15 +247,16 @@ class GroupPanel(QGroupBox):
         rows = min(3, max(1, -(-len(group.images) // 8)))
         self.images.setMinimumHeight(12 + 88 * rows)
         self.images.dropped.connect(page.images_dropped)
-        for image in group.images:
-            item = self.images.add_image(image, pixmaps[image])
+        labels = page.session.labels()
+        for image in page.session.in_order(group.images):  # the participant's order, not by pick id
+            item = self.images.add_image(image, pixmaps[image], labels[image])
             if image == group.representative:
                 item.setBackground(Qt.GlobalColor.yellow)
-                item.setText(f"{image} ★")
+                item.setText(f"{labels[image]} ★")
         self.make_rep = QPushButton("Make representative")
         self.make_rep.clicked.connect(self._representative)
         self.make_rep.setEnabled(len(group.images) > 1)
-        self.rep_label = QLabel(f"Representative: {group.representative or '—'}")
+        self.rep_label = QLabel(f"Representative: {labels[group.representative] if group.representative else '—'}")
         self.rows = {}
         answers = {"usefulness": group.usefulness, "difference": group.difference, "representative": group.representative_quality}
         for key, question in QUESTIONS:
@@ -395,10 +397,11 @@ class TestPage(QWidget):
         """Rebuild the screen from the database (the single source of truth)."""
         position = self.groups_scroll.verticalScrollBar().value()
         unsorted = set(self.session.unsorted())
+        labels = self.session.labels()
         self.pool.clear()
         for image in self.session.order():
             if image in unsorted:
-                self.pool.add_image(image, self.pixmaps[image])
+                self.pool.add_image(image, self.pixmaps[image], labels[image])
         while self.groups_layout.count():
             item = self.groups_layout.takeAt(0)
             w = item.widget() if item is not None else None

@@ -55,7 +55,7 @@ def _thumbnail(pick, size):
         return png_image(path.read_bytes(), width=size)
     return W.HTML(
         f"<div style='width:{size}px;height:{size}px;background:#eceff1;display:flex;"
-        f"align-items:center;justify-content:center;color:#607d8b;font-size:20px'>#{pick.id}</div>"
+        f"align-items:center;justify-content:center;color:#607d8b;font-size:20px'>no picture</div>"
     )
 
 
@@ -73,9 +73,10 @@ class GroupQuestions:
         self.label = group.label  # as stored (1, 2, ... in group-number order)
         self.number = group.label if number is None else number  # as the participant numbered it
         several = len(group.images) > 1
+        labels, shown = panel.session.labels(), panel.session.in_order(group.images)  # never pick ids: they encode the lattice
         # 0 stands for "not chosen yet": a Dropdown whose value is None shows a blank box
         self.representative = W.Dropdown(
-            options=[("choose…", 0)] + [(f"#{i}", i) for i in group.images],
+            options=[("choose…", 0)] + [(labels[i], i) for i in shown],
             value=(group.representative or 0) if several else 0,
             description="representative",
             style={"description_width": "110px"},
@@ -106,7 +107,7 @@ class GroupQuestions:
         observe(self.qualifiers, lambda ch: self._save("qualifiers", ch["new"]))
         self.widget = W.VBox(
             [
-                W.HTML(f"<b>Group {self.number}</b>: images {', '.join(f'#{i}' for i in group.images)}"),
+                W.HTML(f"<b>Group {self.number}</b>: pictures {', '.join(labels[i] for i in shown)}"),
                 self.representative,
                 self.usefulness,
                 self.difference,
@@ -193,6 +194,7 @@ class StudyPanel:
         thumb_size = self._thumb_size
         cards = []
         options = [("–", 0)] + [(str(g), g) for g in range(1, MAX_GROUPS + 1)]
+        labels = self.session.labels()
         for image in self.session.order():
             dropdown = W.Dropdown(options=options, value=0, layout=W.Layout(width="52px"))
             observe(dropdown, lambda ch: None if self.quiet else self.run(self._store_groups))
@@ -201,7 +203,7 @@ class StudyPanel:
                 W.VBox(
                     [
                         _thumbnail(picks[image], thumb_size),
-                        W.HBox([W.Label(f"#{image}", layout=W.Layout(width="38px")), dropdown]),
+                        W.HBox([W.Label(labels[image], layout=W.Layout(width="38px")), dropdown]),
                     ]
                 )
             )
@@ -338,17 +340,18 @@ class StudyPanel:
     def screen_html(self) -> str:
         """The participant's images in their order, each with its group (a static picture of the test)."""
         cells = []
+        labels = self.session.labels()
         for image, dropdown in self.group_of.items():
             path = pathlib.Path(self._picks[image].image or "")
             picture = (
-                png_tag(path.read_bytes(), self._thumb_size, f"#{image}")
+                png_tag(path.read_bytes(), self._thumb_size, labels[image])
                 if path.is_file()
-                else f"<div style='width:{self._thumb_size}px'>#{image}</div>"
+                else f"<div style='width:{self._thumb_size}px'>{labels[image]}</div>"
             )
             group = f"group {dropdown.value}" if dropdown.value else "unsorted"
             cells.append(
                 f"<figure style='margin:2px;text-align:center'>{picture}"
-                f"<figcaption style='font-size:11px'>#{image} · {group}</figcaption></figure>"
+                f"<figcaption style='font-size:11px'>{labels[image]} · {group}</figcaption></figure>"
             )
         return (
             f"{self.header.value}<div style='display:grid;grid-template-columns:repeat(9,"

@@ -34,7 +34,8 @@ def test_moving_a_picture_between_answered_groups_keeps_both(study):
     assert [len(x.images) for x in g] == [8, 10]
     assert answers(g[0]) == (5, 2, 3, 3, ["petit"])
     assert answers(g[1]) == (14, 3, 2, 3, ["grand"])
-    assert s.missing() == ["images not in any group: " + ", ".join(map(str, range(19, 28)))]
+    labels = s.labels()
+    assert s.missing() == ["pictures not in any group: " + ", ".join(labels[i] for i in s.in_order(range(19, 28)))]
 
 
 def test_a_representative_that_left_is_cleared_and_only_it(study):

@@ -64,3 +64,21 @@ def test_api_names_exact_duplicates_and_near_duplicates(tmp_path):
         with pytest.raises(StudyInputError, match="only 3 different plants"):
             study.add_grammar("sp", three_plants())
         assert study.grammars == ["g"]
+
+
+def test_participants_see_their_own_labels_and_answers_keep_pick_ids(study, tmp_path):
+    from ramure.studies.export import export_csv
+
+    first = study.session(study.add_participant(consent=True), "honda")
+    second = study.session(study.add_participant(consent=True), "honda")
+    a, b = first.labels(), second.labels()
+    assert sorted(a) == list(range(1, 28)) and len(set(a.values())) == 27
+    assert a != b and sum(a[i] == b[i] for i in a) < 5  # another code for (nearly) every pick
+    assert not any(label.isdigit() for label in a.values())  # never a pick number
+    assert first.labels() == study.session(first.participant, "honda").labels()  # the same at each resume
+    first.set_groups([[27, 1, 14]])
+    assert first.in_order(first.groups()[0].images) == [i for i in first.order() if i in (1, 14, 27)]
+    assert first.missing()[0].startswith("pictures not in any group: ") and " 2," not in first.missing()[0]
+    files = export_csv(study, tmp_path / "csv")
+    text = "\n".join(f.read_text() for f in files)
+    assert a[27] not in text.split(",") and b[27] not in text.split(",")

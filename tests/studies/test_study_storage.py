@@ -183,7 +183,7 @@ def test_finish_lists_what_is_missing_then_locks_the_test(study):
         s.finish()
     text = str(err.value)
     for part in (
-        "images not in any group: 27",
+        f"pictures not in any group: {s.labels()[27]}",
         "group 1: choose a representative",
         "group 1: rate its usefulness",
         "group 1: give at least one qualifier",
