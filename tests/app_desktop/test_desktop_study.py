@@ -250,7 +250,10 @@ def test_a_double_click_on_finish_cannot_finish_the_next_grammar(qtbot, three_gr
 def exploration_study(folders, doc, db="study.db"):
     """A study ``folders/db`` whose grammar's picks come from ``folders/explore`` (its ``pca.json`` is ``doc``)."""
     explore = folders / "explore"
-    picks = [dict(id=p.id, variant=p.variant, pca=list(p.pca), params={"rule": None, "constants": {}}) for p in lattice_picks()]
+    picks = [
+        dict(id=p.id, variant=p.variant, pca=list(p.pca), params={"rule": None, "constants": {}, "tag": p.id})
+        for p in lattice_picks()
+    ]
     (explore / "picks.json").write_text(json.dumps(picks))
     (explore / "pca.json").write_text(json.dumps(doc))
     (folders / db).parent.mkdir(exist_ok=True)

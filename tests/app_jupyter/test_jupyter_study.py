@@ -25,7 +25,7 @@ def test_cards_follow_the_participants_order(panel):
     order = panel.session.order()
     assert list(panel.group_of) == order and sorted(order) == list(range(1, 28))
     labels = [card.children[1].children[0].value for card in panel.grid.children]
-    assert labels == [f"#{i}" for i in order]
+    assert labels == [panel.session.labels()[i] for i in order]  # the participant's codes, never pick ids
     assert "in progress" not in panel.header.value and "min left" in panel.header.value
 
 
@@ -115,10 +115,11 @@ def test_thumbnails_from_pick_images(tmp_path):
         card = panel.grid.children[panel.session.order().index(2)]
         assert card.children[0].value == png
         other = panel.grid.children[panel.session.order().index(1)]
-        assert "#1" in other.children[0].value  # a placeholder for a pick without image
+        assert "no picture" in other.children[0].value and "#1" not in other.children[0].value  # a placeholder, no pick id
         panel.assign({2: 4})
         page = panel.screen_html()  # the fallback output: what a notebook reopened without a kernel shows
-        assert page.count("data:image/png") == 1 and "#2 · group 4" in page and "#1 · unsorted" in page
+        label = panel.session.labels()
+        assert page.count("data:image/png") == 1 and f"{label[2]} · group 4" in page and f"{label[1]} · unsorted" in page
 
 
 def test_no_consent_is_refused(study):
