@@ -220,7 +220,7 @@ def coinciding_picks(picks: Sequence[Pick], tolerance: float = NEAR_DUPLICATE_TO
         if (spread == label).all():
             break
         label = spread
-    sets = [sorted(picks[i].id for i in np.flatnonzero(label == root)) for root in np.unique(label)]
+    sets = [sorted(picks[int(i)].id for i in np.flatnonzero(label == root)) for root in np.unique(label)]
     return sorted((s for s in sets if len(s) > 1), key=lambda s: (-len(s), s[0]))
 
 
