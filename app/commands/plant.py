@@ -58,7 +58,30 @@ def parse_size(text: str, option: str = "--size", largest: int = 10_000) -> tupl
         raise UserError(f"{option} expects WIDTHxHEIGHT, got '{text}'") from None
     if not all(1 <= side <= largest for side in size):
         raise UserError(f"{option} {text}: width and height must be in 1..{largest} pixels")
+    need, free = size[0] * size[1] * RENDER_BYTES_PER_PIXEL, available_memory()
+    if free is not None and need > 0.8 * free:
+        raise UserError(
+            f"{option} {text}: a picture this large needs about {need / 2**30:.1f} GB to render, "
+            f"and {free / 2**30:.1f} GB of memory is available; ask for a smaller size"
+        )
     return size
+
+
+#: Memory a render takes per pixel (off-screen buffers, the picture, its copies): a
+#: 10,000 x 10,000 render took 6.8 GB.
+RENDER_BYTES_PER_PIXEL = 68
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available now (Linux: ``MemAvailable``), or None where it is not known."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
 
 
 def output_file(text: str | os.PathLike, suffixes: Sequence[str], option: str = "-o") -> pathlib.Path:

@@ -94,3 +94,14 @@ def test_ramure_regen_range_means_the_leaves_inside_it(capsys):
     assert main(["regen", "honda_sympodial", "-n", "5", "--select", f"{a}-{b}", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert set(record["selection"]) == {i for i in leaves if a <= i <= b}
+
+
+def test_a_picture_that_cannot_fit_in_memory_is_refused_before_rendering(tmp_path, monkeypatch):
+    from ramure.app.commands import plant
+
+    monkeypatch.setattr(plant, "available_memory", lambda: 4 * 2**30)  # a 4 GB machine
+    out = tmp_path / "p.png"
+    rc, err = run_cli(["render", "honda_sympodial", "-n", "2", "--size", "10000x10000", "-o", str(out)])
+    assert rc == 2 and "needs about 6.3 GB to render, and 4.0 GB of memory is available" in err
+    assert not out.exists()
+    assert plant.parse_size("4000x4000") == (4000, 4000)  # 1.0 GB fits
