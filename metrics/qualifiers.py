@@ -293,7 +293,29 @@ def canonical_name(name: str, language: str | None = None) -> str:
     key = _fold(name)
     if language == "fr" and key in _FRENCH:
         return _FRENCH[key]
+    if key not in _LOOKUP:  # "plus touffu", "more upright"; "moins dense", "less bushy": the antonym
+        head, _, rest = key.partition("-")
+        if rest and head in _MORE | _LESS:
+            word = canonical_name(rest, language)
+            if word in VOCABULARY:
+                return word if head in _MORE else (VOCABULARY[word].antonym or f"{head}-{word}")
     return _LOOKUP.get(key, key)
+
+
+_MORE, _LESS = {"plus", "more", "tres", "very"}, {"moins", "less"}
+
+
+def accepted_words() -> list[str]:
+    """Every word a qualifier box accepts, for suggestions while typing: the English and French
+    names and the synonyms and comparatives (``taller``, ``touffu``, ``plus touffu`` also work).
+
+    >>> words = accepted_words()
+    >>> {"tall", "taller", "haut", "touffu"} <= set(words), canonical_name("plus touffu")
+    (True, 'bushy')
+    """
+    words = {q.name for q in VOCABULARY.values()} | {q.french for q in VOCABULARY.values() if q.french}
+    words |= {k.replace("-", " ") if k.startswith("plus-") else k for k in _ALIASES}
+    return sorted(words, key=lambda w: (_fold(w), w))
 
 
 def vocabulary_name(name: str, language: str | None = None) -> str:

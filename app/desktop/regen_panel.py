@@ -15,6 +15,7 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QPixmap
 from PySide6.QtWidgets import (
     QComboBox,
+    QCompleter,
     QDoubleSpinBox,
     QFormLayout,
     QGridLayout,
@@ -125,7 +126,12 @@ class RegenPanel(QWidget):
         qual = QGroupBox("Qualifier")
         self.qualifier = QComboBox()
         self.qualifier.setObjectName("qualifier")
-        self.qualifier.currentTextChanged.connect(self._qualifier_changed)
+        # the words people type: "taller", "plus touffu", French names (the model reads them all)
+        self.qualifier.setEditable(True)
+        self.qualifier.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
+        self.qualifier.lineEdit().setPlaceholderText("a word: taller, denser, plus touffu…")
+        self.qualifier.textActivated.connect(self._qualifier_changed)  # chosen from the list
+        self.qualifier.lineEdit().returnPressed.connect(lambda: self._qualifier_changed(self.qualifier.currentText()))
         self.preview = QLabel()
         self.preview.setFixedSize(THUMB, THUMB)
         self.preview.setAlignment(Qt.AlignmentFlag.AlignCenter)
@@ -245,10 +251,18 @@ class RegenPanel(QWidget):
         self.regrow_with_constants.emit(changed_constants(self.values(), self._current))
 
     # -- qualifiers ---------------------------------------------------------------
-    def set_qualifiers(self, names: Sequence[str], note: str = "", tips: Mapping[str, str] | None = None) -> None:
+    def set_qualifiers(
+        self, names: Sequence[str], note: str = "", tips: Mapping[str, str] | None = None, words: Sequence[str] = ()
+    ) -> None:
+        """Offer the qualifiers ``names`` in the list; ``words``: every word typing may complete
+        to (synonyms, comparatives, French), which the model resolves."""
         self.qualifier.blockSignals(True)
         self.qualifier.clear()
         self.qualifier.addItems(list(names))
+        completer = QCompleter(sorted(set(names) | set(words)), self.qualifier)
+        completer.setCaseSensitivity(Qt.CaseSensitivity.CaseInsensitive)
+        completer.setFilterMode(Qt.MatchFlag.MatchContains)
+        self.qualifier.setCompleter(completer)
         for i, name in enumerate(names):
             if tips and name in tips:
                 self.qualifier.setItemData(i, tips[name], Qt.ItemDataRole.ToolTipRole)

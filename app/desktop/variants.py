@@ -81,6 +81,13 @@ def vocabulary_names() -> list[str]:
     return list(_vocabulary())
 
 
+def accepted_words() -> list[str]:
+    """Every word the qualifier box completes to (:func:`ramure.metrics.qualifiers.accepted_words`)."""
+    from ramure.metrics.qualifiers import accepted_words as words
+
+    return words()
+
+
 def qualifier_meanings() -> dict[str, str]:
     """``{name: "dense (FR dense): more branches per unit of box volume"}`` for tooltips."""
     return {name: f"{name} (FR {q.french}): {q.meaning}" for name, q in _vocabulary().items()}

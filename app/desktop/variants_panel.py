@@ -85,6 +85,7 @@ class VariantsController:
             if names
             else "Qualifiers are not available (metrics.qualifiers is missing).",
             variants.qualifier_meanings(),
+            variants.accepted_words(),
         )
 
     @property

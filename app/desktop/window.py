@@ -578,9 +578,7 @@ class MainWindow(QMainWindow):
 
     def _rho(self, percent) -> None:
         """The slider's percent, as the fraction the model takes."""
-        self.controller.set_rho(percent / 100.0)
-        if self.controller.snapshot.selection:
-            self.controller.preview(inline=False)  # a job after the ρ job: the cut it gives
+        self.controller.set_rho(percent / 100.0)  # its preview is asked for when the ρ job is done
 
     def _regrow(self) -> None:
         self.controller.regrow()
@@ -651,6 +649,10 @@ class MainWindow(QMainWindow):
             self.set_cut_preview(job.result)
         elif job.name == "rho" and job.error is None:
             self.set_cut_preview(None)  # the preview of the old ρ: a new one follows
+            if self.controller.snapshot.selection:
+                # asked here, after the ρ job: a preview job queued with the keystroke could be
+                # replaced into a place before a later ρ job and then be cleared by it
+                self.controller.preview(inline=False)
         elif job.name in ("undo", "redo") and job.error is None:
             self.after_history(job.result)
 

@@ -107,7 +107,7 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
     branch = int(np.flatnonzero((tree.depth == 1) & tree.alive & (tree.child_count > 0))[-1])
     chosen = tree.leaves_under(branch).tolist()  # a main branch: tips alone cannot show new constants
     w.controller.select(chosen)
-    w.regen.qualifier.setCurrentText("dense")
+    w.regen.qualifier.setCurrentIndex(w.regen.qualifier.findText("dense"))  # chosen in the list
     tip = w.regen.qualifier.itemData(w.regen.qualifier.currentIndex(), Qt.ItemDataRole.ToolTipRole)
     assert "more branches" in tip  # each qualifier says what it does
     with qtbot.waitSignal(w.controller.job_done, timeout=60000, check_params_cb=lambda job: job.name == "qualifier dense"):
@@ -293,3 +293,27 @@ def test_open_exploration_refuses_pca_json_values_of_the_wrong_type(make_window,
     (tmp_path / "pca.json").write_text(json.dumps({"grammar": "mine", "n": 3, "seed": 2}))
     vs = w.variants.open_exploration(tmp_path)
     assert (vs.name, vs.n, vs.seed, vs.points) == ("mine", 3, 2, None)
+
+
+def test_the_qualifier_box_takes_the_words_people_type(make_window, qtbot):
+    """Issue 35, 'the words people type': comparatives, synonyms and French are typed in the
+    box (with suggestions) and reach the model, which reads them all."""
+    from PySide6.QtTest import QTest
+
+    from ramure.metrics.qualifiers import canonical_name
+
+    w = make_window(n=3)
+    box = w.regen.qualifier
+    assert box.isEditable()
+    offered = set(box.completer().model().stringList())
+    assert {"taller", "denser", "touffu", "haut"} <= offered  # "plus touffu" is read, not listed
+    box.lineEdit().clear()
+    with qtbot.waitSignal(w.regen.qualifier_chosen, timeout=5000) as chosen:
+        QTest.keyClicks(box.lineEdit(), "plus touffu")
+        QTest.keyClick(box.lineEdit(), Qt.Key.Key_Return)
+    assert chosen.args == ["plus touffu"] and canonical_name("plus touffu") == "bushy"
+    with qtbot.waitSignal(w.regen.apply_qualifier, timeout=5000) as applied:
+        w.regen.apply_button.clicked.disconnect()  # the signal alone: no exploration in this test
+        w.regen.apply_button.clicked.connect(lambda: w.regen.apply_qualifier.emit(box.currentText()))
+        qtbot.mouseClick(w.regen.apply_button, Qt.MouseButton.LeftButton)
+    assert applied.args == ["plus touffu"]
