@@ -150,6 +150,8 @@ def export_csv(
         cur = source.conn.execute(sql)
         header = [d[0] for d in cur.description]
         rows = cur.fetchall()
+        if name == "picks.csv":  # never the researcher's folders: paths as seen from the study
+            rows = [(*r[:-1], _shown_path(source, r[-1])) for r in rows]
         if name == "qualifiers.csv":
             header.append("canonical")
             rows = [(*r, ";".join(table.canonical(r[-1][:MAX_QUALIFIER_CHARS]))) for r in rows]
@@ -162,3 +164,14 @@ def export_csv(
     written.append(write_codebook(out_dir))
     written.append(out_dir / "README_R.txt")
     return written
+
+
+def _shown_path(study: Study, image: str | None) -> str | None:
+    """A picture path for ``picks.csv``: relative to the study's folder when inside it (always,
+    for studies made now), else the file name alone."""
+    from ramure.studies.storage import relative_to
+
+    if not image:
+        return image
+    shown = relative_to(study.path.parent, study.path.parent / image)
+    return shown if shown is not None and not pathlib.PurePath(shown).is_absolute() else pathlib.PurePath(image).name

@@ -450,7 +450,7 @@ class Study:
                 (name or path.stem, 60.0 * budget, now_iso()),
             )
             for gname, (source, picks) in loaded.items():
-                _insert_grammar(conn, gname, source, picks)
+                _insert_grammar(conn, gname, source, picks, path.parent)
         return cls(conn, path, clock)
 
     @classmethod
@@ -504,7 +504,7 @@ class Study:
         self._writable()
         source, picks = _read_grammar(name, spec)
         with self.conn:
-            _insert_grammar(self.conn, name, source, picks)
+            _insert_grammar(self.conn, name, source, picks, self.path.parent)
 
     def grammar_id(self, name: str) -> int:
         row = self.conn.execute("SELECT id FROM grammars WHERE name = ?", (name,)).fetchone()
@@ -516,7 +516,9 @@ class Study:
     def grammar_source(self, name: str) -> str | None:
         """Where grammar ``name``'s picks came from (an exploration directory), or None."""
         row = self.conn.execute("SELECT source FROM grammars WHERE id = ?", (self.grammar_id(name),)).fetchone()
-        return row[0] if row and row[0] else None
+        if not row or not row[0]:
+            return None
+        return str((self.path.parent / row[0]).resolve())  # stored relative to the study's folder
 
     def picks(self, grammar: str) -> list[Pick]:
         """The 27 picks of ``grammar``, by id."""
@@ -723,12 +725,26 @@ def _read_grammar(name, spec):
     return source, picks
 
 
-def _insert_grammar(conn, name, source, picks):
+def _insert_grammar(conn, name, source, picks, folder):
+    """Store a grammar's picks; paths inside the study's ``folder`` are stored relative to it, so
+    a study folder copied elsewhere still finds its pictures and names no researcher's folders."""
     try:
-        gid = conn.execute("INSERT INTO grammars (name, source) VALUES (?, ?)", (name, source)).lastrowid
+        gid = conn.execute("INSERT INTO grammars (name, source) VALUES (?, ?)", (name, relative_to(folder, source))).lastrowid
     except sqlite3.IntegrityError:
         raise StudyInputError(f"grammar {name!r} is already in this study") from None
     conn.executemany(
         "INSERT INTO picks (grammar_id, pick_id, variant_id, pc1, pc2, pc3, params, image) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-        [(gid, p.id, p.variant, *p.pca, json.dumps(p.params, sort_keys=True), p.image) for p in picks],
+        [(gid, p.id, p.variant, *p.pca, json.dumps(p.params, sort_keys=True), relative_to(folder, p.image)) for p in picks],
     )
+
+
+def relative_to(folder: str | os.PathLike, path: str | os.PathLike | None) -> str | None:
+    """``path`` relative to ``folder`` (POSIX separators) when it lies inside it, else as given.
+
+    >>> relative_to("/data/study", "/data/study/explore/pick_01.png"), relative_to("/data/study", "/elsewhere/a.png")
+    ('explore/pick_01.png', '/elsewhere/a.png')
+    """
+    if not path:
+        return None
+    root, full = pathlib.Path(folder).resolve(), pathlib.Path(path).resolve()
+    return full.relative_to(root).as_posix() if full.is_relative_to(root) else str(path)

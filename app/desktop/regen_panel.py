@@ -129,9 +129,11 @@ class RegenPanel(QWidget):
         # the words people type: "taller", "plus touffu", French names (the model reads them all)
         self.qualifier.setEditable(True)
         self.qualifier.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
-        self.qualifier.lineEdit().setPlaceholderText("a word: taller, denser, plus touffu…")
+        typed = self.qualifier.lineEdit()
+        assert typed is not None  # an editable combo box has its line edit
+        typed.setPlaceholderText("a word: taller, denser, plus touffu…")
+        typed.returnPressed.connect(lambda: self._qualifier_changed(self.qualifier.currentText()))
         self.qualifier.textActivated.connect(self._qualifier_changed)  # chosen from the list
-        self.qualifier.lineEdit().returnPressed.connect(lambda: self._qualifier_changed(self.qualifier.currentText()))
         self.preview = QLabel()
         self.preview.setFixedSize(THUMB, THUMB)
         self.preview.setAlignment(Qt.AlignmentFlag.AlignCenter)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import pathlib
 import sqlite3
 
 import pytest
@@ -282,3 +283,37 @@ def test_withdrawn_consent_excludes_answers_and_delete_erases_them(study, tmp_pa
 def test_reserved_grammar_name(tmp_path):
     with pytest.raises(StudyInputError, match="reserved"):
         Study.create(tmp_path / "s.db", grammars={"All": lattice_picks()})
+
+
+def test_a_study_folder_copied_elsewhere_still_finds_its_pictures(tmp_path):
+    """Issue 38, section 3: paths are stored relative to the study's folder, so a copied study
+    shows its pictures, and picks.csv names none of the researcher's folders."""
+    import csv
+    import shutil
+
+    from ramure.studies.export import export_csv
+
+    first = tmp_path / "lab" / "study"
+    explore = first / "explore" / "honda"
+    (explore / "thumbs").mkdir(parents=True)
+    (explore / "picks.json").write_text(json.dumps(_pick_dicts()))
+    for p in lattice_picks():
+        (explore / "thumbs" / f"pick_{p.id:02d}.png").write_bytes(b"png")
+    Study.create(first / "s.db", grammars={"honda": explore}).close()
+    raw = sqlite3.connect(first / "s.db")
+    stored = raw.execute("SELECT image FROM picks ORDER BY pick_id").fetchall()
+    source = raw.execute("SELECT source FROM grammars").fetchone()[0]
+    raw.close()
+    assert stored[0][0] == "explore/honda/thumbs/pick_01.png" and source == "explore/honda"
+    moved = tmp_path / "elsewhere" / "copy"
+    shutil.copytree(first, moved)
+    shutil.rmtree(tmp_path / "lab")
+    with Study.open(moved / "s.db") as study:
+        picks = study.picks("honda")
+        assert all(p.image and pathlib.Path(p.image).is_file() for p in picks)
+        assert study.grammar_source("honda") == str((moved / "explore" / "honda").resolve())
+        export_csv(study, tmp_path / "csv")
+    with open(tmp_path / "csv" / "picks.csv", newline="") as fh:
+        images = [row["image"] for row in csv.DictReader(fh)]
+    assert images[0] == "explore/honda/thumbs/pick_01.png"
+    assert not any(str(tmp_path) in image for image in images)
