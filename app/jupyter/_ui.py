@@ -73,9 +73,23 @@ def short_list(values, limit=12) -> str:
 
 
 def png_image(data=b"", width=None):
-    """An ``ipywidgets.Image`` holding PNG bytes."""
+    """An ``ipywidgets.Image`` holding PNG bytes, hidden while it holds none (an empty image
+    shows the browser's broken-image icon).
+
+    >>> image = png_image(); image.layout.display
+    'none'
+    >>> image.value = b"\\x89PNG"; image.layout.display is None
+    True
+    """
     layout = W.Layout(width=f"{width}px") if width else W.Layout()
-    return W.Image(value=data, format="png", layout=layout)
+    image = W.Image(value=data, format="png", layout=layout)
+
+    def show_when_filled(change=None) -> None:
+        image.layout.display = None if image.value else "none"
+
+    show_when_filled()
+    image.observe(show_when_filled, names="value")  # a layout only: no need for the main thread
+    return image
 
 
 def png_tag(data, width, title: str = "") -> str:

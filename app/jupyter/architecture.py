@@ -46,20 +46,13 @@ class ArchitectureBrowser:
         self.path: list[tuple[str, int]] = []
         self.crumbs = W.HTML()
         self.rows = W.Select(options=[], rows=12, layout=W.Layout(width="98%"))
-        self.widget = W.VBox(
-            [
-                self.crumbs,
-                self.rows,
-                W.HBox(
-                    [
-                        button("Open ▸", self.open_selected, "show what this element is made of"),
-                        button("◂ Up", self.up),
-                        button("Top", self.top),
-                        button("Select", self.select_selected, "select this element's internodes", style="info"),
-                    ]
-                ),
-            ]
-        )
+        self.buttons = [
+            button("Open ▸", self.open_selected, "show what this element is made of"),
+            button("◂ Up", self.up),
+            button("Top", self.top),
+            button("Select", self.select_selected, "select this element's internodes", style="info"),
+        ]
+        self.widget = W.VBox([self.crumbs, self.rows, W.HBox(self.buttons)])
         self._version = None
         self.refresh()
 
@@ -142,6 +135,12 @@ class ArchitectureBrowser:
             return
         self.select(self.rows.value)
 
+    def _enable(self, on: bool) -> None:
+        """The rows and buttons work only for a grammar that names its architecture (``#amap``)."""
+        self.rows.disabled = not on
+        for b in self.buttons:
+            b.disabled = not on
+
     def _fill(self) -> None:
         if self.arch is None:
             self.rows.options = []
@@ -167,6 +166,8 @@ class ArchitectureBrowser:
             self.arch, self.path = None, []
             self.crumbs.value = f"<b>Architecture</b>: {HOW_TO}"
             self.rows.options = []
+            self._enable(False)
             return
+        self._enable(True)
         self.path = [(k, r) for k, r in self.path if (k == "axis" and r < len(self.arch.axes))][:1]
         self._fill()

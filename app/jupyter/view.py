@@ -42,6 +42,10 @@ CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
 VIEWS = ("iso", "front", "side", "top")
 BACKENDS = ("auto", "static", "trame", "server", "client")
 RENDER_LOCK = threading.Lock()  # one off-screen render at a time (thumbnail threads included)
+#: Pixels kept free above the plant in the trame view: pyvista's trame menu is a card floating
+#: over the picture, 20 px from its top and 36 px tall; the view is this much taller than the
+#: explorer's ``size`` and frames the plant below it.
+TOOLBAR_BAND = 64
 
 
 def cut_leaves(model: Model) -> np.ndarray:
@@ -89,8 +93,9 @@ def _screenshot(size, draw, background: str = "white") -> bytes:
     return buf.getvalue()
 
 
-def fit_view(plotter: pv.Plotter, points: ArrayLike, fill: float = 0.9, max_points: int = 20_000) -> None:
-    """Pan and zoom the camera so ``points`` (n,3) fill ``fill`` of the picture, centred.
+def fit_view(plotter: pv.Plotter, points: ArrayLike, fill: float = 0.9, max_points: int = 20_000, top: float = 0.0) -> None:
+    """Pan and zoom the camera so ``points`` (n,3) fill ``fill`` of the picture, centred; with
+    ``top``, in the part of the picture below its top ``top`` fraction (kept for a toolbar).
 
     :func:`ramure.app.render.frame_camera` fits the bounding *sphere*, which leaves a tall plant
     seen from above off-centre (its top near the edge, empty space below); this measures
@@ -112,18 +117,21 @@ def fit_view(plotter: pv.Plotter, points: ArrayLike, fill: float = 0.9, max_poin
         ndc = h[:, :2] / h[:, 3:4]
         lo, hi = ndc.min(axis=0), ndc.max(axis=0)
         centre, extent = (lo + hi) / 2, (hi - lo) / 2
+        scale = float(max(extent[0], extent[1] / (1.0 - top)))
+        zoom = fill / scale if scale > 0 else 1.0
+        centre[1] += top / zoom  # the band's centre, -top in NDC once zoomed (a zoom scales about 0)
         position, focal = np.array(cam.position), np.array(cam.focal_point)
         distance = np.linalg.norm(focal - position)
         half_h = distance * np.tan(np.radians(cam.view_angle) / 2)
         up = np.array(cam.up) / np.linalg.norm(cam.up)
         forward = (focal - position) / distance
         right = np.cross(forward, up)
+        right /= np.linalg.norm(right) or 1.0  # a view from above has ``up`` almost along ``forward``
         up = np.cross(right, forward)
         shift = centre[0] * half_h * aspect * right + centre[1] * half_h * up
         cam.position, cam.focal_point = tuple(position + shift), tuple(focal + shift)
-        scale = float(np.max(extent))
         if scale > 0:
-            cam.zoom(fill / scale)
+            cam.zoom(zoom)
     plotter.reset_camera_clipping_range()
 
 
@@ -411,6 +419,16 @@ def needs_reframe(framed: Sequence[float] | None, bounds: Sequence[float], margi
     return bool(grew or float(np.ptp(new, axis=1).max()) < shrink * size)
 
 
+def trame_window(size: tuple[int, int]) -> tuple[int, int]:
+    """The trame view's window (and so its iframe's) size for an explorer ``size``: the toolbar
+    band above a picture of that size, so the plant's top is not under the menu.
+
+    >>> trame_window((480, 480))
+    (480, 544)
+    """
+    return int(size[0]), int(size[1]) + TOOLBAR_BAND
+
+
 class TrameView:
     """pyvista's trame view of the plant (needs ``trame-pyvista``): rotate on drag, select on click,
     re-framed when the camera side is chosen or an edit grows the plant out of the picture.
@@ -423,7 +441,7 @@ class TrameView:
         import pyvista as pv
 
         self.owner = owner
-        self.plotter = pv.Plotter(notebook=True, window_size=list(owner.size))
+        self.plotter = pv.Plotter(notebook=True, window_size=list(trame_window(owner.size)))
         self.plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
         self._actor: pv.Actor | None = None
         self._view: str | None = None
@@ -470,7 +488,7 @@ class TrameView:
 
     def _frame(self, mesh) -> None:
         if mesh.n_cells:
-            fit_view(self.plotter, mesh.points, 0.9)
+            fit_view(self.plotter, mesh.points, 0.9, top=TOOLBAR_BAND / self.plotter.window_size[1])
             self._framed = tuple(mesh.bounds)
 
     def _picked(self, cell) -> None:

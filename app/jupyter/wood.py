@@ -45,7 +45,7 @@ class WoodTab:
         self.from_plant = W.Checkbox(value=False, description="from the plant", indent=False)
         self.height = W.FloatSlider(value=0.3, min=0.0, max=1.0, step=0.01, description="cut at", readout_format=".0%")
         on_value(self.height, lambda _v: self.show_cut())
-        self.facts = W.HTML()
+        self.facts = W.HTML("<small>Choose a species and years, press Grow: the cut appears here.</small>")
         self.picture = png_image(width=size[0])
         self.widget = W.VBox(
             [

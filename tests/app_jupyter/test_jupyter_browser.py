@@ -19,6 +19,7 @@ import time
 import pytest
 
 from jupyter_helpers import ROOT
+from ramure.app.jupyter.view import TOOLBAR_BAND
 
 pytest.importorskip("jupyterlab")
 pytest.importorskip("trame_pyvista")
@@ -29,6 +30,9 @@ from browser_helpers import Lab, chromium_available, launch_chromium, picture_st
 pytestmark = [pytest.mark.browser, pytest.mark.timeout(420)]
 
 ARTIFACTS = ROOT / "tests" / "artifacts" / "browser"
+#: Images shown in the explorer's cell that failed to load: the browser's broken-image icon.
+BROKEN_IMAGES = """() => Array.from(document.querySelectorAll('.jp-CodeCell')[0].querySelectorAll('img'))
+  .filter(i => i.offsetParent && i.complete && i.naturalWidth === 0).map(i => i.outerHTML.slice(0, 80))"""
 KERNEL_IDLE = """() => { const w = window.jupyterapp && window.jupyterapp.shell.currentWidget;
   const k = w && w.sessionContext && w.sessionContext.session && w.sessionContext.session.kernel;
   return !!k && k.status === 'idle'; }"""
@@ -79,6 +83,20 @@ def _view_png(view, previous=None, timeout=15.0, settle=1.2):
         if again != png:
             png, stable = again, time.monotonic()
     return png
+
+
+def _plant_top(png):
+    """How far down the view the plant starts (a fraction of its height): the first row with a
+    bark, leaf or fruit pixel (brown, green, orange or red; pyvista's menu is grey and blue)."""
+    import io
+
+    import numpy as np
+    from matplotlib.image import imread
+
+    rgb = imread(io.BytesIO(png), format="png")[..., :3]
+    plant = np.max(rgb[..., :2], axis=2) - rgb[..., 2] > 0.12
+    rows = np.flatnonzero(plant.any(axis=1))
+    return rows.min() / len(rgb) if len(rows) else 1.0
 
 
 def _save(name, png):
@@ -143,6 +161,16 @@ def test_explore_notebook_in_chromium(lab):
             assert not truncated, f"truncated button labels: {truncated}"
             _save("explorer.png", cell.screenshot())
 
+            # before their first action the picture tabs show no broken-image icon; the
+            # Architecture tab's buttons are disabled for Honda's grammar (no #amap)
+            for name in ("Wood", "Details", "Defects"):
+                cell.get_by_role("tab", name=name).click()
+                assert page.evaluate(BROKEN_IMAGES) == [], name
+            cell.get_by_role("tab", name="Architecture").click()
+            sync_api.expect(cell.get_by_text("names no architecture", exact=False).first).to_be_visible()
+            for name in ("Open ▸", "◂ Up", "Top", "Select"):
+                sync_api.expect(cell.get_by_role("button", name=name, exact=True)).to_be_disabled()
+
             view = cell.locator("iframe").first
             view.wait_for(timeout=30_000)
             first = _view_png(view)
@@ -167,6 +195,11 @@ def test_explore_notebook_in_chromium(lab):
                 assert stats["background"][0] > 200, (side, stats)  # white, not a black (dead) view
                 shots.append(png)
             assert len({bytes(s) for s in shots}) == 4
+            # nothing under pyvista's menu: the menu card hides what is under it, so a plant cut
+            # off by it starts right at the card's lower edge (56 px down); one framed below the
+            # band starts some 24 px lower than the band (the 10 % margin of fit_view)
+            for side, png in zip(("front", "top", "side"), shots[1:]):
+                assert _plant_top(png) >= (TOOLBAR_BAND + 12) / (480 + TOOLBAR_BAND), (side, _plant_top(png))
 
             # a click on a branch selects its leaf; a drag from a branch turns the view
             spot = _dark_pixel(shots[-1])

@@ -125,3 +125,30 @@ def test_fruit_are_orange_so_red_means_selected():
     assert red_pixels(ex.png()) == 0
     ex.select(ex.model.fruit_ids()[:4])
     assert red_pixels(ex.png()) > 0
+
+
+@pytest.mark.parametrize("side", ["top", "iso"])
+def test_the_trame_view_frames_the_plant_below_its_toolbar(side):
+    """pyvista's trame menu floats over the view's top (20 px down, 36 px tall): the view is
+    ``TOOLBAR_BAND`` taller than the explorer's size and the plant is framed below that band."""
+    import io
+
+    from matplotlib.image import imread
+
+    from ramure.app.jupyter.view import TOOLBAR_BAND, _screenshot, fit_view, trame_window
+    from ramure.app.render import frame_camera
+
+    assert TOOLBAR_BAND >= 20 + 36 and trame_window((160, 160)) == (160, 160 + TOOLBAR_BAND)
+    mesh = Explorer(HONDA, n=6, view="static").model.mesh
+    width, height = trame_window((160, 160))
+
+    def draw(plotter):
+        plotter.add_mesh(mesh, color="green")
+        frame_camera(plotter, mesh.bounds, side)
+        fit_view(plotter, mesh.points, 0.9, top=TOOLBAR_BAND / height)
+
+    rgb = imread(io.BytesIO(_screenshot((width, height), draw)), format="png")[..., :3]
+    rows, cols = np.nonzero(np.any(rgb < 0.9, axis=2))
+    assert rows.min() >= TOOLBAR_BAND  # nothing under the menu
+    assert max(np.ptp(rows) + 1, np.ptp(cols) + 1) >= 0.8 * 160  # still fills the picture below it
+    assert abs((rows.min() + rows.max()) / 2 - (TOOLBAR_BAND + 80)) < 10 and abs((cols.min() + cols.max()) / 2 - 80) < 10

@@ -320,3 +320,32 @@ def test_regrowing_the_whole_plant_with_new_constants_redraws():
     before = ex.png()
     assert ex.regrow(params={"rule": 1, "constants": {"a2": 66.0}}) is not None, ex.error
     assert ex.error is None and ex.png() != before and ex.model.mesh.n_cells > 0
+
+
+def test_picture_tabs_show_no_broken_image_before_their_first_action(explorer):
+    """An empty ``ipywidgets.Image`` is a broken-image icon in the browser: hidden until filled."""
+    ex = explorer
+    for tab in (ex.wood, ex.details, ex.defects):
+        assert tab.picture.value == b"" and tab.picture.layout.display == "none"
+        assert "<small>" in tab.facts.value  # a short text says what to do instead
+    ex.defects.apply()  # refused: no fruit selected, still nothing to show
+    assert ex.defects.picture.layout.display == "none"
+    ex.details.season_slider.value = 2
+    assert ex.details.picture.value[:4] == b"\x89PNG" and ex.details.picture.layout.display is None
+    ex.wood.years.value = 2
+    ex.wood.grow()
+    assert ex.wood.picture.value[:4] == b"\x89PNG" and ex.wood.picture.layout.display is None
+    assert ex.view.image.layout.display is None  # the plant's picture is there from the start
+
+
+def test_architecture_buttons_need_an_amap_grammar(explorer):
+    from jupyter_helpers import ROOT
+
+    arch = explorer.architecture  # Honda's grammar names no architecture
+    assert arch.arch is None and "#amap" in arch.crumbs.value
+    assert len(arch.buttons) == 4 and all(b.disabled for b in arch.buttons) and arch.rows.disabled
+    ex = Explorer(str(ROOT / "grammars" / "amap" / "massart.lsys"), n=4, view="static", size=(120, 120), cache=False)
+    arch = ex.architecture
+    assert arch.arch is not None and not any(b.disabled for b in arch.buttons) and not arch.rows.disabled
+    ex.set_text("n: 2\nw: A(1)\np: A(x) -> F(x)A(x+1)")  # the #amap lines gone
+    assert all(b.disabled for b in arch.buttons) and "#amap" in arch.crumbs.value
