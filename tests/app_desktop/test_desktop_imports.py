@@ -44,7 +44,8 @@ def test_study_grammar_source_is_public(tmp_path):
 
     assert callable(getattr(Study, "grammar_source", None))
     picks = [
-        {"id": i, "variant": i, "pca": [float(i), 0.0, 0.0], "params": {"rule": None, "constants": {}}} for i in range(1, 28)
+        {"id": i, "variant": i, "pca": [float(i), 0.0, 0.0], "params": {"rule": None, "constants": {"k": float(i)}}}
+        for i in range(1, 28)  # 27 different plants: a set of copies is refused
     ]
     study = Study.create(tmp_path / "s.sqlite", grammars={"g": picks})
     assert study.grammar_source("g") is None  # plain pick data: no exploration folder
