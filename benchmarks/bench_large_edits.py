@@ -15,12 +15,12 @@ Each benchmark runs in a fresh process, so its ``peak_mb`` (``VmHWM``) is the se
 
 from __future__ import annotations
 
-import json
 import pathlib
 import subprocess
 import sys
 
 import numpy as np
+from benchtools import child_json
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 HERE = pathlib.Path(__file__).resolve().parent
@@ -94,10 +94,7 @@ def _child(code: str, prefix: list[str] | None = None, timeout: int = 900) -> di
         out = subprocess.run([*(prefix or []), sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout)
     except subprocess.SubprocessError as exc:
         return {"error": repr(exc)}
-    lines = [line for line in out.stdout.splitlines() if line.startswith("{")]
-    if out.returncode or not lines:
-        return {"error": (out.stderr.strip().splitlines() or [f"exit {out.returncode}"])[-1]}
-    return json.loads(lines[-1])
+    return child_json(out)
 
 
 def _record(run: dict) -> dict:

@@ -18,6 +18,7 @@ import statistics
 import time
 
 import numpy as np
+from benchtools import child_json
 
 from ramure.lsys import LSystem
 
@@ -644,7 +645,6 @@ def desktop_memory(
     user reaching for the button.  ``cgroup``: a memory cgroup folder the child runs in (with
     ``xvfb-run``, the X server too; see ``bench_memory_limit.py``).
     ``{"error": ...}`` when the window cannot be opened here (no Qt, no display)."""
-    import json
     import os
     import subprocess
     import sys
@@ -662,10 +662,7 @@ def desktop_memory(
         )
     except subprocess.SubprocessError as exc:
         return {"error": repr(exc)}
-    lines = [line for line in out.stdout.splitlines() if line.startswith("{")]
-    if out.returncode or not lines:
-        return {"error": (out.stderr.strip().splitlines() or [f"exit {out.returncode}"])[-1]}
-    return json.loads(lines[-1])
+    return child_json(out)
 
 
 _PLANT_SECONDS = """

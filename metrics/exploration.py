@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ramure.errors import RamureError
-from ramure.io import inside, open_atomic, read_regular, write_text
+from ramure.io import inside, open_atomic, read_json, write_text
 
 from .pca import DeltaPCA
 from .picks import Picks, match_totals, pick_variants
@@ -262,15 +262,7 @@ def read_exploration_info(
 
 
 def _read_json(path: pathlib.Path) -> object:
-    data = read_regular(path, MAX_PCA_JSON_BYTES, "exploration file")
-    try:
-        return json.loads(data.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise RamureError(f"{path}: not UTF-8 text (byte {exc.start})") from None
-    except json.JSONDecodeError as exc:
-        raise RamureError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
-    except RecursionError:
-        raise RamureError(f"{path}: nested too deeply") from None
+    return read_json(path, MAX_PCA_JSON_BYTES, "exploration file")
 
 
 def _is_int(value: object, low: int, high: int) -> bool:

@@ -294,6 +294,23 @@ def _not_regular(mode: int) -> str:
     return "it is not a regular file"
 
 
+def read_json(path: str | os.PathLike, limit: int, what: str = "file") -> object:
+    """The JSON document in ``path``, read by :func:`read_regular` (regular file, at most
+    ``limit`` bytes); text that is not UTF-8, not JSON or nested too deeply is a RamureError
+    naming the file and where."""
+    import json
+
+    data = read_regular(path, limit, what)
+    try:
+        return json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise RamureError(f"{path}: not UTF-8 text (byte {exc.start})") from None
+    except json.JSONDecodeError as exc:
+        raise RamureError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    except RecursionError:
+        raise RamureError(f"{path}: nested too deeply") from None
+
+
 class FileRefused(RamureError):
     """A file :func:`read_regular` does not read; ``reason`` says why in a few words."""
 

@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ramure.io import read_regular
+from ramure.errors import RamureError
+from ramure.io import read_json
 from ramure.studies.errors import StudyInputError
 
 N_PICKS = 27
@@ -100,15 +101,10 @@ def load_picks(directory: str | os.PathLike) -> list[Pick]:
     path = directory / "picks.json"
     if not path.exists():
         raise StudyInputError(f"{directory}: no picks.json (run the exploration first)")
-    data = read_regular(path, MAX_PICKS_JSON_BYTES, "picks file")  # no pipe, no device, bounded
     try:
-        items = json.loads(data.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise StudyInputError(f"{path}: not UTF-8 text (byte {exc.start})") from None
-    except json.JSONDecodeError as exc:
-        raise StudyInputError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
-    except RecursionError:
-        raise StudyInputError(f"{path}: nested too deeply") from None
+        items = read_json(path, MAX_PICKS_JSON_BYTES, "picks file")  # no pipe, no device, bounded
+    except RamureError as exc:
+        raise StudyInputError(str(exc)) from None
     picks = picks_from_data(items, where=str(path))
     return [Pick(p.id, p.variant, p.pca, p.params, inside_folder(directory, p.image, str(path))) for p in picks]
 

@@ -271,9 +271,10 @@ def campaign(inputs, seed=0, keep=None, report_every=0, stream=sys.stdout):
     return counts, bad
 
 
-def table(counts):
-    """The outcome table: one row per outcome, one column per generator."""
-    names = list(GENERATORS)
+def table(counts, generators=None):
+    """The outcome table: one row per outcome, one column per generator (``generators``: their
+    names, this fuzzer's by default; the .g3l fuzzer passes its own)."""
+    names = list(GENERATORS if generators is None else generators)
     outcomes = sorted({o for _, o in counts}, key=lambda o: (not o.startswith("crash"), o))
     width = max([len(o) for o in outcomes] + [10])
     lines = [f"{'outcome':<{width}}  " + "  ".join(f"{g:>8}" for g in names) + f"  {'total':>8}"]

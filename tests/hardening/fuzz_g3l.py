@@ -190,14 +190,9 @@ def campaign(inputs, seed=0, **limits):
 
 def table(counts):
     """The outcome table: one row per outcome, one column per generator."""
-    names = list(GENERATORS)
-    outcomes = sorted({o for _, o in counts}, key=lambda o: (not o.startswith("crash"), o))
-    width = max([len(o) for o in outcomes] + [10])
-    lines = [f"{'outcome':<{width}}  " + "  ".join(f"{g:>8}" for g in names) + f"  {'total':>8}"]
-    for o in outcomes:
-        row = [counts.get((g, o), 0) for g in names]
-        lines.append(f"{o:<{width}}  " + "  ".join(f"{v:>8}" for v in row) + f"  {sum(row):>8}")
-    return "\n".join(lines)
+    from tests.hardening.fuzz import table as outcome_table
+
+    return outcome_table(counts, GENERATORS)
 
 
 def main(argv=None):
