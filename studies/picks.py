@@ -105,6 +105,8 @@ def load_picks(directory: str | os.PathLike) -> list[Pick]:
         items = read_json(path, MAX_PICKS_JSON_BYTES, "picks file")  # no pipe, no device, bounded
     except RamureError as exc:
         raise StudyInputError(str(exc)) from None
+    if not isinstance(items, list):
+        raise StudyInputError(f"{path}: expected a list of 27 picks")
     picks = picks_from_data(items, where=str(path))
     return [Pick(p.id, p.variant, p.pca, p.params, inside_folder(directory, p.image, str(path))) for p in picks]
 
