@@ -79,7 +79,13 @@ def regrow():  # as the desktop's Regrow: what grew back stays selected
 
 result = timed("regrow", regrow)
 regrown = np.intersect1d(ex.selection, snap.segment_leaf)  # regrown leaves that draw a branch
-timed("click", lambda: ex.select([int(regrown[len(regrown) // 2])]))
+tree = ex.derivation.tree  # a click on a regrown tip (a lone segment that carries branches prunes nothing)
+tips = [
+    leaf for leaf, start, count in zip(regrown.tolist(), tree.child_start[tree.parent[regrown]].tolist(),
+                                       tree.child_count[tree.parent[regrown]].tolist())
+    if not tree.child_count[start:start + count].any()
+]
+timed("click", lambda: ex.select([tips[len(tips) // 2]]))
 timed("prune", ex.prune)
 timed("constant", lambda: ex.set_constant("a2", 45))
 print(json.dumps({{"seconds": seconds, "selected": selected, "regrown_modules": int(result.added),
@@ -184,7 +190,13 @@ selected = len(window.controller.snapshot.selection)
 edit("regrow", lambda: QTest.mouseClick(window.regen.regrow_button, Qt.MouseButton.LeftButton))
 snap = window.controller.snapshot
 regrown = np.flatnonzero(np.isin(snap.segment_leaf, snap.selection))
-x, y = window.view.project(snap.midpoints[regrown[len(regrown) // 2 :][:1]])[0]
+tree = window.controller.explorer.derivation.tree  # a regrown tip: Delete prunes it
+parents = tree.parent[snap.segment_leaf[regrown]]
+tips = [
+    i for i, start, count in zip(regrown.tolist(), tree.child_start[parents].tolist(), tree.child_count[parents].tolist())
+    if not tree.child_count[start:start + count].any()
+]
+x, y = window.view.project(snap.midpoints[tips[len(tips) // 2 :][:1]])[0]
 t0 = time.perf_counter()
 window.view.click_at(float(x), float(y))
 settle()
