@@ -561,15 +561,15 @@ class Explorer:
         """Record an edit; ``keep``: what grew back stays selected when something was selected
         (so Regrow again, or another qualifier, acts on the same part)."""
         had = self.selection
-        drawn_before = self._drawn_leaves() if keep and had else None
+        drawn_before = bool(keep and had) and bool(self._draw(had).all())  # picks and rectangles draw
         self.last_result = result
         self.selection = []
         self.summary = edit_summary(self.derivation.tree, result)  # the tree the cut was made in
         self.note = None
         self._fold_whole_plant()
         self._changed()
-        if drawn_before is not None:
-            self.selection = self._regrown_selection(had, drawn_before, result)
+        if keep and had:
+            self.selection = self._regrown_selection(drawn_before, result)
         return result
 
     def _fold_whole_plant(self) -> None:
@@ -589,20 +589,25 @@ class Explorer:
         s.undo()  # the session left keeps the plant before (Undo goes back to it)
         self.session = folded
 
-    def _drawn_leaves(self) -> np.ndarray:
-        """Leaves that draw something (a segment or an organ), sorted."""
+    def _draw(self, leaves) -> np.ndarray:
+        """Whether each of ``leaves`` draws something (a segment or an organ) in the plant shown:
+        one lookup table over the leaf ids, no sort of the plant's 100k+ leaves."""
         sk = self.skeleton
-        return _sorted_unique(np.concatenate([sk.leaf_id, sk.organs.leaf_id]).astype(np.int64))
+        drawn = np.concatenate([sk.leaf_id, sk.organs.leaf_id]).astype(np.int64)
+        leaves = np.asarray(leaves, np.int64)
+        if not len(leaves) or not len(drawn):
+            return np.zeros(len(leaves), bool)
+        return np.isin(leaves, drawn, kind="table")
 
-    def _regrown_selection(self, had, drawn_before, result) -> list[int]:
+    def _regrown_selection(self, only_drawn: bool, result) -> list[int]:
         """The regrown part as a selection of the same kind as the one regrown: the leaves that
         draw, when only such leaves were selected (picks, rectangles: their cut then gives the
         same roots again, where every new module selected would climb higher), else every new
         leaf (a selection made in the derivation tree)."""
         new = np.asarray(regrown_leaves(self.derivation.tree, result), np.int64)
-        if np.isin(np.asarray(had, np.int64), drawn_before).all():
+        if only_drawn:
             try:
-                new = np.intersect1d(new, self._drawn_leaves())
+                new = new[self._draw(new)]
             except RamureError:  # the new plant cannot be drawn: the front end says why when it draws
                 pass
         return new.tolist()

@@ -621,7 +621,11 @@ def minimum_ascension(
     up = tree.parent[leaves].astype(np.int64)
     ok = up >= 0
     selected = leaves if selected is None else np.asarray(selected, np.int64)
-    ok[ok] = _only_leaves_below(tree, up[ok]) | (_picked_share(tree, up[ok], selected) >= rho)
+    parents = up[ok]
+    climbs = _only_leaves_below(tree, parents)  # a tip: its parent holds leaves only
+    if not climbs.all():  # the share of picked leaves only where it decides (two passes over the string)
+        climbs[~climbs] = _picked_share(tree, parents[~climbs], selected) >= rho
+    ok[ok] = climbs
     return np.where(ok, up, leaves)
 
 
