@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import os
+from unittest import mock
 import pathlib
 
 import numpy as np
@@ -24,15 +25,6 @@ def execute(nb, env=None, timeout=180):
     """Run notebook ``nb`` in a fresh python3 kernel at the repository root (``env`` reaches the kernel)."""
     import nbclient
 
-    env = dict(env or {})
-    old = {k: os.environ.get(k) for k in env}
-    os.environ.update(env)
-    try:
+    with mock.patch.dict(os.environ, env or {}):  # the kernel inherits them; restored after
         nbclient.NotebookClient(nb, kernel_name="python3", timeout=timeout, resources={"metadata": {"path": str(ROOT)}}).execute()
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
     return nb

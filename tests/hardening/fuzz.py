@@ -156,20 +156,25 @@ def aware(rng):
 
 def mutate(rng):
     """A shipped grammar with a few random character edits."""
-    text = str(rng.choice(TEXTS))
+    return edit_text(rng, str(rng.choice(TEXTS)), CHARS, EXTREMES)
+
+
+def edit_text(rng, text, chars, extras):
+    """``text`` with 1-4 random edits: cut a run, insert or replace ``chars``, truncate, or
+    insert one of ``extras`` (the .g3l fuzzer calls it with its own alphabet and inputs)."""
     for _ in range(int(rng.integers(1, 5))):
         i = int(rng.integers(0, len(text) + 1))
         op = rng.random()
         if op < 0.3:
             text = text[:i] + text[i + int(rng.integers(1, 6)) :]
         elif op < 0.6:
-            text = text[:i] + "".join(rng.choice(list(CHARS), int(rng.integers(1, 4)))) + text[i:]
+            text = text[:i] + "".join(rng.choice(list(chars), int(rng.integers(1, 4)))) + text[i:]
         elif op < 0.8:
-            text = text[:i] + str(rng.choice(list(CHARS))) + text[i + 1 :]
+            text = text[:i] + str(rng.choice(list(chars))) + text[i + 1 :]
         elif op < 0.9:
             text = text[:i]
         else:
-            text = text[:i] + str(rng.choice(EXTREMES)) + text[i:]
+            text = text[:i] + str(rng.choice(extras)) + text[i:]
     return text
 
 

@@ -91,21 +91,9 @@ def _alarm(_signum, _frame):
 
 def mutate(rng):
     """A shipped wood grammar with a few random character edits."""
-    text = str(rng.choice(TEXTS))
-    for _ in range(int(rng.integers(1, 5))):
-        i = int(rng.integers(0, len(text) + 1))
-        op = rng.random()
-        if op < 0.3:
-            text = text[:i] + text[i + int(rng.integers(1, 6)) :]
-        elif op < 0.6:
-            text = text[:i] + "".join(rng.choice(list(CHARS), int(rng.integers(1, 4)))) + text[i:]
-        elif op < 0.8:
-            text = text[:i] + str(rng.choice(list(CHARS))) + text[i + 1 :]
-        elif op < 0.9:
-            text = text[:i]
-        else:
-            text = text[:i] + str(rng.choice(HOSTILE)) + text[i:]
-    return text
+    from tests.hardening.fuzz import edit_text
+
+    return edit_text(rng, str(rng.choice(TEXTS)), CHARS, HOSTILE)
 
 
 def aware(rng):
