@@ -32,7 +32,7 @@ from ramure.lsys import GrammarError, LSystem, load_kernels
 from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
 from ramure.lsys.cut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
-from ramure.lsys.tree import concat_ranges
+from ramure.lsys.tree import concat_ranges, sorted_unique
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
 from ramure.app.document import check_round_trip, document_text
@@ -359,7 +359,7 @@ class Explorer:
             if isinstance(leaf_ids, Iterable) and not isinstance(leaf_ids, (list, tuple, np.ndarray, str))
             else leaf_ids
         )  # a number, or an array-like taken as it is
-        ids = _sorted_unique(np.atleast_1d(np.asarray(given, np.int64)))
+        ids = sorted_unique(np.atleast_1d(np.asarray(given, np.int64)))
         tree = self.derivation.tree
         known = (ids >= 0) & (ids < tree.size)
         is_leaf = np.zeros(ids.size, bool)
@@ -369,7 +369,7 @@ class Explorer:
         current = np.asarray(self.selection, np.int64)
         new = {
             "replace": lambda: ids,
-            "add": lambda: _sorted_unique(np.concatenate([current, ids])),
+            "add": lambda: sorted_unique(np.concatenate([current, ids])),
             "remove": lambda: np.setdiff1d(current, ids, assume_unique=True),
             "toggle": lambda: np.setxor1d(current, ids, assume_unique=True),
         }[mode]()
@@ -958,17 +958,7 @@ def leaves_in_rectangle(leaf_ids: ArrayLike, screen_xy: ArrayLike, rect: Sequenc
     x0, y0, x1, y1 = rect
     xy = np.asarray(screen_xy, float)
     inside = (xy[:, 0] >= min(x0, x1)) & (xy[:, 0] <= max(x0, x1)) & (xy[:, 1] >= min(y0, y1)) & (xy[:, 1] <= max(y0, y1))
-    return _sorted_unique(np.asarray(leaf_ids)[inside]).tolist()
-
-
-def _sorted_unique(values):
-    """``np.unique`` by sorting (numpy's hash-based unique is slower on 100k+ ids); ids already
-    sorted and unique (a regrow's 650,000 regrown leaves) are only checked, not sorted again."""
-    values = values.ravel()
-    if len(values) > 1 and bool((values[1:] > values[:-1]).all()):
-        return values
-    values = np.sort(values)
-    return values[np.r_[True, values[1:] != values[:-1]]] if len(values) else values
+    return sorted_unique(np.asarray(leaf_ids)[inside]).tolist()
 
 
 def write_obj(mesh: pv.PolyData, path: str | os.PathLike) -> pathlib.Path:
