@@ -639,15 +639,11 @@ def _only_leaves_below(tree, nodes):
 
 
 def _picked_share(tree, nodes, selected):
-    """For each node, the share of its leaves of the selected symbols that are selected."""
+    """For each node, the share of its leaves of the selected symbols that are selected.
+
+    Nodes whose leaves make a small part of the string (a tip's parent, a twig) are counted on
+    their spans only; larger ones by running sums over the whole string."""
     string = np.asarray(tree.leaves)
-    kinds = np.isin(tree.symbol[string], sorted_unique(tree.symbol[selected]))
-    picked = np.zeros(len(string), bool)
-    picked[tree.leaf_positions(selected)] = True
-    kind_sum = np.zeros(len(string) + 1, np.int64)
-    np.cumsum(kinds, out=kind_sum[1:])
-    picked_sum = np.zeros(len(string) + 1, np.int64)
-    np.cumsum(picked, out=picked_sum[1:])
     unique, back = _unique_inverse(np.asarray(nodes, np.int64))
     if len(unique) > 256:
         first, last = tree.leaf_spans()
@@ -656,9 +652,27 @@ def _picked_share(tree, nodes, selected):
         first, last = tree.string_spans(unique)
     has = last >= 0
     a, b = np.where(has, first, 0), np.where(has, last + 1, 0)
-    total = kind_sum[b] - kind_sum[a]
-    share = np.where(total > 0, (picked_sum[b] - picked_sum[a]) / np.maximum(total, 1), 0.0)
+    symbols = sorted_unique(tree.symbol[selected])
+    picked_at = np.sort(tree.leaf_positions(selected))
+    if (b - a).sum() <= len(string) // 16:
+        total, chosen = _span_counts(tree, string, a, b, symbols, picked_at)
+    else:
+        kind_sum = np.zeros(len(string) + 1, np.int64)
+        np.cumsum(np.isin(tree.symbol[string], symbols), out=kind_sum[1:])
+        total = kind_sum[b] - kind_sum[a]
+        chosen = np.searchsorted(picked_at, b) - np.searchsorted(picked_at, a)
+    share = np.where(total > 0, chosen / np.maximum(total, 1), 0.0)
     return share[back]
+
+
+def _span_counts(tree, string, a, b, symbols, picked_at):
+    """Leaves of ``symbols`` in each string span ``[a, b)``, and picked ones (sorted positions)."""
+    at = concat_ranges(a, b - a)
+    owner = np.repeat(np.arange(len(a)), b - a)
+    kinds = np.isin(tree.symbol[string[at]], symbols)
+    total = np.bincount(owner[kinds], minlength=len(a))
+    chosen = np.searchsorted(picked_at, b) - np.searchsorted(picked_at, a)
+    return total, chosen
 
 
 def _unique_inverse(values):

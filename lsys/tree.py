@@ -625,8 +625,15 @@ class DerivationTree:
         return self.leaves[first[node] : last[node] + 1]
 
     def leaf_positions(self, nodes: ArrayLike) -> np.ndarray:
-        """Position of each leaf node in the current string; raises for non-leaves."""
+        """Position of each node in the current string, -1 for a node that is not in it; raises
+        for ids out of range.  A few nodes (at most 256: a click, a regrow's picks) are found
+        from the leaf sums (:meth:`string_spans`), without a table over the whole tree."""
         nodes = np.asarray(nodes, np.int64)
+        if nodes.size and (nodes.min() < 0 or nodes.max() >= self.size):
+            raise IndexError("node id out of range")
+        if nodes.size <= 256 and self._sums is not None and self._sums.size == self.size:
+            first, _ = self.string_spans(nodes)
+            return np.where(self.in_string(nodes), first, -1)
         pos = np.full(self.size, -1, np.int64)
         pos[self.leaves] = np.arange(len(self.leaves))
         if nodes.size and (nodes.min() < 0 or nodes.max() >= self.size):

@@ -258,3 +258,27 @@ def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkey
     assert all(int(t.parent[v]) in nodes for v in nodes if t.parent[v] >= 0) and set(sel.tolist()) <= nodes
     members = set(some.tolist())
     assert answers[0][1] == [r for r in some.tolist() if not members & set(t.ancestors(r).tolist())]
+
+
+@pytest.mark.parametrize("count, wide", [(3, False), (40, False), (3, True), (300, True)])
+def test_picked_share_counts_each_nodes_leaves_of_the_picked_kinds(count, wide):
+    """The share a minimum ascension compares with rho, against a count leaf by leaf: small
+    spans are counted on the spans, large ones (near the root) by running sums."""
+    from ramure.lsys.cut import _picked_share
+    from ramure import load
+
+    tree = load("honda_sympodial").derive(n=9).tree
+    rng = np.random.default_rng(count)
+    string = np.asarray(tree.leaves)
+    segments = string[tree.symbol[string] == tree.symbol[string].max()]  # one kind of module
+    picked = rng.choice(segments, min(count, len(segments)), replace=False)
+    nodes = tree.parent[picked]
+    if wide:  # the root and other inner nodes: more than a sixteenth of the string in all
+        nodes = np.r_[nodes, 0, rng.choice(np.flatnonzero(tree.child_count > 0), 20)]
+    first, last = tree.leaf_spans()
+    want = []
+    for v in nodes:
+        under = string[first[v] : last[v] + 1]
+        kinds = np.isin(tree.symbol[under], tree.symbol[picked])
+        want.append(np.isin(under, picked).sum() / kinds.sum() if kinds.any() else 0.0)
+    np.testing.assert_allclose(_picked_share(tree, nodes, picked), want)

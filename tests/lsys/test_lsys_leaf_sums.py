@@ -41,6 +41,7 @@ def check(tree, rng):
     spans = tree.string_spans(sample)  # before leaf_spans fills the cache they would read
     depth = tree.depth_of(sample)
     counts, weights = tree.subtree_weights(nodes)
+    positions = tree.leaf_positions(sample)  # a few nodes: from the sums, no whole-tree table
     in_string = tree.in_string(nodes)
     ref_counts, ref_weights = reference(tree)
     np.testing.assert_array_equal(counts, ref_counts)
@@ -52,6 +53,10 @@ def check(tree, rng):
     mask = np.zeros(tree.size, bool)
     mask[tree.leaves] = True
     np.testing.assert_array_equal(in_string, mask)
+    where = np.full(tree.size, -1)
+    where[tree.leaves] = np.arange(len(tree.leaves))
+    np.testing.assert_array_equal(positions, where[sample])
+    np.testing.assert_array_equal(tree.leaf_positions(nodes), where)  # many nodes: the table
     np.testing.assert_array_equal(tree.axiom_modules(), np.flatnonzero((tree.parent == -1) & tree.alive))
 
 
