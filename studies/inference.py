@@ -178,8 +178,11 @@ def mixed_model(frame: pd.DataFrame, grammars: list[str]) -> dict:
     """Linear mixed model ``rating ~ grammar`` with participant and test random intercepts.
 
     ``frame`` is :func:`answers_frame`; ``grammars`` the order of the levels (the first
-    is the reference).  Fitted by REML (statsmodels ``MixedLM``); the grammar effect is
-    tested jointly by a Wald chi-square on its coefficients.
+    is the reference).  Fitted by REML (statsmodels ``MixedLM``) twice, from statsmodels'
+    start and from :func:`_moment_start`, keeping the larger REML likelihood: on a simulated
+    100 x 7 study the two starts end at different optima for every measure (statsmodels' start
+    on the boundary, a test variance near 0, and the lower likelihood for two of the three).
+    The grammar effect is tested jointly by a Wald chi-square on its coefficients.
     """
     present = [g for g in grammars if g in set(frame["grammar"])]
     people = frame["participant"].nunique()
@@ -202,9 +205,12 @@ def mixed_model(frame: pd.DataFrame, grammars: list[str]) -> dict:
         exog_re=np.ones((len(df), 1)),
         exog_vc=VCSpec(["test"], [colnames], [mats]),
     )
+    rating = df["rating"].to_numpy(float)
+    start = _moment_start(exog, rating, df["participant"].to_numpy(), df["test"].to_numpy())
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        fit = model.fit(reml=True, method=["lbfgs", "powell"])
+        fits = [model.fit(reml=True, method=["lbfgs", "powell"], start_params=s) for s in (None, start)]
+    fit = max(fits, key=lambda f: f.llf)
     k = len(present)
     ci = np.asarray(fit.conf_int())
     wald = fit.wald_test(np.eye(len(fit.params))[1:k], scalar=True)
@@ -221,8 +227,29 @@ def mixed_model(frame: pd.DataFrame, grammars: list[str]) -> dict:
         wald_df=k - 1,
         p=float(wald.pvalue),
         variance=dict(participant=float(np.asarray(fit.cov_re)[0, 0]), test=float(fit.vcomp[0]), residual=float(fit.scale)),
+        reml_log_likelihood=float(fit.llf),
         converged=bool(fit.converged),  # after the fall-back optimiser, if lbfgs failed
         boundary=any("boundary" in str(w.message) for w in caught),
+    )
+
+
+def _moment_start(exog: np.ndarray, y: np.ndarray, participant: np.ndarray, test: np.ndarray):
+    """Start values for the mixed model: least-squares fixed effects and the variances of the
+    residuals' participant means, test means within participants, and what is left (method of
+    moments, ratios to the residual variance as MixedLM parametrises them): inside the
+    parameter space, away from the boundary where statsmodels' own start may stop."""
+    import pandas as pd
+    from statsmodels.regression.mixed_linear_model import MixedLMParams
+
+    beta = np.linalg.lstsq(exog, y, rcond=None)[0]
+    frame = pd.DataFrame({"p": participant, "t": test, "r": y - exog @ beta})
+    by_person = frame.groupby("p")["r"].transform("mean").to_numpy()
+    by_test = frame.groupby(["p", "t"])["r"].transform("mean").to_numpy()
+    residual = max(float(np.var(frame["r"].to_numpy() - by_test)), 1e-6)
+    person = max(float(np.var(by_person)), 1e-3 * residual)
+    within = max(float(np.var(by_test - by_person)), 1e-3 * residual)
+    return MixedLMParams.from_components(
+        fe_params=beta, cov_re=np.array([[person / residual]]), vcomp=np.array([within / residual])
     )
 
 
