@@ -1,0 +1,546 @@
+"""Participants anywhere: a study's whole participant flow as web pages (``ramure study serve``).
+
+:class:`StudyServer` is the web-free core: it owns the study database (one connection, used by
+one thread only), authenticates participants, turns their requests into
+:class:`~ramure.studies.session.TestSession` calls and answers with the page's state.
+:func:`make_app` wraps it in a Starlette application (imported lazily: the ``web`` extra), and
+:func:`serve` runs that on uvicorn.  The pages (``studies/webpages``) are plain HTML and
+JavaScript with no build step.
+
+What a request can and cannot do:
+
+- A participant joins by consenting (``POST /api/join``) and receives a code and a token, an
+  HMAC of the code under the study's secret (``STUDY.web-secret`` beside the database, made
+  once, readable by its owner only).  Every later request names the code in its path and
+  carries the token: a forged code, or another participant's code, is refused (403).
+- Pictures and groups are addressed by the participant's own picture labels (two characters,
+  :func:`~ramure.studies.session.picture_labels`), never by pick ids, which encode the PCA
+  lattice.
+- Each answer carries the ``version`` of the state it was made on (the number of answers the
+  participant has given) and the part it answers: a replayed or doubled request is stale and
+  refused (409); a body over :data:`MAX_BODY_BYTES` is refused (413).  A refused request
+  changes nothing in the database.
+- The researcher's page and downloads need the researcher token printed at start.
+
+The functions under "Hooks" are where the study design (counterbalanced order, external ids,
+configured consent and completion codes) plugs in; today they give plain defaults.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import hmac
+import io
+import json
+import os
+import pathlib
+import secrets
+import sqlite3
+import tempfile
+import zipfile
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from importlib import resources
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from ramure.io import write_text
+from ramure.studies.errors import StudyInputError
+from ramure.studies.likert import LEVELS
+from ramure.studies.session import TestSession, picture_labels
+
+if TYPE_CHECKING:
+    from starlette.applications import Starlette
+
+    from ramure.studies.picks import Pick
+    from ramure.studies.storage import Study
+
+#: The largest request body accepted, in bytes (a whole grouping of 27 pictures is under 1 KiB).
+MAX_BODY_BYTES = 16 * 1024
+#: Events that are not answers: they do not advance a participant's ``version``.
+_NOT_ANSWERS = ("start", "resume", "consent", "external_id")
+T = TypeVar("T")
+
+
+class RequestRefused(StudyInputError):
+    """A web request refused with an HTTP status (4xx); nothing was changed."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+# -- hooks: the study design fills these -----------------------------------------------------------
+
+
+def grammar_order(study: Study, code: str) -> list[str]:
+    """The order in which participant ``code`` sees the study's stimulus sets (default: as stored)."""
+    return study.grammars
+
+
+def consent_text(study: Study) -> str:
+    """The consent text shown before anything is recorded."""
+    parts = len(study.grammars)
+    return (
+        f"You will sort pictures of plants into groups, in {parts} part{'s' if parts != 1 else ''}, "
+        f"then rate each group and describe it in a few words. It takes about {study.budget_seconds / 60:g} minutes. "
+        "Your answers are stored under an anonymous code, with the time you spend; no name or address is asked. "
+        "You may stop at any time."
+    )
+
+
+def record_external_id(study: Study, code: str, external_id: str) -> None:
+    """Keep the id a recruiting platform gave participant ``code`` (e.g. a Prolific PID from the URL)."""
+    from ramure.studies.storage import log_event
+
+    pid = study.conn.execute("SELECT id FROM participants WHERE code = ?", (code,)).fetchone()[0]
+    with study.conn:
+        log_event(study.conn, pid, "external_id", {"external_id": external_id})
+
+
+def completion_code(study: Study, code: str, secret: bytes) -> str:
+    """The code participant ``code`` is shown at the end, to claim completion on a platform."""
+    return _mac(secret, "complete:" + code)[:10].upper()
+
+
+# -- the server core -------------------------------------------------------------------------------
+
+
+def _mac(secret: bytes, text: str) -> str:
+    return hmac.new(secret, text.encode(), hashlib.sha256).hexdigest()
+
+
+def secret_path(db: str | os.PathLike) -> pathlib.Path:
+    """The file holding the study's web secret: ``STUDY.db.web-secret`` beside the database."""
+    db = pathlib.Path(db)
+    return db.with_name(db.name + ".web-secret")
+
+
+def study_secret(db: str | os.PathLike) -> bytes:
+    """The study's web secret (made on first use, owner-readable only): it signs every token."""
+    path = secret_path(db)
+    if not path.exists():
+        old = os.umask(0o077)
+        try:
+            write_text(path, secrets.token_hex(32) + "\n")
+        finally:
+            os.umask(old)
+    text = path.read_text(encoding="utf-8").strip()
+    if len(text) < 32:
+        raise StudyInputError(f"{path}: the study's web secret is too short; delete the file to make a new one")
+    return text.encode()
+
+
+QUESTIONS = {
+    "usefulness": "How useful would this group of plants be to you?",
+    "difference": "How different is this group from the other groups?",
+    "representative_quality": "How well does the chosen picture stand for its group?",
+}
+
+
+class StudyServer:
+    """The participant flow on one study database, without any web framework.
+
+    Every method that touches the database must run on the single thread that opened it:
+    :meth:`call` runs a function there (the web app awaits it), so answers are written one
+    at a time, each in its own transaction.
+    """
+
+    def __init__(self, db: str | os.PathLike, secret: bytes | None = None) -> None:
+        self.db = pathlib.Path(db)
+        self.secret = secret if secret is not None else study_secret(self.db)
+        self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ramure-study-db")
+        self._study: Study | None = None
+        self._sessions: dict[tuple[str, str], TestSession] = {}
+        self._picks: dict[str, list[Pick]] = {}
+        self._closed = False
+
+    # -- the database thread ---------------------------------------------------------------------
+    @property
+    def study(self) -> Study:
+        """The study, opened for writing on first use (call only on the database thread)."""
+        if self._study is None:
+            from ramure.studies.storage import Study
+
+            self._study = Study.open(self.db)
+        return self._study
+
+    def call(self, fn: Callable[..., T], *args: Any) -> T:
+        """Run ``fn(*args)`` on the database thread and return its result (blocking)."""
+        return self.pool.submit(fn, *args).result()
+
+    async def acall(self, fn: Callable[..., T], *args: Any) -> T:
+        """Await ``fn(*args)`` run on the database thread."""
+        return await asyncio.wrap_future(self.pool.submit(fn, *args))
+
+    def close(self) -> None:
+        """Close the database and stop its thread (again: nothing)."""
+        if self._closed:
+            return
+        self._closed = True
+
+        def shut() -> None:
+            if self._study is not None:
+                self._study.close()
+                self._study = None
+
+        self.call(shut)
+        self.pool.shutdown()
+
+    # -- tokens ------------------------------------------------------------------------------------
+    def participant_token(self, code: str) -> str:
+        return _mac(self.secret, "participant:" + code)[:32]
+
+    def researcher_token(self) -> str:
+        return _mac(self.secret, "researcher")[:32]
+
+    def check_participant(self, code: str, token: str | None) -> None:
+        """Refuse (403) a token that is not participant ``code``'s."""
+        if not token or not hmac.compare_digest(token, self.participant_token(code)):
+            raise RequestRefused(403, "this link does not belong to a participant of this study")
+
+    def check_researcher(self, token: str | None) -> None:
+        if not token or not hmac.compare_digest(token, self.researcher_token()):
+            raise RequestRefused(403, "the researcher token is missing or wrong")
+
+    # -- participant requests (database thread) ----------------------------------------------------
+    def info(self) -> dict:
+        """What the consent page shows."""
+        study = self.study
+        return dict(title=study.name, parts=len(study.grammars), consent=consent_text(study))
+
+    def join(self, body: dict) -> dict:
+        """Register a consenting participant; returns their code and token."""
+        if body.get("consent") is not True:
+            raise RequestRefused(400, "consent must be given (consent: true) before anything is recorded")
+        external = body.get("external_id")
+        if external is not None and (not isinstance(external, str) or not 0 < len(external) <= 64):
+            raise RequestRefused(400, "external_id must be text of 1 to 64 characters")
+        code = self.study.add_participant(code=None, consent=True, seed=secrets.randbits(31))
+        if external:
+            record_external_id(self.study, code, external)
+        return dict(code=code, token=self.participant_token(code))
+
+    def _participant_row(self, code: str) -> tuple:
+        row = self.study.conn.execute("SELECT id, seed, consent FROM participants WHERE code = ?", (code,)).fetchone()
+        if row is None:
+            raise RequestRefused(404, f"no participant {code!r} in this study")
+        if not row[2]:
+            raise RequestRefused(403, f"participant {code!r} has withdrawn consent")
+        return row
+
+    def version(self, code: str) -> int:
+        """How many answers participant ``code`` has given: each answer must name it, so a replay is stale."""
+        marks = ", ".join("?" * len(_NOT_ANSWERS))
+        return self.study.conn.execute(
+            f"SELECT count(*) FROM events e JOIN participants p ON p.id = e.participant_id "
+            f"WHERE p.code = ? AND e.action NOT IN ({marks})",
+            (code, *_NOT_ANSWERS),
+        ).fetchone()[0]
+
+    def _current(self, code: str) -> tuple[int, TestSession | None, bool]:
+        """(part number 1.., its session or None when all is done, whether the time ran out)."""
+        study = self.study
+        order = grammar_order(study, code)
+        for part, grammar in enumerate(order, start=1):
+            if study.finished(code, grammar):
+                continue
+            key = (code, grammar)
+            if key not in self._sessions:
+                try:
+                    self._sessions[key] = study.session(code, grammar)
+                except StudyInputError:
+                    if study.remaining_seconds(code) <= 0:
+                        return part, None, True  # the budget is spent: no new part is started
+                    raise
+            return part, self._sessions[key], False
+        return len(order) + 1, None, False
+
+    def state(self, code: str) -> dict:
+        """Everything the participant page shows, in the participant's own picture labels."""
+        self._participant_row(code)
+        part, session, time_up = self._current(code)
+        parts = len(grammar_order(self.study, code))
+        out: dict[str, Any] = dict(code=code, version=self.version(code), part=part, parts=parts, levels=list(LEVELS))
+        if session is None:
+            out.update(complete=True, time_up=time_up, completion_code=completion_code(self.study, code, self.secret))
+            return out
+        labels = session.labels()
+        shown = lambda ids: [labels[i] for i in session.in_order(ids)]  # noqa: E731
+        groups = [
+            dict(
+                label=g.label,
+                pictures=shown(g.images),
+                representative=labels[g.representative] if g.representative is not None else None,
+                usefulness=g.usefulness,
+                difference=g.difference,
+                representative_quality=g.representative_quality,
+                words=g.qualifiers,
+            )
+            for g in session.groups()
+        ]
+        out.update(
+            complete=False,
+            pictures=shown(session.order()),
+            unsorted=shown(session.unsorted()),
+            groups=groups,
+            missing=[_plain(m) for m in session.missing()],
+            questions=QUESTIONS,
+        )
+        return out
+
+    def answer(self, code: str, body: dict) -> dict:
+        """Apply one answer (refused whole, or written in one transaction) and return the new state."""
+        self._participant_row(code)
+        if body.get("version") != self.version(code):
+            raise RequestRefused(409, "this answer was made on an older page (a repeat, or another tab); reload the page")
+        part, session, _ = self._current(code)
+        if session is None or body.get("part") != part:
+            raise RequestRefused(409, "this part is already finished; reload the page")
+        apply_answer(session, body)
+        if session.finished:
+            self._sessions.pop((code, session.grammar), None)
+        return self.state(code)
+
+    def picture(self, code: str, part: int, label: str) -> str | None:
+        """The file of participant ``code``'s picture ``label`` in ``part``, or None (no picture)."""
+        self._participant_row(code)
+        order = grammar_order(self.study, code)
+        if not 1 <= part <= len(order):
+            raise RequestRefused(404, f"no part {part}")
+        grammar = order[part - 1]
+        seed = self._participant_row(code)[1]
+        by_label = {v: k for k, v in picture_labels(seed, grammar).items()}
+        if label not in by_label:
+            raise RequestRefused(404, f"no picture {label!r}")
+        if grammar not in self._picks:
+            self._picks[grammar] = self.study.picks(grammar)
+        return self._picks[grammar][by_label[label] - 1].image
+
+    # -- researcher requests (database thread) ---------------------------------------------------
+    def progress(self) -> dict:
+        """Live progress for the researcher's page."""
+        study = self.study
+        tests = study.tests()
+        answers = study.conn.execute(
+            f"SELECT count(*) FROM events WHERE action NOT IN ({', '.join('?' * len(_NOT_ANSWERS))})", _NOT_ANSWERS
+        ).fetchone()[0]
+        return dict(
+            title=study.name,
+            parts=study.grammars,
+            participants=study.participants(),
+            tests=len(tests),
+            finished=sum(t["finished_at"] is not None for t in tests),
+            answers=answers,
+        )
+
+    def export_zip(self) -> bytes:
+        """The CSV export (:func:`~ramure.studies.export.export_csv`) as one zip file."""
+        from ramure.studies.export import export_csv
+
+        buffer = io.BytesIO()
+        with tempfile.TemporaryDirectory() as tmp, zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as zf:
+            for path in export_csv(self.study, tmp):
+                zf.write(path, path.name)
+        return buffer.getvalue()
+
+
+def _plain(line: str) -> str:
+    """A :meth:`TestSession.missing` line in the participant's words (no jargon)."""
+    return (
+        line.replace("qualifier", "describing word")
+        .replace("its usefulness", "how useful it is")
+        .replace("its difference", "how different it is")
+    )
+
+
+def _labels(session: TestSession) -> dict[str, int]:
+    return {v: k for k, v in session.labels().items()}
+
+
+def _picture_id(by_label: dict[str, int], label: object) -> int:
+    if not isinstance(label, str) or label not in by_label:
+        raise RequestRefused(400, f"no picture {label!r} in this part")
+    return by_label[label]
+
+
+def _group_number(body: dict) -> int:
+    group = body.get("group")
+    if isinstance(group, bool) or not isinstance(group, int):
+        raise RequestRefused(400, f"group must be a group number, not {group!r}")
+    return group
+
+
+def apply_answer(session: TestSession, body: dict) -> None:
+    """Apply one answer ``body`` (``action`` and its fields, pictures as labels) to ``session``."""
+    by_label = _labels(session)
+    action = body.get("action")
+    if action == "groups":
+        groups = body.get("groups")
+        if not isinstance(groups, list) or not all(isinstance(g, list) for g in groups):
+            raise RequestRefused(400, "groups must be a list of lists of picture labels")
+        session.set_groups([[_picture_id(by_label, label) for label in g] for g in groups])
+    elif action == "representative":
+        session.set_representative(_group_number(body), _picture_id(by_label, body.get("picture")))
+    elif action == "rate":
+        scales = {k: body.get(k) for k in QUESTIONS if body.get(k) is not None}
+        session.rate(
+            _group_number(body), scales.get("usefulness"), scales.get("difference"), scales.get("representative_quality")
+        )
+    elif action == "add_word":
+        session.add_qualifier(_group_number(body), body.get("text"))  # type: ignore[arg-type]  # checked by add_qualifier
+    elif action == "remove_word":
+        session.remove_qualifier(_group_number(body), body.get("text"))  # type: ignore[arg-type]  # checked there too
+    elif action == "finish":
+        session.finish()
+    else:
+        raise RequestRefused(400, f"unknown action {action!r}")
+
+
+# -- the web application -----------------------------------------------------------------------------
+
+
+def page(name: str) -> bytes:
+    """A file of the participant and researcher pages (``studies/webpages``)."""
+    return resources.files(__package__).joinpath("webpages", name).read_bytes()
+
+
+_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8"}
+_HEADERS = {
+    "Cache-Control": "no-store",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+    "Content-Security-Policy": "default-src 'self'; img-src 'self' data:; frame-ancestors 'none'",
+}
+
+
+async def read_body(request: Any, limit: int = MAX_BODY_BYTES) -> dict:
+    """The JSON object of ``request``'s body, read at most ``limit`` bytes (413 beyond, 400 if not JSON)."""
+    length = request.headers.get("content-length")
+    if length is not None and (not length.isdigit() or int(length) > limit):
+        raise RequestRefused(413, f"request body over {limit} bytes")
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > limit:
+            raise RequestRefused(413, f"request body over {limit} bytes")
+    try:
+        body = json.loads(bytes(data))
+    except ValueError:
+        raise RequestRefused(400, "the request body is not JSON") from None
+    if not isinstance(body, dict):
+        raise RequestRefused(400, "the request body must be a JSON object")
+    return body
+
+
+def _bearer(request: Any) -> str | None:
+    auth = request.headers.get("authorization", "")
+    return auth[7:].strip() if auth.lower().startswith("bearer ") else None
+
+
+def make_app(server: StudyServer) -> Starlette:
+    """The Starlette application serving ``server``'s participant and researcher pages."""
+    from starlette.applications import Starlette
+    from starlette.responses import FileResponse, JSONResponse, Response
+    from starlette.routing import Route
+
+    def static(name: str) -> Callable:
+        body, kind = page(name), _TYPES[pathlib.Path(name).suffix]
+
+        async def endpoint(request):
+            return Response(body, media_type=kind, headers=_HEADERS)
+
+        return endpoint
+
+    def reply(obj: object) -> Response:
+        return JSONResponse(obj, headers=_HEADERS)
+
+    async def info(request):
+        return reply(await server.acall(server.info))
+
+    async def join(request):
+        return reply(await server.acall(server.join, await read_body(request)))
+
+    async def state(request):
+        code = request.path_params["code"]
+        server.check_participant(code, _bearer(request))
+        return reply(await server.acall(server.state, code))
+
+    async def answer(request):
+        code = request.path_params["code"]
+        server.check_participant(code, _bearer(request))
+        return reply(await server.acall(server.answer, code, await read_body(request)))
+
+    async def picture(request):
+        params = request.path_params
+        path = await server.acall(server.picture, params["code"], params["part"], params["label"])
+        if path is None or not os.path.isfile(path):
+            return Response(_placeholder(params["label"]), media_type="image/svg+xml", headers=_HEADERS)
+        return FileResponse(path, headers={"Cache-Control": "private, max-age=3600"})
+
+    async def progress(request):
+        server.check_researcher(_bearer(request))
+        return reply(await server.acall(server.progress))
+
+    async def export(request):
+        server.check_researcher(_bearer(request))
+        data = await server.acall(server.export_zip)
+        headers = {**_HEADERS, "Content-Disposition": 'attachment; filename="study-csv.zip"'}
+        return Response(data, media_type="application/zip", headers=headers)
+
+    async def refused(request, exc):
+        status = exc.status if isinstance(exc, RequestRefused) else 400
+        return JSONResponse({"error": str(exc)}, status_code=status, headers=_HEADERS)
+
+    async def broken(request, exc):  # a database error: say so, keep serving
+        return JSONResponse({"error": f"the study could not store this ({exc}); try again"}, status_code=503)
+
+    routes = [
+        Route("/", static("participant.html")),
+        Route("/researcher", static("researcher.html")),
+        *(Route(f"/static/{name}", static(name)) for name in ("study.js", "researcher.js", "study.css")),
+        Route("/api/study", info),
+        Route("/api/join", join, methods=["POST"]),
+        Route("/api/p/{code}/state", state),
+        Route("/api/p/{code}/answer", answer, methods=["POST"]),
+        Route("/img/{code}/{part:int}/{label}", picture),
+        Route("/api/researcher/progress", progress),
+        Route("/api/researcher/export.zip", export),
+    ]
+    handlers: dict[Any, Callable] = {StudyInputError: refused, sqlite3.Error: broken}
+    return Starlette(routes=routes, exception_handlers=handlers)
+
+
+def _placeholder(label: str) -> bytes:
+    text = "".join(c for c in label if c.isalnum())[:4]
+    return (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="160" height="160" viewBox="0 0 160 160">'
+        '<rect width="160" height="160" fill="#e8eee4"/><text x="80" y="92" font-size="40" text-anchor="middle" '
+        f'fill="#4a5a40" font-family="sans-serif">{text}</text></svg>'
+    ).encode()
+
+
+def serve(db: str | os.PathLike, host: str = "127.0.0.1", port: int = 8000, announce: Callable[[dict], None] = print) -> None:
+    """Serve study ``db`` on ``host:port`` until interrupted (needs the ``web`` extra).
+
+    ``announce`` receives the participant and researcher addresses before the server starts.
+    """
+    try:
+        import uvicorn
+    except ImportError:
+        raise StudyInputError("serving a study needs the web extra: pip install 'ramure[web]'") from None
+    server = StudyServer(db)
+    server.call(lambda: server.study)  # refuse a file that is not a study before listening
+    base = f"http://{host if ':' not in host else f'[{host}]'}:{port}"
+    announce(
+        dict(
+            db=str(server.db),
+            participants=f"{base}/",
+            researcher=f"{base}/researcher#{server.researcher_token()}",
+            researcher_token=server.researcher_token(),
+        )
+    )
+    try:
+        uvicorn.run(make_app(server), host=host, port=port, log_level="warning", access_log=False)
+    finally:
+        server.close()
