@@ -10,7 +10,6 @@ let me = null;          // {code, token}
 let state = null;       // the server's state for this participant
 let selected = null;    // label of the picture selected for a move
 let pause = false;      // show the page between two parts
-let busy = false;
 let justDragged = false;
 
 function h(tag, attrs = {}, ...kids) {
@@ -82,12 +81,27 @@ async function showConsent() {
 }
 
 // -- sending answers ------------------------------------------------------------------------------
-async function send(body) {
-  if (busy) return;
-  busy = true;
+// Answers are sent one after the other, in the order given; each is built when its turn comes
+// (a move from the stored grouping), and one made in a part that has ended since is dropped, so
+// a double click on "Finish this part" never lands on the next part.
+let queue = Promise.resolve();
+let pending = 0;
+
+function send(build) {
+  const part = state.part;
+  pending += 1;
   app.classList.add("busy");
   notice("Saving…");
-  const part = state.part;
+  queue = queue.then(() => post(build, part)).finally(() => {
+    pending -= 1;
+    if (pending === 0) app.classList.remove("busy");
+  });
+}
+
+async function post(build, part) {
+  if (state.complete || state.part !== part) return;
+  const body = typeof build === "function" ? build() : build;
+  if (!body) return;
   try {
     state = await api(`/api/p/${encodeURIComponent(me.code)}/answer`, {...body, version: state.version, part});
     notice("Saved.");
@@ -97,25 +111,25 @@ async function send(body) {
       state = await api(`/api/p/${encodeURIComponent(me.code)}/state`);
       notice("This page was out of date and has been refreshed; please check your last change.");
     } else notice("Not saved: " + e.message);
-  } finally {
-    busy = false;
-    app.classList.remove("busy");
   }
-  selected = null;
+  if (selected && !state.complete && !state.pictures.includes(selected)) selected = null;
   render();
 }
 
 function partition() { return state.groups.map(g => g.pictures.slice()); }
 
 function moveTo(label, zone) {
-  const groups = partition().map(g => g.filter(p => p !== label));
-  if (zone === "new") groups.push([label]);
-  else if (zone !== "pool") {
-    const i = Number(zone) - 1;
-    if (!(i >= 0 && i < groups.length)) return;
-    groups[i].push(label);
-  }
-  send({action: "groups", groups: groups.filter(g => g.length > 0)});
+  selected = null;
+  send(() => {
+    const groups = partition().map(g => g.filter(p => p !== label));
+    if (zone === "new") groups.push([label]);
+    else if (zone !== "pool") {
+      const i = Number(zone) - 1;
+      if (!(i >= 0 && i < groups.length)) return null;
+      groups[i].push(label);
+    }
+    return {action: "groups", groups: groups.filter(g => g.length > 0)};
+  });
 }
 
 // -- dragging with pointer events (mouse, touch, pen) -------------------------------------------------
@@ -132,7 +146,7 @@ function highlight(zone) {
 }
 
 function pointerDown(ev) {
-  if (busy || ev.button !== 0) return;
+  if (ev.button !== 0) return;
   const el = ev.currentTarget;
   drag = {label: el.dataset.picture, el, x0: ev.clientX, y0: ev.clientY, moved: false, id: ev.pointerId};
 }
@@ -219,7 +233,7 @@ function groupSection(group) {
   parts.push(scale(group, "difference", state.questions.difference));
   if (several && group.representative) parts.push(scale(group, "representative_quality", state.questions.representative_quality));
   const word = h("input", {type: "text", maxlength: "80", placeholder: "a word or two", "aria-label": `words for group ${group.label}`, dataset: {key: `word-${group.label}`}});
-  const add = () => { const text = word.value.trim(); if (text) send({action: "add_word", group: group.label, text}); };
+  const add = () => { const text = word.value.trim(); word.value = ""; if (text) send({action: "add_word", group: group.label, text}); };
   word.addEventListener("keydown", ev => { if (ev.key === "Enter") { ev.preventDefault(); add(); } });
   parts.push(h("div", {class: "words"}, h("p", {}, "Describe this group in a few words:"),
     h("ul", {}, group.words.map(w => h("li", {}, w, " ", h("button", {type: "button", "aria-label": `remove ${w}`, onclick: () => send({action: "remove_word", group: group.label, text: w})}, "×")))),
@@ -228,10 +242,13 @@ function groupSection(group) {
 }
 
 function render() {
+  // Keep what the participant is typing and where the focus is across the redraw.
   const focused = document.activeElement && document.activeElement.dataset ? document.activeElement.dataset.key : null;
+  const typed = Array.from(app.querySelectorAll("input[type=text]")).map(i => [i.dataset.key, i.value]);
   if (state.complete) renderDone();
   else if (pause) renderPause();
   else renderTask();
+  for (const [key, value] of typed) { const el = app.querySelector(`[data-key="${CSS.escape(key)}"]`); if (el) el.value = value; }
   if (focused) { const el = app.querySelector(`[data-key="${CSS.escape(focused)}"]`); if (el) el.focus(); }
 }
 
