@@ -35,12 +35,14 @@ import io
 import json
 import os
 import pathlib
+import queue
 import secrets
 import sqlite3
 import tempfile
+import threading
 import zipfile
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future
 from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -141,19 +143,30 @@ QUESTIONS = {
 class StudyServer:
     """The participant flow on one study database, without any web framework.
 
-    Every method that touches the database must run on the single thread that opened it:
-    :meth:`call` runs a function there (the web app awaits it), so answers are written one
-    at a time, each in its own transaction.
+    Every method that touches the database runs on the one thread that opened it: :meth:`call`
+    (and :meth:`acall`, which the web app awaits) queue a function there.  That thread takes
+    the calls queued so far as one batch and runs them in order, each answer in its own
+    transaction (``synchronous=NORMAL``: no flush yet); then, if any of them wrote, one last
+    tiny transaction with ``synchronous=FULL`` flushes the journal holding them all, and only
+    then are their results handed back (group commit).  So an answer acknowledged to a
+    participant is on disk, and a crowd answering at once shares the flushes.
     """
+
+    #: At most this many queued calls share one flush.
+    MAX_BATCH = 64
 
     def __init__(self, db: str | os.PathLike, secret: bytes | None = None) -> None:
         self.db = pathlib.Path(db)
         self.secret = secret if secret is not None else study_secret(self.db)
-        self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ramure-study-db")
         self._study: Study | None = None
         self._sessions: dict[tuple[str, str], TestSession] = {}
         self._picks: dict[str, list[Pick]] = {}
+        self._versions: dict[str, int] = {}
+        self._shown: dict[tuple[int, str], tuple[dict[int, str], dict[int, int]]] = {}
         self._closed = False
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._serve_calls, name="ramure-study-db", daemon=True)
+        self._thread.start()
 
     # -- the database thread ---------------------------------------------------------------------
     @property
@@ -163,29 +176,80 @@ class StudyServer:
             from ramure.studies.storage import Study
 
             self._study = Study.open(self.db)
+            self._study.conn.execute("PRAGMA synchronous = NORMAL")  # flushed once per batch (_flush)
         return self._study
 
     def call(self, fn: Callable[..., T], *args: Any) -> T:
-        """Run ``fn(*args)`` on the database thread and return its result (blocking)."""
-        return self.pool.submit(fn, *args).result()
+        """Run ``fn(*args)`` on the database thread and return its result once it is on disk (blocking)."""
+        return self._submit(fn, *args).result()
 
     async def acall(self, fn: Callable[..., T], *args: Any) -> T:
-        """Await ``fn(*args)`` run on the database thread."""
-        return await asyncio.wrap_future(self.pool.submit(fn, *args))
+        """Await ``fn(*args)`` run on the database thread (its writes on disk)."""
+        return await asyncio.wrap_future(self._submit(fn, *args))
+
+    def _submit(self, fn: Callable[..., T], *args: Any) -> Future:
+        if self._closed:
+            raise RequestRefused(503, "the study server is stopping")
+        future: Future = Future()
+        self._queue.put((fn, args, future))
+        return future
+
+    def _serve_calls(self) -> None:
+        while True:
+            batch = [self._queue.get()]
+            while batch[-1] is not None and len(batch) < self.MAX_BATCH:
+                try:
+                    batch.append(self._queue.get_nowait())
+                except queue.Empty:
+                    break
+            stop = batch[-1] is None
+            self._run_batch([item for item in batch if item is not None])
+            if stop:
+                return
+
+    def _run_batch(self, batch: list) -> None:
+        changes = self._study.conn.total_changes if self._study is not None else 0
+        done = []
+        for fn, args, future in batch:
+            if future.set_running_or_notify_cancel():
+                try:
+                    done.append((future, fn(*args), None))
+                except BaseException as exc:  # handed to the caller, which turns it into a reply
+                    done.append((future, None, exc))
+        try:
+            if self._study is not None and self._study.conn.total_changes != changes:
+                self._flush()
+        except sqlite3.Error as exc:
+            done = [(future, None, exc) for future, _, _ in done]
+        for future, value, exc in done:
+            future.set_exception(exc) if exc is not None else future.set_result(value)
+
+    def _flush(self) -> None:
+        """Put every answer committed since the last flush on disk: one transaction at
+        ``synchronous=FULL`` syncs the write-ahead log, which holds them all."""
+        conn = self.study.conn
+        conn.execute("PRAGMA synchronous = FULL")
+        try:
+            with conn:
+                conn.execute("UPDATE study SET name = name WHERE id = 1")
+        finally:
+            conn.execute("PRAGMA synchronous = NORMAL")
 
     def close(self) -> None:
         """Close the database and stop its thread (again: nothing)."""
         if self._closed:
             return
-        self._closed = True
 
         def shut() -> None:
             if self._study is not None:
+                self._flush()
                 self._study.close()
                 self._study = None
 
         self.call(shut)
-        self.pool.shutdown()
+        self._closed = True
+        self._queue.put(None)
+        self._thread.join()
 
     # -- tokens ------------------------------------------------------------------------------------
     def participant_token(self, code: str) -> str:
@@ -230,13 +294,25 @@ class StudyServer:
         return row
 
     def version(self, code: str) -> int:
-        """How many answers participant ``code`` has given: each answer must name it, so a replay is stale."""
-        marks = ", ".join("?" * len(_NOT_ANSWERS))
-        return self.study.conn.execute(
-            f"SELECT count(*) FROM events e JOIN participants p ON p.id = e.participant_id "
-            f"WHERE p.code = ? AND e.action NOT IN ({marks})",
-            (code, *_NOT_ANSWERS),
-        ).fetchone()[0]
+        """How many answers participant ``code`` has given: each answer must name it, so a replay is stale.
+
+        Counted once from the event log, then kept here: this process alone writes answers.
+        """
+        if code not in self._versions:
+            marks = ", ".join("?" * len(_NOT_ANSWERS))
+            self._versions[code] = self.study.conn.execute(
+                f"SELECT count(*) FROM events e JOIN participants p ON p.id = e.participant_id "
+                f"WHERE p.code = ? AND e.action NOT IN ({marks})",
+                (code, *_NOT_ANSWERS),
+            ).fetchone()[0]
+        return self._versions[code]
+
+    def _shown_as(self, session: TestSession) -> tuple[dict[int, str], dict[int, int]]:
+        """The participant's labels and display rank of each pick id in ``session`` (cached)."""
+        key = (session.seed, session.grammar)
+        if key not in self._shown:
+            self._shown[key] = (session.labels(), {pid: i for i, pid in enumerate(session.order())})
+        return self._shown[key]
 
     def _current(self, code: str) -> tuple[int, TestSession | None, bool]:
         """(part number 1.., its session or None when all is done, whether the time ran out)."""
@@ -265,8 +341,8 @@ class StudyServer:
         if session is None:
             out.update(complete=True, time_up=time_up, completion_code=completion_code(self.study, code, self.secret))
             return out
-        labels = session.labels()
-        shown = lambda ids: [labels[i] for i in session.in_order(ids)]  # noqa: E731
+        labels, rank = self._shown_as(session)
+        shown = lambda ids: [labels[i] for i in sorted(ids, key=rank.__getitem__)]  # noqa: E731
         groups = [
             dict(
                 label=g.label,
@@ -281,7 +357,7 @@ class StudyServer:
         ]
         out.update(
             complete=False,
-            pictures=shown(session.order()),
+            pictures=shown(rank),
             unsorted=shown(session.unsorted()),
             groups=groups,
             missing=[_plain(m) for m in session.missing()],
@@ -297,7 +373,8 @@ class StudyServer:
         part, session, _ = self._current(code)
         if session is None or body.get("part") != part:
             raise RequestRefused(409, "this part is already finished; reload the page")
-        apply_answer(session, body)
+        apply_answer(session, body, {v: k for k, v in self._shown_as(session)[0].items()})
+        self._versions[code] += 1
         if session.finished:
             self._sessions.pop((code, session.grammar), None)
         return self.state(code)
@@ -354,10 +431,6 @@ def _plain(line: str) -> str:
     )
 
 
-def _labels(session: TestSession) -> dict[str, int]:
-    return {v: k for k, v in session.labels().items()}
-
-
 def _picture_id(by_label: dict[str, int], label: object) -> int:
     if not isinstance(label, str) or label not in by_label:
         raise RequestRefused(400, f"no picture {label!r} in this part")
@@ -371,9 +444,11 @@ def _group_number(body: dict) -> int:
     return group
 
 
-def apply_answer(session: TestSession, body: dict) -> None:
-    """Apply one answer ``body`` (``action`` and its fields, pictures as labels) to ``session``."""
-    by_label = _labels(session)
+def apply_answer(session: TestSession, body: dict, by_label: dict[str, int] | None = None) -> None:
+    """Apply one answer ``body`` (``action`` and its fields, pictures as labels) to ``session``.
+
+    ``by_label`` maps the participant's labels to pick ids (default: from ``session``)."""
+    by_label = by_label if by_label is not None else {v: k for k, v in session.labels().items()}
     action = body.get("action")
     if action == "groups":
         groups = body.get("groups")

@@ -8,6 +8,7 @@ import io
 import json
 import pathlib
 import subprocess
+import threading
 import sys
 import warnings
 import zipfile
@@ -210,3 +211,30 @@ def test_serve_refuses_a_file_that_is_not_a_study_before_listening(tmp_path):
     )
     assert out.returncode == 2 and "not a SQLite file" in out.stderr and "Traceback" not in out.stderr
     assert out.stdout == ""
+
+
+def test_answers_queued_together_share_one_flush_and_are_acknowledged_after_it(tmp_path):
+    db = make_study(tmp_path, grammars=1)
+    server = StudyServer(db)
+    with TestClient(make_app(server)) as client:
+        people = [WebParticipant(client) for _ in range(6)]
+    flushes, flush = [], server._flush
+    gate = threading.Event()
+
+    def counted_flush():
+        flushes.append(sum(f.done() for f in futures))  # answers already handed back at this flush
+        flush()
+
+    server._flush = counted_flush
+    server._submit(gate.wait)  # hold the database thread while the crowd queues its answers
+    futures = [
+        server._submit(server.answer, p.code, {"version": 0, "part": 1, "action": "groups", "groups": [p.state["pictures"]]})
+        for p in people
+    ]
+    gate.set()
+    states = [f.result(timeout=30) for f in futures]
+    assert flushes == [0]  # one flush for the six answers, before any was acknowledged
+    assert [len(s["groups"][0]["pictures"]) for s in states] == [27] * 6
+    server.close()
+    with Study.open(db, readonly=True) as study:
+        assert study.conn.execute("SELECT count(*) FROM groups").fetchone()[0] == 6
