@@ -162,6 +162,7 @@ class StudyServer:
         self._sessions: dict[tuple[str, str], TestSession] = {}
         self._picks: dict[str, list[Pick]] = {}
         self._versions: dict[str, int] = {}
+        self._seeds: dict[str, int] = {}
         self._shown: dict[tuple[int, str], tuple[dict[int, str], dict[int, int]]] = {}
         self._closed = False
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
@@ -252,16 +253,13 @@ class StudyServer:
         self._thread.join()
 
     # -- tokens ------------------------------------------------------------------------------------
-    def participant_token(self, code: str) -> str:
-        return _mac(self.secret, "participant:" + code)[:32]
+    def participant_token(self, code: str, seed: int) -> str:
+        """Participant ``code``'s token: bound to their random seed too, so a code used again
+        after a deletion never accepts the deleted participant's token."""
+        return _mac(self.secret, f"participant:{code}:{seed}")[:32]
 
     def researcher_token(self) -> str:
         return _mac(self.secret, "researcher")[:32]
-
-    def check_participant(self, code: str, token: str | None) -> None:
-        """Refuse (403) a token that is not participant ``code``'s."""
-        if not token or not hmac.compare_digest(token, self.participant_token(code)):
-            raise RequestRefused(403, "this link does not belong to a participant of this study")
 
     def check_researcher(self, token: str | None) -> None:
         if not token or not hmac.compare_digest(token, self.researcher_token()):
@@ -280,18 +278,25 @@ class StudyServer:
         external = body.get("external_id")
         if external is not None and (not isinstance(external, str) or not 0 < len(external) <= 64):
             raise RequestRefused(400, "external_id must be text of 1 to 64 characters")
-        code = self.study.add_participant(code=None, consent=True, seed=secrets.randbits(31))
+        seed = secrets.randbits(31)
+        code = self.study.add_participant(code=None, consent=True, seed=seed)
         if external:
             record_external_id(self.study, code, external)
-        return dict(code=code, token=self.participant_token(code))
+        return dict(code=code, token=self.participant_token(code, seed))
 
-    def _participant_row(self, code: str) -> tuple:
-        row = self.study.conn.execute("SELECT id, seed, consent FROM participants WHERE code = ?", (code,)).fetchone()
-        if row is None:
-            raise RequestRefused(404, f"no participant {code!r} in this study")
-        if not row[2]:
+    def check_participant(self, code: str, token: str | None) -> int:
+        """Refuse (403) a token that is not participant ``code``'s, or a participant who withdrew;
+        return their seed.  An unknown code is refused the same way, so codes cannot be probed."""
+        row = self.study.conn.execute("SELECT seed, consent FROM participants WHERE code = ?", (code,)).fetchone()
+        if row is None or not token or not hmac.compare_digest(token, self.participant_token(code, row[0])):
+            raise RequestRefused(403, "this link does not belong to a participant of this study")
+        if not row[1]:
             raise RequestRefused(403, f"participant {code!r} has withdrawn consent")
-        return row
+        if self._seeds.setdefault(code, row[0]) != row[0]:  # the code now names someone else: forget the old one
+            self._versions.pop(code, None)
+            self._sessions = {key: s for key, s in self._sessions.items() if key[0] != code}
+            self._seeds[code] = row[0]
+        return row[0]
 
     def version(self, code: str) -> int:
         """How many answers participant ``code`` has given: each answer must name it, so a replay is stale.
@@ -332,9 +337,12 @@ class StudyServer:
             return part, self._sessions[key], False
         return len(order) + 1, None, False
 
-    def state(self, code: str) -> dict:
+    def state(self, code: str, token: str | None) -> dict:
         """Everything the participant page shows, in the participant's own picture labels."""
-        self._participant_row(code)
+        self.check_participant(code, token)
+        return self._state(code)
+
+    def _state(self, code: str) -> dict:
         part, session, time_up = self._current(code)
         parts = len(grammar_order(self.study, code))
         out: dict[str, Any] = dict(code=code, version=self.version(code), part=part, parts=parts, levels=list(LEVELS))
@@ -365,9 +373,9 @@ class StudyServer:
         )
         return out
 
-    def answer(self, code: str, body: dict) -> dict:
+    def answer(self, code: str, token: str | None, body: dict) -> dict:
         """Apply one answer (refused whole, or written in one transaction) and return the new state."""
-        self._participant_row(code)
+        self.check_participant(code, token)
         if body.get("version") != self.version(code):
             raise RequestRefused(409, "this answer was made on an older page (a repeat, or another tab); reload the page")
         part, session, _ = self._current(code)
@@ -377,16 +385,15 @@ class StudyServer:
         self._versions[code] += 1
         if session.finished:
             self._sessions.pop((code, session.grammar), None)
-        return self.state(code)
+        return self._state(code)
 
-    def picture(self, code: str, part: int, label: str) -> str | None:
+    def picture(self, code: str, token: str | None, part: int, label: str) -> str | None:
         """The file of participant ``code``'s picture ``label`` in ``part``, or None (no picture)."""
-        self._participant_row(code)
+        seed = self.check_participant(code, token)
         order = grammar_order(self.study, code)
         if not 1 <= part <= len(order):
             raise RequestRefused(404, f"no part {part}")
         grammar = order[part - 1]
-        seed = self._participant_row(code)[1]
         by_label = {v: k for k, v in picture_labels(seed, grammar).items()}
         if label not in by_label:
             raise RequestRefused(404, f"no picture {label!r}")
@@ -537,18 +544,16 @@ def make_app(server: StudyServer) -> Starlette:
         return reply(await server.acall(server.join, await read_body(request)))
 
     async def state(request):
-        code = request.path_params["code"]
-        server.check_participant(code, _bearer(request))
-        return reply(await server.acall(server.state, code))
+        return reply(await server.acall(server.state, request.path_params["code"], _bearer(request)))
 
     async def answer(request):
-        code = request.path_params["code"]
-        server.check_participant(code, _bearer(request))
-        return reply(await server.acall(server.answer, code, await read_body(request)))
+        body = await read_body(request)
+        return reply(await server.acall(server.answer, request.path_params["code"], _bearer(request), body))
 
     async def picture(request):
         params = request.path_params
-        path = await server.acall(server.picture, params["code"], params["part"], params["label"])
+        token = request.query_params.get("t")  # an <img> sends no header
+        path = await server.acall(server.picture, params["code"], token, params["part"], params["label"])
         if path is None or not os.path.isfile(path):
             return Response(_placeholder(params["label"]), media_type="image/svg+xml", headers=_HEADERS)
         return FileResponse(path, headers={"Cache-Control": "private, max-age=3600"})

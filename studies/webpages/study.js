@@ -181,7 +181,7 @@ document.addEventListener("pointercancel", endDrag);
 
 // -- the pages ------------------------------------------------------------------------------------
 function picture(label) {
-  const img = h("img", {src: `/img/${encodeURIComponent(state.code)}/${state.part}/${encodeURIComponent(label)}`, alt: "picture " + label, draggable: "false"});
+  const img = h("img", {src: `/img/${encodeURIComponent(state.code)}/${state.part}/${encodeURIComponent(label)}?t=${encodeURIComponent(me.token)}`, alt: "picture " + label, draggable: "false"});
   return h("button", {
     type: "button", class: "pic", "aria-pressed": String(selected === label), dataset: {picture: label, key: "pic-" + label},
     title: "Drag to a group, or select and press Move here (keys: 1-9 a group, N a new group, 0 back)",

@@ -86,8 +86,10 @@ def test_pictures_are_served_by_label_and_a_missing_one_is_a_placeholder(tmp_pat
     with TestClient(make_app(server)) as client:
         p = WebParticipant(client)
         label = p.state["pictures"][0]
-        r = client.get(f"/img/{p.code}/1/{label}")
+        r = client.get(f"/img/{p.code}/1/{label}?t={p.token}")
         assert r.status_code == 200 and r.content.startswith(b"\x89PNG")
+        assert client.get(f"/img/{p.code}/1/{label}").status_code == 403  # no token: no picture, no hint
+        assert client.get(f"/img/P999/1/{label}?t={p.token}").status_code == 403
         pick = {
             v: k
             for k, v in picture_labels(
@@ -98,14 +100,14 @@ def test_pictures_are_served_by_label_and_a_missing_one_is_a_placeholder(tmp_pat
             ).items()
         }[label]
         assert r.content == (tmp_path / "set0" / f"pick_{pick:02d}.png").read_bytes()
-        assert client.get(f"/img/{p.code}/1/ZZ").status_code == 404
-        assert client.get(f"/img/{p.code}/2/{label}").status_code == 404
+        assert client.get(f"/img/{p.code}/1/ZZ?t={p.token}").status_code == 404
+        assert client.get(f"/img/{p.code}/2/{label}?t={p.token}").status_code == 404
     server.close()
     db2 = make_study(tmp_path / "bare", grammars=1, pictures=False)
     server = StudyServer(db2)
     with TestClient(make_app(server)) as client:
         p = WebParticipant(client)
-        r = client.get(f"/img/{p.code}/1/{p.state['pictures'][0]}")
+        r = client.get(f"/img/{p.code}/1/{p.state['pictures'][0]}?t={p.token}")
         assert r.status_code == 200 and r.headers["content-type"].startswith("image/svg+xml")
         assert p.state["pictures"][0].encode() in r.content
     server.close()
@@ -227,10 +229,8 @@ def test_answers_queued_together_share_one_flush_and_are_acknowledged_after_it(t
 
     server._flush = counted_flush
     server._submit(gate.wait)  # hold the database thread while the crowd queues its answers
-    futures = [
-        server._submit(server.answer, p.code, {"version": 0, "part": 1, "action": "groups", "groups": [p.state["pictures"]]})
-        for p in people
-    ]
+    answers = [{"version": 0, "part": 1, "action": "groups", "groups": [p.state["pictures"]]} for p in people]
+    futures = [server._submit(server.answer, p.code, p.token, body) for p, body in zip(people, answers)]
     gate.set()
     states = [f.result(timeout=30) for f in futures]
     assert flushes == [0]  # one flush for the six answers, before any was acknowledged
@@ -238,3 +238,17 @@ def test_answers_queued_together_share_one_flush_and_are_acknowledged_after_it(t
     server.close()
     with Study.open(db, readonly=True) as study:
         assert study.conn.execute("SELECT count(*) FROM groups").fetchone()[0] == 6
+
+
+def test_a_code_used_again_after_a_deletion_does_not_accept_the_old_token(served):
+    db, server, client = served
+    gone = WebParticipant(client)
+    gone.send(action="groups", groups=[gone.state["pictures"][:3]])
+    server.call(server.study.delete_participant, gone.code)  # the researcher erases them
+    assert client.get(f"/api/p/{gone.code}/state", headers=gone.headers).status_code == 403
+    new = WebParticipant(client)
+    assert new.code == gone.code and new.token != gone.token  # the lowest free code again
+    assert client.get(f"/api/p/{new.code}/state", headers=gone.headers).status_code == 403
+    assert new.state["groups"] == [] and new.state["version"] == 0  # nothing of the erased participant
+    new.send(action="groups", groups=[new.state["pictures"][:2]])
+    assert len(new.state["groups"][0]["pictures"]) == 2
