@@ -10,9 +10,10 @@ JavaScript with no build step.
 What a request can and cannot do:
 
 - A participant joins by consenting (``POST /api/join``) and receives a code and a token, an
-  HMAC of the code under the study's secret (``STUDY.web-secret`` beside the database, made
-  once, readable by its owner only).  Every later request names the code in its path and
-  carries the token: a forged code, or another participant's code, is refused (403).
+  HMAC of the code and of their random seed under the study's secret (``STUDY.db.web-secret``
+  beside the database, made once, readable by its owner only).  Every later request names the
+  code in its path and carries the token: a forged code, another participant's code, or the
+  token of a deleted participant whose code was given again, is refused (403).
 - Pictures and groups are addressed by the participant's own picture labels (two characters,
   :func:`~ramure.studies.session.picture_labels`), never by pick ids, which encode the PCA
   lattice.
@@ -46,7 +47,7 @@ from concurrent.futures import Future
 from importlib import resources
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from ramure.io import write_text
+from ramure.io import read_regular, write_text
 from ramure.studies.errors import StudyInputError
 from ramure.studies.likert import LEVELS
 from ramure.studies.session import TestSession, picture_labels
@@ -127,7 +128,7 @@ def study_secret(db: str | os.PathLike) -> bytes:
             write_text(path, secrets.token_hex(32) + "\n")
         finally:
             os.umask(old)
-    text = path.read_text(encoding="utf-8").strip()
+    text = read_regular(path, 4096, "the study's web secret").decode("ascii", "replace").strip()
     if len(text) < 32:
         raise StudyInputError(f"{path}: the study's web secret is too short; delete the file to make a new one")
     return text.encode()
