@@ -211,7 +211,7 @@ class StudyServer:
 
     def _run_batch(self, batch: list) -> None:
         changes = self._study.conn.total_changes if self._study is not None else 0
-        done = []
+        done: list[tuple[Future, Any, BaseException | None]] = []
         for fn, args, future in batch:
             if future.set_running_or_notify_cancel():
                 try:
@@ -223,8 +223,8 @@ class StudyServer:
                 self._flush()
         except sqlite3.Error as exc:
             done = [(future, None, exc) for future, _, _ in done]
-        for future, value, exc in done:
-            future.set_exception(exc) if exc is not None else future.set_result(value)
+        for future, value, error in done:
+            future.set_exception(error) if error is not None else future.set_result(value)
 
     def _flush(self) -> None:
         """Put every answer committed since the last flush on disk: one transaction at

@@ -213,6 +213,14 @@ def test_serve_refuses_a_file_that_is_not_a_study_before_listening(tmp_path):
     )
     assert out.returncode == 2 and "not a SQLite file" in out.stderr and "Traceback" not in out.stderr
     assert out.stdout == ""
+    good = make_study(tmp_path / "good", grammars=1)
+    out = subprocess.run(
+        [str(pathlib.Path(sys.executable).with_name("ramure")), "study", "serve", str(good), "--port", "0"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode == 2 and "--port must be from 1 to 65535" in out.stderr and out.stdout == ""
 
 
 def test_answers_queued_together_share_one_flush_and_are_acknowledged_after_it(tmp_path):
