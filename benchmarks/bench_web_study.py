@@ -145,6 +145,19 @@ class Participant:
             state = r.json()
 
 
+def _png() -> bytes:
+    """A tiny valid PNG (serve refuses a study whose picks have no picture)."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    rows = b"".join(b"\x00" + b"\x40\x90\x30" * 4 for _ in range(4))
+    header = chunk(b"IHDR", struct.pack(">IIBBBBB", 4, 4, 8, 2, 0, 0, 0))
+    return b"\x89PNG\r\n\x1a\n" + header + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
+
+
 def _stored_answers(db: pathlib.Path) -> dict[str, int]:
     conn = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
     try:
@@ -208,7 +221,12 @@ def _load(kill: bool) -> dict:
 
     with tempfile.TemporaryDirectory(prefix="ramure-bench-web-") as tmp:
         db = pathlib.Path(tmp) / "study.db"
-        Study.create(db, grammars={"plants": lattice_picks(seed=1)}, name="load").close()
+        picture = pathlib.Path(tmp) / "plant.png"
+        picture.write_bytes(_png())
+        picks = [
+            dict(id=p.id, variant=p.variant, pca=list(p.pca), params=p.params, image=str(picture)) for p in lattice_picks(seed=1)
+        ]
+        Study.create(db, grammars={"plants": picks}, name="load").close()
         server = Server(db, _free_port())
         server.start()
         try:

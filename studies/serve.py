@@ -601,27 +601,45 @@ def _placeholder(label: str) -> bytes:
     ).encode()
 
 
+def missing_pictures(study: Study) -> dict[str, list[int]]:
+    """Pick ids whose picture file is absent (or outside the study's folder), by stimulus set."""
+    missing = {g: [p.id for p in study.picks(g) if p.image is None or not os.path.isfile(p.image)] for g in study.grammars}
+    return {g: ids for g, ids in missing.items() if ids}
+
+
+def check_servable(study: Study) -> None:
+    """Refuse to serve a study that participants could not see: every pick needs its picture."""
+    missing = missing_pictures(study)
+    if missing:
+        which = "; ".join(f"{g}: {len(ids)} of 27 (e.g. pick {ids[0]})" for g, ids in missing.items())
+        raise StudyInputError(
+            f"{study.path}: pictures missing or outside the study's folder ({which}); explore with thumbnails "
+            "into the study's folder (ramure explore GRAMMAR -o STUDY_FOLDER/NAME) and create the study from there"
+        )
+
+
 def serve(db: str | os.PathLike, host: str = "127.0.0.1", port: int = 8000, announce: Callable[[dict], None] = print) -> None:
     """Serve study ``db`` on ``host:port`` until interrupted (needs the ``web`` extra).
 
-    ``announce`` receives the participant and researcher addresses before the server starts.
+    The file is checked first (a study, every picture present) and nothing is written beside a
+    file that is refused.  ``announce`` receives the participant and researcher addresses
+    before the server starts listening.
     """
+    from ramure.studies.storage import Study
+
     try:
         import uvicorn
     except ImportError:
         raise StudyInputError("serving a study needs the web extra: pip install 'ramure[web]'") from None
+    with Study.open(db, readonly=True) as study:
+        check_servable(study)
     server = StudyServer(db)
-    server.call(lambda: server.study)  # refuse a file that is not a study before listening
-    base = f"http://{host if ':' not in host else f'[{host}]'}:{port}"
-    announce(
-        dict(
-            db=str(server.db),
-            participants=f"{base}/",
-            researcher=f"{base}/researcher#{server.researcher_token()}",
-            researcher_token=server.researcher_token(),
-        )
-    )
     try:
+        server.call(lambda: server.study)  # opened for writing before listening: refused here, not per request
+        base = f"http://{host if ':' not in host else f'[{host}]'}:{port}"
+        token = server.researcher_token()
+        addresses = dict(participants=f"{base}/", researcher=f"{base}/researcher#{token}", researcher_token=token)
+        announce(dict(db=str(server.db), **addresses))
         uvicorn.run(make_app(server), host=host, port=port, log_level="warning", access_log=False)
     finally:
         server.close()

@@ -212,7 +212,16 @@ def test_serve_refuses_a_file_that_is_not_a_study_before_listening(tmp_path):
         timeout=60,
     )
     assert out.returncode == 2 and "not a SQLite file" in out.stderr and "Traceback" not in out.stderr
-    assert out.stdout == ""
+    assert out.stdout == "" and sorted(tmp_path.iterdir()) == [bad]  # no secret written beside it
+    bare = make_study(tmp_path / "bare", grammars=1, pictures=False)
+    out = subprocess.run(
+        [str(pathlib.Path(sys.executable).with_name("ramure")), "study", "serve", str(bare), "--port", "9"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert out.returncode == 2 and "pictures missing" in out.stderr and "g0: 27 of 27" in out.stderr
+    assert not secret_path(bare).exists()
     good = make_study(tmp_path / "good", grammars=1)
     out = subprocess.run(
         [str(pathlib.Path(sys.executable).with_name("ramure")), "study", "serve", str(good), "--port", "0"],
