@@ -269,3 +269,16 @@ def test_a_code_used_again_after_a_deletion_does_not_accept_the_old_token(served
     assert new.state["groups"] == [] and new.state["version"] == 0  # nothing of the erased participant
     new.send(action="groups", groups=[new.state["pictures"][:2]])
     assert len(new.state["groups"][0]["pictures"]) == 2
+
+
+def test_a_spent_time_budget_ends_the_study_with_its_code_and_says_so(tmp_path):
+    db = make_study(tmp_path, grammars=2, budget_minutes=0.0005)  # 30 ms: spent during the first part
+    server = StudyServer(db)
+    with TestClient(make_app(server)) as client:
+        p = WebParticipant(client)
+        p.answer_part()
+        assert p.state["complete"] is True and p.state["time_up"] is True and p.state["part"] == 2
+        assert len(p.state["completion_code"]) == 10
+    server.close()
+    with Study.open(db, readonly=True) as study:
+        assert study.finished(p.code, "g0") and [t["grammar"] for t in study.tests()] == ["g0"]

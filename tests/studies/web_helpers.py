@@ -23,7 +23,7 @@ def png(path: pathlib.Path, shade: int) -> None:
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
 
 
-def make_study(folder: pathlib.Path, grammars: int = 2, pictures: bool = True) -> pathlib.Path:
+def make_study(folder: pathlib.Path, grammars: int = 2, pictures: bool = True, budget_minutes: float = 30.0) -> pathlib.Path:
     """A study of ``grammars`` lattice grammars in ``folder``; its picks have PNG pictures when ``pictures``."""
     specs = {}
     for g in range(grammars):
@@ -39,7 +39,7 @@ def make_study(folder: pathlib.Path, grammars: int = 2, pictures: bool = True) -
             ]
         specs[f"g{g}"] = picks
     db = folder / "study.db"
-    Study.create(db, grammars=specs, name="web-study").close()
+    Study.create(db, grammars=specs, name="web-study", budget_minutes=budget_minutes).close()
     return db
 
 
