@@ -14,7 +14,7 @@ $(VPY):
 
 $(STAMP): pyproject.toml | $(VPY)
 	$(VPY) -m pip install -q --upgrade pip
-	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,test,docs]"
+	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,web,test,docs]"
 	touch $(STAMP)
 
 venv: $(STAMP)

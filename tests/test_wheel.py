@@ -72,6 +72,8 @@ def test_wheel_holds_only_ramure(fresh):
     tops = {line.split()[0].split("/")[0] for line in names.splitlines()[1:] if line.strip()}
     assert tops == {"ramure", "ramure-0.1.0.dist-info"}
     assert "ramure/grammars/honda_sympodial.lsys" in names
+    for page in ("participant.html", "researcher.html", "study.js", "researcher.js", "study.css"):
+        assert f"ramure/studies/webpages/{page}" in names  # what `ramure study serve` serves
 
 
 def test_script_runs_from_any_directory(fresh, tmp_path):

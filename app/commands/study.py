@@ -9,6 +9,7 @@ Sub-commands print one JSON object on stdout::
     ramure study export-csv study.db -o csv/
     ramure study export-qualifiers study.db --store qualifiers.db
     ramure study status study.db
+    ramure study serve study.db --port 8000
 """
 
 from __future__ import annotations
@@ -203,6 +204,20 @@ def run_status(args: argparse.Namespace) -> int:
         )
 
 
+def run_serve(args: argparse.Namespace) -> int:
+    from ramure.studies.serve import serve
+
+    if not 0 < args.port < 65536:
+        raise UserError(f"--port must be from 1 to 65535, not {args.port}")
+
+    def announce(addresses: dict) -> None:
+        _print(addresses)
+        sys.stdout.flush()
+
+    serve(args.db, host=args.host, port=args.port, announce=announce)
+    return 0
+
+
 def register(subparsers: Subparsers) -> None:
     parser = subparsers.add_parser("study", help="user studies on variant relevance", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
@@ -280,3 +295,9 @@ def register(subparsers: Subparsers) -> None:
     p = sub.add_parser("status", help="participants and tests of a study")
     p.add_argument("db")
     p.set_defaults(func=run_status)
+
+    p = sub.add_parser("serve", help="serve the participant pages and the researcher's page on the web")
+    p.add_argument("db")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default: this machine only)")
+    p.add_argument("--port", type=int, default=8000)
+    p.set_defaults(func=run_serve)
