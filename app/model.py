@@ -45,7 +45,7 @@ from ramure.lsys.turtle import changed_spans, reinterpret
 
 if TYPE_CHECKING:
     import pyvista as pv
-    from ramure.gmap.map3 import GMap3
+    from ramure.gmap.kernel.map3 import GMap3
     from ramure.lsys import Derivation
     from ramure.lsys.cut import CutResult
     from ramure.lsys.regen import RegenResult
@@ -505,7 +505,7 @@ class Explorer:
         if not fruit:
             raise ValueRefused("select one or more fruit first")
         if "preset" in settings or len(settings) > int("size" in settings):
-            from ramure.gmap.fruit import resolve_params
+            from ramure.gmap.organs.fruit import resolve_params
 
             params = {k: v for k, v in settings.items() if k not in ("preset", "size")}
             resolve_params(settings.get("preset", "round_tomato"), **params)  # refuse bad values now
@@ -530,7 +530,7 @@ class Explorer:
         """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""
 
         def build():
-            from ramure.gmap.plant import fruits_from_skeleton
+            from ramure.gmap.organs.plant import fruits_from_skeleton
 
             return fruits_from_skeleton(
                 self.skeleton, preset=preset, seed=seed, overrides=self.session.fruit_overrides(), **kwargs
@@ -540,7 +540,7 @@ class Explorer:
 
     def fruit_surface(self) -> pv.PolyData | None:
         """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit)."""
-        from ramure.gmap.pyvista import boundary_polydata
+        from ramure.gmap.kernel.pyvista import boundary_polydata
 
         if not self.fruit_ids():
             return None

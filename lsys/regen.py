@@ -440,7 +440,7 @@ class Session:
 
         ``settings`` are recorded as given (``preset``, ``size`` and fruit
         parameters, checked by the volumetric layer that applies them, see
-        :func:`ramure.gmap.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
+        :func:`ramure.gmap.organs.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
         :meth:`fruit_overrides` gives what applies to the current plant.
         """
         leaves = [int(x) for x in leaf_ids]

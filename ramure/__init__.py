@@ -38,7 +38,7 @@ _LAZY = {
     "VariantSweep": "ramure.metrics",
     "DeltaPCA": "ramure.metrics",
     "GMap3": "ramure.gmap",
-    "build_fruit": "ramure.gmap.fruit",
+    "build_fruit": "ramure.gmap.organs.fruit",
     "Study": "ramure.studies",
 }
 

@@ -14,8 +14,8 @@
 * **Lichen** and **Crack** act on the selected fruit's closed surface (the volumetric fruit
   of :meth:`ramure.app.model.Explorer.fruit_surface`, subdivided once so a crack has
   triangles to cut): Open-DLA lichen discs coloured by age class
-  (:func:`ramure.gmap.lichen.grow_lichen`), or a random crack pattern carved from the top of
-  the fruit (:func:`ramure.gmap.cracks.carve`).  Both run in the worker and are shown in the
+  (:func:`ramure.gmap.organs.lichen.grow_lichen`), or a random crack pattern carved from the top of
+  the fruit (:func:`ramure.gmap.organs.cracks.carve`).  Both run in the worker and are shown in the
   dock's own 3D view, with their facts.  Without a selected fruit, or on a surface that is not
   closed, the action is refused with one line in the dock (and the window's usual message).
   **Lichen on the branches** grows on the plant's bark instead: the branches welded into one
@@ -61,7 +61,7 @@ if TYPE_CHECKING:
     from ramure.app.desktop.workers import Job
     from ramure.lsys.seasons import LeafChain, Season
 
-#: The lichen habits of :data:`ramure.gmap.lichen.HABITS`, listed without loading gmap.
+#: The lichen habits of :data:`ramure.gmap.organs.lichen.HABITS`, listed without loading gmap.
 HABIT_NAMES = ("crustose", "foliose", "fruticose")
 
 SEASON_STEPS = 24
@@ -156,11 +156,11 @@ class DetailsPanel(QWidget):
 
     def list_habits(self) -> None:
         """Add any lichen habit :data:`HABIT_NAMES` lacks to the list (once).  The habits come
-        from ramure.gmap.lichen: gmap loads (with scipy.sparse, about 25 MB) when the dock is
+        from ramure.gmap.organs.lichen: gmap loads (with scipy.sparse, about 25 MB) when the dock is
         first on screen, not with the window."""
         if self.habits_listed:
             return
-        from ramure.gmap.lichen import HABITS
+        from ramure.gmap.organs.lichen import HABITS
 
         self.habit.addItems([name for name in HABITS if self.habit.findText(name) < 0])
         self.habits_listed = True

@@ -604,7 +604,7 @@ def fruit_cut_surface(explorer: Explorer, normal: Sequence[float]) -> pv.PolyDat
     so skin, flesh and locules read as the 3G-map's volumes.  Returns a surface with
     ``leaf_id`` and ``tissue`` per cell, or None without fruit.
     """
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     if not explorer.fruit_ids():
         return None

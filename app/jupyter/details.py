@@ -61,7 +61,7 @@ class DetailsTab:
         self.seed = W.BoundedIntText(value=0, min=0, max=2**31 - 1, description="seed")
         for box in (self.season_slider, self.heat, self.humidity, self.wind, self.seed):
             on_value(box, lambda _v: self.show_season())
-        from ramure.gmap.lichen import HABITS
+        from ramure.gmap.organs.lichen import HABITS
 
         self.clusters = W.BoundedIntText(value=5, min=1, max=200, description="clusters")
         self.particles = W.BoundedIntText(value=300, min=1, max=20_000, description="particles")

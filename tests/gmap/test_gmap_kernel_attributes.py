@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from ramure.gmap import GMap3, GMapError, subdivide
-from ramure.gmap.topology import assert_solid
+from ramure.gmap import GMap3, GMapError
+from ramure.gmap.kernel import subdivide
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def cube_pair():

@@ -16,10 +16,11 @@ from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
-from ramure.gmap import graphs
-from ramure.gmap import GMapError, _components_kernel, map3, operations
-from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
-from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
+from ramure.gmap.kernel import graphs
+from ramure.gmap import GMapError
+from ramure.gmap.kernel import _components_kernel, map3, operations
+from ramure.gmap.kernel.map3 import _compiled_validity_problems, _validity_problems
+from ramure.gmap.kernel.topology import assert_solid, boundary_chi, chi, components
 
 KEYS = ("123", "023", "013", "012", "0123", "12", "01", "3")
 
@@ -358,7 +359,7 @@ def test_face_walk_of_mixed_faces_equals_a_dart_by_dart_walk(compiled, monkeypat
 
 
 def _boundary_cases():
-    from ramure.gmap import wood
+    from ramure.gmap.organs import wood
 
     one = GMap3()
     one.add_prisms(5)
