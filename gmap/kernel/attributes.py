@@ -16,7 +16,7 @@ describe each new dart by the old dart it comes from and a *kind*:
 >>> import numpy as np
 >>> from ramure.gmap import GMap3
 >>> gm = GMap3(); _ = gm.add_prisms(4)
->>> gm.add_dart_attribute("u", float, rule="interpolate")
+>>> gm.add_dart_data("u", float, rule="interpolate")
 >>> gm.dart_data["u"][:] = gm.points[:, 0]          # 0 on O, 1 on E
 >>> cols = carried(gm, np.array([0, 0, 8]), np.array([0, 1, 3]))
 >>> cols["u"].tolist()
@@ -40,7 +40,7 @@ OWN, EDGE, FACE, CELL = 0, 1, 2, 3
 
 
 def extra_names(gm: GMap3) -> list[str]:
-    """Names of the per-dart attributes added with :meth:`GMap3.add_dart_attribute`."""
+    """Names of the per-dart attributes added with :meth:`GMap3.add_dart_data`."""
     return [n for n in gm.dart_rules() if n not in BUILTIN_RULES]
 
 

@@ -81,7 +81,7 @@ DART_SPEC = {
 }
 
 #: How each per-dart column reaches the darts an operation creates (see
-#: :meth:`GMap3.add_dart_attribute`): ``copy`` from the dart the new one continues,
+#: :meth:`GMap3.add_dart_data`): ``copy`` from the dart the new one continues,
 #: ``interpolate`` along the split edge (or average over the face / cell for
 #: subdivision's face and cell points), ``reset`` to the column's fill value.
 BUILTIN_RULES = {
@@ -385,14 +385,14 @@ class GMap3(Operations):
         """Volume id of every dart."""
         return self._darts["volume"]
 
-    def add_volume_attribute(self, name: str, dtype: DTypeLike, fill: object = 0, shape: tuple[int, ...] = ()) -> None:
-        """Add a per-volume attribute column (existing volumes get ``fill``)."""
+    def add_volume_data(self, name: str, dtype: DTypeLike, shape: tuple[int, ...] = (), fill: object = 0) -> None:
+        """Add a per-volume attribute column, read back in :attr:`volume_data` (existing volumes get ``fill``)."""
         self._volumes.add(name, dtype, shape, fill)
 
-    def add_dart_attribute(
+    def add_dart_data(
         self, name: str, dtype: DTypeLike, shape: tuple[int, ...] = (), fill: object = 0, rule: str = "copy"
     ) -> None:
-        """Add a per-dart column kept through every operation by ``rule``.
+        """Add a per-dart attribute column, read back in :attr:`dart_data`, kept through every operation by ``rule``.
 
         ``rule`` is ``"copy"`` (a dart made by splitting an edge, a face or a
         cell takes the value of the dart it continues; darts of a new face
@@ -405,7 +405,7 @@ class GMap3(Operations):
         markers copy or reset.
 
         >>> gm = GMap3(); _ = gm.add_prisms(4)
-        >>> gm.add_dart_attribute("uvw", float, (3,), rule="interpolate")
+        >>> gm.add_dart_data("uvw", float, (3,), rule="interpolate")
         >>> gm.dart_data["uvw"][:] = gm.points
         >>> new = gm.split_edge([0], 0.25)
         >>> bool(abs(gm.dart_data["uvw"][new[0]] - gm.points[new[0]]).max() < 1e-12)
@@ -1006,6 +1006,29 @@ class GMap3(Operations):
     def is_valid(self) -> bool:
         """True when :meth:`validity_problems` finds nothing."""
         return not self.validity_problems()
+
+    def is_orientable(self) -> bool:
+        """True when every connected component of the map can be oriented (CGAL's ``is_orientable``).
+
+        A component is orientable when its darts split into two classes that every
+        involution swaps (the dart graph of alpha0..alpha3 is bipartite); a free
+        dart (``alpha_i(d) == d``) is a boundary, not a twist.  One connected-
+        components pass on the double cover (dart, class).
+
+        >>> gm = GMap3(); _ = gm.add_prisms(4)
+        >>> gm.is_orientable()
+        True
+        """
+        n = self.n_darts
+        if n == 0:
+            return True
+        alpha = self.alpha.astype(np.int64)
+        own = np.arange(n)
+        free = alpha == own
+        # (d, 0) -> (alpha_i d, 1) and (d, 1) -> (alpha_i d, 0); a free dart stays in its class
+        rows = np.concatenate([np.where(free, own, alpha + n), np.where(free, own + n, alpha)], axis=1)
+        comp, _ = orbit_labels(rows)
+        return bool(np.all(comp[:n] != comp[n:]))
 
     def check(self) -> GMap3:
         """Raise :class:`GMapError` listing the problems if the map is not valid."""

@@ -38,6 +38,17 @@ _BUILTIN_SET = {"volume", "face", "sublabel", "fcorner", "forward", "point", "ra
 MAX_PRISM_ORDER = 4096
 #: Most darts a map holds: alpha stores dart ids as int32.
 MAX_MAP_DARTS = 2**31 - 1
+#: The involutions that commute with alpha_i (``|i - j| >= 2``): sewing by alpha_i links whole orbits of them.
+_SEW_ORBIT = {0: (2, 3), 1: (3,), 2: (0,), 3: (0, 1)}
+
+
+def _dimension(i):
+    """``i`` as a G-map dimension 0..3, or GMapError."""
+    if not isinstance(i, (int, np.integer)) or isinstance(i, bool) or not 0 <= i <= 3:
+        raise GMapError(f"the dimension i of an i-sew must be 0, 1, 2 or 3, got {i!r}")
+    return int(i)
+
+
 _PRISM_WRITES = ("volume", "face", "sublabel", "fcorner", "forward", "corner", "point", "vcorner", "sup")
 
 
@@ -407,6 +418,93 @@ class Operations:
         self._alpha[3][d] = d
         self._alpha[3][partners] = partners
         self.mark_changed()
+
+    # ------------------------------------------------------------------ i-sewing (CGAL's sew<i>, unsew<i>)
+    def sew(self, i: int, a: ArrayLike, b: ArrayLike) -> None:
+        """i-sew dart ``a`` to dart ``b`` (arrays pair up element-wise), for ``i`` in 0..3.
+
+        As CGAL's ``sew<i>``: the orbits of ``a`` and ``b`` under the involutions
+        that commute with alpha_i (alpha_j with ``|i - j| >= 2``: ``<a2,a3>`` for
+        i = 0, ``<a3>`` for 1, ``<a0>`` for 2, the face ``<a0,a1>`` for 3) are
+        walked in lock-step and linked dart for dart by alpha_i, so the map stays
+        valid.  ``sew(3, a, b)`` is :meth:`sew3` (faces of different degrees
+        included).  Only the involutions change: per-dart attributes and points
+        are the caller's.  Refused, the map unchanged, unless :meth:`is_sewable`.
+        (:meth:`is_valid` also asks for closed volumes, no free alpha0..alpha2: a
+        map unsewn below dimension 3 is a valid G-map, but open until sewn again.)
+
+        >>> from ramure.gmap import GMap3
+        >>> gm = GMap3(); _ = gm.add_prisms(4)
+        >>> partner = int(gm.alpha[2][0])
+        >>> gm.unsew(2, 0); gm.counts()["edges"], gm.is_sewable(2, 0, partner)
+        (13, True)
+        >>> gm.sew(2, 0, partner); gm.counts()["edges"], gm.is_valid()
+        (12, True)
+        """
+        if i == 3:
+            self.sew3(a, b)
+            return
+        da, db = self._sew_orbits(_dimension(i), a, b)
+        self._alpha[i][da] = db
+        self._alpha[i][db] = da
+        self.mark_changed()
+
+    def unsew(self, i: int, a: ArrayLike) -> None:
+        """Make the darts of ``a`` i-free again, with their orbits and partners (CGAL's ``unsew<i>``).
+
+        The orbit of each dart under the involutions that commute with alpha_i
+        (see :meth:`sew`) is unsewn, so the map stays valid; ``unsew(3, a)`` is
+        :meth:`unsew3` (which, unlike this, lets free faces be).  Refused, the map
+        unchanged, when a dart is i-free already.
+        """
+        i = _dimension(i)
+        d = self.check_darts(a)
+        if np.any(self._alpha[i][d] == d):
+            raise GMapError(f"unsew({i}): dart {int(d[self._alpha[i][d] == d][0])} is {i}-free already")
+        if i == 3:
+            self.unsew3(d)
+            return
+        members, _ = self.orbits_from(np.unique(d), _SEW_ORBIT[i], strict=False)
+        partners = self._alpha[i][members].copy()
+        self._alpha[i][members] = members
+        self._alpha[i][partners] = partners
+        self.mark_changed()
+
+    def is_sewable(self, i: int, a: ArrayLike, b: ArrayLike) -> bool:
+        """Whether :meth:`sew` ``(i, a, b)`` would sew (a bool; nothing changes either way)."""
+        try:
+            if _dimension(i) < 3:
+                self._sew_orbits(i, a, b)
+                return True
+            da, db = self.check_darts(a), self.check_darts(b)
+            if da.shape != db.shape:
+                return False
+            (wa, la), (wb, lb) = self.face_walk(da), self.face_walk(db)
+            self.check_sewable(wa, wb)
+            return bool(np.all(la == lb) or len(da) == 1)
+        except GMapError:
+            return False
+
+    def _sew_orbits(self, i, a, b):
+        """Matched darts ``(da, db)`` of the lock-step orbits :meth:`sew` links by alpha_i; GMapError if none."""
+        a, b = self.check_darts(a), self.check_darts(b)
+        if a.shape != b.shape:
+            raise GMapError(f"sew({i}) needs as many darts on each side, got {len(a)} and {len(b)}")
+        alpha = self._alpha
+        da, db = a, b
+        for j in _SEW_ORBIT[i]:  # the involutions commute, so the orbit is d, aj d, ak d, ak aj d
+            da, db = np.concatenate([da, alpha[j][da]]), np.concatenate([db, alpha[j][db]])
+        ua, ia = np.unique(da, return_inverse=True)
+        ub, ib = np.unique(db, return_inverse=True)
+        if len(np.unique(ia * len(ub) + ib)) != len(ua) or len(ua) != len(ub):
+            raise GMapError(f"sew({i}): the orbits of the two sides do not have the same shape, or a dart is used twice")
+        first = np.unique(ia, return_index=True)[1]
+        da, db = ua, db[first]
+        if np.any(alpha[i][da] != da) or np.any(alpha[i][db] != db):
+            raise GMapError(f"sew({i}) needs {i}-free darts; one of them is {i}-sewn already")
+        if np.intersect1d(da, db).size:
+            raise GMapError(f"sew({i}) would sew an orbit to itself")
+        return da, db
 
     # ------------------------------------------------------------------ splits
     def _set_support(self, new, a, b, t) -> None:

@@ -246,7 +246,7 @@ class G3LDerivation:
             ("vseed", np.int64, ()),
             ("shape", np.int8, ()),
         ):
-            gm.add_volume_attribute(name, dtype, 0, shape)
+            gm.add_volume_data(name, dtype, shape, 0)
         self.corner = np.zeros(0, np.int16)  # template corner of each dart (-1: made by a split)
         self._axiom()
 

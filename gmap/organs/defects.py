@@ -322,7 +322,7 @@ def _transpiration(gm, rates=None):
         table[name] = float(k)
     by_code = np.array([table[name] for name in TISSUES])
     if "transpiration" not in vd:
-        gm.add_volume_attribute("transpiration", np.float64, 1.0)
+        gm.add_volume_data("transpiration", np.float64, fill=1.0)
         vd = gm.volume_data
         vd["transpiration"][:] = by_code[vd["tissue"].astype(np.int64)]
     elif rates:
@@ -792,7 +792,7 @@ def crack(
     _, first = np.unique(idx.side_of_dart[strip], return_index=True)
     out.unsew3(strip[first])
     if "healed" not in out.dart_data:
-        out.add_dart_attribute("healed", np.int8, rule="copy")
+        out.add_dart_data("healed", np.int8, rule="copy")
     exposed = np.r_[strip, partner]
     heal = exposed[layer[vol[exposed]] < healed]
     out.dart_data["healed"][heal] = 1

@@ -296,7 +296,7 @@ def excrescence(
     anchors = free[first]
     out = gm.copy()
     if "excrescence" not in out.volume_data:
-        out.add_volume_attribute("excrescence", np.int16, 0)
+        out.add_volume_data("excrescence", np.int16, fill=0)
     before = float(D.cell_volumes(gm).sum())
     _, pos = out.vertex_positions()
     vid, _ = out.cells(0)

@@ -319,8 +319,8 @@ def build_shape(**params: Any) -> GMap3:
     base_frame = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # H = z, L = x, U = y
     origins, frames, fc = _trunk_frames(p, base_frame)
     gm = GMap3()
-    gm.add_volume_attribute("ring", np.int32, -1)
-    gm.add_volume_attribute("sector", np.int32, -1)
+    gm.add_volume_data("ring", np.int32, fill=-1)
+    gm.add_volume_data("sector", np.int32, fill=-1)
     sizes = np.repeat(fc[:, None], 3, axis=1)
     trunk = gm.add_prisms(
         ph,

@@ -175,7 +175,7 @@ def crack_map(
     before_volume = total_volume(gm)
     exposed = np.concatenate(list(strip.values()))
     if "crack" not in out.dart_data:
-        out.add_dart_attribute("crack", np.int8, rule="copy")
+        out.add_dart_data("crack", np.int8, rule="copy")
     out.dart_data["crack"][exposed] = 1
     moved, opening = _open(out, exposed, strip, face_width, face_depth, skin)
     if (cell_volumes(out, sign) <= 0).any():

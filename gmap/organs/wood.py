@@ -464,7 +464,7 @@ class Wood:
             ("rule", np.int8),
             ("key", np.int64),
         ):
-            gm.add_volume_attribute(name, dtype, -1 if dtype is not np.float64 else 0.0)
+            gm.add_volume_data(name, dtype, fill=-1 if dtype is not np.float64 else 0.0)
         self._corner = np.zeros(0, np.int16)  # template corner per dart (-1: made by a split)
         if years:  # one allocation up front instead of doublings
             est = estimated_darts(params, int(years), [br.year for br in (branches or [])])

@@ -95,8 +95,8 @@ def test_a_cut_map_can_be_embedded_and_cut_again():
 
 def test_attributes_follow_the_cut():
     gm = crown()
-    gm.add_dart_attribute("uvw", float, (3,), rule="interpolate")
-    gm.add_dart_attribute("crack", np.int8, rule="copy")
+    gm.add_dart_data("uvw", float, (3,), rule="interpolate")
+    gm.add_dart_data("crack", np.int8, rule="copy")
     gm.dart_data["uvw"][:] = gm.points
     gm.dart_data["crack"][gm.face_darts([1], "E")[0]] = 1
     cut = cut_map(gm, (1, 0.4, 0.2), (0.4, 0, 0))
