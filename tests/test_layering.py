@@ -70,11 +70,6 @@ ALLOWED = {
     "ramure.app": {BASE, "ramure", "ramure.grammars", "ramure.lsys", "ramure.metrics", "ramure.studies"}
     | {"ramure.gmap", "ramure.gmap.kernel", "ramure.gmap.lsystem", "ramure.gmap.organs"},
 }
-#: Module cycles not broken yet, each with what it waits for (the test fails once one is gone).
-KNOWN_CYCLES = [
-    # the grammar reads #surface files, the turtle derives them, a derivation draws itself
-    {"cpfg", "derive", "grammar", "homomorphism", "surfaces", "turtle"},
-]
 
 
 def _modules():
@@ -199,10 +194,10 @@ def test_the_package_graph_is_acyclic():
     assert all(set(ALLOWED[p]) >= imported for p, imported in packages.items())
 
 
-def test_no_module_cycles_but_the_known_ones():
-    found = [{m.rsplit(".", 1)[1] for m in c} for c in _cycles(GRAPH)]
-    assert [c for c in found if c not in KNOWN_CYCLES] == []
-    assert [c for c in KNOWN_CYCLES if c not in found] == [], "a known cycle is gone: remove it from KNOWN_CYCLES"
+def test_no_module_imports_itself_back():
+    # the seven cycles of issue 41 (lsys around grammar/derive/turtle, polygons, cut/mapcut,
+    # defects/excrescence, plant/wood, fruit/fruit_dataset, session/storage) are gone
+    assert _cycles(GRAPH) == []
 
 
 def test_the_cycle_finder_finds_a_lazy_cycle():
