@@ -176,7 +176,7 @@ def _plotter(size):
         import pyvista as pv
 
         plotter = pv.Plotter(off_screen=True, window_size=list(size))
-        plotter.set_background("white")
+        plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
         _STATE["plotter"] = plotter
     return plotter
 

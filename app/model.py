@@ -165,9 +165,9 @@ class Explorer:
             self._plant_state = before
             return before
         same_tree = plant is not None and plant["tree"] is d.tree and plant["lsystem"] is d.lsystem
-        self._plant_before = plant if same_tree and plant.get("mesh") is not None else None
+        self._plant_before = plant if same_tree and plant is not None and plant.get("mesh") is not None else None
         skeleton = None
-        if same_tree:
+        if same_tree and plant is not None:  # (same_tree implies it; said again for mypy)
             old = plant["skeleton"]
             spans = None
             if "trace" in old.extra:  # the edit's own spans, else found by comparing the strings

@@ -26,7 +26,7 @@ import os
 import pathlib
 import threading
 from collections.abc import Callable, Iterable, Mapping
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import ipywidgets as W
 
@@ -487,7 +487,7 @@ class Explorer:
         another ``preset`` (:data:`ramure.gmap.organs.fruit.PRESETS`, e.g. ``"pear"``) and ``size``."""
 
         def apply():
-            settings = {}
+            settings: dict[str, Any] = {}
             if preset:
                 settings["preset"] = str(preset)
             if size is not None:

@@ -46,7 +46,7 @@ def extra_names(gm: GMap3) -> list[str]:
 
 def _group_mean(keys, values, count):
     flat = values.reshape(len(values), -1).astype(float)
-    out = np.stack([np.bincount(keys, flat[:, j], minlength=count) for j in range(flat.shape[1])], axis=1)
+    out: np.ndarray = np.stack([np.bincount(keys, flat[:, j], minlength=count) for j in range(flat.shape[1])], axis=1)
     out /= np.maximum(np.bincount(keys, minlength=count), 1)[:, None]
     return out.reshape((count,) + values.shape[1:])
 

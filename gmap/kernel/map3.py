@@ -314,6 +314,7 @@ class GMap3(Operations):
     """A 3-G-map with numpy storage; see the module docstring for the layout."""
 
     _orbit_memo: dict  # orbit labellings kept across edits, made on first use (see _orbit_state)
+    _scratch: np.ndarray | None = None  # per-dart -1s for orbit walks, made on first use (see _marks)
 
     def __init__(self) -> None:
         self._alpha = np.empty((4, 0), np.int32)
@@ -684,7 +685,7 @@ class GMap3(Operations):
     def _marks(self):
         """A per-dart scratch array of -1 (orbit walks set and reset only what they touch)."""
         n = self._alpha.shape[1]
-        if getattr(self, "_scratch", None) is None or len(self._scratch) < n:
+        if self._scratch is None or len(self._scratch) < n:
             self._scratch = np.full(max(n, 16), -1, np.int64)
         return self._scratch
 

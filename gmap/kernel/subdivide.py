@@ -52,7 +52,7 @@ def _group_mean(keys, values, count):
     """Mean of ``values`` (n, ...) per key in ``0..count-1``."""
     values = np.asarray(values, float)
     flat = values.reshape(len(values), -1)
-    out = np.stack([np.bincount(keys, flat[:, j], minlength=count) for j in range(flat.shape[1])], axis=1)
+    out: np.ndarray = np.stack([np.bincount(keys, flat[:, j], minlength=count) for j in range(flat.shape[1])], axis=1)
     n = np.bincount(keys, minlength=count)
     out /= np.maximum(n, 1)[:, None]
     return out.reshape((count,) + values.shape[1:])
@@ -320,7 +320,7 @@ def _volume_once(gm):
     pairs, pair_of, per_pair = np.unique(pair_key, return_inverse=True, return_counts=True)
     weight = 1.0 / per_pair[pair_of]
     nvol = gm.n_volumes
-    cell_pt = np.stack([np.bincount(vol, weight * pos[vid][:, j], minlength=nvol) for j in range(4)], axis=1)
+    cell_pt: np.ndarray = np.stack([np.bincount(vol, weight * pos[vid][:, j], minlength=nvol) for j in range(4)], axis=1)
     cell_pt /= np.maximum(np.bincount(vol, weight, minlength=nvol), 1e-300)[:, None]
 
     base = 8 * np.arange(n)

@@ -509,7 +509,9 @@ def _strip_atoms(node: Node, atoms: list, column: int) -> Node:
 
 def _split_top(text, sep):
     """Split on ``sep`` outside parentheses and braces."""
-    out, depth, cur = [], 0, []
+    out: list[str] = []
+    cur: list[str] = []
+    depth = 0
     for ch in text:
         if ch in "([{":
             depth += 1

@@ -287,8 +287,8 @@ def _pick_seeds(gm, count, rng):
         chosen.append(i)
         if len(chosen) == count:
             break
-    chosen = np.array(chosen, np.int64)
-    return cells[chosen], inner[chosen]
+    picked = np.array(chosen, np.int64)
+    return cells[picked], inner[picked]
 
 
 def _carve_seeds(gm, cells, inner, smoothing):
@@ -301,10 +301,10 @@ def _carve_seeds(gm, cells, inner, smoothing):
         cut = np.flatnonzero((vol == rest) & (vol[gm.alpha[3]] == c))
         gm.split_prism(rest, (t1 - t0) / (1.0 - t0), face=int(cut[0]), labels=("I", "I"))
         seeds.append(rest)
-    seeds = np.array(seeds, np.int64)
-    gm.volume_data["tissue"][seeds] = CODES["seed"]
-    if smoothing and seeds.size:
-        gm = _subdivide.surface(gm, smoothing, volumes=seeds)
+    seed_ids = np.array(seeds, np.int64)
+    gm.volume_data["tissue"][seed_ids] = CODES["seed"]
+    if smoothing and seed_ids.size:
+        gm = _subdivide.surface(gm, smoothing, volumes=seed_ids)
     return gm
 
 
