@@ -19,7 +19,8 @@ pyvista in :mod:`ramure.gmap.kernel.pyvista` and plane cuts in :mod:`ramure.gmap
 """
 
 from ramure.gmap.kernel.errors import GMapError
-from ramure.gmap.kernel.map3 import GMap3, sublabel_name
+from ramure.gmap.kernel.map3 import GMap3
+from ramure.gmap.kernel.storage import sublabel_name
 from ramure.gmap.kernel.prism import face_label_code, face_label_name
 from ramure.gmap.kernel import cut, subdivide  # noqa: E402  (gmap.kernel.pyvista: import it yourself)
 from ramure.gmap.organs import fruit, plant, tissue

@@ -1,6 +1,6 @@
 """The 3-G-map kernel: darts, involutions, orbits, sewing, validity, attributes, cuts and I/O.
 
-It owns :class:`~ramure.gmap.kernel.map3.GMap3` (``map3``, with its ``operations`` mixin and
+It owns :class:`~ramure.gmap.kernel.map3.GMap3` (``map3``: its ``storage`` with the ``operations`` on top, and
 the compiled ``_*_kernel`` passes), the labelled prism template (``prism``, ``faces``),
 face gluing (``identify``), frames and embedding, orbit graphs (``graphs``), Euler
 characteristics (``topology``), incidence, exact volumes (``measure``), attribute

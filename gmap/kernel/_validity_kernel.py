@@ -3,7 +3,7 @@
 numba because the numpy check gathers about forty arrays per call (one per
 condition and involution); the wood checks after every growth step, where
 that was the largest part of the check.  The conditions and counts are those
-of :func:`ramure.gmap.kernel.map3._validity_problems`, dart by dart; an id outside
+of :func:`ramure.gmap.kernel.storage._validity_problems`, dart by dart; an id outside
 ``0..n-1`` met on the way stops the pass (the caller then runs the full numpy
 check, which names that problem).
 """

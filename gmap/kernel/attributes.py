@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ramure.gmap.kernel.map3 import BUILTIN_RULES
+from ramure.gmap.kernel.storage import BUILTIN_RULES
 
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3

@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 from ramure.gmap.kernel import frames as _frames
 from ramure.gmap.kernel import prism as _prism
 from ramure.gmap.kernel.errors import GMapError
-from ramure.gmap.kernel.map3 import NO_FACE
+from ramure.gmap.kernel.storage import NO_FACE
 
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3

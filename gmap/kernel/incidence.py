@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 from scipy import sparse
 
 from ramure.gmap.kernel.errors import GMapError
-from ramure.gmap.kernel.map3 import CELL_INVOLUTIONS
+from ramure.gmap.kernel.storage import CELL_INVOLUTIONS
 
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3

@@ -1,4 +1,4 @@
-"""Topological operations of :class:`ramure.gmap.GMap3` (mixed into the class).
+"""Topological operations of :class:`ramure.gmap.GMap3`, on its storage (a base class of GMap3).
 
 Create labelled prisms in bulk, alpha3-sew and unsew faces, split an edge, a
 face or a volume, remove volumes.  Every operation works on arrays of darts and
@@ -17,7 +17,6 @@ puts the new vertex on the segment, a face split reuses the face's corners).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -26,9 +25,9 @@ from numpy.typing import ArrayLike
 from ramure.gmap.kernel import prism as _prism
 from ramure.gmap.kernel.errors import GMapError, ValueRefused
 from ramure.gmap.kernel.graphs import compiled_pays
+from ramure.gmap.kernel.storage import MapStorage
 
 if TYPE_CHECKING:
-    from ramure.gmap.kernel._columns import Columns
     from ramure.gmap.kernel.map3 import GMap3
 
 _BUILTIN_SET = {"volume", "face", "sublabel", "fcorner", "forward", "point", "radial", "corner", "vcorner", "sup", "supt"}
@@ -71,41 +70,12 @@ def _label_code(label):
         raise GMapError(str(exc)) from None
 
 
-class Operations:
-    """Mixin holding the operations; see the module docstring."""
-
-    if TYPE_CHECKING:  # provided by GMap3, the only class that mixes this in (declared for mypy)
-        _alpha: np.ndarray
-        _darts: Columns
-        _volumes: Columns
-        _rules: dict[str, str]
-
-        @property
-        def n_darts(self) -> int: ...
-        @property
-        def n_volumes(self) -> int: ...
-        @property
-        def alpha(self) -> np.ndarray: ...
-        def mark_changed(self) -> None: ...
-        def dart_fill(self, name: str) -> object: ...
-        def atomic(self, local: ArrayLike | None = None) -> AbstractContextManager[Any]: ...
-        def cells(self, i: int) -> tuple[np.ndarray, int]: ...
-        def orbits_from(self, starts: ArrayLike, key: Sequence[int], strict: bool = True) -> tuple[np.ndarray, np.ndarray]: ...
-        def _new_darts(self, count: int, skip: Sequence[str] = (), free: Sequence[int] = (0, 1, 2, 3)) -> np.ndarray: ...
-        def _new_volumes(self, count: int, **values: Any) -> np.ndarray: ...
-        def _marks(self) -> np.ndarray: ...
-        def _propagate(
-            self,
-            new: ArrayLike,
-            src: ArrayLike,
-            other: ArrayLike | None = None,
-            frac: ArrayLike | None = None,
-            skip: Sequence[str] = (),
-        ) -> None: ...
+class Operations(MapStorage):
+    """The operations of a 3-G-map, on its storage; see the module docstring."""
 
     def _map(self) -> GMap3:
-        """This map as the GMap3 it is (the only class that mixes Operations in), for the
-        face and glue modules' functions, which take a GMap3."""
+        """This map as the GMap3 it is (the only subclass of Operations), for the face and
+        glue modules' functions, which take a GMap3."""
         return cast("GMap3", self)
 
     # ------------------------------------------------------------------ creation

@@ -4,7 +4,7 @@
 the volume has 6 quad faces and 8 corners, a wedge for 2 triangles, 3 quads
 and 6 corners, otherwise a polyhedron whose faces are oriented outwards.
 Cell data: ``volume`` (id), ``label`` (string), ``tissue`` (int code; names in
-field data ``tissue_names`` and :data:`ramure.gmap.kernel.map3.TISSUES`), ``leaf_id``,
+field data ``tissue_names`` and :data:`ramure.gmap.kernel.storage.TISSUES`), ``leaf_id``,
 ``order``, ``stage`` and any other one-value-per-volume attribute.
 :func:`boundary_polydata` gives the alpha3-free faces as a surface.
 
@@ -22,7 +22,7 @@ import numpy as np
 import pyvista as pv
 from numpy.typing import ArrayLike
 
-from ramure.gmap.kernel.map3 import TISSUES
+from ramure.gmap.kernel.storage import TISSUES
 
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3

@@ -40,7 +40,8 @@ from numpy.typing import ArrayLike
 
 from ramure.gmap.kernel import attributes as _attributes
 from ramure.gmap.kernel.errors import ValueRefused
-from ramure.gmap.kernel.map3 import SUBLABEL_BASE, GMap3
+from ramure.gmap.kernel.map3 import GMap3
+from ramure.gmap.kernel.storage import SUBLABEL_BASE
 from ramure.gmap.kernel.prism import FACE_I
 
 #: letters (1 = a) of the children of a quad at its corners 0, 1, 2, 3

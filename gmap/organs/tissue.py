@@ -53,7 +53,7 @@ from numpy.typing import ArrayLike
 
 from ramure.gmap.kernel import subdivide as _subdivide
 from ramure.gmap.kernel.errors import ValueRefused
-from ramure.gmap.kernel.map3 import TISSUES
+from ramure.gmap.kernel.storage import TISSUES
 
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3
