@@ -60,8 +60,9 @@ SELECT_MODES = ("replace", "add", "remove", "toggle")
 class Explorer:
     """Edit–select–regenerate state for one plant: the document and its one undo history.
 
-    ``source`` is a grammar file path or grammar text; ``n`` and ``seed`` default to the
-    grammar's ``n:`` and ``#seed``.
+    ``source`` is a grammar file path, a shipped grammar's name (``"honda_sympodial"``, as
+    :func:`ramure.load` takes) or grammar text; ``n`` and ``seed`` default to the grammar's
+    ``n:`` and ``#seed``.
 
     The document is the grammar text with the session's ``n``, seed and constants written
     in (:meth:`document_text`) plus the local edits of parts of the plant (regrows, prunes,
@@ -76,7 +77,11 @@ class Explorer:
         given = (
             pathlib.Path(source)
             if isinstance(source, pathlib.Path)
-            or (isinstance(source, str) and "\n" not in source and source.endswith((".lsys", ".l")))
+            or (
+                isinstance(source, str)
+                and "\n" not in source
+                and (source.endswith((".lsys", ".l")) or source in grammar_files.names())
+            )
             else None
         )
         path = grammar_files.resolve(given) if given else None
