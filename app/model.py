@@ -31,7 +31,7 @@ import ramure.io as atomic
 from ramure.lsys import GrammarError, LSystem, load_kernels
 from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
-from ramure.lsys.cut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
+from ramure.lsys.mincut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
 from ramure.lsys.tree import concat_ranges, sorted_unique
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     import pyvista as pv
     from ramure.gmap.kernel.map3 import GMap3
     from ramure.lsys import Derivation
-    from ramure.lsys.cut import CutResult
+    from ramure.lsys.mincut import CutResult
     from ramure.lsys.regen import RegenResult
     from ramure.lsys.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
@@ -739,7 +739,7 @@ class CutPreview:
     ``roots``: the cut's roots; ``leaves``: the modules of the string they hold (what will
     change, in string order); ``changed`` of ``total`` modules; ``climb``: the fewest and most
     levels the cut climbs above a selected leaf (None when nothing regrows); ``stranded``:
-    selected leaves nothing regrows (see :func:`ramure.lsys.cut.minimum_ascension`);
+    selected leaves nothing regrows (see :func:`ramure.lsys.mincut.minimum_ascension`);
     ``from_axiom``: a root is an axiom module.
     """
 

@@ -7,8 +7,8 @@ and regrows everything below it.
 
 Capacities: a leaf 1, an internal node twice the sum of its children, so with
 no selection the cut sits on the leaves.  A selected leaf adds
-``alpha_k = alpha_0 - (2**k - 1) / rho`` to its k-th ancestor (k = 0 is the
-leaf), ``alpha_0 = 2**n`` by default; a capacity that would go negative is
+``bonus_k = bonus_0 - (2**k - 1) / rho`` to its k-th ancestor (k = 0 is the
+leaf), ``bonus_0 = 2**n`` by default; a capacity that would go negative is
 clamped at 0 (spec §4.5).  One level above the leaves this makes the parent a
 root exactly when more than ``rho`` of its leaf children are selected.  Higher
 up it weighs leaves, not children: against cutting all its children a node is
@@ -72,16 +72,16 @@ def check_rho(rho: float) -> float:
     return rho
 
 
-def alpha_table(n: int, rho: float = 0.5, alpha0: float | None = None, kmax: int | None = None) -> np.ndarray:
-    """``alpha_k`` for k = 0..kmax (default n): the selection bonus k levels above a leaf.
+def bonus_table(n: int, rho: float = 0.5, bonus0: float | None = None, kmax: int | None = None) -> np.ndarray:
+    """``bonus_k`` for k = 0..kmax (default n): the selection bonus k levels above a leaf.
 
-    >>> alpha_table(10, rho=0.5, kmax=5).tolist()
+    >>> bonus_table(10, rho=0.5, kmax=5).tolist()
     [1024.0, 1022.0, 1018.0, 1010.0, 994.0, 962.0]
     """
     rho = check_rho(rho)
-    alpha0 = float(2**n if alpha0 is None else alpha0)
+    bonus0 = float(2**n if bonus0 is None else bonus0)
     k = np.arange((n if kmax is None else kmax) + 1, dtype=float)
-    return alpha0 - (2.0**k - 1.0) / rho
+    return bonus0 - (2.0**k - 1.0) / rho
 
 
 def initial_capacities(tree: DerivationTree) -> np.ndarray:
@@ -273,22 +273,22 @@ def path_nodes(tree: DerivationTree, selected: np.ndarray) -> np.ndarray:
     return np.flatnonzero(seen)
 
 
-def _scale(rho, alpha0, n):
-    """``(S, alpha0 * S, q / p * S)``: every capacity times ``S`` is a whole number.
+def _scale(rho, bonus0, n):
+    """``(S, bonus0 * S, q / p * S)``: every capacity times ``S`` is a whole number.
 
-    Capacities are whole numbers plus ``alpha_k = alpha0 - (2**k - 1) / rho``;
-    with ``rho = p / q`` and ``alpha0 = a / b`` (as written in decimal),
-    ``S = p * b`` makes every ``alpha_k * S`` an integer, so the cut is decided
+    Capacities are whole numbers plus ``bonus_k = bonus0 - (2**k - 1) / rho``;
+    with ``rho = p / q`` and ``bonus0 = a / b`` (as written in decimal),
+    ``S = p * b`` makes every ``bonus_k * S`` an integer, so the cut is decided
     in exact integer arithmetic however deep the history (floats lose whole
     units above 2**53, i.e. from n of about 28 on a branching plant).
     """
     r = _as_fraction(rho, "rho")
-    a0 = Fraction(2) ** int(n) if alpha0 is None else _as_fraction(alpha0, "alpha0")
+    a0 = Fraction(2) ** int(n) if bonus0 is None else _as_fraction(bonus0, "bonus0")
     scale = r.numerator * a0.denominator
     return scale, int(a0 * scale), int(scale / r)
 
 
-def _cut_arrays(tree, selected, rho, alpha0, n):
+def _cut_arrays(tree, selected, rho, bonus0, n):
     """The capacities of the graph's path nodes (see :func:`build_graph`), as arrays.
 
     ``cap``: each node edge's capacity; ``off_path``: the merged sink edge of the
@@ -298,13 +298,13 @@ def _cut_arrays(tree, selected, rho, alpha0, n):
     rho = check_rho(rho)
     selected = validate_selection(tree, selected)
     n = int(tree.depth.max()) if n is None else int(n)
-    scale, alpha_s, step_s = _scale(rho, alpha0, n)
+    scale, bonus_s, step_s = _scale(rho, bonus0, n)
     nodes = path_nodes(tree, selected)
     depth = tree.depth_of(nodes)
     cap = np.array([c * scale for c in exact_capacities(tree, nodes)] or [0], dtype=object)[: len(nodes)]
     current, k = selected.copy(), 0
     while current.size:
-        np.add.at(cap, np.searchsorted(nodes, current), alpha_s - ((1 << k) - 1) * step_s)
+        np.add.at(cap, np.searchsorted(nodes, current), bonus_s - ((1 << k) - 1) * step_s)
         current = tree.parent[current]
         current = current[current >= 0]
         k += 1
@@ -337,7 +337,7 @@ def build_graph(
     tree: DerivationTree,
     selected: Iterable[int],
     rho: float = 0.5,
-    alpha0: float | None = None,
+    bonus0: float | None = None,
     n: int | None = None,
     reduce: bool = True,
 ) -> tuple[nx.DiGraph, np.ndarray, dict]:
@@ -353,7 +353,7 @@ def build_graph(
     ``merged_edges`` (always cut; ``edge -> exact scaled capacity``), as do the
     leaves of axiom modules that hold no selected leaf.
     """
-    a = _cut_arrays(tree, selected, rho, alpha0, n)
+    a = _cut_arrays(tree, selected, rho, bonus0, n)
     merged = _never_cut_from_source(a) if reduce else np.zeros(len(a.nodes), bool)
     return _graph(a, merged), a.selected, _merged_edges(a, merged)
 
@@ -520,7 +520,7 @@ def select_roots(
     tree: DerivationTree,
     selected: Iterable[int],
     rho: float = 0.5,
-    alpha0: float | None = None,
+    bonus0: float | None = None,
     n: int | None = None,
     min_ascend: int = 1,
     flow_func: Callable | None = None,
@@ -541,7 +541,7 @@ def select_roots(
     """
     min_ascend = _check_min_ascend(min_ascend, tree)
     if flow_func is None and reduce:
-        a = _cut_arrays(tree, selected, rho, alpha0, n)
+        a = _cut_arrays(tree, selected, rho, bonus0, n)
         cut, passed, source = _tree_cut(a)
         chosen, cut_nodes = a.selected, a.nodes[cut]
         value = sum(a.cap[cut].tolist()) + sum(a.off_path[passed].tolist())
@@ -550,7 +550,7 @@ def select_roots(
         details = partial(_tree_details, a, cut, passed, source)
         graph_size = int(len(a.nodes) - passed.sum())
     else:
-        cut_nodes, value, details, chosen = _flow_cut(tree, selected, rho, alpha0, n, flow_func, reduce)
+        cut_nodes, value, details, chosen = _flow_cut(tree, selected, rho, bonus0, n, flow_func, reduce)
         graph_size = len({v[0] for v in details()[1] if isinstance(v, tuple)})
     internal = tree.child_count[cut_nodes] > 0
     cut_roots = cut_nodes[internal]
@@ -573,11 +573,11 @@ def select_roots(
     )
 
 
-def _flow_cut(tree, selected, rho, alpha0, n, flow_func, reduce):
+def _flow_cut(tree, selected, rho, bonus0, n, flow_func, reduce):
     """The cut by a networkx max-flow solver on :func:`build_graph`'s graph (kept for checking
     the tree recursion, and for any solver a caller names): ``(cut_nodes, value, details,
     selected)`` as :func:`select_roots` uses them."""
-    G, selected, merged_edges = build_graph(tree, selected, rho, alpha0, n, reduce=reduce)
+    G, selected, merged_edges = build_graph(tree, selected, rho, bonus0, n, reduce=reduce)
     scale = G.graph["scale"]
     _, source_side = solve(G, flow_func)
     exact = {(u, v): d.get("exact") for u, v, d in G.edges(data=True) if u in source_side and v not in source_side}

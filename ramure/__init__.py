@@ -29,7 +29,7 @@ _LAZY = {
     "Derivation": "ramure.lsys",
     "Session": "ramure.lsys.regen",
     "regenerate": "ramure.lsys.regen",
-    "select_roots": "ramure.lsys.cut",
+    "select_roots": "ramure.lsys.mincut",
     "leaves_where": "ramure.lsys.select",
     "apply_qualifier": "ramure.metrics.apply",
     "plant_metrics": "ramure.metrics",
