@@ -106,3 +106,16 @@ def test_attributes_are_written_and_read_under_one_name_with_one_signature():
     assert gm.volume_data["colour"].shape == (1, 3) and gm.volume_data["colour"].tolist() == [[0.5, 0.5, 0.5]]
     assert gm.dart_data["uvw"].shape == (48, 3) and float(gm.dart_data["uvw"].sum()) == 48 * 3 * 0.25
     assert gm.dart_rules()["uvw"] == "interpolate"
+
+
+def test_is_sewable_says_what_sew3_does_with_faces_of_different_degrees():
+    gm = GMap3()
+    tri = gm.add_prisms(3)[0]
+    quad = gm.add_prisms(4, origins=[[-1, 0, 0]])[0]
+    before = gm.alpha.copy()
+    assert gm.is_sewable(3, gm.prism_face(tri, 3, "O"), gm.prism_face(quad, 4, "E")) is True  # the triangle is split
+    # a triangle and a quad of one prism share an edge: splitting one splits the other, sew3 refuses
+    assert gm.is_sewable(3, gm.prism_face(tri, 3, "O"), gm.prism_face(tri, 3, "C1")) is False
+    with pytest.raises(GMapError, match="share an edge"):
+        gm.sew(3, gm.prism_face(tri, 3, "O"), gm.prism_face(tri, 3, "C1"))
+    assert gm.n_darts == 36 + 48 and np.array_equal(gm.alpha, before)  # neither the question nor the refusal changed it
