@@ -24,9 +24,9 @@ from ramure.errors import ValueRefused
 if TYPE_CHECKING:
     import pyvista as pv
     from ramure.app.model import Explorer
-    from ramure.gmap.lichen import Lichen
-    from ramure.gmap.trimesh import TriMesh
-    from ramure.gmap.wood import Wood
+    from ramure.gmap.organs.lichen import Lichen
+    from ramure.gmap.organs.trimesh import TriMesh
+    from ramure.gmap.organs.wood import Wood
     from ramure.lsys.seasons import Season
     from ramure.lsys.turtle import Skeleton
 
@@ -45,8 +45,8 @@ def season_at(season: Season, step: int) -> Season:
 
 def selected_fruit_surface(ex: Explorer) -> tuple[pv.PolyData, TriMesh]:
     """The first selected fruit's closed surface as (PolyData, TriMesh); refusals name the fix."""
-    from ramure.gmap.errors import GMapError
-    from ramure.gmap.trimesh import from_polydata
+    from ramure.gmap.kernel.errors import GMapError
+    from ramure.gmap.organs.trimesh import from_polydata
 
     fruit = ex.fruit_ids()
     if not fruit:
@@ -90,7 +90,7 @@ def lichen_on_fruit(
     ``adhesion`` (per vertex of the fruit's surface, [0, 1]; see :func:`paint_adhesion`) is
     where clusters may start: the painted probability of keeping a seed.
     """
-    from ramure.gmap.lichen import age_classes, grow_lichen, to_polydata
+    from ramure.gmap.organs.lichen import age_classes, grow_lichen, to_polydata
 
     poly, mesh = selected_fruit_surface(ex)
     if not 1 <= clusters <= particles:
@@ -113,11 +113,11 @@ def plant_bark(skeleton: Skeleton, thinnest: float = 0.1) -> tuple[pv.PolyData, 
     """A derived plant's bark as one closed surface (PolyData, TriMesh) for lichen.
 
     The plant's own tubes are open rings, so the segments are welded into a closed surface
-    (:func:`ramure.gmap.trimesh.tubes_surface`). Twigs thinner than ``thinnest`` times the
+    (:func:`ramure.gmap.organs.trimesh.tubes_surface`). Twigs thinner than ``thinnest`` times the
     thickest segment's radius are left out (lichen grows on older wood; welding a thousand
     twigs costs seconds and triangles for no lichen).
     """
-    from ramure.gmap.trimesh import tubes_surface
+    from ramure.gmap.organs.trimesh import tubes_surface
 
     if not 0 <= thinnest < 1:
         raise ValueRefused(f"thinnest must be a fraction in [0, 1), not {thinnest}")
@@ -135,8 +135,8 @@ def plant_bark(skeleton: Skeleton, thinnest: float = 0.1) -> tuple[pv.PolyData, 
 
 def wood_bark(wood: Wood) -> tuple[pv.PolyData, TriMesh]:
     """A volumetric wood's skin (bark and cut ends) as (PolyData, TriMesh), over the map's
-    own vertices (:class:`ramure.gmap.mapcracks.Skin`)."""
-    from ramure.gmap.mapcracks import Skin
+    own vertices (:class:`ramure.gmap.organs.mapcracks.Skin`)."""
+    from ramure.gmap.organs.mapcracks import Skin
 
     mesh = Skin(wood.gm).mesh
     return _poly(mesh), mesh
@@ -173,7 +173,7 @@ def lichen_on_surface(
 
     ``r`` defaults to :func:`cover_radius` (a tenth of the surface covered).
     """
-    from ramure.gmap.lichen import age_classes, grow_lichen, to_polydata
+    from ramure.gmap.organs.lichen import age_classes, grow_lichen, to_polydata
 
     if not 1 <= clusters <= particles:
         raise ValueRefused(f"need 1 <= clusters <= particles, not {clusters} clusters for {particles} particles")
@@ -202,7 +202,7 @@ def close_up(growth: Lichen, mesh: TriMesh) -> list:
 def crack_on_fruit(ex: Explorer, nodes: int = 15, seed: int = 0, anchor: Any = None) -> dict:
     """Carve a random crack pattern into the selected fruit from ``anchor`` (default: its top);
     dict with the carved surface, the uncarved ``fruit`` and facts."""
-    from ramure.gmap.cracks import carve, random_pattern
+    from ramure.gmap.organs.cracks import carve, random_pattern
 
     poly, mesh = selected_fruit_surface(ex)
     if not 2 <= nodes <= 500:

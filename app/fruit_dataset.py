@@ -57,7 +57,7 @@ import ramure.io as atomic
 from ramure.errors import RamureError, ValueRefused
 
 if TYPE_CHECKING:
-    from ramure.gmap.map3 import GMap3
+    from ramure.gmap.kernel.map3 import GMap3
 
 PICTURE = (256, 256)
 #: Ranges the random defects are drawn from (mm on a fruit ``size_mm`` across).
@@ -80,7 +80,7 @@ def fruit_rng(seed: int, index: int) -> np.random.Generator:
 
 def random_recipe(rng: np.random.Generator, preset: str = "round_tomato", levels: int = 1) -> dict:
     """Malformation and defect specs for one fruit (see the module docstring)."""
-    from ramure.gmap.malform import SHAPES
+    from ramure.gmap.organs.malform import SHAPES
 
     r = RANDOM_RANGES
     malform = None
@@ -128,9 +128,9 @@ def random_recipe(rng: np.random.Generator, preset: str = "round_tomato", levels
 
 def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMap3, dict]:
     """Build and damage one fruit from its recipe: ``(map, labels)``."""
-    from ramure.gmap.defects import apply_defects
-    from ramure.gmap.fruit import build_fruit
-    from ramure.gmap.malform import malform_params, shape_facts
+    from ramure.gmap.organs.defect_specs import apply_defects
+    from ramure.gmap.organs.fruit import build_fruit
+    from ramure.gmap.organs.malform import malform_params, shape_facts
 
     params = {}
     malform = recipe.get("malform")
@@ -176,7 +176,7 @@ def _plotter(size):
         import pyvista as pv
 
         plotter = pv.Plotter(off_screen=True, window_size=list(size))
-        plotter.set_background("white")
+        plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
         _STATE["plotter"] = plotter
     return plotter
 
@@ -212,9 +212,9 @@ def write_one(
     picture: tuple[int, int] = PICTURE,
 ) -> dict:
     """Build, damage, picture and write fruit ``index``; returns its summary row."""
-    from ramure.app.commands.fruit import tissue_rgb
-    from ramure.gmap.cut import plane_cut
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.organs.tissue import tissue_rgb
+    from ramure.gmap.kernel.cut import plane_cut
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     gm, labels = build_one(recipe, levels, size_mm)
     folder = pathlib.Path(folder)
@@ -305,7 +305,7 @@ def make_dataset(
     ``defects`` mode or preset, levels outside 1..2, workers < 1, a folder that is not empty
     without ``resume`` or ``overwrite``, a ``resume`` with other settings than the folder's.
     """
-    from ramure.gmap.fruit import PRESETS
+    from ramure.gmap.organs.fruit import PRESETS
 
     if int(count) != count or not 1 <= count <= 100_000:
         raise ValueRefused(f"--count must be a whole number in 1..100000, got {count}")
@@ -414,11 +414,11 @@ def _warm() -> None:
     headless_setup()
     import pyvista  # noqa: F401
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401
-    from ramure.gmap import defects
-    from ramure.gmap.fruit import build_fruit
+    from ramure.gmap.organs.defect_specs import apply_defects
+    from ramure.gmap.organs.fruit import build_fruit
 
     gm = build_fruit("round_tomato", precision=4, ph=4, nbvolangle=2, volume_levels=1, seeds=0)
-    defects.apply_defects(gm, [("shrink", {"rate": 0.01})])
+    apply_defects(gm, [("shrink", {"rate": 0.01})])
 
 
 def _run(jobs, workers):

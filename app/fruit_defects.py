@@ -22,7 +22,7 @@ from ramure.errors import ValueRefused
 if TYPE_CHECKING:
     import pyvista as pv
     from ramure.app.model import Explorer
-    from ramure.gmap.map3 import GMap3
+    from ramure.gmap.kernel.map3 import GMap3
 
 #: Volume subdivisions of the fruit the defects are shown on.
 LEVELS = 1
@@ -38,7 +38,7 @@ EXAMPLES = {
 
 def check_specs(specs: Iterable[object]) -> list[str]:
     """Parse every spec (``"kind:options"``); returns them as strings, refusing bad ones."""
-    from ramure.gmap.defects import parse_defect
+    from ramure.gmap.organs.defect_specs import parse_defect
 
     out = []
     for spec in specs:
@@ -78,8 +78,8 @@ def damaged_fruit(
 ) -> tuple[GMap3, dict]:
     """Fruit ``leaf`` (default: the selected one) rebuilt and damaged by ``specs`` (default: its
     recorded defects); returns ``(map, facts)``."""
-    from ramure.gmap.defects import apply_defects
-    from ramure.gmap.fruit import build_fruit
+    from ramure.gmap.organs.defect_specs import apply_defects
+    from ramure.gmap.organs.fruit import build_fruit
 
     leaf = selected_fruit(ex) if leaf is None else leaf
     s = fruit_settings(ex, leaf)
@@ -91,8 +91,8 @@ def damaged_fruit(
 
 def surface(gm: GMap3) -> pv.PolyData:
     """The damaged fruit's skin as PolyData with per-cell ``rgb`` (tissue colours; healed faces brown)."""
-    from ramure.app.commands.fruit import tissue_rgb
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.organs.tissue import tissue_rgb
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     grid = to_unstructured_grid(gm)
     grid.cell_data["rgb"] = tissue_rgb(grid.cell_data["tissue"])

@@ -31,7 +31,7 @@ import ramure.io as atomic
 from ramure.lsys import GrammarError, LSystem, load_kernels
 from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
-from ramure.lsys.cut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
+from ramure.lsys.mincut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
 from ramure.lsys.tree import concat_ranges, sorted_unique
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
@@ -45,9 +45,9 @@ from ramure.lsys.turtle import changed_spans, reinterpret
 
 if TYPE_CHECKING:
     import pyvista as pv
-    from ramure.gmap.map3 import GMap3
+    from ramure.gmap.kernel.map3 import GMap3
     from ramure.lsys import Derivation
-    from ramure.lsys.cut import CutResult
+    from ramure.lsys.mincut import CutResult
     from ramure.lsys.regen import RegenResult
     from ramure.lsys.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
@@ -60,8 +60,9 @@ SELECT_MODES = ("replace", "add", "remove", "toggle")
 class Explorer:
     """Edit–select–regenerate state for one plant: the document and its one undo history.
 
-    ``source`` is a grammar file path or grammar text; ``n`` and ``seed`` default to the
-    grammar's ``n:`` and ``#seed``.
+    ``source`` is a grammar file path, a shipped grammar's name (``"honda_sympodial"``, as
+    :func:`ramure.load` takes) or grammar text; ``n`` and ``seed`` default to the grammar's
+    ``n:`` and ``#seed``.
 
     The document is the grammar text with the session's ``n``, seed and constants written
     in (:meth:`document_text`) plus the local edits of parts of the plant (regrows, prunes,
@@ -76,7 +77,11 @@ class Explorer:
         given = (
             pathlib.Path(source)
             if isinstance(source, pathlib.Path)
-            or (isinstance(source, str) and "\n" not in source and source.endswith((".lsys", ".l")))
+            or (
+                isinstance(source, str)
+                and "\n" not in source
+                and (source.endswith((".lsys", ".l")) or source in grammar_files.names())
+            )
             else None
         )
         path = grammar_files.resolve(given) if given else None
@@ -165,9 +170,9 @@ class Explorer:
             self._plant_state = before
             return before
         same_tree = plant is not None and plant["tree"] is d.tree and plant["lsystem"] is d.lsystem
-        self._plant_before = plant if same_tree and plant.get("mesh") is not None else None
+        self._plant_before = plant if same_tree and plant is not None and plant.get("mesh") is not None else None
         skeleton = None
-        if same_tree:
+        if same_tree and plant is not None:  # (same_tree implies it; said again for mypy)
             old = plant["skeleton"]
             spans = None
             if "trace" in old.extra:  # the edit's own spans, else found by comparing the strings
@@ -505,7 +510,7 @@ class Explorer:
         if not fruit:
             raise ValueRefused("select one or more fruit first")
         if "preset" in settings or len(settings) > int("size" in settings):
-            from ramure.gmap.fruit import resolve_params
+            from ramure.gmap.organs.fruit import resolve_params
 
             params = {k: v for k, v in settings.items() if k not in ("preset", "size")}
             resolve_params(settings.get("preset", "round_tomato"), **params)  # refuse bad values now
@@ -530,7 +535,7 @@ class Explorer:
         """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""
 
         def build():
-            from ramure.gmap.plant import fruits_from_skeleton
+            from ramure.gmap.organs.plant import fruits_from_skeleton
 
             return fruits_from_skeleton(
                 self.skeleton, preset=preset, seed=seed, overrides=self.session.fruit_overrides(), **kwargs
@@ -540,7 +545,7 @@ class Explorer:
 
     def fruit_surface(self) -> pv.PolyData | None:
         """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit)."""
-        from ramure.gmap.pyvista import boundary_polydata
+        from ramure.gmap.kernel.pyvista import boundary_polydata
 
         if not self.fruit_ids():
             return None
@@ -734,7 +739,7 @@ class CutPreview:
     ``roots``: the cut's roots; ``leaves``: the modules of the string they hold (what will
     change, in string order); ``changed`` of ``total`` modules; ``climb``: the fewest and most
     levels the cut climbs above a selected leaf (None when nothing regrows); ``stranded``:
-    selected leaves nothing regrows (see :func:`ramure.lsys.cut.minimum_ascension`);
+    selected leaves nothing regrows (see :func:`ramure.lsys.mincut.minimum_ascension`);
     ``from_axiom``: a root is an axiom module.
     """
 

@@ -11,8 +11,8 @@ import time
 
 import pyvista as pv
 
-from ramure.gmap.cracks import carve, random_pattern
-from ramure.gmap.trimesh import from_polydata
+from ramure.gmap.organs.cracks import carve, random_pattern
+from ramure.gmap.organs.trimesh import from_polydata
 
 
 def bench_crack_63_nodes_on_38k_triangles():
@@ -44,8 +44,8 @@ def bench_map_crack_on_a_tomato():
     No thesis figure (the thesis carves surfaces only); budget: interactive, <= 2 s."""
     import numpy as np
 
-    from ramure.gmap.fruit import build_fruit
-    from ramure.gmap.mapcracks import crack_map
+    from ramure.gmap.organs.fruit import build_fruit
+    from ramure.gmap.organs.mapcracks import crack_map
 
     fruit = build_fruit("round_tomato", volume_levels=1)
     _, pos = fruit.vertex_positions()

@@ -8,7 +8,7 @@ Each defect runs 7 times on one fruit built outside the timing; the figures are 
 machine shared with other jobs the wall time is inflated by waiting for a core; the CPU
 time is what the defect costs).  ``ok`` judges the CPU median.  ``first_seconds`` is the
 first defect on a freshly built fruit: it builds the map's topology index (vertex ids,
-edges, face rings, orientation; see :func:`ramure.gmap.defects.prepare`) once, which
+edges, face rings, orientation; see :func:`ramure.gmap.organs.defects.prepare`) once, which
 every later defect on that fruit or its copies reuses; ``copy_seconds`` is the pure
 function's copy of the input map, included in every figure.
 """
@@ -18,8 +18,8 @@ from __future__ import annotations
 import statistics
 import time
 
-from ramure.gmap import defects as D
-from ramure.gmap.fruit import build_fruit
+from ramure.gmap.organs import defects as D
+from ramure.gmap.organs.fruit import build_fruit
 
 TARGET = 0.040
 RUNS = 7

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import time
 
-from ramure.gmap import subdivide
-from ramure.gmap.fruit import build_fruit
+from ramure.gmap.kernel import subdivide
+from ramure.gmap.organs.fruit import build_fruit
 from benchtools import best
 
 
@@ -79,8 +79,8 @@ def bench_cut_map():
     Oblique plane through the centre; median of 7 after one warm-up; the kept volume is checked
     against the VTK clip of the same model.
     """
-    from ramure.gmap.cut import cut_map, plane_cut
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.cut import cut_map, plane_cut
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     gm = build_fruit("round_tomato", precision=15, ph=100)
     gm.cells(0)
@@ -109,8 +109,8 @@ def _ring_trunk(units=10, sides=16, layers=20, embed_each=True):
     import numpy as np
 
     from ramure.gmap import GMap3
-    from ramure.gmap.embedding import grow
-    from ramure.gmap.topology import assert_solid
+    from ramure.gmap.kernel.embedding import grow
+    from ramure.gmap.kernel.topology import assert_solid
 
     gm = GMap3()
     trunk = gm.add_prisms(sides, units, origins=[[i, 0.0, 0.0] for i in range(units)], sizes=[[1.0, 1.0, 1.0]] * units)

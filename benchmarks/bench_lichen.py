@@ -12,8 +12,8 @@ import time
 
 import pyvista as pv
 
-from ramure.gmap.lichen import grow_lichen
-from ramure.gmap.trimesh import from_polydata
+from ramure.gmap.organs.lichen import grow_lichen
+from ramure.gmap.organs.trimesh import from_polydata
 
 
 def bench_lichen_table_3_1():

@@ -19,8 +19,8 @@ import time
 
 import numpy as np
 
-from ramure.gmap import wood as W
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.organs import wood as W
+from ramure.gmap.kernel.topology import assert_solid
 
 
 _CPU = []  # CPU seconds of the last _median's runs (the machine is shared: wall moves with load)
@@ -87,7 +87,7 @@ def bench_wood_cut_map():
     """``cut_map`` (a 3G-map cut, from the kernel) of the reference wood, when available."""
     w = W.grow_wood("pine", years=10, branches=3)
     try:
-        from ramure.gmap.cut import cut_map
+        from ramure.gmap.kernel.cut import cut_map
     except ImportError:
         return {
             "seconds": None,
@@ -132,7 +132,7 @@ def bench_wood_g3l_grammars():
     1.22 s CPU on the shared 2-core machine, 0.83 s after (compiled once, evaluated for all
     matching volumes at once); issue 39 asks for 20 times faster later.
     """
-    from ramure.gmap.g3l_engine import G3LSystem
+    from ramure.gmap.lsystem.engine import G3LSystem
 
     systems = [(G3LSystem.from_file(f"wood/{name}"), n) for name, n in (("trunk", 8), ("spiral", 6), ("skeleton", 5))]
 

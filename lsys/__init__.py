@@ -6,7 +6,7 @@
 'A(3)B(3)C(1)B(5)C(1)'
 """
 
-from .cut import CutResult, select_roots
+from .mincut import CutResult, select_roots
 from .derive import Derivation, LSystem
 from .errors import DerivationError, GrammarError, RamureError, ValueRefused
 from .grammar import Grammar, parse_grammar
@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 #: The compiled kernels of this package (numba), loaded on first use only.
-KERNEL_MODULES = ("_context_kernel", "_cut_kernel", "_derive_kernel", "_polygon_kernel", "_tree_kernel", "_turtle_kernel")
+KERNEL_MODULES = ("_branch_cut_kernel", "_context_kernel", "_derive_kernel", "_polygon_kernel", "_tree_kernel", "_turtle_kernel")
 
 
 def load_kernels() -> None:

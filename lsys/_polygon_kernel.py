@@ -8,8 +8,6 @@ import numpy as np
 
 from ramure.jit import njit
 
-from .polygons import MAX_EAR_CLIP
-
 
 @njit(cache=True, nogil=True)
 def gather(vtx, tag, n_poly):
@@ -66,7 +64,7 @@ def polygon_depths(acts: np.ndarray, push: int, pop: int, start: int, end: int, 
 
 
 @njit(cache=True, nogil=True)
-def triangulate(points, offsets):
+def triangulate(points, offsets, max_ear_clip):
     n_poly = len(offsets) - 1
     total = 0
     for p in range(n_poly):
@@ -120,7 +118,7 @@ def triangulate(points, offsets):
             if _cross(xs[i0], ys[i0], xs[i], ys[i], xs[i2], ys[i2]) < 0:
                 convex = False
                 break
-        if convex or n > MAX_EAR_CLIP:  # a huge concave outline gets a fan too: never a long stall
+        if convex or n > max_ear_clip:  # a huge concave outline gets a fan too: never a long stall
             for i in range(1, n - 1):
                 tris[k, 0], tris[k, 1], tris[k, 2] = a, a + i, a + i + 1
                 owner[k] = p

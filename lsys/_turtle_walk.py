@@ -8,7 +8,7 @@ sympodial tree at n = 10 (11,253 modules) in about 10 ms, so strings below
 :data:`ramure.lsys.turtle.KERNEL_MIN_MODULES` modules take it while numba is not loaded.
 
 This module also holds what both walks share and that needs no numba: the action codes
-(the values of :class:`ramure.lsys.turtle.TurtleAction`) and :func:`initial_state`.
+(the values of :class:`ramure.lsys.actions.TurtleAction`) and :func:`initial_state`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 
 STATE_SIZE = 17
 
-# Action codes: the values of ramure.lsys.turtle.TurtleAction (numba needs plain ints).
+# Action codes: the values of ramure.lsys.actions.TurtleAction (numba needs plain ints).
 DRAW, MOVE, TURN_LEFT, TURN_RIGHT, PITCH_DOWN, PITCH_UP, ROLL_LEFT, ROLL_RIGHT = 1, 2, 3, 4, 5, 6, 7, 8
 TURN_AROUND, ROLL_HORIZONTAL, PUSH, POP, WIDTH, COLOR_UP, COLOR_DOWN, ORGAN = 9, 10, 11, 12, 13, 14, 15, 16
 POLY_START, POLY_END, POLY_VERTEX, POLY_MOVE, SPHERE, SURFACE, ELASTICITY = 17, 18, 19, 20, 21, 22, 23

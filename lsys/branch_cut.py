@@ -44,7 +44,7 @@ def cut_string(lsys: LSystem, tree: DerivationTree, string: np.ndarray, frozen: 
     if frozen is not None and len(frozen) and frozen[-1]:
         tail = len(frozen) - int(np.flatnonzero(~frozen)[-1]) - 1 if (~frozen).any() else len(frozen)
     open_id, close_id = (-1 if b is None else b for b in lsys.bracket_ids)
-    from ._cut_kernel import keep_after_cuts  # numba loads on the first '%' cut, not on import
+    from ._branch_cut_kernel import keep_after_cuts  # numba loads on the first '%' cut, not on import
 
     keep = keep_after_cuts(symbols.astype(np.int64), cut_id, open_id, close_id, len(string) - tail)
     return string[keep]

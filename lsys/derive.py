@@ -45,6 +45,7 @@ from .decompose import decompose
 from .tree import DerivationTree, concat_ranges
 
 if TYPE_CHECKING:
+    from .polygons import Polygons
     from .turtle import Skeleton
 
 
@@ -125,6 +126,11 @@ class LSystem:
         file = grammar_files.resolve(path)
         text = read_grammar_file(file)
         return cls.from_text(text, filename=str(file))
+
+    @classmethod
+    def file_polygons(cls, path: str | os.PathLike) -> Polygons:
+        """The polygons the grammar file ``path`` draws, derived at its own ``n`` (a ``#surface "file"``)."""
+        return cls.from_file(path).derive().skeleton().polygons
 
     @property
     def n(self) -> int:

@@ -19,7 +19,7 @@ smaller and the larger of ``a`` and ``b``) and ``normal(mean, sd)``.
 Every value is a float: there are no strings, lists, attributes or bit
 operators, and a power that overflows gives ``inf`` (no big integers, so no
 hang).  This one evaluator serves both grammar languages, ``.lsys`` and the
-3Gmap L-systems of ``.g3l`` files (:mod:`ramure.gmap.g3l`).
+3Gmap L-systems of ``.g3l`` files (:mod:`ramure.gmap.lsystem.g3l`).
 
 >>> e = parse_expression("x * r1 + 1")
 >>> import numpy as np

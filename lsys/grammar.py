@@ -619,6 +619,10 @@ class GrammarParser:
         finally:
             chain.pop()
 
+    def check_file(self, path: pathlib.Path) -> None:
+        """Parse the grammar file ``path`` (a ``#surface`` names one): its first error, raised."""
+        parse_grammar(read_grammar_file(path), str(path))
+
     def confined(self, line: SourceLine, start: int, directive: str, name: str, including: str | None) -> pathlib.Path:
         """The resolved path of file ``name`` named by ``directive`` on ``line``, relative to the
         ``including`` file's folder; refused (line, column) unless it lies in :attr:`root`."""

@@ -29,7 +29,7 @@ grammar has interpretation rules.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import fields, is_dataclass
 from typing import TYPE_CHECKING
 
@@ -115,20 +115,18 @@ def interpreted_text(derivation: Derivation, sep: str = "") -> str:
     return sep.join(ls.module_text(scratch, v) for v in string.tolist())
 
 
-def interpret_derivation(derivation: Derivation) -> Skeleton:
+def interpret_derivation(derivation: Derivation, draw: Callable[[LSystem, DerivationTree, np.ndarray], Skeleton]) -> Skeleton:
     """The :class:`~ramure.lsys.turtle.Skeleton` of a derivation drawn through its interpretation rules.
 
     Leaf ids in the result (segments, organs and any other part with a
     ``leaf_id``) are those of the derivation's own history tree.  The result
     carries no turtle trace, so an edit re-interprets the whole plant.
     """
-    from .turtle import interpret_string
-
     ls, tree = derivation.lsystem, derivation.tree
     scratch, string, source = interpreted(ls, tree, tree.leaves, derivation.constants, derivation.seed)
     node_source = np.zeros(scratch.size, np.int64)
     node_source[string] = source
-    skeleton = interpret_string(ls, scratch, string)
+    skeleton = draw(ls, scratch, string)
     _remap(skeleton, node_source)
     skeleton.extra.pop("trace", None)
     skeleton.extra["interpreted"] = len(string)

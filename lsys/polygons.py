@@ -302,4 +302,4 @@ def triangulate(points: ArrayLike, offsets: ArrayLike) -> tuple[np.ndarray, np.n
     offsets = np.ascontiguousarray(offsets, np.int64)
     from ._polygon_kernel import triangulate as compiled  # numba loads on first use only
 
-    return compiled(points, offsets)
+    return compiled(points, offsets, MAX_EAR_CLIP)

@@ -39,15 +39,15 @@ from numpy.typing import ArrayLike
 
 from ramure.io import read_regular, write_text
 
-from .cut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots, stranded_words
+from .mincut import FROM_AXIOM_MESSAGE, ascend, check_rho, collapse_nested, select_roots, stranded_words
 from .combination import split as split_combination
-from .cut import validate_selection
+from .mincut import validate_selection
 from .derive import LSystem, check_constants, check_seed
 from .errors import GrammarError, RamureError, ValueRefused
 from .expr import seeded_generator
 
 if TYPE_CHECKING:
-    from .cut import CutResult
+    from .mincut import CutResult
     from .derive import Derivation
     from .tree import DerivationTree
 
@@ -366,7 +366,7 @@ class Session:
         whole_branches: bool = False,
     ) -> tuple[CutResult | None, np.ndarray, np.ndarray, np.ndarray]:
         """The cut for a selection, without changing anything (``whole_branches``: see
-        :func:`ramure.lsys.cut.minimum_ascension`)."""
+        :func:`ramure.lsys.mincut.minimum_ascension`)."""
         if ascend_levels is not None:
             levels = ascend_levels
             if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
@@ -440,7 +440,7 @@ class Session:
 
         ``settings`` are recorded as given (``preset``, ``size`` and fruit
         parameters, checked by the volumetric layer that applies them, see
-        :func:`ramure.gmap.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
+        :func:`ramure.gmap.organs.plant.fruits_from_skeleton`); ``seed`` None draws a new one.
         :meth:`fruit_overrides` gives what applies to the current plant.
         """
         leaves = [int(x) for x in leaf_ids]

@@ -1,7 +1,7 @@
 """Selections a script or a front end makes without a mouse: leaves by branch order and height.
 
 A selection is a list of history-leaf ids (the ``leaf_id`` of the segments the turtle drew),
-the input of :func:`ramure.lsys.cut.select_roots` and :meth:`ramure.lsys.regen.Session.regrow`.
+the input of :func:`ramure.lsys.mincut.select_roots` and :meth:`ramure.lsys.regen.Session.regrow`.
 
 >>> import ramure
 >>> sk = ramure.derive("honda_sympodial", n=5).skeleton()

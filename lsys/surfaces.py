@@ -30,7 +30,7 @@ with line, column and caret when the grammar is read.
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from functools import cache, lru_cache
 from typing import TYPE_CHECKING
 
@@ -40,6 +40,7 @@ from .errors import GrammarError
 
 if TYPE_CHECKING:
     from .grammar import Grammar, GrammarParser, ModuleSpec, SourceLine
+    from .polygons import Polygons
 
 #: Grid of the shipped surfaces: points along the length and across the width.
 _ALONG, _ACROSS = 12, 7
@@ -122,25 +123,33 @@ def check_grammar(grammar: Grammar) -> None:
             )
 
 
-def templates(grammar: Grammar, constants: Mapping[str, float], kinds: Iterable[str]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """``{kind: (points, triangles)}`` for the surface organ kinds ``"~name"`` among ``kinds``."""
+def templates(
+    grammar: Grammar, constants: Mapping[str, float], kinds: Iterable[str], draw_file: Callable[[str], Polygons] | None = None
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``{kind: (points, triangles)}`` for the surface organ kinds ``"~name"`` among ``kinds``.
+
+    ``draw_file(path)`` derives and draws a ``#surface "file.lsys"`` (the turtle passes
+    :meth:`ramure.lsys.derive.LSystem.file_polygons`, so this module imports no engine).
+    """
     out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for kind in kinds:
         name = str(kind)[1:]
         defined = (getattr(grammar, "surfaces", None) or {}).get(name)
         if defined is not None:
-            out[kind] = _defined(grammar, defined, constants)
+            out[kind] = _defined(grammar, defined, constants, draw_file)
         elif name in LIBRARY:
             out[kind] = shipped(name)
     return out
 
 
-def _defined(grammar, definition, constants):
+def _defined(grammar, definition, constants, draw_file):
     """Points and triangles of a ``#surface`` (a module string or a grammar file)."""
     if definition.path is not None:
         path = pathlib.Path(definition.path)
         stamp = path.stat().st_mtime_ns if path.exists() else 0
-        return _from_file(str(path), stamp)  # an edited sub-grammar file is read again
+        if draw_file is None:
+            raise GrammarError(f"#surface {definition.name}: drawing the grammar file {path} needs a drawing function")
+        return _from_file(str(path), stamp, draw_file)  # an edited sub-grammar file is read again
     key = (id(definition), tuple(sorted((k, float(v)) for k, v in constants.items())))
     cached = _CACHE.get(key)
     if cached is None:
@@ -156,7 +165,7 @@ def _from_modules(grammar, definition, constants):
     from ._turtle_walk import FULL, initial_state, walk  # a few modules: the plain walk, no numba
     from .expr import evaluate_constant
     from .polygons import from_walk
-    from .turtle import SYMBOL_ACTIONS, TurtleAction
+    from .actions import SYMBOL_ACTIONS, TurtleAction
 
     specs = definition.modules
     acts = np.array([SYMBOL_ACTIONS.get(m.symbol, TurtleAction.NONE) for m in specs], np.int8)
@@ -198,14 +207,12 @@ _REALISING: set = set()  # surface files being derived now: a file that draws it
 
 
 @lru_cache(maxsize=32)
-def _from_file(path, stamp):
-    from .derive import LSystem
-
+def _from_file(path, stamp, draw_file):
     if path in _REALISING:
         raise GrammarError(f"#surface cycle: {path} draws a surface made from itself")
     _REALISING.add(path)
     try:
-        polygons = LSystem.from_file(path).derive().skeleton().polygons
+        polygons = draw_file(path)
     finally:
         _REALISING.discard(path)
     if not len(polygons):
@@ -224,18 +231,16 @@ def _local(polygons):
 _CHECKING: set = set()  # surface files being parsed now: a file that names itself is checked once
 
 
-def _check_file(line: SourceLine, at: int, name: str, path: pathlib.Path) -> None:
+def _check_file(parser: GrammarParser, line: SourceLine, at: int, name: str, path: pathlib.Path) -> None:
     """Parse a ``#surface`` grammar file when the directive is read, so an error in it is
     reported at once (line, column of the directive), not after the plant is derived.  A file
     that names itself is left to the drawing, which reports the cycle."""
-    from .grammar import parse_grammar, read_grammar_file
-
     key = str(path)
     if key in _CHECKING:
         return
     _CHECKING.add(key)
     try:
-        parse_grammar(read_grammar_file(path), key)
+        parser.check_file(path)
     except GrammarError as err:
         where = f"line {err.line}: " if err.line else ""
         raise line.error(f"#surface {name}: {path.name}, {where}{err.message}", at + 1) from None
@@ -273,7 +278,7 @@ def parse_directive(parser: GrammarParser, line: SourceLine, start: int) -> Surf
         path = parser.confined(line, at, f"#surface {name}", body[1:-1], line.filename or parser.filename)
         if not path.is_file():
             raise line.error(f"#surface {name}: no grammar file {body[1:-1]} ({path})", at + 1)
-        _check_file(line, at, name, path)
+        _check_file(parser, line, at, name, path)
         return SurfaceDefinition(name, line, at + 1, path=path)
     modules = parser.modules_at(line, at, None, formal=False)
     from .polygons import check_written_polygons

@@ -52,12 +52,12 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from enum import IntEnum
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .actions import SYMBOL_ACTIONS, TurtleAction
 from .errors import DerivationError
 from .polygons import Polygons, check_walk, from_walk
 
@@ -68,59 +68,6 @@ if TYPE_CHECKING:
     from .tree import DerivationTree
 
 
-class TurtleAction(IntEnum):
-    """What a module does to the turtle (the compiled loop dispatches on these values)."""
-
-    NONE = 0  # no turtle meaning (skipped)
-    DRAW = 1  # F
-    MOVE = 2  # f
-    TURN_LEFT = 3  # +
-    TURN_RIGHT = 4  # -
-    PITCH_DOWN = 5  # &
-    PITCH_UP = 6  # ^
-    ROLL_LEFT = 7  # \\
-    ROLL_RIGHT = 8  # /
-    TURN_AROUND = 9  # |
-    ROLL_HORIZONTAL = 10  # $
-    PUSH = 11  # [
-    POP = 12  # ]
-    WIDTH = 13  # !
-    COLOR_UP = 14  # '
-    COLOR_DOWN = 15  # ;
-    ORGAN = 16  # Leaf, Fruit and #organ modules
-    POLY_START = 17  # {
-    POLY_END = 18  # }
-    POLY_VERTEX = 19  # .
-    POLY_MOVE = 20  # G (inside a polygon)
-    SPHERE = 21  # @O
-    SURFACE = 22  # ~name
-    ELASTICITY = 23  # @Ts
-
-
-#: The turtle symbols and their actions (organs come from the grammar's ``#organ``).
-SYMBOL_ACTIONS = {
-    "F": TurtleAction.DRAW,
-    "f": TurtleAction.MOVE,
-    "+": TurtleAction.TURN_LEFT,
-    "-": TurtleAction.TURN_RIGHT,
-    "&": TurtleAction.PITCH_DOWN,
-    "^": TurtleAction.PITCH_UP,
-    "\\": TurtleAction.ROLL_LEFT,
-    "/": TurtleAction.ROLL_RIGHT,
-    "|": TurtleAction.TURN_AROUND,
-    "$": TurtleAction.ROLL_HORIZONTAL,
-    "[": TurtleAction.PUSH,
-    "]": TurtleAction.POP,
-    "!": TurtleAction.WIDTH,
-    "'": TurtleAction.COLOR_UP,
-    ";": TurtleAction.COLOR_DOWN,
-    "{": TurtleAction.POLY_START,
-    "}": TurtleAction.POLY_END,
-    ".": TurtleAction.POLY_VERTEX,
-    "G": TurtleAction.POLY_MOVE,
-    "@O": TurtleAction.SPHERE,
-    "@Ts": TurtleAction.ELASTICITY,
-}
 #: Surfaces are the modules ``~name``: every symbol starting with this prefix.
 SURFACE_PREFIX = "~"
 
@@ -304,7 +251,7 @@ def interpret(derivation: Derivation) -> Skeleton:
     if derivation.lsystem.grammar.interpretation:
         from .homomorphism import interpret_derivation
 
-        return interpret_derivation(derivation)
+        return interpret_derivation(derivation, interpret_string)
     return interpret_string(derivation.lsystem, derivation.tree, derivation.tree.leaves)
 
 
@@ -370,7 +317,7 @@ def _with_drawing(lsys, skeleton):
     if kinds:
         from .surfaces import templates
 
-        skeleton.extra["surfaces"] = templates(lsys.grammar, lsys.constants, sorted(kinds))
+        skeleton.extra["surfaces"] = templates(lsys.grammar, lsys.constants, sorted(kinds), lsys.file_polygons)
     if getattr(lsys.grammar, "materials", None):
         skeleton.extra["materials"] = dict(lsys.grammar.materials)
     return skeleton

@@ -78,7 +78,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ramure.lsys.cut import collapse_nested
+from ramure.lsys.mincut import collapse_nested
 
 from .plant import PlantMetrics, plant_metrics
 from .qualifiers import QUALIFIER_METRICS, VOCABULARY, QualifierModel, all_deltas, canonical_name

@@ -29,7 +29,7 @@ _LAZY = {
     "Derivation": "ramure.lsys",
     "Session": "ramure.lsys.regen",
     "regenerate": "ramure.lsys.regen",
-    "select_roots": "ramure.lsys.cut",
+    "select_roots": "ramure.lsys.mincut",
     "leaves_where": "ramure.lsys.select",
     "apply_qualifier": "ramure.metrics.apply",
     "plant_metrics": "ramure.metrics",
@@ -38,7 +38,7 @@ _LAZY = {
     "VariantSweep": "ramure.metrics",
     "DeltaPCA": "ramure.metrics",
     "GMap3": "ramure.gmap",
-    "build_fruit": "ramure.gmap.fruit",
+    "build_fruit": "ramure.gmap.organs.fruit",
     "Study": "ramure.studies",
 }
 

@@ -32,6 +32,7 @@ import numpy as np
 
 from ramure.studies.errors import StudyInputError
 from ramure.studies.likert import fold, likert_value
+from ramure.studies.records import MAX_QUALIFIER_CHARS as MAX_QUALIFIER_CHARS  # read by data, export and tests
 from typing import TYPE_CHECKING
 from typing import Any
 
@@ -40,9 +41,6 @@ if TYPE_CHECKING:
 
 NEGATIONS = {"pas", "not", "non", "peu", "moins", "less", "sans", "without", "ni", "no"}
 MAX_PHRASE = 4
-#: Longest qualifier text (characters) a participant may give; a stored text is cut to it when read,
-#: so the analysis of a study is bounded by its number of answers, not by the bytes in its file.
-MAX_QUALIFIER_CHARS = 200
 #: Largest synonym file read (bytes); a synonym table is a few kilobytes.
 MAX_SYNONYM_BYTES = 1 << 20
 #: Longest phrase (characters) in a synonym file.

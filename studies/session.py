@@ -36,8 +36,7 @@ import numpy as np
 from ramure.studies.errors import StudyInputError
 from ramure.studies.likert import likert_value
 from ramure.studies.picks import N_PICKS, PICK_IDS
-from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS
-from ramure.studies.storage import log_test_event, now_iso
+from ramure.studies.records import MAX_QUALIFIER_CHARS, log_test_event, now_iso
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 

@@ -42,7 +42,6 @@ True
 
 from __future__ import annotations
 
-import datetime
 import json
 import math
 import os
@@ -55,6 +54,7 @@ from importlib import resources
 
 from ramure.io import APPLICATION_ID as RAMURE_ID, open_sqlite_readonly
 from ramure.studies.errors import StudyInputError
+from ramure.studies.records import log_event, now_iso
 from ramure.studies.picks import Pick, check_distinct, inside_folder, load_picks, picks_from_data
 from collections.abc import Callable
 from typing import TYPE_CHECKING
@@ -67,11 +67,6 @@ SCHEMA_VERSION = 2
 TABLE_SINCE = {"events": 2}
 DEFAULT_BUDGET_MINUTES = 30.0
 _CODE = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
-
-
-def now_iso() -> str:
-    """The current UTC time as ISO-8601 text (seconds precision)."""
-    return datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
 
 
 def connect(path: str | os.PathLike, durable: bool = True) -> sqlite3.Connection:
@@ -141,36 +136,6 @@ def migrate(conn: sqlite3.Connection) -> None:
         if conn.in_transaction:
             conn.rollback()
         raise
-
-
-def event_time() -> str:
-    """The current UTC time as ISO-8601 text, to the millisecond (event log)."""
-    return datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds")
-
-
-def log_test_event(conn: sqlite3.Connection, test_id: int, action: str, detail: dict) -> None:
-    """Append an action on test ``test_id`` to the ``events`` table, with the test's participant and
-    elapsed time read in the same statement (call it inside the change's transaction)."""
-    conn.execute(
-        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) "
-        "SELECT participant_id, id, ?, elapsed_seconds, ?, ? FROM tests WHERE id = ?",
-        (event_time(), action, json.dumps(detail, sort_keys=True), test_id),
-    )
-
-
-def log_event(
-    conn: sqlite3.Connection,
-    participant_id: int,
-    action: str,
-    detail: dict | None = None,
-    test_id: int | None = None,
-    elapsed_seconds: float | None = None,
-) -> None:
-    """Append one participant action to the ``events`` table (call it inside the change's transaction)."""
-    conn.execute(
-        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) VALUES (?, ?, ?, ?, ?, ?)",
-        (participant_id, test_id, event_time(), elapsed_seconds, action, json.dumps(detail or {}, sort_keys=True)),
-    )
 
 
 def open_readonly(path: str | os.PathLike) -> sqlite3.Connection:

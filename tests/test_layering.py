@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ast
+import pathlib
 import subprocess
 import sys
 
@@ -38,3 +40,166 @@ def test_jupyter_import_loads_no_qt(tmp_path):
     pytest.importorskip("ipywidgets")
     out = _loaded_after("import ramure.app.jupyter", tmp_path)
     assert "PySide6" not in out and "matplotlib.pyplot" not in out and "trame" not in out
+
+
+# -- the package graph: who may import whom, lazy (function-level) imports included ------------
+#
+# Imports are read from the source (ast), wherever they stand in a module: at the top, inside a
+# function or a method.  Only those under ``if TYPE_CHECKING:`` are left out (never run).  An
+# import of a module's own package (``from ramure.gmap import GMap3`` inside ``ramure.gmap``)
+# is the package's front door, not an edge.
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+FOLDERS = {"ramure": "ramure", "lsys": "ramure.lsys", "metrics": "ramure.metrics", "gmap": "ramure.gmap"}
+FOLDERS |= {"studies": "ramure.studies", "app": "ramure.app", "grammars": "ramure.grammars"}
+#: The base modules of the ``ramure`` folder (errors, io, jit, lazy), below every package.
+BASE = "ramure.<base>"
+#: What each package may import (besides itself, numpy and the like).  ``ramure`` is the front
+#: door (``ramure/__init__.py``); ``ramure.app`` stands for the CLI, desktop and Jupyter.
+ALLOWED = {
+    BASE: set(),
+    "ramure": {BASE, "ramure.lsys"},
+    "ramure.grammars": {BASE},
+    "ramure.lsys": {BASE, "ramure.grammars"},
+    "ramure.metrics": {BASE, "ramure.grammars", "ramure.lsys"},
+    "ramure.gmap.kernel": {BASE},
+    "ramure.gmap.lsystem": {BASE, "ramure.grammars", "ramure.lsys", "ramure.gmap.kernel"},
+    "ramure.gmap.organs": {BASE, "ramure.lsys", "ramure.gmap.kernel", "ramure.gmap.lsystem"},
+    "ramure.gmap": {"ramure.gmap.kernel", "ramure.gmap.organs"},
+    "ramure.studies": {BASE, "ramure.grammars", "ramure.lsys", "ramure.metrics"},
+    "ramure.app": {BASE, "ramure", "ramure.grammars", "ramure.lsys", "ramure.metrics", "ramure.studies"}
+    | {"ramure.gmap", "ramure.gmap.kernel", "ramure.gmap.lsystem", "ramure.gmap.organs"},
+}
+
+
+def _modules():
+    """``{dotted name: path}`` of every Ramure module, as installed."""
+    out = {}
+    for folder, package in FOLDERS.items():
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            parts = path.relative_to(ROOT / folder).with_suffix("").parts
+            out[".".join((package, *parts)).removesuffix(".__init__")] = path
+    return out
+
+
+MODULES = _modules()
+
+
+def _unchecked(tree):
+    """Ids of the nodes under ``if TYPE_CHECKING:``."""
+    skip = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip |= {id(sub) for stmt in node.body for sub in ast.walk(stmt)}
+    return skip
+
+
+def _imports(name, path):
+    """The Ramure modules ``name`` imports, lazy imports included."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip, found = _unchecked(tree), set()
+    here = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            found |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = ".".join(here.split(".")[: len(here.split(".")) - node.level + 1]) if node.level else ""
+            source = ".".join(filter(None, (base, node.module)))
+            found |= {source} | {f"{source}.{alias.name}" for alias in node.names}
+    own_front_doors = {m for m in found if MODULES.get(m, pathlib.Path()).name == "__init__.py" and name.startswith(m + ".")}
+    return {m for m in found if m in MODULES and m != name} - own_front_doors
+
+
+def _package(module):
+    if module.startswith("ramure.app"):
+        return "ramure.app"
+    if module == "ramure":
+        return "ramure"
+    if module.count(".") == 1 and module.startswith("ramure.") and MODULES[module].parent == ROOT / "ramure":
+        return BASE
+    return module if MODULES[module].name == "__init__.py" else module.rsplit(".", 1)[0]
+
+
+GRAPH = {name: _imports(name, path) for name, path in MODULES.items()}
+
+
+def _cycles(graph):
+    """Strongly connected components of more than one node (Tarjan, iterative)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on.add(root)
+        while work:
+            node, children = work[-1]
+            for child in children:
+                if child not in index:
+                    index[child] = low[child] = counter[0]
+                    counter[0] += 1
+                    stack.append(child)
+                    on.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                    break
+                if child in on:
+                    low[node] = min(low[node], index[child])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[node])
+                if low[node] == index[node]:
+                    component = set()
+                    while True:
+                        top = stack.pop()
+                        on.discard(top)
+                        component.add(top)
+                        if top == node:
+                            break
+                    if len(component) > 1:
+                        out.append(component)
+    return out
+
+
+def test_the_graph_sees_lazy_imports():
+    assert "ramure.gmap.kernel.mapcut" in GRAPH["ramure.gmap.kernel.cut"]  # a top-level import
+    assert "ramure.lsys.turtle" in GRAPH["ramure.lsys.derive"]  # inside Derivation.skeleton
+    assert "ramure.lsys.derive" not in GRAPH["ramure.lsys.turtle"]  # only under TYPE_CHECKING
+
+
+def test_every_package_imports_only_what_it_may():
+    bad = []
+    for name, targets in GRAPH.items():
+        here = _package(name)
+        assert here in ALLOWED, f"{here} ({name}) is a new package: say what it may import in ALLOWED"
+        bad += [f"{name} imports {t}" for t in sorted(targets) if _package(t) not in ALLOWED[here] | {here}]
+    assert bad == []
+
+
+def test_no_core_package_imports_the_front_ends():
+    core = {n: ts for n, ts in GRAPH.items() if not n.startswith("ramure.app")}
+    bad = [f"{n} imports {t}" for n, ts in core.items() for t in ts if t.startswith("ramure.app")]
+    assert bad == []
+
+
+def test_the_package_graph_is_acyclic():
+    packages: dict[str, set[str]] = {}
+    for name, targets in GRAPH.items():
+        packages.setdefault(_package(name), set()).update(_package(t) for t in targets if _package(t) != _package(name))
+    assert _cycles(packages) == []
+    assert all(set(ALLOWED[p]) >= imported for p, imported in packages.items())
+
+
+def test_no_module_imports_itself_back():
+    # the seven cycles of issue 41 (lsys around grammar/derive/turtle, polygons, cut/mapcut,
+    # defects/excrescence, plant/wood, fruit/fruit_dataset, session/storage) are gone
+    assert _cycles(GRAPH) == []
+
+
+def test_the_cycle_finder_finds_a_lazy_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [{"a", "b", "c"}]
+    assert _cycles({"a": {"b"}, "b": set()}) == []

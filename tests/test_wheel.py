@@ -76,6 +76,23 @@ def test_wheel_holds_only_ramure(fresh):
         assert f"ramure/studies/webpages/{page}" in names  # what `ramure study serve` serves
 
 
+def test_wheel_holds_every_package(fresh):
+    # a sub-package missing from pyproject's ``packages`` works in the editable install and
+    # is silently left out of the wheel
+    work, _ = fresh
+    wheel = next((work / "dist").glob("ramure-*.whl"))
+    names = subprocess.run([sys.executable, "-m", "zipfile", "-l", str(wheel)], capture_output=True, text=True, check=True).stdout
+    folders = {"ramure": "ramure", "lsys": "ramure/lsys", "metrics": "ramure/metrics", "gmap": "ramure/gmap"}
+    folders |= {"studies": "ramure/studies", "app": "ramure/app", "grammars": "ramure/grammars"}
+    expected = {
+        f"{installed}/{init.parent.relative_to(ROOT / folder).as_posix()}/__init__.py".replace("/./", "/")
+        for folder, installed in folders.items()
+        for init in (ROOT / folder).rglob("__init__.py")
+    }
+    assert "ramure/gmap/kernel/__init__.py" in expected
+    assert sorted(e for e in expected if e not in names) == []
+
+
 def test_script_runs_from_any_directory(fresh, tmp_path):
     _, python = fresh
     out = _run_installed([str(python), "-c", SCRIPT], cwd=tmp_path)

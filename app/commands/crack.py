@@ -17,15 +17,15 @@ from ramure.app.cli import UserError
 from ramure.app.commands.lichen import substrate
 from ramure.app.commands.plant import output_file, parse_size
 from ramure.io import save_mesh, write_with
-from ramure.gmap.cracks import add_noise, carve, pattern_from_skeleton, random_pattern, smooth, symmetric
+from ramure.gmap.organs.cracks import add_noise, carve, pattern_from_skeleton, random_pattern, smooth, symmetric
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
     import pathlib
-    from ramure.gmap.cracks import Crack
-    from ramure.gmap.map3 import GMap3
+    from ramure.gmap.organs.cracks import Crack
+    from ramure.gmap.kernel.map3 import GMap3
 
 
 def _vector(text, option):
@@ -116,13 +116,13 @@ def crack_model(
     boards split as they dry.
     """
     if on == "fruit":
-        from ramure.gmap.fruit import build_fruit
+        from ramure.gmap.organs.fruit import build_fruit
 
         fruit = build_fruit("round_tomato", volume_levels=1, seed=seed)
         _, pos = fruit.vertex_positions()
         return fruit, tuple(pos[np.argmax(pos[:, 0])]), (0.0, 0.0, 1.0), None
-    from ramure.gmap.cut import cut_map
-    from ramure.gmap.wood import grow_wood, plank_map
+    from ramure.gmap.kernel.cut import cut_map
+    from ramure.gmap.organs.wood import grow_wood, plank_map
 
     wood = grow_wood("pine", years=years, seed=seed, branches=0)
     _, pos = wood.gm.vertex_positions()
@@ -134,8 +134,8 @@ def crack_model(
 
 
 def run_map_crack(args: argparse.Namespace) -> int:
-    """``--on fruit|wood``: the crack cut topologically into a 3-G-map (:mod:`ramure.gmap.mapcracks`)."""
-    from ramure.gmap.mapcracks import crack_map
+    """``--on fruit|wood``: the crack cut topologically into a 3-G-map (:mod:`ramure.gmap.organs.mapcracks`)."""
+    from ramure.gmap.organs.mapcracks import crack_map
 
     out = output_file(args.output, (".png", ".vtu", ".vtp")) if args.output else None
     size = parse_size(args.size)
@@ -161,7 +161,7 @@ def run_map_crack(args: argparse.Namespace) -> int:
         if out.suffix.lower() == ".png":
             render_map_crack(cracked, species, out, size, anchor, facts["length"])
         else:
-            from ramure.gmap.pyvista import boundary_polydata, to_unstructured_grid
+            from ramure.gmap.kernel.pyvista import boundary_polydata, to_unstructured_grid
 
             save_mesh(to_unstructured_grid(cracked) if out.suffix.lower() == ".vtu" else boundary_polydata(cracked), out)
         facts["output"] = str(out)
@@ -180,19 +180,19 @@ def render_map_crack(
     """The cracked map's skin: tissue colours, the crack's walls (unsewn inner faces) dark,
     seen from outside, over the anchor, from twice the crack's length."""
     from ramure.app.render import headless_setup
-    from ramure.gmap.mapcracks import wall_faces
-    from ramure.gmap.pyvista import boundary_polydata
+    from ramure.gmap.organs.mapcracks import wall_faces
+    from ramure.gmap.kernel.pyvista import boundary_polydata
 
     headless_setup()
     import pyvista as pv
 
     surface = boundary_polydata(gm)
     if species is not None:
-        from ramure.gmap.wood import cell_colors
+        from ramure.gmap.organs.wood import cell_colors
 
         rgb = np.asarray(cell_colors(gm.volume_data, species))[np.asarray(surface.cell_data["volume"])]
     else:
-        from ramure.app.commands.fruit import tissue_rgb
+        from ramure.gmap.organs.tissue import tissue_rgb
 
         rgb = tissue_rgb(np.asarray(surface.cell_data["tissue"]))
     wall = wall_faces(gm)  # the crack's walls: inner faces the crack unsewed

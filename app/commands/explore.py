@@ -19,7 +19,7 @@ import json
 import pathlib
 import sys
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ramure.app.cli import UserError
 from ramure.app.commands.plant import add_grammar_options, parse_sets, parse_size
@@ -70,7 +70,7 @@ def _progress_bar(enabled, desc):
         return None, lambda: None
     from tqdm import tqdm
 
-    state = {}
+    state: dict[str, Any] = {}
 
     def progress(done, total):
         bar = state.get("bar")

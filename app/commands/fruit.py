@@ -15,9 +15,9 @@ Examples::
 JSON keys: preset, seed, darts, vertices, edges, faces (2-cells), faces_per_volume
 (the thesis's count), volumes, tissues (volumes per tissue), valid, seconds
 (build + validity check), and output when a file was written.  With ``--defect``
-(see :func:`ramure.gmap.defects.apply_defects`): ``defects`` holds the per-defect
+(see :func:`ramure.gmap.organs.defect_specs.apply_defects`): ``defects`` holds the per-defect
 facts, the volume lost and the grade with its reasons.  With ``--malform`` (see
-:mod:`ramure.gmap.malform`): ``malformation`` holds the shape, the rate, the parameters
+:mod:`ramure.gmap.organs.malform`): ``malformation`` holds the shape, the rate, the parameters
 it changed and the measured flatness, lopsidedness and ribbing.
 
 ``ramure fruit batch`` writes a labelled dataset of defective fruit (pictures whole and
@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike
 import ramure.io as atomic
 from ramure.app.cli import UserError
 from ramure.app.commands.plant import parse_size
-from ramure.gmap.cut import parse_plane
+from ramure.gmap.kernel.cut import parse_plane
 
 if TYPE_CHECKING:
     import pyvista as pv
@@ -94,14 +94,6 @@ def _finite_or_text(name, value):
     return value
 
 
-def tissue_rgb(tissue: ArrayLike) -> np.ndarray:
-    """uint8 RGB per cell from tissue codes (colours of :data:`ramure.gmap.tissue.COLORS`)."""
-    from ramure.gmap.tissue import COLORS, TISSUES
-
-    table = np.array([[int(COLORS[n][i : i + 2], 16) for i in (1, 3, 5)] for n in TISSUES], np.uint8)
-    return table[np.asarray(tissue, np.int64)]
-
-
 def render_fruit(
     grid: pv.DataSet,
     path: str | os.PathLike,
@@ -111,7 +103,7 @@ def render_fruit(
 ) -> str | os.PathLike:
     """Render a fruit grid (cell data ``tissue``) off-screen to PNG, coloured by tissue."""
     from ramure.app.render import headless_setup
-    from ramure.gmap.tissue import COLORS, TISSUES
+    from ramure.gmap.organs.tissue import COLORS, TISSUES, tissue_rgb
 
     headless_setup()
     import pyvista as pv
@@ -154,10 +146,10 @@ def render_fruit(
 
 
 def run_fruit(args: argparse.Namespace) -> int:
-    from ramure.gmap.cut import plane_cut
-    from ramure.gmap.defects import apply_defects, parse_defect
-    from ramure.gmap.fruit import build_fruit
-    from ramure.gmap.tissue import tissue_counts
+    from ramure.gmap.kernel.cut import plane_cut
+    from ramure.gmap.organs.defect_specs import apply_defects, parse_defect
+    from ramure.gmap.organs.fruit import build_fruit
+    from ramure.gmap.organs.tissue import tissue_counts
 
     levels = parse_subdivide(args.subdivide)
     plane = parse_plane(args.cut) if args.cut else None  # checked even without -o
@@ -166,7 +158,7 @@ def run_fruit(args: argparse.Namespace) -> int:
     params: dict[str, Any] = dict(parse_sets(args.set))  # Any: mypy checks ** values against every keyword
     malformation = None
     if args.malform:
-        from ramure.gmap.malform import malform_params, parse_malform
+        from ramure.gmap.organs.malform import malform_params, parse_malform
 
         malformation = parse_malform(args.malform)
         params = malform_params(args.preset, seed=args.seed, **malformation, **params)
@@ -175,7 +167,7 @@ def run_fruit(args: argparse.Namespace) -> int:
         args.preset, seed=args.seed, volume_levels=levels["volume_levels"], surface_levels=levels["surface_levels"], **params
     )
     if malformation is not None:
-        from ramure.gmap.malform import shape_facts
+        from ramure.gmap.organs.malform import shape_facts
 
         malformation = {**malformation, "params": params, **shape_facts(gm)}
     defect_facts = None
@@ -189,7 +181,7 @@ def run_fruit(args: argparse.Namespace) -> int:
         if out.suffix.lower() not in (".png", ".vtu"):
             raise UserError(f"-o: write a .png picture or a .vtu grid, not '{out.name}'")
         out.parent.mkdir(parents=True, exist_ok=True)
-        from ramure.gmap.pyvista import to_unstructured_grid  # pyvista (0.5 s) only for a file
+        from ramure.gmap.kernel.pyvista import to_unstructured_grid  # pyvista (0.5 s) only for a file
 
         grid = to_unstructured_grid(gm)
         normal = None
@@ -239,7 +231,7 @@ def run_fruit(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
-    from ramure.gmap.fruit import PRESETS
+    from ramure.gmap.organs.fruit import PRESETS
 
     p = sub.add_parser("fruit", help="build a volumetric fruit (3G-map); facts, PNG or VTU")
     p.add_argument("--preset", default="round_tomato", choices=sorted(PRESETS), help="fruit preset (default round_tomato)")

@@ -17,16 +17,16 @@ import numpy as np
 
 from ramure.app.cli import UserError
 from ramure.app.commands.plant import output_file, parse_size
-from ramure.gmap.lichen import HABITS, age_classes, grow_lichen, to_polydata
-from ramure.gmap.trimesh import from_polydata
+from ramure.gmap.organs.lichen import HABITS, age_classes, grow_lichen, to_polydata
+from ramure.gmap.organs.trimesh import from_polydata
 from ramure.io import save_mesh, write_with
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
     import pyvista as pv
-    from ramure.gmap.lichen import Lichen
-    from ramure.gmap.trimesh import TriMesh
+    from ramure.gmap.organs.lichen import Lichen
+    from ramure.gmap.organs.trimesh import TriMesh
 
 AGE_COLOURS = np.array([[0.42, 0.5, 0.3], [0.6, 0.68, 0.36], [0.8, 0.82, 0.5]])  # old inside .. young rim
 
@@ -73,7 +73,7 @@ def bark(args: argparse.Namespace) -> tuple[str, pv.DataSet, TriMesh, float]:
         poly, mesh = plant_bark(skeleton, args.thinnest)
         return args.on_plant, poly, mesh, cover_radius(mesh, args.particles)
     if args.on_wood:
-        from ramure.gmap.wood import grow_wood
+        from ramure.gmap.organs.wood import grow_wood
 
         if not 1 <= args.years <= 40:
             raise UserError(f"--years must be 1..40, not {args.years}")

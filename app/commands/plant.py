@@ -105,10 +105,24 @@ def load_and_derive(args: argparse.Namespace) -> tuple[LSystem, Derivation, floa
     return ls, d, time.perf_counter() - t0
 
 
+def run_check_g3l(args: argparse.Namespace) -> int:
+    """``ramure check FILE.g3l``: parse a 3Gmap L-system and report its rules (errors: line, column, caret)."""
+    from ramure.gmap.lsystem.g3l import load_g3l
+
+    g = load_g3l(args.file)
+    ops: dict[str, int] = {}
+    for r in g.rules:
+        ops[r.op] = ops.get(r.op, 0) + 1
+    kinds = ", ".join(f"{v} {k}" for k, v in sorted(ops.items()))
+    print(
+        f"{args.file}: ok — {len(g.rules)} rule(s) ({kinds}), {len(g.constants)} constant(s), "
+        f"{len(g.functions)} function(s), axiom {g.axiom.symbol}"
+    )
+    return 0
+
+
 def run_check(args: argparse.Namespace) -> int:
     if str(args.file).endswith(".g3l"):  # 3Gmap L-systems (wood)
-        from ramure.app.commands.wood import run_check_g3l
-
         return run_check_g3l(args)
     ls = LSystem.from_file(args.file)
     g = ls.grammar

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ramure.app.cli import UserError
+from ramure.app.commands.plant import parse_size
 from ramure.io import write_with
 import os
 from collections.abc import Callable, Iterable, Sequence
@@ -33,8 +34,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
     import pyvista as pv
-    from ramure.gmap.g3l_engine import G3LDerivation
-    from ramure.gmap.wood import Wood
+    from ramure.gmap.lsystem.engine import G3LDerivation
+    from ramure.gmap.organs.wood import Wood
 
 SUFFIXES = (".vtu", ".png", ".glb", ".gltf", ".obj")
 
@@ -101,7 +102,7 @@ def add_wood_actors(
 
 
 def legend_for(species: str) -> list[tuple[str, Any]]:
-    from ramure.gmap.wood import SPECIES
+    from ramure.gmap.organs.wood import SPECIES
 
     c = SPECIES[species]["colors"]
     return [
@@ -125,10 +126,10 @@ def parse_sets(pairs: Iterable[str]) -> dict[str, str]:
 
 def grow_from_args(args: argparse.Namespace) -> tuple[Wood | G3LDerivation, str | None]:
     """The grown model: a :class:`Wood` (species or plant) or a :class:`G3LDerivation` (grammar)."""
-    from ramure.gmap import wood as W
+    from ramure.gmap.organs import wood as W
 
     if args.grammar:
-        from ramure.gmap.g3l_engine import G3LSystem
+        from ramure.gmap.lsystem.engine import G3LSystem
 
         if args.set:
             raise UserError("--set changes species parameters; edit the grammar's #define lines instead")
@@ -158,8 +159,8 @@ def grow_from_args(args: argparse.Namespace) -> tuple[Wood | G3LDerivation, str 
 
 
 def _grid(model, species):
-    from ramure.gmap import wood as W
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.organs import wood as W
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     if species is not None:
         return W.to_grid(model)
@@ -174,8 +175,8 @@ def _grid(model, species):
 
 
 def run_wood(args: argparse.Namespace) -> int:
-    from ramure.gmap import wood as W
-    from ramure.gmap.cut import parse_plane, plane_cut
+    from ramure.gmap.organs import wood as W
+    from ramure.gmap.kernel.cut import parse_plane, plane_cut
 
     if args.species not in W.SPECIES:
         raise UserError(f"--species: unknown species '{args.species}'; choose one of {', '.join(W.SPECIES)}")
@@ -242,8 +243,6 @@ def run_wood(args: argparse.Namespace) -> int:
         if out.suffix.lower() == ".vtu":
             write_atomic(out, lambda tmp: shown.save(tmp))
         elif out.suffix.lower() == ".png":
-            from ramure.app.commands.plant import parse_size
-
             size = parse_size(args.size)
             title = f"{species or pathlib.Path(args.grammar).stem}, {args.years} years"
             write_atomic(
@@ -269,8 +268,8 @@ def run_wood(args: argparse.Namespace) -> int:
 
 def _plank_map_facts(gm, normal, offset, thickness):
     """Darts, volumes, validity, knots and seconds of the plank cut as a 3-G-map (kernel cut_map)."""
-    from ramure.gmap import wood as W
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.organs import wood as W
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     from ramure.errors import RamureError
 
@@ -294,22 +293,6 @@ def export_glb(grid: pv.UnstructuredGrid, path: str | os.PathLike) -> pathlib.Pa
     from ramure.app.export import export_colored
 
     return export_colored(grid.extract_surface(algorithm="dataset_surface"), path)
-
-
-def run_check_g3l(args: argparse.Namespace) -> int:
-    """``ramure check FILE.g3l``: parse a 3Gmap L-system and report its rules (errors: line, column, caret)."""
-    from ramure.gmap.g3l import load_g3l
-
-    g = load_g3l(args.file)
-    ops: dict[str, int] = {}
-    for r in g.rules:
-        ops[r.op] = ops.get(r.op, 0) + 1
-    kinds = ", ".join(f"{v} {k}" for k, v in sorted(ops.items()))
-    print(
-        f"{args.file}: ok — {len(g.rules)} rule(s) ({kinds}), {len(g.constants)} constant(s), "
-        f"{len(g.functions)} function(s), axiom {g.axiom.symbol}"
-    )
-    return 0
 
 
 def register(sub: Subparsers) -> None:

@@ -14,8 +14,8 @@
 * **Lichen** and **Crack** act on the selected fruit's closed surface (the volumetric fruit
   of :meth:`ramure.app.model.Explorer.fruit_surface`, subdivided once so a crack has
   triangles to cut): Open-DLA lichen discs coloured by age class
-  (:func:`ramure.gmap.lichen.grow_lichen`), or a random crack pattern carved from the top of
-  the fruit (:func:`ramure.gmap.cracks.carve`).  Both run in the worker and are shown in the
+  (:func:`ramure.gmap.organs.lichen.grow_lichen`), or a random crack pattern carved from the top of
+  the fruit (:func:`ramure.gmap.organs.cracks.carve`).  Both run in the worker and are shown in the
   dock's own 3D view, with their facts.  Without a selected fruit, or on a surface that is not
   closed, the action is refused with one line in the dock (and the window's usual message).
   **Lichen on the branches** grows on the plant's bark instead: the branches welded into one
@@ -61,7 +61,7 @@ if TYPE_CHECKING:
     from ramure.app.desktop.workers import Job
     from ramure.lsys.seasons import LeafChain, Season
 
-#: The lichen habits of :data:`ramure.gmap.lichen.HABITS`, listed without loading gmap.
+#: The lichen habits of :data:`ramure.gmap.organs.lichen.HABITS`, listed without loading gmap.
 HABIT_NAMES = ("crustose", "foliose", "fruticose")
 
 SEASON_STEPS = 24
@@ -132,14 +132,15 @@ class DetailsPanel(QWidget):
         self.controller = controller
         self.main_window = window  # not self.window: that is QWidget.window()
         self.chain = autumn_chain()
-        self.season = None
-        self.season_key = None  # (plant version, heat, humidity, wind, seed) the season was run for
+        self.season: Season | None = None
+        self.season_rgb: np.ndarray | None = None
+        self.season_key: tuple | None = None  # (plant version, heat, humidity, wind, seed) the season was run for
         self.fallen_actor = None
-        self.shown = None  # "lichen" or "crack": what the dock's view shows
-        self.last_facts = None
-        self.fruit = None  # the selected fruit's surface shown below (uncarved), for the tools
-        self.adhesion = None  # painted per fruit vertex, or None (lichen may start anywhere)
-        self.shown_detail = None  # the session's detail edit the dock's view shows (None: none)
+        self.shown: str | None = None  # "lichen" or "crack": what the dock's view shows
+        self.last_facts: dict[str, Any] | None = None
+        self.fruit: pv.PolyData | None = None  # the selected fruit's surface shown below (uncarved), for the tools
+        self.adhesion: np.ndarray | None = None  # painted per fruit vertex, or None (lichen may start anywhere)
+        self.shown_detail: dict[str, Any] | None = None  # the session's detail edit the dock's view shows (None: none)
         self.habits_listed = False  # the habit list is filled by list_habits(), when the dock is first shown
         self._build()
         # the 3D view is made when the dock is first shown (or first used): see lazy_view
@@ -156,11 +157,11 @@ class DetailsPanel(QWidget):
 
     def list_habits(self) -> None:
         """Add any lichen habit :data:`HABIT_NAMES` lacks to the list (once).  The habits come
-        from ramure.gmap.lichen: gmap loads (with scipy.sparse, about 25 MB) when the dock is
+        from ramure.gmap.organs.lichen: gmap loads (with scipy.sparse, about 25 MB) when the dock is
         first on screen, not with the window."""
         if self.habits_listed:
             return
-        from ramure.gmap.lichen import HABITS
+        from ramure.gmap.organs.lichen import HABITS
 
         self.habit.addItems([name for name in HABITS if self.habit.findText(name) < 0])
         self.habits_listed = True
@@ -304,6 +305,7 @@ class DetailsPanel(QWidget):
         view, snap = self._view(), self.controller.snapshot
         if snap.mesh is None or snap.mesh.n_cells == 0:
             return
+        assert self.season is not None  # computed first (show_step)
         if not len(self.season.leaf_ids):
             self.season_label.setText("This plant has no leaves (no 'Leaf' or surface organs, no polygons) to age.")
             return
@@ -321,6 +323,7 @@ class DetailsPanel(QWidget):
     def _show_fallen(self, view, step):
         import pyvista as pv
 
+        assert self.season is not None  # painted from _paint only
         down = fallen_by(self.season, step)
         if not down.any():
             if self.fallen_actor is not None:
@@ -418,7 +421,7 @@ class DetailsPanel(QWidget):
 
         def run(ex):
             out = crack_on_fruit(ex, nodes, seed, anchor)
-            settings = {"nodes": nodes, "seed": seed, "anchor": None if anchor is None else list(anchor)}
+            settings = {"nodes": nodes, "seed": seed, "anchor": None if anchor is None else np.asarray(anchor, float).tolist()}
             return {**out, "detail": record(ex, "crack", settings, selected_fruit(ex))}
 
         return self.controller.submit("details crack", run, key="details-fruit")
@@ -469,6 +472,7 @@ class DetailsPanel(QWidget):
 
     def _show_fruit(self):
         """The fruit in its colour, painted adhesion in green."""
+        assert self.fruit is not None  # shown once a fruit was grown
         rgb = np.tile(np.array(FRUIT_RGB, float), (self.fruit.n_points, 1))
         if self.adhesion is not None:
             rgb += self.adhesion[:, None] * (np.array(PAINT_RGB, float) - rgb)
@@ -518,7 +522,7 @@ class DetailsPanel(QWidget):
             self.plotter.camera_position = close_up(result["growth"], result["mesh"])
             if hasattr(self.plotter, "render"):
                 self.plotter.render()
-            f = self.last_facts
+            f = result["facts"]
             self.fruit_label.setText(
                 f"Lichen on the branches ({f['habit']}): {f['particles']} particles in "
                 f"{f['clusters']} clusters on {f['triangles']} triangles of bark, "
@@ -538,7 +542,7 @@ class DetailsPanel(QWidget):
         if name == "details lichen":
             self.shown = "lichen"
             self._show_result(result["surface"], FRUIT_RGB, result["discs"])
-            f = self.last_facts
+            f = result["facts"]
             self.fruit_label.setText(
                 f"Lichen ({f['habit']}): {f['particles']} particles in {f['clusters']} "
                 f"clusters on {f['triangles']} triangles, {f['intersection_tests']:,} "
@@ -547,7 +551,7 @@ class DetailsPanel(QWidget):
         else:
             self.shown = "crack"
             self._show_result(result["surface"], FRUIT_RGB, look_at=result["points"])
-            f = self.last_facts
+            f = result["facts"]
             self.fruit_label.setText(
                 f"Crack: {f['nodes']} nodes, length {f['length']:.3g}, "
                 f"{f['triangles_object']} -> {f['triangles_result']} triangles, "

@@ -70,8 +70,8 @@ class FileActions:
         path, _ = QFileDialog.getSaveFileName(self.window, title, self._folder(), filters)
         if not path:
             return None
-        path = pathlib.Path(path)
-        return path if path.suffix else path.with_suffix(suffix)
+        chosen = pathlib.Path(path)
+        return chosen if chosen.suffix else chosen.with_suffix(suffix)
 
     def _folder(self):
         snap = self.controller.snapshot

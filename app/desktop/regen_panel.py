@@ -38,7 +38,7 @@ THUMB = 96
 
 
 def _fruit_presets():
-    from ramure.gmap.fruit import PRESETS
+    from ramure.gmap.organs.fruit import PRESETS
 
     return list(PRESETS)
 
@@ -210,7 +210,7 @@ class RegenPanel(QWidget):
         """``selected`` of the plant's ``total`` fruit are in the selection."""
         self.fruit_box.setVisible(total > 0)
         if total > 0 and self.fruit_preset.count() == 1:
-            # Named shapes from ramure.gmap.fruit: gmap (with scipy.sparse, about 25 MB) loads for a
+            # Named shapes from ramure.gmap.organs.fruit: gmap (with scipy.sparse, about 25 MB) loads for a
             # plant with fruit, not with every window.
             for name in _fruit_presets():
                 self.fruit_preset.addItem(name.replace("_", " "), name)

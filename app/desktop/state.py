@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     import pyvista as pv
     from ramure.app.model import Explorer
     from ramure.lsys import GrammarError
-    from ramure.lsys.cut import CutResult
+    from ramure.lsys.mincut import CutResult
     from ramure.lsys.regen import RegenResult
     from ramure.lsys.tree import DerivationTree
     from ramure.lsys.turtle import Skeleton
@@ -455,7 +455,7 @@ def kinship_cell_colors(explorer: Explorer, mesh: pv.DataSet) -> np.ndarray | No
     on_segment = seg >= 0
     rgb[on_segment] = seg_rgb[seg[on_segment]]
     if not on_segment.all():
-        from ramure.lsys.cut import kinship
+        from ramure.lsys.mincut import kinship
 
         tree = explorer.derivation.tree
         _, _, leaf_rgb = kinship(tree, explorer.selection[0], n=explorer.session.n)
@@ -604,7 +604,7 @@ def fruit_cut_surface(explorer: Explorer, normal: Sequence[float]) -> pv.PolyDat
     so skin, flesh and locules read as the 3G-map's volumes.  Returns a surface with
     ``leaf_id`` and ``tissue`` per cell, or None without fruit.
     """
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     if not explorer.fruit_ids():
         return None
@@ -657,7 +657,7 @@ def cut_too_large_words(cut: CutResult) -> str:
 def cut_graph_layout(
     cut: CutResult, tree: DerivationTree, roots: Iterable[int] = (), symbols: Sequence[str] | None = None
 ) -> GraphLayout:
-    """Lay out the graph of a :class:`ramure.lsys.cut.CutResult` as a tidy tree by derivation depth.
+    """Lay out the graph of a :class:`ramure.lsys.mincut.CutResult` as a tidy tree by derivation depth.
 
     Each tree node ``v`` gives two vertices ``(v, "in")`` above ``(v, "out")``;
     rows are derivation depths (the source at the top, the sink at the

@@ -260,6 +260,7 @@ class VariantsController:
         assert vs is not None, "set_variants() comes first"
         snap = self.controller.snapshot
         ls, n, seed = self.lsystem, vs.n if vs.n is not None else snap.n, vs.seed
+        assert ls is not None  # a grammar is loaded before variants are drawn
 
         def work(progress, cancelled):
             images = []
@@ -337,6 +338,7 @@ class VariantsController:
             return None
         snap = self.controller.snapshot
         ls, n, seed = self.lsystem, snap.n, snap.seed
+        assert ls is not None  # a grammar is loaded before variants are drawn
         self.window.regen.qualifier_note.setText(
             f"Best variant: rule {params.get('rule')}, "
             + ", ".join(f"{k}={v:g}" for k, v in params["constants"].items())

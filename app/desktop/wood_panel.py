@@ -2,7 +2,7 @@
 
 Choose a species and a number of years and press *Grow*: the wood (pith,
 earlywood/latewood rings, heartwood, sapwood, bark and knots, see
-:mod:`ramure.gmap.wood`) appears in the dock's own 3D view, clipped by a
+:mod:`ramure.gmap.organs.wood`) appears in the dock's own 3D view, clipped by a
 plane widget you drag and turn (VTK clip, re-cut live).  *From the current
 plant* grows the wood of the plant shown in the main window: its trunk and
 first branches, with their ages from the derivation steps.  Selecting a
@@ -28,7 +28,7 @@ from ramure.errors import RamureError
 if TYPE_CHECKING:
     from ramure.app.desktop.controller import Controller
     import pyvista as pv
-    from ramure.gmap.wood import Wood
+    from ramure.gmap.organs.wood import Wood
 
 SELECTED_RGB = (220, 30, 30)
 
@@ -80,11 +80,11 @@ class WoodPanel(QWidget):
             controller.selection_changed.connect(self.highlight_selection)
 
     def list_species(self) -> None:
-        """Put the species into their list (once).  They come from ramure.gmap.wood: gmap loads
+        """Put the species into their list (once).  They come from ramure.gmap.organs.wood: gmap loads
         (with scipy.sparse, about 25 MB) when the dock is first on screen or grown, not with the window."""
         if self.species_listed:
             return
-        from ramure.gmap.wood import SPECIES
+        from ramure.gmap.organs.wood import SPECIES
 
         chosen = self.species.currentText()
         self.species.addItems([name for name in sorted(SPECIES) if self.species.findText(name) < 0])
@@ -100,7 +100,7 @@ class WoodPanel(QWidget):
     # -- growth ------------------------------------------------------------------------
     def grow(self) -> Wood | None:
         """Grow the wood from the widgets' values and show it with a cut plane."""
-        from ramure.gmap import wood as W
+        from ramure.gmap.organs import wood as W
 
         self.list_species()
         QGuiApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
@@ -168,7 +168,7 @@ class WoodPanel(QWidget):
         """Paint the selected branches' knots red (the clip widget re-cuts the recoloured grid)."""
         if self.grid is None or self.wood is None:
             return
-        from ramure.gmap.wood import cell_colors
+        from ramure.gmap.organs.wood import cell_colors
 
         rgb = cell_colors(self.wood.gm.volume_data, self.wood.species)
         rgb[self.knot_mask(selection)] = SELECTED_RGB

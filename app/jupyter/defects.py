@@ -28,7 +28,7 @@ from ramure.errors import RamureError
 
 if TYPE_CHECKING:
     from ramure.app.jupyter.explorer import Explorer
-    from ramure.gmap.map3 import GMap3
+    from ramure.gmap.kernel.map3 import GMap3
 
 
 class DefectsTab:

@@ -61,7 +61,7 @@ class DetailsTab:
         self.seed = W.BoundedIntText(value=0, min=0, max=2**31 - 1, description="seed")
         for box in (self.season_slider, self.heat, self.humidity, self.wind, self.seed):
             on_value(box, lambda _v: self.show_season())
-        from ramure.gmap.lichen import HABITS
+        from ramure.gmap.organs.lichen import HABITS
 
         self.clusters = W.BoundedIntText(value=5, min=1, max=200, description="clusters")
         self.particles = W.BoundedIntText(value=300, min=1, max=20_000, description="particles")
@@ -276,7 +276,7 @@ def _render_surface(surface, path, size, discs=None, colour=(0.92, 0.47, 0.16), 
 
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
-        plotter.set_background("white", top="lightsteelblue")
+        plotter.set_background("white", top="lightsteelblue")  # type: ignore[arg-type]  # pyvista stubs: decorated method
         plotter.add_mesh(surface, color=colour, smooth_shading=discs is not None)
         if discs is not None:
             plotter.add_mesh(discs, scalars="rgb", rgb=True, show_scalar_bar=False)
@@ -284,7 +284,7 @@ def _render_surface(surface, path, size, discs=None, colour=(0.92, 0.47, 0.16), 
         centre, span = b.mean(axis=1), float(np.ptp(b, axis=1).max())
         if camera is None:
             plotter.camera_position = [tuple(centre + np.array([0.5, -0.7, 0.9]) * span * 2), tuple(centre), (0, 0, 1)]
-            plotter.reset_camera()
+            plotter.reset_camera()  # type: ignore[call-arg]  # pyvista stubs: decorated method
         else:
             plotter.camera_position = camera
         plotter.screenshot(str(path))

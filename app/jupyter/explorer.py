@@ -26,7 +26,7 @@ import os
 import pathlib
 import threading
 from collections.abc import Callable, Iterable, Mapping
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import ipywidgets as W
 
@@ -79,8 +79,8 @@ def _open_model(source, n, seed):
 
 
 def fruit_presets() -> list:
-    """The volumetric fruit presets (:data:`ramure.gmap.fruit.PRESETS`)."""
-    from ramure.gmap.fruit import PRESETS
+    """The volumetric fruit presets (:data:`ramure.gmap.organs.fruit.PRESETS`)."""
+    from ramure.gmap.organs.fruit import PRESETS
 
     return list(PRESETS)
 
@@ -484,10 +484,10 @@ class Explorer:
 
     def regrow_fruit(self, seed: int | None = None, preset: str | None = None, size: float | None = None) -> RegenResult | None:
         """New volumetric fruit for the selected fruit: a new seed (or ``seed``), and optionally
-        another ``preset`` (:data:`ramure.gmap.fruit.PRESETS`, e.g. ``"pear"``) and ``size``."""
+        another ``preset`` (:data:`ramure.gmap.organs.fruit.PRESETS`, e.g. ``"pear"``) and ``size``."""
 
         def apply():
-            settings = {}
+            settings: dict[str, Any] = {}
             if preset:
                 settings["preset"] = str(preset)
             if size is not None:

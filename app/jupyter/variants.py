@@ -29,7 +29,7 @@ import os
 import pathlib
 import tempfile
 import threading
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import ipywidgets as W
 import numpy as np
@@ -111,7 +111,7 @@ class VariantPanel:
         self.running: threading.Thread | None = None  # the worker thread of a button-started sweep
         self._sweep: VariantSweep | None = None
         self._stop = threading.Event()
-        self._pending = None  # (exploration, grammar) whose thumbnails the main thread renders
+        self._pending: tuple[Any, Any] | None = None  # (exploration, grammar) whose thumbnails the main thread renders
         model = app.model
         self.n = W.BoundedIntText(
             value=min(model.session.n, 5),

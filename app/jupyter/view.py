@@ -209,13 +209,13 @@ def fruit_png(
 
 def fruit_cut_png(model: Model, leaf: int, size: tuple[int, int] = (420, 420), volume_levels: int = 1) -> bytes | None:
     """PNG of fruit ``leaf`` cut open across its axis, volume cells coloured by tissue
-    (:data:`ramure.gmap.tissue.COLORS`) with a legend; None when ``leaf`` is not a fruit."""
+    (:data:`ramure.gmap.organs.tissue.COLORS`) with a legend; None when ``leaf`` is not a fruit."""
     if int(leaf) not in model.fruit_ids():
         return None
-    from ramure.app.commands.fruit import tissue_rgb
-    from ramure.gmap.cut import plane_cut
-    from ramure.gmap.pyvista import to_unstructured_grid
-    from ramure.gmap.tissue import COLORS, TISSUES
+    from ramure.gmap.organs.tissue import tissue_rgb
+    from ramure.gmap.kernel.cut import plane_cut
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
+    from ramure.gmap.organs.tissue import COLORS, TISSUES
 
     grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
     cells = grid.extract_cells(np.asarray(grid.cell_data["leaf_id"]) == int(leaf))

@@ -1,6 +1,6 @@
 """The Wood tab: volumetric wood of a species or of the explorer's plant, with a cut picture.
 
-The notebook counterpart of the desktop's Wood dock (:mod:`ramure.gmap.wood`): choose a
+The notebook counterpart of the desktop's Wood dock (:mod:`ramure.gmap.organs.wood`): choose a
 species and years, tick *from the plant* to grow the wood of the plant shown above (its trunk
 and first branches, ages from the derivation steps), press *Grow*; the picture shows the wood
 cut across at the chosen height (a VTK slice, seen from above), with pith, rings, heartwood, sapwood, bark and
@@ -25,7 +25,7 @@ from ramure.app.jupyter._ui import button, on_value, png_image
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
-    from ramure.gmap.wood import Wood
+    from ramure.gmap.organs.wood import Wood
     import pyvista as pv
     from ramure.app.jupyter.explorer import Explorer
 
@@ -34,7 +34,7 @@ class WoodTab:
     """Species, years, *from the plant*, Grow, a cut height and the cut picture."""
 
     def __init__(self, app: Explorer, size: tuple[int, int] = (420, 420)) -> None:
-        from ramure.gmap.wood import SPECIES
+        from ramure.gmap.organs.wood import SPECIES
 
         self.app = app
         self.size = size
@@ -58,7 +58,7 @@ class WoodTab:
 
     def grow(self) -> None:
         """Grow the wood from the widgets' values, then cut it."""
-        from ramure.gmap import wood as W_
+        from ramure.gmap.organs import wood as W_
 
         try:
             if self.from_plant.value and self.app is not None:
@@ -82,7 +82,7 @@ class WoodTab:
 
     def cut(self) -> tuple[pv.DataSet, float, dict]:
         """The cross-section of the grown wood at the chosen height, and its rings and knots."""
-        from ramure.gmap.wood import cut_facts
+        from ramure.gmap.organs.wood import cut_facts
 
         if self.grid is None:
             raise RamureError("grow a wood first")

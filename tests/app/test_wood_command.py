@@ -41,7 +41,7 @@ def test_set_still_takes_a_wood_parameter(capsys):
 
     assert main(["wood", "--years", "2", "--set", "branches=0", "--set", "sides=5", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
-    from ramure.gmap import wood as W
+    from ramure.gmap.organs import wood as W
 
     assert record["valid"] and record["volumes"] == W.trunk_volumes(5, 2)
     assert record["tissues"]["bark"] == 5 * 2 * 3 // 2  # s Y (Y + 1) / 2 bark cells, as in tests/gmap

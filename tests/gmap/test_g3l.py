@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from ramure.errors import GrammarError
-from ramure.gmap.g3l import parse_g3l
-from ramure.gmap.g3l_engine import G3LSystem
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.lsystem.g3l import parse_g3l
+from ramure.gmap.lsystem.engine import G3LSystem
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def spiral_darts(n):

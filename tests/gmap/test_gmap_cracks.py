@@ -7,9 +7,18 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from ramure.gmap.cracks import CrackPattern, add_noise, carve, pattern_from_skeleton, project, random_pattern, smooth, symmetric
-from ramure.gmap.errors import GMapError
-from ramure.gmap.trimesh import from_polydata
+from ramure.gmap.organs.cracks import (
+    CrackPattern,
+    add_noise,
+    carve,
+    pattern_from_skeleton,
+    project,
+    random_pattern,
+    smooth,
+    symmetric,
+)
+from ramure.gmap.kernel.errors import GMapError
+from ramure.gmap.organs.trimesh import from_polydata
 
 
 @pytest.fixture(scope="module")

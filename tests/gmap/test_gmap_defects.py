@@ -3,11 +3,13 @@
 import numpy as np
 import pytest
 
-from ramure.gmap import GMap3, topology
-from ramure.gmap import defects as D
-from ramure.gmap.errors import GMapError
-from ramure.gmap.fruit import build_fruit
-from ramure.gmap.tissue import CODES
+from ramure.gmap import GMap3
+from ramure.gmap.kernel import topology
+from ramure.gmap.organs import defect_specs as S
+from ramure.gmap.organs import defects as D
+from ramure.gmap.kernel.errors import GMapError
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.organs.tissue import CODES
 
 
 @pytest.fixture(scope="module")
@@ -99,7 +101,7 @@ def test_rot_multipliers_on_rings(fruit):
     rest[np.concatenate(rings)] = False
     assert np.array_equal(k1[rest], k0[rest])
     assert len(np.unique(np.concatenate(rings))) == sum(map(len, rings))
-    from ramure.gmap import incidence
+    from ramure.gmap.kernel import incidence
 
     adj = incidence.volume_adjacency(fruit, by="vertex").tocsr()  # the kernel's adjacency agrees
     for inner, outer, before in ((rings[0], rings[1], rings[0]), (rings[1], rings[2], np.r_[rings[0], rings[1]])):
@@ -197,12 +199,12 @@ def test_hail_needs_the_stop_tissue():
 
 
 def test_parse_defect_specs():
-    assert D.parse_defect("shrink:rate=0.1,steps=3") == ("shrink", {"rate": 0.1, "steps": 3})
-    assert D.parse_defect("rot:coefficients=3/2/1") == ("rot", {"coefficients": (3.0, 2.0, 1.0)})
+    assert S.parse_defect("shrink:rate=0.1,steps=3") == ("shrink", {"rate": 0.1, "steps": 3})
+    assert S.parse_defect("rot:coefficients=3/2/1") == ("rot", {"coefficients": (3.0, 2.0, 1.0)})
     with pytest.raises(GMapError, match="unknown defect"):
-        D.parse_defect("mould:rate=1")
+        S.parse_defect("mould:rate=1")
     with pytest.raises(GMapError, match="not a valid value"):
-        D.parse_defect("hail:count=2.5")
+        S.parse_defect("hail:count=2.5")
 
 
 def test_cli_defects_json(capsys):
@@ -299,7 +301,7 @@ def test_crack_duplicates_interior_vertices(fruit, kind):
 
 
 def test_healed_faces_survive_subdivision(fruit):
-    from ramure.gmap import subdivide
+    from ramure.gmap.kernel import subdivide
 
     out, facts = D.crack(fruit, "longitudinal", sector=2, rings=(4, 4), depth=2, width_mm=0.5, healed=1)
     healed = out.dart_data["healed"] == 1
@@ -332,27 +334,27 @@ def test_crack_refusals(fruit):
 
 def test_crack_spec_and_grade_through_apply(fruit):
     spec = "crack:kind=longitudinal,sector=3,rings=4-4,depth=1,width_mm=0.5,healed=1"
-    assert D.parse_defect(spec)[1]["rings"] == (4, 4)
-    out, facts = D.apply_defects(fruit, [spec], size_mm=65)
+    assert S.parse_defect(spec)[1]["rings"] == (4, 4)
+    out, facts = S.apply_defects(fruit, [spec], size_mm=65)
     check_after(fruit, out)
     c = facts["defects"][0]
     assert c["length_mm"] < 30 and facts["grade"]["marketable"], facts["grade"]
-    big, facts = D.apply_defects(fruit, [spec], size_mm=650)  # ten times the fruit: a long crack
+    big, facts = S.apply_defects(fruit, [spec], size_mm=650)  # ten times the fruit: a long crack
     assert facts["defects"][0]["length_mm"] == pytest.approx(10 * c["length_mm"])
     assert not facts["grade"]["marketable"] and "mm long" in facts["grade"]["reasons"][0]
 
 
 def test_rot_at_ring_and_sector_names_a_skin_vertex_of_that_branch(fruit):
     v = D.skin_vertex_at(fruit, 4, 2)
-    out, facts = D.apply_defects(fruit, ["rot:at=ring4/sector2"])
+    out, facts = S.apply_defects(fruit, ["rot:at=ring4/sector2"])
     assert facts["defects"][0]["vertex"] == v
     vd = fruit.volume_data
     ring1 = D.rot_rings(fruit, v)[0]
     assert set(vd["ring"][ring1].tolist()) >= {4} and 2 in set(vd["sector"][ring1].tolist())
     with pytest.raises(GMapError, match="rings 0..9"):
-        D.apply_defects(fruit, ["rot:at=ring12/sector2"])
+        S.apply_defects(fruit, ["rot:at=ring12/sector2"])
     with pytest.raises(GMapError, match="ringR/sectorS"):
-        D.parse_defect("rot:at=r4s2")
+        S.parse_defect("rot:at=r4s2")
 
 
 def test_hail_stops_at_the_mesocarp_without_an_endocarp():
@@ -378,7 +380,7 @@ def test_index_reuse_matches_a_fresh_map(fruit):
 
 def test_millimetres_stay_those_of_the_fruit_as_given_after_a_shrink(fruit):
     site = int(D.hail_sites(fruit)[5])
-    out, facts = D.apply_defects(fruit, ["shrink:rate=0.1", f"hail:vertex={site},depth_mm=1,stop=endocarp"], size_mm=65.0)
+    out, facts = S.apply_defects(fruit, ["shrink:rate=0.1", f"hail:vertex={site},depth_mm=1,stop=endocarp"], size_mm=65.0)
     shrunk, _ = D.shrink(fruit, 0.1)
     _, p0 = shrunk.vertex_positions()
     _, p1 = out.vertex_positions()

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from ramure.errors import GrammarError
-from ramure.gmap import defects as D
-from ramure.gmap import subdivide, topology
-from ramure.gmap.errors import GMapError
-from ramure.gmap.excrescence import branch_stages, excrescence, parse_path, resolve_path
-from ramure.gmap.fruit import build_fruit
+from ramure.gmap.organs import defects as D
+from ramure.gmap.kernel import subdivide, topology
+from ramure.gmap.kernel.errors import GMapError
+from ramure.gmap.organs.excrescence import branch_stages, excrescence, parse_path, resolve_path
+from ramure.gmap.organs.fruit import build_fruit
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from ramure.errors import GrammarError
-from ramure.gmap import defects as D
-from ramure.gmap import subdivide, topology
-from ramure.gmap.excrescence import SIDE_STEPS, _first_darts, excrescence, resolve_path
-from ramure.gmap.fruit import build_fruit
+from ramure.gmap.organs import defects as D
+from ramure.gmap.kernel import subdivide, topology
+from ramure.gmap.organs.excrescence import SIDE_STEPS, _first_darts, excrescence, resolve_path
+from ramure.gmap.organs.fruit import build_fruit
 
 
 @pytest.fixture(scope="module")

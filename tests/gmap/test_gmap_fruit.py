@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ramure.gmap.errors import ValueRefused
-from ramure.gmap.fruit import PRESETS, build_fruit, dimple_angles, resolve_params, rib_profile, sample
+from ramure.gmap.kernel.errors import ValueRefused
+from ramure.gmap.organs.fruit import PRESETS, build_fruit, dimple_angles, resolve_params, rib_profile, sample
 
 
 def test_round_tomato_matches_the_thesis_table():

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from ramure.gmap import GMap3, GMapError
 from ramure.errors import RamureError, ValueRefused
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def cube_pair(sizes=((1.0, 1.0, 1.0), (1.0, 1.0, 1.0))):
@@ -342,7 +342,7 @@ def test_cells_of_a_volume_sewn_to_itself_do_not_hang():
         "d = int(gm.face_of(0, 'C1')); e = int(gm.alpha[2][d])\n"
         "gm.sew3([d], [e])\n"
         "assert gm.is_valid() and int((gm.alpha[2] == gm.alpha[3]).sum()) == 4\n"
-        "from ramure.gmap.topology import orientation_parity\n"
+        "from ramure.gmap.kernel.topology import orientation_parity\n"
         "orientation_parity(gm)\n"
         "print(gm.cells(0)[1], gm.cells(1)[1], gm.euler_characteristic(), gm.boundary().euler_characteristic())\n"
     )

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from ramure.gmap import GMap3, GMapError, subdivide
-from ramure.gmap.topology import assert_solid
+from ramure.gmap import GMap3, GMapError
+from ramure.gmap.kernel import subdivide
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def cube_pair():
@@ -15,9 +16,9 @@ def cube_pair():
 
 
 def with_attributes(gm):
-    gm.add_dart_attribute("uvw", float, (3,), rule="interpolate")
-    gm.add_dart_attribute("crack", np.int8, rule="copy")
-    gm.add_dart_attribute("seen", np.int8, fill=0, rule="reset")
+    gm.add_dart_data("uvw", float, (3,), rule="interpolate")
+    gm.add_dart_data("crack", np.int8, rule="copy")
+    gm.add_dart_data("seen", np.int8, fill=0, rule="reset")
     gm.dart_data["uvw"][:] = gm.dart_data["corner"]
     darts, _ = gm.face_darts([0], "C1")
     gm.dart_data["crack"][darts] = 1
@@ -29,12 +30,12 @@ def test_rules_are_checked():
     gm = GMap3()
     gm.add_prisms(4)
     with pytest.raises(GMapError):
-        gm.add_dart_attribute("x", float, rule="smooth")
+        gm.add_dart_data("x", float, rule="smooth")
     with pytest.raises(GMapError):
-        gm.add_dart_attribute("x", np.int8, rule="interpolate")
-    gm.add_dart_attribute("x", float)
+        gm.add_dart_data("x", np.int8, rule="interpolate")
+    gm.add_dart_data("x", float)
     with pytest.raises(GMapError):
-        gm.add_dart_attribute("x", float)
+        gm.add_dart_data("x", float)
     assert gm.dart_rules()["x"] == "copy"
 
 

@@ -5,14 +5,14 @@ import pytest
 
 from ramure.errors import ValueRefused
 from ramure.gmap import GMap3
-from ramure.gmap.cut import cut_map, plane_cut
-from ramure.gmap.embedding import grow
-from ramure.gmap.fruit import build_fruit
-from ramure.gmap.prism import FACE_CUT
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.kernel.cut import cut_map, plane_cut
+from ramure.gmap.kernel.embedding import grow
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.kernel.prism import FACE_CUT
+from ramure.gmap.kernel.topology import assert_solid
 
 pv = pytest.importorskip("pyvista")
-from ramure.gmap.pyvista import to_unstructured_grid  # noqa: E402
+from ramure.gmap.kernel.pyvista import to_unstructured_grid  # noqa: E402
 
 
 def crown():
@@ -62,7 +62,7 @@ def test_cut_map_is_one_solid_and_keeps_the_clip_volume(model, normal, origin, t
 
 
 def test_dart_oriented_volumes_match_vtk_on_the_crown_cut():
-    from ramure.gmap.measure import total_volume, volumes
+    from ramure.gmap.kernel.measure import total_volume, volumes
 
     gm = crown()
     assert abs(total_volume(gm) - to_unstructured_grid(gm).volume) < 1e-9
@@ -95,8 +95,8 @@ def test_a_cut_map_can_be_embedded_and_cut_again():
 
 def test_attributes_follow_the_cut():
     gm = crown()
-    gm.add_dart_attribute("uvw", float, (3,), rule="interpolate")
-    gm.add_dart_attribute("crack", np.int8, rule="copy")
+    gm.add_dart_data("uvw", float, (3,), rule="interpolate")
+    gm.add_dart_data("crack", np.int8, rule="copy")
     gm.dart_data["uvw"][:] = gm.points
     gm.dart_data["crack"][gm.face_darts([1], "E")[0]] = 1
     cut = cut_map(gm, (1, 0.4, 0.2), (0.4, 0, 0))
@@ -121,9 +121,9 @@ def test_a_warped_face_crossing_the_plane_four_times_is_cut_in_two_rounds():
     """A cube whose end face is a saddle (corners alternately 0.3 before and after the plane): the
     face crosses the plane four times and the volume meets it in two loops.  Once refused; now the
     face is split twice and the volume once per loop: one kept solid, two caps on the other side."""
-    from ramure.gmap import topology
-    from ramure.gmap.incidence import move_vertices
-    from ramure.gmap.measure import total_volume
+    from ramure.gmap.kernel import topology
+    from ramure.gmap.kernel.incidence import move_vertices
+    from ramure.gmap.kernel.measure import total_volume
 
     gm = GMap3()
     gm.add_prisms(4)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from ramure.gmap import GMap3, GMapError
-from ramure.gmap.embedding import grow, reframe, support_frames
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.kernel.embedding import grow, reframe, support_frames
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def trunk_with_rings(embed_each):
@@ -115,7 +115,7 @@ def _embed_by_bincount(gm):
 @pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize("weights", ["ones", "random"])
 def test_compiled_embedding_equals_the_numpy_sums_bit_for_bit(weights, compiled, monkeypatch):
-    monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n: compiled)
+    monkeypatch.setattr("ramure.gmap.kernel.storage.compiled_pays", lambda n: compiled)
     gm = GMap3()
     gm.add_prisms(4)
     grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
@@ -133,7 +133,7 @@ def test_compiled_embedding_with_a_radial_scalar_equals_the_numpy_one(monkeypatc
     """The radial scalar takes the per-dart labels path of the compiled pass: same points, same radial."""
     out = []
     for compiled in (True, False):
-        monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n, compiled=compiled: compiled)
+        monkeypatch.setattr("ramure.gmap.kernel.storage.compiled_pays", lambda n, compiled=compiled: compiled)
         gm = GMap3()
         gm.add_prisms(4)
         grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
@@ -147,7 +147,7 @@ def test_compiled_embedding_with_a_radial_scalar_equals_the_numpy_one(monkeypatc
 @pytest.mark.parametrize("compiled", [True, False])
 def test_corners_from_per_volume_tables(compiled, monkeypatch):
     """Dart d gets table[offset[volume] + corner[d]]; indices past either end are clipped (both paths alike)."""
-    monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n: compiled)
+    monkeypatch.setattr("ramure.gmap.kernel.storage.compiled_pays", lambda n: compiled)
     gm = GMap3()
     gm.add_prisms(4, 3)
     table = np.arange(3 * 8 * 3, dtype=float).reshape(-1, 3)
@@ -163,7 +163,7 @@ def test_corners_from_per_volume_tables(compiled, monkeypatch):
 
 
 def test_compiled_embedding_refuses_a_dart_of_no_volume(monkeypatch):
-    monkeypatch.setattr("ramure.gmap.map3.compiled_pays", lambda n: True)
+    monkeypatch.setattr("ramure.gmap.kernel.storage.compiled_pays", lambda n: True)
     gm = GMap3()
     gm.add_prisms(4)
     grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
@@ -177,6 +177,6 @@ def test_a_small_map_is_built_and_embedded_without_loading_numba():
     import subprocess
     import sys
 
-    code = "import sys; from ramure.gmap.fruit import build_fruit; build_fruit(); print('numba' in sys.modules)"
+    code = "import sys; from ramure.gmap.organs.fruit import build_fruit; build_fruit(); print('numba' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ramure.gmap import GMap3, GMapError
-from ramure.gmap.identify import boundary_neighbour
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.kernel.identify import boundary_neighbour
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def crown(n=6):
@@ -145,7 +145,7 @@ def _random_operation(gm, kind, x, y, t):
     elif kind == 5:
         gm.split_prisms(np.unique([x % gm.n_volumes, y % gm.n_volumes]), t)
     else:
-        from ramure.gmap.embedding import grow
+        from ramure.gmap.kernel.embedding import grow
 
         grow(gm, [x % n], 3 + y % 4, height=t)
 
@@ -168,8 +168,8 @@ def test_a_refused_operation_leaves_the_map_exactly_as_it_was(ops):
 
 
 def test_batch_split_of_joined_ring_cubes_splits_shared_edges_once():
-    from ramure.gmap.embedding import grow
-    from ramure.gmap.measure import total_volume
+    from ramure.gmap.kernel.embedding import grow
+    from ramure.gmap.kernel.measure import total_volume
 
     gm = GMap3()
     gm.add_prisms(6, sizes=[[2.0, 2.0, 2.0]])

@@ -5,8 +5,8 @@ import pytest
 from scipy import sparse
 
 from ramure.gmap import GMap3, GMapError
-from ramure.gmap import incidence
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.kernel import incidence
+from ramure.gmap.kernel.topology import assert_solid
 
 
 def row_of_cubes(k=3):
@@ -32,7 +32,7 @@ def test_adjacency_by_face_and_by_vertex():
 
 
 def test_cubes_on_two_sides_touch_by_vertex_not_by_face():
-    from ramure.gmap.embedding import grow
+    from ramure.gmap.kernel.embedding import grow
 
     gm = GMap3()
     gm.add_prisms(4)

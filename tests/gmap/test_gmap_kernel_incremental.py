@@ -16,10 +16,11 @@ from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
 from ramure.gmap import GMap3
-from ramure.gmap import graphs
-from ramure.gmap import GMapError, _components_kernel, map3, operations
-from ramure.gmap.map3 import _compiled_validity_problems, _validity_problems
-from ramure.gmap.topology import assert_solid, boundary_chi, chi, components
+from ramure.gmap.kernel import graphs
+from ramure.gmap import GMapError
+from ramure.gmap.kernel import _components_kernel, operations, storage
+from ramure.gmap.kernel.storage import _compiled_validity_problems, _validity_problems
+from ramure.gmap.kernel.topology import assert_solid, boundary_chi, chi, components
 
 KEYS = ("123", "023", "013", "012", "0123", "12", "01", "3")
 
@@ -62,7 +63,7 @@ def _row_of_cubes(gm, count, y):
 @pytest.mark.parametrize("compiled", [True, False])  # the compiled update and the numpy one
 def test_two_old_solids_sewn_together_merge_their_orbits(compiled, monkeypatch):
     """Old-old links (no new dart) merge old orbits: counts drop, labels stay 0..count-1."""
-    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     left = _row_of_cubes(gm, 3, 0.0)
     right = _row_of_cubes(gm, 3, 5.0)
@@ -77,7 +78,7 @@ def test_two_old_solids_sewn_together_merge_their_orbits(compiled, monkeypatch):
 
 @pytest.mark.parametrize("compiled", [True, False])  # the compiled update and the numpy one
 def test_orbits_follow_growth_then_split_then_unsew_then_growth(compiled, monkeypatch):
-    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     col = _row_of_cubes(gm, 2, 0.0)
     _assert_orbits_match_fresh(gm, "start")
@@ -99,7 +100,7 @@ def test_orbits_follow_growth_then_split_then_unsew_then_growth(compiled, monkey
 @pytest.mark.parametrize("compiled", [True, False])  # the compiled update and the numpy one
 def test_copies_that_grow_differently_keep_their_own_labels(compiled, monkeypatch):
     """Copies share labelling states; a state appends in place only once (else it copies)."""
-    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: compiled)
     gm = GMap3()
     col = _row_of_cubes(gm, 3, 0.0)
     for key in KEYS:
@@ -117,7 +118,7 @@ def test_copies_that_grow_differently_keep_their_own_labels(compiled, monkeypatc
 @settings(max_examples=40, deadline=None)
 @given(ops=st.lists(st.tuples(st.integers(0, 4), st.integers(0, 10_000)), min_size=1, max_size=8), compiled=st.booleans())
 def test_random_growth_orbit_counts_equal_a_fresh_labelling(ops, compiled):
-    with mock.patch.object(map3, "compiled_pays", lambda n: compiled):
+    with mock.patch.object(storage, "compiled_pays", lambda n: compiled):
         _random_growth(ops)
 
 
@@ -128,7 +129,7 @@ def test_compiled_orbit_update_numbers_orbits_as_the_numpy_one(ops):
     runs = []
     for compiled in (True, False):
         runs.append([])
-        with mock.patch.object(map3, "compiled_pays", lambda n, compiled=compiled: compiled):
+        with mock.patch.object(storage, "compiled_pays", lambda n, compiled=compiled: compiled):
             _random_growth(ops, runs[-1])
     for a, b in zip(*runs):
         assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
@@ -147,7 +148,7 @@ def test_compiled_orbit_update_hands_new_rows_that_are_not_involutions_to_numpy(
         n = gm.n_darts
         gm.alpha[0][n - 1] = n - 7  # one way: alpha0 is no longer an involution on the new darts
         gm.mark_changed()
-        with mock.patch.object(map3, "compiled_pays", lambda n, compiled=compiled: compiled):
+        with mock.patch.object(storage, "compiled_pays", lambda n, compiled=compiled: compiled):
             counts[compiled] = [gm.orbit_count(key) for key in KEYS]
         assert counts[compiled] == [_fresh(gm).orbit_count(key) for key in KEYS]
     assert counts[True] == counts[False]
@@ -249,9 +250,9 @@ def test_compiled_validity_equals_the_numpy_check(kind, pick, other, row):
     """Same darts to check after growth, same messages and counts, on the whole map and on those darts."""
     gm = _grown_pair()
     _corrupt(gm, kind, pick, other, row)
-    with mock.patch.object(map3, "compiled_pays", lambda n: False):
+    with mock.patch.object(storage, "compiled_pays", lambda n: False):
         numpy_darts = gm._changed_since_valid()
-    with mock.patch.object(map3, "compiled_pays", lambda n: True):
+    with mock.patch.object(storage, "compiled_pays", lambda n: True):
         compiled_darts = gm._changed_since_valid()
     assert (numpy_darts is None) == (compiled_darts is None)  # None: more than growth, a full check
     args = (gm.alpha, gm.dart_volume, gm.dart_data["face"], gm.n_volumes)
@@ -265,7 +266,7 @@ def test_compiled_validity_equals_the_numpy_check(kind, pick, other, row):
 
 @pytest.mark.parametrize("compiled", [True, False])
 def test_validity_names_ids_outside_the_map_on_both_paths(compiled, monkeypatch):
-    monkeypatch.setattr(map3, "compiled_pays", lambda n: compiled)
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: compiled)
     gm = _grown_pair()
     gm.alpha[0][5] = gm.n_darts + 3  # the compiled pass stops there; the full numpy check names it
     assert gm.validity_problems() == ["alpha holds dart ids outside 0..n_darts-1"]
@@ -358,7 +359,7 @@ def test_face_walk_of_mixed_faces_equals_a_dart_by_dart_walk(compiled, monkeypat
 
 
 def _boundary_cases():
-    from ramure.gmap import wood
+    from ramure.gmap.organs import wood
 
     one = GMap3()
     one.add_prisms(5)
@@ -381,7 +382,7 @@ def test_compiled_boundary_counts_equal_the_boundary_surface(case):
     v, e, f, ok = _components_kernel.boundary_counts(gm.alpha, gm.n_darts)
     c = gm.boundary().counts()
     assert ok and (v, e, f) == (c["vertices"], c["edges"], c["faces"])
-    with mock.patch.object(map3, "compiled_pays", lambda n: True):
+    with mock.patch.object(storage, "compiled_pays", lambda n: True):
         assert gm.boundary_euler_characteristic() == gm.boundary().euler_characteristic() == v - e + f
     assert v - e + f == (4 if case in (2, 3) else 2)  # two balls in cases 2 and 3
 
@@ -391,7 +392,7 @@ def test_compiled_boundary_hands_a_broken_surface_to_numpy():
     free = np.flatnonzero(gm.alpha[3] == np.arange(gm.n_darts))
     gm.alpha[2][free[0]] = free[5]  # alpha2 no longer an involution on the surface
     assert not _components_kernel.boundary_counts(gm.alpha, gm.n_darts)[3]
-    with mock.patch.object(map3, "compiled_pays", lambda n: True):
+    with mock.patch.object(storage, "compiled_pays", lambda n: True):
         assert gm.boundary_euler_characteristic() == gm.boundary().euler_characteristic()
 
 

@@ -8,9 +8,9 @@ import pyvista as pv
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ramure.gmap.errors import GMapError
-from ramure.gmap.lichen import age_classes, atlas_models, environment, grow_lichen, neighbours, to_polydata
-from ramure.gmap.trimesh import from_polydata
+from ramure.gmap.kernel.errors import GMapError
+from ramure.gmap.organs.lichen import age_classes, atlas_models, environment, grow_lichen, neighbours, to_polydata
+from ramure.gmap.organs.trimesh import from_polydata
 
 R = 0.05
 
@@ -122,7 +122,7 @@ def test_an_open_surface_is_refused():
 
 
 def test_a_non_manifold_surface_is_refused():
-    from ramure.gmap.trimesh import TriMesh
+    from ramure.gmap.organs.trimesh import TriMesh
 
     # two closed tetrahedra sharing the edge 0-1: that edge has four triangles
     pts = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 0.5, 1], [0.5, -1, 0], [0.5, -0.5, -1.0]])

@@ -9,9 +9,9 @@ import pytest
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ramure.gmap import _dla_kernel as kernel
-from ramure.gmap.lichen import grow_lichen
-from ramure.gmap.trimesh import tubes_surface
+from ramure.gmap.organs import _dla_kernel as kernel
+from ramure.gmap.organs.lichen import grow_lichen
+from ramure.gmap.organs.trimesh import tubes_surface
 
 
 def _euler(mesh):
@@ -81,7 +81,7 @@ def test_lichen_on_a_plant_s_bark_spaced_on_the_surface_and_connected(tree):
 
 def test_lichen_on_a_wood_s_bark():
     from ramure.app.details import cover_radius, wood_bark
-    from ramure.gmap.wood import grow_wood
+    from ramure.gmap.organs.wood import grow_wood
 
     _, mesh = wood_bark(grow_wood("pine", years=4, branches=0))
     growth = grow_lichen(mesh, clusters=4, particles=400, r=cover_radius(mesh, 400), seed=0)

@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from ramure.gmap.errors import ValueRefused
-from ramure.gmap.fruit import build_fruit, hfunction, resolve_params, variate
-from ramure.gmap.malform import GRAMMAR_31, SHAPES, malform_params, parse_malform, shape_facts
+from ramure.gmap.kernel.errors import ValueRefused
+from ramure.gmap.organs.fruit import build_fruit, hfunction, resolve_params, variate
+from ramure.gmap.organs.malform import GRAMMAR_31, SHAPES, malform_params, parse_malform, shape_facts
 
 
 def branch_lengths(gm):
@@ -79,7 +79,7 @@ def test_named_shapes_measure_as_named():
 
 
 def test_malformed_fruit_is_a_valid_ball():
-    from ramure.gmap import topology
+    from ramure.gmap.kernel import topology
 
     for seed in range(4):
         gm = build_fruit("round_tomato", volume_levels=1, seed=seed, **malform_params("round_tomato", rate=1.0, seed=seed))

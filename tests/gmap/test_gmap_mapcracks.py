@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from ramure.gmap.cracks import random_pattern
-from ramure.gmap.errors import GMapError
-from ramure.gmap.fruit import build_fruit
-from ramure.gmap.mapcracks import Skin, crack_edges, crack_map, wall_faces
-from ramure.gmap.pyvista import boundary_polydata
+from ramure.gmap.organs.cracks import random_pattern
+from ramure.gmap.kernel.errors import GMapError
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.organs.mapcracks import Skin, crack_edges, crack_map, wall_faces
+from ramure.gmap.kernel.pyvista import boundary_polydata
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +83,7 @@ def test_same_seed_same_crack_other_seed_other_crack(fruit, side):
 
 
 def test_a_cracked_map_can_be_cut_again(fruit, side, pattern):
-    from ramure.gmap.cut import cut_map
+    from ramure.gmap.kernel.cut import cut_map
 
     out, _ = crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1))
     half = cut_map(out, (0, 1, 0), (0, 0, 0))

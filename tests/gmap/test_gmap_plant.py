@@ -5,10 +5,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from ramure.gmap.errors import ValueRefused
-from ramure.gmap.plant import fruits_from_organs, fruits_from_skeleton
-from ramure.gmap.pyvista import to_unstructured_grid
-from ramure.gmap.tissue import CODES
+from ramure.gmap.kernel.errors import ValueRefused
+from ramure.gmap.organs.plant import fruits_from_organs, fruits_from_skeleton
+from ramure.gmap.kernel.pyvista import to_unstructured_grid
+from ramure.gmap.organs.tissue import CODES
 
 
 def organs(k=3):

@@ -4,12 +4,13 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from ramure.gmap import GMap3, subdivide
-from ramure.gmap.cut import parse_plane, plane_cut
-from ramure.gmap.errors import ValueRefused
-from ramure.gmap.fruit import build_fruit
-from ramure.gmap.pyvista import boundary_polydata, to_unstructured_grid
-from ramure.gmap.tissue import TISSUES
+from ramure.gmap import GMap3
+from ramure.gmap.kernel import subdivide
+from ramure.gmap.kernel.cut import parse_plane, plane_cut
+from ramure.gmap.kernel.errors import ValueRefused
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.kernel.pyvista import boundary_polydata, to_unstructured_grid
+from ramure.gmap.organs.tissue import TISSUES
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from ramure.gmap import GMap3, subdivide, sublabel_name
-from ramure.gmap.fruit import build_fruit
+from ramure.gmap import GMap3, sublabel_name
+from ramure.gmap.kernel import subdivide
+from ramure.gmap.organs.fruit import build_fruit
 
 
 @pytest.fixture(scope="module")

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from ramure.gmap.fruit import build_fruit
-from ramure.gmap.pyvista import to_unstructured_grid
-from ramure.gmap.tissue import CODES, TISSUES, layer_tissues, tissue_counts
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.kernel.pyvista import to_unstructured_grid
+from ramure.gmap.organs.tissue import CODES, TISSUES, layer_tissues, tissue_counts
 
 
 @pytest.fixture(scope="module")

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from ramure.gmap import wood as W
-from ramure.gmap.errors import ValueRefused
-from ramure.gmap.topology import assert_solid
+from ramure.gmap.organs import wood as W
+from ramure.gmap.kernel.errors import ValueRefused
+from ramure.gmap.kernel.topology import assert_solid
 
 
 @pytest.fixture(scope="module")
@@ -317,8 +317,8 @@ def test_wood_from_a_derived_plant():
 
 
 def test_plank_as_a_map_keeps_three_knots_and_cuts_again(knotty):
-    from ramure.gmap.cut import cut_map
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.cut import cut_map
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     part = W.plank_map(knotty.gm, [1, 0, 0], 0.006, 0.004)
     assert part.is_valid() and W.knot_regions(to_unstructured_grid(part)) == 3
@@ -327,8 +327,8 @@ def test_plank_as_a_map_keeps_three_knots_and_cuts_again(knotty):
 
 
 def test_map_cut_and_picture_cut_agree_across_the_trunk(trunk6):
-    from ramure.gmap.cut import cut_map
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.cut import cut_map
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     part = cut_map(trunk6.gm, (0, 0, 1), (0, 0, 0.7))
     grid = W.to_grid(trunk6).clip(normal=(0, 0, 1), origin=(0, 0, 0.7), invert=True)
@@ -338,8 +338,8 @@ def test_map_cut_and_picture_cut_agree_across_the_trunk(trunk6):
 
 
 def test_two_map_cuts_of_the_wood_commute(trunk6):
-    from ramure.gmap.cut import cut_map
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.cut import cut_map
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     a = cut_map(cut_map(trunk6.gm, (0, 0, 1), (0, 0, 0.7)), (1, 0, 0), (0.0, 0, 0))
     b = cut_map(cut_map(trunk6.gm, (1, 0, 0), (0.0, 0, 0)), (0, 0, 1), (0, 0, 0.7))
@@ -358,8 +358,8 @@ def test_a_plank_cut_keeps_the_clip_volume_up_to_the_cells_warp(trunk6):
     the VTK clip's volume to 1e-3 and both sides add up to the whole to 1e-4.  (VTK's own volume of
     the cut polyhedra is not used: it tetrahedralises a polyhedron's convex hull, wrong for the
     non-convex cut ring cells by up to a factor 3.)"""
-    from ramure.gmap.cut import cut_map
-    from ramure.gmap.measure import total_volume
+    from ramure.gmap.kernel.cut import cut_map
+    from ramure.gmap.kernel.measure import total_volume
 
     normal, origin = (1, 0, 0), (0.006, 0, 0)
     kept = total_volume(cut_map(trunk6.gm, normal, origin))
@@ -378,7 +378,7 @@ def _cone_tets(gm):
     the kernel's measure uses, so the signed tets add up to each volume."""
     import pyvista as pv
 
-    from ramure.gmap.topology import orientation_parity
+    from ramure.gmap.kernel.topology import orientation_parity
 
     vid, pos = gm.vertex_positions()
     side, ns = gm.orbit_ids("01")
@@ -413,9 +413,9 @@ def test_map_cut_keeps_the_vtk_clip_volume_on_planar_faces_through_knots():
     """On the planar-faced copy (every face split into triangles, vertices kept) the solid is well
     defined: the map cut keeps the VTK clip's volume to 1e-9 (round-off, in fact) on a plank plane
     through three knots and on an oblique plane, both sides add up, and two cuts commute."""
-    from ramure.gmap.mapcut import cut_map, planar_faces
-    from ramure.gmap.measure import total_volume
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.mapcut import cut_map, planar_faces
+    from ramure.gmap.kernel.measure import total_volume
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     wood = W.grow_wood("pine", years=5, branches=[(1, 0), (2, 1), (3, 15)], height=0.12)
     tri = planar_faces(wood.gm)

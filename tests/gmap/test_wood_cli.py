@@ -7,7 +7,7 @@ import pytest
 import pyvista as pv
 
 from ramure.app.cli import main
-from ramure.gmap import wood as W
+from ramure.gmap.organs import wood as W
 
 
 def run_json(capsys, *argv):

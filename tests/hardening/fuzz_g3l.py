@@ -29,7 +29,7 @@ import traceback
 import numpy as np
 
 from ramure.errors import RamureError
-from ramure.gmap.g3l_engine import G3LSystem
+from ramure.gmap.lsystem.engine import G3LSystem
 
 FOLDER = pathlib.Path(__file__).resolve().parents[2] / "grammars" / "wood"
 TEXTS = [p.read_text(encoding="utf-8") for p in sorted(FOLDER.glob("*.g3l"))]

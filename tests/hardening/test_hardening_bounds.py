@@ -10,7 +10,7 @@ import pytest
 
 from ramure.app.cli import main
 from ramure.errors import ValueRefused
-from ramure.gmap import wood as W
+from ramure.gmap.organs import wood as W
 
 
 def run_cli(argv):

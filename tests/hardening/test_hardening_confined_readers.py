@@ -209,7 +209,7 @@ def test_a_session_file_that_is_a_pipe_is_refused(tmp_path):
 
 
 def test_mtg_and_g3l_readers_refuse_pipes(tmp_path):
-    from ramure.gmap.g3l import load_g3l
+    from ramure.gmap.lsystem.g3l import load_g3l
     from ramure.lsys.mtg import read_mtg
 
     for name, read in (("p.mtg", read_mtg), ("p.g3l", load_g3l)):

@@ -15,8 +15,8 @@ import pytest
 
 from ramure.app.cli import main
 from ramure.errors import DerivationError, GrammarError, ValueRefused
-from ramure.gmap.g3l import parse_g3l
-from ramure.gmap.g3l_engine import G3LSystem
+from ramure.gmap.lsystem.g3l import parse_g3l
+from ramure.gmap.lsystem.engine import G3LSystem
 from ramure.lsys import LSystem
 from tests.hardening.fuzz_g3l import campaign, run_one, table
 

@@ -6,7 +6,7 @@ import pytest
 from networkx.algorithms import flow
 
 from ramure.lsys import LSystem, ValueRefused
-from ramure.lsys.cut import alpha_table, initial_capacities, kinship, select_roots
+from ramure.lsys.mincut import bonus_table, initial_capacities, kinship, select_roots
 
 
 def ternary(n=3):
@@ -17,14 +17,14 @@ def leaves_of(tree, node):
     return tree.leaves_under(node).tolist()
 
 
-def test_alpha_table_n10():
-    assert alpha_table(10, rho=0.5, alpha0=1024, kmax=5).tolist() == [1024, 1022, 1018, 1010, 994, 962]
+def test_bonus_table_n10():
+    assert bonus_table(10, rho=0.5, bonus0=1024, kmax=5).tolist() == [1024, 1022, 1018, 1010, 994, 962]
 
 
 @pytest.mark.parametrize("rho", [0, -0.1, 1.01, "x"])
 def test_rho_out_of_range_refused(rho):
     with pytest.raises(ValueRefused, match="rho"):
-        alpha_table(3, rho=rho)
+        bonus_table(3, rho=rho)
 
 
 def test_initial_capacities_double_up():
@@ -177,12 +177,12 @@ def test_the_trees_own_recursion_finds_the_max_flows_cut(name, n):
     sizes = (1, 2, 3, 5, 12, 40, 200, len(t.leaves) // 2, len(t.leaves))
     for size, rho in zip(sizes, (1.0, 0.5, 0.3, 0.5, 0.9, 0.25, 0.5, 0.5, 0.1)):
         sel = rng.choice(t.leaves, min(size, len(t.leaves)), replace=False)
-        for alpha0 in (None, 3.5):
-            fast = select_roots(t, sel, rho=rho, n=steps, alpha0=alpha0)
+        for bonus0 in (None, 3.5):
+            fast = select_roots(t, sel, rho=rho, n=steps, bonus0=bonus0)
             for check in (dict(flow_func=flow.preflow_push), dict(reduce=False)):
-                _same_cut(fast, select_roots(t, sel, rho=rho, n=steps, alpha0=alpha0, **check))
+                _same_cut(fast, select_roots(t, sel, rho=rho, n=steps, bonus0=bonus0, **check))
             # the network made on first use is the one the solver would have cut
-            solved = select_roots(t, sel, rho=rho, n=steps, alpha0=alpha0, flow_func=flow.preflow_push)
+            solved = select_roots(t, sel, rho=rho, n=steps, bonus0=bonus0, flow_func=flow.preflow_push)
             assert fast.source_side == solved.source_side
             assert sorted(fast.graph.edges(data=True), key=repr) == sorted(solved.graph.edges(data=True), key=repr)
 
@@ -242,8 +242,8 @@ def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkey
     """path_nodes marks a tree-sized mask for large selections: the same nodes and roots as
     sorting each level (forced both ways here); collapse_nested (300 roots: its climb of all
     roots at once) keeps exactly the roots with no other root above them."""
-    from ramure.lsys import cut as cut_module
-    from ramure.lsys.cut import collapse_nested, path_nodes
+    from ramure.lsys import mincut as cut_module
+    from ramure.lsys.mincut import collapse_nested, path_nodes
 
     t = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8).tree
     rng = np.random.default_rng(seed)

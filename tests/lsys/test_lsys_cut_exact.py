@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem, ValueRefused
-from ramure.lsys.cut import FROM_AXIOM_MESSAGE, exact_capacities, initial_capacities, select_roots
+from ramure.lsys.mincut import FROM_AXIOM_MESSAGE, exact_capacities, initial_capacities, select_roots
 from ramure.lsys.regen import Session
 from ramure.lsys.tree import DerivationTree
 
@@ -71,7 +71,7 @@ def finish(tree, roots):
 
 
 def spec_capacities(tree, selected, rho, n):
-    """Capacities from the spec, in Fractions: leaf 1, internal 2 x children, + alpha_k, clamp 0."""
+    """Capacities from the spec, in Fractions: leaf 1, internal 2 x children, + bonus_k, clamp 0."""
     rho = Fraction(repr(float(rho)))
     cap = {}
     in_string = set(tree.leaves.tolist())

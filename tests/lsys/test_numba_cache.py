@@ -108,7 +108,7 @@ def test_processes_compiling_at_the_same_time_leave_a_usable_cache(tmp_path):
 def _kernel_modules():
     import importlib
 
-    for package in ("lsys", "gmap", "app/desktop"):
+    for package in ("lsys", "gmap/kernel", "gmap/organs", "app/desktop"):
         for path in sorted((ROOT / package).glob("_*kernel.py")):
             yield importlib.import_module(f"ramure.{package.replace('/', '.')}.{path.stem}")
 
@@ -147,7 +147,7 @@ def test_no_module_uses_numbas_njit_directly():
 def test_git_ignores_the_cache_files():
     paths = [
         "lsys/__pycache__/_turtle_kernel.walk-91.py311.nbi",
-        "gmap/__pycache__/_dla_kernel.grow-14.py311.1.nbc",
+        "gmap/organs/__pycache__/_dla_kernel.grow-14.py311.1.nbc",
         "ramure/__pycache__/numba_runtime-0123456789abcdef0123.bin",
     ]
     done = subprocess.run(["git", "-C", str(ROOT), "check-ignore", *paths], capture_output=True, text=True, timeout=60)

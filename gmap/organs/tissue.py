@@ -1,0 +1,318 @@
+"""Fruit tissues: the differentiation rule after volume subdivision (thesis §2.4).
+
+Tissue codes (volume attribute ``tissue``; names in :data:`TISSUES`):
+
+====  ==========  ==================================================
+code  name        cells
+====  ==========  ==================================================
+0     columella   the trunk (central axis, placenta)
+1     pericarp    undifferentiated branch cells (no volume subdivision)
+2     exocarp     skin: branch cells with a boundary face
+3     mesocarp    flesh under the skin
+4     endocarp    inner lining of each locule
+5     septum      radial walls between locules
+6     locule      locule cavities (gel)
+7     seed        seeds: locule cells on the columella, rounded
+====  ==========  ==================================================
+
+The rule, ``B -> (C, e, D, m, B, n, carpels, G)`` in the thesis, works here on
+radial layers.  After ``k`` volume subdivisions each branch holds
+``L = 2**k`` layers of cells between the core and the skin (told apart by the
+``radial`` vertex scalar).  The outer layer is exocarp, then mesocarp,
+one layer of endocarp and the rest locule (for ``L = 2``: exocarp and
+mesocarp; ``L = 3``: exocarp, mesocarp, locule).  Any branch cell with a
+boundary face is exocarp, so the skin also covers the poles.  Around the axis,
+the fruit is cut into ``carpels`` equal angular sectors; the fraction
+``septum`` of each sector centred on its borders turns endocarp and locule
+cells into septum.  Then ``seeds`` locule cells glued to the columella but not to the
+exocarp (no two sharing a vertex) are picked at random; each is cut across its depth into gel,
+seed and gel (the seed spans :data:`SEED_SPAN` of the cell's depth), and the
+seeds are rounded by ``seed_smoothing`` surface subdivisions of those cells
+only (their neighbours' faces follow).  The thesis relabels whole cells as
+seeds; here a whole cell would be as deep as the locule, hence the cuts.
+
+Thicknesses ``exocarp``, ``mesocarp`` and ``endocarp`` are *fractions of the
+local pericarp depth* (core surface to skin; the locules take the rest): the
+vertices between layers are moved along each radial line to these depths, as
+the thesis moves the inner faces "along their incident edges".
+
+>>> from ramure.gmap.organs.fruit import build_fruit
+>>> gm = build_fruit("round_tomato", volume_levels=2, seeds=10)
+>>> counts = tissue_counts(gm)
+>>> counts["seed"], counts["exocarp"] > 0, counts["locule"] > 0
+(10, True, True)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ramure.gmap.kernel import subdivide as _subdivide
+from ramure.gmap.kernel.errors import ValueRefused
+from ramure.gmap.kernel.storage import TISSUES
+
+if TYPE_CHECKING:
+    from ramure.gmap.kernel.map3 import GMap3
+
+CODES = {name: code for code, name in enumerate(TISSUES)}
+
+#: Display colours (hex RGB) by tissue name, for renderers.
+COLORS = {
+    "columella": "#f4c7a1",
+    "pericarp": "#e0452f",
+    "exocarp": "#9e0d12",
+    "mesocarp": "#e8412c",
+    "endocarp": "#f0866a",
+    "septum": "#d9382a",
+    "locule": "#d4b843",
+    "seed": "#fff8e0",
+}
+
+#: Internal-structure parameters and their defaults.
+DEFAULTS = {
+    "carpels": 3,
+    "exocarp": 0.04,
+    "mesocarp": 0.30,
+    "endocarp": 0.06,
+    "septum": 0.25,
+    "seeds": 120,
+    "seed_smoothing": 1,
+}
+
+
+def check_params(p: Mapping[str, float]) -> None:
+    """Raise :class:`~ramure.gmap.kernel.errors.ValueRefused` for out-of-range tissue parameters."""
+    if not 1 <= p["carpels"] <= 64:
+        raise ValueRefused(f"carpels must be in 1..64, got {p['carpels']}")
+    for name in ("exocarp", "mesocarp", "endocarp"):
+        if not 0 < p[name] < 1:
+            raise ValueRefused(f"{name} thickness is a fraction of the pericarp depth in (0, 1), got {p[name]}")
+    total = p["exocarp"] + p["mesocarp"] + p["endocarp"]
+    if total >= 1:
+        raise ValueRefused(f"exocarp + mesocarp + endocarp must stay below 1 (the locules take the rest), got {total:g}")
+    if not 0 <= p["septum"] < 1:
+        raise ValueRefused(f"septum must be a fraction of each carpel in [0, 1), got {p['septum']}")
+    if p["seeds"] < 0:
+        raise ValueRefused(f"seeds must be >= 0, got {p['seeds']}")
+    if not 0 <= p["seed_smoothing"] <= 3:
+        raise ValueRefused(f"seed_smoothing must be in 0..3, got {p['seed_smoothing']}")
+
+
+def tissue_counts(gm: GMap3) -> dict[str, int]:
+    """Number of volumes of each tissue, by name (all names present).
+
+    >>> from ramure.gmap.organs.fruit import build_fruit
+    >>> tissue_counts(build_fruit("round_tomato"))["pericarp"]
+    100
+    """
+    counts = np.bincount(gm.volume_data["tissue"].astype(np.int64), minlength=len(TISSUES))
+    return {name: int(counts[code]) for code, name in enumerate(TISSUES)}
+
+
+def layer_tissues(layers: int) -> np.ndarray:
+    """Tissue code of each radial layer, outermost first.
+
+    >>> [TISSUES[c] for c in layer_tissues(4)]
+    ['exocarp', 'mesocarp', 'endocarp', 'locule']
+    """
+    return _layer_plan(layers, DEFAULTS)[0]
+
+
+def _layer_plan(layers, p):
+    """Tissue per layer and the target depth (fraction) of each layer boundary."""
+    exo, meso, endo = p["exocarp"], p["mesocarp"], p["endocarp"]
+    if layers <= 1:
+        return np.array([CODES["pericarp"]]), np.array([0.0, 1.0])
+    if layers == 2:
+        plan = [("exocarp", 1, exo), ("mesocarp", 1, 1 - exo)]
+    elif layers == 3:
+        plan = [("exocarp", 1, exo), ("mesocarp", 1, meso), ("locule", 1, 1 - exo - meso)]
+    else:
+        rest = layers - 2
+        locule_share = (1 - exo - meso - endo) / (1 - exo - endo)
+        n_loc = min(max(1, int(round(rest * locule_share))), rest - 1)
+        plan = [
+            ("exocarp", 1, exo),
+            ("mesocarp", rest - n_loc, meso),
+            ("endocarp", 1, endo),
+            ("locule", n_loc, 1 - exo - meso - endo),
+        ]
+    codes = np.concatenate([[CODES[name]] * count for name, count, _ in plan])
+    steps = np.concatenate([[thick / count] * count for _, count, thick in plan])
+    return codes, np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def differentiate(
+    gm: GMap3,
+    carpels: int = 3,
+    exocarp: float = 0.04,
+    mesocarp: float = 0.30,
+    endocarp: float = 0.06,
+    septum: float = 0.25,
+    seeds: int = 40,
+    seed_smoothing: int = 1,
+    rng: int | np.random.Generator | None = None,
+) -> GMap3:
+    """Assign tissues to a volume-subdivided fruit and shape its layers; returns a map.
+
+    Works on maps from :func:`ramure.gmap.organs.fruit.build_fruit` (volume attributes
+    ``order``, ``ring`` and the ``radial`` vertex scalar).  With fewer than
+    two radial layers (no volume subdivision) the branches stay
+    ``pericarp``.  See the module docstring for the rule.
+    """
+    check_params(
+        dict(
+            carpels=carpels,
+            exocarp=exocarp,
+            mesocarp=mesocarp,
+            endocarp=endocarp,
+            septum=septum,
+            seeds=seeds,
+            seed_smoothing=seed_smoothing,
+        )
+    )
+    rng = np.random.default_rng(rng)
+    vd = gm.volume_data
+    branch = vd["order"] >= 1
+    rho = gm.volume_means(gm.dart_data["radial"])
+    if not branch.any():
+        return gm
+    layers = int(round(1.0 / (2.0 * max(1.0 - rho[branch].max(), 1e-9))))
+    if layers < 2:
+        return gm
+    params = dict(exocarp=exocarp, mesocarp=mesocarp, endocarp=endocarp)
+    codes, depths = _layer_plan(layers, params)
+    tissue = vd["tissue"]
+    layer = np.clip(np.floor((1.0 - rho) * layers).astype(np.int64), 0, layers - 1)
+    tissue[branch] = codes[layer[branch]]
+    alpha = gm.alpha
+    vol = gm.dart_volume
+    free = alpha[3] == np.arange(gm.n_darts)
+    on_skin = np.zeros(gm.n_volumes, bool)
+    on_skin[vol[free]] = True
+    tissue[branch & on_skin] = CODES["exocarp"]
+    inner = np.isin(tissue, [CODES["endocarp"], CODES["locule"]])
+    tissue[inner & _in_septum(gm, carpels, septum)] = CODES["septum"]
+    _place_layers(gm, layers, depths)
+    cells, inner = _pick_seeds(gm, seeds, rng)
+    return _carve_seeds(gm, cells, inner, seed_smoothing)
+
+
+def _in_septum(gm, carpels, septum):
+    """Volumes whose angle about their ring's axis falls in a septum band."""
+    vd = gm.volume_data
+    ring = vd["ring"].astype(np.int64)
+    trunk = np.flatnonzero(vd["order"] == 0)
+    rings, first = np.unique(ring[trunk], return_index=True)
+    origin = np.zeros((int(ring.max()) + 1, 3))
+    frame = np.tile(np.eye(3), (int(ring.max()) + 1, 1, 1))
+    origin[rings] = vd["origin"][trunk[first]]
+    frame[rings] = vd["frame"][trunk[first]]
+    rel = gm.volume_centroids() - origin[ring]
+    f = frame[ring]
+    theta = np.arctan2(np.sum(rel * f[:, 2], axis=1), np.sum(rel * f[:, 1], axis=1))
+    u = np.mod(theta / (2 * np.pi) * carpels, 1.0)
+    return np.minimum(u, 1.0 - u) < septum / 2.0
+
+
+def _place_layers(gm, layers, depths) -> None:
+    """Move vertices along radial lines so layer boundaries sit at ``depths``."""
+    vid, nv = gm.cells(0)
+    _, pos = gm.vertex_positions()
+    rho = np.bincount(vid, gm.dart_data["radial"], minlength=nv) / np.bincount(vid, minlength=nv)
+    u, w = vid, vid[gm.alpha[0]]
+    eps = 1e-9
+
+    def extreme(sign):
+        order = np.lexsort((sign * rho[w], u))
+        last = np.ones(len(order), bool)
+        last[:-1] = u[order][1:] != u[order][:-1]
+        best = np.arange(nv)
+        cand_u, cand_w = u[order][last], w[order][last]
+        better = sign * rho[cand_w] > sign * rho[cand_u] + eps
+        best[cand_u[better]] = cand_w[better]
+        for _ in range(64):  # pointer jumping to the end of the line
+            nxt = best[best]
+            if np.array_equal(nxt, best):
+                break
+            best = nxt
+        return best
+
+    skin, core = extreme(1.0), extreme(-1.0)
+    span = rho[skin] - rho[core]
+    move = (rho > eps) & (rho < 1 - eps) & (span > eps)
+    t = (rho[skin][move] - rho[move]) / span[move]
+    g = np.interp(t, np.linspace(0.0, 1.0, layers + 1), depths)
+    new = pos.copy()
+    new[move] = pos[skin[move]] + (pos[core[move]] - pos[skin[move]]) * g[:, None]
+    gm.points[:] = new[vid]
+
+
+#: Where a seed sits inside its locule cell: fractions of the cell's depth from its inner face.
+SEED_SPAN = (0.2, 0.45)
+
+
+def _pick_seeds(gm, count, rng):
+    """Up to ``count`` random locule cells glued to the columella, not to the exocarp, sharing no vertex.
+
+    Returns ``(volumes, inner_darts)``: each cell and a dart of its face on the columella.
+    """
+    tissue = gm.volume_data["tissue"]
+    alpha = gm.alpha
+    vol = gm.dart_volume
+    sewn = np.flatnonzero(alpha[3] != np.arange(gm.n_darts))
+    here, there = tissue[vol[sewn]], tissue[vol[alpha[3][sewn]]]
+    touch = sewn[(here == CODES["locule"]) & (there == CODES["columella"])]
+    near_skin = np.unique(vol[sewn[there == CODES["exocarp"]]])
+    touch = touch[~np.isin(vol[touch], near_skin)]
+    cells, first = np.unique(vol[touch], return_index=True)
+    if not count or cells.size == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    inner = touch[first]
+    vid, _ = gm.cells(0)
+    by_vol = np.argsort(vol, kind="stable")
+    bounds = np.searchsorted(vol[by_vol], np.arange(gm.n_volumes + 1))
+    used = np.zeros(int(vid.max()) + 1, bool)
+    chosen = []
+    for i in rng.permutation(len(cells)):  # one step per candidate cell, not per dart
+        c = cells[i]
+        verts = vid[by_vol[bounds[c] : bounds[c + 1]]]
+        if used[verts].any():
+            continue
+        used[verts] = True
+        chosen.append(i)
+        if len(chosen) == count:
+            break
+    picked = np.array(chosen, np.int64)
+    return cells[picked], inner[picked]
+
+
+def _carve_seeds(gm, cells, inner, smoothing):
+    """Cut each cell into gel | seed | gel across its depth, then round the seeds."""
+    t0, t1 = SEED_SPAN
+    seeds = []
+    for c, d in zip(cells, inner):  # one step per seed
+        rest = gm.split_prism(int(c), t0, face=int(d), labels=("I", "I"))
+        vol = gm.dart_volume
+        cut = np.flatnonzero((vol == rest) & (vol[gm.alpha[3]] == c))
+        gm.split_prism(rest, (t1 - t0) / (1.0 - t0), face=int(cut[0]), labels=("I", "I"))
+        seeds.append(rest)
+    seed_ids = np.array(seeds, np.int64)
+    gm.volume_data["tissue"][seed_ids] = CODES["seed"]
+    if smoothing and seed_ids.size:
+        gm = _subdivide.surface(gm, smoothing, volumes=seed_ids)
+    return gm
+
+
+def tissue_rgb(tissue: ArrayLike) -> np.ndarray:
+    """uint8 RGB per cell from tissue codes (colours of :data:`COLORS`).
+
+    >>> tissue_rgb([CODES["seed"], CODES["pericarp"]]).tolist()
+    [[255, 248, 224], [224, 69, 47]]
+    """
+    table = np.array([[int(COLORS[n][i : i + 2], 16) for i in (1, 3, 5)] for n in TISSUES], np.uint8)
+    return table[np.asarray(tissue, np.int64)]

@@ -1,0 +1,1654 @@
+"""Volumetric wood on the 3-G-map: pith, growth rings, bark, sapwood, heartwood and knots.
+
+After Guimberteau (2008), chapters 2-3, with the decisions of
+``shared/spec/wood-3gmap.md``.  Each axis (the trunk, and every branch) is a
+chain of pith prisms, one *level* per year of length growth, with a radial
+*stack* of cubes on each side face.  One step is a half-year (spring, then
+summer; spec decision 1); every stack gets one wood cell per step -- earlywood
+in spring, latewood in summer -- and one bark cell per spring, so a stack that
+has lived ``q`` half-years holds ``q`` wood cells and ``ceil(q/2)`` bark cells.
+New cells are added on the free outer face of each stack (the thesis's
+"add a volume on a face") and identified with their neighbours around the
+axis (C2 | C4) and along it (C1 | C3) through the edge they share.
+
+*Cambium (a choice; the thesis has no bark).*  Cells are added outside, but
+the cambium lies under the bark: after each step the roles are re-read from
+the inside of each stack -- the ``q`` inner cells are wood, the outer ones
+bark, the newest bark innermost -- so a cell made as bark becomes wood when
+the cambium passes it.  A cell keeps its topology; its role, width and
+colour follow its position.  Hence bark is always the outer layer (spec
+decision 7: one bark layer per year with its own thickness law), sapwood is
+the outer ``sapwood_rings`` rings, heartwood the rings inside once the tree is
+older than ``heartwood_age`` years (younger trees are all sapwood inside).
+
+*Widths.*  A wood cell's radial width is drawn in its law's bounds,
+``[lo, hi] x f(c) x reaction(phi)``: ``lo, hi`` per season, ``f(c) =
+max(floor, exp(-(c - 1) / decay))`` of the cambial ring number ``c`` (ring
+count from the pith; juvenile rings are wider) and ``reaction(phi) = 1 + r
+max(0, cos(phi - phi_r))``, thicker rings on one side (reaction wood).  The
+draw mixes a per-year value (a good year is wide all round) with a per-cell
+value, both seeded from the axis's seed and the cell's address, never from
+volume ids, so regrowing one branch with a new seed changes only its cells.
+
+*Embedding.*  Default corners are analytic: level frames along each axis,
+corner angles ``2 pi (k - 1/2) / n``, radial boundaries at the cumulative
+widths (apothems).  The kernel's :meth:`GMap3.embed` then averages the
+corners of the volumes around each vertex (spec decision 3).  Default
+corners depend only on attributes, so embedding every step or once gives the
+same positions.
+
+*Knots.*  A year with new branches grows a short *node* level (1.6 times
+the branch's final base radius) under its internode.  A branch born in year
+``j`` starts on the node's pith face in sector ``k`` (the trunk grows no stack
+there, as in Table 3.4 ``A -> A[F]_E [B]_Ci [R1]_C*-i``): the branch's first
+pith prism is sewn onto that face, then grows along the branch direction
+with its own stacks; its first level spans the trunk's radius (the knot), so
+the branch base has ``Y - j`` years of rings around its pith.
+
+*The knot is sewn into its slot (a choice; the thesis only says "special
+gluing between the branch cubes and the trunk cubes").*  The missing stack
+leaves a tunnel whose layer ``i`` is walled by four trunk faces (C2 of the
+stack at ``k - 1``, C4 at ``k + 1``, C3 below, C1 above, cell ``i`` of each).
+Branches have four sides (``branch_sides = 4``), one per wall, and the
+knot's ring cell ``i`` is born in the same step as the walls' cell ``i``, so
+after every layer the kernel's :meth:`GMap3.identify` sews each knot cell's
+C1 face to the wall of its layer through the edge they share (the pith face
+edge for ``i = 1``, the previous layer's seam after): all faces are quads,
+no edge is split, no filler cell is needed, and the knot's rings continue
+the trunk's (one cambium; the bark of the knot meets the trunk's bark).
+The solid stays one ball (valid, chi = 1, boundary chi = 2 after every
+step).  Geometrically ring ``i`` of the knot starts on layer ``i`` of the
+slot: nested cups, a cone of the branch's rings opening from the pith
+(:meth:`Wood._seat_knot`).  Knot volumes are ``exclusive`` (the thesis's
+``seulPourPl``), so the seam vertices take the knot's corners and the
+trunk's rings bend around the knot by a displacement field from the seam
+(:meth:`Wood._push`), which folds no cell.  The seam uses the law's mean
+widths, so regrowing a branch with a new seed moves only that branch.
+
+>>> w = grow_wood("pine", years=2, branches=0)
+>>> w.gm.n_darts == trunk_darts(16, 2), w.gm.euler_characteristic()
+(True, 1)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ramure.gmap.kernel import prism as _prism
+from ramure.gmap.kernel.errors import GMapError, ValueRefused
+from ramure.gmap.lsystem.engine import mix
+from ramure.gmap.kernel.map3 import GMap3
+
+if TYPE_CHECKING:
+    import pyvista as pv
+
+    from ramure.lsys.turtle import Skeleton
+
+#: Wood tissues (volume attribute ``wood``).
+TISSUES = ("pith", "heartwood", "sapwood", "bark", "knot")
+CODES = {name: i for i, name in enumerate(TISSUES)}
+EARLY, LATE = 0, 1
+
+#: Dart offsets of a fresh cube's side faces (forward dart at corner 0), see :mod:`ramure.gmap.kernel.prism`.
+_C1, _C2, _C3, _C4 = 16, 24, 32, 40
+
+#: Fewest trunk faces between two branches of one year that :func:`from_skeleton` keeps (closer
+#: knots of one node crowd the ring cells between them).
+MIN_SECTOR_GAP = 3
+
+#: Most darts a wood may have (about 450 bytes each).
+MAX_DARTS = 8_000_000
+
+_COMMON = dict(
+    sides=16,
+    branch_sides=4,
+    branch_angle=60.0,
+    branch_length=0.15,
+    branch_scale=0.5,
+    branches=3,
+    branch_start=1,
+    reaction=0.0,
+    reaction_angle=0.0,
+    width_floor=0.35,
+    height_jitter=0.0,
+)
+
+#: Species presets: geometry in metres, widths per half-year cell, colours as hex RGB.
+SPECIES: dict[str, dict[str, Any]] = {
+    "pine": dict(
+        _COMMON,
+        pith_radius=0.003,
+        height=0.5,
+        early_min=0.0025,
+        early_max=0.0045,
+        late_min=0.0008,
+        late_max=0.0018,
+        decay=25.0,
+        bark_min=0.0010,
+        bark_max=0.0018,
+        sapwood_rings=6,
+        heartwood_age=8,
+        colors=dict(
+            pith="#5b3b22",
+            heartwood=("#d7a467", "#a8662f"),
+            sapwood=("#f3deb0", "#cf9d5c"),
+            bark="#5a3b28",
+            knot=("#8a5527", "#5b3314"),
+        ),
+    ),
+    "oak": dict(
+        _COMMON,
+        pith_radius=0.0025,
+        height=0.35,
+        early_min=0.0008,
+        early_max=0.0012,
+        late_min=0.0010,
+        late_max=0.0028,
+        decay=40.0,
+        bark_min=0.0012,
+        bark_max=0.0022,
+        sapwood_rings=10,
+        heartwood_age=12,
+        branch_angle=50.0,
+        colors=dict(
+            pith="#4a3520",
+            heartwood=("#b58a55", "#7f5630"),
+            sapwood=("#ead6ad", "#c9a677"),
+            bark="#4b4138",
+            knot=("#6d4a2a", "#4a2f18"),
+        ),
+    ),
+}
+
+#: Parameters a user may set (``--set name=value``) with their meaning.
+PARAMETERS = {
+    "sides": "faces of the trunk's pith prisms (>= 3)",
+    "branch_sides": "faces of a branch's pith prisms (4: one per slot wall, so knots are sewn)",
+    "pith_radius": "apothem of the pith (m)",
+    "height": "length growth of the trunk per year (m)",
+    "early_min": "earlywood width bounds at the pith (m)",
+    "early_max": "",
+    "late_min": "latewood width bounds at the pith (m)",
+    "late_max": "",
+    "decay": "rings for the width law to fall by e (juvenile wood is wider)",
+    "width_floor": "lowest factor of the width law",
+    "bark_min": "bark layer thickness bounds (m)",
+    "bark_max": "",
+    "sapwood_rings": "rings of sapwood under the bark",
+    "heartwood_age": "age (years) after which inner rings are heartwood",
+    "branches": "number of branches (knots)",
+    "branch_start": "first year a branch may be born",
+    "branch_angle": "branch insertion angle from the trunk axis (degrees)",
+    "branch_length": "branch length growth per year (m)",
+    "branch_scale": "branch ring widths / trunk ring widths",
+    "reaction": "extra ring width on the reaction side (0 = none, 0.5 = +50 %)",
+    "reaction_angle": "direction of the reaction side (degrees about the axis)",
+    "height_jitter": "relative random variation of the yearly height growth",
+}
+
+#: Lengths (m) among the parameters, and the largest accepted: growth of a kilometre a year or
+#: a ring a kilometre wide is a typo, and 1e308 would make coordinates that are not finite.
+LENGTHS = ("pith_radius", "height", "early_min", "early_max", "late_min", "late_max", "bark_min", "bark_max", "branch_length")
+MAX_LENGTH = 1000.0
+#: Most faces of the trunk's pith prisms (a round trunk needs tens, not thousands).
+MAX_SIDES = 1024
+
+
+def trunk_darts(sides: int, years: int) -> int:
+    """Darts of a branch-free trunk after ``years`` years (closed form).
+
+    Levels ``t = 0..Y-1`` (one pith ``sides``-prism each, ``12 sides`` darts);
+    level ``t`` has lived ``2 (Y - t)`` half-years, so each of its ``sides``
+    stacks holds ``2 (Y - t)`` wood cells and ``Y - t`` bark cells, cubes of 48
+    darts: ``darts = 12 s Y + 48 s * 3 * Y (Y + 1) / 2``.
+
+    >>> trunk_darts(16, 10)
+    128640
+    """
+    return 12 * sides * years + 48 * sides * 3 * years * (years + 1) // 2
+
+
+def trunk_volumes(sides: int, years: int) -> int:
+    """Volumes of a branch-free trunk: ``Y + 3 s Y (Y + 1) / 2``."""
+    return years + 3 * sides * years * (years + 1) // 2
+
+
+def resolve_params(species: str = "pine", **params: Any) -> dict[str, Any]:
+    """Species preset values overridden by ``params`` (strings converted); checked."""
+    if species not in SPECIES:
+        raise ValueRefused(f"unknown species {species!r}; choose one of {', '.join(SPECIES)}")
+    out = dict(SPECIES[species])
+    for name, value in params.items():
+        if name not in PARAMETERS:
+            raise ValueRefused(f"unknown wood parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+        default = SPECIES[species][name]
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueRefused(f"wood parameter {name}={value!r} is not a number") from None
+        if not math.isfinite(number):
+            raise ValueRefused(f"wood parameter {name} must be a finite number, got {value!r}")
+        if isinstance(default, int) and not number.is_integer():
+            raise ValueRefused(f"wood parameter {name} must be a whole number, got {value!r}")
+        out[name] = int(number) if isinstance(default, int) else number
+    _check(out)
+    return out
+
+
+def _check(p) -> None:
+    def need(cond, message):
+        if not cond:
+            raise ValueRefused(message)
+
+    for name in (
+        "pith_radius",
+        "height",
+        "early_min",
+        "early_max",
+        "late_min",
+        "late_max",
+        "decay",
+        "width_floor",
+        "bark_min",
+        "bark_max",
+        "branch_length",
+        "branch_scale",
+        "reaction",
+        "reaction_angle",
+        "branch_angle",
+        "height_jitter",
+    ):
+        need(math.isfinite(p[name]), f"{name} must be a finite number, got {p[name]}")
+    need(
+        p["sides"] >= 3 and p["branch_sides"] >= 3,
+        f"prism order must be at least 3, got sides={p['sides']}, branch_sides={p['branch_sides']}",
+    )
+    need(
+        p["branch_sides"] == 4,
+        f"branch_sides must be 4 (a knot's four sides are sewn to the four walls of its slot), got {p['branch_sides']}",
+    )
+    for lo, hi in (("early_min", "early_max"), ("late_min", "late_max"), ("bark_min", "bark_max")):
+        need(p[lo] > 0 and p[hi] > 0, f"ring widths must be positive, got {lo}={p[lo]}, {hi}={p[hi]}")
+        need(p[lo] <= p[hi], f"{lo} must not exceed {hi}, got {p[lo]} > {p[hi]}")
+    for name in ("pith_radius", "height", "decay", "branch_length", "branch_scale"):
+        need(p[name] > 0, f"{name} must be > 0, got {p[name]}")
+    for name in LENGTHS:  # a wood of finite, drawable size: never 1e308 m a year
+        need(p[name] <= MAX_LENGTH, f"{name} must be at most {MAX_LENGTH:g} m, got {p[name]:g}")
+    need(p["sides"] <= MAX_SIDES, f"sides must be at most {MAX_SIDES}, got {p['sides']}")
+    need(0 < p["width_floor"] <= 1, f"width_floor must be in (0, 1], got {p['width_floor']}")
+    need(p["reaction"] >= 0, f"reaction must be >= 0, got {p['reaction']}")
+    need(0 <= p["height_jitter"] < 1, f"height_jitter must be in [0, 1), got {p['height_jitter']}")
+    need(0 < p["branch_angle"] < 180, f"branch_angle must be in (0, 180) degrees, got {p['branch_angle']}")
+    need(
+        p["branches"] >= 0 and p["sapwood_rings"] >= 0 and p["heartwood_age"] >= 0,
+        "branches, sapwood_rings and heartwood_age must be >= 0",
+    )
+
+
+def estimated_darts(p: Mapping[str, Any], years: int, branch_years: Sequence[int] = ()) -> int:
+    """Darts the wood will have: the trunk's closed form plus each branch's (a branch born in
+    year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years);
+    nodes add one pith prism and its stacks per year with branches, less one stack per branch
+    (its slot).  Exact for :func:`grow_wood`."""
+    s, b = int(p["sides"]), int(p["branch_sides"])
+    total = trunk_darts(s, years)
+    born = [int(y) for y in branch_years]
+    for j in sorted(set(born)):  # the node level and its stacks, less the slots
+        total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
+    for j in branch_years:
+        total += trunk_darts(b, years - int(j))
+    return total
+
+
+# ---------------------------------------------------------------------- geometry helpers
+def _u01(*key):
+    """A uniform number in [0, 1) from a key (no shared random stream)."""
+    return mix(*key) / float(1 << 63)
+
+
+_MIX_A, _MIX_B = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
+_R31, _R29, _LOW63 = np.uint64(31), np.uint64(29), np.uint64((1 << 63) - 1)
+
+
+def mix_array(*columns: ArrayLike) -> np.ndarray:
+    """:func:`mix` over integer arrays (broadcast), vectorised: the same values as ``mix``.
+
+    >>> int(mix_array(np.array([1]), 2)[0]) == mix(1, 2)
+    True
+    """
+    arrays = [np.asarray(c) for c in columns]
+    h = np.full(np.broadcast(*arrays).shape, 0x9E3779B97F4A7C15, np.uint64)
+    shift = np.empty_like(h)
+    with np.errstate(over="ignore"):  # in place: uint64 arithmetic wraps, as mix's mask does
+        for c in arrays:
+            h ^= c.astype(np.int64).astype(np.uint64)
+            h *= _MIX_A
+            np.right_shift(h, _R31, out=shift)
+            h ^= shift
+            h *= _MIX_B
+            np.right_shift(h, _R29, out=shift)
+            h ^= shift
+    h &= _LOW63
+    return h.view(np.int64)
+
+
+def u01_array(*columns: ArrayLike) -> np.ndarray:
+    """Uniform numbers in [0, 1) from integer key arrays (vectorised :func:`_u01`)."""
+    return mix_array(*columns) / float(1 << 63)
+
+
+@dataclass
+class Branch:
+    """A branch: born in ``year`` on trunk level ``year``, sector ``sector`` (0-based)."""
+
+    year: int
+    sector: int
+    seed: int
+    level: int = -1  # the trunk level (a short node) the branch grows from
+    angle: float | None = None  # insertion angle from the trunk axis (degrees); None: the species'
+
+
+@dataclass
+class Axis:
+    """One pith chain with its stacks; ``levels[t]`` is the first dart of pith prism t."""
+
+    index: int
+    sides: int
+    born_step: int
+    seed: int
+    address: int = 0  # seed-free address for volume keys
+    parts: list = field(default_factory=list)  # (year, 'whole' | 'node' | 'internode') per level
+    levels: list = field(default_factory=list)  # pith first darts
+    level_step: list = field(default_factory=list)  # step each level was made
+    missing: set = field(default_factory=set)  # (t, k) slots with no stack (knot holes)
+    #: stacks as arrays: ``alive[t, k]`` (a stack grows there), ``count[t, k]`` cells in it and
+    #: ``cells[t, k, i]`` the first dart of its cell ``i + 1`` (-1 beyond the count)
+    alive: np.ndarray = None  # type: ignore[assignment]  # set by Wood before any read
+    count: np.ndarray = None  # type: ignore[assignment]
+    cells: np.ndarray = None  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        self.alive = np.zeros((0, self.sides), bool)
+        self.count = np.zeros((0, self.sides), np.int64)
+        self.cells = np.full((0, self.sides, 4), -1, np.int64)
+
+    def add_level(self) -> None:
+        """One more level of (empty, alive) stacks."""
+        self.alive = np.vstack([self.alive, np.ones((1, self.sides), bool)])
+        self.count = np.vstack([self.count, np.zeros((1, self.sides), np.int64)])
+        self.cells = np.concatenate([self.cells, np.full((1,) + self.cells.shape[1:], -1, np.int64)])
+
+    def stack_darts(self, t: int, k: int) -> list[int]:
+        """First darts of the cells of stack ``(t, k)``, from the pith outwards."""
+        return self.cells[t, k, : self.count[t, k]].tolist()
+
+
+#: codes of a trunk level's part of its year (``Axis.parts``)
+_PARTS = {"whole": 0, "node": 1, "internode": 2}
+
+#: the knot's four seam corners in slot coordinates (u, v): (-,-), (+,-), (+,+), (-,+)
+_SU = np.array([-1.0, 1.0, 1.0, -1.0])
+_SV = np.array([-1.0, -1.0, 1.0, 1.0])
+
+
+def _corner_blend(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``((1 + u su) (1 + v sv) / 4)`` for the four seam corners ``(su, sv)`` = (-,-), (+,-), (+,+), (-,+): (m, 4, 1).
+
+    ``u * -1`` is exact, so ``1 + u su`` is ``1 - u`` or ``1 + u``: each factor
+    is made once, and the products and the division are the ones a broadcast
+    over ``_SU``, ``_SV`` would make.
+    """
+    out = np.empty((len(u), 4, 1))
+    pu, mu, pv, mv = 1 + u, 1 - u, 1 + v, 1 - v
+    for c, (a, b) in enumerate(((mu, mv), (pu, mv), (pu, pv), (mu, pv))):
+        np.multiply(a, b, out=out[:, c, 0])
+        out[:, c, 0] /= 4
+    return out
+
+
+def _put_blocks(flat: np.ndarray, rows: np.ndarray, pts: np.ndarray) -> None:
+    """``flat[rows[j] + c] = pts[j, c]`` for each of the ``c < 8`` corners of cube ``j``.
+
+    As whole 8-row blocks when every start row is a multiple of 8 (the usual
+    case: prisms of even order have 2n corners), which numpy copies about 5x
+    faster than 8 single rows each; the same values either way.
+    """
+    if len(flat) % 8 == 0 and not np.any(rows % 8):
+        flat.reshape(-1, 8, 3)[rows // 8] = pts
+    else:
+        flat[rows[:, None] + np.arange(8)[None, :]] = pts
+
+
+class Wood:
+    """A growing volumetric wood: ``gm`` is the :class:`GMap3`; ``step()`` adds a half-year."""
+
+    _radius: float  # memos of trunk_radius() and node_height() once the final year is known
+    _node: float
+    seconds: float  # build time, set by grow_wood / from_skeleton
+
+    def __init__(
+        self,
+        params: dict[str, Any],
+        seed: int = 0,
+        branches: list[Branch] | None = None,
+        species: str = "pine",
+        trunk_frames: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+        years: int | None = None,
+    ) -> None:
+        self.p = params
+        self.final_years = years
+        #: push trunk rings out of the knots' cones (see the module docstring)
+        self.bend_rings = True
+        self.species = species
+        self.seed = int(seed)
+        self.steps = 0
+        self.gm = gm = GMap3()
+        for name, dtype in (
+            ("axis", np.int16),
+            ("level", np.int16),
+            ("sector", np.int16),
+            ("cell", np.int16),
+            ("wood", np.int8),
+            ("season", np.int8),
+            ("year", np.int16),
+            ("ring", np.int16),
+            ("width", np.float64),
+            ("born", np.int16),
+            ("rule", np.int8),
+            ("key", np.int64),
+        ):
+            gm.add_volume_data(name, dtype, fill=-1 if dtype is not np.float64 else 0.0)
+        self._corner = np.zeros(0, np.int16)  # template corner per dart (-1: made by a split)
+        if years:  # one allocation up front instead of doublings
+            est = estimated_darts(params, int(years), [br.year for br in (branches or [])])
+            if est <= MAX_DARTS:
+                gm.reserve(est)
+                self._corner = np.full(est, -1, np.int16)
+        self.trunk = Axis(0, int(params["sides"]), 0, mix(self.seed, 0), address=mix(0))
+        self.axes = [self.trunk]
+        self.branches = list(branches or [])
+        self.trunk_frames = trunk_frames
+        self._sewn_layers: dict[int, int] = {}  # branch index -> slot layers sewn so far
+        #: branch index -> its axis (``axes`` holds them in birth order, which need not be branch order)
+        self.branch_axis: dict[int, Axis] = {}
+
+    # ------------------------------------------------------------------ growth
+    @property
+    def year(self) -> int:
+        return self.steps // 2
+
+    def step(self) -> None:
+        """One half-year: length growth and new branches in spring, then one ring layer."""
+        spring = self.steps % 2 == 0
+        if spring:
+            born = [br for br in self.branches if br.year == self.year]
+            if born:  # a short node carries the new branches, then the internode
+                self._grow_length(self.trunk, "node")
+                for br in born:
+                    br.level = len(self.trunk.levels) - 1
+                self._grow_length(self.trunk, "internode")
+            else:
+                self._grow_length(self.trunk)
+            for b, br in enumerate(self.branches):
+                if br.year == self.year:
+                    self._start_branch(b, br)
+                elif br.year < self.year:
+                    self._grow_length(self.branch_axis[b])
+        for _ in range(2 if spring else 1):
+            self._add_layer()
+            self._sew_knots()
+        self.steps += 1
+        self._sync_corner()
+        self.assign_roles()
+
+    def _sync_corner(self) -> None:
+        n = self.gm.n_darts
+        if n > len(self._corner):  # grow by doubling: no copy per added layer
+            grown = np.full(max(n, 2 * len(self._corner)), -1, np.int16)
+            grown[: len(self._corner)] = self._corner
+            self._corner = grown
+
+    @property
+    def corner(self) -> np.ndarray:
+        """Template corner of every dart (-1 for darts made by edge splits)."""
+        return self._corner[: self.gm.n_darts]
+
+    def _new(self, n, count, axis, rule, **values):
+        gm = self.gm
+        first = gm.add_prisms(n, count, axis=axis, born=self.steps, rule=rule, **values)
+        self._sync_corner()
+        t = _prism.template(n)
+        start = int(first[0]) if len(first) else 0  # add_prisms numbers the prisms' darts consecutively
+        self.corner[start : start + len(first) * t.size].reshape(len(first), t.size)[:] = t.corner[None, :]
+        return first
+
+    def _grow_length(self, ax, part: str = "whole") -> None:
+        """A new pith prism on the free E face of the axis's top prism (none for the trunk's first)."""
+        t = len(ax.levels)
+        ax.parts.append((self.year, part))
+        label = "P" if ax.index == 0 else "Q"
+        (first,) = self._new(
+            ax.sides,
+            1,
+            ax.index,
+            0,
+            label=label,
+            level=t,
+            sector=-1,
+            cell=0,
+            exclusive=ax.index > 0 and t == 0,
+            wood=CODES["pith"] if ax.index == 0 else CODES["knot"],
+            key=mix(ax.address, 1, t),
+        )
+        if ax.levels:
+            gm = self.gm
+            gm.sew3([int(gm.prism_face(ax.levels[-1], ax.sides, "E"))], [int(gm.prism_face(first, ax.sides, "O"))])
+        ax.levels.append(int(first))
+        ax.level_step.append(self.steps)
+        ax.add_level()
+        for k in range(ax.sides):
+            if (t, k) in ax.missing:
+                ax.alive[t, k] = False
+
+    def _start_branch(self, b, br):
+        """The branch's first pith prism, its O face sewn onto the trunk's pith face in the slot."""
+        self.trunk.missing.add((br.level, br.sector))
+        if br.level < len(self.trunk.alive):
+            self.trunk.alive[br.level, br.sector] = False
+        ax = Axis(b + 1, int(self.p["branch_sides"]), self.steps, br.seed, address=mix(1000 + b))
+        self.axes.append(ax)
+        self.branch_axis[b] = ax
+        self._grow_length(ax)
+        gm = self.gm
+        slot = self._anchors([self.trunk.levels[br.level]], f"C{br.sector + 1}")
+        base = self._anchors([ax.levels[0]], "O")
+        gm.sew3(slot, base)
+        self._sewn_layers[b] = 0
+
+    def _anchors(self, firsts, label):
+        """Anchor darts (forward, corner 0) of face ``label`` of the volumes of darts ``firsts``.
+
+        Found by label in each volume's own darts (an orbit walk, cost
+        proportional to the volumes), not by template offsets.
+        """
+        gm = self.gm
+        firsts = np.asarray(firsts, np.int64)
+        members, which = gm.orbits_from(firsts, (0, 1, 2))
+        data = gm.dart_data
+        labels = [label] * len(firsts) if isinstance(label, str) else label
+        code = np.array([_prism.face_label_code(x) for x in labels], np.int64)
+        hit = (data["face"][members] == code[which]) & data["forward"][members] & (data["fcorner"][members] == 0)
+        out = np.full(len(firsts), -1, np.int64)
+        out[which[hit][::-1]] = members[hit][::-1]
+        if np.any(out < 0):
+            raise GMapError(f"a wood volume has no face {label}")
+        return out
+
+    def _side_faces(self, firsts, labels):
+        """A dart of side face ``labels[i]`` of the cell whose O face holds dart ``firsts[i]``.
+
+        Walks each O face and looks across its edges (``alpha2``) for the
+        label carried by the darts: faces by label, one face walk per cell
+        instead of a volume orbit.
+        """
+        gm = self.gm
+        walk, _ = gm.face_walk(np.asarray(firsts, np.int64))
+        side = np.where(walk >= 0, gm.alpha[2][np.maximum(walk, 0)], -1)
+        code = np.array([_prism.face_label_code(x) for x in labels], np.int64)
+        hit = (side >= 0) & (gm.dart_data["face"][np.maximum(side, 0)] == code[:, None])
+        if not hit.any(axis=1).all():
+            raise GMapError(f"a wood cell has no side face {labels[int(np.argmin(hit.any(axis=1)))]}")
+        return side[np.arange(len(side)), np.argmax(hit, axis=1)]
+
+    def _sew_knots(self) -> None:
+        """Identify each knot's new ring cells with the slot walls they meet (see the module docstring).
+
+        Layer ``i`` of a slot is walled by four trunk faces: C2 of stack
+        ``(t, k-1)``, C4 of ``(t, k+1)``, C3 of ``(t-1, k)`` and C1 of
+        ``(t+1, k)``, cell ``i`` of each.  Its partner is the knot cell whose
+        C1 face lies across the wall face's inner edge on the boundary (found
+        by turning around that edge, :func:`ramure.gmap.kernel.identify.boundary_neighbour`):
+        layer ``i - 1`` (or the pith face, for ``i = 1``) is sewn already, so
+        the two faces share that edge and :meth:`GMap3.identify` zips them.
+        Layers are done in order, one batch per layer over every slot.
+        """
+        from ramure.gmap.kernel.identify import boundary_neighbour
+
+        gm, trunk = self.gm, self.trunk
+        n = trunk.sides
+        c1 = _prism.face_label_code("C1")
+        vd = gm.volume_data
+        while True:
+            walls, labels, want = [], [], []
+            for b, done in self._sewn_layers.items():
+                br = self.branches[b]
+                t, k, i = br.level, br.sector, done + 1
+                if self.branch_axis[b].count[0].min() < i:  # the knot's ring cell i is not born yet
+                    continue
+                for tt, kk, label in ((t, (k - 1) % n, "C2"), (t, (k + 1) % n, "C4"), (t - 1, k, "C3"), (t + 1, k, "C1")):
+                    if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk] and trunk.count[tt, kk] >= i:
+                        walls.append(trunk.cells[tt, kk, i - 1])
+                        labels.append(label)
+                        want.append((b, i))
+            if not walls:
+                return
+            anchors = self._side_faces(walls, labels)
+            walk, _ = gm.face_walk(anchors)
+            free = walk >= 0
+            nb = np.full(walk.shape, -1, np.int64)
+            nb[free] = boundary_neighbour(gm, walk[free])
+            nv = gm.dart_volume[np.maximum(nb, 0)]
+            b_of = np.array([w[0] for w in want])[:, None]
+            i_of = np.array([w[1] for w in want])[:, None]
+            partner = (
+                (nb >= 0)
+                & (gm.dart_data["face"][np.maximum(nb, 0)] == c1)
+                & (vd["axis"][nv] == b_of + 1)
+                & (vd["level"][nv] == 0)
+                & (vd["cell"][nv] == i_of)
+            )
+            ok = partner.any(axis=1)
+            if not ok.any():
+                return
+            first = np.argmax(partner, axis=1)
+            a = anchors[ok]
+            other = nb[np.flatnonzero(ok), first[ok]]
+            gm.identify(a, other)
+            for b in {w[0] for w, good in zip(want, ok) if good}:
+                self._sewn_layers[b] += 1
+
+    def _add_layer(self):
+        """One new cube on the outside of every stack, then the joins around and along each axis."""
+        gm = self.gm
+        parts = []
+        for ax in self.axes:  # one step per axis, arrays over its stacks
+            t, k = np.nonzero(ax.alive)
+            i = ax.count[t, k] + 1
+            # fresh template darts keep their ids and labels: E of a cube is first + 8,
+            # C(k+1) of an n-prism first + 4n + 8k (forward dart at the face's corner 0)
+            below = ax.cells[t, k, np.maximum(i - 2, 0)]
+            pith = np.asarray(ax.levels, np.int64)[t] + 4 * ax.sides + 8 * k
+            support = np.where(i > 1, below + 8, pith)
+            parts.append((ax, t, k, i, support))
+        n_slots = sum(len(part[1]) for part in parts)
+        if not n_slots:
+            return
+        if gm.n_darts + 48 * n_slots > MAX_DARTS:
+            raise ValueRefused(f"the wood would exceed {MAX_DARTS:,} darts")
+        cat = np.concatenate
+        axis = cat([np.full(len(t), ax.index) for ax, t, *_ in parts])
+        address = cat([np.full(len(t), ax.address, np.int64) for ax, t, *_ in parts])
+        t_all, k_all, i_all = (cat([part[j] for part in parts]) for j in (1, 2, 3))
+        keys = mix_array(address, 3, t_all, k_all, i_all)
+        first = self._new(
+            4, n_slots, axis, 1, label="W", level=t_all, sector=k_all, cell=i_all, key=keys, exclusive=(axis > 0) & (t_all == 0)
+        )
+        gm.sew3(cat([part[4] for part in parts]), first)
+        start = 0
+        for ax, t, k, i, _ in parts:
+            mine = first[start : start + len(t)].astype(np.int64)
+            start += len(t)
+            if i.max() > ax.cells.shape[2]:
+                grow = max(int(i.max()), 2 * ax.cells.shape[2]) - ax.cells.shape[2]
+                ax.cells = np.concatenate([ax.cells, np.full(ax.cells.shape[:2] + (grow,), -1, np.int64)], 2)
+            ax.cells[t, k, i - 1] = mine
+            ax.count[t, k] = i
+        self._join(parts, first)
+
+    def _join(self, parts, first) -> None:
+        """Identify each new cube with its neighbours through the edges they share.
+
+        Around the axis: C2 of (t, k, i) with C4 of (t, k+1, i); along it: C1 of
+        (t, k, i) with C3 of (t-1, k, i).  The neighbours are found by the
+        stacks' bookkeeping (same pith edge, same layer), never by coordinates;
+        the two darts paired sit on the edge the faces share.
+        """
+        gm = self.gm
+        a_parts: list[np.ndarray] = []
+        b_parts: list[np.ndarray] = []
+        start = 0
+        for ax, t, k, i, _ in parts:
+            f = first[start : start + len(t)].astype(np.int64)
+            start += len(t)
+            kr = (k + 1) % ax.sides  # the stack on the right, same layer
+            right = ax.cells[t, kr, i - 1]
+            ok = ax.alive[t, kr] & (ax.count[t, kr] >= i) & (right != f)
+            a_parts.append(f[ok] + _C2)  # C2 of this cube, dart 0 ...
+            b_parts.append(right[ok] + _C4 + 1)  # ... meets C4 of the next, dart 1: same edge, same vertex
+            tb = np.maximum(t - 1, 0)  # the stack below, same layer
+            ok = (t > 0) & ax.alive[tb, k] & (ax.count[tb, k] >= i)
+            a_parts.append(ax.cells[tb, k, i - 1][ok] + _C3)  # top of the cube below, dart 0
+            b_parts.append(f[ok] + _C1 + 1)  # bottom of this one, dart 1
+        a, b = np.concatenate(a_parts), np.concatenate(b_parts)
+        if a.size:
+            fresh = gm.alpha[3][a] == a
+            gm.sew3(a[fresh], b[fresh])
+
+    # ------------------------------------------------------------------ roles
+    def assign_roles(self) -> None:
+        """Tissue, season, ring and width of every cell from its place in its stack (see module doc)."""
+        gm, p = self.gm, self.p
+        vd = gm.volume_data
+        cell = vd["cell"].astype(np.int64)
+        axis = vd["axis"].astype(np.int64)
+        level = vd["level"].astype(np.int64)
+        is_cell = cell > 0
+        born_level = np.full(gm.n_volumes, 0, np.int64)
+        for ax in self.axes:
+            steps = np.array(ax.level_step + [0], np.int64)
+            on = is_cell & (axis == ax.index)
+            born_level[on] = steps[level[on]]
+        q = self.steps - born_level  # half-years the stack has lived
+        wood = is_cell & (cell <= q)
+        bark = is_cell & ~wood
+        season = np.where(wood, (cell - 1) % 2, -1)
+        ring = np.where(wood, (cell + 1) // 2, -1)
+        year = np.where(wood, born_level // 2 + (cell - 1) // 2, -1)
+        bark_layer = np.where(bark, (q + 1) // 2 - (cell - q) + 1, -1)  # 1 = oldest, outermost
+        year = np.where(bark, born_level // 2 + bark_layer - 1, year)
+        vd["season"][:] = season
+        vd["ring"][:] = ring
+        vd["year"][:] = np.where(is_cell, year, vd["year"])
+        width = self._widths(wood, bark, axis, level, vd["sector"].astype(np.int64), cell, ring, season, year, bark_layer)
+        vd["width"][:] = np.where(is_cell, width, 0.0)
+        tissue = vd["wood"]
+        y_now = self.year + (1 if self.steps % 2 else 0)  # years begun
+        from_bark = y_now - year
+        trunk = axis == 0
+        heart = trunk & wood & (from_bark > p["sapwood_rings"]) & (y_now > p["heartwood_age"])
+        tissue[trunk & wood] = CODES["sapwood"]
+        tissue[heart] = CODES["heartwood"]
+        tissue[bark] = CODES["bark"]
+        tissue[~trunk & wood] = CODES["knot"]
+        vd["label"][is_cell] = np.where(bark[is_cell], "K", np.where(season[is_cell] == EARLY, "R", "S"))
+
+    def law(
+        self, ring: np.ndarray, season: np.ndarray, sector_angle: np.ndarray | None = None, axis: int = 0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds ``(lo, hi)`` of the width law for cambial ring numbers ``ring`` (arrays)."""
+        p = self.p
+        ring = np.asarray(ring, float)
+        f = np.maximum(p["width_floor"], np.exp(-(ring - 1) / p["decay"]))
+        early = np.asarray(season) == EARLY
+        lo = np.where(early, p["early_min"], p["late_min"]) * f
+        hi = np.where(early, p["early_max"], p["late_max"]) * f
+        scale = np.where(np.asarray(axis) == 0, 1.0, p["branch_scale"])
+        if sector_angle is not None:
+            scale = scale * (
+                1.0
+                + p["reaction"]
+                * np.maximum(0.0, np.cos(np.asarray(sector_angle) - math.radians(p["reaction_angle"])))
+                * (np.asarray(axis) == 0)
+            )
+        return lo * scale, hi * scale
+
+    def _widths(self, wood, bark, axis, level, sector, cell, ring, season, year, bark_layer):
+        p = self.p
+        by_index = np.zeros(max(ax.index for ax in self.axes) + 1, np.int64)
+        by_index[[ax.index for ax in self.axes]] = [ax.seed for ax in self.axes]
+        seeds = by_index[np.maximum(axis, 0)]
+        n = np.where(axis == 0, self.trunk.sides, int(p["branch_sides"]))
+        angle = 2 * np.pi * sector / n
+        lo, hi = self.law(np.maximum(ring, 1), np.maximum(season, 0), angle, axis)
+        u_wood = 0.6 * u01_array(seeds, 5, year, season) + 0.4 * u01_array(seeds, 6, level, sector, cell)
+        u_bark = u01_array(seeds, 7, level, sector, bark_layer)
+        bark_scale = np.where(axis == 0, 1.0, p["branch_scale"])
+        w_bark = bark_scale * (p["bark_min"] + (p["bark_max"] - p["bark_min"]) * u_bark)
+        return np.where(wood, lo + (hi - lo) * u_wood, np.where(bark, w_bark, 0.0))
+
+    # ------------------------------------------------------------------ embedding
+    def level_frames(self, ax: Axis) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(origins, frames, heights)`` of the axis's levels (rows H, L, U); kept for the step."""
+        key = (ax.index, len(ax.levels), self.steps)
+        memo = self.__dict__.setdefault("_frames_memo", {})
+        if key not in memo:
+            if len(memo) > 4 * len(self.axes) + 8:
+                memo.clear()
+            memo[key] = self._level_frames(ax)
+        return memo[key]
+
+    def _level_frames(self, ax):
+        p = self.p
+        n_levels = len(ax.levels)
+        if ax.index == 0:
+            yo, yf, yh = self.year_frames()
+            parts = ax.parts[:n_levels]
+            year = np.array([y for y, _ in parts], np.int64)
+            kind = np.array([_PARTS[part] for _, part in parts], np.int64)
+            node = np.minimum(self.node_height(), 0.5 * yh[year])  # one row per level, all levels at once
+            o, f = yo[year], yf[year]  # copies (fancy indexing)
+            h = np.where(kind == 0, yh[year], np.where(kind == 1, node, yh[year] - node))
+            inter = kind == 2
+            o[inter] = yo[year[inter]] + node[inter, None] * yf[year[inter], 0]
+            return o, f, h
+        br = self.branches[ax.index - 1]
+        p0, knot = self.branch_frame(br, knot=True)
+        _, frame = self.branch_frame(br)
+        h = np.full(n_levels, p["branch_length"])
+        if n_levels:  # the first level spans the trunk's final radius: the knot
+            h[0] = self.knot_length(br)
+        s = np.concatenate([[0.0], np.cumsum(h)[:-1]])
+        origins = p0 + h[0] * knot[0] + (s - h[0])[:, None] * frame[0][None]
+        origins[0] = p0
+        frames = np.repeat(frame[None], n_levels, axis=0)
+        frames[0] = knot
+        return origins, frames, h
+
+    def trunk_radius(self) -> float:
+        """The trunk's radius at its base after the final year, from the law's mean widths."""
+        if self.final_years is not None and "_radius" in self.__dict__:
+            return self._radius
+        self._radius = self._trunk_radius()
+        return self._radius
+
+    def _trunk_radius(self):
+        p = self.p
+        years = self.final_years or (self.year + 1)
+        rings = np.arange(1, years + 1)
+        lo_e, hi_e = self.law(rings, np.zeros_like(rings), None, 0)
+        lo_l, hi_l = self.law(rings, np.ones_like(rings), None, 0)
+        return float(p["pith_radius"] + 0.5 * (lo_e + hi_e + lo_l + hi_l).sum() + 0.5 * (p["bark_min"] + p["bark_max"]) * years)
+
+    def year_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(origins, frames, heights)`` of the trunk's yearly growth units (straight, or a plant's)."""
+        if self.trunk_frames is not None:
+            return self.trunk_frames
+        p = self.p
+        years = max(self.final_years or 0, self.year + 1)
+        jit = p["height_jitter"]
+        key = (years, p["height"], jit, self.trunk.seed)
+        memo = self.__dict__.get("_year_frames_memo")
+        if memo is not None and memo[0] == key:
+            return memo[1]
+        h = np.array([p["height"] * (1 + jit * (2 * _u01(self.trunk.seed, 8, y) - 1)) for y in range(years)])
+        o = np.zeros((years, 3))
+        o[:, 2] = np.concatenate([[0.0], np.cumsum(h)[:-1]])
+        out = (o, np.repeat(np.eye(3)[[2, 0, 1]][None], years, axis=0), h)
+        for a in out:  # kept (read-only) while the key holds
+            a.flags.writeable = False
+        self._year_frames_memo = (key, out)
+        return out
+
+    def node_height(self) -> float:
+        """Height of a node carrying branches: the branches' final base diameter and a margin."""
+        if not self.branches:
+            return 0.0
+        if self.final_years is not None and "_node" in self.__dict__:
+            return self._node
+        years = self.final_years or (self.year + 1)
+        probe = Branch(0, 0, 0)
+        self._node = 1.6 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
+        return self._node
+
+    def branch_frame(self, br: Branch, knot: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Base point (centre of the trunk face) and frame (H along the branch) of a branch.
+
+        With ``knot``, the frame of its first level inside the trunk: its rise
+        is capped at ``KNOT_RISE`` degrees (a steep branch's knot would
+        otherwise run along the trunk, far out of its node's slot); the
+        branch turns to its own direction where the knot ends.  Kept while
+        the trunk level it stands on keeps its frame (an embedding asks for
+        each frame several times, and every step); the arrays returned are
+        read-only.
+        """
+        p = self.p
+        o, f, h = self.level_frames(self.trunk)
+        t = br.level  # the frame reads only the trunk's level t: kept while that level stays as it is
+        level = (o[t].tobytes(), f[t].tobytes(), float(h[t]), self.trunk.sides)
+        key = (level, br.level, br.sector, br.angle, bool(knot), p["pith_radius"], p["branch_angle"], self.KNOT_RISE)
+        memo = self.__dict__.setdefault("_branch_frames_memo", {})
+        hit = memo.get(key)
+        if hit is None:
+            if len(memo) > 2 * len(self.branches) + 8:
+                memo.clear()
+            hit = memo[key] = self._branch_frame(br, knot)
+            for a in hit:
+                a.flags.writeable = False
+        return hit
+
+    def _branch_frame(self, br, knot):
+        p = self.p
+        o, f, h = self.level_frames(self.trunk)
+        n = self.trunk.sides
+        phi = 2 * np.pi * br.sector / n
+        t = br.level
+        radial = math.cos(phi) * f[t, 1] + math.sin(phi) * f[t, 2]
+        p0 = o[t] + 0.5 * h[t] * f[t, 0] + p["pith_radius"] * radial
+        elev = math.radians(90.0 - (p["branch_angle"] if br.angle is None else br.angle))
+        if knot:
+            elev = max(min(elev, math.radians(self.KNOT_RISE)), -math.radians(self.KNOT_RISE))
+        d = math.cos(elev) * radial + math.sin(elev) * f[t, 0]
+        d = d / np.linalg.norm(d)
+        # the knot's side 0 faces the slot's bottom wall (the sew puts it there), side 1 the wall at
+        # sector k + 1: L points down the trunk, away from d
+        down = -f[t, 0] + (f[t, 0] @ d) * d
+        left = down / np.linalg.norm(down)
+        d0, d1, d2 = d
+        l0, l1, l2 = left  # np.cross(d, left), term for term, without its overhead
+        return p0, np.array([d, left, [d1 * l2 - d2 * l1, d2 * l0 - d0 * l2, d0 * l1 - d1 * l0]])
+
+    def default_corners(self) -> tuple[np.ndarray, np.ndarray]:
+        """Default corners of every volume, flat: ``(points (sum 2n, 3), offset per volume)``."""
+        gm = self.gm
+        vd = gm.volume_data
+        n_corners = 2 * vd["degree"].astype(np.int64)
+        offset = np.concatenate([[0], np.cumsum(n_corners)[:-1]])
+        flat = np.zeros((int(n_corners.sum()), 3))
+        radii = self._radii()
+        profiles = self._knot_profiles(radii)
+        for ax in self.axes:  # one step per axis, not per volume
+            o, f, h = self.level_frames(ax)
+            rp = self.p["pith_radius"] * (1.0 if ax.index == 0 else self.p["branch_scale"])
+            n = ax.sides
+            theta = 2 * np.pi * (np.arange(n + 1) - 0.5) / n
+            pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
+            flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = self._pith_points(o, f, h, theta[:n], rp, n)
+            cells = np.flatnonzero((vd["axis"] == ax.index) & (vd["cell"] > 0))
+            if not cells.size:
+                continue
+            t, k = vd["level"][cells].astype(int), vd["sector"][cells].astype(int)
+            r_in, r_out = radii[cells] - vd["width"][cells], radii[cells]
+            bottom, top = self._tapers(ax, cells, t, k, radii, rp)
+            pts = self._cube_points(o, f, h, t, k, theta, r_in, r_out, n, bottom=bottom, top=top)
+            if ax.index == 0 and len(self.axes) > 1 and self.bend_rings:
+                pts = self._push(pts, t, profiles)
+            if ax.index > 0 and ax.index - 1 in profiles:
+                pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
+            _put_blocks(flat, offset[cells], pts)
+        return flat, offset
+
+    def _knot_profiles(self, radii):
+        """Per branch, ``(s_j, rho_j, a_j, lateral_j)``, ``j = 0..N``: where slot layer ``j`` meets the knot.
+
+        The trunk's ring ``j`` around the slot ends at apothem ``a_j`` (mean
+        over the slot's wall stacks); along the branch that is at ``s_j = (a_j
+        - r_p) / cos(elevation)``; ``rho_j`` is the knot's ring ``j`` apothem
+        from the law's mean widths (:meth:`_nominal_rings`), so the seam, and
+        the trunk bent around it, do not depend on the branch's seed.  Two
+        knots of one node ``d`` sectors apart share the ring between them:
+        each keeps its width across the trunk (``lateral_j`` scales it) under
+        ``KNOT_ROOM d a_j tan(pi / n)``, so their walls never cross; knots in
+        adjacent sectors (no wall between) both end on their common corner
+        line (``d a_j tan(pi / n)``).
+        """
+        gm, trunk = self.gm, self.trunk
+        n = trunk.sides
+        rp = self.p["pith_radius"]
+        o_t, f_t, _ = self.level_frames(trunk)
+        out = {}
+        for b, br in enumerate(self.branches):
+            if b not in self._sewn_layers:
+                continue
+            ax = self.branch_axis[b]
+            t, k = br.level, br.sector
+            depth = int(ax.count[0].max())
+            a, used = np.zeros(depth + 1), np.zeros(depth + 1)
+            for tt, kk in ((t, (k - 1) % n), (t, (k + 1) % n), (t - 1, k), (t + 1, k)):
+                if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk]:
+                    c = min(int(trunk.count[tt, kk]), depth)
+                    a[1 : c + 1] += radii[gm.dart_volume[trunk.cells[tt, kk, :c]]]
+                    used[1 : c + 1] += 1
+            a[0], used[0] = rp, 1
+            a /= np.maximum(used, 1)
+            for j in range(1, depth + 1):  # layers no wall reaches: continue outwards
+                if used[j] == 0:
+                    a[j] = a[j - 1] + (a[j - 1] - a[j - 2] if j > 1 else rp)
+            rho = self._nominal_rings(ax, depth)
+            _, f, h = self.level_frames(ax)
+            phi = 2 * np.pi * k / n
+            cos_elev = abs(f[0, 0] @ (math.cos(phi) * f_t[t, 1] + math.sin(phi) * f_t[t, 2]))
+            gap = min(
+                [
+                    min((k - o.sector) % n, (o.sector - k) % n)
+                    for c, o in enumerate(self.branches)
+                    if c != b and c in self._sewn_layers and o.level == t
+                ]
+                or [n]
+            )
+            room = (1.0 if gap == 1 else self.KNOT_ROOM) * gap * math.tan(math.pi / n) * a  # 1: meet on the line
+            lateral = np.minimum(1.0, room / np.maximum(rho, 1e-12))
+            out[b] = (np.minimum((a - rp) / max(cos_elev, 0.2), 0.95 * h[0]), rho, a, lateral)
+        return out
+
+    def _nominal_rings(self, ax, depth):
+        """Apothems ``rho_0..rho_depth`` of the first level of branch axis ``ax`` from the law's means.
+
+        Cells ``1..q`` are wood (``q`` half-years lived), the rest bark, as
+        :meth:`assign_roles` reads them; no random draw is involved.
+        """
+        p = self.p
+        cell = np.arange(1, depth + 1)
+        q = self.steps - ax.level_step[0]
+        lo, hi = self.law((cell + 1) // 2, (cell - 1) % 2, None, 1)
+        bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"])
+        width = np.where(cell <= q, 0.5 * (lo + hi), bark)
+        return p["pith_radius"] * p["branch_scale"] + np.concatenate([[0.0], np.cumsum(width)])
+
+    def _seat_knot(self, ax, cells, pts, radii, profile):
+        """Bottom corners of a knot's ring cells: ring ``i`` starts on the slot wall's layer ``i``.
+
+        Cell ``i``'s C1 face (sewn to wall layer ``i``) runs from ``(s_{i-1},
+        rho_{i-1})`` to ``(s_i, rho_i)`` (:meth:`_knot_profiles`; its far end
+        keeps the cell's own widths): nested cups, the knot a cone of the
+        branch's rings.  Knot volumes are ``exclusive`` (the thesis's ``seulPourPl``),
+        so the walls' vertices take these positions.
+        """
+        vd = self.gm.volume_data
+        level0 = np.flatnonzero(vd["level"][cells] == 0)
+        if not level0.size:
+            return pts
+        s_layer, rho_layer, lateral = profile[0], profile[1], profile[3]
+        _, f, _ = self.level_frames(ax)
+        p0, frame = self.branch_frame(self.branches[ax.index - 1], knot=True)
+        sel = cells[level0]
+        i = np.minimum(vd["cell"][sel].astype(np.int64), len(s_layer) - 1)
+        m = ax.sides
+        c = 1.0 / math.cos(math.pi / m)
+        theta = 2 * np.pi * (np.arange(m + 1) - 0.5) / m
+        kk = vd["sector"][sel].astype(np.int64)
+        out = pts.copy()
+        for corner, th, j in ((0, theta[kk], i - 1), (1, theta[kk + 1], i - 1), (4, theta[kk], i), (5, theta[kk + 1], i)):
+            s_at, r = s_layer[j], rho_layer[j]
+            radial = np.cos(th)[:, None] * f[0, 1] + (lateral[j] * np.sin(th))[:, None] * f[0, 2]
+            out[level0, corner] = p0 + s_at[:, None] * frame[0] + (c * r)[:, None] * radial
+        return out
+
+    def _radii(self):
+        """Outer apothem of every cell: pith radius plus the widths of its stack up to it."""
+        vd = self.gm.volume_data
+        cell = vd["cell"].astype(np.int64)
+        is_cell = cell > 0
+        key = (vd["axis"].astype(np.int64) * 4096 + vd["level"]) * 4096 + vd["sector"]
+        order = np.lexsort((cell, key))
+        order = order[is_cell[order]]
+        w = vd["width"][order]
+        k = key[order]
+        csum = np.cumsum(w)
+        start = np.ones(len(k), bool)
+        start[1:] = k[1:] != k[:-1]
+        base = np.maximum.accumulate(np.where(start, np.arange(len(k)), 0))
+        offset = csum - np.concatenate([[0.0], csum])[base]
+        out = np.zeros(len(cell))
+        rp = np.where(vd["axis"] == 0, self.p["pith_radius"], self.p["pith_radius"] * self.p["branch_scale"])
+        out[order] = rp[order] + offset
+        return out
+
+    @staticmethod
+    def _pith_points(o, f, h, theta, rp, n):
+        """:meth:`_ring_points` of every level at once (same arithmetic): ``(levels, 2n, 3)``."""
+        c = 1.0 / math.cos(math.pi / n)
+        radial = np.cos(theta)[None, :, None] * f[:, 1][:, None, :] + np.sin(theta)[None, :, None] * f[:, 2][:, None, :]
+        bottom = o[:, None, :] + (c * rp) * radial
+        return np.concatenate([bottom, bottom + h[:, None, None] * f[:, 0][:, None, :]], axis=1)
+
+    @staticmethod
+    def _ring_points(o, f, h, theta, r_bottom, r_top, n):
+        c = 1.0 / math.cos(math.pi / n)
+        radial = np.cos(theta)[:, None] * f[1][None] + np.sin(theta)[:, None] * f[2][None]
+        bottom = o[None] + (c * r_bottom)[:, None] * radial
+        return np.concatenate([bottom, bottom + h * f[0][None]])
+
+    #: how much of a stack's step is left where the stack above ends (the taper of a level's top)
+    TAPER = 0.12
+    #: share of the half-gap to the next knot of the same node a knot may fill across the trunk
+    KNOT_ROOM = 0.8
+    #: steepest rise of a knot inside the trunk (degrees above the horizontal)
+    KNOT_RISE = 35.0
+
+    def _tapers(self, ax, cells, t, k, radii, rp):
+        """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
+
+        A stack holds one year's cells more than the stack above it; the top
+        corners of those outer cells are drawn in towards the radius where the
+        stack above ends (``R + TAPER (r - R)``), so each level tapers into the
+        next and the apex closes, instead of leaving flat steps.  Bottom
+        corners keep their radii (``None``); a knot's bottom corners are set
+        by :meth:`_seat_knot`.  Topology is unchanged.
+        """
+        vd = self.gm.volume_data
+        cell = vd["cell"][cells].astype(np.int64)
+        n_levels, n = len(ax.levels), ax.sides
+        count = np.zeros((n_levels + 1, n), np.int64)  # cells per stack; a slot never tapers
+        count[: len(ax.count)] = np.where(ax.alive, ax.count, 10**6)
+        above = count[t + 1, k]
+        table = np.full((n_levels, n, int(cell.max()) + 1), rp)
+        table[t, k, cell] = radii[cells]
+        m = np.minimum(above, cell)
+        base = np.where(m > 0, table[t, k, np.maximum(m, 0)], rp)
+        exposed = cell > above
+        eps = self.TAPER
+
+        def top(r):
+            return np.where(exposed, base + eps * (r - base), r)
+
+        return None, top
+
+    @staticmethod
+    def _cube_points(o, f, h, t, k, theta, r_in, r_out, n, bottom=None, top=None):
+        """Corners (m, 8, 3) of cubes: base 0..3 = (bottom th0, bottom th1, top th1, top th0) at r_in.
+
+        Cube ``j`` lies on level ``t[j]`` (rows of the level arrays ``o, f,
+        h``) between angles ``theta[k[j]]`` and ``theta[k[j] + 1]``; the radial
+        directions and level tops are computed once per (level, angle) and
+        gathered.  ``bottom`` and ``top`` map the radii of the bottom and top
+        corners (tapers).
+        """
+        c = 1.0 / math.cos(math.pi / n)
+        bottom = bottom or (lambda r: r)
+        top = top or (lambda r: r)
+        radial = np.cos(theta)[None, :, None] * f[:, 1][:, None, :] + np.sin(theta)[None, :, None] * f[:, 2][:, None, :]
+        r0, r1 = radial[t, k], radial[t, k + 1]
+        low, high = o[t], (o + h[:, None] * f[:, 0])[t]
+        out = np.empty((len(t), 8, 3))
+        for base, r in ((0, r_in), (4, r_out)):
+            rb, rt = (c * bottom(r))[:, None], (c * top(r))[:, None]
+            out[:, base + 0] = low + rb * r0
+            out[:, base + 1] = low + rb * r1
+            out[:, base + 2] = high + rt * r1
+            out[:, base + 3] = high + rt * r0
+        return out
+
+    def nominal_radius(self, br: Branch, s: np.ndarray, now: int | None = None) -> np.ndarray:
+        """The branch's outer radius at distance ``s`` along it, from the law's mean widths."""
+        p = self.p
+        now = self.year + 1 if now is None else now
+        years_here = np.clip(now - br.year - np.floor(np.maximum(s - 2 * p["pith_radius"], 0) / p["branch_length"]), 0, None)
+        rings = np.arange(1, max(int(years_here.max(initial=0)), 0) + 1)
+        lo_e, hi_e = self.law(rings, np.zeros_like(rings), None, 1)
+        lo_l, hi_l = self.law(rings, np.ones_like(rings), None, 1)
+        per_year = 0.5 * (lo_e + hi_e + lo_l + hi_l)
+        cum = np.concatenate([[0.0], np.cumsum(per_year)])
+        bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"]) * years_here
+        return p["pith_radius"] * p["branch_scale"] + cum[years_here.astype(int)] + bark
+
+    def knot_length(self, br: Branch) -> float:
+        """Length of the branch's first level (the knot): from the pith face past the trunk's final radius."""
+        p = self.p
+        angle = p["branch_angle"] if br.angle is None else br.angle
+        radial = max(math.sin(math.radians(angle)), math.cos(math.radians(self.KNOT_RISE)))  # cos(elevation)
+        return max((self.trunk_radius() - p["pith_radius"]) / radial, p["branch_length"] * 0.25)
+
+    def _push(self, pts, levels, profiles):
+        """Bend the trunk's rings around each knot: a displacement field from the knot's seam.
+
+        At slot layer ``j`` each of the tunnel's four corner lines (sector
+        edge ``theta_k`` or ``theta_k+1``, node bottom or top) has a seam
+        vertex that the knot places (its volumes are ``exclusive``); its
+        displacement is the knot corner minus the straight trunk corner.  A
+        trunk corner near the slot gets the bilinear blend of the four
+        displacements at its slot coordinates (clipped to the slot), at its
+        fractional layer (its apothem among the layers' ``a_j``), faded out
+        linearly over twice the displacement's length outside the slot, so
+        the field's slope stays under 1/2 (no folded cells).  On a corner line
+        it is the knot's corner: the seam vertices' volumes agree.  Where
+        several knots reach a corner their fields are blended with weights
+        ``1 / q^2`` (``q`` the distance outside each slot over its reach), so
+        each knot's own field holds on its seam and two knots of one year do
+        not push the same cells twice.
+        """
+        o, f, h = self.level_frames(self.trunk)
+        n = self.trunk.sides
+        half = math.pi / n
+        levels = np.asarray(levels)
+        base = pts.reshape(-1, 3)
+        per = pts.shape[1]
+        num = np.zeros_like(base)
+        den = np.zeros(len(base))
+        for b, br in enumerate(self.branches):
+            if b not in profiles:
+                continue
+            s_layer, rho_layer, a_layer, lateral = profiles[b]
+            cells = np.flatnonzero(np.abs(levels - br.level) <= 1)  # the slot lies in its node level
+            t, phi = br.level, 2 * np.pi * br.sector / n
+            p0, frame = self.branch_frame(br, knot=True)
+            # (4, layers, 3): the four corners (-,-), (+,-), (+,+), (-,+) at once, same arithmetic per corner
+            cos_th = np.array([math.cos(phi + su * half) for su in _SU])
+            sin_th = np.array([math.sin(phi + su * half) for su in _SU])
+            lift = np.array([(0.5 + 0.5 * sv) * h[t] for sv in _SV])
+            ring = cos_th[:, None] * f[t, 1] + sin_th[:, None] * f[t, 2]
+            straight = (o[t] + lift[:, None] * f[t, 0])[:, None, :] + (a_layer / math.cos(half))[None, :, None] * ring[:, None, :]
+            side = (-_SV)[:, None, None] * frame[1] + (_SU[:, None] * lateral)[:, :, None] * frame[2]  # towards each corner
+            knot = p0 + s_layer[:, None] * frame[0] + rho_layer[None, :, None] * side
+            disp = knot - straight
+            size_layer = np.linalg.norm(disp, axis=2).max(axis=0)
+            rel = pts[cells].reshape(-1, 3)
+            rel -= o[t]
+            z = rel @ f[t, 0]
+            close = np.flatnonzero(np.abs(z - 0.5 * h[t]) - 0.5 * h[t] < 2 * size_layer.max())
+            rows = cells[close // per] * per + close % per
+            rel, z = rel[close], z[close]  # the rest is beyond reach
+            across = z[:, None] * f[t, 0]  # np.linalg.norm of rel - across, in place
+            np.subtract(rel, across, out=across)
+            across *= across
+            r_h = across[:, 0] + across[:, 1]  # add.reduce over 3 columns: left to right
+            r_h += across[:, 2]
+            np.sqrt(r_h, out=r_h)
+            du = (np.arctan2(rel @ f[t, 2], rel @ f[t, 1]) - phi + np.pi) % (2 * np.pi) - np.pi
+            outside = np.hypot(np.maximum(np.abs(du) - half, 0) * r_h, np.maximum(np.abs(z - 0.5 * h[t]) - 0.5 * h[t], 0))
+            near = np.flatnonzero(outside < 2 * size_layer.max())
+            if not near.size:
+                continue
+            u = np.clip(du[near] / half, -1, 1)
+            v = np.clip((z[near] - 0.5 * h[t]) / (0.5 * h[t]), -1, 1)
+            lam = np.interp(r_h[near] * math.cos(half), a_layer, np.arange(len(a_layer)))
+            lo = np.floor(lam).astype(np.int64)
+            hi = np.minimum(lo + 1, len(a_layer) - 1)
+            frac = (lam - lo)[:, None]
+            # the four corners at once, term by term as a sum over them (same rounding)
+            blend = _corner_blend(u, v)
+            by_layer = disp.transpose(1, 0, 2).copy()  # (layers, 4, 3): rows gathered whole
+            terms = by_layer[lo]  # in place: (1 - f) d_lo + f d_hi, blended
+            terms *= 1 - frac[:, :, None]
+            upper = by_layer[hi]
+            upper *= frac[:, :, None]
+            terms += upper
+            terms *= blend
+            field = terms[:, 0] + terms[:, 1]
+            field += terms[:, 2]
+            field += terms[:, 3]
+            reach = np.maximum(2 * np.maximum(size_layer[lo], size_layer[hi]), 1e-12)
+            q = outside[near] / reach
+            fade = np.clip(1 - q, 0, 1)
+            weight = np.where(fade > 0, 1.0 / (q * q + 1e-9), 0.0)  # the nearest knot's field wins
+            at = rows[near]  # distinct within a branch
+            field *= (weight * fade)[:, None]
+            num[at] += field
+            den[at] += weight
+        moved = np.flatnonzero(den > 0)
+        out = base.copy()
+        shift = num[moved]
+        shift /= den[moved, None]
+        out[moved] += shift
+        return out.reshape(pts.shape)
+
+    def embed(self) -> np.ndarray:
+        """Default corners on every dart (``gm.corners``), then the kernel's per-vertex average."""
+        gm = self.gm
+        self._sync_corner()
+        flat, offset = self.default_corners()
+        tpl = self.corner
+        gm.set_corners_from_tables(flat, offset, tpl)
+        split = np.flatnonzero(tpl < 0)  # darts made by edge splits: edge midpoints
+        if split.size:
+            corners = gm.corners
+            a0, a1 = gm.alpha[0], gm.alpha[1]
+            corners[split] = 0.5 * (corners[a0[split]] + corners[a0[a1[split]]])
+        return gm.embed()
+
+    # ------------------------------------------------------------------ facts
+    def check_topology(self) -> None:
+        """Raise :class:`GMapError` unless valid, chi = 1 and boundary chi = 2."""
+        from ramure.gmap.kernel.topology import assert_solid
+
+        try:
+            assert_solid(self.gm)
+        except GMapError as err:
+            raise GMapError(f"after step {self.steps}: {err}") from None
+
+    def tissue_counts(self) -> dict[str, int]:
+        """Volumes per wood tissue (all names present)."""
+        counts = np.bincount(self.gm.volume_data["wood"].astype(np.int64), minlength=len(TISSUES))
+        return {name: int(counts[i]) for i, name in enumerate(TISSUES)}
+
+    def branch_volumes(self, b: int) -> np.ndarray:
+        """Volume ids of branch ``b`` (0-based): its pith prisms and cells (the knot is level 0)."""
+        return np.flatnonzero(self.gm.volume_data["axis"] == b + 1)
+
+
+def place_branches(p: Mapping[str, Any], years: int, seed: int, count: int | np.integer | None = None) -> list[Branch]:
+    """Branches for a trunk: birth years spread over ``branch_start..years-1``, sectors by 137.5 degrees.
+
+    The sector is the golden-angle divergence quantised onto the trunk's
+    faces, turned by a seeded offset; a branch is never born in its
+    trunk's last year (it would have no rings yet).
+    """
+    count = int(p["branches"] if count is None else count)
+    first = int(p["branch_start"])
+    span = years - 1 - first
+    if count <= 0 or span < 0:
+        return []
+    faces = (span + 1) * int(p["sides"])  # one branch per trunk face and year: checked before placing
+    if count > faces:
+        shown = f"{count:,}" if count < 10**9 else f"{float(count):.3g}"
+        raise ValueRefused(f"{shown} branches do not fit: {span + 1} years of {p['sides']} trunk faces hold at most {faces:,}")
+    n = int(p["sides"])
+    turn = int(mix(seed, 11) % n)
+    out = []
+    for i in range(count):
+        year = first + (i * (span + 1)) // count if count > span + 1 else first + round(i * span / max(count - 1, 1))
+        sector = (turn + int(round(i * n * 137.5 / 360.0))) % n
+        out.append(Branch(int(min(year, years - 1)), sector, mix(seed, 1000 + i)))
+    return out
+
+
+def grow_wood(
+    species: str = "pine",
+    years: int = 10,
+    seed: int = 0,
+    branches: int | str | Sequence[tuple[int, int]] | None = None,
+    check_every_step: bool = False,
+    embed_every_step: bool = False,
+    branch_seeds: Mapping[int, int] | None = None,
+    **params: Any,
+) -> Wood:
+    """Grow ``years`` years (``2 * years`` half-year steps) of wood; returns the :class:`Wood`.
+
+    ``branches``: a number (placed by :func:`place_branches`; default the
+    species' ``branches``) or a list of ``(year, sector)`` pairs.
+    ``branch_seeds`` maps a branch index to its seed (regrowth).
+    """
+    if isinstance(branches, str):  # from the command line (--set branches=3)
+        params = {**params, "branches": branches}
+        branches = None
+    p = resolve_params(species, **params)
+    years = check_years(years)
+    if isinstance(branches, (int, np.integer)) or branches is None:
+        placed = place_branches(p, years, seed, branches)
+    else:
+        placed = []
+        for i, (year, sector) in enumerate(branches):
+            if not 0 <= int(year) < years or not 0 <= int(sector) < p["sides"]:
+                raise ValueRefused(
+                    f"branch {i}: year must be in 0..{years - 1} and sector in 0..{p['sides'] - 1}, got ({year}, {sector})"
+                )
+            placed.append(Branch(int(year), int(sector), mix(seed, 1000 + i)))
+    slots = [(b.year, b.sector) for b in placed]
+    if len(set(slots)) != len(slots):
+        raise ValueRefused("two branches share one trunk face (same year and sector)")
+    for i, s in (branch_seeds or {}).items():
+        placed[int(i)].seed = mix(int(s), 1000 + int(i))
+    est = estimated_darts(p, years, [b.year for b in placed])
+    if est > MAX_DARTS:
+        raise ValueRefused(
+            f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}; grow fewer years or branches"
+        )
+    t0 = time.perf_counter()
+    wood = Wood(p, seed, placed, species, years=years)
+    for _ in range(2 * years):
+        wood.step()
+        if check_every_step:  # first: its fresh look at what changed is then shared by the embedding's labels
+            wood.check_topology()
+        if embed_every_step:
+            wood.embed()
+    if not embed_every_step:  # else the last step's embedding stands: nothing changed since
+        wood.embed()
+    wood.seconds = time.perf_counter() - t0
+    wood.gm.meta = {
+        "species": species,
+        "years": years,
+        "seed": int(seed),
+        "params": {k: v for k, v in p.items() if k != "colors"},
+        "branches": slots,
+    }
+    return wood
+
+
+def check_years(years: float) -> int:
+    """``years`` as a whole number >= 1, else :class:`ValueRefused`."""
+    try:
+        y = int(years)
+    except (TypeError, ValueError):
+        raise ValueRefused(f"years must be a whole number, got {years!r}") from None
+    if y != years or y <= 0:
+        raise ValueRefused(f"years must be a whole number >= 1, got {years}")
+    return y
+
+
+def regrow_branch(wood: Wood, b: int, seed: int) -> Wood:
+    """The same wood with branch ``b`` grown from a new seed (every other cell keeps its draws)."""
+    if not 0 <= b < len(wood.branches):
+        raise ValueRefused(f"branch index must be in 0..{len(wood.branches) - 1}, got {b}")
+    slots = [(br.year, br.sector) for br in wood.branches]
+    seeds = {i: None for i in range(len(slots))}
+    new = Wood(
+        wood.p,
+        wood.seed,
+        [Branch(y, s, br.seed) for (y, s), br in zip(slots, wood.branches)],
+        wood.species,
+        wood.trunk_frames,
+        wood.final_years,
+    )
+    new.branches[b].seed = mix(int(seed), 1000 + b)
+    del seeds
+    for _ in range(wood.steps):
+        new.step()
+    new.embed()
+    new.gm.meta = dict(wood.gm.meta)
+    return new
+
+
+# ---------------------------------------------------------------------- colours, grids, cuts
+def _hex(c):
+    return [int(c[i : i + 2], 16) for i in (1, 3, 5)]
+
+
+def cell_colors(volume_data: Mapping[str, np.ndarray], species: str = "pine") -> np.ndarray:
+    """uint8 RGB per volume from its wood tissue and season (the species' colours)."""
+    colors = SPECIES[species]["colors"]
+    tissue = np.asarray(volume_data["wood"]).astype(np.int64)
+    season = np.asarray(volume_data["season"]).astype(np.int64)
+    out = np.zeros((len(tissue), 3), np.uint8)
+    for code, name in enumerate(TISSUES):
+        value = colors[name]
+        pair = value if isinstance(value, tuple) else (value, value)
+        for s in (EARLY, LATE):
+            out[(tissue == code) & (np.maximum(season, 0) == s)] = _hex(pair[s])
+    return out
+
+
+def to_grid(wood: Wood) -> pv.UnstructuredGrid:
+    """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data."""
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
+
+    grid = to_unstructured_grid(wood.gm)
+    grid.cell_data["rgb"] = cell_colors(wood.gm.volume_data, wood.species)
+    return grid
+
+
+def parse_plank(text: str) -> tuple[np.ndarray, float, float]:
+    """``"normal=x,offset=0.3,thickness=0.02"`` -> (normal 3-vector, offset, thickness)."""
+    values = {}
+    for part in str(text).split(","):
+        name, sep, value = part.partition("=")
+        name = name.strip().lower()
+        if not sep or name not in ("normal", "offset", "thickness"):
+            raise ValueRefused(f"--plank expects normal=AXIS,offset=NUMBER,thickness=NUMBER, got {text!r}")
+        values[name] = value.strip()
+    normal = values.get("normal", "x").lower()
+    axes = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+    if normal in axes:
+        n = np.array(axes[normal])
+    else:
+        try:
+            n = np.array([float(v) for v in normal.split(":")])
+        except ValueError:
+            raise ValueRefused(f"plank normal must be x, y, z or X:Y:Z, got {normal!r}") from None
+        if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.linalg.norm(n) > 0:
+            raise ValueRefused(f"plank normal must be a non-zero finite 3-vector, got {normal!r}")
+    try:
+        offset, thickness = float(values.get("offset", 0.0)), float(values.get("thickness", 0.02))
+    except ValueError:
+        raise ValueRefused(f"plank offset and thickness must be numbers, got {text!r}") from None
+    if not (math.isfinite(offset) and math.isfinite(thickness)) or thickness <= 0:
+        raise ValueRefused(f"plank thickness must be a positive finite number and offset finite, got {text!r}")
+    return n / np.linalg.norm(n), offset, thickness
+
+
+def plank(grid: pv.UnstructuredGrid, normal: ArrayLike, offset: float, thickness: float) -> pv.UnstructuredGrid:
+    """The slab ``offset <= n · (x - axis) <= offset + thickness`` of a wood grid (VTK clips).
+
+    ``offset`` is measured from the trunk's axis (the line x = y = 0); an
+    empty slab raises :class:`ValueRefused` naming the model's extent.
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    lower = grid.clip(normal=tuple(-n), origin=tuple(offset * n), invert=True)
+    slab = lower.clip(normal=tuple(n), origin=tuple((offset + thickness) * n), invert=True) if lower.n_cells else lower
+    if slab.n_cells == 0:
+        pts = np.asarray(grid.points)
+        reach = float(np.max(pts @ n)) if len(pts) else 0.0
+        raise ValueRefused(f"the plank at offset {offset:g} misses the wood (it reaches {reach:.4g} along the normal)")
+    return slab
+
+
+def cut_facts(grid: pv.DataSet) -> dict[str, Any]:
+    """``{"rings": ..., "knots": ...}`` of a cut or plank: distinct trunk ring years, branch regions."""
+    axis = np.asarray(grid.cell_data["axis"])
+    tissue = np.asarray(grid.cell_data["wood"])
+    year = np.asarray(grid.cell_data["year"])
+    trunk_wood = (axis == 0) & np.isin(tissue, [CODES["sapwood"], CODES["heartwood"]])
+    rings = int(len(np.unique(year[trunk_wood])))
+    return {"rings": rings, "knots": knot_regions(grid)}
+
+
+def knot_regions(grid: pv.DataSet) -> int:
+    """Number of connected regions of branch cells (``axis >= 1``) in a grid."""
+    ids = np.flatnonzero(np.asarray(grid.cell_data["axis"]) >= 1)
+    if not ids.size:
+        return 0
+    part = grid.extract_cells(ids)  # type: ignore[arg-type]  # pyvista stubs want int64
+    conn = part.connectivity()
+    return int(len(np.unique(conn.cell_data["RegionId"])))
+
+
+# ---------------------------------------------------------------------- from a plant
+def _trunk_chain(skeleton):
+    """Indices of the trunk's segments, base to top: order-0 segments following parents."""
+    order = np.asarray(skeleton.order)
+    parent = np.asarray(skeleton.parent)
+    trunk = np.flatnonzero(order == order.min(initial=0))
+    if not trunk.size:
+        raise ValueRefused("the plant has no segments: derive it with more steps")
+    child = {int(parent[i]): int(i) for i in trunk}
+    start = [int(i) for i in trunk if parent[i] < 0 or order[parent[i]] != order.min()]
+    chain = [start[0]]
+    while chain[-1] in child and len(chain) <= len(trunk):
+        chain.append(child[chain[-1]])
+    return np.array(chain)
+
+
+def _subtree_leaves(skeleton, segment):
+    """History-leaf ids of a segment and every segment growing from it."""
+    parent = np.asarray(skeleton.parent)
+    inside = np.zeros(len(parent), bool)
+    inside[segment] = True
+    for _ in range(len(parent)):
+        grow = ~inside & (parent >= 0) & inside[np.maximum(parent, 0)]
+        if not grow.any():
+            break
+        inside |= grow
+    return sorted(set(np.asarray(skeleton.leaf_id)[inside].tolist()))
+
+
+def from_skeleton(
+    skeleton: Skeleton,
+    years: int,
+    species: str = "pine",
+    seed: int = 0,
+    steps: int | None = None,
+    leaf_steps: ArrayLike | None = None,
+    max_branches: int = 24,
+    **params: Any,
+) -> Wood:
+    """Volumetric wood of a derived Ramure plant: its trunk and first branches.
+
+    The trunk polyline (order-0 segments from the base) is cut into
+    ``years`` yearly units of equal length; each unit's frame follows the
+    polyline there (a bent trunk bends the pith and its rings).  Each
+    first-order branch growing from the trunk becomes a knot: its birth year
+    is the year of the trunk unit it grows from -- from the derivation step
+    that made its parent trunk segment when ``leaf_steps`` (the history
+    tree's ``step`` array) and ``steps`` are given, else from its height --
+    its sector from its azimuth and its insertion angle from its direction.
+    Branches born the same year less than ``MIN_SECTOR_GAP`` trunk faces
+    from an earlier one (the thesis's "topological correction" refusing a
+    branch too close to another: two knots of one node that near crowd the
+    ring between them), or born in the last year, are left out; at most
+    ``max_branches`` are kept.
+    Units are the plant's.
+    """
+    years = check_years(years)
+    p = resolve_params(species, **params)
+    start, end = np.asarray(skeleton.start, float), np.asarray(skeleton.end, float)
+    chain = _trunk_chain(skeleton)
+    pts = np.concatenate([start[chain[:1]], end[chain]])
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    if not arc[-1] > 0:
+        raise ValueRefused("the plant's trunk has zero length")
+    cuts = np.linspace(0.0, arc[-1], years + 1)
+    pos = np.stack([np.interp(cuts, arc, pts[:, j]) for j in range(3)], axis=1)
+    heading = np.diff(pos, axis=0)
+    h = np.linalg.norm(heading, axis=1)
+    from ramure.gmap.kernel.frames import frame_from
+
+    frames = frame_from(heading, np.cross(heading, [0.0, 0.0, 1.0]) + np.array([1e-9, 1.0, 0.0]))
+    frames = frame_from(heading, np.repeat(frames[:1, 1], years, axis=0))  # one turn of L for all units
+    branches: list[Branch] = []
+    used: set[tuple[int, int]] = set()
+    leaves: list[list[int]] = []
+    order, parent = np.asarray(skeleton.order), np.asarray(skeleton.parent)
+    on_trunk = np.flatnonzero((order == order.min() + 1) & np.isin(parent, chain))
+    where_in_chain = {int(c): i for i, c in enumerate(chain)}
+    n = int(p["sides"])
+    for i in on_trunk:  # one step per first-order branch
+        par = int(parent[i])
+        at = arc[where_in_chain[par] + 1]
+        year = int(min(np.searchsorted(cuts, at, side="right") - 1, years - 1))
+        if leaf_steps is not None and steps:
+            step = int(np.asarray(leaf_steps)[int(skeleton.leaf_id[par])])
+            year = int(min(years - 1, max(0, step * years // max(int(steps), 1))))
+        d = end[i] - start[i]
+        if not np.linalg.norm(d) > 0 or year >= years - 1:
+            continue
+        f = frames[year]
+        az = math.atan2(d @ f[2], d @ f[1])
+        sector = int(round(az / (2 * np.pi / n))) % n
+        angle = math.degrees(math.acos(np.clip(d @ f[0] / np.linalg.norm(d), -1, 1)))
+        if any(y == year and min((sector - k) % n, (k - sector) % n) < MIN_SECTOR_GAP for y, k in used):
+            continue  # the thesis's topological correction: too close
+        used.add((year, sector))
+        branches.append(Branch(year, sector, mix(seed, 1000 + len(branches)), angle=float(np.clip(angle, 5, 175))))
+        leaves.append(_subtree_leaves(skeleton, int(i)))
+        if len(branches) >= max_branches:
+            break
+    est = estimated_darts(p, years, [b.year for b in branches])
+    if est > MAX_DARTS:
+        raise ValueRefused(f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}")
+    t0 = time.perf_counter()
+    wood = Wood(p, seed, branches, species, trunk_frames=(pos[:-1], frames, h), years=years)
+    for _ in range(2 * years):
+        wood.step()
+    wood.embed()
+    wood.seconds = time.perf_counter() - t0
+    wood.gm.meta = {
+        "species": species,
+        "years": years,
+        "seed": int(seed),
+        "from": "skeleton",
+        "branches": [(b.year, b.sector) for b in branches],
+        "branch_leaves": leaves,
+    }
+    return wood
+
+
+def plank_map(gm: GMap3, normal: ArrayLike, offset: float, thickness: float) -> GMap3:
+    """The plank as a 3-G-map (two kernel map cuts), so it can be cut again, textured, cracked.
+
+    Keeps ``offset <= n . x <= offset + thickness`` like :func:`plank`; the
+    new faces are labelled ``X`` and the volumes keep their attributes
+    (tissue, season, axis...).  Refused by the kernel when a plane misses.
+    """
+    from ramure.gmap.kernel.cut import cut_map
+
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    inner = cut_map(gm, -n, offset * n)
+    return cut_map(inner, n, (offset + thickness) * n)
