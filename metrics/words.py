@@ -32,11 +32,11 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 
 from ramure.errors import RamureError
 
-from .qualifiers import QUALIFIER_METRICS, VOCABULARY, canonical_name
+from .qualifiers import QUALIFIER_METRICS, VOCABULARY, accepted_words, canonical_name
 
 FORMAT = "ramure-words"
 #: Largest vocabulary file read (bytes): a few hundred words take a few tens of kilobytes.
@@ -52,6 +52,19 @@ class WordsFileError(RamureError):
 def word_label(name: str) -> str:
     """How a canonical word is shown: ``long-trunk`` -> ``long trunk`` (``fir-like`` stays)."""
     return name if name in VOCABULARY else name.replace("-", " ")
+
+
+def typed_words(extra: Iterable[str] = ()) -> list[str]:
+    """What a qualifier box suggests while typing, in every front end: the accepted words
+    (:func:`~ramure.metrics.qualifiers.accepted_words`: English, French, synonyms,
+    comparatives) then the ``extra`` canonical words (a study's) as shown.
+
+    >>> words = typed_words(["long-trunk"])
+    >>> {"taller", "touffu", "plus haut"} <= set(words), words[-1]
+    (True, 'long trunk')
+    """
+    shown = accepted_words()
+    return shown + [w for w in map(word_label, extra) if w not in shown]
 
 
 def describe_direction(direction: Mapping[str, float], top: int | None = None) -> str:

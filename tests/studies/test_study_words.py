@@ -141,7 +141,11 @@ def test_study_words_cli_then_qualify_with_the_word(tmp_path, capsys, monkeypatc
     assert main(["qualify", *args, "--qualifier", "Long Trunk", "--json"]) == 0
     applied = json.loads(capsys.readouterr().out)
     assert applied["qualifier"] == "long-trunk" and applied["source"] == "transfer"
-    assert set(applied["own"]) <= set(direction)
+    if applied["improved"]:  # scored along its measured direction, like any qualifier
+        assert applied["moves"]["long-trunk"] > 0
+    else:  # or refused, naming the word and its measured metrics
+        strongest = max(direction, key=lambda m: abs(direction[m]))
+        assert "long-trunk's metrics" in applied["reason"] and strongest in applied["reason"]
     assert main(["qualify", *args, "--qualifier", "long trnk"]) == 2
     assert "did you mean long trunk" in capsys.readouterr().err
     assert main(["qualify", "--list", "--words", str(out)]) == 0
