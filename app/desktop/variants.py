@@ -218,6 +218,9 @@ def qualifier_message(result: QualifierResult) -> str:
     vocab = _vocabulary()
     direction = getattr(vocab.get(name), "direction", None)
     tries = f" ({result.tried} tries)" if result.tried > 1 else ""
+    why = f": {result.reason}" if getattr(result, "reason", None) else ""
+    if not direction and getattr(result, "regen", True) is None:  # a study's word that moved nothing
+        return f"{name}: no variant moved the selection that way{tries}; the plant is as it was{why}"
     if not direction:
         return f"{name}: applied variant {result.variant} (rule {result.params.get('rule')}){tries}"
     metric = max(direction, key=lambda k: (abs(direction[k]), _relative_change(result, k)))
@@ -225,7 +228,6 @@ def qualifier_message(result: QualifierResult) -> str:
     change = f"{METRIC_LABELS.get(metric, metric)} {_short(before)} → {_short(after)}"
     if result.improved:
         return f"{name}: {change}{tries}"
-    why = f": {result.reason}" if getattr(result, "reason", None) else ""
     return f"{name}: no variant moved the selection that way{tries}; the plant is as it was ({change}){why}"
 
 

@@ -90,12 +90,14 @@ def qualifier_summary(result: QualifierResult) -> str:
     weights = (entry.direction or {}) if entry is not None else {}
     shown = sorted(weights, key=lambda m: -abs(weights[m]))[:2]
     moves = ", ".join(f"{_metric_label(m)} {getattr(result.before, m):.4g} → {getattr(result.after, m):.4g}" for m in shown)
-    if not shown:  # no direction (normal, a study-only word): say what was applied
+    why = f": {result.reason}" if getattr(result, "reason", None) else ""
+    if not shown and getattr(result, "regen", True) is None:  # a study's word that moved nothing: say why
+        return f"'{name}' did not move the selection its way after {result.tried} tries; the plant is as it was{why}"
+    if not shown:  # no vocabulary direction (normal, a study's word): say what was applied
         return f"'{name}': applied {result.params}"
     if result.improved:
         word = COMPARATIVES.get(name, f"more {name}")
         return f"{word}: {moves}"
-    why = f": {result.reason}" if result.reason else ""
     return f"'{name}' did not move the selection its way after {result.tried} tries ({moves}); the plant is as it was{why}"
 
 
@@ -214,6 +216,12 @@ class VariantPanel:
         self.matrix_note = W.HTML()
         self.matrix_french = W.Checkbox(value=False, description="French names", indent=False)
         observe(self.matrix_french, lambda _c: self._draw_matrix())
+        self.words_path = W.Text(placeholder="words.json", description="study words", layout=W.Layout(width="260px"))
+        self.load_words_button = button(
+            "Load",
+            lambda: self.app.load_words(self.words_path.value),
+            "accept the words of a vocabulary file ('ramure study words') as qualifiers",
+        )
         self.pca_widget = W.VBox(
             [
                 W.HBox([self.scatter, W.VBox([W.HTML("<b>Qualifier boxes</b>"), self.box_toggles])]),
@@ -221,6 +229,7 @@ class VariantPanel:
                 self.matrix_note,
                 self.matrix,
                 self.matrix_french,
+                W.HBox([self.words_path, self.load_words_button]),
             ]
         )
         self.refresh()

@@ -92,6 +92,7 @@ def test_a_study_word_joins_the_box_and_a_typo_is_refused_with_suggestions(make_
     settle(qtbot, w)
     result = w.variants.last_qualifier
     assert result.qualifier == "long-trunk" and result.source == "transfer"
+    assert w.statusBar().currentMessage().startswith("long-trunk: ")  # what it did, or why not
     if result.improved:
         assert result.moves["long-trunk"] > 0
     else:
@@ -101,3 +102,18 @@ def test_a_study_word_joins_the_box_and_a_typo_is_refused_with_suggestions(make_
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(tmp_path / "bad.json"), ""))
     menu_action(w, "Variants", "Load study words…").trigger()
     assert "not a Ramure vocabulary file" in w.last_message and "long-trunk" in w.variants.words
+
+
+def test_a_study_word_that_moved_nothing_says_why():
+    from types import SimpleNamespace
+
+    from ramure.app.desktop.variants import qualifier_message
+
+    result = SimpleNamespace(
+        qualifier="long-trunk", improved=False, tried=0, variant=-1, params={}, regen=None, reason="every variant moves X more"
+    )
+    assert qualifier_message(result) == (
+        "long-trunk: no variant moved the selection that way; the plant is as it was: every variant moves X more"
+    )
+    result.regen, result.improved, result.variant, result.params = object(), True, 4, {"rule": 2}
+    assert qualifier_message(result) == "long-trunk: applied variant 4 (rule 2)"

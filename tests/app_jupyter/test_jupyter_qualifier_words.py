@@ -103,11 +103,14 @@ def test_a_study_word_is_suggested_and_applied_with_its_direction(ex, tmp_path, 
     path = tmp_path / "words.json"
     doc = {"format": "ramure-words", "words": {"long-trunk": {"direction": {"height": 1.0, "crown_width": -0.3}}}}
     path.write_text(json.dumps(doc))
-    assert ex.load_words(path) == {"long-trunk": {"height": 1.0, "crown_width": -0.3}}
+    ex.variants.words_path.value = str(path)  # the PCA & qualifiers tab's field and button
+    ex.variants.load_words_button.click()
+    assert ex.variants.words == {"long-trunk": {"height": 1.0, "crown_width": -0.3}}
     assert "long trunk" in ex.edits.qualifier.options and "1 study words" in ex.message.text
     ex.edits.qualifier.value = "Long trunk"
     result = click_apply(ex, monkeypatch)
     assert ex.error is None and result.qualifier == "long-trunk" and result.source == "transfer"
+    assert ex.message.text.startswith("'long-trunk'")  # what it did, or why it did nothing
     assert "long-trunk" in result.moves  # scored along its own direction, like any qualifier
     assert result.moves["long-trunk"] > 0 if result.improved else result.reason
     ex.edits.qualifier.value = "long trunc"
@@ -116,3 +119,16 @@ def test_a_study_word_is_suggested_and_applied_with_its_direction(ex, tmp_path, 
     (tmp_path / "bad.json").write_text("[1]")
     assert ex.load_words(tmp_path / "bad.json") is None and "not a Ramure vocabulary file" in ex.error
     assert ex.variants.words  # the words loaded before stay
+
+
+def test_a_study_word_that_moved_nothing_says_why():
+    from types import SimpleNamespace as NS
+
+    from ramure.app.jupyter.variants import qualifier_summary
+
+    result = NS(qualifier="long-trunk", improved=False, tried=0, params={}, regen=None, reason="every variant moves X more")
+    assert qualifier_summary(result) == (
+        "'long-trunk' did not move the selection its way after 0 tries; the plant is as it was: every variant moves X more"
+    )
+    result.regen, result.improved, result.params = object(), True, {"rule": 2}
+    assert qualifier_summary(result) == "'long-trunk': applied {'rule': 2}"
