@@ -258,6 +258,7 @@ def run_qualify_matrix(args: argparse.Namespace, ls: LSystem, exp: Exploration, 
                     "grammar": exp.name,
                     "source": source,
                     "names": regions.names_,
+                    "french": [VOCABULARY[n].french if n in VOCABULARY else n for n in regions.names_],
                     "collision_matrix": regions.collision_matrix_.round(4).tolist(),
                     "mean_collision": round(regions.mean_collision(), 4),
                     "without_region": missing,
@@ -266,6 +267,11 @@ def run_qualify_matrix(args: argparse.Namespace, ls: LSystem, exp: Exploration, 
         )
         return 0
     print(f"collision matrix of {exp.name} ({source} regions; row A, column B: % of A's points inside B's box)")
+    if args.lang == "fr":  # the same matrix, rows and columns named in French
+        import copy
+
+        regions = copy.copy(regions)
+        regions.names_ = [VOCABULARY[n].french if n in VOCABULARY else n for n in regions.names_]
     print(matrix_table(regions))
     if missing:
         print(f"no region (no variant moves them more than another qualifier): {', '.join(missing)}")
@@ -458,7 +464,8 @@ def register(sub: Subparsers) -> None:
         "--lang",
         choices=["en", "fr"],
         default=None,
-        help="read --qualifier as French first ('large' = wide) or English ('large' = big)",
+        help="read --qualifier as French first ('large' = wide) or English ('large' = big); "
+        "fr also names --matrix's rows and columns in French",
     )
     p.add_argument(
         "--list", action="store_true", help="print every qualifier with its French name and metric direction, then exit"

@@ -150,3 +150,10 @@ def test_study_words_cli_then_qualify_with_the_word(tmp_path, capsys, monkeypatc
     assert "did you mean long trunk" in capsys.readouterr().err
     assert main(["qualify", "--list", "--words", str(out)]) == 0
     assert "long trunk" in capsys.readouterr().out
+    # the collision matrix in French too (same numbers, French names)
+    assert main(["qualify", *args[:-2], "--matrix", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["french"][doc["names"].index("small")] == "petit"
+    assert main(["qualify", *args[:-2], "--matrix", "--lang", "fr"]) == 0
+    rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()[2:] if line.strip()}
+    assert {"petit", "haut", "touffu"} <= set(rows) and "small" not in rows
