@@ -73,19 +73,21 @@ def describe_direction(direction: Mapping[str, float], top: int | None = None) -
     return " ".join(f"{'+' if w > 0 else '-'}{abs(w):.2g} {m}" for m, w in parts)
 
 
+def _weight(m: object, w: object) -> bool:
+    return m in QUALIFIER_METRICS and isinstance(w, (int, float)) and not isinstance(w, bool) and math.isfinite(w)
+
+
 def _direction(value: object, where: str) -> dict[str, float]:
-    ok = isinstance(value, dict) and value and len(value) <= len(QUALIFIER_METRICS)
-    if ok:
-        ok = all(
-            m in QUALIFIER_METRICS and isinstance(w, (int, float)) and not isinstance(w, bool) and math.isfinite(w)
-            for m, w in value.items()
-        )
-        ok = ok and any(w != 0 for w in value.values())
-    if not ok:
+    if not (
+        isinstance(value, dict)
+        and 0 < len(value) <= len(QUALIFIER_METRICS)
+        and all(_weight(m, w) for m, w in value.items())
+        and any(w != 0 for w in value.values())
+    ):
         raise WordsFileError(
             f"{where}: a direction is {{metric: finite weight}}, not all zero, over {', '.join(QUALIFIER_METRICS)}"
         )
-    return {m: float(w) for m, w in value.items()}
+    return {str(m): float(w) for m, w in value.items()}
 
 
 def words_of(doc: object, where: str = "words") -> dict[str, dict]:
@@ -129,6 +131,7 @@ def write_words(path: str | os.PathLike, words: Mapping[str, Mapping], merge: bo
 
     new = words_of({"words": dict(words)}, "new words")
     old = read_words_file(path) if merge and pathlib.Path(path).exists() else {}
-    doc = {"format": FORMAT, "version": 1, "words": {**old, **new}}
+    words_out = {**old, **new}
+    doc = {"format": FORMAT, "version": 1, "words": words_out}
     write_text(path, json.dumps(doc, indent=1, ensure_ascii=False) + "\n")
-    return doc["words"]
+    return words_out

@@ -45,9 +45,9 @@ class QualifierMapView(QWidget):
         self.canvas = FigureCanvasQTAgg(self.figure)
         # 22 names and their values need room: a narrow dock scrolls rather than clipping the names
         self.canvas.setMinimumSize(MIN_WIDTH, MIN_HEIGHT)
-        self.scroll = QScrollArea()
-        self.scroll.setWidgetResizable(True)
-        self.scroll.setWidget(self.canvas)
+        self.canvas_area = QScrollArea()
+        self.canvas_area.setWidgetResizable(True)
+        self.canvas_area.setWidget(self.canvas)
         self.note = QLabel("No exploration yet.")
         self.note.setWordWrap(True)
         self.french = QCheckBox("French names")
@@ -55,7 +55,7 @@ class QualifierMapView(QWidget):
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.note)
-        layout.addWidget(self.scroll, 1)
+        layout.addWidget(self.canvas_area, 1)
         layout.addWidget(self.french)
         self.regions: QualifierRegions | None = None
         self.name = ""
