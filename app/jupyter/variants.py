@@ -144,6 +144,7 @@ class VariantPanel:
         self.defaults: QualifierRegions | None = None  # regions of the default vocabulary (its best-ranked variants)
         self.collisions: QualifierRegions | None = None  # what the collision matrix shows (study or vocabulary)
         self.matrix_figure: Figure | None = None
+        self._matrix_key: tuple | None = None  # (regions, French names) the heat map shows
         self.words: dict[str, dict[str, float]] = {}  # a study's words: {word: direction} (load_words)
         self.chosen: np.ndarray | None = None  # PCA point of the last applied pick/qualifier
         self.running: threading.Thread | None = None  # the worker thread of a button-started sweep
@@ -591,13 +592,18 @@ class VariantPanel:
             self.matrix_figure, self.matrix.value = None, b""
             self.matrix_note.value = f"<i>{why}</i>"
             return
+        french = bool(self.matrix_french.value)
+        drawn = self._matrix_key
+        if self.matrix_figure is not None and drawn is not None and drawn[0] is regions and drawn[1] == french:
+            return  # drawn already (about a second: 462 annotated cells)
+        self._matrix_key = (regions, french)
         source = "the study's regions" if regions is self.regions else "the vocabulary's best variants"
         self.matrix_note.value = (
             f"<small>{len(regions.names_)} qualifiers ({source}); row A, column B: % of A's points inside "
             f"B's box; mean {regions.mean_collision():.1f} % (the thesis's study: 66 %). Dark = two words pick "
             "the same plants here.</small>"
         )
-        self.matrix_figure = collision_figure(regions, french=self.matrix_french.value)
+        self.matrix_figure = collision_figure(regions, french=french)
         self.matrix.value = collision_png(self.matrix_figure)
 
     def thumbnail_css(self) -> str:

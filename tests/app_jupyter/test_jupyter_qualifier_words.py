@@ -70,6 +70,25 @@ def test_the_collision_matrix_is_a_heat_map_of_the_api_matrix(explored, tmp_path
     assert "petit" in french and "haut" in french and "small" not in french
     assert panel.matrix.value != png
     panel.matrix_french.value = False
+    figure = panel.matrix_figure
+    panel.refresh()  # nothing changed: not drawn again (a second of matplotlib text)
+    assert panel.matrix_figure is figure
+
+
+def test_the_matrix_shows_a_studys_regions_when_loaded(ex, tmp_path):
+    from ramure.metrics.store import QualifierStore
+
+    exp = ex.variants.exploration
+    with QualifierStore(tmp_path / "q.sqlite") as store:
+        for word, pick in (("petit", 0), ("dense", 26)):
+            near = np.argsort(np.linalg.norm(exp.points - exp.picks.points[pick], axis=1))[:6]
+            store.add(exp.name, word, near, exp.points[near], [exp.sweep.combination(int(i)) for i in near], source="study:t")
+    regions = ex.load_qualifiers(tmp_path / "q.sqlite")
+    ax = ex.variants.matrix_figure.axes[0]
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["dense", "small"] == regions.names_
+    drawn = np.asarray(ax.images[0].get_array().filled(np.nan), float)
+    assert drawn[0, 1] == pytest.approx(regions.collision_matrix_[0, 1])
+    assert "the study's regions" in ex.variants.matrix_note.value
 
 
 def test_the_matrix_waits_for_an_exploration():
