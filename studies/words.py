@@ -46,14 +46,16 @@ MIN_WEIGHT = 0.05
 
 def new_word_groups(data: StudyData, table: SynonymTable | None = None) -> dict[str, dict]:
     """``{canonical word: {"groups": [group rows], "texts": [as typed]}}`` of the texts that name
-    no vocabulary qualifier (at most :data:`~ramure.studies.qualifiers.MAX_PHRASE` words)."""
+    no vocabulary qualifier (at most :data:`~ramure.studies.qualifiers.MAX_PHRASE` words, none
+    of them a known one: "pas dense" is a negated vocabulary word, not a new word)."""
     from ramure.metrics.qualifiers import VOCABULARY, canonical_name
 
     table = table or SynonymTable.load()
     out: dict[str, dict] = {}
     for group, text in zip(data.qualifier_group.tolist(), data.qualifier_text):
         folded = normalise_text(text)
-        if not folded or len(folded.split()) > MAX_PHRASE or table.canonical(text):
+        words = folded.split()
+        if not words or len(words) > MAX_PHRASE or table.canonical(text) or any(table.canonical(w) for w in words):
             continue
         key = canonical_name(folded)
         if key in VOCABULARY:

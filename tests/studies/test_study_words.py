@@ -41,6 +41,7 @@ def simulated(tmp_path):
         _name_groups(study, "synth1", "Feathery!", FEATHERY, 2)
         _name_groups(study, "synth2", "feathery", FEATHERY, 1)
         _name_groups(study, "synth1", "zigzag", [20, 21], 1)
+        _name_groups(study, "synth2", "pas très dense", [20, 21], 2)  # a negated known word
         yield load_study_data(study)
 
 
@@ -57,6 +58,7 @@ def test_new_words_are_the_texts_the_vocabulary_does_not_name(simulated):
     found = new_word_groups(simulated)
     assert set(found["feathery"]["texts"]) == {"Feathery!", "feathery"} and len(found["feathery"]["groups"]) == 3
     assert "petits" not in found and "small" not in found  # French plural of a vocabulary word
+    assert not [w for w in found if "dense" in w]  # "pas très dense" negates a known word
     assert all(len(w.split("-")) <= 4 for w in found)
 
 
