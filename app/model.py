@@ -481,19 +481,29 @@ class Explorer:
         points: np.ndarray | None = None,
         regions: QualifierRegions | None = None,
         tries: int = 5,
+        directions: Mapping[str, Mapping[str, float]] | None = None,
     ) -> QualifierResult:
         """Regrow the selection (or the whole plant) toward qualifier ``name`` ("denser", "rond", ...).
 
         ``sweep`` is a fitted :class:`ramure.metrics.VariantSweep` of this grammar;
         with a study's ``regions`` and the sweep's PCA ``points`` the region
-        centre chooses the variant.  Candidates are tried until the selection's
+        centre chooses the variant; ``directions`` add words (a study's, from a
+        vocabulary file: :func:`ramure.metrics.words.read_words`).  Candidates are tried until the selection's
         metrics move the qualifier's way (see :func:`ramure.metrics.apply.apply_qualifier`);
         the result is one undoable edit.
         """
         from ramure.metrics.apply import apply_qualifier
 
         out = apply_qualifier(
-            self.session, name, sweep, self.selection, rho=self.rho, points=points, regions=regions, tries=tries
+            self.session,
+            name,
+            sweep,
+            self.selection,
+            rho=self.rho,
+            points=points,
+            regions=regions,
+            tries=tries,
+            directions=directions or None,
         )
         if out.regen is not None:  # not improved: the plant and the selection stay as they were
             self._after_edit(out.regen, keep=True)

@@ -318,12 +318,41 @@ def accepted_words() -> list[str]:
     return sorted(words, key=lambda w: (_fold(w), w))
 
 
-def vocabulary_name(name: str, language: str | None = None) -> str:
-    """Like :func:`canonical_name` but refuses names outside the default vocabulary."""
+def close_words(text: str, extra: Iterable[str] = (), n: int = 5) -> list[str]:
+    """The accepted words (and ``extra`` ones, e.g. a study's) nearest ``text`` in spelling,
+    nearest first: what a refusal suggests.
+
+    >>> close_words("taler")[:1], close_words("plus touffuu"), close_words("xyzzy")
+    (['taller'], ['touffu', 'plus touffu'], [])
+    """
+    import difflib
+
+    words = {_fold(w): w for w in accepted_words()}
+    words.update({_fold(w): w if w in VOCABULARY else w.replace("-", " ") for w in extra})  # "long-trunk": "long trunk"
+    key = _fold(text)
+    head, _, rest = key.partition("-")
+    found = difflib.get_close_matches(key, list(words), n=n, cutoff=0.6)
+    if rest and head in _MORE | _LESS:  # "plus touffuu": the word after "plus", with its "plus"
+        found += [f"{head}-{w}" for w in difflib.get_close_matches(rest, list(words), n=n, cutoff=0.6)]
+    return [words.get(k, k.replace("-", " ")) for k in dict.fromkeys(found)][:n]
+
+
+def vocabulary_name(name: str, language: str | None = None, extra: Iterable[str] = ()) -> str:
+    """Like :func:`canonical_name` but refuses names outside the default vocabulary (and
+    ``extra`` canonical names, e.g. a study's words), suggesting the nearest words.
+
+    >>> vocabulary_name("plus touffu"), vocabulary_name("feathery", extra=["feathery"])
+    ('bushy', 'feathery')
+    """
     key = canonical_name(name, language)
-    if key not in VOCABULARY:
-        known = ", ".join(f"{q.name}/{q.french}" for q in VOCABULARY.values())
-        raise ValueRefused(f"unknown qualifier {name!r}; the vocabulary is: {known}")
+    extra = {canonical_name(w) for w in extra}
+    if key not in VOCABULARY and key not in extra:
+        near = close_words(name, extra)
+        hint = f"did you mean {', '.join(near)}? " if near else ""
+        raise ValueRefused(
+            f"unknown qualifier {name!r}: {hint}(English or French, e.g. tall/haut, taller, plus touffu; "
+            "'ramure qualify --list' lists them)"
+        )
     return key
 
 

@@ -224,12 +224,20 @@ def run_qualify_list(args: argparse.Namespace) -> int:
     from ramure.metrics.qualifiers import vocabulary_table
 
     table = vocabulary_table()
+    if getattr(args, "words", None):  # a study's words, with their measured directions
+        from ramure.metrics.words import describe_direction, read_words_file, word_label
+
+        for name, entry in read_words_file(args.words).items():
+            meaning = str(entry.get("meaning") or "a study's word")
+            direction = describe_direction(entry["direction"], 3)
+            table.append(dict(name=word_label(name), french="", direction=direction, meaning=meaning, antonym=None))
     if args.json:
         print(json.dumps(table))
         return 0
     for row in table:
         anto = f" (opposite: {row['antonym']})" if row["antonym"] else ""
-        print(f"{row['name'] + '/' + row['french']:24s} {row['direction']:45s} {row['meaning']}{anto}")
+        names = row["name"] + "/" + row["french"] if row["french"] else row["name"]
+        print(f"{names:24s} {row['direction']:45s} {row['meaning']}{anto}")
     return 0
 
 
@@ -250,6 +258,7 @@ def run_qualify_matrix(args: argparse.Namespace, ls: LSystem, exp: Exploration, 
                     "grammar": exp.name,
                     "source": source,
                     "names": regions.names_,
+                    "french": [VOCABULARY[n].french if n in VOCABULARY else n for n in regions.names_],
                     "collision_matrix": regions.collision_matrix_.round(4).tolist(),
                     "mean_collision": round(regions.mean_collision(), 4),
                     "without_region": missing,
@@ -258,6 +267,11 @@ def run_qualify_matrix(args: argparse.Namespace, ls: LSystem, exp: Exploration, 
         )
         return 0
     print(f"collision matrix of {exp.name} ({source} regions; row A, column B: % of A's points inside B's box)")
+    if args.lang == "fr":  # the same matrix, rows and columns named in French
+        import copy
+
+        regions = copy.copy(regions)
+        regions.names_ = [VOCABULARY[n].french if n in VOCABULARY else n for n in regions.names_]
     print(matrix_table(regions))
     if missing:
         print(f"no region (no variant moves them more than another qualifier): {', '.join(missing)}")
@@ -327,6 +341,7 @@ def run_qualify(args: argparse.Namespace) -> int:
     from ramure.metrics.exploration import explore
     from ramure.metrics.qualifiers import canonical_name, vocabulary_name
     from ramure.metrics.store import QualifierStore
+    from ramure.metrics.words import read_words
 
     if args.list:
         return run_qualify_list(args)
@@ -337,6 +352,7 @@ def run_qualify(args: argparse.Namespace) -> int:
         raise RamureError("give --qualifier NAME (see 'ramure qualify --list'), --matrix or --save-directions")
     if args.directions:
         _load_directions(args.directions)  # refuse a bad file before the sweep
+    words = read_words(args.words) if args.words else {}
     if args.tries < 1:
         raise RamureError(f"--tries must be at least 1, not {args.tries}")
     if args.climb < 0:
@@ -355,7 +371,7 @@ def run_qualify(args: argparse.Namespace) -> int:
     if args.qualifier is not None:
         qualifier = canonical_name(args.qualifier, args.lang)
         if regions is None or qualifier not in regions:
-            vocabulary_name(args.qualifier, args.lang)  # refuse unknown names before the sweep
+            vocabulary_name(args.qualifier, args.lang, extra=words)  # refuse unknown names before the sweep
     progress, close = _progress_bar(not args.json or sys.stderr.isatty(), "variants")
     try:
         exp = explore(ls, progress=progress, **_sweep_kwargs(args))
@@ -372,7 +388,7 @@ def run_qualify(args: argparse.Namespace) -> int:
     selection = _ids(args.select, "--select") if args.select else []
     _check_leaves(selection, session.tree.leaves)
     rho = args.rho / 100.0 if args.rho > 1 else args.rho
-    directions = _load_directions(args.directions) if args.directions else None
+    directions = {**words, **(_load_directions(args.directions) if args.directions else {})} or None
     result = apply_qualifier(
         session,
         qualifier,
@@ -448,7 +464,8 @@ def register(sub: Subparsers) -> None:
         "--lang",
         choices=["en", "fr"],
         default=None,
-        help="read --qualifier as French first ('large' = wide) or English ('large' = big)",
+        help="read --qualifier as French first ('large' = wide) or English ('large' = big); "
+        "fr also names --matrix's rows and columns in French",
     )
     p.add_argument(
         "--list", action="store_true", help="print every qualifier with its French name and metric direction, then exit"
@@ -469,6 +486,12 @@ def register(sub: Subparsers) -> None:
         default=None,
         metavar="JSON",
         help="qualifier directions learnt elsewhere (a --save-directions file): transfer a study to a grammar that has none",
+    )
+    p.add_argument(
+        "--words",
+        default=None,
+        metavar="JSON",
+        help="a vocabulary file of study words ('ramure study words'): its words are accepted as --qualifier",
     )
     p.add_argument("--select", default=None, metavar="LEAF_IDS", help="leaf ids (default: the whole plant)")
     p.add_argument("--rho", type=float, default=0.5, help="cut threshold in (0, 1] (or 0-100)")

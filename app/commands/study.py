@@ -8,6 +8,7 @@ Sub-commands print one JSON object on stdout::
     ramure study anova table.tsv
     ramure study export-csv study.db -o csv/
     ramure study export-qualifiers study.db --store qualifiers.db
+    ramure study words study.db -o words.json
     ramure study status study.db
     ramure study serve study.db --port 8000
 """
@@ -186,6 +187,39 @@ def run_export_qualifiers(args: argparse.Namespace) -> int:
     )
 
 
+def run_words(args: argparse.Namespace) -> int:
+    """The study's new words with their measured directions, added to the vocabulary file ``-o``."""
+    from ramure.errors import RamureError
+    from ramure.metrics.words import write_words
+    from ramure.studies.data import load_study_data
+    from ramure.studies.qualifiers import SynonymTable
+    from ramure.studies.storage import Study
+    from ramure.studies.words import pick_metrics, study_words
+
+    if args.min_groups < 1:
+        raise UserError(f"--min-groups must be at least 1, not {args.min_groups}")
+    metrics, skipped = {}, {}
+    with Study.open(args.db, readonly=True) as study:
+        for grammar in study.grammars:
+            try:
+                metrics[grammar] = pick_metrics(study, grammar, args.grammars_dir)
+            except RamureError as exc:
+                skipped[grammar] = str(exc)
+        data = load_study_data(study)
+    if not metrics:
+        raise UserError(f"{args.db}: no grammar's picks can be measured ({'; '.join(skipped.values())})")
+    words, left_out = study_words(data, metrics, SynonymTable.load(*(args.synonyms or [])), args.min_groups)
+    write_words(args.output, words, merge=True)
+    return _print(
+        dict(
+            output=str(args.output),
+            words={w: dict(direction=e["direction"], groups=e["groups"]) for w, e in words.items()},
+            left_out=left_out,
+            skipped_grammars=skipped,
+        )
+    )
+
+
 def run_status(args: argparse.Namespace) -> int:
     from ramure.studies.storage import Study
 
@@ -291,6 +325,14 @@ def register(subparsers: Subparsers) -> None:
     p.add_argument("--source", help="source tag (default: study:<study name>)")
     synonyms(p)
     p.set_defaults(func=run_export_qualifiers)
+
+    p = sub.add_parser("words", help="add the study's new qualifier words, with measured directions, to a vocabulary file")
+    p.add_argument("db")
+    p.add_argument("-o", "--output", required=True, help="vocabulary file (JSON) to create or add to")
+    p.add_argument("--min-groups", type=int, default=2, help="groups that must use a word (default: 2)")
+    p.add_argument("--grammars-dir", help="folder of the .lsys files the explorations name (default: shipped grammars)")
+    synonyms(p)
+    p.set_defaults(func=run_words)
 
     p = sub.add_parser("status", help="participants and tests of a study")
     p.add_argument("db")

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QCheckBox, QDockWidget, QLabel, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QCheckBox, QDockWidget, QLabel, QScrollArea, QVBoxLayout, QWidget
 
 from ramure.errors import RamureError
 
@@ -26,6 +26,10 @@ if TYPE_CHECKING:
     from ramure.app.desktop.variants import VariantSet
     from ramure.app.desktop.window import MainWindow
     from ramure.metrics.qualifiers import QualifierRegions
+
+
+#: Smallest size (pixels) the heat map is drawn at: below it the names were clipped.
+MIN_WIDTH, MIN_HEIGHT = 480, 440
 
 
 class QualifierMapView(QWidget):
@@ -39,6 +43,11 @@ class QualifierMapView(QWidget):
         super().__init__(parent)
         self.figure = Figure(figsize=(5, 4.6), dpi=90)  # fixed margins: a docked canvas can be tiny
         self.canvas = FigureCanvasQTAgg(self.figure)
+        # 22 names and their values need room: a narrow dock scrolls rather than clipping the names
+        self.canvas.setMinimumSize(MIN_WIDTH, MIN_HEIGHT)
+        self.canvas_area = QScrollArea()
+        self.canvas_area.setWidgetResizable(True)
+        self.canvas_area.setWidget(self.canvas)
         self.note = QLabel("No exploration yet.")
         self.note.setWordWrap(True)
         self.french = QCheckBox("French names")
@@ -46,7 +55,7 @@ class QualifierMapView(QWidget):
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.note)
-        layout.addWidget(self.canvas, 1)
+        layout.addWidget(self.canvas_area, 1)
         layout.addWidget(self.french)
         self.regions: QualifierRegions | None = None
         self.name = ""

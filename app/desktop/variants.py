@@ -18,7 +18,7 @@ import io
 import os
 import pathlib
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -81,11 +81,27 @@ def vocabulary_names() -> list[str]:
     return list(_vocabulary())
 
 
-def accepted_words() -> list[str]:
-    """Every word the qualifier box completes to (:func:`ramure.metrics.qualifiers.accepted_words`)."""
-    from ramure.metrics.qualifiers import accepted_words as words
+def accepted_words(extra: Iterable[str] = ()) -> list[str]:
+    """Every word the qualifier box completes to (:func:`ramure.metrics.words.typed_words`,
+    as in every front end), with ``extra`` canonical words (a study's)."""
+    from ramure.metrics.words import typed_words
 
-    return words()
+    return typed_words(extra)
+
+
+def qualifier_key(text: str, extra: Iterable[str] = ()) -> str:
+    """The canonical qualifier a typed ``text`` names, or a refusal naming the nearest words
+    (:func:`ramure.metrics.qualifiers.vocabulary_name`); ``extra``: a study's words."""
+    from ramure.metrics.qualifiers import vocabulary_name
+
+    return vocabulary_name(text, extra=extra)
+
+
+def read_study_words(path: str | os.PathLike) -> dict[str, dict]:
+    """``{word: entry}`` of a vocabulary file written by ``ramure study words``."""
+    from ramure.metrics.words import read_words_file
+
+    return read_words_file(path)
 
 
 def qualifier_meanings() -> dict[str, str]:
@@ -202,6 +218,9 @@ def qualifier_message(result: QualifierResult) -> str:
     vocab = _vocabulary()
     direction = getattr(vocab.get(name), "direction", None)
     tries = f" ({result.tried} tries)" if result.tried > 1 else ""
+    why = f": {result.reason}" if getattr(result, "reason", None) else ""
+    if not direction and getattr(result, "regen", True) is None:  # a study's word that moved nothing
+        return f"{name}: no variant moved the selection that way{tries}; the plant is as it was{why}"
     if not direction:
         return f"{name}: applied variant {result.variant} (rule {result.params.get('rule')}){tries}"
     metric = max(direction, key=lambda k: (abs(direction[k]), _relative_change(result, k)))
@@ -209,7 +228,6 @@ def qualifier_message(result: QualifierResult) -> str:
     change = f"{METRIC_LABELS.get(metric, metric)} {_short(before)} → {_short(after)}"
     if result.improved:
         return f"{name}: {change}{tries}"
-    why = f": {result.reason}" if getattr(result, "reason", None) else ""
     return f"{name}: no variant moved the selection that way{tries}; the plant is as it was ({change}){why}"
 
 

@@ -52,6 +52,7 @@ class VariantsController:
         self.constants: dict[str, float] | None = None  # the session's constants the variants were swept from
         self.lsystem: LSystem | None = None  # that grammar with those constants (thumbnails and previews derive it)
         self.last_qualifier: QualifierResult | None = None
+        self.words: dict[str, dict] = {}  # a study's words ({word: entry with its direction}), see load_words
         self.tasks: dict[str, Task] = {}
         self.show_fruit = False
         self.cut_fruit = False  # fruit drawn cut open (a plane through each fruit, facing the viewer)
@@ -78,15 +79,44 @@ class VariantsController:
                 "No exploration yet: Explore variants (a sweep of the constants "
                 "±10 %, one rule at a time) or open an exploration folder."
             )
-        names = variants.vocabulary_names()
-        w.regen.set_qualifiers(
-            names,
-            "The first qualifier explores the grammar's variants (once; cached)."
-            if names
-            else "Qualifiers are not available (metrics.qualifiers is missing).",
-            variants.qualifier_meanings(),
-            variants.accepted_words(),
-        )
+        self.offer_qualifiers("The first qualifier explores the grammar's variants (once; cached).")
+
+    def offer_qualifiers(self, note: str) -> None:
+        """The qualifier box's list (the vocabulary, then a study's words) and its suggestions."""
+        from ramure.metrics.words import word_label
+
+        names = variants.vocabulary_names() + [word_label(w) for w in self.words]
+        tips = {**variants.qualifier_meanings(), **{word_label(w): str(e.get("meaning", w)) for w, e in self.words.items()}}
+        self.window.regen.set_qualifiers(names, note, tips, variants.accepted_words(self.words))
+
+    def load_words(self, path: str | os.PathLike | None = None) -> dict[str, dict] | None:
+        """Accept a study's words (a vocabulary file from ``ramure study words``) as qualifiers,
+        each with its measured direction: they join the qualifier list and its suggestions."""
+        if path is None:
+            path, _ = QFileDialog.getOpenFileName(self.window, "Load study words", "", "Vocabulary files (*.json)")
+            if not path:
+                return None
+        try:
+            self.words = variants.read_study_words(path)
+        except RamureError as exc:
+            self.window.report_refused(str(exc))
+            return None
+        self.offer_qualifiers(f"{len(self.words)} study words accepted: {', '.join(sorted(self.words)[:6])}.")
+        self.window.status(f"Loaded {len(self.words)} study words from {os.path.basename(path)}", 8000)
+        return self.words
+
+    def directions(self) -> dict[str, dict[str, float]]:
+        """``{word: {metric: weight}}`` of the study's words, for the qualifier model."""
+        return {w: e["direction"] for w, e in self.words.items()}
+
+    def _qualifier_key(self, name: str) -> str | None:
+        """The canonical qualifier typed as ``name``, or None after saying why it is refused."""
+        try:
+            return variants.qualifier_key(name, self.words)
+        except RamureError as exc:
+            self.window.regen.qualifier_note.setText(str(exc))
+            self.window.status(str(exc), 15000)
+            return None
 
     @property
     def controller(self) -> Controller:
@@ -98,6 +128,7 @@ class VariantsController:
         self.explore_action.triggered.connect(lambda: self.explore())  # not explore(checked)
         self.explore_action.setEnabled(variants.metrics_available() is None)
         menu.addAction("Open exploration folder…").triggered.connect(lambda: self.open_exploration())
+        menu.addAction("Load study words…").triggered.connect(lambda: self.load_words())
         menu.addSeparator()
         menu.addAction("Cancel running work").triggered.connect(self.cancel_all)
 
@@ -299,18 +330,24 @@ class VariantsController:
         """Regrow the selection (or whole plant) with a gallery pick's parameter combination."""
         return self.controller.regrow(params=pick.get("params"))
 
-    def apply_qualifier(self, name: str) -> Job | Task:
+    def apply_qualifier(self, name: str) -> Job | Task | None:
         """Regrow the selection (or plant) toward qualifier ``name`` (explores first if needed).
 
         :meth:`ramure.app.model.Explorer.apply_qualifier` tries the best variants until
-        the selection's metrics move the qualifier's way; one undoable edit.
+        the selection's metrics move the qualifier's way; one undoable edit.  A word
+        nobody knows is refused at once, with the nearest words (None).
         """
+        key = self._qualifier_key(name)
+        if key is None:
+            return None
+        name = key
         if not self.explored():
             self.window.status(f"Exploring the variants before applying '{name}'…", 0)
             return self.explore(then=lambda: self.apply_qualifier(name))
         assert self.variant_set is not None and self.variant_set.exploration is not None  # explored()
         sweep = self.variant_set.exploration.sweep
-        job = self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep))
+        directions = self.directions()
+        job = self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep, directions=directions))
         self.window.status(
             f"Applying '{name}': trying the best variants on the "  # after "Computing…"
             f"{'selection' if self.controller.snapshot.selection else 'whole plant'}…",
@@ -331,8 +368,12 @@ class VariantsController:
         from ramure.metrics.qualifiers import qualifier_combination
 
         assert self.variant_set is not None and self.variant_set.exploration is not None  # explored()
+        key = self._qualifier_key(name)
+        if key is None:
+            self.window.regen.set_preview(None)
+            return None
         try:
-            params = qualifier_combination(name, self.variant_set.exploration.sweep)
+            params = qualifier_combination(key, self.variant_set.exploration.sweep, directions=self.directions() or None)
         except RamureError as exc:
             self.window.regen.qualifier_note.setText(str(exc))
             return None

@@ -109,8 +109,15 @@ class EditPanel:
         self.prune = button("Prune", app.prune, "delete the cut subtrees", style="danger")
         self.undo = button("Undo", app.undo, icon="undo")
         self.redo = button("Redo", app.redo, icon="repeat")
-        self.qualifier = W.Dropdown(
-            options=[], description="qualifier", style={"description_width": "60px"}, layout=W.Layout(width="230px")
+        # the words people type, with suggestions: English, French, synonyms, comparatives, a study's words
+        self.qualifier = W.Combobox(
+            options=[],
+            value="",
+            placeholder="taller, denser, plus touffu…",
+            ensure_option=False,
+            description="qualifier",
+            style={"description_width": "60px"},
+            layout=W.Layout(width="230px"),
         )
         self.apply_qualifier = button(
             "Apply",
@@ -169,13 +176,9 @@ class EditPanel:
         self.prune.disabled = not model.selection
         has_fruit = bool(model.selection) and bool(set(model.selection) & set(model.fruit_ids()))
         self.regrow_fruit.disabled = not has_fruit or not fruit_presets()
-        names = self.app.variants.qualifier_options()
-        options = [("choose a qualifier…", "")] + names if names else []  # never blank (None shows nothing)
-        if list(self.qualifier.options) != options:
-            chosen = self.qualifier.value
-            self.qualifier.options = options
-            self.qualifier.value = chosen if chosen in [v for _, v in options] else (options[0][1] if options else None)
-        self.qualifier.disabled = self.apply_qualifier.disabled = not names
+        words = self.app.variants.qualifier_words()
+        if list(self.qualifier.options) != words:
+            self.qualifier.options = words  # suggestions only: any word may be typed
         self.qualifier.tooltip = (
             "the first use explores the variants (a few seconds)"
             if self.app.variants.exploration is None
@@ -474,8 +477,8 @@ class Explorer:
         """Regrow the cut toward qualifier ``name`` ("dense", "rond", …): candidates are tried
         until the selection's metrics move its way (:meth:`ramure.app.model.Explorer.apply_qualifier`);
         the message line says whether they did, e.g. "denser: density 1772 → 2172"."""
-        if not name:
-            self.message.show("choose a qualifier first", "note")
+        if not str(name or "").strip():
+            self.message.show("type or choose a qualifier first (e.g. taller, denser, plus touffu)", "note")
             return None
         result = self.run(lambda: self.variants.apply_qualifier(name))
         if result is not None:
@@ -543,6 +546,14 @@ class Explorer:
     def load_qualifiers(self, store: str | os.PathLike, grammar: str | None = None) -> QualifierRegions | None:
         """Use qualifier regions from a study's qualifier store (SQLite path)."""
         return self.run(lambda: self.variants.load_regions(store, grammar))
+
+    def load_words(self, path: str | os.PathLike) -> dict[str, dict[str, float]] | None:
+        """Accept a study's words (a vocabulary file written by ``ramure study words``) as
+        qualifiers, each with its measured direction; the qualifier box suggests them."""
+        words = self.run(lambda: self.variants.load_words(path))
+        if words is not None:
+            self.message.show(f"{len(words)} study words accepted as qualifiers: {', '.join(sorted(words)[:8])}", "info")
+        return words
 
     # -- view ----------------------------------------------------------------------------
     def set_view(self, view: str) -> None:

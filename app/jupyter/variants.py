@@ -13,7 +13,12 @@ values.  Applying a pick regrows the selection's cut (the whole plant when
 nothing is selected) with that variant's parameter combination
 (:meth:`ramure.app.model.Explorer.regrow`); applying a qualifier goes through
 :meth:`ramure.app.model.Explorer.apply_qualifier`, which tries candidates until the
-selection's metrics move the qualifier's way and keeps one undoable edit.
+selection's metrics move the qualifier's way and keeps one undoable edit.  The
+qualifier is a typed word (English or French, synonyms, comparatives, a
+study's words from :meth:`VariantPanel.load_words`), read by
+:func:`ramure.metrics.qualifiers.vocabulary_name` as in every front end.  The
+*PCA & qualifiers* tab also shows the qualifiers' collision matrix as a heat map
+(:func:`collision_png`).
 
 >>> from types import SimpleNamespace as NS
 >>> m = NS(branch_density=1772.5, branch_count=3)
@@ -41,6 +46,8 @@ from ramure.app.jupyter.view import RENDER_LOCK
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from ramure.app.jupyter.explorer import Explorer
     from ramure.metrics.apply import QualifierResult
     from ramure.metrics.exploration import Exploration
@@ -83,13 +90,41 @@ def qualifier_summary(result: QualifierResult) -> str:
     weights = (entry.direction or {}) if entry is not None else {}
     shown = sorted(weights, key=lambda m: -abs(weights[m]))[:2]
     moves = ", ".join(f"{_metric_label(m)} {getattr(result.before, m):.4g} → {getattr(result.after, m):.4g}" for m in shown)
-    if not shown:  # no direction (normal, a study-only word): say what was applied
+    why = f": {result.reason}" if getattr(result, "reason", None) else ""
+    if not shown and getattr(result, "regen", True) is None:  # a study's word that moved nothing: say why
+        return f"'{name}' did not move the selection its way after {result.tried} tries; the plant is as it was{why}"
+    if not shown:  # no vocabulary direction (normal, a study's word): say what was applied
         return f"'{name}': applied {result.params}"
     if result.improved:
         word = COMPARATIVES.get(name, f"more {name}")
         return f"{word}: {moves}"
-    why = f": {result.reason}" if result.reason else ""
     return f"'{name}' did not move the selection its way after {result.tried} tries ({moves}); the plant is as it was{why}"
+
+
+def collision_figure(regions: QualifierRegions, french: bool = False, title: str | None = None) -> Figure:
+    """The collision matrix of ``regions`` as a heat map with the qualifier names (English or
+    French) and a colour bar, on a matplotlib figure of its own (no pyplot state)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from ramure.metrics.heatmap import draw_collision_matrix
+
+    fig = Figure(figsize=(6.4, 5.6), dpi=90)
+    FigureCanvasAgg(fig)
+    fig.subplots_adjust(left=0.2, bottom=0.22, right=0.95, top=0.93 if title else 0.98)
+    ax = fig.add_subplot()
+    image = draw_collision_matrix(ax, regions.collision_matrix_, regions.names_, title=title, french=french)
+    fig.colorbar(image, ax=ax, shrink=0.75, label="% of A's variants in B's box")
+    return fig
+
+
+def collision_png(figure: Figure) -> bytes:
+    """PNG bytes of a figure made by :func:`collision_figure`."""
+    import io
+
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png")
+    return buffer.getvalue()
 
 
 class Stopped(RamureError):
@@ -107,6 +142,10 @@ class VariantPanel:
         self.thumbnails: list[bytes | None] = [None] * N_PICKS
         self.regions: QualifierRegions | None = None  # from a study, if loaded
         self.defaults: QualifierRegions | None = None  # regions of the default vocabulary (its best-ranked variants)
+        self.collisions: QualifierRegions | None = None  # what the collision matrix shows (study or vocabulary)
+        self.matrix_figure: Figure | None = None
+        self._matrix_key: tuple | None = None  # (regions, French names) the heat map shows
+        self.words: dict[str, dict[str, float]] = {}  # a study's words: {word: direction} (load_words)
         self.chosen: np.ndarray | None = None  # PCA point of the last applied pick/qualifier
         self.running: threading.Thread | None = None  # the worker thread of a button-started sweep
         self._sweep: VariantSweep | None = None
@@ -174,7 +213,26 @@ class VariantPanel:
                 self.gallery,
             ]
         )
-        self.pca_widget = W.HBox([self.scatter, W.VBox([W.HTML("<b>Qualifier boxes</b>"), self.box_toggles])])
+        self.matrix = png_image()
+        self.matrix_note = W.HTML()
+        self.matrix_french = W.Checkbox(value=False, description="French names", indent=False)
+        observe(self.matrix_french, lambda _c: self._draw_matrix())
+        self.words_path = W.Text(placeholder="words.json", description="study words", layout=W.Layout(width="260px"))
+        self.load_words_button = button(
+            "Load",
+            lambda: self.app.load_words(self.words_path.value),
+            "accept the words of a vocabulary file ('ramure study words') as qualifiers",
+        )
+        self.pca_widget = W.VBox(
+            [
+                W.HBox([self.scatter, W.VBox([W.HTML("<b>Qualifier boxes</b>"), self.box_toggles])]),
+                W.HTML("<b>Collision matrix</b>"),
+                self.matrix_note,
+                self.matrix,
+                self.matrix_french,
+                W.HBox([self.words_path, self.load_words_button]),
+            ]
+        )
         self.refresh()
 
     # -- running -----------------------------------------------------------
@@ -275,7 +333,7 @@ class VariantPanel:
             )
             return exp
         self.exploration, self.thumbnails, self.chosen = exp, images, None
-        self.defaults = None
+        self.defaults = self.collisions = None
         self.refresh()
         self.app.edits.refresh()  # the qualifier choices
         return exp
@@ -305,6 +363,7 @@ class VariantPanel:
     def forget(self) -> None:
         """Drop the exploration (e.g. the grammar changed): the panels go back to empty."""
         self.exploration, self.thumbnails, self.regions, self.defaults, self.chosen = (None, [None] * N_PICKS, None, None, None)
+        self.collisions = None
         self.refresh()
 
     def stop(self) -> None:
@@ -360,6 +419,30 @@ class VariantPanel:
 
         return [(label(name), name) for name in names]
 
+    def qualifier_words(self) -> list[str]:
+        """What the qualifier box suggests: study regions first, then every accepted word
+        (English, French, synonyms, comparatives) and the loaded study words."""
+        from ramure.metrics.words import typed_words
+
+        study = list(self.regions.names_) if self.regions is not None else []
+        return study + [w for w in typed_words(self.words) if w not in study]
+
+    def qualifier_name(self, text: str) -> str:
+        """The canonical qualifier a typed ``text`` names ("plus touffu" -> bushy), or a refusal
+        naming the nearest accepted words."""
+        from ramure.metrics.qualifiers import vocabulary_name
+
+        study = list(self.regions.names_) if self.regions is not None else []
+        return vocabulary_name(text, extra=[*self.words, *study])
+
+    def load_words(self, path: str | os.PathLike) -> dict[str, dict[str, float]]:
+        """Accept the words of vocabulary file ``path`` (``ramure study words``) as qualifiers,
+        with their measured directions; returns ``{word: direction}``."""
+        from ramure.metrics.words import read_words
+
+        self.words = read_words(path)
+        return self.words
+
     def stale(self) -> bool:
         """True when the exploration was swept from other constant values than the plant's."""
         exp = self.exploration
@@ -369,10 +452,11 @@ class VariantPanel:
         """Regrow the model's selection (or whole plant) toward qualifier ``name`` through
         :meth:`ramure.app.model.Explorer.apply_qualifier`, with the study regions when loaded.
         Without an exploration of the current constants, one is run first (blocking)."""
+        key = self.qualifier_name(name)  # an unknown word is refused before any exploration
         if self.exploration is None or self.stale():
             self.explore(wait=True)
         exp = self._need()
-        result = self.app.model.apply_qualifier(name, exp.sweep, points=exp.points, regions=self.regions)
+        result = self.app.model.apply_qualifier(key, exp.sweep, points=exp.points, regions=self.regions, directions=self.words)
         self.mark_applied(exp.points[int(result.variant)] if result.regen is not None else None)
         return result
 
@@ -392,7 +476,7 @@ class VariantPanel:
             regions = qs.regions(grammar or exp.name)
         if regions is None:  # refused: the regions loaded before stay
             raise RamureError(f"{store}: no qualifier points for grammar '{grammar or exp.name}'")
-        self.regions = regions
+        self.regions, self.collisions = regions, None
         self.refresh()
         return self.regions
 
@@ -484,6 +568,43 @@ class VariantPanel:
         for pick in self.cards:
             pick.disabled = exp is None
         self._draw_scatter()
+        self._draw_matrix()
+
+    def collision_regions(self) -> QualifierRegions | None:
+        """The regions whose collision matrix is shown: the study's when loaded, else the default
+        vocabulary's on this exploration (:func:`ramure.metrics.qualifiers.vocabulary_regions`)."""
+        from ramure.metrics.qualifiers import vocabulary_regions
+
+        if self.collisions is None and self.regions is not None:
+            self.collisions = self.regions
+        elif self.collisions is None and self.exploration is not None:
+            self.collisions = vocabulary_regions(self.exploration.sweep, self.exploration.points)
+        return self.collisions
+
+    def _draw_matrix(self) -> None:
+        try:
+            regions = self.collision_regions()
+        except RamureError as err:
+            regions, why = None, f"no collision matrix: {err}"
+        else:
+            why = "explore the variants first" if regions is None else ""
+        if regions is None:
+            self.matrix_figure, self.matrix.value = None, b""
+            self.matrix_note.value = f"<i>{why}</i>"
+            return
+        french = bool(self.matrix_french.value)
+        drawn = self._matrix_key
+        if self.matrix_figure is not None and drawn is not None and drawn[0] is regions and drawn[1] == french:
+            return  # drawn already (about a second: 462 annotated cells)
+        self._matrix_key = (regions, french)
+        source = "the study's regions" if regions is self.regions else "the vocabulary's best variants"
+        self.matrix_note.value = (
+            f"<small>{len(regions.names_)} qualifiers ({source}); row A, column B: % of A's points inside "
+            f"B's box; mean {regions.mean_collision():.1f} % (the thesis's study: 66 %). Dark = two words pick "
+            "the same plants here.</small>"
+        )
+        self.matrix_figure = collision_figure(regions, french=french)
+        self.matrix.value = collision_png(self.matrix_figure)
 
     def thumbnail_css(self) -> str:
         """The style sheet that puts each thumbnail on its button."""
