@@ -47,7 +47,6 @@ are read; :attr:`MTGGraph.encoding` says which.
 from __future__ import annotations
 
 import os
-import pathlib
 import re
 from dataclasses import dataclass, field
 from typing import Any
