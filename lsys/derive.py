@@ -108,9 +108,12 @@ class LSystem:
     @classmethod
     def from_text(cls, text: str, filename: str | None = None) -> Self:
         """Parse grammar text; L-studio/cpfg text (a ``filename`` ending in ``.l``, or a
-        ``derivation length:`` line, never valid ``.lsys``) is read by :mod:`ramure.lsys.cpfg`."""
+        ``derivation length:`` line, never valid ``.lsys``) is read by :mod:`ramure.lsys.cpfg`,
+        an MTG (a ``filename`` ending in ``.mtg``) becomes a plant by :mod:`ramure.lsys.mtg_plant`."""
         from .cpfg import is_cpfg, parse_cpfg
 
+        if filename is not None and str(filename).lower().endswith(".mtg"):
+            return cls(parse_grammar(_mtg_text_as_grammar(text, str(filename))))
         if is_cpfg(text, filename):
             return cls(parse_cpfg(text, filename))
         return cls(parse_grammar(text, filename))
@@ -123,6 +126,11 @@ class LSystem:
         back to the shipped grammar of that name, so examples work from any directory.
         """
         file = grammar_files.resolve(path)
+        if file.suffix.lower() == ".mtg":  # Latin-1 MTG files are common: read by the MTG reader
+            from .mtg_graph import read_mtg_graph
+            from .mtg_plant import mtg_grammar_text
+
+            return cls(parse_grammar(mtg_grammar_text(read_mtg_graph(file), where=str(file))))
         text = read_grammar_file(file)
         return cls.from_text(text, filename=str(file))
 
@@ -771,3 +779,10 @@ class Derivation:
         from .turtle import interpret
 
         return interpret(self)
+
+
+def _mtg_text_as_grammar(text: str, filename: str) -> str:
+    from .mtg_graph import parse_mtg_graph
+    from .mtg_plant import mtg_grammar_text
+
+    return mtg_grammar_text(parse_mtg_graph(text, filename), where=filename)
