@@ -39,7 +39,7 @@ def run_amap(args: argparse.Namespace) -> int:
         grown = grown_by(derivation, arch, args.at, seed=args.seed)
         facts["at"] = {"date": args.at, "internodes": len(grown["internodes"]), "events": grown["events"]}
     if mtg is not None:
-        write_mtg(arch, mtg)
+        write_mtg(arch, mtg, derivation.skeleton())
         facts["mtg"] = str(mtg)
     if args.json:
         print(json.dumps(facts))
@@ -73,7 +73,12 @@ def register(sub: Subparsers) -> None:
         action="store_true",
         help="print counts per level, axes per order, events, the internodes-per-growth-unit histogram",
     )
-    p.add_argument("--mtg", metavar="FILE.mtg", help="write the plant as an MTG file (OpenAlea's format)")
+    p.add_argument(
+        "--mtg",
+        metavar="FILE.mtg",
+        help="write the plant as an MTG file (OpenAlea's format) with each internode's XX YY ZZ, "
+        "TopDiameter, BottomDiameter and Length",
+    )
     p.add_argument(
         "--at",
         type=float,

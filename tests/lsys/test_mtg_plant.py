@@ -72,3 +72,22 @@ def test_a_misread_mtg_is_a_grammar_file_error(tmp_path):
     path.write_text(TOPOLOGY.replace("/P2/E1", "/P2/X1"))
     with pytest.raises(MTGError, match="line 17: class 'X'"):
         LSystem.from_file(path)
+
+
+def test_an_mtg_written_with_geometry_rebuilds_the_same_plant(tmp_path):
+    import ramure
+    from ramure.lsys.amap import architecture
+    from ramure.lsys.mtg import parse_mtg, write_mtg
+
+    derivation = ramure.derive("amap/massart", n=3)
+    original = derivation.skeleton()
+    arch = architecture(derivation)
+    path = write_mtg(arch, tmp_path / "massart.mtg", original)
+    graph = parse_mtg_graph(path.read_text())
+    assert {"XX", "YY", "ZZ", "TopDiameter", "BottomDiameter", "Length"} <= set(graph.feature_types)
+    again = LSystem.from_file(path).derive().skeleton()
+    assert len(again) == len(original) == 27
+    for a, b in ((original.start, again.start), (original.end, again.end)):
+        assert np.allclose(np.sort(a, axis=0), np.sort(b, axis=0))
+    assert np.allclose(np.sort(original.base_radius), np.sort(again.base_radius))
+    assert parse_mtg(path.read_text()).equals(arch)  # Ramure's own reader still reads it back
