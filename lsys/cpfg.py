@@ -46,7 +46,7 @@ import re
 from dataclasses import dataclass, field
 
 from .errors import GrammarError
-from .grammar import Grammar, parse_grammar, strip_comments
+from .grammar import CONTINUATION, Grammar, parse_grammar, strip_comments
 
 #: Suffixes read as cpfg files by :meth:`ramure.lsys.LSystem.from_file`.
 CPFG_SUFFIXES = (".l",)
@@ -105,14 +105,51 @@ class _Translator:
         self.lsystems = 0
         self.ended = False
         self.in_rules = False  # whether the .lsys text is inside a rules section here
+        self.open_successor = False  # whether the last line was a rule or axiom a next line may continue
 
     def error(self, message, number, column, original):
         return GrammarError(message, number, column, original, filename=self.filename)
 
     def translate(self, text):
         text = text.replace("\r\n", "\n").replace("\r", "\n")
-        stripped = strip_comments(text).split("\n")
-        return [self.line(number, s, o) for number, (s, o) in enumerate(zip(stripped, text.split("\n")), 1)]
+        # cpfg runs its files through the C preprocessor: '//' and '/* */' are comments
+        # everywhere, and the output is built from the comment-free text
+        stripped = strip_c_comments(text).split("\n")
+        stripped = _join_define_continuations(stripped)
+        outs = []
+        for number, s in enumerate(stripped, 1):
+            slash = _line_continuation(s)
+            if slash is not None:  # a rule or axiom going on over the next line: Ramure's '...'
+                s = s[:slash] + " " * (len(s) - slash)
+            if self.continues(s):
+                out = self.modules(number, s, s, 0, len(s), _Out(s))
+                self.mark_continued(outs)
+            else:
+                out = self.line(number, s, s)
+                self.open_successor = out.text.lstrip().startswith(("p:", "w:")) or (self.in_rules and "->" in out.text)
+            if slash is not None:
+                out.text += " " + CONTINUATION
+                self.open_successor = True  # the mark is written: the next line continues it
+            outs.append(out)
+        return outs
+
+    def continues(self, s):
+        """Whether line ``s`` goes on with the successor (or axiom) of the line before: cpfg
+        reads a production until the next production, keyword or directive."""
+        body = s.strip()
+        if not body or not self.open_successor or self.ended:
+            return False
+        if body.startswith("#") or "->" in body or re.match(r"[A-Za-z][A-Za-z ]*?\s*:", body):
+            return False
+        return not re.fullmatch(r"(homomorphism|decomposition|endlsystem)(\s*:)?(\s+(no\s+)?warnings)?", body, re.I)
+
+    def mark_continued(self, outs):
+        """End the last non-blank output line with Ramure's continuation mark."""
+        for out in reversed(outs):
+            if out.text.strip():
+                if not out.text.rstrip().endswith(CONTINUATION):
+                    out.text = out.text.rstrip() + " " + CONTINUATION
+                return
 
     def line(self, number, text, original):
         body = text.strip()
@@ -275,6 +312,62 @@ class _Translator:
         )
 
 
+def strip_c_comments(text: str) -> str:
+    """Blank out C and C++ comments keeping every other column and newline in place: ``/* ... */``,
+    and ``//`` to the end of the line where it starts a line or follows a space and is followed
+    by a space or a letter (``F/////S`` rolls five times, as in ABOP's files); text inside
+    double quotes is kept.
+
+    >>> strip_c_comments('A --> F//F  /* a */ "//" // note')
+    'A --> F//F          "//"        '
+    """
+    out, i, n = list(text), 0, len(text)
+    while i < n:
+        c = text[i]
+        if c == '"':
+            j = text.find('"', i + 1)
+            i = n if j < 0 else j + 1
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            end = n if j < 0 else j + 2
+            out[i:end] = [ch if ch == "\n" else " " for ch in text[i:end]]
+            i = end
+        elif text.startswith("//", i) and _comment_starts(text, i):
+            j = text.find("\n", i)
+            end = n if j < 0 else j
+            out[i:end] = " " * (end - i)
+            i = end
+        else:
+            i += 1
+    return "".join(out)
+
+
+def _comment_starts(text, i):
+    before = text[i - 1] if i else "\n"
+    after = text[i + 2] if i + 2 < len(text) else "\n"
+    return before.isspace() and (after.isspace() or after.isalpha())
+
+
+def _join_define_continuations(lines):
+    """A ``#define`` continued with ``\\`` is joined into its first line (the lines it took blanked)."""
+    lines = list(lines)
+    for k in range(len(lines)):
+        if not lines[k].lstrip().startswith("#"):
+            continue
+        following = k + 1
+        while (cut := _line_continuation(lines[k])) is not None and following < len(lines):
+            lines[k] = lines[k][:cut] + " " + lines[following].strip()
+            lines[following] = ""
+            following += 1
+    return lines
+
+
+def _line_continuation(line):
+    """The column of a final ``\\`` (the line goes on over the next one), else None."""
+    body = line.rstrip()
+    return len(body) - 1 if body.endswith("\\") else None
+
+
 def _successor_end(text, start):
     """Where a successor ends: before a top-level ': weight' suffix, else at the end of the line."""
     depth = 0
@@ -343,7 +436,7 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
-    bare = strip_comments("\n".join(lines)).split("\n")
+    bare = strip_c_comments("\n".join(lines)).split("\n")
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         rule.source_line = lines[rule.line - 1]  # derivation errors quote the .l line
         rule.text = bare[rule.line - 1].strip()  # and name the rule as the .l file writes it

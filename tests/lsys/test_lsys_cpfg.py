@@ -88,7 +88,7 @@ def test_cpfg_keywords_and_functions():
         ("start: {n=0;}\naxiom: A\n", 1, 1, "'start:' block"),
         ("Lsystem: 1\naxiom: A\nendlsystem\nLsystem: 2\n", 4, 1, "sub-L-systems"),
         ("axiom: A\nmaximum depth: 2\n", 2, 1, "belongs after"),
-        ("axiom: A\nA -> B\nwhat is this\n", 3, 1, "not supported"),
+        ("axiom: A\nA -> B\nwhat: is this\n", 3, 1, "not supported"),
         ("axiom: A(1)\nA(x) --> B(x*qq)\n", 2, 14, "unknown name 'qq'"),  # column mapped back
         ("axiom: A(1)\nA(x) --> B(ran(2)*qq)\n", 2, 19, "unknown name 'qq'"),  # after a renamed function
         ("derivation length: -1\naxiom: A\n", 1, 19, "whole number"),
@@ -179,3 +179,22 @@ def test_derivation_errors_point_at_the_l_files_rule():
     err = info.value
     assert (err.line, err.column) == (3, 1) and "rule 1 (A(x) --> B(1/x))" in err.message
     assert str(err).splitlines()[-2].strip() == "A(x) --> B(1/x)"
+
+
+def test_comments_continuations_and_successors_over_several_lines():
+    text = (
+        "derivation length: 1\n"
+        "#define W(x) \\\n"
+        "   (x*2)\n"
+        "axiom: A(1) // the apex\n"
+        "A(x) --> F(W(x)) // a comment, not rolls\n"
+        "   [+F(x)]\n"
+        "   F(3)\n"
+        "F(x) --> F(x) \\\n"
+        "   G/////G\n"
+        "endlsystem\n"
+    )
+    ls = LSystem.from_text(text, filename="multi.l")
+    assert [str(r) for r in ls.grammar.rules][0].startswith("A(x) -->")
+    assert ls.derive().to_string() == "F(2)[+F(1)]F(3)"
+    assert ls.derive(n=2).to_string() == "F(2)G/////G[+F(1)G/////G]F(3)G/////G"
