@@ -106,6 +106,8 @@ class _Translator:
         self.ended = False
         self.in_rules = False  # whether the .lsys text is inside a rules section here
         self.open_successor = False  # whether the last line was a rule or axiom a next line may continue
+        self.block = None  # the Start:/End:/... block being read: (name, line, column, lines)
+        self.blocks: list = []
 
     def error(self, message, number, column, original):
         return GrammarError(message, number, column, original, filename=self.filename)
@@ -118,6 +120,9 @@ class _Translator:
         stripped = _join_define_continuations(stripped)
         outs = []
         for number, s in enumerate(stripped, 1):
+            if self.block is not None or _BLOCK.match(s):
+                outs.append(self.block_line(number, s))
+                continue
             slash = _line_continuation(s)
             if slash is not None:  # a rule or axiom going on over the next line: Ramure's '...'
                 s = s[:slash] + " " * (len(s) - slash)
@@ -131,7 +136,40 @@ class _Translator:
                 out.text += " " + CONTINUATION
                 self.open_successor = True  # the mark is written: the next line continues it
             outs.append(out)
+        if self.block is not None:
+            name, number, _, _ = self.block
+            raise self.error(f"the '{name}:' block's '{{' is never closed", number, 1, text.split("\n")[number - 1])
         return outs
+
+    def block_line(self, number, s):
+        """A line of a Start:/End:/StartEach:/EndEach:/Define: block: kept for :meth:`programs`."""
+        if self.block is None:
+            m = _BLOCK.match(s)
+            self.block = (m.group(1), number, m.end() + 1, [s[m.end() :]])
+        else:
+            self.block[3].append(s)
+        body = "\n".join(self.block[3])
+        if "{" in body and _braces_closed(body):
+            self.blocks.append(self.block)
+            self.block = None
+        self.open_successor = False
+        return _Out(" " * len(s))
+
+    def programs(self, lines):
+        """The blocks parsed (:mod:`ramure.lsys.cstatements`): cpfg's name (lower case) -> program."""
+        from .cstatements import parse_program
+
+        out = {}
+        for name, number, column, pieces in self.blocks:
+            key = name.lower()
+            if key in out:
+                raise self.error(f"a second '{name}:' block", number, 1, lines[number - 1])
+            try:
+                out[key] = parse_program("\n".join(pieces), number, column, lines)
+            except GrammarError as err:
+                err.filename = self.filename
+                raise
+        return out
 
     def continues(self, s):
         """Whether line ``s`` goes on with the successor (or axiom) of the line before: cpfg
@@ -188,8 +226,6 @@ class _Translator:
         if body.lower() == "endlsystem":
             self.ended = True
             return _Out(" " * len(original))
-        if keyword and word in ("start", "end", "starteach", "endeach", "define"):
-            raise self.error(f"cpfg's '{keyword.group(1)}:' block (C statements) is not supported", number, start + 1, original)
         if "->" in text:
             return self.rule(number, text, original, start)
         raise self.error(
@@ -342,6 +378,18 @@ def strip_c_comments(text: str) -> str:
     return "".join(out)
 
 
+_BLOCK = re.compile(r"\s*(start|end|starteach|endeach|define)\s*:", re.I)
+
+
+def _braces_closed(text):
+    depth = 0
+    for c in text:
+        depth += (c == "{") - (c == "}")
+        if depth == 0 and c == "}":
+            return True
+    return False
+
+
 def _comment_starts(text, i):
     before = text[i - 1] if i else "\n"
     after = text[i + 2] if i + 2 < len(text) else "\n"
@@ -430,18 +478,31 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
 def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     """Parse a cpfg ``.l`` file's text; errors name the ``.l`` line and column."""
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    outs = _Translator(filename).translate(text)
+    translator = _Translator(filename)
+    outs = translator.translate(text)
+    programs = translator.programs(lines)
+    body = "\n".join(out.text for out in outs) + _globals(programs, outs)
     try:
-        grammar = parse_grammar("\n".join(out.text for out in outs), filename)
+        grammar = parse_grammar(body, filename)
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
+    grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
     bare = strip_c_comments("\n".join(lines)).split("\n")
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         rule.source_line = lines[rule.line - 1]  # derivation errors quote the .l line
         rule.text = bare[rule.line - 1].strip()  # and name the rule as the .l file writes it
     _locate_in_l_file(grammar, outs, lines, filename)
     return grammar
+
+
+def _globals(programs, outs):
+    """``#define`` lines (value 0) for the variables the blocks set, so rules can read them."""
+    from .cstatements import assigned_names
+
+    defined = {m.group(1) for out in outs for m in [re.match(r"\s*#\s*(?:define|function)\s+(\w+)", out.text)] if m}
+    names = sorted(set().union(*(assigned_names(p) for p in programs.values())) - defined) if programs else []
+    return "".join(f"\n#define {name} 0" for name in names)
 
 
 def _locate_in_l_file(grammar, outs, lines, filename):

@@ -37,6 +37,7 @@ import numpy as np
 
 import ramure.grammars as grammar_files
 from .errors import DerivationError, GrammarError, ValueRefused
+from .cstatements import cpfg_blocks
 from .expr import compile_expression, evaluate_constant, seeded_generator
 from .grammar import Grammar, parse_grammar, read_grammar_file
 from .branch_cut import cut_string
@@ -231,6 +232,8 @@ class LSystem:
             raise GrammarError(
                 f"unknown constant(s): {', '.join(sorted(unknown))}; the grammar defines {', '.join(self.constants) or 'none'}"
             )
+        blocks = cpfg_blocks(self.grammar, consts, seed)
+        blocks.run("define", "start")  # cpfg's blocks, if any: the globals live in consts
         tree = DerivationTree(self.max_params, capacity=4096)
         axiom = self.grammar.axiom
         values = np.full((len(axiom), tree.max_params), np.nan)
@@ -245,13 +248,18 @@ class LSystem:
         string = decompose(self, tree, ids, 0, 0, rng, consts)  # the axiom too (no decomposition: ids)
         string = cut_string(self, tree, string)  # '%' cuts the rest of its branch (lsys.branch_cut)
         for step in range(1, n + 1):
+            blocks.run("starteach")
             string = self.rewrite(tree, string, step, rng, consts, rule_constants)
+            blocks.run("endeach")
             if progress is not None:
                 progress(step, n)
+        blocks.run("end")
         tree.leaves = string
         tree.compact_params()  # the later parameters kept only where a node has them
         tree.changed()
-        return Derivation(self, tree, n=n, seed=seed, constants=consts, params=combo)
+        derivation = Derivation(self, tree, n=n, seed=seed, constants=consts, params=combo)
+        derivation.printed = blocks.scope.printed if blocks.scope else []
+        return derivation
 
     @property
     def has_context(self) -> bool:
@@ -742,6 +750,7 @@ class Derivation:
         self.seed = seed
         self.constants = constants
         self.params = params  # the parameter combination derived with (ramure.lsys.combination), or None
+        self.printed: list[str] = []  # what a cpfg file's printf statements printed while deriving
 
     @property
     def leaves(self) -> np.ndarray:

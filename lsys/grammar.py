@@ -245,6 +245,9 @@ class Grammar:
     #: ``#material i r g b [a]`` table (index -> (r, g, b, a), components 0..1).
     surfaces: dict = field(default_factory=dict)
     materials: dict = field(default_factory=dict)
+    #: cpfg's statement blocks (``define``, ``start``, ``starteach``, ``endeach``, ``end`` ->
+    #: :class:`ramure.lsys.cstatements.Block`), run by :meth:`ramure.lsys.LSystem.derive`.
+    programs: dict = field(default_factory=dict)
 
     def symbol_id(self, name: str) -> int:
         return self.symbols.index(name)
