@@ -108,6 +108,8 @@ class _Translator:
         self.open_successor = False  # whether the last line was a rule or axiom a next line may continue
         self.block = None  # the Start:/End:/... block being read: (name, line, column, lines)
         self.blocks: list = []
+        self.head = None  # a production with blocks being read: (first line, lines)
+        self.rule_blocks: dict = {}  # output line -> ((text, line, column) or None) * 2
 
     def error(self, message, number, column, original):
         return GrammarError(message, number, column, original, filename=self.filename)
@@ -122,6 +124,9 @@ class _Translator:
         for number, s in enumerate(stripped, 1):
             if self.block is not None or _BLOCK.match(s):
                 outs.append(self.block_line(number, s))
+                continue
+            if self.head is not None or self.starts_block_rule(s):
+                outs.append(self.block_rule_line(number, s))
                 continue
             slash = _line_continuation(s)
             if slash is not None:  # a rule or axiom going on over the next line: Ramure's '...'
@@ -155,11 +160,70 @@ class _Translator:
         self.open_successor = False
         return _Out(" " * len(s))
 
+    def parsed_rule_blocks(self, lines):
+        """Output line -> (pre, post) programs of the productions with blocks."""
+        from .cstatements import parse_program
+
+        out = {}
+        for number, pair in self.rule_blocks.items():
+            programs = []
+            for block in pair:
+                if block is None:
+                    programs.append(None)
+                    continue
+                text, line, column = block
+                try:
+                    programs.append(parse_program(text, line, column, lines))
+                except GrammarError as err:
+                    err.filename = self.filename
+                    raise
+            out[number] = tuple(programs)
+        return out
+
+    def starts_block_rule(self, s):
+        """Whether ``s`` starts a production with a statement block before its arrow."""
+        body = s.strip()
+        if not body or body.startswith("#") or self.ended or not self.in_rules and self.section != "production":
+            return False
+        colon, brace = _find_depth0(s, ":"), _find_depth0(s, "{")
+        arrow = s.find("-->") if "-->" in s else s.find("->")
+        if colon < 0 or brace < colon or (0 <= arrow < brace):
+            return False
+        word = s[:colon].strip().lower()
+        return word not in ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
+
+    def block_rule_line(self, number, s):
+        """A line of ``pred : {pre} condition {post} --> successor``: the rule is written on the
+        line of its arrow, as ``pred : condition -> successor``, its blocks kept aside."""
+        if self.head is None:
+            self.head = (number, [])
+        self.head[1].append(s)
+        text = "\n".join(self.head[1])
+        colon = _find_depth0(text, ":")
+        arrow = _arrow_after_blocks(text, colon)
+        if arrow < 0:
+            return _Out(" " * len(s))
+        first, self.head = self.head[0], None
+        parts = _split_blocks(text, colon + 1, arrow)
+        if parts is None:
+            raise self.error("cannot read the blocks of this production: {pre} condition {post}", first, colon + 2, s)
+        pre, condition, post = parts
+        width = 3 if text.startswith("-->", arrow) else 2
+        line = f"{text[:colon].strip()} : {condition.strip() or '*'} --> {text[arrow + width :]}"
+        if self.section != "production":
+            raise self.error("statement blocks in homomorphism or decomposition rules are not supported", first, 1, s)
+        self.rule_blocks[number] = tuple(None if b is None else (b[0], *_position(text, b[1], first)) for b in (pre, post))
+        out = self.rule(number, line, line, 0)
+        self.open_successor = True
+        return out
+
     def programs(self, lines):
         """The blocks parsed (:mod:`ramure.lsys.cstatements`): cpfg's name (lower case) -> program."""
         from .cstatements import parse_program
 
         out = {}
+        if self.head is not None:
+            raise self.error("this production's blocks never reach its '-->'", self.head[0], 1, lines[self.head[0] - 1])
         for name, number, column, pieces in self.blocks:
             key = name.lower()
             if key in out:
@@ -378,6 +442,63 @@ def strip_c_comments(text: str) -> str:
     return "".join(out)
 
 
+def _find_depth0(text, char):
+    """The first ``char`` outside parentheses, else -1."""
+    depth = 0
+    for i, c in enumerate(text):
+        if c == char and depth == 0:
+            return i
+        depth += (c == "(") - (c == ")")
+    return -1
+
+
+def _arrow_after_blocks(text, start):
+    """The ``-->`` (or ``->``) after the blocks of a production, else -1."""
+    depth = 0
+    for i in range(start, len(text)):
+        c = text[i]
+        depth += (c in "{(") - (c in "})")
+        if depth == 0 and text.startswith("->", i):
+            return i
+        if depth == 0 and text.startswith("-->", i):
+            return i
+    return -1
+
+
+def _split_blocks(text, start, end):
+    """``{pre} condition {post}`` in text[start:end]: ((block text, offset) or None, condition,
+    (block text, offset) or None), else None."""
+    pieces, condition, at = [None, None], [], start
+    while at < end:
+        c = text[at]
+        if c == "{":
+            depth, j = 0, at
+            while j < end:
+                depth += (text[j] == "{") - (text[j] == "}")
+                if depth == 0:
+                    break
+                j += 1
+            if depth != 0:
+                return None
+            slot = 0 if not "".join(condition).strip() and pieces[0] is None else 1
+            if pieces[slot] is not None:
+                return None
+            pieces[slot] = (text[at : j + 1], at)
+            at = j + 1
+        else:
+            if pieces[1] is not None and not c.isspace():
+                return None
+            condition.append(c)
+            at += 1
+    return pieces[0], "".join(condition).replace("\n", " "), pieces[1]
+
+
+def _position(text, offset, first_line):
+    """(line, column) in the file of ``offset`` in ``text`` that starts at ``first_line``."""
+    before = text[:offset]
+    return first_line + before.count("\n"), offset - (before.rfind("\n") + 1) + 1
+
+
 _BLOCK = re.compile(r"\s*(start|end|starteach|endeach|define)\s*:", re.I)
 
 
@@ -481,13 +602,18 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     translator = _Translator(filename)
     outs = translator.translate(text)
     programs = translator.programs(lines)
-    body = "\n".join(out.text for out in outs) + _globals(programs, outs)
+    rule_blocks = translator.parsed_rule_blocks(lines)
+    every = [*programs.values(), *(b for pair in rule_blocks.values() for b in pair if b is not None)]
+    body = "\n".join(out.text for out in outs) + _globals(every, outs)
     try:
         grammar = parse_grammar(body, filename)
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
     grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
+    for rule in grammar.rules:
+        if rule.line in rule_blocks:
+            rule.blocks = rule_blocks[rule.line]
     bare = strip_c_comments("\n".join(lines)).split("\n")
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         rule.source_line = lines[rule.line - 1]  # derivation errors quote the .l line
@@ -501,7 +627,7 @@ def _globals(programs, outs):
     from .cstatements import assigned_names
 
     defined = {m.group(1) for out in outs for m in [re.match(r"\s*#\s*(?:define|function)\s+(\w+)", out.text)] if m}
-    names = sorted(set().union(*(assigned_names(p) for p in programs.values())) - defined) if programs else []
+    names = sorted(set().union(*(assigned_names(p) for p in programs)) - defined) if programs else []
     return "".join(f"\n#define {name} 0" for name in names)
 
 

@@ -621,3 +621,69 @@ def cpfg_blocks(grammar: Any, variables: dict[str, float], seed: int) -> Blocks:
     """The blocks of ``grammar`` (a cpfg file's ``programs``, none for other grammars) sharing
     ``variables`` (the derivation's constants: the rules read the globals the blocks set)."""
     return Blocks(grammar.programs, variables, seed)
+
+
+class _Layered(dict):
+    """A module's formal parameters over the globals: reads see the formals first; an
+    assignment to a formal stays with the module, any other goes to the globals."""
+
+    def __init__(self, formals: dict[str, float], globals_: dict[str, float]) -> None:
+        super().__init__(formals)
+        self.globals = globals_
+
+    def __contains__(self, name: object) -> bool:
+        return dict.__contains__(self, name) or name in self.globals
+
+    def __getitem__(self, name: str) -> float:
+        return dict.__getitem__(self, name) if dict.__contains__(self, name) else self.globals[name]
+
+    def __setitem__(self, name: str, value: float) -> None:
+        if dict.__contains__(self, name):
+            dict.__setitem__(self, name, value)
+        else:
+            self.globals[name] = value
+
+
+class RuleBlocks:
+    """A cpfg production with statement blocks, ``pred : {pre} condition {post} --> successor``,
+    run module by module in string order as cpfg runs it: the block before the condition, the
+    condition, and for a module that it accepts the block after it and the successor's
+    parameters.  Variables are cpfg's globals (the derivation's constants); the formal
+    parameters are the module's own.
+
+    Called as the rule's compiled condition ``f(V, C, R, n)``; :meth:`take` then gives the
+    successor parameters of the accepted modules, in the same order.
+    """
+
+    def __init__(
+        self, pre: Block | None, post: Block | None, condition: Any, successor: list[list[Any]], formals: list[str]
+    ) -> None:
+        self.pre, self.post, self.condition = pre, post, condition
+        self.successor, self.formals = successor, formals
+        self.rows: list[list[list[float]]] = []
+        self.scope = Scope({})
+
+    def __call__(self, V: dict, C: dict, R: Any, n: int) -> np.ndarray:
+        ok = np.zeros(n)
+        self.rows = []
+        for i in range(n):
+            one = {name: V[name][i : i + 1] for name in self.formals if name in V}
+            variables = _Layered({k: float(v[0]) for k, v in one.items()}, C)
+            scope = Scope(variables, rng=R)
+            if self.pre is not None:
+                self.pre.run(scope)
+            one = {k: np.array([variables[k]]) for k in one}
+            if self.condition is not None and self.condition(one, C, R, 1)[0] == 0:
+                continue
+            if self.post is not None:
+                self.post.run(scope)
+                one = {k: np.array([variables[k]]) for k in one}
+            ok[i] = 1
+            self.rows.append([[float(fn(one, C, R, 1)[0]) for fn in args] for args in self.successor])
+        return ok
+
+    def take(self) -> list[list[list[float]]]:
+        """The successor parameters of the modules the last call accepted (module, successor
+        module, parameter)."""
+        rows, self.rows = self.rows, []
+        return rows

@@ -37,7 +37,7 @@ import numpy as np
 
 import ramure.grammars as grammar_files
 from .errors import DerivationError, GrammarError, ValueRefused
-from .cstatements import cpfg_blocks
+from .cstatements import RuleBlocks, cpfg_blocks
 from .expr import compile_expression, evaluate_constant, seeded_generator
 from .grammar import Grammar, parse_grammar, read_grammar_file
 from .branch_cut import cut_string
@@ -57,6 +57,7 @@ class _CompiledRule:
     succ_nparams: np.ndarray
     succ_args: list  # per successor module: list of compiled fns
     sources: dict  # formal name -> (slot, param index); slot 0 = pred, -k = left k, +k = right k
+    blocks: Any = None  # a cpfg rule with statement blocks: its RuleBlocks (also its condition)
 
 
 @dataclass
@@ -162,13 +163,19 @@ class LSystem:
             for j, name in enumerate(pattern.params):
                 sources[name] = (k, j)
         cond = compile_expression(rule.condition, formals, consts) if rule.condition else None
+        succ_args = [[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor]
+        blocks = None
+        if rule.blocks is not None:  # cpfg: run module by module (cstatements.RuleBlocks)
+            blocks = RuleBlocks(*rule.blocks, cond, succ_args, formals)
+            cond = blocks
         return _CompiledRule(
             rule=rule,
             condition=cond,
             succ_symbols=np.array([self._sym[m.symbol] for m in rule.successor], np.int32),
             succ_nparams=np.array([len(m.args) for m in rule.successor], np.int8),
-            succ_args=[[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor],
+            succ_args=succ_args,
             sources=sources,
+            blocks=blocks,
         )
 
     def _make_groups(self):
@@ -559,6 +566,11 @@ class LSystem:
             if not any(crule.succ_args):  # also an empty successor: no rows, nothing to reshape
                 continue
             block = params[rows].reshape(m, width, -1)
+            if crule.blocks is not None:  # computed with the blocks, module by module
+                for i, module in enumerate(crule.blocks.take()):
+                    for j, values in enumerate(module):
+                        block[i, j, : len(values)] = values
+                continue
             ctx = context.get(r)
             ctx_nodes = None
             if ctx is not None:

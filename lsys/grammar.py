@@ -187,6 +187,9 @@ class Rule:
     probability: float | None = None
     #: The cpfg-style weight suffix (``A -> B : 0.3``); normalised into ``probability``.
     weight: float | None = None
+    #: cpfg's statement blocks before and after the condition (``A : {...} c {...} --> B``):
+    #: (:class:`ramure.lsys.cstatements.Block` or None, the same), else None.
+    blocks: tuple | None = None
 
     @property
     def formals(self) -> list[str]:

@@ -100,3 +100,32 @@ def test_a_block_error_points_at_the_l_file():
     assert info.value.line == 6 and info.value.column == 17  # the ";" that ends "t+"
     with pytest.raises(GrammarError, match="never closed"):
         LSystem.from_text(BLOCKS.replace("}\nEnd:", "\nEnd:"), filename="blocks.l")
+
+
+def test_production_blocks_run_module_by_module_in_string_order():
+    text = (
+        "Lsystem: 0\nStart: {n = 0;}\nderivation length: 3\naxiom: A(1)B(5)A(2)\n"
+        "A(x) : {y = x*2; n = n + 1;} y > 2 {z = n;} --> F(y)A(z)\n"
+        "B(x) --> B(x+1)\nendlsystem\n"
+    )
+    ls = LSystem.from_text(text, filename="blocks.l")
+    # step 1: A(1) sets n = 1 and fails; A(2) sets n = 2, passes, z = 2
+    assert ls.derive(n=1).to_string() == "A(1)B(6)F(4)A(2)"
+    assert ls.derive(n=3).to_string() == "A(1)B(8)F(4)F(4)F(8)A(6)"
+
+
+def test_a_production_whose_blocks_go_over_several_lines():
+    text = (
+        "derivation length: 2\naxiom: A(1)\n"
+        "A(s) : s < 3 {        // to the first power of two above 10\n"
+        "   t = s;\n"
+        "   while (t < 10) { t = t * 2; }\n"
+        "} --> F(t) A(s+1)\n"
+        "   [+B]\n"
+        "B : { k = 1; } --> C\nendlsystem\n"
+    )
+    ls = LSystem.from_text(text, filename="blocks.l")
+    assert ls.derive().to_string() == "F(16)F(16)A(3)[+B][+C]"
+    with pytest.raises(GrammarError) as info:
+        LSystem.from_text(text.replace("t = t * 2;", "t = t * ;"), filename="blocks.l")
+    assert info.value.line == 5 and info.value.column == 28  # just after "t *"
