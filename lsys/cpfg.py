@@ -203,15 +203,16 @@ class _Translator:
         arrow = _arrow_after_blocks(text, colon)
         if arrow < 0:
             return _Out(" " * len(s))
-        first, self.head = self.head[0], None
+        first, self.head_lines, self.head = self.head[0], self.head[1], None
         parts = _split_blocks(text, colon + 1, arrow)
         if parts is None:
-            raise self.error("cannot read the blocks of this production: {pre} condition {post}", first, colon + 2, s)
+            line, column = _position(text, text.index("{", colon), first)
+            raise self.error(
+                "cannot read the blocks of this production: {pre} condition {post}", line, column, self.head_lines[line - first]
+            )
         pre, condition, post = parts
         width = 3 if text.startswith("-->", arrow) else 2
         line = f"{text[:colon].strip()} : {condition.strip() or '*'} --> {text[arrow + width :]}"
-        if self.section != "production":
-            raise self.error("statement blocks in homomorphism or decomposition rules are not supported", first, 1, s)
         self.rule_blocks[number] = tuple(None if b is None else (b[0], *_position(text, b[1], first)) for b in (pre, post))
         out = self.rule(number, line, line, 0)
         self.open_successor = True
@@ -611,7 +612,7 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
     grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
-    for rule in grammar.rules:
+    for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         if rule.line in rule_blocks:
             rule.blocks = rule_blocks[rule.line]
     bare = strip_c_comments("\n".join(lines)).split("\n")

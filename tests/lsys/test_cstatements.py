@@ -129,3 +129,13 @@ def test_a_production_whose_blocks_go_over_several_lines():
     with pytest.raises(GrammarError) as info:
         LSystem.from_text(text.replace("t = t * 2;", "t = t * ;"), filename="blocks.l")
     assert info.value.line == 5 and info.value.column == 28  # just after "t *"
+
+
+def test_decomposition_rules_with_blocks():
+    text = (
+        "#define PL 1\nderivation length: 1\naxiom: A(3)\ndecomposition\nmaximum depth: 10\n"
+        "A(t) : {t=t-PL;} t>0 --> I(t)A(t)\nendlsystem\n"
+    )
+    # the block lowers the formal before the condition: A(3) -> I(2)A(2) -> I(2)I(1)A(1); then
+    # t = 0 fails the condition and A(1) stays as it was
+    assert LSystem.from_text(text, filename="d.l").derive(n=0).to_string() == "I(2)I(1)A(1)"
