@@ -55,7 +55,7 @@ _QUERY = {
     "H": "the turtle heading query ?H",
     "L": "the turtle left-vector query ?L",
     "U": "the turtle up-vector query ?U",
-    "E": "the environmental communication module ?E",
+    "E": "the communication module ?E",
 }
 _AT_MEANING = {
     "Gs": "generalised cylinders",
@@ -187,8 +187,8 @@ class _Translator:
             return False
         colon, brace = _find_depth0(s, ":"), _find_depth0(s, "{")
         arrow = s.find("-->") if "-->" in s else s.find("->")
-        if colon < 0 or brace < colon or (0 <= arrow < brace):
-            return False
+        if colon < 0 or (arrow >= 0 and (brace < colon or arrow < brace)):
+            return False  # no head going on over lines, no block before the arrow
         word = s[:colon].strip().lower()
         return word not in ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
 
@@ -213,7 +213,8 @@ class _Translator:
         pre, condition, post = parts
         width = 3 if text.startswith("-->", arrow) else 2
         line = f"{text[:colon].strip()} : {condition.strip() or '*'} --> {text[arrow + width :]}"
-        self.rule_blocks[number] = tuple(None if b is None else (b[0], *_position(text, b[1], first)) for b in (pre, post))
+        if pre is not None or post is not None:
+            self.rule_blocks[number] = tuple(None if b is None else (b[0], *_position(text, b[1], first)) for b in (pre, post))
         out = self.rule(number, line, line, 0)
         self.open_successor = True
         return out
@@ -310,8 +311,9 @@ class _Translator:
             if macro:  # a function-like macro: a Ramure user function
                 head = f"#function {macro.group(1)}({macro.group(2)}) = "
                 at = start + macro.start(3)
-                return _Out(" " * start + head + original[at:], [(start, at - start, len(head))])
-            return _Out(original)
+                out = _Out(" " * start + head + original[at:], [(start, at - start, len(head))])
+                return self.rename(text, at, len(text), out)
+            return self.rename(text, start, len(text), _Out(original))
         if name == "include":
             raise self.error(
                 "#include in a cpfg file is not supported (view, surface and other files are "
@@ -367,7 +369,8 @@ class _Translator:
             out.text, out.edits = "p: " + out.text, [(0, 0, 3)]
         self.in_rules = True
         end = _successor_end(text, arrow + width)
-        return self.modules(number, text, original, arrow + width, end, out)
+        out = self.modules(number, text, original, arrow + width, end, out)
+        return self.rename(text, 0, arrow, out)
 
     def modules(self, number, text, original, start, end, out):
         """Check a module string for unsupported modules; rename cpfg's random functions."""
@@ -381,10 +384,20 @@ class _Translator:
             elif depth == 0 and c == "?":
                 nxt = text[i + 1 : i + 2]
                 what = _QUERY.get(nxt, "the sub-L-system call ?(...)" if nxt == "(" else "the query module ?")
+                if nxt == "E":
+                    what += (
+                        " talks to an environment program (named in cpfg's -e file: light, space, a field "
+                        "simulator) that Ramure does not run, so it"
+                    )
                 raise self.error(f"{what} is not supported", number, i + 1, original)
             elif depth == 0 and c == "@":
                 self.at_module(number, text, original, i)
             i += 1
+        return self.rename(text, start, end, out)
+
+    @staticmethod
+    def rename(text, start, end, out):
+        """cpfg's ran/nran/fabs in text[start:end] written as Ramure's functions."""
         for pattern, new in _FUNCTIONS:
             for m in reversed(list(pattern.finditer(text, start, end))):
                 at = _shifted(out, m.start())

@@ -80,7 +80,7 @@ def test_cpfg_keywords_and_functions():
     [
         ('#include "plant.v"\n', 1, 1, "#include"),
         ("#ifdef X\n", 1, 1, "#ifdef"),
-        ("axiom: A\nA --> F?E(1)\n", 2, 8, "environmental"),
+        ("axiom: A\nA --> F?E(1)\n", 2, 8, "talks to an environment program"),
         ("axiom: A\nA --> [?P(x,y,z)]\n", 2, 8, "position query ?P"),
         ("axiom: A\nA --> F?(1,2)\n", 2, 8, "sub-L-system"),
         ("axiom: A\nA --> F@Gs\n", 2, 8, "@Gs (generalised cylinders)"),
@@ -198,3 +198,14 @@ def test_comments_continuations_and_successors_over_several_lines():
     assert [str(r) for r in ls.grammar.rules][0].startswith("A(x) -->")
     assert ls.derive().to_string() == "F(2)[+F(1)]F(3)"
     assert ls.derive(n=2).to_string() == "F(2)G/////G[+F(1)G/////G]F(3)G/////G"
+
+
+def test_a_condition_over_several_lines_and_cpfg_functions_in_defines():
+    text = (
+        "#define ANGLE nran(80, 0)\nderivation length: 1\naxiom: A(1)A(-1)\n"
+        "A(x) : fabs(x) < 2\n"
+        "   && x > 0\n"
+        "   --> F(ANGLE)\n"
+        "endlsystem\n"
+    )
+    assert LSystem.from_text(text, filename="heads.l").derive().to_string() == "F(80)A(-1)"
