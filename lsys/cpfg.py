@@ -225,7 +225,13 @@ class _Translator:
 
         out = {}
         if self.head is not None:
-            raise self.error("this production's blocks never reach its '-->'", self.head[0], 1, lines[self.head[0] - 1])
+            raise self.error(
+                "this cpfg line is not supported: it reads as a production's predecessor and condition, "
+                "but no '-->' follows (or it is a keyword Ramure does not know)",
+                self.head[0],
+                1,
+                lines[self.head[0] - 1],
+            )
         for name, number, column, pieces in self.blocks:
             key = name.lower()
             if key in out:
