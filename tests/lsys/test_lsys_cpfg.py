@@ -133,7 +133,7 @@ def test_cli_import_and_check(tmp_path, capsys):
     bad.write_text("derivation length: 2\naxiom: A\nA --> F?E(1)\n")
     assert main(["check", str(bad)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"ramure check: {bad}, line 3, column 8: the environmental") and "Traceback" not in err
+    assert err.startswith(f"ramure check: {bad}, line 3, column 8: the communication module ?E talks to an environment program") and "Traceback" not in err
     assert main(["import", str(bad), "-o", str(tmp_path / "bad.lsys")]) == 2
     assert not (tmp_path / "bad.lsys").exists()
     assert main(["import", str(HERE / "compound_leaf.l"), "-o", str(tmp_path / "x.txt")]) == 2
