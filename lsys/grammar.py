@@ -658,7 +658,7 @@ class GrammarParser:
         m = token.search(text, start)
         while m is not None:
             symbol, i = m.group(), m.end()
-            if symbol in "),":
+            if symbol == ")":
                 raise line.error(_comma_message(symbol), m.start() + 1)
             if symbol == "(":
                 raise line.error("'(' must follow a module name directly, as in A(1,2)", m.start() + 1)

@@ -14,9 +14,10 @@ and U (up) with ``H x L = U``.  It starts at the origin heading up the z axis
 ``$``         roll about H so that L is horizontal (ABOP's ``$``)
 ``[ ]``       push / pop the whole state (position, frame, width, colour, order)
 ``!(w)``      set the width (diameter) to w; ``!`` alone multiplies it by 0.7
-``'(c)``      set the colour index to c; ``'`` alone adds 1 (``;`` subtracts 1)
+``'(c)``      set the colour index to c; ``'`` alone adds 1
 ``;(i)``      set the colour index to i: material i of the grammar's
-              ``#material`` table (the same index as ``'(i)``)
+              ``#material`` table (the same index as ``'(i)``); ``;`` alone adds 1
+``,(i)``      set the colour index to i; ``,`` alone subtracts 1 (as in cpfg and L-Py)
 organs        ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded with
               the turtle's position and frame; their first parameter is the size
 ``{ . }``     polygons (``F f`` inside one record vertices, ``G`` moves without
@@ -85,8 +86,8 @@ class TurtleAction(IntEnum):
     PUSH = 11  # [
     POP = 12  # ]
     WIDTH = 13  # !
-    COLOR_UP = 14  # '
-    COLOR_DOWN = 15  # ;
+    COLOR_UP = 14  # ' and ;
+    COLOR_DOWN = 15  # ,
     ORGAN = 16  # Leaf, Fruit and #organ modules
     POLY_START = 17  # {
     POLY_END = 18  # }
@@ -113,7 +114,8 @@ SYMBOL_ACTIONS = {
     "]": TurtleAction.POP,
     "!": TurtleAction.WIDTH,
     "'": TurtleAction.COLOR_UP,
-    ";": TurtleAction.COLOR_DOWN,
+    ";": TurtleAction.COLOR_UP,  # cpfg and L-Py: ';' raises the colour index, ',' lowers it
+    ",": TurtleAction.COLOR_DOWN,
     "{": TurtleAction.POLY_START,
     "}": TurtleAction.POLY_END,
     ".": TurtleAction.POLY_VERTEX,

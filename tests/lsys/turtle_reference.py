@@ -34,7 +34,8 @@ _ACTIONS = {
     "]": 12,
     "!": 13,
     "'": 14,
-    ";": 15,
+    ";": 14,  # cpfg and L-Py: ";" raises the colour index, "," lowers it
+    ",": 15,
     "{": 17,
     "}": 18,
     ".": 19,

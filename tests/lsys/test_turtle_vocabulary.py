@@ -1,0 +1,26 @@
+"""The turtle vocabulary shared with cpfg and L-Py, each against values computed by hand."""
+
+import numpy as np
+import pytest
+
+from ramure.lsys import LSystem
+from ramure.lsys import turtle
+
+
+def colours(axiom):
+    return LSystem.from_text(f"n: 0\nw: {axiom}\n").derive().skeleton().color.tolist()
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_semicolon_raises_and_comma_lowers_the_colour_index(monkeypatch, compiled):
+    if compiled:  # the compiled loop (numba) must agree with the plain one
+        pytest.importorskip("numba")
+        monkeypatch.setattr(turtle, "KERNEL_MIN_MODULES", 0)
+    assert colours("F;F;;F,F") == [0, 1, 3, 2]
+    assert colours(";(5)F,F,(2)F'F") == [5, 4, 2, 3]
+    assert colours("F[;F]F,F") == [0, 1, 0, -1]  # ']' restores the colour
+
+
+def test_a_cpfg_file_uses_the_same_colour_steps():
+    d = LSystem.from_text("derivation length: 1\naxiom: A\nA --> F;F,,F\nendlsystem\n", filename="c.l").derive()
+    assert np.array_equal(d.skeleton().color, [0, 1, -1])
