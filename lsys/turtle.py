@@ -66,6 +66,7 @@ if TYPE_CHECKING:
     import pyvista as pv
 
     from .derive import Derivation, LSystem
+    from .grammar import Grammar
     from .tree import DerivationTree
 
 
@@ -765,3 +766,25 @@ def _spliced_polygons(lsys, tree, skeleton, trace, leaves, regions, old_spans, d
             parts.append(_checked(lsys, tree, from_walk(leaves, new[i])))
             where.append(new[i][0])
     return np.concatenate(where).astype(np.int32), concatenate(parts)
+
+
+def undrawn_symbols(grammar: Grammar) -> list[str]:
+    """Module symbols a grammar writes that nothing draws: no turtle meaning (``F``, ``+``, an
+    organ, a surface ``~name`` ...), no rule of any section rewrites or interprets them, and no
+    ``#amap`` annotation names them.
+    ``ramure check`` notes them (a misspelt or foreign turtle command is silently skipped).
+
+    >>> from ramure.lsys.grammar import parse_grammar
+    >>> undrawn_symbols(parse_grammar("n: 1\\nw: A\\np:\\n A -> F[+A]Q@c(2)Leaf"))
+    ['@', 'Q', 'c']
+    """
+    rules = [*grammar.rules, *grammar.decomposition, *grammar.interpretation]
+    written = {m.symbol for m in grammar.axiom} | {m.symbol for r in rules for m in r.successor}
+    rewritten = {r.pred.symbol for r in rules}
+    special = {"%", "*"}  # the branch cut (lsys.branch_cut) and ABOP's any-context
+    marks = {entry[1] for entry in grammar.amap}  # '#amap' markers mean architecture, not drawing
+    return sorted(
+        s
+        for s in written - rewritten - special - marks - set(grammar.organs)
+        if s not in SYMBOL_ACTIONS and not s.startswith(SURFACE_PREFIX)
+    )

@@ -10,6 +10,7 @@ import time
 
 from ramure.app.cli import UserError
 from ramure.lsys import LSystem
+from ramure.lsys.turtle import undrawn_symbols
 import os
 from collections.abc import Collection, Iterable, Sequence
 from typing import TYPE_CHECKING
@@ -116,6 +117,9 @@ def run_check(args: argparse.Namespace) -> int:
         f"{args.file}: ok — {len(g.rules)} rule(s), {len(g.constants)} constant(s), n = {g.n}, "
         f"seed = {ls.seed}, axiom {''.join(str(m) for m in g.axiom)}"
     )
+    undrawn = undrawn_symbols(g)
+    if undrawn:
+        print(f"note: nothing draws {', '.join(undrawn)} (no turtle meaning, and no rule rewrites or interprets it)")
     return 0
 
 

@@ -24,3 +24,20 @@ def test_semicolon_raises_and_comma_lowers_the_colour_index(monkeypatch, compile
 def test_a_cpfg_file_uses_the_same_colour_steps():
     d = LSystem.from_text("derivation length: 1\naxiom: A\nA --> F;F,,F\nendlsystem\n", filename="c.l").derive()
     assert np.array_equal(d.skeleton().color, [0, 1, -1])
+
+
+def test_check_notes_the_modules_that_nothing_draws(tmp_path, capsys):
+    from ramure.app.cli import main
+    from ramure.lsys.grammar import parse_grammar
+    from ramure.lsys.turtle import undrawn_symbols
+
+    text = "#amap internode F\n#amap uc U\nn: 1\nw: A\np:\n A -> U F[+A]Q~leaf(1)B\ninterpretation:\n B -> F\n"
+    assert undrawn_symbols(parse_grammar(text)) == ["Q"]  # A is rewritten, B interpreted, U an #amap mark
+    path = tmp_path / "q.lsys"
+    path.write_text(text)
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1].startswith("note: nothing draws Q ")
+    path.write_text(text.replace("Q", ""))
+    assert main(["check", str(path)]) == 0
+    assert not any(line.startswith("note:") for line in capsys.readouterr().out.splitlines())
