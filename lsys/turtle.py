@@ -14,6 +14,8 @@ and U (up) with ``H x L = U``.  It starts at the origin heading up the z axis
 ``$``         roll about H so that L is horizontal (ABOP's ``$``)
 ``[ ]``       push / pop the whole state (position, frame, width, colour, order)
 ``!(w)``      set the width (diameter) to w; ``!`` alone multiplies it by 0.7
+``#(w) _(w)`` set the width to w (cpfg's ``#``, L-Py's ``_``); alone they divide it by 0.7
+``@v``        cpfg's roll to vertical: the same as ``$``
 ``'(c)``      set the colour index to c; ``'`` alone adds 1
 ``;(i)``      set the colour index to i: material i of the grammar's
               ``#material`` table (the same index as ``'(i)``); ``;`` alone adds 1
@@ -97,6 +99,7 @@ class TurtleAction(IntEnum):
     SPHERE = 21  # @O
     SURFACE = 22  # ~name
     ELASTICITY = 23  # @Ts
+    WIDTH_UP = 24  # # (cpfg) and _ (L-Py)
 
 
 #: The turtle symbols and their actions (organs come from the grammar's ``#organ``).
@@ -123,6 +126,9 @@ SYMBOL_ACTIONS = {
     "G": TurtleAction.POLY_MOVE,
     "@O": TurtleAction.SPHERE,
     "@Ts": TurtleAction.ELASTICITY,
+    "#": TurtleAction.WIDTH_UP,  # cpfg
+    "_": TurtleAction.WIDTH_UP,  # L-Py
+    "@v": TurtleAction.ROLL_HORIZONTAL,  # cpfg's roll to vertical: ABOP's $
 }
 #: Surfaces are the modules ``~name``: every symbol starting with this prefix.
 SURFACE_PREFIX = "~"

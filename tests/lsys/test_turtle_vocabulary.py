@@ -15,7 +15,7 @@ def colours(axiom):
 def test_semicolon_raises_and_comma_lowers_the_colour_index(monkeypatch, compiled):
     if compiled:  # the compiled loop (numba) must agree with the plain one
         pytest.importorskip("numba")
-        monkeypatch.setattr(turtle, "KERNEL_MIN_MODULES", 0)
+    monkeypatch.setattr(turtle, "use_kernels", compiled)
     assert colours("F;F;;F,F") == [0, 1, 3, 2]
     assert colours(";(5)F,F,(2)F'F") == [5, 4, 2, 3]
     assert colours("F[;F]F,F") == [0, 1, 0, -1]  # ']' restores the colour
@@ -41,3 +41,26 @@ def test_check_notes_the_modules_that_nothing_draws(tmp_path, capsys):
     path.write_text(text.replace("Q", ""))
     assert main(["check", str(path)]) == 0
     assert not any(line.startswith("note:") for line in capsys.readouterr().out.splitlines())
+
+
+def skeleton(axiom):
+    return LSystem.from_text(f"n: 0\nw: {axiom}\n").derive().skeleton()
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_hash_and_underscore_set_or_widen_the_width(monkeypatch, compiled):
+    if compiled:
+        pytest.importorskip("numba")
+    monkeypatch.setattr(turtle, "use_kernels", compiled)
+    widths = 2 * skeleton("!(0.4)F#F_F!F#(1)F_(2)F").base_radius
+    assert np.allclose(widths, [0.4, 0.4 / 0.7, 0.4 / 0.49, 0.4 / 0.7, 1.0, 2.0])
+
+
+def test_at_v_rolls_to_vertical_like_dollar():
+    a, b = skeleton("+(30)&(40)@vF"), skeleton("+(30)&(40)$F")
+    assert abs(a.normal[0, 2]) < 1e-12 and np.allclose(a.normal, b.normal)  # L ends horizontal
+    # by hand: the horizontal L is z x H normalised, (-H_y, H_x, 0) / |(H_x, H_y)|
+    h = a.end[0] - a.start[0]
+    h /= np.linalg.norm(h)
+    expected = np.array([-h[1], h[0], 0.0]) / np.hypot(h[0], h[1])
+    assert np.allclose(a.normal[0], expected)
