@@ -118,9 +118,7 @@ class _Drawer:
         pitch = math.degrees(math.atan2(up, math.hypot(h, left)))
         state = state.turn(turn).pitch(pitch)
         roll = math.degrees(math.atan2(state.frame[2, 0], state.frame[1, 0]))
-        state = state.roll(roll)
-        if abs(turn) + abs(pitch) + abs(roll) > 0:
-            self.out.append(f"+({_num(turn)})&({_num(pitch)})\\({_num(roll)})")
+        self.out.append(_rotation("+", turn) + _rotation("&", pitch) + _rotation("\\", roll))
         return _State(state.position, _State().frame)
 
     def _plants(self):
@@ -182,7 +180,7 @@ class _Drawer:
         self.out.append(f"F({_num(length)})")
         return state.forward(length)
 
-    def _move(self, state, target, symbol, keep_frame=False):
+    def _move(self, state, target, symbol):
         """Turn toward ``target`` (``+`` then ``&``) and draw or move there."""
         d = np.asarray(target, float) - state.position
         distance = float(np.linalg.norm(d))
@@ -190,15 +188,11 @@ class _Drawer:
             self.out.append(f"{symbol}(0)")
             return state
         h, left, up = state.frame @ d / distance
-        turn = math.degrees(math.atan2(-left, h))
-        pitch = math.degrees(math.atan2(up, math.hypot(h, left)))
+        turn = _angle(math.degrees(math.atan2(-left, h)))
+        pitch = _angle(math.degrees(math.atan2(up, math.hypot(h, left))))
         moved = state.turn(turn).pitch(pitch)
-        self.out.append(f"+({_num(turn)})&({_num(pitch)}){symbol}({_num(distance)})")
-        moved = moved.forward(distance)
-        if keep_frame:
-            self.out.append(f"&({_num(-pitch)})+({_num(-turn)})")
-            return _State(moved.position, state.frame)
-        return moved
+        self.out.append(_rotation("+", turn) + _rotation("&", pitch) + f"{symbol}({_num(distance)})")
+        return moved.forward(distance)
 
 
 class _State:
@@ -230,3 +224,15 @@ class _State:
 
 def _num(x):
     return f"{float(x):.9g}"
+
+
+#: Turns below this many degrees are not written (the file's coordinates are rounded anyway).
+MIN_TURN = 1e-4
+
+
+def _angle(degrees):
+    return 0.0 if abs(degrees) < MIN_TURN else degrees
+
+
+def _rotation(symbol, degrees):
+    return f"{symbol}({_num(degrees)})" if degrees else ""
