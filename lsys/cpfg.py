@@ -106,9 +106,10 @@ class _Translator:
         self.ended = False
         self.in_rules = False  # whether the .lsys text is inside a rules section here
         self.open_successor = False  # whether the last line was a rule or axiom a next line may continue
-        self.block = None  # the Start:/End:/... block being read: (name, line, column, lines)
+        self.block: tuple | None = None  # the Start:/End:/... block being read: (name, line, column, lines)
         self.blocks: list = []
-        self.head = None  # a production with blocks being read: (first line, lines)
+        self.head: tuple | None = None  # a production with blocks being read: (first line, lines)
+        self.head_lines: list[str] = []
         self.rule_blocks: dict = {}  # output line -> ((text, line, column) or None) * 2
 
     def error(self, message, number, column, original):
@@ -150,6 +151,7 @@ class _Translator:
         """A line of a Start:/End:/StartEach:/EndEach:/Define: block: kept for :meth:`programs`."""
         if self.block is None:
             m = _BLOCK.match(s)
+            assert m is not None  # translate() reads a block line only where _BLOCK matches
             self.block = (m.group(1), number, m.end() + 1, [s[m.end() :]])
         else:
             self.block[3].append(s)
@@ -166,7 +168,7 @@ class _Translator:
 
         out = {}
         for number, pair in self.rule_blocks.items():
-            programs = []
+            programs: list = []
             for block in pair:
                 if block is None:
                     programs.append(None)
@@ -488,7 +490,9 @@ def _arrow_after_blocks(text, start):
 def _split_blocks(text, start, end):
     """``{pre} condition {post}`` in text[start:end]: ((block text, offset) or None, condition,
     (block text, offset) or None), else None."""
-    pieces, condition, at = [None, None], [], start
+    pieces: list = [None, None]
+    condition: list[str] = []
+    at = start
     while at < end:
         c = text[at]
         if c == "{":

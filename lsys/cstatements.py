@@ -347,7 +347,7 @@ class _Parser:
         return self.src.where(offset)[0]
 
     def statements(self, end: int) -> list[Statement]:
-        out = []
+        out: list[Statement] = []
         while True:
             self.skip()
             if self.at >= end:
@@ -384,13 +384,13 @@ class _Parser:
             return Loop(condition, self.statement())
         if word == "do":
             self.at += 2
-            body = self.statement()
+            inner = self.statement()
             if self.peek_word() != "while":
                 raise self.src.error("'do' needs 'while (...)' after its body", self.at)
             self.at += 5
             condition = self.parenthesised()
             self.expect(";")
-            return Loop(condition, body, test_first=False)
+            return Loop(condition, inner, test_first=False)
         if word == "for":
             return self.for_loop()
         if word in ("printf", "fprintf", "sprintf") and word != "printf":

@@ -166,7 +166,8 @@ class LSystem:
         succ_args = [[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor]
         blocks = None
         if rule.blocks is not None:  # cpfg: run module by module (cstatements.RuleBlocks)
-            blocks = RuleBlocks(*rule.blocks, cond, succ_args, formals)
+            pre, post = rule.blocks
+            blocks = RuleBlocks(pre, post, cond, succ_args, formals)
             cond = blocks
         return _CompiledRule(
             rule=rule,

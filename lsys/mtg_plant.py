@@ -123,7 +123,9 @@ class _Drawer:
 
     def _plants(self):
         """Root vertex -> rank of its scale-1 plant."""
-        graph, plant_of, ranks = self.graph, {}, {}
+        graph = self.graph
+        plant_of: dict[int, int] = {}
+        ranks: dict[int, int] = {}
         for root in self.children.get(-1, []):
             top = root
             while graph.scale[top] > 1 and graph.complex[top] > 0:
