@@ -389,7 +389,7 @@ class _Translator:
                 depth += 1
             elif c == ")":
                 depth -= 1
-            elif depth == 0 and c == "?":
+            elif depth == 0 and c == "?" and text[i + 1 : i + 2] not in ("P", "H", "L", "U"):
                 nxt = text[i + 1 : i + 2]
                 what = _QUERY.get(nxt, "the sub-L-system call ?(...)" if nxt == "(" else "the query module ?")
                 if nxt == "E":

@@ -240,6 +240,8 @@ class LSystem:
             raise GrammarError(
                 f"unknown constant(s): {', '.join(sorted(unknown))}; the grammar defines {', '.join(self.constants) or 'none'}"
             )
+        from .turtle import answer_queries  # lazily: the turtle needs no derivation to load
+
         blocks = cpfg_blocks(self.grammar, consts, seed)
         blocks.run("define", "start")  # cpfg's blocks, if any: the globals live in consts
         tree = DerivationTree(self.max_params, capacity=4096)
@@ -255,9 +257,12 @@ class LSystem:
         rng = seeded_generator(seed)
         string = decompose(self, tree, ids, 0, 0, rng, consts)  # the axiom too (no decomposition: ids)
         string = cut_string(self, tree, string)  # '%' cuts the rest of its branch (lsys.branch_cut)
+        answer_queries(self, tree, string)  # ?P ?H ?L ?U, if any
         for step in range(1, n + 1):
             blocks.run("starteach")
+            made = tree.size
             string = self.rewrite(tree, string, step, rng, consts, rule_constants)
+            answer_queries(self, tree, string, made)
             blocks.run("endeach")
             if progress is not None:
                 progress(step, n)

@@ -677,7 +677,7 @@ class GrammarParser:
         if self._token_key != key:
             names = sorted(key, key=len, reverse=True)
             # @O (sphere), @Ts (elasticity) and ~name (a surface) are single modules
-            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), r"@Ts|@O|@v|~[A-Za-z_]\w*", r"\S"]))
+            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), r"@Ts|@O|@v|\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
             self._token_key = key
         return self._token_re
 

@@ -64,3 +64,33 @@ def test_at_v_rolls_to_vertical_like_dollar():
     h /= np.linalg.norm(h)
     expected = np.array([-h[1], h[0], 0.0]) / np.hypot(h[0], h[1])
     assert np.allclose(a.normal[0], expected)
+
+
+QUERY = """derivation length: 2
+axiom: F(2)+(90)?P(0,0,0)[?H(0,0,0)]A
+A --> F(1)?P(0,0,0)?U(0,0,0)
+?P(x,y,z) --> ?P(x,y,z)B(x,z)
+endlsystem
+"""
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_query_modules_receive_the_turtle_state_after_each_step(monkeypatch, compiled):
+    if compiled:
+        pytest.importorskip("numba")
+    monkeypatch.setattr(turtle, "use_kernels", compiled)
+    ls = LSystem.from_text(QUERY, filename="query.l")
+    modules = {f"{s}{k}": p for k, (s, p) in enumerate(ls.derive(n=1).modules)}
+    # by hand: F(2) ends at (0, 0, 2); +(90) turns H = +z toward -L = (-1, 0, 0); A's F(1) then
+    # goes from (0, 0, 2) to (-1, 0, 2); U stays +y
+    assert np.allclose(modules["?P2"], [0, 0, 2]) and np.allclose(modules["?H5"], [-1, 0, 0])
+    assert np.allclose(modules["?P8"], [-1, 0, 2]) and np.allclose(modules["?U9"], [0, 1, 0])
+    # the next step's rule reads the answered values
+    assert "B(0,2)" in ls.derive(n=2).to_string() and "B(-1,2)" in ls.derive(n=2).to_string()
+
+
+def test_the_environment_query_is_refused_by_name():
+    from ramure.errors import GrammarError
+
+    with pytest.raises(GrammarError, match="environment program"):
+        LSystem.from_text(QUERY.replace("?U(0,0,0)", "?E(1)"), filename="query.l")
