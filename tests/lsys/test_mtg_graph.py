@@ -153,3 +153,25 @@ def test_command_line_prints_counts_per_scale(tmp_path):
 def test_the_per_scale_counts_are_arrays():
     g = parse_mtg_graph(TWO_PLANTS)
     assert np.array_equal(g.at_scale(1), [1, 11])
+
+
+def test_mutated_files_raise_only_mtg_errors():
+    import random
+
+    from ramure.lsys import LSystem
+    from ramure.lsys.mtg_plant import mtg_grammar_text
+
+    rnd = random.Random(7)
+    read = 0
+    for _ in range(400):
+        chars = list(TWO_PLANTS)
+        for _ in range(rnd.randint(1, 3)):
+            k = rnd.randrange(len(chars))
+            chars[k : k + rnd.randint(0, 1)] = rnd.choice(["", "\t", "\n", "/", "<", "+", "^", "*", "[", "E", "9", "<<E"])
+        try:
+            graph = parse_mtg_graph("".join(chars))
+        except MTGError:
+            continue
+        read += 1
+        LSystem.from_text(mtg_grammar_text(graph)).derive().skeleton()  # what reads, draws
+    assert 0 < read < 400
