@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import pathlib
+import sys
 import time
 
 from ramure.app.cli import UserError
@@ -103,7 +104,9 @@ def load_and_derive(args: argparse.Namespace) -> tuple[LSystem, Derivation, floa
         raise UserError(f"-n must be >= 0, not {args.n}")
     t0 = time.perf_counter()
     d = ls.derive(n=args.n, seed=args.seed)
-    return ls, d, time.perf_counter() - t0
+    seconds = time.perf_counter() - t0
+    sys.stderr.write("".join(d.printed))  # a cpfg file's printf output, as cpfg shows it
+    return ls, d, seconds
 
 
 def run_check(args: argparse.Namespace) -> int:

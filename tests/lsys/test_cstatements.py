@@ -139,3 +139,13 @@ def test_decomposition_rules_with_blocks():
     # the block lowers the formal before the condition: A(3) -> I(2)A(2) -> I(2)I(1)A(1); then
     # t = 0 fails the condition and A(1) stays as it was
     assert LSystem.from_text(text, filename="d.l").derive(n=0).to_string() == "I(2)I(1)A(1)"
+
+
+def test_the_command_line_shows_printf_on_stderr(tmp_path, capsys):
+    from ramure.app.cli import main
+
+    path = tmp_path / "steps.l"
+    path.write_text('Start: {n = 0;}\nEndEach: {n = n + 1; printf("step %d\\n", n);}\nderivation length: 2\naxiom: F\n')
+    assert main(["derive", str(path)]) == 0
+    out = capsys.readouterr()
+    assert out.out.strip() == "F" and out.err == "step 1\nstep 2\n"
