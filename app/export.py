@@ -29,7 +29,8 @@ with numpy; the writers only lay those arrays out:
 ``.vtp``/``.vtk``  the mesh as it is (quads stay quads), with cell data
            ``leaf_id``, ``kind`` (organ kind), ``material`` (index into the
            material table, -1 for the default colour of the kind) and ``rgb``.
-``.ply``/``.stl``  the same mesh through VTK (geometry only for STL).
+``.ply``           triangles with per-vertex normals and colours (binary, :func:`ply_bytes`).
+``.stl``           the same mesh through VTK (geometry only).
 
 Choices the issue leaves open: the glTF writer is hand-written (about 120
 lines of numpy and ``struct``) rather than pygltflib or trimesh — glTF's
@@ -560,17 +561,49 @@ def check_suffix(path: str | os.PathLike) -> pathlib.Path:
     return path
 
 
+def ply_bytes(parts: Sequence[Part]) -> bytes:
+    """A binary little-endian PLY file of ``parts``: triangles only, each vertex with its
+    normal and its part's colour (``red green blue alpha``, 0..255), so trimesh, MeshLab and
+    VTK read the colours."""
+    parts = [p for p in parts if len(p.triangles)]
+    counts = [len(p.points) for p in parts]
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    vertex = np.dtype([("p", "<f4", 3), ("n", "<f4", 3), ("c", "u1", 4)])
+    face = np.dtype([("k", "u1"), ("v", "<i4", 3)])
+    vertices = np.zeros(int(offsets[-1]), vertex)
+    faces = np.zeros(sum(len(p.triangles) for p in parts), face)
+    faces["k"] = 3
+    row = 0
+    for part, start in zip(parts, offsets[:-1].tolist()):
+        block = vertices[start : start + len(part.points)]
+        block["p"], block["n"] = part.points, part.normals
+        block["c"] = np.round(np.clip(part.color, 0, 1) * 255).astype(np.uint8)
+        faces["v"][row : row + len(part.triangles)] = np.asarray(part.triangles) + start
+        row += len(part.triangles)
+    header = (
+        "ply\nformat binary_little_endian 1.0\ncomment written by Ramure\n"
+        f"element vertex {len(vertices)}\n"
+        "property float x\nproperty float y\nproperty float z\n"
+        "property float nx\nproperty float ny\nproperty float nz\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    return header.encode("ascii") + vertices.tobytes() + faces.tobytes()
+
+
 def export_parts(parts: Sequence[Part], path: str | os.PathLike, yup: bool = False) -> pathlib.Path:
-    """Write already built parts as ``.glb``, ``.gltf`` or ``.obj``."""
+    """Write already built parts as ``.glb``, ``.gltf``, ``.obj`` or ``.ply``."""
     path = check_suffix(path)
     suffix = path.suffix.lower()
+    if suffix == ".ply":
+        return write_bytes(path, ply_bytes(parts))
     if suffix == ".glb":
         return write_bytes(path, glb_bytes(parts))
     if suffix == ".gltf":
         return write_text(path, gltf_text(parts))
     if suffix == ".obj":
         return write_obj(parts, path, yup)
-    raise ValueRefused(f"cannot export parts to '{suffix}': use .glb, .gltf or .obj")
+    raise ValueRefused(f"cannot export parts to '{suffix}': use .glb, .gltf, .obj or .ply")
 
 
 def export_mesh(
@@ -588,7 +621,7 @@ def export_mesh(
     """
     path = check_suffix(path)
     suffix = path.suffix.lower()
-    if suffix in (".glb", ".gltf", ".obj"):
+    if suffix in (".glb", ".gltf", ".obj", ".ply"):
         return export_parts(plant_parts(mesh, fruit_surface, materials, yup), path, yup)
     shown = vtk_mesh(mesh, fruit_surface, materials, yup)
     if suffix == ".stl":
@@ -599,7 +632,7 @@ def export_mesh(
 def export_colored(mesh: pv.DataSet, path: str | os.PathLike, rgb: ArrayLike | None = None, yup: bool = False) -> pathlib.Path:
     """Write a mesh coloured per cell (``rgb`` cell data, e.g. wood) by suffix; returns the path."""
     path = check_suffix(path)
-    if path.suffix.lower() in (".glb", ".gltf", ".obj"):
+    if path.suffix.lower() in (".glb", ".gltf", ".obj", ".ply"):
         return export_parts(color_parts(mesh, rgb, yup), path, yup)
     surface = mesh.copy(deep=True)
     if yup:
@@ -623,6 +656,7 @@ __all__ = [
     "mtl_text",
     "obj_text",
     "plant_parts",
+    "ply_bytes",
     "point_normals",
     "read_glb",
     "srgb_to_linear",

@@ -59,6 +59,7 @@ from ._turtle_walk import (  # shared with the plain-Python walk (no numba there
     TURN_LEFT,
     TURN_RIGHT,
     WIDTH,
+    WIDTH_UP,
     initial_state,
 )
 
@@ -280,6 +281,8 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 break
         elif a == WIDTH:
             width = p if k else width * 0.7
+        elif a == WIDTH_UP:
+            width = p if k else width / 0.7
         elif a == COLOR_UP:
             color = np.int64(p) if k else color + 1
         elif a == COLOR_DOWN:

@@ -24,6 +24,7 @@ STATE_SIZE = 17
 DRAW, MOVE, TURN_LEFT, TURN_RIGHT, PITCH_DOWN, PITCH_UP, ROLL_LEFT, ROLL_RIGHT = 1, 2, 3, 4, 5, 6, 7, 8
 TURN_AROUND, ROLL_HORIZONTAL, PUSH, POP, WIDTH, COLOR_UP, COLOR_DOWN, ORGAN = 9, 10, 11, 12, 13, 14, 15, 16
 POLY_START, POLY_END, POLY_VERTEX, POLY_MOVE, SPHERE, SURFACE, ELASTICITY = 17, 18, 19, 20, 21, 22, 23
+WIDTH_UP = 24
 
 # Error codes of walk's ``err`` output: (code, string position) of the first problem.
 ERR_CLOSE_WITHOUT_OPEN, ERR_VERTEX_OUTSIDE, ERR_UNCLOSED = 1, 2, 3
@@ -227,6 +228,8 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 break
         elif a == WIDTH:
             width = p if k else width * 0.7
+        elif a == WIDTH_UP:
+            width = p if k else width / 0.7
         elif a == COLOR_UP:
             color = _int64(p) if k else color + 1
         elif a == COLOR_DOWN:

@@ -26,8 +26,8 @@ class TurtleAction(IntEnum):
     PUSH = 11  # [
     POP = 12  # ]
     WIDTH = 13  # !
-    COLOR_UP = 14  # '
-    COLOR_DOWN = 15  # ;
+    COLOR_UP = 14  # ' and ;
+    COLOR_DOWN = 15  # ,
     ORGAN = 16  # Leaf, Fruit and #organ modules
     POLY_START = 17  # {
     POLY_END = 18  # }
@@ -36,6 +36,7 @@ class TurtleAction(IntEnum):
     SPHERE = 21  # @O
     SURFACE = 22  # ~name
     ELASTICITY = 23  # @Ts
+    WIDTH_UP = 24  # # (cpfg) and _ (L-Py)
 
 
 #: The turtle symbols and their actions (organs come from the grammar's ``#organ``).
@@ -54,11 +55,15 @@ SYMBOL_ACTIONS = {
     "]": TurtleAction.POP,
     "!": TurtleAction.WIDTH,
     "'": TurtleAction.COLOR_UP,
-    ";": TurtleAction.COLOR_DOWN,
+    ";": TurtleAction.COLOR_UP,  # cpfg and L-Py: ';' raises the colour index, ',' lowers it
+    ",": TurtleAction.COLOR_DOWN,
     "{": TurtleAction.POLY_START,
     "}": TurtleAction.POLY_END,
     ".": TurtleAction.POLY_VERTEX,
     "G": TurtleAction.POLY_MOVE,
     "@O": TurtleAction.SPHERE,
     "@Ts": TurtleAction.ELASTICITY,
+    "#": TurtleAction.WIDTH_UP,  # cpfg
+    "_": TurtleAction.WIDTH_UP,  # L-Py
+    "@v": TurtleAction.ROLL_HORIZONTAL,  # cpfg's roll to vertical: ABOP's $
 }

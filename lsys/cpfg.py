@@ -46,7 +46,7 @@ import re
 from dataclasses import dataclass, field
 
 from .errors import GrammarError
-from .grammar import Grammar, parse_grammar, strip_comments
+from .grammar import CONTINUATION, Grammar, parse_grammar, strip_comments
 
 #: Suffixes read as cpfg files by :meth:`ramure.lsys.LSystem.from_file`.
 CPFG_SUFFIXES = (".l",)
@@ -55,7 +55,7 @@ _QUERY = {
     "H": "the turtle heading query ?H",
     "L": "the turtle left-vector query ?L",
     "U": "the turtle up-vector query ?U",
-    "E": "the environmental communication module ?E",
+    "E": "the communication module ?E",
 }
 _AT_MEANING = {
     "Gs": "generalised cylinders",
@@ -105,14 +105,163 @@ class _Translator:
         self.lsystems = 0
         self.ended = False
         self.in_rules = False  # whether the .lsys text is inside a rules section here
+        self.open_successor = False  # whether the last line was a rule or axiom a next line may continue
+        self.block: tuple | None = None  # the Start:/End:/... block being read: (name, line, column, lines)
+        self.blocks: list = []
+        self.head: tuple | None = None  # a production with blocks being read: (first line, lines)
+        self.head_lines: list[str] = []
+        self.rule_blocks: dict = {}  # output line -> ((text, line, column) or None) * 2
 
     def error(self, message, number, column, original):
         return GrammarError(message, number, column, original, filename=self.filename)
 
     def translate(self, text):
         text = text.replace("\r\n", "\n").replace("\r", "\n")
-        stripped = strip_comments(text).split("\n")
-        return [self.line(number, s, o) for number, (s, o) in enumerate(zip(stripped, text.split("\n")), 1)]
+        # cpfg runs its files through the C preprocessor: '//' and '/* */' are comments
+        # everywhere, and the output is built from the comment-free text
+        stripped = strip_c_comments(text).split("\n")
+        stripped = _join_define_continuations(stripped)
+        outs = []
+        for number, s in enumerate(stripped, 1):
+            if self.block is not None or _BLOCK.match(s):
+                outs.append(self.block_line(number, s))
+                continue
+            if self.head is not None or self.starts_block_rule(s):
+                outs.append(self.block_rule_line(number, s))
+                continue
+            slash = _line_continuation(s)
+            if slash is not None:  # a rule or axiom going on over the next line: Ramure's '...'
+                s = s[:slash] + " " * (len(s) - slash)
+            if self.continues(s):
+                out = self.modules(number, s, s, 0, len(s), _Out(s))
+                self.mark_continued(outs)
+            else:
+                out = self.line(number, s, s)
+                self.open_successor = out.text.lstrip().startswith(("p:", "w:")) or (self.in_rules and "->" in out.text)
+            if slash is not None:
+                out.text += " " + CONTINUATION
+                self.open_successor = True  # the mark is written: the next line continues it
+            outs.append(out)
+        if self.block is not None:
+            name, number, _, _ = self.block
+            raise self.error(f"the '{name}:' block's '{{' is never closed", number, 1, text.split("\n")[number - 1])
+        return outs
+
+    def block_line(self, number, s):
+        """A line of a Start:/End:/StartEach:/EndEach:/Define: block: kept for :meth:`programs`."""
+        if self.block is None:
+            m = _BLOCK.match(s)
+            assert m is not None  # translate() reads a block line only where _BLOCK matches
+            self.block = (m.group(1), number, m.end() + 1, [s[m.end() :]])
+        else:
+            self.block[3].append(s)
+        body = "\n".join(self.block[3])
+        if "{" in body and _braces_closed(body):
+            self.blocks.append(self.block)
+            self.block = None
+        self.open_successor = False
+        return _Out(" " * len(s))
+
+    def parsed_rule_blocks(self, lines):
+        """Output line -> (pre, post) programs of the productions with blocks."""
+        from .cstatements import parse_program
+
+        out = {}
+        for number, pair in self.rule_blocks.items():
+            programs: list = []
+            for block in pair:
+                if block is None:
+                    programs.append(None)
+                    continue
+                text, line, column = block
+                try:
+                    programs.append(parse_program(text, line, column, lines))
+                except GrammarError as err:
+                    err.filename = self.filename
+                    raise
+            out[number] = tuple(programs)
+        return out
+
+    def starts_block_rule(self, s):
+        """Whether ``s`` starts a production with a statement block before its arrow."""
+        body = s.strip()
+        if not body or body.startswith("#") or self.ended or not self.in_rules and self.section != "production":
+            return False
+        colon, brace = _find_depth0(s, ":"), _find_depth0(s, "{")
+        arrow = s.find("-->") if "-->" in s else s.find("->")
+        if colon < 0 or (arrow >= 0 and (brace < colon or arrow < brace)):
+            return False  # no head going on over lines, no block before the arrow
+        word = s[:colon].strip().lower()
+        return word not in ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
+
+    def block_rule_line(self, number, s):
+        """A line of ``pred : {pre} condition {post} --> successor``: the rule is written on the
+        line of its arrow, as ``pred : condition -> successor``, its blocks kept aside."""
+        if self.head is None:
+            self.head = (number, [])
+        self.head[1].append(s)
+        text = "\n".join(self.head[1])
+        colon = _find_depth0(text, ":")
+        arrow = _arrow_after_blocks(text, colon)
+        if arrow < 0:
+            return _Out(" " * len(s))
+        first, self.head_lines, self.head = self.head[0], self.head[1], None
+        parts = _split_blocks(text, colon + 1, arrow)
+        if parts is None:
+            line, column = _position(text, text.index("{", colon), first)
+            raise self.error(
+                "cannot read the blocks of this production: {pre} condition {post}", line, column, self.head_lines[line - first]
+            )
+        pre, condition, post = parts
+        width = 3 if text.startswith("-->", arrow) else 2
+        line = f"{text[:colon].strip()} : {condition.strip() or '*'} --> {text[arrow + width :]}"
+        if pre is not None or post is not None:
+            self.rule_blocks[number] = tuple(None if b is None else (b[0], *_position(text, b[1], first)) for b in (pre, post))
+        out = self.rule(number, line, line, 0)
+        self.open_successor = True
+        return out
+
+    def programs(self, lines):
+        """The blocks parsed (:mod:`ramure.lsys.cstatements`): cpfg's name (lower case) -> program."""
+        from .cstatements import parse_program
+
+        out = {}
+        if self.head is not None:
+            raise self.error(
+                "this cpfg line is not supported: it reads as a production's predecessor and condition, "
+                "but no '-->' follows (or it is a keyword Ramure does not know)",
+                self.head[0],
+                1,
+                lines[self.head[0] - 1],
+            )
+        for name, number, column, pieces in self.blocks:
+            key = name.lower()
+            if key in out:
+                raise self.error(f"a second '{name}:' block", number, 1, lines[number - 1])
+            try:
+                out[key] = parse_program("\n".join(pieces), number, column, lines)
+            except GrammarError as err:
+                err.filename = self.filename
+                raise
+        return out
+
+    def continues(self, s):
+        """Whether line ``s`` goes on with the successor (or axiom) of the line before: cpfg
+        reads a production until the next production, keyword or directive."""
+        body = s.strip()
+        if not body or not self.open_successor or self.ended:
+            return False
+        if body.startswith("#") or "->" in body or re.match(r"[A-Za-z][A-Za-z ]*?\s*:", body):
+            return False
+        return not re.fullmatch(r"(homomorphism|decomposition|endlsystem)(\s*:)?(\s+(no\s+)?warnings)?", body, re.I)
+
+    def mark_continued(self, outs):
+        """End the last non-blank output line with Ramure's continuation mark."""
+        for out in reversed(outs):
+            if out.text.strip():
+                if not out.text.rstrip().endswith(CONTINUATION):
+                    out.text = out.text.rstrip() + " " + CONTINUATION
+                return
 
     def line(self, number, text, original):
         body = text.strip()
@@ -151,8 +300,6 @@ class _Translator:
         if body.lower() == "endlsystem":
             self.ended = True
             return _Out(" " * len(original))
-        if keyword and word in ("start", "end", "starteach", "endeach", "define"):
-            raise self.error(f"cpfg's '{keyword.group(1)}:' block (C statements) is not supported", number, start + 1, original)
         if "->" in text:
             return self.rule(number, text, original, start)
         raise self.error(
@@ -172,8 +319,9 @@ class _Translator:
             if macro:  # a function-like macro: a Ramure user function
                 head = f"#function {macro.group(1)}({macro.group(2)}) = "
                 at = start + macro.start(3)
-                return _Out(" " * start + head + original[at:], [(start, at - start, len(head))])
-            return _Out(original)
+                out = _Out(" " * start + head + original[at:], [(start, at - start, len(head))])
+                return self.rename(text, at, len(text), out)
+            return self.rename(text, start, len(text), _Out(original))
         if name == "include":
             raise self.error(
                 "#include in a cpfg file is not supported (view, surface and other files are "
@@ -229,7 +377,8 @@ class _Translator:
             out.text, out.edits = "p: " + out.text, [(0, 0, 3)]
         self.in_rules = True
         end = _successor_end(text, arrow + width)
-        return self.modules(number, text, original, arrow + width, end, out)
+        out = self.modules(number, text, original, arrow + width, end, out)
+        return self.rename(text, 0, arrow, out)
 
     def modules(self, number, text, original, start, end, out):
         """Check a module string for unsupported modules; rename cpfg's random functions."""
@@ -240,13 +389,23 @@ class _Translator:
                 depth += 1
             elif c == ")":
                 depth -= 1
-            elif depth == 0 and c == "?":
+            elif depth == 0 and c == "?" and text[i + 1 : i + 2] not in ("P", "H", "L", "U"):
                 nxt = text[i + 1 : i + 2]
                 what = _QUERY.get(nxt, "the sub-L-system call ?(...)" if nxt == "(" else "the query module ?")
+                if nxt == "E":
+                    what += (
+                        " talks to an environment program (named in cpfg's -e file: light, space, a field "
+                        "simulator) that Ramure does not run, so it"
+                    )
                 raise self.error(f"{what} is not supported", number, i + 1, original)
             elif depth == 0 and c == "@":
                 self.at_module(number, text, original, i)
             i += 1
+        return self.rename(text, start, end, out)
+
+    @staticmethod
+    def rename(text, start, end, out):
+        """cpfg's ran/nran/fabs in text[start:end] written as Ramure's functions."""
         for pattern, new in _FUNCTIONS:
             for m in reversed(list(pattern.finditer(text, start, end))):
                 at = _shifted(out, m.start())
@@ -273,6 +432,133 @@ class _Translator:
             i + 1,
             original,
         )
+
+
+def strip_c_comments(text: str) -> str:
+    """Blank out C and C++ comments keeping every other column and newline in place: ``/* ... */``,
+    and ``//`` to the end of the line where it starts a line or follows a space and is followed
+    by a space or a letter (``F/////S`` rolls five times, as in ABOP's files); text inside
+    double quotes is kept.
+
+    >>> strip_c_comments('A --> F//F  /* a */ "//" // note')
+    'A --> F//F          "//"        '
+    """
+    out, i, n = list(text), 0, len(text)
+    while i < n:
+        c = text[i]
+        if c == '"':
+            j = text.find('"', i + 1)
+            i = n if j < 0 else j + 1
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            end = n if j < 0 else j + 2
+            out[i:end] = [ch if ch == "\n" else " " for ch in text[i:end]]
+            i = end
+        elif text.startswith("//", i) and _comment_starts(text, i):
+            j = text.find("\n", i)
+            end = n if j < 0 else j
+            out[i:end] = " " * (end - i)
+            i = end
+        else:
+            i += 1
+    return "".join(out)
+
+
+def _find_depth0(text, char):
+    """The first ``char`` outside parentheses, else -1."""
+    depth = 0
+    for i, c in enumerate(text):
+        if c == char and depth == 0:
+            return i
+        depth += (c == "(") - (c == ")")
+    return -1
+
+
+def _arrow_after_blocks(text, start):
+    """The ``-->`` (or ``->``) after the blocks of a production, else -1."""
+    depth = 0
+    for i in range(start, len(text)):
+        c = text[i]
+        depth += (c in "{(") - (c in "})")
+        if depth == 0 and text.startswith("->", i):
+            return i
+        if depth == 0 and text.startswith("-->", i):
+            return i
+    return -1
+
+
+def _split_blocks(text, start, end):
+    """``{pre} condition {post}`` in text[start:end]: ((block text, offset) or None, condition,
+    (block text, offset) or None), else None."""
+    pieces: list = [None, None]
+    condition: list[str] = []
+    at = start
+    while at < end:
+        c = text[at]
+        if c == "{":
+            depth, j = 0, at
+            while j < end:
+                depth += (text[j] == "{") - (text[j] == "}")
+                if depth == 0:
+                    break
+                j += 1
+            if depth != 0:
+                return None
+            slot = 0 if not "".join(condition).strip() and pieces[0] is None else 1
+            if pieces[slot] is not None:
+                return None
+            pieces[slot] = (text[at : j + 1], at)
+            at = j + 1
+        else:
+            if pieces[1] is not None and not c.isspace():
+                return None
+            condition.append(c)
+            at += 1
+    return pieces[0], "".join(condition).replace("\n", " "), pieces[1]
+
+
+def _position(text, offset, first_line):
+    """(line, column) in the file of ``offset`` in ``text`` that starts at ``first_line``."""
+    before = text[:offset]
+    return first_line + before.count("\n"), offset - (before.rfind("\n") + 1) + 1
+
+
+_BLOCK = re.compile(r"\s*(start|end|starteach|endeach|define)\s*:", re.I)
+
+
+def _braces_closed(text):
+    depth = 0
+    for c in text:
+        depth += (c == "{") - (c == "}")
+        if depth == 0 and c == "}":
+            return True
+    return False
+
+
+def _comment_starts(text, i):
+    before = text[i - 1] if i else "\n"
+    after = text[i + 2] if i + 2 < len(text) else "\n"
+    return before.isspace() and (after.isspace() or after.isalpha())
+
+
+def _join_define_continuations(lines):
+    """A ``#define`` continued with ``\\`` is joined into its first line (the lines it took blanked)."""
+    lines = list(lines)
+    for k in range(len(lines)):
+        if not lines[k].lstrip().startswith("#"):
+            continue
+        following = k + 1
+        while (cut := _line_continuation(lines[k])) is not None and following < len(lines):
+            lines[k] = lines[k][:cut] + " " + lines[following].strip()
+            lines[following] = ""
+            following += 1
+    return lines
+
+
+def _line_continuation(line):
+    """The column of a final ``\\`` (the line goes on over the next one), else None."""
+    body = line.rstrip()
+    return len(body) - 1 if body.endswith("\\") else None
 
 
 def _successor_end(text, start):
@@ -337,18 +623,36 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
 def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     """Parse a cpfg ``.l`` file's text; errors name the ``.l`` line and column."""
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    outs = _Translator(filename).translate(text)
+    translator = _Translator(filename)
+    outs = translator.translate(text)
+    programs = translator.programs(lines)
+    rule_blocks = translator.parsed_rule_blocks(lines)
+    every = [*programs.values(), *(b for pair in rule_blocks.values() for b in pair if b is not None)]
+    body = "\n".join(out.text for out in outs) + _globals(every, outs)
     try:
-        grammar = parse_grammar("\n".join(out.text for out in outs), filename)
+        grammar = parse_grammar(body, filename)
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
-    bare = strip_comments("\n".join(lines)).split("\n")
+    grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
+    for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
+        if rule.line in rule_blocks:
+            rule.blocks = rule_blocks[rule.line]
+    bare = strip_c_comments("\n".join(lines)).split("\n")
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         rule.source_line = lines[rule.line - 1]  # derivation errors quote the .l line
         rule.text = bare[rule.line - 1].strip()  # and name the rule as the .l file writes it
     _locate_in_l_file(grammar, outs, lines, filename)
     return grammar
+
+
+def _globals(programs, outs):
+    """``#define`` lines (value 0) for the variables the blocks set, so rules can read them."""
+    from .cstatements import assigned_names
+
+    defined = {m.group(1) for out in outs for m in [re.match(r"\s*#\s*(?:define|function)\s+(\w+)", out.text)] if m}
+    names = sorted(set().union(*(assigned_names(p) for p in programs)) - defined) if programs else []
+    return "".join(f"\n#define {name} 0" for name in names)
 
 
 def _locate_in_l_file(grammar, outs, lines, filename):

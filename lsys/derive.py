@@ -37,6 +37,7 @@ import numpy as np
 
 import ramure.grammars as grammar_files
 from .errors import DerivationError, GrammarError, ValueRefused
+from .cstatements import RuleBlocks, cpfg_blocks
 from .expr import compile_expression, evaluate_constant, seeded_generator
 from .grammar import Grammar, parse_grammar, read_grammar_file
 from .branch_cut import cut_string
@@ -57,6 +58,7 @@ class _CompiledRule:
     succ_nparams: np.ndarray
     succ_args: list  # per successor module: list of compiled fns
     sources: dict  # formal name -> (slot, param index); slot 0 = pred, -k = left k, +k = right k
+    blocks: Any = None  # a cpfg rule with statement blocks: its RuleBlocks (also its condition)
 
 
 @dataclass
@@ -109,9 +111,12 @@ class LSystem:
     @classmethod
     def from_text(cls, text: str, filename: str | None = None) -> Self:
         """Parse grammar text; L-studio/cpfg text (a ``filename`` ending in ``.l``, or a
-        ``derivation length:`` line, never valid ``.lsys``) is read by :mod:`ramure.lsys.cpfg`."""
+        ``derivation length:`` line, never valid ``.lsys``) is read by :mod:`ramure.lsys.cpfg`,
+        an MTG (a ``filename`` ending in ``.mtg``) becomes a plant by :mod:`ramure.lsys.mtg_plant`."""
         from .cpfg import is_cpfg, parse_cpfg
 
+        if filename is not None and str(filename).lower().endswith(".mtg"):
+            return cls(parse_grammar(_mtg_text_as_grammar(text, str(filename))))
         if is_cpfg(text, filename):
             return cls(parse_cpfg(text, filename))
         return cls(parse_grammar(text, filename))
@@ -124,6 +129,11 @@ class LSystem:
         back to the shipped grammar of that name, so examples work from any directory.
         """
         file = grammar_files.resolve(path)
+        if file.suffix.lower() == ".mtg":  # Latin-1 MTG files are common: read by the MTG reader
+            from .mtg_graph import read_mtg_graph
+            from .mtg_plant import mtg_grammar_text
+
+            return cls(parse_grammar(mtg_grammar_text(read_mtg_graph(file), where=str(file))))
         text = read_grammar_file(file)
         return cls.from_text(text, filename=str(file))
 
@@ -159,13 +169,20 @@ class LSystem:
             for j, name in enumerate(pattern.params):
                 sources[name] = (k, j)
         cond = compile_expression(rule.condition, formals, consts) if rule.condition else None
+        succ_args = [[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor]
+        blocks = None
+        if rule.blocks is not None:  # cpfg: run module by module (cstatements.RuleBlocks)
+            pre, post = rule.blocks
+            blocks = RuleBlocks(pre, post, cond, succ_args, formals)
+            cond = blocks
         return _CompiledRule(
             rule=rule,
             condition=cond,
             succ_symbols=np.array([self._sym[m.symbol] for m in rule.successor], np.int32),
             succ_nparams=np.array([len(m.args) for m in rule.successor], np.int8),
-            succ_args=[[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor],
+            succ_args=succ_args,
             sources=sources,
+            blocks=blocks,
         )
 
     def _make_groups(self):
@@ -229,6 +246,10 @@ class LSystem:
             raise GrammarError(
                 f"unknown constant(s): {', '.join(sorted(unknown))}; the grammar defines {', '.join(self.constants) or 'none'}"
             )
+        from .turtle import answer_queries  # lazily: the turtle needs no derivation to load
+
+        blocks = cpfg_blocks(self.grammar, consts, seed)
+        blocks.run("define", "start")  # cpfg's blocks, if any: the globals live in consts
         tree = DerivationTree(self.max_params, capacity=4096)
         axiom = self.grammar.axiom
         values = np.full((len(axiom), tree.max_params), np.nan)
@@ -242,14 +263,22 @@ class LSystem:
         rng = seeded_generator(seed)
         string = decompose(self, tree, ids, 0, 0, rng, consts)  # the axiom too (no decomposition: ids)
         string = cut_string(self, tree, string)  # '%' cuts the rest of its branch (lsys.branch_cut)
+        answer_queries(self, tree, string)  # ?P ?H ?L ?U, if any
         for step in range(1, n + 1):
+            blocks.run("starteach")
+            made = tree.size
             string = self.rewrite(tree, string, step, rng, consts, rule_constants)
+            answer_queries(self, tree, string, made)
+            blocks.run("endeach")
             if progress is not None:
                 progress(step, n)
+        blocks.run("end")
         tree.leaves = string
         tree.compact_params()  # the later parameters kept only where a node has them
         tree.changed()
-        return Derivation(self, tree, n=n, seed=seed, constants=consts, params=combo)
+        derivation = Derivation(self, tree, n=n, seed=seed, constants=consts, params=combo)
+        derivation.printed = blocks.scope.printed if blocks.scope else []
+        return derivation
 
     @property
     def has_context(self) -> bool:
@@ -549,6 +578,11 @@ class LSystem:
             if not any(crule.succ_args):  # also an empty successor: no rows, nothing to reshape
                 continue
             block = params[rows].reshape(m, width, -1)
+            if crule.blocks is not None:  # computed with the blocks, module by module
+                for i, module in enumerate(crule.blocks.take()):
+                    for j, values in enumerate(module):
+                        block[i, j, : len(values)] = values
+                continue
             ctx = context.get(r)
             ctx_nodes = None
             if ctx is not None:
@@ -740,6 +774,7 @@ class Derivation:
         self.seed = seed
         self.constants = constants
         self.params = params  # the parameter combination derived with (ramure.lsys.combination), or None
+        self.printed: list[str] = []  # what a cpfg file's printf statements printed while deriving
 
     @property
     def leaves(self) -> np.ndarray:
@@ -777,3 +812,10 @@ class Derivation:
         from .turtle import interpret
 
         return interpret(self)
+
+
+def _mtg_text_as_grammar(text: str, filename: str) -> str:
+    from .mtg_graph import parse_mtg_graph
+    from .mtg_plant import mtg_grammar_text
+
+    return mtg_grammar_text(parse_mtg_graph(text, filename), where=filename)

@@ -187,6 +187,9 @@ class Rule:
     probability: float | None = None
     #: The cpfg-style weight suffix (``A -> B : 0.3``); normalised into ``probability``.
     weight: float | None = None
+    #: cpfg's statement blocks before and after the condition (``A : {...} c {...} --> B``):
+    #: (:class:`ramure.lsys.cstatements.Block` or None, the same), else None.
+    blocks: tuple | None = None
 
     @property
     def formals(self) -> list[str]:
@@ -245,6 +248,9 @@ class Grammar:
     #: ``#material i r g b [a]`` table (index -> (r, g, b, a), components 0..1).
     surfaces: dict = field(default_factory=dict)
     materials: dict = field(default_factory=dict)
+    #: cpfg's statement blocks (``define``, ``start``, ``starteach``, ``endeach``, ``end`` ->
+    #: :class:`ramure.lsys.cstatements.Block`), run by :meth:`ramure.lsys.LSystem.derive`.
+    programs: dict = field(default_factory=dict)
 
     def symbol_id(self, name: str) -> int:
         return self.symbols.index(name)
@@ -656,7 +662,7 @@ class GrammarParser:
         m = token.search(text, start)
         while m is not None:
             symbol, i = m.group(), m.end()
-            if symbol in "),":
+            if symbol == ")":
                 raise line.error(_comma_message(symbol), m.start() + 1)
             if symbol == "(":
                 raise line.error("'(' must follow a module name directly, as in A(1,2)", m.start() + 1)
@@ -675,7 +681,7 @@ class GrammarParser:
         if self._token_key != key:
             names = sorted(key, key=len, reverse=True)
             # @O (sphere), @Ts (elasticity) and ~name (a surface) are single modules
-            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), r"@Ts|@O|~[A-Za-z_]\w*", r"\S"]))
+            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), r"@Ts|@O|@v|\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
             self._token_key = key
         return self._token_re
 

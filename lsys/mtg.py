@@ -31,6 +31,10 @@ from ramure.io import FileRefused, read_regular, write_text
 
 from .amap import Architecture, Table, rank_in_group
 import os
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .turtle import Skeleton
 
 #: The largest MTG file read (a plant of a million entities is about 60 MB).
 MAX_MTG_BYTES = 512 * 2**20
@@ -44,8 +48,32 @@ class MTGError(RamureError, ValueError):
 
 
 # -- export ---------------------------------------------------------------------------------
-def mtg_text(arch: Architecture) -> str:
-    """The MTG text of an architecture (see the module docstring)."""
+#: The geometry features written with a skeleton, named as OpenAlea's PlantFrame reads them:
+#: the internode's top point, its top and bottom diameters and its length.
+GEOMETRY_FEATURES = ("XX", "YY", "ZZ", "TopDiameter", "BottomDiameter", "Length")
+
+
+def internode_geometry(arch: Architecture, skeleton: Skeleton) -> np.ndarray:
+    """(internodes, 6) the :data:`GEOMETRY_FEATURES` of each internode from the segments its
+    history node drew (the first segment's base, the last one's top); nan where it drew none."""
+    order = np.argsort(skeleton.leaf_id, kind="stable")
+    ids = skeleton.leaf_id[order]
+    first = np.searchsorted(ids, arch.internodes.node, side="left")
+    last = np.searchsorted(ids, arch.internodes.node, side="right") - 1
+    drawn = last >= first
+    out = np.full((len(arch.internodes), 6), np.nan)
+    lo, hi = order[first[drawn]], order[last[drawn]]
+    out[drawn, 0:3] = skeleton.end[hi]
+    out[drawn, 3] = 2 * skeleton.top_radius[hi]
+    out[drawn, 4] = 2 * skeleton.base_radius[lo]
+    out[drawn, 5] = np.linalg.norm(skeleton.end[hi] - skeleton.start[lo], axis=1)
+    return out
+
+
+def mtg_text(arch: Architecture, skeleton: Skeleton | None = None) -> str:
+    """The MTG text of an architecture (see the module docstring); with the plant's
+    ``skeleton`` each internode also carries the :data:`GEOMETRY_FEATURES`."""
+    geometry = internode_geometry(arch, skeleton) if skeleton is not None else None
     lines = []  # (column, code, node or None)
     borne: dict[int, list[int]] = {}
     for row, bearer in enumerate(arch.axes.bearer.tolist()):
@@ -77,8 +105,16 @@ def mtg_text(arch: Architecture) -> str:
     header += [f"{s}\t{scale}\tFREE\tFREE\tIMPLICIT" for s, scale in SCALES.items()]
     header += ["", "DESCRIPTION:", "LEFT\tRIGHT\tRELTYPE\tMAX"]
     header += [f"{a}\t{a}\t{r}\t?" for a in ("A", "S", "U", "I") for r in "<+"]
-    header += ["", "FEATURES:", "NAME\tTYPE", "node\tINT", "", "MTG:", "ENTITY-CODE" + "\t" * width + "node"]
-    body = ["\t" * col + code + ("\t" * (width - col) + str(node) if node is not None else "") for col, code, node in lines]
+    names = ["node", *(GEOMETRY_FEATURES if geometry is not None else ())]
+    header += ["", "FEATURES:", "NAME\tTYPE", "node\tINT", *(f"{n}\tREAL" for n in names[1:])]
+    header += ["", "MTG:", "ENTITY-CODE" + "\t" * width + "\t".join(names)]
+    row_of = {int(n): r for r, n in enumerate(arch.internodes.node.tolist())} if geometry is not None else {}
+    body = []
+    for col, code, node in lines:
+        cells = "" if node is None else "\t" * (width - col) + str(node)
+        if node is not None and geometry is not None:
+            cells += "".join("\t" + ("" if np.isnan(x) else f"{x:.9g}") for x in geometry[row_of[node]].tolist())
+        body.append("\t" * col + code + cells)
     return "\n".join(header + body) + "\n"
 
 
@@ -101,10 +137,11 @@ def _write_axis(arch, axis, col, prefix, borne, ranks, lines) -> None:
             _write_axis(arch, child, col + 1, "+", borne, ranks, lines)
 
 
-def write_mtg(arch: Architecture, path: str | os.PathLike) -> pathlib.Path:
-    """Write ``arch`` as an MTG file (temporary file in the same folder, fsync, then renamed)."""
+def write_mtg(arch: Architecture, path: str | os.PathLike, skeleton: Skeleton | None = None) -> pathlib.Path:
+    """Write ``arch`` as an MTG file (temporary file in the same folder, fsync, then renamed);
+    with ``skeleton``, the internodes' geometry features too (:func:`mtg_text`)."""
     path = pathlib.Path(path)
-    text = mtg_text(arch)
+    text = mtg_text(arch, skeleton)
     write_text(path, text)
     return path
 

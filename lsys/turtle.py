@@ -14,9 +14,12 @@ and U (up) with ``H x L = U``.  It starts at the origin heading up the z axis
 ``$``         roll about H so that L is horizontal (ABOP's ``$``)
 ``[ ]``       push / pop the whole state (position, frame, width, colour, order)
 ``!(w)``      set the width (diameter) to w; ``!`` alone multiplies it by 0.7
-``'(c)``      set the colour index to c; ``'`` alone adds 1 (``;`` subtracts 1)
+``#(w) _(w)`` set the width to w (cpfg's ``#``, L-Py's ``_``); alone they divide it by 0.7
+``@v``        cpfg's roll to vertical: the same as ``$``
+``'(c)``      set the colour index to c; ``'`` alone adds 1
 ``;(i)``      set the colour index to i: material i of the grammar's
-              ``#material`` table (the same index as ``'(i)``)
+              ``#material`` table (the same index as ``'(i)``); ``;`` alone adds 1
+``,(i)``      set the colour index to i; ``,`` alone subtracts 1 (as in cpfg and L-Py)
 organs        ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded with
               the turtle's position and frame; their first parameter is the size
 ``{ . }``     polygons (``F f`` inside one record vertices, ``G`` moves without
@@ -65,6 +68,7 @@ if TYPE_CHECKING:
     import pyvista as pv
 
     from .derive import Derivation, LSystem
+    from .grammar import Grammar
     from .tree import DerivationTree
 
 
@@ -710,3 +714,74 @@ def _spliced_polygons(lsys, tree, skeleton, trace, leaves, regions, old_spans, d
             parts.append(_checked(lsys, tree, from_walk(leaves, new[i])))
             where.append(new[i][0])
     return np.concatenate(where).astype(np.int32), concatenate(parts)
+
+
+def undrawn_symbols(grammar: Grammar) -> list[str]:
+    """Module symbols a grammar writes that nothing draws: no turtle meaning (``F``, ``+``, an
+    organ, a surface ``~name`` ...), no rule of any section rewrites or interprets them, and no
+    ``#amap`` annotation names them.
+    ``ramure check`` notes them (a misspelt or foreign turtle command is silently skipped).
+
+    >>> from ramure.lsys.grammar import parse_grammar
+    >>> undrawn_symbols(parse_grammar("n: 1\\nw: A\\np:\\n A -> F[+A]Q@c(2)Leaf"))
+    ['@', 'Q', 'c']
+    """
+    rules = [*grammar.rules, *grammar.decomposition, *grammar.interpretation]
+    written = {m.symbol for m in grammar.axiom} | {m.symbol for r in rules for m in r.successor}
+    rewritten = {r.pred.symbol for r in rules}
+    special = {"%", "*", *QUERIES}  # the branch cut, ABOP's any-context, the query modules
+    marks = {entry[1] for entry in grammar.amap}  # '#amap' markers mean architecture, not drawing
+    return sorted(
+        s
+        for s in written - rewritten - special - marks - set(grammar.organs)
+        if s not in SYMBOL_ACTIONS and not s.startswith(SURFACE_PREFIX)
+    )
+
+
+#: Query modules (cpfg, L-Py): symbol -> the columns of :func:`turtle_states` they receive.
+QUERIES = {"?P": slice(0, 3), "?H": slice(3, 6), "?L": slice(6, 9), "?U": slice(9, 12)}
+
+
+def turtle_states(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike, positions: ArrayLike) -> np.ndarray:
+    """(q, 12) the turtle's position, H, L and U just before each of ``positions`` of the string
+    ``leaves`` (node ids of ``tree``), walked as :func:`interpret_string` walks it (interpretation
+    rules are not applied)."""
+    from ._turtle_walk import SEEK, initial_state
+
+    leaves = node_ids(leaves)
+    acts, nps, par = module_arrays(lsys, tree, leaves)
+    match, _ = _bracket_pairs(acts)
+    angle, step, trop = _settings(lsys)
+    walk = _walker(len(acts))
+    positions = np.asarray(positions, np.int64)
+    out = np.zeros((len(positions), 12))
+    for k, a in enumerate(positions.tolist()):
+        state = initial_state(lsys.grammar.width)
+        walk(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0)
+        out[k] = state[:12]
+    return out
+
+
+def answer_queries(lsys: LSystem, tree: DerivationTree, string: np.ndarray, first_new: int = 0) -> None:
+    """Set the parameters of the query modules ``?P ?H ?L ?U`` of ``string`` written by the last
+    step (node ids from ``first_new``) to the turtle's position, heading, left and up vectors
+    where they stand, as cpfg and L-Py do after each step; a module keeps as many parameters as
+    it was written with (at most 3).  A query module no rule rewrites keeps the values of the
+    step that wrote it (the history tree keeps each node's parameters): rewrite it by itself
+    (``?P(x,y,z) --> ?P(x,y,z)``) to have it refreshed every step."""
+    ids = {s: i for i, s in enumerate(lsys.symbols)}
+    wanted = {ids[s]: cols for s, cols in QUERIES.items() if s in ids}
+    if not wanted:
+        return
+    symbols = tree.symbol[string]
+    where = np.flatnonzero(np.isin(symbols, list(wanted)) & (string >= first_new))
+    if not where.size:
+        return
+    states = turtle_states(lsys, tree, string, where)
+    start = int(string[where].min())
+    block = np.asarray(tree.params[start:], float).copy()
+    for k, position in enumerate(where.tolist()):
+        node = int(string[position])
+        count = min(3, int(tree.nparams[node]))
+        block[node - start, :count] = states[k, wanted[int(symbols[position])]][:count]
+    tree.params[start:] = block

@@ -15,6 +15,7 @@ from ramure.app.cli import UserError
 from ramure.app.commands.plant import add_grammar_options, load_and_derive, output_file
 from ramure.lsys.amap import architecture, grown_by
 from ramure.lsys.mtg import read_mtg, write_mtg
+from ramure.lsys.mtg_graph import read_mtg_graph
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -38,7 +39,7 @@ def run_amap(args: argparse.Namespace) -> int:
         grown = grown_by(derivation, arch, args.at, seed=args.seed)
         facts["at"] = {"date": args.at, "internodes": len(grown["internodes"]), "events": grown["events"]}
     if mtg is not None:
-        write_mtg(arch, mtg)
+        write_mtg(arch, mtg, derivation.skeleton())
         facts["mtg"] = str(mtg)
     if args.json:
         print(json.dumps(facts))
@@ -53,8 +54,14 @@ def run_amap(args: argparse.Namespace) -> int:
 
 
 def run_mtg_check(args: argparse.Namespace) -> int:
-    arch = read_mtg(args.file)
-    print(json.dumps({"file": args.file, **arch.to_dict()}))
+    """Print the MTG's counts per scale, classes, features and edges by type; a file Ramure
+    wrote (its ``# ramure-events:`` first line) adds its architecture tables."""
+    graph = read_mtg_graph(args.file)
+    facts = {"file": args.file, **graph.to_dict()}
+    with open(args.file, "rb") as f:
+        if f.readline().startswith(b"# ramure-events:"):
+            facts.update(read_mtg(args.file).to_dict())
+    print(json.dumps(facts))
     return 0
 
 
@@ -66,7 +73,12 @@ def register(sub: Subparsers) -> None:
         action="store_true",
         help="print counts per level, axes per order, events, the internodes-per-growth-unit histogram",
     )
-    p.add_argument("--mtg", metavar="FILE.mtg", help="write the plant as an MTG file (OpenAlea's format)")
+    p.add_argument(
+        "--mtg",
+        metavar="FILE.mtg",
+        help="write the plant as an MTG file (OpenAlea's format) with each internode's XX YY ZZ, "
+        "TopDiameter, BottomDiameter and Length",
+    )
     p.add_argument(
         "--at",
         type=float,
@@ -76,7 +88,9 @@ def register(sub: Subparsers) -> None:
     )
     p.set_defaults(func=run_amap)
 
-    p = sub.add_parser("mtg", help="read an MTG file and print its architecture as JSON")
+    p = sub.add_parser(
+        "mtg", help="read any MTG file (OpenAlea's format) and print its scales, classes, features and edges as JSON"
+    )
     p.add_argument("file", help="an .mtg file")
     p.set_defaults(func=run_mtg_check)
 

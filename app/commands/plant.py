@@ -6,10 +6,12 @@ import argparse
 import json
 import math
 import pathlib
+import sys
 import time
 
 from ramure.app.cli import UserError
 from ramure.lsys import LSystem
+from ramure.lsys.turtle import undrawn_symbols
 import os
 from collections.abc import Collection, Iterable, Sequence
 from typing import TYPE_CHECKING
@@ -102,7 +104,9 @@ def load_and_derive(args: argparse.Namespace) -> tuple[LSystem, Derivation, floa
         raise UserError(f"-n must be >= 0, not {args.n}")
     t0 = time.perf_counter()
     d = ls.derive(n=args.n, seed=args.seed)
-    return ls, d, time.perf_counter() - t0
+    seconds = time.perf_counter() - t0
+    sys.stderr.write("".join(d.printed))  # a cpfg file's printf output, as cpfg shows it
+    return ls, d, seconds
 
 
 def run_check_g3l(args: argparse.Namespace) -> int:
@@ -130,6 +134,9 @@ def run_check(args: argparse.Namespace) -> int:
         f"{args.file}: ok — {len(g.rules)} rule(s), {len(g.constants)} constant(s), n = {g.n}, "
         f"seed = {ls.seed}, axiom {''.join(str(m) for m in g.axiom)}"
     )
+    undrawn = undrawn_symbols(g)
+    if undrawn:
+        print(f"note: nothing draws {', '.join(undrawn)} (no turtle meaning, and no rule rewrites or interprets it)")
     return 0
 
 

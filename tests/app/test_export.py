@@ -306,3 +306,23 @@ def test_obj_and_materials_change_together(mesh, tmp_path, monkeypatch):
     (tmp_path / "plant.mtl").write_text("a user's own file")  # not of our pattern: left alone
     E.export_mesh(mesh, target)
     assert (tmp_path / "plant.mtl").read_text() == "a user's own file"
+
+
+def test_ply_is_triangles_with_the_organs_colours(mesh, tmp_path):
+    path = E.export_mesh(mesh, tmp_path / "plant.ply")
+    data = path.read_bytes()
+    head, body = data.split(b"end_header\n", 1)
+    lines = head.decode("ascii").splitlines()
+    assert lines[:2] == ["ply", "format binary_little_endian 1.0"]
+    n_vertices = int(next(x for x in lines if x.startswith("element vertex")).split()[-1])
+    n_faces = int(next(x for x in lines if x.startswith("element face")).split()[-1])
+    assert n_faces == n_triangles(mesh)
+    vertex = np.dtype([("p", "<f4", 3), ("n", "<f4", 3), ("c", "u1", 4)])
+    face = np.dtype([("k", "u1"), ("v", "<i4", 3)])
+    assert len(body) == n_vertices * vertex.itemsize + n_faces * face.itemsize
+    faces = np.frombuffer(body, face, offset=n_vertices * vertex.itemsize)
+    assert (faces["k"] == 3).all() and faces["v"].min() == 0 and faces["v"].max() == n_vertices - 1
+    colours = {tuple(c) for c in np.frombuffer(body, vertex, count=n_vertices)["c"].tolist()}
+    assert {tuple(round(v * 255) for v in (*BARK, 1.0)), tuple(round(v * 255) for v in (*LEAF, 1.0))} <= colours
+    back = pv.read(path)  # VTK's reader agrees
+    assert back.n_cells == n_faces and back.is_all_triangles and "RGBA" in back.point_data

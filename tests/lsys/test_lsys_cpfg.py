@@ -80,15 +80,15 @@ def test_cpfg_keywords_and_functions():
     [
         ('#include "plant.v"\n', 1, 1, "#include"),
         ("#ifdef X\n", 1, 1, "#ifdef"),
-        ("axiom: A\nA --> F?E(1)\n", 2, 8, "environmental"),
-        ("axiom: A\nA --> [?P(x,y,z)]\n", 2, 8, "position query ?P"),
+        ("axiom: A\nA --> F?E(1)\n", 2, 8, "talks to an environment program"),
+        ("axiom: A\nA --> [?(1)]\n", 2, 8, "sub-L-system call"),
         ("axiom: A\nA --> F?(1,2)\n", 2, 8, "sub-L-system"),
         ("axiom: A\nA --> F@Gs\n", 2, 8, "@Gs (generalised cylinders)"),
-        ("axiom: A(1)\nA(x) : {y=x;} y>1 --> B\n", 2, 8, "C blocks"),
-        ("start: {n=0;}\naxiom: A\n", 1, 1, "'start:' block"),
+        ("axiom: A(1)\nA(x) : {y=x;} y>1 {z=1;} {w=2;} --> B\n", 2, 8, "cannot read the blocks"),
+        ("start: {n=0;\naxiom: A\n", 1, 1, "'start:' block's '{' is never closed"),
         ("Lsystem: 1\naxiom: A\nendlsystem\nLsystem: 2\n", 4, 1, "sub-L-systems"),
         ("axiom: A\nmaximum depth: 2\n", 2, 1, "belongs after"),
-        ("axiom: A\nA -> B\nwhat is this\n", 3, 1, "not supported"),
+        ("axiom: A\nA -> B\nwhat: is this\n", 3, 1, "not supported"),
         ("axiom: A(1)\nA(x) --> B(x*qq)\n", 2, 14, "unknown name 'qq'"),  # column mapped back
         ("axiom: A(1)\nA(x) --> B(ran(2)*qq)\n", 2, 19, "unknown name 'qq'"),  # after a renamed function
         ("derivation length: -1\naxiom: A\n", 1, 19, "whole number"),
@@ -109,7 +109,7 @@ def test_unsupported_constructs_are_errors_at_the_l_files_line_and_column(text, 
 
 def test_from_file_errors_name_the_l_file(tmp_path):
     bad = tmp_path / "bad.l"
-    bad.write_text("derivation length: 2\naxiom: A\nA --> F?H\n")
+    bad.write_text("derivation length: 2\naxiom: A\nA --> F?E\n")
     with pytest.raises(GrammarError) as info:
         LSystem.from_file(bad)
     assert str(bad) in str(info.value) and "line 3, column 8" in str(info.value)
@@ -133,7 +133,8 @@ def test_cli_import_and_check(tmp_path, capsys):
     bad.write_text("derivation length: 2\naxiom: A\nA --> F?E(1)\n")
     assert main(["check", str(bad)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"ramure check: {bad}, line 3, column 8: the environmental") and "Traceback" not in err
+    assert err.startswith(f"ramure check: {bad}, line 3, column 8: the communication module ?E talks")
+    assert "environment program" in err and "Traceback" not in err
     assert main(["import", str(bad), "-o", str(tmp_path / "bad.lsys")]) == 2
     assert not (tmp_path / "bad.lsys").exists()
     assert main(["import", str(HERE / "compound_leaf.l"), "-o", str(tmp_path / "x.txt")]) == 2
@@ -179,3 +180,33 @@ def test_derivation_errors_point_at_the_l_files_rule():
     err = info.value
     assert (err.line, err.column) == (3, 1) and "rule 1 (A(x) --> B(1/x))" in err.message
     assert str(err).splitlines()[-2].strip() == "A(x) --> B(1/x)"
+
+
+def test_comments_continuations_and_successors_over_several_lines():
+    text = (
+        "derivation length: 1\n"
+        "#define W(x) \\\n"
+        "   (x*2)\n"
+        "axiom: A(1) // the apex\n"
+        "A(x) --> F(W(x)) // a comment, not rolls\n"
+        "   [+F(x)]\n"
+        "   F(3)\n"
+        "F(x) --> F(x) \\\n"
+        "   G/////G\n"
+        "endlsystem\n"
+    )
+    ls = LSystem.from_text(text, filename="multi.l")
+    assert [str(r) for r in ls.grammar.rules][0].startswith("A(x) -->")
+    assert ls.derive().to_string() == "F(2)[+F(1)]F(3)"
+    assert ls.derive(n=2).to_string() == "F(2)G/////G[+F(1)G/////G]F(3)G/////G"
+
+
+def test_a_condition_over_several_lines_and_cpfg_functions_in_defines():
+    text = (
+        "#define ANGLE nran(80, 0)\nderivation length: 1\naxiom: A(1)A(-1)\n"
+        "A(x) : fabs(x) < 2\n"
+        "   && x > 0\n"
+        "   --> F(ANGLE)\n"
+        "endlsystem\n"
+    )
+    assert LSystem.from_text(text, filename="heads.l").derive().to_string() == "F(80)A(-1)"

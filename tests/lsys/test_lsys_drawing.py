@@ -107,11 +107,11 @@ def test_per_branch_elasticity_bends_like_a_global_tropism():
 
 
 def test_materials_select_by_index_and_ride_on_the_mesh():
-    text = "#material 1 0.2 0.6 0.1\n#material 3 1 0.9 0.3 0.5\nn: 0\nw: F;(1)F'(3);F;(3){f+f+f+f}"
+    text = "#material 1 0.2 0.6 0.1\n#material 3 1 0.9 0.3 0.5\nn: 0\nw: F;(1)F'(3),F;(3){f+f+f+f}"
     ls = LSystem.from_text(text)
     assert ls.grammar.materials == {1: (0.2, 0.6, 0.1, 1.0), 3: (1.0, 0.9, 0.3, 0.5)}
     sk = ls.derive().skeleton()
-    assert sk.color.tolist() == [0, 1, 2] and sk.polygons.color.tolist() == [3]  # ';' alone: minus 1
+    assert sk.color.tolist() == [0, 1, 2] and sk.polygons.color.tolist() == [3]  # ',' alone: minus 1 (cpfg, L-Py)
     mesh = sk.to_polydata(sides=4)
     mat = np.asarray(mesh.cell_data["material"])
     assert mat.tolist() == [0] * 4 + [1] * 4 + [2] * 4 + [3, 3]

@@ -150,10 +150,9 @@ def test_wildcard_cannot_be_mixed_into_a_context():
     assert "'*' stands for a whole context" in info.value.message and info.value.column == 4
 
 
-def test_comma_between_modules_is_refused_by_name():
-    with pytest.raises(GrammarError) as info:
-        parse_grammar(HEAD + " A -> B,C\n")
-    assert info.value.column == 8 and "unexpected ','" in info.value.message
+def test_comma_between_modules_is_the_colour_down_module():
+    rule = parse_grammar(HEAD + " A -> B,C\n").rules[0]
+    assert [m.symbol for m in rule.successor] == ["B", ",", "C"]  # cpfg's and L-Py's ','
 
 
 def test_commas_separate_ignored_symbols():

@@ -34,13 +34,17 @@ _ACTIONS = {
     "]": 12,
     "!": 13,
     "'": 14,
-    ";": 15,
+    ";": 14,  # cpfg and L-Py: ";" raises the colour index, "," lowers it
+    ",": 15,
     "{": 17,
     "}": 18,
     ".": 19,
     "G": 20,
     "@O": 21,
     "@Ts": 23,
+    "#": 24,  # cpfg: set the width, or widen it
+    "_": 24,  # L-Py: the same
+    "@v": 10,  # cpfg's roll to vertical: ABOP's $
 }
 _ORGAN = 16
 _SURFACE = 22
@@ -193,6 +197,8 @@ def interpret(derivation):
                 pos, h, l, u, width, color, order, last_seg, elasticity = stack.pop()
         elif a == 13:
             width = p if k else width * 0.7
+        elif a == 24:
+            width = p if k else width / 0.7
         elif a == 14:
             color = int(p) if k else color + 1
         elif a == 15:
