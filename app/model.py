@@ -538,6 +538,31 @@ class Explorer:
 
         return self._cached(("fruit", preset, seed, tuple(sorted(kwargs.items()))), build)
 
+    def fruit_volume(self, leaf: int, preset: str = "round_tomato", seed: int = 0, **kwargs: Any) -> GMap3:
+        """Fruit ``leaf`` alone as a volumetric 3G-map: the same fruit as in :meth:`fruit_volumes`
+        (each fruit's draw depends on its leaf id, not on the others), built without the others."""
+        from ramure.gmap.plant import fruits_from_organs
+
+        organs = self.skeleton.organs
+        at = np.flatnonzero((organs.kind == "Fruit") & (organs.leaf_id == int(leaf)))
+        if not len(at):
+            raise ValueRefused(f"leaf {leaf} is not a fruit of this plant")
+        overrides = {int(leaf): own} if (own := self.session.fruit_overrides().get(int(leaf))) else None
+
+        def build():
+            return fruits_from_organs(
+                organs.position[at],
+                organs.frame[at],
+                organs.size[at],
+                organs.leaf_id[at],
+                preset=preset,
+                seed=seed,
+                overrides=overrides,
+                **kwargs,
+            )
+
+        return self._cached(("one fruit", int(leaf), preset, seed, tuple(sorted(kwargs.items()))), build)
+
     def fruit_surface(self) -> pv.PolyData | None:
         """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit)."""
         from ramure.gmap.pyvista import boundary_polydata

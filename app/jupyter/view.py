@@ -217,8 +217,7 @@ def fruit_cut_png(model: Model, leaf: int, size: tuple[int, int] = (420, 420), v
     from ramure.gmap.pyvista import to_unstructured_grid
     from ramure.gmap.tissue import COLORS, TISSUES
 
-    grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
-    cells = grid.extract_cells(np.asarray(grid.cell_data["leaf_id"]) == int(leaf))
+    cells = to_unstructured_grid(model.fruit_volume(leaf, volume_levels=volume_levels))  # that fruit only
     organs = model.skeleton.organs
     axis = np.asarray(organs.frame)[list(organs.leaf_id).index(int(leaf))][0]  # the heading
     inside = plane_cut(cells, normal=tuple(axis), origin=cells.center, mode="cells")

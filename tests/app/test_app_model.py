@@ -154,6 +154,27 @@ def test_regrow_one_fruit_changes_only_that_fruit():
     assert ex.session.fruit_overrides() == {}
 
 
+def test_one_fruit_built_alone_is_that_fruit_among_all():
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    ex = Explorer("grammars/fruit_tree.lsys")
+    fruit = ex.fruit_ids()
+    ex.select(fruit[2:3])
+    ex.regrow_fruit(preset="pear")  # an override: the pear must come back alone too
+    every = to_unstructured_grid(ex.fruit_volumes(volume_levels=1))
+    for leaf in (fruit[0], fruit[2]):
+        alone = to_unstructured_grid(ex.fruit_volume(leaf, volume_levels=1))
+        among = every.extract_cells(np.asarray(every.cell_data["leaf_id"]) == leaf)
+        assert alone.n_cells == among.n_cells > 100
+        assert set(np.unique(alone.cell_data["leaf_id"]).tolist()) == {leaf}
+        assert np.allclose(alone.bounds, among.bounds)
+        assert alone.volume == pytest.approx(among.volume)
+        assert np.array_equal(np.bincount(alone.cell_data["tissue"]), np.bincount(among.cell_data["tissue"]))
+    assert to_unstructured_grid(ex.fruit_volume(fruit[0])).n_cells != to_unstructured_grid(ex.fruit_volume(fruit[2])).n_cells
+    with pytest.raises(RamureError, match="not a fruit"):
+        ex.fruit_volume(10**9)
+
+
 def test_apply_qualifier_makes_the_selection_denser_and_undoes():
     from ramure.metrics import VariantSweep
 
