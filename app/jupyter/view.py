@@ -374,6 +374,108 @@ class ClickPicker:
         return cell if cell >= 0 else None
 
 
+class RectanglePicker:
+    """Rectangle mode of the interactive view: a left drag draws a rubber band and, on release,
+    ``on_rectangle((x0, y0, x1, y1))`` gets its display corners (pixels, origin bottom left, as
+    VTK counts); the camera stays still.  A press and release without moving is a click:
+    ``on_click(x, y)``.  Off (the default), the view turns on drag as usual.
+
+    Its observers run before the camera's interactor style and stop the left button's events
+    there (VTK's abort flag), for the interactor of a desktop window and for trame's remote
+    view alike (trame hands the browser's mouse events to the same interactor)."""
+
+    EVENTS = ("LeftButtonPressEvent", "MouseMoveEvent", "LeftButtonReleaseEvent")
+
+    def __init__(
+        self,
+        plotter: pv.Plotter,
+        on_rectangle: Callable[[tuple[int, int, int, int]], object],
+        on_click: Callable[[int, int], object],
+    ) -> None:
+        assert plotter.iren is not None, "an on-screen or notebook plotter has an interactor"
+        self.plotter = plotter
+        self.interactor = plotter.iren.interactor
+        self.on_rectangle, self.on_click = on_rectangle, on_click
+        self.tags: dict[str, int] = {}
+        self.start: tuple[int, int] | None = None
+        self.band = _band_actor()
+        self.band.VisibilityOff()
+        plotter.renderer.AddViewProp(self.band)
+
+    @property
+    def enabled(self) -> bool:
+        return bool(self.tags)
+
+    def enable(self, on: bool) -> None:
+        if on == self.enabled:
+            return
+        if on:
+            handlers = (self._press, self._move, self._release)
+            self.tags = {e: self.interactor.AddObserver(e, h, 100.0) for e, h in zip(self.EVENTS, handlers)}
+        else:
+            for tag in self.tags.values():
+                self.interactor.RemoveObserver(tag)
+            self.tags, self.start = {}, None
+            self.band.VisibilityOff()
+
+    def _swallow(self, event: str) -> None:
+        """Stop ``event`` here: the interactor style (the camera) does not see it."""
+        self.interactor.GetCommand(self.tags[event]).SetAbortFlag(1)
+
+    def _press(self, _caller, event) -> None:
+        self._swallow(event)
+        self.start = tuple(self.interactor.GetEventPosition())
+
+    def _move(self, _caller, event) -> None:
+        if self.start is None:
+            return  # the pointer passes over the view: nothing to do
+        self._swallow(event)
+        _place_band(self.band, self.start, self.interactor.GetEventPosition())
+        self.band.VisibilityOn()
+
+    def _release(self, _caller, event) -> None:
+        self._swallow(event)
+        start, self.start = self.start, None
+        self.band.VisibilityOff()
+        if start is None:
+            return
+        x, y = self.interactor.GetEventPosition()
+        if max(abs(x - start[0]), abs(y - start[1])) <= CLICK_PIXELS:
+            self.on_click(x, y)
+        else:
+            self.on_rectangle((start[0], start[1], x, y))
+
+
+def _band_actor() -> Any:
+    """A red outline in display coordinates (its four corners set by :func:`_place_band`)."""
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkRenderingCore import vtkActor2D, vtkPolyDataMapper2D
+
+    points = vtkPoints()
+    points.SetNumberOfPoints(4)
+    outline = vtkCellArray()
+    outline.InsertNextCell(5, [0, 1, 2, 3, 0])
+    data = vtkPolyData()
+    data.SetPoints(points)
+    data.SetLines(outline)
+    mapper = vtkPolyDataMapper2D()
+    mapper.SetInputData(data)
+    actor = vtkActor2D()
+    actor.SetMapper(mapper)
+    actor.GetProperty().SetColor(0.85, 0.0, 0.0)
+    actor.GetProperty().SetLineWidth(1.5)
+    return actor
+
+
+def _place_band(actor: Any, start: Sequence[int], end: Sequence[int]) -> None:
+    data = actor.GetMapper().GetInput()
+    (x0, y0), (x1, y1) = start, end
+    for k, (x, y) in enumerate(((x0, y0), (x1, y0), (x1, y1), (x0, y1))):
+        data.GetPoints().SetPoint(k, x, y, 0.0)
+    data.GetPoints().Modified()
+
+
 _ABSENT = object()
 
 
@@ -447,6 +549,7 @@ class TrameView:
         self._framed: tuple[float, ...] | None = None
         self.draw(update=False)
         self.clicks = ClickPicker(self.plotter, self._picked)
+        self.rectangle = RectanglePicker(self.plotter, self._rectangle, self._click_at)
         with without_vtklocal():
             self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
 
@@ -492,3 +595,19 @@ class TrameView:
 
     def _picked(self, cell) -> None:
         self.owner.app.pick(cell)
+
+    def _click_at(self, x: int, y: int) -> None:
+        cell = self.clicks.pick(x, y)
+        if cell is not None:
+            self._picked(cell)
+
+    def camera(self) -> tuple[np.ndarray, tuple[int, int]]:
+        """The camera's world-to-clip projection and the view's size in pixels (what a rubber
+        band's display rectangle is measured against)."""
+        from ramure.app.render import projection_matrix
+
+        width, height = self.plotter.window_size
+        return projection_matrix(self.plotter.renderer), (int(width), int(height))
+
+    def _rectangle(self, rect) -> None:
+        self.owner.app.select_rectangle(rect)

@@ -152,3 +152,57 @@ def test_the_trame_view_frames_the_plant_below_its_toolbar(side):
     assert rows.min() >= TOOLBAR_BAND  # nothing under the menu
     assert max(np.ptp(rows) + 1, np.ptp(cols) + 1) >= 0.8 * 160  # still fills the picture below it
     assert abs((rows.min() + rows.max()) / 2 - (TOOLBAR_BAND + 80)) < 10 and abs((cols.min() + cols.max()) / 2 - 80) < 10
+
+
+def test_rectangle_mode_selects_what_a_drag_encloses_in_a_kernel():
+    """Only where pyvista's trame backend is installed: with ▭ rectangle on, a left drag in the
+    interactive view (the browser's mouse events, handed to VTK as trame's mouse handler hands
+    them) draws a band and selects the leaves the model finds inside, the camera staying still;
+    a press and release in place picks like a click; with the button off a drag turns the view."""
+    pytest.importorskip("trame_pyvista")
+    nbformat = pytest.importorskip("nbformat")
+    from jupyter_helpers import execute
+
+    code = f"""from ramure.app.jupyter import Explorer
+from vtkmodules.vtkWebCore import vtkWebApplication, vtkWebInteractionEvent
+ex = Explorer({HONDA!r}, n=6)
+pl = ex.view.trame.plotter
+camera = pl.camera_position
+web, L = vtkWebApplication(), vtkWebInteractionEvent.LEFT_BUTTON
+def mouse(buttons, x, y):  # trame's viewport.mouse.interaction: x, y as fractions of the view
+    event = vtkWebInteractionEvent()
+    event.SetButtons(buttons)
+    event.SetX(x)
+    event.SetY(y)
+    web.HandleInteractionEvent(pl.render_window, event)
+ex.rectangle.value = True  # the button
+mouse(L, 0.25, 0.25); mouse(L, 0.5, 0.5)
+band = ex.view.trame.rectangle.band.GetVisibility()
+mouse(L, 0.75, 0.75); mouse(0, 0.75, 0.75)
+w, h = pl.window_size
+expected = ex.model.leaves_in_view(*ex.view.trame.camera(), (w / 4, h / 4, 3 * w / 4, 3 * h / 4))
+print("band", band, ex.view.trame.rectangle.band.GetVisibility())
+print("selected", len(ex.selection), len(set(ex.skeleton.leaf_id.tolist())), ex.selection == expected)
+print("still", pl.camera_position == camera)
+print("message", ex.message.text)
+sk = ex.skeleton
+k = int(np.argmax(sk.order))
+pl.renderer.SetWorldPoint(*((sk.start[k] + sk.end[k]) / 2), 1.0)
+pl.renderer.WorldToDisplay()
+x, y, _ = pl.renderer.GetDisplayPoint()
+mouse(L, x / w, y / h); mouse(0, x / w, y / h)
+print("click", ex.selection == [int(sk.leaf_id[k])])
+ex.rectangle.value = False
+mouse(L, 0.25, 0.25); mouse(L, 0.5, 0.4); mouse(0, 0.5, 0.4)
+print("turned", pl.camera_position != camera, ex.selection == [int(sk.leaf_id[k])])"""
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("import numpy as np\n" + code)])
+    execute(nb, {"PYVISTA_JUPYTER_BACKEND": "trame"}, timeout=120)
+    out = "".join(o.get("text", "") for o in nb.cells[0].outputs if o.output_type == "stream")
+    lines = dict(line.split(" ", 1) for line in out.splitlines() if " " in line)
+    assert lines.get("band") == "1 0", out  # shown during the drag, gone after
+    selected, total, same = lines["selected"].split()
+    assert same == "True" and 1 < int(selected) < int(total), out
+    assert lines["still"] == "True", out
+    assert lines["message"].startswith(f"rectangle: {selected} leaves (replace)"), out
+    assert lines["click"] == "True", out
+    assert lines["turned"] == "True True", out
