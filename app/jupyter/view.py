@@ -10,6 +10,11 @@ installed and pyvista's notebook backend is not set to ``static``
 (``PYVISTA_JUPYTER_BACKEND=static``), else the PNG.  Either way :meth:`PlantView.png` gives the current picture, which is
 also what a notebook shows where no widget can run (nbconvert, GitHub).
 
+In the interactive view a click picks (:class:`ClickPicker`) and, in rectangle mode, a drag
+draws a rubber band whose leaves the model finds (:class:`RectanglePicker`, the model's
+``leaves_in_view``: the same as the desktop's).  The view's frame is served through Jupyter's
+own port when jupyter-server-proxy is there (:func:`trame_proxy`).
+
 >>> from ramure.app.model import Explorer
 >>> png = plant_png(Explorer("grammars/honda_sympodial.lsys", n=4), size=(120, 120))
 >>> png[:4] == b"\\x89PNG"
@@ -21,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import io
+import os
 import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
@@ -391,11 +397,13 @@ class RectanglePicker:
         plotter: pv.Plotter,
         on_rectangle: Callable[[tuple[int, int, int, int]], object],
         on_click: Callable[[int, int], object],
+        on_band: Callable[[], object] | None = None,
     ) -> None:
         assert plotter.iren is not None, "an on-screen or notebook plotter has an interactor"
         self.plotter = plotter
         self.interactor = plotter.iren.interactor
         self.on_rectangle, self.on_click = on_rectangle, on_click
+        self.on_band = on_band or plotter.render  # show the band as it moves (trame: send a new picture)
         self.tags: dict[str, int] = {}
         self.start: tuple[int, int] | None = None
         self.band = _band_actor()
@@ -432,6 +440,7 @@ class RectanglePicker:
         self._swallow(event)
         _place_band(self.band, self.start, self.interactor.GetEventPosition())
         self.band.VisibilityOn()
+        self.on_band()
 
     def _release(self, _caller, event) -> None:
         self._swallow(event)
@@ -520,6 +529,41 @@ def needs_reframe(framed: Sequence[float] | None, bounds: Sequence[float], margi
     return bool(grew or float(np.ptp(new, axis=1).max()) < shrink * size)
 
 
+#: ``RAMURE_TRAME_PROXY``: ``1`` sends the trame view through Jupyter's own port (jupyter-server-proxy's
+#: ``/proxy/PORT/``), ``0`` lets the browser reach trame's port directly; unset, the proxy is used
+#: whenever jupyter-server-proxy is importable (see :func:`trame_proxy`).
+PROXY_SWITCH = "RAMURE_TRAME_PROXY"
+
+
+def trame_proxy() -> dict[str, Any]:
+    """How the browser reaches the trame view: pyvista's ``server_proxy_enabled`` and
+    ``server_proxy_prefix`` for :meth:`pyvista.Plotter.show`.
+
+    Through the proxy the view's frame loads from ``PREFIX PORT/index.html`` on the Jupyter
+    server itself (``/proxy/PORT/``; on JupyterHub pyvista puts the user's service prefix in
+    front, from ``JUPYTERHUB_SERVICE_PREFIX``), so it works wherever the notebook does: on a
+    hub, or through an SSH tunnel that forwards Jupyter's port only.  Without it the frame asks
+    for ``http://localhost:PORT``, a port the browser reaches only on the kernel's machine.
+
+    Chosen by :data:`PROXY_SWITCH` (``1``/``0``), else by pyvista when it was told
+    (``PYVISTA_TRAME_JUPYTER_MODE``, ``PYVISTA_TRAME_SERVER_PROXY_PREFIX``, a hub), else on
+    whenever ``jupyter_server_proxy`` is importable.  The prefix is always pyvista's.
+    """
+    import pyvista as pv
+
+    theme = pv.global_theme.trame
+    switch = os.environ.get(PROXY_SWITCH, "").strip().lower()
+    if switch in ("1", "on", "yes", "true"):
+        enabled = True
+    elif switch in ("0", "off", "no", "false"):
+        enabled = False
+    elif theme.server_proxy_enabled or theme.jupyter_extension_enabled or os.environ.get("PYVISTA_TRAME_JUPYTER_MODE"):
+        enabled = bool(theme.server_proxy_enabled)  # pyvista was told: its choice
+    else:
+        enabled = importlib.util.find_spec("jupyter_server_proxy") is not None
+    return {"server_proxy_enabled": enabled, "server_proxy_prefix": theme.server_proxy_prefix}
+
+
 def trame_window(size: tuple[int, int]) -> tuple[int, int]:
     """The trame view's window (and so its iframe's) size for an explorer ``size``: the toolbar
     band above a picture of that size, so the plant's top is not under the menu.
@@ -549,9 +593,10 @@ class TrameView:
         self._framed: tuple[float, ...] | None = None
         self.draw(update=False)
         self.clicks = ClickPicker(self.plotter, self._picked)
-        self.rectangle = RectanglePicker(self.plotter, self._rectangle, self._click_at)
+        self.rectangle = RectanglePicker(self.plotter, self._rectangle, self._click_at, self._push)
+        self.last_rectangle: tuple[int, int, int, int] | None = None
         with without_vtklocal():
-            self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
+            self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True, jupyter_kwargs=trame_proxy())
 
     def draw(self, update: bool = True) -> None:
         model = self.owner.app.model
@@ -571,11 +616,15 @@ class TrameView:
         elif model.mesh.n_cells and needs_reframe(self._framed, model.mesh.bounds):
             self.reframe(model.mesh)
         if update:
-            viewer = getattr(self.widget, "viewer", None)
-            if viewer is not None:
-                viewer.update()
-            else:
-                self.plotter.render()
+            self._push()
+
+    def _push(self) -> None:
+        """Render, and send the picture to the browser (trame's viewer) when there is one."""
+        viewer = getattr(getattr(self, "widget", None), "viewer", None)
+        if viewer is not None:
+            viewer.update()
+        else:
+            self.plotter.render()
 
     def reframe(self, mesh: pv.PolyData) -> None:
         """Frame the whole plant again, looking from where the camera looks now (z up)."""
@@ -610,4 +659,5 @@ class TrameView:
         return projection_matrix(self.plotter.renderer), (int(width), int(height))
 
     def _rectangle(self, rect) -> None:
+        self.last_rectangle = rect  # display corners of the last band (what a test compares)
         self.owner.app.select_rectangle(rect)

@@ -206,3 +206,62 @@ print("turned", pl.camera_position != camera, ex.selection == [int(sk.leaf_id[k]
     assert lines["message"].startswith(f"rectangle: {selected} leaves (replace)"), out
     assert lines["click"] == "True", out
     assert lines["turned"] == "True True", out
+
+
+def test_the_trame_view_goes_through_jupyters_port_when_it_can(monkeypatch):
+    """jupyter-server-proxy importable: the trame view's frame loads from /proxy/PORT/ on the
+    Jupyter server; RAMURE_TRAME_PROXY turns it on or off; a choice pyvista was given stays."""
+    import importlib.util
+
+    import pyvista as pv
+
+    from ramure.app.jupyter.view import PROXY_SWITCH, trame_proxy
+
+    theme = pv.global_theme.trame
+    monkeypatch.setattr(theme, "_server_proxy_enabled", False)
+    monkeypatch.setattr(theme, "_server_proxy_prefix", "/proxy/")
+    monkeypatch.setattr(theme, "_jupyter_extension_enabled", False)
+    monkeypatch.delenv(PROXY_SWITCH, raising=False)
+    monkeypatch.delenv("PYVISTA_TRAME_JUPYTER_MODE", raising=False)
+    real = importlib.util.find_spec
+    installed = {"jupyter_server_proxy": True}
+
+    def find_spec(name, *args):
+        if name == "jupyter_server_proxy":
+            return real("json") if installed[name] else None
+        return real(name, *args)
+
+    monkeypatch.setattr(importlib.util, "find_spec", find_spec)
+    assert trame_proxy() == {"server_proxy_enabled": True, "server_proxy_prefix": "/proxy/"}
+    installed["jupyter_server_proxy"] = False
+    assert trame_proxy()["server_proxy_enabled"] is False  # no proxy to go through
+    monkeypatch.setenv(PROXY_SWITCH, "1")
+    assert trame_proxy()["server_proxy_enabled"] is True
+    installed["jupyter_server_proxy"] = True
+    monkeypatch.setenv(PROXY_SWITCH, "off")
+    assert trame_proxy()["server_proxy_enabled"] is False
+    monkeypatch.delenv(PROXY_SWITCH)
+    monkeypatch.setenv("PYVISTA_TRAME_JUPYTER_MODE", "native")  # told to pyvista: kept
+    assert trame_proxy()["server_proxy_enabled"] is False
+    monkeypatch.setattr(theme, "_server_proxy_enabled", True)  # e.g. on a hub
+    monkeypatch.setattr(theme, "_server_proxy_prefix", "/user/ada/proxy/")
+    assert trame_proxy() == {"server_proxy_enabled": True, "server_proxy_prefix": "/user/ada/proxy/"}
+
+
+def test_the_trame_frame_url_in_a_kernel():
+    """Only where pyvista's trame backend is installed: in a kernel the view's frame is on
+    /proxy/PORT/ (jupyter-server-proxy is installed with Ramure's jupyter extra), and on
+    http://localhost:PORT with RAMURE_TRAME_PROXY=0."""
+    pytest.importorskip("trame_pyvista")
+    pytest.importorskip("jupyter_server_proxy")
+    nbformat = pytest.importorskip("nbformat")
+    from jupyter_helpers import execute
+
+    code = f"""from ramure.app.jupyter import Explorer
+ex = Explorer({HONDA!r}, n=3)
+print(ex.view.backend, ex.view.trame.widget.src)"""
+    for switch, start in (("", "/proxy/"), ("0", "http://localhost:")):
+        nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
+        execute(nb, {"PYVISTA_JUPYTER_BACKEND": "trame", "RAMURE_TRAME_PROXY": switch}, timeout=120)
+        out = "".join(o.get("text", "") for o in nb.cells[0].outputs if o.output_type == "stream").split()
+        assert out[0] == "server" and out[1].startswith(start) and "/index.html?ui=" in out[1], out
