@@ -80,7 +80,7 @@ def _render_grid(skeletons, size, view: str, zoom: float, cols: int) -> list[np.
         for k, sk in enumerate(skeletons):
             plotter.subplot(k // cols, k % cols)
             _draw_tile(plotter, sk, view, zoom)
-        image = plotter.screenshot(return_img=True)
+        image = np.asarray(plotter.screenshot(return_img=True))
     finally:
         plotter.close()
     return [image[(k // cols) * h : (k // cols + 1) * h, (k % cols) * w : (k % cols + 1) * w] for k in range(len(skeletons))]
