@@ -466,6 +466,7 @@ class Explorer:
         if self.view.trame is None or not self.view.picking:
             if on:
                 self.message.show(NO_RECTANGLE, "error")
+                self.rectangle.value = False
             return
         self.view.trame.rectangle.enable(bool(on))
 

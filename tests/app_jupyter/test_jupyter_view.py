@@ -265,3 +265,12 @@ print(ex.view.backend, ex.view.trame.widget.src)"""
         execute(nb, {"PYVISTA_JUPYTER_BACKEND": "trame", "RAMURE_TRAME_PROXY": switch}, timeout=120)
         out = "".join(o.get("text", "") for o in nb.cells[0].outputs if o.output_type == "stream").split()
         assert out[0] == "server" and out[1].startswith(start) and "/index.html?ui=" in out[1], out
+
+
+def test_the_picture_view_refuses_the_rectangle_and_says_why():
+    ex = Explorer(HONDA, n=4, view="static")
+    assert ex.rectangle.disabled
+    ex.set_rectangle_mode(True)
+    assert not ex.rectangle.value and "needs the interactive 3D view" in ex.message.text
+    assert ex.select_rectangle((0, 0, 400, 400)) is None and ex.selection == []
+    assert "needs the interactive 3D view" in ex.message.text
