@@ -400,6 +400,21 @@ class Explorer:
     def segment_midpoints(self) -> np.ndarray:
         return self.skeleton.midpoints()
 
+    def rectangle_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """What a rubber band selects by, in both front ends: the segments' midpoints then the
+        leaves' and fruit's centres (k, 3), and the history leaf of each (k,)."""
+        sk = self.skeleton
+        points = np.concatenate([sk.midpoints(), np.asarray(sk.organs.position, float).reshape(-1, 3)])
+        leaves = np.concatenate([np.asarray(sk.leaf_id, np.int64), np.asarray(sk.organs.leaf_id, np.int64)])
+        return points, leaves
+
+    def leaves_in_view(self, matrix: ArrayLike, size: tuple[int, int], rect: Sequence[float]) -> list[int]:
+        """Leaves whose :meth:`rectangle_points` project inside display rectangle ``rect`` =
+        (x0, y0, x1, y1) (pixels, origin bottom left, any corner order) through ``matrix`` (a
+        camera's 4x4 world-to-clip projection) onto a viewport of ``size`` (width, height)."""
+        points, leaves = self.rectangle_points()
+        return leaves_in_rectangle(leaves, project_to_display(matrix, points, size), rect)
+
     def leaves_where(
         self, min_order: int | None = None, min_height: float | None = None, max_height: float | None = None
     ) -> list[int]:
@@ -552,6 +567,31 @@ class Explorer:
             )
 
         return self._cached(("fruit", preset, seed, tuple(sorted(kwargs.items()))), build)
+
+    def fruit_volume(self, leaf: int, preset: str = "round_tomato", seed: int = 0, **kwargs: Any) -> GMap3:
+        """Fruit ``leaf`` alone as a volumetric 3G-map: the same fruit as in :meth:`fruit_volumes`
+        (each fruit's draw depends on its leaf id, not on the others), built without the others."""
+        from ramure.gmap.plant import fruits_from_organs
+
+        organs = self.skeleton.organs
+        at = np.flatnonzero((organs.kind == "Fruit") & (organs.leaf_id == int(leaf)))
+        if not len(at):
+            raise ValueRefused(f"leaf {leaf} is not a fruit of this plant")
+        overrides = {int(leaf): own} if (own := self.session.fruit_overrides().get(int(leaf))) else None
+
+        def build():
+            return fruits_from_organs(
+                organs.position[at],
+                organs.frame[at],
+                organs.size[at],
+                organs.leaf_id[at],
+                preset=preset,
+                seed=seed,
+                overrides=overrides,
+                **kwargs,
+            )
+
+        return self._cached(("one fruit", int(leaf), preset, seed, tuple(sorted(kwargs.items()))), build)
 
     def fruit_surface(self) -> pv.PolyData | None:
         """The volumetric fruit as a surface with a ``leaf_id`` per cell (None without fruit)."""
@@ -976,6 +1016,30 @@ def leaves_in_rectangle(leaf_ids: ArrayLike, screen_xy: ArrayLike, rect: Sequenc
     return sorted_unique(np.asarray(leaf_ids)[inside]).tolist()
 
 
+def project_to_display(matrix: ArrayLike, points: ArrayLike, size: tuple[int, int]) -> np.ndarray:
+    """Display coordinates (k, 2) of world ``points`` through a 4x4 composite projection.
+
+    ``matrix`` maps world to clip coordinates (VTK's composite projection
+    transform); ``size`` is the viewport (width, height) in pixels.  Display y
+    points up (VTK's convention).  Points behind the camera come out as NaN.
+    """
+    pts = np.asarray(points, float).reshape(-1, 3)
+    m = np.asarray(matrix, float)
+    x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+
+    def row(i):  # one clip coordinate, elementwise (a BLAS matmul stalls its threads on a busy machine)
+        return x * m[i, 0] + y * m[i, 1] + z * m[i, 2] + m[i, 3]
+
+    w = row(3)  # z is not needed
+    w[w <= 0] = np.nan  # behind the camera
+    width, height = size
+    out = np.empty((len(pts), 2))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out[:, 0] = (row(0) / w + 1.0) * (0.5 * width)
+        out[:, 1] = (row(1) / w + 1.0) * (0.5 * height)
+    return out
+
+
 def write_obj(mesh: pv.PolyData, path: str | os.PathLike) -> pathlib.Path:
     """Wavefront OBJ of a plant mesh with normals and a ``.mtl`` beside it (see :mod:`ramure.app.export`)."""
     from ramure.app.export import plant_parts
@@ -1005,6 +1069,7 @@ __all__ = [
     "finite_number",
     "leaves_in_rectangle",
     "local_edits_message",
+    "project_to_display",
     "warm_up_edits",
     "warm_up_in_background",
     "write_obj",

@@ -66,6 +66,13 @@ def frame_camera(plotter: pv.BasePlotter, bounds: ArrayLike, view: str = "front"
     plotter.reset_camera(bounds=tuple(b.ravel()))  # type: ignore[call-arg]  # pyvista stubs: decorated method
 
 
+def projection_matrix(renderer: Any) -> np.ndarray:
+    """The 4x4 matrix from world to clip coordinates of ``renderer``'s camera (VTK's composite
+    projection for the renderer's aspect ratio)."""
+    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
+    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+
+
 def render_mesh(
     mesh: pv.PolyData,
     path: str | os.PathLike,

@@ -45,6 +45,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 import pyvista as pv
 
+from ramure.app.render import projection_matrix  # shared with the notebook's view
+
 if TYPE_CHECKING:
     from ramure.lsys.turtle import Skeleton
 
@@ -136,13 +138,6 @@ def fit_camera(
         renderer.ResetCameraClippingRange()
     else:
         renderer.ResetCameraClippingRange(*clip_bounds)
-
-
-def projection_matrix(renderer: Any) -> np.ndarray:
-    """The 4x4 matrix from world to clip coordinates of ``renderer``'s camera (VTK's composite
-    projection for the renderer's aspect ratio)."""
-    m = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1, 1)
-    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
 def outside_view(plotter: pv.BasePlotter, bounds: Sequence[float], slack: float = 1.02) -> bool:

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ramure.app.document import DEFINE_LINE, format_constant, text_with_constants  # noqa: F401 (the desktop's names)
+from ramure.app.model import project_to_display  # noqa: F401 (shared with the notebook; the desktop's name)
 from ramure.app.render import plant_colors
 
 if TYPE_CHECKING:
@@ -476,30 +477,6 @@ def selection_box_lines(skeleton: Skeleton, selection: Collection[int]) -> np.nd
 
     corners = plant_obb(skeleton, segments=segments).corners()
     return corners[EDGES]
-
-
-def project_to_display(matrix: ArrayLike, points: ArrayLike, size: tuple[int, int]) -> np.ndarray:
-    """Display coordinates (k, 2) of world ``points`` through a 4x4 composite projection.
-
-    ``matrix`` maps world to clip coordinates (VTK's composite projection
-    transform); ``size`` is the viewport (width, height) in pixels.  Display y
-    points up (VTK's convention).  Points behind the camera come out as NaN.
-    """
-    pts = np.asarray(points, float).reshape(-1, 3)
-    m = np.asarray(matrix, float)
-    x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
-
-    def row(i):  # one clip coordinate, elementwise (a BLAS matmul stalls its threads on a busy machine)
-        return x * m[i, 0] + y * m[i, 1] + z * m[i, 2] + m[i, 3]
-
-    w = row(3)  # z is not needed
-    w[w <= 0] = np.nan  # behind the camera
-    width, height = size
-    out = np.empty((len(pts), 2))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out[:, 0] = (row(0) / w + 1.0) * (0.5 * width)
-        out[:, 1] = (row(1) / w + 1.0) * (0.5 * height)
-    return out
 
 
 def cells_near_line(

@@ -25,7 +25,7 @@ import html
 import os
 import pathlib
 import threading
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import ipywidgets as W
@@ -57,6 +57,11 @@ if TYPE_CHECKING:
 T = TypeVar("T")
 
 PLACEHOLDER = "n: 0\nw: F"  # the plant shown while the given grammar does not parse
+#: Why the rectangle cannot be used: the picture view has no camera a drag could be measured in.
+NO_RECTANGLE = (
+    'rectangle selection needs the interactive 3D view (pip install "pyvista[jupyter]"); '
+    "select with the tools on the right or the derivation tree"
+)
 
 
 def _open_model(source, n, seed):
@@ -232,13 +237,27 @@ class Explorer:
         self.show_cut = W.Checkbox(value=True, description="preview the cut (orange)", indent=False)
         on_value(self.show_cut, self.set_show_cut)
         self.preview_line = W.HTML()
+        # rectangle mode: a drag in the view selects what it encloses (the desktop's rubber band)
+        self.rectangle = W.ToggleButton(
+            value=False,
+            description="▭ rectangle",
+            tooltip="drag a rectangle in the view to select the branches in it (the mode on the right applies)",
+            disabled=not self.view.picking,
+            layout=W.Layout(width="110px"),
+        )
+        on_value(self.rectangle, self.set_rectangle_mode)
         picking = (
-            "click a branch to select it"
+            "click a branch to select it; ▭ rectangle: drag to select the branches inside"
             if self.view.picking
             else "picture view: select with the tools on the right or the derivation tree"
         )
         centre = W.VBox(
-            [self.view.widget, W.HBox([self.camera, self.show_cut]), self.preview_line, W.HTML(f"<small>{picking}</small>")]
+            [
+                self.view.widget,
+                W.HBox([self.camera, self.show_cut, self.rectangle]),
+                self.preview_line,
+                W.HTML(f"<small>{picking}</small>"),
+            ]
         )
         side = W.VBox([self.selection_panel.widget, self.edits.widget], layout=W.Layout(width="30%", min_width="320px"))
         left = W.VBox([self.grammar.widget], layout=W.Layout(width="30%", min_width="280px"))
@@ -440,6 +459,39 @@ class Explorer:
 
     def clear_selection(self) -> None:
         self.run(self.model.clear_selection)
+
+    def set_rectangle_mode(self, on: bool) -> None:
+        """Rectangle mode (the ▭ button): a drag in the 3D view selects the branches it encloses
+        instead of turning the view.  Needs the interactive view."""
+        if self.rectangle.value != bool(on):
+            self.rectangle.value = bool(on)  # the button's observer comes back here
+            return
+        if self.view.trame is None or not self.view.picking:
+            if on:
+                self.message.show(NO_RECTANGLE, "error")
+                self.rectangle.value = False
+            return
+        self.view.trame.rectangle.enable(bool(on))
+
+    def select_rectangle(self, rect: Sequence[float], mode: str | None = None) -> list[int] | None:
+        """Select the leaves whose branch midpoints (and leaf and fruit centres) fall inside
+        ``rect`` = (x0, y0, x1, y1), pixels of the 3D view with the origin at its bottom left
+        (what a drag in rectangle mode gives): the model's
+        :meth:`~ramure.app.model.Explorer.leaves_in_view`, as the desktop's rubber band."""
+        if self.view.trame is None:
+            self.message.show(NO_RECTANGLE, "error")
+            return None
+        matrix, size = self.view.trame.camera()
+        mode = mode or self.selection_panel.mode.value
+        found: list[int] = []
+
+        def apply() -> None:
+            found.extend(self.model.leaves_in_view(matrix, size, rect))
+            self.model.select(found, mode)
+
+        self.run(apply, note=lambda: f"rectangle: {len(found)} leaves ({mode}); {self.model.status()}")
+        self.warm_up()
+        return found
 
     def pick(self, cell_id: int, mode: str | None = None) -> None:
         """Select the leaf that drew mesh cell ``cell_id`` (what a click in the 3D view does)."""

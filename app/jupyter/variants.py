@@ -338,9 +338,9 @@ class VariantPanel:
         self.app.edits.refresh()  # the qualifier choices
         return exp
 
-    def _render_thumbnails(self, exp, batch=3):
-        """The 27 pick thumbnails (PNG bytes) by :mod:`ramure.app.thumbnails`, a few at a time so the
-        bar moves and *Stop* is honoured between batches."""
+    def _render_thumbnails(self, exp, batch=9):
+        """The 27 pick thumbnails (PNG bytes) by :mod:`ramure.app.thumbnails`, a row of nine at a time
+        (one render each) so the bar moves and *Stop* is honoured between rows."""
         from ramure.app.thumbnails import render_variants
 
         size = (self.thumb_size * 2, self.thumb_size * 2)

@@ -10,6 +10,11 @@ installed and pyvista's notebook backend is not set to ``static``
 (``PYVISTA_JUPYTER_BACKEND=static``), else the PNG.  Either way :meth:`PlantView.png` gives the current picture, which is
 also what a notebook shows where no widget can run (nbconvert, GitHub).
 
+In the interactive view a click picks (:class:`ClickPicker`) and, in rectangle mode, a drag
+draws a rubber band whose leaves the model finds (:class:`RectanglePicker`, the model's
+``leaves_in_view``: the same as the desktop's).  The view's frame is served through Jupyter's
+own port when jupyter-server-proxy is there (:func:`trame_proxy`).
+
 >>> from ramure.app.model import Explorer
 >>> png = plant_png(Explorer("grammars/honda_sympodial.lsys", n=4), size=(120, 120))
 >>> png[:4] == b"\\x89PNG"
@@ -21,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import io
+import os
 import sys
 import threading
 from collections.abc import Callable, Iterator, Sequence
@@ -217,8 +223,7 @@ def fruit_cut_png(model: Model, leaf: int, size: tuple[int, int] = (420, 420), v
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
     from ramure.gmap.organs.tissue import COLORS, TISSUES
 
-    grid = to_unstructured_grid(model.fruit_volumes(volume_levels=volume_levels))
-    cells = grid.extract_cells(np.asarray(grid.cell_data["leaf_id"]) == int(leaf))
+    cells = to_unstructured_grid(model.fruit_volume(leaf, volume_levels=volume_levels))  # that fruit only
     organs = model.skeleton.organs
     axis = np.asarray(organs.frame)[list(organs.leaf_id).index(int(leaf))][0]  # the heading
     inside = plane_cut(cells, normal=tuple(axis), origin=cells.center, mode="cells")
@@ -375,6 +380,111 @@ class ClickPicker:
         return cell if cell >= 0 else None
 
 
+class RectanglePicker:
+    """Rectangle mode of the interactive view: a left drag draws a rubber band and, on release,
+    ``on_rectangle((x0, y0, x1, y1))`` gets its display corners (pixels, origin bottom left, as
+    VTK counts); the camera stays still.  A press and release without moving is a click:
+    ``on_click(x, y)``.  Off (the default), the view turns on drag as usual.
+
+    Its observers run before the camera's interactor style and stop the left button's events
+    there (VTK's abort flag), for the interactor of a desktop window and for trame's remote
+    view alike (trame hands the browser's mouse events to the same interactor)."""
+
+    EVENTS = ("LeftButtonPressEvent", "MouseMoveEvent", "LeftButtonReleaseEvent")
+
+    def __init__(
+        self,
+        plotter: pv.Plotter,
+        on_rectangle: Callable[[tuple[int, int, int, int]], object],
+        on_click: Callable[[int, int], object],
+        on_band: Callable[[], object] | None = None,
+    ) -> None:
+        assert plotter.iren is not None, "an on-screen or notebook plotter has an interactor"
+        self.plotter = plotter
+        self.interactor = plotter.iren.interactor
+        self.on_rectangle, self.on_click = on_rectangle, on_click
+        self.on_band = on_band or plotter.render  # show the band as it moves (trame: send a new picture)
+        self.tags: dict[str, int] = {}
+        self.start: tuple[int, int] | None = None
+        self.band = _band_actor()
+        self.band.VisibilityOff()
+        plotter.renderer.AddViewProp(self.band)
+
+    @property
+    def enabled(self) -> bool:
+        return bool(self.tags)
+
+    def enable(self, on: bool) -> None:
+        if on == self.enabled:
+            return
+        if on:
+            handlers = (self._press, self._move, self._release)
+            self.tags = {e: self.interactor.AddObserver(e, h, 100.0) for e, h in zip(self.EVENTS, handlers)}
+        else:
+            for tag in self.tags.values():
+                self.interactor.RemoveObserver(tag)
+            self.tags, self.start = {}, None
+            self.band.VisibilityOff()
+
+    def _swallow(self, event: str) -> None:
+        """Stop ``event`` here: the interactor style (the camera) does not see it."""
+        self.interactor.GetCommand(self.tags[event]).SetAbortFlag(1)
+
+    def _press(self, _caller, event) -> None:
+        self._swallow(event)
+        self.start = tuple(self.interactor.GetEventPosition())
+
+    def _move(self, _caller, event) -> None:
+        if self.start is None:
+            return  # the pointer passes over the view: nothing to do
+        self._swallow(event)
+        _place_band(self.band, self.start, self.interactor.GetEventPosition())
+        self.band.VisibilityOn()
+        self.on_band()
+
+    def _release(self, _caller, event) -> None:
+        self._swallow(event)
+        start, self.start = self.start, None
+        self.band.VisibilityOff()
+        if start is None:
+            return
+        x, y = self.interactor.GetEventPosition()
+        if max(abs(x - start[0]), abs(y - start[1])) <= CLICK_PIXELS:
+            self.on_click(x, y)
+        else:
+            self.on_rectangle((start[0], start[1], x, y))
+
+
+def _band_actor() -> Any:
+    """A red outline in display coordinates (its four corners set by :func:`_place_band`)."""
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkRenderingCore import vtkActor2D, vtkPolyDataMapper2D
+
+    points = vtkPoints()
+    points.SetNumberOfPoints(4)
+    outline = vtkCellArray()
+    outline.InsertNextCell(5, [0, 1, 2, 3, 0])
+    data = vtkPolyData()
+    data.SetPoints(points)
+    data.SetLines(outline)
+    mapper = vtkPolyDataMapper2D()
+    mapper.SetInputData(data)
+    actor = vtkActor2D()
+    actor.SetMapper(mapper)
+    actor.GetProperty().SetColor(0.85, 0.0, 0.0)
+    actor.GetProperty().SetLineWidth(1.5)
+    return actor
+
+
+def _place_band(actor: Any, start: Sequence[int], end: Sequence[int]) -> None:
+    data = actor.GetMapper().GetInput()
+    (x0, y0), (x1, y1) = start, end
+    for k, (x, y) in enumerate(((x0, y0), (x1, y0), (x1, y1), (x0, y1))):
+        data.GetPoints().SetPoint(k, x, y, 0.0)
+    data.GetPoints().Modified()
+
+
 _ABSENT = object()
 
 
@@ -419,6 +529,41 @@ def needs_reframe(framed: Sequence[float] | None, bounds: Sequence[float], margi
     return bool(grew or float(np.ptp(new, axis=1).max()) < shrink * size)
 
 
+#: ``RAMURE_TRAME_PROXY``: ``1`` sends the trame view through Jupyter's own port (jupyter-server-proxy's
+#: ``/proxy/PORT/``), ``0`` lets the browser reach trame's port directly; unset, the proxy is used
+#: whenever jupyter-server-proxy is importable (see :func:`trame_proxy`).
+PROXY_SWITCH = "RAMURE_TRAME_PROXY"
+
+
+def trame_proxy() -> dict[str, Any]:
+    """How the browser reaches the trame view: pyvista's ``server_proxy_enabled`` and
+    ``server_proxy_prefix`` for :meth:`pyvista.Plotter.show`.
+
+    Through the proxy the view's frame loads from ``PREFIX PORT/index.html`` on the Jupyter
+    server itself (``/proxy/PORT/``; on JupyterHub pyvista puts the user's service prefix in
+    front, from ``JUPYTERHUB_SERVICE_PREFIX``), so it works wherever the notebook does: on a
+    hub, or through an SSH tunnel that forwards Jupyter's port only.  Without it the frame asks
+    for ``http://localhost:PORT``, a port the browser reaches only on the kernel's machine.
+
+    Chosen by :data:`PROXY_SWITCH` (``1``/``0``), else by pyvista when it was told
+    (``PYVISTA_TRAME_JUPYTER_MODE``, ``PYVISTA_TRAME_SERVER_PROXY_PREFIX``, a hub), else on
+    whenever ``jupyter_server_proxy`` is importable.  The prefix is always pyvista's.
+    """
+    import pyvista as pv
+
+    theme = pv.global_theme.trame
+    switch = os.environ.get(PROXY_SWITCH, "").strip().lower()
+    if switch in ("1", "on", "yes", "true"):
+        enabled = True
+    elif switch in ("0", "off", "no", "false"):
+        enabled = False
+    elif theme.server_proxy_enabled or theme.jupyter_extension_enabled or os.environ.get("PYVISTA_TRAME_JUPYTER_MODE"):
+        enabled = bool(theme.server_proxy_enabled)  # pyvista was told: its choice
+    else:
+        enabled = importlib.util.find_spec("jupyter_server_proxy") is not None
+    return {"server_proxy_enabled": enabled, "server_proxy_prefix": theme.server_proxy_prefix}
+
+
 def trame_window(size: tuple[int, int]) -> tuple[int, int]:
     """The trame view's window (and so its iframe's) size for an explorer ``size``: the toolbar
     band above a picture of that size, so the plant's top is not under the menu.
@@ -448,8 +593,10 @@ class TrameView:
         self._framed: tuple[float, ...] | None = None
         self.draw(update=False)
         self.clicks = ClickPicker(self.plotter, self._picked)
+        self.rectangle = RectanglePicker(self.plotter, self._rectangle, self._click_at, self._push)
+        self.last_rectangle: tuple[int, int, int, int] | None = None
         with without_vtklocal():
-            self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True)
+            self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True, jupyter_kwargs=trame_proxy())
 
     def draw(self, update: bool = True) -> None:
         model = self.owner.app.model
@@ -469,11 +616,15 @@ class TrameView:
         elif model.mesh.n_cells and needs_reframe(self._framed, model.mesh.bounds):
             self.reframe(model.mesh)
         if update:
-            viewer = getattr(self.widget, "viewer", None)
-            if viewer is not None:
-                viewer.update()
-            else:
-                self.plotter.render()
+            self._push()
+
+    def _push(self) -> None:
+        """Render, and send the picture to the browser (trame's viewer) when there is one."""
+        viewer = getattr(getattr(self, "widget", None), "viewer", None)
+        if viewer is not None:
+            viewer.update()
+        else:
+            self.plotter.render()
 
     def reframe(self, mesh: pv.PolyData) -> None:
         """Frame the whole plant again, looking from where the camera looks now (z up)."""
@@ -493,3 +644,20 @@ class TrameView:
 
     def _picked(self, cell) -> None:
         self.owner.app.pick(cell)
+
+    def _click_at(self, x: int, y: int) -> None:
+        cell = self.clicks.pick(x, y)
+        if cell is not None:
+            self._picked(cell)
+
+    def camera(self) -> tuple[np.ndarray, tuple[int, int]]:
+        """The camera's world-to-clip projection and the view's size in pixels (what a rubber
+        band's display rectangle is measured against)."""
+        from ramure.app.render import projection_matrix
+
+        width, height = self.plotter.window_size
+        return projection_matrix(self.plotter.renderer), (int(width), int(height))
+
+    def _rectangle(self, rect) -> None:
+        self.last_rectangle = rect  # display corners of the last band (what a test compares)
+        self.owner.app.select_rectangle(rect)

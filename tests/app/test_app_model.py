@@ -37,6 +37,49 @@ def test_rectangle_picks_segments_inside():
     assert leaves_in_rectangle([7, 8, 9, 8], xy, (11, 11, 4, 4)) == [8, 9]
 
 
+def _vtk_display_points(plotter, points):
+    """Display coordinates of world points by VTK's own renderer (one point at a time)."""
+    out = []
+    for point in points:
+        plotter.renderer.SetWorldPoint(*point, 1.0)
+        plotter.renderer.WorldToDisplay()
+        out.append(plotter.renderer.GetDisplayPoint()[:2])
+    return np.array(out)
+
+
+def test_a_rubber_band_selects_the_same_leaves_in_both_front_ends():
+    """The notebook's rectangle goes through the model's leaves_in_view; the desktop's window
+    projects its snapshot's midpoints and organ centres: for the same camera and rectangle they
+    select the same leaves, those VTK itself puts inside the rectangle."""
+    pv = pytest.importorskip("pyvista")
+    from ramure.app.desktop import state
+    from ramure.app.render import frame_camera, headless_setup, projection_matrix
+
+    headless_setup()
+    ex = Explorer("grammars/fruit_tree.lsys")  # branches, leaves and fruit
+    plotter = pv.Plotter(off_screen=True, window_size=[300, 200])
+    plotter.add_mesh(ex.mesh)
+    frame_camera(plotter, ex.mesh.bounds, "iso")
+    plotter.render()
+    matrix, size = projection_matrix(plotter.renderer), (300, 200)
+    rect = (260, 40, 120, 190)  # the upper right of the crown, corners in any order
+    notebook = ex.leaves_in_view(matrix, size, rect)
+
+    snap = state.take_snapshot(ex)  # what the desktop window projects
+    xy = state.project_to_display(matrix, np.concatenate([snap.midpoints, snap.organ_points]), size)
+    desktop = leaves_in_rectangle(np.concatenate([snap.segment_leaf, snap.organ_leaves]), xy, rect)
+
+    points, leaves = ex.rectangle_points()
+    vtk_xy = _vtk_display_points(plotter, points)
+    inside = (vtk_xy[:, 0] >= 120) & (vtk_xy[:, 0] <= 260) & (vtk_xy[:, 1] >= 40) & (vtk_xy[:, 1] <= 190)
+    plotter.close()
+    assert notebook == desktop == sorted(set(leaves[inside].tolist()))
+    assert 0 < len(notebook) < len(set(leaves.tolist()))  # some of the plant, not all of it
+    assert set(notebook) & set(ex.fruit_ids())  # fruit are selected by their centres
+    ex.select(notebook)
+    assert ex.selection == notebook
+
+
 def test_cell_maps_to_leaf(ex):
     mesh = ex.mesh
     cell = int(np.flatnonzero(mesh.cell_data["segment"] == 5)[0])
@@ -152,6 +195,27 @@ def test_regrow_one_fruit_changes_only_that_fruit():
     )
     ex.undo()
     assert ex.session.fruit_overrides() == {}
+
+
+def test_one_fruit_built_alone_is_that_fruit_among_all():
+    from ramure.gmap.pyvista import to_unstructured_grid
+
+    ex = Explorer("grammars/fruit_tree.lsys")
+    fruit = ex.fruit_ids()
+    ex.select(fruit[2:3])
+    ex.regrow_fruit(preset="pear")  # an override: the pear must come back alone too
+    every = to_unstructured_grid(ex.fruit_volumes(volume_levels=1))
+    for leaf in (fruit[0], fruit[2]):
+        alone = to_unstructured_grid(ex.fruit_volume(leaf, volume_levels=1))
+        among = every.extract_cells(np.asarray(every.cell_data["leaf_id"]) == leaf)
+        assert alone.n_cells == among.n_cells > 100
+        assert set(np.unique(alone.cell_data["leaf_id"]).tolist()) == {leaf}
+        assert np.allclose(alone.bounds, among.bounds)
+        assert alone.volume == pytest.approx(among.volume)
+        assert np.array_equal(np.bincount(alone.cell_data["tissue"]), np.bincount(among.cell_data["tissue"]))
+    assert to_unstructured_grid(ex.fruit_volume(fruit[0])).n_cells != to_unstructured_grid(ex.fruit_volume(fruit[2])).n_cells
+    with pytest.raises(RamureError, match="not a fruit"):
+        ex.fruit_volume(10**9)
 
 
 def test_apply_qualifier_makes_the_selection_denser_and_undoes():
