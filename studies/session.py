@@ -163,8 +163,9 @@ class TestSession:
 
     __test__ = False  # not a pytest class
 
-    def __init__(self, study: Study, test_id: int, participant: str, grammar: str, seed: int) -> None:
+    def __init__(self, study: Study, test_id: int, participant: str, grammar: str, seed: int, front_end: str = "script") -> None:
         self.study = study
+        self.front_end = front_end  # stored with each answer
         self.conn = study.conn
         self.test_id = test_id
         self.participant = participant
@@ -271,7 +272,7 @@ class TestSession:
                     "UPDATE tests SET elapsed_seconds = elapsed_seconds + ? WHERE id = ?",
                     (max(0.0, now - self._tick), self.test_id),
                 )
-                log_test_event(self.conn, self.test_id, action, detail)
+                log_test_event(self.conn, self.test_id, action, detail, self.front_end)
         except sqlite3.IntegrityError as exc:  # a check the validation above missed
             raise StudyInputError(f"answer refused by the database: {exc}") from None
         self._tick = now
