@@ -9,6 +9,7 @@ Sub-commands print one JSON object on stdout::
     ramure study export-csv study.db -o csv/
     ramure study export-qualifiers study.db --store qualifiers.db
     ramure study status study.db
+    ramure study withdraw study.db P104 --delete
 """
 
 from __future__ import annotations
@@ -77,14 +78,31 @@ def _summary(result) -> dict:
 
 
 def run_create(args: argparse.Namespace) -> int:
+    from ramure.studies.design import read_config
     from ramure.studies.storage import Study
 
+    config = read_config(args.config) if args.config else None  # checked before any file is made
     with Study.create(
-        args.db, grammars=_grammar_specs(args.grammar), name=args.name, budget_minutes=args.budget_minutes
+        args.db, grammars=_grammar_specs(args.grammar), name=args.name, budget_minutes=args.budget_minutes, config=config
     ) as study:
         return _print(
-            dict(db=str(study.path), name=study.name, grammars=study.grammars, budget_minutes=study.budget_seconds / 60)
+            dict(
+                db=str(study.path),
+                name=study.name,
+                grammars=study.grammars,
+                budget_minutes=study.budget_seconds / 60,
+                framing=study.config().framing,
+            )
         )
+
+
+def run_withdraw(args: argparse.Namespace) -> int:
+    from ramure.studies.storage import Study
+
+    with Study.open(args.db) as study:
+        code = study.find_participant(args.participant)
+        study.withdraw(code, delete=args.delete)
+        return _print(dict(db=str(study.path), participant=code, withdrawn=True, deleted=bool(args.delete)))
 
 
 def run_simulate(args: argparse.Namespace) -> int:
@@ -227,6 +245,12 @@ def register(subparsers: Subparsers) -> None:
     )
     p.add_argument("--name", help="study name (default: the file name)")
     p.add_argument("--budget-minutes", type=float, default=30.0, help="time budget per participant")
+    p.add_argument(
+        "--config",
+        metavar="FILE",
+        help="study config JSON: consent, contact, retention, instructions, practice, attention_checks, "
+        "demographics, likert, completion_code, framing (defaults for what is left out)",
+    )
     p.set_defaults(func=run_create)
 
     p = sub.add_parser("simulate", help="run simulated participants end to end (store, analyse, export)")
@@ -276,6 +300,12 @@ def register(subparsers: Subparsers) -> None:
     p.add_argument("--source", help="source tag (default: study:<study name>)")
     synonyms(p)
     p.set_defaults(func=run_export_qualifiers)
+
+    p = sub.add_parser("withdraw", help="a participant withdraws: left out of analyses, or erased with --delete")
+    p.add_argument("db")
+    p.add_argument("participant", help="participant code, or external id (e.g. a Prolific PID)")
+    p.add_argument("--delete", action="store_true", help="erase every answer of the participant")
+    p.set_defaults(func=run_withdraw)
 
     p = sub.add_parser("status", help="participants and tests of a study")
     p.add_argument("db")
