@@ -237,7 +237,7 @@ class TestSession:
             if several and g.representative_quality is None:
                 todo.append(f"group {g.label}: rate its representative")
             if not g.qualifiers:
-                todo.append(f"group {g.label}: give at least one qualifier")
+                todo.append(f"group {g.label}: describe it in at least one word")
         return todo
 
     # -- time ---------------------------------------------------------------------
@@ -381,10 +381,10 @@ class TestSession:
         """Add one free-text qualifier (French or English) to ``group``."""
         gid, _ = self._group(group)
         if not isinstance(text, str) or not text.strip():
-            raise StudyInputError(f"group {group}: a qualifier must be non-empty text, got {text!r}")
+            raise StudyInputError(f"group {group}: a description must be a non-empty word, got {text!r}")
         if len(text.strip()) > MAX_QUALIFIER_CHARS:
             raise StudyInputError(
-                f"group {group}: a qualifier is a word or a short phrase, at most {MAX_QUALIFIER_CHARS} characters"
+                f"group {group}: a description is a word or a short phrase, at most {MAX_QUALIFIER_CHARS} characters"
             )
         with self._write("add_qualifier", {"group": int(group), "text": text.strip()}) as conn:
             conn.execute("INSERT INTO qualifiers (group_id, text) VALUES (?, ?)", (gid, text.strip()))
@@ -396,7 +396,7 @@ class TestSession:
             "SELECT id FROM qualifiers WHERE group_id = ? AND text = ? ORDER BY id DESC", (gid, str(text).strip())
         ).fetchone()
         if row is None:
-            raise StudyInputError(f"group {group} has no qualifier {text!r}")
+            raise StudyInputError(f"group {group} has no description {text!r}")
         with self._write("remove_qualifier", {"group": int(group), "text": str(text).strip()}) as conn:
             conn.execute("DELETE FROM qualifiers WHERE id = ?", (row[0],))
 
