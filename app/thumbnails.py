@@ -32,6 +32,7 @@ from ramure.app.render import BARK, headless_setup, frame_camera, plant_colors
 from ramure.io import write_with
 
 if TYPE_CHECKING:
+    from ramure.lsys.turtle import Skeleton
     from ramure.metrics.exploration import Exploration
     from ramure.metrics.sweep import VariantSweep
 
@@ -48,8 +49,12 @@ def _segment_lines(sk):
     return pv.PolyData(points, lines=lines)
 
 
-def _render_many(skeletons, paths, size=(256, 256), view: str = "front", captions=None, zoom: float = 1.15):
-    """Render skeletons to PNG files with one reused off-screen plotter."""
+def _render_many(
+    skeletons, paths, size=(256, 256), view: str = "front", captions=None, zoom: float = 1.15, bounds=None, bar=None
+):
+    """Render skeletons to PNG files with one reused off-screen plotter; framed on ``bounds`` when
+    given (one camera for all, with a vertical scale bar ``bar`` long at their left), else each
+    plant on its own bounds."""
     headless_setup()
     import pyvista as pv
 
@@ -63,14 +68,44 @@ def _render_many(skeletons, paths, size=(256, 256), view: str = "front", caption
                 mesh.cell_data["rgb"] = plant_colors(mesh)
                 plotter.add_mesh(mesh, scalars="rgb", rgb=True, smooth_shading=False)
                 plotter.add_mesh(_segment_lines(sk), color=BARK, line_width=1.0)
-                frame_camera(plotter, mesh.bounds, view)
-                plotter.camera.zoom(zoom)
+                if bounds is None:
+                    frame_camera(plotter, mesh.bounds, view)
+                    plotter.camera.zoom(zoom)
+            if bounds is not None:
+                frame_camera(plotter, bounds, view)
+                plotter.camera.zoom(1.35)  # reset_camera fits the bounds' sphere: a wide margin
+                if bar:
+                    plotter.add_mesh(_scale_bar(bounds, bar), color="black", line_width=5.0)
             if captions is not None:
                 plotter.add_text(captions[k], position="lower_left", font_size=8, color="black")
             write_with(path, lambda tmp: plotter.screenshot(tmp))
     finally:
         plotter.close()
     return paths
+
+
+def _scale_bar(bounds, length):
+    """A vertical segment ``length`` long standing on the ground at the left of ``bounds``."""
+    import pyvista as pv
+
+    b = np.asarray(bounds, float)
+    x = b[0] + 0.08 * (b[1] - b[0])  # inside the room shared_bounds made on the left
+    y = 0.5 * (b[2] + b[3])
+    return pv.Line((x, y, b[4]), (x, y, b[4] + float(length)))
+
+
+def render_framed(
+    skeletons: Sequence[Skeleton],
+    paths: Sequence[str | os.PathLike],
+    size: tuple[int, int] = (480, 480),
+    bounds: Sequence[float] | None = None,
+    bar: float | None = None,
+    view: str = "front",
+) -> list[str | os.PathLike]:
+    """Render ``skeletons`` to ``paths`` with one off-screen plotter: every plant framed on the same
+    ``bounds`` with a scale bar ``bar`` long (one scale for a study's set), or, with ``bounds``
+    None, each on its own bounds."""
+    return _render_many(skeletons, list(paths), size, view, bounds=bounds, bar=bar)
 
 
 def render_variants(

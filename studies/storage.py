@@ -585,6 +585,18 @@ class Study:
         )
         return [Pick(r[0], r[1], (r[2], r[3], r[4]), json.loads(r[5]), self._picture(r[6])) for r in rows]
 
+    def set_pictures(self, grammar: str, images: dict[int, str | os.PathLike]) -> None:
+        """Store the picture of each pick of ``grammar`` (``{pick id: file}``), relative to the study's
+        folder; each file must lie inside it (one transaction)."""
+        self._writable()
+        gid = self.grammar_id(grammar)
+        rows = []
+        for pid, image in sorted(images.items()):
+            inside_folder(self.path.parent, image, f"picture of pick {pid}")  # refused if outside
+            rows.append((relative_to(self.path.parent, image), gid, int(pid)))
+        with self.conn:
+            self.conn.executemany("UPDATE picks SET image = ? WHERE grammar_id = ? AND pick_id = ?", rows)
+
     def _picture(self, image):
         """A pick's picture path if it lies inside the study's folder, else None (never shown).
 

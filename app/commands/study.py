@@ -81,10 +81,17 @@ def run_create(args: argparse.Namespace) -> int:
     from ramure.studies.design import read_config
     from ramure.studies.storage import Study
 
+    if not 32 <= args.picture_size <= 2048:
+        raise UserError(f"--picture-size must be 32 to 2048 pixels, not {args.picture_size}")
     config = read_config(args.config) if args.config else None  # checked before any file is made
     with Study.create(
         args.db, grammars=_grammar_specs(args.grammar), name=args.name, budget_minutes=args.budget_minutes, config=config
     ) as study:
+        pictures = {}
+        if not args.no_render:
+            from ramure.app.stimuli import render_stimuli
+
+            pictures = render_stimuli(study, size=args.picture_size)
         return _print(
             dict(
                 db=str(study.path),
@@ -92,6 +99,7 @@ def run_create(args: argparse.Namespace) -> int:
                 grammars=study.grammars,
                 budget_minutes=study.budget_seconds / 60,
                 framing=study.config().framing,
+                pictures=pictures,
             )
         )
 
@@ -251,6 +259,8 @@ def register(subparsers: Subparsers) -> None:
         help="study config JSON: consent, contact, retention, instructions, practice, attention_checks, "
         "demographics, likert, completion_code, framing (defaults for what is left out)",
     )
+    p.add_argument("--picture-size", type=int, default=480, help="side of the rendered pictures, pixels (default 480)")
+    p.add_argument("--no-render", action="store_true", help="keep the explorations' own pictures (framed each on its own bounds)")
     p.set_defaults(func=run_create)
 
     p = sub.add_parser("simulate", help="run simulated participants end to end (store, analyse, export)")

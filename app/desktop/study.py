@@ -134,32 +134,11 @@ def pick_images(
 
 
 def _study_grammar(study, grammar, grammars_dir=None):
-    """The LSystem, n and seed to draw a study grammar's picks with (None if not found).
+    """The LSystem, n and seed to draw a study grammar's picks with (:func:`ramure.app.stimuli.study_grammar`,
+    confined to the study's folder: a participant's window does not show the experimenter's file errors)."""
+    from ramure.app.stimuli import study_grammar
 
-    The exploration folder's ``pca.json`` is read by
-    :func:`ramure.metrics.exploration.read_exploration_info`: the grammar it names is read
-    only from the grammars folder or from inside the exploration folder, and that folder
-    (named by the database) only if it lies inside the study's own folder, as its pictures
-    do; otherwise the grammar is looked up by its name.  A participant's window does not
-    show the experimenter's file errors: a refused ``pca.json`` draws nothing, and the
-    stored pictures (or placeholders) stand in.
-    """
-    from ramure.io import inside
-    from ramure.lsys import LSystem
-    from ramure.metrics.exploration import ExplorationInfo, find_grammar, read_exploration_info
-
-    try:
-        recorded = study.grammar_source(grammar)
-        if recorded and inside(recorded, study.path.parent):
-            info = read_exploration_info(recorded, grammars_dir, name=grammar)
-        else:
-            info = ExplorationInfo(grammar, find_grammar(grammar, grammars_dir), None, 0)
-        if info.grammar_file is None:
-            return None, None, 0
-        lsystem = LSystem.from_file(info.grammar_file)
-    except RamureError:
-        return None, None, 0
-    return lsystem, info.n if info.n is not None else lsystem.n, info.seed
+    return study_grammar(study, grammar, grammars_dir)
 
 
 # -- drag and drop lists -----------------------------------------------------------------
