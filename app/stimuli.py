@@ -121,7 +121,7 @@ def render_stimuli(
             frame = shared_bounds(bounds)
             bar = bar_length(float(frame[5] - frame[4]))
             info.update(bounds=[round(float(v), 6) for v in frame], bar=bar)
-            render_framed(skeletons, paths, (size, size), frame, bar)
+            render_framed(skeletons, paths, (size, size), frame.tolist(), bar)
         else:
             render_framed(skeletons, paths, (size, size), None, None)
         study.set_pictures(grammar, {p.id: path for p, path in zip(picks, paths)})

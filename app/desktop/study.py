@@ -728,7 +728,12 @@ class ParticipantWindow(QWidget):
             self.info_label.setText(html_text(step.title, step.text))
             self.stack.setCurrentWidget(self.info_page)
         elif step.kind in ("attention", "demographics"):
-            page = QuestionsPage(step.title, step.questions, lambda answers, kind=step.kind: self._answer(kind, answers))
+            kind = step.kind
+
+            def send(answers: dict[str, str]) -> None:
+                self._answer(kind, answers)
+
+            page = QuestionsPage(step.title, step.questions, send)
             if self.questions_page is not None:
                 self.stack.removeWidget(self.questions_page)
                 self.questions_page.deleteLater()

@@ -48,7 +48,7 @@ from ramure.studies.design import WORDS, ParticipantFlow, Question, Step, set_ti
 
 if TYPE_CHECKING:
     from ramure.studies import Study
-    from ramure.studies.session import Group
+    from ramure.studies.session import Group, TestSession
 
 T = TypeVar("T")
 
@@ -214,7 +214,7 @@ class StudyPanel:
             layout=W.Layout(display="none"),
         )
         self.withdraw_button = button("Withdraw from the study…", self._ask_withdraw)
-        self.session = None  # type: ignore[assignment]  # set when a set is shown
+        self.session: TestSession  # set by open(), when a set is shown
         self.widget = W.VBox()
         self.show_step()
 
@@ -461,7 +461,7 @@ class StudyPanel:
     # -- display -------------------------------------------------------------
     def _ipython_display_(self) -> None:
         """The test widget, then a static picture of it (for a notebook reopened without a kernel)."""
-        s = self.session
+        s = getattr(self, "session", None)
         text = (
             f"<StudyPanel: participant {self.participant}, page {self.step.kind}>"
             if s is None
@@ -472,7 +472,7 @@ class StudyPanel:
 
     def screen_html(self) -> str:
         """The participant's images in their order, each with its group (a static picture of the test)."""
-        if self.session is None or self.step.kind != "test":
+        if getattr(self, "session", None) is None or self.step.kind != "test":
             return self.page_text.value
         cells = []
         labels = self.session.labels()
@@ -494,7 +494,7 @@ class StudyPanel:
         )
 
     def refresh(self) -> None:
-        s = self.session
+        s = getattr(self, "session", None)
         if s is None or self.step.kind != "test":
             return
         groups = s.groups()
