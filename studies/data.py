@@ -87,13 +87,16 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         with Study.open(source, readonly=True) as study:
             return load_study_data(study, finished_only, include_pilot)
     conn = source.conn
-    grammars = [r for r in conn.execute("SELECT id, name FROM grammars ORDER BY id")]
+    practice = source.config().practice_set  # sorted to learn the task: never analysed
+    grammars = [r for r in conn.execute("SELECT id, name FROM grammars WHERE name IS NOT ? ORDER BY id", (practice,))]
     gindex = {gid: i for i, (gid, _) in enumerate(grammars)}
     n_g = len(grammars)
     pca = np.zeros((n_g, N_PICKS, 3))
     variant = np.zeros((n_g, N_PICKS), dtype=np.int64)
     params = [[None] * N_PICKS for _ in range(n_g)]
     for gid, pick, var, x, y, z, par in conn.execute("SELECT grammar_id, pick_id, variant_id, pc1, pc2, pc3, params FROM picks"):
+        if gid not in gindex:
+            continue  # the practice set
         pca[gindex[gid], pick - 1] = (x, y, z)
         variant[gindex[gid], pick - 1] = var
         params[gindex[gid]][pick - 1] = par
@@ -106,6 +109,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
     where = (
         "JOIN participants p ON p.id = t.participant_id WHERE p.consent = 1"
         + pilots
+        + ("" if practice is None else f" AND t.grammar_id != {int(source.grammar_id(practice))}")
         + (" AND t.finished_at IS NOT NULL" if finished_only else "")
     )
     tests = np.array(

@@ -127,6 +127,8 @@ class StudyConfig:
     questions: Mapping[str, str] = field(default_factory=lambda: dict(DEFAULT_QUESTIONS))
     completion_code: str | None = None
     framing: str = "shared"
+    #: A grammar of the study sorted first, as practice: never in the Latin square, never analysed.
+    practice_set: str | None = None
 
     def consent_text(self) -> str:
         """The consent as participants read it: the text, then the contact and the data retention."""
@@ -142,7 +144,8 @@ class StudyConfig:
         return data
 
 
-_TEXT_FIELDS = ("title", "consent", "contact", "retention", "instructions", "completion_code", "practice")
+_TEXT_FIELDS = ("title", "consent", "contact", "retention", "instructions", "completion_code", "practice", "practice_set")
+_OPTIONAL = ("completion_code", "practice", "practice_set")
 _CODE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 
@@ -204,7 +207,7 @@ def config_from_data(data: object, where: str = "study config") -> StudyConfig:
     values: dict[str, Any] = {}
     for key in _TEXT_FIELDS:
         if key in data:
-            values[key] = _text(data[key], f"{where}.{key}", optional=key in ("completion_code", "practice"))
+            values[key] = _text(data[key], f"{where}.{key}", optional=key in _OPTIONAL)
     code = values.get("completion_code")
     if code is not None and not _CODE.match(code):
         raise StudyInputError(f"{where}.completion_code: {code!r} must be 1-64 letters, digits, '-' or '_'")
@@ -357,9 +360,14 @@ class ParticipantFlow:
         return self.study.grammar_order(self.code)
 
     def number(self, grammar: str) -> tuple[int, int]:
-        """``(n, m)``: ``grammar`` is set n of the participant's m."""
+        """``(n, m)``: ``grammar`` is set n of the participant's m (n is 0 for the practice set)."""
         order = self.grammars
-        return order.index(grammar) + 1, len(order)
+        return (order.index(grammar) + 1 if grammar in order else 0), len(order)
+
+    def title(self, grammar: str) -> str:
+        """What participants read for a set: "Set 2 of 3", or "Practice"."""
+        n, m = self.number(grammar)
+        return set_title(n, m) if n else "Practice"
 
     def _done(self, page: str) -> bool:
         return page in self.study.participant_answers(self.code)
@@ -373,6 +381,9 @@ class ParticipantFlow:
             return Step("instructions", "Instructions", c.instructions)
         if c.practice and not self._done("practice"):
             return Step("practice", "Practice", c.practice)
+        practice = c.practice_set
+        if practice and practice in self.study.grammars and not self.study.finished(self.code, practice):
+            return Step("test", "Practice", c.practice or "", grammar=practice, number=0, total=len(self.grammars))
         order = self.grammars
         finished = [g for g in order if self.study.finished(self.code, g)]
         if c.attention_checks and finished and not self._done("attention"):

@@ -479,6 +479,9 @@ class Study:
         from ramure.studies.design import StudyConfig
 
         config = config if config is not None else StudyConfig()
+        if config.practice_set is not None and config.practice_set not in (grammars or {}):
+            known = ", ".join(grammars or {}) or "none"
+            raise StudyInputError(f"the practice set {config.practice_set!r} is not a grammar of the study (grammars: {known})")
         path = pathlib.Path(path)
         try:
             budget = float(budget_minutes)
@@ -690,7 +693,7 @@ class Study:
         from ramure.studies.design import grammar_order
 
         index = self.conn.execute("SELECT count(*) FROM enrolments WHERE pilot = ?", (int(pilot),)).fetchone()[0]
-        order = grammar_order(self.grammars, index)
+        order = grammar_order(self.sets(), index)
         fixed = self.config().completion_code
         code = fixed or "".join(secrets.choice("ABCDEFGHJKLMNPQRSTUVWXYZ23456789") for _ in range(8))
         self.conn.execute(
@@ -712,8 +715,14 @@ class Study:
         """Participant ``code``'s order of the grammars (their Latin-square row; the study's order for
         a participant enrolled before version 3).  Grammars added after they enrolled come last."""
         row = self._enrolment(code)
-        order = [g for g in json.loads(row[2]) if g in self.grammars] if row else []
-        return order + [g for g in self.grammars if g not in order]
+        sets = self.sets()
+        order = [g for g in json.loads(row[2]) if g in sets] if row else []
+        return order + [g for g in sets if g not in order]
+
+    def sets(self) -> list[str]:
+        """The grammars participants sort for real: all but the config's practice set."""
+        practice = self.config().practice_set
+        return [g for g in self.grammars if g != practice]
 
     def completion_code(self, code: str) -> str | None:
         """The code participant ``code`` gives their recruiting platform at the end (None before version 3)."""

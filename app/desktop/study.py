@@ -677,13 +677,17 @@ class ParticipantWindow(QWidget):
         return page
 
     def progress(self, grammar: str) -> tuple[int, int]:
-        """``(n, m)``: ``grammar`` is test n of the participant's m."""
-        return self.grammars.index(grammar) + 1, len(self.grammars)
+        """``(n, m)``: ``grammar`` is test n of the participant's m (n 0: the practice set)."""
+        return (self.grammars.index(grammar) + 1 if grammar in self.grammars else 0), len(self.grammars)
+
+    def title(self, grammar: str) -> str:
+        """ "Set n of m", or "Practice"."""
+        n, m = self.progress(grammar)
+        return set_title(n, m) if n else "Practice"
 
     def show_between(self, grammar: str) -> None:
         """The page between tests, after ``grammar``'s test was finished."""
-        n, m = self.progress(grammar)
-        self.between_label.setText(f"<h2>{set_title(n, m)} done</h2><p>{WORDS['saved']}</p>")
+        self.between_label.setText(f"<h2>{self.title(grammar)} done</h2><p>{WORDS['saved']}</p>")
         self.continue_button.setEnabled(False)
         self.stack.setCurrentWidget(self.between_page)
         delay = QApplication.styleHints().mouseDoubleClickInterval() + 100
@@ -759,8 +763,7 @@ class ParticipantWindow(QWidget):
         return self.show_step()
 
     def open_test(self, session: TestSession) -> TestPage:
-        n, m = self.progress(session.grammar)
-        self.progress_label.setText(set_title(n, m))
+        self.progress_label.setText(self.title(session.grammar))
         pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, "", "…")) for i in range(1, 28)}
         page = TestPage(self, session, pixmaps, self.config)
         page.finished.connect(self._test_finished)

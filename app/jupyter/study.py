@@ -222,8 +222,14 @@ class StudyPanel:
         return self.study.finished(self.participant, grammar)
 
     def progress(self) -> tuple[int, int]:
-        """``(n, m)``: the open test is set n of the participant's m."""
-        return self.grammars.index(self.session.grammar) + 1, len(self.grammars)
+        """``(n, m)``: the open test is set n of the participant's m (n 0: the practice set)."""
+        grammar = self.session.grammar
+        return (self.grammars.index(grammar) + 1 if grammar in self.grammars else 0), len(self.grammars)
+
+    def title(self) -> str:
+        """ "Set n of m", or "Practice", for the open test."""
+        n, m = self.progress()
+        return set_title(n, m) if n else "Practice"
 
     # -- pages ---------------------------------------------------------------------------
     def show_step(self) -> Step:
@@ -231,7 +237,8 @@ class StudyPanel:
         step = self.flow.step()
         if step.kind == "test":
             left = [g for g in self.grammars if not self._finished(g)]
-            grammar = step.grammar if step.grammar in left else (left[0] if left else None)
+            practice = step.grammar is not None and step.grammar == self.config.practice_set
+            grammar = step.grammar if practice or step.grammar in left else (left[0] if left else None)
             if grammar is not None:
                 self.step = Step("test", step.title, grammar=grammar)
                 self.open(grammar)
@@ -370,8 +377,7 @@ class StudyPanel:
             self.message.show(err, "error")
 
     def _show_between(self) -> None:
-        n, m = self.progress()
-        self.between.value = f"<h3>{set_title(n, m)} done</h3><p>{WORDS['saved']}</p>"
+        self.between.value = f"<h3>{self.title()} done</h3><p>{WORDS['saved']}</p>"
         self.header.value = ""
         self.widget.children = [self.message.widget, self.between, self.continue_button]
 
@@ -521,10 +527,9 @@ class StudyPanel:
             self.quiet = False
         minutes = s.remaining_seconds() / 60
         state = "finished" if s.finished else f"{minutes:.0f} min left"
-        n, m = self.progress()
         self.header.value = (
             f"<h3 style='margin:4px 0'>{html.escape(self.config.title)} — participant {s.participant}: "
-            f"{set_title(n, m)} ({state})</h3>"
+            f"{self.title()} ({state})</h3>"
         )
         todo = [] if s.finished else s.missing()
         self.todo.value = (

@@ -140,3 +140,15 @@ def test_withdrawing_from_the_window_erases_the_answers(qtbot, tmp_path):
     assert win.stack.currentWidget() is win.done_page and "deleted" in win.done_page.text()
     assert [p["code"] for p in win.study.participants()] == ["P102"]
     win.close()
+
+
+def test_the_practice_sort_comes_first_then_set_1(qtbot, tmp_path):
+    config = StudyConfig(practice_set="g3", attention_checks=(), demographics=())
+    win = participant_window(qtbot, make_study(tmp_path / "s.db", config=config), code="P101")
+    assert win.page.session.grammar == "g3" and win.progress_label.text() == "Practice"
+    finish_set(qtbot, win.page)
+    assert "Practice done" in win.between_label.text()
+    qtbot.waitUntil(win.continue_button.isEnabled, timeout=3000)
+    qtbot.mouseClick(win.continue_button, Qt.MouseButton.LeftButton)
+    assert win.page.session.grammar == "g1" and win.progress_label.text() == "Set 1 of 2"
+    win.close()

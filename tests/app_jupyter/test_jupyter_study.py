@@ -321,3 +321,19 @@ def test_withdraw_from_the_panel(study):
     assert panel.withdraw_buttons.layout.display == ""
     panel.withdraw_buttons.children[1].click()
     assert [p["code"] for p in study.participants()] == [keep] and "deleted" in panel.page_text.value
+
+
+def test_the_practice_sort_comes_first_in_the_notebook_too(tmp_path):
+    from ramure.studies.design import StudyConfig
+
+    grammars = {f"g{i}": lattice_picks(seed=i) for i in (1, 2)}
+    config = StudyConfig(practice_set="g2", attention_checks=(), demographics=())
+    with Study.create(tmp_path / "s.db", grammars=grammars, config=config) as study:
+        panel = to_test(StudyPanel(study, study.add_participant(consent=True), thumb_size=32))
+        assert panel.session.grammar == "g2" and "Practice" in panel.header.value
+        panel.assign([range(1, 28)])
+        panel.answer(1, representative=5, usefulness="good", difference="fair", quality="good", qualifiers="x")
+        panel.finish()
+        assert "Practice done" in panel.between.value
+        panel.continue_button.click()
+        assert panel.session.grammar == "g1" and "Set 1 of 1" in panel.header.value

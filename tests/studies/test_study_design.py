@@ -241,3 +241,23 @@ def test_a_version_2_study_is_migrated_and_its_answers_kept(tmp_path):
         code = study.add_participant(consent=True, external_id="x1")
         study.session(code, "honda", front_end="notebook").set_groups([[1, 2]])
         assert study.events(code)[-1]["front_end"] == "notebook" and study.completion_code(code)
+
+
+def test_a_practice_sort_comes_first_and_is_never_analysed(tmp_path, clock):
+    config = StudyConfig(practice_set="fern", attention_checks=(), demographics=())
+    with three(tmp_path, clock, config=config) as study:
+        code = study.add_participant(consent=True)
+        assert study.grammar_order(code) == ["honda", "tree2"] and study.sets() == ["honda", "tree2"]
+        flow = ParticipantFlow(study, code)
+        flow.acknowledge("instructions")
+        flow.acknowledge("practice")
+        step = flow.step()
+        assert (step.kind, step.title, step.grammar, flow.title("fern")) == ("test", "Practice", "fern", "Practice")
+        complete(flow.session("fern"))
+        assert flow.step().title == "Set 1 of 2"
+        for grammar in ("honda", "tree2"):
+            complete(flow.session(grammar))
+        data = load_study_data(study)
+        assert data.grammars == ["honda", "tree2"] and len(data.test_participant) == 2
+    with pytest.raises(StudyInputError, match="practice set 'oak' is not a grammar of the study"):
+        Study.create(tmp_path / "t.db", grammars={"honda": lattice_picks(seed=1)}, config=StudyConfig(practice_set="oak"))
