@@ -40,6 +40,10 @@ def test_participant_pages_show_no_jargon_and_no_grammar_name(qtbot, tmp_path):
     config = StudyConfig(contact="lab@example.org")
     win = participant_window(qtbot, make_study(tmp_path / "s.db", config=config), code="P101")
     seen = texts(win)
+    win.page.move_images([1, 2, 3], "new")
+    qtbot.waitUntil(lambda: win.page.panels[1].make_rep.isVisible(), timeout=3000)
+    seen += texts(win)  # a group's panel: its questions, buttons and hints
+    assert any("How useful" in t for t in seen)
     finish_set(qtbot, win.page)
     seen += texts(win)
     qtbot.waitUntil(win.continue_button.isEnabled, timeout=3000)
