@@ -90,7 +90,7 @@ def fit_icon(width: int, height: int, count: int = 27, caption: int = 22, gap: i
     ``width`` x ``height``, so that the participant sees every picture at once.
 
     >>> fit_icon(520, 700), fit_icon(1000, 700) > fit_icon(520, 700)
-    (78, True)
+    (82, True)
     """
     for size in range(largest, 23, -2):
         columns = max(1, (width - 4) // (size + gap))
