@@ -261,3 +261,12 @@ def test_a_practice_sort_comes_first_and_is_never_analysed(tmp_path, clock):
         assert data.grammars == ["honda", "tree2"] and len(data.test_participant) == 2
     with pytest.raises(StudyInputError, match="practice set 'oak' is not a grammar of the study"):
         Study.create(tmp_path / "t.db", grammars={"honda": lattice_picks(seed=1)}, config=StudyConfig(practice_set="oak"))
+
+
+def test_the_example_config_is_valid_and_free_of_jargon():
+    import pathlib
+
+    config = read_config(pathlib.Path(__file__).resolve().parents[2] / "examples" / "study_config.json")
+    assert [q.key for q in config.demographics] == ["age", "expertise", "comments"] and not config.demographics[2].required
+    texts = [config.consent_text(), config.instructions, config.practice or "", *config.questions.values()]
+    assert [t for t in texts + [q.text for q in config.demographics] if jargon_in(t)] == []
