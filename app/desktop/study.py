@@ -883,11 +883,17 @@ class StudyMenu:
         return ask_study_path(self.window)
 
     def participant(
-        self, path: str | os.PathLike | None = None, code: str | None = None, pilot: bool = False
+        self,
+        path: str | os.PathLike | None = None,
+        code: str | None = None,
+        pilot: bool = False,
+        external_id: str | None = None,
     ) -> ParticipantWindow | None:
         """Open a study and a participant window (a new anonymous code unless ``code`` is given).
 
-        ``pilot``: a new participant is a trial run, kept apart from the real data."""
+        ``pilot``: a new participant is a trial run, kept apart from the real data.
+        ``external_id`` (a recruiting platform's id, e.g. a Prolific PID): the participant
+        enrolled under it is resumed, or a new one is enrolled with it."""
         from ramure.studies import Study
 
         path = path or self._ask_study()
@@ -895,6 +901,9 @@ class StudyMenu:
             return None
         try:
             study = Study.open(path)
+            if code is None and external_id is not None:
+                known = {p["external_id"]: p["code"] for p in study.participants() if p["external_id"]}
+                code = known.get(external_id) or study.add_participant(external_id=external_id, pilot=pilot)
             if code is None:
                 code = self._choose_participant(study, pilot)
                 if code is None:

@@ -156,3 +156,19 @@ def test_the_practice_sort_comes_first_then_set_1(qtbot, tmp_path):
     qtbot.mouseClick(win.continue_button, Qt.MouseButton.LeftButton)
     assert win.page.session.grammar == "g1" and win.progress_label.text() == "Set 1 of 2"
     win.close()
+
+
+def test_the_study_menu_enrols_by_external_id_and_marks_pilots(make_window, qtbot, tmp_path):
+    path = make_study(tmp_path / "s.db", participants=0)
+    w = make_window(n=2)
+    first = w.study_menu.participant(path, external_id="5f3a9c1e2b")
+    qtbot.addWidget(first)
+    first.close()
+    again = w.study_menu.participant(path, external_id="5f3a9c1e2b")  # the same person comes back
+    qtbot.addWidget(again)
+    trial = w.study_menu.participant(path, pilot=True)
+    qtbot.addWidget(trial)
+    rows = again.study.participants()
+    assert again.code == first.code and [(p["external_id"], p["pilot"]) for p in rows] == [("5f3a9c1e2b", False), (None, True)]
+    again.close()
+    trial.close()
