@@ -262,7 +262,7 @@ class TestSession:
         event ``action`` with ``detail`` (which the change may still fill in)."""
         if self.finished:
             raise StudyInputError(
-                f"the test of {self.participant!r} on {self.grammar!r} is finished; its answers can no longer change"
+                "this set is finished; its answers can no longer change"  # read by participants: no grammar name
             )
         now = self.study.clock()
         try:

@@ -270,3 +270,15 @@ def test_the_example_config_is_valid_and_free_of_jargon():
     assert [q.key for q in config.demographics] == ["age", "expertise", "comments"] and not config.demographics[2].required
     texts = [config.consent_text(), config.instructions, config.practice or "", *config.questions.values()]
     assert [t for t in texts + [q.text for q in config.demographics] if jargon_in(t)] == []
+
+
+def test_refusals_participants_read_name_no_grammar(study):
+    s = study.session(study.add_participant(consent=True), "honda")
+    complete(s)
+    with pytest.raises(StudyInputError) as refused:
+        s.add_qualifier(1, "late")
+    assert "honda" not in str(refused.value) and not jargon_in(str(refused.value))
+    other = study.session(study.add_participant(consent=True), "honda")
+    other.set_groups([[1, 2]])
+    todo = other.missing()
+    assert len(todo) == 6 and [m for m in todo if jargon_in(m)] == []  # "give at least one qualifier" before
