@@ -33,6 +33,7 @@ from ramure.app.render import BARK, headless_setup, frame_camera, plant_colors
 from ramure.io import write_with
 
 if TYPE_CHECKING:
+    from ramure.lsys.turtle import Skeleton
     from ramure.metrics.exploration import Exploration
     from ramure.metrics.sweep import VariantSweep
 
@@ -57,17 +58,25 @@ def _grid_shape(count: int, size: tuple[int, int], columns: int = 9, max_side: i
     return cols, rows
 
 
-def _draw_tile(plotter, sk, view: str, zoom: float) -> None:
+def _draw_tile(plotter, sk, view: str, zoom: float, bounds=None, bar=None) -> None:
+    """One plant in the current viewport, framed on its own bounds, or on ``bounds`` (one camera
+    for a whole set) with a vertical scale bar ``bar`` long at their left."""
     mesh = sk.to_polydata(sides=6)
     if mesh.n_cells:
         mesh.cell_data["rgb"] = plant_colors(mesh)
         plotter.add_mesh(mesh, scalars="rgb", rgb=True, smooth_shading=False)
         plotter.add_mesh(_segment_lines(sk), color=BARK, line_width=1.0)
-        frame_camera(plotter, mesh.bounds, view)
-        plotter.camera.zoom(zoom)
+        if bounds is None:
+            frame_camera(plotter, mesh.bounds, view)
+            plotter.camera.zoom(zoom)
+    if bounds is not None:
+        frame_camera(plotter, bounds, view)
+        plotter.camera.zoom(1.35)  # reset_camera fits the bounds' sphere: a wide margin
+        if bar:
+            plotter.add_mesh(_scale_bar(bounds, bar), color="black", line_width=5.0)
 
 
-def _render_grid(skeletons, size, view: str, zoom: float, cols: int) -> list[np.ndarray]:
+def _render_grid(skeletons, size, view: str, zoom: float, cols: int, bounds=None, bar=None) -> list[np.ndarray]:
     """Render skeletons side by side in one window (one viewport each, one render in all) and
     cut the picture into one RGB tile per skeleton."""
     import pyvista as pv
@@ -79,7 +88,7 @@ def _render_grid(skeletons, size, view: str, zoom: float, cols: int) -> list[np.
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
         for k, sk in enumerate(skeletons):
             plotter.subplot(k // cols, k % cols)
-            _draw_tile(plotter, sk, view, zoom)
+            _draw_tile(plotter, sk, view, zoom, bounds, bar)
         image = np.asarray(plotter.screenshot(return_img=True))
     finally:
         plotter.close()
@@ -98,17 +107,45 @@ def _save_tile(tile: np.ndarray, path, caption: str | None) -> None:
     write_with(path, lambda tmp: picture.save(tmp, format="PNG"))
 
 
-def _render_many(skeletons, paths, size=(256, 256), view: str = "front", captions=None, zoom: float = 1.15):
+def _render_many(
+    skeletons, paths, size=(256, 256), view: str = "front", captions=None, zoom: float = 1.15, bounds=None, bar=None
+):
     """Render skeletons to PNG files, as many as fit in one off-screen window per render
-    (a render costs about the same for one tile as for 27: the tiles share it)."""
+    (a render costs about the same for one tile as for 27: the tiles share it); framed on
+    ``bounds`` when given (one camera for all, with a scale bar ``bar`` long), else each plant
+    on its own bounds."""
     headless_setup()
     skeletons, paths = list(skeletons), list(paths)
     cols, rows = _grid_shape(len(skeletons), size)
     for start in range(0, len(skeletons), cols * rows):
         chunk = skeletons[start : start + cols * rows]
-        for k, tile in enumerate(_render_grid(chunk, size, view, zoom, cols), start):
+        for k, tile in enumerate(_render_grid(chunk, size, view, zoom, cols, bounds, bar), start):
             _save_tile(tile, paths[k], None if captions is None else captions[k])
     return paths
+
+
+def _scale_bar(bounds, length):
+    """A vertical segment ``length`` long standing on the ground at the left of ``bounds``."""
+    import pyvista as pv
+
+    b = np.asarray(bounds, float)
+    x = b[0] + 0.08 * (b[1] - b[0])  # inside the room shared_bounds made on the left
+    y = 0.5 * (b[2] + b[3])
+    return pv.Line((x, y, b[4]), (x, y, b[4] + float(length)))
+
+
+def render_framed(
+    skeletons: Sequence[Skeleton],
+    paths: Sequence[str | os.PathLike],
+    size: tuple[int, int] = (480, 480),
+    bounds: Sequence[float] | None = None,
+    bar: float | None = None,
+    view: str = "front",
+) -> list[str | os.PathLike]:
+    """Render ``skeletons`` to ``paths`` with one off-screen plotter: every plant framed on the same
+    ``bounds`` with a scale bar ``bar`` long (one scale for a study's set), or, with ``bounds``
+    None, each on its own bounds."""
+    return _render_many(skeletons, list(paths), size, view, bounds=bounds, bar=bar)
 
 
 def render_variants(

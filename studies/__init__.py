@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from ramure.studies.analysis import cooccurrence, grouping_stats, groups_per_test, image_ratings, images_per_group
     from ramure.studies.anova import AnovaResult, anova_table, one_way_anova, read_table
     from ramure.studies.data import StudyData, load_study_data
+    from ramure.studies.design import ParticipantFlow, StudyConfig, read_config
     from ramure.studies.errors import StudyInputError
     from ramure.studies.agreement import grouping_agreement, pairwise_ari
     from ramure.studies.export import export_csv, write_codebook
@@ -54,9 +55,11 @@ _LAZY = {
     "AnovaResult": ".anova",
     "Group": ".session",
     "LEVELS": ".likert",
+    "ParticipantFlow": ".design",
     "Pick": ".picks",
     "SimulatedParticipant": ".simulate",
     "Study": ".storage",
+    "StudyConfig": ".design",
     "StudyData": ".data",
     "StudyInputError": ".errors",
     "SynonymTable": ".qualifiers",
@@ -86,6 +89,7 @@ _LAZY = {
     "qualifier_frequencies": ".qualifiers",
     "quality_summary": ".quality",
     "rating_inference": ".inference",
+    "read_config": ".design",
     "read_table": ".anova",
     "representatives": ".quality",
     "run_simulation": ".simulate",
@@ -99,9 +103,11 @@ __all__ = [
     "AnovaResult",
     "Group",
     "LEVELS",
+    "ParticipantFlow",
     "Pick",
     "SimulatedParticipant",
     "Study",
+    "StudyConfig",
     "StudyData",
     "StudyInputError",
     "SynonymTable",
@@ -131,6 +137,7 @@ __all__ = [
     "qualifier_frequencies",
     "quality_summary",
     "rating_inference",
+    "read_config",
     "read_table",
     "representatives",
     "run_simulation",

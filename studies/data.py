@@ -76,29 +76,41 @@ class StudyData:
         return self.grammars.index(grammar)
 
 
-def load_study_data(source: Study | str | os.PathLike, finished_only: bool = True) -> StudyData:
-    """Read a :class:`~ramure.studies.storage.Study` (or a path to one) into arrays."""
-    from ramure.studies.storage import Study
+def load_study_data(source: Study | str | os.PathLike, finished_only: bool = True, include_pilot: bool = False) -> StudyData:
+    """Read a :class:`~ramure.studies.storage.Study` (or a path to one) into arrays.
+
+    Pilot participants (trial runs, :meth:`~ramure.studies.storage.Study.add_participant`
+    ``pilot=True``) are left out unless ``include_pilot``."""
+    from ramure.studies.storage import TABLE_SINCE, Study
 
     if isinstance(source, (str, os.PathLike)):
         with Study.open(source, readonly=True) as study:
-            return load_study_data(study, finished_only)
+            return load_study_data(study, finished_only, include_pilot)
     conn = source.conn
-    grammars = [r for r in conn.execute("SELECT id, name FROM grammars ORDER BY id")]
+    practice = source.config().practice_set  # sorted to learn the task: never analysed
+    grammars = [r for r in conn.execute("SELECT id, name FROM grammars WHERE name IS NOT ? ORDER BY id", (practice,))]
     gindex = {gid: i for i, (gid, _) in enumerate(grammars)}
     n_g = len(grammars)
     pca = np.zeros((n_g, N_PICKS, 3))
     variant = np.zeros((n_g, N_PICKS), dtype=np.int64)
     params = [[None] * N_PICKS for _ in range(n_g)]
     for gid, pick, var, x, y, z, par in conn.execute("SELECT grammar_id, pick_id, variant_id, pc1, pc2, pc3, params FROM picks"):
+        if gid not in gindex:
+            continue  # the practice set
         pca[gindex[gid], pick - 1] = (x, y, z)
         variant[gindex[gid], pick - 1] = var
         params[gindex[gid]][pick - 1] = par
-    people = conn.execute("SELECT id, code FROM participants ORDER BY id").fetchall()
+    pilots = ""
+    if not include_pilot and source.version >= TABLE_SINCE["enrolments"]:
+        pilots = " AND p.id NOT IN (SELECT participant_id FROM enrolments WHERE pilot = 1)"
+    people = conn.execute(f"SELECT id, code FROM participants p WHERE 1 {pilots} ORDER BY id").fetchall()
     pindex = {pid: i for i, (pid, _) in enumerate(people)}
 
-    where = "JOIN participants p ON p.id = t.participant_id WHERE p.consent = 1" + (
-        " AND t.finished_at IS NOT NULL" if finished_only else ""
+    where = (
+        "JOIN participants p ON p.id = t.participant_id WHERE p.consent = 1"
+        + pilots
+        + ("" if practice is None else f" AND t.grammar_id != {int(source.grammar_id(practice))}")
+        + (" AND t.finished_at IS NOT NULL" if finished_only else "")
     )
     tests = np.array(
         conn.execute(

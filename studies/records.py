@@ -27,13 +27,14 @@ def event_time() -> str:
     return datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds")
 
 
-def log_test_event(conn: sqlite3.Connection, test_id: int, action: str, detail: dict) -> None:
+def log_test_event(conn: sqlite3.Connection, test_id: int, action: str, detail: dict, front_end: str | None = None) -> None:
     """Append an action on test ``test_id`` to the ``events`` table, with the test's participant and
-    elapsed time read in the same statement (call it inside the change's transaction)."""
+    elapsed time read in the same statement and the ``front_end`` that took the answer (call it
+    inside the change's transaction)."""
     conn.execute(
-        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) "
-        "SELECT participant_id, id, ?, elapsed_seconds, ?, ? FROM tests WHERE id = ?",
-        (event_time(), action, json.dumps(detail, sort_keys=True), test_id),
+        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail, front_end) "
+        "SELECT participant_id, id, ?, elapsed_seconds, ?, ?, ? FROM tests WHERE id = ?",
+        (event_time(), action, json.dumps(detail, sort_keys=True), front_end, test_id),
     )
 
 
@@ -44,9 +45,11 @@ def log_event(
     detail: dict | None = None,
     test_id: int | None = None,
     elapsed_seconds: float | None = None,
+    front_end: str | None = None,
 ) -> None:
     """Append one participant action to the ``events`` table (call it inside the change's transaction)."""
     conn.execute(
-        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail) VALUES (?, ?, ?, ?, ?, ?)",
-        (participant_id, test_id, event_time(), elapsed_seconds, action, json.dumps(detail or {}, sort_keys=True)),
+        "INSERT INTO events (participant_id, test_id, at, elapsed_seconds, action, detail, front_end) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?)",
+        (participant_id, test_id, event_time(), elapsed_seconds, action, json.dumps(detail or {}, sort_keys=True), front_end),
     )

@@ -1,4 +1,5 @@
--- Ramure user study on variant relevance (schema version 2: version 1 plus the events table).
+-- Ramure user study on variant relevance (schema version 3: version 1, the events table since 2,
+-- and since 3 settings, enrolments, page_answers and events.front_end).
 -- Every statement is idempotent: running the whole file on a version-1 file migrates it.
 -- Likert answers are stored as 1..4 (poor, fair, good, excellent).
 CREATE TABLE IF NOT EXISTS study (
@@ -18,7 +19,7 @@ CREATE TABLE IF NOT EXISTS picks (
   variant_id INTEGER NOT NULL,
   pc1 REAL NOT NULL, pc2 REAL NOT NULL, pc3 REAL NOT NULL,
   params TEXT NOT NULL,           -- JSON {"rule": int, "constants": {...}}
-  image TEXT,                     -- absolute path of the thumbnail, if any
+  image TEXT,                     -- the picture, relative to the study folder when inside it
   PRIMARY KEY (grammar_id, pick_id)
 );
 CREATE TABLE IF NOT EXISTS participants (
@@ -67,7 +68,27 @@ CREATE TABLE IF NOT EXISTS events (  -- every accepted action of a participant, 
   at TEXT NOT NULL,               -- UTC ISO-8601, milliseconds
   elapsed_seconds REAL,           -- the test's time spent when it happened
   action TEXT NOT NULL,           -- consent, start, resume, group, representative, rate, ...
-  detail TEXT NOT NULL DEFAULT '{}'  -- JSON: the answer, and any answer it dropped
+  detail TEXT NOT NULL DEFAULT '{}',  -- JSON: the answer, and any answer it dropped
+  front_end TEXT                  -- desktop, notebook, web, simulated, script (NULL before version 3)
+);
+CREATE TABLE IF NOT EXISTS settings (  -- the study's design: key -> JSON (config, stimuli framing)
+  key TEXT PRIMARY KEY,
+  value TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS enrolments (  -- one per participant enrolled since version 3
+  participant_id INTEGER PRIMARY KEY REFERENCES participants(id) ON DELETE CASCADE,
+  external_id TEXT UNIQUE,        -- e.g. a Prolific PID, or NULL
+  pilot INTEGER NOT NULL DEFAULT 0 CHECK (pilot IN (0, 1)),  -- trial runs, left out of the analysis
+  grammar_order TEXT NOT NULL,    -- JSON list of grammar names (a Latin-square row)
+  completion_code TEXT,
+  withdrawn_at TEXT
+);
+CREATE TABLE IF NOT EXISTS page_answers (  -- instructions read, practice, attention checks, demographics
+  participant_id INTEGER NOT NULL REFERENCES participants(id) ON DELETE CASCADE,
+  page TEXT NOT NULL,
+  answers TEXT NOT NULL,          -- JSON object
+  at TEXT NOT NULL,
+  PRIMARY KEY (participant_id, page)
 );
 CREATE INDEX IF NOT EXISTS tests_by_participant ON tests (participant_id);
 CREATE INDEX IF NOT EXISTS groups_by_test ON groups (test_id);

@@ -162,8 +162,9 @@ class TestSession:
 
     __test__ = False  # not a pytest class
 
-    def __init__(self, study: Study, test_id: int, participant: str, grammar: str, seed: int) -> None:
+    def __init__(self, study: Study, test_id: int, participant: str, grammar: str, seed: int, front_end: str = "script") -> None:
         self.study = study
+        self.front_end = front_end  # stored with each answer
         self.conn = study.conn
         self.test_id = test_id
         self.participant = participant
@@ -235,7 +236,7 @@ class TestSession:
             if several and g.representative_quality is None:
                 todo.append(f"group {g.label}: rate its representative")
             if not g.qualifiers:
-                todo.append(f"group {g.label}: give at least one qualifier")
+                todo.append(f"group {g.label}: describe it in at least one word")
         return todo
 
     # -- time ---------------------------------------------------------------------
@@ -260,7 +261,7 @@ class TestSession:
         event ``action`` with ``detail`` (which the change may still fill in)."""
         if self.finished:
             raise StudyInputError(
-                f"the test of {self.participant!r} on {self.grammar!r} is finished; its answers can no longer change"
+                "this set is finished; its answers can no longer change"  # read by participants: no grammar name
             )
         now = self.study.clock()
         try:
@@ -270,7 +271,7 @@ class TestSession:
                     "UPDATE tests SET elapsed_seconds = elapsed_seconds + ? WHERE id = ?",
                     (max(0.0, now - self._tick), self.test_id),
                 )
-                log_test_event(self.conn, self.test_id, action, detail)
+                log_test_event(self.conn, self.test_id, action, detail, self.front_end)
         except sqlite3.IntegrityError as exc:  # a check the validation above missed
             raise StudyInputError(f"answer refused by the database: {exc}") from None
         self._tick = now
@@ -379,10 +380,10 @@ class TestSession:
         """Add one free-text qualifier (French or English) to ``group``."""
         gid, _ = self._group(group)
         if not isinstance(text, str) or not text.strip():
-            raise StudyInputError(f"group {group}: a qualifier must be non-empty text, got {text!r}")
+            raise StudyInputError(f"group {group}: a description must be a non-empty word, got {text!r}")
         if len(text.strip()) > MAX_QUALIFIER_CHARS:
             raise StudyInputError(
-                f"group {group}: a qualifier is a word or a short phrase, at most {MAX_QUALIFIER_CHARS} characters"
+                f"group {group}: a description is a word or a short phrase, at most {MAX_QUALIFIER_CHARS} characters"
             )
         with self._write("add_qualifier", {"group": int(group), "text": text.strip()}) as conn:
             conn.execute("INSERT INTO qualifiers (group_id, text) VALUES (?, ?)", (gid, text.strip()))
@@ -394,7 +395,7 @@ class TestSession:
             "SELECT id FROM qualifiers WHERE group_id = ? AND text = ? ORDER BY id DESC", (gid, str(text).strip())
         ).fetchone()
         if row is None:
-            raise StudyInputError(f"group {group} has no qualifier {text!r}")
+            raise StudyInputError(f"group {group} has no description {text!r}")
         with self._write("remove_qualifier", {"group": int(group), "text": str(text).strip()}) as conn:
             conn.execute("DELETE FROM qualifiers WHERE id = ?", (row[0],))
 

@@ -201,7 +201,7 @@ def run_simulation(
             code = study.add_participant(consent=True)
             person = SimulatedParticipant(noise=noise, seed=int(rng.integers(2**31)))
             for grammar in rng.permutation(grammars)[:count].tolist():
-                session = study.session(code, grammar)
+                session = study.session(code, grammar, front_end="simulated")
                 clock.advance(min(median * float(np.exp(rng.normal(0.0, 0.35))), longest))
                 person.answer(session, points[grammar], effects.get(grammar, 0.0))
             codes.append(code)

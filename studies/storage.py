@@ -60,11 +60,14 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from ramure.studies.design import StudyConfig
     from ramure.studies.session import TestSession
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: The schema version each table appeared in (the others are in version 1).
-TABLE_SINCE = {"events": 2}
+TABLE_SINCE = {"events": 2, "settings": 3, "enrolments": 3, "page_answers": 3}
+#: Columns added to an older table, and the version they appeared in (``ALTER TABLE`` migrates them).
+COLUMN_SINCE = {("events", "front_end"): 3}
 DEFAULT_BUDGET_MINUTES = 30.0
 _CODE = re.compile(r"^[A-Za-z0-9_-]{1,32}$")
 
@@ -105,21 +108,36 @@ def _columns(conn: sqlite3.Connection, table: str) -> list[tuple]:
 _SIGNATURE: dict[str, list[tuple]] = {}
 
 
-def _signature() -> dict[str, list[tuple]]:
-    """The columns of every table of ``schema.sql``, read from an in-memory database (cached)."""
+def _signature(version: int = SCHEMA_VERSION) -> dict[str, list[tuple]]:
+    """The columns of every table of ``schema.sql`` in ``version`` (read from an in-memory database, cached)."""
     if not _SIGNATURE:
         mem = sqlite3.connect(":memory:")
         mem.executescript(schema_sql())
         _SIGNATURE.update({name: _columns(mem, name) for name in _schema_tables()})
         mem.close()
-    return _SIGNATURE
+    return {
+        table: [c for c in columns if COLUMN_SINCE.get((table, c[0]), 1) <= version]
+        for table, columns in _SIGNATURE.items()
+        if TABLE_SINCE.get(table, 1) <= version
+    }
+
+
+def _added_columns(version: int) -> str:
+    """``ALTER TABLE`` statements adding the columns newer than ``version`` (as ``schema.sql`` declares them)."""
+    declared = {(t, c[0]): c for t, cols in _signature().items() for c in cols}
+    return " ".join(
+        f"ALTER TABLE {table} ADD COLUMN {column} {declared[(table, column)][1]};"
+        for (table, column), since in COLUMN_SINCE.items()
+        if TABLE_SINCE.get(table, 1) <= version < since  # a newer table is created whole by schema.sql
+    )
 
 
 def migrate(conn: sqlite3.Connection) -> None:
     """Bring an open study database to :data:`SCHEMA_VERSION`, in one transaction.
 
-    Version 1 lacks the ``events`` table; ``schema.sql`` creates only what is
-    missing, so running it migrates, and answers already stored are untouched.
+    Version 1 lacks the ``events`` table, version 2 the ``settings``, ``enrolments`` and
+    ``page_answers`` tables and ``events.front_end``; ``schema.sql`` creates only what is
+    missing and ``ALTER TABLE`` adds the columns, so answers already stored are untouched.
     A study made before the application id gets it.  Call it only on a file
     :func:`check_study_file` accepted: it writes.
     Two processes migrating at once are serialised by ``BEGIN IMMEDIATE``.
@@ -129,12 +147,14 @@ def migrate(conn: sqlite3.Connection) -> None:
         return
     try:
         conn.executescript(
-            f"BEGIN IMMEDIATE; {schema_sql()} PRAGMA user_version = {SCHEMA_VERSION}; "
+            f"BEGIN IMMEDIATE; {schema_sql()} {_added_columns(version)} PRAGMA user_version = {SCHEMA_VERSION}; "
             f"PRAGMA application_id = {APPLICATION_ID}; COMMIT;"
         )
-    except sqlite3.Error:
+    except sqlite3.Error as exc:
         if conn.in_transaction:
             conn.rollback()
+        if "duplicate column" in str(exc) and conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION:
+            return  # another process migrated it between our look and our lock
         raise
 
 
@@ -210,7 +230,7 @@ def _recognise(conn: sqlite3.Connection, path: pathlib.Path) -> int:
     if not 1 <= version <= SCHEMA_VERSION:
         raise StudyInputError(f"{path}: study database version {version}; this Ramure reads versions 1 to {SCHEMA_VERSION}")
     for table in sorted(_schema_tables(version)):
-        if _columns(conn, table) != _signature()[table]:
+        if _columns(conn, table) != _signature(version)[table]:
             raise StudyInputError(f"{path}: not a Ramure study database (table {table} has other columns)")
     problems = [r[0] for r in conn.execute("PRAGMA quick_check(5)")]
     if problems != ["ok"]:
@@ -288,6 +308,34 @@ VALUE_RULES: tuple[tuple[str, str, str, str], ...] = (
     ("events", "elapsed_seconds", _optional("elapsed_seconds", _number("elapsed_seconds", "0", "1e9")), "seconds, or empty"),
     ("events", "action", _text("action"), "non-empty text"),
     ("events", "detail", "typeof(detail) = 'text'", "JSON text"),
+    ("events", "front_end", _optional("front_end", _text("front_end")), "text (a front end), or empty"),
+    ("settings", "key", _text("key"), "non-empty text"),
+    ("settings", "value", "typeof(value) = 'text' AND json_valid(value)", "JSON text"),
+    ("enrolments", "participant_id", "typeof(participant_id) = 'integer'", "an integer"),
+    (
+        "enrolments",
+        "external_id",
+        _optional("external_id", "typeof(external_id) = 'text' AND length(external_id) BETWEEN 1 AND 64"),
+        "text of 1 to 64 characters, or empty",
+    ),
+    ("enrolments", "pilot", _integer("pilot", 0, 1), "0 or 1"),
+    (
+        "enrolments",
+        "grammar_order",
+        "typeof(grammar_order) = 'text' AND json_valid(grammar_order) AND json_type(grammar_order) = 'array'",
+        "a JSON list of grammar names",
+    ),
+    ("enrolments", "completion_code", _optional("completion_code", _text("completion_code")), "text, or empty"),
+    ("enrolments", "withdrawn_at", _optional("withdrawn_at", _text("withdrawn_at")), "a UTC time, or empty"),
+    ("page_answers", "participant_id", "typeof(participant_id) = 'integer'", "an integer"),
+    ("page_answers", "page", _text("page"), "non-empty text"),
+    (
+        "page_answers",
+        "answers",
+        "typeof(answers) = 'text' AND json_valid(answers) AND json_type(answers) = 'object'",
+        "a JSON object",
+    ),
+    ("page_answers", "at", _text("at"), _TIME),
 )
 
 
@@ -304,7 +352,7 @@ def check_values(conn: sqlite3.Connection, path: str | os.PathLike, version: int
     """
     tables = _schema_tables(version)
     for table, column, rule, wording in VALUE_RULES:
-        if table not in tables:
+        if table not in tables or COLUMN_SINCE.get((table, column), 1) > version:
             continue
         bad = conn.execute(f"SELECT rowid, quote({column}) FROM {table} WHERE ({rule}) IS NOT 1 LIMIT 1").fetchone()
         if bad is not None:
@@ -380,14 +428,22 @@ class Study:
         budget_minutes: float = DEFAULT_BUDGET_MINUTES,
         clock: Callable[[], float] = time.monotonic,
         durable: bool = True,
+        config: StudyConfig | None = None,
     ) -> Study:
         """Create a study in a new file ``path``.
 
         ``grammars`` maps a grammar name to an exploration directory (holding
         ``picks.json``) or to plain data: a list of 27 pick dicts or
         :class:`~ramure.studies.picks.Pick`.  ``budget_minutes`` is each participant's
-        time budget over all their tests.
+        time budget over all their tests.  ``config`` holds what participants read
+        (:class:`~ramure.studies.design.StudyConfig`, default texts when None).
         """
+        from ramure.studies.design import StudyConfig
+
+        config = config if config is not None else StudyConfig()
+        if config.practice_set is not None and config.practice_set not in (grammars or {}):
+            known = ", ".join(grammars or {}) or "none"
+            raise StudyInputError(f"the practice set {config.practice_set!r} is not a grammar of the study (grammars: {known})")
         path = pathlib.Path(path)
         try:
             budget = float(budget_minutes)
@@ -416,6 +472,7 @@ class Study:
             )
             for gname, (source, picks) in loaded.items():
                 _insert_grammar(conn, gname, source, picks, path.parent)
+            conn.execute("INSERT INTO settings (key, value) VALUES ('config', ?)", (json.dumps(config.to_data()),))
         return cls(conn, path, clock)
 
     @classmethod
@@ -493,6 +550,18 @@ class Study:
         )
         return [Pick(r[0], r[1], (r[2], r[3], r[4]), json.loads(r[5]), self._picture(r[6])) for r in rows]
 
+    def set_pictures(self, grammar: str, images: dict[int, str | os.PathLike]) -> None:
+        """Store the picture of each pick of ``grammar`` (``{pick id: file}``), relative to the study's
+        folder; each file must lie inside it (one transaction)."""
+        self._writable()
+        gid = self.grammar_id(grammar)
+        rows = []
+        for pid, image in sorted(images.items()):
+            inside_folder(self.path.parent, image, f"picture of pick {pid}")  # refused if outside
+            rows.append((relative_to(self.path.parent, image), gid, int(pid)))
+        with self.conn:
+            self.conn.executemany("UPDATE picks SET image = ? WHERE grammar_id = ? AND pick_id = ?", rows)
+
     def _picture(self, image):
         """A pick's picture path if it lies inside the study's folder, else None (never shown).
 
@@ -508,13 +577,49 @@ class Study:
             return None
         return picture
 
+    # -- settings --------------------------------------------------------------
+    def setting(self, key: str) -> object:
+        """The stored setting ``key`` (decoded JSON), or None (and None for a study before version 3)."""
+        if self.version < TABLE_SINCE["settings"]:
+            return None
+        row = self.conn.execute("SELECT value FROM settings WHERE key = ?", (key,)).fetchone()
+        return json.loads(row[0]) if row else None
+
+    def set_setting(self, key: str, value: object) -> None:
+        """Store setting ``key`` as JSON (replacing any earlier value)."""
+        self._writable()
+        with self.conn:
+            self.conn.execute(
+                "INSERT OR REPLACE INTO settings (key, value) VALUES (?, ?)", (key, json.dumps(value, sort_keys=True))
+            )
+
+    def config(self) -> StudyConfig:
+        """What participants read (:class:`~ramure.studies.design.StudyConfig`); the defaults for a
+        study stored without one."""
+        from ramure.studies.design import StudyConfig, config_from_data
+
+        data = self.setting("config")
+        return StudyConfig() if data is None else config_from_data(data, where=f"{self.path}: settings config")
+
     # -- participants --------------------------------------------------------
-    def add_participant(self, code: str | None = None, consent: bool = False, seed: int | None = None) -> str:
+    def add_participant(
+        self,
+        code: str | None = None,
+        consent: bool = False,
+        seed: int | None = None,
+        external_id: str | None = None,
+        pilot: bool = False,
+    ) -> str:
         """Register a participant under an anonymous ``code`` (default P101, P102...).
 
         ``seed`` fixes the image order of their tests (default: from the code).
+        ``external_id`` is a recruiting platform's id (a Prolific PID); ``pilot`` marks a
+        trial run, left out of the analysis.  The participant's order of the grammars is
+        the next row of a balanced Latin square (pilots and real participants count apart),
+        and a completion code is drawn; both are stored.
         """
         self._writable()
+        external_id = _external_id(external_id)
         if code is None:
             taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
             number = 101
@@ -537,9 +642,115 @@ class Study:
                 ).lastrowid
                 if consent and pid is not None:  # pid: set by the INSERT just made
                     log_event(self.conn, pid, "consent", {"given": True})
-        except sqlite3.IntegrityError:
+                self._enrol(pid, external_id, bool(pilot))
+        except sqlite3.IntegrityError as exc:
+            if external_id is not None and "external_id" in str(exc):
+                raise StudyInputError(f"external id {external_id!r} is already enrolled in this study") from None
             raise StudyInputError(f"participant code {code!r} is already used") from None
         return code
+
+    def _enrol(self, pid: int | None, external_id: str | None, pilot: bool) -> None:
+        import secrets
+
+        from ramure.studies.design import grammar_order
+
+        index = self.conn.execute("SELECT count(*) FROM enrolments WHERE pilot = ?", (int(pilot),)).fetchone()[0]
+        order = grammar_order(self.sets(), index)
+        fixed = self.config().completion_code
+        code = fixed or "".join(secrets.choice("ABCDEFGHJKLMNPQRSTUVWXYZ23456789") for _ in range(8))
+        self.conn.execute(
+            "INSERT INTO enrolments (participant_id, external_id, pilot, grammar_order, completion_code) VALUES (?, ?, ?, ?, ?)",
+            (pid, external_id, int(pilot), json.dumps(order), code),
+        )
+
+    def _enrolment(self, code: str) -> tuple | None:
+        """(external_id, pilot, grammar order, completion code, withdrawn_at) of ``code``, or None."""
+        pid = self._participant(code)[0]
+        if self.version < TABLE_SINCE["enrolments"]:
+            return None
+        return self.conn.execute(
+            "SELECT external_id, pilot, grammar_order, completion_code, withdrawn_at FROM enrolments WHERE participant_id = ?",
+            (pid,),
+        ).fetchone()
+
+    def grammar_order(self, code: str) -> list[str]:
+        """Participant ``code``'s order of the grammars (their Latin-square row; the study's order for
+        a participant enrolled before version 3).  Grammars added after they enrolled come last."""
+        row = self._enrolment(code)
+        sets = self.sets()
+        order = [g for g in json.loads(row[2]) if g in sets] if row else []
+        return order + [g for g in sets if g not in order]
+
+    def sets(self) -> list[str]:
+        """The grammars participants sort for real: all but the config's practice set."""
+        practice = self.config().practice_set
+        return [g for g in self.grammars if g != practice]
+
+    def completion_code(self, code: str) -> str | None:
+        """The code participant ``code`` gives their recruiting platform at the end (None before version 3)."""
+        row = self._enrolment(code)
+        return row[3] if row else None
+
+    def is_pilot(self, code: str) -> bool:
+        row = self._enrolment(code)
+        return bool(row and row[1])
+
+    def find_participant(self, name: str) -> str:
+        """The code of the participant whose code, or external id, is ``name``."""
+        row = self.conn.execute("SELECT code FROM participants WHERE code = ?", (str(name),)).fetchone()
+        if row is None and self.version >= TABLE_SINCE["enrolments"]:
+            row = self.conn.execute(
+                "SELECT p.code FROM participants p JOIN enrolments e ON e.participant_id = p.id WHERE e.external_id = ?",
+                (str(name),),
+            ).fetchone()
+        if row is None:
+            raise StudyInputError(f"no participant {name!r} in this study (neither a code nor an external id)")
+        return row[0]
+
+    def has_consent(self, code: str) -> bool:
+        return bool(self._participant(code)[2])
+
+    def withdraw(self, code: str, delete: bool = False) -> None:
+        """Participant ``code`` withdraws: their consent is withdrawn and the time recorded, so their
+        answers are left out of every analysis and export; ``delete=True`` erases them too."""
+        self._writable()
+        if delete:
+            self.delete_participant(code)
+            return
+        pid = self._participant(code)[0]
+        with self.conn:
+            self.conn.execute("UPDATE participants SET consent = 0, consent_at = ? WHERE id = ?", (now_iso(), pid))
+            self.conn.execute("UPDATE enrolments SET withdrawn_at = ? WHERE participant_id = ?", (now_iso(), pid))
+            log_event(self.conn, pid, "withdraw", {})
+
+    def record_answers(self, code: str, page: str, answers: dict) -> None:
+        """Store participant ``code``'s ``answers`` (a JSON object) on ``page`` (instructions,
+        practice, attention, demographics), with the time, replacing earlier ones."""
+        self._writable()
+        pid = self._participant(code)[0]
+        with self.conn:
+            self.conn.execute(
+                "INSERT OR REPLACE INTO page_answers (participant_id, page, answers, at) VALUES (?, ?, ?, ?)",
+                (pid, page, json.dumps(answers, sort_keys=True), now_iso()),
+            )
+            log_event(self.conn, pid, "page", {"page": page, "answers": answers})
+
+    def participant_answers(self, code: str) -> dict[str, dict]:
+        """Participant ``code``'s answers by page (see :meth:`record_answers`)."""
+        pid = self._participant(code)[0]
+        if self.version < TABLE_SINCE["page_answers"]:
+            return {}
+        rows = self.conn.execute("SELECT page, answers FROM page_answers WHERE participant_id = ?", (pid,))
+        return {page: json.loads(text) for page, text in rows}
+
+    def started(self, code: str, grammar: str) -> bool:
+        """Whether participant ``code`` has started (or finished) their test on ``grammar``."""
+        row = self.conn.execute(
+            "SELECT 1 FROM tests t JOIN participants p ON p.id = t.participant_id "
+            "JOIN grammars g ON g.id = t.grammar_id WHERE p.code = ? AND g.name = ?",
+            (str(code), grammar),
+        ).fetchone()
+        return row is not None
 
     def record_consent(self, code: str, given: bool = True) -> None:
         """Record that participant ``code`` gave (or withdrew) consent, with the time.
@@ -570,14 +781,29 @@ class Study:
         return row
 
     def participants(self) -> list[dict]:
-        """Each participant's code, consent and number of tests started/finished."""
+        """Each participant's code, consent, number of tests started/finished, external id, pilot flag
+        and withdrawal time."""
+        enrolled = self.version >= TABLE_SINCE["enrolments"]
+        extra = "e.external_id, coalesce(e.pilot, 0), e.withdrawn_at" if enrolled else "NULL, 0, NULL"
+        join = "LEFT JOIN enrolments e ON e.participant_id = p.id" if enrolled else ""
         rows = self.conn.execute(
-            "SELECT p.code, p.consent, p.consent_at, count(t.id), count(t.finished_at), "
-            "coalesce(sum(t.elapsed_seconds), 0) FROM participants p "
+            f"SELECT p.code, p.consent, p.consent_at, count(t.id), count(t.finished_at), "
+            f"coalesce(sum(t.elapsed_seconds), 0), {extra} FROM participants p {join} "
             "LEFT JOIN tests t ON t.participant_id = p.id GROUP BY p.id ORDER BY p.id"
         )
         return [
-            dict(code=r[0], consent=bool(r[1]), consent_at=r[2], tests=r[3], finished=r[4], elapsed_seconds=r[5]) for r in rows
+            dict(
+                code=r[0],
+                consent=bool(r[1]),
+                consent_at=r[2],
+                tests=r[3],
+                finished=r[4],
+                elapsed_seconds=r[5],
+                external_id=r[6],
+                pilot=bool(r[7]),
+                withdrawn_at=r[8],
+            )
+            for r in rows
         ]
 
     def used_seconds(self, code: str) -> float:
@@ -594,12 +820,17 @@ class Study:
         return max(0.0, self.budget_seconds - self.used_seconds(code))
 
     # -- tests ----------------------------------------------------------------
-    def session(self, code: str, grammar: str) -> TestSession:
+    def session(self, code: str, grammar: str, front_end: str = "script") -> TestSession:
         """Start, or resume, participant ``code``'s test on ``grammar``.
 
         Refused without consent, and refused for a *new* test once the
         participant's budget is spent (an unfinished test can always be resumed).
+        ``front_end`` (desktop, notebook, web, simulated, script) is stored with every answer.
         """
+        from ramure.studies.design import FRONT_ENDS
+
+        if front_end not in FRONT_ENDS:
+            raise StudyInputError(f"front end {front_end!r} is not one of {', '.join(FRONT_ENDS)}")
         from ramure.studies.session import TestSession
 
         self._writable()
@@ -621,13 +852,13 @@ class Study:
                 )
                 test_id = cur.lastrowid
                 assert test_id is not None  # set by the INSERT just made
-                log_event(self.conn, pid, "start", {"grammar": grammar}, test_id, 0.0)
+                log_event(self.conn, pid, "start", {"grammar": grammar}, test_id, 0.0, front_end)
         else:
             test_id = row[0]
             if row[1] is None:
                 with self.conn:
-                    log_event(self.conn, pid, "resume", {"grammar": grammar}, test_id, row[2])
-        return TestSession(self, test_id, str(code), grammar, seed)
+                    log_event(self.conn, pid, "resume", {"grammar": grammar}, test_id, row[2], front_end)
+        return TestSession(self, test_id, str(code), grammar, seed, front_end)
 
     def finished(self, code: str, grammar: str) -> bool:
         """Whether participant ``code`` has finished their test on ``grammar``."""
@@ -654,7 +885,10 @@ class Study:
             args,
         )
         keys = ("participant", "grammar", "at", "elapsed_seconds", "action")
-        return [dict(zip(keys, r[:5]), detail=self._detail(r[6], r[5])) for r in rows]
+        front = {}
+        if self.version >= COLUMN_SINCE[("events", "front_end")]:
+            front = dict(self.conn.execute("SELECT id, front_end FROM events"))
+        return [dict(zip(keys, r[:5]), detail=self._detail(r[6], r[5]), front_end=front.get(r[6])) for r in rows]
 
     def _detail(self, row: int, text: str) -> dict:
         try:
@@ -675,6 +909,15 @@ class Study:
         return [
             dict(test=r[0], participant=r[1], grammar=r[2], started_at=r[3], finished_at=r[4], elapsed_seconds=r[5]) for r in rows
         ]
+
+
+def _external_id(value: object) -> str | None:
+    """A recruiting platform's participant id, checked (None stays None)."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or not re.match(r"^[A-Za-z0-9_.:-]{1,64}$", value):
+        raise StudyInputError(f"external id {value!r} must be 1-64 letters, digits, '.', ':', '-' or '_' (e.g. a Prolific PID)")
+    return value
 
 
 def _read_grammar(name, spec):

@@ -11,6 +11,7 @@ Sub-commands print one JSON object on stdout::
     ramure study words study.db -o words.json
     ramure study status study.db
     ramure study serve study.db --port 8000
+    ramure study withdraw study.db P104 --delete
 """
 
 from __future__ import annotations
@@ -79,14 +80,39 @@ def _summary(result) -> dict:
 
 
 def run_create(args: argparse.Namespace) -> int:
+    from ramure.studies.design import read_config
     from ramure.studies.storage import Study
 
+    if not 32 <= args.picture_size <= 2048:
+        raise UserError(f"--picture-size must be 32 to 2048 pixels, not {args.picture_size}")
+    config = read_config(args.config) if args.config else None  # checked before any file is made
     with Study.create(
-        args.db, grammars=_grammar_specs(args.grammar), name=args.name, budget_minutes=args.budget_minutes
+        args.db, grammars=_grammar_specs(args.grammar), name=args.name, budget_minutes=args.budget_minutes, config=config
     ) as study:
+        pictures = {}
+        if not args.no_render:
+            from ramure.app.stimuli import render_stimuli
+
+            pictures = render_stimuli(study, size=args.picture_size)
         return _print(
-            dict(db=str(study.path), name=study.name, grammars=study.grammars, budget_minutes=study.budget_seconds / 60)
+            dict(
+                db=str(study.path),
+                name=study.name,
+                grammars=study.grammars,
+                budget_minutes=study.budget_seconds / 60,
+                framing=study.config().framing,
+                pictures=pictures,
+            )
         )
+
+
+def run_withdraw(args: argparse.Namespace) -> int:
+    from ramure.studies.storage import Study
+
+    with Study.open(args.db) as study:
+        code = study.find_participant(args.participant)
+        study.withdraw(code, delete=args.delete)
+        return _print(dict(db=str(study.path), participant=code, withdrawn=True, deleted=bool(args.delete)))
 
 
 def run_simulate(args: argparse.Namespace) -> int:
@@ -276,6 +302,14 @@ def register(subparsers: Subparsers) -> None:
     )
     p.add_argument("--name", help="study name (default: the file name)")
     p.add_argument("--budget-minutes", type=float, default=30.0, help="time budget per participant")
+    p.add_argument(
+        "--config",
+        metavar="FILE",
+        help="study config JSON: consent, contact, retention, instructions, practice, attention_checks, "
+        "demographics, likert, completion_code, framing (defaults for what is left out)",
+    )
+    p.add_argument("--picture-size", type=int, default=480, help="side of the rendered pictures, pixels (default 480)")
+    p.add_argument("--no-render", action="store_true", help="keep the explorations' own pictures (framed each on its own bounds)")
     p.set_defaults(func=run_create)
 
     p = sub.add_parser("simulate", help="run simulated participants end to end (store, analyse, export)")
@@ -333,6 +367,12 @@ def register(subparsers: Subparsers) -> None:
     p.add_argument("--grammars-dir", help="folder of the .lsys files the explorations name (default: shipped grammars)")
     synonyms(p)
     p.set_defaults(func=run_words)
+
+    p = sub.add_parser("withdraw", help="a participant withdraws: left out of analyses, or erased with --delete")
+    p.add_argument("db")
+    p.add_argument("participant", help="participant code, or external id (e.g. a Prolific PID)")
+    p.add_argument("--delete", action="store_true", help="erase every answer of the participant")
+    p.set_defaults(func=run_withdraw)
 
     p = sub.add_parser("status", help="participants and tests of a study")
     p.add_argument("db")

@@ -1,16 +1,21 @@
 """Study mode: the participant's screens and the Study menu.
 
-A participant session (:class:`ParticipantWindow`) walks through:
+A participant session (:class:`ParticipantWindow`) shows the pages of a
+:class:`ramure.studies.design.ParticipantFlow`, with the study's own words
+(:class:`ramure.studies.design.StudyConfig`, the same as in the notebook):
 
-1. **Consent** — the study's purpose and an "I agree" box (recorded with
-   :meth:`ramure.studies.Study.record_consent`);
-2. per grammar, **sorting** — the 27 thumbnails in the participant's seeded
-   order, dragged into groups (drop on "New group" to start one);
-3. per group, a **representative** (click an image, "Make representative"),
-   the **three Likert questions** and free-text **qualifiers**;
-4. **Finish** — refused, listing what is missing, until everything is answered; then
-   a short page ("Grammar 1 of 3 done", Continue) before the next grammar, so a
-   double click on Finish never reaches the next test.  "Grammar N of M" stays in view.
+1. **Consent** — the study's text, contact and data retention, and an "I agree" box;
+2. the **instructions** and the **practice** page;
+3. per picture set, in the participant's Latin-square order, **sorting** — the 27
+   pictures in the participant's seeded order, all in view, dragged into groups
+   (drop on "New group" to start one); a double click shows a picture larger;
+4. per group, a **representative** (click an image, "Make representative"),
+   the **three Likert questions** and the words that describe it;
+5. **Finish** — refused, listing what is missing, until everything is answered; then
+   a short page ("Set 1 of 3 done", Continue) before the next set, so a
+   double click on Finish never reaches the next test.  "Set N of M" stays in view;
+6. the attention checks (after the first set), the demographics questions, and the last
+   page: the completion code, and any set the time budget skipped.
 
 Every answer goes straight to :class:`ramure.studies.TestSession` (one SQLite
 transaction each), and the screen is rebuilt from what is stored, so a crash
@@ -23,7 +28,7 @@ from __future__ import annotations
 
 import os
 import pathlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
@@ -33,6 +38,9 @@ from PySide6.QtWidgets import (
     QApplication,
     QButtonGroup,
     QCheckBox,
+    QComboBox,
+    QDialog,
+    QFormLayout,
     QGridLayout,
     QGroupBox,
     QHBoxLayout,
@@ -53,6 +61,7 @@ from PySide6.QtWidgets import (
 from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
+from ramure.studies.design import WORDS, ParticipantFlow, Question, StudyConfig, set_title, split_words
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QCloseEvent, QDragEnterEvent, QDragMoveEvent, QDropEvent, QImage
@@ -64,31 +73,46 @@ if TYPE_CHECKING:
 
 MIME = "application/x-ramure-images"
 ICON = 96
-QUESTIONS = (
-    ("usefulness", "How useful is this group of variants?"),
-    ("difference", "How different are the images of this group from the others?"),
-    ("representative", "How well does the representative stand for its group?"),
-)
-LEVELS = ("poor", "fair", "good", "excellent")
-CONSENT_TEXT = (
-    "<h3>Variants of procedural plants</h3>"
-    "<p>You will see 27 pictures of plants made from one grammar. Sort them into groups of "
-    "pictures that look alike to you, choose one picture to represent each group, answer three "
-    "short questions per group and give each group one or more words that describe it.</p>"
-    "<p>Your answers are stored under an anonymous code, each as soon as you give it. You can stop "
-    "at any time; you can withdraw your consent later and your answers will be left out.</p>"
-)
+#: Size the pictures are loaded at: what a double click shows (the pool shows them smaller).
+LARGE = 480
+
+
+def html_text(title: str, text: str) -> str:
+    """A page's title and plain text (paragraphs at blank lines) as escaped rich text."""
+    import html
+
+    paragraphs = "".join(f"<p>{html.escape(p).replace(chr(10), '<br>')}</p>" for p in text.split("\n\n") if p.strip())
+    return f"<h3>{html.escape(title)}</h3>{paragraphs}"
+
+
+def fit_icon(width: int, height: int, count: int = 27, caption: int = 22, gap: int = 12, largest: int = 160) -> int:
+    """The largest square icon (pixels) such that ``count`` pictures with their captions fit in
+    ``width`` x ``height``, so that the participant sees every picture at once.
+
+    >>> fit_icon(520, 700), fit_icon(1000, 700) > fit_icon(520, 700)
+    (82, True)
+    """
+    for size in range(largest, 23, -2):
+        columns = max(1, (width - 4) // (size + gap))
+        rows = -(-count // columns)
+        if rows * (size + caption + gap) <= height - 4:
+            return size
+    return 24
 
 
 # -- images --------------------------------------------------------------------------
-def pick_images(study: Study, grammar: str, size: int = ICON, grammars_dir: str | os.PathLike | None = None) -> dict[int, QImage]:
-    """QImages of a grammar's 27 picks, by id: their image files, else derived, else placeholders.
+def pick_images(
+    study: Study, grammar: str, size: int = LARGE, grammars_dir: str | os.PathLike | None = None
+) -> dict[int, QImage]:
+    """QImages of a grammar's 27 picks, by id: the pictures stored with the study (rendered once,
+    the same the notebook shows), else derived, else placeholders.
 
     Drawing derives each variant (when a grammar file named like the grammar is found), so call
     it from a worker.
     """
     picks = study.picks(grammar)
-    lsystem, n, seed = _study_grammar(study, grammar, grammars_dir)
+    stored = all(p.image and pathlib.Path(p.image).is_file() for p in picks)
+    lsystem, n, seed = (None, None, 0) if stored else _study_grammar(study, grammar, grammars_dir)
     images = {}
     from PySide6.QtGui import QImage
 
@@ -96,13 +120,13 @@ def pick_images(study: Study, grammar: str, size: int = ICON, grammars_dir: str 
 
     for pick in picks:
         image = QImage()
-        if lsystem is not None:  # drawn here, unlabelled: older pick files carry metric captions
+        if pick.image and pathlib.Path(pick.image).is_file():
+            image = QImage(pick.image)
+        if image.isNull() and lsystem is not None:  # a study made without pictures
             try:
                 image = skeleton_image(variant_skeleton(lsystem, n, seed, pick.params), size)
             except (RamureError, ValueError, KeyError, ArithmeticError):
                 image = QImage()
-        if image.isNull() and pick.image and pathlib.Path(pick.image).is_file():
-            image = QImage(pick.image)
         if image.isNull():
             image = placeholder_image(size, "", "no picture")  # never the pick id: it encodes the lattice
         images[pick.id] = image.scaled(size, size, Qt.AspectRatioMode.KeepAspectRatio, Qt.TransformationMode.SmoothTransformation)
@@ -110,32 +134,11 @@ def pick_images(study: Study, grammar: str, size: int = ICON, grammars_dir: str 
 
 
 def _study_grammar(study, grammar, grammars_dir=None):
-    """The LSystem, n and seed to draw a study grammar's picks with (None if not found).
+    """The LSystem, n and seed to draw a study grammar's picks with (:func:`ramure.app.stimuli.study_grammar`,
+    confined to the study's folder: a participant's window does not show the experimenter's file errors)."""
+    from ramure.app.stimuli import study_grammar
 
-    The exploration folder's ``pca.json`` is read by
-    :func:`ramure.metrics.exploration.read_exploration_info`: the grammar it names is read
-    only from the grammars folder or from inside the exploration folder, and that folder
-    (named by the database) only if it lies inside the study's own folder, as its pictures
-    do; otherwise the grammar is looked up by its name.  A participant's window does not
-    show the experimenter's file errors: a refused ``pca.json`` draws nothing, and the
-    stored pictures (or placeholders) stand in.
-    """
-    from ramure.io import inside
-    from ramure.lsys import LSystem
-    from ramure.metrics.exploration import ExplorationInfo, find_grammar, read_exploration_info
-
-    try:
-        recorded = study.grammar_source(grammar)
-        if recorded and inside(recorded, study.path.parent):
-            info = read_exploration_info(recorded, grammars_dir, name=grammar)
-        else:
-            info = ExplorationInfo(grammar, find_grammar(grammar, grammars_dir), None, 0)
-        if info.grammar_file is None:
-            return None, None, 0
-        lsystem = LSystem.from_file(info.grammar_file)
-    except RamureError:
-        return None, None, 0
-    return lsystem, info.n if info.n is not None else lsystem.n, info.seed
+    return study_grammar(study, grammar, grammars_dir)
 
 
 # -- drag and drop lists -----------------------------------------------------------------
@@ -147,10 +150,12 @@ class ImageList(QListWidget):
     """
 
     dropped = Signal(list, object)  # image ids, target list
+    enlarge = Signal(int)  # image id double-clicked: show it larger
 
     def __init__(self, target: str | int, icon: int = ICON, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.target = target  # "pool", "new" or a group label
+        self.itemDoubleClicked.connect(lambda item: self.enlarge.emit(int(item.data(Qt.ItemDataRole.UserRole))))
         self.setViewMode(QListView.ViewMode.IconMode)
         self.setIconSize(QSize(icon, icon))
         self.setResizeMode(QListView.ResizeMode.Adjust)
@@ -198,6 +203,7 @@ class ImageList(QListWidget):
         """Show pick ``image_id`` under the participant's ``label`` (never the pick id: it encodes the lattice)."""
         item = QListWidgetItem(QIcon(pixmap), label)
         item.setData(Qt.ItemDataRole.UserRole, int(image_id))
+        item.setToolTip(f"{label}: double-click to see it larger")
         self.addItem(item)
         return item
 
@@ -213,7 +219,7 @@ class LikertRow(QWidget):
 
     answered = Signal(str, int)  # question, level 1-4
 
-    def __init__(self, key: str, question: str, parent: QWidget | None = None) -> None:
+    def __init__(self, key: str, question: str, levels: Sequence[str], parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.key = key
         self.buttons = QButtonGroup(self)
@@ -222,7 +228,7 @@ class LikertRow(QWidget):
         label = QLabel(question)
         label.setWordWrap(True)
         layout.addWidget(label, 1)
-        for level, name in enumerate(LEVELS, start=1):
+        for level, name in enumerate(levels, start=1):
             button = QRadioButton(name)
             self.buttons.addButton(button, level)
             layout.addWidget(button)
@@ -241,12 +247,14 @@ class GroupPanel(QGroupBox):
     """One group: its images (a drop target), representative, ratings and qualifiers."""
 
     def __init__(self, page: TestPage, group: Group, pixmaps: Mapping[int, QPixmap]) -> None:
-        super().__init__(f"Group {group.label} — {len(group.images)} image(s)")
+        super().__init__(f"{WORDS['group']} {group.label} — {len(group.images)} picture(s)")
         self.page, self.label = page, group.label
+        config = page.config
         self.images = ImageList(group.label, icon=64)
         rows = min(3, max(1, -(-len(group.images) // 8)))
         self.images.setMinimumHeight(12 + 88 * rows)
         self.images.dropped.connect(page.images_dropped)
+        self.images.enlarge.connect(page.enlarge)
         labels = page.session.labels()
         for image in page.session.in_order(group.images):  # the participant's order, not by pick id
             item = self.images.add_image(image, pixmaps[image], labels[image])
@@ -257,17 +265,19 @@ class GroupPanel(QGroupBox):
         self.make_rep.clicked.connect(self._representative)
         self.make_rep.setEnabled(len(group.images) > 1)
         self.rep_label = QLabel(f"Representative: {labels[group.representative] if group.representative else '—'}")
+        self.rep_label.setToolTip(WORDS["representative"])
         self.rows = {}
         answers = {"usefulness": group.usefulness, "difference": group.difference, "representative": group.representative_quality}
-        for key, question in QUESTIONS:
+        for key, question in config.questions.items():
             if key == "representative" and len(group.images) < 2:
                 continue
-            row = LikertRow(key, question)
+            row = LikertRow(key, question, config.levels)
             row.set_level(answers[key])
             row.answered.connect(lambda k, level: page.rate(self.label, k, level))
             self.rows[key] = row
         self.qualifier = QLineEdit()
-        self.qualifier.setPlaceholderText("a word for this group (e.g. dense, petit), then Enter")
+        self.qualifier.setPlaceholderText(WORDS["words_hint"])
+        self.qualifier.setToolTip(WORDS["words"])
         self.qualifier.returnPressed.connect(self._add_qualifier)
         add = QPushButton("Add")
         add.clicked.connect(self._add_qualifier)
@@ -311,12 +321,17 @@ class TestPage(QWidget):
 
     finished = Signal()
 
-    def __init__(self, window: ParticipantWindow, session: TestSession, pixmaps: Mapping[int, QPixmap]) -> None:
+    def __init__(
+        self, window: ParticipantWindow, session: TestSession, pixmaps: Mapping[int, QPixmap], config: StudyConfig | None = None
+    ) -> None:
         super().__init__()
         self.owner, self.session, self.pixmaps = window, session, pixmaps  # not self.window: QWidget.window()
+        self.config = config or session.study.config()
         self.pool = ImageList("pool")
         self.pool.setObjectName("pool")
         self.pool.dropped.connect(self.images_dropped)
+        self.pool.enlarge.connect(self.enlarge)
+        self.pool.installEventFilter(self)  # resized: the pictures are resized to stay all in view
         self.new_group = ImageList("new", icon=32)
         self.new_group.setObjectName("newGroup")
         self.new_group.setMaximumHeight(70)
@@ -328,14 +343,16 @@ class TestPage(QWidget):
         scroll = self.groups_scroll = QScrollArea()  # not self.scroll: QWidget.scroll()
         scroll.setWidgetResizable(True)
         scroll.setWidget(self.groups_host)
-        self.finish_button = QPushButton("Finish this grammar")
+        self.finish_button = QPushButton(WORDS["finish"])
         self.finish_button.clicked.connect(self.finish)
         self.todo = QLabel("")
         self.todo.setWordWrap(True)
         left = QVBoxLayout()
-        left.addWidget(QLabel(f"<b>{session.grammar}</b>: drag the pictures into groups of similar plants."))
+        hint = QLabel(WORDS["sort"] + " " + "Double-click a picture to see it larger.")
+        hint.setWordWrap(True)
+        left.addWidget(hint)
         left.addWidget(self.pool, 1)
-        left.addWidget(QLabel("Drop here to start a new group:"))
+        left.addWidget(QLabel(f"Drop here to start a {WORDS['new_group'].lower()}:"))
         left.addWidget(self.new_group)
         right = QVBoxLayout()
         right.addWidget(scroll, 1)
@@ -345,6 +362,39 @@ class TestPage(QWidget):
         layout.addLayout(left, 2)
         layout.addLayout(right, 3)
         self.refresh()
+
+    def eventFilter(self, watched: object, event: object) -> bool:  # noqa: N802 (Qt API)
+        from PySide6.QtCore import QEvent
+
+        if watched is self.pool and isinstance(event, QEvent) and event.type() == QEvent.Type.Resize:
+            self.fit_pool()
+        return False
+
+    def fit_pool(self) -> None:
+        """Size the pool's pictures so that all 27 are in view at once."""
+        area = self.pool.viewport().size()
+        size = fit_icon(area.width(), area.height(), caption=self.pool.fontMetrics().height() + 6)
+        self.pool.setIconSize(QSize(size, size))
+        self.pool.setGridSize(QSize(size + 10, size + self.pool.fontMetrics().height() + 10))
+
+    def enlarge(self, image: int) -> QDialog:
+        """Show picture ``image`` large, in a dialog (closed by a click or Escape)."""
+        dialog = QDialog(self)
+        dialog.setWindowTitle(self.session.labels()[image])
+        label = QLabel()
+        label.setObjectName("enlarged")
+        pixmap = self.pixmaps[image]
+        side = min(LARGE, max(pixmap.width(), pixmap.height(), 1))
+        label.setPixmap(pixmap.scaled(side, side, Qt.AspectRatioMode.KeepAspectRatio, Qt.TransformationMode.SmoothTransformation))
+        close = QPushButton("Close")
+        close.clicked.connect(dialog.accept)
+        layout = QVBoxLayout(dialog)
+        layout.addWidget(label)
+        layout.addWidget(QLabel(self.session.labels()[image]), 0, Qt.AlignmentFlag.AlignHCenter)
+        layout.addWidget(close)
+        self.enlarged = dialog
+        dialog.show()
+        return dialog
 
     # -- what the participant does ---------------------------------------------------
     def partition(self) -> list[list[int]]:
@@ -370,7 +420,18 @@ class TestPage(QWidget):
         self._write(lambda: self.session.rate(label, **{key: level}))
 
     def add_qualifier(self, label: int, text: str) -> bool:
-        return self._write(lambda: self.session.add_qualifier(label, text))
+        """Store the words typed for group ``label`` (split as in every front end: ``split_words``)."""
+        words = split_words(text)
+        if not words:
+            return self._write(lambda: self.session.add_qualifier(label, text))  # refused, with its message
+
+        def add() -> None:
+            stored = next((g.qualifiers for g in self.session.groups() if g.label == label), [])
+            for word in words:
+                if word not in stored:
+                    self.session.add_qualifier(label, word)
+
+        return self._write(add)
 
     def remove_qualifier(self, label: int, text: str) -> None:
         self._write(lambda: self.session.remove_qualifier(label, text))
@@ -432,8 +493,46 @@ class TestPage(QWidget):
         )
 
 
+class QuestionsPage(QWidget):
+    """A page of questions (attention checks, demographics): a list to choose from, or a text box."""
+
+    def __init__(self, title: str, questions: Sequence[Question], send: Callable[[dict[str, str]], None]) -> None:
+        super().__init__()
+        self.send = send
+        self.fields: dict[str, QComboBox | QLineEdit] = {}
+        form = QFormLayout()
+        for q in questions:
+            if q.options:
+                box = QComboBox()
+                box.addItems(["", *q.options])
+                self.fields[q.key] = box
+            else:
+                self.fields[q.key] = QLineEdit()
+            label = QLabel(q.text)
+            label.setWordWrap(True)
+            form.addRow(label, self.fields[q.key])
+        self.next_button = QPushButton("Continue")
+        self.next_button.setMinimumHeight(36)
+        self.next_button.clicked.connect(lambda: self.send(self.answers()))
+        column = QWidget()
+        column.setMaximumWidth(760)
+        inner = QVBoxLayout(column)
+        inner.addStretch(1)
+        inner.addWidget(QLabel(html_text(title, "")))
+        inner.addLayout(form)
+        inner.addWidget(self.next_button)
+        inner.addStretch(2)
+        layout = QHBoxLayout(self)
+        layout.addStretch(1)
+        layout.addWidget(column, 4)
+        layout.addStretch(1)
+
+    def answers(self) -> dict[str, str]:
+        return {k: (f.currentText() if isinstance(f, QComboBox) else f.text()) for k, f in self.fields.items()}
+
+
 class ParticipantWindow(QWidget):
-    """Consent, then one :class:`TestPage` per grammar, with the remaining time always visible."""
+    """The pages of a :class:`~ramure.studies.design.ParticipantFlow`, with the remaining time always visible."""
 
     closed = Signal()
 
@@ -448,7 +547,9 @@ class ParticipantWindow(QWidget):
         super().__init__()
         self.setWindowTitle(f"Ramure study — participant {code}")
         self.study, self.code, self.ask = study, code, ask
-        self.grammars = list(grammars or study.grammars)
+        self.flow = ParticipantFlow(study, code, front_end="desktop")
+        self.config = self.flow.config
+        self.grammars = list(grammars or self.flow.grammars)  # the participant's Latin-square order
         self.grammars_dir = grammars_dir
         self.last_message: str | None = None
         self.page: TestPage | None = None
@@ -470,23 +571,32 @@ class ParticipantWindow(QWidget):
         layout.addWidget(self.stack, 1)
         self.consent_page = self._consent_page()
         self.stack.addWidget(self.consent_page)
-        self.done_page = QLabel("<h2>Thank you!</h2><p>All your answers are saved.</p>")
+        self.done_page = QLabel("")
+        self.done_page.setObjectName("donePage")
+        self.done_page.setWordWrap(True)
+        self.done_page.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)  # the code can be copied
         self.done_page.setAlignment(Qt.AlignmentFlag.AlignCenter)
         self.stack.addWidget(self.done_page)
         self.between_page = self._between_page()
         self.stack.addWidget(self.between_page)
+        self.info_page, self.info_label, self.info_button = self._info_page()
+        self.stack.addWidget(self.info_page)
+        self.questions_page: QuestionsPage | None = None
+        self.withdraw_button = QPushButton("Withdraw from the study…")
+        self.withdraw_button.setObjectName("withdrawButton")
+        self.withdraw_button.clicked.connect(lambda: self.withdraw())
+        top.addWidget(self.withdraw_button)
         self.tick = QTimer(self)
         self.tick.timeout.connect(self.update_timer)
         self.tick.start(1000)
         self.resize(1300, 850)
-        consented = any(p["code"] == code and p["consent"] for p in study.participants())
-        if consented:
-            self.next_grammar()
+        self.show_step()
         self.update_timer()
 
     def _consent_page(self):
         page = QWidget()
-        text = QLabel(CONSENT_TEXT)
+        text = QLabel(html_text(self.config.title, self.config.consent_text()))
+        text.setObjectName("consentText")
         text.setTextFormat(Qt.TextFormat.RichText)
         text.setWordWrap(True)
         font = text.font()
@@ -514,8 +624,34 @@ class ParticipantWindow(QWidget):
         layout.addStretch(1)
         return page
 
+    def _info_page(self):
+        """The instructions or the practice page: a text and Continue."""
+        page = QWidget()
+        label = QLabel("")
+        label.setObjectName("infoText")
+        label.setWordWrap(True)
+        font = label.font()
+        font.setPointSizeF(font.pointSizeF() * 1.3)
+        label.setFont(font)
+        button = QPushButton("Continue")
+        button.setObjectName("infoContinue")
+        button.setMinimumHeight(36)
+        button.clicked.connect(self._acknowledge)
+        column = QWidget()
+        column.setMaximumWidth(760)
+        inner = QVBoxLayout(column)
+        inner.addStretch(1)
+        inner.addWidget(label)
+        inner.addWidget(button)
+        inner.addStretch(2)
+        layout = QHBoxLayout(page)
+        layout.addStretch(1)
+        layout.addWidget(column, 4)
+        layout.addStretch(1)
+        return page, label, button
+
     def _between_page(self):
-        """'Grammar 1 of 3 done' and a Continue button, shown between two tests.
+        """'Set 1 of 3 done' and a Continue button, shown between two tests.
 
         Continue is placed away from where Finish was and enabled only after a
         double-click interval, so the second click of a double click on Finish
@@ -541,13 +677,17 @@ class ParticipantWindow(QWidget):
         return page
 
     def progress(self, grammar: str) -> tuple[int, int]:
-        """``(n, m)``: ``grammar`` is test n of the participant's m."""
-        return self.grammars.index(grammar) + 1, len(self.grammars)
+        """``(n, m)``: ``grammar`` is test n of the participant's m (n 0: the practice set)."""
+        return (self.grammars.index(grammar) + 1 if grammar in self.grammars else 0), len(self.grammars)
+
+    def title(self, grammar: str) -> str:
+        """ "Set n of m", or "Practice"."""
+        n, m = self.progress(grammar)
+        return set_title(n, m) if n else "Practice"
 
     def show_between(self, grammar: str) -> None:
         """The page between tests, after ``grammar``'s test was finished."""
-        n, m = self.progress(grammar)
-        self.between_label.setText(f"<h2>Grammar {n} of {m} done</h2><p>Your answers are saved.</p>")
+        self.between_label.setText(f"<h2>{self.title(grammar)} done</h2><p>{WORDS['saved']}</p>")
         self.continue_button.setEnabled(False)
         self.stack.setCurrentWidget(self.between_page)
         delay = QApplication.styleHints().mouseDoubleClickInterval() + 100
@@ -559,31 +699,73 @@ class ParticipantWindow(QWidget):
 
     def give_consent(self) -> None:
         try:
-            self.study.record_consent(self.code, True)
+            self.flow.consent()
         except RamureError as exc:
             self.refuse(str(exc))
             return
-        self.next_grammar()
+        self.show_step()
 
-    def next_grammar(self) -> TestPage | None:
-        """Open the first grammar whose test is not finished, or the thank-you page."""
-        for grammar in self.grammars:
+    def _acknowledge(self) -> None:
+        step = self.flow.step()
+        if step.kind in ("instructions", "practice") and self.stack.currentWidget() is self.info_page:
             try:
-                session = self.study.session(self.code, grammar)
+                self.flow.acknowledge(step.kind)
             except RamureError as exc:
                 self.refuse(str(exc))
-                self.stack.setCurrentWidget(self.done_page)
-                return None
-            if not session.finished:
-                return self.open_test(session)
-        self.stack.setCurrentWidget(self.done_page)
+                return
+        self.show_step()
+
+    def _answer(self, kind: str, answers: dict[str, str]) -> None:
+        try:
+            self.flow.answer(kind, answers)
+        except RamureError as exc:
+            self.refuse(str(exc))
+            return
+        self.show_step()
+
+    def show_step(self) -> TestPage | None:
+        """Show the page the flow says comes next (from what is stored)."""
+        step = self.flow.step()
+        if step.kind == "consent":
+            self.stack.setCurrentWidget(self.consent_page)
+        elif step.kind in ("instructions", "practice"):
+            self.info_label.setText(html_text(step.title, step.text))
+            self.stack.setCurrentWidget(self.info_page)
+        elif step.kind in ("attention", "demographics"):
+            kind = step.kind
+
+            def send(answers: dict[str, str]) -> None:
+                self._answer(kind, answers)
+
+            page = QuestionsPage(step.title, step.questions, send)
+            if self.questions_page is not None:
+                self.stack.removeWidget(self.questions_page)
+                self.questions_page.deleteLater()
+            self.questions_page = page
+            self.stack.addWidget(page)
+            self.stack.setCurrentWidget(page)
+        elif step.kind == "test" and step.grammar is not None:
+            if self.page is not None and self.page.session.grammar == step.grammar and not self.page.session.finished:
+                self.stack.setCurrentWidget(self.page)
+                return self.page
+            try:
+                return self.open_test(self.flow.session(step.grammar))
+            except RamureError as exc:
+                self.refuse(str(exc))
+        else:
+            self.done_page.setText(html_text(step.title, step.text))
+            self.progress_label.setText("")
+            self.stack.setCurrentWidget(self.done_page)
         return None
 
+    def next_grammar(self) -> TestPage | None:
+        """Go on with the flow: the next set, a page of questions, or the last page."""
+        return self.show_step()
+
     def open_test(self, session: TestSession) -> TestPage:
-        n, m = self.progress(session.grammar)
-        self.progress_label.setText(f"Grammar {n} of {m}")
-        pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, str(i), "…")) for i in range(1, 28)}
-        page = TestPage(self, session, pixmaps)
+        self.progress_label.setText(self.title(session.grammar))
+        pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, "", "…")) for i in range(1, 28)}
+        page = TestPage(self, session, pixmaps, self.config)
         page.finished.connect(self._test_finished)
         if self.page is not None:
             self.stack.removeWidget(self.page)
@@ -623,10 +805,39 @@ class ParticipantWindow(QWidget):
         if page is not None and any(not self._finished(g) for g in left):
             self.show_between(page.session.grammar)
         else:
-            self.next_grammar()
+            self.show_step()
 
     def _finished(self, grammar) -> bool:
         return self.study.finished(self.code, grammar)
+
+    def withdraw(self, delete: bool | None = None) -> None:
+        """The participant withdraws (asked first when ``delete`` is None): their answers are
+        left out of the analysis, or erased; the window then closes."""
+        if delete is None:
+            box = QMessageBox(self)
+            box.setWindowTitle("Withdraw")
+            box.setText("Do you want to withdraw from the study? You can also have every answer you gave deleted.")
+            keep = box.addButton("Withdraw", QMessageBox.ButtonRole.AcceptRole)
+            erase = box.addButton("Withdraw and delete my answers", QMessageBox.ButtonRole.DestructiveRole)
+            box.addButton(QMessageBox.StandardButton.Cancel)
+            box.exec()
+            if box.clickedButton() not in (keep, erase):
+                return
+            delete = box.clickedButton() is erase
+        try:
+            self.study.withdraw(self.code, delete=delete)
+        except RamureError as exc:
+            self.refuse(str(exc))
+            return
+        self.page = None
+        self.done_page.setText(
+            html_text(
+                "You have withdrawn",
+                "Thank you. " + ("Your answers are deleted." if delete else "Your answers will not be used."),
+            )
+        )
+        self.stack.setCurrentWidget(self.done_page)
+        self.withdraw_button.setEnabled(False)
 
     def update_timer(self) -> None:
         if self.is_closed:
@@ -634,7 +845,10 @@ class ParticipantWindow(QWidget):
         if self.page is not None and not self.page.session.finished:
             seconds = self.page.session.remaining_seconds()
         else:
-            seconds = self.study.remaining_seconds(self.code)
+            try:
+                seconds = self.study.remaining_seconds(self.code)
+            except RamureError:  # withdrawn and deleted
+                seconds = 0.0
         minutes, secs = divmod(int(seconds), 60)
         self.timer_label.setText(f"Time left: {minutes:02d}:{secs:02d}")
         self.timer_label.setStyleSheet("font-size: 14pt; font-weight: bold;" + (" color: #c00000;" if seconds < 120 else ""))
@@ -668,8 +882,18 @@ class StudyMenu:
 
         return ask_study_path(self.window)
 
-    def participant(self, path: str | os.PathLike | None = None, code: str | None = None) -> ParticipantWindow | None:
-        """Open a study and a participant window (a new anonymous code unless ``code`` is given)."""
+    def participant(
+        self,
+        path: str | os.PathLike | None = None,
+        code: str | None = None,
+        pilot: bool = False,
+        external_id: str | None = None,
+    ) -> ParticipantWindow | None:
+        """Open a study and a participant window (a new anonymous code unless ``code`` is given).
+
+        ``pilot``: a new participant is a trial run, kept apart from the real data.
+        ``external_id`` (a recruiting platform's id, e.g. a Prolific PID): the participant
+        enrolled under it is resumed, or a new one is enrolled with it."""
         from ramure.studies import Study
 
         path = path or self._ask_study()
@@ -677,13 +901,16 @@ class StudyMenu:
             return None
         try:
             study = Study.open(path)
+            if code is None and external_id is not None:
+                known = {p["external_id"]: p["code"] for p in study.participants() if p["external_id"]}
+                code = known.get(external_id) or study.add_participant(external_id=external_id, pilot=pilot)
             if code is None:
-                code = self._choose_participant(study)
+                code = self._choose_participant(study, pilot)
                 if code is None:
                     study.close()
                     return None
             elif code not in [p["code"] for p in study.participants()]:
-                study.add_participant(code)
+                study.add_participant(code, pilot=pilot)
         except RamureError as exc:
             self.window.report_refused(str(exc))
             return None
@@ -693,20 +920,22 @@ class StudyMenu:
         win.show()
         return win
 
-    def _choose_participant(self, study):
-        """A new code, or an existing one to resume (asked in a small dialog)."""
-        codes = [p["code"] for p in study.participants()]
+    def _choose_participant(self, study, pilot=False):
+        """A new code, or an existing one to resume, or a pilot run (asked in a small dialog)."""
+        codes = [p["code"] for p in study.participants() if p["consent"] or not p["withdrawn_at"]]
         if not codes or not self.window.ask:
-            return study.add_participant()
+            return study.add_participant(pilot=pilot)
         from PySide6.QtWidgets import QInputDialog
 
-        new = "New participant"
+        new, trial = "New participant", "New pilot run (kept apart from the real data)"
         choice, ok = QInputDialog.getItem(
-            self.window, "Participant", "Resume a participant or start a new one:", [new, *codes], 0, False
+            self.window, "Participant", "Resume a participant or start a new one:", [new, trial, *codes], 0, False
         )
         if not ok:
             return None
-        return study.add_participant() if choice == new else choice
+        if choice in (new, trial):
+            return study.add_participant(pilot=pilot or choice == trial)
+        return choice
 
     def analyst(self, path: str | os.PathLike | None = None) -> AnalystWindow | None:
         from ramure.app.desktop.analyst import AnalystWindow
@@ -721,4 +950,4 @@ class StudyMenu:
         return win
 
 
-__all__ = ["GroupPanel", "ImageList", "ParticipantWindow", "StudyMenu", "TestPage", "pick_images"]
+__all__ = ["GroupPanel", "ImageList", "ParticipantWindow", "QuestionsPage", "StudyMenu", "TestPage", "fit_icon", "pick_images"]

@@ -1,17 +1,19 @@
-"""Study mode in the notebook: one participant's tests, one grammar at a time.
+"""Study mode in the notebook: one participant's pages, one picture set at a time.
 
-:class:`StudyPanel` drives a :class:`ramure.studies.TestSession`, so every answer is
-checked and stored in the study's SQLite file as it is given (one
-transaction each, timed).  The participant
+:class:`StudyPanel` shows the pages of a :class:`ramure.studies.design.ParticipantFlow`
+with the study's own words (the same as the desktop's: consent with contact and data
+retention, instructions, practice, attention checks, demographics, the completion code)
+and drives a :class:`ramure.studies.TestSession`, so every answer is checked and stored in
+the study's SQLite file as it is given (one transaction each, timed, marked "notebook").
+For each set, in the participant's Latin-square order, the participant
 
-1. sorts the 27 thumbnails (in their own seeded order) by giving each a
-   group number,
-2. for each group chooses a representative, rates usefulness, difference and
-   the representative (poor / fair / good / excellent) and names it with one
-   or more qualifiers,
-3. presses *Finish*; anything missing is listed instead.  Between two grammars a
-   short page ("Grammar 1 of 3 done", *Continue*) stops a double click on *Finish*
-   from reaching the next test; the header shows "N of M".
+1. sorts the 27 pictures (in their own seeded order, all in view; *enlarge* shows one
+   large) by giving each a group number,
+2. for each group chooses the picture that stands for it, answers the study's three
+   Likert questions and describes it in words (split at commas, as everywhere),
+3. presses *Finish*; anything missing is listed instead.  Between two sets a
+   short page ("Set 1 of 3 done", *Continue*) stops a double click on *Finish*
+   from reaching the next test; the header shows "Set N of M".
 
 The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answer`,
 :meth:`~StudyPanel.finish`) that set the widgets and run their handlers.
@@ -20,6 +22,9 @@ The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answe
 >>> from ramure.studies import Study, lattice_picks
 >>> study = Study.create(pathlib.Path(tempfile.mkdtemp()) / "s.db", grammars={"honda": lattice_picks()})
 >>> panel = StudyPanel(study, study.add_participant(consent=True), "honda")
+>>> panel.step.kind
+'instructions'
+>>> panel.page_button.click(); panel.page_button.click()  # the instructions, then the practice page
 >>> panel.assign({i: 1 if i <= 13 else 2 for i in range(1, 28)})
 >>> [len(g.images) for g in panel.session.groups()]
 [13, 14]
@@ -30,6 +35,7 @@ The same steps are methods (:meth:`~StudyPanel.assign`, :meth:`~StudyPanel.answe
 
 from __future__ import annotations
 
+import html
 import pathlib
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, TypeVar
@@ -38,31 +44,38 @@ import ipywidgets as W
 
 from ramure.app.jupyter._ui import Fallback, MessageLine, button, observe, png_image, png_tag
 from ramure.errors import RamureError
-from ramure.studies.likert import LEVELS
+from ramure.studies.design import WORDS, ParticipantFlow, Question, Step, set_title, split_words
 
 if TYPE_CHECKING:
     from ramure.studies import Study
-    from ramure.studies.session import Group
+    from ramure.studies.session import Group, TestSession
 
 T = TypeVar("T")
 
-MAX_GROUPS = 9
+#: A group number per picture: as many groups as pictures (the desktop has no limit either).
+MAX_GROUPS = 27
 
 
 def _thumbnail(pick, size):
     path = pathlib.Path(pick.image) if pick.image else None
     if path is not None and path.is_file():
-        return png_image(path.read_bytes(), width=size)
+        image = png_image(path.read_bytes(), width=size)
+        image.layout.width, image.layout.max_width = "100%", f"{size}px"
+        return image
     return W.HTML(
         f"<div style='width:{size}px;height:{size}px;background:#eceff1;display:flex;"
         f"align-items:center;justify-content:center;color:#607d8b;font-size:20px'>no picture</div>"
     )
 
 
-def _likert(description):
-    return W.ToggleButtons(
-        options=LEVELS, value=None, description=description, style={"description_width": "110px", "button_width": "72px"}
-    )
+def _likert(levels):
+    return W.ToggleButtons(options=list(levels), value=None, style={"button_width": "88px"})
+
+
+def _page_html(title: str, text: str) -> str:
+    """A page's title and the study's plain text (paragraphs at blank lines), escaped."""
+    paragraphs = "".join(f"<p>{html.escape(p)}</p>" for p in text.split("\n\n") if p.strip())
+    return f"<h3>{html.escape(title)}</h3>{paragraphs}"
 
 
 class GroupQuestions:
@@ -70,6 +83,7 @@ class GroupQuestions:
 
     def __init__(self, panel: StudyPanel, group: Group, number: int | None = None) -> None:
         self.panel = panel
+        self.levels = panel.config.levels
         self.label = group.label  # as stored (1, 2, ... in group-number order)
         self.number = group.label if number is None else number  # as the participant numbered it
         several = len(group.images) > 1
@@ -78,27 +92,24 @@ class GroupQuestions:
         self.representative = W.Dropdown(
             options=[("choose…", 0)] + [(labels[i], i) for i in shown],
             value=(group.representative or 0) if several else 0,
-            description="representative",
-            style={"description_width": "110px"},
-            layout=W.Layout(width="240px", display="" if several else "none"),
+            layout=W.Layout(width="120px", display="" if several else "none"),
         )
-        self.usefulness = _likert("usefulness")
-        self.difference = _likert("difference")
-        self.quality = _likert("representative")
+        questions = panel.config.questions
+        self.usefulness = _likert(self.levels)
+        self.difference = _likert(self.levels)
+        self.quality = _likert(self.levels)
         self.quality.layout.display = "" if several else "none"
         for widget, stored in (
             (self.usefulness, group.usefulness),
             (self.difference, group.difference),
             (self.quality, group.representative_quality),
         ):
-            widget.value = LEVELS[stored - 1] if stored else None
+            widget.value = self.levels[stored - 1] if stored else None
         self.qualifiers = W.Text(
             value=", ".join(group.qualifiers),
-            description="qualifiers",
-            placeholder="e.g. petit, dense",
+            placeholder=WORDS["words_hint"],
             continuous_update=False,
-            style={"description_width": "110px"},
-            layout=W.Layout(width="420px"),
+            layout=W.Layout(width="520px"),
         )
         observe(self.representative, lambda ch: self._save("representative", ch["new"]))
         observe(self.usefulness, lambda ch: self._save("usefulness", ch["new"]))
@@ -107,11 +118,17 @@ class GroupQuestions:
         observe(self.qualifiers, lambda ch: self._save("qualifiers", ch["new"]))
         self.widget = W.VBox(
             [
-                W.HTML(f"<b>Group {self.number}</b>: pictures {', '.join(labels[i] for i in shown)}"),
-                self.representative,
+                W.HTML(f"<b>{WORDS['group']} {self.number}</b>: pictures {', '.join(labels[i] for i in shown)}"),
+                W.HBox(
+                    [W.Label(WORDS["representative"]), self.representative], layout=W.Layout(display="" if several else "none")
+                ),
+                W.HTML(html.escape(questions["usefulness"])),
                 self.usefulness,
+                W.HTML(html.escape(questions["difference"])),
                 self.difference,
+                W.HTML(html.escape(questions["representative"]), layout=W.Layout(display="" if several else "none")),
                 self.quality,
+                W.HTML(html.escape(WORDS["words"])),
                 self.qualifiers,
             ],
             layout=W.Layout(border="1px solid #ddd", padding="4px", margin="2px 0"),
@@ -126,13 +143,15 @@ class GroupQuestions:
             (self.difference, group.difference),
             (self.quality, group.representative_quality),
         ):
-            widget.value = LEVELS[stored - 1] if stored else None
+            widget.value = self.levels[stored - 1] if stored else None
         self.qualifiers.value = ", ".join(group.qualifiers)
 
     def _save(self, what, value) -> None:
         if self.panel.quiet or value is None or (what == "representative" and value == 0):
             return
         s, g = self.panel.session, self.label
+        if what in ("usefulness", "difference", "quality"):
+            value = self.levels.index(value) + 1  # the study's level names, stored as 1-4
         if what == "representative":
             self.panel.run(lambda: s.set_representative(g, value))
         elif what == "usefulness":
@@ -145,7 +164,7 @@ class GroupQuestions:
             self.panel.run(lambda: self._sync_qualifiers(value))
 
     def _sync_qualifiers(self, text) -> None:
-        wanted = [t.strip() for t in str(text).split(",") if t.strip()]
+        wanted = split_words(text)
         stored = next(g.qualifiers for g in self.panel.session.groups() if g.label == self.label)
         for name in stored:
             if name not in wanted:
@@ -156,38 +175,149 @@ class GroupQuestions:
 
 
 class StudyPanel:
-    """A participant's tests of an open :class:`ramure.studies.Study`, one grammar at a time.
+    """A participant's pages on an open :class:`ramure.studies.Study` (see the module docstring).
 
     ``grammar`` is one grammar name, a list of them, or None for all the study's
-    grammars, in order; the panel opens the first whose test is unfinished.  After
-    each finished test but the last a short page says "Grammar 1 of 3 done" with a
-    *Continue* button, so a double click on *Finish* never reaches the next test.
+    grammars in the participant's Latin-square order; the panel shows the page the
+    :class:`~ramure.studies.design.ParticipantFlow` says comes next (consent, instructions,
+    practice, a set, questions, the last page).  After each finished set but the last a
+    short page says "Set 1 of 3 done" with a *Continue* button, so a double click on
+    *Finish* never reaches the next test.
     """
 
-    def __init__(self, study: Study, participant: str, grammar: str | Sequence[str] | None = None, thumb_size: int = 96) -> None:
+    def __init__(self, study: Study, participant: str, grammar: str | Sequence[str] | None = None, thumb_size: int = 110) -> None:
         self.study = study
         self.participant = participant
-        self.grammars = [grammar] if isinstance(grammar, str) else list(grammar or study.grammars)
+        self.flow = ParticipantFlow(study, participant, front_end="notebook")
+        self.config = self.flow.config
+        self.grammars = [grammar] if isinstance(grammar, str) else list(grammar or self.flow.grammars)
         self.quiet = False
         self.message = MessageLine()
         self.header = W.HTML()
         self._thumb_size = thumb_size
         self.between = W.HTML()
-        self.continue_button = button("Continue", self.next_test, style="primary", tooltip="start the next grammar")
+        self.continue_button = button("Continue", self.next_test, style="primary", tooltip="go on")
+        self.page_text = W.HTML()
+        self.page_button = button("Continue", self._page_done, style="primary")
+        self.agree = W.Checkbox(description="I have read this and I agree to take part.", indent=False)
+        self.fields: dict[str, W.Dropdown | W.Text] = {}
+        self.zoom = png_image()
+        self.zoom_label = W.HTML()
+        self.zoom_box = W.VBox(
+            [self.zoom_label, self.zoom, button("Close", self._unzoom)], layout=W.Layout(display="none", align_items="center")
+        )
+        self.withdraw_buttons = W.HBox(
+            [
+                button("Withdraw", lambda: self.withdraw(False), tooltip="your answers will not be used"),
+                button("Withdraw and delete my answers", lambda: self.withdraw(True), style="danger"),
+            ],
+            layout=W.Layout(display="none"),
+        )
+        self.withdraw_button = button("Withdraw from the study…", self._ask_withdraw)
+        self.session: TestSession  # set by open(), when a set is shown
         self.widget = W.VBox()
-        unfinished = [g for g in self.grammars if not self._finished(g)]
-        self.open(unfinished[0] if unfinished else self.grammars[-1])
+        self.show_step()
 
     def _finished(self, grammar: str) -> bool:
         return self.study.finished(self.participant, grammar)
 
     def progress(self) -> tuple[int, int]:
-        """``(n, m)``: the open test is grammar n of the participant's m."""
-        return self.grammars.index(self.session.grammar) + 1, len(self.grammars)
+        """``(n, m)``: the open test is set n of the participant's m (n 0: the practice set)."""
+        grammar = self.session.grammar
+        return (self.grammars.index(grammar) + 1 if grammar in self.grammars else 0), len(self.grammars)
+
+    def title(self) -> str:
+        """ "Set n of m", or "Practice", for the open test."""
+        n, m = self.progress()
+        return set_title(n, m) if n else "Practice"
+
+    # -- pages ---------------------------------------------------------------------------
+    def show_step(self) -> Step:
+        """Show the page the flow says comes next (sets outside ``grammars`` are not this panel's)."""
+        step = self.flow.step()
+        if step.kind == "test":
+            left = [g for g in self.grammars if not self._finished(g)]
+            practice = step.grammar is not None and step.grammar == self.config.practice_set
+            grammar = step.grammar if practice or step.grammar in left else (left[0] if left else None)
+            if grammar is not None:
+                self.step = Step("test", step.title, grammar=grammar)
+                self.open(grammar)
+                return self.step
+            step = Step("done", "Thank you", WORDS["saved"])  # the sets of this panel are done
+        self.step = step
+        body: list[W.Widget] = [self.message.widget, self.page_text]
+        self.page_text.value = _page_html(step.title, step.text)
+        self.header.value = ""
+        if step.kind == "consent":
+            self.agree.value = False
+            body += [self.agree, self.page_button]
+        elif step.kind in ("instructions", "practice"):
+            body.append(self.page_button)
+        elif step.kind in ("attention", "demographics"):
+            self.fields = {q.key: self._field(q) for q in step.questions}
+            body += [W.VBox([W.HTML(html.escape(q.text)), self.fields[q.key]]) for q in step.questions]
+            body.append(self.page_button)
+        if step.kind != "done":
+            body += [self.withdraw_button, self.withdraw_buttons]
+        self.widget.children = body
+        return step
+
+    @staticmethod
+    def _field(question: Question) -> W.Dropdown | W.Text:
+        if question.options:
+            return W.Dropdown(options=["", *question.options], value="", layout=W.Layout(width="320px"))
+        return W.Text(layout=W.Layout(width="320px"))
+
+    def _page_done(self) -> None:
+        """Continue on the consent, instructions, practice or questions page."""
+        kind = self.step.kind
+        if kind == "consent" and not self.agree.value:
+            self.message.show("please tick the box to agree first", "error")
+            return
+        try:
+            if kind == "consent":
+                self.flow.consent()
+            elif kind in ("instructions", "practice"):
+                self.flow.acknowledge(kind)
+            elif kind in ("attention", "demographics"):
+                self.flow.answer(kind, {k: str(f.value or "") for k, f in self.fields.items()})
+            else:
+                return
+        except RamureError as err:
+            self.message.show(err, "error")
+            return
+        self.message.clear()
+        self.show_step()
+
+    def enlarge(self, image: int) -> None:
+        """Show picture ``image`` large above the others (the *enlarge* button under it)."""
+        path = pathlib.Path(self._picks[image].image or "")
+        self.zoom.value = path.read_bytes() if path.is_file() else b""
+        self.zoom.layout.width = "min(480px, 90%)"
+        self.zoom_label.value = f"<b>{html.escape(self.session.labels()[image])}</b>"
+        self.zoom_box.layout.display = ""
+
+    def _unzoom(self) -> None:
+        self.zoom_box.layout.display = "none"
+
+    def _ask_withdraw(self) -> None:
+        self.withdraw_buttons.layout.display = ""
+
+    def withdraw(self, delete: bool) -> None:
+        """The participant withdraws: left out of the analysis, or (``delete``) erased."""
+        try:
+            self.study.withdraw(self.participant, delete=delete)
+        except RamureError as err:
+            self.message.show(err, "error")
+            return
+        done = "Your answers are deleted." if delete else "Your answers will not be used."
+        self.page_text.value = _page_html("You have withdrawn", f"Thank you. {done}")
+        self.header.value = ""
+        self.widget.children = [self.page_text]
 
     def open(self, grammar: str) -> None:
         """Start, or resume, the test on ``grammar`` (refused without consent or budget)."""
-        self.session = self.study.session(self.participant, grammar)
+        self.session = self.flow.session(grammar)
         picks = {p.id: p for p in self.session.picks()}
         self.group_of = {}
         self._picks = picks
@@ -196,53 +326,58 @@ class StudyPanel:
         options = [("–", 0)] + [(str(g), g) for g in range(1, MAX_GROUPS + 1)]
         labels = self.session.labels()
         for image in self.session.order():
-            dropdown = W.Dropdown(options=options, value=0, layout=W.Layout(width="52px"))
+            dropdown = W.Dropdown(options=options, value=0, layout=W.Layout(width="56px"))
             observe(dropdown, lambda ch: None if self.quiet else self.run(self._store_groups))
             self.group_of[image] = dropdown
+            zoom = button("", lambda image=image: self.enlarge(image), tooltip="see it larger", icon="search-plus", width="32px")
             cards.append(
                 W.VBox(
                     [
                         _thumbnail(picks[image], thumb_size),
-                        W.HBox([W.Label(labels[image], layout=W.Layout(width="38px")), dropdown]),
-                    ]
+                        W.HBox([W.Label(labels[image], layout=W.Layout(width="30px")), dropdown, zoom]),
+                    ],
+                    layout=W.Layout(min_width="0"),
                 )
             )
-        self.grid = W.GridBox(cards, layout=W.Layout(grid_template_columns=f"repeat(9, {thumb_size + 8}px)"))
+        self.grid = W.GridBox(  # 9 columns sharing the width: the 27 pictures in 3 rows, all in view
+            cards, layout=W.Layout(grid_template_columns="repeat(9, minmax(0, 1fr))", grid_gap="2px", max_width="1200px")
+        )
         self.questions = W.VBox()
         self.forms: dict[int, GroupQuestions] = {}
         self._layout: list[tuple[int, tuple]] | None = None
         self.finish_button = button(
-            "Finish test", self.finish, style="primary", tooltip="store the test as finished (refused while answers are missing)"
+            WORDS["finish"],
+            self.finish,
+            style="primary",
+            tooltip="store this set as finished (refused while answers are missing)",
         )
         self.todo = W.HTML()
         self.widget.children = [
             self.header,
             self.message.widget,
-            W.HTML(
-                "<b>1. Sort the trees</b>: give each image a group number; trees in a group look "
-                "alike, groups look different (a group may hold one image)."
-            ),
+            W.HTML(f"<b>1.</b> {html.escape(WORDS['sort'])}"),
+            self.zoom_box,
             self.grid,
-            W.HTML(
-                "<b>2. For each group</b>: choose a representative, rate, and name it (several qualifiers separated by commas)."
-            ),
+            W.HTML(f"<b>2.</b> {html.escape(WORDS['answer'])}"),
             self.questions,
             W.HBox([self.finish_button]),
             self.todo,
+            self.withdraw_button,
+            self.withdraw_buttons,
         ]
         self.refresh()
 
     def next_test(self) -> None:
-        """Continue: open the next grammar whose test is unfinished (from the page between tests)."""
-        if self.widget.children[-1] is not self.continue_button:
+        """Continue: the page after a finished set (the next set, or questions, or the last page)."""
+        if self.continue_button not in self.widget.children:
             return
-        left = [g for g in self.grammars if not self._finished(g)]
-        if left:
-            self.run(lambda: self.open(left[0]))
+        try:
+            self.show_step()
+        except RamureError as err:
+            self.message.show(err, "error")
 
     def _show_between(self) -> None:
-        n, m = self.progress()
-        self.between.value = f"<h3>Grammar {n} of {m} done</h3><p>Your answers are saved.</p>"
+        self.between.value = f"<h3>{self.title()} done</h3><p>{WORDS['saved']}</p>"
         self.header.value = ""
         self.widget.children = [self.message.widget, self.between, self.continue_button]
 
@@ -323,22 +458,28 @@ class StudyPanel:
             return
         self.run(self.session.finish)
         if self.session.finished:
-            self.message.show("test finished and stored — thank you", "info")
+            self.message.show(f"{WORDS['saved']} Thank you.", "info")
             if any(not self._finished(g) for g in self.grammars):
                 self._show_between()
+            else:
+                self.show_step()
 
     # -- display -------------------------------------------------------------
     def _ipython_display_(self) -> None:
         """The test widget, then a static picture of it (for a notebook reopened without a kernel)."""
-        s = self.session
+        s = getattr(self, "session", None)
         text = (
-            f"<StudyPanel: participant {s.participant}, grammar {s.grammar}, "
+            f"<StudyPanel: participant {self.participant}, page {self.step.kind}>"
+            if s is None
+            else f"<StudyPanel: participant {s.participant}, grammar {s.grammar}, "
             f"{len(s.groups())} groups, {'finished' if s.finished else 'in progress'}>"
         )
         Fallback(self.widget, lambda: (self.screen_html(), None), text)._ipython_display_()
 
     def screen_html(self) -> str:
         """The participant's images in their order, each with its group (a static picture of the test)."""
+        if getattr(self, "session", None) is None or self.step.kind != "test":
+            return self.page_text.value
         cells = []
         labels = self.session.labels()
         for image, dropdown in self.group_of.items():
@@ -359,7 +500,9 @@ class StudyPanel:
         )
 
     def refresh(self) -> None:
-        s = self.session
+        s = getattr(self, "session", None)
+        if s is None or self.step.kind != "test":
+            return
         groups = s.groups()
         self.quiet = True
         try:
@@ -384,10 +527,9 @@ class StudyPanel:
             self.quiet = False
         minutes = s.remaining_seconds() / 60
         state = "finished" if s.finished else f"{minutes:.0f} min left"
-        n, m = self.progress()
         self.header.value = (
-            f"<h3 style='margin:4px 0'>Study “{self.study.name}” — participant {s.participant}, "
-            f"grammar {s.grammar}: {n} of {m} ({state})</h3>"
+            f"<h3 style='margin:4px 0'>{html.escape(self.config.title)} — participant {s.participant}: "
+            f"{self.title()} ({state})</h3>"
         )
         todo = [] if s.finished else s.missing()
         self.todo.value = (
@@ -396,5 +538,5 @@ class StudyPanel:
         self.finish_button.disabled = s.finished
         if s.finished:
             for form in self.forms.values():
-                for child in form.widget.children[1:]:
+                for child in (form.representative, form.usefulness, form.difference, form.quality, form.qualifiers):
                     child.disabled = True

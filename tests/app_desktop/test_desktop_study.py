@@ -54,6 +54,28 @@ def drop(source, ids, target):
     QApplication.sendEvent(target.viewport(), QDropEvent(QPointF(5, 5), *args))
 
 
+def to_test(qtbot, win):
+    """Click Continue on the instructions and practice pages, as the participant does."""
+    for _ in range(3):
+        if win.stack.currentWidget() is not win.info_page:
+            break
+        qtbot.mouseClick(win.info_button, Qt.MouseButton.LeftButton)
+    return win.page
+
+
+def answer_questions(qtbot, win, **answers):
+    """Fill the page of questions (attention checks, demographics) and press Continue."""
+    page = win.questions_page
+    assert win.stack.currentWidget() is page
+    for key, value in answers.items():
+        field = page.fields[key]
+        if hasattr(field, "setCurrentText"):
+            field.setCurrentText(value)
+        else:
+            QTest.keyClicks(field, value)
+    qtbot.mouseClick(page.next_button, Qt.MouseButton.LeftButton)
+
+
 def stored(path, code):
     """The groups as another connection sees them (committed answers only)."""
     with Study.open(path) as study:
@@ -68,7 +90,7 @@ def test_participant_session_writes_every_answer(make_window, qtbot, study_path,
     assert not win.start_button.isEnabled()
     win.agree.setChecked(True)
     qtbot.mouseClick(win.start_button, Qt.MouseButton.LeftButton)
-    page = win.page
+    page = to_test(qtbot, win)
     assert page is not None and page.pool.count() == 27
     assert re.fullmatch(r"Time left: \d\d:\d\d", win.timer_label.text())
     qtbot.waitUntil(lambda: not win.image_task.running, timeout=20000)
@@ -110,6 +132,8 @@ def test_participant_session_writes_every_answer(make_window, qtbot, study_path,
     assert stored(study_path, "P7")[0].qualifiers == []
     page.add_qualifier(1, "dense")
     qtbot.mouseClick(page.finish_button, Qt.MouseButton.LeftButton)
+    answer_questions(qtbot, win, attention_1="fair")
+    answer_questions(qtbot, win, age="25-39", expertise="a little")
     assert win.stack.currentWidget() is win.done_page
     with Study.open(study_path) as study:
         assert study.tests()[0]["finished_at"] is not None
@@ -121,7 +145,7 @@ def test_refused_answers_change_nothing(make_window, qtbot, study_path):
     win = w.study_menu.participant(study_path, code="P8")
     qtbot.addWidget(win)
     win.give_consent()
-    page = win.page
+    page = to_test(qtbot, win)
     page.move_images([1, 2, 3], "new")
     assert page.set_representative(1, 9) is None and "not in group 1" in win.last_message
     assert not page.add_qualifier(1, "   ")
@@ -164,6 +188,7 @@ def participant_window(qtbot, path, code="P1"):
     qtbot.addWidget(win)
     win.show()
     qtbot.waitExposed(win)
+    to_test(qtbot, win)
     qtbot.waitUntil(lambda: not win.image_task.running, timeout=20000)
     qtbot.wait(50)  # the pictures' arrival rebuilds the page once more
     return win
@@ -220,7 +245,7 @@ def test_moving_a_picture_keeps_both_groups_answers(qtbot, three_grammars):
 
 def test_a_double_click_on_finish_cannot_finish_the_next_grammar(qtbot, three_grammars):
     win = participant_window(qtbot, three_grammars)
-    assert win.progress_label.text() == "Grammar 1 of 3"
+    assert win.progress_label.text() == "Set 1 of 3"
     page = win.page
     for g in range(3):
         page.move_images(list(range(1 + 9 * g, 10 + 9 * g)), "new")
@@ -235,13 +260,14 @@ def test_a_double_click_on_finish_cannot_finish_the_next_grammar(qtbot, three_gr
     qtbot.mouseClick(target, Qt.MouseButton.LeftButton, pos=target.mapFrom(win, where))
     assert win.last_message is None  # no "Not saved – images not in any group: ..."
     assert win.stack.currentWidget() is win.between_page
-    assert "Grammar 1 of 3 done" in win.between_label.text()
+    assert "Set 1 of 3 done" in win.between_label.text()
     assert [t["grammar"] for t in win.study.tests()] == ["g1"]  # the next test is not even started
     assert target is not win.continue_button or not win.continue_button.isEnabled()
     qtbot.waitUntil(win.continue_button.isEnabled, timeout=3000)
     qtbot.mouseClick(win.continue_button, Qt.MouseButton.LeftButton)
+    answer_questions(qtbot, win, attention_1="fair")  # the attention checks come after the first set
     assert win.stack.currentWidget() is win.page and win.page.session.grammar == "g2"
-    assert win.progress_label.text() == "Grammar 2 of 3"
+    assert win.progress_label.text() == "Set 2 of 3"
     assert win.page.session.groups() == [] and not win.page.session.finished
     win.close()
 

@@ -154,7 +154,7 @@ def test_read_commands_leave_a_version_1_study_as_it_is(study_copy, tmp_path, ca
     assert digest(study_copy) == before and only_file(study_copy)
     with Study.open(study_copy) as study:  # a write open recognises it by its schema, then migrates it
         assert study.conn.execute("PRAGMA application_id").fetchone()[0] == APPLICATION_ID
-        assert study.version == 2 and study.events() == []
+        assert study.version == 3 and study.events() == []
 
 
 def test_a_read_only_study_refuses_every_change(study_copy):
@@ -174,7 +174,7 @@ def test_a_read_only_study_refuses_every_change(study_copy):
 def test_a_study_exactly_like_ours_but_made_before_the_application_id_opens(tmp_path):
     path = tmp_path / "old.db"
     conn = sqlite3.connect(path)
-    conn.executescript(schema_sql() + "PRAGMA user_version = 2;")
+    conn.executescript(schema_sql() + "PRAGMA user_version = 3;")
     conn.execute("INSERT INTO study VALUES (1, 'old', 600, '2025-01-01T00:00:00+00:00')")
     conn.commit()
     conn.close()
@@ -274,7 +274,7 @@ def test_status_and_analyze_refuse_wrong_values_in_one_line(study_copy, tmp_path
 def test_a_column_without_its_constraint_is_not_our_schema(tmp_path):
     path = tmp_path / "s.db"
     conn = sqlite3.connect(path)  # grammars.name may be NULL here: not the table Ramure writes
-    conn.executescript(schema_sql().replace("name TEXT NOT NULL UNIQUE", "name TEXT") + "PRAGMA user_version = 2;")
+    conn.executescript(schema_sql().replace("name TEXT NOT NULL UNIQUE", "name TEXT") + "PRAGMA user_version = 3;")
     conn.execute("INSERT INTO study VALUES (1, 's', 60, 'now')")
     conn.execute("INSERT INTO grammars (id, name) VALUES (1, NULL)")
     conn.commit()

@@ -97,3 +97,31 @@ def test_create_status_analyze_export(tmp_path, capsys):
     conn = sqlite3.connect(tmp_path / "q.db")
     assert conn.execute("SELECT count(*) FROM qualifier_points").fetchone()[0] == out["points"]
     conn.close()
+
+
+def test_create_with_a_config_then_withdraw_and_delete_by_external_id(tmp_path, capsys):
+    from ramure.studies.storage import Study
+
+    explore = tmp_path / "explore" / "honda"
+    explore.mkdir(parents=True)
+    rows = [dict(id=p.id, variant=p.variant, pca=list(p.pca), params=p.params) for p in lattice_picks(1)]
+    (explore / "picks.json").write_text(json.dumps(rows))
+    (tmp_path / "bad.json").write_text(json.dumps({"likert": {"levels": ["a", "b"]}}))
+    db = tmp_path / "study.db"
+    code, _, err = run(capsys, "create", str(db), "--grammar", f"honda={explore}", "--config", str(tmp_path / "bad.json"))
+    assert code == 2 and "likert.levels: expected the 4 level names" in err and not db.exists()
+    (tmp_path / "c.json").write_text(json.dumps({"contact": "lab@example.org", "framing": "own"}))
+    code, out, _ = run(capsys, "create", str(db), "--grammar", f"honda={explore}", "--config", str(tmp_path / "c.json"))
+    assert code == 0 and out["framing"] == "own"
+    with Study.open(db) as study:
+        assert study.config().contact == "lab@example.org"
+        study.add_participant("P1", consent=True, external_id="prolific-5f3a")
+        study.add_participant("P2", consent=True)
+    code, out, _ = run(capsys, "withdraw", str(db), "prolific-5f3a")
+    assert code == 0 and out == dict(db=str(db), participant="P1", withdrawn=True, deleted=False)
+    code, out, _ = run(capsys, "withdraw", str(db), "P2", "--delete")
+    assert code == 0 and out["deleted"]
+    code, out, _ = run(capsys, "status", str(db))
+    assert [(p["code"], p["consent"], bool(p["withdrawn_at"])) for p in out["participants"]] == [("P1", False, True)]
+    code, _, err = run(capsys, "withdraw", str(db), "P9")
+    assert code == 2 and "no participant 'P9'" in err

@@ -114,7 +114,7 @@ def test_a_version_1_study_is_migrated_with_its_answers(tmp_path):
     conn.executescript("DROP TABLE events; PRAGMA user_version = 1;")
     conn.close()
     with Study.open(db) as study:
-        assert study.conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 2
+        assert study.conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION == 3
         assert study.conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
         assert study.events() == []
         s = study.session("P1", "honda")

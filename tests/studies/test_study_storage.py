@@ -134,7 +134,7 @@ def test_bad_ratings_refused_and_nothing_lost(study):
         s.rate(2, representative="good")
     with pytest.raises(StudyInputError, match="image 4 is not in group 1"):
         s.set_representative(1, 4)
-    with pytest.raises(StudyInputError, match="non-empty text"):
+    with pytest.raises(StudyInputError, match="non-empty word"):
         s.add_qualifier(1, "   ")
     assert _snapshot(s) == before
     assert before[0]["usefulness"] == 2 and before[0]["difference"] == 4
@@ -187,7 +187,7 @@ def test_finish_lists_what_is_missing_then_locks_the_test(study):
         f"pictures not in any group: {s.labels()[27]}",
         "group 1: choose a representative",
         "group 1: rate its usefulness",
-        "group 1: give at least one qualifier",
+        "group 1: describe it in at least one word",
     ):
         assert part in text
     assert not s.finished
@@ -205,7 +205,7 @@ def test_remove_qualifier(study):
     s.add_qualifier(1, "small")
     s.remove_qualifier(1, "dense")
     assert s.groups()[0].qualifiers == ["small"]
-    with pytest.raises(StudyInputError, match="no qualifier 'dense'"):
+    with pytest.raises(StudyInputError, match="no description 'dense'"):
         s.remove_qualifier(1, "dense")
 
 
