@@ -1,0 +1,192 @@
+"""Study ▸ New study from this exploration…: the study made from the window's variants, then served.
+
+:class:`NewStudyDialog` asks for a folder, a title and a time budget, calls
+:func:`ramure.app.new_study.new_study` (the function the notebook calls too) and then shows the
+``ramure study serve`` command, with a button that copies it.  Without an exploration made in
+this window, the action explores first.  Variants ▸ Save exploration folder… writes the same
+files (``picks.json`` and the pictures) without a study.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING
+
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import (
+    QApplication,
+    QDialog,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QVBoxLayout,
+    QWidget,
+)
+
+from ramure.errors import RamureError
+
+if TYPE_CHECKING:
+    from PySide6.QtWidgets import QMenu
+
+    from ramure.app.desktop.window import MainWindow
+    from ramure.app.new_study import NewStudy
+    from ramure.metrics.exploration import Exploration
+
+
+class NewStudyDialog(QDialog):
+    """Folder, title and budget of a new study; after *Create*, the command that serves it."""
+
+    def __init__(self, window: MainWindow, exploration: Exploration, grammar: str) -> None:
+        super().__init__(window)
+        self.window_ = window
+        self.exploration = exploration
+        self.grammar = grammar
+        self.made: NewStudy | None = None
+        self.setWindowTitle("New study")
+        self.folder = QLineEdit()
+        self.folder.setPlaceholderText("a new folder for the study")
+        browse = QPushButton("Choose…")
+        browse.clicked.connect(self.choose_folder)
+        row = QHBoxLayout()
+        row.addWidget(self.folder)
+        row.addWidget(browse)
+        self.title = QLineEdit(f"{grammar} study")
+        self.minutes = QDoubleSpinBox()
+        self.minutes.setRange(1.0, 1440.0)
+        self.minutes.setValue(30.0)
+        self.minutes.setSuffix(" min")
+        form = QFormLayout()
+        form.addRow("Folder", _wrap(row))
+        form.addRow("Title", self.title)
+        form.addRow("Time per participant", self.minutes)
+        self.create_button = QPushButton("Create study")
+        self.create_button.setDefault(True)
+        self.create_button.clicked.connect(self.create)
+        self.note = QLabel(f"The 27 picks of {grammar} are drawn once into the folder: every participant sees these pictures.")
+        self.note.setWordWrap(True)
+        self.command = QLineEdit()
+        self.command.setReadOnly(True)
+        self.copy_button = QPushButton("Copy serve command")
+        self.copy_button.clicked.connect(self.copy_command)
+        self.served = QWidget()
+        served = QVBoxLayout(self.served)
+        served.setContentsMargins(0, 0, 0, 0)
+        served.addWidget(QLabel("Serve it to participants (in a terminal; Ctrl+C stops it):"))
+        served.addWidget(self.command)
+        served.addWidget(self.copy_button)
+        self.served.hide()
+        layout = QVBoxLayout(self)
+        layout.addLayout(form)
+        layout.addWidget(self.note)
+        layout.addWidget(self.create_button)
+        layout.addWidget(self.served)
+
+    def choose_folder(self) -> None:
+        folder = QFileDialog.getExistingDirectory(self, "Folder of the new study")
+        if folder:
+            self.folder.setText(folder)
+
+    def create(self) -> NewStudy | None:
+        """Make the study (the pictures are drawn here, in the GUI thread: VTK draws there)."""
+        from ramure.app.new_study import new_study
+
+        folder = self.folder.text().strip()
+        if not folder:
+            return self._refuse("choose a folder for the study first")
+        QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+        try:
+            made = new_study(
+                self.exploration,
+                folder,
+                name=self.title.text().strip() or None,
+                grammar=self.grammar,
+                budget_minutes=self.minutes.value(),
+            )
+        except (RamureError, OSError) as exc:
+            return self._refuse(str(exc))
+        finally:
+            QApplication.restoreOverrideCursor()
+        self.made = made
+        self.note.setStyleSheet("")
+        self.note.setText(f"Study created: {made.db} ({made.grammar}, 27 pictures in {made.exploration.name}/).")
+        self.command.setText(made.command)
+        self.served.show()
+        self.create_button.setEnabled(False)
+        self.window_.status(f"New study {made.db}", 10000)
+        return made
+
+    def _refuse(self, message: str) -> None:
+        self.note.setStyleSheet("color: #b00020;")
+        self.note.setText(message)
+        self.window_.report_refused(message)
+        return None
+
+    def copy_command(self) -> None:
+        QApplication.clipboard().setText(self.command.text())
+        self.window_.status("Serve command copied", 5000)
+
+
+def _wrap(layout: QHBoxLayout) -> QWidget:
+    widget = QWidget()
+    layout.setContentsMargins(0, 0, 0, 0)
+    widget.setLayout(layout)
+    return widget
+
+
+class NewStudyActions:
+    """Study ▸ New study from this exploration… and Variants ▸ Save exploration folder…"""
+
+    def __init__(self, window: MainWindow, study_menu: QMenu, variants_menu: QMenu) -> None:
+        self.window = window
+        self.dialog: NewStudyDialog | None = None
+        study_menu.addSeparator()
+        study_menu.addAction("New study from this exploration…").triggered.connect(lambda: self.new_study())
+        variants_menu.addAction("Save exploration folder…").triggered.connect(lambda: self.save_exploration())
+
+    def _explored(self) -> tuple[Exploration, str] | None:
+        variants = self.window.variants
+        if not variants.explored():
+            return None
+        vs = variants.variant_set
+        assert vs is not None and vs.exploration is not None  # explored()
+        return vs.exploration, vs.name
+
+    def new_study(self) -> NewStudyDialog | None:
+        """Open the dialog on the window's exploration; explore first when there is none."""
+        explored = self._explored()
+        if explored is None:
+            self.window.status("Exploring the variants first: the study is made of the 27 picks…", 0)
+            self.window.variants.explore(then=lambda: self.new_study())
+            return None
+        if self.dialog is not None:
+            self.dialog.close()
+        self.dialog = NewStudyDialog(self.window, *explored)
+        self.dialog.show()
+        return self.dialog
+
+    def save_exploration(self, directory: str | os.PathLike | None = None) -> bool:
+        """Write the exploration (``picks.json``, pictures, ``pca.json``, ``variants.csv``) to a folder."""
+        from ramure.app.new_study import save_exploration
+
+        explored = self._explored()
+        if explored is None:
+            self.window.report_refused("Explore the variants first (Variants ▸ Explore variants of this grammar)")
+            return False
+        if directory is None:
+            directory = QFileDialog.getExistingDirectory(self.window, "Save the exploration into")
+            if not directory:
+                return False
+        QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+        try:
+            save_exploration(explored[0], directory)
+        except (RamureError, OSError) as exc:
+            self.window.report_refused(str(exc))
+            return False
+        finally:
+            QApplication.restoreOverrideCursor()
+        self.window.status(f"Exploration saved to {directory}", 10000)
+        return True
