@@ -171,7 +171,7 @@ def export_jspsych(db: str | os.PathLike, folder: str | os.PathLike, jspsych: st
         title, consent = study.name, consent_text(study)
     for grammar, picks in pictures.items():
         for pick in picks:
-            with open(pick.image, "rb") as f:  # type: ignore[arg-type]  # check_servable: every image is a file
+            with open(pick.image, "rb") as f:
                 if f.read(8) != _PNG:
                     raise StudyInputError(f"{pick.image}: not a PNG picture ({grammar}, pick {pick.id}); explore again")
     secret = _study_secret(db, create=True)
@@ -183,7 +183,7 @@ def export_jspsych(db: str | os.PathLike, folder: str | os.PathLike, jspsych: st
         codes = picture_codes(secret, grammar)
         sets.append(dict(grammar=grammar, pictures=[codes[p.id] for p in picks]))
         for pick in picks:
-            written.append(write_bytes(folder / "img" / f"{codes[pick.id]}.png", pathlib.Path(pick.image).read_bytes()))  # type: ignore[arg-type]  # checked above
+            written.append(write_bytes(folder / "img" / f"{codes[pick.id]}.png", pathlib.Path(pick.image).read_bytes()))
     task = dict(
         title=title,
         consent=consent,
@@ -257,7 +257,7 @@ def _json_trials(path: pathlib.Path, text: str) -> list:
             if line.strip():
                 try:
                     chunks.append(json.loads(line))
-                except ValueError as exc:
+                except json.JSONDecodeError as exc:
                     raise StudyInputError(f"{path}: line {number} is not JSON ({exc.msg})") from None
     trials: list = []
     for chunk in chunks:
@@ -330,9 +330,7 @@ class ImportedRun:
     parts: list[ImportedPart] = field(default_factory=list)
 
 
-def _likert(value: object, where: str, optional: bool = False) -> int | None:
-    if value is None and optional:
-        return None
+def _likert(value: object, where: str) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not 1 <= int(value) <= len(LEVELS):
         raise StudyInputError(f"{where} is {value!r}, not a level 1 to {len(LEVELS)}")
     return int(value)
@@ -367,12 +365,14 @@ def _group(raw: object, ids: dict[str, int], where: str) -> ImportedGroup:
     chosen = raw.get("representative")
     if not isinstance(chosen, str) or chosen not in ids or ids[chosen] not in pictures:
         raise StudyInputError(f"{where}: representative {chosen!r} is not a picture of the group")
-    quality = _likert(raw.get("representative_quality"), f"{where}: representative_quality", optional=not several)
+    quality = raw.get("representative_quality")
+    if several or quality is not None:
+        quality = _likert(quality, f"{where}: representative_quality")
     return ImportedGroup(
         pictures,
         ids[chosen],
-        _likert(raw.get("usefulness"), f"{where}: usefulness"),  # type: ignore[arg-type]  # not optional: an int
-        _likert(raw.get("difference"), f"{where}: difference"),  # type: ignore[arg-type]  # not optional: an int
+        _likert(raw.get("usefulness"), f"{where}: usefulness"),
+        _likert(raw.get("difference"), f"{where}: difference"),
         quality if several else None,
         _words(raw.get("words"), where),
     )

@@ -65,7 +65,7 @@ class NewStudyDialog(QDialog):
         form.addRow("Time per participant", self.minutes)
         self.create_button = QPushButton("Create study")
         self.create_button.setDefault(True)
-        self.create_button.clicked.connect(self.create)
+        self.create_button.clicked.connect(self.make_study)
         self.note = QLabel(f"The 27 picks of {grammar} are drawn once into the folder: every participant sees these pictures.")
         self.note.setWordWrap(True)
         self.command = QLineEdit()
@@ -90,13 +90,14 @@ class NewStudyDialog(QDialog):
         if folder:
             self.folder.setText(folder)
 
-    def create(self) -> NewStudy | None:
+    def make_study(self) -> NewStudy | None:
         """Make the study (the pictures are drawn here, in the GUI thread: VTK draws there)."""
         from ramure.app.new_study import new_study
 
         folder = self.folder.text().strip()
         if not folder:
-            return self._refuse("choose a folder for the study first")
+            self._refuse("choose a folder for the study first")
+            return None
         QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
         try:
             made = new_study(
@@ -107,7 +108,8 @@ class NewStudyDialog(QDialog):
                 budget_minutes=self.minutes.value(),
             )
         except (RamureError, OSError) as exc:
-            return self._refuse(str(exc))
+            self._refuse(str(exc))
+            return None
         finally:
             QApplication.restoreOverrideCursor()
         self.made = made
@@ -123,7 +125,6 @@ class NewStudyDialog(QDialog):
         self.note.setStyleSheet("color: #b00020;")
         self.note.setText(message)
         self.window_.report_refused(message)
-        return None
 
     def copy_command(self) -> None:
         QApplication.clipboard().setText(self.command.text())
