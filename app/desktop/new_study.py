@@ -98,7 +98,11 @@ class NewStudyDialog(QDialog):
         if not folder:
             self._refuse("choose a folder for the study first")
             return None
+        self.note.setStyleSheet("")
+        self.note.setText("Drawing the 27 pictures and writing the study…")
+        self.create_button.setEnabled(False)  # a second click while drawing makes nothing twice
         QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+        QApplication.processEvents()  # show the note before the drawing holds this thread
         try:
             made = new_study(
                 self.exploration,
@@ -109,6 +113,7 @@ class NewStudyDialog(QDialog):
             )
         except (RamureError, OSError) as exc:
             self._refuse(str(exc))
+            self.create_button.setEnabled(True)
             return None
         finally:
             QApplication.restoreOverrideCursor()

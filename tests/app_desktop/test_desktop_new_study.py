@@ -57,6 +57,7 @@ def test_new_study_explores_first_then_builds_a_servable_study(make_window, qtbo
     qtbot.keyClicks(again.folder, str(folder))
     qtbot.mouseClick(again.create_button, Qt.MouseButton.LeftButton)
     assert "already holds a study" in again.note.text() and not again.served.isVisible()
+    assert again.create_button.isEnabled()  # another folder may be tried
     assert db.read_bytes() == before
     again.close()
 
