@@ -23,6 +23,8 @@ import os
 import pathlib
 import re
 import shlex
+import socket
+import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -57,6 +59,20 @@ def serve_command(db: str | os.PathLike, port: int | None = None) -> str:
     """
     command = f"ramure study serve {shlex.quote(os.fspath(db))}"
     return command if port is None else f"{command} --port {int(port)}"
+
+
+def serve_argv(db: str | os.PathLike, port: int) -> list[str]:
+    """The ``ramure study serve`` command as a program and its arguments, run with this Python
+    (for a front end that starts the server itself, on this machine only: 127.0.0.1)."""
+    code = "import sys; from ramure.app.cli import main; sys.exit(main())"
+    return [sys.executable, "-c", code, "study", "serve", os.fspath(db), "--host", "127.0.0.1", "--port", str(int(port))]
+
+
+def free_port() -> int:
+    """A TCP port free on 127.0.0.1 now (the server may still lose it to another program)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
 
 
 def save_exploration(

@@ -2,17 +2,19 @@
 
 :class:`NewStudyDialog` asks for a folder, a title and a time budget, calls
 :func:`ramure.app.new_study.new_study` (the function the notebook calls too) and then shows the
-``ramure study serve`` command, with a button that copies it.  Without an exploration made in
+``ramure study serve`` command, with a button that copies it, and one that starts the server
+here (127.0.0.1 only, a child process stopped with the dialog).  Without an exploration made in
 this window, the action explores first.  Variants ▸ Save exploration folder… writes the same
 files (``picks.json`` and the pictures) without a study.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from typing import TYPE_CHECKING
 
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QProcess, Qt
 from PySide6.QtWidgets import (
     QApplication,
     QDialog,
@@ -30,6 +32,7 @@ from PySide6.QtWidgets import (
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
+    from PySide6.QtGui import QCloseEvent
     from PySide6.QtWidgets import QMenu
 
     from ramure.app.desktop.window import MainWindow
@@ -78,6 +81,23 @@ class NewStudyDialog(QDialog):
         served.addWidget(QLabel("Serve it to participants (in a terminal; Ctrl+C stops it):"))
         served.addWidget(self.command)
         served.addWidget(self.copy_button)
+        self.serve_button = QPushButton("Serve now on this computer")
+        self.serve_button.setToolTip("Start the server here (127.0.0.1 only) until this dialog closes")
+        self.serve_button.clicked.connect(self.serve_here)
+        self.stop_button = QPushButton("Stop serving")
+        self.stop_button.clicked.connect(self.stop_serving)
+        self.stop_button.hide()
+        self.addresses = QLabel()
+        self.addresses.setWordWrap(True)
+        self.addresses.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        buttons = QHBoxLayout()
+        buttons.addWidget(self.serve_button)
+        buttons.addWidget(self.stop_button)
+        served.addLayout(buttons)
+        served.addWidget(self.addresses)
+        self.server: QProcess | None = None
+        self.server_addresses: dict | None = None
+        self._server_output = b""
         self.served.hide()
         layout = QVBoxLayout(self)
         layout.addLayout(form)
@@ -134,6 +154,64 @@ class NewStudyDialog(QDialog):
     def copy_command(self) -> None:
         QApplication.clipboard().setText(self.command.text())
         self.window_.status("Serve command copied", 5000)
+
+    # -- serving here ------------------------------------------------------------------------------
+    def serve_here(self) -> QProcess | None:
+        """Start ``ramure study serve`` on 127.0.0.1 as a child process; its addresses show when it listens."""
+        from ramure.app.new_study import free_port, serve_argv
+
+        if self.made is None or (self.server is not None and self.server.state() != QProcess.ProcessState.NotRunning):
+            return self.server
+        argv = serve_argv(self.made.db, free_port())
+        process = QProcess(self)
+        process.setProgram(argv[0])
+        process.setArguments(argv[1:])
+        process.readyReadStandardOutput.connect(self._server_said)
+        process.finished.connect(self._server_ended)
+        self._server_output = b""
+        self.server, self.server_addresses = process, None
+        self.addresses.setText("Starting the server…")
+        self.serve_button.setEnabled(False)
+        self.stop_button.show()
+        process.start()
+        return process
+
+    def _server_said(self) -> None:
+        if self.server is None:
+            return
+        self._server_output += bytes(self.server.readAllStandardOutput().data())
+        try:
+            said = json.loads(self._server_output)
+        except ValueError:
+            return  # not the whole announcement yet
+        self.server_addresses = said
+        self.addresses.setText(
+            f"Participants: {said['participants']}\nResearcher's page: {said['researcher']}\n"
+            "This computer only; the server stops with this dialog."
+        )
+
+    def _server_ended(self, code: int, status: QProcess.ExitStatus) -> None:
+        process = self.server
+        if process is None:
+            return
+        error = bytes(process.readAllStandardError().data()).decode("utf-8", "replace").strip()
+        self.addresses.setText(error.splitlines()[-1] if code and error else "The server has stopped.")
+        self.serve_button.setEnabled(True)
+        self.stop_button.hide()
+
+    def stop_serving(self) -> None:
+        """Stop the server this dialog started (its answers are on disk once acknowledged)."""
+        process = self.server
+        if process is None or process.state() == QProcess.ProcessState.NotRunning:
+            return
+        process.terminate()
+        if not process.waitForFinished(5000):
+            process.kill()
+            process.waitForFinished(2000)
+
+    def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        self.stop_serving()
+        super().closeEvent(event)
 
 
 def _wrap(layout: QHBoxLayout) -> QWidget:

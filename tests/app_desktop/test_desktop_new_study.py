@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import json
+import urllib.error
+import urllib.request
+
 import pytest
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QProcess, Qt
 from PySide6.QtWidgets import QApplication
 
 from desktop_helpers import settle
@@ -23,6 +27,17 @@ def menu_action(window, menu_title, text):
                 if action.text().replace("&", "") == text:
                     return action
     raise AssertionError(f"no {menu_title} > {text}")
+
+
+def _get(qtbot, url, seconds=30):
+    """The body at ``url`` once the server listens (it announces its address just before)."""
+    for _ in range(seconds * 10):
+        try:
+            with urllib.request.urlopen(url, timeout=10) as reply:
+                return reply.read()
+        except urllib.error.URLError:
+            qtbot.wait(100)
+    raise AssertionError(f"{url} never answered")
 
 
 def test_new_study_explores_first_then_builds_a_servable_study(make_window, qtbot, tmp_path):
@@ -51,6 +66,17 @@ def test_new_study_explores_first_then_builds_a_servable_study(make_window, qtbo
         check_servable(study)
     qtbot.mouseClick(dialog.copy_button, Qt.MouseButton.LeftButton)
     assert QApplication.clipboard().text() == dialog.command.text()
+    pytest.importorskip("uvicorn")
+    qtbot.mouseClick(dialog.serve_button, Qt.MouseButton.LeftButton)  # served here, as a child process
+    try:
+        qtbot.waitUntil(lambda: dialog.server_addresses is not None, timeout=60000)
+        address = dialog.server_addresses["participants"]
+        assert address.startswith("http://127.0.0.1:") and address in dialog.addresses.text()
+        assert json.loads(_get(qtbot, address + "api/study"))["title"] == "Honda pilot"
+    finally:
+        process = dialog.server
+        qtbot.mouseClick(dialog.stop_button, Qt.MouseButton.LeftButton)
+    assert process.state() == QProcess.ProcessState.NotRunning and dialog.serve_button.isEnabled()
     # the same folder again: refused in the dialog, the study untouched
     before = db.read_bytes()
     again = w.new_study.new_study()
