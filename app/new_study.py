@@ -128,3 +128,36 @@ def new_study(
     with Study.create(db, grammars={grammar: directory}, name=name or folder.resolve().name, budget_minutes=budget_minutes):
         pass
     return NewStudy(db, grammar, directory, serve_command(db))
+
+
+def add_to_study(
+    exploration: Exploration,
+    folder: str | os.PathLike,
+    grammar: str | None = None,
+    size: tuple[int, int] = PICTURE_SIZE,
+) -> NewStudy:
+    """Add ``exploration`` as one more stimulus set of the study in ``folder`` (made by :func:`new_study`).
+
+    Refused, before anything is written: no study in ``folder``, a study that already has
+    participants (its stimuli are fixed once anyone took part), a grammar already in it, a bad
+    name or coinciding picks.
+    """
+    from ramure.studies.picks import check_distinct, picks_from_data
+    from ramure.studies.storage import Study
+
+    folder = pathlib.Path(folder)
+    grammar = _check_grammar_name(grammar or exploration.name)
+    db = folder / STUDY_FILE
+    if not db.is_file():
+        raise StudyInputError(f"{folder}: holds no study ({STUDY_FILE}); make a new study there instead")
+    with Study.open(db, readonly=True) as study:
+        if study.participants():
+            raise StudyInputError(f"{db}: participants have taken part already; its pictures can no longer change")
+        if grammar in study.grammars:
+            raise StudyInputError(f"{db}: already holds a stimulus set named {grammar!r}; give this one another name")
+    check_distinct(picks_from_data(exploration.pick_records(), where=grammar), f"grammar {grammar!r}")
+    directory = folder / grammar
+    save_exploration(exploration, directory, size)
+    with Study.open(db) as study:
+        study.add_grammar(grammar, directory)
+    return NewStudy(db, grammar, directory, serve_command(db))

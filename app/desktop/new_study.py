@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from PySide6.QtCore import QProcess, Qt
 from PySide6.QtWidgets import (
     QApplication,
+    QCheckBox,
     QDialog,
     QDoubleSpinBox,
     QFileDialog,
@@ -65,7 +66,13 @@ class NewStudyDialog(QDialog):
         form = QFormLayout()
         form.addRow("Folder", _wrap(row))
         form.addRow("Title", self.title)
+        self.set_name = QLineEdit(grammar)
+        self.set_name.setToolTip("Names these 27 pictures in the study (a folder of it; participants never see it)")
+        form.addRow("Name of these pictures", self.set_name)
         form.addRow("Time per participant", self.minutes)
+        self.add_to = QCheckBox("Add these pictures to the study already in this folder (one more part)")
+        self.add_to.toggled.connect(lambda on: (self.title.setEnabled(not on), self.minutes.setEnabled(not on)))
+        form.addRow("", self.add_to)
         self.create_button = QPushButton("Create study")
         self.create_button.setDefault(True)
         self.create_button.clicked.connect(self.make_study)
@@ -112,7 +119,7 @@ class NewStudyDialog(QDialog):
 
     def make_study(self) -> NewStudy | None:
         """Make the study (the pictures are drawn here, in the GUI thread: VTK draws there)."""
-        from ramure.app.new_study import new_study
+        from ramure.app.new_study import add_to_study, new_study
 
         folder = self.folder.text().strip()
         if not folder:
@@ -124,13 +131,16 @@ class NewStudyDialog(QDialog):
         QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
         QApplication.processEvents()  # show the note before the drawing holds this thread
         try:
-            made = new_study(
-                self.exploration,
-                folder,
-                name=self.title.text().strip() or None,
-                grammar=self.grammar,
-                budget_minutes=self.minutes.value(),
-            )
+            if self.add_to.isChecked():
+                made = add_to_study(self.exploration, folder, grammar=self.set_name.text().strip())
+            else:
+                made = new_study(
+                    self.exploration,
+                    folder,
+                    name=self.title.text().strip() or None,
+                    grammar=self.set_name.text().strip(),
+                    budget_minutes=self.minutes.value(),
+                )
         except (RamureError, OSError) as exc:
             self._refuse(str(exc))
             self.create_button.setEnabled(True)
@@ -139,7 +149,8 @@ class NewStudyDialog(QDialog):
             QApplication.restoreOverrideCursor()
         self.made = made
         self.note.setStyleSheet("")
-        self.note.setText(f"Study created: {made.db} ({made.grammar}, 27 pictures in {made.exploration.name}/).")
+        done = "Added to the study" if self.add_to.isChecked() else "Study created"
+        self.note.setText(f"{done}: {made.db} ({made.grammar}, 27 pictures in {made.exploration.name}/).")
         self.command.setText(made.command)
         self.served.show()
         self.create_button.setEnabled(False)

@@ -543,10 +543,11 @@ class Explorer:
             )
         return result
 
-    def new_study(self, folder: str | os.PathLike, name: str | None = None) -> NewStudy | None:
-        """Make a study of the 27 picks in ``folder`` (:func:`ramure.app.new_study.new_study`) and
-        show the command that serves it; a refusal is shown on the panel and None returned."""
-        return self.study_maker.create(folder, name)
+    def new_study(self, folder: str | os.PathLike, name: str | None = None, add: bool = False) -> NewStudy | None:
+        """Make a study of the 27 picks in ``folder`` (:func:`ramure.app.new_study.new_study`; with
+        ``add``, add them to the study there) and show the command that serves it; a refusal is
+        shown on the panel and None returned."""
+        return self.study_maker.create(folder, name, add)
 
     def load_qualifiers(self, store: str | os.PathLike, grammar: str | None = None) -> QualifierRegions | None:
         """Use qualifier regions from a study's qualifier store (SQLite path)."""

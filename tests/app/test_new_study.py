@@ -9,7 +9,7 @@ import sqlite3
 import numpy as np
 import pytest
 
-from ramure.app.new_study import new_study, serve_command
+from ramure.app.new_study import add_to_study, new_study, serve_command
 from ramure.studies.errors import StudyInputError
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -78,3 +78,23 @@ def test_bad_settings_are_refused(exploration, tmp_path, kwargs, message):
 
 def test_serve_command_names_the_port():
     assert serve_command("/x/study.db", port=8010) == "ramure study serve /x/study.db --port 8010"
+
+
+def test_a_second_grammar_is_added_until_someone_takes_part(exploration, tmp_path):
+    from ramure.studies.storage import Study
+
+    with pytest.raises(StudyInputError, match="holds no study"):
+        add_to_study(exploration, tmp_path / "s", grammar="second", size=(32, 32))
+    made = new_study(exploration, tmp_path / "s", size=(32, 32))
+    with pytest.raises(StudyInputError, match="already holds a stimulus set named 'honda_sympodial'"):
+        add_to_study(exploration, tmp_path / "s", size=(32, 32))
+    added = add_to_study(exploration, tmp_path / "s", grammar="second", size=(32, 32))
+    assert added.db == made.db and added.exploration == tmp_path / "s" / "second"
+    with Study.open(made.db) as study:
+        assert study.grammars == ["honda_sympodial", "second"]
+        assert study.picks("second")[0].image == str(tmp_path / "s" / "second" / "thumbs" / "pick_01.png")
+        study.add_participant(consent=True)
+    before = made.db.read_bytes()
+    with pytest.raises(StudyInputError, match="participants have taken part already"):
+        add_to_study(exploration, tmp_path / "s", grammar="third", size=(32, 32))
+    assert made.db.read_bytes() == before and not (tmp_path / "s" / "third").exists()

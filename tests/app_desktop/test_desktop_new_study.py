@@ -85,6 +85,14 @@ def test_new_study_explores_first_then_builds_a_servable_study(make_window, qtbo
     assert "already holds a study" in again.note.text() and not again.served.isVisible()
     assert again.create_button.isEnabled()  # another folder may be tried
     assert db.read_bytes() == before
+    again.add_to.click()  # the same pictures as one more part, under another name
+    assert not again.title.isEnabled()
+    again.set_name.selectAll()
+    qtbot.keyClicks(again.set_name, "second")
+    qtbot.mouseClick(again.create_button, Qt.MouseButton.LeftButton)
+    assert again.note.text().startswith("Added to the study"), again.note.text()
+    with Study.open(db, readonly=True) as study:
+        assert study.name == "Honda pilot" and study.grammars == ["honda_sympodial", "second"]
     again.close()
 
 

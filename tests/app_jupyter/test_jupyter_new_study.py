@@ -37,3 +37,10 @@ def test_new_study_button_builds_the_study_and_shows_the_serve_command(tmp_path)
     before = db.read_bytes()
     assert ex.new_study(tmp_path / "s") is None
     assert "already holds a study" in panel.message.text and db.read_bytes() == before
+    panel.add_to.value = True  # one more part: refused under the same name, added under another
+    panel.create_button.click()
+    assert "already holds a stimulus set named 'honda_sympodial'" in panel.message.text
+    ex.variants.exploration.name = "second"
+    assert ex.new_study(tmp_path / "s", add=True) is not None and panel.message.text.startswith("added to the study")
+    with Study.open(db, readonly=True) as study:
+        assert study.grammars == ["honda_sympodial", "second"] and study.name == "Notebook pilot"
