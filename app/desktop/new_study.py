@@ -71,7 +71,7 @@ class NewStudyDialog(QDialog):
         form.addRow("Name of these pictures", self.set_name)
         form.addRow("Time per participant", self.minutes)
         self.add_to = QCheckBox("Add these pictures to the study already in this folder (one more part)")
-        self.add_to.toggled.connect(lambda on: (self.title.setEnabled(not on), self.minutes.setEnabled(not on)))
+        self.add_to.toggled.connect(self._adding)
         form.addRow("", self.add_to)
         self.create_button = QPushButton("Create study")
         self.create_button.setDefault(True)
@@ -111,6 +111,11 @@ class NewStudyDialog(QDialog):
         layout.addWidget(self.note)
         layout.addWidget(self.create_button)
         layout.addWidget(self.served)
+
+    def _adding(self, on: bool) -> None:
+        """The title and budget belong to the study already there when adding to it."""
+        self.title.setEnabled(not on)
+        self.minutes.setEnabled(not on)
 
     def choose_folder(self) -> None:
         folder = QFileDialog.getExistingDirectory(self, "Folder of the new study")
