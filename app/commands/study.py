@@ -12,6 +12,8 @@ Sub-commands print one JSON object on stdout::
     ramure study status study.db
     ramure study serve study.db --port 8000
     ramure study withdraw study.db P104 --delete
+    ramure study export-jspsych study.db -o experiment/
+    ramure study import-jspsych study.db results.json
 """
 
 from __future__ import annotations
@@ -278,6 +280,18 @@ def run_serve(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_export_jspsych(args: argparse.Namespace) -> int:
+    from ramure.studies.jspsych import export_jspsych
+
+    return _print(export_jspsych(args.db, args.output, jspsych=args.jspsych))
+
+
+def run_import_jspsych(args: argparse.Namespace) -> int:
+    from ramure.studies.jspsych import import_jspsych
+
+    return _print(import_jspsych(args.db, args.results))
+
+
 def register(subparsers: Subparsers) -> None:
     parser = subparsers.add_parser("study", help="user studies on variant relevance", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
@@ -383,3 +397,19 @@ def register(subparsers: Subparsers) -> None:
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default: this machine only)")
     p.add_argument("--port", type=int, default=8000)
     p.set_defaults(func=run_serve)
+
+    p = sub.add_parser("export-jspsych", help="write the study as a jsPsych experiment (for JATOS or Pavlovia)")
+    p.add_argument("db")
+    p.add_argument("-o", "--output", required=True, help="folder for the experiment (new, or an earlier export)")
+    p.add_argument(
+        "--jspsych",
+        default=None,
+        metavar="DIR_OR_URL",
+        help="a local jsPsych package folder to copy in (runs offline), or its URL (default: the unpkg CDN)",
+    )
+    p.set_defaults(func=run_export_jspsych)
+
+    p = sub.add_parser("import-jspsych", help="import the result file of a jsPsych export (checked first)")
+    p.add_argument("db")
+    p.add_argument("results", help="jsPsych data: JSON, JATOS's results file, or CSV")
+    p.set_defaults(func=run_import_jspsych)

@@ -328,10 +328,15 @@ class MainWindow(QMainWindow):
             v.addAction(dock.toggleViewAction())
         self.fruit_action = self.variants.fruit_action(v)
 
-        self.variants.build_menu(bar.addMenu("Va&riants"))
+        variants_menu = bar.addMenu("Va&riants")
+        self.variants.build_menu(variants_menu)
         from ramure.app.desktop.study import StudyMenu
 
-        self.study_menu = StudyMenu(self, bar.addMenu("&Study"))
+        study_menu = bar.addMenu("&Study")
+        self.study_menu = StudyMenu(self, study_menu)
+        from ramure.app.desktop.new_study import NewStudyActions
+
+        self.new_study = NewStudyActions(self, study_menu, variants_menu)
         from ramure.app.desktop.help import HelpMenu
 
         self.help_menu = HelpMenu(self, bar.addMenu("&Help"))

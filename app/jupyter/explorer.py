@@ -37,6 +37,7 @@ from ramure.app.jupyter.details import DetailsTab
 from ramure.app.jupyter.defects import DefectsTab
 from ramure.app.jupyter._ui import Fallback, MessageLine, button, on_value, png_tag
 from ramure.app.jupyter.grammar import GrammarPanel
+from ramure.app.jupyter.new_study import NewStudyPanel
 from ramure.app.jupyter.selection import SelectionPanel, TreeBrowser
 from ramure.app.jupyter.variants import VariantPanel, qualifier_summary
 from ramure.app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
@@ -51,6 +52,7 @@ if TYPE_CHECKING:
     from ramure.lsys.regen import RegenResult, Session
     from ramure.lsys.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
+    from ramure.app.new_study import NewStudy
     from ramure.metrics.exploration import Exploration
     from ramure.metrics.qualifiers import QualifierRegions
 
@@ -220,6 +222,7 @@ class Explorer:
         self.status_line = W.HTML()
         self.grammar = GrammarPanel(self, text)
         self.variants = VariantPanel(self, cache=cache)
+        self.study_maker = NewStudyPanel(self)
         self.view = PlantView(self, backend=view, size=size)
         self.selection_panel = SelectionPanel(self)
         self.tree = TreeBrowser(self)
@@ -268,7 +271,7 @@ class Explorer:
             children=[
                 self.tree.widget,
                 self.architecture.widget,
-                self.variants.widget,
+                W.VBox([self.variants.widget, self.study_maker.widget]),
                 self.variants.pca_widget,
                 self.wood.widget,
                 self.details.widget,
@@ -594,6 +597,12 @@ class Explorer:
                 "info",
             )
         return result
+
+    def new_study(self, folder: str | os.PathLike, name: str | None = None, add: bool = False) -> NewStudy | None:
+        """Make a study of the 27 picks in ``folder`` (:func:`ramure.app.new_study.new_study`; with
+        ``add``, add them to the study there) and show the command that serves it; a refusal is
+        shown on the panel and None returned."""
+        return self.study_maker.create(folder, name, add)
 
     def load_qualifiers(self, store: str | os.PathLike, grammar: str | None = None) -> QualifierRegions | None:
         """Use qualifier regions from a study's qualifier store (SQLite path)."""
