@@ -209,8 +209,11 @@ def lacks(name: str, deltas: ArrayLike) -> str:
         if not np.any(sign * change > TOLERANCE):
             way = "raises" if sign > 0 else "lowers"
             return f"no constant or rule {way} the {label} (the variants only move it the other way)"
-    words = " and ".join(f"{'raises' if s > 0 else 'lowers'} the {LABELS[m]}" for m, s in DEFINITIONS[name].terms())
-    return f"no single constant or rule {words} at once"
+    terms = DEFINITIONS[name].terms()
+    words = " and ".join(f"{'raises' if s > 0 else 'lowers'} the {LABELS[m]}" for m, s in terms)
+    if len(terms) == 1:  # the moves it sees are rounding noise around 0, or score nothing
+        return f"no constant or rule {words} measurably"
+    return f"no constant or rule {words} at once"
 
 
 def definition_table() -> list[dict]:
