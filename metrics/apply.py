@@ -312,7 +312,8 @@ def _judge(model, key, before, after, antonym, floor: float | np.ndarray = 0.0):
     deltas = all_deltas(_snap(after, floor), _snap(before, floor))
     moves = model.move_scores(deltas)
     own = moves.get(key, float("nan"))
-    if abs(own) < MIN_MOVE or (key in DEFINITIONS and not definition_holds(key, deltas)):
+    defined = key in DEFINITIONS and model.sources_.get(key) == "vocabulary"
+    if abs(own) < MIN_MOVE or (defined and not definition_holds(key, deltas)):
         own = min(own, 0.0)  # rounding noise, or the metric it promises did not move its way: no move
     # a rival is a qualifier whose own definition this change keeps, and that it moves more
     rivals = {k: v for k, v in moves.items() if k not in (key, antonym) and (k not in DEFINITIONS or definition_holds(k, deltas))}
@@ -465,7 +466,7 @@ def _unreachable(model, key):
     weights = model.direction(key)
     own = ", ".join(sorted(weights, key=lambda m: -abs(weights[m]))[:4])
     if not np.any(forward):
-        if key in DEFINITIONS:
+        if key in DEFINITIONS and model.sources_.get(key) == "vocabulary":
             deltas = model.deltas_[model.usable_]
             return f"{key} {DEFINITIONS[key].sentence()}, but in this grammar {lacks(key, deltas)}"
         return f"no variant of this grammar moves {key}'s metrics ({own}) its way: the varied constants do not reach them"

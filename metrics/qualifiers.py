@@ -523,7 +523,7 @@ class QualifierModel(ParamsMixin):
         moved = np.any(z != 0, axis=1) if changes is None else np.asarray(changes, bool)
         self.usable_ = finite & moved
         self.deltas_ = deltas
-        self.holds_ = _holds(self.names_, deltas, self.scores_)
+        self.holds_ = _holds(self.names_, deltas, self.scores_, self.sources_)
         filled = np.where(np.isfinite(self.scores_) & self.holds_, self.scores_, -np.inf)
         self.owner_ = np.where(filled.max(axis=1, initial=-np.inf) > 0, filled.argmax(axis=1), -1)
         self.rules_ = getattr(sweep, "rules_", None)
@@ -642,12 +642,13 @@ class QualifierModel(ParamsMixin):
         }
 
 
-def _holds(names, deltas, scores) -> np.ndarray:
+def _holds(names, deltas, scores, sources) -> np.ndarray:
     """(N,Q): each variant keeps each qualifier's definition (:mod:`ramure.metrics.definitions`);
-    a qualifier without one (a study's word) holds where its score is positive."""
+    a word without one, or whose direction a study's regions or another grammar gave (its
+    meaning is then what the participants chose), holds where its score is positive."""
     out = np.asarray(scores, float) > 0
     for q, name in enumerate(names):
-        if name in DEFINITIONS:
+        if name in DEFINITIONS and sources.get(name) == "vocabulary":
             out[:, q] = definition_holds(name, deltas)
     return out
 
