@@ -312,7 +312,7 @@ def _judge(model, key, before, after, antonym, floor: float | np.ndarray = 0.0):
     deltas = all_deltas(_snap(after, floor), _snap(before, floor))
     moves = model.move_scores(deltas)
     own = moves.get(key, float("nan"))
-    defined = key in DEFINITIONS and model.sources_.get(key) == "vocabulary"
+    defined = key in DEFINITIONS and model.sources_.get(key) != "region"
     if abs(own) < MIN_MOVE or (defined and not definition_holds(key, deltas)):
         own = min(own, 0.0)  # rounding noise, or the metric it promises did not move its way: no move
     # a rival is a qualifier whose own definition this change keeps, and that it moves more
@@ -466,7 +466,7 @@ def _unreachable(model, key):
     weights = model.direction(key)
     own = ", ".join(sorted(weights, key=lambda m: -abs(weights[m]))[:4])
     if not np.any(forward):
-        if key in DEFINITIONS and model.sources_.get(key) == "vocabulary":
+        if key in DEFINITIONS and model.sources_.get(key) != "region":
             deltas = model.deltas_[model.usable_]
             return f"{key} {DEFINITIONS[key].sentence()}, but in this grammar {lacks(key, deltas)}"
         return f"no variant of this grammar moves {key}'s metrics ({own}) its way: the varied constants do not reach them"
@@ -568,9 +568,10 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
 def _best_held(session, key, source, tried, selection, rho):
     """No try was dominant: apply again the one that moved ``key`` most among those that kept its
     definition (score > 0), flagged ``dominant`` False with the ``rival`` that moved more (the
-    word's own metric moved its way, which is what it promises).  None when no try kept it."""
+    word's own metric moved its way, which is what it promises).  None when no try kept it, or
+    when ``key`` has no definition to keep (a word of a study, or a direction its regions gave)."""
     held = [t for t in tried if t.score > 0 and t.changed and t.kind != "whole"]
-    if not held:
+    if not held or key not in DEFINITIONS or source == "region":
         return None
     t = max(held, key=lambda t: t.score)
     if t.kind == "steps":

@@ -644,11 +644,11 @@ class QualifierModel(ParamsMixin):
 
 def _holds(names, deltas, scores, sources) -> np.ndarray:
     """(N,Q): each variant keeps each qualifier's definition (:mod:`ramure.metrics.definitions`);
-    a word without one, or whose direction a study's regions or another grammar gave (its
-    meaning is then what the participants chose), holds where its score is positive."""
+    a word without one, or whose direction this grammar's study regions gave (its meaning is
+    then what the participants chose), holds where its score is positive."""
     out = np.asarray(scores, float) > 0
     for q, name in enumerate(names):
-        if name in DEFINITIONS and sources.get(name) == "vocabulary":
+        if name in DEFINITIONS and sources.get(name) != "region":
             out[:, q] = definition_holds(name, deltas)
     return out
 
