@@ -57,6 +57,8 @@ CONTEXT_WINDOW = 256
 #: The last edits in the undo history that keep both whole strings (see :class:`Change`);
 #: older ones keep what they replaced only.
 KEEP_STRINGS = 1
+#: The largest derivation count a "steps" edit sets (as the explorers' n box).
+MAX_STEPS = 30
 SESSION_VERSION = 1
 
 
@@ -317,7 +319,7 @@ class Session:
     """A plant being edited: derivation + edit log with undo/redo, saved as JSON.
 
     Every edit is a dict in :attr:`edits` (``op`` = ``regrow``, ``prune``,
-    ``constants`` or ``fruit``) holding everything needed to replay it, including the seed
+    ``constants``, ``steps`` or ``fruit``) holding everything needed to replay it, including the seed
     actually used, so :meth:`load` rebuilds the identical plant.
     """
 
@@ -335,6 +337,7 @@ class Session:
         self.lsystem = lsystem
         self.filename = filename
         self.n = lsystem.n if n is None else int(n)
+        self.base_n = self.n  # the n the edits replay from (a "steps" edit changes self.n)
         self.seed = lsystem.seed if seed is None else int(seed)  # default: the grammar's #seed
         self.base_constants = {**lsystem.constants, **(constants or {})}
         self.constants = dict(self.base_constants)
@@ -505,6 +508,14 @@ class Session:
         edit = {"op": "constants", "values": _check_values(values, self.lsystem)}
         return self._apply(edit)
 
+    def set_steps(self, n: int, params: dict | None = None) -> RegenResult:
+        """Derive the whole plant again with ``n`` derivation steps (an undoable edit; a
+        qualifier's n +- 1 when no constant moves the plant its way); ``params`` a parameter
+        combination this derivation applies (as a whole-plant :meth:`regrow`'s)."""
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 0 <= n <= MAX_STEPS:
+            raise ValueRefused(f"the derivation count must be a whole number from 0 to {MAX_STEPS}, not {n!r}")
+        return self._apply({"op": "steps", "n": int(n), "params": _check_params(params, self.lsystem)})
+
     def current_lsystem(self) -> LSystem:
         """The grammar with this session's current constants: what a variant sweep should vary.
 
@@ -533,14 +544,15 @@ class Session:
                 None,
                 time.perf_counter() - t0,
             )
-        elif edit["op"] == "constants":
-            undo = ("derivation", self.derivation, dict(self.constants))
-            constants = {**self.constants, **edit["values"]}
-            derivation = self.lsystem.derive(n=self.n, seed=self.seed, constants=constants)
+        elif edit["op"] in ("constants", "steps"):
+            undo = ("derivation", self.derivation, dict(self.constants), self.n)
+            constants = {**self.constants, **edit.get("values", {})}
+            n = int(edit.get("n", self.n))
+            derivation = self.lsystem.derive(n=n, seed=self.seed, constants=constants, params=edit.get("params"))
             # Only now that the plant re-derived: a refused value changes nothing.
-            self.derivation, self.constants = derivation, constants
+            self.derivation, self.constants, self.n = derivation, constants, n
             result = RegenResult(
-                "constants", *(np.zeros(0, np.int64),) * 3, len(undo[1]), len(self.derivation), None, time.perf_counter() - t0
+                edit["op"], *(np.zeros(0, np.int64),) * 3, len(undo[1]), len(self.derivation), None, time.perf_counter() - t0
             )
         else:
             result = self._regrow_or_prune(edit, t0, refuse_empty)
@@ -614,9 +626,9 @@ class Session:
         if not take:
             return None
         edit, how = take.pop()
-        if how[0] == "derivation":  # swap whole derivations (a constants edit)
-            current = ("derivation", self.derivation, dict(self.constants))
-            self.derivation, self.constants = how[1], how[2]
+        if how[0] == "derivation":  # swap whole derivations (a constants or steps edit)
+            current = ("derivation", self.derivation, dict(self.constants), self.n)
+            self.derivation, self.constants, self.n = how[1], how[2], how[3]
             how = current
         elif how[0] == "change":
             how[1].apply(self.tree, forward=forward)
@@ -642,7 +654,7 @@ class Session:
             "version": SESSION_VERSION,
             "grammar": self.lsystem.text,
             "filename": self.filename,
-            "n": self.n,
+            "n": self.base_n,
             "seed": self.seed,
             "constants": self.base_constants,
             "edits": self.edits,
@@ -808,9 +820,16 @@ def _check_detail_settings(settings):
 
 def _check_edit(edit, i, session):
     """Check one saved edit before replaying it on ``session`` (ids must be current leaves)."""
-    if not isinstance(edit, dict) or edit.get("op") not in ("regrow", "prune", "constants", "fruit", "detail"):
+    if not isinstance(edit, dict) or edit.get("op") not in ("regrow", "prune", "constants", "steps", "fruit", "detail"):
         raise RamureError(f"edit {i + 1} has no valid 'op'")
     what = f"edit {i + 1} ({edit['op']})"
+    if edit["op"] == "steps":
+        if not _is_whole(edit.get("n"), high=MAX_STEPS):
+            raise RamureError(f"{what}: 'n' must be a whole number from 0 to {MAX_STEPS}")
+        try:
+            return {**edit, "params": _check_params(edit.get("params"), session.lsystem)}
+        except ValueRefused as exc:
+            raise RamureError(f"{what}: {exc}") from None
     if edit["op"] == "detail":
         leaves = edit.get("leaves")
         if edit.get("kind") not in DETAIL_KINDS or not isinstance(leaves, list) or not all(_is_whole(x) for x in leaves):

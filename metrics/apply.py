@@ -36,9 +36,12 @@ min-cut selects.  Here the choice is checked, not assumed:
    direction, divided by the spread of that qualifier's scores over the
    sweep (so one qualifier's move compares with another's; values within
    1e-6 of the base plant's value of 0 count as 0, and scores below
-   :data:`MIN_MOVE` as no move).  A try is kept only when it moves its own
-   qualifier forward *and* no other qualifier (its antonym aside) more: a
-   variant chosen for one qualifier that moves another more is rejected.
+   :data:`MIN_MOVE` as no move).  A try moves its qualifier forward only
+   when the qualifier's definition holds on the measured part (the metric
+   it promises moves its way, :mod:`ramure.metrics.definitions`).  A try is
+   kept at once when it moves its own qualifier forward *and* no other
+   qualifier (its antonym aside, and only qualifiers whose own definition
+   the change keeps) more.
    At the first level the first ``tries`` candidates are tried, then the
    set widens (up to :data:`WIDEN` times ``tries``) while tries move
    forward without dominating; each level above tries ``tries`` (a higher
@@ -51,7 +54,16 @@ min-cut selects.  Here the choice is checked, not assumed:
    at once, saying which qualifiers move more.  When no try anywhere is
    dominant (or :data:`BUDGET` regrowths are spent), the plant is left as
    it was (no edit, ``regen`` None) and the result has ``improved`` False,
-   a ``reason`` naming the rival that moved more, and a ``suggestion``.
+   a ``reason``, and a ``suggestion`` — unless some try kept the
+   qualifier's definition: the best such try is then applied, with
+   ``dominant`` False and the ``rival`` that moved more named.
+4. **One derivation step more or less** (whole plant only).  When no
+   variant serves the qualifier (no constant changes the number of
+   segments, say), ``n + 1`` then ``n - 1`` are tried
+   (:meth:`~ramure.lsys.regen.Session.set_steps`), alone and with the
+   variants that score the qualifier highest; ``changed`` records it.  A
+   refusal names what the grammar lacks ("no constant or rule changes the
+   branch radii").
    On a stochastic grammar each candidate is also tried with three more
    seeds (unless ``seed`` is given).  ``normal`` (no direction) keeps its
    first candidate: the combination closest to the base plant.
@@ -78,8 +90,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ramure.errors import RamureError
 from ramure.lsys.mincut import collapse_nested
+from ramure.lsys.regen import MAX_STEPS
 
+from .definitions import DEFINITIONS, definition_holds, lacks, metric_changes, metric_value
 from .plant import PlantMetrics, plant_metrics
 from .qualifiers import QUALIFIER_METRICS, VOCABULARY, QualifierModel, all_deltas, canonical_name
 from .shape import ShapeMetrics, plant_shape
@@ -111,7 +126,9 @@ class QualifierResult:
     ``after`` and the ``direction`` (+1/-1) it should move; ``moves`` the
     score of the change along every qualifier; ``climbed`` the levels
     climbed above the default ascension (``min_ascend``); ``reason`` and
-    ``suggestion`` explain a result that is not ``improved``.
+    ``suggestion`` explain a result that is not ``improved``; ``changed`` what the
+    variant changed (rule and constants, with a ``text`` to show); ``definition`` the
+    qualifier's defining metrics (:mod:`ramure.metrics.definitions`) before and after.
     """
 
     qualifier: str
@@ -136,6 +153,8 @@ class QualifierResult:
     climbed: int = 0
     reason: str | None = None
     suggestion: str | None = None
+    changed: dict | None = None  # what the variant changed (VariantSweep.describe): rule, constants, text
+    definition: dict | None = None  # the qualifier's defining metrics before/after and whether they held
 
     def to_dict(self) -> dict:
         return {
@@ -159,6 +178,8 @@ class QualifierResult:
             "reason": self.reason,
             "suggestion": self.suggestion,
             "tried": self.tried,
+            "changed": self.changed,
+            "definition": self.definition,
             "regen": self.regen.to_dict() if self.regen is not None else None,
         }
 
@@ -257,6 +278,7 @@ class _Try:
     rival: str | None
     moves: dict
     changed: bool
+    kind: str = "cut"  # "cut": the selection's cut at ``level``; "whole": the plant, climbing; "steps": n +- 1
 
 
 def _snap(values, floor):
@@ -287,11 +309,14 @@ def _judge(model, key, before, after, antonym, floor: float | np.ndarray = 0.0):
     qualifier's move is that vector projected on its unit direction.  The
     antonym is no rival (its move is exactly minus ``key``'s).
     """
-    moves = model.move_scores(all_deltas(_snap(after, floor), _snap(before, floor)))
+    deltas = all_deltas(_snap(after, floor), _snap(before, floor))
+    moves = model.move_scores(deltas)
     own = moves.get(key, float("nan"))
-    if abs(own) < MIN_MOVE:  # rounding noise is no move
-        own = 0.0
-    rivals = {k: v for k, v in moves.items() if k not in (key, antonym)}
+    defined = key in DEFINITIONS and model.sources_.get(key) != "region"
+    if abs(own) < MIN_MOVE or (defined and not definition_holds(key, deltas)):
+        own = min(own, 0.0)  # rounding noise, or the metric it promises did not move its way: no move
+    # a rival is a qualifier whose own definition this change keeps, and that it moves more
+    rivals = {k: v for k, v in moves.items() if k not in (key, antonym) and (k not in DEFINITIONS or definition_holds(k, deltas))}
     rival = max(rivals, key=rivals.__getitem__) if rivals else None
     dominant = rival is None or own >= rivals[rival]
     return own, dominant, (None if dominant else rival), moves
@@ -376,8 +401,32 @@ def apply_qualifier(
     lets it climb to the whole plant).  See the module docstring.
     """
     model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
+    n_before = session.n
     with _same_cut(session):
-        return _apply(session, canonical_name(name), model, sweep, [int(x) for x in selection], rho, tries, seed, max_climb)
+        out = _apply(session, canonical_name(name), model, sweep, [int(x) for x in selection], rho, tries, seed, max_climb)
+    if "n" in out.params:  # a derivation count, alone or with a sweep variant
+        out.changed = {"n": [n_before, out.params["n"]], "text": f"n {n_before} -> {out.params['n']}"}
+        if out.variant >= 0 and hasattr(sweep, "describe"):
+            also = sweep.describe(out.variant)
+            out.changed = {**also, **out.changed, "text": f"{out.changed['text']}; {also['text']}"}
+    elif out.variant >= 0 and hasattr(sweep, "describe"):
+        out.changed = sweep.describe(out.variant)
+    out.definition = definition_record(out.qualifier, out.before, out.after)
+    return out
+
+
+def definition_record(name: str, before: ArrayLike, after: ArrayLike) -> dict | None:
+    """``{"definition", "terms": [{metric, sign, before, after}], "holds"}`` of qualifier ``name``
+    for the fifteen metrics ``before`` and ``after`` (None for a word without a definition)."""
+    if name not in DEFINITIONS:
+        return None
+    b, a = np.asarray(before, float), np.asarray(after, float)
+    terms = [
+        {"metric": m, "sign": sign, "before": float(metric_value(m, b)), "after": float(metric_value(m, a))}
+        for m, sign in DEFINITIONS[name].terms()
+    ]
+    holds = bool(definition_holds(name, metric_changes(a, b)))
+    return {"definition": DEFINITIONS[name].describe(), "terms": terms, "holds": holds}
 
 
 @contextlib.contextmanager
@@ -413,15 +462,14 @@ def _unreachable(model, key):
     """
     q = model.index(key)
     s = model.scores_[:, q]
-    forward = model.usable_ & np.isfinite(s) & (s > MIN_MOVE)
+    forward = model.usable_ & np.isfinite(s) & (s > MIN_MOVE) & model.holds_[:, q]
     weights = model.direction(key)
     own = ", ".join(sorted(weights, key=lambda m: -abs(weights[m]))[:4])
     if not np.any(forward):
+        if key in DEFINITIONS and model.sources_.get(key) != "region":
+            deltas = model.deltas_[model.usable_]
+            return f"{key} {DEFINITIONS[key].sentence()}, but in this grammar {lacks(key, deltas)}"
         return f"no variant of this grammar moves {key}'s metrics ({own}) its way: the varied constants do not reach them"
-    if not np.any(forward & (model.owner_ == q)):
-        rivals = collections.Counter(model.names_[o] for o in model.owner_[forward] if o >= 0)
-        who = ", ".join(name for name, _ in rivals.most_common(3))
-        return f"every variant of this grammar that moves {key}'s metrics ({own}) its way moves another qualifier more ({who})"
     return None
 
 
@@ -432,6 +480,12 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
     varied = list(getattr(sweep, "names_", []))
     unreachable = _unreachable(model, key)
     if unreachable:
+        if not selection:  # no constant can: one derivation step more or less may
+            stepped, tries_n = _try_steps(session, model, sweep, key, source, 0, tries)
+            kept = stepped or _best_held(session, key, source, tries_n, selection, rho)
+            if kept is not None:
+                return kept
+            unreachable += f"; {_steps_reason(key, tries_n)}"
         return _not_improved(session, model, key, source, selection, rho, [], [unreachable], varied)
     climb = 0 if max_climb is None else max(int(max_climb), 0)
     top = 1 + climb
@@ -492,12 +546,86 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
         level_tries, accepted, regen = _try_level(
             session, model, sweep, key, (), rho, 1, model.rank(key), tries, seed, before, None, WIDEN * max(int(tries), 1), WIDEN
         )
+        for t in level_tries:
+            t.kind = "whole"
         tried += level_tries
         if accepted is not None:
             accepted.level = top
             return _result(session, key, source, accepted, regen, m0, s0, before, len(tried), top, True)
         reasons.append(_level_reason(key, top, level_tries).replace(f"ascension {top}", "whole plant"))
+    if not selection:
+        stepped, tries_n = _try_steps(session, model, sweep, key, source, len(tried), tries)
+        if stepped is not None:
+            return stepped
+        tried += tries_n
+        reasons.append(_steps_reason(key, tries_n))
+    kept = _best_held(session, key, source, tried, selection, rho)
+    if kept is not None:
+        return kept
     return _not_improved(session, model, key, source, selection, rho, tried, reasons, varied)
+
+
+def _best_held(session, key, source, tried, selection, rho):
+    """No try was dominant: apply again the one that moved ``key`` most among those that kept its
+    definition (score > 0), flagged ``dominant`` False with the ``rival`` that moved more (the
+    word's own metric moved its way, which is what it promises).  None when no try kept it, or
+    when ``key`` has no definition to keep (a word of a study, or a direction its regions gave)."""
+    held = [t for t in tried if t.score > 0 and t.changed and t.kind != "whole"]
+    if not held or key not in DEFINITIONS or source == "region":
+        return None
+    t = max(held, key=lambda t: t.score)
+    if t.kind == "steps":
+        m0, s0, before = _measure(session, _roots(session, [], rho))
+        regen = session.set_steps(t.params["n"], t.params["combination"])
+    else:
+        m0, s0, before = _measure(session, _roots(session, selection, rho, t.level))
+        regen = session.regrow(selection, rho=rho, seed=t.seed, params=t.params, min_ascend=t.level)
+    reason = f"no try moved {key} more than every other qualifier: this one keeps {key}'s definition but moves {t.rival} more"
+    return _result(session, key, source, t, regen, m0, s0, before, len(tried), t.level, True, reason)
+
+
+def _try_steps(session, model, sweep, key, source, tried_before=0, tries=3):
+    """Whole plant: one derivation step more, then one less (:meth:`Session.set_steps`), alone
+    and with each of the ``tries`` variants that score ``key`` highest (a step adds or removes
+    segments; a constant then packs or spreads them).  Keeps the first that keeps ``key``'s
+    definition and moves it more than any other qualifier.  Returns ``(result or None, tries)``."""
+    antonym = VOCABULARY[key].antonym if key in VOCABULARY else None
+    m0, s0, before = _measure(session, _roots(session, [], 0.5))
+    s = model.scores_[:, model.index(key)]
+    best = np.flatnonzero(model.usable_ & np.isfinite(s))
+    best = best[np.argsort(-s[best], kind="stable")][: max(int(tries), 0)].tolist()
+    out: list[_Try] = []
+    for n in (session.n + 1, session.n - 1):
+        if not 0 <= n <= MAX_STEPS:
+            continue
+        for variant in [-1, *best]:
+            combo = sweep.combination(variant) if variant >= 0 else None
+            try:
+                regen = session.set_steps(n, combo)
+            except RamureError:  # too large a plant, or a turtle error: not a candidate
+                continue
+            after = _measure(session, _roots(session, [], 0.5))[2]
+            own, dominant, rival, moves = _judge(model, key, before, after, antonym, noise_floor(sweep))
+            changed = not np.allclose(after, before, rtol=1e-9, atol=1e-12)
+            t = _Try(1, variant, None, {"n": n, "combination": combo}, own, dominant, rival, moves, changed, "steps")
+            out.append(t)
+            if own > 0 and dominant:
+                return _result(session, key, source, t, regen, m0, s0, before, tried_before + len(out), 1, True), out
+            session.undo()
+    return None, out
+
+
+def _steps_reason(key, tries) -> str:
+    """Why neither n + 1 nor n - 1 was kept (one clause)."""
+    if not tries:
+        return "no other derivation count could be derived"
+    forward = [t for t in tries if t.score > 0]
+    if forward:
+        best = max(forward, key=lambda t: t.score)
+        return f"n {best.params['n']} moves {key} but moves {best.rival} more"
+    what = DEFINITIONS[key].sentence() if key in DEFINITIONS else f"move {key}"
+    ns = [str(n) for n in sorted({t.params["n"] for t in tries}, reverse=True)]
+    return f"neither n {' nor n '.join(ns)} {what}" if len(ns) > 1 else f"n {ns[0]} also fails: nothing there {what}"
 
 
 def _level_reason(key, level, tries, steps_left=None) -> str:
@@ -522,7 +650,7 @@ def _level_reason(key, level, tries, steps_left=None) -> str:
 
 
 def _result(session, key, source, t, regen, m0, s0, before, tried, level, improved, reason=None, suggestion=None):
-    m1, s1, after = _measure(session, regen.roots)
+    m1, s1, after = _measure(session, regen.roots if len(regen.roots) else _roots(session, [], 0.5))
     improved = improved and t.score > 0
     return QualifierResult(
         key,

@@ -27,9 +27,11 @@ Antonyms keep exactly opposite scores.  The same scores judge a selection's
 measured change (:mod:`ramure.metrics.apply`).
 
 **The choice is checked** (:class:`QualifierModel`).  A variant *belongs*
-to the qualifier it moves most (its highest score over all directional
-qualifiers).  For a qualifier, candidates come in three tiers: (1) variants
-it owns, that move it forward (score > 0), best score first — so the
+to the qualifier it moves most (its highest score over the directional
+qualifiers whose definition it keeps).  A variant moves a qualifier *forward* when its score is
+positive and the qualifier's definition holds (the metric it promises moves
+its way: :mod:`ramure.metrics.definitions`).  For a qualifier, candidates come
+in three tiers: (1) variants it owns, that move it forward, best score first — so the
 variant applied moves the qualifier's own metrics more than any other
 candidate not rejected, and two qualifiers never pick the same one;
 (2) variants that move it forward but move some other qualifier more,
@@ -75,6 +77,7 @@ from numpy.typing import ArrayLike
 
 from ramure.errors import ValueRefused
 
+from .definitions import DEFINITIONS, definition_holds
 from .estimator import ParamsMixin
 from .plant import METRIC_NAMES, metric_deltas
 from .shape import SHAPE_METRIC_NAMES, shape_deltas
@@ -502,7 +505,8 @@ class QualifierModel(ParamsMixin):
     *Scores* in the module docstring), ``sources_`` ``{name: "vocabulary" | "transfer" | "region"}``, ``scale_`` (15,),
     ``scores_`` (N,Q), ``normal_scores_`` (N,), ``owner_`` (N,) (index into
     ``names_`` of the qualifier each variant moves most; -1 for none),
-    ``usable_`` (N,) (finite and not the base plant), ``rules_`` (N,) or None,
+    ``usable_`` (N,) (finite and not the base plant), ``deltas_`` (N,15), ``holds_`` (N,Q) (the variant keeps the
+    qualifier's definition, :mod:`ramure.metrics.definitions`), ``rules_`` (N,) or None,
     ``picks_`` ``{name: variant}`` (whole-plant picks, pairwise distinct).
     """
 
@@ -547,7 +551,9 @@ class QualifierModel(ParamsMixin):
         changes = getattr(sweep, "changes_", None)
         moved = np.any(z != 0, axis=1) if changes is None else np.asarray(changes, bool)
         self.usable_ = finite & moved
-        filled = np.where(np.isfinite(self.scores_), self.scores_, -np.inf)
+        self.deltas_ = deltas
+        self.holds_ = _holds(self.names_, deltas, self.scores_, self.sources_)
+        filled = np.where(np.isfinite(self.scores_) & self.holds_, self.scores_, -np.inf)
         self.owner_ = np.where(filled.max(axis=1, initial=-np.inf) > 0, filled.argmax(axis=1), -1)
         self.rules_ = getattr(sweep, "rules_", None)
         self.n_variants_ = len(deltas)
@@ -584,8 +590,9 @@ class QualifierModel(ParamsMixin):
         """Candidate tiers for directional qualifier ``q`` among ``keep`` (module docstring)."""
         s = self.scores_[:, q]
         keep = keep & self.usable_ & np.isfinite(s)
-        owned = keep & (s > 0) & (self.owner_ == q)
-        return owned, keep & (s > 0) & ~owned, keep & ~(s > 0)
+        forward = (s > 0) & self.holds_[:, q]
+        owned = keep & forward & (self.owner_ == q)
+        return owned, keep & forward & ~owned, keep & ~forward
 
     def _assign(self):
         """One whole-plant pick per directional qualifier, never shared (``picks_``).
@@ -664,10 +671,27 @@ class QualifierModel(ParamsMixin):
         }
 
 
+def _holds(names, deltas, scores, sources) -> np.ndarray:
+    """(N,Q): each variant keeps each qualifier's definition (:mod:`ramure.metrics.definitions`);
+    a word without one, or whose direction this grammar's study regions gave (its meaning is
+    then what the participants chose), holds where its score is positive."""
+    out = np.asarray(scores, float) > 0
+    for q, name in enumerate(names):
+        if name in DEFINITIONS and sources.get(name) != "region":
+            out[:, q] = definition_holds(name, deltas)
+    return out
+
+
 # -- regions --------------------------------------------------------------------
+def _rows(points: ArrayLike, dim: int = 3) -> np.ndarray:
+    """Points as rows: a 2-D array as it is (any dimension), anything else as rows of ``dim``."""
+    points = np.asarray(points, float)
+    return points if points.ndim == 2 else points.reshape(-1, dim)
+
+
 def trim_points(points: ArrayLike, trim: float = 0.07) -> np.ndarray:
     """Boolean mask keeping all but the ``floor(trim * k)`` points farthest from the median point."""
-    points = np.asarray(points, float).reshape(-1, 3)
+    points = _rows(points)
     drop = int(np.floor(float(trim) * len(points)))
     keep = np.ones(len(points), bool)
     if drop > 0:
@@ -679,7 +703,7 @@ def trim_points(points: ArrayLike, trim: float = 0.07) -> np.ndarray:
 class QualifierRegions(ParamsMixin):
     """One axis-aligned box per qualifier in PCA space (configure, fit, query).
 
-    ``fit(points)`` takes ``{qualifier: (k,3) points}`` (names in English or
+    ``fit(points)`` takes ``{qualifier: (k,d) points}`` (d = 3 in PCA space; names in English or
     French).  Fitted: ``names_`` (canonical, sorted), ``boxes_`` ``{name: (lo, hi)}``,
     ``centres_`` ``{name: (3,)}``, ``kept_`` ``{name: (k',3) points after trimming}``,
     ``collision_matrix_`` (q,q): row A, column B = % of A's kept points inside
@@ -699,7 +723,7 @@ class QualifierRegions(ParamsMixin):
             raise ValueRefused(f"trim must be a fraction in [0, 1), not {self.trim}")
         merged: dict[str, np.ndarray] = {}
         for name, pts in dict(points).items():
-            pts = np.asarray(pts, float).reshape(-1, 3)
+            pts = _rows(pts)
             key = canonical_name(name)
             merged[key] = np.vstack([merged[key], pts]) if key in merged else pts
         merged = {k: v[np.all(np.isfinite(v), axis=1)] for k, v in merged.items()}
@@ -731,7 +755,7 @@ class QualifierRegions(ParamsMixin):
 
     def contains(self, name: str, points: ArrayLike) -> np.ndarray:
         lo, hi = self.boxes_[self._name(name)]
-        points = np.asarray(points, float).reshape(-1, 3)
+        points = _rows(points, len(lo))
         return np.all((points >= lo - 1e-12) & (points <= hi + 1e-12), axis=1)
 
     def nearest_variants(self, name: str, cloud: ArrayLike) -> np.ndarray:
@@ -813,18 +837,27 @@ def qualifier_combination(
     return fitted.combination(int(order[0]))
 
 
+def qualifier_space(sweep: VariantSweep | ArrayLike) -> np.ndarray:
+    """The variants (N,15) in the space the qualifiers are defined in: each of the fifteen
+    metrics' change divided by its spread over the sweep (NaN rows for failed variants)."""
+    deltas = _deltas_of(sweep)
+    return standardise(deltas, metric_scale(deltas))
+
+
 def vocabulary_regions(
-    sweep: VariantSweep | ArrayLike, points: ArrayLike, per_qualifier: int = 10, trim: float = 0.0
+    sweep: VariantSweep | ArrayLike, points: ArrayLike | None = None, per_qualifier: int = 10, trim: float = 0.0
 ) -> QualifierRegions:
     """Regions of the default vocabulary on one grammar, before any study.
 
     Each directional qualifier's box surrounds its ``per_qualifier`` best
-    candidates that it owns (tier 1 of :meth:`QualifierModel.rank`) in the
-    PCA cloud ``points``; the collision matrix then tells how far the
-    qualifiers' choices overlap in PCA space.
+    candidates that it owns (tier 1 of :meth:`QualifierModel.rank`) in
+    ``points``: by default the fifteen-metric :func:`qualifier_space` (the
+    ten-metric PCA cloud of an exploration lacks height, width and angles, so
+    there "regular" and "irregular" fall in one box), or a PCA cloud (N,3);
+    the collision matrix then tells how far the qualifiers' choices overlap.
     """
     model = QualifierModel().fit(sweep)
-    points = np.asarray(points, float)
+    points = qualifier_space(sweep) if points is None else np.asarray(points, float)
     boxes: dict[str, np.ndarray] = {}
     for name in model.names_:
         q = model.index(name)
@@ -837,6 +870,32 @@ def vocabulary_regions(
     return QualifierRegions(trim=trim).fit(boxes)
 
 
+#: A region lying more than this share (%) inside another's box does not separate from it.
+SEPARATION = 25.0
+
+
+def synonyms(regions: QualifierRegions, threshold: float = SEPARATION) -> list[tuple[str, str, float]]:
+    """Pairs ``(a, b, percent)`` whose regions do not separate on this plant: more than
+    ``threshold`` % of ``a``'s points lie inside ``b``'s box, or the other way (``percent`` is
+    the larger share).  The data cannot tell these words apart here: they are synonyms for
+    this plant.
+
+    >>> regions = QualifierRegions(trim=0).fit({"tall": [[0, 0, 0], [2, 2, 2]], "large": [[1, 1, 1], [5, 5, 5]],
+    ...                                          "wide": [[9, 9, 9], [10, 10, 10]]})
+    >>> synonyms(regions)
+    [('large', 'tall', 50.0)]
+    """
+    m = regions.collision_matrix_
+    names = regions.names_
+    out = []
+    for i, a in enumerate(names):
+        for j in range(i + 1, len(names)):
+            share = float(max(m[i, j], m[j, i]))
+            if share > threshold:
+                out.append((a, names[j], round(share, 1)))
+    return sorted(out, key=lambda t: (-t[2], t[0], t[1]))
+
+
 def matrix_table(regions: QualifierRegions) -> str:
     """The collision matrix as a text table (row A, column B: % of A's points in B's box)."""
     names = regions.names_
@@ -847,4 +906,8 @@ def matrix_table(regions: QualifierRegions) -> str:
         cells = " ".join("     ." if i == j else f"{regions.collision_matrix_[i, j]:6.1f}" for j in range(len(names)))
         rows.append(f"{a:>{width}} {cells}")
     rows.append(f"mean off-diagonal collision: {regions.mean_collision():.1f} %")
+    pairs = synonyms(regions)
+    if pairs:
+        said = ", ".join(f"{a} ~ {b} ({share:.0f} %)" for a, b, share in pairs)
+        rows.append(f"synonyms for this plant (regions more than {SEPARATION:.0f} % inside each other): {said}")
     return "\n".join(rows)

@@ -57,7 +57,7 @@ from . import cache as _cache
 from .estimator import ParamsMixin, check_n_jobs
 from .plant import METRIC_NAMES, metric_deltas, metrics_from_arrays
 from .shape import SHAPE_METRIC_NAMES, shape_deltas, shape_from_arrays
-from .variants import distinct_variants, rule_constant_names, variant_design
+from .variants import describe_variant, distinct_variants, rule_constant_names, variant_design
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -182,6 +182,9 @@ class VariantSweep(ParamsMixin):
     scheduler, connect_timeout
         a Dask scheduler address (``"tcp://host:port"``) or a ``distributed.Client``;
         seconds to wait when connecting to an address (default 10).
+    wide
+        a larger step (e.g. 0.25 for +-25 %) added one constant at a time, per rule, to the
+        grid (None: none); see :func:`ramure.metrics.variants.variant_design`.
     mp_context
         multiprocessing start method for the local pool (default ``"fork"`` on Linux;
         a GUI running the sweep from a background thread should pass ``"forkserver"``,
@@ -213,6 +216,7 @@ class VariantSweep(ParamsMixin):
         scheduler: str | Client | None = None,
         mp_context: str | None = None,
         connect_timeout: float = 10.0,
+        wide: float | None = None,
     ) -> None:
         self.n = n
         self.seed = seed
@@ -227,6 +231,7 @@ class VariantSweep(ParamsMixin):
         self.scheduler = scheduler
         self.mp_context = mp_context
         self.connect_timeout = connect_timeout
+        self.wide = wide
 
     @property
     def _event(self):
@@ -270,6 +275,7 @@ class VariantSweep(ParamsMixin):
             "names": list(design.names),
             "mode": design.mode,
             "n_samples": self.n_samples,
+            "wide": self.wide,
         }
 
     # -- fitting -----------------------------------------------------------
@@ -285,7 +291,7 @@ class VariantSweep(ParamsMixin):
         ls = as_lsystem(grammar)
         n, jobs = self._check(ls)
         design = variant_design(
-            ls.constants, len(ls.grammar.rules), self.constants, self.beta, self.mode, self.n_samples, seed=self.seed
+            ls.constants, len(ls.grammar.rules), self.constants, self.beta, self.mode, self.n_samples, self.seed, self.wide
         )
         base_constants = dict(ls.constants)
         path = None
@@ -310,6 +316,7 @@ class VariantSweep(ParamsMixin):
         self.base_constants_ = base_constants
         self.n_ = n
         self.n_rules_ = len(ls.grammar.rules)
+        self.rule_names_ = [str(r.pred) for r in ls.grammar.rules]
         self.design_ = design
         self.names_ = design.names
         self.rules_ = design.rules
@@ -436,6 +443,12 @@ class VariantSweep(ParamsMixin):
         if not 0 <= int(i) < self.n_variants_:
             raise ValueRefused(f"variant {i} is out of range 0..{self.n_variants_ - 1}")
         return self.design_.combination(int(i))
+
+    def describe(self, i: int) -> dict:
+        """What variant ``i`` changed against the grammar: ``{"rule", "predecessor", "constants":
+        {name: [before, after]}, "text"}`` (see :func:`ramure.metrics.variants.describe_variant`)."""
+        self.combination(i)  # validates i
+        return describe_variant(self.design_, int(i), self.base_constants_, getattr(self, "rule_names_", ()))
 
     def derive(self, i: int, n: int | None = None) -> Derivation:
         """Derive variant ``i`` again (e.g. to render it); ``n`` defaults to the sweep's."""

@@ -166,8 +166,18 @@ def variant_design(
     mode: str = "grid",
     n_samples: int | None = None,
     seed: int = 0,
+    wide: float | None = None,
 ) -> VariantDesign:
-    """All variants of a grammar with ``constants`` (dict) and ``n_rules`` rules (see module doc)."""
+    """All variants of a grammar with ``constants`` (dict) and ``n_rules`` rules (see module doc).
+
+    ``wide`` (e.g. 0.25) adds, per rule, ``2 m`` variants that change one constant at a
+    time by ``+-wide``: a larger step for grammars where ``+-beta`` moves too little
+    (levels ``+-wide / beta``, beyond [-1, 1]).
+
+    >>> d = variant_design({"r1": 0.9, "r2": 0.7}, n_rules=1, wide=0.25)
+    >>> len(d), d.values[-4:].tolist()
+    (13, [[0.675, 0.7], [1.125, 0.7], [0.9, 0.525], [0.9, 0.875]])
+    """
     beta = check_beta(beta)
     if mode not in MODES:
         raise RamureError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
@@ -193,10 +203,40 @@ def variant_design(
         if int(n_samples) * n_rules > MAX_VARIANTS:
             raise ValueRefused(f"{n_samples} samples x {n_rules} rules exceeds {MAX_VARIANTS:,} variants")
         levels = 2.0 * _unit_samples(mode, m, int(n_samples), seed) - 1.0
+    if wide is not None:
+        levels = np.vstack([levels, _one_at_a_time(m, check_beta(wide) / beta)])
     base = np.array([constants[k] for k in names], float)
     values = round12(base * (1.0 + beta * levels))
     rules = np.repeat(np.arange(n_rules), len(levels))
     return VariantDesign(names, rules, np.tile(levels, (n_rules, 1)), np.tile(values, (n_rules, 1)), beta, mode)
+
+
+def _one_at_a_time(m, level):
+    """(2m, m) levels: each constant alone at ``-level`` then ``+level``."""
+    out = np.zeros((2 * m, m))
+    out[0::2][np.arange(m), np.arange(m)] = -level
+    out[1::2][np.arange(m), np.arange(m)] = level
+    return out
+
+
+def describe_variant(design: VariantDesign, i: int, base: Mapping[str, float], rule_names: Sequence[str] = ()) -> dict:
+    """What variant ``i`` changed: ``{"rule", "predecessor", "constants": {name: [before, after]}, "text"}``.
+
+    Only the constants whose value differs from ``base`` are listed; ``rule_names`` (the
+    rules' predecessors) names the rule in ``text``, e.g. ``"rule 0 (S): ls 0.8 -> 0.88"``.
+
+    >>> d = variant_design({"a": 10.0, "b": 2.0}, n_rules=2)
+    >>> describe_variant(d, 10, {"a": 10.0, "b": 2.0}, ["A", "B"])["text"]
+    'rule 1 (B): a 10 -> 9'
+    """
+    rule = int(design.rules[i])
+    changed = {
+        k: [float(base[k]), float(v)] for k, v in zip(design.names, design.values[i].tolist()) if float(base[k]) != float(v)
+    }
+    pred = rule_names[rule] if rule < len(rule_names) else None
+    head = f"rule {rule}" + (f" ({pred})" if pred else "")
+    body = ", ".join(f"{k} {a:g} -> {b:g}" for k, (a, b) in changed.items()) or "no constant changed"
+    return {"rule": rule, "predecessor": pred, "constants": changed, "text": f"{head}: {body}"}
 
 
 def _unit_samples(mode, m, count, seed):

@@ -243,11 +243,11 @@ def run_qualify_list(args: argparse.Namespace) -> int:
 
 def run_qualify_matrix(args: argparse.Namespace, ls: LSystem, exp: Exploration, regions: QualifierRegions | None) -> int:
     """``ramure qualify --matrix FILE``: the qualifiers' collision matrix on this grammar."""
-    from ramure.metrics.qualifiers import matrix_table, vocabulary_regions
+    from ramure.metrics.qualifiers import matrix_table, synonyms, vocabulary_regions
 
     source = "study" if regions is not None else "vocabulary"
-    if regions is None:
-        regions = vocabulary_regions(exp.sweep, exp.points, trim=args.trim)
+    if regions is None:  # in the fifteen-metric space the qualifiers are defined in
+        regions = vocabulary_regions(exp.sweep, trim=args.trim)
     from ramure.metrics.qualifiers import VOCABULARY
 
     missing = [q for q, v in VOCABULARY.items() if v.direction is not None and q not in regions.names_]
@@ -262,6 +262,7 @@ def run_qualify_matrix(args: argparse.Namespace, ls: LSystem, exp: Exploration, 
                     "collision_matrix": regions.collision_matrix_.round(4).tolist(),
                     "mean_collision": round(regions.mean_collision(), 4),
                     "without_region": missing,
+                    "synonyms": [list(pair) for pair in synonyms(regions)],
                 }
             )
         )

@@ -107,10 +107,11 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
     branch = int(np.flatnonzero((tree.depth == 1) & tree.alive & (tree.child_count > 0))[-1])
     chosen = tree.leaves_under(branch).tolist()  # a main branch: tips alone cannot show new constants
     w.controller.select(chosen)
-    w.regen.qualifier.setCurrentIndex(w.regen.qualifier.findText("dense"))  # chosen in the list
+    # "dense" adds segments (issue 35), which no constant of Honda does: "thick" moves its radii
+    w.regen.qualifier.setCurrentIndex(w.regen.qualifier.findText("thick"))  # chosen in the list
     tip = w.regen.qualifier.itemData(w.regen.qualifier.currentIndex(), Qt.ItemDataRole.ToolTipRole)
-    assert "more branches" in tip  # each qualifier says what it does
-    with qtbot.waitSignal(w.controller.job_done, timeout=60000, check_params_cb=lambda job: job.name == "qualifier dense"):
+    assert "thicker branches" in tip  # each qualifier says what it does
+    with qtbot.waitSignal(w.controller.job_done, timeout=60000, check_params_cb=lambda job: job.name == "qualifier thick"):
         qtbot.mouseClick(w.regen.apply_button, Qt.MouseButton.LeftButton)
     settle(qtbot, w)
     sweep = w.variants.variant_set.exploration.sweep
@@ -121,9 +122,9 @@ def test_qualifier_explores_first_then_regrows_the_selection(make_window, qtbot)
     assert edit["params"] is not None and edit["selection"] == sorted(chosen)
     assert w.variants.last_qualifier.roots.tolist() == [branch]  # the selection's cut, nothing more
     result = w.variants.last_qualifier
-    assert result.improved and result.after.branch_density > result.before.branch_density
+    assert result.improved and result.after.mean_radius > result.before.mean_radius
     message = w.statusBar().currentMessage()
-    assert message.startswith("dense: density ") and "→" in message
+    assert message.startswith("thick: ") and "→" in message
     assert w.regen.preview.pixmap() is not None and not w.regen.preview.pixmap().isNull()
     w.controller.undo()
     settle(qtbot, w)

@@ -42,7 +42,7 @@ def test_explore_notebook_runs(tmp_path):
     assert "undo restores the plant: True" in text
     assert "changed: True | last edit: regrow {'a2': 30.0}" in text
     assert "replays to the same plant: True" in text
-    assert re.search(r"denser: density [\d.]+ → [\d.]+", text) and "one more edit: True" in text
+    assert re.search(r"thicker: mean radius [\d.]+ → [\d.]+", text) and "one more edit: True" in text
     assert "regrew 1 fruit as pear (seed" in text or "not available in this version" in text
     assert re.search(r"the pear: \d+ volume cells in [3-9] tissues", text) or "not available in this version" in text
     pngs = [o for o in outputs(nb) if "image/png" in o.get("data", {})]
@@ -56,7 +56,7 @@ def test_explore_notebook_runs(tmp_path):
         and "title='PCA'" not in o["data"]["text/html"]
     ]
     assert pictures and pictures[0].count("<img") == 27  # the gallery
-    assert "the plant after &#x27;dense&#x27;" in pictures[1] and pictures[1].count("<img") == 2  # with the PCA view
+    assert "the plant after &#x27;thick&#x27;" in pictures[1] and pictures[1].count("<img") == 2  # with the PCA view
     if "not available in this version" not in text:
         assert "after Regrow fruit: a pear" in pictures[2] and pictures[2].count("<img") == 3
         assert "the pear cut across its axis" in pictures[3] and pictures[3].count("<img") == 2

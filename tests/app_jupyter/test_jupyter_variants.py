@@ -63,7 +63,8 @@ def test_gallery_button_applies_the_pick(ex):
     assert "applied pick #27" in ex.message.text
 
 
-def test_qualifier_dropdown_makes_the_selection_denser(ex):
+def test_qualifier_dropdown_makes_the_selection_thicker(ex):
+    """(Issue 35: "dense" adds segments, which no constant of Honda does; "thick" moves its radii.)"""
     from ramure.metrics.apply import active_rules, roots_metrics
 
     tree = ex.plant.tree
@@ -71,11 +72,11 @@ def test_qualifier_dropdown_makes_the_selection_denser(ex):
     ex.tree.select(branch)  # the derivation tree's Select: every leaf under a main branch
     roots = ex.model.plan().roots
     rules = active_rules(ex.plant.tree, roots)
-    before = roots_metrics(ex.session, roots).branch_density
-    ex.edits.qualifier.value = "dense"
+    before = roots_metrics(ex.session, roots).mean_radius
+    ex.edits.qualifier.value = "thick"
     ex.edits.apply_qualifier.click()
     result = ex.model.last_result
-    after = roots_metrics(ex.session, result.roots).branch_density
+    after = roots_metrics(ex.session, result.roots).mean_radius
     assert ex.history[-1]["params"]["rule"] in rules and len(ex.history) == 1  # one undoable edit
     assert result.roots.tolist() == roots.tolist()  # the selection's cut, what the preview shows
     added = np.asarray(result.change.added)
@@ -85,10 +86,10 @@ def test_qualifier_dropdown_makes_the_selection_denser(ex):
     assert ex.variants.chosen is not None  # the applied variant is marked in the PCA view
     ex.undo()
     assert ex.history == []
-    # the part regrown really got denser
-    part_before = roots_metrics(ex.session, result.roots).branch_density
+    # the part regrown really got thicker
+    part_before = roots_metrics(ex.session, result.roots).mean_radius
     assert part_before == before
-    assert after > part_before and message.startswith(f"denser: density {part_before:.4g} → {after:.4g}")
+    assert after > part_before and message.startswith(f"thicker: mean radius {part_before:.4g} → {after:.4g}")
 
 
 def test_qualifier_that_cannot_improve_says_so(ex, monkeypatch):

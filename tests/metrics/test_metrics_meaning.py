@@ -13,6 +13,7 @@ from ramure.lsys.regen import Session
 from ramure.metrics import DeltaPCA, VariantSweep, explore
 from ramure.metrics import apply as apply_module
 from ramure.metrics.apply import apply_qualifier
+from ramure.metrics.definitions import definition_holds, metric_changes
 from ramure.metrics.estimator import check_n_jobs
 from ramure.metrics.qualifiers import (
     ANTONYMS,
@@ -169,15 +170,24 @@ def _random_selection(session, rng):
 
 
 def _able(sweep, q):
-    """Can ``q`` be applied on this grammar at all (it owns a variant: one that moves it more than any
-    other qualifier on the whole plant)?  The others refuse at once, saying why."""
+    """Can ``q`` be applied on a selection of this grammar at all (some variant keeps its definition
+    and moves it forward on the whole plant)?  The others refuse at once, saying what the grammar lacks."""
     return apply_module._unreachable(QualifierModel().fit(sweep), q) is None
 
 
+def _kept(out):
+    """An applied result keeps its qualifier's definition (issue 35), and is dominant or names the
+    rival that moved more (kept only when no try anywhere was dominant)."""
+    return out.definition["holds"] and (out.dominant and _dominant(out) or (out.rival and not out.dominant))
+
+
 def _dominant(out):
-    """The result moved its qualifier at least as much as any other (its antonym aside)."""
+    """The result moved its qualifier at least as much as any other (its antonym aside) whose own
+    definition the change keeps (a "dense" score without one more segment is no rival: issue 35)."""
     antonym = VOCABULARY[out.qualifier].antonym
-    return all(out.moves[out.qualifier] >= v for k, v in out.moves.items() if k not in (out.qualifier, antonym))
+    change = metric_changes(np.array(out.after, float), np.array(out.before, float))
+    rivals = {k: v for k, v in out.moves.items() if k not in (out.qualifier, antonym) and definition_holds(k, change)}
+    return all(out.moves[out.qualifier] >= v for v in rivals.values())
 
 
 @pytest.mark.slow
@@ -190,13 +200,16 @@ def test_each_qualifier_moves_its_own_metrics_on_random_selections(sweeps):
     for q in DIRECTIONAL:
         moved = 0
         able = [g for g in grammars if _able(sweeps[g], q)]
-        assert able, q  # every qualifier can be applied on at least one of these grammars
+        # every qualifier can be applied on at least one of these grammars, except the words that
+        # add or remove segments: no constant of these grammars does (the whole plant's n +- 1 does)
+        assert able or q in ("dense", "sparse", "bushy"), q
         for g in set(grammars) - set(able):  # the others refuse at once and say why
             session = Session(_lsystem(g), n=_n(g))
             out = apply_qualifier(session, q, sweeps[g], selection=_random_selection(session, rng))
             assert not out.improved and out.tried == 0 and q in out.reason and out.suggestion
+            assert "in this grammar no constant or rule" in out.reason, out.reason
             refused += 1
-        for _ in range(20):
+        for _ in range(20 if able else 0):
             g = able[rng.integers(len(able))]
             session = Session(_lsystem(g), n=_n(g))
             out = apply_qualifier(  # the meaning of each word, with climbing allowed (it is opt-in since
@@ -215,12 +228,12 @@ def test_each_qualifier_moves_its_own_metrics_on_random_selections(sweeps):
             assert out.improved == (out.regen is not None) and (out.score > 0 or not out.improved)
             if out.improved:
                 moved += 1
-                assert out.dominant and out.rival is None and _dominant(out), (q, g, out.moves)
+                assert _kept(out), (q, g, out.moves)
                 assert own > 0 or len(out.own) > 1, (q, g, out.own)  # one metric: it moved its way
                 assert len(session.edits) == 1
             else:
                 assert out.reason and out.suggestion and out.after == out.before and not session.edits
-        if moved < 18:
+        if able and moved < 18:
             failures[q] = moved
     assert not failures, failures
     assert refused <= len(DIRECTIONAL) * len(grammars) / 2  # most qualifiers apply on most grammars
@@ -236,20 +249,22 @@ def test_whole_plant_picks_are_distinct_and_antonyms_opposite(grammar, sweeps):
     applied = {q: r.variant for q, r in results.items() if r.improved}
     able = [q for q in DIRECTIONAL if _able(sweep, q)]
     stochastic = any(r.probability is not None for r in _lsystem(grammar).grammar.rules)
-    assert set(applied) <= set(able)
+    # on the whole plant, n +- 1 (alone or with a constant) can serve a word no constant serves
     if not stochastic:  # a stochastic whole-plant regrowth is a new random draw, not the sweep's variant
         assert len(applied) >= 0.8 * len(able), {q: r.reason for q, r in results.items() if not r.improved}
     for q, r in results.items():
-        if r.improved:  # a variant chosen for q moves no other qualifier more than q
-            assert r.dominant and _dominant(r), (q, r.moves)
+        if r.improved:  # a variant chosen for q keeps q's definition; dominant, or the rival is named
+            assert _kept(r), (q, r.moves)
         else:
             assert r.reason and not r.regen
     picks = QualifierModel().fit(sweep).picks()
-    assert len(set(picks.values())) == len(picks) >= len(able)
+    assert len(set(picks.values())) == len(picks)
     if not stochastic:
-        # no two qualifiers pick the same variant (a stochastic grammar's whole-plant regrowth is a
-        # new random draw: the same combination can serve two qualifiers under two seeds)
-        assert len(set(applied.values())) == len(applied), applied
+        # no two qualifiers pick the same sweep variant (a stochastic grammar's whole-plant regrowth is
+        # a new random draw: the same combination can serve two qualifiers under two seeds); a result
+        # kept although a rival moved more (its best try) may share one
+        chosen = [(r.variant, r.params.get("n")) for q, r in results.items() if r.improved and r.dominant and r.variant >= 0]
+        assert len(set(chosen)) == len(chosen), applied
     for a, b in ANTONYMS:
         ra, rb = results[a], results[b]
         if ra.improved and rb.improved:  # a's own direction: up for a, down for b
@@ -282,10 +297,10 @@ def test_three_tips_change_only_their_cut_under_every_qualifier_or_say_why(gramm
         assert out.climbed == 0 and out.roots.tolist() == shown.tolist(), (q, out.roots)
         if not np.allclose(before, after):
             assert out.improved and out.min_ascend == 1 and len(session.edits) == 1
-            assert out.dominant and _dominant(out)
+            assert _kept(out)
         else:
             assert not out.improved and out.reason and "--climb" in out.suggestion, out.to_dict()
-            assert "last derivation step" in out.reason or "moves another qualifier more" in out.reason, out.reason
+            assert "last derivation step" in out.reason or "in this grammar no constant or rule" in out.reason, out.reason
             assert not session.edits
 
 
@@ -309,7 +324,7 @@ def test_nothing_to_vary_is_explained():
     session = Session(ls, n=3)
     out = apply_qualifier(session, "tall", sweep, selection=session.leaves_with_symbol("F")[:3].tolist())
     assert not out.improved and "vary constants" in out.suggestion
-    assert "do not reach" in out.reason and "(height)" in out.reason
+    assert "no constant or rule changes the height" in out.reason
     assert len(session.edits) == 0
 
 
@@ -335,10 +350,10 @@ def test_directions_transfer_to_an_unseen_grammar_through_metrics(sweeps):
     assert other.shape_metrics_[best, SHAPE_METRIC_NAMES.index("height")] > other.base_shape_metrics_[0]
     session = Session(_lsystem("weeping"), n=_n("weeping"))
     out = apply_qualifier(session, "tall", other, directions=learnt)
-    assert out.source == "transfer" and out.after_shape.height > out.before_shape.height and out.dominant
-    # where every variant moving the learnt "tall" moves another qualifier more, it says so
+    assert out.source == "transfer" and out.after_shape.height > out.before_shape.height and _kept(out)
+    # on another grammar the learnt "tall" still keeps tall's definition: taller, or it says why
     out = apply_qualifier(Session(_lsystem("ternary_bush"), n=3), "tall", sweeps["ternary_bush"], directions=learnt)
-    assert not out.improved and "moves another qualifier more" in out.reason and "height" in out.reason
+    assert out.after_shape.height > out.before_shape.height if out.improved else "height" in out.reason
 
 
 # -- the collision matrix ------------------------------------------------------------
@@ -366,6 +381,7 @@ def test_qualify_cli_list_and_matrix(tmp_path, capsys):
     assert main(["qualify", "--matrix", str(g), "-n", "3", "--jobs", "1", *cache, "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["source"] == "vocabulary" and len(doc["collision_matrix"]) == len(doc["names"])
+    assert all(share > 25 for _, _, share in doc["synonyms"])  # pairs the data cannot separate here
     assert main(["qualify", "--matrix", str(g), "-n", "3", "--jobs", "1", *cache]) == 0
     assert "collision matrix of bush" in capsys.readouterr().out
     assert main(["qualify", str(g), "-n", "3", "--jobs", "1", *cache, "--qualifier", "érigé", "--json"]) == 0

@@ -68,3 +68,31 @@ def test_a_qualifier_keeps_the_regrown_part_selected_as_regrow_does(conifer):
     assert f"regrew {out.regen.removed} of {shown.total:,} modules" in ex.status()
     ex.select(ex.selection)  # the same part again: a Regrow now previews exactly it
     assert ex.preview().changed == out.regen.added
+
+
+GRAMMARS = pathlib.Path(__file__).parents[1] / "data" / "grammars"
+
+
+@pytest.mark.parametrize("name", ["shrub", "vine", "palm", "stochastic_bush"])
+def test_three_tips_never_replace_the_whole_plant_on_the_new_grammars(name):
+    """Issue 35's figures: on 3 tips, 8 of 22 qualifiers (conifer) and 10 of 22 (shrub) replaced
+    the whole plant.  Now none does on any of the grammars written for it: each regrows at most
+    the previewed cut of the tips, never an axiom module, or leaves the plant and says why."""
+    ls = LSystem.from_file(GRAMMARS / f"{name}.lsys")
+    sweep = VariantSweep(n_jobs=1, cache=False, wide=0.25).fit(ls)
+    whole, applied = 0, 0
+    for q in VOCABULARY:
+        session = Session(ls)
+        tips = _three_tips(session)
+        tree, total = session.tree, len(session.tree.leaves)
+        shown = session.plan(tips, 0.5)[1]
+        assert len(tips) == 3 and (tree.parent[shown] >= 0).all()
+        out = apply_qualifier(session, q, sweep, selection=tips, tries=2)
+        whole += bool((tree.parent[out.roots] < 0).any()) or session.n != ls.n
+        assert set(out.roots.tolist()) <= set(shown.tolist()) and out.climbed == 0, (q, out.roots)
+        if out.regen is not None:
+            applied += out.improved
+            assert out.regen.removed <= 0.1 * total, (q, out.regen.removed, total)
+        else:
+            assert out.reason and out.suggestion and not session.edits
+    assert whole == 0
