@@ -264,7 +264,7 @@ def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkey
 def test_picked_share_counts_each_nodes_leaves_of_the_picked_kinds(count, wide):
     """The share a minimum ascension compares with rho, against a count leaf by leaf: small
     spans are counted on the spans, large ones (near the root) by running sums."""
-    from ramure.lsys.cut import _picked_share
+    from ramure.lsys.mincut import _picked_share
     from ramure import load
 
     tree = load("honda_sympodial").derive(n=9).tree
