@@ -571,7 +571,7 @@ class Explorer:
     def fruit_volume(self, leaf: int, preset: str = "round_tomato", seed: int = 0, **kwargs: Any) -> GMap3:
         """Fruit ``leaf`` alone as a volumetric 3G-map: the same fruit as in :meth:`fruit_volumes`
         (each fruit's draw depends on its leaf id, not on the others), built without the others."""
-        from ramure.gmap.plant import fruits_from_organs
+        from ramure.gmap.organs.plant import fruits_from_organs
 
         organs = self.skeleton.organs
         at = np.flatnonzero((organs.kind == "Fruit") & (organs.leaf_id == int(leaf)))

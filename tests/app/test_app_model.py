@@ -198,7 +198,7 @@ def test_regrow_one_fruit_changes_only_that_fruit():
 
 
 def test_one_fruit_built_alone_is_that_fruit_among_all():
-    from ramure.gmap.pyvista import to_unstructured_grid
+    from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     ex = Explorer("grammars/fruit_tree.lsys")
     fruit = ex.fruit_ids()
