@@ -108,28 +108,38 @@ class ArchitectureBrowser:
 
     # -- actions ---------------------------------------------------------------
     def open(self, tag: tuple[str, int]) -> None:
+        """Go down into the row ``tag`` = ``(kind, row)`` (an axis, a growth unit...) when it has parts; the
+        breadcrumb grows by one.
+        """
         if self.arch is not None and self.children(tag):
             kind, row = tag
             self.path.append((kind, row))
             self._fill()
 
     def open_selected(self) -> None:
+        """Open the row chosen in the list (the Open button)."""
         if self.rows.value:
             self.open(self.rows.value)
 
     def up(self) -> None:
+        """Go back up one level of the breadcrumb."""
         if self.path:
             self.path.pop()
             self._fill()
 
     def top(self) -> None:
+        """Go back to the plant's axes, the top of the breadcrumb."""
         self.path = []
         self._fill()
 
     def select(self, tag: tuple[str, int]) -> None:
+        """Select the history leaves that draw the row ``tag``, in the selection panel's mode (replace, add...)."""
         self.app.select(self.leaves_of(tag), self.app.selection_panel.mode.value)
 
     def select_selected(self) -> None:
+        """Select the row chosen in the list (the Select button); without one, the message line says to choose
+        one.
+        """
         if not self.rows.value:
             self.app.message.show("choose a row in the architecture first", "note")
             return
@@ -156,6 +166,10 @@ class ArchitectureBrowser:
         self.rows.value = None
 
     def refresh(self) -> None:
+        """Follow the model after a change of plant: recompute the architecture, keep the opened axis while it
+        still exists, and disable the browser (saying why) when the grammar has no ``#amap``
+        annotations.
+        """
         model = self.app.model
         if model.version == self._version:
             return

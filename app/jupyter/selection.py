@@ -77,11 +77,17 @@ class SelectionPanel:
         self.refresh()
 
     def select_ids(self) -> None:
+        """Select the ids typed in the box (numbers and ranges, as ``ramure regen --select`` takes them) in the
+        panel's mode.
+        """
         model = self.app.model
         self.app.run(lambda: model.select(resolve_ids(self.ids.value, model.derivation.tree.leaves), self.mode.value))
         self.app.warm_up()
 
     def select_where(self) -> None:
+        """Select by the branch-order and height filters (a height range covering the whole plant filters
+        nothing) in the panel's mode.
+        """
         lo, hi = self.height.value
         full = lo <= self.height.min and hi >= self.height.max
         self.app.select_where(
@@ -92,6 +98,7 @@ class SelectionPanel:
         )
 
     def refresh(self) -> None:
+        """Follow the model: fit the height slider and the branch-order box to the plant's extent."""
         model = self.app.model
         sk = model.skeleton
         if len(sk):
@@ -162,6 +169,9 @@ class TreeBrowser:
         self.refresh()
 
     def children(self) -> np.ndarray:
+        """The derivation-tree nodes listed now: the children of the node last opened, or the axiom's modules at
+        the top.
+        """
         tree = self.app.model.derivation.tree
         if self.path:
             return tree.children(self.path[-1])
@@ -184,19 +194,25 @@ class TreeBrowser:
         self._fill()
 
     def open_selected(self) -> None:
+        """Open the node chosen in the list (the Open button)."""
         if self.rows.value is not None:
             self.open(self.rows.value)
 
     def up(self) -> None:
+        """Go back up one level of the breadcrumb."""
         if self.path:
             self.path.pop()
             self._fill()
 
     def top(self) -> None:
+        """Go back to the axiom's modules, the top of the breadcrumb."""
         self.path = []
         self._fill()
 
     def select_selected(self) -> None:
+        """Select the leaves under the node chosen in the list (the Select button); without one, the message line
+        says to choose one.
+        """
         if self.rows.value is None:
             self.app.message.show("choose a row in the derivation tree first", "note")
             return
@@ -229,6 +245,9 @@ class TreeBrowser:
         self.rows.value = None
 
     def refresh(self) -> None:
+        """Follow the model after a change of plant: keep the opened path as far as its nodes are still alive and
+        inner, and list the children again.
+        """
         model = self.app.model
         if model.version == self._version:
             return
