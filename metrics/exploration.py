@@ -38,13 +38,13 @@ import os
 import pathlib
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ramure.errors import RamureError
+from ramure.errors import RamureError, ValueRefused
 from ramure.io import inside, open_atomic, read_json, write_text
 
 from .pca import DeltaPCA
@@ -53,8 +53,6 @@ from .plant import METRIC_NAMES
 from .sweep import VariantSweep, as_lsystem
 
 if TYPE_CHECKING:
-    from distributed import Client
-
     from ramure.lsys import LSystem
 
 
@@ -111,45 +109,29 @@ class Exploration:
 
 def explore(
     grammar: LSystem | str | os.PathLike,
-    n: int | None = None,
-    seed: int = 0,
-    beta: float = 0.1,
-    constants: str | Iterable[str] | None = None,
-    mode: str = "grid",
-    n_samples: int | None = None,
     standardize: bool = False,
     match: str = "optimal",
-    n_jobs: int | None = None,
-    chunk_size: int | None = None,
-    cache: bool = True,
-    cache_dir: str | os.PathLike | None = None,
-    scheduler: str | Client | None = None,
     progress: Callable[[int, int], None] | None = None,
     cancel: threading.Event | Callable[[], bool] | None = None,
     sweep: VariantSweep | None = None,
+    **sweep_options: Any,
 ) -> Exploration:
     """Sweep ``grammar`` (LSystem or path), run the PCA and pick the 27 variants.
 
-    Pass an already configured (or fitted) :class:`VariantSweep` as ``sweep``
-    to keep a handle on it (e.g. to call ``sweep.cancel()`` from a GUI); the
-    other sweep options are then ignored.
+    ``sweep_options`` are :class:`VariantSweep`'s parameters (``n``, ``seed``, ``beta``,
+    ``constants``, ``mode``, ``n_samples``, ``n_jobs``, ``cache``, ...): one keyword set, the
+    sweep's own, so a new sweep option needs no change here; an unknown one is refused with
+    :class:`~ramure.errors.ValueRefused`.  ``standardize`` goes to the PCA, ``match`` to the
+    27 picks.  Pass an already configured (or fitted) :class:`VariantSweep` as ``sweep`` to
+    keep a handle on it (e.g. to call ``sweep.cancel()`` from a GUI); sweep options are then
+    refused rather than ignored.
     """
     t0 = time.perf_counter()
     ls = as_lsystem(grammar)
     if sweep is None:
-        sweep = VariantSweep(
-            n=n,
-            seed=seed,
-            beta=beta,
-            constants=constants,
-            mode=mode,
-            n_samples=n_samples,
-            n_jobs=n_jobs,
-            chunk_size=chunk_size,
-            cache=cache,
-            cache_dir=cache_dir,
-            scheduler=scheduler,
-        )
+        sweep = VariantSweep().set_params(**sweep_options)
+    elif sweep_options:
+        raise ValueRefused(f"give a sweep or sweep options ({', '.join(sorted(sweep_options))}), not both")
     if not hasattr(sweep, "deltas_"):
         sweep.fit(ls, progress=progress, cancel=cancel)
     pca = DeltaPCA(standardize=standardize).fit(sweep.deltas_)

@@ -23,6 +23,10 @@ if TYPE_CHECKING:
 
 
 def run_amap(args: argparse.Namespace) -> int:
+    """``ramure amap``: derive the grammar, print its architecture tables (axes, annual shoots, growth units,
+    internodes; JSON with ``--json``), replay the growth up to ``--at`` years and write the MTG file
+    ``--mtg``; returns the exit code 0.
+    """
     mtg = output_file(args.mtg, (".mtg",), "--mtg") if args.mtg else None
     _, derivation, derive_seconds = load_and_derive(args)
     t0 = time.perf_counter()
@@ -66,6 +70,9 @@ def run_mtg_check(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``amap`` (the architecture of a derived plant) and ``mtg`` (read any MTG file) to the CLI's
+    subcommands.
+    """
     p = sub.add_parser("amap", help="botanical architecture (AMAP) tables of a plant; --mtg writes an MTG file")
     add_grammar_options(p)
     p.add_argument(

@@ -47,6 +47,10 @@ def _wind(text):
 
 
 def run_autumn(args: argparse.Namespace) -> int:
+    """``ramure autumn``: age the plant's leaves through the autumn chain for ``--steps`` steps under ``--heat``,
+    ``--humidity`` and ``--wind``, print how many fell and the count per state, and render the season to
+    ``-o`` (PNG); returns 0.
+    """
     out = output_file(args.output, (".png",)) if args.output else None
     size = parse_size(args.size)
     heat, humidity, wind = _unit(args.heat, "--heat"), _unit(args.humidity, "--humidity"), _wind(args.wind)
@@ -117,6 +121,7 @@ def render_autumn(
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``autumn`` (leaves that change colour and fall) to the CLI's subcommands."""
     p = sub.add_parser("autumn", help="age the leaves (colours), let them fall and pile up; --json facts, -o PNG")
     add_grammar_options(p)
     p.add_argument("--steps", type=int, default=16, help="time steps (default 16)")

@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 
 
 def run_import(args: argparse.Namespace) -> int:
+    """``ramure import``: translate the L-studio/cpfg ``.l`` file into an ``.lsys`` grammar at ``-o``, after
+    checking that the translation parses; a wrong suffix or an angle outside -360..360 is a
+    :class:`~ramure.errors.UserError`; returns 0.
+    """
     source = pathlib.Path(args.file)
     if source.suffix.lower() != ".l":
         raise UserError(f"{args.file}: an L-studio/cpfg file ends with .l")
@@ -42,6 +46,7 @@ def run_import(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``import`` (an L-studio/cpfg file as a Ramure grammar) to the CLI's subcommands."""
     p = sub.add_parser("import", help="translate an L-studio/cpfg .l file into an .lsys grammar")
     p.add_argument("file", help="the .l file")
     p.add_argument("-o", "--output", required=True, help="the .lsys file to write")

@@ -73,6 +73,10 @@ def _sizes(args: argparse.Namespace):
 
 
 def run_crack(args: argparse.Namespace) -> int:
+    """``ramure crack``: carve a crack of the chosen pattern into a surface model (stone, bark...) or, for a
+    volumetric substrate, split its G-map along its faces; print the crack's facts and write ``-o`` (PNG,
+    STL, VTP or PLY); returns 0.
+    """
     args.length, args.width, args.depth = _sizes(args)
     if args.on in MAPS:
         return run_map_crack(args)
@@ -222,6 +226,8 @@ def render_map_crack(
 
 
 def render_crack(crack: Crack, anchor: Sequence[float], path: pathlib.Path, size: tuple[int, int]) -> None:
+    """Render the cracked ``crack.result`` off-screen to the PNG ``path`` (``size`` pixels), the camera looking at
+    the crack from outside (``anchor``, where it started, is not drawn)."""
     import numpy as np
 
     from ramure.app.render import headless_setup
@@ -245,6 +251,7 @@ def render_crack(crack: Crack, anchor: Sequence[float], path: pathlib.Path, size
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``crack`` (cracks carved into a surface or a volumetric map) to the CLI's subcommands."""
     p = sub.add_parser("crack", help="carve a crack (skeleton + profile) into a closed surface; --json, -o PNG/STL")
     p.add_argument(
         "--on",

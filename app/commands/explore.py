@@ -120,6 +120,10 @@ def _sweep_kwargs(args):
 
 # -- explore ----------------------------------------------------------------------
 def run_explore(args: argparse.Namespace) -> int:
+    """``ramure explore``: sweep the grammar's constants (the sweep options), derive every variant, measure it,
+    place it in the PCA of its metrics and write the exploration (table, thumbnails, JSON) to the ``-o``
+    folder; returns 0.
+    """
     from ramure.metrics.exploration import explore, write_exploration
 
     t0 = time.perf_counter()
@@ -179,6 +183,9 @@ def run_explore(args: argparse.Namespace) -> int:
 
 # -- metrics ----------------------------------------------------------------------
 def run_metrics(args: argparse.Namespace) -> int:
+    """``ramure metrics``: derive the plant and print its metrics and oriented bounding box, of the whole plant
+    or of the leaves ``--select`` / segments ``--segments`` given; returns 0.
+    """
     from ramure.metrics.plant import plant_metrics, plant_obb
 
     t0 = time.perf_counter()
@@ -337,6 +344,10 @@ def _describe(result):
 
 
 def run_qualify(args: argparse.Namespace) -> int:
+    """``ramure qualify``: apply a qualifier ("taller", "bushier"...) to the plant or to a selection (``--list``
+    shows the vocabulary, ``--matrix`` and ``--save-directions`` the learnt directions), regrowing toward
+    it, and print what changed; returns 0.
+    """
     from ramure.lsys.regen import Session
     from ramure.metrics.apply import apply_qualifier
     from ramure.metrics.exploration import explore
@@ -423,6 +434,7 @@ def run_qualify(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``explore`` (variant sweeps), ``metrics`` and ``qualify`` to the CLI's subcommands."""
     p = sub.add_parser("explore", help="sweep the constants' variants, PCA, 27 picks, thumbnails")
     add_grammar_options(p)
     _add_sweep_options(p)

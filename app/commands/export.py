@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 
 
 def run_export(args: argparse.Namespace) -> int:
+    """``ramure export``: derive the plant and write its mesh (``--sides`` per tube) in the format of ``-o``'s
+    suffix (glTF, OBJ, VTK, PLY or STL), Y up with ``--yup``; returns 0.
+    """
     from ramure.app.export import export_mesh
 
     out = output_file(args.output, EXPORT_SUFFIXES)
@@ -46,6 +49,7 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``export`` (the plant as a mesh file) to the CLI's subcommands."""
     p = sub.add_parser("export", help="write the plant as .glb/.gltf, .obj (+.mtl), .vtp/.vtk, .ply or .stl")
     add_grammar_options(p)
     p.add_argument("-o", "--output", required=True, help="file to write; the suffix picks the format")

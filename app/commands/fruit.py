@@ -146,6 +146,10 @@ def render_fruit(
 
 
 def run_fruit(args: argparse.Namespace) -> int:
+    """``ramure fruit``: build a volumetric fruit from a preset and ``--set`` values, subdivide it, add the
+    ``--defect`` and ``--malform`` deformations, cut it by ``--cut``, print its counts per tissue and
+    write ``-o`` (picture or grid); returns 0.
+    """
     from ramure.gmap.kernel.cut import plane_cut
     from ramure.gmap.organs.defect_specs import apply_defects, parse_defect
     from ramure.gmap.organs.fruit import build_fruit
@@ -231,6 +235,8 @@ def run_fruit(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``fruit`` (one volumetric fruit) and its action ``fruit batch`` (a labelled data set of fruit) to the
+    CLI's subcommands."""
     from ramure.gmap.organs.fruit import PRESETS
 
     p = sub.add_parser("fruit", help="build a volumetric fruit (3G-map); facts, PNG or VTU")
@@ -312,6 +318,9 @@ def register(sub: Subparsers) -> None:
 
 
 def run_batch(args: argparse.Namespace) -> int:
+    """``ramure fruit batch``: make a data set of ``--count`` fruit with random defects (pictures, labels, a
+    summary) in the ``-o`` folder, ``--resume`` continuing one left unfinished; returns 0.
+    """
     from ramure.app.fruit_dataset import make_dataset
 
     size = parse_size(args.size)

@@ -85,6 +85,9 @@ def bark(args: argparse.Namespace) -> tuple[str, pv.DataSet, TriMesh, float]:
 
 
 def run_lichen(args: argparse.Namespace) -> int:
+    """``ramure lichen``: grow lichen clusters by diffusion-limited aggregation on a closed surface (a stone, a
+    mesh file, a plant's bark ``--on-plant`` or a pine's ``--on-wood``), print their facts and write ``-o``
+    (PNG or VTP); returns 0."""
     out = output_file(args.output, (".png", ".vtp")) if args.output else None
     size = parse_size(args.size)
     what, _, mesh, default_r = bark(args)
@@ -124,6 +127,9 @@ def run_lichen(args: argparse.Namespace) -> int:
 def render_lichen(
     mesh: TriMesh, growth: Lichen, discs: pv.PolyData, path: pathlib.Path, size: tuple[int, int], close: bool = False
 ) -> None:
+    """Render the bark ``mesh`` with the lichen ``discs`` coloured by age to the PNG ``path`` (``size`` pixels);
+    ``close`` frames the lichen rather than the whole bark.
+    """
     from ramure.app.render import frame_camera, headless_setup
 
     headless_setup()
@@ -149,6 +155,7 @@ def render_lichen(
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``lichen`` (lichen grown on bark) to the CLI's subcommands."""
     p = sub.add_parser("lichen", help="grow lichen on a closed surface (Open-DLA); --json facts, -o PNG or VTP")
     p.add_argument("--on", default="stone", help="'stone' (default) or a closed mesh file (.vtp, .stl, .ply, .obj)")
     p.add_argument("--clusters", type=int, default=26, help="number of lichen clusters (default 26)")

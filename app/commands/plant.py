@@ -126,6 +126,10 @@ def run_check_g3l(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    """``ramure check``: parse the grammar (an ``.lsys``, ``.l`` or ``.g3l`` file) and print its rules,
+    constants, n, seed and axiom, with a note on symbols nothing draws; a grammar error exits 2; returns
+    0.
+    """
     if str(args.file).endswith(".g3l"):  # 3Gmap L-systems (wood)
         return run_check_g3l(args)
     ls = LSystem.from_file(args.file)
@@ -141,6 +145,9 @@ def run_check(args: argparse.Namespace) -> int:
 
 
 def run_derive(args: argparse.Namespace) -> int:
+    """``ramure derive``: derive the grammar and print the string, or with ``--json`` its counts (modules, tree
+    nodes, segments, bounds) and timings; returns 0.
+    """
     ls, d, seconds = load_and_derive(args)
     if not args.json:
         print(d.to_string())
@@ -168,6 +175,9 @@ def run_derive(args: argparse.Namespace) -> int:
 
 
 def run_render(args: argparse.Namespace) -> int:
+    """``ramure render``: derive the grammar and render the plant off-screen to the PNG ``-o`` from ``--view``;
+    returns 0.
+    """
     from ramure.app.render import render_plant
 
     out = output_file(args.output, (".png",))
@@ -180,6 +190,7 @@ def run_render(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``check``, ``derive`` and ``render`` to the CLI's subcommands."""
     p = sub.add_parser("check", help="parse a grammar and report problems with line and column")
     add_grammar_options(p, derive=False)
     p.set_defaults(func=run_check)

@@ -42,6 +42,9 @@ def select_leaves(text: str, session: Session) -> list[int]:
 
 
 def run_leaves(args: argparse.Namespace) -> int:
+    """``ramure leaves``: derive the plant and list its history leaves with the segment or organ each draws (JSON
+    with ``--json``): the ids ``ramure regen --select`` takes; returns 0.
+    """
     ls = LSystem.from_file(args.file)
     ls.constants.update(parse_sets(args.set, ls.constants))
     d = ls.derive(n=args.n, seed=args.seed)
@@ -66,6 +69,9 @@ def run_leaves(args: argparse.Namespace) -> int:
 
 
 def run_regen(args: argparse.Namespace) -> int:
+    """``ramure regen``: regrow (or ``--prune``) the cut of the ``--select``-ed leaves with ``--rho``,
+    ``--regen-seed`` and ``--set`` constants, print what changed and save the session to ``-o``; returns 0.
+    """
     t0 = time.perf_counter()
     if args.min_ascend < 0:
         raise UserError(f"--min-ascend must be >= 0, not {args.min_ascend}")
@@ -106,6 +112,7 @@ def run_regen(args: argparse.Namespace) -> int:
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``leaves`` and ``regen`` (select and regrow from the command line) to the CLI's subcommands."""
     p = sub.add_parser("leaves", help="list history-leaf ids with their segment end points")
     add_grammar_options(p)
     p.add_argument("--json", action="store_true")

@@ -82,6 +82,9 @@ def _summary(result) -> dict:
 
 
 def run_create(args: argparse.Namespace) -> int:
+    """``ramure study create``: a new study database with its grammars, name and time budget; prints them as
+    JSON; returns 0.
+    """
     from ramure.studies.design import read_config
     from ramure.studies.storage import Study
 
@@ -118,6 +121,9 @@ def run_withdraw(args: argparse.Namespace) -> int:
 
 
 def run_simulate(args: argparse.Namespace) -> int:
+    """``ramure study simulate``: run a study with simulated participants, analyse it and write the report (and
+    the qualifier points with ``--store``); returns 0.
+    """
     import tempfile
 
     from ramure.studies.data import load_study_data
@@ -160,6 +166,9 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 
 def run_analyze(args: argparse.Namespace) -> int:
+    """``ramure study analyze``: write the HTML report of a study database to ``-o`` and print its summary;
+    returns 0.
+    """
     from ramure.studies.data import load_study_data
     from ramure.studies.report import write_report
 
@@ -176,6 +185,9 @@ def run_analyze(args: argparse.Namespace) -> int:
 
 
 def run_anova(args: argparse.Namespace) -> int:
+    """``ramure study anova``: the one-way ANOVA of a CSV table of scores (columns are the groups), printed as
+    JSON; returns 0.
+    """
     import numpy as np
 
     from ramure.studies.anova import anova_table, read_table
@@ -187,6 +199,7 @@ def run_anova(args: argparse.Namespace) -> int:
 
 
 def run_export_csv(args: argparse.Namespace) -> int:
+    """``ramure study export-csv``: write the study's tables as CSV files to ``-o``; returns 0."""
     from ramure.studies.export import export_csv
 
     files = export_csv(args.db, args.output, synonyms=args.synonyms or [])
@@ -194,6 +207,9 @@ def run_export_csv(args: argparse.Namespace) -> int:
 
 
 def run_export_qualifiers(args: argparse.Namespace) -> int:
+    """``ramure study export-qualifiers``: turn the study's labelled picks into qualifier points in the store
+    ``--store`` and print how many per qualifier; returns 0.
+    """
     from ramure.studies.data import load_study_data
     from ramure.studies.qualifiers import SynonymTable, export_qualifier_points, labelled_points
 
@@ -249,6 +265,9 @@ def run_words(args: argparse.Namespace) -> int:
 
 
 def run_status(args: argparse.Namespace) -> int:
+    """``ramure study status``: print a study's grammars, budget, participants and finished tests as JSON (the
+    database is opened read-only); returns 0.
+    """
     from ramure.studies.storage import Study
 
     with Study.open(args.db, readonly=True) as study:
@@ -267,6 +286,9 @@ def run_status(args: argparse.Namespace) -> int:
 
 
 def run_serve(args: argparse.Namespace) -> int:
+    """``ramure study serve``: serve the web study from the database on ``--host``:``--port`` until stopped,
+    printing its addresses first; returns 0.
+    """
     from ramure.studies.serve import serve
 
     if not 0 < args.port < 65536:
@@ -293,6 +315,8 @@ def run_import_jspsych(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: Subparsers) -> None:
+    """Add ``study`` and its subcommands (create, simulate, analyze, anova, export-csv, export-qualifiers, words,
+    status, serve) to the CLI."""
     parser = subparsers.add_parser("study", help="user studies on variant relevance", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
     sub.required = True

@@ -102,6 +102,9 @@ def add_wood_actors(
 
 
 def legend_for(species: str) -> list[tuple[str, Any]]:
+    """The picture legend of a wood species: ``(tissue name, colour)`` for pith, heartwood, sapwood, bark and
+    knots.
+    """
     from ramure.gmap.organs.wood import SPECIES
 
     c = SPECIES[species]["colors"]
@@ -115,6 +118,9 @@ def legend_for(species: str) -> list[tuple[str, Any]]:
 
 
 def parse_sets(pairs: Iterable[str]) -> dict[str, str]:
+    """``--set NAME=VALUE`` options as a dict of strings (the wood builder parses the values); a pair without
+    ``=`` or a name is a :class:`~ramure.errors.UserError`.
+    """
     out = {}
     for pair in pairs:
         name, sep, value = pair.partition("=")
@@ -175,6 +181,9 @@ def _grid(model, species):
 
 
 def run_wood(args: argparse.Namespace) -> int:
+    """``ramure wood``: grow wood as a 3-G-map (a ``--species`` with ``--set`` values, or a ``.g3l``
+    ``--grammar``), cut it by ``--cut`` or saw a ``--plank``, print its counts per tissue and write ``-o``
+    (VTU grid, PNG or glTF/OBJ scene); returns 0."""
     from ramure.gmap.organs import wood as W
     from ramure.gmap.kernel.cut import parse_plane, plane_cut
 
@@ -296,6 +305,7 @@ def export_glb(grid: pv.UnstructuredGrid, path: str | os.PathLike) -> pathlib.Pa
 
 
 def register(sub: Subparsers) -> None:
+    """Add ``wood`` (volumetric wood, its cuts and planks) to the CLI's subcommands."""
     p = sub.add_parser("wood", help="grow volumetric wood (rings, knots, bark); cut it; facts, PNG, VTU or GLB")
     p.add_argument("--species", default="pine", help="species preset: pine or oak (default pine)")
     p.add_argument("--years", type=int, default=10, help="years of growth (two half-year steps each)")

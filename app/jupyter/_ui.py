@@ -11,8 +11,9 @@ kernel's main thread (:mod:`ramure.app.jupyter.mainthread`).  Typed leaf ids are
 from __future__ import annotations
 
 import base64
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 import html
+from typing import Any
 
 import ipywidgets as W
 
@@ -63,6 +64,81 @@ def observe(widget, handler, names: str = "value"):
 def on_value(widget, handler):
     """Call ``handler(new_value)`` on the kernel's main thread whenever ``widget.value`` changes."""
     return observe(widget, lambda change: handler(change["new"]))
+
+
+class Breadcrumbs:
+    """A list of the rows under an opened element, with a breadcrumb above it: *Open* goes down
+    into the chosen row, *Up* back one level, *Top* to the start, *Select* selects the row's
+    leaves with the selection panel's mode.  The derivation-tree and the architecture browsers
+    are two of them.
+
+    :attr:`path` holds the opened rows (empty: the top).  A subclass says what a row is:
+    :meth:`can_open` (whether it has rows under it), :meth:`leaves_of` (what *Select* selects)
+    and :meth:`fill` (the breadcrumb and the rows under :attr:`path`); :attr:`WHAT` names the
+    list in its messages.
+    """
+
+    WHAT = "list"
+
+    def __init__(self, app: Any, open_help: str, select_help: str, below: Sequence[W.Widget] = ()) -> None:
+        self.app = app
+        self.path: list = []
+        self.crumbs = W.HTML()
+        self.rows = W.Select(options=[], rows=12, layout=W.Layout(width="98%"))
+        self.buttons = [
+            button("Open ▸", self.open_selected, open_help),
+            button("◂ Up", self.up),
+            button("Top", self.top),
+            button("Select", self.select_selected, select_help, style="info"),
+        ]
+        self.widget = W.VBox([self.crumbs, self.rows, W.HBox(self.buttons), *below])
+        self._version: int | None = None
+
+    def can_open(self, row: Any) -> bool:
+        """Whether ``row`` has rows under it."""
+        raise NotImplementedError
+
+    def leaves_of(self, row: Any) -> list[int]:
+        """The history leaves *Select* selects for ``row``."""
+        raise NotImplementedError
+
+    def fill(self) -> None:
+        """Show the breadcrumb of :attr:`path` and list the rows under its end."""
+        raise NotImplementedError
+
+    def open(self, row: Any) -> None:
+        """Go down into ``row`` when it has rows under it: the breadcrumb grows by one."""
+        if self.can_open(row):
+            self.path.append(row)
+            self.fill()
+
+    def open_selected(self) -> None:
+        """Open the row chosen in the list (the Open button)."""
+        if self.rows.value is not None:
+            self.open(self.rows.value)
+
+    def up(self) -> None:
+        """Go back up one level of the breadcrumb."""
+        if self.path:
+            self.path.pop()
+            self.fill()
+
+    def top(self) -> None:
+        """Go back to the top of the breadcrumb."""
+        self.path = []
+        self.fill()
+
+    def select(self, row: Any) -> None:
+        """Select :meth:`leaves_of` ``row`` in the selection panel's mode (replace, add...)."""
+        self.app.select(self.leaves_of(row), self.app.selection_panel.mode.value)
+
+    def select_selected(self) -> None:
+        """Select the row chosen in the list (the Select button); without one, the message line
+        says to choose one."""
+        if self.rows.value is None:
+            self.app.message.show(f"choose a row in the {self.WHAT} first", "note")
+            return
+        self.select(self.rows.value)
 
 
 def short_list(values, limit=12) -> str:

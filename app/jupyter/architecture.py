@@ -20,10 +20,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import ipywidgets as W
 import numpy as np
 
-from ramure.app.jupyter._ui import button
+from ramure.app.jupyter._ui import Breadcrumbs
 from ramure.errors import RamureError
 from ramure.lsys.amap import architecture
 
@@ -37,23 +36,14 @@ HOW_TO = (
 )
 
 
-class ArchitectureBrowser:
+class ArchitectureBrowser(Breadcrumbs):
     """Rows of the AMAP tables under an opened element; ``path`` is the list of opened ``(kind, row)``."""
 
+    WHAT = "architecture"
+
     def __init__(self, app: Explorer) -> None:
-        self.app = app
+        super().__init__(app, "show what this element is made of", "select this element's internodes")
         self.arch: Architecture | None = None
-        self.path: list[tuple[str, int]] = []
-        self.crumbs = W.HTML()
-        self.rows = W.Select(options=[], rows=12, layout=W.Layout(width="98%"))
-        self.buttons = [
-            button("Open ▸", self.open_selected, "show what this element is made of"),
-            button("◂ Up", self.up),
-            button("Top", self.top),
-            button("Select", self.select_selected, "select this element's internodes", style="info"),
-        ]
-        self.widget = W.VBox([self.crumbs, self.rows, W.HBox(self.buttons)])
-        self._version = None
         self.refresh()
 
     # -- rows ------------------------------------------------------------------
@@ -107,33 +97,14 @@ class ArchitectureBrowser:
         return inter.node[mask].tolist()
 
     # -- actions ---------------------------------------------------------------
+    def can_open(self, tag: tuple[str, int]) -> bool:
+        """Whether the element ``tag`` = ``(kind, row)`` (an axis, a growth unit...) has parts."""
+        return self.arch is not None and bool(self.children(tag))
+
     def open(self, tag: tuple[str, int]) -> None:
-        if self.arch is not None and self.children(tag):
-            kind, row = tag
-            self.path.append((kind, row))
-            self._fill()
-
-    def open_selected(self) -> None:
-        if self.rows.value:
-            self.open(self.rows.value)
-
-    def up(self) -> None:
-        if self.path:
-            self.path.pop()
-            self._fill()
-
-    def top(self) -> None:
-        self.path = []
-        self._fill()
-
-    def select(self, tag: tuple[str, int]) -> None:
-        self.app.select(self.leaves_of(tag), self.app.selection_panel.mode.value)
-
-    def select_selected(self) -> None:
-        if not self.rows.value:
-            self.app.message.show("choose a row in the architecture first", "note")
-            return
-        self.select(self.rows.value)
+        """Go down into the element ``tag`` = ``(kind, row)`` when it has parts."""
+        kind, row = tag
+        super().open((kind, row))
 
     def _enable(self, on: bool) -> None:
         """The rows and buttons work only for a grammar that names its architecture (``#amap``)."""
@@ -141,7 +112,8 @@ class ArchitectureBrowser:
         for b in self.buttons:
             b.disabled = not on
 
-    def _fill(self) -> None:
+    def fill(self) -> None:
+        """Show the opened elements as the breadcrumb, with the plant's counts, and list the parts of the last."""
         if self.arch is None:
             self.rows.options = []
             return
@@ -156,6 +128,10 @@ class ArchitectureBrowser:
         self.rows.value = None
 
     def refresh(self) -> None:
+        """Follow the model after a change of plant: recompute the architecture, keep the opened axis while it
+        still exists, and disable the browser (saying why) when the grammar has no ``#amap``
+        annotations.
+        """
         model = self.app.model
         if model.version == self._version:
             return
@@ -170,4 +146,4 @@ class ArchitectureBrowser:
             return
         self._enable(True)
         self.path = [(k, r) for k, r in self.path if (k == "axis" and r < len(self.arch.axes))][:1]
-        self._fill()
+        self.fill()

@@ -139,6 +139,10 @@ class DetailsTab:
 
     # -- lichen and cracks ---------------------------------------------------------------
     def grow_lichen(self) -> None:
+        """Grow lichen on the selected fruit (at the picked point when there is one, else all over) with the
+        tab's settings, record it in the model and show the result; a refused setting is said in the
+        message line.
+        """
         from ramure.app.details import diagonal, lichen_on_fruit, paint_adhesion
 
         try:
@@ -186,6 +190,10 @@ class DetailsTab:
         )
 
     def carve_crack(self) -> None:
+        """Carve a crack into the selected fruit from the picked point (or its default start) with the tab's
+        settings, record it in the model and show the result; a refused setting is said in the message
+        line.
+        """
         from ramure.app.details import crack_on_fruit
 
         try:

@@ -177,6 +177,9 @@ class EditPanel:
         )
 
     def refresh(self) -> None:
+        """Enable the buttons for what the model can do now (undo, redo, prune a selection, regrow selected
+        fruit) and offer the qualifier words known.
+        """
         model = self.app.model
         self.undo.disabled = not model.can_undo
         self.redo.disabled = not model.can_redo
@@ -304,6 +307,7 @@ class Explorer:
 
     @property
     def skeleton(self) -> Skeleton:
+        """The turtle's skeleton of the plant shown (the model's :attr:`~ramure.app.model.Explorer.skeleton`)."""
         return self.model.skeleton
 
     @property
@@ -323,9 +327,11 @@ class Explorer:
 
     @selection.setter
     def selection(self, leaf_ids: int | Iterable[int]) -> None:
+        """Select ``leaf_ids`` in place of the current selection (as :meth:`select` with ``replace``)."""
         self.select(leaf_ids, "replace")
 
     def status(self) -> str:
+        """The model's one-line status: modules, segments, the selection and the last edit."""
         return self.model.status()
 
     # -- running actions -------------------------------------------------------
@@ -397,6 +403,9 @@ class Explorer:
         return None
 
     def set_constant(self, name: str, value: float) -> None:
+        """Change one ``#define`` (an undoable edit that re-derives the plant); a refused value is said in the
+        message line.
+        """
         self.run(lambda: self.model.set_constant(name, value))
 
     def apply_constants(self, values: Mapping[str, float] | None = None) -> None:
@@ -417,6 +426,10 @@ class Explorer:
         self.run(apply)
 
     def set_derivation(self, n: float | None = None, seed: float | None = None) -> None:
+        """Re-derive with another derivation count ``n`` or ``seed`` (None keeps it; the same values do nothing);
+        a refused value is said in the message line.
+        """
+
         def apply():
             count = None if n is None else _number(n, "the derivation count")
             start = None if seed is None else _number(seed, "the seed")
@@ -440,6 +453,9 @@ class Explorer:
 
     # -- selection -------------------------------------------------------------------
     def select(self, leaf_ids: int | Iterable[int], mode: str = "replace") -> None:
+        """Change the selection (``mode`` is replace, add, remove or toggle) and prepare the next edit in the
+        background.
+        """
         self.run(lambda: self.model.select(leaf_ids, mode))
         self.warm_up()
 
@@ -461,6 +477,7 @@ class Explorer:
         self.warm_up()
 
     def clear_selection(self) -> None:
+        """Select nothing (a Regrow then regrows the whole plant)."""
         self.run(self.model.clear_selection)
 
     def set_rectangle_mode(self, on: bool) -> None:
@@ -574,6 +591,9 @@ class Explorer:
         return fruit_cut_png(self.model, leaf, size=size)
 
     def prune(self) -> RegenResult | None:
+        """Delete the selection's cut subtrees without regrowing them; None, with the reason in the message line,
+        when nothing is selected.
+        """
         return self.run(self.model.prune)
 
     def undo(self) -> dict | None:
@@ -658,6 +678,9 @@ class Explorer:
         return self.run(lambda: self.model.export(path), note=f"mesh exported to {path}")
 
     def load_session(self, path: str | os.PathLike) -> None:
+        """Open a session file (the grammar and its local edits) as a fresh document; a refused file is said in
+        the message line.
+        """
         self.run(lambda: self.model.load_session(path))
 
     # -- display ---------------------------------------------------------------------------

@@ -31,6 +31,8 @@ def slider_range(value: float) -> tuple[float, float]:
 
 
 def constant_slider(name: str, value: float) -> W.FloatSlider:
+    """A slider for the constant ``name`` over :func:`slider_range` of ``value`` in 400 steps,
+    which sends its value when released."""
     lo, hi = slider_range(value)
     return W.FloatSlider(
         value=float(value),
@@ -155,6 +157,9 @@ class GrammarPanel:
 
     # -- refresh -----------------------------------------------------------
     def refresh(self) -> None:
+        """Follow the model: its grammar error, its text (after a session load or a gallery pick), ``n``, seed
+        and the constants' sliders.
+        """
         model = self.app.model
         err = model.error
         self.error.value = message_html(err) if err is not None else ""

@@ -35,6 +35,7 @@ def kernel_loop() -> Any:
 
 
 def is_main_thread() -> bool:
+    """Whether the caller runs in the Python main thread (the kernel's, where widgets may be changed)."""
     return threading.current_thread() is threading.main_thread()
 
 

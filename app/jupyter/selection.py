@@ -18,7 +18,7 @@ import ipywidgets as W
 import numpy as np
 
 from ramure.app.ids import id_example, resolve_ids
-from ramure.app.jupyter._ui import button, observe, short_list
+from ramure.app.jupyter._ui import Breadcrumbs, button, observe, short_list
 from ramure.app.model import SELECT_MODES
 
 if TYPE_CHECKING:
@@ -77,11 +77,17 @@ class SelectionPanel:
         self.refresh()
 
     def select_ids(self) -> None:
+        """Select the ids typed in the box (numbers and ranges, as ``ramure regen --select`` takes them) in the
+        panel's mode.
+        """
         model = self.app.model
         self.app.run(lambda: model.select(resolve_ids(self.ids.value, model.derivation.tree.leaves), self.mode.value))
         self.app.warm_up()
 
     def select_where(self) -> None:
+        """Select by the branch-order and height filters (a height range covering the whole plant filters
+        nothing) in the panel's mode.
+        """
         lo, hi = self.height.value
         full = lo <= self.height.min and hi >= self.height.max
         self.app.select_where(
@@ -92,6 +98,7 @@ class SelectionPanel:
         )
 
     def refresh(self) -> None:
+        """Follow the model: fit the height slider and the branch-order box to the plant's extent."""
         model = self.app.model
         sk = model.skeleton
         if len(sk):
@@ -128,7 +135,7 @@ def node_label(model: Model, node: int) -> str:
     return f"{text} · {count} leaves, step {int(tree.step[node])}"
 
 
-class TreeBrowser:
+class TreeBrowser(Breadcrumbs):
     """Browse the derivation history from the axiom down; select a leaf or all leaves under a node.
 
     ``path`` holds the opened nodes (empty = the axiom's modules).  Choose a row,
@@ -136,32 +143,18 @@ class TreeBrowser:
     with the panel's mode.
     """
 
+    WHAT = "derivation tree"
+
     def __init__(self, app: Explorer) -> None:
-        self.app = app
-        self.path: list[int] = []
-        self.crumbs = W.HTML()
-        self.rows = W.Select(options=[], rows=12, layout=W.Layout(width="98%"))
-        observe(self.rows, lambda ch: self._describe())
         self.info = W.HTML()
-        self.widget = W.VBox(
-            [
-                self.crumbs,
-                self.rows,
-                W.HBox(
-                    [
-                        button("Open ▸", self.open_selected, "show this node's children"),
-                        button("◂ Up", self.up),
-                        button("Top", self.top),
-                        button("Select", self.select_selected, "select this leaf, or every leaf under this node", style="info"),
-                    ]
-                ),
-                self.info,
-            ]
-        )
-        self._version = None
+        super().__init__(app, "show this node's children", "select this leaf, or every leaf under this node", [self.info])
+        observe(self.rows, lambda ch: self._describe())
         self.refresh()
 
     def children(self) -> np.ndarray:
+        """The derivation-tree nodes listed now: the children of the node last opened, or the axiom's modules at
+        the top.
+        """
         tree = self.app.model.derivation.tree
         if self.path:
             return tree.children(self.path[-1])
@@ -174,38 +167,20 @@ class TreeBrowser:
         symbols = np.asarray(model.lsystem.symbols, dtype=object)[model.derivation.tree.symbol[kids]]
         return kids[symbols == symbol].tolist()
 
+    def can_open(self, node: int) -> bool:
+        """Whether ``node`` has children; a leaf has none, and the line under the list says so."""
+        if self.app.model.derivation.tree.is_leaf(node):
+            self.info.value = "<i>a leaf has no children: use Select</i>"
+            return False
+        return True
+
     def open(self, node: int) -> None:
         """Show ``node``'s children (a leaf has none: nothing happens)."""
-        tree = self.app.model.derivation.tree
-        if tree.is_leaf(node):
-            self.info.value = "<i>a leaf has no children: use Select</i>"
-            return
-        self.path.append(int(node))
-        self._fill()
+        super().open(int(node))
 
-    def open_selected(self) -> None:
-        if self.rows.value is not None:
-            self.open(self.rows.value)
-
-    def up(self) -> None:
-        if self.path:
-            self.path.pop()
-            self._fill()
-
-    def top(self) -> None:
-        self.path = []
-        self._fill()
-
-    def select_selected(self) -> None:
-        if self.rows.value is None:
-            self.app.message.show("choose a row in the derivation tree first", "note")
-            return
-        self.select(self.rows.value)
-
-    def select(self, node: int) -> None:
-        """Select the leaves under ``node`` (the node itself if it is a leaf)."""
-        leaves = self.app.model.derivation.tree.leaves_under(int(node))
-        self.app.select(leaves.tolist(), self.app.selection_panel.mode.value)
+    def leaves_of(self, node: int) -> list[int]:
+        """The leaves under ``node`` (the node itself if it is a leaf)."""
+        return self.app.model.derivation.tree.leaves_under(int(node)).tolist()
 
     def _describe(self) -> None:
         node = self.rows.value
@@ -217,7 +192,9 @@ class TreeBrowser:
             f"node {node}: {node_label(self.app.model, node)}, rule {int(tree.rule[node])}, depth {int(tree.depth[node])}"
         )
 
-    def _fill(self) -> None:
+    def fill(self) -> None:
+        """Show the opened nodes' modules as the breadcrumb and list the children of the last (at most
+        :data:`MAX_ROWS`)."""
         model = self.app.model
         names = [model.lsystem.module_text(model.derivation.tree, n) for n in self.path]
         self.crumbs.value = "<b>Derivation tree</b>: " + (" ▸ ".join(names) if names else "axiom")
@@ -229,6 +206,9 @@ class TreeBrowser:
         self.rows.value = None
 
     def refresh(self) -> None:
+        """Follow the model after a change of plant: keep the opened path as far as its nodes are still alive and
+        inner, and list the children again.
+        """
         model = self.app.model
         if model.version == self._version:
             return
@@ -242,4 +222,4 @@ class TreeBrowser:
             else:
                 break
         self.path = keep
-        self._fill()
+        self.fill()

@@ -399,6 +399,7 @@ class StudyPanel:
         return sorted({d.value for d in self.group_of.values() if d.value})
 
     def images_of(self, number: int) -> list:
+        """The images the participant put in group ``number``, sorted."""
         return sorted(image for image, d in self.group_of.items() if d.value == number)
 
     def _store_groups(self) -> None:
@@ -500,6 +501,9 @@ class StudyPanel:
         )
 
     def refresh(self) -> None:
+        """Show the stored groups and the session's state (resuming, or after a change the screen does not show
+        yet) and enable what can be done now.
+        """
         s = getattr(self, "session", None)
         if s is None or self.step.kind != "test":
             return

@@ -412,9 +412,11 @@ class RectanglePicker:
 
     @property
     def enabled(self) -> bool:
+        """Whether the rubber band listens to the mouse."""
         return bool(self.tags)
 
     def enable(self, on: bool) -> None:
+        """Start (``on``) or stop listening to the mouse for a rubber band; stopping hides a band half drawn."""
         if on == self.enabled:
             return
         if on:
@@ -599,6 +601,10 @@ class TrameView:
             self.widget = self.plotter.show(jupyter_backend=mode, return_viewer=True, jupyter_kwargs=trame_proxy())
 
     def draw(self, update: bool = True) -> None:
+        """Draw the model's plant with the view's colours, on the same actor when there is one (new arrays, no
+        new GL objects), framing the camera when the view direction changed; ``update`` pushes the
+        frame to the browser.
+        """
         model = self.owner.app.model
         mesh = model.mesh.copy(deep=False)
         mesh.cell_data["rgb"] = view_colors(model, self.owner.show_cut)
