@@ -82,6 +82,57 @@ def render_wood(
     return path
 
 
+def render_plank(
+    part: pv.DataSet,
+    path: str | os.PathLike,
+    normal: ArrayLike,
+    size: tuple[int, int] = (900, 900),
+    title: str | None = None,
+    legend: Sequence[tuple[str, Any]] | None = None,
+) -> str | os.PathLike:
+    """Render a length of plank face-on to PNG: the trunk axis across the picture, the board filling it.
+
+    A parallel projection looks at the face on the ``normal`` side, unlit so
+    the colours are the tissues'; the length runs left to right.
+    """
+    from ramure.app.render import headless_setup
+
+    headless_setup()
+    import pyvista as pv
+
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    along = np.array([0.0, 0.0, 1.0])
+    across = np.cross(n, along)
+    if not np.linalg.norm(across) > 1e-6:  # a cross-cut plank (normal z): x across, y up
+        along, across = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    across = across / np.linalg.norm(across)
+    pts = np.asarray(part.points, float)
+    length = float(np.ptp(pts @ along)) or 1.0
+    width = float(np.ptp(pts @ across)) or 1.0
+    b = np.asarray(part.bounds, float).reshape(3, 2)
+    centre = b.mean(axis=1)
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
+    surface = part.extract_surface(algorithm="dataset_surface")
+    plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
+    plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method
+    plotter.camera_position = [tuple(centre + n * length * 3.0), tuple(centre), tuple(across)]
+    w, h = size
+    scale = 0.5 * max(length * h / w, width / 0.6) * 1.04  # the board in the top 60 %, the legend below
+    plotter.camera.parallel_scale = scale
+    plotter.camera.focal_point = tuple(centre - across * 0.3 * scale)
+    plotter.camera.position = tuple(centre - across * 0.3 * scale + n * length * 3.0)
+    plotter.camera.clipping_range = (length * 0.5, length * 6.0)
+    if legend:
+        add_legend_box(plotter, legend)
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
+
+
 def add_wood_actors(
     plotter: pv.Plotter, grid: pv.DataSet, legend: Sequence[tuple[str, Any]] | None = None, name: str = "wood"
 ) -> pv.PolyData:
@@ -91,14 +142,41 @@ def add_wood_actors(
         surface, scalars="rgb", rgb=True, show_edges=False, name=name, smooth_shading=False, ambient=0.35, diffuse=0.75
     )
     if legend:
-        plotter.add_legend(
-            [[label, color] for label, color in legend],  # type: ignore[arg-type]  # pyvista: a decorated method reads as unbound
-            bcolor=(0.9, 0.9, 0.9),
-            face="rectangle",
-            size=(0.22, 0.035 * len(legend) + 0.01),
-            loc="lower right",
-        )
+        add_legend_box(plotter, legend)
     return surface
+
+
+def add_legend_box(plotter: pv.Plotter, legend: Sequence[tuple[str, Any]]) -> None:
+    """A legend that reads: dark text on a light box, each name after a swatch of its colour.
+
+    (pyvista's legend writes each name in its own colour: pale sapwood vanished on grey.)
+    """
+    from pyvista import Color
+
+    longest = max(len(label) for label, _ in legend)
+    box = plotter.add_legend(
+        [[label, color] for label, color in legend],  # type: ignore[arg-type]  # pyvista: a decorated method reads as unbound
+        bcolor=(0.96, 0.96, 0.94),
+        border=True,
+        face="rectangle",
+    )
+    width, height = min(0.6, 0.018 * longest + 0.05), min(0.4, 0.04 * len(legend) + 0.01)
+    box.SetPosition(1.0 - width - 0.02, 0.02)  # text scales to the box: size it to the names
+    box.SetPosition2(width, height)
+    for i, (label, color) in enumerate(legend):
+        box.SetEntry(i, swatch(Color(color).int_rgb), label, (0.08, 0.08, 0.08))
+        box.SetEntrySymbol(i, None)
+    box.GetEntryTextProperty().SetColor(0.08, 0.08, 0.08)
+
+
+def swatch(rgb: Sequence[int], size: int = 8) -> Any:
+    """A ``size`` x ``size`` vtkImageData of one colour, a legend entry's icon."""
+    import pyvista as pv
+
+    image = pv.ImageData(dimensions=(size, size, 1))
+    image.point_data["rgb"] = np.tile(np.asarray(rgb, np.uint8), (size * size, 1))
+    image.point_data.active_scalars_name = "rgb"
+    return image
 
 
 def legend_for(species: str) -> list[tuple[str, Any]]:
@@ -107,10 +185,12 @@ def legend_for(species: str) -> list[tuple[str, Any]]:
     c = SPECIES[species]["colors"]
     return [
         ("pith", c["pith"]),
-        ("heartwood", c["heartwood"][1]),
-        ("sapwood", c["sapwood"][0]),
+        ("heartwood, earlywood", c["heartwood"][0]),
+        ("heartwood, latewood", c["heartwood"][1]),
+        ("sapwood, earlywood", c["sapwood"][0]),
+        ("sapwood, latewood", c["sapwood"][1]),
         ("bark", c["bark"]),
-        ("knot", c["knot"][1]),
+        ("knot (branch wood)", c["knot"][1]),
     ]
 
 
@@ -184,6 +264,8 @@ def run_wood(args: argparse.Namespace) -> int:
     plank = W.parse_plank(args.plank) if args.plank else None
     if plane and plank:
         raise UserError("give --cut or --plank, not both")
+    if (args.length is not None or args.at is not None) and not plank:
+        raise UserError("--length and --at choose the part of a --plank to draw; give --plank too")
     out = None
     if args.output:
         out = pathlib.Path(args.output)
@@ -242,6 +324,14 @@ def run_wood(args: argparse.Namespace) -> int:
         assert shown is not None  # grown above whenever there is an output
         if out.suffix.lower() == ".vtu":
             write_atomic(out, lambda tmp: shown.save(tmp))
+        elif out.suffix.lower() == ".png" and plank:
+            part, at, length = W.plank_window(shown, args.length, args.at)
+            record["plank_window"] = {"at": round(at, 6), "length": round(length, 6)}
+            title = (
+                f"{species or pathlib.Path(args.grammar).stem}, {args.years} years: {length:.3g} m of plank around z = {at:.3g} m"
+            )
+            legend = legend_for(species) if species else None
+            write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend))
         elif out.suffix.lower() == ".png":
             size = parse_size(args.size)
             title = f"{species or pathlib.Path(args.grammar).stem}, {args.years} years"
@@ -320,6 +410,12 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--cut", default=None, metavar="AXIS=VALUE", help="keep what lies below the plane, e.g. z=1.0")
     p.add_argument(
         "--plank", default=None, metavar="normal=x,offset=O,thickness=T", help="a slab at distance O from the trunk axis, T thick"
+    )
+    p.add_argument(
+        "--length", type=float, default=None, metavar="METRES", help="with --plank and a PNG: the length drawn (default 3 widths)"
+    )
+    p.add_argument(
+        "--at", type=float, default=None, metavar="Z", help="with --plank and a PNG: centre height (default: the largest knot)"
     )
     p.add_argument("--size", default="900x900", help="PNG size WIDTHxHEIGHT")
     p.add_argument("--json", action="store_true", help="print the facts as one JSON object")

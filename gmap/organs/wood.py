@@ -1495,7 +1495,45 @@ def plank(grid: pv.UnstructuredGrid, normal: ArrayLike, offset: float, thickness
         pts = np.asarray(grid.points)
         reach = float(np.max(pts @ n)) if len(pts) else 0.0
         raise ValueRefused(f"the plank at offset {offset:g} misses the wood (it reaches {reach:.4g} along the normal)")
+    if "axis" in grid.cell_data and np.any(np.asarray(grid.cell_data["axis"]) == 0):
+        if not np.any(np.asarray(slab.cell_data["axis"]) == 0):  # a sliver of branch or nothing: no board
+            trunk = np.asarray(grid.extract_cells(np.flatnonzero(np.asarray(grid.cell_data["axis"]) == 0)).points)
+            reach = float(np.max(trunk @ n))
+            raise ValueRefused(
+                f"the plank at offset {offset:g} misses the trunk (it reaches {reach:.4g} along the normal); "
+                "only branch wood would be left"
+            )
     return slab
+
+
+def plank_window(slab: pv.DataSet, length: float | None = None, at: float | None = None) -> tuple[pv.DataSet, float, float]:
+    """A length of a plank around a knot: ``(part, centre, length)`` along the trunk axis (z).
+
+    ``at`` is the centre height (default: the middle of the plank's largest
+    knot, else of the plank); ``length`` defaults to three times the board's
+    width, so its rings show as lines once the part fills a picture.
+    """
+    b = np.asarray(slab.bounds, float).reshape(3, 2)
+    if length is None:
+        length = 3.0 * float(np.max(b[:2, 1] - b[:2, 0]))
+    if not (math.isfinite(length) and length > 0):
+        raise ValueRefused(f"plank length must be a positive number, got {length:g}")
+    if at is None:
+        at = _knot_centre(slab) if "axis" in slab.cell_data else None
+        at = float(b[2].mean()) if at is None else at
+    if not b[2, 0] <= at <= b[2, 1]:
+        raise ValueRefused(f"plank centre z = {at:g} is off the plank (it spans {b[2, 0]:.4g}..{b[2, 1]:.4g})")
+    part = slab.clip_box((b[0, 0] - 1, b[0, 1] + 1, b[1, 0] - 1, b[1, 1] + 1, at - length / 2, at + length / 2), invert=False)
+    return part, float(at), float(length)
+
+
+def _knot_centre(slab):
+    """Height of the centre of the plank's largest knot region (``None`` without knots)."""
+    ids = np.flatnonzero(np.asarray(slab.cell_data["axis"]) >= 1)
+    if not ids.size:
+        return None
+    conn = slab.extract_cells(ids).connectivity("largest")
+    return float(np.asarray(conn.cell_centers().points)[:, 2].mean())
 
 
 def cut_facts(grid: pv.DataSet) -> dict[str, Any]:
