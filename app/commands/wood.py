@@ -238,14 +238,15 @@ def grow_from_args(args: argparse.Namespace) -> tuple[Wood | G3LDerivation, str 
     return W.grow_wood(args.species, args.years, seed=args.seed, check_every_step=True, **params), args.species
 
 
-def _grid(model, species):
+def _grid(model, species, convex=False):
+    """The model as a grid; ``convex`` (for a .vtu) splits polyhedra so VTK measures them right."""
     from ramure.gmap.organs import wood as W
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     if species is not None:
-        return W.to_grid(model)
-    grid = to_unstructured_grid(model.gm)
-    labels = np.asarray(model.gm.volume_data["label"])
+        return W.to_grid(model, convex=convex)
+    grid = to_unstructured_grid(model.gm, convex=convex)
+    labels = np.asarray(grid.cell_data["label"])
     palette = np.array([[214, 170, 110], [160, 105, 60], [110, 70, 40], [235, 210, 160], [90, 60, 35]], np.uint8)
     codes = {lab: i for i, lab in enumerate(sorted(set(labels.tolist())))}
     grid.cell_data["rgb"] = palette[np.array([codes[x] % len(palette) for x in labels], np.int64)]
@@ -292,7 +293,7 @@ def run_wood(args: argparse.Namespace) -> int:
     shown = None
     look: np.ndarray | None = None
     if plane or plank or out is not None:
-        grid = _grid(model, species)
+        grid = _grid(model, species, convex=out is not None and out.suffix.lower() == ".vtu")
         shown = grid
         if plane:
             normal, origin = plane

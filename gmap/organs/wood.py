@@ -1443,12 +1443,17 @@ def cell_colors(volume_data: Mapping[str, np.ndarray], species: str = "pine") ->
     return out
 
 
-def to_grid(wood: Wood) -> pv.UnstructuredGrid:
-    """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data."""
+def to_grid(wood: Wood, convex: bool = False) -> pv.UnstructuredGrid:
+    """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data.
+
+    ``convex=True`` writes polyhedra as tetrahedra (cell data ``volume`` names
+    the owner), so VTK measures their volumes right: use it for a ``.vtu``.
+    """
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
-    grid = to_unstructured_grid(wood.gm)
-    grid.cell_data["rgb"] = cell_colors(wood.gm.volume_data, wood.species)
+    grid = to_unstructured_grid(wood.gm, convex=convex)
+    colors = cell_colors(wood.gm.volume_data, wood.species)
+    grid.cell_data["rgb"] = colors[np.asarray(grid.cell_data["volume"])]
     return grid
 
 
