@@ -8,7 +8,7 @@ Examples::
     ramure wood --grammar grammars/wood/trunk.g3l --years 4 -o trunk.vtu
     ramure wood --from-plant grammars/abop_tree.lsys -n 6 --years 8 -o tree.glb
 
-JSON keys: species, years, seed, darts, volumes, tissues (volumes per tissue),
+JSON keys: species, years, steps (half-years), seed, darts, volumes, tissues (volumes per tissue),
 rings and knots at the cut or plank (when one is asked for), chi, boundary_chi,
 valid, seconds (growth + checks), darts_per_second, output.
 """
@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from ramure.gmap.organs.wood import Wood
 
 SUFFIXES = (".vtu", ".png", ".glb", ".gltf", ".obj")
+DEFAULT_YEARS = 10
 
 
 def write_atomic(path: str | os.PathLike, writer: Callable[[str], object]) -> pathlib.Path:
@@ -214,7 +215,11 @@ def grow_from_args(args: argparse.Namespace) -> tuple[Wood | G3LDerivation, str 
         if args.set:
             raise UserError("--set changes species parameters; edit the grammar's #define lines instead")
         system = G3LSystem.from_file(args.grammar)
-        return system.derive(2 * W.check_years(args.years), seed=args.seed, check_every_step=True), None
+        steps = system.grammar.steps if args.years is None else 2 * W.check_years(args.years)  # the file's #steps
+        steps = 2 * DEFAULT_YEARS if steps is None else steps
+        return system.derive(steps, seed=args.seed, check_every_step=True), None
+    if args.years is None:
+        args.years = DEFAULT_YEARS
     params: dict[str, Any] = parse_sets(args.set)  # strings: resolve_params converts them
     unknown = sorted(set(params) - set(W.PARAMETERS))
     if unknown:  # not only a typo: 'seed' or 'species' would collide with the grower's own arguments
@@ -281,6 +286,7 @@ def run_wood(args: argparse.Namespace) -> int:
         "species": species,
         "grammar": args.grammar,
         "years": args.years,
+        "steps": model.stage if species is None else 2 * args.years,  # half-years
         "seed": args.seed,
         "darts": gm.n_darts,
         "volumes": gm.n_volumes,
@@ -318,6 +324,8 @@ def run_wood(args: argparse.Namespace) -> int:
             record.update(W.cut_facts(grid.slice(normal=tuple(plane[0]), origin=tuple(plane[1]))))
         elif plank and species is not None:
             record.update(W.cut_facts(shown))
+    if args.years is None:  # a grammar's #steps: years as the steps say
+        record["years"] = record["steps"] / 2
     record.update(report)
     record["seconds"] = round(seconds, 6)
     record["darts_per_second"] = round(gm.n_darts / max(seconds, 1e-9))
@@ -328,14 +336,13 @@ def run_wood(args: argparse.Namespace) -> int:
         elif out.suffix.lower() == ".png" and plank:
             part, at, length = W.plank_window(shown, args.length, args.at)
             record["plank_window"] = {"at": round(at, 6), "length": round(length, 6)}
-            title = (
-                f"{species or pathlib.Path(args.grammar).stem}, {args.years} years: {length:.3g} m of plank around z = {at:.3g} m"
-            )
+            name = species or pathlib.Path(args.grammar).stem
+            title = f"{name}, {record['years']:g} years: {length:.3g} m of plank around z = {at:.3g} m"
             legend = legend_for(species) if species else None
             write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend))
         elif out.suffix.lower() == ".png":
             size = parse_size(args.size)
-            title = f"{species or pathlib.Path(args.grammar).stem}, {args.years} years"
+            title = f"{species or pathlib.Path(args.grammar).stem}, {record['years']:g} years"
             write_atomic(
                 out,
                 lambda tmp: render_wood(
@@ -389,7 +396,12 @@ def export_glb(grid: pv.UnstructuredGrid, path: str | os.PathLike) -> pathlib.Pa
 def register(sub: Subparsers) -> None:
     p = sub.add_parser("wood", help="grow volumetric wood (rings, knots, bark); cut it; facts, PNG, VTU or GLB")
     p.add_argument("--species", default="pine", help="species preset: pine or oak (default pine)")
-    p.add_argument("--years", type=int, default=10, help="years of growth (two half-year steps each)")
+    p.add_argument(
+        "--years",
+        type=int,
+        default=None,
+        help=f"years of growth, two half-year steps each (default {DEFAULT_YEARS}; with --grammar, the file's #steps)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (ring widths, branch sectors)")
     p.add_argument(
         "--set",
@@ -402,7 +414,7 @@ def register(sub: Subparsers) -> None:
         "--grammar",
         default=None,
         metavar="FILE.g3l",
-        help="grow a 3Gmap L-system instead of the species model (2 steps per year)",
+        help="grow a 3Gmap L-system instead of the species model (its #steps half-years, unless --years)",
     )
     p.add_argument(
         "--from-plant", default=None, metavar="FILE.lsys", help="wood of a derived plant: its trunk and first branches"

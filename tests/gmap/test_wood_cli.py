@@ -100,6 +100,20 @@ def test_plank_that_misses_the_trunk_is_refused_without_a_picture(capsys, tmp_pa
     assert not list(tmp_path.iterdir())
 
 
+def test_grammar_option_honours_the_files_steps(capsys, tmp_path):
+    # the CLI grew every grammar 2 x 10 half-years, whatever its #steps said
+    from ramure.gmap.lsystem.engine import G3LSystem
+
+    text = open("grammars/wood/spiral.g3l").read().replace("#steps 6", "#steps 3")
+    grammar = tmp_path / "spiral3.g3l"
+    grammar.write_text(text)
+    r = run_json(capsys, "--grammar", str(grammar))
+    assert r["steps"] == 3 and r["years"] == 1.5
+    assert r["darts"] == G3LSystem.from_file(str(grammar)).derive(3).gm.n_darts == 192 * 4 + 384 * 3
+    r = run_json(capsys, "--grammar", str(grammar), "--years", "2")  # --years still wins
+    assert r["steps"] == 4 and r["darts"] == 192 * 5 + 384 * 4
+
+
 def test_grammar_option_runs_a_g3l(capsys):
     r = run_json(capsys, "--grammar", "grammars/wood/spiral.g3l", "--years", "2")
     assert r["darts"] == 192 * 5 + 384 * 4 and r["chi"] == 1 and "labels" in r
