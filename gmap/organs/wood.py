@@ -1561,6 +1561,36 @@ def knot_regions(grid: pv.DataSet) -> int:
     return int(len(np.unique(conn.cell_data["RegionId"])))
 
 
+def knot_roundness(section: pv.DataSet, normal: ArrayLike) -> list[float]:
+    """Area over smallest bounding rectangle of each knot (``axis >= 1`` region) on a plane section.
+
+    ``section`` is a slice of a wood grid (polygons in a plane of the given
+    ``normal``); a round knot scores pi/4 (0.785), a square one 1.  The
+    rectangle is the smallest over rotations in 1 degree steps.
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    u = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    ids = np.flatnonzero(np.asarray(section.cell_data["axis"]) >= 1)
+    if not ids.size:
+        return []
+    regions = section.extract_cells(ids).connectivity()  # type: ignore[arg-type]  # pyvista stubs want int64
+    region = np.asarray(regions.cell_data["RegionId"])
+    area = np.asarray(regions.compute_cell_sizes(length=False, volume=False).cell_data["Area"])
+    turn = np.radians(np.arange(90))
+    out = []
+    for r in np.unique(region):  # one per knot: a handful
+        pts = np.asarray(regions.extract_cells(np.flatnonzero(region == r)).points)
+        a, b = pts @ u, pts @ v
+        x = np.outer(np.cos(turn), a) + np.outer(np.sin(turn), b)
+        y = np.outer(-np.sin(turn), a) + np.outer(np.cos(turn), b)
+        box = np.ptp(x, axis=1) * np.ptp(y, axis=1)
+        out.append(float(area[region == r].sum() / box.min()))
+    return out
+
+
 # ---------------------------------------------------------------------- from a plant
 def _trunk_chain(skeleton):
     """Indices of the trunk's segments, base to top: order-0 segments following parents."""
