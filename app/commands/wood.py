@@ -286,7 +286,7 @@ def run_wood(args: argparse.Namespace) -> int:
         "species": species,
         "grammar": args.grammar,
         "years": args.years,
-        "steps": model.stage if species is None else 2 * args.years,  # half-years
+        "steps": 2 * args.years if isinstance(model, W.Wood) else model.stage,  # half-years
         "seed": args.seed,
         "darts": gm.n_darts,
         "volumes": gm.n_volumes,

@@ -1502,7 +1502,8 @@ def plank(grid: pv.UnstructuredGrid, normal: ArrayLike, offset: float, thickness
         raise ValueRefused(f"the plank at offset {offset:g} misses the wood (it reaches {reach:.4g} along the normal)")
     if "axis" in grid.cell_data and np.any(np.asarray(grid.cell_data["axis"]) == 0):
         if not np.any(np.asarray(slab.cell_data["axis"]) == 0):  # a sliver of branch or nothing: no board
-            trunk = np.asarray(grid.extract_cells(np.flatnonzero(np.asarray(grid.cell_data["axis"]) == 0)).points)
+            ids = np.flatnonzero(np.asarray(grid.cell_data["axis"]) == 0)
+            trunk = np.asarray(grid.extract_cells(ids).points)  # type: ignore[arg-type]  # pyvista stubs want int64
             reach = float(np.max(trunk @ n))
             raise ValueRefused(
                 f"the plank at offset {offset:g} misses the trunk (it reaches {reach:.4g} along the normal); "
