@@ -93,38 +93,27 @@ def render_plank(
 ) -> str | os.PathLike:
     """Render a length of plank face-on to PNG: the trunk axis across the picture, the board filling it.
 
-    A parallel projection looks at the face on the ``normal`` side, unlit so
-    the colours are the tissues'; the length runs left to right.
+    A parallel projection looks at the face nearer the pith (at the plank's
+    offset), unlit so the colours are the tissues'; the length runs left to right.
     """
     from ramure.app.render import headless_setup
 
     headless_setup()
     import pyvista as pv
 
-    n = np.asarray(normal, float)
-    n = n / np.linalg.norm(n)
-    along = np.array([0.0, 0.0, 1.0])
-    across = np.cross(n, along)
-    if not np.linalg.norm(across) > 1e-6:  # a cross-cut plank (normal z): x across, y up
-        along, across = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
-    across = across / np.linalg.norm(across)
-    pts = np.asarray(part.points, float)
-    length = float(np.ptp(pts @ along)) or 1.0
-    width = float(np.ptp(pts @ across)) or 1.0
-    b = np.asarray(part.bounds, float).reshape(3, 2)
-    centre = b.mean(axis=1)
+    from ramure.gmap.organs.wood import plank_camera
+
+    w, h = size
+    position, focal, up, scale = plank_camera(part.points, normal, w / h, room_below=0.4)
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
     surface = part.extract_surface(algorithm="dataset_surface")
     plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
     plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method
-    plotter.camera_position = [tuple(centre + n * length * 3.0), tuple(centre), tuple(across)]
-    w, h = size
-    scale = 0.5 * max(length * h / w, width / 0.6) * 1.04  # the board in the top 60 %, the legend below
+    plotter.camera_position = [tuple(position), tuple(focal), tuple(up)]
     plotter.camera.parallel_scale = scale
-    plotter.camera.focal_point = tuple(centre - across * 0.3 * scale)
-    plotter.camera.position = tuple(centre - across * 0.3 * scale + n * length * 3.0)
-    plotter.camera.clipping_range = (length * 0.5, length * 6.0)
+    distance = float(np.linalg.norm(position - focal))
+    plotter.camera.clipping_range = (distance * 0.5, distance * 1.5)
     if legend:
         add_legend_box(plotter, legend)
     if title:

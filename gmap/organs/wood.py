@@ -1512,6 +1512,60 @@ def plank(grid: pv.UnstructuredGrid, normal: ArrayLike, offset: float, thickness
     return slab
 
 
+PLANK_PRESETS = {"flat-sawn": 0.5, "quarter-sawn": 0.0, "rift": 0.3}
+"""Plank offset from the pith as a fraction of the trunk's radius: a flat-sawn board shows arches
+(rings nearly in its face), a quarter-sawn one passes the pith (rings across its face, straight
+stripes), a rift one lies between (rings at 30-60 degrees over most of its width).  A quarter-sawn
+board is centred on the pith (offset ``-thickness / 2``)."""
+
+
+def plank_normal(degrees: float) -> np.ndarray:
+    """The horizontal plank normal at ``degrees`` around the trunk axis from +x."""
+    a = math.radians(float(degrees))
+    return np.array([math.cos(a), math.sin(a), 0.0])
+
+
+def preset_offset(grid: pv.DataSet, preset: str, thickness: float) -> float:
+    """The offset of a ``preset`` plank (:data:`PLANK_PRESETS`) in a wood grid whose trunk has ``axis == 0``.
+
+    The radius is the trunk's wood under the bark (its cells' centres)."""
+    if preset not in PLANK_PRESETS:
+        raise ValueRefused(f"unknown plank preset {preset!r}; choose one of {', '.join(PLANK_PRESETS)}")
+    if preset == "quarter-sawn":
+        return -0.5 * thickness
+    axis = np.asarray(grid.cell_data["axis"]) if "axis" in grid.cell_data else np.zeros(grid.n_cells)
+    wood = np.asarray(grid.cell_data["wood"]) != CODES["bark"] if "wood" in grid.cell_data else True
+    centres = np.asarray(grid.cell_centers().points)[(axis <= 0) & wood]  # the trunk's wood, under the bark
+    radius = float(np.max(np.hypot(centres[:, 0], centres[:, 1]))) if len(centres) else 0.0
+    return PLANK_PRESETS[preset] * radius
+
+
+def plank_camera(
+    points: ArrayLike, normal: ArrayLike, aspect: float = 1.0, room_below: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """``(position, focal point, view up, parallel scale)`` that show a plank's face filling a view.
+
+    The camera faces the board's inner face (the one at ``offset``, nearer the
+    pith: a flat-sawn board's arches); the trunk axis (z) runs across the
+    view, the board's width up; ``aspect`` is width over height; ``room_below`` is the share of the view's height
+    left free under the board (for a legend).
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    along = np.array([0.0, 0.0, 1.0])
+    up = np.cross(n, along)
+    if not np.linalg.norm(up) > 1e-6:  # a cross-cut plank (normal z): x across, y up
+        along, up = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    up = up / np.linalg.norm(up)
+    pts = np.asarray(points, float)
+    length = float(np.ptp(pts @ along)) or 1.0
+    width = float(np.ptp(pts @ up)) or 1.0
+    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    scale = 0.5 * max(length / aspect, width / (1.0 - room_below)) * 1.04
+    focal = centre - up * room_below * scale
+    return focal - n * length * 3.0, focal, up, scale  # from the pith's side: the face at ``offset``
+
+
 def plank_window(slab: pv.DataSet, length: float | None = None, at: float | None = None) -> tuple[pv.DataSet, float, float]:
     """A length of a plank around a knot: ``(part, centre, length)`` along the trunk axis (z).
 
