@@ -8,7 +8,7 @@ Examples::
     ramure wood --grammar grammars/wood/trunk.g3l --years 4 -o trunk.vtu
     ramure wood --from-plant grammars/abop_tree.lsys -n 6 --years 8 -o tree.glb
 
-JSON keys: species, years, seed, darts, volumes, tissues (volumes per tissue),
+JSON keys: species, years, steps (half-years), seed, darts, volumes, tissues (volumes per tissue),
 rings and knots at the cut or plank (when one is asked for), chi, boundary_chi,
 valid, seconds (growth + checks), darts_per_second, output.
 """
@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from ramure.gmap.organs.wood import Wood
 
 SUFFIXES = (".vtu", ".png", ".glb", ".gltf", ".obj")
+DEFAULT_YEARS = 10
 
 
 def write_atomic(path: str | os.PathLike, writer: Callable[[str], object]) -> pathlib.Path:
@@ -82,6 +83,46 @@ def render_wood(
     return path
 
 
+def render_plank(
+    part: pv.DataSet,
+    path: str | os.PathLike,
+    normal: ArrayLike,
+    size: tuple[int, int] = (900, 900),
+    title: str | None = None,
+    legend: Sequence[tuple[str, Any]] | None = None,
+) -> str | os.PathLike:
+    """Render a length of plank face-on to PNG: the trunk axis across the picture, the board filling it.
+
+    A parallel projection looks at the face nearer the pith (at the plank's
+    offset), unlit so the colours are the tissues'; the length runs left to right.
+    """
+    from ramure.app.render import headless_setup
+
+    headless_setup()
+    import pyvista as pv
+
+    from ramure.gmap.organs.wood import plank_camera
+
+    w, h = size
+    position, focal, up, scale = plank_camera(part.points, normal, w / h, room_below=0.4)
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
+    surface = part.extract_surface(algorithm="dataset_surface")
+    plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
+    plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method
+    plotter.camera_position = [tuple(position), tuple(focal), tuple(up)]
+    plotter.camera.parallel_scale = scale
+    distance = float(np.linalg.norm(position - focal))
+    plotter.camera.clipping_range = (distance * 0.5, distance * 1.5)
+    if legend:
+        add_legend_box(plotter, legend)
+    if title:
+        plotter.add_text(title, font_size=10, color="black")
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
+
+
 def add_wood_actors(
     plotter: pv.Plotter, grid: pv.DataSet, legend: Sequence[tuple[str, Any]] | None = None, name: str = "wood"
 ) -> pv.PolyData:
@@ -91,14 +132,41 @@ def add_wood_actors(
         surface, scalars="rgb", rgb=True, show_edges=False, name=name, smooth_shading=False, ambient=0.35, diffuse=0.75
     )
     if legend:
-        plotter.add_legend(
-            [[label, color] for label, color in legend],  # type: ignore[arg-type]  # pyvista: a decorated method reads as unbound
-            bcolor=(0.9, 0.9, 0.9),
-            face="rectangle",
-            size=(0.22, 0.035 * len(legend) + 0.01),
-            loc="lower right",
-        )
+        add_legend_box(plotter, legend)
     return surface
+
+
+def add_legend_box(plotter: pv.Plotter, legend: Sequence[tuple[str, Any]]) -> None:
+    """A legend that reads: dark text on a light box, each name after a swatch of its colour.
+
+    (pyvista's legend writes each name in its own colour: pale sapwood vanished on grey.)
+    """
+    from pyvista import Color
+
+    longest = max(len(label) for label, _ in legend)
+    box = plotter.add_legend(
+        [[label, color] for label, color in legend],  # type: ignore[arg-type]  # pyvista: a decorated method reads as unbound
+        bcolor=(0.96, 0.96, 0.94),
+        border=True,
+        face="rectangle",
+    )
+    width, height = min(0.6, 0.018 * longest + 0.05), min(0.4, 0.04 * len(legend) + 0.01)
+    box.SetPosition(1.0 - width - 0.02, 0.02)  # text scales to the box: size it to the names
+    box.SetPosition2(width, height)
+    for i, (label, color) in enumerate(legend):
+        box.SetEntry(i, swatch(Color(color).int_rgb), label, (0.08, 0.08, 0.08))
+        box.SetEntrySymbol(i, None)
+    box.GetEntryTextProperty().SetColor(0.08, 0.08, 0.08)
+
+
+def swatch(rgb: Sequence[int], size: int = 8) -> Any:
+    """A ``size`` x ``size`` vtkImageData of one colour, a legend entry's icon."""
+    import pyvista as pv
+
+    image = pv.ImageData(dimensions=(size, size, 1))
+    image.point_data["rgb"] = np.tile(np.asarray(rgb, np.uint8), (size * size, 1))
+    image.point_data.active_scalars_name = "rgb"
+    return image
 
 
 def legend_for(species: str) -> list[tuple[str, Any]]:
@@ -110,10 +178,12 @@ def legend_for(species: str) -> list[tuple[str, Any]]:
     c = SPECIES[species]["colors"]
     return [
         ("pith", c["pith"]),
-        ("heartwood", c["heartwood"][1]),
-        ("sapwood", c["sapwood"][0]),
+        ("heartwood, earlywood", c["heartwood"][0]),
+        ("heartwood, latewood", c["heartwood"][1]),
+        ("sapwood, earlywood", c["sapwood"][0]),
+        ("sapwood, latewood", c["sapwood"][1]),
         ("bark", c["bark"]),
-        ("knot", c["knot"][1]),
+        ("knot (branch wood)", c["knot"][1]),
     ]
 
 
@@ -140,7 +210,11 @@ def grow_from_args(args: argparse.Namespace) -> tuple[Wood | G3LDerivation, str 
         if args.set:
             raise UserError("--set changes species parameters; edit the grammar's #define lines instead")
         system = G3LSystem.from_file(args.grammar)
-        return system.derive(2 * W.check_years(args.years), seed=args.seed, check_every_step=True), None
+        steps = system.grammar.steps if args.years is None else 2 * W.check_years(args.years)  # the file's #steps
+        steps = 2 * DEFAULT_YEARS if steps is None else steps
+        return system.derive(steps, seed=args.seed, check_every_step=True), None
+    if args.years is None:
+        args.years = DEFAULT_YEARS
     params: dict[str, Any] = parse_sets(args.set)  # strings: resolve_params converts them
     unknown = sorted(set(params) - set(W.PARAMETERS))
     if unknown:  # not only a typo: 'seed' or 'species' would collide with the grower's own arguments
@@ -164,14 +238,15 @@ def grow_from_args(args: argparse.Namespace) -> tuple[Wood | G3LDerivation, str 
     return W.grow_wood(args.species, args.years, seed=args.seed, check_every_step=True, **params), args.species
 
 
-def _grid(model, species):
+def _grid(model, species, convex=False):
+    """The model as a grid; ``convex`` (for a .vtu) splits polyhedra so VTK measures them right."""
     from ramure.gmap.organs import wood as W
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
     if species is not None:
-        return W.to_grid(model)
-    grid = to_unstructured_grid(model.gm)
-    labels = np.asarray(model.gm.volume_data["label"])
+        return W.to_grid(model, convex=convex)
+    grid = to_unstructured_grid(model.gm, convex=convex)
+    labels = np.asarray(grid.cell_data["label"])
     palette = np.array([[214, 170, 110], [160, 105, 60], [110, 70, 40], [235, 210, 160], [90, 60, 35]], np.uint8)
     codes = {lab: i for i, lab in enumerate(sorted(set(labels.tolist())))}
     grid.cell_data["rgb"] = palette[np.array([codes[x] % len(palette) for x in labels], np.int64)]
@@ -193,6 +268,8 @@ def run_wood(args: argparse.Namespace) -> int:
     plank = W.parse_plank(args.plank) if args.plank else None
     if plane and plank:
         raise UserError("give --cut or --plank, not both")
+    if (args.length is not None or args.at is not None) and not plank:
+        raise UserError("--length and --at choose the part of a --plank to draw; give --plank too")
     out = None
     if args.output:
         out = pathlib.Path(args.output)
@@ -207,6 +284,7 @@ def run_wood(args: argparse.Namespace) -> int:
         "species": species,
         "grammar": args.grammar,
         "years": args.years,
+        "steps": 2 * args.years if isinstance(model, W.Wood) else model.stage,  # half-years
         "seed": args.seed,
         "darts": gm.n_darts,
         "volumes": gm.n_volumes,
@@ -219,7 +297,7 @@ def run_wood(args: argparse.Namespace) -> int:
     shown = None
     look: np.ndarray | None = None
     if plane or plank or out is not None:
-        grid = _grid(model, species)
+        grid = _grid(model, species, convex=out is not None and out.suffix.lower() == ".vtu")
         shown = grid
         if plane:
             normal, origin = plane
@@ -244,6 +322,8 @@ def run_wood(args: argparse.Namespace) -> int:
             record.update(W.cut_facts(grid.slice(normal=tuple(plane[0]), origin=tuple(plane[1]))))
         elif plank and species is not None:
             record.update(W.cut_facts(shown))
+    if args.years is None:  # a grammar's #steps: years as the steps say
+        record["years"] = record["steps"] / 2
     record.update(report)
     record["seconds"] = round(seconds, 6)
     record["darts_per_second"] = round(gm.n_darts / max(seconds, 1e-9))
@@ -251,9 +331,16 @@ def run_wood(args: argparse.Namespace) -> int:
         assert shown is not None  # grown above whenever there is an output
         if out.suffix.lower() == ".vtu":
             write_atomic(out, lambda tmp: shown.save(tmp))
+        elif out.suffix.lower() == ".png" and plank:
+            part, at, length = W.plank_window(shown, args.length, args.at)
+            record["plank_window"] = {"at": round(at, 6), "length": round(length, 6)}
+            name = species or pathlib.Path(args.grammar).stem
+            title = f"{name}, {record['years']:g} years: {length:.3g} m of plank around z = {at:.3g} m"
+            legend = legend_for(species) if species else None
+            write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend))
         elif out.suffix.lower() == ".png":
             size = parse_size(args.size)
-            title = f"{species or pathlib.Path(args.grammar).stem}, {args.years} years"
+            title = f"{species or pathlib.Path(args.grammar).stem}, {record['years']:g} years"
             write_atomic(
                 out,
                 lambda tmp: render_wood(
@@ -308,7 +395,12 @@ def register(sub: Subparsers) -> None:
     """Add ``wood`` (volumetric wood, its cuts and planks) to the CLI's subcommands."""
     p = sub.add_parser("wood", help="grow volumetric wood (rings, knots, bark); cut it; facts, PNG, VTU or GLB")
     p.add_argument("--species", default="pine", help="species preset: pine or oak (default pine)")
-    p.add_argument("--years", type=int, default=10, help="years of growth (two half-year steps each)")
+    p.add_argument(
+        "--years",
+        type=int,
+        default=None,
+        help=f"years of growth, two half-year steps each (default {DEFAULT_YEARS}; with --grammar, the file's #steps)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (ring widths, branch sectors)")
     p.add_argument(
         "--set",
@@ -321,7 +413,7 @@ def register(sub: Subparsers) -> None:
         "--grammar",
         default=None,
         metavar="FILE.g3l",
-        help="grow a 3Gmap L-system instead of the species model (2 steps per year)",
+        help="grow a 3Gmap L-system instead of the species model (its #steps half-years, unless --years)",
     )
     p.add_argument(
         "--from-plant", default=None, metavar="FILE.lsys", help="wood of a derived plant: its trunk and first branches"
@@ -330,6 +422,12 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--cut", default=None, metavar="AXIS=VALUE", help="keep what lies below the plane, e.g. z=1.0")
     p.add_argument(
         "--plank", default=None, metavar="normal=x,offset=O,thickness=T", help="a slab at distance O from the trunk axis, T thick"
+    )
+    p.add_argument(
+        "--length", type=float, default=None, metavar="METRES", help="with --plank and a PNG: the length drawn (default 3 widths)"
+    )
+    p.add_argument(
+        "--at", type=float, default=None, metavar="Z", help="with --plank and a PNG: centre height (default: the largest knot)"
     )
     p.add_argument("--size", default="900x900", help="PNG size WIDTHxHEIGHT")
     p.add_argument("--json", action="store_true", help="print the facts as one JSON object")

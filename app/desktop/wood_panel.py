@@ -20,7 +20,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QGuiApplication
-from PySide6.QtWidgets import QCheckBox, QComboBox, QFormLayout, QHBoxLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
+)
 
 from ramure.app.desktop.lazy_view import LazyView
 from ramure.errors import RamureError
@@ -31,6 +42,17 @@ if TYPE_CHECKING:
     from ramure.gmap.organs.wood import Wood
 
 SELECTED_RGB = (220, 30, 30)
+PRESETS = ("flat-sawn", "quarter-sawn", "rift")  # as ramure.gmap.organs.wood.PLANK_PRESETS (gmap loads late)
+
+
+def _spin(name: str, low: float, high: float, value: float, suffix: str, decimals: int = 1) -> QDoubleSpinBox:
+    box = QDoubleSpinBox()
+    box.setObjectName(name)
+    box.setRange(low, high)
+    box.setDecimals(decimals)
+    box.setValue(value)
+    box.setSuffix(suffix)
+    return box
 
 
 class WoodPanel(QWidget):
@@ -72,12 +94,77 @@ class WoodPanel(QWidget):
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(form)
         layout.addLayout(row)
+        layout.addLayout(self.plank_controls())
         layout.addWidget(self.facts)
         # the view and the species list: when the dock is first on screen (see lazy_view)
         self.view_slot = LazyView(plotter_factory or _interactor, setup=lambda _plotter: self.list_species())
         layout.addWidget(self.view_slot, 1)
         if controller is not None and hasattr(controller, "selection_changed"):
             controller.selection_changed.connect(self.highlight_selection)
+
+    def plank_controls(self) -> QFormLayout:
+        """Plank: a preset, its direction around the trunk, offset from the pith, thickness; Saw."""
+        self.plank_preset = QComboBox()
+        self.plank_preset.setObjectName("woodPlankPreset")
+        self.plank_preset.addItems(PRESETS)
+        self.plank_preset.currentIndexChanged.connect(lambda _i: self.apply_preset())
+        self.plank_direction = _spin("woodPlankDirection", 0.0, 359.0, 0.0, " deg", 0)
+        self.plank_offset = _spin("woodPlankOffset", -2000.0, 2000.0, 10.0, " mm")
+        self.plank_thickness = _spin("woodPlankThickness", 0.1, 500.0, 20.0, " mm")
+        self.plank_button = QPushButton("Saw plank")
+        self.plank_button.setObjectName("woodPlank")
+        self.plank_button.clicked.connect(self.show_plank)
+        form = QFormLayout()
+        form.addRow("Plank", self.plank_preset)
+        form.addRow("Direction", self.plank_direction)
+        form.addRow("Offset", self.plank_offset)
+        form.addRow("Thickness", self.plank_thickness)
+        form.addRow(self.plank_button)
+        return form
+
+    def apply_preset(self) -> None:
+        """Set the offset of the chosen preset for the grown wood's trunk (the pith's offset before Grow)."""
+        from ramure.gmap.organs.wood import preset_offset
+
+        thickness = self.plank_thickness.value() / 1000.0
+        if self.grid is None:
+            offset = -0.5 * thickness if self.plank_preset.currentText() == "quarter-sawn" else 0.0
+        else:
+            offset = preset_offset(self.grid, self.plank_preset.currentText(), thickness)
+        self.plank_offset.setValue(1000.0 * offset)
+
+    def show_plank(self) -> Any:
+        """Saw the plank the controls describe and show a length of it around a knot, face-on, filling the view."""
+        from ramure.gmap.organs import wood as W
+
+        if self.grid is None:
+            self.facts.setText("Grow the wood first, then saw a plank.")
+            return None
+        normal = W.plank_normal(self.plank_direction.value())
+        offset, thickness = self.plank_offset.value() / 1000.0, self.plank_thickness.value() / 1000.0
+        try:
+            slab = W.plank(self.grid, normal, offset, thickness)
+            part, at, length = W.plank_window(slab)
+        except RamureError as err:
+            self.facts.setText(f"Refused: {err}")
+            return None
+        facts = W.cut_facts(slab)
+        p = self.plotter
+        p.clear()
+        p.add_mesh(part.extract_surface(algorithm="dataset_surface"), scalars="rgb", rgb=True, lighting=False, name="plank")
+        w, h = p.window_size
+        position, focal, up, scale = W.plank_camera(part.points, normal, w / h if w > 0 and h > 0 else 1.0)
+        p.enable_parallel_projection()
+        p.camera_position = [tuple(position), tuple(focal), tuple(up)]
+        p.camera.parallel_scale = scale
+        p.reset_camera_clipping_range()
+        if hasattr(p, "render"):
+            p.render()
+        self.facts.setText(
+            f"Plank {self.plank_preset.currentText()}: {facts['rings']} rings, {facts['knots']} knot(s); "
+            f"{length:.3g} m shown around z = {at:.3g} m, seen from the pith's side."
+        )
+        return part
 
     def list_species(self) -> None:
         """Put the species into their list (once).  They come from ramure.gmap.organs.wood: gmap loads
@@ -137,6 +224,7 @@ class WoodPanel(QWidget):
             return
         p = self.plotter
         p.clear()
+        p.disable_parallel_projection()  # a plank was shown face-on
         b = np.asarray(self.grid.bounds, float).reshape(3, 2)
         origin = (0.0, 0.0, float(b[2, 0] + 0.3 * (b[2, 1] - b[2, 0])))
         p.add_mesh_clip_plane(

@@ -27,7 +27,7 @@ from ramure.gmap.kernel.storage import TISSUES
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3
 
-VTK_HEXAHEDRON, VTK_WEDGE, VTK_POLYHEDRON = 12, 13, 42
+VTK_TETRA, VTK_HEXAHEDRON, VTK_WEDGE, VTK_POLYHEDRON = 10, 12, 13, 42
 _SKIP = {"frame", "origin", "size", "parent"}
 
 
@@ -73,7 +73,7 @@ def _outward(pos, cycles, degree, cell_centre):
 
 
 def _cell_records(gm, pos):
-    """Cell types and the flat legacy cell array, one cell per volume in volume order."""
+    """Cell types, the flat legacy cell array and each record's length, one cell per volume in volume order."""
     vid, _ = gm.cells(0)
     alpha = gm.alpha
     first, cycles, degree, fvol, cdarts = face_cycles(gm)
@@ -146,11 +146,53 @@ def _cell_records(gm, pos):
         ok = cyc >= 0
         pos_in = fstart[:, None] + 1 + np.arange(cyc.shape[1])[None, :]
         flat[pos_in[ok]] = cyc[ok]
-    return ctype, flat
+    return ctype, flat, length
 
 
-def to_unstructured_grid(gm: GMap3) -> pv.UnstructuredGrid:
+def _polyhedra_as_tetrahedra(gm, pos, ctype):
+    """Tetrahedra ``(face centre, b, a, volume centre)`` for each edge ``a -> b`` of each polyhedron's faces.
+
+    Returns ``(cells (n, 4), owning volume (n,), extra points)``; the extra
+    points are the face centres then the volume centres, numbered after ``pos``.
+    A face is fanned from its vertex centroid as :func:`ramure.gmap.kernel.measure.volumes`
+    does, so the tetrahedra's volumes sum to the kernel's, convex cell or not.
+    """
+    _, cycles, degree, fvol, _ = face_cycles(gm)
+    keep = ctype[fvol] == VTK_POLYHEDRON
+    cycles, degree, fvol = cycles[keep], degree[keep], fvol[keep]
+    centres = gm.volume_centroids()
+    cycles = _outward(pos, cycles, degree, centres[fvol])
+    _, fcentre = _newell(pos, cycles, degree)
+    vols = np.flatnonzero(ctype == VTK_POLYHEDRON)
+    centre_id = np.full(gm.n_volumes, -1, np.int64)
+    centre_id[vols] = len(pos) + len(fvol) + np.arange(len(vols))
+    k = np.arange(cycles.shape[1])[None, :]
+    nxt = np.where(k + 1 >= degree[:, None], 0, k + 1)
+    f, e = np.nonzero(k < degree[:, None])
+    a, b = cycles[f, e], np.take_along_axis(cycles, nxt, axis=1)[f, e]
+    cells = np.stack([len(pos) + f, b, a, centre_id[fvol[f]]], axis=1)
+    return cells, fvol[f], np.concatenate([fcentre, centres[vols]])
+
+
+def _split_polyhedra(gm, pos, ctype, flat, length):
+    """The legacy cell records with each polyhedron replaced by tetrahedra (after the other cells)."""
+    fixed = ctype != VTK_POLYHEDRON
+    kept = flat[np.repeat(fixed, length)]
+    cells, owner, extra = _polyhedra_as_tetrahedra(gm, pos, ctype)
+    tets = np.concatenate([np.full((len(cells), 1), 4), cells], axis=1).ravel()
+    types = np.concatenate([ctype[fixed], np.full(len(cells), VTK_TETRA, np.uint8)])
+    owners = np.concatenate([np.flatnonzero(fixed), owner])
+    return np.concatenate([kept, tets]), types, np.concatenate([pos, extra]), owners
+
+
+def to_unstructured_grid(gm: GMap3, convex: bool = False) -> pv.UnstructuredGrid:
     """A :class:`pyvista.UnstructuredGrid` with one cell per volume and cell data per volume.
+
+    With ``convex=True`` every polyhedron (a volume that is not a hexahedron
+    or a wedge, often non-convex after a cut or a knot) is written as
+    tetrahedra instead, each carrying its volume's cell data and id
+    (``volume``): VTK measures a non-convex polyhedron cell short (12-35 %
+    on a cut plank), tetrahedra exactly.
 
     >>> from ramure.gmap import GMap3
     >>> gm = GMap3(); _ = gm.add_prisms(4); _ = gm.add_prisms(3)
@@ -161,13 +203,16 @@ def to_unstructured_grid(gm: GMap3) -> pv.UnstructuredGrid:
     [1.0, 1.299038]
     """
     vid, pos = gm.vertex_positions()
-    ctype, flat = _cell_records(gm, pos)
+    ctype, flat, length = _cell_records(gm, pos)
+    owner = np.arange(gm.n_volumes)
+    if convex and np.any(ctype == VTK_POLYHEDRON):
+        flat, ctype, pos, owner = _split_polyhedra(gm, pos, ctype, flat, length)
     grid = pv.UnstructuredGrid(flat, ctype, pos)
-    grid.cell_data["volume"] = np.arange(gm.n_volumes)
+    grid.cell_data["volume"] = owner
     for name, arr in gm.volume_data.items():
         if name in _SKIP or np.ndim(arr) != 1:
             continue
-        grid.cell_data[name] = np.asarray(arr)
+        grid.cell_data[name] = np.asarray(arr)[owner]
     grid.field_data["tissue_names"] = np.array(TISSUES)
     return grid
 

@@ -1443,12 +1443,17 @@ def cell_colors(volume_data: Mapping[str, np.ndarray], species: str = "pine") ->
     return out
 
 
-def to_grid(wood: Wood) -> pv.UnstructuredGrid:
-    """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data."""
+def to_grid(wood: Wood, convex: bool = False) -> pv.UnstructuredGrid:
+    """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data.
+
+    ``convex=True`` writes polyhedra as tetrahedra (cell data ``volume`` names
+    the owner), so VTK measures their volumes right: use it for a ``.vtu``.
+    """
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
-    grid = to_unstructured_grid(wood.gm)
-    grid.cell_data["rgb"] = cell_colors(wood.gm.volume_data, wood.species)
+    grid = to_unstructured_grid(wood.gm, convex=convex)
+    colors = cell_colors(wood.gm.volume_data, wood.species)
+    grid.cell_data["rgb"] = colors[np.asarray(grid.cell_data["volume"])]
     return grid
 
 
@@ -1495,7 +1500,100 @@ def plank(grid: pv.UnstructuredGrid, normal: ArrayLike, offset: float, thickness
         pts = np.asarray(grid.points)
         reach = float(np.max(pts @ n)) if len(pts) else 0.0
         raise ValueRefused(f"the plank at offset {offset:g} misses the wood (it reaches {reach:.4g} along the normal)")
+    if "axis" in grid.cell_data and np.any(np.asarray(grid.cell_data["axis"]) == 0):
+        if not np.any(np.asarray(slab.cell_data["axis"]) == 0):  # a sliver of branch or nothing: no board
+            ids = np.flatnonzero(np.asarray(grid.cell_data["axis"]) == 0)
+            trunk = np.asarray(grid.extract_cells(ids).points)  # type: ignore[arg-type]  # pyvista stubs want int64
+            reach = float(np.max(trunk @ n))
+            raise ValueRefused(
+                f"the plank at offset {offset:g} misses the trunk (it reaches {reach:.4g} along the normal); "
+                "only branch wood would be left"
+            )
     return slab
+
+
+PLANK_PRESETS = {"flat-sawn": 0.5, "quarter-sawn": 0.0, "rift": 0.3}
+"""Plank offset from the pith as a fraction of the trunk's radius: a flat-sawn board shows arches
+(rings nearly in its face), a quarter-sawn one passes the pith (rings across its face, straight
+stripes), a rift one lies between (rings at 30-60 degrees over most of its width).  A quarter-sawn
+board is centred on the pith (offset ``-thickness / 2``)."""
+
+
+def plank_normal(degrees: float) -> np.ndarray:
+    """The horizontal plank normal at ``degrees`` around the trunk axis from +x."""
+    a = math.radians(float(degrees))
+    return np.array([math.cos(a), math.sin(a), 0.0])
+
+
+def preset_offset(grid: pv.DataSet, preset: str, thickness: float) -> float:
+    """The offset of a ``preset`` plank (:data:`PLANK_PRESETS`) in a wood grid whose trunk has ``axis == 0``.
+
+    The radius is the trunk's wood under the bark (its cells' centres)."""
+    if preset not in PLANK_PRESETS:
+        raise ValueRefused(f"unknown plank preset {preset!r}; choose one of {', '.join(PLANK_PRESETS)}")
+    if preset == "quarter-sawn":
+        return -0.5 * thickness
+    axis = np.asarray(grid.cell_data["axis"]) if "axis" in grid.cell_data else np.zeros(grid.n_cells)
+    wood = np.asarray(grid.cell_data["wood"]) != CODES["bark"] if "wood" in grid.cell_data else True
+    centres = np.asarray(grid.cell_centers().points)[(axis <= 0) & wood]  # the trunk's wood, under the bark
+    radius = float(np.max(np.hypot(centres[:, 0], centres[:, 1]))) if len(centres) else 0.0
+    return PLANK_PRESETS[preset] * radius
+
+
+def plank_camera(
+    points: ArrayLike, normal: ArrayLike, aspect: float = 1.0, room_below: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """``(position, focal point, view up, parallel scale)`` that show a plank's face filling a view.
+
+    The camera faces the board's inner face (the one at ``offset``, nearer the
+    pith: a flat-sawn board's arches); the trunk axis (z) runs across the
+    view, the board's width up; ``aspect`` is width over height; ``room_below`` is the share of the view's height
+    left free under the board (for a legend).
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    along = np.array([0.0, 0.0, 1.0])
+    up = np.cross(n, along)
+    if not np.linalg.norm(up) > 1e-6:  # a cross-cut plank (normal z): x across, y up
+        along, up = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    up = up / np.linalg.norm(up)
+    pts = np.asarray(points, float)
+    length = float(np.ptp(pts @ along)) or 1.0
+    width = float(np.ptp(pts @ up)) or 1.0
+    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    scale = 0.5 * max(length / aspect, width / (1.0 - room_below)) * 1.04
+    focal = centre - up * room_below * scale
+    return focal - n * length * 3.0, focal, up, scale  # from the pith's side: the face at ``offset``
+
+
+def plank_window(slab: pv.DataSet, length: float | None = None, at: float | None = None) -> tuple[pv.DataSet, float, float]:
+    """A length of a plank around a knot: ``(part, centre, length)`` along the trunk axis (z).
+
+    ``at`` is the centre height (default: the middle of the plank's largest
+    knot, else of the plank); ``length`` defaults to three times the board's
+    width, so its rings show as lines once the part fills a picture.
+    """
+    b = np.asarray(slab.bounds, float).reshape(3, 2)
+    if length is None:
+        length = 3.0 * float(np.max(b[:2, 1] - b[:2, 0]))
+    if not (math.isfinite(length) and length > 0):
+        raise ValueRefused(f"plank length must be a positive number, got {length:g}")
+    if at is None:
+        at = _knot_centre(slab) if "axis" in slab.cell_data else None
+        at = float(b[2].mean()) if at is None else at
+    if not b[2, 0] <= at <= b[2, 1]:
+        raise ValueRefused(f"plank centre z = {at:g} is off the plank (it spans {b[2, 0]:.4g}..{b[2, 1]:.4g})")
+    part = slab.clip_box((b[0, 0] - 1, b[0, 1] + 1, b[1, 0] - 1, b[1, 1] + 1, at - length / 2, at + length / 2), invert=False)
+    return part, float(at), float(length)
+
+
+def _knot_centre(slab):
+    """Height of the centre of the plank's largest knot region (``None`` without knots)."""
+    ids = np.flatnonzero(np.asarray(slab.cell_data["axis"]) >= 1)
+    if not ids.size:
+        return None
+    conn = slab.extract_cells(ids).connectivity("largest")
+    return float(np.asarray(conn.cell_centers().points)[:, 2].mean())
 
 
 def cut_facts(grid: pv.DataSet) -> dict[str, Any]:
@@ -1516,6 +1614,36 @@ def knot_regions(grid: pv.DataSet) -> int:
     part = grid.extract_cells(ids)  # type: ignore[arg-type]  # pyvista stubs want int64
     conn = part.connectivity()
     return int(len(np.unique(conn.cell_data["RegionId"])))
+
+
+def knot_roundness(section: pv.DataSet, normal: ArrayLike) -> list[float]:
+    """Area over smallest bounding rectangle of each knot (``axis >= 1`` region) on a plane section.
+
+    ``section`` is a slice of a wood grid (polygons in a plane of the given
+    ``normal``); a round knot scores pi/4 (0.785), a square one 1.  The
+    rectangle is the smallest over rotations in 1 degree steps.
+    """
+    n = np.asarray(normal, float)
+    n = n / np.linalg.norm(n)
+    u = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    ids = np.flatnonzero(np.asarray(section.cell_data["axis"]) >= 1)
+    if not ids.size:
+        return []
+    regions = section.extract_cells(ids).connectivity()  # type: ignore[arg-type]  # pyvista stubs want int64
+    region = np.asarray(regions.cell_data["RegionId"])
+    area = np.asarray(regions.compute_cell_sizes(length=False, volume=False).cell_data["Area"])
+    turn = np.radians(np.arange(90))
+    out = []
+    for r in np.unique(region):  # one per knot: a handful
+        pts = np.asarray(regions.extract_cells(np.flatnonzero(region == r)).points)
+        a, b = pts @ u, pts @ v
+        x = np.outer(np.cos(turn), a) + np.outer(np.sin(turn), b)
+        y = np.outer(-np.sin(turn), a) + np.outer(np.cos(turn), b)
+        box = np.ptp(x, axis=1) * np.ptp(y, axis=1)
+        out.append(float(area[region == r].sum() / box.min()))
+    return out
 
 
 # ---------------------------------------------------------------------- from a plant

@@ -17,6 +17,7 @@ class _Plotter:
 
         self.interactor = QWidget(parent)
         self.clipped = []
+        self.meshes = []
 
     def clear(self):
         self.clipped.clear()
@@ -29,6 +30,28 @@ class _Plotter:
 
     def reset_camera(self):
         pass
+
+    # the plank, shown face-on
+    window_size = (800, 600)
+
+    def add_mesh(self, mesh, **kwargs):
+        self.meshes.append((mesh, kwargs))
+
+    def enable_parallel_projection(self):
+        self.parallel = True
+
+    def disable_parallel_projection(self):
+        self.parallel = False
+
+    def reset_camera_clipping_range(self):
+        pass
+
+    meshes: list = []
+    parallel = False
+    camera_position = None
+
+    class camera:  # noqa: N801 - stands for the plotter's camera object
+        parallel_scale = 1.0
 
 
 class _Controller:
@@ -109,3 +132,44 @@ def test_clicking_a_branch_of_the_real_plant_paints_its_knot(app):
     painted = np.all(rgb == SELECTED_RGB, axis=1)
     knot = np.asarray(grid.cell_data["axis"]) == b + 1
     assert knot.any() and np.all(painted[knot]) and not np.any(painted[~knot])
+
+
+def test_plank_controls_saw_a_preset_board_that_fills_the_view(app):
+    # the dock had no plank control: planks existed only in ramure wood
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    from ramure.app.desktop.wood_panel import WoodPanel
+    from ramure.gmap.organs import wood as W
+
+    panel = WoodPanel(None, plotter_factory=_Plotter)
+    panel.years.setValue(4)
+    assert panel.grow() is not None
+    trunk_wood = (np.asarray(panel.grid.cell_data["axis"]) == 0) & (np.asarray(panel.grid.cell_data["wood"]) != W.CODES["bark"])
+    centres = np.asarray(panel.grid.cell_centers().points)[trunk_wood]
+    radius = np.hypot(centres[:, 0], centres[:, 1]).max()
+    panel.plank_preset.setFocus()
+    QTest.keyClick(panel.plank_preset, Qt.Key.Key_Down)  # flat-sawn -> quarter-sawn
+    assert panel.plank_preset.currentText() == "quarter-sawn"
+    assert panel.plank_offset.value() == pytest.approx(-10.0)  # centred on the pith: -thickness / 2
+    QTest.keyClick(panel.plank_preset, Qt.Key.Key_Down)  # -> rift
+    assert panel.plank_offset.value() == pytest.approx(1000 * 0.3 * radius, abs=0.05)
+    panel.plank_direction.selectAll()
+    QTest.keyClicks(panel.plank_direction, "90")  # a board facing +y
+    QTest.mouseClick(panel.plank_button, Qt.MouseButton.LeftButton)
+    plotter = panel.plotter
+    mesh, kwargs = plotter.meshes[-1]
+    along_normal = np.asarray(mesh.points)[:, 1]
+    offset = panel.plank_offset.value() / 1000  # the spin box shows tenths of a millimetre
+    assert along_normal.min() >= offset - 1e-9 and along_normal.max() <= offset + 0.02 + 1e-9  # the slab asked for
+    assert plotter.parallel and not kwargs["lighting"] and "rings" in panel.facts.text()
+    position, focal, up = (np.asarray(v) for v in plotter.camera_position)
+    assert np.allclose(up, [1, 0, 0], atol=1e-9) and (position - focal)[1] < 0  # face-on, from the pith's side
+    length = np.ptp(np.asarray(mesh.points)[:, 2])
+    width = np.ptp(np.asarray(mesh.points) @ up)
+    scale = plotter.camera.parallel_scale
+    fill = max(length / (2 * scale * 800 / 600), width / (2 * scale))
+    assert 0.9 < fill <= 1.0  # the cut face fills the view
+    panel.plank_offset.setValue(2000.0)
+    QTest.mouseClick(panel.plank_button, Qt.MouseButton.LeftButton)
+    assert "Refused" in panel.facts.text() and "misses" in panel.facts.text() and len(plotter.meshes) == 1
