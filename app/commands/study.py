@@ -112,6 +112,8 @@ def run_create(args: argparse.Namespace) -> int:
 
 
 def run_withdraw(args: argparse.Namespace) -> int:
+    """``ramure study withdraw``: leave a participant (code or external id) out of analyses, or erase
+    every answer with ``--delete``; prints what was done as JSON; returns 0."""
     from ramure.studies.storage import Study
 
     with Study.open(args.db) as study:
@@ -303,12 +305,16 @@ def run_serve(args: argparse.Namespace) -> int:
 
 
 def run_export_jspsych(args: argparse.Namespace) -> int:
+    """``ramure study export-jspsych``: write the study's pictures and task as a jsPsych experiment
+    folder (for JATOS or Pavlovia); prints what was written as JSON; returns 0."""
     from ramure.studies.jspsych import export_jspsych
 
     return _print(export_jspsych(args.db, args.output, jspsych=args.jspsych))
 
 
 def run_import_jspsych(args: argparse.Namespace) -> int:
+    """``ramure study import-jspsych``: store a jsPsych results file's runs as new participants (all or
+    nothing); prints what was imported as JSON; returns 0."""
     from ramure.studies.jspsych import import_jspsych
 
     return _print(import_jspsych(args.db, args.results))
@@ -316,7 +322,7 @@ def run_import_jspsych(args: argparse.Namespace) -> int:
 
 def register(subparsers: Subparsers) -> None:
     """Add ``study`` and its subcommands (create, simulate, analyze, anova, export-csv, export-qualifiers, words,
-    status, serve) to the CLI."""
+    status, serve, withdraw, export-jspsych, import-jspsych) to the CLI."""
     parser = subparsers.add_parser("study", help="user studies on variant relevance", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND")
     sub.required = True
