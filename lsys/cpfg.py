@@ -577,7 +577,7 @@ def _shifted(out, column):
 
 
 def translate(text: str, filename: str | None = None) -> str:
-    """The ``.lsys`` text of a cpfg ``.l`` file (one line per line of the ``.l`` file).
+    """The Ramure grammar text of a cpfg file, one line per line of the cpfg file.
 
     >>> print(translate("derivation length: 3\\naxiom: A\\nA --> AB").strip())
     n: 3

@@ -197,7 +197,7 @@ class If(Statement):
 
 @dataclass
 class Loop(Statement):
-    """``while``, ``do ... while`` and ``for`` (``init`` and ``step`` run as statements)."""
+    """``while``, ``do``-``while`` and ``for`` loops (``init`` and ``step`` run as statements)."""
 
     condition: _Expr | None
     body: Statement
@@ -313,7 +313,7 @@ class _Text:
 
 
 def parse_program(text: str, line: int | None = None, column: int = 1, lines: list[str] | None = None) -> Block:
-    """Parse the statements of ``text`` (a ``{ ... }`` block or bare statements); ``line`` and
+    """Parse the statements of ``text`` (a braced block or bare statements); ``line`` and
     ``column`` place its first character in the file (whose ``lines`` errors quote)."""
     source = _Text(text, line, column, lines)
     parser = _Parser(source)

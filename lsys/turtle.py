@@ -4,31 +4,31 @@ The turtle keeps a position and a frame of unit vectors H (heading), L (left)
 and U (up) with ``H x L = U``.  It starts at the origin heading up the z axis
 (H = +z, L = +x, U = +y), so 2D grammars lie in the x-z plane.
 
-============  ========================================================================
-``F(l)``      draw a branch segment of length l (default ``#step``)
-``f(l)``      move by l without drawing
-``+ -``       turn left / right about U by the parameter (default ``#angle``)
-``& ^``       pitch down / up about L
-``\\ /``       roll left / right about H
-``|``         turn around (180 degrees about U)
-``$``         roll about H so that L is horizontal (ABOP's ``$``)
-``[ ]``       push / pop the whole state (position, frame, width, colour, order)
-``!(w)``      set the width (diameter) to w; ``!`` alone multiplies it by 0.7
-``#(w) _(w)`` set the width to w (cpfg's ``#``, L-Py's ``_``); alone they divide it by 0.7
-``@v``        cpfg's roll to vertical: the same as ``$``
-``'(c)``      set the colour index to c; ``'`` alone adds 1
-``;(i)``      set the colour index to i: material i of the grammar's
-              ``#material`` table (the same index as ``'(i)``); ``;`` alone adds 1
-``,(i)``      set the colour index to i; ``,`` alone subtracts 1 (as in cpfg and L-Py)
-organs        ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded with
-              the turtle's position and frame; their first parameter is the size
-``{ . }``     polygons (``F f`` inside one record vertices, ``G`` moves without
-              recording): see :mod:`ramure.lsys.polygons`
-``@O(r)``     a sphere of radius r (``@O`` alone: diameter = the width), an organ
-``~name(s)``  a predefined surface scaled by s, an organ (:mod:`ramure.lsys.surfaces`)
-``@Ts(e)``    the tropism elasticity for the rest of the branch (``[`` saves it):
-              bends toward ``#tropism``'s direction, else -z
-============  ========================================================================
+==============  ========================================================================
+``F(l)``        draw a branch segment of length l (default ``#step``)
+``f(l)``        move by l without drawing
+``+ -``         turn left / right about U by the parameter (default ``#angle``)
+``& ^``         pitch down / up about L
+``\\ /``          roll left / right about H
+``|``           turn around (180 degrees about U)
+``$``           roll about H so that L is horizontal (ABOP's ``$``)
+``[ ]``         push / pop the whole state (position, frame, width, colour, order)
+``!(w)``        set the width (diameter) to w; ``!`` alone multiplies it by 0.7
+``#(w) _(w)``   set the width to w (cpfg's ``#``, L-Py's ``_``); alone they divide it by 0.7
+``@v``          cpfg's roll to vertical: the same as ``$``
+``'(c)``        set the colour index to c; ``'`` alone adds 1
+``;(i)``        set the colour index to i: material i of the grammar's
+                ``#material`` table (the same index as ``'(i)``); ``;`` alone adds 1
+``,(i)``        set the colour index to i; ``,`` alone subtracts 1 (as in cpfg and L-Py)
+organs          ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded with
+                the turtle's position and frame; their first parameter is the size
+``{ . }``       polygons (``F f`` inside one record vertices, ``G`` moves without
+                recording): see :mod:`ramure.lsys.polygons`
+``@O(r)``       a sphere of radius r (``@O`` alone: diameter = the width), an organ
+``~name(s)``    a predefined surface scaled by s, an organ (:mod:`ramure.lsys.surfaces`)
+``@Ts(e)``      the tropism elasticity for the rest of the branch (``[`` saves it):
+                bends toward ``#tropism``'s direction, else -z
+==============  ========================================================================
 
 A segment's **base radius** is half the width when it is drawn, times
 ``#widthscale`` (default 1; ABOP widths are often in pixels, so a grammar may
