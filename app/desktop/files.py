@@ -7,6 +7,7 @@ controller.  Recent files are kept in the window's ``QSettings``.
 
 from __future__ import annotations
 
+import errno
 import os
 import pathlib
 from typing import TYPE_CHECKING
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from ramure.errors import RamureError, ValueRefused
+from ramure.io import write_with
 from ramure.app.model import local_edits_message
 
 if TYPE_CHECKING:
@@ -197,8 +199,15 @@ class FileActions:
             return None
         image = self.window.grab_window() if whole_window else self.window.view.grab_image()
         path.parent.mkdir(parents=True, exist_ok=True)
-        if not image.save(str(path), "PNG"):  # type: ignore[call-overload]  # PySide6's stub wants bytes; the binding refuses them, takes str
-            self.window.report_refused(f"cannot write {path}")
+
+        def save(tmp: str) -> None:  # through a temporary file: a kill never leaves half a picture
+            if not image.save(tmp, "PNG"):  # type: ignore[call-overload]  # PySide6's stub wants bytes; the binding refuses them, takes str
+                raise OSError(errno.EIO, "Qt could not write the picture")
+
+        try:
+            write_with(path, save)
+        except RamureError as exc:
+            self.window.report_refused(str(exc))
             return None
         self.window.status(f"Saved screenshot {path}")
         return path

@@ -120,3 +120,30 @@ def test_obj_export_has_groups_materials_normals_volumetric_fruit_and_y_up(make_
     height = bounds[2, 1] - bounds[2, 0]
     assert abs((vertices[:, 1].max() - vertices[:, 1].min()) - height) < 0.05 * height + 1e-6  # Y up
     assert " " in lines[-1] and lines[-1].startswith("f ") and "//" in lines[-1]
+
+
+def test_screenshot_goes_through_a_temporary_file(make_window, tmp_path, monkeypatch):
+    """Issue 37: the screenshot was saved straight onto its file, so a kill mid-write left half
+    a picture; now it is written beside it and renamed.  What a killed screenshot left (a
+    temporary file of a dead process) is removed by the next one; a full disk keeps the old."""
+    import errno
+    import os
+    import subprocess
+    import sys
+
+    w = make_window()
+    png = w.files.screenshot(tmp_path / "view.png")
+    old = png.read_bytes()
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    stale = tmp_path / f".view.png.{int(dead.stdout)}.abcd1234.tmp.png"
+    stale.write_bytes(old[:100])
+    assert w.files.screenshot(png) == png and not stale.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["view.png"]
+    old = png.read_bytes()
+
+    def no_space(*_args):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", no_space)
+    assert w.files.screenshot(png) is None and "No space left on device" in w.last_message
+    assert png.read_bytes() == old and sorted(p.name for p in tmp_path.iterdir()) == ["view.png"]
