@@ -44,11 +44,14 @@ class FileActions:
 
     # -- recent files -----------------------------------------------------------
     def recent(self) -> list[str]:
+        """The recent files the settings file names that still exist.  The file is read from
+        disk: an entry that is not a path (another type Qt decodes, a NUL byte, a name too
+        long for the system) is skipped, and only the first entries are looked at."""
         value = self.settings.value("recent", [])
         if isinstance(value, str):  # QSettings gives one stored path back as a plain string
             value = [value]
-        paths = value if isinstance(value, list) else []
-        return [v for v in paths if pathlib.Path(v).exists()]
+        paths = value[: 4 * MAX_RECENT] if isinstance(value, list) else []
+        return [v for v in paths if isinstance(v, str) and _exists(v)]
 
     def remember(self, path: str | os.PathLike) -> None:
         path = str(pathlib.Path(path).resolve())
@@ -211,3 +214,11 @@ class FileActions:
             return None
         self.window.status(f"Saved screenshot {path}")
         return path
+
+
+def _exists(path: str) -> bool:
+    """``path`` exists; False for what cannot be a path here (a NUL byte, a name too long)."""
+    try:
+        return pathlib.Path(path).exists()
+    except (OSError, ValueError):
+        return False
