@@ -42,3 +42,24 @@ def test_recent_files_skip_entries_that_are_not_paths(tmp_path, stored):
     path.write_text("[General]\nrecent=" + stored.replace("{good}", str(good)) + "\n")
     recent = FileActions.recent(types.SimpleNamespace(settings=QSettings(str(path), QSettings.Format.IniFormat)))
     assert recent == ([str(good)] if "{good}" in stored else [])
+
+
+def test_the_large_run_s_worker_fuzzes_under_the_address_space_limit():
+    """The large run (benchmarks/bench_fuzz_large.py) in small: one chunk of each reader, each
+    in a process under the 2 GB limit, prints its figures; none crashes."""
+    import json
+    import os
+    import pathlib
+    import subprocess
+    import sys
+
+    root = pathlib.Path(__file__).resolve().parents[2]
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", QT_QPA_PLATFORM="offscreen")
+    for reader, inputs in (("lsys", 6), ("studies", 3), ("files", 6)):
+        cmd = [sys.executable, "-m", "tests.hardening.fuzz_all", "--reader", reader, "--inputs", str(inputs), "--seed", "4"]
+        out = subprocess.run(cmd, cwd=root, env=env, capture_output=True, text=True, timeout=600)
+        record = json.loads(out.stdout.strip().splitlines()[-1])
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert record["inputs"] == inputs and record["crashes"] == 0 and record["slow"] == 0
+        assert record["limit_mb"] == 2048 and 0 < record["peak_mb"] < 2048
+        assert sum(record["outcomes"].values()) == inputs
