@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import contextlib
 import json
 import pathlib
 import re
@@ -43,8 +44,13 @@ GRAMMARS = sorted((pathlib.Path(__file__).resolve().parents[2] / "grammars").glo
 TEXTS = [p.read_text(encoding="utf-8") for p in GRAMMARS]
 SLOW_SECONDS = 5.0
 HANG_SECONDS = 30
-#: Module budget for one input: large plants are refused by the derivation's own limit.
+#: Derivation steps of one input (a grammar's larger ``n:`` is lowered to this).
 MAX_N = 6
+#: Module budget of one input: a larger plant is refused by the derivation's own limit
+#: (``LSystem.max_modules``, 20 M for a user), as the 2.9 M modules of a Koch island given a
+#: rule of 9 F were (7.3 s of CPU through the loop).  Large plants' speed is benchmarked
+#: in benchmarks/bench_large_edits.py.
+MAX_MODULES = 1_500_000
 
 SYMBOLS = "FfABXYGL+-&^\\/|!$'"
 EXTREMES = [
@@ -255,10 +261,26 @@ STAGES = ("none", "parse", "draw", "metrics", "regrow", "undo", "json")
 def core_loop(text, rng, reached=None):
     """Everything a user does with one grammar, through the front ends' model; returns the JSON
     it printed.  ``reached`` (a list) gets the name of each stage as it finishes."""
+    reached = [] if reached is None else reached
+    with module_budget():
+        return _core_loop(text, rng, reached)
+
+
+@contextlib.contextmanager
+def module_budget(limit: int = MAX_MODULES):
+    """Lower ``LSystem.max_modules`` to ``limit`` for the block (the fuzzer's budget)."""
+    old = LSystem.max_modules
+    LSystem.max_modules = min(limit, old)
+    try:
+        yield
+    finally:
+        LSystem.max_modules = old
+
+
+def _core_loop(text, rng, reached):
     from ramure.app.model import Explorer
     from ramure.metrics import plant_metrics
 
-    reached = [] if reached is None else reached
     n = min(LSystem.from_text(text).n, MAX_N)
     reached.append("parse")
     ex = Explorer(text, n=n, seed=int(rng.integers(0, 1000)))  # derived and drawn, or refused

@@ -45,3 +45,14 @@ def test_a_crash_is_counted_as_a_crash(monkeypatch):
     monkeypatch.setattr(fuzz, "core_loop", broken)
     assert run_one("n: 1\nw: F\n", np.random.default_rng(0))[0] == "crash:IndexError"
     assert set(GENERATORS) == {"aware", "grammar", "random"}
+
+
+def test_a_plant_past_the_fuzz_budget_is_refused_and_the_limit_restored():
+    """The large run found a Koch island with a rule of 9 F (2.9 M modules at n = 6) taking
+    7.3 s of CPU through the loop: the fuzzer's module budget refuses it before deriving."""
+    from ramure.lsys import LSystem
+
+    text = "#angle 90\nn: 6\nw: F-F-F-F\np:\n  F -> F-F+F+FF-F-FFF\n"
+    outcome, seconds, stage = run_one(text, np.random.default_rng(0))
+    assert (outcome, stage) == ("refused:DerivationError", "parse") and seconds < 5
+    assert LSystem.max_modules == 20_000_000
