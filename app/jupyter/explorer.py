@@ -586,7 +586,12 @@ class Explorer:
         return self.run(lambda: self.model.export(path), note=f"mesh exported to {path}")
 
     def load_session(self, path: str | os.PathLike) -> None:
-        self.run(lambda: self.model.load_session(path))
+        """Load a session file; the message line follows the replay of its edits."""
+        self.run(lambda: self.model.load_session(path, progress=self._replaying))
+
+    def _replaying(self, done: int, total: int) -> None:
+        if done == 1 or done == total or done % 50 == 0:  # a few updates, not one per edit
+            self.message.show(f"replaying the session: edit {done} of {total}", "info")
 
     # -- display ---------------------------------------------------------------------------
     def _picture(self):
