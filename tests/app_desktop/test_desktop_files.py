@@ -147,3 +147,22 @@ def test_screenshot_goes_through_a_temporary_file(make_window, tmp_path, monkeyp
     monkeypatch.setattr(os, "fsync", no_space)
     assert w.files.screenshot(png) is None and "No space left on device" in w.last_message
     assert png.read_bytes() == old and sorted(p.name for p in tmp_path.iterdir()) == ["view.png"]
+
+
+def test_loading_a_session_shows_its_replay_in_the_status_bar(make_window, qtbot, tmp_path):
+    """Issue 37: a session of many edits replayed with no word; the status bar follows it."""
+    from ramure.lsys import LSystem
+    from ramure.lsys.regen import Session
+
+    session = Session(LSystem.from_file(ROOT / "grammars" / "stochastic_plant.lsys"), n=4, seed=1)
+    for _ in range(3):
+        session.regrow([int(session.tree.leaves[-1])], rho=0.5)
+    path = session.save(tmp_path / "s.json")
+    w = make_window()
+    shown = []
+    w.statusBar().messageChanged.connect(shown.append)
+    w.files.load_session(path)
+    settle(qtbot, w)
+    replay = [m for m in shown if m.startswith("Replaying")]
+    assert replay == [f"Replaying the session: edit {i} of 3" for i in (1, 2, 3)]
+    assert len(w.controller.explorer.session.edits) == 3
