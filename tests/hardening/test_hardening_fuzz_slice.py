@@ -56,3 +56,19 @@ def test_a_plant_past_the_fuzz_budget_is_refused_and_the_limit_restored():
     outcome, seconds, stage = run_one(text, np.random.default_rng(0))
     assert (outcome, stage) == ("refused:DerivationError", "parse") and seconds < 5
     assert LSystem.max_modules == 20_000_000
+
+
+def test_an_infinite_turn_computed_in_a_rule_is_refused_not_a_math_error():
+    """Found by the large run (seed 103): a turn whose angle a rule computes as 1e308*10 raised
+    ValueError('math domain error') in the plain-Python turtle walk; it is refused as a plant
+    with non-finite points, as the compiled walk's NaN was."""
+    import pytest
+
+    from ramure.errors import RamureError
+    from ramure.lsys import LSystem
+
+    text = "n: 2\nw: A(1)\np:\n  A(x) -> F+((1e308*10)*x)F\n"
+    with pytest.raises(RamureError):
+        LSystem.from_text(text).derive().skeleton()
+    outcome, _, stage = run_one(text, np.random.default_rng(0))
+    assert outcome.startswith("refused") and stage == "parse"
