@@ -47,7 +47,10 @@ class FileActions:
         """The recent files the settings file names that still exist.  The file is read from
         disk: an entry that is not a path (another type Qt decodes, a NUL byte, a name too
         long for the system) is skipped, and only the first entries are looked at."""
-        value = self.settings.value("recent", [])
+        try:
+            value = self.settings.value("recent", [])
+        except RuntimeError:  # a @Variant Qt cannot convert ("Can't find converter for 'qfloat16'")
+            return []
         if isinstance(value, str):  # QSettings gives one stored path back as a plain string
             value = [value]
         paths = value[: 4 * MAX_RECENT] if isinstance(value, list) else []
