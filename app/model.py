@@ -19,7 +19,7 @@ import math
 import os
 import pathlib
 import threading
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -753,13 +753,14 @@ class Explorer:
         self.mark_saved()
         return out
 
-    def load_session(self, path: str | os.PathLike) -> None:
+    def load_session(self, path: str | os.PathLike, progress: Callable[[int, int], None] | None = None) -> None:
         """Load a session file (a fresh history, a clean document); on error the current plant is
-        untouched.
+        untouched.  ``progress(done, total)`` follows the replay of its edits (at most
+        :data:`ramure.lsys.regen.MAX_SESSION_EDITS`).
 
         The loaded plant is drawn before it replaces the current one (as the constructor and
         :meth:`set_text` do): a session whose plant cannot be drawn (``F(1e300)``) is refused."""
-        session = Session.load(path)
+        session = Session.load(path, progress=progress)
         skeleton = session.derivation.skeleton()  # a turtle error leaves the current plant as it is
         self.session, self.text = session, session.lsystem.text
         self.error = None

@@ -136,7 +136,7 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
         te = float(state[16])
     stack: list[tuple] = []
     pstack: list[int] = []
-    cos, sin, radians, sqrt = math.cos, math.sin, math.radians, math.sqrt
+    cos, sin, radians, sqrt = _cos, _sin, math.radians, math.sqrt
     stop = end
     i = begin
     while i < end:
@@ -339,3 +339,13 @@ def kept_modules(old, new, size):
     in_new[new] = True
     keep_old, keep_new = in_new[old], in_old[new]
     return keep_old, keep_new, bool(np.array_equal(old[keep_old], new[keep_new]))
+
+
+def _cos(rad: float) -> float:
+    """``math.cos``, but NaN for an infinite angle (math raises), as the compiled walk gives it:
+    the plant's points are then refused as not finite, whichever walk drew them."""
+    return math.cos(rad) if math.isfinite(rad) else math.nan
+
+
+def _sin(rad: float) -> float:
+    return math.sin(rad) if math.isfinite(rad) else math.nan

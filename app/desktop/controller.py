@@ -65,6 +65,7 @@ class Controller(QObject):
     # whatever a view keeps of the plant before it (for an instant undo) can go at once, before
     # the edit makes its new version (the view then holds two versions during the edit, not three).
     edit_started = Signal()
+    replaying = Signal(int, int)  # a session's edits replayed so far, of how many (worker thread)
 
     def __init__(self, explorer: Explorer, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -204,7 +205,8 @@ class Controller(QObject):
         return self.submit("redo", lambda ex: _noted(ex.redo, ex))
 
     def load_session(self, path: str | os.PathLike) -> Job:
-        return self.submit("load session", lambda ex: ex.load_session(path))
+        """Load a session file in the worker; :attr:`replaying` follows the replay of its edits."""
+        return self.submit("load session", lambda ex: ex.load_session(path, progress=self.replaying.emit))
 
     def load_grammar(self, path: str | os.PathLike) -> Job:
         """Replace the plant by a grammar file: a fresh session and a fresh history (see

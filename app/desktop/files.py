@@ -7,6 +7,7 @@ controller.  Recent files are kept in the window's ``QSettings``.
 
 from __future__ import annotations
 
+import errno
 import os
 import pathlib
 from typing import TYPE_CHECKING
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from ramure.errors import RamureError, ValueRefused
+from ramure.io import write_with
 from ramure.app.model import local_edits_message
 
 if TYPE_CHECKING:
@@ -42,11 +44,17 @@ class FileActions:
 
     # -- recent files -----------------------------------------------------------
     def recent(self) -> list[str]:
-        value = self.settings.value("recent", [])
+        """The recent files the settings file names that still exist.  The file is read from
+        disk: an entry that is not a path (another type Qt decodes, a NUL byte, a name too
+        long for the system) is skipped, and only the first entries are looked at."""
+        try:
+            value = self.settings.value("recent", [])
+        except RuntimeError:  # a @Variant Qt cannot convert ("Can't find converter for 'qfloat16'")
+            return []
         if isinstance(value, str):  # QSettings gives one stored path back as a plain string
             value = [value]
-        paths = value if isinstance(value, list) else []
-        return [v for v in paths if pathlib.Path(v).exists()]
+        paths = value[: 4 * MAX_RECENT] if isinstance(value, list) else []
+        return [v for v in paths if isinstance(v, str) and _exists(v)]
 
     def remember(self, path: str | os.PathLike) -> None:
         path = str(pathlib.Path(path).resolve())
@@ -197,8 +205,23 @@ class FileActions:
             return None
         image = self.window.grab_window() if whole_window else self.window.view.grab_image()
         path.parent.mkdir(parents=True, exist_ok=True)
-        if not image.save(str(path), "PNG"):  # type: ignore[call-overload]  # PySide6's stub wants bytes; the binding refuses them, takes str
-            self.window.report_refused(f"cannot write {path}")
+
+        def save(tmp: str) -> None:  # through a temporary file: a kill never leaves half a picture
+            if not image.save(tmp, "PNG"):  # type: ignore[call-overload]  # PySide6's stub wants bytes; the binding refuses them, takes str
+                raise OSError(errno.EIO, "Qt could not write the picture")
+
+        try:
+            write_with(path, save)
+        except RamureError as exc:
+            self.window.report_refused(str(exc))
             return None
         self.window.status(f"Saved screenshot {path}")
         return path
+
+
+def _exists(path: str) -> bool:
+    """``path`` exists; False for what cannot be a path here (a NUL byte, a name too long)."""
+    try:
+        return pathlib.Path(path).exists()
+    except (OSError, ValueError):
+        return False

@@ -357,6 +357,7 @@ class MainWindow(QMainWindow):
         c.crashed.connect(self.report_crash)
         c.busy_changed.connect(self._busy_changed)
         c.edit_started.connect(self.view.forget_kept)
+        c.replaying.connect(lambda done, total: self.status(f"Replaying the session: edit {done} of {total}"))
         self.editor.text_settled.connect(self._text_settled)
         self.constants_panel.constant_changed.connect(self._constant)
         self.constants_panel.derivation_changed.connect(self._derivation)

@@ -678,10 +678,14 @@ class Explorer:
         return self.run(lambda: self.model.export(path), note=f"mesh exported to {path}")
 
     def load_session(self, path: str | os.PathLike) -> None:
-        """Open a session file (the grammar and its local edits) as a fresh document; a refused file is said in
-        the message line.
+        """Open a session file (the grammar and its local edits) as a fresh document; the message line
+        follows the replay of its edits, and says why a file is refused.
         """
-        self.run(lambda: self.model.load_session(path))
+        self.run(lambda: self.model.load_session(path, progress=self._replaying))
+
+    def _replaying(self, done: int, total: int) -> None:
+        if done == 1 or done == total or done % 50 == 0:  # a few updates, not one per edit
+            self.message.show(f"replaying the session: edit {done} of {total}", "info")
 
     # -- display ---------------------------------------------------------------------------
     def _picture(self):

@@ -120,3 +120,49 @@ def test_obj_export_has_groups_materials_normals_volumetric_fruit_and_y_up(make_
     height = bounds[2, 1] - bounds[2, 0]
     assert abs((vertices[:, 1].max() - vertices[:, 1].min()) - height) < 0.05 * height + 1e-6  # Y up
     assert " " in lines[-1] and lines[-1].startswith("f ") and "//" in lines[-1]
+
+
+def test_screenshot_goes_through_a_temporary_file(make_window, tmp_path, monkeypatch):
+    """Issue 37: the screenshot was saved straight onto its file, so a kill mid-write left half
+    a picture; now it is written beside it and renamed.  What a killed screenshot left (a
+    temporary file of a dead process) is removed by the next one; a full disk keeps the old."""
+    import errno
+    import os
+    import subprocess
+    import sys
+
+    w = make_window()
+    png = w.files.screenshot(tmp_path / "view.png")
+    old = png.read_bytes()
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    stale = tmp_path / f".view.png.{int(dead.stdout)}.abcd1234.tmp.png"
+    stale.write_bytes(old[:100])
+    assert w.files.screenshot(png) == png and not stale.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["view.png"]
+    old = png.read_bytes()
+
+    def no_space(*_args):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", no_space)
+    assert w.files.screenshot(png) is None and "No space left on device" in w.last_message
+    assert png.read_bytes() == old and sorted(p.name for p in tmp_path.iterdir()) == ["view.png"]
+
+
+def test_loading_a_session_shows_its_replay_in_the_status_bar(make_window, qtbot, tmp_path):
+    """Issue 37: a session of many edits replayed with no word; the status bar follows it."""
+    from ramure.lsys import LSystem
+    from ramure.lsys.regen import Session
+
+    session = Session(LSystem.from_file(ROOT / "grammars" / "stochastic_plant.lsys"), n=4, seed=1)
+    for _ in range(3):
+        session.regrow([int(session.tree.leaves[-1])], rho=0.5)
+    path = session.save(tmp_path / "s.json")
+    w = make_window()
+    shown = []
+    w.statusBar().messageChanged.connect(shown.append)
+    w.files.load_session(path)
+    settle(qtbot, w)
+    replay = [m for m in shown if m.startswith("Replaying")]
+    assert replay == [f"Replaying the session: edit {i} of 3" for i in (1, 2, 3)]
+    assert len(w.controller.explorer.session.edits) == 3

@@ -74,3 +74,21 @@ def test_bad_input_is_refused_on_the_message_line(case, shared):
     assert (ex.plant.to_string(), list(ex.history), ex.model.constants, ex.session.n, ex.session.seed, ex.model.rho) == before
     if case != "regrow fruit on branches":  # (that action selects first)
         assert ex.selection == selected
+
+
+def test_loading_a_session_shows_the_replay_on_the_message_line(tmp_path):
+    """Issue 37: a session of many edits replayed with no word; the message line follows it."""
+    from ramure.lsys import LSystem
+    from ramure.lsys.regen import Session
+
+    session = Session(LSystem.from_file(HONDA), n=4, seed=1)
+    for _ in range(3):
+        session.regrow([int(session.tree.leaves[-1])], rho=0.5)
+    path = session.save(tmp_path / "s.json")
+    ex = Explorer(HONDA, n=3, view="static", size=(80, 80), cache=False)
+    shown = []
+    show = ex.message.show
+    ex.message.show = lambda text, kind="info": (shown.append(str(text)), show(text, kind))
+    ex.load_session(path)
+    assert shown[:2] == ["replaying the session: edit 1 of 3", "replaying the session: edit 3 of 3"]
+    assert len(ex.model.session.edits) == 3 and ex.message.kind == "info"

@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import contextlib
 import io
+import pathlib
 
 import pytest
 
 from ramure.app.cli import main
-from ramure.errors import ValueRefused
+from ramure.errors import RamureError, ValueRefused
 from ramure.gmap.organs import wood as W
 
 
@@ -105,3 +106,48 @@ def test_a_picture_that_cannot_fit_in_memory_is_refused_before_rendering(tmp_pat
     assert rc == 2 and "needs about 6.3 GB to render, and 4.0 GB of memory is available" in err
     assert not out.exists()
     assert plant.parse_size("4000x4000") == (4000, 4000)  # 1.0 GB fits
+
+
+TERNARY = pathlib.Path(__file__).resolve().parents[2] / "grammars" / "ternary_branching.lsys"
+
+
+def _saved_session(tmp_path, edits):
+    """A session file of the ternary plant with ``edits`` real regrows."""
+    from ramure.lsys import LSystem
+    from ramure.lsys.regen import Session
+
+    session = Session(LSystem.from_file("ternary_branching"), n=3, seed=1)
+    for _ in range(edits):
+        session.regrow([int(session.tree.leaves[-1])], rho=0.5)
+    return session.save(tmp_path / "s.json")
+
+
+def test_a_session_of_too_many_edits_is_refused_before_any_replay(tmp_path, monkeypatch):
+    """Issue 37, item 6: 2,000 edits replayed for 4.3 s with no word; the count is checked first."""
+    import json
+
+    from ramure.app.model import Explorer
+    from ramure.lsys import regen
+
+    path = _saved_session(tmp_path, 1)
+    data = json.loads(path.read_text())
+    data["edits"] = data["edits"] * 2000
+    path.write_text(json.dumps(data))
+    ex = Explorer(TERNARY, n=2)
+    before = ex.session.derivation.to_string()
+    monkeypatch.setattr(regen.Session, "_apply", lambda *_: pytest.fail("an edit was replayed before the count was checked"))
+    with pytest.raises(RamureError, match="it holds 2,000 edits; a session replays at most 1,000"):
+        ex.load_session(path)
+    assert ex.session.derivation.to_string() == before
+    assert regen.MAX_SESSION_EDITS == 1000
+
+
+def test_a_session_replay_reports_its_progress(tmp_path):
+    from ramure.app.model import Explorer
+
+    path = _saved_session(tmp_path, 3)
+    calls = []
+    ex = Explorer(TERNARY, n=2)
+    ex.load_session(path, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+    assert len(ex.session.edits) == 3

@@ -1,0 +1,79 @@
+"""The large fuzz run of issue 37: 100,000 inputs across every reader's fuzzer.
+
+The readers (``tests/hardening/fuzz_all.py``): ``.lsys`` grammars through the whole core loop
+(parse, draw, measure, regrow, undo), ``.g3l`` wood grammars, study databases, synonym files
+and exploration folders (``pca.json``, ``picks.json``), sessions, MTG files and the desktop's
+settings file.  Each chunk of inputs runs in a process of its own under a 2 GB address-space
+limit (``RLIMIT_AS``), so a memory blow-up is a ``MemoryError`` crash, not a swapping machine.
+
+Targets: 0 exceptions other than Ramure's own errors, 0 inputs over 5 s (of CPU: on a shared
+machine the wall clock counts the other jobs too) and no chunk stopped by the limit.
+``RAMURE_FUZZ_INPUTS`` sets the total (100,000 by default; a smaller run for a quick look).
+"""
+
+from __future__ import annotations
+
+import collections
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+#: Each reader's share of the inputs.
+SHARES = {"lsys": 0.4, "g3l": 0.15, "studies": 0.2, "files": 0.25}
+CHUNK = 2000
+
+
+def chunks(total: int) -> list[tuple[str, int, int]]:
+    """``(reader, inputs, seed)`` for every chunk of a run of ``total`` inputs."""
+    out = []
+    for reader, share in SHARES.items():
+        left, seed = round(total * share), 0
+        while left > 0:
+            out.append((reader, min(CHUNK, left), seed))
+            left -= CHUNK
+            seed += 1
+    return out
+
+
+def run_chunk(reader: str, inputs: int, seed: int) -> dict:
+    """One chunk in a fresh process under the limit; its figures (or the reason it died)."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", QT_QPA_PLATFORM="offscreen")
+    cmd = [sys.executable, "-m", "tests.hardening.fuzz_all", "--reader", reader, "--inputs", str(inputs), "--seed", str(seed)]
+    out = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
+    lines = [line for line in out.stdout.splitlines() if line.startswith("{")]
+    if not lines:  # the process itself died (the limit, a signal): every input of it counts as a crash
+        tail = (out.stderr.strip().splitlines() or [f"exit {out.returncode}"])[-1]
+        return dict(reader=reader, seed=seed, inputs=inputs, crashes=inputs, slow=0, outcomes={"died": inputs}, died=tail)
+    return json.loads(lines[-1])
+
+
+def bench_fuzz_large() -> dict:
+    total = int(os.environ.get("RAMURE_FUZZ_INPUTS", "100000"))
+    start = time.perf_counter()
+    per_reader: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    peak, died = 0.0, []
+    for reader, inputs, seed in chunks(total):
+        record = run_chunk(reader, inputs, seed)
+        per_reader[reader].update(inputs=record["inputs"], crashes=record["crashes"], slow=record["slow"])
+        per_reader[reader].update(record["outcomes"])
+        peak = max(peak, record.get("peak_mb", 0.0))
+        if "died" in record:
+            died.append(f"{reader}/{seed}: {record['died']}")
+    inputs = sum(c["inputs"] for c in per_reader.values())
+    crashes = sum(c["crashes"] for c in per_reader.values())
+    slow = sum(c["slow"] for c in per_reader.values())
+    return dict(
+        seconds=round(time.perf_counter() - start, 1),
+        inputs=inputs,
+        crashes=crashes,
+        slow_inputs=slow,
+        peak_mb=peak,
+        limit_mb=2048,
+        chunks_died=died,
+        readers={r: dict(c) for r, c in per_reader.items()},
+        ok=bool(crashes == 0 and slow == 0 and not died and inputs >= total),
+    )
