@@ -91,7 +91,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ramure.errors import RamureError
-from ramure.lsys.mincut import collapse_nested
+from ramure.lsys.mincut import check_rho, collapse_nested
 from ramure.lsys.regen import MAX_STEPS
 
 from .definitions import DEFINITIONS, definition_holds, lacks, metric_changes, metric_value
@@ -400,6 +400,7 @@ def apply_qualifier(
     Regrow of the selection would change, nothing more; ``session.n`` or more
     lets it climb to the whole plant).  See the module docstring.
     """
+    rho = check_rho(rho)  # at the door: a whole-plant refusal may never reach the cut that checks it
     model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
     n_before = session.n
     with _same_cut(session):

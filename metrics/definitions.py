@@ -172,7 +172,7 @@ def metric_change(metric: str, deltas: ArrayLike) -> np.ndarray:
     if metric in BASE_METRICS:
         return deltas[..., BASE_METRICS.index(metric)]
     ratio = np.ones(deltas.shape[:-1])
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore"):  # a metric falling to 0 under a negative power: inf
         for m, power in DERIVED_METRICS[metric].items():
             ratio = ratio * np.maximum(1.0 + deltas[..., BASE_METRICS.index(m)] / 100.0, 0.0) ** power
     return 100.0 * (ratio - 1.0)

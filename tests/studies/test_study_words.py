@@ -145,9 +145,8 @@ def test_study_words_cli_then_qualify_with_the_word(tmp_path, capsys, monkeypatc
     assert applied["qualifier"] == "long-trunk" and applied["source"] == "transfer"
     if applied["improved"]:  # scored along its measured direction, like any qualifier
         assert applied["moves"]["long-trunk"] > 0
-    else:  # or refused, naming the word and its measured metrics
-        strongest = max(direction, key=lambda m: abs(direction[m]))
-        assert "long-trunk's metrics" in applied["reason"] and strongest in applied["reason"]
+    else:  # or refused as any qualifier is, naming the word (and the rival that moved more)
+        assert "long-trunk" in applied["reason"] and "moved" in applied["reason"]
     assert main(["qualify", *args, "--qualifier", "long trnk"]) == 2
     assert "did you mean long trunk" in capsys.readouterr().err
     assert main(["qualify", "--list", "--words", str(out)]) == 0
@@ -158,4 +157,4 @@ def test_study_words_cli_then_qualify_with_the_word(tmp_path, capsys, monkeypatc
     assert doc["french"][doc["names"].index("small")] == "petit"
     assert main(["qualify", *args[:-2], "--matrix", "--lang", "fr"]) == 0
     rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()[2:] if line.strip()}
-    assert {"petit", "haut", "touffu"} <= set(rows) and "small" not in rows
+    assert {"petit", "haut", "gros"} <= set(rows) and "small" not in rows  # bushy: no region on Honda (issue 35)
