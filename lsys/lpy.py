@@ -104,13 +104,20 @@ class _Record:
     args: list = field(default_factory=list)
 
 
+class _Ignored(types.SimpleNamespace):
+    """Display settings Ramure does not use (the turtle's and the options'): every call is accepted."""
+
+    def __getattr__(self, name: str) -> Callable[..., None]:
+        return lambda *args, **kw: None
+
+
 class _Context:
     """The L-Py turtle context an ``__initialiseContext__`` writes into."""
 
     def __init__(self, ns: dict, fixed: Mapping[str, Any], materials: dict) -> None:
         self.ns, self.fixed = ns, fixed
-        self.turtle = types.SimpleNamespace(setMaterial=self.set_material)
-        self.options = types.SimpleNamespace(setSelection=lambda *a: None)
+        self.turtle = _Ignored(setMaterial=self.set_material)
+        self.options = _Ignored()
         self.materials = materials
         self.animation_timestep = 0
 
@@ -228,6 +235,8 @@ class LpyLSystem(LSystem):
             isForward=lambda: True,
             frameDisplay=lambda *a: None,
             context=lambda: context,
+            execContext=lambda: context,
+            isAnimationEnabled=lambda: False,
         )
         ns.update(overrides)
         self._exec(self._init, ns)
@@ -258,10 +267,8 @@ class LpyLSystem(LSystem):
     def _rule_table(self, ns: dict) -> dict:
         table: dict[str, dict[int, list]] = {"production": {}, "decomposition": {}, "interpretation": {}}
         for k, rule in enumerate(self.translation.rules):
-            sym = self.intern(rule.pred[0])
-            left = [(self.intern(s), a) for s, a in rule.left]
-            right = [(self.intern(s), a) for s, a in rule.right]
-            table[rule.section].setdefault(sym, []).append((k, rule, ns[rule.function], rule.pred[1], left, right))
+            pred, left, right = ([(self.intern(s), a) for s, a in p] for p in (rule.pred, rule.left, rule.right))
+            table[rule.section].setdefault(pred[0][0], []).append((k, rule, ns[rule.function], pred, left, right))
         return table
 
     def intern(self, name: str) -> int:
@@ -315,6 +322,7 @@ class LpyLSystem(LSystem):
         tree = DerivationTree(TABLE_PARAMS, capacity=1024)
         self._records[tree] = rec
         string = self._axiom(tree, rec)
+        self._answer_queries(tree, rec, string, 0)
         self._hook(rec, "Start")
         done = 0
         for step in range(1, steps + 1):
@@ -322,7 +330,9 @@ class LpyLSystem(LSystem):
                 break
             rec.rt.iteration = step - 1
             self._hook(rec, "StartEach")
+            first = tree.size
             string = self.rewrite(tree, string, step, np.random.default_rng(seed), {})
+            self._answer_queries(tree, rec, string, first)
             self._hook(rec, "EndEach", tree, string)
             done = step
             if progress is not None:
@@ -342,6 +352,27 @@ class LpyLSystem(LSystem):
         ids = builder.block(-1, -1, axiom)
         builder.flush()
         return self._decompose(tree, rec, np.asarray(ids, np.int32), builder.first, 0)
+
+    def _answer_queries(self, tree: DerivationTree, rec: _Record, string: np.ndarray, first: int) -> None:
+        """The query modules ``?P ?H ?L ?U`` the last step wrote get the turtle's state there:
+        a :class:`Vector3` for one parameter, the coordinates for several (as in L-Py)."""
+        from .turtle import QUERIES, turtle_states
+
+        wanted = {self._sym[q]: cols for q, cols in QUERIES.items() if q in self._sym}
+        nodes = np.asarray(string, np.int64)
+        where = np.flatnonzero(np.isin(tree.symbol[nodes], list(wanted)) & (nodes >= first)) if wanted else []
+        if not len(where):
+            return
+        states = turtle_states(self, tree, nodes, where)
+        start = int(nodes[where].min())
+        block = np.asarray(tree.params[start:], float).copy()
+        for k, position in enumerate(where.tolist()):
+            node = int(nodes[position])
+            value = states[k, wanted[rec.syms[node]]]
+            count = len(rec.args[node])
+            rec.args[node] = (lpy_plantgl.Vector3(value),) if count <= 1 else tuple(value[:count].tolist())
+            block[node - start, : min(count, 3)] = value[: min(count, 3)]
+        tree.params[start:] = block
 
     def _hook(self, rec: _Record, name: str, tree: DerivationTree | None = None, string: Any = None) -> None:
         fn = rec.ns.get(name)
@@ -392,28 +423,43 @@ class LpyLSystem(LSystem):
         context = _Neighbours(self, rec, nodes)
         table = rec.rules[section]
         out: list[int] = []
-        for i, node in enumerate(nodes):
-            hit = None if skip(i, node) or rec.syms[node] not in table else self._apply(rec, table, context, nodes, i)
+        i = 0
+        while i < len(nodes):
+            node = nodes[i]
+            hit = None if skip(i, node) or rec.syms[node] not in table else self._apply(rec, table, context, nodes, i, out)
             if hit is None:
                 out.append(node)
-            else:
-                out.extend(builder.block(node, hit[0], hit[1]))
+                i += 1
+                continue
+            out.extend(builder.block(node, hit[0], hit[1]))
+            for other in nodes[i + 1 : i + hit[2]]:  # a predecessor of several modules: the others end
+                builder.block(other, hit[0], [])
+            i += hit[2]
         builder.flush()
         return out
 
-    def _apply(self, rec: _Record, table: dict, context: _Neighbours, nodes: list, i: int) -> tuple | None:
-        node = nodes[i]
-        args = rec.args[node]
-        for k, rule, fn, arity, left, right in table[rec.syms[node]]:
-            if (rule.group and rule.group != rec.rt.group) or not _fits(arity, len(args)):
+    def _apply(self, rec: _Record, table: dict, context: _Neighbours, nodes: list, i: int, out: list) -> tuple | None:
+        """``(rule index, produced modules, modules rewritten)`` of the first rule that applies at ``i``."""
+        for k, rule, fn, pred, left, right in table[rec.syms[nodes[i]]]:
+            if rule.group and rule.group != rec.rt.group:
                 continue
-            values = context.matched(i, left, right)
+            args = context.sequence(i, pred)
+            last = i + len(pred) - 1
+            if rule.new_left:  # '<<': the left context is read in what this step produced so far
+                values = None if args is None else context.matched(i, last, [], right)
+                before = context.new_left(out, left)
+                values = None if values is None or before is None else (before, values[1])
+            else:
+                values = None if args is None else context.matched(i, last, left, right)
             if values is None:
                 continue
+            flat = [*values[0], *args, *values[1]]
+            if any(j >= len(flat) or flat[j] != v for j, v in rule.equal):
+                continue
             rec.rt.buffer = []
-            out = self._call(fn, *values[0], *args, *values[1])
+            out = self._call(fn, *flat)
             if out is not None:
-                return k, _checked(out, rule, self.filename)
+                return k, _checked(out, rule, self.filename), len(pred)
         return None
 
     def record(self, tree: DerivationTree) -> _Record:
@@ -474,7 +520,7 @@ class _Builder:
             self.rec.args.append(tuple(args))
         self.next += len(modules)
         if parent >= 0:
-            self.blocks.append((parent, first, len(modules)))
+            self.blocks.append((parent, first if modules else -1, len(modules)))
         return list(range(first, self.next))
 
     def flush(self) -> None:
@@ -498,6 +544,7 @@ class _Neighbours:
     """Context modules of a string: branches skipped, the ignore/consider filter applied."""
 
     def __init__(self, lsystem: LpyLSystem, rec: _Record, nodes: list) -> None:
+        self.rec = rec
         self.syms = [rec.syms[v] for v in nodes]
         self.args = [rec.args[v] for v in nodes]
         self.open, self.close = lsystem.intern("["), lsystem.intern("]")
@@ -548,9 +595,41 @@ class _Neighbours:
                 j += 1
         return found if len(found) == count else None
 
-    def matched(self, i: int, left: list, right: list) -> tuple[list, list] | None:
+    def new_left(self, out: list, patterns: list) -> list | None:
+        """The arguments of the left context ``patterns`` in the new string ``out`` (node ids), or None."""
+        rec, found, j, depth = self.rec, [], len(out) - 1, 0
+        while j >= 0 and len(found) < len(patterns):
+            s = rec.syms[out[j]]
+            if s == self.close:
+                depth += 1
+            elif s == self.open:
+                depth = max(depth - 1, 0)
+            elif depth == 0 and not self.skipped(s):
+                found.append(out[j])
+            j -= 1
+        if len(found) < len(patterns):
+            return None
+        values: list = []
+        for node, (sym, arity) in zip(found[::-1], patterns):
+            if rec.syms[node] != sym or not _fits(arity, len(rec.args[node])):
+                return None
+            values.extend(rec.args[node])
+        return values
+
+    def sequence(self, i: int, patterns: list) -> list | None:
+        """The arguments of the modules from ``i`` on if they match ``patterns`` one by one, else None."""
+        if i + len(patterns) > len(self.syms):
+            return None
+        out: list = []
+        for j, (sym, arity) in enumerate(patterns, start=i):
+            if self.syms[j] != sym or not _fits(arity, len(self.args[j])):
+                return None
+            out.extend(self.args[j])
+        return out
+
+    def matched(self, first: int, last: int, left: list, right: list) -> tuple[list, list] | None:
         values: tuple[list, list] = ([], [])
-        for side, patterns, at in ((0, left, self.left), (1, right, self.right)):
+        for side, patterns, at, i in ((0, left, self.left, first), (1, right, self.right, last)):
             if not patterns:
                 continue
             where = at(i, len(patterns))

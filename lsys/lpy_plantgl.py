@@ -107,6 +107,9 @@ class Vector3:
         return self._of(self.data / n if n > 0 else self.data)
 
 
+Vector3.OX, Vector3.OY, Vector3.OZ = (Vector3(*row) for row in np.eye(3))  # type: ignore[attr-defined]  # PlantGL's axes
+
+
 class Vector2(Vector3):
     """A 2D vector (PlantGL's ``Vector2``)."""
 
@@ -171,11 +174,23 @@ class Material:
     """A material: its drawn colour is ``ambient * diffuse`` (0..255), with ``transparency``."""
 
     def __init__(
-        self, name: Any = "", ambient: Any = (80, 80, 80), diffuse: float = 2.0, transparency: float = 0.0, **other: Any
+        self,
+        name: Any = "",
+        ambient: Any = (80, 80, 80),
+        diffuse: float = 2.0,
+        specular: Any = None,
+        emission: Any = None,
+        shininess: float = 0.2,
+        transparency: float = 0.0,
+        **other: Any,
     ) -> None:
-        if not isinstance(name, str):  # Material(Color3(...)) / Material((r, g, b))
-            name, ambient = "", name
+        if not isinstance(name, str):  # Material(ambient, diffuse, specular, emission, shininess, transparency)
+            name, ambient, diffuse, specular, emission, shininess, transparency = (
+                "", name, ambient, diffuse, specular, emission, shininess
+            )  # fmt: skip
+            diffuse = 2.0 if isinstance(diffuse, tuple) else diffuse
         self.name = name
+        self.specular, self.emission, self.shininess = specular, emission, shininess
         self.ambient = Color3(*ambient) if not isinstance(ambient, Color3) else ambient
         self.diffuse = float(diffuse)
         self.transparency = float(transparency)
@@ -223,6 +238,24 @@ class Curve2D:
 
     def getPointAt(self, u: float) -> Vector2:
         raise NotImplementedError
+
+    def getTangentAt(self, u: float) -> Vector2:
+        """The derivative at ``u`` (central differences)."""
+        h = (self.lastKnot - self.firstKnot) * 1e-4
+        a = self.getPointAt(max(self.firstKnot, u - h))
+        b = self.getPointAt(min(self.lastKnot, u + h))
+        return (b - a) / (min(self.lastKnot, u + h) - max(self.firstKnot, u - h))
+
+    def getLength(self, begin: float | None = None, end: float | None = None) -> float:
+        """The arc length from ``begin`` to ``end`` (the whole curve by default), over 200 chords."""
+        us = np.linspace(self.firstKnot if begin is None else begin, self.lastKnot if end is None else end, 201)
+        pts = np.array([list(self.getPointAt(float(u))) for u in us])
+        return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+
+    def deepcopy(self) -> Any:
+        import copy
+
+        return copy.deepcopy(self)
 
     def points(self, count: int) -> np.ndarray:
         """``count`` points evenly spaced in the parameter, as an array (count, 2)."""

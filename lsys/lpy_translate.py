@@ -26,6 +26,7 @@ predecessors of several modules, brackets in a context, successors over several 
 
 from __future__ import annotations
 
+import ast
 import re
 from dataclasses import dataclass, field
 
@@ -92,10 +93,14 @@ class LpyRule:
     group: int
     line: int
     function: str
-    pred: tuple[str, int | None]  # (name, arity; None: any)
+    pred: list[tuple[str, int | None]]  # (name, arity: None any, -k at least k) of each module
     left: list[tuple[str, int | None]] = field(default_factory=list)
     right: list[tuple[str, int | None]] = field(default_factory=list)
     text: str = ""
+    #: (index among the rule's parameters, value) a module's parameter must equal (``M(0)``)
+    equal: list[tuple[int, object]] = field(default_factory=list)
+    #: the left context is L-Py's new context ``<<``: the modules this step already produced
+    new_left: bool = False
 
 
 @dataclass
@@ -146,7 +151,7 @@ class _Translator:
         if found:
             raise self.error(f"L-Py's {found.group(1)} is not supported by Ramure", number, found.start() + 1)
         if line[0] in " \t":
-            if self.section is not None and self.open_rule is None:
+            if self.open_rule is None and self.section is not None:
                 raise self.error("an indented line in a rules section, outside any rule", number, 1)
             self.body += 1
             self.emit(self.python(line, number), number)
@@ -163,9 +168,13 @@ class _Translator:
         """Handle a section keyword at column 1; True if the line was one."""
         self.keyword_done = True
         if m := _AXIOM.match(line):
-            if not m.group(1).strip():
-                raise self.error("an Axiom written as a function body is not supported by Ramure", number)
-            self.emit(f"__axiom__ = {self.modules(m.group(1), number, m.start(1))}", number)
+            if not _strip_comment(m.group(1)).strip() and not self.indented_after(number):
+                self.emit("__axiom__ = []", number)
+            elif not _strip_comment(m.group(1)).strip():  # an axiom made by a body of nproduce calls
+                self.emit("def __axiom__():", number)
+                self.open_rule = LpyRule("axiom", 0, number, "__axiom__", [])
+            else:
+                self.emit(f"__axiom__ = {self.modules(m.group(1), number, m.start(1))}", number)
         elif m := _LENGTH.match(line):
             self.emit(f"__derivation_length__ = int({_strip_comment(m.group(1)).strip()})", number)
         elif m := _SECTION.match(line):
@@ -192,9 +201,19 @@ class _Translator:
             self.keyword_done = False
         return self.keyword_done
 
+    def indented_after(self, number: int) -> bool:
+        """Whether the next line with code after line ``number`` is indented (L-Py's body test)."""
+        for line in self.lines[number:]:
+            if line.strip() and not line.strip().startswith("#"):
+                return line[0] in " \t"
+        return False
+
     def close_rule(self, number: int) -> None:
         if self.open_rule is not None and not self.body:
             self.emit("    pass", number)
+        if self.open_rule is not None and self.open_rule.section == "axiom":
+            self.emit("    return __produce__([])", number)
+            self.emit("__axiom__ = __axiom__()", number)
         self.open_rule, self.body = None, 0
 
     def rule(self, number: int, line: str) -> None:
@@ -210,6 +229,8 @@ class _Translator:
         self.emit(f"def {rule.function}({formals}):", number)
         self.open_rule = rule
         rest = code[end + (3 if end == arrow else 1) :]
+        if rest.strip().startswith("@static"):  # L-Py's hint that the rule gives the same result
+            rest = rest.replace("@static", "", 1)
         if end == arrow:
             self.emit("    return __produce__(" + self.modules(rest, number, end + 3) + ")", number)
             self.body = 1
@@ -218,23 +239,30 @@ class _Translator:
             self.body = 1
 
     def header(self, head: str, number: int) -> LpyRule:
-        if "<<" in head or ">>" in head:
-            raise self.error("L-Py's new contexts '<<' and '>>' are not supported by Ramure", number, 1)
-        left, right = "", ""
-        if "<" in head:
+        if ">>" in head:
+            raise self.error("L-Py's new right context '>>' is not supported by Ramure", number, 1)
+        left, right, new = "", "", False
+        if "<<" in head:
+            left, head, new = *head.split("<<", 1), True
+            if "<" in left:
+                raise self.error("a rule with both '<' and '<<' is not supported by Ramure", number, 1)
+        elif "<" in head:
             left, head = head.split("<", 1)
         if ">" in head:
             head, right = head.split(">", 1)
         self.formals: list[str] = []
+        self.equal: list[tuple[int, object]] = []
         lefts, preds, rights = (self.pattern(p, number) for p in (left, head, right))
-        if len(preds) != 1:
-            raise self.error("a predecessor of several modules is not supported by Ramure", number, 1)
+        if not preds:
+            raise self.error("a rule without a predecessor", number, 1)
         if any(name in "[]" for name, _ in lefts + rights):
             raise self.error("a bracket in a rule's context is not supported by Ramure", number, 1)
         if any(f.startswith("*") for f in self.formals[:-1]):
             raise self.error("'*args' is supported in the last parameter of a rule only", number, 1)
         name = f"__rule_{len(self.rules)}"
-        return LpyRule(self.section or "production", self.group, number, name, preds[0], lefts, rights)
+        rule = LpyRule(self.section or "production", self.group, number, name, preds, lefts, rights, equal=self.equal)
+        rule.new_left = new
+        return rule
 
     def pattern(self, text: str, number: int) -> list[tuple[str, int | None]]:
         out: list[tuple[str, int | None]] = []
@@ -243,9 +271,15 @@ class _Translator:
                 out.append((name, None))
                 continue
             formals = [a.strip() for a in _split_args(args) if a.strip()]
-            for f in formals:
-                if not re.fullmatch(r"\*?[A-Za-z_]\w*", f):
-                    raise self.error(f"a pattern's parameter must be a name, not {f!r}", number, column + 1)
+            for k, f in enumerate(formals):
+                if re.fullmatch(r"\*?[A-Za-z_]\w*", f):
+                    continue
+                try:
+                    value = ast.literal_eval(f)
+                except (ValueError, SyntaxError):
+                    raise self.error(f"a pattern's parameter must be a name or a value, not {f!r}", number, column + 1) from None
+                self.equal.append((len(self.formals) + k, value))
+                formals[k] = f"__value_{len(self.formals) + k}"
             self.formals.extend(formals)
             star = bool(formals) and formals[-1].startswith("*")
             out.append((name, -len(formals) if star else len(formals)))
@@ -282,13 +316,29 @@ class _Translator:
 
 
 def _declared(text: str) -> list[str]:
-    names = []
+    """Names of ``module`` declarations, and the words of rule predecessors (L-Py declares them)."""
+    names, in_rules = [], False
     for line in text.splitlines():
         m = _MODULE.match(line)
         if m:
             decl = _strip_comment(m.group(2)).split(":")[0]
             names += re.findall(r"([A-Za-z_]\w*)\s*(?:\([^)]*\))?", _drop_parens(decl))
+        elif _SECTION.match(line):
+            in_rules = True
+        elif line.startswith("endlsystem"):
+            in_rules = False
+        elif in_rules and line[:1].isalpha() and not _keyword_line(line):
+            code = _strip_comment(line)
+            ends = [e for e in (_top_level(code, "-->"), _top_level(code, ":")) if e >= 0]
+            head = _drop_parens(code[: min(ends)]) if ends else ""
+            names += [w for w in re.findall(r"(?<![~@?\w])[A-Za-z_]\w+", head)]
     return names
+
+
+def _keyword_line(line: str) -> bool:
+    return any(p.match(line) for p in (_AXIOM, _LENGTH, _SECTION, _DEPTH, _GROUP, _FILTER, _MODULE)) or line.startswith(
+        ("endgroup", "endlsystem")
+    )
 
 
 def _drop_parens(text: str) -> str:
