@@ -127,6 +127,7 @@ class _Translator:
         self.group = 0
         self.open_rule: LpyRule | None = None
         self.body = 0
+        self.indent = "    "
 
     def error(self, message: str, number: int, column: int = 1) -> LpyError:
         source = self.lines[number - 1] if 0 < number <= len(self.lines) else None
@@ -153,6 +154,8 @@ class _Translator:
         if line[0] in " \t":
             if self.open_rule is None and self.section is not None:
                 raise self.error("an indented line in a rules section, outside any rule", number, 1)
+            if not self.body:
+                self.indent = line[: len(line) - len(line.lstrip())]
             self.body += 1
             self.emit(self.python(line, number), number)
             return
@@ -212,9 +215,9 @@ class _Translator:
         if self.open_rule is not None and not self.body:
             self.emit("    pass", number)
         if self.open_rule is not None and self.open_rule.section == "axiom":
-            self.emit("    return __produce__([])", number)
+            self.emit(f"{self.indent}return __produce__([])", number)
             self.emit("__axiom__ = __axiom__()", number)
-        self.open_rule, self.body = None, 0
+        self.open_rule, self.body, self.indent = None, 0, "    "
 
     def rule(self, number: int, line: str) -> None:
         code = _strip_comment(line)
