@@ -180,8 +180,8 @@ class LpyLSystem(LSystem):
         main, init = _split_init(text)
         self.translation = translate(main, filename)
         self.filename = filename
-        self._code = self._compile(self.translation.source, _MAIN, filename)
-        self._init = self._compile(init, _INIT, filename)
+        self._code = self._compile_code(self.translation.source, _MAIN, filename)
+        self._init = self._compile_code(init, _INIT, filename)
         self._records: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
         self.materials: dict[int, tuple] = {}
         rec = self._run({})
@@ -191,7 +191,7 @@ class LpyLSystem(LSystem):
         super().__init__(grammar)
         self.max_params = TABLE_PARAMS
 
-    def _compile(self, source: str, name: str, filename: str | None) -> types.CodeType:
+    def _compile_code(self, source: str, name: str, filename: str | None) -> types.CodeType:
         try:
             return compile(source, name, "exec")
         except SyntaxError as exc:
@@ -302,12 +302,13 @@ class LpyLSystem(LSystem):
     ) -> Derivation:
         """Run the file afresh and derive ``n`` steps (default: its ``derivation length``).
 
-        ``constants`` override its numeric ``extern``/``__scalars__`` values; ``seed`` seeds
+        :attr:`constants` (its numeric ``extern``/``__scalars__`` values, editable) and then
+        ``constants`` override the file's values; ``seed`` seeds
         Python's :mod:`random` before ``Start`` (a file that calls ``random.seed`` reseeds it).
         """
         extra, _ = split_combination(params)
-        overrides = {**(constants or {}), **extra}
-        unknown = set(overrides) - set(self.constants)
+        given = {**(constants or {}), **extra}
+        unknown = set(given) - set(self.constants)
         if unknown:
             raise GrammarError(
                 f"unknown constant(s): {', '.join(sorted(unknown))}; "
@@ -315,6 +316,7 @@ class LpyLSystem(LSystem):
             )
         seed = self.seed if seed is None else check_seed(seed)
         random.seed(seed)
+        overrides = {**self.constants, **given}  # self.constants may have been edited (--set)
         rec = self._run(overrides)
         steps = int(rec.ns.get("__derivation_length__", 1)) if n is None else int(n)
         if not 0 <= steps <= self.max_steps:
@@ -341,7 +343,7 @@ class LpyLSystem(LSystem):
         tree.leaves = string
         tree.compact_params()
         tree.changed()
-        consts = {**self.constants, **{k: float(v) for k, v in overrides.items()}}
+        consts = {k: float(v) for k, v in overrides.items()}
         return LpyDerivation(self, tree, n=done, seed=seed, constants=consts, params=params)
 
     def _axiom(self, tree: DerivationTree, rec: _Record) -> np.ndarray:
@@ -360,8 +362,10 @@ class LpyLSystem(LSystem):
 
         wanted = {self._sym[q]: cols for q, cols in QUERIES.items() if q in self._sym}
         nodes = np.asarray(string, np.int64)
-        where = np.flatnonzero(np.isin(tree.symbol[nodes], list(wanted)) & (nodes >= first)) if wanted else []
-        if not len(where):
+        if not wanted:
+            return
+        where = np.flatnonzero(np.isin(tree.symbol[nodes], list(wanted)) & (nodes >= first))
+        if not where.size:
             return
         states = turtle_states(self, tree, nodes, where)
         start = int(nodes[where].min())
@@ -444,13 +448,13 @@ class LpyLSystem(LSystem):
             if rule.group and rule.group != rec.rt.group:
                 continue
             args = context.sequence(i, pred)
+            if args is None:
+                continue
             last = i + len(pred) - 1
-            if rule.new_left:  # '<<': the left context is read in what this step produced so far
-                values = None if args is None else context.matched(i, last, [], right)
+            values = context.matched(i, last, [] if rule.new_left else left, right)
+            if values is not None and rule.new_left:  # '<<': read in what this step produced so far
                 before = context.new_left(out, left)
-                values = None if values is None or before is None else (before, values[1])
-            else:
-                values = None if args is None else context.matched(i, last, left, right)
+                values = None if before is None else (before, values[1])
             if values is None:
                 continue
             flat = [*values[0], *args, *values[1]]
@@ -568,7 +572,8 @@ class _Neighbours:
         return self.match
 
     def left(self, i: int, count: int) -> list[int] | None:
-        found, j = [], i - 1
+        found: list[int] = []
+        j = i - 1
         while j >= 0 and len(found) < count:
             s = self.syms[j]
             if s == self.close:
@@ -580,24 +585,48 @@ class _Neighbours:
                 j -= 1
         return found[::-1] if len(found) == count else None
 
-    def right(self, i: int, count: int) -> list[int] | None:
-        found, j = [], i + 1
-        while j < len(self.syms) and len(found) < count:
-            s = self.syms[j]
-            if s == self.close:
+    def right(self, i: int, patterns: list) -> list[int] | None:
+        """Positions matching the right context ``patterns`` after ``i`` (``[`` and ``]`` in it as in
+        cpfg: ``[`` enters the next branch, ``]`` leaves the rest of the current one), or None."""
+        found: list[int] = []
+        j, size = i + 1, len(self.syms)
+        for sym, _ in patterns:
+            while (
+                j < size
+                and sym != self.open
+                and self.syms[j] != self.close
+                and (self.syms[j] == self.open or self.skipped(self.syms[j]))
+            ):  # branches and filtered modules are skipped on the way to a module
+                j = self.brackets().get(j, size) + 1 if self.syms[j] == self.open else j + 1
+            if sym == self.close:
+                j = self._branch_end(j) + 1
+                continue
+            while sym == self.open and j < size and self.skipped(self.syms[j]):
+                j += 1
+            if j >= size or self.syms[j] != sym:
                 return None
-            if s == self.open:
-                j = self.brackets().get(j, len(self.syms)) + 1
-            elif not self.skipped(s):
+            if sym != self.open:
                 found.append(j)
-                j += 1
-            else:
-                j += 1
-        return found if len(found) == count else None
+            j += 1
+        return found
+
+    def _branch_end(self, j: int) -> int:
+        """The position of the ``]`` that closes the branch position ``j`` is in."""
+        depth = 0
+        while j < len(self.syms):
+            if self.syms[j] == self.open:
+                depth += 1
+            elif self.syms[j] == self.close:
+                if depth == 0:
+                    return j
+                depth -= 1
+            j += 1
+        return j
 
     def new_left(self, out: list, patterns: list) -> list | None:
         """The arguments of the left context ``patterns`` in the new string ``out`` (node ids), or None."""
-        rec, found, j, depth = self.rec, [], len(out) - 1, 0
+        rec, j, depth = self.rec, len(out) - 1, 0
+        found: list[int] = []
         while j >= 0 and len(found) < len(patterns):
             s = rec.syms[out[j]]
             if s == self.close:
@@ -629,13 +658,14 @@ class _Neighbours:
 
     def matched(self, first: int, last: int, left: list, right: list) -> tuple[list, list] | None:
         values: tuple[list, list] = ([], [])
-        for side, patterns, at, i in ((0, left, self.left, first), (1, right, self.right, last)):
+        for side, patterns, i in ((0, left, first), (1, right, last)):
             if not patterns:
                 continue
-            where = at(i, len(patterns))
+            where = self.left(i, len(patterns)) if side == 0 else self.right(i, patterns)
             if where is None:
                 return None
-            for j, (sym, arity) in zip(where, patterns):
+            modules = [p for p in patterns if p[0] not in (self.open, self.close)]
+            for j, (sym, arity) in zip(where, modules):
                 if self.syms[j] != sym or not _fits(arity, len(self.args[j])):
                     return None
                 values[side].extend(self.args[j])

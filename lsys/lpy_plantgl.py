@@ -114,7 +114,7 @@ class Vector2(Vector3):
     """A 2D vector (PlantGL's ``Vector2``)."""
 
     size = 2
-    z = property(lambda self: 0.0)  # type: ignore[assignment]  # a 2D vector has no z
+    z = property(lambda self: 0.0)  # a 2D vector has no z
 
 
 class Vector4(Vector3):

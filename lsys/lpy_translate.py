@@ -258,8 +258,8 @@ class _Translator:
         lefts, preds, rights = (self.pattern(p, number) for p in (left, head, right))
         if not preds:
             raise self.error("a rule without a predecessor", number, 1)
-        if any(name in "[]" for name, _ in lefts + rights):
-            raise self.error("a bracket in a rule's context is not supported by Ramure", number, 1)
+        if any(name in "[]" for name, _ in lefts):
+            raise self.error("a bracket in a rule's left context is not supported by Ramure", number, 1)
         if any(f.startswith("*") for f in self.formals[:-1]):
             raise self.error("'*args' is supported in the last parameter of a rule only", number, 1)
         name = f"__rule_{len(self.rules)}"

@@ -82,6 +82,8 @@ def test_constants_override_extern_and_the_history_records_each_rule(tmp_path):
     assert (tree.step[kids] == 1).all() and (tree.rule[kids] == 0).all()
     with pytest.raises(GrammarError, match="unknown constant"):
         ls.derive(constants={"nope": 1})
+    ls.constants["growth"] = 0.5  # what `ramure derive --set growth=0.5` does
+    assert ls.derive(n=1).to_string() == "Internode(0.5)[+(30)Apex(1)]Apex(1)"
 
 
 def test_regrow_a_subtree_of_an_lpy_model_round_trip(tmp_path):
@@ -191,6 +193,20 @@ endlsystem
     assert LpyLSystem(text2).derive().to_string() == "TTT[T]T"  # '<<' reads what the step produced
 
 
+def test_right_contexts_with_branches():
+    text = """\
+Axiom: I(1) [I(2) X] I(3) [I(4)] I(5) A [B] [C D] E
+derivation length: 1
+production:
+I(n) > [I(k)]I(q) --> J(n,k,q)
+A > [C] E --> X
+A > [B] E --> Y
+endlsystem
+"""
+    # '[' enters the next branch, ']' skips the rest of it; other branches are skipped on the way
+    assert LpyLSystem(text).derive().to_string() == "J(1,2,3)[I(2)X]J(3,4,5)[I(4)]I(5)Y[B][CD]E"
+
+
 def test_query_modules_get_the_turtle_position():
     text = "Axiom: F(2) +(90) F(3) ?P(0) A\nderivation length: 1\nproduction:\n?P(p) A --> B(p.x, p.z)\nendlsystem\n"
     d = LpyLSystem(text).derive()
@@ -260,7 +276,7 @@ def test_small_plantgl_against_values_by_hand():
     [
         ("lpyimport other\nAxiom: A\n", 1, "lpyimport"),
         ("Axiom: A\nproduction:\nA >> B --> C\nendlsystem\n", 3, "'>>'"),
-        ("Axiom: A\nproduction:\nA > [B] --> C\nendlsystem\n", 3, "bracket in a rule's context"),
+        ("Axiom: A\nproduction:\n[B] < A --> C\nendlsystem\n", 3, "bracket in a rule's left context"),
         ("Axiom: A\nproduction:\nA --> B(1\nendlsystem\n", 3, "unclosed"),
         ("Axiom: A\nproduction:\nA(x+1) --> B\nendlsystem\n", 3, "a name or a value"),
         ("from openalea.plantgl.all import Text\nAxiom: A\n", 1, "openalea.plantgl.all.Text"),
