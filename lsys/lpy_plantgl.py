@@ -228,13 +228,20 @@ class Curve2D:
         self.options = options
         self.name = ""
 
+    #: coordinates of a point (2 for the 2D curves, 3 for the 3D ones); a control point may
+    #: carry one more value, its weight
+    dim = 2
+
     def _points(self, homogeneous: bool) -> np.ndarray:
-        pts = np.array([list(p)[:3] for p in self.ctrlPointList], float)
-        if pts.shape[1] == 2:
+        pts = np.array([list(p)[: self.dim + 1] for p in self.ctrlPointList], float)
+        if pts.shape[1] == self.dim:
             pts = np.c_[pts, np.ones(len(pts))]
         if homogeneous:
-            pts[:, :2] *= pts[:, 2:3]
+            pts[:, : self.dim] *= pts[:, self.dim : self.dim + 1]
         return pts
+
+    def _point(self, values: np.ndarray) -> Vector2:
+        return Vector2(values) if self.dim == 2 else Vector3(values)
 
     def getPointAt(self, u: float) -> Vector2:
         raise NotImplementedError
@@ -251,6 +258,13 @@ class Curve2D:
         us = np.linspace(self.firstKnot if begin is None else begin, self.lastKnot if end is None else end, 201)
         pts = np.array([list(self.getPointAt(float(u))) for u in us])
         return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+
+    def getArcLengthToUMapping(self) -> QuantisedFunction:
+        """The parameter ``u`` at each fraction (0..1) of the curve's arc length."""
+        us = np.linspace(self.firstKnot, self.lastKnot, 201)
+        pts = np.array([list(self.getPointAt(float(u))) for u in us])
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))]
+        return QuantisedFunction(Polyline2D(np.c_[s / s[-1] if s[-1] > 0 else s, us]), sampling=201)
 
     def deepcopy(self) -> Any:
         import copy
@@ -271,13 +285,13 @@ class Polyline2D(Curve2D):
         self.lastKnot = float(max(len(self.ctrlPointList) - 1, 0))
 
     def getPointAt(self, u: float) -> Vector2:
-        pts = self._points(False)[:, :2]
+        pts = self._points(False)[:, : self.dim]
         u = min(max(float(u), 0.0), self.lastKnot)
         i = min(int(math.floor(u)), len(pts) - 2)
         if i < 0:
-            return Vector2(pts[0])
+            return self._point(pts[0])
         t = u - i
-        return Vector2(pts[i] * (1 - t) + pts[i + 1] * t)
+        return self._point(pts[i] * (1 - t) + pts[i + 1] * t)
 
 
 class BezierCurve2D(Curve2D):
@@ -288,7 +302,7 @@ class BezierCurve2D(Curve2D):
         t = min(max(float(u), 0.0), 1.0)
         while len(pts) > 1:
             pts = pts[:-1] * (1 - t) + pts[1:] * t
-        return Vector2(pts[0, :2] / pts[0, 2])
+        return self._point(pts[0, : self.dim] / pts[0, self.dim])
 
 
 class NurbsCurve2D(Curve2D):
@@ -317,7 +331,25 @@ class NurbsCurve2D(Curve2D):
                 span = knots[i + p - r + 1] - knots[i]
                 a = 0.0 if span == 0 else (u - knots[i]) / span
                 d[j] = (1 - a) * d[j - 1] + a * d[j]
-        return Vector2(d[p, :2] / d[p, 2])
+        return self._point(d[p, : self.dim] / d[p, self.dim])
+
+
+class Polyline(Polyline2D):
+    """A 3D polyline (PlantGL's ``Polyline``)."""
+
+    dim = 3
+
+
+class BezierCurve(BezierCurve2D):
+    """A 3D rational Bezier curve, control points x, y, z and a weight (PlantGL's ``BezierCurve``)."""
+
+    dim = 3
+
+
+class NurbsCurve(NurbsCurve2D):
+    """A 3D rational B-spline, control points x, y, z and a weight (PlantGL's ``NurbsCurve``)."""
+
+    dim = 3
 
 
 class QuantisedFunction:
@@ -340,6 +372,6 @@ def names() -> dict[str, Any]:
     """Every name of this small PlantGL (what ``from openalea.plantgl.all import *`` gives)."""
     shown = (
         Vector2, Vector3, Vector4, Color3, Color4, Material, Polyline2D, BezierCurve2D, NurbsCurve2D,
-        QuantisedFunction, Point2Array, Point3Array, Point4Array, norm, cross, dot,
+        Polyline, BezierCurve, NurbsCurve, QuantisedFunction, Point2Array, Point3Array, Point4Array, norm, cross, dot,
     )  # fmt: skip
     return {f.__name__: f for f in shown}

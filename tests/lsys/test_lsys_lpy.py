@@ -12,6 +12,7 @@ from ramure.lsys.lpy_plantgl import (
     BezierCurve2D,
     Color3,
     Material,
+    NurbsCurve,
     NurbsCurve2D,
     Point3Array,
     Polyline2D,
@@ -267,6 +268,9 @@ def test_small_plantgl_against_values_by_hand():
     assert line.getLength() == pytest.approx(math.sqrt(2) + 2)
     f = QuantisedFunction(line)
     assert f(0.5) == pytest.approx(0.5) and f(2.0) == pytest.approx(1.0)
+    assert list(NurbsCurve([(0, 0, 0, 1), (1, 2, 1, 1), (3, 0, 2, 1)], degree=2).getPointAt(0.5)) == [1.25, 1, 1]
+    to_u = Polyline2D([(0, 0), (1, 0), (3, 0)]).getArcLengthToUMapping()
+    assert to_u(0.5) == pytest.approx(1.25) and to_u(1 / 6) == pytest.approx(0.5)  # half of 3 is 1.5 along
     assert Material("m", ambient=(100, 50, 0), diffuse=2).rgba() == pytest.approx((200 / 255, 100 / 255, 0, 1))
     assert Color3(1, 2, 3).rgb01() == pytest.approx((1 / 255, 2 / 255, 3 / 255))
 
