@@ -244,8 +244,13 @@ class LpyLSystem(LSystem):
             self._call(ns["__initialiseContext__"], context)
         self._exec(self._code, ns)
         scalars = {s[0]: s[2] for s in ns.get("__scalars__", ()) if isinstance(s, (tuple, list)) and len(s) > 2}
-        self._externs = {k: float(v) for k, v in {**scalars, **externs}.items() if _is_number(v)}
+        values = {k: v for k, v in {**scalars, **externs}.items() if _is_number(v)}
+        self._externs = {k: float(v) for k, v in values.items()}
+        self._ints = getattr(self, "_ints", None) or {k for k, v in values.items() if isinstance(v, (int, np.integer))}
         return _Record(ns, rt, self._rule_table(ns))
+
+    def _like(self, name: str, value: float) -> Any:
+        return int(value) if name in self._ints and float(value).is_integer() else value
 
     def _exec(self, code: types.CodeType, ns: dict) -> None:
         self._call(lambda: exec(code, ns))
@@ -316,7 +321,8 @@ class LpyLSystem(LSystem):
             )
         seed = self.seed if seed is None else check_seed(seed)
         random.seed(seed)
-        overrides = {**self.constants, **given}  # self.constants may have been edited (--set)
+        # self.constants may have been edited (--set); a whole number stays an int where the file wrote one
+        overrides = {k: self._like(k, v) for k, v in {**self.constants, **given}.items()}
         rec = self._run(overrides)
         steps = int(rec.ns.get("__derivation_length__", 1)) if n is None else int(n)
         if not 0 <= steps <= self.max_steps:

@@ -117,6 +117,9 @@ class Vector2(Vector3):
     z = property(lambda self: 0.0)  # a 2D vector has no z
 
 
+Vector2.OX, Vector2.OY = Vector2(1, 0), Vector2(0, 1)  # type: ignore[attr-defined]  # PlantGL's axes
+
+
 class Vector4(Vector3):
     """A 4D vector (PlantGL's ``Vector4``), e.g. a weighted control point."""
 
@@ -133,9 +136,20 @@ def norm(v: Any) -> float:
     return float(np.linalg.norm(_data(v)))
 
 
-def cross(a: Any, b: Any) -> Vector3:
-    """The cross product ``a x b``."""
-    return Vector3(np.cross(_data(a), _data(b)))
+def cross(a: Any, b: Any) -> Any:
+    """The cross product ``a x b`` (of two 2D vectors: the number ``ax*by - ay*bx``)."""
+    u, v = _data(a), _data(b)
+    if len(u) == 2 and len(v) == 2:
+        return float(u[0] * v[1] - u[1] * v[0])
+    return Vector3(np.cross(u, v))
+
+
+def angle(a: Any, b: Any) -> float:
+    """The angle from ``a`` to ``b`` in radians: signed for 2D vectors, in [0, pi] for 3D ones."""
+    u, v = _data(a), _data(b)
+    if len(u) == 2 and len(v) == 2:
+        return math.atan2(cross(u, v), float(u @ v))
+    return math.atan2(float(np.linalg.norm(np.cross(u, v))), float(u @ v))
 
 
 def dot(a: Any, b: Any) -> float:
@@ -355,7 +369,10 @@ class NurbsCurve(NurbsCurve2D):
 class QuantisedFunction:
     """A curve read as a function ``y(x)``, sampled ``sampling`` times and interpolated."""
 
-    def __init__(self, curve: Curve2D, sampling: int = 100, clamped: bool = True) -> None:
+    def __init__(self, curve: Any, sampling: int = 100, clamped: bool = True) -> None:
+        if not isinstance(curve, Curve2D):  # a list of (x, y) points
+            curve = Polyline2D(curve)
+            sampling = max(int(sampling), 10 * len(curve.ctrlPointList))
         pts = curve.points(max(int(sampling), 2))
         order = np.argsort(pts[:, 0], kind="stable")
         self.x, self.y = pts[order, 0], pts[order, 1]
@@ -372,6 +389,6 @@ def names() -> dict[str, Any]:
     """Every name of this small PlantGL (what ``from openalea.plantgl.all import *`` gives)."""
     shown = (
         Vector2, Vector3, Vector4, Color3, Color4, Material, Polyline2D, BezierCurve2D, NurbsCurve2D,
-        Polyline, BezierCurve, NurbsCurve, QuantisedFunction, Point2Array, Point3Array, Point4Array, norm, cross, dot,
+        Polyline, BezierCurve, NurbsCurve, QuantisedFunction, Point2Array, Point3Array, Point4Array, norm, cross, dot, angle,
     )  # fmt: skip
     return {f.__name__: f for f in shown}

@@ -17,7 +17,10 @@ from ramure.lsys.lpy_plantgl import (
     Point3Array,
     Polyline2D,
     QuantisedFunction,
+    Vector2,
     Vector3,
+    angle,
+    cross,
 )
 from ramure.lsys.lpy_translate import LpyError, scan_modules
 
@@ -83,6 +86,8 @@ def test_constants_override_extern_and_the_history_records_each_rule(tmp_path):
     assert (tree.step[kids] == 1).all() and (tree.rule[kids] == 0).all()
     with pytest.raises(GrammarError, match="unknown constant"):
         ls.derive(constants={"nope": 1})
+    counted = LpyLSystem("extern(k=2)\nAxiom: A(*range(k))\n")  # an int stays an int when overridden
+    assert counted.derive().to_string() == "A(0,1)" and counted.derive(constants={"k": 3}).to_string() == "A(0,1,2)"
     ls.constants["growth"] = 0.5  # what `ramure derive --set growth=0.5` does
     assert ls.derive(n=1).to_string() == "Internode(0.5)[+(30)Apex(1)]Apex(1)"
 
@@ -116,6 +121,9 @@ def test_regrow_a_subtree_of_an_lpy_model_round_trip(tmp_path):
     session = Session(tmp_path / "det.lpy")
     result = session.regrow([int(session.derivation.leaves[-1])])
     assert result.added >= 1 and len(session.derivation) == len(det)
+    session.save(tmp_path / "det.json")  # the edit log replays on the .lpy file
+    again = Session.load(tmp_path / "det.json")
+    assert isinstance(again.lsystem, LpyLSystem) and again.derivation.to_string() == session.derivation.to_string()
 
 
 def test_hooks_groups_stop_and_iteration_numbers():
@@ -271,6 +279,10 @@ def test_small_plantgl_against_values_by_hand():
     assert list(NurbsCurve([(0, 0, 0, 1), (1, 2, 1, 1), (3, 0, 2, 1)], degree=2).getPointAt(0.5)) == [1.25, 1, 1]
     to_u = Polyline2D([(0, 0), (1, 0), (3, 0)]).getArcLengthToUMapping()
     assert to_u(0.5) == pytest.approx(1.25) and to_u(1 / 6) == pytest.approx(0.5)  # half of 3 is 1.5 along
+    assert angle(Vector2(1, 0), Vector2(0, -2)) == pytest.approx(-math.pi / 2)  # signed in 2D
+    assert angle(Vector3(1, 0, 0), Vector3(0, 0, -2)) == pytest.approx(math.pi / 2)
+    assert cross((1, 2), (3, 4)) == -2.0
+    assert QuantisedFunction([(0, 1), (1, 3)])(0.25) == pytest.approx(1.5)
     assert Material("m", ambient=(100, 50, 0), diffuse=2).rgba() == pytest.approx((200 / 255, 100 / 255, 0, 1))
     assert Color3(1, 2, 3).rgb01() == pytest.approx((1 / 255, 2 / 255, 3 / 255))
 
