@@ -84,6 +84,7 @@ class _Runtime:
     group: int = 0
     iteration: int = 0
     stopped: bool = False
+    backward: bool = False
 
     def produce(self, modules: list) -> list:
         out, self.buffer = self.buffer + modules, []
@@ -231,8 +232,9 @@ class LpyLSystem(LSystem):
             getGroup=lambda: rt.group,
             getIterationNb=lambda: rt.iteration,
             Stop=stop,
-            forward=lambda: None,
-            isForward=lambda: True,
+            forward=lambda: setattr(rt, "backward", False),
+            backward=lambda: setattr(rt, "backward", True),
+            isForward=lambda: not rt.backward,
             frameDisplay=lambda *a: None,
             context=lambda: context,
             execContext=lambda: context,
@@ -429,6 +431,8 @@ class LpyLSystem(LSystem):
 
     def _pass(self, tree: DerivationTree, rec: _Record, nodes: list, section: str, step: int, skip: Callable) -> list:
         """Apply ``section``'s rules to every module of ``nodes`` not skipped; the new string."""
+        if section == "production" and rec.rt.backward:
+            return self._backward_pass(tree, rec, nodes, step, skip)
         builder = _Builder(self, tree, rec, step)
         context = _Neighbours(self, rec, nodes)
         table = rec.rules[section]
@@ -448,16 +452,43 @@ class LpyLSystem(LSystem):
         builder.flush()
         return out
 
+    def _backward_pass(self, tree: DerivationTree, rec: _Record, nodes: list, step: int, skip: Callable) -> list:
+        """L-Py's ``backward()``: the modules are rewritten from the right end, so a ``>>`` context
+        reads what this step already produced on the right."""
+        builder = _Builder(self, tree, rec, step)
+        context = _Neighbours(self, rec, nodes)
+        table = rec.rules["production"]
+        pieces: list[list[int]] = []
+        tail: list[int] = []  # the produced string right of i, rightmost first
+        for i in range(len(nodes) - 1, -1, -1):
+            node = nodes[i]
+            hit = None if skip(i, node) or rec.syms[node] not in table else self._apply(rec, table, context, nodes, i, tail)
+            if hit is not None and hit[2] > 1:
+                rule = self.translation.rules[hit[0]]
+                raise LpyError(
+                    "a predecessor of several modules in a backward derivation", rule.line, 1, rule.text, self.filename
+                )
+            piece = [node] if hit is None else builder.block(node, hit[0], hit[1])
+            pieces.append(piece)
+            tail.extend(reversed(piece))
+        builder.flush()
+        return [v for piece in reversed(pieces) for v in piece]
+
     def _apply(self, rec: _Record, table: dict, context: _Neighbours, nodes: list, i: int, out: list) -> tuple | None:
         """``(rule index, produced modules, modules rewritten)`` of the first rule that applies at ``i``."""
         for k, rule, fn, pred, left, right in table[rec.syms[nodes[i]]]:
             if rule.group and rule.group != rec.rt.group:
                 continue
+            if (rule.new_right and not rec.rt.backward) or (rule.new_left and rec.rt.backward):
+                continue  # a new context on the side not produced yet matches nothing
             args = context.sequence(i, pred)
             if args is None:
                 continue
             last = i + len(pred) - 1
-            values = context.matched(i, last, [] if rule.new_left else left, right)
+            values = context.matched(i, last, [] if rule.new_left else left, [] if rule.new_right else right)
+            if values is not None and rule.new_right:  # '>>' (backward): read in what was produced on the right
+                after = context.new_right(out, right)
+                values = None if after is None else (values[0], after)
             if values is not None and rule.new_left:  # '<<': read in what this step produced so far
                 before = context.new_left(out, left)
                 values = None if before is None else (before, values[1])
@@ -591,38 +622,51 @@ class _Neighbours:
                 j -= 1
         return found[::-1] if len(found) == count else None
 
-    def right(self, i: int, patterns: list) -> list[int] | None:
+    def new_right(self, tail: list, patterns: list) -> list | None:
+        """The arguments of the right context ``patterns`` in the produced string ``tail`` (node ids,
+        rightmost first), or None."""
+        where = self.right(-1, patterns, _Reversed(tail, self.rec.syms))
+        if where is None:
+            return None
+        values: list = []
+        modules = [p for p in patterns if p[0] not in (self.open, self.close)]
+        for j, (sym, arity) in zip(where, modules):
+            node = tail[len(tail) - 1 - j]
+            if not _fits(arity, len(self.rec.args[node])):
+                return None
+            values.extend(self.rec.args[node])
+        return values
+
+    def right(self, i: int, patterns: list, syms: Any = None) -> list[int] | None:
         """Positions matching the right context ``patterns`` after ``i`` (``[`` and ``]`` in it as in
         cpfg: ``[`` enters the next branch, ``]`` leaves the rest of the current one), or None."""
         found: list[int] = []
-        j, size = i + 1, len(self.syms)
+        syms = self.syms if syms is None else syms
+        j, size = i + 1, len(syms)
         for sym, _ in patterns:
             while (
-                j < size
-                and sym != self.open
-                and self.syms[j] != self.close
-                and (self.syms[j] == self.open or self.skipped(self.syms[j]))
+                j < size and sym != self.open and syms[j] != self.close and (syms[j] == self.open or self.skipped(syms[j]))
             ):  # branches and filtered modules are skipped on the way to a module
-                j = self.brackets().get(j, size) + 1 if self.syms[j] == self.open else j + 1
+                j = self._branch_end(j + 1, syms) + 1 if syms[j] == self.open else j + 1
             if sym == self.close:
-                j = self._branch_end(j) + 1
+                j = self._branch_end(j, syms) + 1
                 continue
-            while sym == self.open and j < size and self.skipped(self.syms[j]):
+            while sym == self.open and j < size and self.skipped(syms[j]):
                 j += 1
-            if j >= size or self.syms[j] != sym:
+            if j >= size or syms[j] != sym:
                 return None
             if sym != self.open:
                 found.append(j)
             j += 1
         return found
 
-    def _branch_end(self, j: int) -> int:
+    def _branch_end(self, j: int, syms: Any) -> int:
         """The position of the ``]`` that closes the branch position ``j`` is in."""
         depth = 0
-        while j < len(self.syms):
-            if self.syms[j] == self.open:
+        while j < len(syms):
+            if syms[j] == self.open:
                 depth += 1
-            elif self.syms[j] == self.close:
+            elif syms[j] == self.close:
                 if depth == 0:
                     return j
                 depth -= 1
@@ -676,6 +720,19 @@ class _Neighbours:
                     return None
                 values[side].extend(self.args[j])
         return values
+
+
+class _Reversed:
+    """The symbols of node ids read from the end (a backward pass's produced string, in string order)."""
+
+    def __init__(self, nodes: list, syms: list) -> None:
+        self.nodes, self.syms = nodes, syms
+
+    def __len__(self) -> int:
+        return len(self.nodes)
+
+    def __getitem__(self, j: int) -> int:
+        return self.syms[self.nodes[len(self.nodes) - 1 - j]]
 
 
 class LpyDerivation(Derivation):

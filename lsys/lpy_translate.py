@@ -101,6 +101,8 @@ class LpyRule:
     equal: list[tuple[int, object]] = field(default_factory=list)
     #: the left context is L-Py's new context ``<<``: the modules this step already produced
     new_left: bool = False
+    #: the right context is L-Py's new context ``>>``: what a backward step produced on the right
+    new_right: bool = False
 
 
 @dataclass
@@ -242,16 +244,18 @@ class _Translator:
             self.body = 1
 
     def header(self, head: str, number: int) -> LpyRule:
+        left, right, new, new_right = "", "", False, False
         if ">>" in head:
-            raise self.error("L-Py's new right context '>>' is not supported by Ramure", number, 1)
-        left, right, new = "", "", False
+            head, right, new_right = *head.split(">>", 1), True
+            if ">" in head or re.search(r"\bx\s*\(", right):
+                raise self.error("'>>' with '>' or a repeated pattern x(...) is not supported by Ramure", number, 1)
         if "<<" in head:
             left, head, new = *head.split("<<", 1), True
             if "<" in left:
                 raise self.error("a rule with both '<' and '<<' is not supported by Ramure", number, 1)
         elif "<" in head:
             left, head = head.split("<", 1)
-        if ">" in head:
+        if ">" in head and not new_right:
             head, right = head.split(">", 1)
         self.formals: list[str] = []
         self.equal: list[tuple[int, object]] = []
@@ -264,7 +268,7 @@ class _Translator:
             raise self.error("'*args' is supported in the last parameter of a rule only", number, 1)
         name = f"__rule_{len(self.rules)}"
         rule = LpyRule(self.section or "production", self.group, number, name, preds, lefts, rights, equal=self.equal)
-        rule.new_left = new
+        rule.new_left, rule.new_right = new, new_right
         return rule
 
     def pattern(self, text: str, number: int) -> list[tuple[str, int | None]]:

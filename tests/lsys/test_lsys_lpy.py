@@ -216,6 +216,22 @@ endlsystem
     assert LpyLSystem(text).derive().to_string() == "J(1,2,3)[I(2)X]J(3,4,5)[I(4)]I(5)Y[B][CD]E"
 
 
+def test_backward_derivation_reads_the_new_right_context():
+    text = """\
+def Start():
+    backward()
+Axiom: S(1) S(1) [S(1) S(5)] S(1) S(7)
+derivation length: 1
+production:
+S(a) >> S(b) --> S(a+b)
+endlsystem
+"""
+    # from the right: 7 stays, 1+7, in the branch 5 stays and 1+5, then 1+8 (the branch skipped), 1+9
+    assert LpyLSystem(text).derive().to_string() == "S(10)S(9)[S(6)S(5)]S(8)S(7)"
+    forward = LpyLSystem(text.replace("    backward()", "    forward()")).derive().to_string()
+    assert forward == "S(1)S(1)[S(1)S(5)]S(1)S(7)"  # forward, nothing is produced on the right yet
+
+
 def test_query_modules_get_the_turtle_position():
     text = "Axiom: F(2) +(90) F(3) ?P(0) A\nderivation length: 1\nproduction:\n?P(p) A --> B(p.x, p.z)\nendlsystem\n"
     d = LpyLSystem(text).derive()
@@ -291,7 +307,7 @@ def test_small_plantgl_against_values_by_hand():
     "text, line, words",
     [
         ("lpyimport other\nAxiom: A\n", 1, "lpyimport"),
-        ("Axiom: A\nproduction:\nA >> B --> C\nendlsystem\n", 3, "'>>'"),
+        ("Axiom: A\nproduction:\nA >> x([B]) --> C\nendlsystem\n", 3, "repeated pattern x(...)"),
         ("Axiom: A\nproduction:\n[B] < A --> C\nendlsystem\n", 3, "bracket in a rule's left context"),
         ("Axiom: A\nproduction:\nA --> B(1\nendlsystem\n", 3, "unclosed"),
         ("Axiom: A\nproduction:\nA(x+1) --> B\nendlsystem\n", 3, "a name or a value"),
@@ -315,6 +331,6 @@ def test_ramure_derive_reads_an_lpy_file(tmp_path, capsys):
     path.write_text(GROWTH)
     assert main(["derive", str(path), "-n", "1"]) == 0
     assert capsys.readouterr().out.strip() == "Internode(2)[+(30)Apex(1)]Apex(1)"
-    path.write_text("Axiom: A\nproduction:\nA << B >> C --> D\nendlsystem\n")
+    path.write_text("Axiom: A\nproduction:\nA >> x([B]) --> D\nendlsystem\n")
     assert main(["derive", str(path)]) == 2
     assert "line 3" in capsys.readouterr().err
