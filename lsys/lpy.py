@@ -498,9 +498,9 @@ class LpyLSystem(LSystem):
             if any(j >= len(flat) or flat[j] != v for j, v in rule.equal):
                 continue
             rec.rt.buffer = []
-            out = self._call(fn, *flat)
-            if out is not None:
-                return k, _checked(out, rule, self.filename), len(pred)
+            produced = self._call(fn, *flat)
+            if produced is not None:
+                return k, _checked(produced, rule, self.filename), len(pred)
         return None
 
     def record(self, tree: DerivationTree) -> _Record:

@@ -254,10 +254,10 @@ class Curve2D:
             pts[:, : self.dim] *= pts[:, self.dim : self.dim + 1]
         return pts
 
-    def _point(self, values: np.ndarray) -> Vector2:
+    def _point(self, values: np.ndarray) -> Vector3:
         return Vector2(values) if self.dim == 2 else Vector3(values)
 
-    def getPointAt(self, u: float) -> Vector2:
+    def getPointAt(self, u: float) -> Vector3:
         raise NotImplementedError
 
     def getTangentAt(self, u: float) -> Vector2:
@@ -298,7 +298,7 @@ class Polyline2D(Curve2D):
         super().__init__(pointList, **options)
         self.lastKnot = float(max(len(self.ctrlPointList) - 1, 0))
 
-    def getPointAt(self, u: float) -> Vector2:
+    def getPointAt(self, u: float) -> Vector3:
         pts = self._points(False)[:, : self.dim]
         u = min(max(float(u), 0.0), self.lastKnot)
         i = min(int(math.floor(u)), len(pts) - 2)
@@ -311,7 +311,7 @@ class Polyline2D(Curve2D):
 class BezierCurve2D(Curve2D):
     """A rational Bezier curve (control points x, y, weight), de Casteljau's evaluation."""
 
-    def getPointAt(self, u: float) -> Vector2:
+    def getPointAt(self, u: float) -> Vector3:
         pts = self._points(True)
         t = min(max(float(u), 0.0), 1.0)
         while len(pts) > 1:
@@ -333,7 +333,7 @@ class NurbsCurve2D(Curve2D):
         self.knotList = np.asarray(list(knotList), float)
         self.firstKnot, self.lastKnot = float(self.knotList[self.degree]), float(self.knotList[n])
 
-    def getPointAt(self, u: float) -> Vector2:
+    def getPointAt(self, u: float) -> Vector3:
         pts, knots, p = self._points(True), self.knotList, self.degree
         u = min(max(float(u), self.firstKnot), self.lastKnot)
         k = int(np.searchsorted(knots, u, side="right")) - 1

@@ -200,6 +200,8 @@ endlsystem
     assert d.to_string() == "XD(1)C(2)T"
     text2 = "Axiom: S A A [A] A\nderivation length: 1\nproduction:\nS --> T\nT << A --> T\nendlsystem\n"
     assert LpyLSystem(text2).derive().to_string() == "TTT[T]T"  # '<<' reads what the step produced
+    text3 = "Axiom: S A A\nderivation length: 1\nproduction:\nS --> T\nT << A :\n  if False:\n    produce X\nT << A --> T\n"
+    assert LpyLSystem(text3).derive().to_string() == "TTT"  # a rule that does not apply leaves the next one its context
 
 
 def test_right_contexts_with_branches():
