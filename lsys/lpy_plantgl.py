@@ -144,17 +144,43 @@ def cross(a: Any, b: Any) -> Any:
     return Vector3(np.cross(u, v))
 
 
-def angle(a: Any, b: Any) -> float:
-    """The angle from ``a`` to ``b`` in radians: signed for 2D vectors, in [0, pi] for 3D ones."""
+def angle(a: Any, b: Any, axis: Any = None) -> float:
+    """The angle from ``a`` to ``b`` in radians: signed for 2D vectors, in [0, pi] for 3D ones, and
+    signed about ``axis`` when one is given (positive when ``a x b`` points along it)."""
     u, v = _data(a), _data(b)
     if len(u) == 2 and len(v) == 2:
         return math.atan2(cross(u, v), float(u @ v))
-    return math.atan2(float(np.linalg.norm(np.cross(u, v))), float(u @ v))
+    turn = np.cross(u, v)
+    unsigned = math.atan2(float(np.linalg.norm(turn)), float(u @ v))
+    return -unsigned if axis is not None and float(turn @ _data(axis)) < 0 else unsigned
 
 
 def dot(a: Any, b: Any) -> float:
     """The dot product of ``a`` and ``b``."""
     return float(_data(a) @ _data(b))
+
+
+class Matrix3:
+    """A 3x3 matrix (PlantGL's ``Matrix3``): ``m * v`` turns a vector, ``m * n`` composes."""
+
+    def __init__(self, *rows: Any) -> None:
+        self.data = np.array(rows, float).reshape(3, 3) if rows else np.eye(3)
+
+    @staticmethod
+    def axisRotation(axis: Any, angle: float) -> Matrix3:
+        """The rotation by ``angle`` radians about ``axis`` (right hand), Rodrigues' formula."""
+        k = _data(axis) / np.linalg.norm(_data(axis))
+        cross_k = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        out = Matrix3()
+        out.data = np.eye(3) + math.sin(angle) * cross_k + (1 - math.cos(angle)) * cross_k @ cross_k
+        return out
+
+    def __mul__(self, other: Any) -> Any:
+        if isinstance(other, Matrix3):
+            out = Matrix3()
+            out.data = self.data @ other.data
+            return out
+        return Vector3(self.data @ _data(other))
 
 
 class Color3:
@@ -389,6 +415,7 @@ def names() -> dict[str, Any]:
     """Every name of this small PlantGL (what ``from openalea.plantgl.all import *`` gives)."""
     shown = (
         Vector2, Vector3, Vector4, Color3, Color4, Material, Polyline2D, BezierCurve2D, NurbsCurve2D,
-        Polyline, BezierCurve, NurbsCurve, QuantisedFunction, Point2Array, Point3Array, Point4Array, norm, cross, dot, angle,
+        Polyline, BezierCurve, NurbsCurve, QuantisedFunction, Point2Array, Point3Array, Point4Array, norm, cross,
+        dot, angle, Matrix3,
     )  # fmt: skip
     return {f.__name__: f for f in shown}

@@ -12,6 +12,7 @@ from ramure.lsys.lpy_plantgl import (
     BezierCurve2D,
     Color3,
     Material,
+    Matrix3,
     NurbsCurve,
     NurbsCurve2D,
     Point3Array,
@@ -300,6 +301,10 @@ def test_small_plantgl_against_values_by_hand():
     assert angle(Vector2(1, 0), Vector2(0, -2)) == pytest.approx(-math.pi / 2)  # signed in 2D
     assert angle(Vector3(1, 0, 0), Vector3(0, 0, -2)) == pytest.approx(math.pi / 2)
     assert cross((1, 2), (3, 4)) == -2.0
+    assert angle(Vector3(0, 1, 0), Vector3(0, 0, 1), Vector3(-1, 0, 0)) == pytest.approx(-math.pi / 2)
+    turn = Matrix3.axisRotation((1, 0, 0), math.pi / 2)  # y turns to z about x
+    assert list(turn * Vector3(0, 1, 0)) == pytest.approx([0, 0, 1])
+    assert list((turn * turn) * Vector3(0, 1, 0)) == pytest.approx([0, -1, 0])
     assert QuantisedFunction([(0, 1), (1, 3)])(0.25) == pytest.approx(1.5)
     assert Material("m", ambient=(100, 50, 0), diffuse=2).rgba() == pytest.approx((200 / 255, 100 / 255, 0, 1))
     assert Color3(1, 2, 3).rgb01() == pytest.approx((1 / 255, 2 / 255, 3 / 255))
