@@ -5,11 +5,12 @@ The file's Python stays as it is; its L-system sections become Python:
 ==================================  ==============================================================
 ``.lpy``                            Python
 ==================================  ==============================================================
-``Axiom: A(1) B``                   ``__axiom__ = [("A", (1,)), ("B", ())]``
+``Axiom: A(1) B``                   ``__axiom__ = [("A", (1,)), ("B", ())]`` (or a body of ``nproduce``)
 ``derivation length: N``            ``__derivation_length__ = N``
 ``module A(x), B``                  declares the multi-letter names (``AB`` is ``A`` then ``B``)
 ``production:`` and the others      the section the next rules belong to
 ``A(x) < B(y) > C --> D(x+y)``      ``def __rule_k(x, y): return __produce__([("D", (x+y,))])``
+``A << B`` / ``A >> B``             new contexts: what the step produced (``>>`` in ``backward()``)
 ``B(y) :`` + an indented body       ``def __rule_k(y):`` + the body
 ``produce S`` / ``nproduce S``      ``return __produce__([...])`` / ``__nproduce__([...])``
 ``maximum depth: N``                ``__max_depth__["decomposition"] = N`` (or interpretation)
@@ -19,9 +20,9 @@ The file's Python stays as it is; its L-system sections become Python:
 ==================================  ==============================================================
 
 Refused with a :class:`LpyError` naming the construct and its line: ``lpyimport``,
-``undeclare``, ``makestring``, ``InLeftContext``/``InRightContext``, new contexts ``<<``/``>>``,
-predecessors of several modules, brackets in a context, successors over several lines and an
-``Axiom`` written as a function body.
+``undeclare``, ``makestring``, ``InLeftContext``/``InRightContext``, ``>>`` with ``>`` or with a
+repeated pattern ``x(...)``, ``<`` with ``<<``, brackets in a left context, pattern parameters that
+are neither names nor values, and successors over several lines.
 """
 
 from __future__ import annotations
