@@ -8,7 +8,9 @@ openalea/lpy's ``share/``, ``models/`` and ``doc/_downloads`` (or any folder of 
 A file *derives with modules* when :mod:`ramure.lsys.lpy` runs it, derives its own
 ``derivation length`` (capped at :data:`MAX_STEPS`, and stopped after :data:`SECONDS` seconds)
 to a string of at least one module, and the turtle draws it.  Opening an ``.lpy`` file runs
-its code: run this on files you trust.  Refusals are counted by the first words of their message.
+its code: run this on files you trust.  ``bench_lpy_speed`` times the derivation itself (a
+Python rule call and a history node per module, as L-Py calls Python per module).
+Refusals are counted by the first words of their message.
 """
 
 from __future__ import annotations
@@ -86,6 +88,31 @@ def count(folders: list[str]) -> dict:
         "seconds": round(time.perf_counter() - t0, 3),
         "per_file": per_file if os.environ.get("RAMURE_LPY_PER_FILE") else None,
     }
+
+
+#: A model whose every module is rewritten by a Python rule at every step (L-Py's multicore demo, smaller).
+SPEED_MODEL = """\
+Axiom:
+  for i in range(100000): nproduce A B
+derivation length: 2
+production:
+A : produce B
+B : produce A
+endlsystem
+"""
+
+
+def bench_lpy_speed():
+    """Rule applications per second of the .lpy derivation (one Python call and one history node each)."""
+    from benchtools import best
+
+    from ramure.lsys.lpy import LpyLSystem
+
+    ls = LpyLSystem(SPEED_MODEL, "speed.lpy")
+    seconds, derivation = best(ls.derive, repeats=2)
+    written = derivation.tree.size
+    rate = round(written / seconds)
+    return {"modules": len(derivation), "history_nodes": written, "seconds": round(seconds, 3), "nodes_per_s": rate}
 
 
 def bench_field_lpy():

@@ -554,9 +554,17 @@ class _Builder:
 
     def block(self, parent: int, rule: int, modules: list) -> list[int]:
         first = self.next
-        for k, (name, args) in enumerate(modules):
+        for k, module in enumerate(modules):
+            if type(module) is not tuple or len(module) != 2:
+                where = self.ls.translation.rules[rule] if rule >= 0 else None
+                raise LpyError(
+                    f"a rule produced {module!r}, not a module (use produce or nproduce)",
+                    *((where.line, 1, where.text) if where else (None, None, None)),
+                    self.ls.filename,
+                )
+            name, args = module
             sym = self.ls.intern(name)
-            self.rows.append((sym, min(len(args), TABLE_PARAMS), _numbers(args), parent, rule, k))
+            self.rows.append((sym, min(len(args), TABLE_PARAMS), _numbers(args) if args else _NO_NUMBERS, parent, rule, k))
             self.rec.syms.append(sym)
             self.rec.args.append(tuple(args))
         self.next += len(modules)
@@ -792,7 +800,7 @@ def _file_line(exc: BaseException, translation: Translation) -> int | None:
 
 
 def _checked(out: Any, rule: LpyRule, filename: str | None) -> list:
-    if isinstance(out, list) and all(isinstance(m, tuple) and len(m) == 2 for m in out):
+    if isinstance(out, list):  # its items are checked as the builder records them
         return out
     raise LpyError(f"the rule returned {type(out).__name__}, not a produced string", rule.line, 1, rule.text, filename)
 
@@ -803,6 +811,9 @@ def _fits(arity: int | None, count: int) -> bool:
 
 def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
+
+
+_NO_NUMBERS = [math.nan] * TABLE_PARAMS
 
 
 def _numbers(args: tuple) -> list[float]:

@@ -322,6 +322,7 @@ def test_small_plantgl_against_values_by_hand():
         ("x = 1\n\nAxiom: A(undefined_name)\n", 3, "undefined_name"),
         ("Axiom: A\nderivation length: 1\nproduction:\nA :\n    produce B(1/0)\nendlsystem\n", 5, "ZeroDivisionError"),
         ("Axiom: A\nproduction:\nA :\n  if x\nendlsystem\n", 4, "Python syntax"),
+        ("Axiom: A\nderivation length: 1\nproduction:\nA :\n  return [1]\nendlsystem\n", 4, "not a module"),
     ],
 )
 def test_unsupported_or_broken_files_are_refused_at_their_line(text, line, words):
