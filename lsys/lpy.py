@@ -556,12 +556,11 @@ class _Builder:
         first = self.next
         for k, module in enumerate(modules):
             if type(module) is not tuple or len(module) != 2:
-                where = self.ls.translation.rules[rule] if rule >= 0 else None
-                raise LpyError(
-                    f"a rule produced {module!r}, not a module (use produce or nproduce)",
-                    *((where.line, 1, where.text) if where else (None, None, None)),
-                    self.ls.filename,
-                )
+                message = f"a rule produced {module!r}, not a module (use produce or nproduce)"
+                if rule < 0:
+                    raise LpyError(message, None, None, None, self.ls.filename)
+                where = self.ls.translation.rules[rule]
+                raise LpyError(message, where.line, 1, where.text, self.ls.filename)
             name, args = module
             sym = self.ls.intern(name)
             self.rows.append((sym, min(len(args), TABLE_PARAMS), _numbers(args) if args else _NO_NUMBERS, parent, rule, k))
