@@ -10,6 +10,7 @@ from .mincut import CutResult, select_roots
 from .derive import Derivation, LSystem
 from .errors import DerivationError, GrammarError, RamureError, ValueRefused
 from .grammar import Grammar, parse_grammar
+from .lpy import LpyLSystem  # registers the .lpy reader
 from .regen import RegenResult, Session, regenerate
 from .select import leaves_where
 from .tree import DerivationTree
@@ -23,6 +24,7 @@ __all__ = [
     "Grammar",
     "GrammarError",
     "LSystem",
+    "LpyLSystem",
     "Organs",
     "RamureError",
     "RegenResult",

@@ -31,7 +31,7 @@ import os
 import sys
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Self
+from typing import TYPE_CHECKING, Any, Self, cast
 
 import numpy as np
 
@@ -48,6 +48,11 @@ from .tree import DerivationTree, concat_ranges
 if TYPE_CHECKING:
     from .polygons import Polygons
     from .turtle import Skeleton
+
+
+#: Readers of other model formats: file suffix -> ``reader(text, filename)`` returning an
+#: :class:`LSystem`; a reader's module registers itself (``.lpy``: :mod:`ramure.lsys.lpy`).
+FILE_READERS: dict[str, Callable[[str, str | None], LSystem]] = {}
 
 
 @dataclass
@@ -112,9 +117,13 @@ class LSystem:
     def from_text(cls, text: str, filename: str | None = None) -> Self:
         """Parse grammar text; L-studio/cpfg text (a ``filename`` ending in ``.l``, or a
         ``derivation length:`` line, never valid ``.lsys``) is read by :mod:`ramure.lsys.cpfg`,
-        an MTG (a ``filename`` ending in ``.mtg``) becomes a plant by :mod:`ramure.lsys.mtg_plant`."""
+        an MTG (a ``filename`` ending in ``.mtg``) becomes a plant by :mod:`ramure.lsys.mtg_plant`,
+        a suffix of :data:`FILE_READERS` (``.lpy``) is read by its reader."""
         from .cpfg import is_cpfg, parse_cpfg
 
+        reader = FILE_READERS.get(os.path.splitext(str(filename))[1].lower()) if filename is not None else None
+        if reader is not None:  # e.g. L-Py's .lpy (ramure.lsys.lpy registers itself)
+            return cast(Self, reader(text, filename))
         if filename is not None and str(filename).lower().endswith(".mtg"):
             return cls(parse_grammar(_mtg_text_as_grammar(text, str(filename))))
         if is_cpfg(text, filename):
