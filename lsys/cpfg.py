@@ -435,7 +435,7 @@ class _Translator:
 
 
 def strip_c_comments(text: str) -> str:
-    """Blank out C and C++ comments keeping every other column and newline in place: ``/* ... */``,
+    """Blank out C and C++ comments keeping every other column and newline in place: ``/*`` to ``*/``,
     and ``//`` to the end of the line where it starts a line or follows a space and is followed
     by a space or a letter (``F/////S`` rolls five times, as in ABOP's files); text inside
     double quotes is kept.

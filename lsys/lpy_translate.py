@@ -15,7 +15,7 @@ The file's Python stays as it is; its L-system sections become Python:
 ``produce S`` / ``nproduce S``      ``return __produce__([...])`` / ``__nproduce__([...])``
 ``maximum depth: N``                ``__max_depth__["decomposition"] = N`` (or interpretation)
 ``group N:`` / ``endgroup``         the group of the next rules (``useGroup(N)`` selects it)
-``consider: ...`` / ``ignore: ...`` the context filter
+``consider:`` / ``ignore:``         the context filter
 ``endlsystem``                      back to plain Python
 ==================================  ==============================================================
 
