@@ -395,6 +395,22 @@ def table(counts, generators=None):
     return "\n".join(lines)
 
 
+def reader_campaign_main(campaign, doc: str, argv: list[str] | None = None) -> int:
+    """The command line of a reader fuzzer (studies, files): ``--inputs``, ``--seed``; prints the
+    counts per (reader, outcome) and a JSON summary; 1 if any input was neither ok nor refused."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--inputs", type=int, default=3000)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    counts = campaign(args.inputs, args.seed)
+    for (kind, outcome), n in sorted(counts.items()):
+        print(f"{kind:12s} {outcome:24s} {n}")
+    bad = sum(n for (_, outcome), n in counts.items() if outcome not in ("ok", "refused"))
+    print(json.dumps(dict(inputs=args.inputs, seconds=round(time.perf_counter() - start, 1), bad=bad)))
+    return 1 if bad else 0
+
+
 def stage_table(stages, generators=None):
     """Inputs per deepest stage reached (rows in loop order), one column per generator, and the
     share that got through regrow and undo."""

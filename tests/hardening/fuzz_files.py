@@ -20,7 +20,6 @@ a bug), ``slow`` (over 5 s of CPU).  Goal: no crash, no change, nothing slow.
 
 from __future__ import annotations
 
-import argparse
 import collections
 import copy
 import functools
@@ -35,7 +34,7 @@ import types
 import numpy as np
 
 from ramure.errors import RamureError
-from tests.hardening.fuzz import edit_text
+from tests.hardening.fuzz import edit_text, reader_campaign_main
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SLOW_SECONDS = 5.0
@@ -232,17 +231,7 @@ def campaign(inputs: int, seed: int = 0, readers: tuple[str, ...] = READERS) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--inputs", type=int, default=3000)
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    start = time.perf_counter()
-    counts = campaign(args.inputs, args.seed)
-    for (kind, outcome), n in sorted(counts.items()):
-        print(f"{kind:12s} {outcome:24s} {n}")
-    bad = sum(n for (_, outcome), n in counts.items() if outcome not in ("ok", "refused"))
-    print(json.dumps(dict(inputs=args.inputs, seconds=round(time.perf_counter() - start, 1), bad=bad)))
-    return 1 if bad else 0
+    return reader_campaign_main(campaign, __doc__ or "", argv)
 
 
 if __name__ == "__main__":

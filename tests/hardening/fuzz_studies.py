@@ -19,7 +19,6 @@ no change, nothing slow.
 
 from __future__ import annotations
 
-import argparse
 import collections
 import functools
 import hashlib
@@ -35,6 +34,7 @@ import traceback
 import numpy as np
 
 from ramure.errors import RamureError
+from tests.hardening.fuzz import reader_campaign_main
 
 SLOW_SECONDS = 5.0
 VALUES = [None, 0, -1, 1, 4, 5, 27, 28, 1000, 2**62, -(2**63), 1.5, -1e308, float("inf"), "", " ", "lots", "{}", "[1]"]
@@ -201,17 +201,7 @@ def campaign(inputs: int, seed: int = 0) -> collections.Counter:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--inputs", type=int, default=3000)
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args(argv)
-    start = time.perf_counter()
-    counts = campaign(args.inputs, args.seed)
-    for (kind, outcome), n in sorted(counts.items()):
-        print(f"{kind:12s} {outcome:24s} {n}")
-    bad = sum(n for (_, outcome), n in counts.items() if outcome not in ("ok", "refused"))
-    print(json.dumps(dict(inputs=args.inputs, seconds=round(time.perf_counter() - start, 1), bad=bad)))
-    return 1 if bad else 0
+    return reader_campaign_main(campaign, __doc__ or "", argv)
 
 
 if __name__ == "__main__":
