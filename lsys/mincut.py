@@ -655,24 +655,21 @@ def _picked_share(tree, nodes, selected):
     symbols = sorted_unique(tree.symbol[selected])
     picked_at = np.sort(tree.leaf_positions(selected))
     if (b - a).sum() <= len(string) // 16:
-        total, chosen = _span_counts(tree, string, a, b, symbols, picked_at)
+        total = _span_kinds(tree, string, a, b, symbols)
     else:
         kind_sum = np.zeros(len(string) + 1, np.int64)
         np.cumsum(np.isin(tree.symbol[string], symbols), out=kind_sum[1:])
         total = kind_sum[b] - kind_sum[a]
-        chosen = np.searchsorted(picked_at, b) - np.searchsorted(picked_at, a)
+    chosen = np.searchsorted(picked_at, b) - np.searchsorted(picked_at, a)
     share = np.where(total > 0, chosen / np.maximum(total, 1), 0.0)
     return share[back]
 
 
-def _span_counts(tree, string, a, b, symbols, picked_at):
-    """Leaves of ``symbols`` in each string span ``[a, b)``, and picked ones (sorted positions)."""
+def _span_kinds(tree, string, a, b, symbols):
+    """Leaves of ``symbols`` in each string span ``[a, b)``, counted on the spans only."""
     at = concat_ranges(a, b - a)
     owner = np.repeat(np.arange(len(a)), b - a)
-    kinds = np.isin(tree.symbol[string[at]], symbols)
-    total = np.bincount(owner[kinds], minlength=len(a))
-    chosen = np.searchsorted(picked_at, b) - np.searchsorted(picked_at, a)
-    return total, chosen
+    return np.bincount(owner[np.isin(tree.symbol[string[at]], symbols)], minlength=len(a))
 
 
 def _unique_inverse(values):
