@@ -9,6 +9,8 @@ limit (``RLIMIT_AS``), so a memory blow-up is a ``MemoryError`` crash, not a swa
 Targets: 0 exceptions other than Ramure's own errors, 0 inputs over 5 s (of CPU: on a shared
 machine the wall clock counts the other jobs too) and no chunk stopped by the limit.
 ``RAMURE_FUZZ_INPUTS`` sets the total (100,000 by default; a smaller run for a quick look).
+``RAMURE_FUZZ_LOG`` names a JSON-lines file where each finished chunk is appended: a run that
+is stopped and started again with the same log skips the chunks already there.
 """
 
 from __future__ import annotations
@@ -51,13 +53,27 @@ def run_chunk(reader: str, inputs: int, seed: int) -> dict:
     return json.loads(lines[-1])
 
 
+def logged_chunks(log: pathlib.Path | None) -> dict[tuple[str, int, int], dict]:
+    """The chunks an earlier run appended to ``log``, by ``(reader, inputs, seed)``."""
+    if log is None or not log.is_file():
+        return {}
+    records = [json.loads(line) for line in log.read_text().splitlines() if line.strip()]
+    return {(r["reader"], r["inputs"], r["seed"]): r for r in records}
+
+
 def bench_fuzz_large() -> dict:
     total = int(os.environ.get("RAMURE_FUZZ_INPUTS", "100000"))
+    log = pathlib.Path(os.environ["RAMURE_FUZZ_LOG"]) if os.environ.get("RAMURE_FUZZ_LOG") else None
+    done = logged_chunks(log)
     start = time.perf_counter()
     per_reader: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
-    peak, died = 0.0, []
+    peak, died, records = 0.0, [], []
     for reader, inputs, seed in chunks(total):
-        record = run_chunk(reader, inputs, seed)
+        record = done.get((reader, inputs, seed)) or run_chunk(reader, inputs, seed)
+        records.append(record)
+        if log is not None and (reader, inputs, seed) not in done:
+            with log.open("a") as stream:
+                stream.write(json.dumps(record) + "\n")
         per_reader[reader].update(inputs=record["inputs"], crashes=record["crashes"], slow=record["slow"])
         per_reader[reader].update(record["outcomes"])
         peak = max(peak, record.get("peak_mb", 0.0))
@@ -68,6 +84,8 @@ def bench_fuzz_large() -> dict:
     slow = sum(c["slow"] for c in per_reader.values())
     return dict(
         seconds=round(time.perf_counter() - start, 1),
+        chunk_seconds=round(sum(r.get("seconds", 0.0) for r in records), 1),
+        chunks_resumed=sum(key in done for key in chunks(total)),
         inputs=inputs,
         crashes=crashes,
         slow_inputs=slow,
