@@ -213,6 +213,8 @@ def age_leaves(
     or a tuple ``(leaf_ids, positions)``. ``heat`` and ``humidity`` are numbers or per-leaf arrays in
     [0, 1]; ``wind`` is the horizontal wind (x, y) in units per step, or a strength along x
     (its length is the wind strength ``s``). Deterministic for a seed, leaf by leaf.
+    A plant (skeleton or organs) without any leaf is refused with :class:`ValueRefused`; an
+    explicit empty ``(leaf_ids, positions)`` tuple gives an empty season.
     """
     ids, positions = _leaves(organs)
     steps, dt, wind_xy = _check_run(steps, dt, wind)
@@ -285,11 +287,20 @@ def plant_leaves(skeleton: Skeleton | Organs) -> tuple[np.ndarray, np.ndarray]:
     return ids[first], positions[first]
 
 
+#: The refusal for a plant that has no leaves (issue 40: ``autumn`` on such a plant gave 0 leaves, exit 0).
+NO_LEAVES = (
+    "this plant has no leaves to age: it draws no Leaf module, no ~surface organ (~leaf, ~petal, ...) "
+    "and no filled polygon { ... }; add leaves to the grammar, or choose a plant that has them"
+)
+
+
 def _leaves(organs):
     if isinstance(organs, tuple):
         ids, positions = organs
     else:
         ids, positions = plant_leaves(organs)
+        if len(ids) == 0:  # a plant with nothing to age: say so instead of an empty autumn
+            raise ValueRefused(NO_LEAVES)
     ids = np.asarray(ids, np.int64)
     positions = np.asarray(positions, np.float64).reshape(len(ids), 3)
     if len(ids) > 50_000_000:

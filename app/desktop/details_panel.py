@@ -306,9 +306,6 @@ class DetailsPanel(QWidget):
         if snap.mesh is None or snap.mesh.n_cells == 0:
             return
         assert self.season is not None  # computed first (show_step)
-        if not len(self.season.leaf_ids):
-            self.season_label.setText("This plant has no leaves (no 'Leaf' or surface organs, no polygons) to age.")
-            return
         base = state.base_colors(snap.mesh)
         rgb, fallen = season_cell_colors(snap.mesh, self.season, self.chain, step, base)
         if len(snap.selection):

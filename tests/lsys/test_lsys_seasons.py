@@ -188,3 +188,21 @@ def test_polygon_leaves_age_fall_and_keep_their_streams_through_a_regrow():
     after = age_leaves(session.derivation.skeleton(), autumn_chain(), steps=8, seed=3, wind=0.1)
     kept, i, j = np.intersect1d(before.leaf_ids, after.leaf_ids, return_indices=True)
     assert 0 < len(kept) < 42 and np.array_equal(before.states[:, i], after.states[:, j])
+
+
+def test_a_plant_without_leaves_is_refused_by_name():
+    """Issue 40: ``autumn`` on a leafless tree gave "0 leaves" and exit 0; now it says why."""
+    skeleton = ramure.derive("abop_tree", n=3).skeleton()
+    with pytest.raises(ValueRefused, match="no leaves to age.*Leaf module"):
+        age_leaves(skeleton, autumn_chain(), steps=4)
+    empty = age_leaves((np.arange(0), np.zeros((0, 3))), autumn_chain(), steps=4)  # an explicit empty set stays legal
+    assert len(empty.leaf_ids) == 0
+
+
+def test_autumn_command_refuses_a_leafless_plant(capsys, tmp_path):
+    from ramure.app.cli import main
+
+    out = tmp_path / "autumn.png"
+    assert main(["autumn", "abop_tree", "-n", "3", "-o", str(out)]) == 2
+    assert "no leaves to age" in capsys.readouterr().err
+    assert not out.exists()
