@@ -4,7 +4,8 @@ season: the work behind the Details panels and ``ramure lichen --on-plant / --on
 Shared by the desktop's Details dock and the Jupyter Details tab (no Qt, no widgets): each
 function takes a :class:`ramure.app.model.Explorer` and returns what the panel shows.
 
-Sizes chosen here (the issue is silent): lichen particle radius = fruit diagonal / 120;
+Sizes chosen here (the issue is silent): lichen particle radius = fruit diagonal / 80 (at / 120
+the default 300 particles covered 3 % of a fruit, too little to see: issue 40);
 crack arcs = diagonal / 25 long, profiles diagonal / 80 wide and diagonal / 40 deep, carved
 from the top of the fruit along +x.  The fruit's surface (from
 :meth:`~ramure.app.model.Explorer.fruit_surface`, 122 quads for a round tomato) is split into
@@ -100,13 +101,13 @@ def lichen_on_fruit(
             f"the painted adhesion has {len(adhesion)} values for a fruit of {poly.n_points} vertices: paint this fruit again"
         )
     growth = grow_lichen(
-        mesh, clusters=clusters, particles=particles, r=diagonal(poly) / 120, habit=habit, adhesion=adhesion, seed=seed
+        mesh, clusters=clusters, particles=particles, r=diagonal(poly) / 80, habit=habit, adhesion=adhesion, seed=seed
     )
     discs = to_polydata(growth, mesh, lift=growth.r * 0.2)
     per_disc = discs.n_cells // max(growth.count, 1)
     discs.cell_data["rgb"] = np.repeat(AGE_RGB[age_classes(growth, 3)], per_disc, axis=0)
     facts = {"triangles": len(mesh.triangles), "habit": habit, "painted": adhesion is not None, **growth.facts()}
-    return {"surface": poly, "fruit": poly, "discs": discs, "facts": facts}
+    return {"surface": poly, "fruit": poly, "discs": discs, "facts": facts, "growth": growth, "mesh": mesh}
 
 
 def plant_bark(skeleton: Skeleton, thinnest: float = 0.1) -> tuple[pv.PolyData, TriMesh]:
@@ -197,6 +198,21 @@ def close_up(growth: Lichen, mesh: TriMesh) -> list:
     outward /= max(np.linalg.norm(outward), 1e-12)
     up = np.array([0.0, 0.0, 1.0]) if abs(outward[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     return [tuple(centre + outward * extent * 3.2 + up * extent * 0.6), tuple(centre), tuple(up)]
+
+
+def facing(growth: Lichen, mesh: TriMesh) -> list:
+    """A camera that shows the whole surface from the side where its lichen grows: along the
+    particles' mean outward normal, far enough for the surface to fill about two thirds of the
+    picture.  A fixed camera sees the far side of the fruit half the time, and the lichen with it."""
+    normals = mesh.normals[growth.triangle]
+    outward = normals.mean(axis=0)
+    outward /= max(np.linalg.norm(outward), 1e-12)
+    lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+    centre, radius = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
+    up = np.array([0.0, 0.0, 1.0]) if abs(outward[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    side = np.cross(outward, up)
+    eye = centre + (outward + 0.25 * side + 0.2 * up) * radius * 2.6
+    return [tuple(eye), tuple(centre), tuple(up)]
 
 
 def crack_on_fruit(ex: Explorer, nodes: int = 15, seed: int = 0, anchor: Any = None) -> dict:

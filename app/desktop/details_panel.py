@@ -537,8 +537,13 @@ class DetailsPanel(QWidget):
             return
         self.last_facts = result["facts"]
         if name == "details lichen":
+            from ramure.app.details import facing
+
             self.shown = "lichen"
             self._show_result(result["surface"], FRUIT_RGB, result["discs"])
+            self.plotter.camera_position = facing(result["growth"], result["mesh"])  # the lichen's side
+            if hasattr(self.plotter, "render"):
+                self.plotter.render()
             f = result["facts"]
             self.fruit_label.setText(
                 f"Lichen ({f['habit']}): {f['particles']} particles in {f['clusters']} "

@@ -143,7 +143,7 @@ class DetailsTab:
         tab's settings, record it in the model and show the result; a refused setting is said in the
         message line.
         """
-        from ramure.app.details import diagonal, lichen_on_fruit, paint_adhesion
+        from ramure.app.details import diagonal, facing, lichen_on_fruit, paint_adhesion
 
         try:
             point, poly = self._place()
@@ -160,12 +160,13 @@ class DetailsTab:
             self._refused(err)
             return
         f = out["facts"]
+        camera = facing(out["growth"], out["mesh"])  # the lichen's side, the whole fruit in view
         self._show(
             "lichen",
             out,
             f"Lichen ({f['habit']}): {f['particles']} particles in {f['clusters']} clusters "
             f"on {f['triangles']} triangles; old discs dark, young rims light",
-            lambda path: _render_surface(out["surface"], path, self.size, out["discs"]),
+            lambda path: _render_surface(out["surface"], path, self.size, out["discs"], camera=camera),
         )
 
     def grow_lichen_on_bark(self) -> None:

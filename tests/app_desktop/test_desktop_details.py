@@ -243,3 +243,25 @@ def test_lichen_and_a_crack_are_kept_in_the_session_undone_and_redone(qtbot, win
     qtbot.waitUntil(lambda: panel.shown == "lichen", timeout=30000)
     settle(qtbot, window)
     assert panel.last_facts == lichen
+
+
+def _shot(panel, **visible):
+    for name, on in visible.items():
+        panel.plotter.actors[name].SetVisibility(on)
+    panel.plotter.render()
+    return panel.plotter.screenshot(return_img=True).astype(int)
+
+
+def test_lichen_at_its_default_size_shows_in_the_dock(qtbot, window):
+    """Issue 40 §7: at its default size, seen from a fixed corner, lichen covered a few pixels."""
+    panel = _panel(window)
+    window.controller.select([window.controller.explorer.fruit_ids()[0]])
+    qtbot.mouseClick(panel.lichen_button, Qt.MouseButton.LeftButton)  # the dock's defaults
+    _wait(qtbot, window, panel, "particles in")
+    lichen = _shot(panel, details_surface=True, details_discs=True)
+    fruit = _shot(panel, details_surface=True, details_discs=False)
+    empty = _shot(panel, details_surface=False, details_discs=False)
+    on_fruit = (fruit != empty).any(-1).sum()
+    shown = (lichen != fruit).any(-1).sum()
+    assert on_fruit > 0.1 * fruit.shape[0] * fruit.shape[1]  # the fruit fills the view
+    assert shown > 0.15 * on_fruit  # and the lichen a good part of the fruit
