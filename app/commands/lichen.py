@@ -84,6 +84,20 @@ def bark(args: argparse.Namespace) -> tuple[str, pv.DataSet, TriMesh, float]:
     return args.on, surface, mesh, 0.02
 
 
+def seeding_map(mesh: TriMesh, args: argparse.Namespace) -> np.ndarray | None:
+    """The seed probability per vertex for ``--seeding``: None (anywhere), the habit's light and
+    humidity response (``light``), or that times an accessibility band around ``--accessibility``
+    (``accessibility``, the spec's mode: about 0.45 for crustose lichen on stone)."""
+    from ramure.gmap.organs.lichen import seed_map
+
+    if args.seeding == "anywhere":
+        return None
+    if not 0 <= args.accessibility <= 1:
+        raise UserError(f"--accessibility must be in [0, 1], not {args.accessibility:g}")
+    target = args.accessibility if args.seeding == "accessibility" else None
+    return seed_map(mesh, args.habit, target=target)
+
+
 def run_lichen(args: argparse.Namespace) -> int:
     """``ramure lichen``: grow lichen clusters by diffusion-limited aggregation on a closed surface (a stone, a
     mesh file, a plant's bark ``--on-plant`` or a pine's ``--on-wood``), print their facts and write ``-o``
@@ -98,12 +112,14 @@ def run_lichen(args: argparse.Namespace) -> int:
         particles=args.particles,
         r=default_r if args.r is None else args.r,
         habit=args.habit,
+        adhesion=seeding_map(mesh, args),
         seed=args.seed,
     )
     facts = {
         "on": what,
         "triangles": len(mesh.triangles),
         "habit": args.habit,
+        "seeding": args.seeding,
         "r": growth.r,
         **growth.facts(),
         "seconds": round(time.perf_counter() - t0, 4),
@@ -128,9 +144,10 @@ def render_lichen(
     mesh: TriMesh, growth: Lichen, discs: pv.PolyData, path: pathlib.Path, size: tuple[int, int], close: bool = False
 ) -> None:
     """Render the bark ``mesh`` with the lichen ``discs`` coloured by age to the PNG ``path`` (``size`` pixels);
-    ``close`` frames the lichen rather than the whole bark.
+    ``close`` frames the lichen rather than the whole bark; otherwise the whole surface is seen
+    from the side where the lichen grows (:func:`ramure.app.details.facing`).
     """
-    from ramure.app.render import frame_camera, headless_setup
+    from ramure.app.render import headless_setup
 
     headless_setup()
     import pyvista as pv
@@ -144,12 +161,9 @@ def render_lichen(
     plotter.set_background("white", top="lightsteelblue")  # type: ignore[arg-type]  # pyvista stubs: decorated method
     plotter.add_mesh(surface, color=(0.62, 0.6, 0.57), smooth_shading=True)
     plotter.add_mesh(discs, scalars="rgb", rgb=True)
-    if close:
-        from ramure.app.details import close_up
+    from ramure.app.details import close_up, facing
 
-        plotter.camera_position = close_up(growth, mesh)
-    else:
-        frame_camera(plotter, surface.bounds, "iso")
+    plotter.camera_position = close_up(growth, mesh) if close else facing(growth, mesh)
     write_with(path, lambda tmp: plotter.screenshot(tmp))
     plotter.close()
 
@@ -181,6 +195,16 @@ def register(sub: Subparsers) -> None:
         "the particles would cover a tenth of it)",
     )
     p.add_argument("--habit", default="crustose", choices=sorted(HABITS))
+    p.add_argument(
+        "--seeding",
+        default="anywhere",
+        choices=("anywhere", "light", "accessibility"),
+        help="where clusters start: anywhere (default), where the habit's light and humidity suit it, "
+        "or that and near an accessibility (Miller's tangent sphere; see --accessibility)",
+    )
+    p.add_argument(
+        "--accessibility", type=float, default=0.45, help="with --seeding accessibility: the target in [0, 1] (default 0.45)"
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="print clusters, particles, intersection tests, seconds")
     p.add_argument("-o", "--output", help="PNG picture or VTP of the lichen discs")

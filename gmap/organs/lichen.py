@@ -143,6 +143,80 @@ def environment(
     return np.minimum.reduce(parts)
 
 
+def accessibility(mesh: TriMesh, reference: float | None = None, iterations: int = 14) -> np.ndarray:
+    """Tangent-sphere accessibility per vertex (Miller 1994), in [0, 1].
+
+    A vertex's accessibility is the radius of the largest sphere that touches the surface there
+    from outside (centre ``p + r n``) and holds none of the surface inside, over ``reference``
+    (default: half the bounding-box diagonal), capped at 1: deep creases and the stem cavity of a
+    fruit are near 0, open convex skin is 1.  The emptiness test uses the surface's vertices, edge
+    midpoints and triangle centroids in a k-d tree, with a 0.5 % tolerance for the facets; the radius
+    is found by bisection on a log scale from a tenth of the mean edge length (monotone: the tangent
+    spheres at one point with one normal are nested).
+    """
+    from scipy.spatial import cKDTree
+
+    points, tris = mesh.points, mesh.triangles
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    reference = float(np.linalg.norm(hi - lo)) / 2 if reference is None else float(reference)
+    if not (np.isfinite(reference) and reference > 0):
+        raise GMapError(f"the accessibility reference radius must be > 0, not {reference}")
+    corners = points[tris]
+    samples = np.concatenate([points, corners.mean(axis=1), (corners + np.roll(corners, 1, axis=1)).reshape(-1, 3) / 2])
+    tree = cKDTree(samples)
+    normals = _vertex_normals(mesh)
+    edge = float(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).mean())
+    radius = np.full(len(points), reference)
+    hidden = np.flatnonzero(~_empty(tree, points, normals, np.full(len(points), reference)))  # the rest are open
+    low = np.full(len(hidden), np.log(min(edge / 10, reference)))
+    high = np.full(len(hidden), np.log(reference))
+    for _ in range(iterations):
+        mid = (low + high) / 2
+        fits = _empty(tree, points[hidden], normals[hidden], np.exp(mid))
+        low, high = np.where(fits, mid, low), np.where(fits, high, mid)
+    radius[hidden] = np.exp(low)
+    return np.clip(radius / reference, 0.0, 1.0)
+
+
+def _empty(tree, points, normals, radius) -> np.ndarray:
+    """Whether the sphere of ``radius`` (one per point) tangent at each point outside holds no sample."""
+    if not len(points):
+        return np.zeros(0, bool)
+    distance, _ = tree.query(points + normals * radius[:, None], distance_upper_bound=float(radius.max()))
+    return distance >= 0.995 * radius
+
+
+def seed_map(
+    mesh: TriMesh,
+    habit: str = "crustose",
+    target: float | None = 0.45,
+    width: float = 0.2,
+    humidity: ArrayLike | None = None,
+    sun: ArrayLike = (0.3, -0.4, 0.87),
+    reference: float | None = None,
+) -> np.ndarray:
+    """Where spores stay, per vertex in [0, 1]: the habit's light and humidity response
+    :func:`environment` times an accessibility band around ``target`` (the spec: spores are
+    dropped where accessibility is too high or too low; crustose lichen on stone at about 0.45),
+    ``exp(-((a - target) / width)^2)``.  ``target=None`` leaves accessibility out (light and
+    humidity only).  Pass the result as ``adhesion`` to :func:`grow_lichen`.  The map is scaled
+    so its best place is 1: on a surface whose accessibility is the same everywhere (a convex
+    fruit, a smooth stone) light and humidity alone decide.  A map that is 0 everywhere is refused.
+    """
+    env = environment(mesh, habit, sun, humidity)
+    if target is None:
+        weights = env
+    else:
+        if not (0 <= target <= 1 and width > 0):
+            raise GMapError(f"the accessibility target must be in [0, 1] and the width > 0, not {target}, {width}")
+        band = np.exp(-(((accessibility(mesh, reference) - target) / width) ** 2))
+        weights = env * band
+    if not weights.max() > 0:
+        what = "light and humidity" if target is None else f"accessibility near {target:g}, light and humidity"
+        raise GMapError(f"no place on this surface suits {habit} lichen ({what}); seed anywhere or paint where it may start")
+    return np.clip(weights / weights.max(), 0.0, 1.0)
+
+
 def _vertex_normals(mesh: TriMesh) -> np.ndarray:
     acc = np.zeros_like(mesh.points)
     for k in range(3):
