@@ -37,11 +37,12 @@ AGE_RGB = np.array([[107, 128, 77], [153, 173, 92], [204, 209, 128]], np.uint8) 
 def season_at(season: Season, step: int) -> Season:
     """The :class:`~ramure.lsys.seasons.Season` as it was at ``step``: leaves fallen later are
     still attached (no landing point yet)."""
-    from ramure.lsys.seasons import Season
+    import dataclasses
 
     down = season.fallen & (season.fall_step <= step)
     ground = np.where(down[:, None], season.ground, np.nan)
-    return Season(season.leaf_ids, season.states[: step + 1], down, np.where(down, season.fall_step, -1), ground, season.motif)
+    fall_step = np.where(down, season.fall_step, -1)
+    return dataclasses.replace(season, states=season.states[: step + 1], fallen=down, fall_step=fall_step, ground=ground)
 
 
 def selected_fruit_surface(ex: Explorer) -> tuple[pv.PolyData, TriMesh]:
@@ -198,6 +199,23 @@ def close_up(growth: Lichen, mesh: TriMesh) -> list:
     outward /= max(np.linalg.norm(outward), 1e-12)
     up = np.array([0.0, 0.0, 1.0]) if abs(outward[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     return [tuple(centre + outward * extent * 3.2 + up * extent * 0.6), tuple(centre), tuple(up)]
+
+
+def litter_polydata(season: Season, colors: np.ndarray, step: int = -1, size: float = 0.12) -> pv.PolyData:
+    """The fallen leaves at ``step`` as curled blades on compacted piles
+    (:func:`ramure.lsys.seasons.litter`), each triangle coloured by its leaf's state then
+    (``colors``, the chain's RGB in [0, 1], as ``rgb`` cell data) and carrying its ``leaf_id``."""
+    import pyvista as pv
+
+    from ramure.lsys.seasons import litter
+
+    step = len(season.states) - 1 if step < 0 else step
+    points, triangles, leaf = litter(season, step, size)
+    faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
+    mesh = pv.PolyData(points, faces)
+    mesh.cell_data["rgb"] = np.round(colors[season.states[step][leaf]] * 255).astype(np.uint8)
+    mesh.cell_data["leaf_id"] = season.leaf_ids[leaf]
+    return mesh
 
 
 def facing(growth: Lichen, mesh: TriMesh) -> list:

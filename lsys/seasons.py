@@ -20,6 +20,14 @@ tumble, spiral: displacement per time step plus the wind) until it lands on the 
 the pile already there (a height map of cells; each landed leaf raises its cell by its
 thickness), so leaves pile up downwind.
 
+**Litter** (:func:`litter`, chosen here: the source's atlas leaves are scanned and folded by a
+mass-spring model, and it compacts heaps by a physics run of up to 12 h): a fallen leaf is drawn
+as an ovate blade (:func:`leaf_shape`) that rolls across and arches along as it dries, more each
+step it has lain on the ground (``curl = t / (t + 4)`` of the full roll after ``t`` steps), and a
+pile **compacts**: a leaf with ``k`` leaves above it in its cell keeps ``f + (1 − f) e^{−k/k₀}``
+of its thickness (``f`` = :data:`COMPACTED`, ``k₀`` = :data:`COMPACTION_DEPTH`), so a pile of
+``N`` leaves is lower than ``N`` thicknesses and its bottom layers are pressed flat.
+
 **Random streams survive a regrow**: every draw is a counter-based hash of (seed, the leaf's
 history-tree id, step, purpose), so a leaf keeps its fate when another part of the plant is
 regrown, and only the regrown subtree's new leaves get new streams.
@@ -142,7 +150,7 @@ def autumn_chain() -> LeafChain:
 
 
 # -- counter-based random streams -----------------------------------------------------------
-_PURPOSE = {"transition": 1, "detach": 2, "motif": 3, "phase": 4, "jitter": 5}
+_PURPOSE = {"transition": 1, "detach": 2, "motif": 3, "phase": 4, "jitter": 5, "yaw": 6}
 
 
 def leaf_uniform(seed: int, leaf_ids: np.ndarray, step: int, purpose: str) -> np.ndarray:
@@ -177,6 +185,9 @@ class Season:
     motif: np.ndarray
     intersection_tests: int = 0
     trajectory_segments: int = 0
+    cell: float = 0.25
+    thickness: float = 0.02
+    seed: int = 0
 
     def colors(self, chain: LeafChain, step: int = -1) -> np.ndarray:
         return chain.colors[self.states[step]]
@@ -229,7 +240,7 @@ def age_leaves(
         ground[fallen], tests, segments = _drop(
             ids[fallen], positions[fallen], fall_step[fallen], motif[fallen], wind_xy, seed, ground_cell, thickness
         )
-    return Season(ids, states, fallen, fall_step, ground, motif, tests, segments)
+    return Season(ids, states, fallen, fall_step, ground, motif, tests, segments, ground_cell, thickness, seed)
 
 
 def age_states(
@@ -340,6 +351,109 @@ def _motif_offsets(motif, phase, k):
     flip = np.where(motif == 2, np.sign(np.sin(angle * 2)) * 0.1, 0.0)[:, None] * sway[:, ::-1]
     down = np.select([motif == 0, motif == 1, motif == 2, motif == 3], [0.5, 0.22, 0.3, 0.28])
     return np.concatenate([lateral + flip, -down[:, None]], axis=1)
+
+
+# -- litter: fallen leaves drawn curled, in piles that compact --------------------------------
+#: The share of its thickness a deeply buried leaf keeps, and the number of leaves above it
+#: over which it is pressed (an e-folding count): chosen here, see the module docstring.
+COMPACTED = 0.35
+COMPACTION_DEPTH = 4.0
+#: The roll of a fully dried blade across its width, in radians from the midrib to an edge.
+FULL_ROLL = 1.3
+
+
+def leaf_shape(
+    length: float = 1.0, width: float = 0.5, roll: float = 0.0, arch: float = 0.0, rows: int = 9, cols: int = 7
+) -> tuple[np.ndarray, np.ndarray]:
+    """An ovate leaf blade as triangles: ``(points (k, 3), triangles (m, 3))``, the midrib along x
+    from the petiole (``x = -length/2``) to the tip, lying on z = 0 when flat.
+
+    ``roll`` bends the blade across its midrib: the edges turn up by ``roll`` radians (the blade
+    is bent, not stretched, so its area stays that of the flat leaf); ``arch`` lifts tip and
+    petiole by ``arch * length / 4`` each. Widest a little before the middle:
+    ``half-width(u) = width/2 * sin(pi u)^0.7 * (1 - u/4)``, ``u`` in [0, 1] along the midrib.
+    """
+    points = _blades(length, width, np.array([float(roll)]), np.array([float(arch)]), rows, cols)[0]
+    a = (np.arange(rows - 1)[:, None] * cols + np.arange(cols - 1)[None, :]).ravel()
+    quads = np.stack([a, a + 1, a + cols + 1, a + cols], axis=1)
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    corners = points[triangles]
+    area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    return points, triangles[area > 1e-15 * max(length, width) ** 2]  # the petiole and tip rows meet in a point
+
+
+def _blades(length, width, roll, arch, rows=9, cols=7):
+    """The points of ``len(roll)`` blades at once, (n, rows * cols, 3) (see :func:`leaf_shape`)."""
+    u = np.linspace(0.0, 1.0, rows)
+    v = np.linspace(-1.0, 1.0, cols)
+    half = 0.5 * width * np.sin(np.pi * u) ** 0.7 * (1 - 0.25 * u)
+    x = np.broadcast_to(((u - 0.5) * length)[None, :, None], (len(roll), rows, cols))
+    across = np.broadcast_to(half[None, :, None] * v[None, None, :], x.shape)
+    bend = np.maximum(roll, 1e-9)[:, None, None] / np.maximum(half, 1e-12)[None, :, None]
+    angle = across * bend  # the curvature that turns each row's edge up by ``roll``
+    y, z = np.sin(angle) / bend, (1 - np.cos(angle)) / bend
+    z = z + arch[:, None, None] * x**2 / length
+    return np.stack([x, y, z], axis=-1).reshape(len(roll), -1, 3)
+
+
+def pile_heights(season: Season, step: int = -1) -> np.ndarray:
+    """The height of each leaf fallen by ``step`` on its compacted pile (NaN for the others).
+
+    Leaves share a pile when they landed in one ``season.cell`` square; they lie in the order
+    they landed, each pressed by the leaves above it (see the module docstring), so a pile's top
+    is ``sum_k t (f + (1 - f) exp(-k / k0))`` over its leaves, ``k`` counted from the top.
+    """
+    step = len(season.states) - 1 if step < 0 else step
+    down = np.flatnonzero(season.fallen & (season.fall_step <= step))
+    out = np.full(len(season.leaf_ids), np.nan)
+    if not len(down):
+        return out
+    ground = season.ground[down]
+    keys = np.floor(ground[:, :2] / season.cell).astype(np.int64)
+    order = np.lexsort((ground[:, 2], keys[:, 1], keys[:, 0]))  # by square, bottom (first landed) to top
+    keys, ground, down = keys[order], ground[order], down[order]
+    new_pile = np.r_[True, (keys[1:] != keys[:-1]).any(axis=1)]
+    pile = np.cumsum(new_pile) - 1
+    starts = np.flatnonzero(new_pile)
+    size = np.diff(np.r_[starts, len(down)])[pile]
+    above = size - 1 - (np.arange(len(down)) - starts[pile])
+    pressed = season.thickness * (COMPACTED + (1 - COMPACTED) * np.exp(-above / COMPACTION_DEPTH))
+    below = np.cumsum(pressed) - pressed
+    base = below[starts][pile]  # what the earlier piles add to the running sum
+    out[down] = (below - base) + pressed / 2 + _ground_level(ground, pile, starts, season.thickness)
+    return out
+
+
+def _ground_level(ground, pile, starts, thickness):
+    """Where each pile stands: the first leaf's landing height less half a thickness (0 on open ground)."""
+    return np.maximum(ground[starts, 2] - thickness / 2, 0.0)[pile]
+
+
+def litter(season: Season, step: int = -1, size: float = 0.12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fallen leaves at ``step`` as one triangle mesh: ``(points, triangles, leaf)`` where
+    ``leaf`` (m,) is each triangle's index into ``season.leaf_ids``.
+
+    Each leaf is a :func:`leaf_shape` ``size`` long, turned by a yaw drawn from its own stream
+    (it keeps it through a regrow), rolled and arched by the steps it has lain on the ground,
+    standing on its compacted pile (:func:`pile_heights`).
+    """
+    step = len(season.states) - 1 if step < 0 else step
+    z = pile_heights(season, step)
+    down = np.flatnonzero(~np.isnan(z))
+    if not len(down):
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
+    lying = step - season.fall_step[down]
+    curl = lying / (lying + 4.0)
+    yaw = 2 * np.pi * leaf_uniform(season.seed, season.leaf_ids[down], 0, "yaw")
+    flat, triangles = leaf_shape(size, size / 2)
+    cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    blades = _blades(size, size / 2, FULL_ROLL * curl, 0.3 * curl)
+    x, y = blades[..., 0], blades[..., 1]
+    turned = np.stack([x * cos - y * sin, x * sin + y * cos, blades[..., 2]], axis=-1)
+    centre = np.column_stack([season.ground[down, :2], z[down]])
+    points = (turned + centre[:, None, :]).reshape(-1, 3)
+    all_triangles = (triangles[None] + len(flat) * np.arange(len(down))[:, None, None]).reshape(-1, 3)
+    return points, all_triangles, np.repeat(down, len(triangles))
 
 
 def _drop(ids, start, fall_step, motif, wind, seed, cell, thickness):

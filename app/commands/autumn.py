@@ -83,7 +83,8 @@ def run_autumn(args: argparse.Namespace) -> int:
 def render_autumn(
     skeleton: Skeleton, season: Season, chain: LeafChain, path: str | os.PathLike, size: tuple[int, int] = (800, 800)
 ) -> str | os.PathLike:
-    """The plant with attached leaves in their state's colour and fallen leaves on the ground."""
+    """The plant with attached leaves in their state's colour and fallen leaves on the ground,
+    curled by the time they have lain there, on compacted piles (:func:`ramure.app.details.litter_polydata`)."""
     from ramure.app.render import frame_camera, headless_setup, plant_colors
 
     headless_setup()
@@ -107,10 +108,10 @@ def render_autumn(
         ground = season.ground[season.fallen]
         bounds[:2, 0] = np.minimum(bounds[:2, 0], ground[:, :2].min(axis=0))
         bounds[:2, 1] = np.maximum(bounds[:2, 1], ground[:, :2].max(axis=0))
-        leaves = pv.PolyData(ground)
-        leaves.point_data["rgb"] = (chain.colors[season.states[-1][season.fallen]] * 255).astype(np.uint8)
-        disc = pv.Disc(inner=0.0, outer=0.12, c_res=8)
-        plotter.add_mesh(leaves.glyph(geom=disc, orient=False, scale=False), scalars="rgb", rgb=True)
+        from ramure.app.details import litter_polydata
+
+        litter = litter_polydata(season, chain.colors, size=0.24)
+        plotter.add_mesh(litter, scalars="rgb", rgb=True, smooth_shading=True, show_scalar_bar=False)
     span = bounds[:, 1] - bounds[:, 0]
     plane = pv.Plane(center=(*(bounds[:2].mean(axis=1)), 0.0), i_size=span[0] * 1.3 + 1, j_size=span[1] * 1.3 + 1)
     plotter.add_mesh(plane, color=(0.42, 0.52, 0.32))

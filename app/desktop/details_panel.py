@@ -318,7 +318,7 @@ class DetailsPanel(QWidget):
         self.season_label.setText(season_text(self.season, self.chain, step))
 
     def _show_fallen(self, view, step):
-        import pyvista as pv
+        from ramure.app.details import litter_polydata
 
         assert self.season is not None  # painted from _paint only
         down = fallen_by(self.season, step)
@@ -328,12 +328,10 @@ class DetailsPanel(QWidget):
                 self.fallen_actor = None
             view.redraw()
             return
-        size = 0.012 * diagonal(self.controller.snapshot.mesh)
-        cloud = pv.PolyData(self.season.ground[down])
-        cloud.point_data["rgb"] = np.round(self.chain.colors[self.season.states[step][down]] * 255).astype(np.uint8)
-        discs = cloud.glyph(geom=pv.Disc(inner=0.0, outer=size, c_res=8), orient=False, scale=False)
+        size = 0.024 * diagonal(self.controller.snapshot.mesh)
+        leaves = litter_polydata(self.season, self.chain.colors, step, size)
         self.fallen_actor = view.plotter.add_mesh(
-            discs,
+            leaves,
             scalars="rgb",
             rgb=True,
             name="details_fallen",

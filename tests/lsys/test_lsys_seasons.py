@@ -206,3 +206,64 @@ def test_autumn_command_refuses_a_leafless_plant(capsys, tmp_path):
     assert main(["autumn", "abop_tree", "-n", "3", "-o", str(out)]) == 2
     assert "no leaves to age" in capsys.readouterr().err
     assert not out.exists()
+
+
+# -- litter: curled leaves on compacting piles ------------------------------------------------
+def _area(points, triangles):
+    c = points[triangles]
+    return 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
+
+
+def test_a_rolled_blade_keeps_its_area_and_lifts_its_edges_by_the_bend():
+    from ramure.lsys.seasons import leaf_shape
+
+    flat_points, triangles = leaf_shape(1.0, 0.5, rows=41, cols=21)
+    u = np.linspace(0, 1, 20001)
+    exact = np.trapezoid(0.5 * np.sin(np.pi * u) ** 0.7 * (1 - u / 4), u)  # 2 * half-width, length 1
+    assert abs(_area(flat_points, triangles) - exact) < 0.03 * exact
+    assert np.ptp(flat_points[:, 2]) == 0.0
+    roll = 1.2
+    points, same = leaf_shape(1.0, 0.5, roll=roll, rows=41, cols=21)
+    assert abs(_area(points, same) - _area(flat_points, triangles)) < 0.01 * exact  # bent, not stretched
+    middle = points.reshape(41, 21, 3)[20]  # the row at u = 1/2
+    half = 0.25 * (1 - 0.5 / 4)
+    np.testing.assert_allclose(middle[[0, -1], 2], half * (1 - np.cos(roll)) / roll, rtol=1e-9)
+
+
+def _column(n, thickness=0.02):
+    from ramure.lsys.seasons import Season
+
+    ground = np.column_stack([np.full(n, 0.1), np.full(n, 0.1), thickness * (np.arange(n) + 0.5)])
+    return Season(
+        np.arange(n),
+        np.zeros((3, n), np.int64),
+        np.ones(n, bool),
+        np.zeros(n, np.int64),
+        ground,
+        np.zeros(n, np.int64),
+        thickness=thickness,
+    )
+
+
+def test_a_pile_compacts_to_the_closed_form():
+    from ramure.lsys.seasons import COMPACTED, COMPACTION_DEPTH, pile_heights
+
+    n, t = 12, 0.02
+    z = pile_heights(_column(n, t))
+    k = np.arange(n)[::-1]  # leaves above each one, bottom first
+    pressed = t * (COMPACTED + (1 - COMPACTED) * np.exp(-k / COMPACTION_DEPTH))
+    np.testing.assert_allclose(z, np.cumsum(pressed) - pressed / 2, rtol=1e-12)
+    assert np.all(np.diff(z) > 0) and z[-1] + pressed[-1] / 2 < n * t  # lower than the leaves stacked loose
+    assert pile_heights(_column(1, t))[0] == pytest.approx(t / 2)  # one leaf lies as it landed
+
+
+def test_litter_curls_the_leaves_that_lay_longest():
+    from ramure.lsys.seasons import leaf_shape, litter
+
+    season = _column(2)
+    season.fall_step[:] = [0, 2]  # the first fell two steps before the second
+    season.ground[1, :2] += 1.0  # on open ground of its own
+    points, triangles, leaf = litter(season, step=2, size=0.3)
+    assert len(triangles) == 2 * len(leaf_shape()[1]) and set(leaf.tolist()) == {0, 1}
+    rise = [np.ptp(points[np.unique(triangles[leaf == i])][:, 2]) for i in (0, 1)]
+    assert rise[0] > 0.01 and rise[1] < 1e-9  # 2 steps on the ground against a leaf just fallen
