@@ -144,6 +144,22 @@ def bench_wood_g3l_grammars():
     return _record(seconds, 1.5, trunk.gm, steps=8, all_three_darts=sum(d.gm.n_darts for d in out))
 
 
+def bench_wood_g3l_trunk_20():
+    """Issue 39: the ``.g3l`` trunk at n = 20 (161,664 darts) in at most 1.5 s, at least 100k darts/s.
+
+    Before: 34 s (4.8k darts/s) at issue 39's filing, 8-9 s after issue 37's compiled
+    expressions; then contexts, support faces and joins are found for all volumes of a rule
+    at once instead of one volume at a time (each search scanned the whole map).
+    """
+    from ramure.gmap.lsystem.engine import G3LSystem
+
+    trunk = G3LSystem.from_file("wood/trunk")
+    seconds, out = _median(lambda: trunk.derive(20, seed=3), repeats=3)
+    rec = _record(seconds, 1.5, out.gm, steps=20, target_darts_per_second=100_000)
+    rec["ok"] = bool(rec["ok"] and rec["darts_per_second"] >= 100_000)
+    return rec
+
+
 if __name__ == "__main__":
     for name, fn in sorted(globals().items()):
         if name.startswith("bench_"):

@@ -392,7 +392,7 @@ class G3LDerivation:
         if rule.condition is None:
             return vols[keep]
         if rule.context:
-            keep[keep] = [self._context_ok(rule, v) for v in vols[keep].tolist()]
+            keep[keep] = self._context_ok(rule, vols[keep])
         idx = np.flatnonzero(keep)
         if idx.size:
             keep[idx] = self._eval(rule.condition, self._scope(rule.pred_params, vols[idx])) != 0
@@ -417,11 +417,21 @@ class G3LDerivation:
         first = np.argmax(hit, axis=0)
         return np.where(hit.any(axis=0), np.array([r.index for r in rules])[first], -1).tolist()
 
-    def _context_ok(self, rule, v) -> bool:
+    def _context_ok(self, rule, vols: np.ndarray) -> np.ndarray:
+        """Which of ``vols`` meet every context of ``rule`` (all volumes at once)."""
+        ok = np.ones(len(vols), bool)
         for face, sym, other, col in rule.context:
-            if not self._adjacent(v, face, sym, other, rule, col):
-                return False
-        return True
+            ok[ok] = self._adjacent(vols[ok], face, sym, other, rule, col)
+        return ok
+
+    def _face_codes(self, vols, label, rule, column):
+        """:meth:`_face_code` for many volumes: checked once per kind of volume (order, shape), in
+        the volumes' order, so a refusal names the first volume that lacks the face."""
+        vd = self.gm.volume_data
+        kinds = vd["degree"][vols].astype(np.int64) * 2 + vd["shape"][vols]
+        _, first = np.unique(kinds, return_index=True)
+        for i in np.sort(first).tolist():
+            self._face_code(int(vols[i]), label, rule, column)
 
     def _face_code(self, v, label, rule, column):
         gm = self.gm
@@ -441,18 +451,29 @@ class G3LDerivation:
             )
         return code
 
-    def _adjacent(self, v, face, sym, other, rule, col):
-        self._face_code(v, face, rule, col)
-        start = _ops.face_starts(self.gm, [v], face)
-        if start[0] < 0 or not _ops.face_is_free(self.gm, start)[0]:
-            return False
-        walk, _ = self.gm.face_walk(start)
-        mine = walk[0][walk[0] >= 0]
-        nb = _ops.boundary_neighbour(self.gm, mine)
-        vd = self.gm.volume_data
+    def _adjacent(self, vols, face, sym, other, rule, col):
+        """Per volume of ``vols``: its free face ``face`` shares an edge with face ``other`` of a
+        volume labelled ``sym`` (the rule's context)."""
+        gm = self.gm
+        out = np.zeros(len(vols), bool)
+        if not len(vols):
+            return out
+        self._face_codes(vols, face, rule, col)
+        starts = _ops.face_starts(gm, vols, face)
+        free = starts >= 0
+        free[free] = _ops.face_is_free(gm, starts[free])
+        if not free.any():
+            return out
+        walk, _ = gm.face_walk(starts[free])
+        mine = walk >= 0
+        nb = np.full(walk.shape, -1, np.int64)
+        nb[mine] = _ops.boundary_neighbour(gm, walk[mine])
+        hit = np.zeros(walk.shape, bool)
+        there = nb[mine]
         code = _prism.face_label_code(other)
-        ok = (vd["label"][self.gm.dart_volume[nb]] == sym) & (self.gm.dart_data["face"][nb] == code)
-        return bool(ok.any())
+        hit[mine] = (gm.volume_data["label"][gm.dart_volume[there]] == sym) & (gm.dart_data["face"][there] == code)
+        out[free] = hit.any(axis=1)
+        return out
 
     # ------------------------------------------------------------------ operators
     def _faces_of(self, rule, spec, vols, scope):
@@ -513,7 +534,7 @@ class G3LDerivation:
     def _add_children(self, rule, requests):
         gm = self.gm
         vols = np.array([r[0] for r in requests], np.int64)
-        starts = np.array([_ops.face_starts(gm, [v], lab)[0] for v, lab, *_ in requests], np.int64)
+        starts = self._starts(vols, [r[1] for r in requests])
         ok = starts >= 0
         ok[ok] = _ops.face_is_free(gm, starts[ok])
         requests = [r for r, keep in zip(requests, ok) if keep]
@@ -559,6 +580,17 @@ class G3LDerivation:
             _ops.sew_pairs(gm, starts[idx], new_o)
             self._sync_corner()
 
+    def _starts(self, vols: np.ndarray, labels: list[str]) -> np.ndarray:
+        """:func:`~ramure.gmap.lsystem.operators.face_starts` of face ``labels[i]`` of ``vols[i]``:
+        one pass over the map per face label, not per request."""
+        out = np.full(len(vols), -1, np.int64)
+        names = np.array(labels, dtype=object)
+        for label in dict.fromkeys(labels):
+            idx = np.flatnonzero(names == label)
+            unique, back = np.unique(vols[idx], return_inverse=True)
+            out[idx] = _ops.face_starts(self.gm, unique, label)[back]
+        return out
+
     def default_corners(self, volumes: ArrayLike | None = None) -> list[np.ndarray]:
         """Default corners of ``volumes`` from their stored frames: a list of (2n, 3) arrays."""
         vd = self.gm.volume_data
@@ -577,33 +609,41 @@ class G3LDerivation:
         return out
 
     def _support_frames(self, starts, vols, orders):
-        """Frames on the support faces: origin, rows (H, L, U), forward pairing, corner 0."""
+        """Frames on the support faces: origin, rows (H, L, U), forward pairing, corner 0.
+
+        All support faces of one length at once: a face's corners are its parent's default
+        corners where the dart has a template corner, else the map's corners.
+        """
         gm = self.gm
         walk, length = gm.face_walk(starts)
-        parents = np.unique(vols)
-        corners = dict(zip(parents.tolist(), self.default_corners(parents)))
+        parents, parent_of = np.unique(vols, return_inverse=True)
+        corners = self.default_corners(parents)
+        flat = np.concatenate(corners)
+        offset = np.concatenate([[0], np.cumsum([len(c) for c in corners])[:-1]])
+        middle = np.array([c.mean(axis=0) for c in corners])
         k = len(starts)
         origin, frame = np.zeros((k, 3)), np.zeros((k, 3, 3))
         forward = np.ones(k, bool)
         c0 = np.zeros((k, 3))
-        for i in range(k):  # one step per new volume
-            w = walk[i, : length[i] : 2]
-            cid = self.corner[w]
-            pc = corners[int(vols[i])]
-            pts = np.where(cid[:, None] >= 0, pc[np.maximum(cid, 0)], gm.corners[w])
-            centre = pts.mean(axis=0)
-            newell = np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0)
-            outward = centre - pc.mean(axis=0)
-            sign = 1.0 if newell @ outward >= 0 else -1.0
-            h = sign * newell / max(np.linalg.norm(newell), 1e-300)
-            u0 = pts[0] - centre
-            u0 -= (u0 @ h) * h
-            u0 /= max(np.linalg.norm(u0), 1e-300)
-            n = 4 if orders[i] == 3 else int(orders[i])
-            left = math.cos(math.pi / n) * u0 + math.sin(math.pi / n) * np.cross(h, u0)
-            origin[i], frame[i] = centre, np.stack([h, left, np.cross(h, left)])
-            forward[i] = sign > 0
-            c0[i] = pts[0]
+        for size in np.unique(length).tolist():
+            idx = np.flatnonzero(length == size)
+            w = walk[idx, :size:2]
+            cid = self.corner[w].astype(np.int64)
+            mine = flat[offset[parent_of[idx]][:, None] + np.maximum(cid, 0)]
+            pts = np.where(cid[..., None] >= 0, mine, gm.corners[w])
+            centre = pts.mean(axis=1)
+            newell = np.cross(pts, np.roll(pts, -1, axis=1)).sum(axis=1)
+            outward = centre - middle[parent_of[idx]]
+            sign = np.where(np.einsum("ij,ij->i", newell, outward) >= 0, 1.0, -1.0)
+            h = sign[:, None] * newell / np.maximum(np.linalg.norm(newell, axis=1), 1e-300)[:, None]
+            u0 = pts[:, 0] - centre
+            u0 -= np.einsum("ij,ij->i", u0, h)[:, None] * h
+            u0 /= np.maximum(np.linalg.norm(u0, axis=1), 1e-300)[:, None]
+            n = np.where(orders[idx] == 3, 4, orders[idx]).astype(np.float64)[:, None]
+            left = np.cos(np.pi / n) * u0 + np.sin(np.pi / n) * np.cross(h, u0)
+            origin[idx], frame[idx] = centre, np.stack([h, left, np.cross(h, left)], axis=1)
+            forward[idx] = sign > 0
+            c0[idx] = pts[:, 0]
         return origin, frame, forward, c0
 
     def _apply_split(self, rule, vols) -> None:
@@ -637,31 +677,43 @@ class G3LDerivation:
         gm = self.gm
         face_a, sym_b, face_b = rule.join
         code_b = _prism.face_label_code(face_b)
-        vd = gm.volume_data
         a_list, b_list, used = [], [], set()
-        for v in vols:  # one step per candidate volume
-            self._face_code(v, face_a, rule, 1)
-            start = _ops.face_starts(gm, [v], face_a)
-            if start[0] < 0 or not _ops.face_is_free(gm, start)[0]:
-                continue
-            walk, _ = gm.face_walk(start)
-            mine = walk[0][walk[0] >= 0]
-            nb = _ops.boundary_neighbour(gm, mine)
-            hit = (vd["label"][gm.dart_volume[nb]] == sym_b) & (gm.dart_data["face"][nb] == code_b) & (gm.dart_volume[nb] != v)
-            for a, b in zip(mine[hit], nb[hit]):
+        code_a = _prism.face_label_code(face_a)
+        for v, mine, nb in self._join_candidates(rule, np.asarray(vols, np.int64), face_a, sym_b, code_b):
+            for a, b in zip(mine.tolist(), nb.tolist()):  # the first free partner face not yet taken
                 fb = (int(gm.dart_volume[b]), code_b)
-                if fb in used or (v, _prism.face_label_code(face_a)) in used:
-                    continue
-                if not _ops.face_is_free(gm, [b])[0]:
+                if fb in used or (v, code_a) in used:
                     continue
                 used.add(fb)
-                used.add((v, _prism.face_label_code(face_a)))
-                a_list.append(int(a))
-                b_list.append(int(b))
+                used.add((v, code_a))
+                a_list.append(a)
+                b_list.append(b)
                 break
         if a_list:  # the kernel's identify: start darts and sense from the shared edge
             gm.identify(np.array(a_list, np.int64), np.array(b_list, np.int64))
         self._sync_corner()
+
+    def _join_candidates(self, rule, vols, face_a, sym_b, code_b):
+        """Per volume whose free face ``face_a`` touches a free face ``code_b`` of a ``sym_b``
+        volume: ``(volume, its darts, their partners)`` in the face walk's order, computed for
+        all volumes at once (the map does not change until the joins are made together)."""
+        gm, vd = self.gm, self.gm.volume_data
+        if not len(vols):
+            return []
+        self._face_codes(vols, face_a, rule, 1)
+        starts = _ops.face_starts(gm, vols, face_a)
+        free = starts >= 0
+        free[free] = _ops.face_is_free(gm, starts[free])
+        walk, _ = gm.face_walk(starts[free])
+        mine = walk >= 0
+        nb = np.full(walk.shape, -1, np.int64)
+        nb[mine] = _ops.boundary_neighbour(gm, walk[mine])
+        there = np.maximum(nb, 0)
+        owner = vols[free][:, None]
+        hit = mine & (vd["label"][gm.dart_volume[there]] == sym_b) & (gm.dart_data["face"][there] == code_b)
+        hit &= gm.dart_volume[there] != owner
+        hit[hit] = _ops.face_is_free(gm, there[hit])
+        return [(int(v), walk[i][hit[i]], nb[i][hit[i]]) for i, v in enumerate(vols[free].tolist()) if hit[i].any()]
 
     # ------------------------------------------------------------------ results
     def embed(self) -> np.ndarray:
