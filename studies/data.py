@@ -58,6 +58,9 @@ class StudyData:
     qualifier_group: np.ndarray  # (n_qualifiers,) group row of each qualifier
     qualifier_text: list
     test_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_tests,) time on task
+    #: (n_participants,) attention checks answered with another option than the expected one
+    #: (0 for a participant who did not reach the page, or a study without checks)
+    attention_missed: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
     def n_tests(self) -> int:
@@ -144,6 +147,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         f"JOIN tests t ON t.id = g.test_id {where} ORDER BY q.id"
     ).fetchall()
     name = conn.execute("SELECT name FROM study").fetchone()[0]
+    missed = attention_missed(source, [c for _, c in people])
     return StudyData(
         name=name,
         grammars=[n for _, n in grammars],
@@ -163,7 +167,22 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         qualifier_group=np.array([gid_row[g] for g, _ in quals], dtype=np.int64),
         qualifier_text=[t for _, t in quals],
         test_seconds=seconds,
+        attention_missed=missed,
     )
+
+
+def attention_missed(study: Study, codes: list[str]) -> np.ndarray:
+    """Per participant of ``codes``: how many of the study's attention checks were answered with
+    another option than the expected one (a check left unanswered on a stored page counts)."""
+    checks = study.config().attention_checks
+    out = np.zeros(len(codes), np.int64)
+    if not checks:
+        return out
+    for i, code in enumerate(codes):
+        page = study.participant_answers(code).get("attention")
+        if page is not None:
+            out[i] = sum(page.get(q.key) != q.answer for q in checks)
+    return out
 
 
 def params_of(data: StudyData, grammar: int, pick: int) -> dict:

@@ -10,7 +10,9 @@
   - ``all_alone``: every picture in a group of its own (no sorting either);
   - ``straight_lining``: three groups or more, every usefulness and difference
     answer the same level;
-  - ``unrated``: some group lacks a usefulness or difference answer.
+  - ``unrated``: some group lacks a usefulness or difference answer;
+  - ``missed_attention``: the participant answered an attention check with another option
+    than the one it asked for (every test of that participant carries the flag).
 
 * :func:`quality_summary` -- time on task per grammar and the flag counts;
 * :func:`representatives` -- how often the chosen representative is the group's
@@ -36,7 +38,7 @@ if TYPE_CHECKING:
     from ramure.studies.data import StudyData
 
 TOO_FAST_SECONDS = 60.0
-FLAGS = ("too_fast", "single_group", "all_alone", "straight_lining", "unrated")
+FLAGS = ("too_fast", "single_group", "all_alone", "straight_lining", "unrated", "missed_attention")
 
 
 def per_test_quality(data: StudyData) -> list[dict]:
@@ -49,6 +51,7 @@ def per_test_quality(data: StudyData) -> list[dict]:
     groups = np.bincount(data.group_test, minlength=n)
     rated = ~np.isnan(data.usefulness) & ~np.isnan(data.difference)
     rated_groups = np.bincount(data.group_test, weights=rated, minlength=n)
+    missed = data.attention_missed if len(data.attention_missed) == len(data.participants) else None
     rows = []
     for t in range(n):
         mine = data.group_test == t
@@ -59,6 +62,7 @@ def per_test_quality(data: StudyData) -> list[dict]:
             all_alone=bool(groups[t] == data.membership.shape[1]),
             straight_lining=bool(groups[t] >= 3 and rated[mine].all() and np.unique(levels).size == 1),
             unrated=bool(rated_groups[t] < groups[t]),
+            missed_attention=bool(missed is not None and missed[data.test_participant[t]] > 0),
         )
         rows.append(
             dict(

@@ -670,7 +670,8 @@ def _quality_html(result):
     counts = ", ".join(f"{e(f.replace('_', ' '))}: {n}" for f, n in q["flag_counts"].items())
     parts.append(
         f"<p class='note'>Flags — {counts}. Too fast: under {q['too_fast_seconds']:g} s or a third of the median. "
-        "Single group / all alone: no sorting. Straight-lining: one level for every answer of three groups or more.</p>"
+        "Single group / all alone: no sorting. Straight-lining: one level for every answer of three groups or more. "
+        "Missed attention: an attention check answered with another option than the one it asked for.</p>"
     )
     if q["flagged"]:
         rows = [

@@ -242,6 +242,27 @@ def test_time_on_task_and_flags(study, clock):
     assert [r["flags"] for r in rows] == [["too_fast", "single_group"], ["straight_lining"], [], ["too_fast"]]
 
 
+def test_a_missed_attention_check_flags_every_test_of_that_participant(study, clock):
+    """Issue 38 §3: attention checks were stored and never looked at again."""
+    from ramure.studies.quality import quality_summary
+
+    codes = [study.add_participant(consent=True) for _ in range(3)]
+    answers = [{"attention_1": "fair"}, {"attention_1": "good"}, None]  # passed, missed, never reached
+    for code, page in zip(codes, answers):
+        if page is not None:
+            study.record_answers(code, "attention", page)
+        for grammar in ("honda", "tree2"):
+            clock.advance(600)
+            _answer(study.session(code, grammar), [range(1, 10), range(10, 19), range(19, 28)], level=2 + len(grammar) % 2)
+    data = load_study_data(study)
+    assert data.attention_missed.tolist() == [0, 1, 0]
+    rows = per_test_quality(data)
+    assert [("missed_attention" in r["flags"]) for r in rows] == [False, False, True, True, False, False]
+    summary = quality_summary(data)
+    assert summary["flag_counts"]["missed_attention"] == 2
+    assert {r["participant"] for r in summary["flagged"] if "missed_attention" in r["flags"]} == {codes[1]}
+
+
 def test_codebook_describes_every_exported_column(tmp_path):
     simulate_study(tmp_path / "s.db", participants=2, grammars=1)
     files = export_csv(tmp_path / "s.db", tmp_path / "csv")
