@@ -25,6 +25,8 @@ identity keys, double precision and byte-ordered (``"C"``) text, so rows sort as
 
 from __future__ import annotations
 
+import functools
+import os
 import re
 import sqlite3
 import urllib.parse
@@ -58,7 +60,7 @@ def is_database_url(location: object) -> bool:
     return isinstance(location, str) and location.split("://", 1)[0].lower() in ("postgresql", "postgres")
 
 
-def sqlite_path(location: object) -> object:
+def sqlite_path(location: str | os.PathLike) -> str | os.PathLike:
     """A ``sqlite:///path`` URL as its path (SQLAlchemy's spelling: three slashes before a relative
     path, four before an absolute one); anything else unchanged.
 
@@ -84,6 +86,7 @@ def shown_url(url: str) -> str:
     return urllib.parse.urlunsplit(parts._replace(netloc=f"{parts.username}:***@{netloc[1]}"))
 
 
+@functools.lru_cache(maxsize=512)
 def translate(sql: str, params: bool = True) -> str:
     """SQLite's spelling of ``sql`` in PostgreSQL's (see the module's list); string literals are kept.
 
@@ -120,6 +123,16 @@ def pg_schema(sql: str) -> list[str]:
     sql = re.sub(r"\bREAL\b", "DOUBLE PRECISION", sql)
     sql = re.sub(r"\bTEXT\b", 'TEXT COLLATE "C"', sql)
     return [s.strip() for s in sql.split(";") if s.strip()]
+
+
+@functools.lru_cache(maxsize=512)
+def _statement(sql: str, params: bool) -> tuple[str, bool, bool]:
+    """``sql`` in PostgreSQL's spelling (cached), whether it returns the new row's ``id``, and
+    whether it changes rows (counted in ``total_changes``)."""
+    table = _INSERT.match(sql)
+    returning = bool(table and table.group(1).lower() in ID_TABLES and "RETURNING" not in sql.upper())
+    changes = bool(table or re.match(r"^\s*(UPDATE|DELETE)\b", sql, re.IGNORECASE))
+    return translate(sql, params=params) + (" RETURNING id" if returning else ""), returning, changes
 
 
 def _as_sqlite_error(exc: Exception) -> sqlite3.Error:
@@ -180,7 +193,7 @@ class PgConnection:
         self.text_factory: Any = str  # SQLite's; PostgreSQL checks the encoding itself
         self.total_changes = 0
         self._depth = 0
-        self._transaction: Any = None
+        self._pending = ""  # session settings sent ahead of the next statement (one round trip, not two)
         if readonly:
             self.execute("SET default_transaction_read_only = on")
         self.execute(f"SET synchronous_commit = {'on' if durable else 'off'}")
@@ -199,21 +212,29 @@ class PgConnection:
         pragma = _PRAGMA.match(sql)
         if pragma:
             return self._pragma(pragma.group(1).lower(), (pragma.group(2) or "").upper())
-        table = _INSERT.match(sql)
-        returning = bool(table and table.group(1).lower() in ID_TABLES and "RETURNING" not in sql.upper())
-        text = translate(sql, params=bool(params)) + (" RETURNING id" if returning else "")
-        cursor = self.raw.cursor()
-        try:
-            cursor.execute(text, tuple(params) if params else None)
-        except self._psycopg.Error as exc:
-            raise _as_sqlite_error(exc) from None
+        text, returning, changes = _statement(sql, bool(params))
+        cursor = self._run(text, tuple(params) if params else None)
         lastrowid = None
         if returning:
             row = cursor.fetchone()
             lastrowid = row[0] if row else None
-        if table or re.match(r"^\s*(UPDATE|DELETE)\b", sql, re.IGNORECASE):
+        if changes:
             self.total_changes += max(0, cursor.rowcount)
         return PgCursor(cursor, lastrowid)
+
+    def _run(self, text: str, params: tuple | None) -> Any:
+        """Execute ``text`` (PostgreSQL's spelling), with any pending settings in the same round trip
+        (the client-side cursor sends several statements at once; the last one's result is read)."""
+        cursor = self.raw.cursor()
+        if self._pending:  # a SET: no placeholder or % in it
+            text, self._pending = f"{self._pending}; {text}", ""
+        try:
+            cursor.execute(text, params)
+        except self._psycopg.Error as exc:
+            raise _as_sqlite_error(exc) from None
+        while cursor.nextset():  # the last statement's result
+            pass
+        return cursor
 
     def executemany(self, sql: str, rows: Iterable[Sequence]) -> PgCursor:
         """Run one statement for each row of ``rows``."""
@@ -230,42 +251,35 @@ class PgConnection:
 
     def _pragma(self, name: str, value: str) -> PgCursor:
         if name == "synchronous" and value in ("FULL", "NORMAL", "OFF", "EXTRA"):
-            return self.execute(f"SET synchronous_commit = {'off' if value in ('NORMAL', 'OFF') else 'on'}")
+            self._pending = f"SET synchronous_commit = {'off' if value in ('NORMAL', 'OFF') else 'on'}"
+            return PgCursor(self.raw.cursor())
         if name == "foreign_keys":  # always enforced by PostgreSQL
-            return self.execute("SELECT 1")
+            return PgCursor(self.raw.cursor())
         raise sqlite3.OperationalError(f"PRAGMA {name} is SQLite's; this study is on PostgreSQL")
 
     def __enter__(self) -> PgConnection:
         if self._depth == 0:
-            self._transaction = self.raw.transaction()
+            begin = "BEGIN" if self.readonly else f"BEGIN; SELECT pg_advisory_xact_lock({LOCK_KEY})"
             try:
-                self._transaction.__enter__()
-            except self._psycopg.Error as exc:
-                raise _as_sqlite_error(exc) from None
-            self._depth = 1
-            if not self.readonly:
-                try:
-                    self.execute(f"SELECT pg_advisory_xact_lock({LOCK_KEY})")
-                except BaseException:
-                    self._end(sqlite3.OperationalError, None, None)
-                    raise
-        else:
-            self._depth += 1
+                self._run(begin, None)  # one round trip
+            except BaseException:
+                self._finish("ROLLBACK")
+                raise
+        self._depth += 1
         return self
 
-    def __exit__(self, kind: Any, exc: Any, tb: Any) -> bool:
-        if self._depth > 1:
-            self._depth -= 1
-            return False
-        self._end(kind, exc, tb)
-        return False
+    def __exit__(self, kind: Any, exc: Any, tb: Any) -> None:
+        self._depth -= 1
+        if self._depth == 0:
+            self._finish("COMMIT" if kind is None else "ROLLBACK")
 
-    def _end(self, kind: Any, exc: Any, tb: Any) -> None:
-        transaction, self._transaction, self._depth = self._transaction, None, 0
+    def _finish(self, command: str) -> None:
+        self._depth = 0
         try:
-            transaction.__exit__(kind, exc, tb)
-        except self._psycopg.Error as error:  # the COMMIT itself failed
-            raise _as_sqlite_error(error) from None
+            self._run(command, None)
+        except sqlite3.Error:
+            if command == "COMMIT":  # the COMMIT itself failed: PostgreSQL has rolled back
+                raise
 
     def commit(self) -> None:
         """Nothing to do: statements outside ``with conn:`` are committed as they run."""

@@ -58,7 +58,7 @@ from ramure.studies.pgsql import PgConnection, is_database_url, pg_schema, shown
 from ramure.studies.records import log_event, now_iso
 from ramure.studies.picks import Pick, check_distinct, inside_folder, load_picks, picks_from_data
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 if TYPE_CHECKING:
     from ramure.studies.design import StudyConfig
@@ -462,9 +462,9 @@ def check_postgres_study(conn: PgConnection, where: str) -> int:
         raise StudyInputError(
             f"{where}: study database version {version}; this Ramure reads version {SCHEMA_VERSION} on PostgreSQL"
         )
-    if tuple(conn.execute("SELECT count(*), min(id) FROM study").fetchone()) != (1, 1):
+    if conn.execute("SELECT count(*), min(id) FROM study").fetchone() != (1, 1):
         raise StudyInputError(f"{where}: table study must hold exactly one row, with id 1")
-    check_picks(conn, where, row_id="grammar_id * 100 + pick_id")
+    check_picks(cast(sqlite3.Connection, conn), where, row_id="grammar_id * 100 + pick_id")
     return SCHEMA_VERSION
 
 
@@ -578,14 +578,14 @@ class Study:
                     conn.execute(statement)
                 conn.execute("INSERT INTO settings (key, value) VALUES (?, ?)", (PG_VERSION_KEY, json.dumps(SCHEMA_VERSION)))
                 conn.execute("INSERT INTO settings (key, value) VALUES ('folder', ?)", (json.dumps(str(folder)),))
-                _fill(conn, name or conn.dbname, budget, loaded, folder, config)  # type: ignore[attr-defined]
+                _fill(conn, name or conn.dbname, budget, loaded, folder, config)
         except sqlite3.Error as exc:
             conn.close()
             raise StudyInputError(f"{where}: cannot create the study ({exc})") from None
         except BaseException:
             conn.close()
             raise
-        return cls(conn, folder / f"{conn.dbname}.postgresql", clock, where=where)  # type: ignore[attr-defined]
+        return cls(cast(sqlite3.Connection, conn), folder / f"{conn.dbname}.postgresql", clock, where=where)
 
     @classmethod
     def open(
@@ -635,8 +635,8 @@ class Study:
             raise
         if folder is None:
             folder = json.loads(stored[0]) if stored else os.getcwd()
-        path = pathlib.Path(folder).resolve() / f"{conn.dbname}.postgresql"  # type: ignore[attr-defined]
-        return cls(conn, path, clock, readonly=readonly, version=version, where=where)
+        path = pathlib.Path(folder).resolve() / f"{conn.dbname}.postgresql"
+        return cls(cast(sqlite3.Connection, conn), path, clock, readonly=readonly, version=version, where=where)
 
     def _writable(self) -> None:
         if self.readonly:
