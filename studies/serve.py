@@ -159,7 +159,7 @@ class StudyServer:
     def __init__(self, db: str | os.PathLike, secret: bytes | None = None, folder: str | os.PathLike | None = None) -> None:
         from ramure.studies.pgsql import is_database_url, sqlite_path
 
-        self.db: str | pathlib.Path = str(db) if is_database_url(db) else pathlib.Path(sqlite_path(db))  # type: ignore[arg-type]
+        self.db: str | pathlib.Path = str(db) if is_database_url(db) else pathlib.Path(sqlite_path(db))
         self.folder = folder  # a PostgreSQL study's folder, when not the one stored at its creation
         self._study: Study | None = None
         self._sessions: dict[tuple[str, str], TestSession] = {}
