@@ -757,22 +757,15 @@ class Study:
         """
         self._writable()
         external_id = _external_id(external_id)
-        if code is None:
-            taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
-            number = 101
-            while f"P{number}" in taken:
-                number += 1
-            code = f"P{number}"
-        code = str(code)
-        if not _CODE.match(code):
+        if code is not None and not _CODE.match(str(code)):
             raise StudyInputError(
-                f"participant code {code!r} must be 1-32 letters, digits, '-' or '_' (an anonymous code, not a name)"
+                f"participant code {str(code)!r} must be 1-32 letters, digits, '-' or '_' (an anonymous code, not a name)"
             )
-        if seed is None:
-            seed = zlib.crc32(code.encode())
         stamp = now_iso()
         try:
-            with self.conn:
+            with self.conn:  # on PostgreSQL writers take turns here, so two stations never draw one code
+                code = self._next_code() if code is None else str(code)
+                seed = zlib.crc32(code.encode()) if seed is None else seed
                 pid = self.conn.execute(
                     "INSERT INTO participants (code, seed, consent, consent_at, created_at) VALUES (?, ?, ?, ?, ?)",
                     (code, int(seed), int(bool(consent)), stamp if consent else None, stamp),
@@ -785,6 +778,14 @@ class Study:
                 raise StudyInputError(f"external id {external_id!r} is already enrolled in this study") from None
             raise StudyInputError(f"participant code {code!r} is already used") from None
         return code
+
+    def _next_code(self) -> str:
+        """The first free code P101, P102, ..."""
+        taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
+        number = 101
+        while f"P{number}" in taken:
+            number += 1
+        return f"P{number}"
 
     def _enrol(self, pid: int | None, external_id: str | None, pilot: bool) -> None:
         import secrets

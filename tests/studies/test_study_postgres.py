@@ -168,3 +168,27 @@ def test_a_database_without_a_study_and_a_server_that_is_not_there_are_refused(p
         conn.execute("CREATE TABLE groups (id int)")
     with pytest.raises(StudyInputError, match="already has tables named groups; choose an empty database"):
         Study.create(pg_url, grammars={"honda": lattice_picks(seed=1)})
+
+
+ENROL = """
+import sys
+from ramure.studies.storage import Study
+with Study.open(sys.argv[1]) as study:
+    for _ in range(int(sys.argv[2])):
+        print(study.add_participant(consent=True), flush=True)
+"""
+
+
+def test_stations_enrolling_at_once_draw_distinct_codes_and_balanced_orders_on_postgresql(pg_url):
+    """Codes and Latin-square rows are drawn inside the enrolment's transaction, where writers
+    take turns: three stations enrolling at once never draw one code or one row twice."""
+    with Study.create(pg_url, grammars={"a": lattice_picks(seed=1), "b": lattice_picks(seed=2)}) as study:
+        pass
+    stations = [start(ENROL, pg_url, 12) for _ in range(3)]
+    codes = [line.strip() for station in stations for line in station.stdout]
+    assert [station.wait(timeout=120) for station in stations] == [0, 0, 0]
+    assert len(codes) == len(set(codes)) == 36
+    with Study.open(pg_url, readonly=True) as study:
+        assert sorted(p["code"] for p in study.participants()) == sorted(codes)
+        orders = [tuple(study.grammar_order(code)) for code in codes]
+    assert orders.count(("a", "b")) == orders.count(("b", "a")) == 18  # the square's two rows, evenly
