@@ -192,3 +192,12 @@ def test_stations_enrolling_at_once_draw_distinct_codes_and_balanced_orders_on_p
         assert sorted(p["code"] for p in study.participants()) == sorted(codes)
         orders = [tuple(study.grammar_order(code)) for code in codes]
     assert orders.count(("a", "b")) == orders.count(("b", "a")) == 18  # the square's two rows, evenly
+
+
+def test_a_sqlite_url_names_the_file(tmp_path, monkeypatch):
+    """``sqlite:///`` URLs (SQLAlchemy's spelling) name the same file as its path: three slashes
+    before a relative path, four before an absolute one."""
+    monkeypatch.chdir(tmp_path)
+    Study.create("sqlite:///rel.db", grammars={"honda": lattice_picks(seed=1)}).close()
+    with Study.open(f"sqlite:///{tmp_path / 'rel.db'}", readonly=True) as study:
+        assert study.path == tmp_path / "rel.db" and study.grammars == ["honda"] and not study.postgres
