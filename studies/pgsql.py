@@ -193,7 +193,12 @@ class PgConnection:
         self.text_factory: Any = str  # SQLite's; PostgreSQL checks the encoding itself
         self.total_changes = 0
         self._depth = 0
-        self._pending = ""  # session settings sent ahead of the next statement (one round trip, not two)
+        # Sent ahead of the next statement, in its round trip: a session setting (PRAGMA
+        # synchronous), then the BEGIN of a transaction and its lock.  A SET sent this way joins the
+        # transaction that follows and is undone if it rolls back: only a rolled-back answer can
+        # undo one, leaving commits synchronous (slower, never less durable) until the next flush.
+        self._pending = ""
+        self._begin = ""
         if readonly:
             self.execute("SET default_transaction_read_only = on")
         self.execute(f"SET synchronous_commit = {'on' if durable else 'off'}")
@@ -226,8 +231,9 @@ class PgConnection:
         """Execute ``text`` (PostgreSQL's spelling), with any pending settings in the same round trip
         (the client-side cursor sends several statements at once; the last one's result is read)."""
         cursor = self.raw.cursor()
-        if self._pending:  # a SET: no placeholder or % in it
-            text, self._pending = f"{self._pending}; {text}", ""
+        ahead = [part for part in (self._pending, self._begin) if part]  # no placeholder or % in them
+        if ahead:
+            text, self._pending, self._begin = "; ".join([*ahead, text]), "", ""
         try:
             cursor.execute(text, params)
         except self._psycopg.Error as exc:
@@ -258,19 +264,17 @@ class PgConnection:
         raise sqlite3.OperationalError(f"PRAGMA {name} is SQLite's; this study is on PostgreSQL")
 
     def __enter__(self) -> PgConnection:
-        if self._depth == 0:
-            begin = "BEGIN" if self.readonly else f"BEGIN; SELECT pg_advisory_xact_lock({LOCK_KEY})"
-            try:
-                self._run(begin, None)  # one round trip
-            except BaseException:
-                self._finish("ROLLBACK")
-                raise
+        if self._depth == 0:  # sent with the transaction's first statement
+            self._begin = "BEGIN" if self.readonly else f"BEGIN; SELECT pg_advisory_xact_lock({LOCK_KEY})"
         self._depth += 1
         return self
 
     def __exit__(self, kind: Any, exc: Any, tb: Any) -> None:
         self._depth -= 1
         if self._depth == 0:
+            if self._begin:  # no statement ran: there is no transaction to end
+                self._begin = ""
+                return
             self._finish("COMMIT" if kind is None else "ROLLBACK")
 
     def _finish(self, command: str) -> None:
