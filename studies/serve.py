@@ -114,7 +114,9 @@ def _mac(secret: bytes, text: str) -> str:
 
 
 def secret_path(db: str | os.PathLike) -> pathlib.Path:
-    """The file holding the study's web secret: ``STUDY.db.web-secret`` beside the database."""
+    """The file holding the study's web secret: ``STUDY.db.web-secret`` beside the database (for a
+    PostgreSQL study, ``db`` is its :attr:`~ramure.studies.storage.Study.path`: the secret lies in
+    the study's folder, ``DBNAME.postgresql.web-secret``)."""
     db = pathlib.Path(db)
     return db.with_name(db.name + ".web-secret")
 

@@ -1,5 +1,9 @@
 """A study stored in SQLite: grammars and their 27 picks, participants, tests.
 
+The same code stores a study in PostgreSQL when given a ``postgresql://`` URL instead of a
+file (:mod:`ramure.studies.pgsql` is the dialect layer; :func:`check_postgres_study` the
+check at each open).  What follows describes the SQLite file.
+
 Every write is one transaction (``with conn:``), foreign keys are on and the
 journal is WAL, so a crash loses at most the answer being written.  The schema
 is ``studies/schema.sql``.
