@@ -14,13 +14,14 @@ $(VPY):
 
 $(STAMP): pyproject.toml | $(VPY)
 	$(VPY) -m pip install -q --upgrade pip
-	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,web,test,docs]"
+	$(VPY) -m pip install -q -e ".[gui,jupyter,dask,web,postgres,test,docs]"
 	touch $(STAMP)
 
 venv: $(STAMP)
 
-# System packages for Qt/VTK under a virtual screen; installed only when missing
-# and only when we may (root or sudo), so a developer with a display needs nothing.
+# System packages for Qt/VTK under a virtual screen, Chromium, and PostgreSQL's server (the
+# study tests start a throwaway cluster from it); installed only when missing and only when
+# we may (root or sudo), so a developer with a display needs nothing.
 sysdeps:
 	@bash .ci/sysdeps.sh
 

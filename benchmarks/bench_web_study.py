@@ -11,6 +11,10 @@ cut short read their state again and carry on, as the page does after a reload.
 Targets: nothing lost, every test finished, and at most 10 ms of the server's CPU per answer
 (the latencies are reported, not judged: on a shared machine they measure the neighbours too);
 bounded at 180 s of answering.
+
+Each runs on a SQLite file and on PostgreSQL (``_postgresql``): a throwaway cluster from Debian's
+package (``tests/studies/pg_cluster.py``, fsync on), the study created from its URL and served
+from it.  ``tests/studies/test_study_load.py`` runs the same crowd, smaller, in ``make test``.
 """
 
 from __future__ import annotations
@@ -29,7 +33,9 @@ import tempfile
 import time
 import urllib.request
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "studies"))  # pg_cluster: a throwaway PostgreSQL server
 
 PARTICIPANTS = int(os.environ.get("RAMURE_BENCH_PARTICIPANTS", "200"))
 #: The server's own CPU time per answer (HTTP, checks, SQL): judged instead of the latency, which on a
@@ -49,7 +55,7 @@ def _free_port() -> int:
 class Server:
     """``ramure study serve DB`` in a child process."""
 
-    def __init__(self, db: pathlib.Path, port: int) -> None:
+    def __init__(self, db: pathlib.Path | str, port: int) -> None:
         self.db, self.port = db, port
         self.base = f"http://127.0.0.1:{port}"
         self.process: subprocess.Popen | None = None
@@ -158,36 +164,46 @@ def _png() -> bytes:
     return b"\x89PNG\r\n\x1a\n" + header + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
 
 
-def _stored_answers(db: pathlib.Path) -> dict[str, int]:
-    conn = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+def _reader(db: pathlib.Path | str):
+    """A connection of the database's own driver (not Ramure's), to count what it holds."""
+    if isinstance(db, str):
+        import psycopg
+
+        return psycopg.connect(db, autocommit=True)
+    return sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+
+
+def _stored_answers(db: pathlib.Path | str) -> dict[str, int]:
+    conn = _reader(db)
     try:
-        marks = ", ".join("?" * len(NOT_ANSWERS))
+        marks = ", ".join(["%s" if isinstance(db, str) else "?"] * len(NOT_ANSWERS))
         rows = conn.execute(
             "SELECT p.code, count(e.id) FROM participants p LEFT JOIN events e ON e.participant_id = p.id "
             f"AND e.action NOT IN ({marks}) GROUP BY p.id",
             NOT_ANSWERS,
         ).fetchall()
-        assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        if not isinstance(db, str):
+            assert conn.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
         return dict(rows)
     finally:
         conn.close()
 
 
-def _finished(db: pathlib.Path) -> int:
-    conn = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+def _finished(db: pathlib.Path | str) -> int:
+    conn = _reader(db)
     try:
         return conn.execute("SELECT count(*) FROM tests WHERE finished_at IS NOT NULL").fetchone()[0]
     finally:
         conn.close()
 
 
-async def _crowd(server: Server, kill_after: int | None) -> tuple[list[Participant], dict, float]:
+async def _crowd(server: Server, kill_after: int | None, participants: int) -> tuple[list[Participant], dict, float]:
     import httpx
 
     stats: dict = dict(latencies=[], refused=0, retries=0, kills=0)
     async with contextlib.AsyncExitStack() as stack:  # a client each: one connection, as one browser tab
         clients = [
-            await stack.enter_async_context(httpx.AsyncClient(base_url=server.base, timeout=60.0)) for _ in range(PARTICIPANTS)
+            await stack.enter_async_context(httpx.AsyncClient(base_url=server.base, timeout=60.0)) for _ in range(participants)
         ]
         people = [Participant(client, stats) for client in clients]
 
@@ -213,35 +229,48 @@ async def _crowd(server: Server, kill_after: int | None) -> tuple[list[Participa
         return people, stats, time.perf_counter() - t0
 
 
-def _load(kill: bool) -> dict:
+def load(kill: bool = False, backend: str = "sqlite", participants: int = PARTICIPANTS) -> dict:
+    """``participants`` answering at once against ``ramure study serve`` on 127.0.0.1, the study on
+    ``backend`` (``sqlite`` or ``postgresql``); ``kill``: the server is killed -9 and restarted a
+    third of the way in.  Returns the figures (see the module docstring)."""
+    with tempfile.TemporaryDirectory(prefix="ramure-bench-web-") as tmp, contextlib.ExitStack() as stack:
+        db: pathlib.Path | str = pathlib.Path(tmp) / "study.db"
+        if backend == "postgresql":
+            from pg_cluster import Cluster
+
+            db = stack.enter_context(Cluster(fsync=True)).new_database("load")
+        elif backend != "sqlite":
+            raise ValueError(f"backend {backend!r} is not sqlite or postgresql")
+        return _load_on(db, pathlib.Path(tmp), kill, participants) | dict(backend=backend)
+
+
+def _load_on(db: pathlib.Path | str, folder: pathlib.Path, kill: bool, participants: int) -> dict:
     import numpy as np
 
     from ramure.studies.picks import lattice_picks
     from ramure.studies.storage import Study
 
-    with tempfile.TemporaryDirectory(prefix="ramure-bench-web-") as tmp:
-        db = pathlib.Path(tmp) / "study.db"
-        picture = pathlib.Path(tmp) / "plant.png"
-        picture.write_bytes(_png())
-        picks = [
-            dict(id=p.id, variant=p.variant, pca=list(p.pca), params=p.params, image=str(picture)) for p in lattice_picks(seed=1)
-        ]
-        Study.create(db, grammars={"plants": picks}, name="load").close()
-        server = Server(db, _free_port())
-        server.start()
-        try:
-            per_participant = 1 + 3 * 4 + 2 + 1
-            people, stats, seconds = asyncio.run(_crowd(server, PARTICIPANTS * per_participant // 3 if kill else None))
-        finally:
-            server.stop()
-        stored = _stored_answers(db)
-        lost = sum(max(0, p.acked - stored.get(p.code, 0)) for p in people)
-        finished = _finished(db)
+    picture = folder / "plant.png"
+    picture.write_bytes(_png())
+    picks = [
+        dict(id=p.id, variant=p.variant, pca=list(p.pca), params=p.params, image=str(picture)) for p in lattice_picks(seed=1)
+    ]
+    Study.create(db, grammars={"plants": picks}, name="load", folder=folder).close()
+    server = Server(db, _free_port())
+    server.start()
+    try:
+        per_participant = 1 + 3 * 4 + 2 + 1
+        people, stats, seconds = asyncio.run(_crowd(server, participants * per_participant // 3 if kill else None, participants))
+    finally:
+        server.stop()
+    stored = _stored_answers(db)
+    lost = sum(max(0, p.acked - stored.get(p.code, 0)) for p in people)
+    finished = _finished(db)
     lat = np.array(stats["latencies"])
     p95 = float(np.percentile(lat, 95))
     out = dict(
         seconds=round(seconds, 2),
-        participants=PARTICIPANTS,
+        participants=participants,
         answers=int(lat.size),
         answers_per_second=round(lat.size / seconds, 1),
         p50_latency_ms=round(1000 * float(np.median(lat)), 1),
@@ -255,7 +284,7 @@ def _load(kill: bool) -> dict:
         retries=stats["retries"],
         target_server_cpu_ms=TARGET_SERVER_CPU_MS,
         unfinished_at_bound=stats["timed_out"],
-        ok=lost == 0 and finished == PARTICIPANTS and server.cpu_used / max(1, lat.size) * 1000 <= TARGET_SERVER_CPU_MS,
+        ok=lost == 0 and finished == participants and server.cpu_used / max(1, lat.size) * 1000 <= TARGET_SERVER_CPU_MS,
     )
     if kill:
         out.update(kills=stats["kills"], acked_before_kill=stats.get("acked_at_kill"))
@@ -264,14 +293,25 @@ def _load(kill: bool) -> dict:
 
 def bench_serve_200_participants():
     """200 participants answer at once on SQLite; nothing acknowledged may be lost."""
-    return _load(kill=False)
+    return load(kill=False)
 
 
 def bench_serve_200_participants_kill():
     """The same crowd with the server killed (SIGKILL) and restarted a third of the way in."""
-    return _load(kill=True)
+    return load(kill=True)
+
+
+def bench_serve_200_participants_postgresql():
+    """200 participants answer at once, the study on PostgreSQL; nothing acknowledged may be lost."""
+    return load(kill=False, backend="postgresql")
+
+
+def bench_serve_200_participants_kill_postgresql():
+    """The PostgreSQL crowd with Ramure's server killed (SIGKILL) and restarted a third of the way in."""
+    return load(kill=True, backend="postgresql")
 
 
 if __name__ == "__main__":
-    for name in ("bench_serve_200_participants", "bench_serve_200_participants_kill"):
+    names = [n for n in globals() if n.startswith("bench_")]
+    for name in names if len(sys.argv) < 2 else sys.argv[1:]:
         print(json.dumps({"benchmark": f"bench_web_study.{name[6:]}", **globals()[name]()}), flush=True)

@@ -106,7 +106,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
     pilots = ""
     if not include_pilot and source.version >= TABLE_SINCE["enrolments"]:
         pilots = " AND p.id NOT IN (SELECT participant_id FROM enrolments WHERE pilot = 1)"
-    people = conn.execute(f"SELECT id, code FROM participants p WHERE 1 {pilots} ORDER BY id").fetchall()
+    people = conn.execute(f"SELECT id, code FROM participants p WHERE 1 = 1 {pilots} ORDER BY id").fetchall()
     pindex = {pid: i for i, (pid, _) in enumerate(people)}
 
     where = (

@@ -49,7 +49,7 @@ _QUERIES = {
         "g.usefulness, g.difference, g.representative_quality "
         "FROM groups g JOIN tests t ON t.id = g.test_id JOIN participants p ON p.id = t.participant_id "
         "JOIN grammars gr ON gr.id = t.grammar_id LEFT JOIN (SELECT * FROM group_images "
-        "ORDER BY pick_id) gi ON gi.group_id = g.id WHERE p.consent = 1 GROUP BY g.id ORDER BY t.id, g.label"
+        "ORDER BY pick_id) gi ON gi.group_id = g.id WHERE p.consent = 1 GROUP BY g.id, t.id, p.id, gr.id ORDER BY t.id, g.label"
     ),
     "memberships.csv": (
         "SELECT t.id AS test, p.code AS participant, gr.name AS grammar, g.label AS grp, gi.pick_id "

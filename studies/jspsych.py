@@ -160,6 +160,8 @@ def export_jspsych(db: str | os.PathLike, folder: str | os.PathLike, jspsych: st
     from ramure.studies.serve import QUESTIONS, check_servable, consent_text
     from ramure.studies.storage import Study
 
+    _sqlite_only(db)
+
     folder = pathlib.Path(folder)
     _check_folder(folder)
     local = None
@@ -447,6 +449,17 @@ def check_results(trials: list[dict], mark: str, codes: dict[str, dict[int, str]
 # -- storing ------------------------------------------------------------------------------------------
 
 
+def _sqlite_only(db: str | os.PathLike) -> None:
+    """Refuse a PostgreSQL study: the jsPsych export signs its codes with the secret kept beside a
+    SQLite file, and the import rehearses on an in-memory copy of one."""
+    from ramure.studies.pgsql import is_database_url
+
+    if is_database_url(db):
+        raise StudyInputError(
+            "the jsPsych export and import work on a SQLite study file; serve a PostgreSQL study with `ramure study serve`"
+        )
+
+
 class _PageClock:
     """The study's clock during an import: the page's time, in seconds, set before each answer."""
 
@@ -508,6 +521,8 @@ def import_jspsych(db: str | os.PathLike, results: str | os.PathLike) -> dict:
     stored, one new participant per run.  A refusal leaves the study unchanged.
     """
     from ramure.studies.storage import Study
+
+    _sqlite_only(db)
 
     source = pathlib.Path(results).name
     trials = read_results(results)

@@ -114,7 +114,9 @@ def _mac(secret: bytes, text: str) -> str:
 
 
 def secret_path(db: str | os.PathLike) -> pathlib.Path:
-    """The file holding the study's web secret: ``STUDY.db.web-secret`` beside the database."""
+    """The file holding the study's web secret: ``STUDY.db.web-secret`` beside the database (for a
+    PostgreSQL study, ``db`` is its :attr:`~ramure.studies.storage.Study.path`: the secret lies in
+    the study's folder, ``DBNAME.postgresql.web-secret``)."""
     db = pathlib.Path(db)
     return db.with_name(db.name + ".web-secret")
 
@@ -156,9 +158,11 @@ class StudyServer:
     #: At most this many queued calls share one flush.
     MAX_BATCH = 64
 
-    def __init__(self, db: str | os.PathLike, secret: bytes | None = None) -> None:
-        self.db = pathlib.Path(db)
-        self.secret = secret if secret is not None else study_secret(self.db)
+    def __init__(self, db: str | os.PathLike, secret: bytes | None = None, folder: str | os.PathLike | None = None) -> None:
+        from ramure.studies.pgsql import is_database_url, sqlite_path
+
+        self.db: str | pathlib.Path = str(db) if is_database_url(db) else pathlib.Path(sqlite_path(db))
+        self.folder = folder  # a PostgreSQL study's folder, when not the one stored at its creation
         self._study: Study | None = None
         self._sessions: dict[tuple[str, str], TestSession] = {}
         self._picks: dict[str, list[Pick]] = {}
@@ -169,6 +173,9 @@ class StudyServer:
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._thread = threading.Thread(target=self._serve_calls, name="ramure-study-db", daemon=True)
         self._thread.start()
+        if secret is None:  # beside the SQLite file; for PostgreSQL, in the study's folder (Study.path)
+            secret = study_secret(self.db if isinstance(self.db, pathlib.Path) else self.call(lambda: self.study.path))
+        self.secret = secret
 
     # -- the database thread ---------------------------------------------------------------------
     @property
@@ -177,7 +184,7 @@ class StudyServer:
         if self._study is None:
             from ramure.studies.storage import Study
 
-            self._study = Study.open(self.db)
+            self._study = Study.open(self.db, folder=self.folder)
             self._study.conn.execute("PRAGMA synchronous = NORMAL")  # flushed once per batch (_flush)
         return self._study
 
@@ -613,13 +620,20 @@ def check_servable(study: Study) -> None:
     if missing:
         which = "; ".join(f"{g}: {len(ids)} of 27 (e.g. pick {ids[0]})" for g, ids in missing.items())
         raise StudyInputError(
-            f"{study.path}: pictures missing or outside the study's folder ({which}); explore with thumbnails "
+            f"{study.where}: pictures missing or outside the study's folder ({which}); explore with thumbnails "
             "into the study's folder (ramure explore GRAMMAR -o STUDY_FOLDER/NAME) and create the study from there"
         )
 
 
-def serve(db: str | os.PathLike, host: str = "127.0.0.1", port: int = 8000, announce: Callable[[dict], None] = print) -> None:
-    """Serve study ``db`` on ``host:port`` until interrupted (needs the ``web`` extra).
+def serve(
+    db: str | os.PathLike,
+    host: str = "127.0.0.1",
+    port: int = 8000,
+    announce: Callable[[dict], None] = print,
+    folder: str | os.PathLike | None = None,
+) -> None:
+    """Serve study ``db`` (a SQLite file or a PostgreSQL URL) on ``host:port`` until interrupted
+    (needs the ``web`` extra).  ``folder`` overrides a PostgreSQL study's folder of pictures.
 
     The file is checked first (a study, every picture present) and nothing is written beside a
     file that is refused.  ``announce`` receives the participant and researcher addresses
@@ -631,15 +645,16 @@ def serve(db: str | os.PathLike, host: str = "127.0.0.1", port: int = 8000, anno
         import uvicorn
     except ImportError:
         raise StudyInputError("serving a study needs the web extra: pip install 'ramure[web]'") from None
-    with Study.open(db, readonly=True) as study:
+    with Study.open(db, readonly=True, folder=folder) as study:
         check_servable(study)
-    server = StudyServer(db)
+        where = study.where
+    server = StudyServer(db, folder=folder)
     try:
         server.call(lambda: server.study)  # opened for writing before listening: refused here, not per request
         base = f"http://{host if ':' not in host else f'[{host}]'}:{port}"
         token = server.researcher_token()
         addresses = dict(participants=f"{base}/", researcher=f"{base}/researcher#{token}", researcher_token=token)
-        announce(dict(db=str(server.db), **addresses))
+        announce(dict(db=where, **addresses))
         uvicorn.run(make_app(server), host=host, port=port, log_level="warning", access_log=False)
     finally:
         server.close()

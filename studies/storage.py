@@ -1,5 +1,9 @@
 """A study stored in SQLite: grammars and their 27 picks, participants, tests.
 
+The same code stores a study in PostgreSQL when given a ``postgresql://`` URL instead of a
+file (:mod:`ramure.studies.pgsql` is the dialect layer; :func:`check_postgres_study` the
+check at each open).  What follows describes the SQLite file.
+
 Every write is one transaction (``with conn:``), foreign keys are on and the
 journal is WAL, so a crash loses at most the answer being written.  The schema
 is ``studies/schema.sql``.
@@ -54,10 +58,11 @@ from importlib import resources
 
 from ramure.io import APPLICATION_ID as RAMURE_ID, open_sqlite_readonly
 from ramure.studies.errors import StudyInputError
+from ramure.studies.pgsql import PgConnection, is_database_url, pg_schema, shown_url, sqlite_path
 from ramure.studies.records import log_event, now_iso
 from ramure.studies.picks import Pick, check_distinct, inside_folder, load_picks, picks_from_data
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 if TYPE_CHECKING:
     from ramure.studies.design import StudyConfig
@@ -77,8 +82,12 @@ def connect(path: str | os.PathLike, durable: bool = True) -> sqlite3.Connection
 
     ``durable=False`` sets ``synchronous=NORMAL``: a committed answer still
     survives a killed process, but not a power cut; simulations use it for speed.
+    A PostgreSQL URL opens a :class:`~ramure.studies.pgsql.PgConnection` (used as this
+    function's ``sqlite3.Connection``), ``durable=False`` then turning ``synchronous_commit`` off.
     """
-    conn = sqlite3.connect(os.fspath(path), timeout=10.0)
+    if is_database_url(path):
+        return PgConnection(str(path), durable=durable)  # type: ignore[return-value]
+    conn = sqlite3.connect(os.fspath(sqlite_path(path)), timeout=10.0)
     conn.execute("PRAGMA foreign_keys = ON")
     conn.execute("PRAGMA journal_mode = WAL")
     conn.execute(f"PRAGMA synchronous = {'FULL' if durable else 'NORMAL'}")
@@ -361,13 +370,20 @@ def check_values(conn: sqlite3.Connection, path: str | os.PathLike, version: int
         if table in tables:
             column = next(r[3] for r in conn.execute(f"PRAGMA foreign_key_list({table})") if r[0] == key)
             raise StudyInputError(f"{path}: table {table}, row {row}: {column} names no row of table {parent}")
+    check_picks(conn, path)
+
+
+def check_picks(conn: sqlite3.Connection, path: str | os.PathLike, row_id: str = "rowid") -> None:
+    """Refuse a study whose grammar lacks one of the 27 picks, or whose pick ``params`` is not a
+    JSON object with a ``rule`` (SQLite and PostgreSQL alike; ``row_id`` is the SQL naming a row
+    in the message: SQLite's ``rowid``, which PostgreSQL lacks)."""
     short = conn.execute(
         "SELECT g.name, count(p.pick_id) FROM grammars g LEFT JOIN picks p ON p.grammar_id = g.id "
-        "GROUP BY g.id HAVING count(DISTINCT p.pick_id) != 27 LIMIT 1"
+        "GROUP BY g.id, g.name HAVING count(DISTINCT p.pick_id) != 27 LIMIT 1"
     ).fetchone()
     if short is not None:
         raise StudyInputError(f"{path}: table picks: grammar {short[0]!r} has {short[1]} picks, not the 27 ids 1-27")
-    for row, params in conn.execute("SELECT rowid, params FROM picks"):
+    for row, params in conn.execute(f"SELECT {row_id}, params FROM picks"):
         try:
             decoded = json.loads(params)
         except ValueError:
@@ -394,11 +410,82 @@ def is_database_file(db: str | os.PathLike, path: str | os.PathLike) -> bool:
     return False
 
 
+#: The ``settings`` key holding a PostgreSQL study's schema version (SQLite's ``user_version``).
+PG_VERSION_KEY = "ramure_schema_version"
+
+
+def _fill(conn, name: str, budget: float, loaded: dict, folder: pathlib.Path, config: StudyConfig) -> None:
+    """The rows of a new study: its name and budget, grammars with picks, and config (in the caller's transaction)."""
+    conn.execute("INSERT INTO study (id, name, budget_seconds, created_at) VALUES (1, ?, ?, ?)", (name, 60.0 * budget, now_iso()))
+    for gname, (source, picks) in loaded.items():
+        _insert_grammar(conn, gname, source, picks, folder)
+    conn.execute("INSERT INTO settings (key, value) VALUES ('config', ?)", (json.dumps(config.to_data()),))
+
+
+def _connect_postgres(url: str, where: str, readonly: bool = False, durable: bool = True) -> PgConnection:
+    try:
+        return PgConnection(url, readonly=readonly, durable=durable)
+    except sqlite3.Error as exc:
+        raise StudyInputError(f"{where}: cannot connect to the study's database ({exc})") from None
+
+
+def _pg_tables(conn: PgConnection) -> set[str]:
+    rows = conn.execute("SELECT table_name FROM information_schema.tables WHERE table_schema = current_schema()")
+    return {r[0] for r in rows}
+
+
+def check_postgres_study(conn: PgConnection, where: str) -> int:
+    """Refuse, with one line, a PostgreSQL database that does not hold a Ramure study; return its version.
+
+    Checked: every table of ``schema.sql`` with its columns in order, the schema version stored
+    in ``settings`` (:data:`PG_VERSION_KEY`; PostgreSQL studies start at version 3), one
+    ``study`` row with id 1, and the 27 picks of each grammar (:func:`check_picks`).  The
+    column types, ``CHECK`` constraints and foreign keys are PostgreSQL's to enforce: unlike
+    SQLite it never stores a value of another type, so the per-value rules are not re-read.
+    """
+    tables = _pg_tables(conn)
+    if "study" not in tables:
+        raise StudyInputError(f"{where}: holds no Ramure study (no table study); create one with `ramure study create`")
+    missing = _schema_tables() - tables
+    if missing:
+        raise StudyInputError(f"{where}: not a Ramure study database (no table {', '.join(sorted(missing))})")
+    for table, columns in _signature().items():
+        names = [
+            r[0]
+            for r in conn.execute(
+                "SELECT column_name FROM information_schema.columns WHERE table_schema = current_schema() "
+                "AND table_name = ? ORDER BY ordinal_position",
+                (table,),
+            )
+        ]
+        if names != [c[0] for c in columns]:
+            raise StudyInputError(f"{where}: not a Ramure study database (table {table} has other columns)")
+    row = conn.execute("SELECT value FROM settings WHERE key = ?", (PG_VERSION_KEY,)).fetchone()
+    version = json.loads(row[0]) if row else None
+    if version != SCHEMA_VERSION:
+        raise StudyInputError(
+            f"{where}: study database version {version}; this Ramure reads version {SCHEMA_VERSION} on PostgreSQL"
+        )
+    if conn.execute("SELECT count(*), min(id) FROM study").fetchone() != (1, 1):
+        raise StudyInputError(f"{where}: table study must hold exactly one row, with id 1")
+    check_picks(cast(sqlite3.Connection, conn), where, row_id="grammar_id * 100 + pick_id")
+    return SCHEMA_VERSION
+
+
 class Study:
     """A study database: grammars x 27 picks, participants, one test per grammar each.
 
     Use :meth:`create` for a new file and :meth:`open` for an existing one.
     ``clock`` (seconds, monotonic) times the participants' budget; tests pass a fake.
+
+    The location is a SQLite file (a path, or ``sqlite:///path``) or a PostgreSQL database
+    (``postgresql://user:password@host/dbname``, the ``postgres`` extra; see
+    :mod:`ramure.studies.pgsql`).  A study's pictures live in its *folder*: the SQLite file's
+    folder, or for PostgreSQL the ``folder`` given at creation (default: the current directory),
+    stored in the study and overridable at :meth:`open` (a server on another machine).
+    ``path`` is then ``FOLDER/DBNAME.postgresql``, a name no file has: it places the study's
+    web secret beside its pictures.  ``where`` names the study in messages (the URL's
+    password masked).
     """
 
     def __init__(
@@ -408,9 +495,12 @@ class Study:
         clock: Callable[[], float] = time.monotonic,
         readonly: bool = False,
         version: int = SCHEMA_VERSION,
+        where: str | None = None,
     ) -> None:
         self.conn = conn
         self.path = pathlib.Path(path)
+        self.where = where or str(self.path)
+        self.postgres = isinstance(conn, PgConnection)
         self.clock = clock
         conn.text_factory = strict_text(self.path)
         self.readonly = readonly  # opened by a read command: every change is refused
@@ -429,6 +519,7 @@ class Study:
         clock: Callable[[], float] = time.monotonic,
         durable: bool = True,
         config: StudyConfig | None = None,
+        folder: str | os.PathLike | None = None,
     ) -> Study:
         """Create a study in a new file ``path``.
 
@@ -437,6 +528,8 @@ class Study:
         :class:`~ramure.studies.picks.Pick`.  ``budget_minutes`` is each participant's
         time budget over all their tests.  ``config`` holds what participants read
         (:class:`~ramure.studies.design.StudyConfig`, default texts when None).
+        ``path`` may be a PostgreSQL URL: the database must exist and hold no study tables;
+        ``folder`` is then the study's folder (pictures; default: the current directory).
         """
         from ramure.studies.design import StudyConfig
 
@@ -444,7 +537,6 @@ class Study:
         if config.practice_set is not None and config.practice_set not in (grammars or {}):
             known = ", ".join(grammars or {}) or "none"
             raise StudyInputError(f"the practice set {config.practice_set!r} is not a grammar of the study (grammars: {known})")
-        path = pathlib.Path(path)
         try:
             budget = float(budget_minutes)
         except (TypeError, ValueError):
@@ -453,6 +545,9 @@ class Study:
             raise StudyInputError(f"budget must be a positive number of minutes, got {budget_minutes!r}")
         # Read every grammar before touching the disk, so a bad one leaves no file.
         loaded = {gname: _read_grammar(gname, spec) for gname, spec in (grammars or {}).items()}
+        if is_database_url(path):
+            return cls._create_postgres(str(path), loaded, name, budget, clock, durable, config, folder)
+        path = pathlib.Path(sqlite_path(path))
         if path.exists() and path.stat().st_size > 0:
             try:
                 check_study_file(path)
@@ -466,18 +561,44 @@ class Study:
         with conn:
             conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
             conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
-            conn.execute(
-                "INSERT INTO study (id, name, budget_seconds, created_at) VALUES (1, ?, ?, ?)",
-                (name or path.stem, 60.0 * budget, now_iso()),
-            )
-            for gname, (source, picks) in loaded.items():
-                _insert_grammar(conn, gname, source, picks, path.parent)
-            conn.execute("INSERT INTO settings (key, value) VALUES ('config', ?)", (json.dumps(config.to_data()),))
+            _fill(conn, name or path.stem, budget, loaded, path.parent, config)
         return cls(conn, path, clock)
 
     @classmethod
+    def _create_postgres(cls, url, loaded, name, budget, clock, durable, config, folder) -> Study:
+        """:meth:`create` in the PostgreSQL database ``url``: schema and rows in one transaction."""
+        where = shown_url(url)
+        conn = _connect_postgres(url, where, durable=durable)
+        folder = pathlib.Path(folder if folder is not None else os.getcwd()).resolve()
+        try:
+            with conn:
+                tables = _pg_tables(conn)
+                if "study" in tables:
+                    raise StudyInputError(f"{where}: already holds a study; open it instead")
+                if tables & _schema_tables():
+                    taken = ", ".join(sorted(tables & _schema_tables()))
+                    raise StudyInputError(f"{where}: already has tables named {taken}; choose an empty database")
+                for statement in pg_schema(schema_sql()):
+                    conn.execute(statement)
+                conn.execute("INSERT INTO settings (key, value) VALUES (?, ?)", (PG_VERSION_KEY, json.dumps(SCHEMA_VERSION)))
+                conn.execute("INSERT INTO settings (key, value) VALUES ('folder', ?)", (json.dumps(str(folder)),))
+                _fill(conn, name or conn.dbname, budget, loaded, folder, config)
+        except sqlite3.Error as exc:
+            conn.close()
+            raise StudyInputError(f"{where}: cannot create the study ({exc})") from None
+        except BaseException:
+            conn.close()
+            raise
+        return cls(cast(sqlite3.Connection, conn), folder / f"{conn.dbname}.postgresql", clock, where=where)
+
+    @classmethod
     def open(
-        cls, path: str | os.PathLike, clock: Callable[[], float] = time.monotonic, durable: bool = True, readonly: bool = False
+        cls,
+        path: str | os.PathLike,
+        clock: Callable[[], float] = time.monotonic,
+        durable: bool = True,
+        readonly: bool = False,
+        folder: str | os.PathLike | None = None,
     ) -> Study:
         """Open an existing study file (refused with a clear message otherwise).
 
@@ -486,8 +607,12 @@ class Study:
         commands) keeps that read-only connection: nothing is ever written.
         Otherwise the file is reopened for writing, in WAL mode, and a file of an
         older schema version is migrated in place (see :func:`migrate`).
+        A PostgreSQL URL is checked by :func:`check_postgres_study` (``readonly`` then makes
+        the server refuse any write); ``folder`` overrides the study folder stored at creation.
         """
-        path = pathlib.Path(path)
+        if is_database_url(path):
+            return cls._open_postgres(str(path), clock, durable, readonly, folder)
+        path = pathlib.Path(sqlite_path(path))
         version = check_study_file(path)  # read-only: a file that is not ours is never changed
         try:
             if readonly:
@@ -502,9 +627,24 @@ class Study:
             conn.close()
             raise StudyInputError(f"{path}: cannot open the study for writing ({exc})") from None
 
+    @classmethod
+    def _open_postgres(cls, url, clock, durable, readonly, folder) -> Study:
+        where = shown_url(url)
+        conn = _connect_postgres(url, where, readonly=readonly, durable=durable)
+        try:
+            version = check_postgres_study(conn, where)
+            stored = conn.execute("SELECT value FROM settings WHERE key = 'folder'").fetchone()
+        except BaseException:
+            conn.close()
+            raise
+        if folder is None:
+            folder = json.loads(stored[0]) if stored else os.getcwd()
+        path = pathlib.Path(folder).resolve() / f"{conn.dbname}.postgresql"
+        return cls(cast(sqlite3.Connection, conn), path, clock, readonly=readonly, version=version, where=where)
+
     def _writable(self) -> None:
         if self.readonly:
-            raise StudyInputError(f"{self.path}: opened read-only; open it again for writing to change it")
+            raise StudyInputError(f"{self.where}: opened read-only; open it again for writing to change it")
 
     def close(self) -> None:
         self.conn.close()
@@ -590,7 +730,8 @@ class Study:
         self._writable()
         with self.conn:
             self.conn.execute(
-                "INSERT OR REPLACE INTO settings (key, value) VALUES (?, ?)", (key, json.dumps(value, sort_keys=True))
+                "INSERT INTO settings (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+                (key, json.dumps(value, sort_keys=True)),
             )
 
     def config(self) -> StudyConfig:
@@ -599,7 +740,7 @@ class Study:
         from ramure.studies.design import StudyConfig, config_from_data
 
         data = self.setting("config")
-        return StudyConfig() if data is None else config_from_data(data, where=f"{self.path}: settings config")
+        return StudyConfig() if data is None else config_from_data(data, where=f"{self.where}: settings config")
 
     # -- participants --------------------------------------------------------
     def add_participant(
@@ -620,22 +761,15 @@ class Study:
         """
         self._writable()
         external_id = _external_id(external_id)
-        if code is None:
-            taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
-            number = 101
-            while f"P{number}" in taken:
-                number += 1
-            code = f"P{number}"
-        code = str(code)
-        if not _CODE.match(code):
+        if code is not None and not _CODE.match(str(code)):
             raise StudyInputError(
-                f"participant code {code!r} must be 1-32 letters, digits, '-' or '_' (an anonymous code, not a name)"
+                f"participant code {str(code)!r} must be 1-32 letters, digits, '-' or '_' (an anonymous code, not a name)"
             )
-        if seed is None:
-            seed = zlib.crc32(code.encode())
         stamp = now_iso()
         try:
-            with self.conn:
+            with self.conn:  # on PostgreSQL writers take turns here, so two stations never draw one code
+                code = self._next_code() if code is None else str(code)
+                seed = zlib.crc32(code.encode()) if seed is None else seed
                 pid = self.conn.execute(
                     "INSERT INTO participants (code, seed, consent, consent_at, created_at) VALUES (?, ?, ?, ?, ?)",
                     (code, int(seed), int(bool(consent)), stamp if consent else None, stamp),
@@ -648,6 +782,14 @@ class Study:
                 raise StudyInputError(f"external id {external_id!r} is already enrolled in this study") from None
             raise StudyInputError(f"participant code {code!r} is already used") from None
         return code
+
+    def _next_code(self) -> str:
+        """The first free code P101, P102, ..."""
+        taken = {r[0] for r in self.conn.execute("SELECT code FROM participants")}
+        number = 101
+        while f"P{number}" in taken:
+            number += 1
+        return f"P{number}"
 
     def _enrol(self, pid: int | None, external_id: str | None, pilot: bool) -> None:
         import secrets
@@ -730,7 +872,8 @@ class Study:
         pid = self._participant(code)[0]
         with self.conn:
             self.conn.execute(
-                "INSERT OR REPLACE INTO page_answers (participant_id, page, answers, at) VALUES (?, ?, ?, ?)",
+                "INSERT INTO page_answers (participant_id, page, answers, at) VALUES (?, ?, ?, ?) "
+                "ON CONFLICT (participant_id, page) DO UPDATE SET answers = excluded.answers, at = excluded.at",
                 (pid, page, json.dumps(answers, sort_keys=True), now_iso()),
             )
             log_event(self.conn, pid, "page", {"page": page, "answers": answers})
@@ -786,10 +929,11 @@ class Study:
         enrolled = self.version >= TABLE_SINCE["enrolments"]
         extra = "e.external_id, coalesce(e.pilot, 0), e.withdrawn_at" if enrolled else "NULL, 0, NULL"
         join = "LEFT JOIN enrolments e ON e.participant_id = p.id" if enrolled else ""
+        by = "p.id, e.participant_id" if enrolled else "p.id"  # PostgreSQL: e's columns depend on its key
         rows = self.conn.execute(
             f"SELECT p.code, p.consent, p.consent_at, count(t.id), count(t.finished_at), "
             f"coalesce(sum(t.elapsed_seconds), 0), {extra} FROM participants p {join} "
-            "LEFT JOIN tests t ON t.participant_id = p.id GROUP BY p.id ORDER BY p.id"
+            f"LEFT JOIN tests t ON t.participant_id = p.id GROUP BY {by} ORDER BY p.id"
         )
         return [
             dict(
@@ -896,7 +1040,7 @@ class Study:
         except ValueError:
             detail = None
         if not isinstance(detail, dict):
-            raise _refuse_value(self.path, "events", row, "detail", "a JSON object", repr(text))
+            raise _refuse_value(self.where, "events", row, "detail", "a JSON object", repr(text))
         return detail
 
     def tests(self) -> list[dict]:

@@ -14,6 +14,9 @@ Sub-commands print one JSON object on stdout::
     ramure study withdraw study.db P104 --delete
     ramure study export-jspsych study.db -o experiment/
     ramure study import-jspsych study.db results.json
+
+Wherever a command takes ``study.db`` it also takes a PostgreSQL URL,
+``postgresql://user:password@host:5432/dbname`` (the ``postgres`` extra), or ``sqlite:///study.db``.
 """
 
 from __future__ import annotations
@@ -28,6 +31,10 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
+
+
+_URL = "a PostgreSQL URL (postgresql://user@host/dbname)"
+_DB_HELP = f"the study: a SQLite file, or {_URL}"
 
 
 def _print(obj) -> int:
@@ -92,7 +99,12 @@ def run_create(args: argparse.Namespace) -> int:
         raise UserError(f"--picture-size must be 32 to 2048 pixels, not {args.picture_size}")
     config = read_config(args.config) if args.config else None  # checked before any file is made
     with Study.create(
-        args.db, grammars=_grammar_specs(args.grammar), name=args.name, budget_minutes=args.budget_minutes, config=config
+        args.db,
+        grammars=_grammar_specs(args.grammar),
+        name=args.name,
+        budget_minutes=args.budget_minutes,
+        config=config,
+        folder=args.folder,
     ) as study:
         pictures = {}
         if not args.no_render:
@@ -101,7 +113,7 @@ def run_create(args: argparse.Namespace) -> int:
             pictures = render_stimuli(study, size=args.picture_size)
         return _print(
             dict(
-                db=str(study.path),
+                db=study.where,
                 name=study.name,
                 grammars=study.grammars,
                 budget_minutes=study.budget_seconds / 60,
@@ -119,7 +131,7 @@ def run_withdraw(args: argparse.Namespace) -> int:
     with Study.open(args.db) as study:
         code = study.find_participant(args.participant)
         study.withdraw(code, delete=args.delete)
-        return _print(dict(db=str(study.path), participant=code, withdrawn=True, deleted=bool(args.delete)))
+        return _print(dict(db=study.where, participant=code, withdrawn=True, deleted=bool(args.delete)))
 
 
 def run_simulate(args: argparse.Namespace) -> int:
@@ -276,7 +288,7 @@ def run_status(args: argparse.Namespace) -> int:
         tests = study.tests()
         return _print(
             dict(
-                db=str(study.path),
+                db=study.where,
                 name=study.name,
                 grammars=study.grammars,
                 budget_minutes=study.budget_seconds / 60,
@@ -300,7 +312,7 @@ def run_serve(args: argparse.Namespace) -> int:
         _print(addresses)
         sys.stdout.flush()
 
-    serve(args.db, host=args.host, port=args.port, announce=announce)
+    serve(args.db, host=args.host, port=args.port, announce=announce, folder=args.folder)
     return 0
 
 
@@ -336,7 +348,8 @@ def register(subparsers: Subparsers) -> None:
         )
 
     p = sub.add_parser("create", help="create a study database from exploration directories")
-    p.add_argument("db", help="new SQLite file")
+    p.add_argument("db", help=f"new SQLite file, or {_URL}")
+    p.add_argument("--folder", help=f"with {_URL}: the study's folder, for its pictures (default: here)")
     p.add_argument(
         "--grammar",
         action="append",
@@ -371,7 +384,7 @@ def register(subparsers: Subparsers) -> None:
     p.set_defaults(func=run_simulate)
 
     p = sub.add_parser("analyze", help="write the HTML report and CSVs of a study")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("-o", "--output", required=True, help="report folder")
     p.add_argument("--alpha", type=float, default=0.05)
     p.add_argument("--min-usefulness", default="good", help="groups kept for qualifiers (default: good)")
@@ -391,13 +404,13 @@ def register(subparsers: Subparsers) -> None:
     p.set_defaults(func=run_anova)
 
     p = sub.add_parser("export-csv", help="export the raw answers to CSV files")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("-o", "--output", required=True, help="folder for the CSV files")
     synonyms(p)
     p.set_defaults(func=run_export_csv)
 
     p = sub.add_parser("export-qualifiers", help="export labelled points to the qualifier store")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("--store", required=True, help="SQLite file holding the qualifier_points table")
     p.add_argument("--min-usefulness", default="good", help="keep groups rated at least this (default: good)")
     p.add_argument("--source", help="source tag (default: study:<study name>)")
@@ -405,7 +418,7 @@ def register(subparsers: Subparsers) -> None:
     p.set_defaults(func=run_export_qualifiers)
 
     p = sub.add_parser("words", help="add the study's new qualifier words, with measured directions, to a vocabulary file")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("-o", "--output", required=True, help="vocabulary file (JSON) to create or add to")
     p.add_argument("--min-groups", type=int, default=2, help="groups that must use a word (default: 2)")
     p.add_argument("--grammars-dir", help="folder of the .lsys files the explorations name (default: shipped grammars)")
@@ -413,23 +426,24 @@ def register(subparsers: Subparsers) -> None:
     p.set_defaults(func=run_words)
 
     p = sub.add_parser("withdraw", help="a participant withdraws: left out of analyses, or erased with --delete")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("participant", help="participant code, or external id (e.g. a Prolific PID)")
     p.add_argument("--delete", action="store_true", help="erase every answer of the participant")
     p.set_defaults(func=run_withdraw)
 
     p = sub.add_parser("status", help="participants and tests of a study")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.set_defaults(func=run_status)
 
     p = sub.add_parser("serve", help="serve the participant pages and the researcher's page on the web")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
+    p.add_argument("--folder", help=f"with {_URL}: the study's folder of pictures, if not the one given at creation")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default: this machine only)")
     p.add_argument("--port", type=int, default=8000)
     p.set_defaults(func=run_serve)
 
     p = sub.add_parser("export-jspsych", help="write the study as a jsPsych experiment (for JATOS or Pavlovia)")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("-o", "--output", required=True, help="folder for the experiment (new, or an earlier export)")
     p.add_argument(
         "--jspsych",
@@ -440,6 +454,6 @@ def register(subparsers: Subparsers) -> None:
     p.set_defaults(func=run_export_jspsych)
 
     p = sub.add_parser("import-jspsych", help="import the result file of a jsPsych export (checked first)")
-    p.add_argument("db")
+    p.add_argument("db", help=_DB_HELP)
     p.add_argument("results", help="jsPsych data: JSON, JATOS's results file, or CSV")
     p.set_defaults(func=run_import_jspsych)

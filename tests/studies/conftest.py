@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from pg_cluster import Cluster, why_not
 
 from ramure.studies.picks import lattice_picks
 from ramure.studies.storage import Study
@@ -36,3 +37,20 @@ def study(tmp_path, clock):
     )
     yield s
     s.close()
+
+
+@pytest.fixture(scope="session")
+def pg_cluster():
+    """A throwaway PostgreSQL server (Debian's package) for the session's PostgreSQL tests."""
+    reason = why_not()
+    if reason:
+        pytest.skip(reason)
+    cluster = Cluster(fsync=False).start()
+    yield cluster
+    cluster.stop()
+
+
+@pytest.fixture
+def pg_url(pg_cluster):
+    """The URL of a new, empty database on :func:`pg_cluster`."""
+    return pg_cluster.new_database()

@@ -28,9 +28,11 @@ from ramure.studies.session import picture_labels  # noqa: E402
 from ramure.studies.storage import Study  # noqa: E402
 
 
-@pytest.fixture
-def served(tmp_path):
-    db = make_study(tmp_path)
+@pytest.fixture(params=["sqlite", "postgresql"])
+def served(request, tmp_path):
+    """A served study, on a SQLite file and on PostgreSQL (the same tests, the same guarantees)."""
+    url = request.getfixturevalue("pg_url") if request.param == "postgresql" else None
+    db = make_study(tmp_path, db=url)
     server = StudyServer(db)
     with TestClient(make_app(server)) as client:
         yield db, server, client

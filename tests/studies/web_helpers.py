@@ -23,8 +23,11 @@ def png(path: pathlib.Path, shade: int) -> None:
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
 
 
-def make_study(folder: pathlib.Path, grammars: int = 2, pictures: bool = True, budget_minutes: float = 30.0) -> pathlib.Path:
-    """A study of ``grammars`` lattice grammars in ``folder``; its picks have PNG pictures when ``pictures``."""
+def make_study(
+    folder: pathlib.Path, grammars: int = 2, pictures: bool = True, budget_minutes: float = 30.0, db: str | None = None
+) -> pathlib.Path | str:
+    """A study of ``grammars`` lattice grammars in ``folder``; its picks have PNG pictures when ``pictures``.
+    ``db``: a PostgreSQL URL to create it in instead of ``folder/study.db`` (``folder`` holds its pictures)."""
     specs = {}
     for g in range(grammars):
         picks = lattice_picks(seed=g + 1)
@@ -38,13 +41,15 @@ def make_study(folder: pathlib.Path, grammars: int = 2, pictures: bool = True, b
                 for p in picks
             ]
         specs[f"g{g}"] = picks
-    db = folder / "study.db"
-    Study.create(db, grammars=specs, name="web-study", budget_minutes=budget_minutes).close()
-    return db
+    where = db if db is not None else folder / "study.db"
+    Study.create(where, grammars=specs, name="web-study", budget_minutes=budget_minutes, folder=folder).close()
+    return where
 
 
-def snapshot(db: pathlib.Path) -> list[str]:
-    """Every row of every table, read through a separate read-only connection."""
+def snapshot(db: pathlib.Path | str) -> list[str]:
+    """Every row of every table, read through a separate read-only connection (SQLite or PostgreSQL)."""
+    if isinstance(db, str) and db.startswith("postgresql://"):
+        return pg_snapshot(db)
     conn = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
     try:
         return list(conn.iterdump())
@@ -94,3 +99,21 @@ class WebParticipant:
             self.send(action="add_word", group=label, text="small" if label == 1 else "dense")
         self.send(action="finish")
         return groups
+
+
+def pg_snapshot(url: str) -> list[str]:
+    """Every row of every table of the PostgreSQL database ``url``, read through its own connection
+    (identity sequences left out: a refused insert may use up an id while storing nothing)."""
+    import psycopg
+
+    with psycopg.connect(url, autocommit=True) as conn:
+        tables = [
+            r[0]
+            for r in conn.execute(
+                "SELECT table_name FROM information_schema.tables WHERE table_schema = current_schema() ORDER BY table_name"
+            )
+        ]
+        rows = []
+        for table in tables:
+            rows += [f"{table}: {r!r}" for r in conn.execute(f"SELECT * FROM {table} ORDER BY 1")]  # noqa: S608
+        return sorted(rows)
