@@ -194,8 +194,12 @@ def _random_spec(rng, kind, levels):
 
 
 def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMap3, GMap3, dict]:
-    """Build one fruit from its recipe: ``(clean map, damaged map, labels)``; the labels'
-    defects carry ``cells``, the volume ids of the damaged map each defect made or moved."""
+    """Build one fruit from its recipe: ``(reference map, damaged map, labels)``.
+
+    The reference is the fruit without its located defects (crack, hail, rot, excrescence):
+    the clean fruit, shrunk when the recipe shrinks it, so that a located defect's mask is
+    compared with the same fruit without it.  The labels' defects carry ``cells``, the
+    volume ids of the damaged map each defect made or moved."""
     from ramure.gmap.organs.defect_specs import apply_defects
     from ramure.gmap.organs.fruit import build_fruit
     from ramure.gmap.organs.malform import malform_params, shape_facts
@@ -208,14 +212,20 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
         params = malform_params(recipe["preset"], seed=recipe["seed"], rate=recipe["variation"])
     clean = build_fruit(recipe["preset"], seed=recipe["seed"], volume_levels=levels, **params)
     specs = [(kind, _fit(clean, kind, dict(opts))) for kind, opts in recipe["defects"]]
+    from ramure.gmap.organs.defects import mm_per_unit
+
+    lo, hi = clean.points.min(axis=0), clean.points.max(axis=0)
     labels = {
         "preset": recipe["preset"],
         "seed": recipe["seed"],
+        "model_frame": {"centre": [float(x) for x in (lo + hi) / 2], "mm_per_unit": float(mm_per_unit(clean, size_mm))},
         "params": params,
         "variation": recipe.get("variation", 0.0),
         "malformation": None if not malform else {**malform, **shape_facts(clean)},
     }
     gm, facts = apply_defects(clean, specs, size_mm=size_mm, seed=recipe["seed"])
+    whole = [spec for spec in specs if spec[0] not in CATEGORY_ID]  # shrinkage: no place of its own
+    reference = apply_defects(clean, whole, size_mm=size_mm, seed=recipe["seed"])[0] if whole else clean
     for fact in facts["defects"]:
         fact["cells"] = [int(c) for c in defect_cells(clean, gm, fact)]
     labels.update(
@@ -225,12 +235,12 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
         darts=gm.n_darts,
         volumes=gm.n_volumes,
     )
-    return clean, gm, labels
+    return reference, gm, labels
 
 
 def defect_cells(clean: GMap3, damaged: GMap3, fact: Mapping[str, Any]) -> np.ndarray:
-    """Volume ids (of ``damaged``) a defect made or moved: a crater's cells at its vertex (and
-    the next ring when it widened), rot's three rings, an excrescence's grown cells, the cells
+    """Volume ids (of ``damaged``) a defect made or moved: a crater's cells at its vertex (the
+    crater's bowl), rot's three rings, an excrescence's grown cells, the cells
     whose faces a crack exposed; none for shrinkage, which is the whole fruit.
 
     Vertex ids of hail and rot are the clean fruit's (they are applied before any defect
@@ -239,7 +249,7 @@ def defect_cells(clean: GMap3, damaged: GMap3, fact: Mapping[str, Any]) -> np.nd
 
     kind = fact["kind"]
     if kind == "hail":
-        cells = [np.concatenate(rot_rings(clean, c["vertex"], 2 if c["widened"] else 1)) for c in fact["craters"]]
+        cells = [rot_rings(clean, c["vertex"], 1)[0] for c in fact["craters"]]
         return np.unique(np.concatenate(cells)) if cells else np.zeros(0, np.int64)
     if kind == "rot":
         return np.unique(np.concatenate(rot_rings(clean, fact["vertex"], len(fact["coefficients"]))))
@@ -319,10 +329,9 @@ def render_views(
     defect, 0 for none) and ``defect_bits`` (bit i: defect i).
     """
     from ramure.app import fruit_views as V
-    from ramure.gmap.organs.defects import mm_per_unit
 
-    lo, hi = clean.points.min(axis=0), clean.points.max(axis=0)
-    centre, scale = (lo + hi) / 2, mm_per_unit(clean, size_mm)
+    frame = labels["model_frame"]  # the clean fruit's: a shrunk fruit is not refitted
+    centre, scale = np.asarray(frame["centre"]), frame["mm_per_unit"]
     grid = _mm_grid(damaged, centre, scale)
     first = np.zeros(grid.n_cells, np.int16)
     bits = np.zeros(grid.n_cells, np.int32)
@@ -335,19 +344,24 @@ def render_views(
     surface = grid.extract_surface(algorithm="dataset_surface")
     clean_surface = _mm_grid(clean, centre, scale).extract_surface(algorithm="dataset_surface")
     face_cell = np.asarray(surface.cell_data["vtkOriginalCellIds"], np.int64)
-    face_bits = bits[face_cell]
+    cell_bits = bits[face_cell]
+    face_bits = _face_bits(surface, cell_bits, labels["defects"])
     face_area = np.asarray(surface.compute_cell_sizes(length=False, volume=False).cell_data["Area"])
     rgb, clean_rgb = _cell_rgb(surface), _cell_rgb(clean_surface)
     renderer = _renderer(picture)
     records, pictures, cleans = [], [], []
-    for k, view in enumerate(V.sample_views(fruit_rng(seed, index, 1), views, size_mm, stage)):
-        props = V.stage_meshes(view, np.asarray(clean_surface.points), size_mm)
-        img = renderer.picture(surface, rgb, view, props)
-        ref = renderer.picture(clean_surface, clean_rgb, view, props)
-        faces = renderer.face_ids(surface, view, props)
+    drawn = V.sample_views(fruit_rng(seed, index, 1), views, size_mm, stage)
+    renderer.set_fruit(
+        surface, rgb, clean_surface, clean_rgb, V.stage_meshes(drawn[0], np.asarray(clean_surface.points), size_mm)
+    )
+    for k, view in enumerate(drawn):
+        img = renderer.picture(view)
+        ref = renderer.picture(view, clean=True)
+        faces = renderer.face_ids(view)
         seen = faces >= 0
         changed = (np.abs(img.astype(np.int16) - ref.astype(np.int16)) > CHANGED_LEVEL).any(axis=2)
         pix_bits = np.where(seen, face_bits[np.where(seen, faces, 0)], 0)
+        pix_cells = np.where(seen, cell_bits[np.where(seen, faces, 0)], 0)
         seen_faces = np.zeros(surface.n_cells, bool)
         seen_faces[faces[seen]] = True
         defects = []
@@ -355,6 +369,8 @@ def render_views(
             if fact["kind"] not in CATEGORY_ID:
                 continue  # shrinkage: the whole fruit (its fruit-level facts say how much)
             mask = (pix_bits & (1 << min(i, 30))) != 0
+            if fact["kind"] == "crack":  # its walls, and where it changes the skin of its cells
+                mask |= ((pix_cells & (1 << min(i, 30))) != 0) & changed
             mine = (face_bits & (1 << min(i, 30))) != 0
             area = float(face_area[mine].sum())
             n_changed = int((mask & changed).sum())
@@ -385,6 +401,29 @@ def render_views(
     return records, pictures, cleans, grid
 
 
+#: A crack's mask is its walls: faces of its cells turned away from the fruit's centre by
+#: more than this (|normal . radial| below it); skin faces face outward.
+WALL_COSINE = 0.6
+
+
+def _face_bits(surface, bits: np.ndarray, defects: Sequence[Mapping[str, Any]]) -> np.ndarray:
+    """Defect bits per surface face: the cell's, but a crack keeps only its walls (the faces it
+    exposed, not the skin of its cells); its mask adds the pixels of its cells' skin that
+    differ from the reference (the gap's shading), see :func:`render_views`."""
+    cracks = [i for i, d in enumerate(defects) if d["kind"] == "crack"]
+    if not cracks:
+        return bits
+    shown = surface.compute_normals(cell_normals=True, point_normals=False, auto_orient_normals=False)
+    normal = np.asarray(shown.cell_data["Normals"])
+    centre = np.asarray(surface.cell_centers().points)
+    radial = centre / np.maximum(np.linalg.norm(centre, axis=1, keepdims=True), 1e-12)
+    wall = np.abs(np.einsum("ij,ij->i", normal, radial)) < WALL_COSINE
+    out = bits.copy()
+    for i in cracks:
+        out[~wall] &= ~np.int32(1 << min(i, 30))
+    return out
+
+
 def _cut_picture(grid, index, seed, picture):
     """A picture of the fruit cut through its axis by a plane of random direction, facing the cut."""
     from ramure.gmap.kernel.cut import plane_cut
@@ -408,7 +447,10 @@ def _cut_picture(grid, index, seed, picture):
         "gloss": 0.2,
         "background": [1.0, 1.0, 1.0],
     }
-    return _renderer(picture).picture(cut, _cell_rgb(cut), view, []), {"normal": normal.tolist(), "origin": [0.0, 0.0, 0.0]}
+    renderer = _renderer(picture)
+    colours = _cell_rgb(cut)
+    renderer.set_fruit(cut, colours, cut, colours, [])
+    return renderer.picture(view), {"normal": normal.tolist(), "origin": [0.0, 0.0, 0.0]}
 
 
 def _png(img: np.ndarray) -> bytes:
@@ -770,7 +812,7 @@ def _run_dask(jobs, workers, scheduler, folder):
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
             client = Client(cluster)
         else:
             client = Client(scheduler, timeout="20s")
@@ -791,6 +833,8 @@ def _run_dask(jobs, workers, scheduler, folder):
     finally:
         if futures:
             client.cancel(futures)
+        with contextlib.suppress(Exception):  # release the workers' GL contexts; a gone worker has none
+            client.run(close_plotter)
         client.close()
         if cluster is not None:
             cluster.close()

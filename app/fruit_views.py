@@ -156,18 +156,20 @@ def stage_meshes(view: Mapping[str, Any], fruit_points: np.ndarray, size_mm: flo
     low = float((fruit_points @ up).min())
     belt = pv.Plane(center=tuple(up * (low - 0.002 * size_mm)), direction=tuple(up), i_size=8 * size_mm, j_size=8 * size_mm)
     out = [(belt, list(view["belt"]))]
-    if view["stage"] == "cup":
-        rim = 0.18 * size_mm
-        height = np.dot(fruit_points, up)
-        ring = fruit_points[np.abs(height - (low + rim)) < 0.05 * size_mm]
-        centre = ring.mean(axis=0) if len(ring) else up * (low + rim)
-        radius = 0.9 * (float(np.linalg.norm(ring - centre, axis=1).mean()) if len(ring) else 0.3 * size_mm)
-        base = centre - up * (centre @ up - low + 0.002 * size_mm)
+    if view["stage"] == "cup":  # a cone round the fruit's lower part, wider than it at its rim
+        rim = 0.22 * size_mm
+        height = fruit_points @ up
+        ring = fruit_points[np.abs(height - (low + rim)) < 0.04 * size_mm]
+        axis_point = ring.mean(axis=0) if len(ring) else up * (low + rim)
+        across = ring - axis_point - np.outer((ring - axis_point) @ up, up)
+        radius = 1.12 * (float(np.linalg.norm(across, axis=1).max()) if len(ring) else 0.35 * size_mm)
+        apex = axis_point - up * (axis_point @ up - low + 0.6 * rim)
+        depth = 1.6 * rim
         cup = pv.Cone(
-            center=tuple(base + up * rim / 2),
+            center=tuple(apex + up * depth / 2),
             direction=tuple(-up),
-            height=rim,
-            radius=radius * 1.05,
+            height=depth,
+            radius=radius,
             capping=False,
             resolution=48,
         )
@@ -176,7 +178,13 @@ def stage_meshes(view: Mapping[str, Any], fruit_points: np.ndarray, size_mm: flo
 
 
 class ViewRenderer:
-    """One off-screen plotter for every view a process renders (see the module docstring)."""
+    """One off-screen plotter for every view a process renders (see the module docstring).
+
+    :meth:`set_fruit` adds a fruit's actors once (the damaged fruit shaded and in ids, the
+    clean fruit shaded, the stage); :meth:`picture` and :meth:`face_ids` then only switch
+    actors, lights and camera per view, which is most of the cost saved (pyvista's
+    ``add_mesh`` costs more than a render).
+    """
 
     def __init__(self, size: Sequence[int]) -> None:
         from ramure.app.render import headless_setup
@@ -187,10 +195,41 @@ class ViewRenderer:
         self.size = (int(size[0]), int(size[1]))
         self.plotter = pv.Plotter(off_screen=True, window_size=list(self.size))
         self.plotter.disable_anti_aliasing()
+        self.actors: dict[str, Any] = {}
+        self.stage: list[tuple[Any, Any]] = []
 
     def close(self) -> None:
         """Release the GL context."""
         self.plotter.close()
+
+    def set_fruit(
+        self, surface: pv.PolyData, rgb: np.ndarray, clean: pv.PolyData, clean_rgb: np.ndarray, stage: Sequence
+    ) -> None:
+        """The fruit (damaged and clean surfaces with their face colours) and its stage meshes."""
+        p = self.plotter
+        p.clear_actors()
+        shaded = {"smooth_shading": True, "split_sharp_edges": True, "feature_angle": 50.0, "diffuse": 0.85}
+        self.actors = {}
+        for name, mesh, colours in (("damaged", surface, rgb), ("clean", clean, clean_rgb)):
+            shown = mesh.copy(deep=False)
+            shown.cell_data["rgb"] = colours
+            self.actors[name] = p.add_mesh(shown, scalars="rgb", rgb=True, specular_power=30.0, render=False, **shaded)
+        code = np.arange(1, surface.n_cells + 1, dtype=np.int64)
+        ids = surface.copy(deep=False)
+        ids.cell_data["id_rgb"] = np.stack([(code >> 16) & 255, (code >> 8) & 255, code & 255], axis=1).astype(np.uint8)
+        self.actors["ids"] = p.add_mesh(ids, scalars="id_rgb", rgb=True, lighting=False, render=False)
+        self.stage = []
+        for mesh, colour in stage:
+            shade = p.add_mesh(mesh, color=tuple(colour), ambient=0.3, diffuse=0.7, render=False)
+            flat = p.add_mesh(mesh, color=(0.0, 0.0, 0.0), lighting=False, render=False)
+            self.stage.append((shade, flat))
+
+    def _show(self, which: str) -> None:
+        for name, actor in self.actors.items():
+            actor.SetVisibility(name == which)
+        for shade, flat in self.stage:
+            shade.SetVisibility(which != "ids")
+            flat.SetVisibility(which == "ids")
 
     def _camera(self, view: Mapping[str, Any]) -> None:
         cam = self.plotter.camera
@@ -199,63 +238,42 @@ class ViewRenderer:
         distance = float(np.linalg.norm(np.subtract(view["eye"], view["target"])))
         cam.clipping_range = (max(distance * 0.02, 1e-3), distance * 10)
 
-    def picture(self, surface: pv.PolyData, rgb: np.ndarray, view: Mapping[str, Any], stage: Sequence) -> np.ndarray:
-        """The shaded picture of a view, ``(height, width, 3)`` uint8."""
+    def _grab(self) -> np.ndarray:
+        self.plotter.render()
+        return np.asarray(self.plotter.screenshot(None, return_img=True))[..., :3].copy()
+
+    def picture(self, view: Mapping[str, Any], clean: bool = False) -> np.ndarray:
+        """The shaded picture of a view of the damaged (or clean) fruit, ``(height, width, 3)`` uint8."""
         import pyvista as pv
 
         p = self.plotter
-        p.clear_actors()
+        which = "clean" if clean else "damaged"
+        self._show(which)
+        prop = self.actors[which].prop
+        prop.ambient, prop.specular = view["ambient"], view["gloss"]
         p.remove_all_lights()
         p.set_background(tuple(view["background"]))  # type: ignore[arg-type]  # pyvista stubs: decorated method
-        shown = surface.copy(deep=False)
-        shown.cell_data["rgb"] = rgb
-        p.add_mesh(
-            shown,
-            scalars="rgb",
-            rgb=True,
-            smooth_shading=True,
-            split_sharp_edges=True,
-            feature_angle=50.0,
-            ambient=view["ambient"],
-            diffuse=0.85,
-            specular=view["gloss"],
-            specular_power=30.0,
-            render=False,
-        )
-        for mesh, colour in stage:
-            p.add_mesh(mesh, color=tuple(colour), ambient=0.3, diffuse=0.7, render=False)
         target = np.asarray(view["target"], float)
-        tint = tuple(view["light_tint"])
         key = view["key_light"]
         p.add_light(
             pv.Light(
                 position=tuple(target + np.asarray(key["direction"]) * 1000.0),
                 focal_point=tuple(target),
-                color=tint,
+                color=tuple(view["light_tint"]),
                 intensity=key["intensity"],
                 light_type="scene light",
             )
         )
         p.add_light(pv.Light(light_type="headlight", intensity=view["fill_light"]))
         self._camera(view)
-        p.render()
-        return np.asarray(p.screenshot(None, return_img=True))[..., :3].copy()
+        return self._grab()
 
-    def face_ids(self, surface: pv.PolyData, view: Mapping[str, Any], stage: Sequence) -> np.ndarray:
-        """Per pixel, the index of the surface face seen there, -1 for the stage or the backdrop."""
-        p = self.plotter
-        p.clear_actors()
-        p.remove_all_lights()
-        p.set_background((0.0, 0.0, 0.0))  # type: ignore[arg-type]  # pyvista stubs: decorated method
-        code = np.arange(1, surface.n_cells + 1, dtype=np.int64)
-        ids = surface.copy(deep=False)
-        ids.cell_data["id_rgb"] = np.stack([(code >> 16) & 255, (code >> 8) & 255, code & 255], axis=1).astype(np.uint8)
-        p.add_mesh(ids, scalars="id_rgb", rgb=True, lighting=False, render=False)
-        for mesh, _ in stage:
-            p.add_mesh(mesh, color=(0.0, 0.0, 0.0), lighting=False, render=False)
+    def face_ids(self, view: Mapping[str, Any]) -> np.ndarray:
+        """Per pixel, the index of the damaged surface's face seen there, -1 for the stage or backdrop."""
+        self._show("ids")
+        self.plotter.set_background((0.0, 0.0, 0.0))  # type: ignore[arg-type]  # pyvista stubs: decorated method
         self._camera(view)
-        p.render()
-        img = np.asarray(p.screenshot(None, return_img=True))[..., :3].astype(np.int64)
+        img = self._grab().astype(np.int64)
         return (img[..., 0] << 16 | img[..., 1] << 8 | img[..., 2]) - 1
 
 
