@@ -201,13 +201,16 @@ COCO files and manifest, whatever the number of workers or the cluster.
 - Camera effects: no lens distortion, blur, noise, motion, exposure or white balance changes.
 - Fruit-to-fruit contact, several fruit per picture, leaves, labels on the fruit.
 - Biological processes: rot and shrinkage are geometric (cells shrink), not grown in time.
-- Defects that never change the picture: a defect whose mask does not differ from the clean
-  fruit seen the same way is kept in the fruit's labels with `visible: false` and has no COCO
-  annotation in that view.
+- Defects that never change the picture: a defect whose mask does not differ (at least 12
+  pixels by more than 8 levels) from the fruit without its located defects seen the same way
+  is kept in the fruit's labels with `visible: false` and has no COCO annotation in that view.
+- A crack's mask is its walls plus the pixels of its cells' skin it changes; a crater's is
+  its bowl (the cells round its vertex); rot's the three rings of cells it dries faster.
 
 ## Files
-- `fruit_NNNN_vK.png`: view K of fruit NNNN (`_clean.png`: the same view of the fruit
-  without its defects, when asked).  `fruit_NNNN_cut.png`: the fruit cut through its axis.
+- `fruit_NNNN_vK.png`: view K of fruit NNNN (`_clean.png`, when asked: the same view of
+  the fruit without its located defects, shrunk if the fruit is: the reference of `visible`).
+  `fruit_NNNN_cut.png`: the fruit cut through its axis.
 - `fruit_NNNN.vtu`: the damaged fruit's cells in millimetres (frame of the cameras), with cell
   data `tissue`, `defect` (index + 1 of the first defect owning the cell, 0 none) and
   `defect_bits` (bit i: defect i): the 3D ground truth.

@@ -5,8 +5,8 @@ train a sorting system.  :func:`make_dataset` writes, for fruit ``i`` of ``count
 
 * ``fruit_0000_v0.png`` .. ``_v{views-1}.png``: views with a random camera, light,
   backdrop and stage (plain, conveyor belt, cup; see :mod:`ramure.app.fruit_views`), and
-  with ``clean_pictures`` the same views of the fruit without its defects
-  (``_v0_clean.png``); ``fruit_0000_cut.png``: the fruit cut through its axis by a plane of
+  with ``clean_pictures`` the same views of the fruit without its located defects
+  (``_v0_clean.png``; shrunk when the fruit is); ``fruit_0000_cut.png``: the fruit cut through its axis by a plane of
   random direction;
 * ``fruit_0000.vtu``: the damaged fruit's cells in millimetres, in the cameras' frame, with
   ``tissue`` and the 3D ground truth ``defect`` / ``defect_bits`` per cell;
@@ -19,8 +19,9 @@ then ``coco_{train,val,test,all}.json`` and ``DATASET_CARD.md`` (:mod:`ramure.ap
 and ``dataset.json``, the manifest: the settings, ``"complete"``, counts, one row per fruit.
 
 **Visible** means: at least :data:`MIN_VISIBLE_PIXELS` pixels of the defect's mask differ
-from the clean fruit (same shape variation, camera, light and stage, no defect) by more
-than :data:`CHANGED_LEVEL` in a channel.  Only visible defects get COCO annotations; the
+from the reference fruit (same shape, shrinkage, camera, light and stage, without the
+located defects: crack, hail, rot, excrescence) by more than :data:`CHANGED_LEVEL` in a
+channel.  Only visible defects get COCO annotations; the
 others stay in the fruit's labels.  Shrinkage has no place: it is the fruit's (the camera
 is never refitted, so a shrunk fruit is smaller in the picture).
 
@@ -141,14 +142,13 @@ def random_recipe(rng: np.random.Generator, preset: str = "round_tomato", levels
     from ramure.gmap.organs.malform import SHAPES
 
     r = RANDOM_RANGES
+    variation = round(float(rng.uniform(*r["variation_rate"])), 3)  # used when not malformed
+    malform = None
     if rng.random() < 0.3:
         if rng.random() < 0.5:
             malform = {"shape": str(rng.choice(sorted(SHAPES))), "rate": 0.0}
         else:
             malform = {"shape": None, "rate": round(float(rng.uniform(*r["malform_rate"])), 3)}
-        variation = 0.0
-    else:
-        malform, variation = None, round(float(rng.uniform(*r["variation_rate"])), 3)
     n = int(rng.choice(len(DEFECT_COUNT_P), p=DEFECT_COUNT_P))
     kinds = [str(k) for k in rng.choice(DEFECT_KINDS, n, replace=False)]
     specs = [(kind, _random_spec(rng, kind, levels)) for kind in kinds]
@@ -208,7 +208,7 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
     malform = recipe.get("malform")
     if malform:
         params = malform_params(recipe["preset"], seed=recipe["seed"], **malform)
-    elif recipe.get("variation"):
+    elif recipe.get("variation"):  # a slight natural variation of a fruit that is not malformed
         params = malform_params(recipe["preset"], seed=recipe["seed"], rate=recipe["variation"])
     clean = build_fruit(recipe["preset"], seed=recipe["seed"], volume_levels=levels, **params)
     specs = [(kind, _fit(clean, kind, dict(opts))) for kind, opts in recipe["defects"]]
@@ -220,12 +220,15 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
         "seed": recipe["seed"],
         "model_frame": {"centre": [float(x) for x in (lo + hi) / 2], "mm_per_unit": float(mm_per_unit(clean, size_mm))},
         "params": params,
-        "variation": recipe.get("variation", 0.0),
+        "variation": 0.0 if malform else recipe.get("variation", 0.0),
         "malformation": None if not malform else {**malform, **shape_facts(clean)},
     }
     gm, facts = apply_defects(clean, specs, size_mm=size_mm, seed=recipe["seed"])
     whole = [spec for spec in specs if spec[0] not in CATEGORY_ID]  # shrinkage: no place of its own
-    reference = apply_defects(clean, whole, size_mm=size_mm, seed=recipe["seed"])[0] if whole else clean
+    if len(whole) == len(specs):
+        reference = gm  # nothing located: the fruit is its own reference
+    else:
+        reference = apply_defects(clean, whole, size_mm=size_mm, seed=recipe["seed"])[0] if whole else clean
     for fact in facts["defects"]:
         fact["cells"] = [int(c) for c in defect_cells(clean, gm, fact)]
     labels.update(
@@ -342,7 +345,8 @@ def render_views(
     grid.cell_data["defect"] = first
     grid.cell_data["defect_bits"] = bits
     surface = grid.extract_surface(algorithm="dataset_surface")
-    clean_surface = _mm_grid(clean, centre, scale).extract_surface(algorithm="dataset_surface")
+    same = clean is damaged  # no located defect: one surface, one picture per view
+    clean_surface = surface if same else _mm_grid(clean, centre, scale).extract_surface(algorithm="dataset_surface")
     face_cell = np.asarray(surface.cell_data["vtkOriginalCellIds"], np.int64)
     cell_bits = bits[face_cell]
     face_bits = _face_bits(surface, cell_bits, labels["defects"])
@@ -356,7 +360,7 @@ def render_views(
     )
     for k, view in enumerate(drawn):
         img = renderer.picture(view)
-        ref = renderer.picture(view, clean=True)
+        ref = img if same else renderer.picture(view, clean=True)
         faces = renderer.face_ids(view)
         seen = faces >= 0
         changed = (np.abs(img.astype(np.int16) - ref.astype(np.int16)) > CHANGED_LEVEL).any(axis=2)

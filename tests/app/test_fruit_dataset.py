@@ -17,7 +17,7 @@ def labels(folder, i):
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory):
     folder = tmp_path_factory.mktemp("ds")
-    return folder, F.make_dataset(folder, count=4, seed=5, workers=2, picture=(128, 128), views=2, clean_pictures=True)
+    return folder, F.make_dataset(folder, count=4, seed=7, workers=2, picture=(128, 128), views=2, clean_pictures=True)
 
 
 def rgb(path):
@@ -130,7 +130,7 @@ def test_cameras_project_the_mesh_onto_its_mask(dataset):
 
 def test_deterministic_and_independent_per_fruit(dataset, tmp_path):
     folder, _ = dataset
-    F.make_dataset(tmp_path, count=2, seed=5, workers=1, picture=(128, 128), views=2, clean_pictures=True)
+    F.make_dataset(tmp_path, count=2, seed=7, workers=1, picture=(128, 128), views=2, clean_pictures=True)
     for i in range(2):
         assert (tmp_path / f"fruit_{i:04d}.json").read_bytes() == (folder / f"fruit_{i:04d}.json").read_bytes()
     other = F.random_recipe(F.fruit_rng(6, 0))
@@ -157,7 +157,10 @@ def test_random_recipes_balance_the_defect_kinds():
 def test_clean_fruit_vary():
     """``--defects none``: no defect, yet no two fruit nor views alike."""
     recipes = [F.random_recipe(F.fruit_rng(0, i)) for i in range(20)]
-    assert len({r["variation"] for r in recipes if r["malform"] is None}) > 5
+    assert len({r["variation"] for r in recipes}) > 15
+    built = [F.build_one({**r, "malform": None, "defects": []})[1] for r in recipes[:3]]
+    points = [np.round(gm.points, 6).tobytes() for gm in built]
+    assert len(set(points)) == 3  # three different shapes
 
 
 def test_a_concentric_crack_rings_the_stem_scar():
@@ -255,3 +258,51 @@ def test_killed_batch_stops_its_workers_and_resumes_to_the_same_dataset(tmp_path
     fresh = F.make_dataset(tmp_path / "fresh", count=5, seed=3, workers=1, picture=(48, 48))
     assert (folder / "dataset.json").read_bytes() == (tmp_path / "fresh" / "dataset.json").read_bytes()
     assert summary["fruit"] == fresh["fruit"]
+
+
+def test_a_dask_local_cluster_makes_the_same_dataset(tmp_path):
+    """Issue 40, section 5: ``--scheduler local``; the files come back to this process and are
+    byte-identical to the pool's (labels, COCO files, card, manifest, pictures, grids)."""
+    pytest.importorskip("dask.distributed")
+    a, b = tmp_path / "dask", tmp_path / "pool"
+    F.make_dataset(a, count=3, seed=4, views=1, picture=(64, 64), workers=2, scheduler="local")
+    F.make_dataset(b, count=3, seed=4, views=1, picture=(64, 64), workers=1)
+    names = sorted(p.name for p in b.iterdir())
+    assert names == sorted(p.name for p in a.iterdir())
+    for name in names:
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+
+
+def test_cli_batch_views_and_stage(capsys, tmp_path):
+    from ramure.app.cli import main
+
+    assert main(["fruit", "batch", "--views", "0", "-o", str(tmp_path / "a")]) == 2
+    assert "--views" in capsys.readouterr().err
+    out = tmp_path / "b"
+    assert (
+        main(
+            [
+                "fruit",
+                "batch",
+                "--count",
+                "1",
+                "--views",
+                "2",
+                "--stage",
+                "conveyor",
+                "--size",
+                "64x64",
+                "--workers",
+                "1",
+                "-o",
+                str(out),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["views"] == 2 and summary["stage"] == "conveyor" and summary["splits"]
+    record = labels(out, 0)
+    assert [v["stage"] for v in record["views"]] == ["conveyor", "conveyor"]
+    assert (out / "DATASET_CARD.md").read_text().count("What is not simulated") == 1
