@@ -6,10 +6,11 @@
   instance-segmentation files (``images``, ``annotations``, ``categories``).  One image per
   view; one ``fruit`` annotation per image (the whole fruit, its grade in
   ``attributes``) and one annotation per defect *visible* in that view (its mask differs
-  from the clean fruit seen the same way, see :mod:`ramure.app.fruit_dataset`).  Masks are
-  exact, as uncompressed RLE (``{"size": [h, w], "counts": [...]}``, ``iscrowd`` 0), read
-  by pycocotools, torchvision's ``CocoDetection`` and detectron2 (``INPUT.MASK_FORMAT
-  bitmask``).  Extra keys (``camera``, ``attributes``...) are ignored by those readers.
+  from the fruit without its located defects seen the same way, see
+  :mod:`ramure.app.fruit_dataset`).  Masks are exact, as uncompressed RLE
+  (``{"size": [h, w], "counts": [...]}``, ``iscrowd`` 0), read by pycocotools,
+  torchvision's ``CocoDetection`` and detectron2 (``INPUT.MASK_FORMAT bitmask``).  Extra
+  keys (``camera``, ``attributes``...) are ignored by those readers.
   Ids are given in fruit and view order, so the files are byte-identical for one seed.
 * ``DATASET_CARD.md``: what the data are, what is simulated and what is not, the layout,
   conventions and counts.
@@ -26,6 +27,15 @@ from typing import Any
 import ramure.io as atomic
 
 CARD = "DATASET_CARD.md"
+#: COCO categories (``fruit``: the whole fruit, carrying its grade; one per defect kind with a place).
+CATEGORIES = (
+    {"id": 1, "name": "fruit"},
+    {"id": 2, "name": "crack"},
+    {"id": 3, "name": "hail"},
+    {"id": 4, "name": "rot"},
+    {"id": 5, "name": "excrescence"},
+)
+CATEGORY_ID = {c["name"]: c["id"] for c in CATEGORIES}
 SPLITS = ("train", "val", "test")
 
 
@@ -35,8 +45,6 @@ def _labels(folder: pathlib.Path, row: Mapping[str, Any]) -> dict:
 
 def coco_records(record: Mapping[str, Any], image_id: int, annotation_id: int) -> tuple[list[dict], list[dict]]:
     """COCO images and annotations of one fruit's labels, ids from ``image_id`` and ``annotation_id``."""
-    from ramure.app.fruit_dataset import CATEGORY_ID
-
     images, annotations = [], []
     grade = record["grade"]
     shrink = [d for d in record["defects"] if d["kind"] == "shrink"]
@@ -108,8 +116,6 @@ def coco_records(record: Mapping[str, Any], image_id: int, annotation_id: int) -
 def write_coco_and_card(folder: pathlib.Path, settings: Mapping[str, Any], rows: Sequence[Mapping[str, Any]]) -> dict:
     """Write the COCO files and the card (see the module docstring); returns the manifest's extra
     facts: images and annotations per split, labelled and visible defects, duplicate pictures."""
-    from ramure.app.fruit_dataset import CATEGORIES
-
     per_split: dict[str, dict[str, list]] = {s: {"images": [], "annotations": []} for s in SPLITS}
     image_id, annotation_id = 1, 1
     labelled = visible = 0
@@ -158,8 +164,6 @@ def write_coco_and_card(folder: pathlib.Path, settings: Mapping[str, Any], rows:
 
 
 def _write_coco(path: pathlib.Path, info: Mapping[str, Any], part: Mapping[str, list]) -> None:
-    from ramure.app.fruit_dataset import CATEGORIES
-
     data = {
         "info": dict(info),
         "licenses": [],

@@ -66,6 +66,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import ramure.io as atomic
+from ramure.app.fruit_coco import CATEGORY_ID
 from ramure.errors import RamureError, ValueRefused
 
 if TYPE_CHECKING:
@@ -101,15 +102,6 @@ MIN_VISIBLE_PIXELS = 12
 CHANGED_LEVEL = 8
 #: Train / validation / test fractions of the split (per fruit, all its views together).
 SPLIT = (("train", 0.7), ("val", 0.15), ("test", 0.15))
-#: COCO categories (``fruit``: the whole fruit, carrying its grade; one per defect kind with a place).
-CATEGORIES = (
-    {"id": 1, "name": "fruit"},
-    {"id": 2, "name": "crack"},
-    {"id": 3, "name": "hail"},
-    {"id": 4, "name": "rot"},
-    {"id": 5, "name": "excrescence"},
-)
-CATEGORY_ID = {c["name"]: c["id"] for c in CATEGORIES}
 _STATE: dict[str, Any] = {}
 
 
@@ -321,7 +313,15 @@ def _mm_grid(gm, centre, scale):
 
 
 def render_views(
-    index: int, seed: int, clean, damaged, labels: dict, size_mm: float, views: int, stage: str, picture: tuple[int, int]
+    index: int,
+    seed: int,
+    clean: GMap3,
+    damaged: GMap3,
+    labels: dict,
+    size_mm: float,
+    views: int,
+    stage: str,
+    picture: tuple[int, int],
 ) -> tuple[list[dict], list[np.ndarray], list[np.ndarray], Any]:
     """Render fruit ``index``'s views: ``(view records, pictures, clean pictures, damaged grid)``.
 

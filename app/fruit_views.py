@@ -208,12 +208,21 @@ class ViewRenderer:
         """The fruit (damaged and clean surfaces with their face colours) and its stage meshes."""
         p = self.plotter
         p.clear_actors()
-        shaded = {"smooth_shading": True, "split_sharp_edges": True, "feature_angle": 50.0, "diffuse": 0.85}
         self.actors = {}
         for name, mesh, colours in (("damaged", surface, rgb), ("clean", clean, clean_rgb)):
             shown = mesh.copy(deep=False)
             shown.cell_data["rgb"] = colours
-            self.actors[name] = p.add_mesh(shown, scalars="rgb", rgb=True, specular_power=30.0, render=False, **shaded)
+            self.actors[name] = p.add_mesh(
+                shown,
+                scalars="rgb",
+                rgb=True,
+                smooth_shading=True,
+                split_sharp_edges=True,
+                feature_angle=50.0,
+                diffuse=0.85,
+                specular_power=30.0,
+                render=False,
+            )
         code = np.arange(1, surface.n_cells + 1, dtype=np.int64)
         ids = surface.copy(deep=False)
         ids.cell_data["id_rgb"] = np.stack([(code >> 16) & 255, (code >> 8) & 255, code & 255], axis=1).astype(np.uint8)
