@@ -306,3 +306,17 @@ def test_cli_batch_views_and_stage(capsys, tmp_path):
     record = labels(out, 0)
     assert [v["stage"] for v in record["views"]] == ["conveyor", "conveyor"]
     assert (out / "DATASET_CARD.md").read_text().count("What is not simulated") == 1
+
+
+def test_the_camera_never_refits_a_shrunk_fruit():
+    """Issue 40: shrinkage was undone by the renderer's framing.  The same fruit, views and
+    camera, shrunk by 10 % of every edge twice (0.81 linear), covers about 0.66 of the pixels."""
+    recipe = {"preset": "round_tomato", "malform": None, "variation": 0.0, "defects": [], "seed": 11}
+    shrunk = {**recipe, "defects": [("shrink", {"rate": 0.1, "steps": 2})]}
+    views = []
+    for r in (recipe, shrunk):
+        files = F.make_fruit(3, r, seed=2, picture=(96, 96), views=2)
+        views.append(json.loads(files["fruit_0003.json"])["views"])
+    for clean, small in zip(*views):
+        assert clean["camera"] == small["camera"]
+        assert 0.55 < small["fruit"]["pixels"] / clean["fruit"]["pixels"] < 0.75
