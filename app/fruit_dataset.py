@@ -671,40 +671,47 @@ def make_dataset(
         "stage": stage,
         "clean_pictures": bool(clean_pictures),
     }
-    _prepare(folder, settings, resume, overwrite)
-    t0 = time.perf_counter()
-    write_manifest(folder, settings, [], complete=False)
-    done = {i for i in range(int(count)) if resume and (folder / f"fruit_{i:04d}.json").is_file()}
-    options = {
-        "seed": int(seed),
-        "levels": levels,
-        "size_mm": float(size_mm),
-        "picture": tuple(int(v) for v in picture),
-        "views": int(views),
-        "stage": stage,
-        "clean_pictures": bool(clean_pictures),
-    }
-    jobs = []
-    for i in range(int(count)):
-        if i in done:
-            continue
-        recipe = random_recipe(fruit_rng(seed, i), preset, levels)
-        if defects == "none":
-            recipe.update(malform=None, defects=[])
-        jobs.append((i, recipe, str(folder), options))
-    if not jobs:
-        rows = []
-    elif scheduler is not None:
-        rows = _run_dask(jobs, int(workers), scheduler, folder)
-    else:
-        rows = _run(jobs, int(workers))
-    rows += [_row_of(folder, i) for i in sorted(done)]
-    rows.sort(key=lambda r: r["index"])
-    from ramure.app.fruit_coco import write_coco_and_card
+    dask = _dask_client(scheduler, int(workers)) if scheduler is not None else None  # unreachable: nothing written
+    try:
+        _prepare(folder, settings, resume, overwrite)
+        t0 = time.perf_counter()
+        write_manifest(folder, settings, [], complete=False)
+        done = {i for i in range(int(count)) if resume and (folder / f"fruit_{i:04d}.json").is_file()}
+        options = {
+            "seed": int(seed),
+            "levels": levels,
+            "size_mm": float(size_mm),
+            "picture": tuple(int(v) for v in picture),
+            "views": int(views),
+            "stage": stage,
+            "clean_pictures": bool(clean_pictures),
+        }
+        jobs = []
+        for i in range(int(count)):
+            if i in done:
+                continue
+            recipe = random_recipe(fruit_rng(seed, i), preset, levels)
+            if defects == "none":
+                recipe.update(malform=None, defects=[])
+            jobs.append((i, recipe, str(folder), options))
+        if not jobs:
+            rows = []
+        elif dask is not None:
+            rows = _run_dask(jobs, dask[0], folder)
+        else:
+            rows = _run(jobs, int(workers))
+        rows += [_row_of(folder, i) for i in sorted(done)]
+        rows.sort(key=lambda r: r["index"])
+        from ramure.app.fruit_coco import write_coco_and_card
 
-    extra = write_coco_and_card(folder, settings, rows)
-    summary = write_manifest(folder, settings, rows, complete=True, extra=extra)
-    return {**summary, "seconds": round(time.perf_counter() - t0, 3)}
+        extra = write_coco_and_card(folder, settings, rows)
+        summary = write_manifest(folder, settings, rows, complete=True, extra=extra)
+        return {**summary, "seconds": round(time.perf_counter() - t0, 3)}
+    finally:
+        if dask is not None:
+            dask[0].close()
+            if dask[1] is not None:
+                dask[1].close()
 
 
 MANIFEST = "dataset.json"
@@ -806,24 +813,34 @@ def _run(jobs, workers):
         return list(pool.map(_job, jobs, chunksize=chunk))
 
 
-def _run_dask(jobs, workers, scheduler, folder):
-    """Make the fruit on a Dask cluster (``"local"``: a ``LocalCluster`` of ``workers`` processes)
-    and write their files here, in index order as they arrive; returns the summary rows."""
+#: How long to try to reach a Dask scheduler before giving up.
+DASK_CONNECT_SECONDS = 20.0
+
+
+def _dask_client(scheduler: str, workers: int):
+    """``(client, cluster)``: a client of the scheduler at ``scheduler``, or of a new
+    ``LocalCluster`` of ``workers`` processes for ``"local"`` (its cluster, else None)."""
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, LocalCluster
     except ImportError:
         raise RamureError("running on a Dask cluster needs Dask: pip install 'ramure[dask]'") from None
     cluster = None
     try:
         if scheduler == "local":
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
-            client = Client(cluster)
-        else:
-            client = Client(scheduler, timeout="20s")
+            return Client(cluster), cluster
+        return Client(scheduler, timeout=f"{DASK_CONNECT_SECONDS}s"), None
     except (OSError, TimeoutError) as exc:
         if cluster is not None:
             cluster.close()
         raise RamureError(f"cannot reach the Dask scheduler at {scheduler} ({exc})") from None
+
+
+def _run_dask(jobs, client, folder):
+    """Make the fruit on the Dask ``client``'s workers and write their files here as they
+    arrive; returns the summary rows."""
+    from dask.distributed import as_completed
+
     futures = []
     rows = []
     try:
@@ -839,7 +856,4 @@ def _run_dask(jobs, workers, scheduler, folder):
             client.cancel(futures)
         with contextlib.suppress(Exception):  # release the workers' GL contexts; a gone worker has none
             client.run(close_plotter)
-        client.close()
-        if cluster is not None:
-            cluster.close()
     return rows

@@ -320,3 +320,11 @@ def test_the_camera_never_refits_a_shrunk_fruit():
     for clean, small in zip(*views):
         assert clean["camera"] == small["camera"]
         assert 0.55 < small["fruit"]["pixels"] / clean["fruit"]["pixels"] < 0.75
+
+
+def test_an_unreachable_scheduler_is_refused_before_anything_is_written(tmp_path, monkeypatch):
+    pytest.importorskip("dask.distributed")
+    monkeypatch.setattr(F, "DASK_CONNECT_SECONDS", 1.0)
+    with pytest.raises(F.RamureError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        F.make_dataset(tmp_path / "ds", count=1, scheduler="tcp://127.0.0.1:9")
+    assert not (tmp_path / "ds").exists()
