@@ -81,8 +81,10 @@ def bench_defect_crack():
 
 def bench_fruit_dataset_100():
     """``ramure fruit batch --count 100 --defects random --seed 0``: 100 tomatoes with tissues
-    (one volume subdivision), two pictures, a VTU and labels each, on a pool of 2 processes.
-    Target 10 s.  ``cpu_per_core_seconds`` = CPU of this process and its workers / 2: the
+    (one volume subdivision), 4 views with masks (3 renders each: picture, reference, ids), a
+    cut picture, a VTU and labels each, COCO files, on a pool of 2 processes.  Target 20 s
+    (10 s with the two pictures of issue 17; see bench_fruit_batch for the rate).
+    ``cpu_per_core_seconds`` = CPU of this process and its workers / 2: the
     wall time on 2 idle cores, whatever the machine's load."""
     import resource
     import shutil
@@ -103,8 +105,8 @@ def bench_fruit_dataset_100():
     return {
         "seconds": round(wall, 3),
         "cpu_per_core_seconds": round(cpu / 2, 3),
-        "target_seconds": 10.0,
-        "ok": cpu / 2 <= 10.0,
+        "target_seconds": 20.0,
+        "ok": cpu / 2 <= 20.0,
         "fruit": summary["count"],
         "marketable": summary["marketable"],
     }

@@ -11,6 +11,7 @@ Examples::
     ramure fruit --malform rate=0.2 --seed 4 -o malformed.png
     ramure fruit --malform lopsided --json
     ramure fruit batch --count 100 --defects random --seed 0 -o dataset/
+    ramure fruit batch --count 1000 --views 4 --scheduler tcp://10.0.0.5:8786 -o dataset/
 
 JSON keys: preset, seed, darts, vertices, edges, faces (2-cells), faces_per_volume
 (the thesis's count), volumes, tissues (volumes per tissue), valid, seconds
@@ -20,8 +21,10 @@ facts, the volume lost and the grade with its reasons.  With ``--malform`` (see
 :mod:`ramure.gmap.organs.malform`): ``malformation`` holds the shape, the rate, the parameters
 it changed and the measured flatness, lopsidedness and ribbing.
 
-``ramure fruit batch`` writes a labelled dataset of defective fruit (pictures whole and
-cut, VTU, a label JSON per fruit; see :mod:`ramure.app.fruit_dataset`).
+``ramure fruit batch`` writes a labelled dataset of defective fruit (several views per
+fruit with exact defect masks, a cut picture, VTU, a label JSON per fruit, COCO files with a
+train/val/test split and a dataset card; see :mod:`ramure.app.fruit_dataset`), on a process
+pool or a Dask cluster (``--scheduler``).
 """
 
 from __future__ import annotations
@@ -308,7 +311,22 @@ def register(sub: Subparsers) -> None:
         help="volume subdivisions: 1 (exocarp, mesocarp; fast, default) or 2 (+ endocarp, locules, seeds)",
     )
     b.add_argument("--size-mm", type=float, default=65.0, help="fruit size in millimetres (default 65)")
-    b.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    b.add_argument("--workers", type=int, default=2, help="worker processes (default 2; with --scheduler local, Dask workers)")
+    b.add_argument("--views", type=int, default=4, help="pictures per fruit, each with its own camera and light (default 4)")
+    b.add_argument(
+        "--stage",
+        default="mixed",
+        choices=["mixed", "plain", "conveyor", "cup"],
+        help="what the fruit is seen on: a plain backdrop, a conveyor belt, a cup on the belt, or mixed per fruit (default)",
+    )
+    b.add_argument("--clean-pictures", action="store_true", help="also write each view of the fruit without its defects")
+    b.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="local|tcp://HOST:PORT",
+        help="run on Dask (needs ramure[dask]): 'local' starts a LocalCluster of --workers processes; an address "
+        "uses that cluster (files come back to this machine)",
+    )
     b.add_argument("--size", default="256x256", help="picture size WIDTHxHEIGHT (default 256x256)")
     b.add_argument("--json", action="store_true", help="print the dataset summary as JSON")
     b.add_argument("-o", "--output", required=True, help="dataset folder (created; must be empty unless --resume/--overwrite)")
@@ -336,11 +354,16 @@ def run_batch(args: argparse.Namespace) -> int:
         picture=size,
         resume=args.resume,
         overwrite=args.overwrite,
+        views=args.views,
+        stage=args.stage,
+        clean_pictures=args.clean_pictures,
+        scheduler=args.scheduler,
     )
     if args.json:
         print(json.dumps({k: v for k, v in summary.items() if k != "fruit"}))
     else:
         print(
-            f"wrote {summary['count']} fruit to {args.output} ({summary['marketable']} marketable) in {summary['seconds']:.1f} s"
+            f"wrote {summary['count']} fruit x {summary['views']} views to {args.output} ({summary['marketable']} marketable; "
+            f"{summary['visible_defects']} of {summary['located_defects']} located defects visible) in {summary['seconds']:.1f} s"
         )
     return 0

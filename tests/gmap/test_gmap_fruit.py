@@ -135,3 +135,28 @@ def test_builds_are_deterministic_and_store_provenance():
     assert np.array_equal(a.alpha, b.alpha) and np.allclose(a.points, b.points)
     assert a.meta["preset"] == "cherry_tomato" and a.meta["seed"] == 3
     assert a.meta["params"]["precision"] == 20
+
+
+def test_seeds_carved_at_once_sit_between_two_gel_slabs():
+    """Issue 40 (level-2 profile): the seeds are cut in one batch, as one by one before: each
+    is a middle slab of its cell (gel on the columella side, gel outside), so no seed touches
+    the columella, and carving keeps the locules' volume."""
+    from ramure.gmap.organs.defects import cell_volumes
+    from ramure.gmap.organs.fruit import build_fruit
+    from ramure.gmap.organs.tissue import CODES
+
+    plain = build_fruit("round_tomato", volume_levels=2, seeds=0, seed=1)
+    gm = build_fruit("round_tomato", volume_levels=2, seeds=30, seed_smoothing=0, seed=1)
+    assert gm.is_valid()
+    tissue, vol, a3 = gm.volume_data["tissue"], gm.dart_volume.astype(np.int64), gm.alpha[3]
+    seeds = np.flatnonzero(tissue == CODES["seed"])
+    assert len(seeds) == 30 and gm.n_volumes == plain.n_volumes + 60
+    for s in seeds:
+        darts = np.flatnonzero(vol == s)
+        around = tissue[vol[a3[darts[a3[darts] != darts]]]]
+        assert CODES["columella"] not in around and (around == CODES["locule"]).sum() >= 8
+    gel = (tissue == CODES["locule"]) | (tissue == CODES["seed"])
+    before = cell_volumes(plain)[plain.volume_data["tissue"] == CODES["locule"]].sum()
+    assert cell_volumes(gm)[gel].sum() == pytest.approx(before, rel=1e-6)
+    share = cell_volumes(gm)[seeds].sum() / before
+    assert 0.005 < share < 0.2
