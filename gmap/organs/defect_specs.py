@@ -14,7 +14,6 @@ from typing import Any
 from ramure.gmap.kernel.errors import GMapError
 from ramure.gmap.kernel.map3 import GMap3
 from ramure.gmap.organs.defects import (
-    DEFAULT_SIZE_MM,
     ROT_COEFFICIENTS,
     crack,
     grade,
@@ -31,7 +30,7 @@ from ramure.gmap.organs.excrescence import excrescence, parse_path
 DEFECT_OPTIONS = {
     "shrink": ("rate", "steps", "kind"),
     "rot": ("vertex", "at", "coefficients", "rate", "steps"),
-    "hail": ("count", "depth_mm", "stop", "vertex"),
+    "hail": ("count", "depth_mm", "stop", "vertex", "healed"),
     "crack": ("kind", "sector", "rings", "depth", "width_mm", "healed"),
     "excrescence": ("path", "height_mm", "segments", "taper"),
 }
@@ -126,15 +125,29 @@ def apply_defects(
         out, facts = _apply_one(out, kind, dict(opts), size_i, seed + 1000 * i)
         records.append(facts)
     after = float(volumes_at(gm, out.points).sum())  # dart ids are the input's
+    # a crack's loss is its gap, not the flesh's bulge (of either sign) round it
+    after -= sum(r.get("volume_lost", 0.0) + r.get("flesh_volume_change", 0.0) for r in records if r["kind"] == "crack")
+    if out is gm:
+        out = gm.copy()
+    out.meta["mm_per_unit"] = scale  # a shrunk fruit keeps the millimetres it was given
     return out, {
         "defects": records,
-        "size_mm": DEFAULT_SIZE_MM if size_mm is None else float(size_mm),
+        "size_mm": scale * _extent(gm),
+        "mm_per_unit": scale,
         "volume_before": before,
         "volume_after": after,
         "volume_lost": before - after,
         "volume_lost_fraction": (before - after) / before,
+        "volume_before_mm3": before * scale**3,
+        "volume_lost_mm3": (before - after) * scale**3,
         "grade": grade(records),
     }
+
+
+def _extent(gm):
+    """Largest bounding-box extent of the fruit, model units."""
+    _, pos = gm.vertex_positions()
+    return float((pos.max(axis=0) - pos.min(axis=0)).max())
 
 
 def _apply_one(gm, kind, opts, size_mm, seed):
@@ -154,7 +167,7 @@ def _apply_one(gm, kind, opts, size_mm, seed):
             gm,
             opts.get("kind", "longitudinal"),
             opts.get("sector", 0),
-            opts.get("rings", (3, 6)),
+            opts.get("rings"),
             opts.get("depth", 1),
             opts.get("width_mm", 1.0),
             opts.get("healed", 0),
@@ -165,4 +178,6 @@ def _apply_one(gm, kind, opts, size_mm, seed):
             raise GMapError("excrescence: give a path, e.g. excrescence:path=(9, C*, *)")
         return excrescence(gm, opts["path"], opts.get("height_mm", 3.0), opts.get("segments", 1), opts.get("taper", 0.5), size_mm)
     vertices = None if "vertex" not in opts else [opts["vertex"]]
-    return hail(gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"), opts.get("stop"), size_mm, seed)
+    return hail(
+        gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"), opts.get("stop"), size_mm, seed, opts.get("healed", 0)
+    )

@@ -66,6 +66,10 @@ STIFFNESS_FLOOR = 0.01
 ROT_COEFFICIENTS = (2.5, 2.0, 1.5)
 #: A hail crater may use at most this fraction of the span down to the stop tissue.
 HAIL_MAX_FRACTION = 0.7
+#: The skin vertices round a crater sink this fraction of its depth (a round bowl), or
+#: :data:`HAIL_WIDENED_RIM` when the crater reached its cap and widens instead.
+HAIL_RIM = 0.45
+HAIL_WIDENED_RIM = 0.7
 #: OECD/UNECE tomato rule: a marketable crack is at most this long (mm).
 MAX_CRACK_MM = 30.0
 
@@ -245,7 +249,14 @@ def prepare(gm: GMap3) -> GMap3:
 
 # ---------------------------------------------------------------- geometry helpers
 def mm_per_unit(gm: GMap3, size_mm: float | None = None) -> float:
-    """Millimetres per model unit when the fruit's largest extent is ``size_mm``."""
+    """Millimetres per model unit when the fruit's largest extent is ``size_mm``.
+
+    ``size_mm`` None: the fruit's own scale, ``gm.meta["mm_per_unit"]``, written by
+    :func:`ramure.gmap.organs.fruit.build_fruit` from the preset's real size and kept by the
+    defects (a shrunk fruit keeps its millimetres), else a :data:`DEFAULT_SIZE_MM` fruit.
+    """
+    if size_mm is None and float(getattr(gm, "meta", {}).get("mm_per_unit", 0.0) or 0.0) > 0:
+        return float(gm.meta["mm_per_unit"])
     size = DEFAULT_SIZE_MM if size_mm is None else size_mm
     if not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
         raise GMapError(f"fruit size must be a finite number of millimetres > 0, got {size_mm!r}")
@@ -432,6 +443,24 @@ def _laplacian_solver(idx, wt):
     return lu, eps
 
 
+# ---------------------------------------------------------------- marks for the renderers
+#: Volume columns the defects write for the renderers (float32 in [0, 1], 0 on an intact cell);
+#: :func:`ramure.gmap.organs.species.cell_rgb` turns them into colour.
+MARK_COLUMNS = ("corky", "wound", "bruise", "rot")
+
+
+def _mark(gm: GMap3, name: str, volumes: ArrayLike, value: float | np.ndarray, keep_max: bool = False) -> None:
+    """Set the volume mark ``name`` of ``volumes`` to ``value`` (created at 0 on first use)."""
+    if name not in gm.volume_data:
+        gm.add_volume_data(name, np.float32, fill=0.0)
+    col = gm.volume_data[name]
+    v = np.asarray(volumes, np.int64)
+    if keep_max:
+        col[v] = np.maximum(col[v], value)
+    else:
+        col[v] = value
+
+
 # ---------------------------------------------------------------- rot
 def rot(
     gm: GMap3, vertex: int | None = None, coefficients: Sequence[float] = ROT_COEFFICIENTS, seed: int = 0
@@ -456,8 +485,9 @@ def rot(
     out = gm.copy()
     k = _transpiration(out)
     rings = rot_rings(out, int(vertex), len(coef))
-    for ring, c in zip(rings, coef):
+    for i, (ring, c) in enumerate(zip(rings, coef)):
         k[ring] *= c
+        _mark(out, "rot", ring, 1.0 - i / len(coef), keep_max=True)  # 1 at the centre, fading outwards
     return out, {"kind": "rot", "vertex": int(vertex), "coefficients": coef, "ring_cells": [int(len(r)) for r in rings]}
 
 
@@ -549,8 +579,14 @@ def hail(
     stop: str | None = None,
     size_mm: float | None = None,
     seed: int = 0,
+    healed: int = 0,
 ) -> tuple[GMap3, dict[str, Any]]:
     """Hail craters: targeted at skin ``vertices`` or ``count`` random distinct skin vertices.
+
+    Marks for the renderers: the cells round each crater get ``bruise`` (1 at the cells on the
+    hit vertex, 0.6 further out: the flesh under the skin browns), and with ``healed = 1`` the
+    crater's skin cells get ``corky`` (a healed pit, corky brown; the thesis's
+    ``cicatrisation``).  ``healed`` is 0 (fresh) or 1 (healed).
 
     ``depth_mm`` is one depth or a ``(low, high)`` range drawn uniformly per
     crater (millimetres on a fruit ``size_mm`` across).  A crater never moves
@@ -558,13 +594,20 @@ def hail(
     span to that tissue and widens instead (neighbouring skin vertices pushed
     by half its depth).  Facts per crater: vertex, requested and actual depth
     (mm), widened, volume.  ``stop`` None: the endocarp when the fruit has one
-    (two volume subdivisions), else the mesocarp.  Refused: depth <= 0, count < 1 or above the skin
+    (two volume subdivisions), else the columella: at one subdivision the exocarp is a
+    thin skin over one mesocarp layer, and stopping at the mesocarp capped every
+    crater at a fraction of the skin's thickness (a median 0.67 mm where 3.37 mm was
+    asked, issue 40); a pit goes through the skin into the flesh.  The skin vertices
+    round the hit sink :data:`HAIL_RIM` of the depth, so a pit is a round bowl.  Refused: depth <= 0, count < 1 or above the skin
     vertices, an unknown stop tissue, a vertex not on the skin.
     """
-    if stop is None:  # the endocarp when there is one (two volume subdivisions)
-        stop = "endocarp" if np.any(gm.volume_data["tissue"] == CODES["endocarp"]) else "mesocarp"
+    if stop is None:  # the endocarp when there is one (two volume subdivisions), else the core
+        stop = "endocarp" if np.any(gm.volume_data["tissue"] == CODES["endocarp"]) else "columella"
+        if not np.any(gm.volume_data["tissue"] == CODES["mesocarp"]):
+            stop = "mesocarp"  # no layers at all: refused below, naming the fix
     if stop not in CODES:
         raise GMapError(f"hail: unknown stop tissue {stop!r}; known: {', '.join(TISSUES)}")
+
     lo, hi = _depth_range(depth_mm)
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise GMapError(f"hail depth must be > 0 mm (a range low..high with low <= high), got {depth_mm}")
@@ -592,6 +635,8 @@ def hail(
         raise GMapError(f"hail: vertex {int(bad[0])} is not a skin vertex with one inward edge")
     if len(np.unique(vertices)) != len(vertices):
         raise GMapError("hail: the same vertex is hit twice")
+    if healed not in (0, 1):
+        raise GMapError(f"hail healed must be 0 (fresh) or 1 (healed), got {healed}")
     depths = rng.uniform(lo, hi, len(vertices)) if hi > lo else np.full(len(vertices), lo)
     out = gm.copy()
     idx = _index(out)
@@ -600,6 +645,8 @@ def hail(
     stop_cells = ((tissue == CODES[stop]) | (tissue == CODES["columella"])).astype(np.int8)
     stop_vertex = (idx.inc @ stop_cells) > 0
     pos = idx.positions(out)
+    on_skin_cell = np.zeros(out.n_volumes, bool)
+    on_skin_cell[idx.vol[idx.free]] = True
     craters = []
     for v, d_mm in zip(vertices.tolist(), depths.tolist()):  # one step per crater
         moves, actual, widened = _crater(graph, pos, on_skin, stop_vertex, v, d_mm / scale)
@@ -612,6 +659,10 @@ def hail(
         if np.any(new_vol <= 0):
             raise GMapError(f"hail: the crater at vertex {v} ({d_mm:.3g} mm) turns a cell inside out; use shallower craters")
         lost = float(old_vol.sum() - new_vol.sum())
+        _mark(out, "bruise", cells, 0.6, keep_max=True)
+        _mark(out, "bruise", idx.cells_at(np.array([v], np.int64)), 1.0, keep_max=True)
+        if healed:
+            _mark(out, "corky", cells[on_skin_cell[cells]], 1.0)
         craters.append(
             {
                 "vertex": int(v),
@@ -628,6 +679,7 @@ def hail(
         "kind": "hail",
         "count": len(craters),
         "stop": stop,
+        "healed": int(healed),
         "craters": craters,
         "volume_before": before,
         "volume_after": before - lost,
@@ -654,14 +706,14 @@ def _crater(graph, pos, on_skin, stop_vertex, v, depth):
     cap = HAIL_MAX_FRACTION * span
     actual, widened = min(depth, cap), depth > cap
     moves = _push(pos, chain, actual)
-    if widened:
-        nb = graph.indices[graph.indptr[v] : graph.indptr[v + 1]]
-        for x in nb[on_skin[nb]].tolist():
-            c = _radial_chain(graph, pos, on_skin, stop_vertex, int(x))
-            if c is None or len(c) < 2:
-                continue
-            s = float(np.linalg.norm(np.diff(pos[c], axis=0), axis=1).sum())
-            moves.update({k: p for k, p in _push(pos, c, min(0.5 * actual, 0.5 * s)).items() if k not in moves})
+    share = HAIL_WIDENED_RIM if widened else HAIL_RIM
+    nb = graph.indices[graph.indptr[v] : graph.indptr[v + 1]]
+    for x in nb[on_skin[nb]].tolist():  # the rim: a round bowl, not a single pushed point
+        c = _radial_chain(graph, pos, on_skin, stop_vertex, int(x))
+        if c is None or len(c) < 2:
+            continue
+        s = float(np.linalg.norm(np.diff(pos[c], axis=0), axis=1).sum())
+        moves.update({k: p for k, p in _push(pos, c, min(share * actual, HAIL_MAX_FRACTION * s)).items() if k not in moves})
     return moves, actual, widened
 
 
@@ -722,7 +774,7 @@ def crack(
     gm: GMap3,
     kind: str = "longitudinal",
     sector: int = 0,
-    rings: Sequence[int] = (3, 6),
+    rings: Sequence[int] | None = None,
     depth: int = 1,
     width_mm: float = 1.0,
     healed: int = 0,
@@ -743,6 +795,13 @@ def crack(
     later subdivision).  Refused: an unknown kind, depth < 1 or deeper than
     the pericarp, width <= 0, healed outside 0..depth, rings or sector out of
     range or reversed, a fruit without radial layers.
+
+    ``rings`` None: growth cracks start at the stem scar (the last rings; ring 0 is the blossom
+    end), so a radial (longitudinal) crack runs over rings ``n // 2 .. n - 2`` down from the
+    shoulder, and a concentric or transverse one circles ring ``n - 3`` round the stem scar.
+    Cells along the crack get the volume marks ``corky`` (healed layers, rendered corky
+    brown) or ``wound`` (fresh walls, rendered as wet flesh): see
+    :func:`ramure.gmap.organs.species.cell_rgb`.
     """
     if kind not in CRACK_KINDS:
         raise GMapError(f"crack kind must be one of {', '.join(CRACK_KINDS)}, got {kind!r}")
@@ -758,6 +817,8 @@ def crack(
     vd = gm.volume_data
     ring, sec = vd["ring"].astype(np.int64), vd["sector"].astype(np.int64)
     n_rings, ph = int(ring.max()) + 1, int(sec.max()) + 1
+    if rings is None:
+        rings = (n_rings // 2, n_rings - 2) if kind == "longitudinal" else (max(n_rings - 3, 0), max(n_rings - 3, 0) + 2)
     r0, r1 = int(rings[0]), int(rings[1])
     if not (0 <= r0 <= r1 < n_rings) or not 0 <= sector < ph:
         raise GMapError(
@@ -796,6 +857,9 @@ def crack(
     exposed = np.r_[strip, partner]
     heal = exposed[layer[vol[exposed]] < healed]
     out.dart_data["healed"][heal] = 1
+    _mark(out, "wound", np.unique(vol[exposed]), 1.0)
+    _mark(out, "wound", np.unique(vol[heal]), 0.0)
+    _mark(out, "corky", np.unique(vol[heal]), 1.0)
     split = _split_copies(idx, out, exposed, side_a)
     cells = idx.cells_at(np.unique(idx.vid[exposed]))
     before_cells = idx.volumes(pos0, cells)
@@ -804,6 +868,7 @@ def crack(
     if np.any(after_cells <= 0):
         raise GMapError("crack: opening turned a cell inside out; use a narrower crack")
     lost = float(before_cells.sum() - after_cells.sum())
+    gap = _gap_volume(out, strip, side_a[vol[strip]], opening)
     facts = {
         "kind": "crack",
         "crack_kind": kind,
@@ -818,11 +883,30 @@ def crack(
         "duplicated_vertices": int(len(split[0])),
         "opened_vertices": int(opened),
         "crack_vertices": int(len(np.unique(idx.vid[exposed]))),
-        "volume_lost": lost,
+        "volume_lost": gap,
+        "gap_volume_mm3": gap * scale**3,
+        "flesh_volume_change": -lost,
     }
     before = float(idx.volumes(pos0).sum())
     facts.update(volume_before=before, volume_after=before - lost)
     return out, facts
+
+
+def _gap_volume(out, strip, side_a_darts, opening):
+    """Volume of a crack's gap: half its side-A wall area times its mean opening (a wedge whose
+    tips stay shut), model units.  Never negative; the flesh's own volume change (cells pushed
+    aside, a bulge of either sign) is reported apart as ``flesh_volume_change``."""
+    darts = strip[side_a_darts]
+    if darts.size == 0 or opening <= 0:
+        return 0.0
+    fid, nf = out.orbit_ids("01")
+    pts = out.points
+    f = fid[darts]
+    count = np.bincount(f, minlength=nf)
+    centre = np.stack([np.bincount(f, pts[darts, j], minlength=nf) for j in range(3)], 1) / np.maximum(count, 1)[:, None]
+    tri = np.cross(pts[out.alpha[0][darts]] - pts[darts], centre[f] - pts[darts])
+    area = 0.25 * float(np.linalg.norm(tri, axis=1).sum())  # each edge has two darts in a face
+    return 0.5 * area * opening
 
 
 def _strip_skin_length(idx, strip, pos):
