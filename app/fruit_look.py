@@ -218,8 +218,8 @@ def render_png(
             rgb=True,
             smooth_shading=True,
             split_sharp_edges=True,
-            ambient=0.28,
-            diffuse=0.8,
+            ambient=0.4 if cut is not None else 0.28,
+            diffuse=0.65 if cut is not None else 0.8,
             specular=0.3,
             specular_power=18,
         )

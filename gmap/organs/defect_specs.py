@@ -25,6 +25,8 @@ from ramure.gmap.organs.defects import (
     volumes_at,
 )
 from ramure.gmap.organs.excrescence import excrescence, parse_path
+from ramure.gmap.organs.grading import grade_unece
+from ramure.gmap.organs.malform import shape_facts
 
 #: Defect kinds and the options each accepts (``kind:name=value,...``).
 DEFECT_OPTIONS = {
@@ -110,8 +112,10 @@ def apply_defects(
     """Apply defect specs in order; returns the map and the facts.
 
     Facts: ``defects`` (one record per defect), ``volume_before``,
-    ``volume_after``, ``volume_lost`` (fraction too), ``size_mm`` and
-    ``grade`` (:func:`grade`).  Every spec is parsed before anything is
+    ``volume_after``, ``volume_lost`` (fraction too, and in mm³), ``size_mm``, ``grade``
+    (:func:`grade`, the OECD rule check) and ``unece`` (the UNECE class of the fruit's species,
+    :func:`ramure.gmap.organs.grading.grade_unece`, with the change in lopsidedness the
+    defects made as its shape measure).  Every spec is parsed before anything is
     applied; ``seed`` is offset per defect so two hail specs differ.
     Millimetres stay those of the fruit as given: after a shrink, a later
     defect is told the shrunk fruit's size in the same millimetres.
@@ -129,6 +133,8 @@ def apply_defects(
     after -= sum(r.get("volume_lost", 0.0) + r.get("flesh_volume_change", 0.0) for r in records if r["kind"] == "crack")
     if out is gm:
         out = gm.copy()
+    species = str(gm.meta.get("species", "tomato"))
+    shape = {"lopsidedness": shape_facts(out)["lopsidedness"] - shape_facts(gm)["lopsidedness"]}  # what the defects changed
     out.meta["mm_per_unit"] = scale  # a shrunk fruit keeps the millimetres it was given
     return out, {
         "defects": records,
@@ -141,6 +147,7 @@ def apply_defects(
         "volume_before_mm3": before * scale**3,
         "volume_lost_mm3": (before - after) * scale**3,
         "grade": grade(records),
+        "unece": grade_unece(records, species, {"volume_lost_fraction": (before - after) / before, **shape}),
     }
 
 

@@ -650,6 +650,9 @@ def hail(
     craters = []
     for v, d_mm in zip(vertices.tolist(), depths.tolist()):  # one step per crater
         moves, actual, widened = _crater(graph, pos, on_skin, stop_vertex, v, d_mm / scale)
+        rim = graph.indices[graph.indptr[v] : graph.indptr[v + 1]]
+        rim = rim[on_skin[rim]]
+        reach = 2.0 * float(np.linalg.norm(pos[rim] - pos[v], axis=1).mean()) * scale if rim.size else 0.0
         moved = np.array(sorted(moves), np.int64)
         cells = idx.cells_at(moved)
         old_vol = idx.volumes(pos, cells)
@@ -670,6 +673,9 @@ def hail(
                 "actual_depth_mm": actual * scale,
                 "widened": widened,
                 "volume": lost,
+                "volume_mm3": lost * scale**3,
+                "diameter_mm": 2.0 * reach,
+                "area_mm2": math.pi * reach**2,
                 "moved": len(moves),
             }
         )
@@ -688,14 +694,19 @@ def hail(
 
 
 def hail_sites(gm: GMap3) -> np.ndarray:
-    """Skin vertices with exactly one interior edge (4-valent skin vertices of a subdivided fruit)."""
+    """Skin vertices with exactly one interior edge (4-valent skin vertices of a subdivided fruit),
+    away from the axis, whose skin neighbours have one too (so a pit's whole rim can sink)."""
     idx = _index(gm)
     on_skin = idx.on_skin
     skin = np.flatnonzero(on_skin)
     g = idx.graph.tocoo()
     inner = np.bincount(g.row[~on_skin[g.col]], minlength=idx.nv)
     axis = (idx.inc @ (gm.volume_data["tissue"] == CODES["columella"]).astype(np.int8)) > 0
-    return skin[(inner[skin] == 1) & ~axis[skin]]
+    ok = (inner == 1) & ~axis & on_skin
+    # a pit's rim sinks too: every skin neighbour must have its own inward edge (no pole rims)
+    bad_rim = on_skin[g.col] & ~ok[g.col] & on_skin[g.row]
+    has_bad = np.bincount(g.row[bad_rim], minlength=idx.nv) > 0
+    return skin[ok[skin] & ~has_bad[skin]]
 
 
 def _crater(graph, pos, on_skin, stop_vertex, v, depth):

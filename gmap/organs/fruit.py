@@ -173,7 +173,7 @@ PRESETS = {
     "apple": dict(
         precision=12,
         ph=12,
-        longueur=10.0,
+        longueur=14.0,
         fc="sin",
         largeur=62.0,
         fb="circle",
@@ -182,8 +182,8 @@ PRESETS = {
         angleinf=-45.0,
         carpels=5,
         seeds=10,
-        mesocarp=0.55,
-        endocarp=0.08,
+        mesocarp=0.7,
+        endocarp=0.06,
     ),
     "plum": dict(
         precision=10,
