@@ -230,7 +230,9 @@ def render_png(
             if extra.n_cells:
                 plotter.add_mesh(extra, scalars="rgb", rgb=True, smooth_shading=True, specular=0.2)
         if legend:
-            entries = legend_entries(shown) if cut is not None else legend_entries(shown)[:1]
+            entries = legend_entries(shown)
+            if cut is None:  # the outside is skin only
+                entries = [e for e in entries if e[0] in ("skin", "peel")] or entries[:1]
             _legend(plotter, entries, size)
         centre = np.asarray(whole.center, float)
         look = _direction(view, cut)

@@ -187,3 +187,22 @@ def test_apply_defects_grades_by_the_fruit_species(tomato):
     pear = build_fruit("pear", volume_levels=1)
     _, facts = apply_defects(pear, ["crack:healed=1"])
     assert facts["unece"]["standard"].startswith("UNECE FFV-51")
+
+
+def test_shrivel_wrinkles_the_skin_and_is_no_homothety(tomato):
+    smooth, _ = apply_defects(tomato, ["shrink:rate=0.06,wrinkle=0"])
+    wrinkled, facts = apply_defects(tomato, ["shrink:rate=0.06"])
+    assert wrinkled.is_valid() and facts["defects"][0]["wrinkle_mm"] > 0.5
+    idx = D._index(tomato)
+    skin = idx.on_skin
+
+    def radius_spread(gm):
+        pos = gm.vertex_positions()[1]
+        r = np.linalg.norm(pos[skin] - pos[skin].mean(axis=0), axis=1)
+        fresh = np.linalg.norm(tomato.vertex_positions()[1][skin] - tomato.vertex_positions()[1][skin].mean(axis=0), axis=1)
+        return np.std(r / fresh)  # 0 for a homothety
+
+    assert radius_spread(smooth) < 1e-6 < 0.005 < radius_spread(wrinkled)
+    assert facts["volume_lost_mm3"] > 0 and facts["unece"]["grade"] == G.OUT
+    with pytest.raises(GMapError, match="wrinkle must be >= 0"):
+        apply_defects(tomato, ["shrink:rate=0.05,wrinkle=-1"])
