@@ -66,11 +66,34 @@ def coloured_grid(gm: GMap3, stage: str | None = None, seed: int = 0) -> pv.Unst
     marks = {k: np.asarray(grid.cell_data[k]) for k in MARKS if k in grid.cell_data}
     centres = grid.cell_centers().points
     grid.cell_data["rgb"] = cell_rgb(grid.cell_data["tissue"], species, stage, centres, marks, seed)
+    if "corky" in marks or "wound" in marks:  # crack walls: coloured_surface keeps the mark on the walls only
+        plain = {k: v for k, v in marks.items() if k not in ("corky", "wound")}
+        grid.cell_data["rgb_skin"] = cell_rgb(grid.cell_data["tissue"], species, stage, centres, plain, seed)
     grid.field_data["materials"] = np.array([json.dumps(materials(species, stage))])
     grid.field_data["species"] = np.array([species])
     grid.field_data["ripeness"] = np.array([stage])
     grid.field_data["mm_per_unit"] = np.array([float(gm.meta.get("mm_per_unit", 0.0) or 0.0)])
     return grid
+
+
+def coloured_surface(grid: pv.UnstructuredGrid) -> pv.PolyData:
+    """The grid's outer faces with cell data ``rgb``; a crack's marks (corky, wound) stay on its
+    walls (faces turned more than about 45 degrees from the outward direction), while the skin
+    faces of the same cells keep the skin colour: a healed crack is a narrow corky line, not a
+    band two cells wide."""
+    surface = grid.extract_surface(algorithm="dataset_surface")
+    if "rgb_skin" not in surface.cell_data or surface.n_cells == 0:
+        return surface
+    normals = surface.compute_normals(cell_normals=True, point_normals=False, auto_orient_normals=True)
+    n = np.asarray(normals.cell_data["Normals"], float)
+    centres = np.asarray(surface.cell_centers().points, float)
+    out = centres - np.asarray(grid.center, float)
+    out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
+    skin_face = np.abs(np.einsum("ij,ij->i", n, out)) > 0.7
+    rgb = np.asarray(surface.cell_data["rgb"]).copy()
+    rgb[skin_face] = np.asarray(surface.cell_data["rgb_skin"])[skin_face]
+    surface.cell_data["rgb"] = rgb
+    return surface
 
 
 def stem_point(gm: GMap3) -> tuple[np.ndarray, np.ndarray]:
@@ -188,7 +211,8 @@ def render_png(
 
     ``cut`` = ``(normal, origin)`` keeps what lies behind that plane (cells clipped flat).
     ``view``: ``"side"`` (from the side, a little above), ``"top"`` (down the axis onto the stem
-    scar), ``"bottom"`` or a direction.  ``frame_mm``: the frame's width in millimetres (default
+    scar), ``"bottom"``, ``"defect"`` (facing the damaged cells, :func:`defect_direction`) or a
+    direction.  ``frame_mm``: the frame's width in millimetres (default
     the fruit's real size times :data:`FRAME_MARGIN`).  Metadata: ``mm_per_pixel``, ``species``,
     ``ripeness``, written into the PNG as text chunks too.
     """
@@ -208,7 +232,7 @@ def render_png(
     frame = (frame_mm or real * FRAME_MARGIN) / mpu
     whole = grid.extract_surface(algorithm="dataset_surface")
     shown = grid if cut is None else plane_cut(grid, normal=cut[0], origin=cut[1], mode="clip")
-    surface = shown.extract_surface(algorithm="dataset_surface")
+    surface = coloured_surface(shown)
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
@@ -235,7 +259,7 @@ def render_png(
                 entries = [e for e in entries if e[0] in ("skin", "peel")] or entries[:1]
             _legend(plotter, entries, size)
         centre = np.asarray(whole.center, float)
-        look = _direction(view, cut)
+        look = _direction(defect_direction(whole_marked(grid), centre) if view == "defect" else view, cut)
         up = (0.0, 0.0, 1.0) if abs(look[2]) < 0.9 else (0.0, 1.0, 0.0)
         plotter.camera_position = [tuple(centre + look * frame * 4.0), tuple(centre), up]
         plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method
@@ -264,6 +288,31 @@ def _legend(plotter, entries, size):
         prop.SetBackgroundColor(*(int(colour[i : i + 2], 16) / 255.0 for i in (1, 3, 5)))
         prop.SetBackgroundOpacity(1.0)
         plotter.add_text(name, position=(x0 + int(1.8 * font), y), font_size=font, color="black")
+
+
+def whole_marked(grid: pv.UnstructuredGrid) -> pv.PolyData:
+    """The grid's outer faces with their cells' data (marks included): what a camera sees."""
+    return grid.extract_surface(algorithm="dataset_surface")
+
+
+def defect_direction(grid: pv.DataSet, centre: np.ndarray) -> tuple[float, float, float]:
+    """From the fruit's centre towards its marked cells (corky, wound, scar, bruise, rot; pass the
+    outer surface so inner cells do not pull), tipped up a little; the side view when nothing
+    is marked."""
+    from ramure.gmap.organs.species import MARKS
+
+    weight = np.zeros(grid.n_cells)
+    for name in MARKS[:5]:
+        if name in grid.cell_data:
+            weight = np.maximum(weight, np.asarray(grid.cell_data[name], float))
+    if "excrescence" in grid.cell_data:
+        weight = np.maximum(weight, (np.asarray(grid.cell_data["excrescence"]) > 0).astype(float))
+    if not weight.any():
+        return (0.55, -0.75, 0.35)
+    pts = grid.cell_centers().points
+    d = (pts * weight[:, None]).sum(axis=0) / weight.sum() - centre
+    d = d / max(np.linalg.norm(d), 1e-12)
+    return (float(d[0]), float(d[1]), float(d[2] + 0.25))
 
 
 def _direction(view, cut):

@@ -517,7 +517,7 @@ def _laplacian_solver(idx, wt):
 # ---------------------------------------------------------------- marks for the renderers
 #: Volume columns the defects write for the renderers (float32 in [0, 1], 0 on an intact cell);
 #: :func:`ramure.gmap.organs.species.cell_rgb` turns them into colour.
-MARK_COLUMNS = ("corky", "wound", "bruise", "rot")
+MARK_COLUMNS = ("corky", "wound", "scar", "bruise", "rot")
 
 
 def _mark(gm: GMap3, name: str, volumes: ArrayLike, value: float | np.ndarray, keep_max: bool = False) -> None:
@@ -556,9 +556,15 @@ def rot(
     out = gm.copy()
     k = _transpiration(out)
     rings = rot_rings(out, int(vertex), len(coef))
-    for i, (ring, c) in enumerate(zip(rings, coef)):
+    for ring, c in zip(rings, coef):
         k[ring] *= c
-        _mark(out, "rot", ring, 1.0 - i / len(coef), keep_max=True)  # 1 at the centre, fading outwards
+    # the lesion's colour: 1 at the seed vertex fading to 0.15 at the farthest rot cell, by
+    # distance (a round patch, not the square of the rings)
+    cells = np.concatenate(rings)
+    centres = out.volume_centroids()[cells]
+    d = np.linalg.norm(centres - _index(out).positions(out)[int(vertex)], axis=1)
+    t = (d - d.min()) / max(float(d.max() - d.min()), 1e-12)
+    _mark(out, "rot", cells, 1.0 - 0.85 * t, keep_max=True)
     return out, {"kind": "rot", "vertex": int(vertex), "coefficients": coef, "ring_cells": [int(len(r)) for r in rings]}
 
 
@@ -656,8 +662,12 @@ def hail(
 
     Marks for the renderers: the cells round each crater get ``bruise`` (1 at the cells on the
     hit vertex, 0.6 further out: the flesh under the skin browns), and with ``healed = 1`` the
-    crater's skin cells get ``corky`` (a healed pit, corky brown; the thesis's
-    ``cicatrisation``).  ``healed`` is 0 (fresh) or 1 (healed).
+    skin cells at the hit get ``scar`` (a healed pit, corky brown; the thesis's
+    ``cicatrisation``).  ``healed`` is 0 (fresh) or 1 (healed).  A crater's size is read where
+    it is half its depth (as a grader sees a pit's edge): the depth falls from the hit to
+    :data:`HAIL_RIM` of it at the first ring of skin vertices (mean distance ``s``), so
+    ``diameter_mm`` = ``s / (1 - HAIL_RIM)`` and ``area_mm2`` is the disc of that diameter
+    (what the grading tables compare).
 
     ``depth_mm`` is one depth or a ``(low, high)`` range drawn uniformly per
     crater (millimetres on a fruit ``size_mm`` across).  A crater never moves
@@ -723,7 +733,8 @@ def hail(
         moves, actual, widened = _crater(graph, pos, on_skin, stop_vertex, v, d_mm / scale)
         rim = graph.indices[graph.indptr[v] : graph.indptr[v + 1]]
         rim = rim[on_skin[rim]]
-        reach = 2.0 * float(np.linalg.norm(pos[rim] - pos[v], axis=1).mean()) * scale if rim.size else 0.0
+        spacing = float(np.linalg.norm(pos[rim] - pos[v], axis=1).mean()) * scale if rim.size else 0.0
+        reach = spacing * 0.5 / (1.0 - HAIL_RIM)  # radius where the pit is half its depth
         moved = np.array(sorted(moves), np.int64)
         cells = idx.cells_at(moved)
         old_vol = idx.volumes(pos, cells)
@@ -734,9 +745,10 @@ def hail(
             raise GMapError(f"hail: the crater at vertex {v} ({d_mm:.3g} mm) turns a cell inside out; use shallower craters")
         lost = float(old_vol.sum() - new_vol.sum())
         _mark(out, "bruise", cells, 0.6, keep_max=True)
-        _mark(out, "bruise", idx.cells_at(np.array([v], np.int64)), 1.0, keep_max=True)
-        if healed:
-            _mark(out, "corky", cells[on_skin_cell[cells]], 1.0)
+        hit = idx.cells_at(np.array([v], np.int64))
+        _mark(out, "bruise", hit, 1.0, keep_max=True)
+        if healed:  # a healed pit: a corky scar on the skin cells at the hit
+            _mark(out, "scar", hit[on_skin_cell[hit]], 1.0)
         craters.append(
             {
                 "vertex": int(v),

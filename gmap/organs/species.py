@@ -81,7 +81,7 @@ SIZE_MM = {
 #: Corky brown of healed cracks and healed hail (suberised wound periderm).
 CORK = "#8a5a2b"
 #: Rot: browning at the edge, water-soaked tissue, white-grey mould at the centre.
-ROT = {"brown": "#6b3d1e", "soaked": "#4a3a22", "mould": "#dcdccf"}
+ROT = {"brown": "#6b3d1e", "soaked": "#4a3a22", "mould": "#b8bca8"}
 #: A bruise under the skin darkens the flesh towards this colour.
 BRUISE = "#5a2c1a"
 #: Stem (stalk) and calyx.
@@ -90,8 +90,9 @@ CALYX = "#3f6b2a"
 
 
 def _stage(skin: str, flesh: str, **inside: str) -> dict[str, str]:
-    """Colours of one stage: skin (exocarp), flesh (mesocarp, pericarp, septum) and the rest."""
-    out = {"exocarp": skin, "pericarp": flesh, "mesocarp": flesh, "septum": flesh}
+    """Colours of one stage: skin (exocarp; and the undifferentiated pericarp of a fruit without
+    volume subdivision, seen from outside), flesh (mesocarp, septum) and the rest."""
+    out = {"exocarp": skin, "pericarp": skin, "mesocarp": flesh, "septum": flesh}
     out.update(inside)
     return out
 
@@ -116,8 +117,8 @@ STAGES: dict[str, dict[str, dict[str, str]]] = {
     "apple": {
         "green": _stage("#8cc43c", "#f4f2d2", columella="#ece8c0", endocarp="#e6deb2", locule="#e0d6a8", seed="#3e2412"),
         "yellow": _stage("#e8d04c", "#f8f2d0", columella="#eee6bc", endocarp="#e8dcae", locule="#e2d6a6", seed="#3e2412"),
-        "red": _stage("#a8141c", "#f6f2d6", columella="#eee8c2", endocarp="#e8deb2", locule="#e2d8aa", seed="#3e2412"),
         "bicolour": _stage("#d8c048", "#f6f2d4", columella="#eee8c0", endocarp="#e8deb0", locule="#e2d8a8", seed="#3e2412"),
+        "red": _stage("#a8141c", "#f6f2d6", columella="#eee8c2", endocarp="#e8deb2", locule="#e2d8aa", seed="#3e2412"),
     },
     "plum": {
         "green": _stage("#8aa83a", "#e4e6a0", columella="#b48c5a", endocarp="#a07a4c", locule="#a07a4c", seed="#e8dcb8"),
@@ -231,11 +232,13 @@ def cell_rgb(
     skin cell in nine, fixed by the cell's number and ``seed``).  ``marks`` are per-cell
     columns in [0, 1] written by the defects (:mod:`ramure.gmap.organs.defects`):
 
-    ``corky``     healed crack or hail wall: corky brown :data:`CORK` (whole weight);
+    ``corky``     a healed crack's wall: corky brown :data:`CORK` (whole weight; a renderer
+                  colours the walls only, :func:`ramure.app.fruit_look.coloured_surface`);
     ``wound``     a fresh wound's wall: the flesh colour, wet and lighter than the skin;
+    ``scar``      a healed hail pit: corky brown on the skin;
     ``bruise``    under a hail pit: the flesh darkens towards :data:`BRUISE` (up to 60 %);
-    ``rot``       rot intensity: browning (rot > 0), water-soaked dark (> 0.5), white-grey
-                  mould on some cells at the centre (> 0.8);
+    ``rot``       rot intensity: browning (rot > 0), water-soaked dark (> 0.5), a grey-green
+                  mould fuzz at the centre (> 0.8);
     ``organ``     1 = stem, 2 = calyx.
     """
     codes = np.asarray(tissue, np.int64)
@@ -270,9 +273,9 @@ def cell_rgb(
     rot = mark("rot")
     rgb = _mix(rgb, ROT["brown"], np.clip(rot * 1.6, 0, 0.85) * (rot > 0))
     rgb = _mix(rgb, ROT["soaked"], np.clip((rot - 0.5) * 2.0, 0, 0.7))
-    mould = (rot > 0.8) & (_hash01(ids, seed + 2) < 0.55)
-    rgb[mould] = _mix(rgb[mould], ROT["mould"], 0.9 * np.ones(int(mould.sum())))
-    rgb = _mix(rgb, CORK, mark("corky"))
+    mould = rot > 0.8
+    rgb[mould] = _mix(rgb[mould], ROT["mould"], 0.35 + 0.3 * _hash01(ids[mould], seed + 2))
+    rgb = _mix(rgb, CORK, np.maximum(mark("corky"), mark("scar")))
     organ = np.asarray(marks.get("organ", np.zeros(n)), np.int64).reshape(n)
     rgb[organ == 1] = hex_rgb(STEM)
     rgb[organ == 2] = hex_rgb(CALYX)
@@ -280,7 +283,7 @@ def cell_rgb(
 
 
 #: Damage and organ columns :func:`cell_rgb` reads from a grid's cell data.
-MARKS = ("corky", "wound", "bruise", "rot", "organ")
+MARKS = ("corky", "wound", "scar", "bruise", "rot", "organ")
 
 
 def materials(species: str, stage: str | None = None) -> list[dict[str, object]]:
