@@ -81,3 +81,21 @@ def test_defect_sheet_grades_are_computed_and_ordered(tmp_path):
     for better, worse in zip(grades[::2], grades[1::2]):
         assert order.index(better) < order.index(worse)
     assert Image.open(tmp_path / "sheet.png").size == (320, 2 * (160 + 22))
+
+
+def test_plant_export_has_one_material_per_fruit_tissue(tmp_path):
+    from ramure.app.export import export_mesh, read_glb
+    from ramure.app.model import Explorer
+    from ramure.gmap.organs.species import hex_rgb, palette
+
+    ex = Explorer("grammars/fruit_tree.lsys")
+    surface = ex.fruit_surface()
+    assert str(surface.field_data["species"][0]) == "tomato"
+    out = export_mesh(ex.mesh, tmp_path / "tree.glb", fruit_surface=surface)
+    doc = read_glb(out)[0]
+    names = [m["name"] for m in doc["materials"]]
+    assert "fruit" not in names and "fruit_pericarp" in names  # unsubdivided fruit: pericarp seen as skin
+    skin = next(m for m in doc["materials"] if m["name"] == "fruit_pericarp")
+    srgb = np.array(hex_rgb(palette("tomato")["exocarp"])) / 255.0
+    linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+    assert np.allclose(skin["pbrMetallicRoughness"]["baseColorFactor"][:3], linear, atol=0.01)
