@@ -173,7 +173,7 @@ PRESETS = {
     "apple": dict(
         precision=12,
         ph=12,
-        longueur=14.0,
+        longueur=12.0,
         fc="sin",
         largeur=62.0,
         fb="circle",
