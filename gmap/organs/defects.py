@@ -679,91 +679,25 @@ def hail(
     thin skin over one mesocarp layer, and stopping at the mesocarp capped every
     crater at a fraction of the skin's thickness (a median 0.67 mm where 3.37 mm was
     asked, issue 40); a pit goes through the skin into the flesh.  The skin vertices
-    round the hit sink :data:`HAIL_RIM` of the depth, so a pit is a round bowl.  Refused: depth <= 0, count < 1 or above the skin
-    vertices, an unknown stop tissue, a vertex not on the skin.
+    round the hit sink :data:`HAIL_RIM` of the depth, so a pit is a round bowl.  Refused:
+    depth <= 0, count < 1 or above the skin vertices, an unknown stop tissue, a vertex not on
+    the skin, healed not 0 or 1.
     """
-    if stop is None:  # the endocarp when there is one (two volume subdivisions), else the core
-        stop = "endocarp" if np.any(gm.volume_data["tissue"] == CODES["endocarp"]) else "columella"
-        if not np.any(gm.volume_data["tissue"] == CODES["mesocarp"]):
-            stop = "mesocarp"  # no layers at all: refused below, naming the fix
-    if stop not in CODES:
-        raise GMapError(f"hail: unknown stop tissue {stop!r}; known: {', '.join(TISSUES)}")
-
+    stop = _hail_stop(gm, stop)
     lo, hi = _depth_range(depth_mm)
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise GMapError(f"hail depth must be > 0 mm (a range low..high with low <= high), got {depth_mm}")
-    if not np.any(gm.volume_data["tissue"] == CODES[stop]):
-        raise GMapError(
-            f"hail: this fruit has no {stop} cells to stop at; a layered defect needs "
-            "--subdivide volume:N (volume:1 builds exocarp and mesocarp, volume:2 also "
-            "endocarp and locules)"
-        )
-    scale = mm_per_unit(gm, size_mm)
-    skin = hail_sites(gm)
-    rng = np.random.default_rng(seed)
-    if vertices is None:
-        n = 1 if count is None else count
-        if int(n) != n or n < 1:
-            raise GMapError(f"hail count must be a whole number >= 1, got {count}")
-        if n > len(skin):
-            raise GMapError(f"hail count {n} is above the {len(skin)} skin vertices (with one inward edge) of this fruit")
-        vertices = rng.choice(skin, int(n), replace=False)
-    vertices = np.atleast_1d(np.asarray(vertices, np.int64))
-    if vertices.size == 0:
-        raise GMapError("hail: no vertex to hit")
-    bad = vertices[~np.isin(vertices, skin)]
-    if bad.size:
-        raise GMapError(f"hail: vertex {int(bad[0])} is not a skin vertex with one inward edge")
-    if len(np.unique(vertices)) != len(vertices):
-        raise GMapError("hail: the same vertex is hit twice")
     if healed not in (0, 1):
         raise GMapError(f"hail healed must be 0 (fresh) or 1 (healed), got {healed}")
+    scale = mm_per_unit(gm, size_mm)
+    rng = np.random.default_rng(seed)
+    vertices = _hail_targets(gm, vertices, count, rng)
     depths = rng.uniform(lo, hi, len(vertices)) if hi > lo else np.full(len(vertices), lo)
     out = gm.copy()
-    idx = _index(out)
-    graph, on_skin = idx.graph, idx.on_skin
-    tissue = out.volume_data["tissue"]
-    stop_cells = ((tissue == CODES[stop]) | (tissue == CODES["columella"])).astype(np.int8)
-    stop_vertex = (idx.inc @ stop_cells) > 0
-    pos = idx.positions(out)
-    on_skin_cell = np.zeros(out.n_volumes, bool)
-    on_skin_cell[idx.vol[idx.free]] = True
-    craters = []
-    for v, d_mm in zip(vertices.tolist(), depths.tolist()):  # one step per crater
-        moves, actual, widened = _crater(graph, pos, on_skin, stop_vertex, v, d_mm / scale)
-        rim = graph.indices[graph.indptr[v] : graph.indptr[v + 1]]
-        rim = rim[on_skin[rim]]
-        spacing = float(np.linalg.norm(pos[rim] - pos[v], axis=1).mean()) * scale if rim.size else 0.0
-        reach = spacing * 0.5 / (1.0 - HAIL_RIM)  # radius where the pit is half its depth
-        moved = np.array(sorted(moves), np.int64)
-        cells = idx.cells_at(moved)
-        old_vol = idx.volumes(pos, cells)
-        pos[moved] = np.array([moves[x] for x in moved.tolist()])
-        idx.set_positions(out, pos, moved)
-        new_vol = idx.volumes(pos, cells)
-        if np.any(new_vol <= 0):
-            raise GMapError(f"hail: the crater at vertex {v} ({d_mm:.3g} mm) turns a cell inside out; use shallower craters")
-        lost = float(old_vol.sum() - new_vol.sum())
-        _mark(out, "bruise", cells, 0.6, keep_max=True)
-        hit = idx.cells_at(np.array([v], np.int64))
-        _mark(out, "bruise", hit, 1.0, keep_max=True)
-        if healed:  # a healed pit: a corky scar on the skin cells at the hit
-            _mark(out, "scar", hit[on_skin_cell[hit]], 1.0)
-        craters.append(
-            {
-                "vertex": int(v),
-                "depth_mm": float(d_mm),
-                "actual_depth_mm": actual * scale,
-                "widened": widened,
-                "volume": lost,
-                "volume_mm3": lost * scale**3,
-                "diameter_mm": 2.0 * reach,
-                "area_mm2": math.pi * reach**2,
-                "moved": len(moves),
-            }
-        )
+    dig = _Digger(out, stop, scale, int(healed))
+    craters = [dig.crater(v, d_mm) for v, d_mm in zip(vertices.tolist(), depths.tolist())]  # one step per crater
     lost = sum(c["volume"] for c in craters)
-    before = float(idx.volumes(idx.positions(gm)).sum())
+    before = float(dig.idx.volumes(dig.idx.positions(gm)).sum())
     return out, {
         "kind": "hail",
         "count": len(craters),
@@ -774,6 +708,102 @@ def hail(
         "volume_after": before - lost,
         "volume_lost": lost,
     }
+
+
+def _hail_stop(gm: GMap3, stop: str | None) -> str:
+    """The stop tissue, checked: given, or the endocarp when there is one, else the core."""
+    tissue = gm.volume_data["tissue"]
+    if stop is None:
+        stop = "endocarp" if np.any(tissue == CODES["endocarp"]) else "columella"
+        if not np.any(tissue == CODES["mesocarp"]):
+            stop = "mesocarp"  # no layers at all: refused below, naming the fix
+    if stop not in CODES:
+        raise GMapError(f"hail: unknown stop tissue {stop!r}; known: {', '.join(TISSUES)}")
+    if not np.any(tissue == CODES[stop]):
+        raise GMapError(
+            f"hail: this fruit has no {stop} cells to stop at; a layered defect needs "
+            "--subdivide volume:N (volume:1 builds exocarp and mesocarp, volume:2 also "
+            "endocarp and locules)"
+        )
+    return stop
+
+
+def _hail_targets(gm: GMap3, vertices: ArrayLike | None, count: int | None, rng: np.random.Generator) -> np.ndarray:
+    """The skin vertices hit: those given (checked) or ``count`` distinct random hail sites."""
+    skin = hail_sites(gm)
+    if vertices is None:
+        n = 1 if count is None else count
+        if int(n) != n or n < 1:
+            raise GMapError(f"hail count must be a whole number >= 1, got {count}")
+        if n > len(skin):
+            raise GMapError(f"hail count {n} is above the {len(skin)} skin vertices (with one inward edge) of this fruit")
+        vertices = rng.choice(skin, int(n), replace=False)
+    hit = np.atleast_1d(np.asarray(vertices, np.int64))
+    if hit.size == 0:
+        raise GMapError("hail: no vertex to hit")
+    bad = hit[~np.isin(hit, skin)]
+    if bad.size:
+        raise GMapError(f"hail: vertex {int(bad[0])} is not a skin vertex with one inward edge")
+    if len(np.unique(hit)) != len(hit):
+        raise GMapError("hail: the same vertex is hit twice")
+    return hit
+
+
+class _Digger:
+    """Digs craters one after another into ``out`` (edited in place), marking bruise and scar."""
+
+    def __init__(self, out: GMap3, stop: str, scale: float, healed: int) -> None:
+        self.out, self.scale, self.healed = out, scale, healed
+        self.idx = idx = _index(out)
+        tissue = out.volume_data["tissue"]
+        stop_cells = ((tissue == CODES[stop]) | (tissue == CODES["columella"])).astype(np.int8)
+        self.stop_vertex = (idx.inc @ stop_cells) > 0
+        self.pos = idx.positions(out)
+        self.on_skin_cell = np.zeros(out.n_volumes, bool)
+        self.on_skin_cell[idx.vol[idx.free]] = True
+
+    def crater(self, v: int, d_mm: float) -> dict[str, Any]:
+        """Push skin vertex ``v`` in by ``d_mm``; the crater's facts."""
+        idx, pos, scale = self.idx, self.pos, self.scale
+        moves, actual, widened = _crater(idx.graph, pos, idx.on_skin, self.stop_vertex, v, d_mm / scale)
+        reach = self._half_depth_radius(v)
+        moved = np.array(sorted(moves), np.int64)
+        cells = idx.cells_at(moved)
+        old_vol = idx.volumes(pos, cells)
+        pos[moved] = np.array([moves[x] for x in moved.tolist()])
+        idx.set_positions(self.out, pos, moved)
+        new_vol = idx.volumes(pos, cells)
+        if np.any(new_vol <= 0):
+            raise GMapError(f"hail: the crater at vertex {v} ({d_mm:.3g} mm) turns a cell inside out; use shallower craters")
+        self._mark(v, cells)
+        lost = float(old_vol.sum() - new_vol.sum())
+        return {
+            "vertex": int(v),
+            "depth_mm": float(d_mm),
+            "actual_depth_mm": actual * scale,
+            "widened": widened,
+            "volume": lost,
+            "volume_mm3": lost * scale**3,
+            "diameter_mm": 2.0 * reach,
+            "area_mm2": math.pi * reach**2,
+            "moved": len(moves),
+        }
+
+    def _half_depth_radius(self, v: int) -> float:
+        """Radius (mm) where the pit is half its depth (see :func:`hail`), from the first ring."""
+        g, on_skin, pos = self.idx.graph, self.idx.on_skin, self.pos
+        rim = g.indices[g.indptr[v] : g.indptr[v + 1]]
+        rim = rim[on_skin[rim]]
+        spacing = float(np.linalg.norm(pos[rim] - pos[v], axis=1).mean()) * self.scale if rim.size else 0.0
+        return spacing * 0.5 / (1.0 - HAIL_RIM)
+
+    def _mark(self, v: int, cells: np.ndarray) -> None:
+        """Bruise under the pit (1 at the hit, 0.6 round it); a healed pit's corky scar."""
+        _mark(self.out, "bruise", cells, 0.6, keep_max=True)
+        hit = self.idx.cells_at(np.array([v], np.int64))
+        _mark(self.out, "bruise", hit, 1.0, keep_max=True)
+        if self.healed:
+            _mark(self.out, "scar", hit[self.on_skin_cell[hit]], 1.0)
 
 
 def hail_sites(gm: GMap3) -> np.ndarray:
@@ -897,45 +927,13 @@ def crack(
     brown) or ``wound`` (fresh walls, rendered as wet flesh): see
     :func:`ramure.gmap.organs.species.cell_rgb`.
     """
-    if kind not in CRACK_KINDS:
-        raise GMapError(f"crack kind must be one of {', '.join(CRACK_KINDS)}, got {kind!r}")
     layers, layer = radial_layers(gm)
-    if layers < 2:
-        raise GMapError("crack: a layered defect needs a volume-subdivided fruit (needs --subdivide volume:N)")
-    if int(depth) != depth or not 1 <= depth < layers:
-        raise GMapError(f"crack depth must be 1..{layers - 1} layers (the pericarp has {layers}), got {depth}")
-    if not (math.isfinite(width_mm) and width_mm > 0):
-        raise GMapError(f"crack width must be > 0 mm, got {width_mm}")
-    if int(healed) != healed or not 0 <= healed <= depth:
-        raise GMapError(f"crack healed layers must be in 0..depth ({depth}), got {healed}")
-    vd = gm.volume_data
-    ring, sec = vd["ring"].astype(np.int64), vd["sector"].astype(np.int64)
-    n_rings, ph = int(ring.max()) + 1, int(sec.max()) + 1
-    if rings is None:
-        rings = (n_rings // 2, n_rings - 2) if kind == "longitudinal" else (max(n_rings - 3, 0), max(n_rings - 3, 0) + 2)
-    r0, r1 = int(rings[0]), int(rings[1])
-    if not (0 <= r0 <= r1 < n_rings) or not 0 <= sector < ph:
-        raise GMapError(
-            f"crack: rings {r0}-{r1} and sector {sector} must lie in rings 0..{n_rings - 1} "
-            f"(first <= last) and sectors 0..{ph - 1}"
-        )
-    if kind != "longitudinal" and r0 + 1 >= n_rings:
-        raise GMapError(f"crack: a {kind} crack needs a ring after ring {r0}")
+    _check_crack(kind, layers, depth, width_mm, healed)
+    r0, r1 = _crack_rings(gm, kind, sector, rings)
     scale = mm_per_unit(gm, size_mm)
-    shallow = (layer >= 0) & (layer < depth)
-    if kind == "longitudinal":
-        side_a = shallow & (sec == sector) & (ring >= r0) & (ring <= r1)
-        side_b = shallow & (sec == (sector + 1) % ph) & (ring >= r0) & (ring <= r1)
-    else:
-        if kind == "concentric":
-            arc = np.ones(gm.n_volumes, bool)
-        else:
-            arc = np.isin(sec, (sector + np.arange(r1 - r0 + 1)) % ph)
-        side_a = shallow & (ring == r0) & arc
-        side_b = shallow & (ring == r0 + 1) & arc
+    side_a, side_b = _crack_sides(gm, kind, sector, r0, r1, (layer >= 0) & (layer < depth))
     idx = _index(gm)
-    a3 = gm.alpha[3]
-    vol = idx.vol
+    a3, vol = gm.alpha[3], idx.vol
     cand = idx.darts_in(np.flatnonzero(side_a))
     strip = np.sort(cand[(a3[cand] != cand) & side_b[vol[a3[cand]]]])
     if strip.size == 0:
@@ -943,17 +941,10 @@ def crack(
     out = gm.copy()
     pos0 = idx.positions(out)
     length = _strip_skin_length(idx, strip, pos0) * scale
-    partner = a3[strip].copy()
+    exposed = np.r_[strip, a3[strip]]
     _, first = np.unique(idx.side_of_dart[strip], return_index=True)
     out.unsew3(strip[first])
-    if "healed" not in out.dart_data:
-        out.add_dart_data("healed", np.int8, rule="copy")
-    exposed = np.r_[strip, partner]
-    heal = exposed[layer[vol[exposed]] < healed]
-    out.dart_data["healed"][heal] = 1
-    _mark(out, "wound", np.unique(vol[exposed]), 1.0)
-    _mark(out, "wound", np.unique(vol[heal]), 0.0)
-    _mark(out, "corky", np.unique(vol[heal]), 1.0)
+    _mark_crack_walls(out, exposed, layer[vol[exposed]] < healed, vol)
     split = _split_copies(idx, out, exposed, side_a)
     cells = idx.cells_at(np.unique(idx.vid[exposed]))
     before_cells = idx.volumes(pos0, cells)
@@ -963,7 +954,8 @@ def crack(
         raise GMapError("crack: opening turned a cell inside out; use a narrower crack")
     lost = float(before_cells.sum() - after_cells.sum())
     gap = _gap_volume(out, strip, side_a[vol[strip]], opening)
-    facts = {
+    before = float(idx.volumes(pos0).sum())
+    return out, {
         "kind": "crack",
         "crack_kind": kind,
         "sector": int(sector),
@@ -980,10 +972,63 @@ def crack(
         "volume_lost": gap,
         "gap_volume_mm3": gap * scale**3,
         "flesh_volume_change": -lost,
+        "volume_before": before,
+        "volume_after": before - lost,
     }
-    before = float(idx.volumes(pos0).sum())
-    facts.update(volume_before=before, volume_after=before - lost)
-    return out, facts
+
+
+def _check_crack(kind: str, layers: int, depth: int, width_mm: float, healed: int) -> None:
+    """Refuse an unknown kind, an unlayered fruit, a depth, width or healing out of range."""
+    if kind not in CRACK_KINDS:
+        raise GMapError(f"crack kind must be one of {', '.join(CRACK_KINDS)}, got {kind!r}")
+    if layers < 2:
+        raise GMapError("crack: a layered defect needs a volume-subdivided fruit (needs --subdivide volume:N)")
+    if int(depth) != depth or not 1 <= depth < layers:
+        raise GMapError(f"crack depth must be 1..{layers - 1} layers (the pericarp has {layers}), got {depth}")
+    if not (math.isfinite(width_mm) and width_mm > 0):
+        raise GMapError(f"crack width must be > 0 mm, got {width_mm}")
+    if int(healed) != healed or not 0 <= healed <= depth:
+        raise GMapError(f"crack healed layers must be in 0..depth ({depth}), got {healed}")
+
+
+def _crack_rings(gm: GMap3, kind: str, sector: int, rings: Sequence[int] | None) -> tuple[int, int]:
+    """The crack's rings (the stem-scar defaults of :func:`crack` when None), checked."""
+    vd = gm.volume_data
+    n_rings, ph = int(vd["ring"].max()) + 1, int(vd["sector"].max()) + 1
+    if rings is None:
+        rings = (n_rings // 2, n_rings - 2) if kind == "longitudinal" else (max(n_rings - 3, 0), max(n_rings - 3, 0) + 2)
+    r0, r1 = int(rings[0]), int(rings[1])
+    if not (0 <= r0 <= r1 < n_rings) or not 0 <= sector < ph:
+        raise GMapError(
+            f"crack: rings {r0}-{r1} and sector {sector} must lie in rings 0..{n_rings - 1} "
+            f"(first <= last) and sectors 0..{ph - 1}"
+        )
+    if kind != "longitudinal" and r0 + 1 >= n_rings:
+        raise GMapError(f"crack: a {kind} crack needs a ring after ring {r0}")
+    return r0, r1
+
+
+def _crack_sides(gm: GMap3, kind: str, sector: int, r0: int, r1: int, shallow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Volume masks of the cells on either side of the crack's faces (``shallow``: the opened layers)."""
+    vd = gm.volume_data
+    ring, sec = vd["ring"].astype(np.int64), vd["sector"].astype(np.int64)
+    ph = int(sec.max()) + 1
+    if kind == "longitudinal":
+        span = (ring >= r0) & (ring <= r1)
+        return shallow & (sec == sector) & span, shallow & (sec == (sector + 1) % ph) & span
+    arc = np.ones(gm.n_volumes, bool) if kind == "concentric" else np.isin(sec, (sector + np.arange(r1 - r0 + 1)) % ph)
+    return shallow & (ring == r0) & arc, shallow & (ring == r0 + 1) & arc
+
+
+def _mark_crack_walls(out: GMap3, exposed: np.ndarray, heal: np.ndarray, vol: np.ndarray) -> None:
+    """Healed walls: dart attribute ``healed`` (kept by subdivision) and volume mark ``corky``;
+    fresh walls: volume mark ``wound``."""
+    if "healed" not in out.dart_data:
+        out.add_dart_data("healed", np.int8, rule="copy")
+    out.dart_data["healed"][exposed[heal]] = 1
+    _mark(out, "wound", np.unique(vol[exposed]), 1.0)
+    _mark(out, "wound", np.unique(vol[exposed[heal]]), 0.0)
+    _mark(out, "corky", np.unique(vol[exposed[heal]]), 1.0)
 
 
 def _gap_volume(out, strip, side_a_darts, opening):
