@@ -251,16 +251,35 @@ def plant_parts(
             data = {"leaf_id": leaf[sel], "kind": kind[sel], "material": material[sel]}
             parts.append(_sub_part(points, tri[sel], data, KIND_NAMES.get(int(k), f"kind{k}"), name, color))
     if fruit_surface is not None and fruit_surface.n_cells:
-        parts.append(_fruit_part(fruit_surface, yup))
+        parts.extend(_fruit_parts(fruit_surface, yup))
     return parts
 
 
-def _fruit_part(surface, yup):
-    points, tri, _ = triangles_of(surface)
+def _fruit_parts(surface, yup):
+    """The volumetric fruit's surface: one part per tissue with its species' colour (material
+    ``fruit_<tissue>``, e.g. ``fruit_exocarp``), or one ``fruit`` part without tissue data."""
+    points, tri, cell = triangles_of(surface)
     points = y_up(points) if yup else points
-    m = len(tri)
-    data = {"leaf_id": np.full(m, -1), "kind": np.full(m, 2), "material": np.full(m, -1)}
-    return Part("fruit", "fruit", FRUIT, points, tri, cell_data=data)
+    if "tissue" not in surface.cell_data:
+        m = len(tri)
+        data = {"leaf_id": np.full(m, -1), "kind": np.full(m, 2), "material": np.full(m, -1)}
+        return [Part("fruit", "fruit", FRUIT, points, tri, cell_data=data)]
+    from ramure.gmap.kernel.storage import TISSUES
+    from ramure.gmap.organs.species import hex_rgb, palette
+
+    fd = surface.field_data
+    species = str(fd["species"][0]) if "species" in fd else "tomato"
+    colours = palette(species, str(fd["ripeness"][0]) if "ripeness" in fd else None)
+    tissue = np.asarray(surface.cell_data["tissue"]).astype(np.int64)[cell]
+    leaf = _cell_array(surface, "leaf_id", np.full(surface.n_cells, -1))[cell]
+    parts = []
+    for code in np.unique(tissue):
+        sel = tissue == code
+        name = TISSUES[int(code)]
+        data = {"leaf_id": leaf[sel], "kind": np.full(int(sel.sum()), 2), "material": np.full(int(sel.sum()), -1)}
+        colour = tuple(c / 255.0 for c in hex_rgb(colours[name]))
+        parts.append(_sub_part(points, tri[sel], data, "fruit", f"fruit_{name}", colour))
+    return parts
 
 
 def color_parts(mesh: pv.DataSet, rgb: ArrayLike | None = None, yup: bool = False, flat: bool = True) -> list[Part]:

@@ -74,29 +74,28 @@ def fruit_settings(ex: Explorer, leaf: int) -> dict:
 
 
 def damaged_fruit(
-    ex: Explorer, leaf: int | None = None, specs: Iterable[object] | None = None, size_mm: float = 65.0
+    ex: Explorer, leaf: int | None = None, specs: Iterable[object] | None = None, size_mm: float | None = None
 ) -> tuple[GMap3, dict]:
     """Fruit ``leaf`` (default: the selected one) rebuilt and damaged by ``specs`` (default: its
-    recorded defects); returns ``(map, facts)``."""
+    recorded defects); returns ``(map, facts)``.  ``size_mm`` None: the preset's real size."""
     from ramure.gmap.organs.defect_specs import apply_defects
     from ramure.gmap.organs.fruit import build_fruit
 
     leaf = selected_fruit(ex) if leaf is None else leaf
     s = fruit_settings(ex, leaf)
     specs = s["defects"] if specs is None else check_specs(specs)
-    gm = build_fruit(s["preset"], seed=s["seed"], volume_levels=LEVELS, **s["params"])
-    gm, facts = apply_defects(gm, specs, size_mm=size_mm, seed=s["seed"])
+    gm = build_fruit(s["preset"], seed=s["seed"], volume_levels=LEVELS, size_mm=size_mm, **s["params"])
+    gm, facts = apply_defects(gm, specs, seed=s["seed"])
     return gm, {**facts, "leaf": leaf, "specs": list(specs)}
 
 
 def surface(gm: GMap3) -> pv.PolyData:
-    """The damaged fruit's skin as PolyData with per-cell ``rgb`` (tissue colours; healed faces brown)."""
-    from ramure.gmap.organs.tissue import tissue_rgb
-    from ramure.gmap.kernel.pyvista import to_unstructured_grid
+    """The damaged fruit's skin as PolyData with per-cell ``rgb``: the species' colours at its
+    ripeness, healed crack walls corky brown, fresh ones wet flesh, hail scars, bruises and rot
+    (:func:`ramure.app.fruit_look.coloured_surface`)."""
+    from ramure.app.fruit_look import coloured_grid, coloured_surface
 
-    grid = to_unstructured_grid(gm)
-    grid.cell_data["rgb"] = tissue_rgb(grid.cell_data["tissue"])
-    return grid.extract_surface(algorithm="dataset_surface")
+    return coloured_surface(coloured_grid(gm))
 
 
 def facts_text(facts: Mapping[str, Any]) -> str:
@@ -104,7 +103,9 @@ def facts_text(facts: Mapping[str, Any]) -> str:
     kinds = ", ".join(d["kind"] for d in facts["defects"]) or "no defects"
     g = facts["grade"]
     why = f" ({'; '.join(g['reasons'])})" if g["reasons"] else ""
-    return f"Fruit {facts['leaf']}: {kinds}; volume lost {100 * facts['volume_lost_fraction']:.1f} %; {g['grade']}{why}"
+    unece = facts.get("unece") or {}
+    cls = f"; UNECE {unece['grade']}" if unece.get("grade") else ""
+    return f"Fruit {facts['leaf']}: {kinds}; volume lost {100 * facts['volume_lost_fraction']:.1f} %; {g['grade']}{why}{cls}"
 
 
 def png_bytes(gm: GMap3, size: tuple[int, int] = (420, 420)) -> bytes:
@@ -122,7 +123,7 @@ def png_bytes(gm: GMap3, size: tuple[int, int] = (420, 420)) -> bytes:
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
-        plotter.add_mesh(skin, scalars="rgb", rgb=True, render=False)
+        plotter.add_mesh(skin, scalars="rgb", rgb=True, render=False, smooth_shading=True, split_sharp_edges=True)
         b = np.asarray(skin.bounds, float).reshape(3, 2)
         centre, extent = b.mean(axis=1), float(np.max(b[:, 1] - b[:, 0])) or 1.0
         look = np.array([0.55, -0.75, 0.55]) / np.linalg.norm([0.55, -0.75, 0.55])

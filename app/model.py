@@ -602,6 +602,9 @@ class Explorer:
         gm = self.fruit_volumes()
         surface = boundary_polydata(gm)
         surface.cell_data["leaf_id"] = np.asarray(gm.volume_data["leaf_id"])[surface.cell_data["volume"]]
+        if gm.meta.get("species"):  # per-tissue materials in the species' colours (app.export)
+            surface.field_data["species"] = np.array([gm.meta["species"]])
+            surface.field_data["ripeness"] = np.array([gm.meta["ripeness"]])
         return surface
 
     def _draws_the_same(self, drawn) -> bool:

@@ -38,7 +38,15 @@ def _vector(text, option):
     return values
 
 
+#: Nodes of the random pattern when not given: a fruit takes a short growth crack (6 arcs of 8 units,
+#: about a quarter of a 65 mm tomato's girth), stone and wood the long pattern.
+NODES = {"fruit": 6}
+DEFAULT_NODES = 63
+
+
 def _pattern(args: argparse.Namespace):
+    if args.nodes is None:
+        args.nodes = NODES.get(args.on, DEFAULT_NODES)
     if args.nodes < 2:
         raise UserError(f"--nodes must be >= 2, not {args.nodes}")
     if args.from_plant:
@@ -112,7 +120,8 @@ def crack_model(
     """The 3-G-map to crack and where a crack starts by default: ``(map, anchor, direction,
     species)``.
 
-    ``fruit``: a round tomato subdivided once (1,000 cells), the crack from the side (+x)
+    ``fruit``: a round tomato subdivided twice (8,000 cells: a crack follows cell faces, so
+    finer cells make a finer, less stair-stepped crack), the crack from the side (+x)
     towards the stem (+z).
     ``wood``: a board of a ``years``-year pine trunk (no branches): sawn through the pith, as
     thick as the trunk's radius, and cross-cut at mid-height (three kernel map cuts); the
@@ -122,7 +131,7 @@ def crack_model(
     if on == "fruit":
         from ramure.gmap.organs.fruit import build_fruit
 
-        fruit = build_fruit("round_tomato", volume_levels=1, seed=seed)
+        fruit = build_fruit("round_tomato", volume_levels=2, seed=seed)
         _, pos = fruit.vertex_positions()
         return fruit, tuple(pos[np.argmax(pos[:, 0])]), (0.0, 0.0, 1.0), None
     from ramure.gmap.kernel.cut import cut_map
@@ -205,11 +214,11 @@ def render_map_crack(
     surface.cell_data["rgb"] = rgb
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     plotter.set_background("white", top="lightsteelblue")  # type: ignore[arg-type]  # pyvista stubs: decorated method
-    plotter.add_mesh(surface, scalars="rgb", rgb=True, show_scalar_bar=False)
+    plotter.add_mesh(surface, scalars="rgb", rgb=True, show_scalar_bar=False, smooth_shading=True, split_sharp_edges=True)
     cells = surface.cell_centers().points
     mouth = cells[~wall][np.argsort(np.linalg.norm(cells[~wall] - np.asarray(anchor), axis=1))[:12]]
     centre = mouth.mean(axis=0)
-    span = max(2.0 * length, 1e-6)
+    span = max(min(2.0 * length, 0.9 * surface.length), 1e-6)  # never farther than the whole model
     normals = surface.compute_normals(
         cell_normals=True, point_normals=False, split_vertices=False, consistent_normals=True, auto_orient_normals=True
     ).cell_data["Normals"]
@@ -260,7 +269,7 @@ def register(sub: Subparsers) -> None:
         "plank) cracked topologically along its own faces",
     )
     p.add_argument("--years", type=int, default=12, help="with --on wood: the pine's age (default 12)")
-    p.add_argument("--nodes", type=int, default=63, help="nodes of the random pattern (default 63)")
+    p.add_argument("--nodes", type=int, default=None, help="nodes of the random pattern (default 63; 6 on fruit)")
     p.add_argument("--from-plant", metavar="GRAMMAR", help="take the pattern from a plant's branching instead")
     p.add_argument("-n", type=int, default=None, help="with --from-plant: derivation steps")
     p.add_argument("--seed", type=int, default=0)

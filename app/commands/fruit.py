@@ -114,9 +114,10 @@ def render_fruit(
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
     shown = grid.copy(deep=False)
-    shown.cell_data["rgb"] = tissue_rgb(shown.cell_data["tissue"])
+    if "rgb" not in shown.cell_data:  # a grid from ramure.app.fruit_look.coloured_grid keeps its colours
+        shown.cell_data["rgb"] = tissue_rgb(shown.cell_data["tissue"])
     surface = shown.extract_surface(algorithm="dataset_surface")
-    plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=False)
+    plotter.add_mesh(surface, scalars="rgb", rgb=True, show_edges=False, smooth_shading=True, split_sharp_edges=True)
     edges = surface.extract_feature_edges(feature_angle=25, boundary_edges=False, non_manifold_edges=False, manifold_edges=False)
     if edges.n_points:
         plotter.add_mesh(edges, color=(0.25, 0.1, 0.1), line_width=0.5, opacity=0.25)
@@ -171,7 +172,13 @@ def run_fruit(args: argparse.Namespace) -> int:
         params = malform_params(args.preset, seed=args.seed, **malformation, **params)
     t0 = time.perf_counter()
     gm = build_fruit(
-        args.preset, seed=args.seed, volume_levels=levels["volume_levels"], surface_levels=levels["surface_levels"], **params
+        args.preset,
+        seed=args.seed,
+        volume_levels=levels["volume_levels"],
+        surface_levels=levels["surface_levels"],
+        ripeness=args.ripeness,
+        size_mm=args.size_mm,
+        **params,
     )
     if malformation is not None:
         from ramure.gmap.organs.malform import shape_facts
@@ -179,7 +186,7 @@ def run_fruit(args: argparse.Namespace) -> int:
         malformation = {**malformation, "params": params, **shape_facts(gm)}
     defect_facts = None
     if defects:
-        gm, defect_facts = apply_defects(gm, defects, size_mm=args.size_mm, seed=args.seed)
+        gm, defect_facts = apply_defects(gm, defects, seed=args.seed)  # the fruit's own millimetres
     valid = gm.is_valid()
     seconds = time.perf_counter() - t0
     out = None
@@ -188,10 +195,10 @@ def run_fruit(args: argparse.Namespace) -> int:
         if out.suffix.lower() not in (".png", ".vtu"):
             raise UserError(f"-o: write a .png picture or a .vtu grid, not '{out.name}'")
         out.parent.mkdir(parents=True, exist_ok=True)
-        from ramure.gmap.kernel.pyvista import to_unstructured_grid  # pyvista (0.5 s) only for a file
 
-        grid = to_unstructured_grid(gm)
-        normal = None
+        from ramure.app.fruit_look import coloured_grid, render_png
+
+        grid = coloured_grid(gm)  # species colours, damage marks and per-tissue materials
         if plane:
             normal, origin = plane
             grid = plane_cut(grid, normal=normal, origin=origin, mode=args.cut_mode)
@@ -200,13 +207,15 @@ def run_fruit(args: argparse.Namespace) -> int:
         if out.suffix.lower() == ".vtu":
             atomic.save_mesh(grid, out)  # in memory first: a full disk is a clear error
         else:
-            atomic.write_with(
-                out, lambda tmp: render_fruit(grid, tmp, size=size, cut_normal=normal, title=args.preset.replace("_", " "))
-            )
+            title = f"{args.preset.replace('_', ' ')}, {gm.meta['ripeness']}, {gm.meta['size_mm']:g} mm"
+            atomic.write_with(out, lambda tmp: render_png(gm, tmp, size=size, cut=plane, title=title))
     if args.json:
         c = gm.counts()
         record = {
             "preset": args.preset,
+            "species": gm.meta["species"],
+            "ripeness": gm.meta["ripeness"],
+            "size_mm": gm.meta["size_mm"],
             "seed": args.seed,
             **c,
             "tissues": tissue_counts(gm),
@@ -287,7 +296,18 @@ def register(sub: Subparsers) -> None:
         "ribbed, pointed; e.g. --malform ribbed,rate=0.1 (seeded by --seed)",
     )
     p.add_argument(
-        "--size-mm", type=float, default=None, help="fruit size in millimetres for defect depths and the grade (default 65)"
+        "--size-mm",
+        type=float,
+        default=None,
+        help="fruit size in millimetres for defect depths, the grade and the picture's scale "
+        "(default the preset's real size: cherry tomato 25, round tomato 65, banana 180...)",
+    )
+    p.add_argument(
+        "--ripeness",
+        default=None,
+        metavar="STAGE",
+        help="ripeness stage for the colours, e.g. green, turning, red for tomatoes; yellow, flecked for "
+        "bananas; green, yellow, red, bicolour for apples (default: ripe)",
     )
     p.add_argument("--json", action="store_true", help="print the facts as one JSON object")
     p.add_argument("-o", "--output", default=None, help="write a .png picture or a .vtu grid")

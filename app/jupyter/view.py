@@ -214,21 +214,20 @@ def fruit_png(
 
 
 def fruit_cut_png(model: Model, leaf: int, size: tuple[int, int] = (420, 420), volume_levels: int = 1) -> bytes | None:
-    """PNG of fruit ``leaf`` cut open across its axis, volume cells coloured by tissue
-    (:data:`ramure.gmap.organs.tissue.COLORS`) with a legend; None when ``leaf`` is not a fruit."""
+    """PNG of fruit ``leaf`` cut open across its axis, volume cells coloured by tissue in its
+    species' colours (:func:`ramure.app.fruit_look.coloured_grid`) with a legend in the
+    species' words; None when ``leaf`` is not a fruit."""
     if int(leaf) not in model.fruit_ids():
         return None
-    from ramure.gmap.organs.tissue import tissue_rgb
+    from ramure.app.fruit_look import coloured_grid, legend_entries
     from ramure.gmap.kernel.cut import plane_cut
-    from ramure.gmap.kernel.pyvista import to_unstructured_grid
-    from ramure.gmap.organs.tissue import COLORS, TISSUES
 
-    cells = to_unstructured_grid(model.fruit_volume(leaf, volume_levels=volume_levels))  # that fruit only
+    cells = coloured_grid(model.fruit_volume(leaf, volume_levels=volume_levels))  # that fruit only, species colours
     organs = model.skeleton.organs
     axis = np.asarray(organs.frame)[list(organs.leaf_id).index(int(leaf))][0]  # the heading
     inside = plane_cut(cells, normal=tuple(axis), origin=cells.center, mode="cells")
-    inside.cell_data["rgb"] = tissue_rgb(inside.cell_data["tissue"])
-    present = [TISSUES[c] for c in np.unique(np.asarray(inside.cell_data["tissue"]))]
+    entries = legend_entries(inside)
+    present = [name for name, _ in entries]
     side = np.cross(axis, (0.0, 0.0, 1.0))
     look = axis + 0.6 * side / (np.linalg.norm(side) or 1.0) + (0.0, 0.0, 0.3)  # the cut face, a bit aside
     centre = np.asarray(inside.center)
@@ -236,7 +235,7 @@ def fruit_cut_png(model: Model, leaf: int, size: tuple[int, int] = (420, 420), v
     def draw(plotter) -> None:
         plotter.add_mesh(inside, scalars="rgb", rgb=True, show_edges=True, edge_color="#5d4037", line_width=0.5)
         plotter.add_legend(
-            [[name, COLORS[name]] for name in present],
+            [[name, colour] for name, colour in entries],
             bcolor="white",
             border=True,
             face="rectangle",

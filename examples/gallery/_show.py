@@ -12,7 +12,9 @@ def show(render, *args, **kwargs):
         path = f"{folder}/picture.png"
         render(*args, path, **kwargs)
         image = mpimg.imread(path)
-    fig, ax = plt.subplots(figsize=(5, 5))
+    height, width = image.shape[:2]
+    square = 0.8 < height / width < 1.25
+    fig, ax = plt.subplots(figsize=(5, 5) if square else (8, min(8 * height / width, 24)))  # contact sheets stay readable
     ax.imshow(image)
     ax.set_axis_off()
     fig.tight_layout()

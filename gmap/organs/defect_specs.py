@@ -14,7 +14,6 @@ from typing import Any
 from ramure.gmap.kernel.errors import GMapError
 from ramure.gmap.kernel.map3 import GMap3
 from ramure.gmap.organs.defects import (
-    DEFAULT_SIZE_MM,
     ROT_COEFFICIENTS,
     crack,
     grade,
@@ -24,14 +23,17 @@ from ramure.gmap.organs.defects import (
     shrink,
     skin_vertex_at,
     volumes_at,
+    wrinkle,
 )
 from ramure.gmap.organs.excrescence import excrescence, parse_path
+from ramure.gmap.organs.grading import grade_unece
+from ramure.gmap.organs.malform import shape_facts
 
 #: Defect kinds and the options each accepts (``kind:name=value,...``).
 DEFECT_OPTIONS = {
-    "shrink": ("rate", "steps", "kind"),
+    "shrink": ("rate", "steps", "kind", "wrinkle"),
     "rot": ("vertex", "at", "coefficients", "rate", "steps"),
-    "hail": ("count", "depth_mm", "stop", "vertex"),
+    "hail": ("count", "depth_mm", "stop", "vertex", "healed"),
     "crack": ("kind", "sector", "rings", "depth", "width_mm", "healed"),
     "excrescence": ("path", "height_mm", "segments", "taper"),
 }
@@ -111,8 +113,10 @@ def apply_defects(
     """Apply defect specs in order; returns the map and the facts.
 
     Facts: ``defects`` (one record per defect), ``volume_before``,
-    ``volume_after``, ``volume_lost`` (fraction too), ``size_mm`` and
-    ``grade`` (:func:`grade`).  Every spec is parsed before anything is
+    ``volume_after``, ``volume_lost`` (fraction too, and in mm³), ``size_mm``, ``grade``
+    (:func:`grade`, the OECD rule check) and ``unece`` (the UNECE class of the fruit's species,
+    :func:`ramure.gmap.organs.grading.grade_unece`, with the change in lopsidedness the
+    defects made as its shape measure).  Every spec is parsed before anything is
     applied; ``seed`` is offset per defect so two hail specs differ.
     Millimetres stay those of the fruit as given: after a shrink, a later
     defect is told the shrunk fruit's size in the same millimetres.
@@ -126,20 +130,55 @@ def apply_defects(
         out, facts = _apply_one(out, kind, dict(opts), size_i, seed + 1000 * i)
         records.append(facts)
     after = float(volumes_at(gm, out.points).sum())  # dart ids are the input's
+    # a crack's loss is its gap, not the flesh's bulge (of either sign) round it
+    after -= sum(r.get("volume_lost", 0.0) + r.get("flesh_volume_change", 0.0) for r in records if r["kind"] == "crack")
+    if out is gm:
+        out = gm.copy()
+    species = str(gm.meta.get("species", "tomato"))
+    shape = {"lopsidedness": shape_facts(out)["lopsidedness"] - shape_facts(gm)["lopsidedness"]}  # what the defects changed
+    out.meta["mm_per_unit"] = scale  # a shrunk fruit keeps the millimetres it was given
     return out, {
         "defects": records,
-        "size_mm": DEFAULT_SIZE_MM if size_mm is None else float(size_mm),
+        "size_mm": scale * _extent(gm),
+        "mm_per_unit": scale,
         "volume_before": before,
         "volume_after": after,
         "volume_lost": before - after,
         "volume_lost_fraction": (before - after) / before,
+        "volume_before_mm3": before * scale**3,
+        "volume_lost_mm3": (before - after) * scale**3,
         "grade": grade(records),
+        "unece": grade_unece(records, species, {"volume_lost_fraction": (before - after) / before, **shape}),
     }
+
+
+def _shrivel(gm, opts, size_mm, seed):
+    """Shrink, then wrinkle the skin: ``wrinkle`` (default 1) times half the radius the fruit lost
+    (a 65 mm tomato shrunk 10 % per edge creases about 1.6 mm deep); ``wrinkle=0`` keeps it
+    smooth (the thesis's homothety)."""
+    out, facts = shrink(gm, opts.get("rate", 0.1), opts.get("steps", 1), rate_kind=opts.get("kind", "edge"))
+    factor = opts.get("wrinkle", 1.0)
+    if factor < 0:
+        raise GMapError(f"shrink wrinkle must be >= 0 (0: smooth), got {factor}")
+    linear = 1.0 - facts["volume_kept"] ** (1.0 / 3.0)
+    amplitude = factor * 0.5 * (0.5 * size_mm) * linear
+    if amplitude > 0:
+        out, w = wrinkle(out, amplitude, size_mm=size_mm * (1.0 - linear), seed=seed)
+        after = float(volumes_at(out, out.points).sum())
+        facts.update(wrinkle_mm=w["amplitude_mm"], volume_after=after, volume_lost=facts["volume_before"] - after)
+        facts["volume_kept"] = after / facts["volume_before"]
+    return out, facts
+
+
+def _extent(gm):
+    """Largest bounding-box extent of the fruit, model units."""
+    _, pos = gm.vertex_positions()
+    return float((pos.max(axis=0) - pos.min(axis=0)).max())
 
 
 def _apply_one(gm, kind, opts, size_mm, seed):
     if kind == "shrink":
-        return shrink(gm, opts.get("rate", 0.1), opts.get("steps", 1), rate_kind=opts.get("kind", "edge"))
+        return _shrivel(gm, opts, size_mm, seed)
     if kind == "rot":
         vertex = opts.get("vertex")
         if "at" in opts:
@@ -154,7 +193,7 @@ def _apply_one(gm, kind, opts, size_mm, seed):
             gm,
             opts.get("kind", "longitudinal"),
             opts.get("sector", 0),
-            opts.get("rings", (3, 6)),
+            opts.get("rings"),
             opts.get("depth", 1),
             opts.get("width_mm", 1.0),
             opts.get("healed", 0),
@@ -165,4 +204,6 @@ def _apply_one(gm, kind, opts, size_mm, seed):
             raise GMapError("excrescence: give a path, e.g. excrescence:path=(9, C*, *)")
         return excrescence(gm, opts["path"], opts.get("height_mm", 3.0), opts.get("segments", 1), opts.get("taper", 0.5), size_mm)
     vertices = None if "vertex" not in opts else [opts["vertex"]]
-    return hail(gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"), opts.get("stop"), size_mm, seed)
+    return hail(
+        gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"), opts.get("stop"), size_mm, seed, opts.get("healed", 0)
+    )

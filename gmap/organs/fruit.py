@@ -61,6 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from ramure.gmap.kernel import frames as _frames
 from ramure.gmap.kernel import prism as _prism
 from ramure.gmap.kernel import subdivide as _subdivide
+from ramure.gmap.organs import species as _species
 from ramure.gmap.organs import tissue as _tissue
 from ramure.gmap.kernel.errors import ValueRefused
 from ramure.gmap.kernel.map3 import GMap3
@@ -163,6 +164,60 @@ PRESETS = {
         angleinf=-60.0,
         anglesup=0.0,
         carpels=6,
+    ),
+    # Not in Table 2.12 (Ramure's): an apple, round and a little flattened, dimpled at both
+    # ends (nbvolangle = precision), five carpels and ten pips; a plum and a cherry (drupes):
+    # one kernel in a stone (the differentiation's endocarp and locules, see
+    # :mod:`ramure.gmap.organs.species`), a shallow stem cavity; the plum is oval with its
+    # suture (one shallow groove: nbprotus=1, creux=0.88).
+    "apple": dict(
+        precision=12,
+        ph=12,
+        longueur=12.0,
+        fc="sin",
+        largeur=62.0,
+        fb="circle",
+        nbvolangle=12,
+        anglesup=25.0,
+        angleinf=-45.0,
+        carpels=5,
+        seeds=10,
+        mesocarp=0.7,
+        endocarp=0.06,
+    ),
+    "plum": dict(
+        precision=10,
+        ph=12,
+        longueur=19.0,
+        fc="sin",
+        largeur=50.0,
+        fb="circle",
+        nbprotus=1,
+        creux=0.88,
+        nbvolangle=3,
+        angleinf=-30.0,
+        anglesup=0.0,
+        carpels=1,
+        septum=0.0,
+        seeds=1,
+        mesocarp=0.62,
+        endocarp=0.1,
+    ),
+    "cherry": dict(
+        precision=10,
+        ph=10,
+        longueur=12.0,
+        fc="sin",
+        largeur=55.0,
+        fb="circle",
+        nbvolangle=4,
+        angleinf=-40.0,
+        anglesup=0.0,
+        carpels=1,
+        septum=0.0,
+        seeds=1,
+        mesocarp=0.45,
+        endocarp=0.1,
     ),
 }
 
@@ -412,6 +467,8 @@ def build_fruit(
     origin: ArrayLike | None = None,
     frame: ArrayLike | None = None,
     anchor: str = "center",
+    ripeness: str | None = None,
+    size_mm: float | None = None,
     **params: object,
 ) -> GMap3:
     """Build a volumetric fruit from a preset and parameter overrides.
@@ -424,13 +481,21 @@ def build_fruit(
     face of the axis) at ``origin``, scales uniformly so that the largest
     extent of the fruit's own bounding box (before turning) is ``size`` (when given) and turns the fruit so its
     axis (blossom end to stem end, local +z) follows ``frame[0]`` (rows H,
-    L, U; local x goes to L).  Provenance is stored in ``gm.meta``.
+    L, U; local x goes to L).  Provenance is stored in ``gm.meta``, with the
+    species, the ``ripeness`` stage (default the ripe one, see
+    :mod:`ramure.gmap.organs.species`) and the real size ``size_mm`` (the
+    preset's, :data:`ramure.gmap.organs.species.SIZE_MM`, unless given): the
+    millimetres of the defects and of the pictures.
 
     >>> gm = build_fruit("banana", precision=6, ph=6)
     >>> gm.counts()["volumes"], gm.is_valid()
     (42, True)
     """
     p = resolve_params(preset, **params)
+    species = _species.species_of(preset)
+    stage = _species.check_stage(species, ripeness)
+    if size_mm is not None and not (np.isfinite(size_mm) and size_mm > 0):
+        raise ValueRefused(f"size_mm must be a finite number of millimetres > 0, got {size_mm}")
     levels = [int(volume_levels), int(surface_levels)]
     if min(levels) < 0:
         raise ValueRefused(f"subdivision levels must be >= 0, got volume={levels[0]}, surface={levels[1]}")
@@ -455,12 +520,18 @@ def build_fruit(
     _place(gm, stem, anchor, size, origin, frame)
     gm.meta = {
         "preset": preset,
+        "species": species,
+        "ripeness": stage,
+        "size_mm": _species.SIZE_MM[preset] if size_mm is None else float(size_mm),
+        "mm_per_unit": 0.0,
         "params": p,
         "seed": int(seed),
         "volume_levels": int(volume_levels),
         "surface_levels": int(surface_levels),
         "seconds": time.perf_counter() - t0,
     }
+    _, pos = gm.vertex_positions()
+    gm.meta["mm_per_unit"] = gm.meta["size_mm"] / max(float((pos.max(axis=0) - pos.min(axis=0)).max()), 1e-12)
     return gm
 
 

@@ -138,7 +138,14 @@ def fruits_from_organs(
     if not merge:
         return fruits
     merged = GMap3.merge(fruits) if fruits else GMap3()
+    species = {(f.meta.get("species"), f.meta.get("ripeness")) for f in fruits}
     merged.meta = {
+        # one species for the renderers when every fruit shares it (a mixed tree keeps the default)
+        **(
+            dict(zip(("species", "ripeness"), next(iter(species))))
+            if len(species) == 1 and None not in next(iter(species))
+            else {}
+        ),
         "fruits": [
             {
                 "leaf_id": int(lid),

@@ -108,7 +108,7 @@ def test_parameters_are_converted_and_checked():
         with pytest.raises(ValueRefused):
             resolve_params("round_tomato", **bad)
     with pytest.raises(ValueRefused, match="unknown fruit preset"):
-        build_fruit("apple")
+        build_fruit("quince")
 
 
 def test_placement_size_origin_and_frame():

@@ -108,6 +108,14 @@ def test_bad_cracks_are_refused(fruit, pattern):
         crack_map(cube, random_pattern(4, seed=0, length=0.1 * np.ptp(pos), width=0.01, depth=0.1), anchor=top)
 
 
+def test_a_crack_too_wide_for_its_cells_opens_narrower(fruit, side):
+    wide = random_pattern(63, seed=0, length=8.0, width=3.0, depth=8.0)  # the old default: refused before
+    out, facts = crack_map(fruit, wide, anchor=side, direction=(0, 0, 1))
+    assert facts["valid"] and facts["narrowed"] < 1.0 and facts["opened_vertices"] > 0
+    _, same = crack_map(fruit, random_pattern(8, seed=2, length=8.0, width=3.0, depth=8.0), anchor=side, direction=(0, 0, 1))
+    assert same["narrowed"] == 1.0
+
+
 def test_command_line_cracks_a_pine_board_and_a_fruit(tmp_path, capsys):
     from ramure.app.cli import main
 
@@ -120,10 +128,12 @@ def test_command_line_cracks_a_pine_board_and_a_fruit(tmp_path, capsys):
     picture = np.asarray(Image.open(tmp_path / "board.png").convert("RGB")).astype(int)
     dark = (picture.sum(axis=2) < 90).mean()  # the crack's walls are drawn near black
     assert picture.std() > 20 and 0.001 < dark < 0.3
-    assert main(["crack", "--on", "fruit", "--nodes", "8", "--json", "-o", str(tmp_path / "fruit.vtu")]) == 0
+    assert main(["crack", "--on", "fruit", "--json", "-o", str(tmp_path / "fruit.vtu")]) == 0  # the defaults work (issue 40)
     import pyvista as pv
 
-    assert pv.read(tmp_path / "fruit.vtu").n_cells == json.loads(capsys.readouterr().out)["volumes"] == 1000
+    facts = json.loads(capsys.readouterr().out)
+    assert pv.read(tmp_path / "fruit.vtu").n_cells == facts["volumes"] > 8000  # twice subdivided: a finer crack
+    assert facts["valid"] and facts["nodes"] == 6 and facts["skin_edges_opened"] > 3
     assert main(["crack", "--on", "fruit", "--anchor", "0,0,900"]) == 2
     err = capsys.readouterr().err
     assert "not on the surface" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

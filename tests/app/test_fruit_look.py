@@ -1,0 +1,101 @@
+"""Pictures of fruit (issue 40): species colours in the PNG, a physical frame, corky cracks, the gallery."""
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from ramure.app import fruit_look as L
+from ramure.gmap.organs.defect_specs import apply_defects
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.organs.species import CORK, hex_rgb
+
+
+def _pixels(path):
+    return np.asarray(Image.open(path).convert("RGB")).astype(int)
+
+
+def _fruit_mask(img):
+    return np.abs(img - 255).sum(axis=2) > 30  # not the white background
+
+
+@pytest.fixture(scope="module")
+def tomato():
+    return build_fruit("round_tomato", volume_levels=1)
+
+
+def test_picture_has_species_colour_and_its_scale(tmp_path):
+    banana = build_fruit("banana", ripeness="yellow")
+    meta = L.render_png(banana, tmp_path / "b.png", size=(240, 240), legend=False)
+    img = _pixels(tmp_path / "b.png")
+    fruit = img[_fruit_mask(img)]
+    assert len(fruit) > 3000
+    r, g, b = np.median(fruit, axis=0)
+    assert r > 150 and g > 120 and b < 110  # yellow, not a tomato's crimson
+    text = L.read_png_meta(tmp_path / "b.png")
+    assert float(text["mm_per_pixel"]) == pytest.approx(180.0 * L.FRAME_MARGIN / 240)
+    assert text["species"] == "banana" and meta["ripeness"] == "yellow"
+
+
+def test_shrivel_is_not_undone_by_the_framing(tmp_path, tomato):
+    shrunk, _ = apply_defects(tomato, ["shrink:rate=0.06,steps=2"])
+    L.render_png(tomato, tmp_path / "fresh.png", size=(200, 200), legend=False, decorations=False)
+    L.render_png(shrunk, tmp_path / "shrunk.png", size=(200, 200), legend=False, decorations=False)
+    fresh, small = _fruit_mask(_pixels(tmp_path / "fresh.png")).sum(), _fruit_mask(_pixels(tmp_path / "shrunk.png")).sum()
+    assert small < 0.8 * fresh  # 37 % of the volume lost: about a quarter of the area
+
+
+def test_healed_crack_shows_corky_brown_and_a_fresh_one_does_not(tmp_path):
+    apple = build_fruit("apple", volume_levels=1)
+    cork = np.array(hex_rgb(L_CORK := CORK))
+    counts = {}
+    for healed in (0, 1):
+        out, _ = apply_defects(apple, [f"crack:healed={healed},rings=5-10,sector=2,width_mm=2"])
+        L.render_png(out, tmp_path / f"{healed}.png", size=(240, 240), view="defect", legend=False, decorations=False)
+        img = _pixels(tmp_path / f"{healed}.png")
+        # corky brown: near CORK in hue (r > g > b, dark-mid), shading scales it
+        ratio = img / np.maximum(img.sum(axis=2, keepdims=True), 1)
+        want = cork / cork.sum()
+        counts[healed] = int((np.abs(ratio - want).sum(axis=2) < 0.06).sum())
+    assert L_CORK and counts[1] > 40 and counts[1] > 4 * max(counts[0], 1)
+
+
+def test_exports_carry_per_tissue_materials(tomato):
+    import json
+
+    grid = L.coloured_grid(tomato)
+    mats = json.loads(str(grid.field_data["materials"][0]))
+    names = {m["tissue"]: m for m in mats if m["tissue"]}
+    assert names["exocarp"]["shown_as"] == "skin" and len(names) == 8
+    assert np.asarray(grid.cell_data["rgb"]).shape == (grid.n_cells, 3)
+
+
+def test_defect_sheet_grades_are_computed_and_ordered(tmp_path):
+    from ramure.app.fruit_gallery import DEFECT_PAIRS, defect_sheet
+    from ramure.gmap.organs.grading import CLASSES, OUT
+
+    order = [*CLASSES, OUT, "not tabulated"]
+    pairs = [p for p in DEFECT_PAIRS if p[0].startswith(("healed crack", "shrivel"))]
+    shown = defect_sheet(tmp_path / "sheet.png", tile=160, pairs=pairs)
+    grades = [s["grade"] for s in shown]
+    assert grades == ["Class I", OUT, "Class I", "Class II"]
+    for better, worse in zip(grades[::2], grades[1::2]):
+        assert order.index(better) < order.index(worse)
+    assert Image.open(tmp_path / "sheet.png").size == (320, 2 * (160 + 22))
+
+
+def test_plant_export_has_one_material_per_fruit_tissue(tmp_path):
+    from ramure.app.export import export_mesh, read_glb
+    from ramure.app.model import Explorer
+    from ramure.gmap.organs.species import hex_rgb, palette
+
+    ex = Explorer("grammars/fruit_tree.lsys")
+    surface = ex.fruit_surface()
+    assert str(surface.field_data["species"][0]) == "tomato"
+    out = export_mesh(ex.mesh, tmp_path / "tree.glb", fruit_surface=surface)
+    doc = read_glb(out)[0]
+    names = [m["name"] for m in doc["materials"]]
+    assert "fruit" not in names and "fruit_pericarp" in names  # unsubdivided fruit: pericarp seen as skin
+    skin = next(m for m in doc["materials"] if m["name"] == "fruit_pericarp")
+    srgb = np.array(hex_rgb(palette("tomato")["exocarp"])) / 255.0
+    linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+    assert np.allclose(skin["pbrMetallicRoughness"]["baseColorFactor"][:3], linear, atol=0.01)
