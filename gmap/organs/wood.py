@@ -49,20 +49,29 @@ the branch base has ``Y - j`` years of rings around its pith.
 gluing between the branch cubes and the trunk cubes").*  The missing stack
 leaves a tunnel whose layer ``i`` is walled by four trunk faces (C2 of the
 stack at ``k - 1``, C4 at ``k + 1``, C3 below, C1 above, cell ``i`` of each).
-Branches have four sides (``branch_sides = 4``), one per wall, and the
-knot's ring cell ``i`` is born in the same step as the walls' cell ``i``, so
-after every layer the kernel's :meth:`GMap3.identify` sews each knot cell's
-C1 face to the wall of its layer through the edge they share (the pith face
-edge for ``i = 1``, the previous layer's seam after): all faces are quads,
-no edge is split, no filler cell is needed, and the knot's rings continue
-the trunk's (one cambium; the bark of the knot meets the trunk's bark).
+Branches have as many sides as the trunk (``branch_sides = 16``, any
+multiple of 4): a quarter of them faces each wall.  The trunk's pith face
+under the knot has its edges cut in ``q = branch_sides / 4`` pieces when the
+branch is sewn on; at each layer every wall face is cut in ``q`` quads
+(its outer edge in ``q`` pieces, then ``q - 1`` chords,
+:meth:`Wood._split_walls`), and the next cell of a wall's stack gets the
+same pieces on its O face (:meth:`Wood._match_supports`).  The knot's ring
+cell ``i`` is born in the same step as the walls' cell ``i``, so after
+every layer the kernel's :meth:`GMap3.identify` sews each knot cell's C1
+face to its piece of the wall of its layer through the edge they share
+(the pith face edge for ``i = 1``, the previous layer's seam after): no
+filler cell is needed, and the knot's rings continue the trunk's (one
+cambium; the bark of the knot meets the trunk's bark).
 The solid stays one ball (valid, chi = 1, boundary chi = 2 after every
 step).  Geometrically ring ``i`` of the knot starts on layer ``i`` of the
 slot: nested cups, a cone of the branch's rings opening from the pith
-(:meth:`Wood._seat_knot`).  Knot volumes are ``exclusive`` (the thesis's
-``seulPourPl``), so the seam vertices take the knot's corners and the
-trunk's rings bend around the knot by a displacement field from the seam
-(:meth:`Wood._push`), which folds no cell.  The seam uses the law's mean
+(:meth:`Wood._seat_knot`), round in every cut.  Knot volumes are
+``exclusive`` (the thesis's ``seulPourPl``), so the seam vertices take the
+knot's corners and the trunk's rings bend around the knot by a displacement
+field from the seam (:meth:`Wood._push`): the trunk makes room for the
+square round the knot's section, and the ring cells on the seam curve in
+along its round edge, so a tangential cut shows the trunk's rings flowing
+round a round knot.  The seam uses the law's mean
 widths, so regrowing a branch with a new seed moves only that branch.
 
 >>> w = grow_wood("pine", years=2, branches=0)
@@ -108,7 +117,7 @@ MAX_DARTS = 8_000_000
 
 _COMMON = dict(
     sides=16,
-    branch_sides=4,
+    branch_sides=16,
     branch_angle=60.0,
     branch_length=0.15,
     branch_scale=0.5,
@@ -170,7 +179,7 @@ SPECIES: dict[str, dict[str, Any]] = {
 #: Parameters a user may set (``--set name=value``) with their meaning.
 PARAMETERS = {
     "sides": "faces of the trunk's pith prisms (>= 3)",
-    "branch_sides": "faces of a branch's pith prisms (4: one per slot wall, so knots are sewn)",
+    "branch_sides": "faces of a branch's pith prisms (a multiple of 4: a quarter meets each slot wall)",
     "pith_radius": "apothem of the pith (m)",
     "height": "length growth of the trunk per year (m)",
     "early_min": "earlywood width bounds at the pith (m)",
@@ -271,8 +280,9 @@ def _check(p) -> None:
         f"prism order must be at least 3, got sides={p['sides']}, branch_sides={p['branch_sides']}",
     )
     need(
-        p["branch_sides"] == 4,
-        f"branch_sides must be 4 (a knot's four sides are sewn to the four walls of its slot), got {p['branch_sides']}",
+        p["branch_sides"] % 4 == 0 and p["branch_sides"] <= MAX_SIDES,
+        "branch_sides must be a multiple of 4, at most "
+        f"{MAX_SIDES} (a quarter of a knot's sides meets each wall of its slot), got {p['branch_sides']}",
     )
     for lo, hi in (("early_min", "early_max"), ("late_min", "late_max"), ("bark_min", "bark_max")):
         need(p[lo] > 0 and p[hi] > 0, f"ring widths must be positive, got {lo}={p[lo]}, {hi}={p[hi]}")
@@ -296,7 +306,9 @@ def estimated_darts(p: Mapping[str, Any], years: int, branch_years: Sequence[int
     """Darts the wood will have: the trunk's closed form plus each branch's (a branch born in
     year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years);
     nodes add one pith prism and its stacks per year with branches, less one stack per branch
-    (its slot).  Exact for :func:`grow_wood`."""
+    (its slot); the walls of a slot are cut in ``branch_sides / 4`` pieces, one per knot cell
+    facing them.  Exact for :func:`grow_wood` (measured: a knot of 16 sides grown ``y`` years
+    adds ``3 (28 + 144 y)`` darts of cuts)."""
     s, b = int(p["sides"]), int(p["branch_sides"])
     total = trunk_darts(s, years)
     born = [int(y) for y in branch_years]
@@ -304,6 +316,9 @@ def estimated_darts(p: Mapping[str, Any], years: int, branch_years: Sequence[int
         total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
     for j in branch_years:
         total += trunk_darts(b, years - int(j))
+        # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
+        # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
+        total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
     return total
 
 
@@ -569,8 +584,30 @@ class Wood:
         gm = self.gm
         slot = self._anchors([self.trunk.levels[br.level]], f"C{br.sector + 1}")
         base = self._anchors([ax.levels[0]], "O")
+        self._cut_slot(int(slot[0]), ax.sides // 4)
         gm.sew3(slot, base)
         self._sewn_layers[b] = 0
+
+    def _cut_slot(self, dart: int, q: int) -> None:
+        """Cut each edge of the trunk's pith face under a knot (the face of ``dart``) into ``q`` pieces.
+
+        An edge already cut (shared with the slot of a knot born beside it in
+        the same year) is left as it is; corners are the darts with a
+        template corner.
+        """
+        if q == 1:
+            return
+        gm = self.gm
+        walk, length = gm.face_walk([dart])
+        at_vertex = walk[0, 0 : length[0] : 2]
+        corners = np.flatnonzero(self.corner[at_vertex] >= 0)
+        pieces = np.diff(np.append(corners, len(at_vertex)))
+        cur = np.array([at_vertex[c] for c, n in zip(corners, pieces) if n == 1], np.int64)
+        for step in range(q - 1, 0, -1):
+            if not cur.size:
+                break
+            new = gm.split_edge(cur, 1.0 / (step + 1))
+            cur = gm.alpha[1][new].astype(np.int64)
 
     def _anchors(self, firsts, label):
         """Anchor darts (forward, corner 0) of face ``label`` of the volumes of darts ``firsts``.
@@ -640,6 +677,8 @@ class Wood:
             if not walls:
                 return
             anchors = self._side_faces(walls, labels)
+            anchors, rows = self._split_walls(anchors)
+            want = [want[r] for r in rows]
             walk, _ = gm.face_walk(anchors)
             free = walk >= 0
             nb = np.full(walk.shape, -1, np.int64)
@@ -663,6 +702,88 @@ class Wood:
             gm.identify(a, other)
             for b in {w[0] for w, good in zip(want, ok) if good}:
                 self._sewn_layers[b] += 1
+
+    def _split_walls(self, anchors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Split each slot wall face of ``anchors`` into ``q = branch_sides / 4`` faces, one per knot cell.
+
+        A wall face of layer ``i`` runs from its inner edge (shared with the
+        cell's O face, already in ``q`` pieces: the previous layer's seam, or
+        the pith face split when the branch was sewn) to its outer edge (on
+        the E face).  The outer edge is cut into ``q`` pieces, then ``q - 1``
+        chords join inner vertex ``r`` to outer vertex ``r``: ``q`` quads,
+        each to be sewn to the C1 face of one knot cell.  Found by the faces'
+        labels (topology), never by coordinates.  Returns one dart per
+        sub-face (on its inner piece) and the row of ``anchors`` it came from;
+        with ``q = 1`` (or faces already split) the anchors themselves.
+        """
+        gm = self.gm
+        q = int(self.p["branch_sides"]) // 4
+        rows = np.arange(len(anchors))
+        if q == 1 or not len(anchors):
+            return anchors, rows
+        e_code, o_code = _prism.face_label_code("E"), _prism.face_label_code("O")
+        walk, _ = gm.face_walk(anchors)
+        across = gm.dart_data["face"][gm.alpha[2][np.maximum(walk, 0)]]
+        outer = (walk >= 0) & (across == e_code)
+        fresh = np.flatnonzero(outer.sum(axis=1) == 2)  # outer edge still whole
+        if fresh.size:
+            cur = walk[fresh, np.argmax(outer[fresh], axis=1)].astype(np.int64)
+            for step in range(q - 1, 0, -1):  # cut 1/(step + 1) of what is left: q equal pieces
+                new = gm.split_edge(cur, 1.0 / (step + 1))
+                cur = gm.alpha[1][new].astype(np.int64)
+        walk, length = gm.face_walk(anchors)
+        across = gm.dart_data["face"][gm.alpha[2][np.maximum(walk, 0)]]
+        n_edges = 2 * q + 2
+        ready = np.flatnonzero(length == 2 * n_edges)
+        out_darts, out_rows = [anchors[length != 2 * n_edges]], [rows[length != 2 * n_edges]]
+        if not ready.size:
+            return np.concatenate(out_darts), np.concatenate(out_rows)
+        edge_darts = walk[ready, 0 : 2 * n_edges : 2]  # dart starting edge e, at vertex e
+        inner = across[ready, 0 : 2 * n_edges : 2] == o_code
+        if not np.all(inner.sum(axis=1) == q):
+            raise GMapError("a slot wall's inner edge is not split into one piece per knot cell")
+        first_inner = inner & ~np.roll(inner, 1, axis=1)
+        e0 = np.argmax(first_inner, axis=1)
+        pick = np.arange(len(ready))
+        sub = np.stack([edge_darts[pick, (e0 + r) % n_edges] for r in range(q)], axis=1)
+        for r in range(1, q):  # chord r: inner vertex r to outer vertex r, 2q + 1 - 2r corners on
+            gm.split_faces(sub[:, r], np.full(len(ready), 2 * q + 1 - 2 * r))
+        out_darts.append(sub.ravel())
+        out_rows.append(np.repeat(rows[ready], q))
+        return np.concatenate(out_darts), np.concatenate(out_rows)
+
+    def _match_supports(self, support: np.ndarray, first: np.ndarray) -> None:
+        """Split the O edges of fresh cubes ``first`` as the edges of their ``support`` faces are split.
+
+        A slot wall's cells have edges cut for the knot's sides (and the
+        trunk's pith face under a knot likewise); the next cell stacked on
+        such a face gets the same pieces on its O face so the two faces sew
+        vertex to vertex.  Original corners carry a template corner
+        (``corner >= 0``), split vertices do not.
+        """
+        gm = self.gm
+        walk, length = gm.face_walk(support)
+        odd = np.flatnonzero(length > 8)
+        if not odd.size:
+            return
+        corner = self.corner
+        owalk, _ = gm.face_walk(first[odd])
+        darts, cuts = [], []
+        for row, j in enumerate(odd):
+            at_vertex = walk[j, 0 : length[j] : 2]
+            corners = np.flatnonzero(corner[at_vertex] >= 0)
+            if len(corners) != 4 or corners[0] != 0:
+                raise GMapError("a wood cell's support face has lost a corner")
+            pieces = np.diff(np.append(corners, len(at_vertex)))
+            for e in np.flatnonzero(pieces > 1):
+                darts.append(int(owalk[row, 2 * e]))
+                cuts.append(int(pieces[e]) - 1)
+        cur, left = np.array(darts, np.int64), np.array(cuts, np.int64)
+        while cur.size:
+            new = gm.split_edge(cur, 1.0 / (left + 1))
+            cur, left = gm.alpha[1][new].astype(np.int64), left - 1
+            keep = left > 0
+            cur, left = cur[keep], left[keep]
 
     def _add_layer(self):
         """One new cube on the outside of every stack, then the joins around and along each axis."""
@@ -690,7 +811,9 @@ class Wood:
         first = self._new(
             4, n_slots, axis, 1, label="W", level=t_all, sector=k_all, cell=i_all, key=keys, exclusive=(axis > 0) & (t_all == 0)
         )
-        gm.sew3(cat([part[4] for part in parts]), first)
+        support = cat([part[4] for part in parts])
+        self._match_supports(support, first.astype(np.int64))
+        gm.sew3(support, first)
         start = 0
         for ax, t, k, i, _ in parts:
             mine = first[start : start + len(t)].astype(np.int64)
@@ -947,7 +1070,7 @@ class Wood:
             o, f, h = self.level_frames(ax)
             rp = self.p["pith_radius"] * (1.0 if ax.index == 0 else self.p["branch_scale"])
             n = ax.sides
-            theta = 2 * np.pi * (np.arange(n + 1) - 0.5) / n
+            theta = self.sector_angles(ax)
             pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
             flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = self._pith_points(o, f, h, theta[:n], rp, n)
             cells = np.flatnonzero((vd["axis"] == ax.index) & (vd["cell"] > 0))
@@ -963,6 +1086,20 @@ class Wood:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
             _put_blocks(flat, offset[cells], pts)
         return flat, offset
+
+    @staticmethod
+    def sector_angles(ax: Axis) -> np.ndarray:
+        """Angles of the corners of an axis's sectors, ``n + 1`` values (the last closes the turn).
+
+        The trunk's sector ``k`` spans ``2 pi (k -+ 1/2) / n``.  A branch's
+        corner ``v`` is at ``2 pi v / m - pi / 4``: its corners ``0, m/4, m/2,
+        3m/4`` (where the walls of its slot meet) lie on the diagonals, so
+        each wall faces a quarter of the knot, centred on it (for ``m = 4``
+        both rules agree).
+        """
+        n = ax.sides
+        shift = 0.5 if ax.index == 0 else n / 8
+        return 2 * np.pi * (np.arange(n + 1) - shift) / n
 
     def _knot_profiles(self, radii):
         """Per branch, ``(s_j, rho_j, a_j, lateral_j)``, ``j = 0..N``: where slot layer ``j`` meets the knot.
@@ -1051,7 +1188,7 @@ class Wood:
         i = np.minimum(vd["cell"][sel].astype(np.int64), len(s_layer) - 1)
         m = ax.sides
         c = 1.0 / math.cos(math.pi / m)
-        theta = 2 * np.pi * (np.arange(m + 1) - 0.5) / m
+        theta = self.sector_angles(ax)
         kk = vd["sector"][sel].astype(np.int64)
         out = pts.copy()
         for corner, th, j in ((0, theta[kk], i - 1), (1, theta[kk + 1], i - 1), (4, theta[kk], i), (5, theta[kk + 1], i)):
@@ -1099,6 +1236,8 @@ class Wood:
     TAPER = 0.12
     #: share of the half-gap to the next knot of the same node a knot may fill across the trunk
     KNOT_ROOM = 0.8
+    #: half-side of the square the trunk makes room for around a round knot, over the knot's radius
+    KNOT_HULL = 1.3
     #: steepest rise of a knot inside the trunk (degrees above the horizontal)
     KNOT_RISE = 35.0
 
@@ -1214,10 +1353,18 @@ class Wood:
             lift = np.array([(0.5 + 0.5 * sv) * h[t] for sv in _SV])
             ring = cos_th[:, None] * f[t, 1] + sin_th[:, None] * f[t, 2]
             straight = (o[t] + lift[:, None] * f[t, 0])[:, None, :] + (a_layer / math.cos(half))[None, :, None] * ring[:, None, :]
-            side = (-_SV)[:, None, None] * frame[1] + (_SU[:, None] * lateral)[:, :, None] * frame[2]  # towards each corner
-            knot = p0 + s_layer[:, None] * frame[0] + rho_layer[None, :, None] * side
-            disp = knot - straight
-            size_layer = np.linalg.norm(disp, axis=2).max(axis=0)
+            by_layer = straight.transpose(1, 0, 2).copy()  # (layers, 4, 3)
+            seam = self._seam_map(p0, frame, s_layer, rho_layer, lateral, hull=True)
+            ring_u = np.array([-1, 0, 1, 1, 1, 0, -1, -1], float)  # the slot's boundary, corners and mid-walls
+            ring_v = np.array([-1, -1, -1, 0, 1, 1, 1, 0], float)
+            blend8 = _corner_blend(ring_u, ring_v)
+            disp = np.stack(
+                [
+                    seam(ring_u, ring_v, np.full(8, j), np.zeros(8)) - (by_layer[j][None] * blend8).sum(axis=1)
+                    for j in range(len(a_layer))
+                ]
+            )
+            size_layer = np.linalg.norm(disp, axis=2).max(axis=1)
             rel = pts[cells].reshape(-1, 3)
             rel -= o[t]
             z = rel @ f[t, 0]
@@ -1241,18 +1388,14 @@ class Wood:
             lo = np.floor(lam).astype(np.int64)
             hi = np.minimum(lo + 1, len(a_layer) - 1)
             frac = (lam - lo)[:, None]
-            # the four corners at once, term by term as a sum over them (same rounding)
             blend = _corner_blend(u, v)
-            by_layer = disp.transpose(1, 0, 2).copy()  # (layers, 4, 3): rows gathered whole
-            terms = by_layer[lo]  # in place: (1 - f) d_lo + f d_hi, blended
+            terms = by_layer[lo]  # the straight trunk at the slot coordinates: bilinear in the corners
             terms *= 1 - frac[:, :, None]
             upper = by_layer[hi]
             upper *= frac[:, :, None]
             terms += upper
             terms *= blend
-            field = terms[:, 0] + terms[:, 1]
-            field += terms[:, 2]
-            field += terms[:, 3]
+            field = seam(u, v, lo, frac[:, 0]) - terms.sum(axis=1)
             reach = np.maximum(2 * np.maximum(size_layer[lo], size_layer[hi]), 1e-12)
             q = outside[near] / reach
             fade = np.clip(1 - q, 0, 1)
@@ -1267,6 +1410,41 @@ class Wood:
         shift /= den[moved, None]
         out[moved] += shift
         return out.reshape(pts.shape)
+
+    def _seam_map(self, p0, frame, s_layer, rho_layer, lateral, hull=False):
+        """Where the knot's seam lies at slot coordinates ``(u, v)`` in ``[-1, 1]^2``, fractional layer ``j + w``.
+
+        With ``hull`` (what the trunk around the knot is pushed to), the
+        square circumscribing the knot's round section, of half-side ``rho /
+        cos(pi / m)``: the trunk cells next to the slot make room for the whole
+        knot, and their faces on the seam (placed by the knot, whose volumes
+        are exclusive) curve in along its round edge without crossing their
+        far sides.  Else the slot's square boundary mapped onto the round
+        section itself (an elliptical grid map, ``x = u sqrt(1 - v^2 / 2)``,
+        ``y = v sqrt(1 - u^2 / 2)``: the walls' corners go to the diagonals,
+        the mid-walls to the axes).  A four-sided knot is its own square.
+        Returns a function of arrays ``(u, v, j, w)`` giving points ``(len(u), 3)``.
+        """
+        m = int(self.p["branch_sides"])
+        scale = 1.0 / math.cos(math.pi / m)
+        last = len(s_layer) - 1
+
+        def at(u, v, j, w):
+            j = np.asarray(j, np.int64)
+            k = np.minimum(j + 1, last)
+            w = np.asarray(w, float)
+            s_at = (1 - w) * s_layer[j] + w * s_layer[k]
+            r_at = scale * ((1 - w) * rho_layer[j] + w * rho_layer[k])
+            lat = (1 - w) * lateral[j] + w * lateral[k]
+            if m == 4:
+                x, y = u / math.sqrt(2), v / math.sqrt(2)
+            elif hull:
+                x, y = self.KNOT_HULL * u, self.KNOT_HULL * v
+            else:
+                x, y = u * np.sqrt(1 - 0.5 * v * v), v * np.sqrt(1 - 0.5 * u * u)
+            return p0 + s_at[:, None] * frame[0] + (r_at * -y)[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
+
+        return at
 
     def embed(self) -> np.ndarray:
         """Default corners on every dart (``gm.corners``), then the kernel's per-vertex average."""
@@ -1443,11 +1621,14 @@ def cell_colors(volume_data: Mapping[str, np.ndarray], species: str = "pine") ->
     return out
 
 
-def to_grid(wood: Wood, convex: bool = False) -> pv.UnstructuredGrid:
+def to_grid(wood: Wood, convex: bool = True) -> pv.UnstructuredGrid:
     """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data.
 
-    ``convex=True`` writes polyhedra as tetrahedra (cell data ``volume`` names
-    the owner), so VTK measures their volumes right: use it for a ``.vtu``.
+    ``convex=True`` (the default) writes polyhedra as tetrahedra (cell data
+    ``volume`` names the owner), so VTK measures their volumes right and
+    slices them right: the slot walls around a round knot are non-convex
+    polyhedra, which VTK's polyhedron slice leaves with holes.  Hexahedra
+    and wedges stay whole either way.
     """
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
