@@ -17,7 +17,7 @@ from ramure.gmap.organs import wood as W
 from _show import show
 
 wood = W.grow_wood("pine", years=12, branches=[(3, 0), (5, 6), (7, 11)], height=0.3)
-grid = W.to_grid(wood)
+grid = W.smooth_grid(wood, W.to_grid(wood))  # rings drawn with 64 sides
 base, frame = wood.branch_frame(wood.branches[0], knot=True)  # the knot faces +x from the pith
 radius = wood.trunk_radius()
 legend = legend_for("pine")
