@@ -1716,9 +1716,8 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     if not rows.size:
         return grid
     conn = grid.cell_connectivity.reshape(-1)
-    offsets = grid.cell_offsets
-    starts = offsets[rows]
-    cells = conn[starts[:, None] + np.arange(8)[None, :]]
+    starts = np.asarray(grid.cell_offsets, np.int64)[rows]
+    cells = conn[starts[:, None] + np.arange(8, dtype=np.int64)[None, :]]
     pts = np.asarray(grid.points)
     o, f, _ = wood.level_frames(wood.trunk)
     level = vd["level"][owner[rows]].astype(np.int64)
@@ -1768,8 +1767,7 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
         lo, hi = ring[j], ring[j + 1]
         piece = np.where(end == 0, np.take_along_axis(lo, slot, axis=1), np.take_along_axis(hi, slot, axis=1))
         new_cells.append(piece)
-    keep = np.flatnonzero(~hexa)
-    old = grid.extract_cells(keep)
+    old = grid.extract_cells(~hexa)
     sub = pv.UnstructuredGrid(
         np.hstack([np.full((m * parts, 1), 8), np.concatenate(new_cells)]).ravel(),
         np.full(m * parts, 12, np.uint8),
