@@ -243,8 +243,8 @@ def _grid(model, species, convex=False):
     from ramure.gmap.organs import wood as W
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
-    if species is not None:
-        return W.to_grid(model, convex=convex)
+    if species is not None:  # pictures get round rings; a .vtu keeps the kernel's cells
+        return W.to_grid(model, convex=convex) if convex else W.smooth_grid(model, W.to_grid(model))
     grid = to_unstructured_grid(model.gm, convex=convex)
     labels = np.asarray(grid.cell_data["label"])
     palette = np.array([[214, 170, 110], [160, 105, 60], [110, 70, 40], [235, 210, 160], [90, 60, 35]], np.uint8)

@@ -207,7 +207,7 @@ class WoodPanel(QWidget):
             return None
         finally:
             QGuiApplication.restoreOverrideCursor()
-        self.wood, self.grid = wood, W.to_grid(wood)
+        self.wood, self.grid = wood, W.smooth_grid(wood, W.to_grid(wood))  # round rings in the picture
         self.show_grid()
         counts = wood.tissue_counts()
         gm = wood.gm
@@ -258,8 +258,8 @@ class WoodPanel(QWidget):
             return
         from ramure.gmap.organs.wood import cell_colors
 
-        rgb = cell_colors(self.wood.gm.volume_data, self.wood.species)
-        rgb[self.knot_mask(selection)] = SELECTED_RGB
+        rgb = cell_colors(self.wood.gm.volume_data, self.wood.species)[np.asarray(self.grid.cell_data["volume"])]
+        rgb[self.knot_mask(selection)] = SELECTED_RGB  # the grid's cells: pieces of volumes (round rings, tetrahedra)
         self.grid.cell_data["rgb"] = rgb
         self.show_grid()
 

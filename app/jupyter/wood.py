@@ -72,7 +72,7 @@ class WoodTab:
         except RamureError as err:
             self.facts.value = f"<small style='color:#b00020'>refused: {err}</small>"
             return
-        self.grid = W_.to_grid(self.wood)
+        self.grid = W_.smooth_grid(self.wood, W_.to_grid(self.wood))  # round rings in the picture
         gm = self.wood.gm
         counts = ", ".join(f"{v} {k}" for k, v in self.wood.tissue_counts().items() if v)
         self.facts.value = (

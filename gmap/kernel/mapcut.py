@@ -131,16 +131,51 @@ def planar_faces(gm: GMap3) -> GMap3:
     """
     out = gm.copy()
     for _ in range(64):
+        vid, pos = out.vertex_positions()
         face, count = out.cells(2)
         first = np.full(count, -1, np.int64)
         first[face[::-1]] = np.arange(out.n_darts)[::-1]
-        _, length = out.face_walk(first)
+        walk, length = out.face_walk(first)
         degree = length // 2
-        big = degree > 3
-        if not big.any():
+        big = np.flatnonzero(degree > 3)
+        if not big.size:
             return out
-        out.split_faces(first[big], degree[big] // 2)
+        start, step = _diagonals(pos, vid, walk[big], degree[big])
+        out.split_faces(walk[big, 2 * start], step)
     raise GMapError("planar_faces: a face did not become triangles in 64 rounds")
+
+
+def _diagonals(pos, vid, walk, degree):
+    """One diagonal per face, ``(start corner, corners on)``: corner 0 to the one half-way round, or,
+    where that diagonal is not inside the face (a face curved in round a knot), the diagonal that
+    cuts off the face's first ear (:func:`ramure.gmap.kernel.measure.face_triangles`)."""
+    from ramure.gmap.kernel.measure import face_triangles
+
+    start = np.zeros(len(degree), np.int64)
+    step = degree // 2
+    corners = walk[:, 0::2]
+    ok = corners >= 0
+    p = np.where(ok[:, :, None], pos[vid[np.maximum(corners, 0)]], 0.0)
+    k = np.arange(corners.shape[1])[None, :]
+    nxt = np.where(k + 1 >= degree[:, None], 0, k + 1)
+    q = np.take_along_axis(p, nxt[:, :, None], axis=1)
+    normal = np.where(ok[:, :, None], np.cross(p, q), 0.0).sum(axis=1)
+    rows = np.arange(len(degree))
+    a, b = p[:, 0], p[rows, step]
+    side = np.ones(len(degree), bool)  # both halves turn the face's way: the diagonal lies inside
+    edges = np.where(ok[:, :, None], np.cross(p, q), 0.0)
+    first_half = k < step[:, None]  # edges 0 .. step-1, closed by the diagonal back to corner 0
+    for half, closing in ((first_half, np.cross(b, a)), (~first_half & ok, np.cross(a, b))):
+        part = np.where(half[:, :, None], edges, 0.0).sum(axis=1) + closing
+        side &= np.einsum("fi,fi->f", part, normal) > 0
+    for f in np.flatnonzero(~side):
+        cyc = vid[corners[f, : degree[f]]]
+        i, _, j = sorted(face_triangles(pos, cyc)[0].tolist())
+        if j - i == 2:
+            start[f], step[f] = i, 2
+        else:  # the ear wraps round corner 0
+            start[f], step[f] = j, 2
+    return start, step
 
 
 def _grown(sd, gm):

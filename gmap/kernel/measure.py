@@ -48,8 +48,79 @@ def volumes(gm: GMap3) -> np.ndarray:
     q = np.take_along_axis(p, nxt[:, :, None], axis=1)
     ref = pos.mean(axis=0)
     tet = np.einsum("fki,fki->fk", np.cross(p - ref, q - ref), (c - ref)[:, None, :]) / 6.0
-    signed = np.bincount(gm.dart_volume[first], np.where(ok, tet, 0.0).sum(axis=1), minlength=gm.n_volumes)
+    per_face = np.where(ok, tet, 0.0).sum(axis=1)
+    ids = np.where(ok, vid[np.maximum(corners, 0)], -1)
+    for f in np.flatnonzero(turned_over(p, q, c, ok)):  # clipped into ears instead (see face_triangles)
+        cyc = ids[f, : deg[f]]
+        tri = pos[cyc[face_triangles(pos, cyc)]]
+        per_face[f] = np.einsum("ki,ki->", np.cross(tri[:, 0] - ref, tri[:, 1] - ref), tri[:, 2] - ref) / 6.0
+    signed = np.bincount(gm.dart_volume[first], per_face, minlength=gm.n_volumes)
     return np.abs(signed)
+
+
+def turned_over(p: np.ndarray, q: np.ndarray, c: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Faces (rows of padded corners ``p``, next corners ``q``, centroids ``c``) whose fan from the
+    vertex centroid has a triangle turned against the face's Newell normal: not convex seen from it."""
+    cross = np.where(ok[:, :, None], np.cross(p - c[:, None, :], q - c[:, None, :]), 0.0)
+    normal = cross.sum(axis=1)
+    return np.any(np.einsum("fki,fi->fk", cross, normal) < 0, axis=1)
+
+
+def face_triangles(pos: np.ndarray, cycle: np.ndarray) -> np.ndarray:
+    """Triangles ``(k, 3)`` (positions in ``cycle``, in its turning sense) of a face that its vertex
+    centroid does not see whole: ear-clipped in the plane of its Newell normal.
+
+    A face of a cell curved around a round knot (or its piece after a plank
+    cut) is not convex, and a fan from its centroid folds over itself.  The
+    ears are clipped from the smallest vertex id in its increasing
+    direction, so the two sides of a face get the same triangles and the
+    kernel's volumes and the VTK tetrahedra of
+    :func:`ramure.gmap.kernel.pyvista.to_unstructured_grid` agree.  The same
+    area as any fan when the face is planar.
+    """
+    cycle = np.asarray(cycle, np.int64)
+    m = len(cycle)
+    start = int(np.argmin(cycle))
+    order = (start + np.arange(m)) % m
+    if cycle[order[1]] > cycle[order[-1]]:  # walk towards the smaller neighbour: one canonical order
+        order = (start - np.arange(m)) % m
+    p = pos[cycle[order]]
+    centre = p.mean(axis=0)
+    normal = np.cross(p - centre, np.roll(p, -1, axis=0) - centre).sum(axis=0)
+    normal /= np.linalg.norm(normal) or 1.0
+    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    xy = np.stack([(p - centre) @ u, (p - centre) @ np.cross(normal, u)], axis=1)
+    ears = np.array(_ear_clip(xy), np.int64).reshape(-1, 3)
+    out = order[ears]
+    if order[1] != (start + 1) % m:  # triangles back in the cycle's own turning sense
+        out = out[:, ::-1]
+    return out
+
+
+def _ear_clip(xy: np.ndarray) -> list[tuple[int, int, int]]:
+    """Triangles of a counter-clockwise polygon ``xy`` (m, 2); the rest fanned if no ear is left."""
+    idx = list(range(len(xy)))
+    out = []
+    while len(idx) > 3:
+        n = len(idx)
+        for t in range(n):
+            i, j, k = idx[t - 1], idx[t], idx[(t + 1) % n]
+            a, b, c = xy[i], xy[j], xy[k]
+            if (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) <= 0:
+                continue  # a reflex or flat corner is no ear
+            rest = xy[[x for x in idx if x not in (i, j, k)]]
+            d1 = (b[0] - a[0]) * (rest[:, 1] - a[1]) - (b[1] - a[1]) * (rest[:, 0] - a[0])
+            d2 = (c[0] - b[0]) * (rest[:, 1] - b[1]) - (c[1] - b[1]) * (rest[:, 0] - b[0])
+            d3 = (a[0] - c[0]) * (rest[:, 1] - c[1]) - (a[1] - c[1]) * (rest[:, 0] - c[0])
+            if not np.any((d1 >= 0) & (d2 >= 0) & (d3 >= 0)):
+                out.append((i, j, k))
+                idx.pop(t)
+                break
+        else:
+            break
+    out.extend((idx[0], idx[x], idx[x + 1]) for x in range(1, len(idx) - 1))
+    return out
 
 
 def total_volume(gm: GMap3) -> float:

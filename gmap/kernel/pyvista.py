@@ -22,6 +22,7 @@ import numpy as np
 import pyvista as pv
 from numpy.typing import ArrayLike
 
+from ramure.gmap.kernel.measure import face_triangles, turned_over
 from ramure.gmap.kernel.storage import TISSUES
 
 if TYPE_CHECKING:
@@ -157,11 +158,11 @@ def _polyhedra_as_tetrahedra(gm, pos, ctype):
     A face is fanned from its vertex centroid as :func:`ramure.gmap.kernel.measure.volumes`
     does, so the tetrahedra's volumes sum to the kernel's, convex cell or not.
     """
-    _, cycles, degree, fvol, _ = face_cycles(gm)
+    first, cycles, degree, fvol, _ = face_cycles(gm)
     keep = ctype[fvol] == VTK_POLYHEDRON
-    cycles, degree, fvol = cycles[keep], degree[keep], fvol[keep]
+    first, cycles, degree, fvol = first[keep], cycles[keep], degree[keep], fvol[keep]
     centres = gm.volume_centroids()
-    cycles = _outward(pos, cycles, degree, centres[fvol])
+    cycles = _parity_oriented(gm, first, cycles, degree)
     _, fcentre = _newell(pos, cycles, degree)
     vols = np.flatnonzero(ctype == VTK_POLYHEDRON)
     centre_id = np.full(gm.n_volumes, -1, np.int64)
@@ -171,7 +172,66 @@ def _polyhedra_as_tetrahedra(gm, pos, ctype):
     f, e = np.nonzero(k < degree[:, None])
     a, b = cycles[f, e], np.take_along_axis(cycles, nxt, axis=1)[f, e]
     cells = np.stack([len(pos) + f, b, a, centre_id[fvol[f]]], axis=1)
-    return cells, fvol[f], np.concatenate([fcentre, centres[vols]])
+    owner = fvol[f]
+    every = np.concatenate([pos, fcentre, centres[vols]])
+    ok = k < degree[:, None]
+    p = pos[np.maximum(cycles, 0)]
+    q = np.take_along_axis(p, nxt[:, :, None], axis=1)
+    turned = np.flatnonzero(turned_over(p, q, fcentre, ok))
+    if turned.size:  # ears instead of the folded fan, as the kernel measures them
+        fan = ~np.isin(f, turned)
+        ears = [cycles[t, : degree[t]][face_triangles(pos, cycles[t, : degree[t]])] for t in turned]
+        tri = np.concatenate(ears)
+        face_of = np.repeat(turned, [len(e) for e in ears])
+        cells = np.concatenate([cells[fan], np.stack([tri[:, 0], tri[:, 2], tri[:, 1], centre_id[fvol[face_of]]], axis=1)])
+        owner = np.concatenate([owner[fan], fvol[face_of]])
+    a, b, c, d = (every[cells[:, i]] for i in range(4))
+    signed = np.bincount(owner, np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a), minlength=gm.n_volumes)
+    inside_out = signed[owner] < 0  # walked inside out (as the kernel's measure finds): turn them over
+    cells[inside_out, 1], cells[inside_out, 2] = cells[inside_out, 2], cells[inside_out, 1].copy()
+    _star_apex(every, cells, owner, centre_id)
+    return cells, owner, every[len(pos) :]
+
+
+def _parity_oriented(gm, first, cycles, degree):
+    """Vertex cycles turned the way the kernel's measure walks them (from a dart of orientation class
+    0, :func:`ramure.gmap.kernel.topology.orientation_parity`): one sense per volume, by topology.
+
+    (Turning each face by its Newell normal against the cell's centroid, as
+    :func:`_outward` does, guesses wrong for a sliver cut from a cell curved
+    round a knot.)
+    """
+    from ramure.gmap.kernel.topology import orientation_parity
+
+    flip = orientation_parity(gm)[first] == 1
+    idx = np.arange(cycles.shape[1])[None, :]
+    rev = np.where(idx == 0, 0, degree[:, None] - idx)
+    rev = np.where(idx < degree[:, None], rev, idx)
+    return np.where(flip[:, None], np.take_along_axis(cycles, rev, axis=1), cycles)
+
+
+def _star_apex(points, cells, owner, centre_id) -> None:
+    """Move the apex of each cell with a tetrahedron turned inside out to the candidate with the least.
+
+    VTK measures each tetrahedron unsigned; a cell not star-shaped from its
+    centroid (curved round a knot) would measure too much.  Candidates: the
+    centroid pulled a quarter, half and three quarters of the way towards each
+    of its vertices.  The signed sum, the kernel's volume, is the same from any apex.
+    """
+    a, b, c, d = (points[cells[:, i]] for i in range(4))
+    normal = np.cross(b - a, c - a)
+    vol = np.einsum("ij,ij->i", normal, d - a)
+    total = np.bincount(owner, vol, minlength=len(centre_id))
+    sign = np.where(total < 0, -1.0, 1.0)
+    inverted = np.bincount(owner, np.maximum(-vol * sign[owner], 0.0), minlength=len(centre_id))
+    for v in np.flatnonzero(inverted > 1e-12 * np.abs(total)):
+        rows = np.flatnonzero(owner == v)
+        centre = points[centre_id[v]]
+        corners = points[np.unique(cells[rows, 1:3])]
+        cand = np.concatenate([[centre], *[centre + t * (corners - centre) for t in (0.25, 0.5, 0.75)]])
+        signed = ((cand[:, None, :] - a[rows][None]) * normal[rows][None]).sum(axis=2) * sign[v]
+        best = int(np.argmin(np.maximum(-signed, 0.0).sum(axis=1)))
+        points[centre_id[v]] = cand[best]
 
 
 def _split_polyhedra(gm, pos, ctype, flat, length):

@@ -49,20 +49,29 @@ the branch base has ``Y - j`` years of rings around its pith.
 gluing between the branch cubes and the trunk cubes").*  The missing stack
 leaves a tunnel whose layer ``i`` is walled by four trunk faces (C2 of the
 stack at ``k - 1``, C4 at ``k + 1``, C3 below, C1 above, cell ``i`` of each).
-Branches have four sides (``branch_sides = 4``), one per wall, and the
-knot's ring cell ``i`` is born in the same step as the walls' cell ``i``, so
-after every layer the kernel's :meth:`GMap3.identify` sews each knot cell's
-C1 face to the wall of its layer through the edge they share (the pith face
-edge for ``i = 1``, the previous layer's seam after): all faces are quads,
-no edge is split, no filler cell is needed, and the knot's rings continue
-the trunk's (one cambium; the bark of the knot meets the trunk's bark).
+Branches have as many sides as the trunk (``branch_sides = 16``, any
+multiple of 4): a quarter of them faces each wall.  The trunk's pith face
+under the knot has its edges cut in ``q = branch_sides / 4`` pieces when the
+branch is sewn on; at each layer every wall face is cut in ``q`` quads
+(its outer edge in ``q`` pieces, then ``q - 1`` chords,
+:meth:`Wood._split_walls`), and the next cell of a wall's stack gets the
+same pieces on its O face (:meth:`Wood._match_supports`).  The knot's ring
+cell ``i`` is born in the same step as the walls' cell ``i``, so after
+every layer the kernel's :meth:`GMap3.identify` sews each knot cell's C1
+face to its piece of the wall of its layer through the edge they share
+(the pith face edge for ``i = 1``, the previous layer's seam after): no
+filler cell is needed, and the knot's rings continue the trunk's (one
+cambium; the bark of the knot meets the trunk's bark).
 The solid stays one ball (valid, chi = 1, boundary chi = 2 after every
 step).  Geometrically ring ``i`` of the knot starts on layer ``i`` of the
 slot: nested cups, a cone of the branch's rings opening from the pith
-(:meth:`Wood._seat_knot`).  Knot volumes are ``exclusive`` (the thesis's
-``seulPourPl``), so the seam vertices take the knot's corners and the
-trunk's rings bend around the knot by a displacement field from the seam
-(:meth:`Wood._push`), which folds no cell.  The seam uses the law's mean
+(:meth:`Wood._seat_knot`), round in every cut.  Knot volumes are
+``exclusive`` (the thesis's ``seulPourPl``), so the seam vertices take the
+knot's corners and the trunk's rings bend around the knot by a displacement
+field from the seam (:meth:`Wood._push`): the trunk makes room for the
+square round the knot's section, and the ring cells on the seam curve in
+along its round edge, so a tangential cut shows the trunk's rings flowing
+round a round knot.  The seam uses the law's mean
 widths, so regrowing a branch with a new seed moves only that branch.
 
 >>> w = grow_wood("pine", years=2, branches=0)
@@ -108,7 +117,8 @@ MAX_DARTS = 8_000_000
 
 _COMMON = dict(
     sides=16,
-    branch_sides=4,
+    branch_sides=16,
+    branch_levels=2,
     branch_angle=60.0,
     branch_length=0.15,
     branch_scale=0.5,
@@ -170,7 +180,8 @@ SPECIES: dict[str, dict[str, Any]] = {
 #: Parameters a user may set (``--set name=value``) with their meaning.
 PARAMETERS = {
     "sides": "faces of the trunk's pith prisms (>= 3)",
-    "branch_sides": "faces of a branch's pith prisms (4: one per slot wall, so knots are sewn)",
+    "branch_sides": "faces of a branch's pith prisms (a multiple of 4: a quarter meets each slot wall)",
+    "branch_levels": "most yearly levels of a branch, its knot included (0: no limit; 2: the knot and a stub)",
     "pith_radius": "apothem of the pith (m)",
     "height": "length growth of the trunk per year (m)",
     "early_min": "earlywood width bounds at the pith (m)",
@@ -271,8 +282,9 @@ def _check(p) -> None:
         f"prism order must be at least 3, got sides={p['sides']}, branch_sides={p['branch_sides']}",
     )
     need(
-        p["branch_sides"] == 4,
-        f"branch_sides must be 4 (a knot's four sides are sewn to the four walls of its slot), got {p['branch_sides']}",
+        p["branch_sides"] % 4 == 0 and p["branch_sides"] <= MAX_SIDES,
+        "branch_sides must be a multiple of 4, at most "
+        f"{MAX_SIDES} (a quarter of a knot's sides meets each wall of its slot), got {p['branch_sides']}",
     )
     for lo, hi in (("early_min", "early_max"), ("late_min", "late_max"), ("bark_min", "bark_max")):
         need(p[lo] > 0 and p[hi] > 0, f"ring widths must be positive, got {lo}={p[lo]}, {hi}={p[hi]}")
@@ -287,23 +299,32 @@ def _check(p) -> None:
     need(0 <= p["height_jitter"] < 1, f"height_jitter must be in [0, 1), got {p['height_jitter']}")
     need(0 < p["branch_angle"] < 180, f"branch_angle must be in (0, 180) degrees, got {p['branch_angle']}")
     need(
-        p["branches"] >= 0 and p["sapwood_rings"] >= 0 and p["heartwood_age"] >= 0,
-        "branches, sapwood_rings and heartwood_age must be >= 0",
+        p["branches"] >= 0 and p["sapwood_rings"] >= 0 and p["heartwood_age"] >= 0 and p["branch_levels"] >= 0,
+        "branches, branch_levels, sapwood_rings and heartwood_age must be >= 0",
     )
 
 
 def estimated_darts(p: Mapping[str, Any], years: int, branch_years: Sequence[int] = ()) -> int:
     """Darts the wood will have: the trunk's closed form plus each branch's (a branch born in
-    year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years);
+    year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years, of at most
+    ``branch_levels`` levels);
     nodes add one pith prism and its stacks per year with branches, less one stack per branch
-    (its slot).  Exact for :func:`grow_wood`."""
+    (its slot); the walls of a slot are cut in ``branch_sides / 4`` pieces, one per knot cell
+    facing them.  Exact for :func:`grow_wood` (measured: a knot of 16 sides grown ``y`` years
+    adds ``3 (28 + 144 y)`` darts of cuts)."""
     s, b = int(p["sides"]), int(p["branch_sides"])
     total = trunk_darts(s, years)
     born = [int(y) for y in branch_years]
     for j in sorted(set(born)):  # the node level and its stacks, less the slots
         total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
+    cap = int(p.get("branch_levels", 0))
     for j in branch_years:
-        total += trunk_darts(b, years - int(j))
+        y = years - int(j)
+        kept = y if cap == 0 else min(y, cap)  # levels t < kept, level t lived y - t years
+        total += 12 * b * kept + 144 * b * (kept * y - kept * (kept - 1) // 2)
+        # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
+        # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
+        total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
     return total
 
 
@@ -499,7 +520,7 @@ class Wood:
             for b, br in enumerate(self.branches):
                 if br.year == self.year:
                     self._start_branch(b, br)
-                elif br.year < self.year:
+                elif br.year < self.year and self._branch_grows(b):
                     self._grow_length(self.branch_axis[b])
         for _ in range(2 if spring else 1):
             self._add_layer()
@@ -507,6 +528,18 @@ class Wood:
         self.steps += 1
         self._sync_corner()
         self.assign_roles()
+
+    def _branch_grows(self, b: int) -> bool:
+        """Whether branch ``b`` still grows in length: below ``branch_levels`` levels (0: always).
+
+        A log's branches are stubs: the knot inside the trunk and a short
+        length past the bark are what planks and cuts show, and a branch of
+        as many sides as the trunk grown to its full length would cost four
+        times the darts of the trunk's rings (30 years, 20 branches: 9.2
+        million darts against 3.6 million with stubs).
+        """
+        cap = int(self.p.get("branch_levels", 0))
+        return cap == 0 or len(self.branch_axis[b].levels) < cap
 
     def _sync_corner(self) -> None:
         n = self.gm.n_darts
@@ -569,8 +602,45 @@ class Wood:
         gm = self.gm
         slot = self._anchors([self.trunk.levels[br.level]], f"C{br.sector + 1}")
         base = self._anchors([ax.levels[0]], "O")
+        self._cut_slot(int(slot[0]), ax.sides // 4)
         gm.sew3(slot, base)
         self._sewn_layers[b] = 0
+
+    def _cut_edges(self, darts: np.ndarray, pieces: np.ndarray) -> None:
+        """Cut the edge of each dart of ``darts`` into ``pieces`` equal pieces, halving in batches.
+
+        A cut at ``h / n`` (``h = n // 2``) leaves ``h`` pieces on the dart's
+        side and ``n - h`` beyond (from ``alpha1`` of the new dart); every round
+        cuts all edges at once, so four pieces take two batches, not three.
+        """
+        gm = self.gm
+        cur, left = np.asarray(darts, np.int64), np.asarray(pieces, np.int64)
+        keep = left > 1
+        cur, left = cur[keep], left[keep]
+        while cur.size:
+            half = left // 2
+            new = gm.split_edge(cur, half / left)
+            beyond = gm.alpha[1][new].astype(np.int64)
+            cur, left = np.concatenate([cur, beyond]), np.concatenate([half, left - half])
+            keep = left > 1
+            cur, left = cur[keep], left[keep]
+
+    def _cut_slot(self, dart: int, q: int) -> None:
+        """Cut each edge of the trunk's pith face under a knot (the face of ``dart``) into ``q`` pieces.
+
+        An edge already cut (shared with the slot of a knot born beside it in
+        the same year) is left as it is; corners are the darts with a
+        template corner.
+        """
+        if q == 1:
+            return
+        gm = self.gm
+        walk, length = gm.face_walk([dart])
+        at_vertex = walk[0, 0 : length[0] : 2]
+        corners = np.flatnonzero(self.corner[at_vertex] >= 0)
+        pieces = np.diff(np.append(corners, len(at_vertex)))
+        whole = pieces == 1  # an edge cut already (a knot beside this one) stays as it is
+        self._cut_edges(at_vertex[corners[whole]], np.full(int(whole.sum()), q))
 
     def _anchors(self, firsts, label):
         """Anchor darts (forward, corner 0) of face ``label`` of the volumes of darts ``firsts``.
@@ -640,6 +710,8 @@ class Wood:
             if not walls:
                 return
             anchors = self._side_faces(walls, labels)
+            anchors, rows = self._split_walls(anchors)
+            want = [want[r] for r in rows]
             walk, _ = gm.face_walk(anchors)
             free = walk >= 0
             nb = np.full(walk.shape, -1, np.int64)
@@ -663,6 +735,94 @@ class Wood:
             gm.identify(a, other)
             for b in {w[0] for w, good in zip(want, ok) if good}:
                 self._sewn_layers[b] += 1
+
+    def _split_walls(self, anchors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Split each slot wall face of ``anchors`` into ``q = branch_sides / 4`` faces, one per knot cell.
+
+        A wall face of layer ``i`` runs from its inner edge (shared with the
+        cell's O face, already in ``q`` pieces: the previous layer's seam, or
+        the pith face split when the branch was sewn) to its outer edge (on
+        the E face).  The outer edge is cut into ``q`` pieces, then ``q - 1``
+        chords join inner vertex ``r`` to outer vertex ``r``: ``q`` quads,
+        each to be sewn to the C1 face of one knot cell.  Found by the faces'
+        labels (topology), never by coordinates.  Returns one dart per
+        sub-face (on its inner piece) and the row of ``anchors`` it came from;
+        with ``q = 1`` (or faces already split) the anchors themselves.
+        """
+        gm = self.gm
+        q = int(self.p["branch_sides"]) // 4
+        rows = np.arange(len(anchors))
+        if q == 1 or not len(anchors):
+            return anchors, rows
+        e_code, o_code = _prism.face_label_code("E"), _prism.face_label_code("O")
+        walk, _ = gm.face_walk(anchors)
+        across = gm.dart_data["face"][gm.alpha[2][np.maximum(walk, 0)]]
+        outer = (walk >= 0) & (across == e_code)
+        fresh = np.flatnonzero(outer.sum(axis=1) == 2)  # outer edge still whole
+        if fresh.size:
+            self._cut_edges(walk[fresh, np.argmax(outer[fresh], axis=1)], np.full(len(fresh), q))
+        walk, length = gm.face_walk(anchors)
+        across = gm.dart_data["face"][gm.alpha[2][np.maximum(walk, 0)]]
+        n_edges = 2 * q + 2
+        ready = np.flatnonzero(length == 2 * n_edges)
+        out_darts, out_rows = [anchors[length != 2 * n_edges]], [rows[length != 2 * n_edges]]
+        if not ready.size:
+            return np.concatenate(out_darts), np.concatenate(out_rows)
+        edge_darts = walk[ready, 0 : 2 * n_edges : 2]  # dart starting edge e, at vertex e
+        inner = across[ready, 0 : 2 * n_edges : 2] == o_code
+        if not np.all(inner.sum(axis=1) == q):
+            raise GMapError("a slot wall's inner edge is not split into one piece per knot cell")
+        first_inner = inner & ~np.roll(inner, 1, axis=1)
+        e0 = np.argmax(first_inner, axis=1)
+        pick = np.arange(len(ready))
+        sub = np.stack([edge_darts[pick, (e0 + r) % n_edges] for r in range(q)], axis=1)
+        for r in range(1, q):  # chord r: inner vertex r to outer vertex r, 2q + 1 - 2r corners on
+            gm.split_faces(sub[:, r], np.full(len(ready), 2 * q + 1 - 2 * r))
+        out_darts.append(sub.ravel())
+        out_rows.append(np.repeat(rows[ready], q))
+        return np.concatenate(out_darts), np.concatenate(out_rows)
+
+    def _near_slots(self, parts) -> np.ndarray:
+        """Mask over this layer's new cells: those on a trunk stack walling a knot's slot."""
+        walls = np.zeros((len(self.trunk.levels) + 2, self.trunk.sides), bool)
+        n = self.trunk.sides
+        for b in self._sewn_layers:
+            t, k = self.branches[b].level, self.branches[b].sector
+            for tt, kk in ((t, (k - 1) % n), (t, (k + 1) % n), (t - 1, k), (t + 1, k)):
+                if tt >= 0:
+                    walls[tt, kk] = True
+        masks = [walls[t, k] if ax.index == 0 else np.zeros(len(t), bool) for ax, t, k, *_ in parts]
+        return np.concatenate(masks)
+
+    def _match_supports(self, support: np.ndarray, first: np.ndarray) -> None:
+        """Split the O edges of fresh cubes ``first`` as the edges of their ``support`` faces are split.
+
+        A slot wall's cells have edges cut for the knot's sides (and the
+        trunk's pith face under a knot likewise); the next cell stacked on
+        such a face gets the same pieces on its O face so the two faces sew
+        vertex to vertex.  Original corners carry a template corner
+        (``corner >= 0``), split vertices do not.
+        """
+        gm = self.gm
+        if not len(support):
+            return
+        walk, length = gm.face_walk(support)
+        odd = np.flatnonzero(length > 8)
+        if not odd.size:
+            return
+        corner = self.corner
+        owalk, _ = gm.face_walk(first[odd])
+        darts, cuts = [], []
+        for row, j in enumerate(odd):
+            at_vertex = walk[j, 0 : length[j] : 2]
+            corners = np.flatnonzero(corner[at_vertex] >= 0)
+            if len(corners) != 4 or corners[0] != 0:
+                raise GMapError("a wood cell's support face has lost a corner")
+            pieces = np.diff(np.append(corners, len(at_vertex)))
+            for e in np.flatnonzero(pieces > 1):
+                darts.append(int(owalk[row, 2 * e]))
+                cuts.append(int(pieces[e]) - 1)
+        self._cut_edges(np.array(darts, np.int64), np.array(cuts, np.int64) + 1)
 
     def _add_layer(self):
         """One new cube on the outside of every stack, then the joins around and along each axis."""
@@ -690,7 +850,10 @@ class Wood:
         first = self._new(
             4, n_slots, axis, 1, label="W", level=t_all, sector=k_all, cell=i_all, key=keys, exclusive=(axis > 0) & (t_all == 0)
         )
-        gm.sew3(cat([part[4] for part in parts]), first)
+        support = cat([part[4] for part in parts])
+        near = self._near_slots(parts)  # only a slot wall's stack has cut edges under its next cell
+        self._match_supports(support[near], first[near].astype(np.int64))
+        gm.sew3(support, first)
         start = 0
         for ax, t, k, i, _ in parts:
             mine = first[start : start + len(t)].astype(np.int64)
@@ -947,7 +1110,7 @@ class Wood:
             o, f, h = self.level_frames(ax)
             rp = self.p["pith_radius"] * (1.0 if ax.index == 0 else self.p["branch_scale"])
             n = ax.sides
-            theta = 2 * np.pi * (np.arange(n + 1) - 0.5) / n
+            theta = self.sector_angles(ax)
             pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
             flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = self._pith_points(o, f, h, theta[:n], rp, n)
             cells = np.flatnonzero((vd["axis"] == ax.index) & (vd["cell"] > 0))
@@ -963,6 +1126,20 @@ class Wood:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
             _put_blocks(flat, offset[cells], pts)
         return flat, offset
+
+    @staticmethod
+    def sector_angles(ax: Axis) -> np.ndarray:
+        """Angles of the corners of an axis's sectors, ``n + 1`` values (the last closes the turn).
+
+        The trunk's sector ``k`` spans ``2 pi (k -+ 1/2) / n``.  A branch's
+        corner ``v`` is at ``2 pi v / m - pi / 4``: its corners ``0, m/4, m/2,
+        3m/4`` (where the walls of its slot meet) lie on the diagonals, so
+        each wall faces a quarter of the knot, centred on it (for ``m = 4``
+        both rules agree).
+        """
+        n = ax.sides
+        shift = 0.5 if ax.index == 0 else n / 8
+        return 2 * np.pi * (np.arange(n + 1) - shift) / n
 
     def _knot_profiles(self, radii):
         """Per branch, ``(s_j, rho_j, a_j, lateral_j)``, ``j = 0..N``: where slot layer ``j`` meets the knot.
@@ -1051,7 +1228,7 @@ class Wood:
         i = np.minimum(vd["cell"][sel].astype(np.int64), len(s_layer) - 1)
         m = ax.sides
         c = 1.0 / math.cos(math.pi / m)
-        theta = 2 * np.pi * (np.arange(m + 1) - 0.5) / m
+        theta = self.sector_angles(ax)
         kk = vd["sector"][sel].astype(np.int64)
         out = pts.copy()
         for corner, th, j in ((0, theta[kk], i - 1), (1, theta[kk + 1], i - 1), (4, theta[kk], i), (5, theta[kk + 1], i)):
@@ -1099,6 +1276,8 @@ class Wood:
     TAPER = 0.12
     #: share of the half-gap to the next knot of the same node a knot may fill across the trunk
     KNOT_ROOM = 0.8
+    #: half-side of the square the trunk makes room for around a round knot, over the knot's radius
+    KNOT_HULL = 1.3
     #: steepest rise of a knot inside the trunk (degrees above the horizontal)
     KNOT_RISE = 35.0
 
@@ -1214,10 +1393,16 @@ class Wood:
             lift = np.array([(0.5 + 0.5 * sv) * h[t] for sv in _SV])
             ring = cos_th[:, None] * f[t, 1] + sin_th[:, None] * f[t, 2]
             straight = (o[t] + lift[:, None] * f[t, 0])[:, None, :] + (a_layer / math.cos(half))[None, :, None] * ring[:, None, :]
-            side = (-_SV)[:, None, None] * frame[1] + (_SU[:, None] * lateral)[:, :, None] * frame[2]  # towards each corner
-            knot = p0 + s_layer[:, None] * frame[0] + rho_layer[None, :, None] * side
-            disp = knot - straight
-            size_layer = np.linalg.norm(disp, axis=2).max(axis=0)
+            by_layer = straight.transpose(1, 0, 2).copy()  # (layers, 4, 3)
+            seam = self._seam_map(p0, frame, s_layer, rho_layer, lateral, hull=True)
+            ring_u = np.array([-1, 0, 1, 1, 1, 0, -1, -1], float)  # the slot's boundary, corners and mid-walls
+            ring_v = np.array([-1, -1, -1, 0, 1, 1, 1, 0], float)
+            blend8 = _corner_blend(ring_u, ring_v)
+            n_layers = len(a_layer)
+            layer = np.repeat(np.arange(n_layers), 8)
+            at_ring = seam(np.tile(ring_u, n_layers), np.tile(ring_v, n_layers), layer, np.zeros(len(layer)))
+            straight_ring = np.einsum("lcx,pc->lpx", by_layer, blend8[:, :, 0]).reshape(-1, 3)
+            size_layer = np.linalg.norm(at_ring - straight_ring, axis=1).reshape(n_layers, 8).max(axis=1)
             rel = pts[cells].reshape(-1, 3)
             rel -= o[t]
             z = rel @ f[t, 0]
@@ -1241,18 +1426,14 @@ class Wood:
             lo = np.floor(lam).astype(np.int64)
             hi = np.minimum(lo + 1, len(a_layer) - 1)
             frac = (lam - lo)[:, None]
-            # the four corners at once, term by term as a sum over them (same rounding)
             blend = _corner_blend(u, v)
-            by_layer = disp.transpose(1, 0, 2).copy()  # (layers, 4, 3): rows gathered whole
-            terms = by_layer[lo]  # in place: (1 - f) d_lo + f d_hi, blended
+            terms = by_layer[lo]  # the straight trunk at the slot coordinates: bilinear in the corners
             terms *= 1 - frac[:, :, None]
             upper = by_layer[hi]
             upper *= frac[:, :, None]
             terms += upper
             terms *= blend
-            field = terms[:, 0] + terms[:, 1]
-            field += terms[:, 2]
-            field += terms[:, 3]
+            field = seam(u, v, lo, frac[:, 0]) - terms.sum(axis=1)
             reach = np.maximum(2 * np.maximum(size_layer[lo], size_layer[hi]), 1e-12)
             q = outside[near] / reach
             fade = np.clip(1 - q, 0, 1)
@@ -1267,6 +1448,41 @@ class Wood:
         shift /= den[moved, None]
         out[moved] += shift
         return out.reshape(pts.shape)
+
+    def _seam_map(self, p0, frame, s_layer, rho_layer, lateral, hull=False):
+        """Where the knot's seam lies at slot coordinates ``(u, v)`` in ``[-1, 1]^2``, fractional layer ``j + w``.
+
+        With ``hull`` (what the trunk around the knot is pushed to), the
+        square circumscribing the knot's round section, of half-side ``rho /
+        cos(pi / m)``: the trunk cells next to the slot make room for the whole
+        knot, and their faces on the seam (placed by the knot, whose volumes
+        are exclusive) curve in along its round edge without crossing their
+        far sides.  Else the slot's square boundary mapped onto the round
+        section itself (an elliptical grid map, ``x = u sqrt(1 - v^2 / 2)``,
+        ``y = v sqrt(1 - u^2 / 2)``: the walls' corners go to the diagonals,
+        the mid-walls to the axes).  A four-sided knot is its own square.
+        Returns a function of arrays ``(u, v, j, w)`` giving points ``(len(u), 3)``.
+        """
+        m = int(self.p["branch_sides"])
+        scale = 1.0 / math.cos(math.pi / m)
+        last = len(s_layer) - 1
+
+        def at(u, v, j, w):
+            j = np.asarray(j, np.int64)
+            k = np.minimum(j + 1, last)
+            w = np.asarray(w, float)
+            s_at = (1 - w) * s_layer[j] + w * s_layer[k]
+            r_at = scale * ((1 - w) * rho_layer[j] + w * rho_layer[k])
+            lat = (1 - w) * lateral[j] + w * lateral[k]
+            if m == 4:
+                x, y = u / math.sqrt(2), v / math.sqrt(2)
+            elif hull:
+                x, y = self.KNOT_HULL * u, self.KNOT_HULL * v
+            else:
+                x, y = u * np.sqrt(1 - 0.5 * v * v), v * np.sqrt(1 - 0.5 * u * u)
+            return p0 + s_at[:, None] * frame[0] + (r_at * -y)[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
+
+        return at
 
     def embed(self) -> np.ndarray:
         """Default corners on every dart (``gm.corners``), then the kernel's per-vertex average."""
@@ -1443,11 +1659,14 @@ def cell_colors(volume_data: Mapping[str, np.ndarray], species: str = "pine") ->
     return out
 
 
-def to_grid(wood: Wood, convex: bool = False) -> pv.UnstructuredGrid:
+def to_grid(wood: Wood, convex: bool = True) -> pv.UnstructuredGrid:
     """The wood as a :class:`pyvista.UnstructuredGrid` (one cell per volume) with ``rgb`` cell data.
 
-    ``convex=True`` writes polyhedra as tetrahedra (cell data ``volume`` names
-    the owner), so VTK measures their volumes right: use it for a ``.vtu``.
+    ``convex=True`` (the default) writes polyhedra as tetrahedra (cell data
+    ``volume`` names the owner), so VTK measures their volumes right and
+    slices them right: the slot walls around a round knot are non-convex
+    polyhedra, which VTK's polyhedron slice leaves with holes.  Hexahedra
+    and wedges stay whole either way.
     """
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
@@ -1455,6 +1674,109 @@ def to_grid(wood: Wood, convex: bool = False) -> pv.UnstructuredGrid:
     colors = cell_colors(wood.gm.volume_data, wood.species)
     grid.cell_data["rgb"] = colors[np.asarray(grid.cell_data["volume"])]
     return grid
+
+
+#: VTK hexahedron edges in three classes of four parallel edges (points 0-3 bottom, 4-7 top)
+_HEX_EDGES = np.array(
+    [
+        [[0, 1], [3, 2], [4, 5], [7, 6]],
+        [[0, 3], [1, 2], [4, 7], [5, 6]],
+        [[0, 4], [1, 5], [3, 7], [2, 6]],
+    ]
+)
+
+
+def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.UnstructuredGrid:
+    """A picture grid whose trunk rings are round: each trunk ring cell cut in ``parts`` along its arc.
+
+    A trunk of 16 sides shows 16-gons in a cross-cut; at 64 sides the wood
+    would hold four times the darts (the 30-year, 20-branch pine: 12 million).
+    For pictures only, each hexahedral ring cell of the trunk is cut into
+    ``parts`` hexahedra across its sector, the new points interpolated in
+    polar coordinates about its level's axis (radius, angle and height
+    linear), so the rings are drawn with ``16 parts`` sides, on circles.
+    Other cells (pith, knots, the tetrahedra round a knot) are kept; the
+    volumes are not the kernel's any more (arcs, not chords): measure a
+    :func:`to_grid`.
+    """
+    import pyvista as pv
+
+    if parts <= 1:
+        return grid
+    vd = wood.gm.volume_data
+    owner = np.asarray(grid.cell_data["volume"])
+    hexa = (grid.celltypes == 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)
+    n = wood.trunk.sides
+    for br in wood.branches:  # the stacks round a slot are bent by the knot: kept as they are
+        if br.level >= 0:
+            near_level = np.abs(vd["level"][owner].astype(np.int64) - br.level) <= 1
+            gap = np.abs((vd["sector"][owner].astype(np.int64) - br.sector + n // 2) % n - n // 2)
+            hexa &= ~(near_level & (gap <= 2))
+    rows = np.flatnonzero(hexa)
+    if not rows.size:
+        return grid
+    conn = grid.cell_connectivity.reshape(-1)
+    starts = np.asarray(grid.cell_offsets, np.int64)[rows]
+    cells = conn[starts[:, None] + np.arange(8, dtype=np.int64)[None, :]]
+    pts = np.asarray(grid.points)
+    o, f, _ = wood.level_frames(wood.trunk)
+    level = vd["level"][owner[rows]].astype(np.int64)
+    origin, axis_dir, e1, e2 = o[level], f[level, 0], f[level, 1], f[level, 2]
+
+    def polar(p):  # (m, 8, 3) -> radius, angle, height about each cell's level axis
+        rel = p - origin[:, None, :]
+        z = np.einsum("mcx,mx->mc", rel, axis_dir)
+        x = np.einsum("mcx,mx->mc", rel, e1)
+        y = np.einsum("mcx,mx->mc", rel, e2)
+        return np.hypot(x, y), np.arctan2(y, x), z
+
+    r, th, z = polar(pts[cells])
+    # the edge class spanning the largest angle runs round the trunk
+    spans = [np.abs(np.angle(np.exp(1j * (th[:, e[:, 1]] - th[:, e[:, 0]])))).mean(axis=1) for e in _HEX_EDGES]
+    which = np.argmax(np.stack(spans, axis=1), axis=1)
+    edges = _HEX_EDGES[which]  # (m, 4, 2): the four tangential edges, each from its 'a' corner to 'b'
+    m = len(rows)
+    idx = np.arange(m)[:, None]
+    a, b = cells[idx, edges[:, :, 0]], cells[idx, edges[:, :, 1]]  # point ids (m, 4)
+    ra, ta, za = r[idx, edges[:, :, 0]], th[idx, edges[:, :, 0]], z[idx, edges[:, :, 0]]
+    rb, tb, zb = r[idx, edges[:, :, 1]], th[idx, edges[:, :, 1]], z[idx, edges[:, :, 1]]
+    tb = ta + np.angle(np.exp(1j * (tb - ta)))  # the short way round
+    new_pts, new_cells = [pts], []
+    ring = [a]
+    base = len(pts)
+    for j in range(1, parts):
+        w = j / parts
+        rr, tt, zz = ra + w * (rb - ra), ta + w * (tb - ta), za + w * (zb - za)
+        p = (
+            origin[:, None, :]
+            + zz[..., None] * axis_dir[:, None, :]
+            + rr[..., None] * (np.cos(tt)[..., None] * e1[:, None, :] + np.sin(tt)[..., None] * e2[:, None, :])
+        )
+        new_pts.append(p.reshape(-1, 3))
+        ring.append(base + np.arange(4 * m).reshape(m, 4))
+        base += 4 * m
+    ring.append(b)
+    # the hexahedron's corner of each tangential edge's end: rebuild each slice with the same VTK order
+    slot = np.zeros((m, 8), np.int64)  # for corner c: (edge index, 0 = a end / 1 = b end)
+    end = np.zeros((m, 8), np.int64)
+    for k in range(4):
+        slot[idx[:, 0], edges[:, k, 0]] = k
+        slot[idx[:, 0], edges[:, k, 1]] = k
+        end[idx[:, 0], edges[:, k, 1]] = 1
+    for j in range(parts):
+        lo, hi = ring[j], ring[j + 1]
+        piece = np.where(end == 0, np.take_along_axis(lo, slot, axis=1), np.take_along_axis(hi, slot, axis=1))
+        new_cells.append(piece)
+    old = grid.extract_cells(~hexa)
+    sub = pv.UnstructuredGrid(
+        np.hstack([np.full((m * parts, 1), 8), np.concatenate(new_cells)]).ravel(),
+        np.full(m * parts, 12, np.uint8),
+        np.concatenate(new_pts),
+    )
+    for name in grid.cell_data.keys():
+        sub.cell_data[name] = np.concatenate([np.asarray(grid.cell_data[name])[rows]] * parts)
+    out = pv.merge([old, sub], merge_points=False)
+    return out
 
 
 def parse_plank(text: str) -> tuple[np.ndarray, float, float]:
