@@ -304,6 +304,14 @@ class LpyLSystem(LSystem):
         current.constants = dict(self.grammar.constants)
         return current
 
+    def turtle_arguments(self, tree: DerivationTree, nodes: np.ndarray) -> list[tuple]:
+        """The arguments of modules ``nodes`` of ``tree`` as the file gave them (vectors and
+        curves too), for the turtle's commands of several parameters."""
+        rec = self._records.get(tree)
+        if rec is None:
+            return [tuple(float(v) for v in tree.params[n, : tree.nparams[n]]) for n in nodes.tolist()]
+        return [tuple(rec.args[n]) for n in nodes.tolist()]
+
     def rule_counts(self) -> dict[str, int]:
         """How many rules each of the file's sections holds (``production:``, ``decomposition:``,
         ``interpretation:``/``homomorphism:``)."""
