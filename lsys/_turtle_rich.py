@@ -293,8 +293,8 @@ class Rich:
         elif a in (GUIDED_DRAW, GUIDED_MOVE):
             self._guided(st, i, _arg(v, 0, step), a == GUIDED_DRAW, seg, order, seek, full, seg_base, polys)
         elif a == CONTOUR_DRAW:
-            d = _arg(v, 0, step)
-            end = tuple(p[j] + h[j] * d for j in range(3))
+            forward = _arg(v, 0, step)
+            end = tuple(p[j] + h[j] * forward for j in range(3))
             self._draw(st, i, p, end, seg, order, seek, full, seg_base, polys)
             st[0:3] = list(end)
         elif a == SWEEP:

@@ -27,8 +27,13 @@ organs          ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded wit
 ``@O(r)``       a sphere of radius r (``@O`` alone: diameter = the width), an organ
 ``~name(s)``    a predefined surface scaled by s, an organ (:mod:`ramure.lsys.surfaces`)
 ``@Ts(e)``      the tropism elasticity for the rest of the branch (``[`` saves it):
-                bends toward ``#tropism``'s direction, else -z
+                bends toward ``#tropism``'s direction (``@Tp`` sets it), else -z
 ==============  ========================================================================
+
+The commands of several parameters or objects (``@M``, ``@R``, ``@o``, ``@c``, ``@B``,
+``@Tp``, ``@Gs``/``@Gc``/``@Ge``, L-Py's ``LineTo``, ``SetGuide``, ``Sweep`` ...) are walked by
+:mod:`ramure.lsys._turtle_rich` (its table gives their meanings); a string without them never
+pays for them.
 
 A segment's **base radius** is half the width when it is drawn, times
 ``#widthscale`` (default 1; ABOP widths are often in pixels, so a grammar may
