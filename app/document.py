@@ -32,6 +32,7 @@ from ramure.errors import RamureError
 from ramure.io import read_regular
 from ramure.lsys import GrammarError, LSystem
 from ramure.lsys.grammar import read_grammar_file
+from ramure.lsys.lpy import LpyLSystem
 from ramure.lsys.regen import MAX_SESSION_BYTES
 
 if TYPE_CHECKING:
@@ -67,6 +68,26 @@ def text_with_constants(text: str, constants: Mapping[str, float], written: Mapp
         if m and m.group(2) in changed:
             lines[i] = _spaced(m, format_constant(changed[m.group(2)]))
     return "\n".join(lines)
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def lpy_text_with_constants(text: str, constants: Mapping[str, float], written: Mapping[str, float]) -> str:
+    """An L-Py model's ``text`` with each ``extern(name=number)`` whose value differs from
+    ``written`` rewritten to ``constants``' value (the first such ``extern`` of each name).
+
+    >>> lpy_text_with_constants("extern(k=2, angle = 30.5)\\nAxiom: A", {"k": 3.0, "angle": 30.5},
+    ...                         {"k": 2.0, "angle": 30.5})
+    'extern(k=3, angle = 30.5)\\nAxiom: A'
+    """
+    for name, value in constants.items():
+        if name not in written or float(value) == float(written[name]):
+            continue
+        pattern = re.compile(rf"(\bextern\s*\([^)]*?\b{re.escape(name)}\s*=\s*)({_NUMBER})")
+        new = format_constant(value)
+        text = pattern.sub(lambda m, new=new: m.group(1) + new, text, count=1)
+    return text
 
 
 def text_with_derivation(text: str, n: int, seed: int, written_n: int, written_seed: int) -> str:
@@ -111,6 +132,8 @@ def document_text(
     ``b`` is written as a number too if its expression would now give another value.
     """
     out = text_with_derivation(text, n, seed, lsystem.n, lsystem.seed)
+    if isinstance(lsystem, LpyLSystem):  # an L-Py model: its constants are extern(...) values
+        return lpy_text_with_constants(out, constants, lsystem.grammar.constants)
     written = dict(lsystem.constants)
     for _ in range(len(constants) + 1):
         new = text_with_constants(out, constants, written)
@@ -260,6 +283,7 @@ __all__ = [
     "runs_code",
     "session_runs_code",
     "check_round_trip",
+    "lpy_text_with_constants",
     "document_text",
     "format_constant",
     "text_with_constants",

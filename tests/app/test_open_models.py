@@ -132,3 +132,15 @@ def test_a_session_of_an_mtg_plant_round_trips(files: dict[str, pathlib.Path], t
     out = session.save(tmp_path / "m.json")
     assert not session_runs_code(out)
     assert Session.load(out).derivation.to_string() == session.derivation.to_string()
+
+
+def test_saving_an_lpy_writes_n_and_externs(files: dict[str, pathlib.Path], tmp_path: pathlib.Path) -> None:
+    ex = Explorer(files["lpy"], run_code=True)
+    ex.set_derivation(n=4)
+    ex.set_constant("k", 3.0)
+    out = ex.save_grammar(tmp_path / "saved.lpy")
+    text = out.read_text()
+    assert "extern(k=3)" in text and "derivation length: 4" in text
+    again = Explorer(out, run_code=True)
+    assert again.derivation.to_string() == ex.derivation.to_string()
+    assert not ex.dirty
