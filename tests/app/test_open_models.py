@@ -35,10 +35,11 @@ LEFT\tRIGHT\tRELTYPE\tMAX
 FEATURES:
 NAME\tTYPE
 Length\tREAL
+Species\tALPHA
 
 MTG:
-ENTITY-CODE\t\t\tLength
-/P1/E1\t\t\t2
+ENTITY-CODE\t\t\tLength\tSpecies
+/P1/E1\t\t\t2\tHêtre
 ^<E2\t\t\t3
 \t+E3\t\t1
 """
@@ -49,7 +50,7 @@ def files(tmp_path: pathlib.Path) -> dict[str, pathlib.Path]:
     model = tmp_path / "model.lpy"
     model.write_text(MODEL)
     mtg = tmp_path / "plant.mtg"
-    mtg.write_bytes(MTG.replace("Length\t", "Length\t").encode("latin-1"))
+    mtg.write_bytes(MTG.encode("latin-1"))  # OpenAlea's files are often Latin-1
     return {"lpy": model, "mtg": mtg}
 
 
