@@ -129,7 +129,7 @@ MAX_INCLUDE_DEPTH = 16
 #: A rule or axiom line ending with this mark continues on the next non-blank line.
 CONTINUATION = "..."
 #: The deepest ``#interpretation_depth`` / ``#decomposition_depth`` accepted.
-MAX_RULE_DEPTH = 64
+MAX_RULE_DEPTH = 1000  # cpfg files write maximum depth: 100 to 1000; rounds stop once no rule applies
 #: Section headers of the rules: their name (and cpfg/L-Py spellings) -> the rule set they open.
 SECTIONS = {
     "production": "production",

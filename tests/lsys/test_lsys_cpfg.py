@@ -210,3 +210,10 @@ def test_a_condition_over_several_lines_and_cpfg_functions_in_defines():
         "endlsystem\n"
     )
     assert LSystem.from_text(text, filename="heads.l").derive().to_string() == "F(80)A(-1)"
+
+
+def test_a_deep_maximum_depth_is_a_cap():
+    """cpfg files write ``maximum depth: 500``: rounds stop once no rule applies."""
+    text = "derivation length: 1\naxiom: A\nA --> B\ndecomposition\nmaximum depth: 500\nB --> C\nC --> F\nendlsystem\n"
+    d = LSystem.from_text(text, filename="deep.l").derive()
+    assert d.to_string() == "F"
