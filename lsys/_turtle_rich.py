@@ -38,6 +38,9 @@ vectors, curves).  Meanings follow cpfg and L-Py (L-Py's helpcard; the cpfg 3.0 
                          radius r (an optional radius variation function of [0,1] multiplies it)
 ``InterpolateColors(i,j,a)``  the colour index nearest the blend (1-a)i + a j (Ramure's
                          colours are indices of the material table, so a blend is rounded)
+``@#(n) @!(n)``          cpfg's polygons around and along a cylinder (L-Py's
+``SectionResolution``    ``SectionResolution``): Ramure's meshes choose their own resolution
+                         (:func:`ramure.app.model.mesh_sides`), so these change nothing drawn
 =======================  ==================================================================
 """
 
@@ -79,7 +82,8 @@ RICH_FIRST = 25
     GUIDED_DRAW,
     GUIDED_MOVE,
     CONTOUR_DRAW,
-) = range(RICH_FIRST, RICH_FIRST + 27)
+    RESOLUTION,
+) = range(RICH_FIRST, RICH_FIRST + 28)
 
 #: Symbols of both dialects (cpfg's ``@Gc`` and ``@o`` differ: see :func:`symbol_codes`).
 SYMBOL_CODES = {
@@ -112,6 +116,9 @@ SYMBOL_CODES = {
     "SetContour": SET_CONTOUR,
     "Sweep": SWEEP,
     "InterpolateColors": INTERPOLATE,
+    "@#": RESOLUTION,
+    "@!": RESOLUTION,
+    "SectionResolution": RESOLUTION,
 }
 #: cpfg's meanings where they differ from L-Py's.
 CPFG_CODES = {"@Gc": GC_POINT, "@Ge": GC_END, "@o": CIRCLE_D}

@@ -228,3 +228,9 @@ def test_check_knows_the_new_commands():
 def test_query_modules_see_the_new_commands():
     d = LSystem.from_text("derivation length: 1\naxiom: A\nA --> @M(1,2,3)F?P(0,0,0)\nendlsystem\n", filename="c.l").derive()
     assert d.to_string() == "@M(1,2,3)F?P(1,2,4)"
+
+
+def test_cylinder_resolutions_are_read_and_change_nothing_drawn():
+    plain = cpfg_skeleton("F@Gs F@Gc(2)")
+    hinted = cpfg_skeleton("@#(6)F@!(3)@Gs F@Gc(2)")
+    assert np.array_equal(plain.end, hinted.end) and len(plain) == 3
