@@ -29,13 +29,16 @@ vectors, curves).  Meanings follow cpfg and L-Py (L-Py's helpcard; the cpfg 3.0 
                          the Hermite curve from the previous one (tangents: the headings,
                          length 1.2 times the chord), in n segments (default 1)
 ``@Gc @Ge`` (L-Py)       StartGC / EndGC: Ramure's tubes already join (nothing to do)
-``SetGuide(c,l)``        the ``F``/``f`` that follow on this branch move along the 2D curve c
-                         rescaled to length l (x along the heading, y along L), until
-                         ``EndGuide`` or the curve's end (then straight on)
-``SetContour(c)``        the segments that follow on this branch are swept with the closed
+``SetGuide(c,l)``        the ``F``/``f``/``nF`` that follow (in branches too, each with its own
+                         copy) move along the 2D curve c rescaled to length l (x along the
+                         heading, y along L), until ``EndGuide``, the end of the branch it was
+                         set in, or the curve's end (then straight on)
+``SetContour(c)``        the segments that follow (in branches too) are swept with the closed
                          2D curve c (in L-U, scaled by the radius) as section, as polygons
 ``Sweep(p,c,l,dl,r)``    ``SetGuide(p,l)``, ``SetContour(c)`` and segments of dl along l of
                          radius r (an optional radius variation function of [0,1] multiplies it)
+``nF(l,dl,r,f)``          segments of dl along l (on the guide, swept by the contour, when set);
+                         r sets the width, times f((k + 1/2) / count) when f is given
 ``InterpolateColors(i,j,a)``  the colour index nearest the blend (1-a)i + a j (Ramure's
                          colours are indices of the material table, so a blend is rounded)
 ``@#(n) @!(n)``          cpfg's polygons around and along a cylinder (L-Py's
@@ -83,7 +86,8 @@ RICH_FIRST = 25
     GUIDED_MOVE,
     CONTOUR_DRAW,
     RESOLUTION,
-) = range(RICH_FIRST, RICH_FIRST + 28)
+    N_DRAW,
+) = range(RICH_FIRST, RICH_FIRST + 29)
 
 #: Symbols of both dialects (cpfg's ``@Gc`` and ``@o`` differ: see :func:`symbol_codes`).
 SYMBOL_CODES = {
@@ -119,6 +123,7 @@ SYMBOL_CODES = {
     "@#": RESOLUTION,
     "@!": RESOLUTION,
     "SectionResolution": RESOLUTION,
+    "nF": N_DRAW,
 }
 #: cpfg's meanings where they differ from L-Py's.
 CPFG_CODES = {"@Gc": GC_POINT, "@Ge": GC_END, "@o": CIRCLE_D}
@@ -141,19 +146,23 @@ def recode(acts: np.ndarray, match: np.ndarray) -> np.ndarray:
     from ._turtle_walk import DRAW, MOVE
 
     out = acts.copy()
-    modes = {GC_START: "gc", SET_GUIDE: "guide", SET_CONTOUR: "contour"}
+    modes = {GC_START: "gc", SET_GUIDE: "guide", SET_CONTOUR: "contour", SWEEP: "sweep"}
     ends = {GC_END: "gc", END_GUIDE: "guide"}
-    starts = np.flatnonzero(np.isin(acts, list(modes)))
+    starts = np.flatnonzero(np.isin(acts, [GC_START, SET_GUIDE, SET_CONTOUR]))
     for s in starts.tolist():
         mode = modes[int(acts[s])]
-        i, n = s + 1, len(acts)
+        i, n, depth = s + 1, len(acts), 0
         while i < n:
             a = int(acts[i])
-            if a == 11 and match[i] > i:  # PUSH: skip the whole branch
+            if a == 11 and mode == "gc" and match[i] > i:  # PUSH: a cpfg cylinder skips the branch
                 i = int(match[i]) + 1
                 continue
-            if a == 12 or ends.get(a) == mode or modes.get(a) == mode:  # POP, its end, or a new one
-                break
+            if a == 11:  # a guide or contour goes on in branches (L-Py's turtle state)
+                depth += 1
+            elif a == 12 and depth:
+                depth -= 1
+            elif a == 12 or (depth == 0 and (ends.get(a) == mode or modes.get(a) == mode)):
+                break  # the end of its branch, its end, or a new one
             if mode == "gc" and a == DRAW:
                 out[i] = MOVE
             elif mode == "guide" and a in (DRAW, MOVE, CONTOUR_DRAW):
@@ -244,7 +253,19 @@ class Rich:
         self.gc: tuple | None = None  # cpfg cylinder: (position, heading, width) of the last control point
         self.guide: dict | None = None
         self.contour: np.ndarray | None = None
-        self.stack: list[tuple[float, float, float]] = []  # the tropism direction at each '['
+        self.stack: list[tuple] = []  # at each '[': tropism direction, guide, contour, cylinder
+
+    def push(self, tx: float, ty: float, tz: float) -> None:
+        """A branch starts: it inherits the guide (its own copy) and the contour, and starts
+        outside any cpfg cylinder (the parent's resumes at ``]``)."""
+        self.stack.append((tx, ty, tz, self.guide, self.contour, self.gc))
+        self.guide = dict(self.guide) if self.guide is not None else None
+        self.gc = None
+
+    def pop(self) -> tuple[float, float, float]:
+        """A branch ends: the parent's state again; returns its tropism direction."""
+        tx, ty, tz, self.guide, self.contour, self.gc = self.stack.pop()
+        return tx, ty, tz
 
     # -- one module ---------------------------------------------------------------------
     def step(self, a, i, st, seg, polys, order, seek, full, seg_base, step, pstack) -> int:
@@ -306,6 +327,8 @@ class Rich:
             st[0:3] = list(end)
         elif a == SWEEP:
             self._sweep(st, i, raw, v, step, seg, order, seek, full, seg_base, polys)
+        elif a == N_DRAW:
+            self._n_draw(st, i, raw, v, step, seg, order, seek, full, seg_base, polys)
         elif not seek and a in (CIRCLE, CIRCLE_D, DISC_HL, BOX, FRAME):
             self._shape(a, st, i, v, p, h, l, u, width, step, polys)
         return int(st[14])
@@ -448,6 +471,28 @@ class Rich:
             st[12] = 2.0 * radius * factor
             self._guided(st, i, d, True, seg, order, seek, full, seg_base, polys)
         self.contour, self.guide = saved_contour, saved_guide
+
+    def _n_draw(self, st, i, raw, v, step, seg, order, seek, full, seg_base, polys):
+        """L-Py's ``nF(length, dl[, radius, variation])``: segments of dl along length (on the
+        guide, with the contour, when set); a radius sets the width (times the variation)."""
+        length, dl = _arg(v, 0, step), _arg(v, 1, step)
+        if not (length > 0 and dl > 0):
+            return
+        radius = _arg(v, 2, math.nan)
+        variation = raw[3] if len(raw) > 3 and callable(raw[3]) else None
+        count = max(1, min(int(math.ceil(length / dl - 1e-9)), 10_000))
+        for k in range(count):
+            if not math.isnan(radius):
+                factor = float(variation((k + 0.5) / count)) if variation is not None else 1.0
+                st[12] = 2.0 * radius * factor
+            d = min(dl, length - k * dl)
+            if self.guide is not None:
+                self._guided(st, i, d, True, seg, order, seek, full, seg_base, polys)
+            else:
+                p, h = tuple(st[0:3]), st[3:6]
+                end = tuple(p[j] + h[j] * d for j in range(3))
+                self._draw(st, i, p, end, seg, order, seek, full, seg_base, polys)
+                st[0:3] = list(end)
 
     def _shape(self, a, st, i, v, p, h, l, u, width, step, polys):  # noqa: E741
         color = st[13]

@@ -224,14 +224,14 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 continue
             saved = color if -_EXACT <= color <= _EXACT else _int64(float(color))  # the compiled rows are floats
             stack.append((px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, saved, order, last, te))
-            if rich is not None:  # the tropism direction @Tp sets
-                rich.stack.append((tx, ty, tz))
+            if rich is not None:  # the tropism direction @Tp sets, guides, contours
+                rich.push(tx, ty, tz)
             order += 1
         elif a == POP:
             if stack:
                 px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, color, order, last, te = stack.pop()
                 if rich is not None:
-                    tx, ty, tz = rich.stack.pop()
+                    tx, ty, tz = rich.pop()
             elif mode == REGION:
                 stop = i
                 break

@@ -234,3 +234,13 @@ def test_cylinder_resolutions_are_read_and_change_nothing_drawn():
     plain = cpfg_skeleton("F@Gs F@Gc(2)")
     hinted = cpfg_skeleton("@#(6)F@!(3)@Gs F@Gc(2)")
     assert np.array_equal(plain.end, hinted.end) and len(plain) == 3
+
+
+def test_n_f_draws_pieces_on_the_guide_and_branches_inherit_it():
+    s = lpy_skeleton("nF(2, 0.5) nF(1, 0.5, 0.25)")
+    assert s.end[:, 2].tolist() == [0.5, 1, 1.5, 2, 2.5, 3]
+    assert np.allclose(s.base_radius[4:], 0.25)  # the radius given sets the width: 2 * 0.25
+    head = "from openalea.plantgl.all import Polyline2D\nC0 = Polyline2D([(0, 0), (2, 0), (2, 2)])\n"
+    g = lpy_skeleton("SetGuide(C0, 2) F(0.5) [F(1)] F(1)", head)
+    # the branch goes on along its copy of the guide; the parent resumes where it was
+    assert np.allclose(g.end, [[0, 0, 0.5], [0.5, 0, 1], [0.5, 0, 1]])
