@@ -39,8 +39,9 @@ vectors, curves).  Meanings follow cpfg and L-Py (L-Py's helpcard; the cpfg 3.0 
                          radius r (an optional radius variation function of [0,1] multiplies it)
 ``nF(l,dl,r,f)``          segments of dl along l (on the guide, swept by the contour, when set);
                          r sets the width, times f((k + 1/2) / count) when f is given
-``InterpolateColors(i,j,a)``  the colour index nearest the blend (1-a)i + a j (Ramure's
-                         colours are indices of the material table, so a blend is rounded)
+``InterpolateColors(i,j,a)``  the colour (1-a) i + a j: a new material index (after the
+                         table's) whose colour blends materials i and j; without both in the
+                         ``#material`` table, the index nearest (1-a) i + a j
 ``@#(n) @!(n)``          cpfg's polygons around and along a cylinder (L-Py's
 ``SectionResolution``    ``SectionResolution``): Ramure's meshes choose their own resolution
                          (:func:`ramure.app.model.mesh_sides`), so these change nothing drawn
@@ -247,9 +248,13 @@ def curve_points(curve: Any, closed: bool = False) -> np.ndarray | None:
 class Rich:
     """The arguments of a string's rich modules and the state they keep along one walk."""
 
-    def __init__(self, args: dict[int, tuple], cpfg: bool, width_scale: float = 1.0) -> None:
+    def __init__(self, args: dict[int, tuple], cpfg: bool, materials: dict | None = None) -> None:
         self.args = args
         self.cpfg = cpfg
+        self.materials = dict(materials or {})  # the grammar's #material table (index -> rgba)
+        #: the materials InterpolateColors made: index -> rgba, beyond the table's indices
+        self.blends: dict[int, tuple] = {}
+        self._blend_of: dict[tuple, int] = {}
         self.gc: tuple | None = None  # cpfg cylinder: (position, heading, width) of the last control point
         self.guide: dict | None = None
         self.contour: np.ndarray | None = None
@@ -304,8 +309,7 @@ class Rich:
             if t is not None:
                 st[15:18] = list(t)
         elif a == INTERPOLATE:
-            c1, c2, alpha = _arg(v, 0, st[13]), _arg(v, 1, st[13]), _arg(v, 2, 0.5)
-            st[13] = int(math.floor(c1 + alpha * (c2 - c1) + 0.5))
+            st[13] = self._blend(_arg(v, 0, st[13]), _arg(v, 1, st[13]), _arg(v, 2, 0.5))
         elif a == GC_START:
             self.gc = (p, h, width)
         elif a in (GC_POINT, GC_END):
@@ -334,6 +338,20 @@ class Rich:
         return int(st[14])
 
     # -- pieces -------------------------------------------------------------------------
+    def _blend(self, c1: float, c2: float, alpha: float) -> int:
+        """The colour index of (1 - alpha) c1 + alpha c2: a new material blending the two when
+        the table has both, else the nearer of the two indices' ramp."""
+        i, j = int(c1), int(c2)
+        if i in self.materials and j in self.materials and c1 == i and c2 == j and math.isfinite(alpha):
+            key = (i, j, round(alpha, 9))
+            if key not in self._blend_of:
+                first = max([*self.materials, *self.blends, 0]) + 1
+                a, b = self.materials[i], self.materials[j]
+                self.blends[first] = tuple((1 - alpha) * x + alpha * y for x, y in zip(a, b))
+                self._blend_of[key] = first
+            return self._blend_of[key]
+        return int(math.floor(c1 + alpha * (c2 - c1) + 0.5))
+
     def _set_head(self, st, v, h, u):
         head = _unit(_arg(v, 0, 0.0), _arg(v, 1, 0.0), _arg(v, 2, 1.0)) if v else _unit(0.0, 0.0, 1.0)
         if head is None:

@@ -318,7 +318,10 @@ def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> 
     skeleton = _skeleton(lsys, tree, leaves, segs, orgs, trace)
     _check_color(lsys, tree, leaves[poly[0]], poly[2])  # before from_walk makes colours int32
     skeleton.polygons = _checked(lsys, tree, from_walk(leaves, poly))
-    return _with_drawing(lsys, skeleton)
+    skeleton = _with_drawing(lsys, skeleton)
+    if rich is not None and rich.blends:  # the materials InterpolateColors blended
+        skeleton.extra["materials"] = {**skeleton.extra.get("materials", {}), **rich.blends}
+    return skeleton
 
 
 def rich_modules(lsys: LSystem, tree: DerivationTree, leaves: np.ndarray, acts: np.ndarray) -> tuple[np.ndarray, Rich | None]:
@@ -339,7 +342,7 @@ def rich_modules(lsys: LSystem, tree: DerivationTree, leaves: np.ndarray, acts: 
         rows = np.asarray(tree.params[nodes], float).tolist()
         values = [tuple(row[:k]) for row, k in zip(rows, counts)]
     cpfg = getattr(lsys.grammar, "dialect", "") == "cpfg"
-    return acts, Rich(dict(zip(where.tolist(), values)), cpfg)
+    return acts, Rich(dict(zip(where.tolist(), values)), cpfg, getattr(lsys.grammar, "materials", None))
 
 
 def _checked(lsys, tree, polygons):

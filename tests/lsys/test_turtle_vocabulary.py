@@ -205,9 +205,16 @@ def test_set_contour_and_sweep_draw_the_section():
     assert w.start.tolist() == [[0, 0, 2]]  # the sweep moved the turtle, then a plain tube
 
 
-def test_interpolate_colors_takes_the_nearest_index():
-    s = lpy_skeleton("InterpolateColors(1, 5, 0.25) F InterpolateColors(1, 5, 0.9) F")
-    assert s.color.tolist() == [2, 5]
+def test_interpolate_colors_blends_two_materials():
+    text = "#module InterpolateColors\n#material 1 1 0 0\n#material 2 0 0 1\nn: 0\n"
+    s = LSystem.from_text(text + "w: InterpolateColors(1,2,0.25)F InterpolateColors(1,2,0.25)F ;(2)F\n").derive().skeleton()
+    assert s.color.tolist() == [3, 3, 2]  # one new material for the blend, after the table's
+    assert np.allclose(s.extra["materials"][3], [0.75, 0, 0.25, 1])
+    mesh = s.to_polydata()
+    assert 3 in set(np.asarray(mesh.cell_data["material"]).tolist())
+    # without both in the table: the index nearest the blend
+    plain = lpy_skeleton("InterpolateColors(1, 5, 0.25) F InterpolateColors(1, 5, 0.9) F")
+    assert plain.color.tolist() == [2, 5]
 
 
 def test_tilde_l_is_the_predefined_leaf():
