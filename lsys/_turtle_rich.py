@@ -228,21 +228,23 @@ def turned_to(h, l, u, d):  # noqa: E741 - the turtle's L
     return tuple(d), _rotate(l, k, c, s), _rotate(u, k, c, s)
 
 
-def curve_points(curve: Any, closed: bool = False) -> np.ndarray | None:
-    """(m, 2) points of an L-Py 2D curve (Ramure's small PlantGL), or None if it is not one."""
+def curve_points(curve: Any, dims: int = 2) -> np.ndarray | None:
+    """(m, dims) points of an L-Py curve (Ramure's small PlantGL; a 2D curve gets z = 0 when
+    ``dims`` is 3), or None if it is not one."""
     points = getattr(curve, "points", None)
     if not callable(points):
         return None
     try:
         if type(curve).__name__.startswith("Polyline"):  # its corners exactly
-            pts = np.array([list(p)[:2] for p in curve.ctrlPointList], float)
+            pts = np.array([list(p)[: getattr(curve, "dim", 2)] for p in curve.ctrlPointList], float)
         else:
-            pts = np.asarray(points(CURVE_SAMPLES), float)[:, :2]
+            pts = np.asarray(points(CURVE_SAMPLES), float)
     except (TypeError, ValueError, IndexError):
         return None
-    if len(pts) < 2 or not np.isfinite(pts).all():
+    if pts.ndim != 2 or len(pts) < 2 or pts.shape[1] < 2 or not np.isfinite(pts).all():
         return None
-    return pts
+    pts = pts[:, :dims]
+    return np.c_[pts, np.zeros(len(pts))] if pts.shape[1] < dims else pts
 
 
 class Rich:
@@ -255,6 +257,8 @@ class Rich:
         #: the materials InterpolateColors made: index -> rgba, beyond the table's indices
         self.blends: dict[int, tuple] = {}
         self._blend_of: dict[tuple, int] = {}
+        #: the first module given what it cannot use: (string position, why), raised by the turtle
+        self.problem: tuple[int, str] | None = None
         self.gc: tuple | None = None  # cpfg cylinder: (position, heading, width) of the last control point
         self.guide: dict | None = None
         self.contour: np.ndarray | None = None
@@ -317,11 +321,11 @@ class Rich:
             if a == GC_END:
                 self.gc = None
         elif a == SET_GUIDE:
-            self._set_guide(raw, v, p, h, l)
+            self._set_guide(raw, v, p, h, l, i)
         elif a == END_GUIDE:
             self.guide = None
         elif a == SET_CONTOUR:
-            self.contour = curve_points(raw[0]) if raw else None
+            self.contour = self._contour(raw[0] if raw else None, i)
         elif a in (GUIDED_DRAW, GUIDED_MOVE):
             self._guided(st, i, _arg(v, 0, step), a == GUIDED_DRAW, seg, order, seek, full, seg_base, polys)
         elif a == CONTOUR_DRAW:
@@ -338,6 +342,12 @@ class Rich:
         return int(st[14])
 
     # -- pieces -------------------------------------------------------------------------
+    def _contour(self, curve: Any, i: int) -> np.ndarray | None:
+        pts = curve_points(curve)
+        if pts is None and self.problem is None:
+            self.problem = (i, "SetContour (and Sweep) take a 2D curve as the section (a Polyline2D, a NurbsCurve2D ...)")
+        return pts
+
     def _blend(self, c1: float, c2: float, alpha: float) -> int:
         """The colour index of (1 - alpha) c1 + alpha c2: a new material blending the two when
         the table has both, else the nearer of the two indices' ramp."""
@@ -428,11 +438,13 @@ class Rich:
             prev = point
         self.gc = (p, h, width)
 
-    def _set_guide(self, raw, v, p, h, l):  # noqa: E741
-        pts = curve_points(raw[0]) if raw else None
+    def _set_guide(self, raw, v, p, h, l, i=-1):  # noqa: E741
+        pts = curve_points(raw[0], 3) if raw else None
         length = _arg(v, 1, math.nan)
         if pts is None or not length > 0:
             self.guide = None
+            if self.problem is None:
+                self.problem = (i, "SetGuide (and Sweep) take a curve and a length > 0 (a Polyline2D, a NurbsCurve2D ...)")
             return
         pts = pts - pts[0]
         steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
@@ -442,7 +454,8 @@ class Rich:
             return
         along = np.concatenate([[0.0], np.cumsum(steps)]) * (length / total)
         pts = pts * (length / total)
-        world = np.array(p) + np.outer(pts[:, 0], h) + np.outer(pts[:, 1], l)
+        u = _cross(h, l)  # a 3D guide's z goes along U
+        world = np.array(p) + np.outer(pts[:, 0], h) + np.outer(pts[:, 1], l) + np.outer(pts[:, 2], u)
         self.guide = {"along": along, "world": world, "s": 0.0}
 
     def _guided(self, st, i, d, draw, seg, order, seek, full, seg_base, polys):
@@ -478,8 +491,8 @@ class Rich:
         if not (length > 0 and dl > 0) or len(raw) < 2:
             return
         saved_contour, saved_guide = self.contour, self.guide
-        self._set_guide(raw[:1], [math.nan, length], tuple(st[0:3]), tuple(st[3:6]), tuple(st[6:9]))
-        self.contour = curve_points(raw[1])
+        self._set_guide(raw[:1], [math.nan, length], tuple(st[0:3]), tuple(st[3:6]), tuple(st[6:9]), i)
+        self.contour = self._contour(raw[1], i)
         radius = _arg(v, 4, st[12] / 2.0)
         variation = raw[5] if len(raw) > 5 and callable(raw[5]) else None
         count = max(1, min(int(math.ceil(length / dl - 1e-9)), 10_000))

@@ -310,6 +310,9 @@ def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> 
         from ._turtle_walk import walk as plain
 
         _, segs, orgs, poly, err = plain(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0, rich=rich)
+        if rich.problem is not None:
+            at, why = rich.problem
+            raise DerivationError(f"{why}: not {lsys.module_text(tree, int(leaves[at]))}")
     else:
         walk = _walker(len(acts))
         _, segs, orgs, poly, err = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)

@@ -251,3 +251,18 @@ def test_n_f_draws_pieces_on_the_guide_and_branches_inherit_it():
     g = lpy_skeleton("SetGuide(C0, 2) F(0.5) [F(1)] F(1)", head)
     # the branch goes on along its copy of the guide; the parent resumes where it was
     assert np.allclose(g.end, [[0, 0, 0.5], [0.5, 0, 1], [0.5, 0, 1]])
+
+
+def test_a_guide_or_contour_that_is_not_a_curve_is_refused():
+    from ramure.lsys.errors import DerivationError
+
+    with pytest.raises(DerivationError, match=r"SetGuide \(and Sweep\) take a curve.*not SetGuide\(3"):
+        lpy_skeleton("SetGuide(3, 2) F")
+    with pytest.raises(DerivationError, match="SetContour"):
+        lpy_skeleton("SetContour('round') F")
+
+
+def test_a_3d_guide_goes_along_u_too():
+    head = "from openalea.plantgl.all import Polyline\nC = Polyline([(0, 0, 0), (1, 0, 0), (1, 0, 1)])\n"
+    s = lpy_skeleton("SetGuide(C, 2) F F", head)
+    assert np.allclose(s.end, [[0, 0, 1], [0, 1, 1]])  # z of the curve along U = +y
