@@ -20,13 +20,20 @@ p:
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import pathlib
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING
 
 from ramure.errors import RamureError
+from ramure.io import read_regular
 from ramure.lsys import GrammarError, LSystem
+from ramure.lsys.grammar import read_grammar_file
+from ramure.lsys.lpy import LpyLSystem
+from ramure.lsys.regen import MAX_SESSION_BYTES
 
 if TYPE_CHECKING:
     from ramure.lsys.regen import Session
@@ -61,6 +68,26 @@ def text_with_constants(text: str, constants: Mapping[str, float], written: Mapp
         if m and m.group(2) in changed:
             lines[i] = _spaced(m, format_constant(changed[m.group(2)]))
     return "\n".join(lines)
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def lpy_text_with_constants(text: str, constants: Mapping[str, float], written: Mapping[str, float]) -> str:
+    """An L-Py model's ``text`` with each ``extern(name=number)`` whose value differs from
+    ``written`` rewritten to ``constants``' value (the first such ``extern`` of each name).
+
+    >>> lpy_text_with_constants("extern(k=2, angle = 30.5)\\nAxiom: A", {"k": 3.0, "angle": 30.5},
+    ...                         {"k": 2.0, "angle": 30.5})
+    'extern(k=3, angle = 30.5)\\nAxiom: A'
+    """
+    for name, value in constants.items():
+        if name not in written or float(value) == float(written[name]):
+            continue
+        pattern = re.compile(rf"(\bextern\s*\([^)]*?\b{re.escape(name)}\s*=\s*)({_NUMBER})")
+        new = format_constant(value)
+        text = pattern.sub(lambda m, new=new: m.group(1) + new, text, count=1)
+    return text
 
 
 def text_with_derivation(text: str, n: int, seed: int, written_n: int, written_seed: int) -> str:
@@ -105,6 +132,8 @@ def document_text(
     ``b`` is written as a number too if its expression would now give another value.
     """
     out = text_with_derivation(text, n, seed, lsystem.n, lsystem.seed)
+    if isinstance(lsystem, LpyLSystem):  # an L-Py model: its constants are extern(...) values
+        return lpy_text_with_constants(out, constants, lsystem.grammar.constants)
     written = dict(lsystem.constants)
     for _ in range(len(constants) + 1):
         new = text_with_constants(out, constants, written)
@@ -137,4 +166,126 @@ def check_round_trip(text: str, session: Session, filename: str | None = None) -
         )
 
 
-__all__ = ["check_round_trip", "document_text", "format_constant", "text_with_constants", "text_with_derivation"]
+# -- opening files: grammars, L-studio/cpfg, L-Py models, MTGs ------------------------------------
+
+#: Suffixes of the files the explorer opens as a plant: Ramure grammars, L-studio/cpfg files,
+#: L-Py models and OpenAlea MTGs.
+OPEN_SUFFIXES = (".lsys", ".l", ".lpy", ".mtg")
+#: Suffixes whose opening runs the file's code: an L-Py model is a Python program.
+CODE_SUFFIXES = (".lpy",)
+#: The largest session file :func:`session_runs_code` looks into (what :meth:`Session.load` reads).
+_SESSION_PEEK_BYTES = MAX_SESSION_BYTES
+
+
+def runs_code(path: str | os.PathLike) -> bool:
+    """Whether opening ``path`` runs code written in it (an L-Py ``.lpy`` model does)."""
+    return pathlib.Path(path).suffix.lower() in CODE_SUFFIXES
+
+
+def code_folder(path: str | os.PathLike) -> pathlib.Path:
+    """The folder a permission to run ``path``'s code is given for: its resolved parent."""
+    return pathlib.Path(path).absolute().parent.resolve()
+
+
+class CodeNotAllowed(RamureError):
+    """Opening ``path`` would run its code, and the caller did not allow it.
+
+    Front ends allow it after asking: the desktop once per folder (:class:`CodeTrust`), the
+    notebook with ``Explorer(path, run_code=True)``."""
+
+    def __init__(self, path: str | os.PathLike, how: str = "allow it only for files you would run as a script") -> None:
+        self.path = pathlib.Path(path)
+        self.folder = code_folder(path)
+        what = (
+            "is a session of an L-Py model: loading it runs the model's Python code"
+            if self.path.suffix.lower() == ".json"
+            else "is an L-Py model, a Python program: opening it runs its code"
+        )
+        super().__init__(f"{self.path.name} {what} with your rights; {how}")
+
+
+class CodeTrust:
+    """The folders whose L-Py models the user allowed to run: the desktop asks once per folder.
+
+    ``folders`` are what a settings file stored (entries that are not text are dropped).
+
+    >>> trust = CodeTrust()
+    >>> trust.allows("/models/tree.lpy"), trust.allows("/models/tree.lsys")
+    (False, True)
+    >>> trust.allow("/models/tree.lpy")
+    >>> trust.allows("/models/bush.lpy"), trust.allows("/elsewhere/bush.lpy")
+    (True, False)
+    """
+
+    def __init__(self, folders: Iterable[object] = ()) -> None:
+        self._folders = [f for f in folders if isinstance(f, str) and f]
+
+    @property
+    def folders(self) -> list[str]:
+        """The allowed folders (resolved paths), in the order they were allowed."""
+        return list(self._folders)
+
+    def allows(self, path: str | os.PathLike) -> bool:
+        """``path`` runs no code, or stands in a folder already allowed."""
+        return not runs_code(path) or str(code_folder(path)) in self._folders
+
+    def allow(self, path: str | os.PathLike) -> None:
+        """Allow the code of every file in ``path``'s folder (not its subfolders)."""
+        folder = str(code_folder(path))
+        if folder not in self._folders:
+            self._folders.append(folder)
+
+
+def open_document(path: str | os.PathLike, run_code: bool = False) -> tuple[str, LSystem, pathlib.Path | None]:
+    """The text, grammar and document path of the file ``path`` opened as a plant.
+
+    * ``.lsys`` and L-studio ``.l`` files: their text, read as grammars;
+    * L-Py ``.lpy`` models: their text, run as Python (:mod:`ramure.lsys.lpy`) — only with
+      ``run_code`` (else :class:`CodeNotAllowed`, before a byte of it is read);
+    * OpenAlea ``.mtg`` files (UTF-8 or Latin-1): the grammar whose axiom draws the MTG
+      (:mod:`ramure.lsys.mtg_plant`).  The MTG is imported: the document is that grammar,
+      with no path yet (Save asks where to write it), and the MTG file is never overwritten.
+    """
+    path = pathlib.Path(path)
+    if runs_code(path) and not run_code:
+        raise CodeNotAllowed(path)
+    if path.suffix.lower() == ".mtg":
+        from ramure.lsys.mtg_graph import read_mtg_graph
+        from ramure.lsys.mtg_plant import mtg_grammar_text
+
+        text = mtg_grammar_text(read_mtg_graph(path), where=str(path))
+        return text, LSystem.from_text(text), None
+    text = read_grammar_file(path)
+    return text, LSystem.from_text(text, filename=str(path)), path
+
+
+def session_runs_code(path: str | os.PathLike) -> bool:
+    """Whether replaying the session file ``path`` runs code: its grammar is an L-Py model.
+
+    A file that cannot be read or parsed gives False (loading it then says what is wrong)."""
+    try:
+        data = json.loads(read_regular(path, _SESSION_PEEK_BYTES, "session file").decode("utf-8"))
+    except (RamureError, OSError, ValueError, RecursionError):
+        return False
+    if not isinstance(data, dict):
+        return False
+    names = (data.get("reader"), data.get("filename"))
+    return any(isinstance(n, str) and runs_code("x" + n if n.startswith(".") else n) for n in names)
+
+
+__all__ = [
+    "CODE_SUFFIXES",
+    "OPEN_SUFFIXES",
+    "CodeNotAllowed",
+    "CodeTrust",
+    "code_folder",
+    "open_document",
+    "runs_code",
+    "session_runs_code",
+    "check_round_trip",
+    "lpy_text_with_constants",
+    "document_text",
+    "format_constant",
+    "text_with_constants",
+    "text_with_derivation",
+]

@@ -29,13 +29,19 @@ from numpy.typing import ArrayLike
 import ramure.io as atomic
 
 from ramure.lsys import GrammarError, LSystem, load_kernels
-from ramure.lsys.grammar import read_grammar_file
 from ramure.lsys.select import leaves_where
 from ramure.lsys.mincut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
 from ramure.lsys.tree import concat_ranges, sorted_unique
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
-from ramure.app.document import check_round_trip, document_text
+from ramure.app.document import (
+    OPEN_SUFFIXES,
+    CodeNotAllowed,
+    check_round_trip,
+    document_text,
+    open_document,
+    session_runs_code,
+)
 from ramure.app.history import Timeline, history_words
 from ramure.app.ids import not_a_leaf
 from ramure.lsys.combination import split as split_combination
@@ -62,7 +68,10 @@ class Explorer:
 
     ``source`` is a grammar file path, a shipped grammar's name (``"honda_sympodial"``, as
     :func:`ramure.load` takes) or grammar text; ``n`` and ``seed`` default to the grammar's
-    ``n:`` and ``#seed``.
+    ``n:`` and ``#seed``.  Files are opened by :func:`~ramure.app.document.open_document`:
+    ``.lsys``, L-studio ``.l``, OpenAlea ``.mtg`` and L-Py ``.lpy`` models; an ``.lpy`` is a
+    Python program and is run only with ``run_code=True`` (else
+    :class:`~ramure.app.document.CodeNotAllowed`).
 
     The document is the grammar text with the session's ``n``, seed and constants written
     in (:meth:`document_text`) plus the local edits of parts of the plant (regrows, prunes,
@@ -73,20 +82,12 @@ class Explorer:
     brings back a plant the user chose to leave by opening another file.
     """
 
-    def __init__(self, source: str | os.PathLike, n: int | None = None, seed: int | None = None) -> None:
-        given = (
-            pathlib.Path(source)
-            if isinstance(source, pathlib.Path)
-            or (
-                isinstance(source, str)
-                and "\n" not in source
-                and (source.endswith((".lsys", ".l")) or source in grammar_files.names())
-            )
-            else None
-        )
-        path = grammar_files.resolve(given) if given else None
-        self.path = path
-        self.text = read_grammar_file(path) if path else str(source)
+    def __init__(self, source: str | os.PathLike, n: int | None = None, seed: int | None = None, run_code: bool = False) -> None:
+        path = source_path(source)
+        if path is not None:
+            self.text, lsystem, self.path = open_document(path, run_code=run_code)
+        else:
+            self.text, lsystem, self.path = str(source), LSystem.from_text(str(source)), None
         self.error: GrammarError | None = None  # the last grammar error, shown by the front end
         self.rho = 0.5
         self.selection: list[int] = []
@@ -95,12 +96,7 @@ class Explorer:
         self.note: str | None = None  # why the last edit changed nothing on screen, if it did not
         self.version = 0
         self._cache: dict[str, Any] = {}
-        self.session = Session(
-            LSystem.from_text(self.text, filename=str(path) if path else None),
-            n=n,
-            seed=seed,
-            filename=str(path) if path else None,
-        )
+        self.session = Session(lsystem, n=n, seed=seed, filename=str(self.path) if self.path else None)
         self._drawn(self.derivation.skeleton())  # a turtle error (a polygon never closed) is raised here
         self.timeline = Timeline()  # the sessions a new text, n or seed replaced
         self.history_note = ""  # what the last Undo or Redo did ("Undid: a2 = 45"), "" after any other change
@@ -290,15 +286,17 @@ class Explorer:
             "constants": constants,
         }
 
-    def open_grammar(self, path: str | os.PathLike) -> None:
+    def open_grammar(self, path: str | os.PathLike, run_code: bool = False) -> None:
         """Open a grammar file: a fresh plant with the file's ``n``, seed and constants, a fresh
         history (Undo does not go back to the plant left) and a clean document.  On error
-        (RamureError) nothing changes."""
-        path = pathlib.Path(path)
-        text = read_grammar_file(path)  # a regular UTF-8 file only, never a device or a pipe
-        session = Session(LSystem.from_text(text, filename=str(path)), filename=str(path))
+        (RamureError) nothing changes.
+
+        Any file :func:`~ramure.app.document.open_document` opens: an ``.lpy`` only with
+        ``run_code`` (its code runs), an ``.mtg`` becomes an unsaved grammar that draws it."""
+        text, lsystem, document = open_document(path, run_code=run_code)  # regular files only
+        session = Session(lsystem, filename=str(document) if document else None)
         skeleton = session.derivation.skeleton()
-        self.text, self.path, self.session, self.error = text, path, session, None
+        self.text, self.path, self.session, self.error = text, document, session, None
         self._fresh(skeleton)
 
     def _fresh(self, skeleton=None) -> None:
@@ -756,13 +754,18 @@ class Explorer:
         self.mark_saved()
         return out
 
-    def load_session(self, path: str | os.PathLike, progress: Callable[[int, int], None] | None = None) -> None:
+    def load_session(
+        self, path: str | os.PathLike, progress: Callable[[int, int], None] | None = None, run_code: bool = False
+    ) -> None:
         """Load a session file (a fresh history, a clean document); on error the current plant is
         untouched.  ``progress(done, total)`` follows the replay of its edits (at most
         :data:`ramure.lsys.regen.MAX_SESSION_EDITS`).
 
         The loaded plant is drawn before it replaces the current one (as the constructor and
-        :meth:`set_text` do): a session whose plant cannot be drawn (``F(1e300)``) is refused."""
+        :meth:`set_text` do): a session whose plant cannot be drawn (``F(1e300)``) is refused.
+        A session of an L-Py model replays the model's code: only with ``run_code``."""
+        if not run_code and session_runs_code(path):
+            raise CodeNotAllowed(path)
         session = Session.load(path, progress=progress)
         skeleton = session.derivation.skeleton()  # a turtle error leaves the current plant as it is
         self.session, self.text = session, session.lsystem.text
@@ -775,6 +778,18 @@ class Explorer:
         from ramure.app.export import export_mesh
 
         return export_mesh(self.mesh, path)
+
+
+def source_path(source: str | os.PathLike) -> pathlib.Path | None:
+    """The file an :class:`Explorer` ``source`` names, or None when it is grammar text: a path
+    object, a one-line string ending in one of :data:`~ramure.app.document.OPEN_SUFFIXES`, or a
+    shipped grammar's name."""
+    if isinstance(source, pathlib.Path):
+        return grammar_files.resolve(source)
+    if isinstance(source, str) and "\n" not in source:
+        if source.lower().endswith(OPEN_SUFFIXES) or source in grammar_files.names():
+            return grammar_files.resolve(source)
+    return None
 
 
 def local_edits_message(count: int) -> str:

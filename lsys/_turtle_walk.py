@@ -25,6 +25,7 @@ DRAW, MOVE, TURN_LEFT, TURN_RIGHT, PITCH_DOWN, PITCH_UP, ROLL_LEFT, ROLL_RIGHT =
 TURN_AROUND, ROLL_HORIZONTAL, PUSH, POP, WIDTH, COLOR_UP, COLOR_DOWN, ORGAN = 9, 10, 11, 12, 13, 14, 15, 16
 POLY_START, POLY_END, POLY_VERTEX, POLY_MOVE, SPHERE, SURFACE, ELASTICITY = 17, 18, 19, 20, 21, 22, 23
 WIDTH_UP = 24
+RICH_FIRST = 25  # and after: ramure.lsys._turtle_rich (this walk only)
 
 # Error codes of walk's ``err`` output: (code, string position) of the first problem.
 ERR_CLOSE_WITHOUT_OPEN, ERR_VERTEX_OUTSIDE, ERR_UNCLOSED = 1, 2, 3
@@ -118,8 +119,12 @@ class _Polygons:
         )
 
 
-def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_base, pidx=None):
-    """:func:`ramure.lsys._turtle_kernel.walk` (same arguments, same results), in plain Python."""
+def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_base, pidx=None, rich=None):
+    """:func:`ramure.lsys._turtle_kernel.walk` (same arguments, same results), in plain Python.
+
+    ``rich`` (a :class:`ramure.lsys._turtle_rich.Rich`) walks the modules of several
+    parameters too (codes from :data:`~ramure.lsys._turtle_rich.RICH_FIRST`), which the
+    compiled walk leaves to this one."""
     acts = acts.tolist()
     nps = nps.tolist()
     par = (par if pidx is None else par[pidx]).tolist()
@@ -219,10 +224,14 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
                 continue
             saved = color if -_EXACT <= color <= _EXACT else _int64(float(color))  # the compiled rows are floats
             stack.append((px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, saved, order, last, te))
+            if rich is not None:  # the tropism direction @Tp sets, guides, contours
+                rich.push(tx, ty, tz)
             order += 1
         elif a == POP:
             if stack:
                 px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, color, order, last, te = stack.pop()
+                if rich is not None:
+                    tx, ty, tz = rich.pop()
             elif mode == REGION:
                 stop = i
                 break
@@ -261,6 +270,10 @@ def walk(acts, nps, par, begin, end, match, mode, state, angle, step, trop, seg_
             else:
                 size = p if k else 1.0
             org.append((i, px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, size, color))
+        elif a >= RICH_FIRST and rich is not None:
+            st = [px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, color, last, tx, ty, tz, te]
+            last = rich.step(a, i, st, seg, polys, order, seek, mode == FULL, seg_base, step, pstack)
+            px, py, pz, hx, hy, hz, lx, ly, lz, ux, uy, uz, width, color, _, tx, ty, tz, te = st
         i += 1
     if pstack and not seek and err[0] < 0:
         err = [ERR_UNCLOSED, polys.at[pstack[-1]]]

@@ -417,9 +417,11 @@ class _Translator:
     def at_module(self, number, text, original, i):
         m = re.match(r"@([A-Za-z#]+)", text[i:])
         name = "@" + (m.group(1) if m else "")
+        from ._turtle_rich import CPFG_CODES, SYMBOL_CODES
         from .turtle import SYMBOL_ACTIONS
 
-        known = sorted(s for s in SYMBOL_ACTIONS if s.startswith("@"))  # what the turtle draws today
+        drawn = [*SYMBOL_ACTIONS, *SYMBOL_CODES, *CPFG_CODES]
+        known = sorted({s for s in drawn if s.startswith("@")}, key=lambda s: (-len(s), s))  # what the turtle draws
         if any(name.startswith(k) and not name[len(k) : len(k) + 1].isalpha() for k in known) or any(
             text.startswith(k, i) for k in known
         ):
@@ -635,6 +637,7 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
     grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
+    grammar.dialect = "cpfg"  # the turtle reads @Gc, @Ge and @o as cpfg does
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         if rule.line in rule_blocks:
             rule.blocks = rule_blocks[rule.line]

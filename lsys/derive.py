@@ -130,6 +130,15 @@ class LSystem:
             return cls(parse_cpfg(text, filename))
         return cls(parse_grammar(text, filename))
 
+    def copy(self) -> LSystem:
+        """A fresh grammar of the same kind (an ``.lpy`` model stays one) with the file's constants."""
+        return LSystem(self.grammar)
+
+    def rule_counts(self) -> dict[str, int]:
+        """How many rules each section holds: production, decomposition, interpretation."""
+        g = self.grammar
+        return {"production": len(g.rules), "decomposition": len(g.decomposition), "interpretation": len(g.interpretation)}
+
     @classmethod
     def from_file(cls, path: str | os.PathLike) -> Self:
         """Load a grammar file; a shipped grammar's name (``"honda_sympodial"``) works too.

@@ -129,7 +129,7 @@ MAX_INCLUDE_DEPTH = 16
 #: A rule or axiom line ending with this mark continues on the next non-blank line.
 CONTINUATION = "..."
 #: The deepest ``#interpretation_depth`` / ``#decomposition_depth`` accepted.
-MAX_RULE_DEPTH = 64
+MAX_RULE_DEPTH = 1000  # cpfg files write maximum depth: 100 to 1000; rounds stop once no rule applies
 #: Section headers of the rules: their name (and cpfg/L-Py spellings) -> the rule set they open.
 SECTIONS = {
     "production": "production",
@@ -251,6 +251,9 @@ class Grammar:
     #: cpfg's statement blocks (``define``, ``start``, ``starteach``, ``endeach``, ``end`` ->
     #: :class:`ramure.lsys.cstatements.Block`), run by :meth:`ramure.lsys.LSystem.derive`.
     programs: dict = field(default_factory=dict)
+    #: The language the text was written in where the turtle reads a symbol its way: ``"cpfg"``
+    #: (``@Gc`` a cylinder's control point, ``@o(d)`` a diameter), else ``""``.
+    dialect: str = ""
 
     def symbol_id(self, name: str) -> int:
         return self.symbols.index(name)
@@ -680,8 +683,9 @@ class GrammarParser:
         key = tuple(self.modules)
         if self._token_key != key:
             names = sorted(key, key=len, reverse=True)
-            # @O (sphere), @Ts (elasticity) and ~name (a surface) are single modules
-            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), r"@Ts|@O|@v|\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
+            # @O (sphere), @Ts (elasticity), the other @ commands and ~name (a surface) are single modules
+            at_names = r"@Ts|@Tp|@Gs|@Gc|@Ge|@O|@o|@c|@v|@M|@R|@B|@#|@!"
+            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), at_names, r"\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
             self._token_key = key
         return self._token_re
 

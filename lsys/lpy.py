@@ -32,6 +32,7 @@ the modules (as in L-Py, which calls Python for each rule too).
 from __future__ import annotations
 
 import builtins
+import copy
 import inspect
 import math
 import random
@@ -186,6 +187,9 @@ class LpyLSystem(LSystem):
         self._records: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
         self.materials: dict[int, tuple] = {}
         rec = self._run({})
+        axiom = rec.ns.get("__axiom__")
+        #: the axiom as the file's run gave it (its code may compute it), as text
+        self.axiom_text = "".join(_module_text(m) for m in axiom) if isinstance(axiom, list) else ""
         n = int(rec.ns.get("__derivation_length__", 1))
         grammar = Grammar(text=text, constants=self._externs, axiom=[], rules=[], n=n, angle=60.0, step=1.0)
         grammar.filename, grammar.materials = filename, dict(self.materials)
@@ -293,6 +297,28 @@ class LpyLSystem(LSystem):
         if name in ("symbols", "_sym") and hasattr(self, name):
             return  # LSystem.__init__ would reset the symbols interned while running the file
         super().__setattr__(name, value)
+
+    def copy(self) -> LpyLSystem:
+        """This model with its own constants (the file is not run again: the compiled code is shared)."""
+        current = copy.copy(self)
+        current.constants = dict(self.grammar.constants)
+        return current
+
+    def turtle_arguments(self, tree: DerivationTree, nodes: np.ndarray) -> list[tuple]:
+        """The arguments of modules ``nodes`` of ``tree`` as the file gave them (vectors and
+        curves too), for the turtle's commands of several parameters."""
+        rec = self._records.get(tree)
+        if rec is None:
+            return [tuple(float(v) for v in tree.params[n, : tree.nparams[n]]) for n in nodes.tolist()]
+        return [tuple(rec.args[n]) for n in nodes.tolist()]
+
+    def rule_counts(self) -> dict[str, int]:
+        """How many rules each of the file's sections holds (``production:``, ``decomposition:``,
+        ``interpretation:``/``homomorphism:``)."""
+        counts = {"production": 0, "decomposition": 0, "interpretation": 0}
+        for rule in self.translation.rules:
+            counts[rule.section] += 1
+        return counts
 
     @property
     def has_context(self) -> bool:
@@ -818,6 +844,14 @@ _NO_NUMBERS = [math.nan] * TABLE_PARAMS
 def _numbers(args: tuple) -> list[float]:
     row = [float(a) if _is_number(a) else math.nan for a in args[:TABLE_PARAMS]]
     return row + [math.nan] * (TABLE_PARAMS - len(row))
+
+
+def _module_text(module: Any) -> str:
+    """``A(1,2)`` for the axiom entry ``('A', (1, 2))``."""
+    if isinstance(module, tuple) and len(module) == 2 and isinstance(module[1], tuple):
+        name, args = module
+        return f"{name}({','.join(_fmt(a) for a in args)})" if args else str(name)
+    return str(module)
 
 
 def _fmt(v: Any) -> str:

@@ -46,7 +46,7 @@ PREDEFINED = frozenset(
     PinpointRel SetHead EulerAngles Elasticity Tropism StartGC EndGC StartPolygon EndPolygon
     PointPolygon CpfgSurface GetPos GetHead GetLeft GetUp GetFrame TextureScale TextureUScale
     TextureVScale TextureTransformation TextureRotation ScreenProjection Circle Disc Surface
-    PglShape CustomGeometry Leaf Fruit Flower None""".split()
+    PglShape CustomGeometry Leaf Fruit Flower None nF""".split()
 )
 AT_NAMES = (
     "@Gs",

@@ -523,7 +523,7 @@ class Session:
         values set since (sliders, :meth:`set_constants`), so exploring or qualifying a
         session starts from the plant on screen.
         """
-        current = LSystem(self.lsystem.grammar)
+        current = self.lsystem.copy()
         current.constants.update(self.constants)
         return current
 
@@ -654,6 +654,7 @@ class Session:
             "version": SESSION_VERSION,
             "grammar": self.lsystem.text,
             "filename": self.filename,
+            "reader": _reader(self.lsystem, self.filename),
             "n": self.base_n,
             "seed": self.seed,
             "constants": self.base_constants,
@@ -696,7 +697,8 @@ class Session:
             raise RamureError(f"{where} is incomplete: missing {', '.join(missing)}")
         _check_session_fields(data, where)
         try:
-            ls = LSystem.from_text(data["grammar"], filename=_beside(folder, data.get("filename")))
+            name = _beside(folder, data.get("filename"), data.get("reader"))
+            ls = LSystem.from_text(data["grammar"], filename=name)
             session = cls(ls, n=data["n"], seed=data["seed"], constants=data["constants"], filename=data.get("filename"))
             for i, edit in enumerate(data["edits"]):
                 session._apply(_check_edit(edit, i, session))
@@ -731,12 +733,36 @@ class Session:
         return cls.from_dict(data, where=str(path), folder=path.absolute().parent, progress=progress)
 
 
-def _beside(folder, stored):
-    """Where a session's grammar is parsed from: its stored file name, in ``folder``."""
-    if folder is None:
-        return None
+def _beside(folder, stored, reader=None):
+    """Where a session's grammar is parsed from: its stored file name, in ``folder``.
+
+    ``reader`` (the suffix of the reader the grammar text needs, see :func:`_reader`) replaces
+    the name's suffix.  With no ``folder`` it is None (no file is read), except for an L-Py
+    model: a bare ``session.lpy`` then names its reader."""
     name = stored.replace("\\", "/").rsplit("/", 1)[-1] if stored else ""
+    if isinstance(reader, str) and reader in _READERS:
+        name = str(pathlib.PurePath(name or "session").with_suffix(reader))
+    elif folder is None:
+        return None
+    if folder is None:  # no file is read: an .lpy name only says which reader parses the text
+        return name if reader == ".lpy" else None
     return str(pathlib.Path(folder) / (name or "session.lsys"))
+
+
+#: The readers a session names: an L-Py model's Python, and a grammar an MTG became.
+_READERS = (".lpy", ".lsys")
+
+
+def _reader(lsystem, filename):
+    """The suffix whose reader parses ``lsystem``'s text when the file name would not say it:
+    ``.lpy`` for an L-Py model, ``.lsys`` for the grammar an MTG file became; else None."""
+    from .lpy import LpyLSystem
+
+    if isinstance(lsystem, LpyLSystem):
+        return ".lpy"
+    if filename and str(filename).lower().endswith(".mtg"):
+        return ".lsys"
+    return None
 
 
 def _check_params(params, lsystem):

@@ -9,7 +9,8 @@ regrown through its module's history leaf like any organ).
 
 Shipped (:data:`LIBRARY`): ``leaf`` (lanceolate, folded along the midrib and
 arched), ``petal`` (obovate, cupped), ``sepal`` (narrow, pointed, slightly
-cupped), ``disc`` (a flat round disc, for flower centres).
+cupped), ``disc`` (a flat round disc, for flower centres); ``l`` is ``leaf`` under the name
+cpfg and L-Py give their predefined leaf (``~l``).
 
 A grammar defines its own with ``#surface`` (its name may shadow a shipped one):
 
@@ -83,7 +84,7 @@ def _disc():
 
 
 #: The shipped surfaces: name -> function returning (points (m,3) in (h,l,u), triangles (t,3)).
-LIBRARY = {"leaf": _leaf, "petal": _petal, "sepal": _sepal, "disc": _disc}
+LIBRARY = {"leaf": _leaf, "petal": _petal, "sepal": _sepal, "disc": _disc, "l": _leaf}
 
 
 @cache

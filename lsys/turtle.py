@@ -27,8 +27,13 @@ organs          ``Leaf``, ``Fruit`` and every ``#organ`` module are recorded wit
 ``@O(r)``       a sphere of radius r (``@O`` alone: diameter = the width), an organ
 ``~name(s)``    a predefined surface scaled by s, an organ (:mod:`ramure.lsys.surfaces`)
 ``@Ts(e)``      the tropism elasticity for the rest of the branch (``[`` saves it):
-                bends toward ``#tropism``'s direction, else -z
+                bends toward ``#tropism``'s direction (``@Tp`` sets it), else -z
 ==============  ========================================================================
+
+The commands of several parameters or objects (``@M``, ``@R``, ``@o``, ``@c``, ``@B``,
+``@Tp``, ``@Gs``/``@Gc``/``@Ge``, L-Py's ``LineTo``, ``SetGuide``, ``Sweep`` ...) are walked by
+:mod:`ramure.lsys._turtle_rich` (its table gives their meanings); a string without them never
+pays for them.
 
 A segment's **base radius** is half the width when it is drawn, times
 ``#widthscale`` (default 1; ABOP widths are often in pixels, so a grammar may
@@ -60,6 +65,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._turtle_rich import CPFG_CODES, RICH_FIRST, SYMBOL_CODES, Rich, recode, symbol_codes
 from .actions import SYMBOL_ACTIONS, TurtleAction
 from .errors import DerivationError
 from .polygons import Polygons, check_walk, from_walk
@@ -220,10 +226,13 @@ def _settings(lsys):
 def action_table(lsys: LSystem) -> np.ndarray:
     """The :class:`TurtleAction` of every symbol of ``lsys`` (one more entry, 0, for padding)."""
     organs = set(lsys.grammar.organs)
+    rich = symbol_codes(getattr(lsys.grammar, "dialect", "") == "cpfg")
 
     def action(s):
         if s in SYMBOL_ACTIONS:
             return SYMBOL_ACTIONS[s]
+        if s in rich:
+            return rich[s]
         if s in organs:
             return TurtleAction.ORGAN
         return TurtleAction.SURFACE if s.startswith(SURFACE_PREFIX) and len(s) > 1 else TurtleAction.NONE
@@ -296,14 +305,47 @@ def interpret_string(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike) -> 
     acts, nps, par = module_arrays(lsys, tree, leaves)
     angle, step, trop = _settings(lsys)
     state = initial_state(lsys.grammar.width)
-    walk = _walker(len(acts))
-    _, segs, orgs, poly, err = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)
+    acts, rich = rich_modules(lsys, tree, leaves, acts)
+    if rich is not None:  # modules of several parameters: the plain walk (see ramure.lsys._turtle_rich)
+        from ._turtle_walk import walk as plain
+
+        _, segs, orgs, poly, err = plain(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0, rich=rich)
+        if rich.problem is not None:
+            at, why = rich.problem
+            raise DerivationError(f"{why}: not {lsys.module_text(tree, int(leaves[at]))}")
+    else:
+        walk = _walker(len(acts))
+        _, segs, orgs, poly, err = walk(acts, nps, par, 0, len(acts), _NO_MATCH, FULL, state, angle, step, trop, 0)
     check_walk(lsys, tree, leaves, poly, err)
     trace = Trace(leaves, acts, nps, segs[0], orgs[0], _balanced(acts), poly[0])
     skeleton = _skeleton(lsys, tree, leaves, segs, orgs, trace)
     _check_color(lsys, tree, leaves[poly[0]], poly[2])  # before from_walk makes colours int32
     skeleton.polygons = _checked(lsys, tree, from_walk(leaves, poly))
-    return _with_drawing(lsys, skeleton)
+    skeleton = _with_drawing(lsys, skeleton)
+    if rich is not None and rich.blends:  # the materials InterpolateColors blended
+        skeleton.extra["materials"] = {**skeleton.extra.get("materials", {}), **rich.blends}
+    return skeleton
+
+
+def rich_modules(lsys: LSystem, tree: DerivationTree, leaves: np.ndarray, acts: np.ndarray) -> tuple[np.ndarray, Rich | None]:
+    """The actions to walk and, when the string has modules of several parameters (``@M``,
+    ``LineTo``, ``SetGuide`` ...), their arguments (:class:`~ramure.lsys._turtle_rich.Rich`);
+    else ``acts`` unchanged and None (the fast walks)."""
+    if not (acts >= RICH_FIRST).any():
+        return acts, None
+    match, _ = _bracket_pairs(acts)
+    acts = recode(acts, match)
+    where = np.flatnonzero(acts >= RICH_FIRST)
+    nodes = leaves[where]
+    arguments = getattr(lsys, "turtle_arguments", None)
+    if arguments is not None:
+        values = arguments(tree, nodes)
+    else:
+        counts = tree.nparams[nodes].tolist()
+        rows = np.asarray(tree.params[nodes], float).tolist()
+        values = [tuple(row[:k]) for row, k in zip(rows, counts)]
+    cpfg = getattr(lsys.grammar, "dialect", "") == "cpfg"
+    return acts, Rich(dict(zip(where.tolist(), values)), cpfg, getattr(lsys.grammar, "materials", None))
 
 
 def _checked(lsys, tree, polygons):
@@ -516,7 +558,7 @@ def reinterpret(
     leaves = node_ids(leaves)
     old_spans = np.asarray(old_spans, np.int64).reshape(-1, 2)
     new_spans = np.asarray(new_spans, np.int64).reshape(-1, 2)
-    if trace is None or not trace.balanced or not len(old_spans):
+    if trace is None or not trace.balanced or not len(old_spans) or (trace.acts >= RICH_FIRST).any():
         return interpret_string(lsys, tree, leaves)
     order = np.argsort(old_spans[:, 0], kind="stable")
     old_spans, new_spans = old_spans[order], new_spans[order]
@@ -723,8 +765,8 @@ def undrawn_symbols(grammar: Grammar) -> list[str]:
     ``ramure check`` notes them (a misspelt or foreign turtle command is silently skipped).
 
     >>> from ramure.lsys.grammar import parse_grammar
-    >>> undrawn_symbols(parse_grammar("n: 1\\nw: A\\np:\\n A -> F[+A]Q@c(2)Leaf"))
-    ['@', 'Q', 'c']
+    >>> undrawn_symbols(parse_grammar("n: 1\\nw: A\\np:\\n A -> F[+A]Q@X(2)@c(2)Leaf"))
+    ['@', 'Q', 'X']
     """
     rules = [*grammar.rules, *grammar.decomposition, *grammar.interpretation]
     written = {m.symbol for m in grammar.axiom} | {m.symbol for r in rules for m in r.successor}
@@ -734,7 +776,7 @@ def undrawn_symbols(grammar: Grammar) -> list[str]:
     return sorted(
         s
         for s in written - rewritten - special - marks - set(grammar.organs)
-        if s not in SYMBOL_ACTIONS and not s.startswith(SURFACE_PREFIX)
+        if s not in SYMBOL_ACTIONS and s not in SYMBOL_CODES and s not in CPFG_CODES and not s.startswith(SURFACE_PREFIX)
     )
 
 
@@ -753,11 +795,19 @@ def turtle_states(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike, positi
     match, _ = _bracket_pairs(acts)
     angle, step, trop = _settings(lsys)
     walk = _walker(len(acts))
+    acts, rich = rich_modules(lsys, tree, leaves, acts)
     positions = np.asarray(positions, np.int64)
     out = np.zeros((len(positions), 12))
     for k, a in enumerate(positions.tolist()):
         state = initial_state(lsys.grammar.width)
-        walk(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0)
+        if rich is not None:
+            from ._turtle_walk import walk as plain
+
+            rich.gc = rich.guide = rich.contour = None
+            rich.stack = []
+            plain(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0, rich=rich)
+        else:
+            walk(acts, nps, par, 0, a, match, SEEK, state, angle, step, trop, 0)
         out[k] = state[:12]
     return out
 

@@ -134,9 +134,12 @@ def run_check(args: argparse.Namespace) -> int:
         return run_check_g3l(args)
     ls = LSystem.from_file(args.file)
     g = ls.grammar
+    counts = ls.rule_counts()
+    others = ", ".join(f"{v} {k}" for k, v in counts.items() if k != "production" and v)
+    axiom = "".join(str(m) for m in g.axiom) or getattr(ls, "axiom_text", "")
     print(
-        f"{args.file}: ok — {len(g.rules)} rule(s), {len(g.constants)} constant(s), n = {g.n}, "
-        f"seed = {ls.seed}, axiom {''.join(str(m) for m in g.axiom)}"
+        f"{args.file}: ok — {counts['production']} rule(s){f' (and {others})' if others else ''}, "
+        f"{len(ls.constants)} constant(s), n = {g.n}, seed = {ls.seed}, axiom {axiom}"
     )
     undrawn = undrawn_symbols(g)
     if undrawn:

@@ -16,6 +16,7 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from ramure.errors import RamureError, ValueRefused
 from ramure.io import write_with
+from ramure.app.document import CodeNotAllowed, CodeTrust, runs_code, session_runs_code
 from ramure.app.model import local_edits_message
 
 if TYPE_CHECKING:
@@ -24,7 +25,11 @@ if TYPE_CHECKING:
     from ramure.app.desktop.window import MainWindow
     from ramure.app.desktop.workers import Job
 
-GRAMMAR_FILTER = "L-system grammars (*.lsys *.l);;All files (*)"  # .l: L-studio/cpfg (ramure.lsys.cpfg)
+GRAMMAR_FILTER = (  # .l: L-studio/cpfg (ramure.lsys.cpfg); .lpy: L-Py models; .mtg: OpenAlea MTGs
+    "Plants (*.lsys *.l *.lpy *.mtg);;L-system grammars (*.lsys *.l);;L-Py models (*.lpy);;OpenAlea MTG (*.mtg);;All files (*)"
+)
+#: The settings key of the folders whose L-Py models the user allowed to run (asked once per folder).
+TRUSTED_KEY = "trusted_code_folders"
 SESSION_FILTER = "Ramure sessions (*.json);;All files (*)"
 EXPORT_FILTER = "glTF binary (*.glb);;glTF (*.gltf);;Wavefront OBJ (*.obj);;VTK PolyData (*.vtp *.vtk);;PLY (*.ply);;STL (*.stl)"
 PNG_FILTER = "PNG images (*.png)"
@@ -85,6 +90,43 @@ class FileActions:
         snap = self.controller.snapshot
         return str(pathlib.Path(snap.path).parent) if snap.path else str(pathlib.Path.cwd())
 
+    # -- code in files (L-Py models) ---------------------------------------------
+    def code_trust(self) -> CodeTrust:
+        """The folders whose L-Py models may run, as the settings remember them."""
+        try:
+            value = self.settings.value(TRUSTED_KEY, [])
+        except RuntimeError:  # a value Qt cannot convert: nothing is trusted
+            value = []
+        return CodeTrust([value] if isinstance(value, str) else value if isinstance(value, list) else [])
+
+    def may_run_code(self, path: str | os.PathLike) -> bool:
+        """Whether ``path`` (an L-Py model, or a session of one) may run its code: its folder was
+        allowed before, or the user allows it now (remembered for the folder).  A window that may
+        not ask refuses, on the status line."""
+        trust = self.code_trust()
+        folder_file = pathlib.Path(path).with_suffix(".lpy")  # a session: its own folder is asked about
+        if trust.allows(folder_file):
+            return True
+        refusal = CodeNotAllowed(path, how="open it only if you would run it as a script")
+        if not self.window.ask:
+            self.window.report_refused(str(refusal))
+            return False
+        answer = QMessageBox.question(
+            self.window,
+            "Run the model's code?",
+            f"{refusal}.\n\nRun L-Py models from this folder?\n{refusal.folder}\n\n"
+            "Ramure remembers the answer Yes for this folder.",
+            QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
+            QMessageBox.StandardButton.No,
+        )
+        if answer != QMessageBox.StandardButton.Yes:
+            self.window.status(f"Not opened: {pathlib.Path(path).name} was not allowed to run code")
+            return False
+        trust.allow(folder_file)
+        self.settings.setValue(TRUSTED_KEY, trust.folders)
+        self.settings.sync()
+        return True
+
     # -- grammar ----------------------------------------------------------------
     def open_grammar(self, path: str | os.PathLike | None = None) -> Job | None:
         """Load a grammar file as a fresh plant (after the unsaved-changes prompt)."""
@@ -95,7 +137,14 @@ class FileActions:
         if not path.is_file():
             self.window.report_refused(f"{path}: no such grammar file")
             return None
-        job = self.controller.load_grammar(path)
+        if runs_code(path) and not self.may_run_code(path):
+            return None
+
+        def run(ex):
+            ex.open_grammar(path, run_code=True)  # allowed just above, or not code at all
+            return ex.text
+
+        job = self.controller.submit("open grammar", run, key="text")
         self.window.pending_open = (job.id, path)
         self.remember(path)
         return job
@@ -165,7 +214,12 @@ class FileActions:
         path = self._path_to_open(path, "Load session", SESSION_FILTER)
         if path is None:
             return None
-        job = self.controller.load_session(path)
+        if session_runs_code(path) and not self.may_run_code(path):
+            return None
+        controller = self.controller
+        job = controller.submit(
+            "load session", lambda ex: ex.load_session(path, progress=controller.replaying.emit, run_code=True)
+        )
         self.remember(path)
         self.window.after_load = job.id
         return job

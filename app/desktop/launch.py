@@ -105,7 +105,8 @@ def main(argv: list[str] | None = None) -> int:
 
     on_first_compile(lambda _name: print(FIRST_COMPILE, file=sys.stderr, flush=True))
     try:
-        explorer = Explorer(path, n=args.n, seed=args.seed)
+        # a file named on the command line runs as `ramure derive` runs it: an .lpy's code too
+        explorer = Explorer(path, n=args.n, seed=args.seed, run_code=True)
     except (OSError, RamureError) as exc:
         print(f"ramure desktop: {exc}", file=sys.stderr)
         return 2

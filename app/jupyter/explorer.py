@@ -30,7 +30,6 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import ipywidgets as W
 
-import ramure.grammars as grammar_files
 from ramure.app.jupyter.architecture import ArchitectureBrowser
 from ramure.app.jupyter.wood import WoodTab
 from ramure.app.jupyter.details import DetailsTab
@@ -41,7 +40,9 @@ from ramure.app.jupyter.new_study import NewStudyPanel
 from ramure.app.jupyter.selection import SelectionPanel, TreeBrowser
 from ramure.app.jupyter.variants import VariantPanel, qualifier_summary
 from ramure.app.jupyter.view import VIEWS, PlantView, fruit_cut_png, fruit_png
+from ramure.app.document import CodeNotAllowed, runs_code, session_runs_code
 from ramure.app.model import Explorer as Model
+from ramure.app.model import source_path
 from ramure.app.model import finite_number as _number  # a finite number or a refusal naming it
 from ramure.app.model import warm_up_in_background
 from ramure.errors import GrammarError, RamureError, ValueRefused
@@ -66,20 +67,21 @@ NO_RECTANGLE = (
 )
 
 
-def _open_model(source, n, seed):
+def _open_model(source, n, seed, run_code=False):
     """The model for ``source``; a grammar that does not parse gives a one-segment
-    placeholder plant, the error and the text to show in the editor."""
-    is_path = isinstance(source, pathlib.Path) or (
-        isinstance(source, str) and "\n" not in source and (source.endswith(".lsys") or source in grammar_files.names())
-    )
-    if is_path:
-        source = grammar_files.resolve(source)
-    if is_path and not pathlib.Path(source).is_file():
+    placeholder plant, the error and the text to show in the editor.  An ``.lpy`` model is
+    refused (:class:`~ramure.app.document.CodeNotAllowed`) unless ``run_code``."""
+    path = source_path(source)
+    if path is not None:
+        source = path
+    if path is not None and not path.is_file():
         raise RamureError(f"{source}: no such grammar file")
+    if path is not None and runs_code(path) and not run_code:
+        raise CodeNotAllowed(path, how="pass run_code=True to Explorer(...) if you would run it as a script")
     try:
-        return Model(source, n=n, seed=seed), None
+        return Model(source, n=n, seed=seed, run_code=run_code), None
     except GrammarError as err:
-        text = pathlib.Path(source).read_text(encoding="utf-8") if is_path else str(source)
+        text = path.read_text(encoding="utf-8", errors="replace") if path is not None else str(source)
         model = Model(PLACEHOLDER, seed=seed)
         model.error = err
         return model, text
@@ -204,6 +206,12 @@ class EditPanel:
 class Explorer:
     """Jupyter explorer of a grammar file path or grammar text.
 
+    The file may be a Ramure ``.lsys``, an L-studio/cpfg ``.l``, an OpenAlea ``.mtg`` (its
+    plant becomes an unsaved grammar) or an L-Py ``.lpy`` model.  **An ``.lpy`` is a Python
+    program**: opening it runs its code, so it is refused unless ``run_code=True`` says you
+    would run it as a script (docs/security.md); :meth:`load_session` takes the same
+    argument for a session of an L-Py model.
+
     ``view``: ``"auto"`` (interactive trame view when installed, else a
     picture), ``"static"`` or a trame mode.  ``size``: the 3D view in pixels.
     ``cache``: let variant sweeps use the on-disk cache.
@@ -217,8 +225,9 @@ class Explorer:
         view: str = "auto",
         size: tuple[int, int] = (480, 480),
         cache: bool = True,
+        run_code: bool = False,
     ) -> None:
-        self.model, text = _open_model(source, n, seed)
+        self.model, text = _open_model(source, n, seed, run_code)
         self.error: str | None = None
         self.message = MessageLine()
         self.title = W.HTML()
@@ -668,20 +677,27 @@ class Explorer:
 
     # -- files -----------------------------------------------------------------------------
     def save(self, path: str | os.PathLike) -> pathlib.Path | None:
-        """Save by suffix: ``.json`` session, ``.lsys`` grammar, else the mesh (``.vtp``, ``.obj``, …)."""
+        """Save by suffix: ``.json`` session, ``.lsys`` (``.lpy``) grammar, else the mesh (``.vtp``, ``.obj``, …)."""
         path = pathlib.Path(path)
         suffix = path.suffix.lower()
         if suffix == ".json":
             return self.run(lambda: self.model.save_session(path), note=f"session saved to {path}")
-        if suffix == ".lsys":
+        if suffix in (".lsys", ".lpy"):
             return self.run(lambda: self.model.save_grammar(path), note=f"grammar saved to {path}")
         return self.run(lambda: self.model.export(path), note=f"mesh exported to {path}")
 
-    def load_session(self, path: str | os.PathLike) -> None:
+    def load_session(self, path: str | os.PathLike, run_code: bool = False) -> None:
         """Open a session file (the grammar and its local edits) as a fresh document; the message line
-        follows the replay of its edits, and says why a file is refused.
+        follows the replay of its edits, and says why a file is refused.  A session of an L-Py
+        model replays its Python code: only with ``run_code=True``.
         """
-        self.run(lambda: self.model.load_session(path, progress=self._replaying))
+
+        def load() -> None:
+            if not run_code and session_runs_code(path):
+                raise CodeNotAllowed(path, how="pass run_code=True to load_session(...) if you would run it as a script")
+            self.model.load_session(path, progress=self._replaying, run_code=True)
+
+        self.run(load)
 
     def _replaying(self, done: int, total: int) -> None:
         if done == 1 or done == total or done % 50 == 0:  # a few updates, not one per edit

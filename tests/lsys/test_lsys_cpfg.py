@@ -83,7 +83,7 @@ def test_cpfg_keywords_and_functions():
         ("axiom: A\nA --> F?E(1)\n", 2, 8, "talks to an environment program"),
         ("axiom: A\nA --> [?(1)]\n", 2, 8, "sub-L-system call"),
         ("axiom: A\nA --> F?(1,2)\n", 2, 8, "sub-L-system"),
-        ("axiom: A\nA --> F@Gs\n", 2, 8, "@Gs (generalised cylinders)"),
+        ("axiom: A\nA --> F@Gr(1)\n", 2, 8, "@Gr (generalised cylinders)"),
         ("axiom: A(1)\nA(x) : {y=x;} y>1 {z=1;} {w=2;} --> B\n", 2, 8, "cannot read the blocks"),
         ("start: {n=0;\naxiom: A\n", 1, 1, "'start:' block's '{' is never closed"),
         ("Lsystem: 1\naxiom: A\nendlsystem\nLsystem: 2\n", 4, 1, "sub-L-systems"),
@@ -210,3 +210,10 @@ def test_a_condition_over_several_lines_and_cpfg_functions_in_defines():
         "endlsystem\n"
     )
     assert LSystem.from_text(text, filename="heads.l").derive().to_string() == "F(80)A(-1)"
+
+
+def test_a_deep_maximum_depth_is_a_cap():
+    """cpfg files write ``maximum depth: 500``: rounds stop once no rule applies."""
+    text = "derivation length: 1\naxiom: A\nA --> B\ndecomposition\nmaximum depth: 500\nB --> C\nC --> F\nendlsystem\n"
+    d = LSystem.from_text(text, filename="deep.l").derive()
+    assert d.to_string() == "F"

@@ -342,3 +342,17 @@ def test_ramure_derive_reads_an_lpy_file(tmp_path, capsys):
     path.write_text("Axiom: A\nproduction:\nA >> x([B]) --> D\nendlsystem\n")
     assert main(["derive", str(path)]) == 2
     assert "line 3" in capsys.readouterr().err
+
+
+def test_ramure_check_counts_an_lpy_files_rules(tmp_path, capsys):
+    from ramure.app.cli import main
+
+    path = tmp_path / "m.lpy"
+    path.write_text(
+        "extern(k=2)\nAxiom: A(1)B\nderivation length: 2\nproduction:\nA(x) --> F(x)A(x+1)\nB --> C\n"
+        "decomposition:\nC --> F\ninterpretation:\nA --> F\nendlsystem\n"
+    )
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "ok — 2 rule(s) (and 1 decomposition, 1 interpretation), 1 constant(s), n = 2" in out
+    assert out.split("\n")[0].endswith("axiom A(1)B")

@@ -239,7 +239,7 @@ def test_an_interpretation_rules_mistake_names_its_line():
 @pytest.mark.parametrize(
     "line, column, fragment",
     [
-        ("#interpretation_depth 0", 23, "from 1 to 64"),
+        ("#interpretation_depth 0", 23, "from 1 to 1000"),
         ("#decomposition_depth 2.5", 22, "whole number"),
         ("maximum depth: 2", 1, "not a rule"),
     ],
