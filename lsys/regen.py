@@ -223,7 +223,7 @@ def regenerate(
     roots = collapse_nested(tree, roots)
     extra, rule_constants = split_combination(params)  # params: ramure.lsys.combination
     constants = {**(constants or {}), **extra}
-    unknown = (set(constants) | {k for v in (rule_constants or {}).values() for k in v}) - set(ls.constants)
+    unknown = (set(constants) | {k for v in (rule_constants or {}).values() for k in v}) - set(ls.constants) - set(ls.hidden)
     if unknown:
         raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}")
     consts = check_constants({**derivation.constants, **(constants or {})})
@@ -757,7 +757,7 @@ def _check_values(values, lsystem, where: str = ""):
     """Constant overrides: known names, finite numbers (returned as floats)."""
     if not isinstance(values, dict):
         raise ValueRefused(f"constant values must be a mapping of name to number, not {values!r}")
-    unknown = set(values) - set(lsystem.constants)
+    unknown = set(values) - set(lsystem.constants) - set(getattr(lsystem, "hidden", {}))
     if unknown:
         raise ValueRefused(f"unknown constant(s){where}: {', '.join(sorted(map(str, unknown)))}")
     check_constants(values)

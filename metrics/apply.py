@@ -347,8 +347,8 @@ def _try_level(session, model, sweep, key, selection, rho, level, order, tries, 
         for try_seed in _seeds(session, seed):
             if budget is not None and len(out) >= budget:
                 return out, None, None
-            regen = session.regrow(selection, rho=rho, seed=try_seed, params=params, min_ascend=level)
-            after = _measure(session, regen.roots)[2]
+            regen = _regrow(session, selection, rho, try_seed, params, level)
+            after = _measure(session, _regrown(session, regen, rho))[2]
             own, dominant, rival, moves = _judge(model, key, before, after, antonym, floor)
             t = _Try(
                 level,
@@ -454,7 +454,7 @@ def _same_cut(session):
         del session.plan
 
 
-def _unreachable(model, key):
+def _unreachable(model, key, base=None):
     """Why no variant of this grammar can be applied for ``key`` (None when one can).
 
     A variant can be applied when it moves ``key`` forward more than any
@@ -469,7 +469,9 @@ def _unreachable(model, key):
     if not np.any(forward):
         if key in DEFINITIONS and model.sources_.get(key) != "region":
             deltas = model.deltas_[model.usable_]
-            return f"{key} {DEFINITIONS[key].sentence()}, but in this grammar {lacks(key, deltas)}"
+            why = lacks(key, deltas, base)
+            where = "" if why.startswith("the plant") else "in this grammar "
+            return f"{key} {DEFINITIONS[key].sentence()}, but {where}{why}"
         return f"no variant of this grammar moves {key}'s metrics ({own}) its way: the varied constants do not reach them"
     return None
 
@@ -479,7 +481,10 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
     if key == "normal" or key not in model.names_:
         return _apply_first(session, model, sweep, key, selection, rho, seed, source)
     varied = list(getattr(sweep, "names_", []))
-    unreachable = _unreachable(model, key)
+    base = None
+    if hasattr(sweep, "base_shape_metrics_"):
+        base = np.concatenate([sweep.base_metrics_, sweep.base_shape_metrics_])
+    unreachable = _unreachable(model, key, base)
     if unreachable:
         if not selection:  # no constant can: one derivation step more or less may
             stepped, tries_n = _try_steps(session, model, sweep, key, source, 0, tries)
@@ -580,7 +585,7 @@ def _best_held(session, key, source, tried, selection, rho):
         regen = session.set_steps(t.params["n"], t.params["combination"])
     else:
         m0, s0, before = _measure(session, _roots(session, selection, rho, t.level))
-        regen = session.regrow(selection, rho=rho, seed=t.seed, params=t.params, min_ascend=t.level)
+        regen = _regrow(session, selection, rho, t.seed, t.params, t.level)
     reason = f"no try moved {key} more than every other qualifier: this one keeps {key}'s definition but moves {t.rival} more"
     return _result(session, key, source, t, regen, m0, s0, before, len(tried), t.level, True, reason)
 
@@ -650,8 +655,23 @@ def _level_reason(key, level, tries, steps_left=None) -> str:
     return f"ascension {level}: none of {len(tries)} tries changed the part regrown"
 
 
+def _regrow(session, selection, rho, seed, params, level):
+    """Apply a candidate: regrow the selection's cut (:meth:`Session.regrow`); on the whole
+    plant, a combination for every rule (``rule`` None: an axiom literal, :mod:`ramure.lsys.hidden`)
+    derives the plant again (:meth:`Session.set_steps` at the same ``n``), since a regrowth
+    keeps the axiom's values."""
+    if not selection and params.get("rule", 0) is None:
+        return session.set_steps(session.n, params)
+    return session.regrow(selection, rho=rho, seed=seed, params=params, min_ascend=level)
+
+
+def _regrown(session, regen, rho):
+    """The roots to measure after ``regen``: its own, or the whole plant's after a re-derivation."""
+    return regen.roots if len(regen.roots) else _roots(session, [], rho)
+
+
 def _result(session, key, source, t, regen, m0, s0, before, tried, level, improved, reason=None, suggestion=None):
-    m1, s1, after = _measure(session, regen.roots if len(regen.roots) else _roots(session, [], 0.5))
+    m1, s1, after = _measure(session, _regrown(session, regen, 0.5))
     improved = improved and t.score > 0
     return QualifierResult(
         key,
@@ -763,8 +783,8 @@ def _apply_first(session, model, sweep, key, selection, rho, seed, source):
     m0, s0, before = _measure(session, roots)
     variant = int(order[0])
     params = sweep.combination(variant)
-    regen = session.regrow(selection, rho=rho, seed=seed, params=params)
-    m1, s1, after = _measure(session, regen.roots)
+    regen = _regrow(session, selection, rho, seed, params, 1)
+    m1, s1, after = _measure(session, _regrown(session, regen, rho))
     return QualifierResult(
         key,
         variant,
