@@ -40,6 +40,7 @@ from .errors import DerivationError, GrammarError, ValueRefused
 from .cstatements import RuleBlocks, cpfg_blocks
 from .expr import compile_expression, evaluate_constant, seeded_generator
 from .grammar import Grammar, parse_grammar, read_grammar_file
+from .hidden import Hidden, grammar_hidden, literal_keys, probabilities
 from .branch_cut import cut_string
 from .combination import split as split_combination
 from .decompose import decompose
@@ -108,6 +109,9 @@ class LSystem:
             + [len(m.args) for r in [*grammar.rules, *grammar.decomposition] for m in r.successor]
             + [1]
         )
+        #: Hidden constants (:mod:`ramure.lsys.hidden`): literals and rule probabilities a
+        #: combination may set like ``#define`` names; without an override, the grammar's values.
+        self.hidden: dict[str, Hidden] = grammar_hidden(grammar)
         self._rules = [self._compile(r) for r in grammar.rules]
         self._groups = self._make_groups()
         self.bracket_ids = (self._sym.get("["), self._sym.get("]"))
@@ -187,7 +191,11 @@ class LSystem:
             for j, name in enumerate(pattern.params):
                 sources[name] = (k, j)
         cond = compile_expression(rule.condition, formals, consts) if rule.condition else None
-        succ_args = [[compile_expression(a, formals, consts) for a in m.args] for m in rule.successor]
+        hidden = getattr(self, "hidden", {})
+        succ_args = [
+            [compile_expression(a, formals, consts, literal_keys(hidden, rule.index, j, k)) for k, a in enumerate(m.args)]
+            for j, m in enumerate(rule.successor)
+        ]
         blocks = None
         if rule.blocks is not None:  # cpfg: run module by module (cstatements.RuleBlocks)
             pre, post = rule.blocks
@@ -257,9 +265,9 @@ class LSystem:
         seed = self.seed if seed is None else check_seed(seed)
         consts = {**self.constants, **(constants or {})}
         check_constants(consts)
-        unknown = set(constants or {}) - set(self.constants)
+        unknown = set(constants or {}) - set(self.constants) - set(self.hidden)
         for overrides in (rule_constants or {}).values():
-            unknown |= set(overrides) - set(self.constants)
+            unknown |= set(overrides) - set(self.constants) - set(self.hidden)
         if unknown:
             raise GrammarError(
                 f"unknown constant(s): {', '.join(sorted(unknown))}; the grammar defines {', '.join(self.constants) or 'none'}"
@@ -273,7 +281,8 @@ class LSystem:
         values = np.full((len(axiom), tree.max_params), np.nan)
         for i, spec in enumerate(axiom):
             for j, arg in enumerate(spec.args):
-                values[i, j] = evaluate_constant(arg, consts)
+                key = f"~w{i}.{j}"  # an axiom literal a combination overrides (ramure.lsys.hidden)
+                values[i, j] = consts[key] if key in consts else evaluate_constant(arg, consts)
         ids = tree.append(
             [self._sym[m.symbol] for m in axiom], [len(m.args) for m in axiom], values, -1, 0, -1, np.arange(len(axiom))
         )
@@ -406,7 +415,13 @@ class LSystem:
 
     def _choose(self, group, cand, ctx, chosen, tree, string, rng, constants, rule_constants) -> None:
         if group.cumulative is not None:
-            draws = np.searchsorted(group.cumulative, rng.random(cand.size), side="right")
+            cumulative = group.cumulative
+            probs = [self.grammar.rules[r].probability for r in group.rules]
+            changed = probabilities(group.rules, probs, rule_constants)
+            if changed is not None:  # a variant's rule probability (ramure.lsys.hidden)
+                cumulative = np.cumsum(changed)
+                cumulative[-1] = 1.0 + 1e-12
+            draws = np.searchsorted(cumulative, rng.random(cand.size), side="right")
             subsets = [(r, draws == k) for k, r in enumerate(group.rules)]
         else:
             subsets = [(r, None) for r in group.rules]

@@ -433,8 +433,10 @@ def uses_random(node: Node | Expression) -> bool:
     return any(uses_random(a) for a in tree.args)
 
 
-def _source(node, params, constants, src):
+def _source(node, params, constants, src, lift=None):
     if node.kind == "num":
+        if lift and node.offset in lift:  # a hidden constant (ramure.lsys.hidden): overridable
+            return f"C.get({lift[node.offset]!r}, {node.value!r})"
         return repr(node.value)
     if node.kind == "name":
         if node.value in params:
@@ -446,7 +448,7 @@ def _source(node, params, constants, src):
         if node.value not in constants:
             raise src.error(f"unknown constant '{node.value}'", node.offset)
         return f"C[{node.value!r}]"
-    parts = [_source(a, params, constants, src) for a in node.args]
+    parts = [_source(a, params, constants, src, lift) for a in node.args]
     if node.kind == "unary":
         return {"-": "(-{0})", "+": "(+{0})", "!": "_f(np.logical_not({0}))"}[node.value].format(*parts)
     if node.kind == "binary":
@@ -455,16 +457,18 @@ def _source(node, params, constants, src):
 
 
 def compile_expression(
-    expr: Expression, params: Iterable[str], constants: Iterable[str]
+    expr: Expression, params: Iterable[str], constants: Iterable[str], lift: Mapping[int, str] | None = None
 ) -> Callable[[dict, dict, np.random.Generator, int], np.ndarray]:
     """Compile an expression tree to ``f(V, C, R, n) -> float array of length n``.
 
     ``V`` maps formal parameter names to arrays, ``C`` constant names to
     floats, ``R`` is a :class:`numpy.random.Generator` (only read by
     ``uniform``/``normal``), ``n`` the number of modules evaluated.
-    Unknown names raise :class:`GrammarError` here, at compile time.
+    Unknown names raise :class:`GrammarError` here, at compile time.  ``lift``
+    (``{offset: key}``) makes the literals at those offsets read ``C[key]`` when ``C``
+    has it (:mod:`ramure.lsys.hidden`).
     """
-    body = _source(expr.node, set(params), set(constants), expr.src)
+    body = _source(expr.node, set(params), set(constants), expr.src, lift)
     code = f"lambda V, C, R, n: _out({body}, n)"
     return eval(code, {"np": np, "_out": _broadcast, "_f": _as_float, "_alea": _alea})  # noqa: S307 - generated from our own AST
 

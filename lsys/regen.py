@@ -207,8 +207,13 @@ def regenerate(
     constants: Mapping[str, float] | None = None,
     params: dict | None = None,
     prune: bool = False,
+    steps: int = 0,
 ) -> Change:
     """Regrow (or, with ``prune=True``, cut back) the subtrees under ``roots`` in place.
+
+    ``steps`` (-1, 0 or 1) regrows the subtrees one derivation step less or more than the
+    plant's ``n``: the part alone grows on (or stops a step early), the rest of the plant
+    stays as it is (a qualifier's n +- 1 on a selection, issue 35).
 
     Roots whose leaf spans touch and that were made at the same step are
     re-derived together as one string, so context rules see each other's
@@ -223,11 +228,15 @@ def regenerate(
     roots = collapse_nested(tree, roots)
     extra, rule_constants = split_combination(params)  # params: ramure.lsys.combination
     constants = {**(constants or {}), **extra}
-    unknown = (set(constants) | {k for v in (rule_constants or {}).values() for k in v}) - set(ls.constants)
+    unknown = (set(constants) | {k for v in (rule_constants or {}).values() for k in v}) - set(ls.constants) - set(ls.hidden)
     if unknown:
         raise GrammarError(f"unknown constant(s): {', '.join(sorted(unknown))}")
     consts = check_constants({**derivation.constants, **(constants or {})})
     check_seed(seed)
+    if isinstance(steps, bool) or steps not in (-1, 0, 1):
+        raise ValueRefused(f"a regrowth's extra steps are -1, 0 or 1, not {steps!r}")
+    if steps < 0 and not prune and len(roots) and int(tree.step[roots].max()) >= derivation.n - 1:
+        raise ValueRefused("one step less leaves a part made in the last step nothing to regrow")
     first, last = tree.string_spans(roots)
     order = np.argsort(first)
     roots, first, last = roots[order], first[order], last[order]
@@ -238,7 +247,7 @@ def regenerate(
     rng = seeded_generator(seed)
     sums = tree.detach_sums()  # kept: updated under the roots once the edit is done
     try:
-        pieces, starts, ends = _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune)
+        pieces, starts, ends = _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune, steps)
     except BaseException:
         # Loses nothing: forget the half-grown nodes and point the roots at their old children.
         tree.truncate(first_new)
@@ -285,7 +294,7 @@ def _edit_spans(starts, ends, pieces):
     return old, np.stack([first, first + grown - 1], axis=1)
 
 
-def _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune):
+def _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_constants, prune, steps=0):
     """Re-derive each run of touching roots; returns (pieces, span starts, span ends)."""
     tree, ls = derivation.tree, derivation.lsystem
     pieces, starts, ends = [], [], []
@@ -296,7 +305,7 @@ def _rederive(derivation, roots, first, last, old_leaves, rng, consts, rule_cons
             left = old_leaves[max(0, first[run[0]] - window) : first[run[0]]]
             right = old_leaves[last[run[-1]] + 1 : last[run[-1]] + 1 + window]
             string = np.concatenate([left, string, right])
-            for step in range(int(tree.step[roots[run[0]]]) + 1, derivation.n + 1):
+            for step in range(int(tree.step[roots[run[0]]]) + 1, derivation.n + 1 + steps):
                 frozen = np.zeros(len(string), bool)
                 frozen[: len(left)] = frozen[len(string) - len(right) :] = True
                 string = ls.rewrite(tree, string, step, rng, consts, rule_constants, frozen)
@@ -393,6 +402,7 @@ class Session:
         min_ascend: int = 1,
         ascend_levels: int | None = None,
         refuse_empty: bool = False,
+        steps: int = 0,
     ) -> RegenResult:
         """Regrow the selection's cut subtrees (or the whole plant if ``selection`` is empty).
 
@@ -401,7 +411,11 @@ class Session:
         parameter combination ``{"rule": r or None, "constants": {...}}``.
         ``refuse_empty``: a selection whose cut regrows nothing (every selected leaf
         stays) is refused with :class:`ValueRefused` instead of making an empty edit.
+        ``steps`` 1 (or -1) regrows the cut's part one derivation step more (less) than the
+        plant's ``n``; the rest of the plant is unchanged (:func:`regenerate`).
         """
+        if isinstance(steps, bool) or steps not in (-1, 0, 1):
+            raise ValueRefused(f"a regrowth's extra steps are -1, 0 or 1, not {steps!r}")
         edit = {
             "op": "regrow",
             "selection": [int(x) for x in selection],
@@ -413,6 +427,8 @@ class Session:
             "ascend": ascend_levels,
             "whole_branches": False,
         }
+        if steps:  # recorded only when used, so older readers see the edits they know
+            edit["steps"] = int(steps)
         return self._apply(edit, refuse_empty)
 
     def prune(
@@ -588,6 +604,7 @@ class Session:
             constants=edit["constants"],
             params=edit["params"],
             prune=edit["op"] == "prune",
+            steps=edit.get("steps", 0),
         )
         return RegenResult(
             edit["op"],
@@ -783,7 +800,7 @@ def _check_values(values, lsystem, where: str = ""):
     """Constant overrides: known names, finite numbers (returned as floats)."""
     if not isinstance(values, dict):
         raise ValueRefused(f"constant values must be a mapping of name to number, not {values!r}")
-    unknown = set(values) - set(lsystem.constants)
+    unknown = set(values) - set(lsystem.constants) - set(getattr(lsystem, "hidden", {}))
     if unknown:
         raise ValueRefused(f"unknown constant(s){where}: {', '.join(sorted(map(str, unknown)))}")
     check_constants(values)
@@ -908,6 +925,8 @@ def _check_edit(edit, i, session):
         raise RamureError(f"{what}: 'ascend' must be null or a whole number >= 0")
     if not isinstance(edit.get("whole_branches", True), bool):
         raise RamureError(f"{what}: 'whole_branches' must be true or false")
+    if edit.get("steps", 0) not in (-1, 0, 1) or isinstance(edit.get("steps"), bool):
+        raise RamureError(f"{what}: 'steps' must be -1, 0 or 1")
     try:
         constants = _check_values(edit["constants"], session.lsystem)
         params = _check_params(edit.get("params"), session.lsystem)

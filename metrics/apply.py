@@ -94,7 +94,7 @@ from ramure.errors import RamureError
 from ramure.lsys.mincut import check_rho, collapse_nested
 from ramure.lsys.regen import MAX_STEPS
 
-from .definitions import DEFINITIONS, definition_holds, lacks, metric_changes, metric_value
+from .definitions import DEFINITIONS, definition_holds, lacks, metric_change, metric_changes, metric_value
 from .plant import PlantMetrics, plant_metrics
 from .qualifiers import QUALIFIER_METRICS, VOCABULARY, QualifierModel, all_deltas, canonical_name
 from .shape import ShapeMetrics, plant_shape
@@ -278,7 +278,8 @@ class _Try:
     rival: str | None
     moves: dict
     changed: bool
-    kind: str = "cut"  # "cut": the selection's cut at ``level``; "whole": the plant, climbing; "steps": n +- 1
+    kind: str = "cut"  # "cut": the selection's cut at ``level``; "whole": the plant, climbing; "steps": n +- 1;
+    # "part-steps": the selection's part one derivation step more or less
 
 
 def _snap(values, floor):
@@ -347,8 +348,8 @@ def _try_level(session, model, sweep, key, selection, rho, level, order, tries, 
         for try_seed in _seeds(session, seed):
             if budget is not None and len(out) >= budget:
                 return out, None, None
-            regen = session.regrow(selection, rho=rho, seed=try_seed, params=params, min_ascend=level)
-            after = _measure(session, regen.roots)[2]
+            regen = _regrow(session, selection, rho, try_seed, params, level)
+            after = _measure(session, _regrown(session, regen, rho))[2]
             own, dominant, rival, moves = _judge(model, key, before, after, antonym, floor)
             t = _Try(
                 level,
@@ -405,7 +406,13 @@ def apply_qualifier(
     n_before = session.n
     with _same_cut(session):
         out = _apply(session, canonical_name(name), model, sweep, [int(x) for x in selection], rho, tries, seed, max_climb)
-    if "n" in out.params:  # a derivation count, alone or with a sweep variant
+    if "steps" in out.params:  # the selection's part, one derivation step more or less
+        n_part = n_before + out.params["steps"]
+        out.changed = {"steps": out.params["steps"], "text": f"n {n_before} -> {n_part} inside the selection"}
+        if out.variant >= 0 and hasattr(sweep, "describe"):
+            also = sweep.describe(out.variant)
+            out.changed = {**also, **out.changed, "text": f"{out.changed['text']}; {also['text']}"}
+    elif "n" in out.params:  # a derivation count, alone or with a sweep variant
         out.changed = {"n": [n_before, out.params["n"]], "text": f"n {n_before} -> {out.params['n']}"}
         if out.variant >= 0 and hasattr(sweep, "describe"):
             also = sweep.describe(out.variant)
@@ -454,7 +461,7 @@ def _same_cut(session):
         del session.plan
 
 
-def _unreachable(model, key):
+def _unreachable(model, key, base=None):
     """Why no variant of this grammar can be applied for ``key`` (None when one can).
 
     A variant can be applied when it moves ``key`` forward more than any
@@ -469,7 +476,9 @@ def _unreachable(model, key):
     if not np.any(forward):
         if key in DEFINITIONS and model.sources_.get(key) != "region":
             deltas = model.deltas_[model.usable_]
-            return f"{key} {DEFINITIONS[key].sentence()}, but in this grammar {lacks(key, deltas)}"
+            why = lacks(key, deltas, base)
+            where = "" if why.startswith("the plant") else "in this grammar "
+            return f"{key} {DEFINITIONS[key].sentence()}, but {where}{why}"
         return f"no variant of this grammar moves {key}'s metrics ({own}) its way: the varied constants do not reach them"
     return None
 
@@ -479,14 +488,20 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
     if key == "normal" or key not in model.names_:
         return _apply_first(session, model, sweep, key, selection, rho, seed, source)
     varied = list(getattr(sweep, "names_", []))
-    unreachable = _unreachable(model, key)
-    if unreachable:
-        if not selection:  # no constant can: one derivation step more or less may
+    base = None
+    if hasattr(sweep, "base_shape_metrics_"):
+        base = np.concatenate([sweep.base_metrics_, sweep.base_shape_metrics_])
+    unreachable = _unreachable(model, key, base)
+    if unreachable:  # no constant can: one derivation step more or less may
+        if not selection:
             stepped, tries_n = _try_steps(session, model, sweep, key, source, 0, tries)
-            kept = stepped or _best_held(session, key, source, tries_n, selection, rho)
-            if kept is not None:
-                return kept
-            unreachable += f"; {_steps_reason(key, tries_n)}"
+        else:  # inside the selection only: the rest of the plant stays as it is
+            stepped, tries_n = _try_part_steps(session, model, sweep, key, source, selection, rho, seed, tries, 0)
+        kept = stepped or _best_held(session, key, source, tries_n, selection, rho)
+        if kept is not None:
+            return kept
+        if tries_n or not selection:
+            unreachable += f"; {_steps_reason(key, tries_n, bool(selection))}"
         return _not_improved(session, model, key, source, selection, rho, [], [unreachable], varied)
     climb = 0 if max_climb is None else max(int(max_climb), 0)
     top = 1 + climb
@@ -539,6 +554,13 @@ def _apply(session, key, model, sweep, selection, rho, tries, seed, max_climb):
             crowded += 1
         if wrong_way >= MAX_WRONG_WAY_LEVELS or crowded >= MAX_CROWDED_LEVELS or len(tried) >= BUDGET:
             break
+    if selection and len(tried) < BUDGET:  # one derivation step more or less, inside the selection
+        stepped, tries_p = _try_part_steps(session, model, sweep, key, source, selection, rho, seed, tries, len(tried))
+        if stepped is not None:
+            return stepped
+        tried += tries_p
+        if tries_p:
+            reasons.append(_steps_reason(key, tries_p, True))
     whole = _roots(session, [], rho)
     tried_whole = last_roots is not None and np.array_equal(last_roots, whole)
     if selection and climb >= session.n and not tried_whole:
@@ -578,9 +600,12 @@ def _best_held(session, key, source, tried, selection, rho):
     if t.kind == "steps":
         m0, s0, before = _measure(session, _roots(session, [], rho))
         regen = session.set_steps(t.params["n"], t.params["combination"])
+    elif t.kind == "part-steps":
+        m0, s0, before = _measure(session, _roots(session, selection, rho, 1))
+        regen = session.regrow(selection, rho=rho, seed=t.seed, params=t.params["combination"], steps=t.params["steps"])
     else:
         m0, s0, before = _measure(session, _roots(session, selection, rho, t.level))
-        regen = session.regrow(selection, rho=rho, seed=t.seed, params=t.params, min_ascend=t.level)
+        regen = _regrow(session, selection, rho, t.seed, t.params, t.level)
     reason = f"no try moved {key} more than every other qualifier: this one keeps {key}'s definition but moves {t.rival} more"
     return _result(session, key, source, t, regen, m0, s0, before, len(tried), t.level, True, reason)
 
@@ -616,17 +641,74 @@ def _try_steps(session, model, sweep, key, source, tried_before=0, tries=3):
     return None, out
 
 
-def _steps_reason(key, tries) -> str:
-    """Why neither n + 1 nor n - 1 was kept (one clause)."""
+def _steps_reason(key, tries, part=False) -> str:
+    """Why neither n + 1 nor n - 1 was kept (one clause); ``part``: inside the selection."""
     if not tries:
         return "no other derivation count could be derived"
+    where = " inside the selection" if part else ""
+    if part:  # one step more (+1) or less (-1) of the selection's part
+        tries = [_Try(**{**t.__dict__, "params": {"n": f"{t.params['steps']:+d}"}}) for t in tries]
     forward = [t for t in tries if t.score > 0]
     if forward:
         best = max(forward, key=lambda t: t.score)
-        return f"n {best.params['n']} moves {key} but moves {best.rival} more"
+        return f"n {best.params['n']}{where} moves {key} but moves {best.rival} more"
     what = DEFINITIONS[key].sentence() if key in DEFINITIONS else f"move {key}"
     ns = [str(n) for n in sorted({t.params["n"] for t in tries}, reverse=True)]
-    return f"neither n {' nor n '.join(ns)} {what}" if len(ns) > 1 else f"n {ns[0]} also fails: nothing there {what}"
+    if len(ns) > 1:
+        return f"neither n {' nor n '.join(ns)}{where} {what}"
+    return f"n {ns[0]}{where} also fails: nothing there {what}"
+
+
+def _step_partners(model, key, rules, count) -> list[int]:
+    """Variants to try with one derivation step more or less: the best that move ``key``
+    forward, then the best that move its definition's other terms their way (for "dense", a
+    step adds the segments and a variant packs them: branches per unit of box volume up)."""
+    q = model.index(key)
+    order = model.rank(key, rules=rules)
+    best = [int(v) for v in order if model.scores_[v, q] > 0][:count]
+    terms = DEFINITIONS[key].terms()[1:] if key in DEFINITIONS else ()
+    if terms:
+        usable = np.flatnonzero(model.usable_ & (np.isin(model.rules_, sorted(rules)) if model.rules_ is not None else True))
+        push = sum(sign * np.nan_to_num(metric_change(m, model.deltas_[usable])) for m, sign in terms)
+        ahead = usable[np.argsort(-push, kind="stable")][np.sort(-push) < 0]
+        best += [int(v) for v in ahead if int(v) not in best][:count]
+    return best
+
+
+def _try_part_steps(session, model, sweep, key, source, selection, rho, seed, tries=3, tried_before=0):
+    """A selection's part regrown one derivation step more, then one less, than the plant
+    (:meth:`Session.regrow` with ``steps``; the rest of the plant unchanged), alone and with the
+    best candidates of the rules it regrows that move ``key`` forward on the whole plant (a step
+    adds or removes segments: "dense" or "sparse" for a part).  Keeps the first try that moves
+    ``key`` forward more than any other qualifier.  Returns ``(result or None, tries)``."""
+    roots = _roots(session, selection, rho, 1)
+    if not len(roots):
+        return None, []
+    antonym = VOCABULARY[key].antonym if key in VOCABULARY else None
+    m0, s0, before = _measure(session, roots)
+    rules = reading_rules(session.lsystem, active_rules(session.tree, roots), list(getattr(sweep, "names_", [])))
+    best = _step_partners(model, key, rules, max(min(int(tries), 3), 0))
+    out: list[_Try] = []
+    for extra in (1, -1):
+        for variant in [-1, *best]:
+            combo = sweep.combination(variant) if variant >= 0 else None
+            for try_seed in _seeds(session, seed):
+                if len(out) >= BUDGET:
+                    return None, out
+                try:
+                    regen = session.regrow(selection, rho=rho, seed=try_seed, params=combo, steps=extra)
+                except RamureError:  # one step less of a part made in the last step, or too large
+                    break
+                after = _measure(session, regen.roots)[2]
+                own, dominant, rival, moves = _judge(model, key, before, after, antonym, noise_floor(sweep))
+                changed = not np.allclose(after, before, rtol=1e-9, atol=1e-12)
+                params = {"steps": extra, "combination": combo}
+                t = _Try(1, variant, try_seed, params, own, dominant, rival, moves, changed, "part-steps")
+                out.append(t)
+                if own > 0 and dominant:
+                    return _result(session, key, source, t, regen, m0, s0, before, tried_before + len(out), 1, True), out
+                session.undo()
+    return None, out
 
 
 def _level_reason(key, level, tries, steps_left=None) -> str:
@@ -650,8 +732,23 @@ def _level_reason(key, level, tries, steps_left=None) -> str:
     return f"ascension {level}: none of {len(tries)} tries changed the part regrown"
 
 
+def _regrow(session, selection, rho, seed, params, level):
+    """Apply a candidate: regrow the selection's cut (:meth:`Session.regrow`); on the whole
+    plant, a combination for every rule (``rule`` None: an axiom literal, :mod:`ramure.lsys.hidden`)
+    derives the plant again (:meth:`Session.set_steps` at the same ``n``), since a regrowth
+    keeps the axiom's values."""
+    if not selection and params.get("rule", 0) is None:
+        return session.set_steps(session.n, params)
+    return session.regrow(selection, rho=rho, seed=seed, params=params, min_ascend=level)
+
+
+def _regrown(session, regen, rho):
+    """The roots to measure after ``regen``: its own, or the whole plant's after a re-derivation."""
+    return regen.roots if len(regen.roots) else _roots(session, [], rho)
+
+
 def _result(session, key, source, t, regen, m0, s0, before, tried, level, improved, reason=None, suggestion=None):
-    m1, s1, after = _measure(session, regen.roots if len(regen.roots) else _roots(session, [], 0.5))
+    m1, s1, after = _measure(session, _regrown(session, regen, 0.5))
     improved = improved and t.score > 0
     return QualifierResult(
         key,
@@ -763,8 +860,8 @@ def _apply_first(session, model, sweep, key, selection, rho, seed, source):
     m0, s0, before = _measure(session, roots)
     variant = int(order[0])
     params = sweep.combination(variant)
-    regen = session.regrow(selection, rho=rho, seed=seed, params=params)
-    m1, s1, after = _measure(session, regen.roots)
+    regen = _regrow(session, selection, rho, seed, params, 1)
+    m1, s1, after = _measure(session, _regrown(session, regen, rho))
     return QualifierResult(
         key,
         variant,

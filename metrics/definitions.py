@@ -193,17 +193,24 @@ def definition_holds(name: str, deltas: ArrayLike) -> np.ndarray:
     return ok
 
 
-def lacks(name: str, deltas: ArrayLike) -> str:
+def lacks(name: str, deltas: ArrayLike, base: ArrayLike | None = None) -> str:
     """Why no change in ``deltas`` (N, 15) satisfies ``name``'s definition, in the user's words.
 
     ``"no constant or rule changes the branch angles to the vertical"`` when no variant moves
-    a term at all; otherwise which way the variants move it.
+    a term at all; otherwise which way the variants move it.  With the plant's fifteen
+    ``base`` values, a term that must fall from 0 says so: ``"the plant's one-sidedness around
+    the trunk is already 0"`` (a symmetric plant cannot be made more symmetric).
+
+    >>> lacks("symmetric", np.zeros((2, 15)), base=np.r_[np.ones(14), 0.0])
+    "the plant's one-sidedness around the trunk is already 0 (nothing can lower it)"
     """
     deltas = np.asarray(deltas, float).reshape(-1, len(BASE_METRICS))
     deltas = deltas[np.all(np.isfinite(deltas), axis=1)]
     for metric, sign in DEFINITIONS[name].terms():
         change = metric_change(metric, deltas)
         label = LABELS[metric]
+        if base is not None and sign < 0 and abs(float(metric_value(metric, base))) <= 1e-9:
+            return f"the plant's {label} is already 0 (nothing can lower it)"
         if not np.any(np.abs(change) > TOLERANCE):
             return f"no constant or rule changes the {label}"
         if not np.any(sign * change > TOLERANCE):

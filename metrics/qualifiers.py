@@ -481,7 +481,9 @@ def _score_weights(directions, z) -> np.ndarray:
     variants ``z`` (N,15), so every qualifier's score varies by 1 over the sweep."""
     ok = np.all(np.isfinite(z), axis=1)
     spread = (z[ok] @ directions.T).std(axis=0) if ok.any() else np.zeros(len(directions))
-    return np.divide(directions, spread[:, None], out=np.zeros_like(directions), where=spread[:, None] > 0)
+    # a qualifier no variant moves keeps its direction at unit spread: its scores over the sweep
+    # are all 0 anyway, and a change measured elsewhere (n +- 1) still scores
+    return directions / np.where(spread > 0, spread, 1.0)[:, None]
 
 
 class QualifierModel(ParamsMixin):
@@ -528,7 +530,10 @@ class QualifierModel(ParamsMixin):
         if not 0 <= refine <= 1:
             raise ValueRefused(f"refine must be in [0, 1], not {self.refine!r}")
         deltas = _deltas_of(sweep)
-        self.scale_ = metric_scale(deltas)
+        # a metric no variant moves gets unit scale (1 % = 1): its sweep values are all 0 whatever
+        # the scale, and a change measured elsewhere (one derivation step more) still counts
+        scale = metric_scale(deltas)
+        self.scale_ = np.where(scale > 0, scale, 1.0)
         dirs = {n: q.vector() for n, q in VOCABULARY.items() if q.direction is not None}
         sources = dict.fromkeys(dirs, "vocabulary")
         for name, weights in (self.directions or {}).items():

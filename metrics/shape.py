@@ -155,20 +155,26 @@ def plant_shape(skeleton: Skeleton, leaf_ids: Iterable[int] | None = None, segme
     )
 
 
+#: A shape metric's base value this close to 0 (metres, degrees) is rounding noise.
+ZERO = 1e-9
+
+
 def shape_deltas(variant: ArrayLike, base: ArrayLike) -> np.ndarray:
     """Change of shape metrics, rows of ``variant`` (..., k) against ``base`` (k,).
 
     ``100 (v / b - 1)`` like :func:`~ramure.metrics.plant.metric_deltas` where
     ``b != 0``; where the base value is 0 (e.g. a plant whose branches all
     leave at one angle has ``angle_spread`` 0) the plain difference ``v - b``,
-    so a change away from 0 still counts.  Non-finite values stay NaN.
+    so a change away from 0 still counts.  A base value within :data:`ZERO` of 0 is
+    rounding noise (a symmetric plant's asymmetry of 1e-17 m) and counts as 0: a
+    change of 1e-17 is no move, not -50 %.  Non-finite values stay NaN.
 
-    >>> shape_deltas(np.array([[2.0, 3.0]]), np.array([1.0, 0.0])).tolist()
-    [[100.0, 3.0]]
+    >>> shape_deltas(np.array([[2.0, 3.0, 0.5]]), np.array([1.0, 0.0, 1e-17])).tolist()
+    [[100.0, 3.0, 0.5]]
     """
     variant = np.asarray(variant, float)
     base = np.asarray(base, float)
-    ok = base != 0
+    ok = np.abs(base) > ZERO
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = 100.0 * (variant - base) / np.where(ok, np.abs(base), 1.0)
     out = np.where(ok, rel, variant - base)

@@ -139,7 +139,8 @@ def evaluate_variants(
     failed = np.zeros(len(rules), bool)
     for i, (rule, vals) in enumerate(zip(np.asarray(rules).tolist(), np.asarray(values).tolist())):
         try:
-            out[i] = measure(ls, n, seed, constants, combination(rule, dict(zip(names, vals))))
+            # rule -1: an axiom literal (ramure.lsys.hidden), read when the plant is derived again
+            out[i] = measure(ls, n, seed, constants, combination(None if rule < 0 else rule, dict(zip(names, vals))))
         except (RamureError, ArithmeticError, ValueError, MemoryError):
             failed[i] = True
     return out, failed
@@ -185,6 +186,11 @@ class VariantSweep(ParamsMixin):
     wide
         a larger step (e.g. 0.25 for +-25 %) added one constant at a time, per rule, to the
         grid (None: none); see :func:`ramure.metrics.variants.variant_design`.
+    hidden
+        also vary the grammar's hidden constants (:mod:`ramure.lsys.hidden`): its numeric
+        literals and rule probabilities, one at a time (and the literals one rule writes alike,
+        together), at ``+-beta`` and ``+-wide``; a grammar without ``#define`` is then swept too.
+        Default False (the thesis's variants; the PCA cloud of an exploration stays as it was).
     mp_context
         multiprocessing start method for the local pool (default ``"fork"`` on Linux;
         a GUI running the sweep from a background thread should pass ``"forkserver"``,
@@ -197,6 +203,7 @@ class VariantSweep(ParamsMixin):
     :mod:`ramure.metrics.shape` metrics, for qualifiers; the PCA uses the ten only),
     ``changes_`` (N,) (the variant changes a constant its rule reads: not the base plant),
     ``n_variants_``, ``n_derived_`` (derivations run; 0 from the cache), ``n_rules_``, ``n_``,
+    ``hidden_`` (the hidden constants varied: ``{key: Hidden}``),
     ``grammar_text_``, ``grammar_file_`` (None for text), ``base_constants_``,
     ``seconds_``, ``from_cache_``, ``cache_path_``.
     """
@@ -217,6 +224,7 @@ class VariantSweep(ParamsMixin):
         mp_context: str | None = None,
         connect_timeout: float = 10.0,
         wide: float | None = None,
+        hidden: bool = False,
     ) -> None:
         self.n = n
         self.seed = seed
@@ -232,6 +240,7 @@ class VariantSweep(ParamsMixin):
         self.mp_context = mp_context
         self.connect_timeout = connect_timeout
         self.wide = wide
+        self.hidden = hidden
 
     @property
     def _event(self):
@@ -276,6 +285,7 @@ class VariantSweep(ParamsMixin):
             "mode": design.mode,
             "n_samples": self.n_samples,
             "wide": self.wide,
+            "hidden": bool(self.hidden),
         }
 
     # -- fitting -----------------------------------------------------------
@@ -290,8 +300,11 @@ class VariantSweep(ParamsMixin):
         self._event.clear()
         ls = as_lsystem(grammar)
         n, jobs = self._check(ls)
+        if not isinstance(self.hidden, (bool, np.bool_)):
+            raise ValueRefused(f"hidden must be True or False, not {self.hidden!r}")
+        knobs = {k: (h.value, h.rule) for k, h in ls.hidden.items()} if self.hidden else None
         design = variant_design(
-            ls.constants, len(ls.grammar.rules), self.constants, self.beta, self.mode, self.n_samples, self.seed, self.wide
+            ls.constants, len(ls.grammar.rules), self.constants, self.beta, self.mode, self.n_samples, self.seed, self.wide, knobs
         )
         base_constants = dict(ls.constants)
         path = None
@@ -317,6 +330,7 @@ class VariantSweep(ParamsMixin):
         self.n_ = n
         self.n_rules_ = len(ls.grammar.rules)
         self.rule_names_ = [str(r.pred) for r in ls.grammar.rules]
+        self.hidden_ = {k: ls.hidden[k] for k in design.hidden}
         self.design_ = design
         self.names_ = design.names
         self.rules_ = design.rules
@@ -448,7 +462,9 @@ class VariantSweep(ParamsMixin):
         """What variant ``i`` changed against the grammar: ``{"rule", "predecessor", "constants":
         {name: [before, after]}, "text"}`` (see :func:`ramure.metrics.variants.describe_variant`)."""
         self.combination(i)  # validates i
-        return describe_variant(self.design_, int(i), self.base_constants_, getattr(self, "rule_names_", ()))
+        return describe_variant(
+            self.design_, int(i), self.base_constants_, getattr(self, "rule_names_", ()), getattr(self, "hidden_", {})
+        )
 
     def derive(self, i: int, n: int | None = None) -> Derivation:
         """Derive variant ``i`` again (e.g. to render it); ``n`` defaults to the sweep's."""

@@ -24,6 +24,7 @@ JSON and read back derives exactly the same plant.
 
 from __future__ import annotations
 
+import collections
 import itertools
 import warnings
 from dataclasses import dataclass
@@ -39,6 +40,7 @@ from ramure.lsys.combination import combination
 
 if TYPE_CHECKING:
     from ramure.lsys import LSystem
+    from ramure.lsys.hidden import Hidden
 
 MODES = ("grid", "lhs", "sobol")
 MAX_VARIANTS = 200_000
@@ -55,17 +57,29 @@ class VariantDesign:
     values: np.ndarray
     beta: float
     mode: str
+    #: The hidden constants among ``names`` (:mod:`ramure.lsys.hidden`): set only where changed.
+    hidden: tuple = ()
 
     def __len__(self) -> int:
         return len(self.rules)
 
     def combination(self, i: int) -> dict:
-        """Variant ``i`` as a parameter combination ``{"rule", "constants"}`` (:mod:`ramure.lsys.combination`)."""
-        return combination(self.rules[i], dict(zip(self.names, self.values[i].tolist())))
+        """Variant ``i`` as a parameter combination ``{"rule", "constants"}`` (:mod:`ramure.lsys.combination`);
+        rule -1 (an axiom literal) is ``None``: every rule, the axiom evaluated again."""
+        hidden = set(self.hidden)
+        values = {
+            k: v
+            for k, v, level in zip(self.names, self.values[i].tolist(), self.levels[i].tolist())
+            if k not in hidden or level != 0
+        }
+        rule = int(self.rules[i])
+        return combination(None if rule < 0 else rule, values)
 
 
 def rule_constant_names(lsystem: LSystem) -> list[set[str]]:
-    """For each rule, the set of constants its condition and successor expressions read.
+    """For each rule, the set of constants its condition and successor expressions read,
+    with its hidden constants (:mod:`ramure.lsys.hidden`: its literals, its probability);
+    then one more set: the axiom's hidden constants (read when the plant is derived again).
 
     A name that is also one of the rule's formal parameters means the parameter.
     """
@@ -77,6 +91,10 @@ def rule_constant_names(lsystem: LSystem) -> list[set[str]]:
         exprs += [arg for module in rule.successor for arg in module.args]
         formals = set(rule.formals)
         out.append({name for e in exprs for name, _ in names_used(e) if name not in formals and name in lsystem.constants})
+    for key, knob in getattr(lsystem, "hidden", {}).items():
+        if knob.rule is not None and knob.rule < len(out):
+            out[knob.rule].add(key)
+    out.append({key for key, knob in getattr(lsystem, "hidden", {}).items() if knob.rule is None})
     return out
 
 
@@ -96,8 +114,11 @@ def distinct_variants(design: VariantDesign, used: Sequence[Collection[str]]) ->
     >>> len(reps), int((inv == -1).sum())   # rule 0: 2 plants + base; rule 1: 8 + base
     (10, 4)
     """
-    mask = np.array([[name in used[r] for name in design.names] for r in range(int(design.rules.max()) + 1)])
-    relevant = mask[design.rules]
+    rows = max(int(design.rules.max()) + 1, len(used))
+    mask = np.array([[r < len(used) and name in used[r] for name in design.names] for r in range(rows)])
+    mask = mask.reshape(rows, len(design.names))
+    # rule -1 (axiom literals) reads the last entry of ``used`` (see rule_constant_names)
+    relevant = mask[np.where(design.rules < 0, len(used) - 1, design.rules)]
     levels = np.where(relevant, design.levels, 0.0)
     base = ~np.any(levels != 0, axis=1)
     keys = np.column_stack([design.rules, levels])
@@ -167,12 +188,23 @@ def variant_design(
     n_samples: int | None = None,
     seed: int = 0,
     wide: float | None = None,
+    hidden: Mapping[str, tuple[float, int | None]] | None = None,
 ) -> VariantDesign:
     """All variants of a grammar with ``constants`` (dict) and ``n_rules`` rules (see module doc).
 
     ``wide`` (e.g. 0.25) adds, per rule, ``2 m`` variants that change one constant at a
     time by ``+-wide``: a larger step for grammars where ``+-beta`` moves too little
     (levels ``+-wide / beta``, beyond [-1, 1]).
+
+    ``hidden`` (``{key: (value, rule or None)}``, :mod:`ramure.lsys.hidden`) adds, after
+    the constants' variants, each hidden constant alone at ``+-beta`` (and ``+-wide``) on
+    its own rule (rule -1 for the axiom's), then each set of literals of one rule that
+    write the same number, all together: the grammar's ``w*0.6`` four times becomes one knob
+    as well as four.  A grammar with hidden constants needs no ``#define``.
+
+    >>> d = variant_design({}, n_rules=2, hidden={"~0.1.0.0": (30.0, 0), "~0.3.0.0": (30.0, 0), "~w0.0": (0.06, None)})
+    >>> len(d), d.rules.tolist(), d.combination(6)
+    (8, [0, 0, 0, 0, -1, -1, 0, 0], {'rule': 0, 'constants': {'~0.1.0.0': 27.0, '~0.3.0.0': 27.0}})
 
     >>> d = variant_design({"r1": 0.9, "r2": 0.7}, n_rules=1, wide=0.25)
     >>> len(d), d.values[-4:].tolist()
@@ -183,9 +215,15 @@ def variant_design(
         raise RamureError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
     if int(n_rules) < 1:
         raise RamureError("the grammar has no production rule to vary")
-    names = choose_constants(constants, names)
+    hidden = dict(hidden or {})
+    if hidden and names is None and not any(v != 0 for v in constants.values()):
+        names = ()  # only hidden constants to vary
+    else:
+        names = choose_constants(constants, names)
     m = len(names)
-    if mode == "grid":
+    if m == 0:
+        levels = np.zeros((0, 0))
+    elif mode == "grid":
         per_rule = 3**m
         if per_rule * n_rules > MAX_VARIANTS:
             raise ValueRefused(
@@ -203,12 +241,40 @@ def variant_design(
         if int(n_samples) * n_rules > MAX_VARIANTS:
             raise ValueRefused(f"{n_samples} samples x {n_rules} rules exceeds {MAX_VARIANTS:,} variants")
         levels = 2.0 * _unit_samples(mode, m, int(n_samples), seed) - 1.0
+    steps = [-1.0, 1.0]
     if wide is not None:
         levels = np.vstack([levels, _one_at_a_time(m, check_beta(wide) / beta)])
-    base = np.array([constants[k] for k in names], float)
-    values = round12(base * (1.0 + beta * levels))
+        steps += [-check_beta(wide) / beta, check_beta(wide) / beta]
     rules = np.repeat(np.arange(n_rules), len(levels))
-    return VariantDesign(names, rules, np.tile(levels, (n_rules, 1)), np.tile(values, (n_rules, 1)), beta, mode)
+    levels = np.tile(levels, (n_rules, 1))
+    keys = tuple(hidden)
+    extra_rules, extra_levels = _hidden_rows(hidden, keys, steps)
+    all_levels = np.zeros((len(levels) + len(extra_levels), m + len(keys)))
+    all_levels[: len(levels), :m] = levels
+    all_levels[len(levels) :, m:] = extra_levels
+    base = np.array([constants[k] for k in names] + [hidden[k][0] for k in keys], float)
+    values = round12(base * (1.0 + beta * all_levels))
+    all_rules = np.concatenate([rules, extra_rules]).astype(np.int64)
+    return VariantDesign(tuple(names) + keys, all_rules, all_levels, values, beta, mode, keys)
+
+
+def _hidden_rows(hidden, keys, steps):
+    """Rules (k,) and levels (k, h) of the hidden constants' variants: each alone, then each
+    set of one rule's literals writing the same number together (see :func:`variant_design`)."""
+    sets = [[j] for j in range(len(keys))]
+    same: dict[tuple, list[int]] = {}
+    for j, key in enumerate(keys):
+        value, rule = hidden[key]
+        if not key.startswith(("~p", "~w")):  # literals of one rule writing the same number
+            same.setdefault((rule, float(value)), []).append(j)
+    sets += [js for js in same.values() if len(js) > 1]
+    rules, levels = [], np.zeros((len(sets) * len(steps), len(keys)))
+    for s, js in enumerate(sets):
+        rule = hidden[keys[js[0]]][1]
+        for t, step in enumerate(steps):
+            levels[s * len(steps) + t, js] = step
+            rules.append(-1 if rule is None else int(rule))
+    return np.array(rules, np.int64), levels
 
 
 def _one_at_a_time(m, level):
@@ -219,24 +285,48 @@ def _one_at_a_time(m, level):
     return out
 
 
-def describe_variant(design: VariantDesign, i: int, base: Mapping[str, float], rule_names: Sequence[str] = ()) -> dict:
-    """What variant ``i`` changed: ``{"rule", "predecessor", "constants": {name: [before, after]}, "text"}``.
+def describe_variant(
+    design: VariantDesign,
+    i: int,
+    base: Mapping[str, float],
+    rule_names: Sequence[str] = (),
+    hidden: Mapping[str, Hidden] | None = None,
+) -> dict:
+    """What variant ``i`` changed: ``{"rule", "predecessor", "constants": {name: [before, after]},
+    "written": [...], "text"}``.
 
     Only the constants whose value differs from ``base`` are listed; ``rule_names`` (the
     rules' predecessors) names the rule in ``text``, e.g. ``"rule 0 (S): ls 0.8 -> 0.88"``.
+    A hidden constant (``hidden``: the grammar's :attr:`~ramure.lsys.LSystem.hidden`) is
+    shown as written in the grammar, ``"rule 1 (L(l)): +(40) -> +(44)"``; literals changed
+    together and written alike are shown once with their count; ``written`` lists those texts.
 
     >>> d = variant_design({"a": 10.0, "b": 2.0}, n_rules=2)
     >>> describe_variant(d, 10, {"a": 10.0, "b": 2.0}, ["A", "B"])["text"]
     'rule 1 (B): a 10 -> 9'
     """
+    hidden = dict(hidden or {})
     rule = int(design.rules[i])
+    before = {**{k: h.value for k, h in hidden.items()}, **base}
     changed = {
-        k: [float(base[k]), float(v)] for k, v in zip(design.names, design.values[i].tolist()) if float(base[k]) != float(v)
+        k: [float(before[k]), float(v)]
+        for k, v in zip(design.names, design.values[i].tolist())
+        if k in before and float(before[k]) != float(v)
     }
-    pred = rule_names[rule] if rule < len(rule_names) else None
-    head = f"rule {rule}" + (f" ({pred})" if pred else "")
-    body = ", ".join(f"{k} {a:g} -> {b:g}" for k, (a, b) in changed.items()) or "no constant changed"
-    return {"rule": rule, "predecessor": pred, "constants": changed, "text": f"{head}: {body}"}
+    pred = rule_names[rule] if 0 <= rule < len(rule_names) else None
+    head = "the axiom (the plant derived again)" if rule < 0 else f"rule {rule}" + (f" ({pred})" if pred else "")
+    plain = [f"{k} {a:g} -> {b:g}" for k, (a, b) in changed.items() if k not in hidden]
+    written = [f"{hidden[k].written(a)} -> {hidden[k].written(b)}" for k, (a, b) in changed.items() if k in hidden]
+    counts = collections.Counter(written)
+    shown = [w if counts[w] == 1 else f"{w} (x{counts[w]})" for w in dict.fromkeys(written)]
+    body = ", ".join(plain + shown) or "no constant changed"
+    return {
+        "rule": None if rule < 0 else rule,
+        "predecessor": pred,
+        "constants": changed,
+        "written": written,
+        "text": f"{head}: {body}",
+    }
 
 
 def _unit_samples(mode, m, count, seed):

@@ -2,6 +2,7 @@
 
 import pathlib
 
+import numpy as np
 import pytest
 
 from ramure.errors import RamureError, ValueRefused
@@ -44,3 +45,34 @@ def test_a_saved_steps_edit_is_checked():
     data["edits"] = [{"op": "steps", "n": 99}]
     with pytest.raises(RamureError, match="'n' must be a whole number from 0 to 30"):
         Session.from_dict(data)
+
+
+def test_a_selection_regrows_one_step_more_or_less_inside_only(tmp_path):
+    """Issue 35 section 3: a selection's part regrown with one derivation step more (less) than
+    the plant; every leaf outside it stays, the plant's n stays, and a saved session replays it."""
+    s = Session("honda_sympodial", n=5)
+    tree = s.tree
+    f = set(s.leaves_with_symbol("F").tolist())
+    branch = np.flatnonzero(tree.alive & (tree.depth == 2) & (tree.child_count > 0))
+    leaves = [x for x in tree.leaves_under(int(branch[0])).tolist() if x in f]
+    roots = s.plan(leaves)[1]
+    first, last = tree.string_spans(roots)
+    outside = np.concatenate([tree.leaves[: first.min()], tree.leaves[last.max() + 1 :]])
+    inside = int(sum(len(tree.leaves_under(int(r))) for r in roots))
+    more = s.regrow(leaves, seed=4, steps=1)
+    grown = int(sum(len(tree.leaves_under(int(r))) for r in more.roots))
+    assert more.roots.tolist() == roots.tolist() and s.n == 5 and grown > inside
+    assert np.isin(outside, tree.leaves).all() and int(tree.step[tree.leaves].max()) == 6
+    again = Session.load(s.save(tmp_path / "s.json"))
+    assert again.derivation.to_string() == s.derivation.to_string()
+    s.undo()
+    less = s.regrow(leaves, seed=4, steps=-1)
+    assert int(sum(len(tree.leaves_under(int(r))) for r in less.roots)) < inside
+    assert np.isin(outside, tree.leaves).all()
+    with pytest.raises(ValueRefused, match="-1, 0 or 1"):
+        s.regrow(leaves, steps=2)
+    tips = [x for x in tree.leaves[tree.step[tree.leaves] == 5].tolist() if x in f][:3]
+    edits = len(s.edits)
+    with pytest.raises(ValueRefused, match="one step less"):
+        s.regrow(tips, steps=-1)
+    assert len(s.edits) == edits

@@ -33,7 +33,7 @@ def _three_tips(session):
 def test_all_22_qualifiers_on_three_tips_stay_in_the_tips_cut(conifer):
     ls, sweep = conifer
     assert len(VOCABULARY) == 22
-    said = 0
+    said = refused = last = grown = 0
     for q in VOCABULARY:
         session = Session(ls)
         tips = _three_tips(session)
@@ -50,8 +50,16 @@ def test_all_22_qualifiers_on_three_tips_stay_in_the_tips_cut(conifer):
             assert out.regen is not None and out.roots.tolist() == shown.tolist()
         elif not out.improved:
             assert out.reason and out.suggestion and not session.edits
-            said += "last derivation step" in out.reason
-    assert said >= 10  # the tips' part cannot show new constants: the reason says why
+            # the tips' part cannot show new constants, nor gain what the word asks with one
+            # more derivation step of its own: the reason says both
+            said += "n +1 inside the selection" in out.reason
+            last += "last derivation step" in out.reason
+            refused += 1
+        elif "steps" in out.changed:  # the part grew one step more, the rest of the plant did not
+            grown += 1
+            assert out.changed["text"].startswith("n 7 -> 8 inside the selection") and session.n == 7
+            assert out.roots.tolist() == shown.tolist()
+    assert said == refused >= 5 and last >= 5 and grown >= 10, (said, refused, last, grown)
 
 
 def test_a_qualifier_keeps_the_regrown_part_selected_as_regrow_does(conifer):
@@ -96,3 +104,32 @@ def test_three_tips_never_replace_the_whole_plant_on_the_new_grammars(name):
         else:
             assert out.reason and out.suggestion and not session.edits
     assert whole == 0
+
+
+def test_dense_and_bushy_grow_a_selected_branch_one_step_more_and_nothing_else():
+    """Issue 35 section 3: on Honda, no constant changes the number of segments, so "dense" and
+    "bushy" on a selection were refused.  The selection's part now regrows one derivation step
+    more (the rest of the plant unchanged, the cut the preview shows, the part kept selected)."""
+    sweep = VariantSweep(n=6, n_jobs=1, cache=False, wide=0.25).fit("honda_sympodial")
+    ex = Explorer("honda_sympodial", n=6)
+    tree = ex.derivation.tree
+    f = set(ex.session.leaves_with_symbol("F").tolist())
+    branch = np.flatnonzero(tree.alive & (tree.depth == 3) & (tree.child_count > 0))
+    leaves = [x for x in tree.leaves_under(int(branch[len(branch) // 2])).tolist() if x in f]
+    ex.select(leaves)
+    shown = ex.preview()
+    old = ex.derivation.to_string()
+    first, last = tree.string_spans(shown.roots)
+    outside = np.concatenate([tree.leaves[: first.min()], tree.leaves[last.max() + 1 :]])
+    out = ex.apply_qualifier("bushy", sweep)
+    assert out.improved and out.changed["steps"] == 1 and "n 6 -> 7 inside the selection" in out.changed["text"]
+    assert out.roots.tolist() == shown.roots.tolist() and ex.session.n == 6
+    assert out.after.branch_count > out.before.branch_count and out.after.crown_width > out.before.crown_width
+    assert np.isin(outside, tree.leaves).all()  # every leaf outside the part is still there
+    assert (tree.step[tree.leaves] == 7).any()  # the part grew a step past the plant's n
+    added = np.asarray(out.regen.change.added)
+    # the part grown stays selected: its new leaves that draw (as a Regrow keeps them)
+    assert set(ex.selection) <= set(added[tree.child_count[added] == 0].tolist()) and len(ex.selection) > len(leaves)
+    assert f"regrew {out.regen.removed} of {shown.total:,} modules" in ex.status()
+    ex.session.undo()
+    assert ex.derivation.to_string() == old

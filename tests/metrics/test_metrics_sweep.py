@@ -196,3 +196,26 @@ def test_pca_of_degenerate_data():
     assert pca.explained_variance_ratio_ == pytest.approx([1, 0, 0])
     assert DeltaPCA().fit(np.zeros((4, 10))).transform(np.zeros((4, 10))) == pytest.approx(np.zeros((4, 3)))
     assert DeltaPCA().fit(np.ones((2, 10))).components_.shape == (3, 10)
+
+
+def test_hidden_constants_sweep_a_grammar_without_define_and_say_what_they_changed():
+    """Issue 35 section 2: literals and probabilities vary when no #define does; each variant
+    says what it changed in the grammar's own words."""
+    from ramure.lsys import LSystem
+
+    text = "n: 4\nw: !(0.1)A(1)\np:\n .6 A(x) -> F(x)[+(30)A(x*0.5)][-(30)A(x*0.5)]A(x)\n .4 A(x) -> F(x)A(x)\n"
+    with pytest.raises(RamureError, match="no non-zero #define"):
+        VariantSweep(n_jobs=1, cache=False).fit(LSystem.from_text(text))
+    sweep = VariantSweep(n_jobs=1, cache=False, hidden=True).fit(LSystem.from_text(text))
+    # rule 0: +(30), -(30), 0.5 twice, p0; rule 1: p1; axiom: 0.1, 1 -> 8 knobs alone, then the
+    # two 30s and the two 0.5s of rule 0 together: 10 sets, each at -10 % and +10 %
+    assert sweep.n_variants_ == 20 and sweep.changes_.all() and not sweep.failed_.any()
+    texts = [sweep.describe(i)["text"] for i in range(sweep.n_variants_)]
+    assert "rule 0 (A(x)): +(30) -> +(27)" in texts
+    assert "rule 1 (A(x)): probability 0.4 -> probability 0.44" in texts
+    assert "the axiom (the plant derived again): !(0.1) -> !(0.11)" in texts
+    assert "rule 0 (A(x)): A(x*0.5) -> A(x*0.55) (x2)" in texts
+    # the axiom's width reaches the radii; the combination is what a session applies
+    i = texts.index("the axiom (the plant derived again): !(0.1) -> !(0.11)")
+    assert sweep.combination(i) == {"rule": None, "constants": {"~w0.0": 0.11}}
+    assert sweep.deltas_[i, 9] == pytest.approx(10.0)  # mean radius +10 %
