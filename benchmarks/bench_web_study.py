@@ -118,7 +118,7 @@ class Participant:
         r.raise_for_status()
         self.code, token = r.json()["code"], r.json()["token"]
         self.headers = {"Authorization": f"Bearer {token}"}
-        state = await self.state()
+        state = await self._pages(await self.state())  # the instructions and practice pages first
         shown, groups, start = state["pictures"], [], 0
         for size in SIZES:
             groups.append(shown[start : start + size])
@@ -131,24 +131,37 @@ class Participant:
             plan += [dict(action="rate", group=label, usefulness=1 + label % 4, difference=4 - label % 4)]
             plan += [dict(action="add_word", group=label, text=f"word {label}")]
         plan.append(dict(action="finish"))
-        base = state["version"]  # answers given before the plan (none)
+        base = state["version"]  # answers given before the plan: the pages before the set
         while state["version"] - base < len(plan):
             body = {**plan[state["version"] - base], "version": state["version"], "part": state["part"]}
-            t0 = time.perf_counter()
-            try:
-                r = await self.client.post(f"/api/p/{self.code}/answer", json=body, headers=self.headers)
-            except Exception:  # the server went away mid-answer: read what it kept, carry on
-                self.stats["retries"] += 1
-                await asyncio.sleep(0.2)
-                state = await self.state()
-                continue
-            if r.status_code != 200:
-                self.stats["refused"] += 1
-                state = await self.state()
-                continue
-            self.stats["latencies"].append(time.perf_counter() - t0)
-            self.acked += 1
-            state = r.json()
+            state = await self._send(state, body)
+        await self._pages(state)  # the attention and demographics questions after the set
+
+    async def _pages(self, state: dict) -> dict:
+        """Answer the study's pages of text and questions until a picture set or the end (the
+        questions with their first option)."""
+        while "page" in state:
+            page = state["page"]
+            answers = {q["key"]: q["options"][0] for q in page["questions"]}
+            body = {"page": page["kind"], "version": state["version"], **({"answers": answers} if answers else {})}
+            state = await self._send(state, body)
+        return state
+
+    async def _send(self, state: dict, body: dict) -> dict:
+        """Post one answer; on a refusal or a lost connection, the state read again (the page's way)."""
+        t0 = time.perf_counter()
+        try:
+            r = await self.client.post(f"/api/p/{self.code}/answer", json=body, headers=self.headers)
+        except Exception:  # the server went away mid-answer: read what it kept, carry on
+            self.stats["retries"] += 1
+            await asyncio.sleep(0.2)
+            return await self.state()
+        if r.status_code != 200:
+            self.stats["refused"] += 1
+            return await self.state()
+        self.stats["latencies"].append(time.perf_counter() - t0)
+        self.acked += 1
+        return r.json()
 
 
 def _png() -> bytes:

@@ -23,8 +23,13 @@ What a request can and cannot do:
   changes nothing in the database.
 - The researcher's page and downloads need the researcher token printed at start.
 
-The functions under "Hooks" are where the study design (counterbalanced order, external ids,
-configured consent and completion codes) plugs in; today they give plain defaults.
+The participant's pages follow the study design (:class:`~ramure.studies.design.ParticipantFlow`,
+the same flow as the desktop and the notebook): consent at join, the instructions, the practice
+page and practice set, each picture set in the participant's counterbalanced order, the attention
+checks after the first set, the demographics questions, and the completion code (the study's
+configured code, else one of the participant's own).  The state names the page (``page``: its
+kind, title, text and questions, never an attention check's expected answer) or the set
+(``part``: 0 for the practice set, then 1..; ``title`` as participants read it).
 """
 
 from __future__ import annotations
@@ -49,17 +54,20 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from ramure.io import read_regular, write_text
 from ramure.studies.errors import StudyInputError
-from ramure.studies.likert import LEVELS
 from ramure.studies.session import TestSession, picture_labels
 
 if TYPE_CHECKING:
     from starlette.applications import Starlette
+
+    from ramure.studies.design import Step
 
     from ramure.studies.picks import Pick
     from ramure.studies.storage import Study
 
 #: The largest request body accepted, in bytes (a whole grouping of 27 pictures is under 1 KiB).
 MAX_BODY_BYTES = 16 * 1024
+#: The participant's pages that are not picture sets.
+PAGES = ("instructions", "practice", "attention", "demographics")
 #: Events that are not answers: they do not advance a participant's ``version``.
 _NOT_ANSWERS = ("start", "resume", "consent", "external_id")
 T = TypeVar("T")
@@ -73,23 +81,30 @@ class RequestRefused(StudyInputError):
         self.status = status
 
 
-# -- hooks: the study design fills these -----------------------------------------------------------
+# -- the study design, as the web pages use it -----------------------------------------------------
 
 
 def grammar_order(study: Study, code: str) -> list[str]:
-    """The order in which participant ``code`` sees the study's stimulus sets (default: as stored)."""
-    return study.grammars
+    """The order in which participant ``code`` sees the study's picture sets: the stored
+    counterbalanced order (:meth:`~ramure.studies.storage.Study.grammar_order`)."""
+    return study.grammar_order(code)
 
 
 def consent_text(study: Study) -> str:
-    """The consent text shown before anything is recorded."""
-    parts = len(study.grammars)
+    """The consent shown before anything is recorded: the study's configured text with its contact
+    and data retention (:meth:`~ramure.studies.design.StudyConfig.consent_text`), and how long it takes."""
+    parts = len(grammar_order_of_new(study))
     return (
-        f"You will sort pictures of plants into groups, in {parts} part{'s' if parts != 1 else ''}, "
-        f"then rate each group and describe it in a few words. It takes about {study.budget_seconds / 60:g} minutes. "
-        "Your answers are stored under an anonymous code, with the time you spend; no name or address is asked. "
-        "You may stop at any time."
+        study.config().consent_text()
+        + f"\n\nThere {'are' if parts != 1 else 'is'} {parts} part{'s' if parts != 1 else ''} of pictures; "
+        f"it takes about {study.budget_seconds / 60:g} minutes."
     )
+
+
+def grammar_order_of_new(study: Study) -> list[str]:
+    """The picture sets a new participant will see (the practice set aside)."""
+    practice = study.config().practice_set
+    return [g for g in study.grammars if g != practice]
 
 
 def record_external_id(study: Study, code: str, external_id: str) -> None:
@@ -102,8 +117,10 @@ def record_external_id(study: Study, code: str, external_id: str) -> None:
 
 
 def completion_code(study: Study, code: str, secret: bytes) -> str:
-    """The code participant ``code`` is shown at the end, to claim completion on a platform."""
-    return _mac(secret, "complete:" + code)[:10].upper()
+    """The code participant ``code`` is shown at the end, to claim completion on a platform: the
+    study's configured code when it has one (one code for all, as Prolific gives), else a code of
+    this participant's own (an HMAC of their code under the study's secret)."""
+    return study.completion_code(code) or _mac(secret, "complete:" + code)[:10].upper()
 
 
 # -- the server core -------------------------------------------------------------------------------
@@ -327,23 +344,22 @@ class StudyServer:
             self._shown[key] = (session.labels(), {pid: i for i, pid in enumerate(session.order())})
         return self._shown[key]
 
-    def _current(self, code: str) -> tuple[int, TestSession | None, bool]:
-        """(part number 1.., its session or None when all is done, whether the time ran out)."""
-        study = self.study
-        order = grammar_order(study, code)
-        for part, grammar in enumerate(order, start=1):
-            if study.finished(code, grammar):
-                continue
-            key = (code, grammar)
-            if key not in self._sessions:
-                try:
-                    self._sessions[key] = study.session(code, grammar)
-                except StudyInputError:
-                    if study.remaining_seconds(code) <= 0:
-                        return part, None, True  # the budget is spent: no new part is started
-                    raise
-            return part, self._sessions[key], False
-        return len(order) + 1, None, False
+    def _step(self, code: str) -> Step:
+        """The page participant ``code`` is on (:class:`~ramure.studies.design.ParticipantFlow`)."""
+        from ramure.studies.design import ParticipantFlow
+
+        return ParticipantFlow(self.study, code, front_end="web").step()
+
+    def _current(self, code: str) -> tuple[Step, TestSession | None]:
+        """The participant's page and, on a picture set, its session (started or resumed)."""
+        step = self._step(code)
+        if step.kind != "test":
+            return step, None
+        assert step.grammar is not None  # a test step names its set
+        key = (code, step.grammar)
+        if key not in self._sessions:
+            self._sessions[key] = self.study.session(code, step.grammar, front_end="web")
+        return step, self._sessions[key]
 
     def state(self, code: str, token: str | None) -> dict:
         """Everything the participant page shows, in the participant's own picture labels."""
@@ -351,11 +367,23 @@ class StudyServer:
         return self._state(code)
 
     def _state(self, code: str) -> dict:
-        part, session, time_up = self._current(code)
-        parts = len(grammar_order(self.study, code))
-        out: dict[str, Any] = dict(code=code, version=self.version(code), part=part, parts=parts, levels=list(LEVELS))
-        if session is None:
-            out.update(complete=True, time_up=time_up, completion_code=completion_code(self.study, code, self.secret))
+        step, session = self._current(code)
+        config = self.study.config()
+        out: dict[str, Any] = dict(
+            code=code, version=self.version(code), part=None, parts=step.total or len(grammar_order(self.study, code))
+        )
+        out.update(levels=list(config.levels), title=step.title)
+        if step.kind == "done":
+            out.update(
+                complete=True,
+                time_up=bool(step.skipped),
+                skipped=len(step.skipped),
+                completion_code=completion_code(self.study, code, self.secret),
+            )
+            return out
+        if session is None:  # instructions, practice text, attention checks, demographics
+            questions = [dict(key=q.key, text=q.text, options=list(q.options), required=q.required) for q in step.questions]
+            out.update(complete=False, page=dict(kind=step.kind, title=step.title, text=step.text, questions=questions))
             return out
         labels, rank = self._shown_as(session)
         shown = lambda ids: [labels[i] for i in sorted(ids, key=rank.__getitem__)]  # noqa: E731
@@ -373,35 +401,65 @@ class StudyServer:
         ]
         out.update(
             complete=False,
+            part=step.number,
+            practice=step.number == 0,
             pictures=shown(rank),
             unsorted=shown(session.unsorted()),
             groups=groups,
             missing=[_plain(m) for m in session.missing()],
-            questions=QUESTIONS,
+            questions={**QUESTIONS, **{k: v for k, v in config.questions.items() if k in QUESTIONS}},
         )
+        if "representative" in config.questions:
+            out["questions"]["representative_quality"] = config.questions["representative"]
         return out
 
     def answer(self, code: str, token: str | None, body: dict) -> dict:
-        """Apply one answer (refused whole, or written in one transaction) and return the new state."""
+        """Apply one answer (refused whole, or written in one transaction) and return the new state.
+
+        On a page of text (``instructions``, ``practice``) the answer is ``{"page": kind}``; on a
+        page of questions (``attention``, ``demographics``) ``{"page": kind, "answers": {key: option}}``;
+        on a picture set one of the actions of :func:`apply_answer` with the set's ``part``.
+        """
         self.check_participant(code, token)
         if body.get("version") != self.version(code):
             raise RequestRefused(409, "this answer was made on an older page (a repeat, or another tab); reload the page")
-        part, session, _ = self._current(code)
-        if session is None or body.get("part") != part:
-            raise RequestRefused(409, "this part is already finished; reload the page")
-        apply_answer(session, body, {v: k for k, v in self._shown_as(session)[0].items()})
+        step, session = self._current(code)
+        if "page" in body:
+            self._answer_page(code, step, body)
+        else:
+            if session is None or body.get("part") != step.number:
+                raise RequestRefused(409, "this part is already finished; reload the page")
+            apply_answer(session, body, {v: k for k, v in self._shown_as(session)[0].items()})
+            if session.finished:
+                self._sessions.pop((code, session.grammar), None)
         self._versions[code] += 1
-        if session.finished:
-            self._sessions.pop((code, session.grammar), None)
         return self._state(code)
 
+    def _answer_page(self, code: str, step: Step, body: dict) -> None:
+        from ramure.studies.design import ParticipantFlow
+
+        if body.get("page") != step.kind or step.kind not in PAGES:
+            raise RequestRefused(409, "this page is already done; reload the page")
+        flow = ParticipantFlow(self.study, code, front_end="web")
+        if step.kind in ("instructions", "practice"):
+            flow.acknowledge(step.kind)
+            return
+        answers = body.get("answers")
+        if not isinstance(answers, dict):
+            raise RequestRefused(400, "answers must be an object of question key to the chosen option")
+        flow.answer(step.kind, answers)
+
     def picture(self, code: str, token: str | None, part: int, label: str) -> str | None:
-        """The file of participant ``code``'s picture ``label`` in ``part``, or None (no picture)."""
+        """The file of participant ``code``'s picture ``label`` in ``part`` (0: the practice set), or None."""
         seed = self.check_participant(code, token)
         order = grammar_order(self.study, code)
-        if not 1 <= part <= len(order):
+        practice = self.study.config().practice_set
+        if part == 0 and practice is not None:
+            grammar = practice
+        elif 1 <= part <= len(order):
+            grammar = order[part - 1]
+        else:
             raise RequestRefused(404, f"no part {part}")
-        grammar = order[part - 1]
         by_label = {v: k for k, v in picture_labels(seed, grammar).items()}
         if label not in by_label:
             raise RequestRefused(404, f"no picture {label!r}")

@@ -1,8 +1,10 @@
 "use strict";
-// The participant's pages: consent, sorting pictures into groups (drag with a mouse, a finger or
-// a pen; or select a picture and press "Move here", or a key), rating and describing each group,
-// a pause between parts and the completion code.  Every change is sent at once and the page shows
-// what the server stored; a reload continues where it stopped.  No build step, no library.
+// The participant's pages, in the order the study's design gives (the server's ParticipantFlow):
+// consent, the instructions, the practice text, sorting pictures into groups (drag with a mouse, a
+// finger or a pen; or select a picture and press "Move here", or a key), rating and describing each
+// group, the attention and demographics questions, a pause between sets and the completion code.
+// Every change is sent at once and the page shows what the server stored; a reload continues where
+// it stopped.  No build step, no library.
 const app = document.getElementById("app");
 const noticeBox = document.getElementById("notice");
 const KEY = "ramure-study-participant";
@@ -105,14 +107,14 @@ async function post(build, part) {
   try {
     state = await api(`/api/p/${encodeURIComponent(me.code)}/answer`, {...body, version: state.version, part});
     notice("Saved.");
-    if (body.action === "finish" && !state.complete) pause = true;
+    if (body.action === "finish" && !state.complete && !state.page) pause = true;
   } catch (e) {
     if (e.status === 409) {
       state = await api(`/api/p/${encodeURIComponent(me.code)}/state`);
       notice("This page was out of date and has been refreshed; please check your last change.");
     } else notice("Not saved: " + e.message);
   }
-  if (selected && !state.complete && !state.pictures.includes(selected)) selected = null;
+  if (selected && !(state.pictures || []).includes(selected)) selected = null;
   render();
 }
 
@@ -246,6 +248,7 @@ function render() {
   const focused = document.activeElement && document.activeElement.dataset ? document.activeElement.dataset.key : null;
   const typed = Array.from(app.querySelectorAll("input[type=text]")).map(i => [i.dataset.key, i.value]);
   if (state.complete) renderDone();
+  else if (state.page) renderPage(state.page);
   else if (pause) renderPause();
   else renderTask();
   for (const [key, value] of typed) { const el = app.querySelector(`[data-key="${CSS.escape(key)}"]`); if (el) el.value = value; }
@@ -262,8 +265,8 @@ function renderTask() {
     ? h("ul", {class: "missing"}, state.missing.map(m => h("li", {}, m)))
     : h("p", {}, "Everything is answered.");
   app.replaceChildren(
-    h("p", {class: "progress"}, `Part ${state.part} of ${state.parts}`),
-    h("h1", {}, "Sort the plants into groups"),
+    h("p", {class: "progress"}, state.title),
+    h("h1", {}, state.practice ? "Practice: sort the plants into groups" : "Sort the plants into groups"),
     h("p", {}, "Put plants that look alike in the same group. Then, for each group, choose the picture that best stands for it, answer the questions and describe it in a few words."),
     pool,
     h("div", {class: "groups"}, state.groups.map(groupSection), fresh),
@@ -274,10 +277,39 @@ function renderTask() {
 
 function renderPause() {
   app.replaceChildren(
-    h("p", {class: "progress"}, `Part ${state.part - 1} of ${state.parts} is done`),
+    h("p", {class: "progress"}, state.part > 1 ? `Set ${state.part - 1} of ${state.parts} is done` : "Done"),
     h("h1", {}, "Saved. Take a short break if you like."),
-    h("p", {}, `Next: part ${state.part} of ${state.parts}, with other plants.`),
+    h("p", {}, `Next: ${state.title.toLowerCase()}, with other plants.`),
     h("p", {}, h("button", {type: "button", id: "continue", onclick: () => { pause = false; render(); }}, "Continue")),
+  );
+}
+
+// A page of text (instructions, the practice) with Continue, or of questions (attention checks,
+// demographics): every question answered by a choice, or by text where it offers none.
+function renderPage(page) {
+  const fields = page.questions.map(q => {
+    if (!q.options.length) {
+      return h("p", {}, h("label", {for: "q-" + q.key}, q.text + " "),
+        h("input", {type: "text", id: "q-" + q.key, name: q.key, maxlength: "500", dataset: {key: "q-" + q.key}}));
+    }
+    return h("fieldset", {class: "scale"}, h("legend", {}, q.text), ...q.options.map((option, i) => h("label", {},
+      h("input", {type: "radio", name: q.key, value: option, dataset: {key: `q-${q.key}-${i}`}}), " " + option)));
+  });
+  const go = h("button", {type: "button", id: "continue-page"}, "Continue");
+  go.addEventListener("click", () => {
+    if (!page.questions.length) return send({page: page.kind});
+    const answers = {};
+    for (const q of page.questions) {
+      const chosen = app.querySelector(`input[name="${CSS.escape(q.key)}"]:checked`) || app.querySelector(`input[type=text][name="${CSS.escape(q.key)}"]`);
+      if (chosen && chosen.value.trim()) answers[q.key] = chosen.value.trim();
+    }
+    send({page: page.kind, answers});
+  });
+  app.replaceChildren(
+    h("h1", {}, page.title),
+    ...page.text.split("\n\n").filter(t => t.trim()).map(t => h("p", {}, t)),
+    ...fields,
+    h("p", {}, go),
   );
 }
 

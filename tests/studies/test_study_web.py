@@ -49,7 +49,7 @@ def test_a_whole_participant_session_is_stored_and_gives_a_completion_code(serve
     p.get_state()  # a reload in the middle continues the same part
     assert p.state["part"] == 2 and p.state["unsorted"] == p.state["pictures"]
     p.answer_part(sizes=(20, 7))
-    assert p.state["complete"] is True and len(p.state["completion_code"]) == 10
+    assert p.state["complete"] is True and p.pages_seen == ["instructions", "practice", "attention", "demographics"]
     assert p.get_state()["completion_code"] == p.state["completion_code"]  # stable on reload
     server.close()  # the database is written by the server's one connection; read it now
     with Study.open(db, readonly=True) as study:
@@ -68,6 +68,8 @@ def test_a_whole_participant_session_is_stored_and_gives_a_completion_code(serve
         assert sorted(r[0] for r in stored) == sorted(pick_of[label] for label in first[0])
         external = [e["detail"] for e in study.events(p.code) if e["action"] == "external_id"]
         assert external == [{"external_id": "5f1e0c"}]
+        assert p.state["completion_code"] == study.completion_code(p.code)  # the study's code for them
+        assert set(study.participant_answers(p.code)) == {"instructions", "practice", "attention", "demographics"}
 
 
 def test_pages_speak_in_labels_never_pick_ids_or_jargon(served):
@@ -179,8 +181,9 @@ def test_the_researcher_page_needs_its_token_and_shows_progress_and_downloads(se
     progress = client.get("/api/researcher/progress", headers=auth).json()
     assert (progress["tests"], progress["finished"]) == (3, 2)
     assert [p["code"] for p in progress["participants"]] == [done.code, started.code]
-    # per part: the grouping, 3 groups x (representative, its rating, two ratings, a word), a single x 2, finish
-    assert progress["answers"] == 2 * (1 + 3 * 4 + 2 + 1) + 1
+    # per part: the grouping, 3 groups x (representative, its rating, two ratings, a word), a single x 2, finish;
+    # the pages: instructions and practice for both, attention and demographics for the one who finished
+    assert progress["answers"] == 2 * (1 + 3 * 4 + 2 + 1) + 1 + 2 + 2 + 2
     r = client.get("/api/researcher/export.zip", headers=auth)
     assert r.status_code == 200 and r.headers["content-type"] == "application/zip"
     with zipfile.ZipFile(io.BytesIO(r.content)) as zf:
@@ -248,7 +251,7 @@ def test_answers_queued_together_share_one_flush_and_are_acknowledged_after_it(t
 
     server._flush = counted_flush
     server._submit(gate.wait)  # hold the database thread while the crowd queues its answers
-    answers = [{"version": 0, "part": 1, "action": "groups", "groups": [p.state["pictures"]]} for p in people]
+    answers = [{"version": p.state["version"], "part": 1, "action": "groups", "groups": [p.state["pictures"]]} for p in people]
     futures = [server._submit(server.answer, p.code, p.token, body) for p, body in zip(people, answers)]
     gate.set()
     states = [f.result(timeout=30) for f in futures]
@@ -268,7 +271,7 @@ def test_a_code_used_again_after_a_deletion_does_not_accept_the_old_token(served
     new = WebParticipant(client)
     assert new.code == gone.code and new.token != gone.token  # the lowest free code again
     assert client.get(f"/api/p/{new.code}/state", headers=gone.headers).status_code == 403
-    assert new.state["groups"] == [] and new.state["version"] == 0  # nothing of the erased participant
+    assert new.state["groups"] == [] and new.state["version"] == len(new.pages_seen)  # nothing of the erased one
     new.send(action="groups", groups=[new.state["pictures"][:2]])
     assert len(new.state["groups"][0]["pictures"]) == 2
 
@@ -281,8 +284,65 @@ def test_a_spent_time_budget_ends_the_study_with_its_code_and_says_so(tmp_path):
     with TestClient(make_app(server)) as client:
         p = WebParticipant(client)
         p.answer_part()
-        assert p.state["complete"] is True and p.state["time_up"] is True and p.state["part"] == 2
-        assert len(p.state["completion_code"]) == 10
+        assert p.state["complete"] is True and p.state["time_up"] is True and p.state["skipped"] == 1
+        assert p.pages_seen[-2:] == ["attention", "demographics"]  # the questions still come, the set does not
     server.close()
     with Study.open(db, readonly=True) as study:
         assert study.finished(p.code, "g0") and [t["grammar"] for t in study.tests()] == ["g0"]
+
+
+# -- the participant flow of the study design, over the web (issue 38 §3 and §5) ---------------------
+def test_the_web_walks_the_designed_flow_and_refuses_a_page_out_of_turn(served):
+    db, server, client = served
+    p = WebParticipant(client, pages=False)
+    page = p.state["page"]
+    assert (page["kind"], page["questions"]) == ("instructions", []) and "New group" in page["text"]
+    url = f"/api/p/{p.code}/answer"
+    before = snapshot(db)
+    for body in ({"page": "practice"}, {"page": "attention", "answers": {}}, {"action": "groups", "groups": [], "part": 1}):
+        r = client.post(url, json={"version": p.state["version"], **body}, headers=p.headers)
+        assert r.status_code == 409, body  # not the page the participant is on
+    assert snapshot(db) == before
+    p.send(page="instructions")
+    p.send(page="practice")
+    assert p.state["part"] == 1 and p.state["title"] == "Set 1 of 2" and len(p.state["unsorted"]) == 27
+    p.pages = False  # answer_part leaves the next page to this test
+    p.answer_part()
+    page = p.state["page"]
+    assert page["kind"] == "attention" and page["questions"][0]["options"] == ["poor", "fair", "good", "excellent"]
+    assert "answer" not in page["questions"][0]  # the expected option is never sent
+    for answers, status, words in (({}, 400, "please answer"), ({"attention_1": "splendid"}, 400, "is not one of")):
+        before = snapshot(db)
+        r = client.post(url, json={"version": p.state["version"], "page": "attention", "answers": answers}, headers=p.headers)
+        assert r.status_code == status and words in r.json()["error"]
+        assert snapshot(db) == before
+    p.send(page="attention", answers={"attention_1": "good"})  # the wrong option: stored, flagged in the analysis
+    assert p.state["part"] == 2
+    p.answer_part()
+    assert p.state["page"]["kind"] == "demographics"
+    p.send(page="demographics", answers={"age": "25-39", "expertise": "a little"})
+    assert p.state["complete"] is True and p.state["skipped"] == 0
+    server.close()
+    with Study.open(db, readonly=True) as study:
+        assert study.participant_answers(p.code)["attention"] == {"attention_1": "good"}
+        assert {e["front_end"] for e in study.events(p.code) if e["grammar"]} == {"web"}
+
+
+def test_a_practice_set_comes_first_over_the_web_and_participants_get_counterbalanced_orders(tmp_path):
+    from ramure.studies.design import StudyConfig
+
+    config = StudyConfig(practice_set="g2", levels=("no", "a little", "rather", "very"), attention_checks=())
+    db = make_study(tmp_path, grammars=3, config=config)
+    server = StudyServer(db)
+    with TestClient(make_app(server)) as client:
+        first, second = WebParticipant(client), WebParticipant(client)
+        for p in (first, second):
+            assert (p.state["part"], p.state["practice"], p.state["title"]) == (0, True, "Practice")
+            assert p.state["levels"] == ["no", "a little", "rather", "very"]
+            label = p.state["pictures"][0]
+            assert client.get(f"/img/{p.code}/0/{label}", params={"t": p.token}).status_code == 200
+            p.answer_part(sizes=(27,))
+            assert (p.state["part"], p.state["practice"], p.state["title"]) == (1, False, "Set 1 of 2")
+        orders = [server.call(server.study.grammar_order, p.code) for p in (first, second)]
+        assert orders == [["g0", "g1"], ["g1", "g0"]]  # the Williams square's first two rows
+    server.close()

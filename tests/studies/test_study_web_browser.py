@@ -3,10 +3,11 @@
 The server runs as the researcher starts it (``ramure study serve STUDY --port N``, a separate
 process on 127.0.0.1); Debian's ``/usr/bin/chromium`` is driven by Playwright's Python package
 (no browser download), as the notebook's browser test does.  The participant arrives from a
-recruiting link, consents, drags pictures into groups with the mouse, moves others by keyboard
-and by select-then-"Move here", chooses representatives, rates and names the groups, reloads the
-page in the middle and continues, double-clicks "Finish this part" (the pause page catches the
-second click), does the second part and gets a completion code.  Then the database holds every
+recruiting link, consents, reads the instructions and the practice page, drags pictures into
+groups with the mouse, moves others by keyboard and by select-then-"Move here", chooses
+representatives, rates and names the groups, reloads the page in the middle and continues,
+double-clicks "Finish this part" (the second click is dropped, not sent), answers the attention
+check, does the second set, answers the demographics questions and gets a completion code.  Then the database holds every
 answer, and the researcher's page shows the participant and downloads the CSVs.  A phone-sized
 touch context moves a picture by taps.  Select it alone with ``pytest -m browser``.
 """
@@ -126,7 +127,10 @@ def test_a_remote_participant_session_in_chromium(served):
             assert page.locator("#start").is_disabled()
             page.check("#agree")
             page.click("#start")
-            page.wait_for_selector("text=Part 1 of 2")
+            for title in ("Instructions", "Practice"):  # the study's pages before the first set
+                page.wait_for_selector(f"h1:text-is('{title}')")
+                act(page, lambda: page.click("#continue-page"))
+            page.wait_for_selector("text=Set 1 of 2")
             assert pool(page).count() == 27
             assert page.evaluate("() => Array.from(document.images).filter(i => i.complete && i.naturalWidth === 0).length") == 0
 
@@ -147,7 +151,7 @@ def test_a_remote_participant_session_in_chromium(served):
             act(page, lambda: pool(page).first.press("n"))
             answer_groups(page, ["tall and thin"])
             page.reload()
-            page.wait_for_selector("text=Part 1 of 2")
+            page.wait_for_selector("text=Set 1 of 2")
             assert page.locator("[data-zone='1'] li").first.inner_text().startswith("tall and thin")
             assert page.locator("input[name=usefulness-1][value='2']").is_checked()
             assert pool(page).count() == 0 and page.locator(".group").count() == 3
@@ -156,21 +160,28 @@ def test_a_remote_participant_session_in_chromium(served):
             answer_groups(page, ["bushy", "odd one"], first=2)
             assert page.locator(".missing").count() == 0
             page.locator("#finish").dblclick()
-            page.wait_for_selector("#continue")
+            page.wait_for_selector("#continue-page")
             page.wait_for_function(IDLE)
-            assert "Part 1 of 2 is done" in page.inner_text("#app")
+            assert "A few questions" in page.inner_text("#app")  # the attention check after the first set
             assert page.inner_text("#notice") == "Saved."  # the second click was dropped, not sent and refused
+            page.check("input[name=attention_1][value=fair]")
+            act(page, lambda: page.click("#continue-page"))
 
-            # Part 2, after the pause: everything into one group by keys.
-            page.click("#continue")
-            page.wait_for_selector("text=Part 2 of 2")
+            # Set 2: everything into one group by keys.
+            page.wait_for_selector("text=Set 2 of 2")
             act(page, lambda: pool(page).first.press("n"))
             while pool(page).count():
                 act(page, lambda: pool(page).first.press("1"))
             answer_groups(page, ["all alike"])
             act(page, lambda: page.click("#finish"))
+            page.wait_for_selector("h1:text-is('About you')")
+            act(page, lambda: page.click("#continue-page"))  # nothing chosen: refused in one line
+            assert "please answer" in page.inner_text("#notice")
+            page.check("input[name=age][value='25-39']")
+            page.check("input[name=expertise][value='a little']")
+            act(page, lambda: page.click("#continue-page"))
             code = page.locator("#completion").inner_text()
-            assert len(code) == 10 and code.isalnum()
+            assert len(code) >= 6 and code.isalnum()
             page.reload()
             assert page.locator("#completion").inner_text() == code  # the end survives a reload too
             assert errors == []
@@ -181,7 +192,10 @@ def test_a_remote_participant_session_in_chromium(served):
             mobile.goto(base)
             mobile.tap("#agree")
             mobile.tap("#start")
-            mobile.wait_for_selector("text=Part 1 of 2")
+            for title in ("Instructions", "Practice"):
+                mobile.wait_for_selector(f"h1:text-is('{title}')")
+                act(mobile, lambda: mobile.tap("#continue-page"))
+            mobile.wait_for_selector("text=Set 1 of 2")
             mobile.locator("[data-zone=pool] .pic").first.tap()
             act(mobile, lambda: mobile.locator("[data-zone=new] .move").tap())
             assert mobile.locator("[data-zone='1'] .pic").count() == 1

@@ -24,10 +24,16 @@ def png(path: pathlib.Path, shade: int) -> None:
 
 
 def make_study(
-    folder: pathlib.Path, grammars: int = 2, pictures: bool = True, budget_minutes: float = 30.0, db: str | None = None
+    folder: pathlib.Path,
+    grammars: int = 2,
+    pictures: bool = True,
+    budget_minutes: float = 30.0,
+    db: str | None = None,
+    config=None,
 ) -> pathlib.Path | str:
     """A study of ``grammars`` lattice grammars in ``folder``; its picks have PNG pictures when ``pictures``.
-    ``db``: a PostgreSQL URL to create it in instead of ``folder/study.db`` (``folder`` holds its pictures)."""
+    ``db``: a PostgreSQL URL to create it in instead of ``folder/study.db`` (``folder`` holds its pictures);
+    ``config`` a :class:`~ramure.studies.design.StudyConfig` (default: the defaults)."""
     specs = {}
     for g in range(grammars):
         picks = lattice_picks(seed=g + 1)
@@ -42,7 +48,9 @@ def make_study(
             ]
         specs[f"g{g}"] = picks
     where = db if db is not None else folder / "study.db"
-    Study.create(where, grammars=specs, name="web-study", budget_minutes=budget_minutes, folder=folder).close()
+    Study.create(
+        where, grammars=specs, name="web-study", budget_minutes=budget_minutes, folder=folder, config=config
+    ).close()
     return where
 
 
@@ -58,9 +66,14 @@ def snapshot(db: pathlib.Path | str) -> list[str]:
 
 
 class WebParticipant:
-    """One participant driving the JSON API: join, then answer each part completely."""
+    """One participant driving the JSON API: join, then answer each part completely.
 
-    def __init__(self, client, external_id: str | None = None):
+    The pages between picture sets (instructions, the practice text, attention checks,
+    demographics) are answered as they come (:meth:`pass_pages`) unless ``pages=False``;
+    ``pages_seen`` lists their kinds in order.
+    """
+
+    def __init__(self, client, external_id: str | None = None, pages: bool = True):
         self.client = client
         body = {"consent": True}
         if external_id:
@@ -69,7 +82,23 @@ class WebParticipant:
         assert r.status_code == 200, r.text
         self.code, self.token = r.json()["code"], r.json()["token"]
         self.headers = {"Authorization": f"Bearer {self.token}"}
+        self.pages, self.pages_seen = pages, []
         self.state = self.get_state()
+        if pages:
+            self.pass_pages()
+
+    def pass_pages(self, attention: str = "fair") -> dict:
+        """Answer every page of text or questions up to the next picture set or the end: the
+        attention check with ``attention``, other questions with their first option."""
+        while "page" in self.state:
+            page = self.state["page"]
+            self.pages_seen.append(page["kind"])
+            answers = {
+                q["key"]: attention if page["kind"] == "attention" and attention in q["options"] else q["options"][0]
+                for q in page["questions"]
+            }
+            self.send(page=page["kind"], **({"answers": answers} if page["questions"] else {}))
+        return self.state
 
     def get_state(self) -> dict:
         r = self.client.get(f"/api/p/{self.code}/state", headers=self.headers)
@@ -98,6 +127,8 @@ class WebParticipant:
             self.send(action="rate", group=label, usefulness=1 + label % 4, difference=4 - label % 4)
             self.send(action="add_word", group=label, text="small" if label == 1 else "dense")
         self.send(action="finish")
+        if self.pages:
+            self.pass_pages()
         return groups
 
 
