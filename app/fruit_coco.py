@@ -43,8 +43,23 @@ def _labels(folder: pathlib.Path, row: Mapping[str, Any]) -> dict:
     return json.loads(atomic.read_regular(folder / row["labels"], 256 * 2**20, "fruit labels"))
 
 
-def coco_records(record: Mapping[str, Any], image_id: int, annotation_id: int) -> tuple[list[dict], list[dict]]:
-    """COCO images and annotations of one fruit's labels, ids from ``image_id`` and ``annotation_id``."""
+MASK_FORMATS = ("rle", "polygon")
+
+
+def coco_records(
+    record: Mapping[str, Any], image_id: int, annotation_id: int, masks: str = "rle"
+) -> tuple[list[dict], list[dict]]:
+    """COCO images and annotations of one fruit's labels, ids from ``image_id`` and ``annotation_id``.
+
+    ``masks``: ``"rle"`` (exact) or ``"polygon"`` (outer boundaries traced along pixel
+    edges, :func:`ramure.app.fruit_views.polygons`: no holes; what ultralytics'
+    ``convert_coco`` and detectron2's default mask format read).
+    """
+    from ramure.app.fruit_views import polygons, rle_decode
+
+    def segmentation(rle):
+        return rle if masks == "rle" else polygons(rle_decode(rle))
+
     images, annotations = [], []
     grade = record["grade"]
     shrink = [d for d in record["defects"] if d["kind"] == "shrink"]
@@ -69,7 +84,7 @@ def coco_records(record: Mapping[str, Any], image_id: int, annotation_id: int) -
                 "id": annotation_id,
                 "image_id": image_id,
                 "category_id": CATEGORY_ID["fruit"],
-                "segmentation": fruit["segmentation"],
+                "segmentation": segmentation(fruit["segmentation"]),
                 "area": fruit["pixels"],
                 "bbox": fruit["bbox"],
                 "iscrowd": 0,
@@ -101,7 +116,7 @@ def coco_records(record: Mapping[str, Any], image_id: int, annotation_id: int) -
                     "id": annotation_id,
                     "image_id": image_id,
                     "category_id": CATEGORY_ID[d["kind"]],
-                    "segmentation": d["segmentation"],
+                    "segmentation": segmentation(d["segmentation"]),
                     "area": d["pixels"],
                     "bbox": d["bbox"],
                     "iscrowd": 0,
@@ -123,7 +138,7 @@ def write_coco_and_card(folder: pathlib.Path, settings: Mapping[str, Any], rows:
     pictures: dict[str, set[str]] = {}
     for row in rows:
         record = _labels(folder, row)
-        images, annotations = coco_records(record, image_id, annotation_id)
+        images, annotations = coco_records(record, image_id, annotation_id, settings.get("coco_masks", "rle"))
         image_id += len(images)
         annotation_id += len(annotations)
         per_split[record["split"]]["images"] += images
@@ -227,10 +242,12 @@ COCO files and manifest, whatever the number of workers or the cluster.
 ## Conventions
 - Categories: {", ".join(f"{c['id']} {c['name']}" for c in extra["categories"])}.  Shrinkage
   has no place of its own: it is an attribute of the `fruit` annotation.
-- Masks: uncompressed COCO RLE, exact per pixel (from an id pass of the same camera), with
-  occlusion by the fruit and the cup.  `area` is the mask's pixel count; `bbox` is
-  `[x, y, width, height]` of its pixels.  detectron2 needs `INPUT.MASK_FORMAT=bitmask`;
-  ultralytics needs polygons (convert the masks, e.g. with OpenCV's `findContours`).
+- Masks (`{s.get("coco_masks", "rle")}` in the COCO files): exact per pixel (from an id pass of the
+  same camera), with occlusion by the fruit and the cup; `rle` is uncompressed COCO RLE
+  (detectron2: `INPUT.MASK_FORMAT=bitmask`), `polygon` the outer boundaries along pixel edges
+  (holes dropped; ultralytics' `convert_coco(use_segments=True)`).  The fruit's labels
+  always hold the RLE.  `area` is the mask's pixel count; `bbox` is `[x, y, width, height]`
+  of its pixels.
 - Cameras (in each image's `camera`): OpenCV pinhole, `x_cam = R x_world + t` in mm, pixels
   `K x_cam` divided by depth, origin at the top-left pixel's centre.
 - Splits: {", ".join(f"{n}" for n in ("train", "val", "test"))} drawn per fruit from the seed

@@ -66,7 +66,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import ramure.io as atomic
-from ramure.app.fruit_coco import CATEGORY_ID
+from ramure.app.fruit_coco import CATEGORY_ID, MASK_FORMATS
 from ramure.errors import RamureError, ValueRefused
 
 if TYPE_CHECKING:
@@ -624,11 +624,13 @@ def make_dataset(
     stage: str = "mixed",
     clean_pictures: bool = False,
     scheduler: str | None = None,
+    coco_masks: str = "rle",
 ) -> dict:
     """Write ``count`` labelled fruit into ``folder`` (see the module docstring); the summary
     (the manifest, plus ``"seconds"``).
 
-    ``scheduler``: None (a process pool of ``workers``), ``"local"`` (a Dask
+    ``coco_masks``: ``"rle"`` (exact) or ``"polygon"`` in the COCO files (see
+    :func:`ramure.app.fruit_coco.coco_records`).  ``scheduler``: None (a process pool of ``workers``), ``"local"`` (a Dask
     ``LocalCluster`` of ``workers`` processes) or a Dask scheduler address
     (``tcp://host:8786``).  Refused before anything is written: count outside 1..100000,
     an unknown ``defects`` mode, preset or stage, levels outside 1..2, views outside
@@ -654,6 +656,8 @@ def make_dataset(
         raise ValueRefused(f"--stage must be one of {', '.join(STAGES)} or mixed, got {stage!r}")
     if not (np.isfinite(size_mm) and size_mm > 0):
         raise ValueRefused(f"--size-mm must be a finite number > 0, got {size_mm}")
+    if coco_masks not in MASK_FORMATS:
+        raise ValueRefused(f"--coco-masks must be one of {', '.join(MASK_FORMATS)}, got {coco_masks!r}")
     if resume and overwrite:
         raise ValueRefused("--resume and --overwrite exclude each other")
     folder = pathlib.Path(folder)
@@ -670,6 +674,7 @@ def make_dataset(
         "views": int(views),
         "stage": stage,
         "clean_pictures": bool(clean_pictures),
+        "coco_masks": coco_masks,
     }
     dask = _dask_client(scheduler, int(workers)) if scheduler is not None else None  # unreachable: nothing written
     try:

@@ -312,3 +312,62 @@ def bbox(mask: np.ndarray) -> list[int]:
     if rows.size == 0:
         return [0, 0, 0, 0]
     return [int(cols[0]), int(rows[0]), int(cols[-1] - cols[0] + 1), int(rows[-1] - rows[0] + 1)]
+
+
+def polygons(mask: np.ndarray) -> list[list[float]]:
+    """COCO polygons (``[x0, y0, x1, y1, ...]``, pixel-edge coordinates) of a mask's outer
+    boundaries, one per connected piece (8-connected pieces touching at a corner split there).
+
+    Traced along pixel edges, so rasterising them gives the mask back, except its holes
+    (COCO polygons have none; the RLE is exact).  Straight runs are one segment.
+    """
+    m = np.pad(np.asarray(mask, bool), 1)
+    edges: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    # clockwise on screen (y down) round every foreground pixel; coordinates of the unpadded mask
+    for dr, dc, start, end in ((-1, 0, (0, 0), (1, 0)), (0, 1, (1, 0), (1, 1)), (1, 0, (1, 1), (0, 1)), (0, -1, (0, 1), (0, 0))):
+        rows, cols = np.nonzero(m[1:-1, 1:-1] & ~m[1 + dr : m.shape[0] - 1 + dr, 1 + dc : m.shape[1] - 1 + dc])
+        for r, c in zip(rows.tolist(), cols.tolist()):
+            edges.setdefault((c + start[0], r + start[1]), []).append((c + end[0], r + end[1]))
+    out = []
+    while edges:
+        first = next(iter(edges))
+        loop, point, heading = [first], first, None
+        while True:
+            options = edges[point]
+            nxt = options.pop(_rightmost(options, point, heading) if len(options) > 1 else 0)
+            if not options:
+                del edges[point]
+            heading = (nxt[0] - point[0], nxt[1] - point[1])
+            point = nxt
+            if point == first and (point not in edges):
+                break
+            loop.append(point)
+            if point == first:
+                break
+        corners = _corners(loop)
+        xs, ys = np.array([p[0] for p in corners], float), np.array([p[1] for p in corners], float)
+        if len(corners) >= 3 and float(np.dot(xs, np.roll(ys, -1)) - np.dot(np.roll(xs, -1), ys)) > 0:  # outer, not a hole
+            out.append([float(v) for p in corners for v in p])
+    return out
+
+
+def _rightmost(options, point, heading):
+    """At a corner two pieces share, the edge turning right of ``heading`` (keeps pieces apart)."""
+    if heading is None:
+        return 0
+    right = (-heading[1], heading[0])  # a right turn on screen (y down)
+    for i, o in enumerate(options):
+        if (o[0] - point[0], o[1] - point[1]) == right:
+            return i
+    return 0
+
+
+def _corners(loop):
+    """The loop's points where its direction changes."""
+    n = len(loop)
+    keep = []
+    for i in range(n):
+        a, b, c = loop[i - 1], loop[i], loop[(i + 1) % n]
+        if (b[0] - a[0]) * (c[1] - b[1]) != (b[1] - a[1]) * (c[0] - b[0]):
+            keep.append(b)
+    return keep

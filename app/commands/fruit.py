@@ -339,6 +339,12 @@ def register(sub: Subparsers) -> None:
         choices=["mixed", "plain", "conveyor", "cup"],
         help="what the fruit is seen on: a plain backdrop, a conveyor belt, a cup on the belt, or mixed per fruit (default)",
     )
+    b.add_argument(
+        "--coco-masks",
+        default="rle",
+        choices=["rle", "polygon"],
+        help="masks in the COCO files: exact RLE (default) or polygons (outer boundaries; for ultralytics)",
+    )
     b.add_argument("--clean-pictures", action="store_true", help="also write each view of the fruit without its defects")
     b.add_argument(
         "--scheduler",
@@ -378,6 +384,7 @@ def run_batch(args: argparse.Namespace) -> int:
         stage=args.stage,
         clean_pictures=args.clean_pictures,
         scheduler=args.scheduler,
+        coco_masks=args.coco_masks,
     )
     if args.json:
         print(json.dumps({k: v for k, v in summary.items() if k != "fruit"}))

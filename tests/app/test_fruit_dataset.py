@@ -113,6 +113,30 @@ def test_coco_files_load_and_boxes_agree_with_masks(dataset):
         assert (coco.annToMask(coco.anns[a["id"]]).astype(bool) == rle_decode(a["segmentation"])).all()
 
 
+def test_polygon_masks_rasterise_back_to_the_rle_masks(dataset):
+    """``--coco-masks polygon`` (ultralytics, detectron2's default): pycocotools draws the
+    polygons back onto the exact masks (holes aside) with the same boxes."""
+    from ramure.app.fruit_coco import coco_records
+    from ramure.app.fruit_views import bbox, polygons, rle_decode
+
+    ring = np.zeros((12, 12), bool)
+    ring[2:9, 2:9], ring[4:6, 4:6] = True, False
+    assert polygons(ring) == [[2.0, 2.0, 9.0, 2.0, 9.0, 9.0, 2.0, 9.0]]  # the outer boundary, no hole
+    mask_util = pytest.importorskip("pycocotools.mask")
+    folder, _ = dataset
+    record = labels(folder, 1)
+    _, exact = coco_records(record, 1, 1)
+    _, drawn = coco_records(record, 1, 1, masks="polygon")
+    assert len(exact) == len(drawn) >= 2
+    for a, b in zip(exact, drawn):
+        mask = rle_decode(a["segmentation"])
+        h, w = mask.shape
+        assert isinstance(b["segmentation"], list) and all(len(p) >= 6 and len(p) % 2 == 0 for p in b["segmentation"])
+        back = mask_util.decode(mask_util.merge(mask_util.frPyObjects(b["segmentation"], h, w))).astype(bool)
+        assert bbox(back) == a["bbox"]
+        assert (back & mask).sum() / (back | mask).sum() > 0.97
+
+
 def test_cameras_project_the_mesh_onto_its_mask(dataset):
     import pyvista as pv
 
