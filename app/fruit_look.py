@@ -147,7 +147,8 @@ def _calyx(skin, base, axis, side, count, reach, colour):
 
     other = np.cross(axis, side)
     centre = np.asarray(skin.center)
-    points, faces = [], []
+    points: list[np.ndarray] = []
+    faces: list[int] = []
     for k in range(count):
         a = 2 * np.pi * (k + 0.3) / count
         out = np.cos(a) * side + np.sin(a) * other
@@ -267,7 +268,7 @@ def render_png(
         plotter.camera.clipping_range = (frame * 0.5, frame * 8.0)
         if title:
             plotter.add_text(title, font_size=11, color="black")
-        image = plotter.screenshot(return_img=True)
+        image = np.asarray(plotter.screenshot(return_img=True))
     finally:
         plotter.close()
     meta = {"mm_per_pixel": frame * mpu / size[1], "species": species, "ripeness": ripe, "size_mm": real}

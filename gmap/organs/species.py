@@ -213,8 +213,8 @@ def _hash01(ids: np.ndarray, seed: int) -> np.ndarray:
 
 
 def _mix(rgb: np.ndarray, colour: str, t: ArrayLike) -> np.ndarray:
-    t = np.clip(np.asarray(t, float), 0.0, 1.0)[:, None]
-    return rgb * (1.0 - t) + np.array(hex_rgb(colour), float) * t
+    w = np.clip(np.asarray(t, float), 0.0, 1.0)[:, None]
+    return rgb * (1.0 - w) + np.array(hex_rgb(colour), float) * w
 
 
 def cell_rgb(
