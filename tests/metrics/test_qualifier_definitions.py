@@ -146,3 +146,20 @@ def test_regions_separate_or_are_named_synonyms(sweeps):
         counts[grammar] = len(pairs)
     assert counts["conifer"] == counts["grass"] == counts["stochastic_bush"] == 0, counts
     assert counts["shrub"] <= 2 and sum(counts.values()) <= 8, counts
+
+
+def test_qualify_cli_turns_hidden_constants(tmp_path, capsys):
+    """``ramure qualify --hidden --wide 0.25``: the shrub's width, written only as !(0.06) in its
+    axiom, makes it thick; without --hidden the same word is refused, saying why."""
+    import json
+
+    from ramure.app.cli import main
+
+    args = ["qualify", str(GRAMMARS["shrub"]), "--jobs", "1", "--cache-dir", str(tmp_path), "--qualifier", "thick"]
+    assert main([*args, "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert not rec["improved"] and "no constant or rule changes the branch radii" in rec["reason"]
+    assert main([*args, "--hidden", "--wide", "0.25", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["improved"] and "!(0.06) -> !(" in rec["changed"]["text"], rec["changed"]
+    assert rec["definition"]["holds"] and rec["after"]["mean_radius"] > rec["before"]["mean_radius"]
