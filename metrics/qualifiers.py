@@ -849,13 +849,23 @@ def qualifier_space(sweep: VariantSweep | ArrayLike) -> np.ndarray:
     return standardise(deltas, metric_scale(deltas))
 
 
+#: Candidates a vocabulary region surrounds: as many as a qualifier tries first
+#: (:func:`ramure.metrics.apply.apply_qualifier`'s ``tries``).
+REGION_CANDIDATES = 5
+
+
 def vocabulary_regions(
-    sweep: VariantSweep | ArrayLike, points: ArrayLike | None = None, per_qualifier: int = 10, trim: float = 0.0
+    sweep: VariantSweep | ArrayLike,
+    points: ArrayLike | None = None,
+    per_qualifier: int = REGION_CANDIDATES,
+    trim: float = 0.0,
 ) -> QualifierRegions:
     """Regions of the default vocabulary on one grammar, before any study.
 
     Each directional qualifier's box surrounds its ``per_qualifier`` best
-    candidates that it owns (tier 1 of :meth:`QualifierModel.rank`) in
+    candidates that it owns (tier 1 of :meth:`QualifierModel.rank`): the ones
+    applying it tries first (5 by default; 10 made a box of every variant a word
+    owns far from its best, and on the shrub 4 pairs overlapped where 2 do now) in
     ``points``: by default the fifteen-metric :func:`qualifier_space` (the
     ten-metric PCA cloud of an exploration lacks height, width and angles, so
     there "regular" and "irregular" fall in one box), or a PCA cloud (N,3);

@@ -95,6 +95,14 @@ def _add_sweep_options(p):
         help="grid: all 3^m combinations per rule; lhs/sobol: --samples per rule",
     )
     p.add_argument("--samples", type=int, default=None, help="samples per rule for --mode lhs/sobol")
+    p.add_argument(
+        "--wide", type=float, default=None, metavar="FRACTION", help="also move each constant alone by +-FRACTION (e.g. 0.25)"
+    )
+    p.add_argument(
+        "--hidden",
+        action="store_true",
+        help="also vary the numbers the grammar writes without a name: literals, axiom numbers, rule probabilities",
+    )
     p.add_argument("--jobs", type=int, default=-1, help="worker processes (default -1: every core; 1 runs in this process)")
     p.add_argument(
         "--scheduler", default=None, metavar="tcp://HOST:PORT", help="run the sweep on a Dask cluster (needs ramure[dask])"
@@ -115,6 +123,8 @@ def _sweep_kwargs(args):
         cache=not args.no_cache,
         cache_dir=args.cache_dir,
         scheduler=args.scheduler,
+        wide=args.wide,
+        hidden=args.hidden,
     )
 
 
