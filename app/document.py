@@ -25,7 +25,7 @@ import math
 import os
 import pathlib
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import TYPE_CHECKING
 
 from ramure.errors import RamureError
@@ -85,9 +85,13 @@ def lpy_text_with_constants(text: str, constants: Mapping[str, float], written: 
         if name not in written or float(value) == float(written[name]):
             continue
         pattern = re.compile(rf"(\bextern\s*\([^)]*?\b{re.escape(name)}\s*=\s*)({_NUMBER})")
-        new = format_constant(value)
-        text = pattern.sub(lambda m, new=new: m.group(1) + new, text, count=1)
+        text = pattern.sub(_replacer(format_constant(value)), text, count=1)
     return text
+
+
+def _replacer(value: str) -> Callable[[re.Match], str]:
+    """A ``re.sub`` replacement: the match's first group, then ``value``."""
+    return lambda m: m.group(1) + value
 
 
 def text_with_derivation(text: str, n: int, seed: int, written_n: int, written_seed: int) -> str:
