@@ -251,7 +251,9 @@ def open_document(path: str | os.PathLike, run_code: bool = False) -> tuple[str,
       with no path yet (Save asks where to write it), and the MTG file is never overwritten.
     """
     path = pathlib.Path(path)
-    if runs_code(path) and not run_code:
+    if runs_code(path) and not run_code:  # refused before a byte of it is read
+        if not path.exists():
+            raise GrammarError("cannot read the model: no such file", filename=str(path))
         raise CodeNotAllowed(path)
     if path.suffix.lower() == ".mtg":
         from ramure.lsys.mtg_graph import read_mtg_graph
