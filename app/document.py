@@ -25,7 +25,7 @@ import math
 import os
 import pathlib
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import TYPE_CHECKING
 
 from ramure.errors import RamureError
@@ -85,9 +85,13 @@ def lpy_text_with_constants(text: str, constants: Mapping[str, float], written: 
         if name not in written or float(value) == float(written[name]):
             continue
         pattern = re.compile(rf"(\bextern\s*\([^)]*?\b{re.escape(name)}\s*=\s*)({_NUMBER})")
-        new = format_constant(value)
-        text = pattern.sub(lambda m, new=new: m.group(1) + new, text, count=1)
+        text = pattern.sub(_replacer(format_constant(value)), text, count=1)
     return text
+
+
+def _replacer(value: str) -> Callable[[re.Match], str]:
+    """A ``re.sub`` replacement: the match's first group, then ``value``."""
+    return lambda m: m.group(1) + value
 
 
 def text_with_derivation(text: str, n: int, seed: int, written_n: int, written_seed: int) -> str:
@@ -247,7 +251,9 @@ def open_document(path: str | os.PathLike, run_code: bool = False) -> tuple[str,
       with no path yet (Save asks where to write it), and the MTG file is never overwritten.
     """
     path = pathlib.Path(path)
-    if runs_code(path) and not run_code:
+    if runs_code(path) and not run_code:  # refused before a byte of it is read
+        if not path.exists():
+            raise GrammarError("cannot read the model: no such file", filename=str(path))
         raise CodeNotAllowed(path)
     if path.suffix.lower() == ".mtg":
         from ramure.lsys.mtg_graph import read_mtg_graph

@@ -145,3 +145,10 @@ def test_saving_an_lpy_writes_n_and_externs(files: dict[str, pathlib.Path], tmp_
     again = Explorer(out, run_code=True)
     assert again.derivation.to_string() == ex.derivation.to_string()
     assert not ex.dirty
+
+
+def test_a_missing_lpy_is_said_missing(tmp_path: pathlib.Path) -> None:
+    from ramure.lsys import GrammarError
+
+    with pytest.raises(GrammarError, match="no such file"):
+        Explorer(tmp_path / "gone.lpy")
