@@ -77,7 +77,7 @@ def make_application(argv: list[str] | None = None) -> QApplication:
     if app is None:
         one_malloc_arena()
         app = QApplication(list(argv or sys.argv[:1]))
-        from ramure.app.desktop.native_view import native_windows
+        from ramure.app.desktop.view.native_view import native_windows
 
         if not native_windows():  # pyvistaqt's QOpenGLWidget fallback only (6-12 MB less otherwise)
             import pyvistaqt  # noqa: F401  (loaded before the first window, as before)

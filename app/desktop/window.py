@@ -20,22 +20,22 @@ from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QTabWidget
 
 from ramure.app.desktop import state
-from ramure.app.desktop.constants_panel import ConstantsPanel
+from ramure.app.desktop.panels.constants import ConstantsPanel
 from ramure.app.desktop.controller import Busy, Controller
-from ramure.app.desktop.cut_graph import CutGraphView
-from ramure.app.desktop.editor import GrammarEditor
-from ramure.app.desktop.files import FileActions
-from ramure.app.desktop.gallery import GalleryView
-from ramure.app.desktop.pca_cloud import PcaCloudView
+from ramure.app.desktop.panels.cut_graph import CutGraphView
+from ramure.app.desktop.panels.editor import GrammarEditor
+from ramure.app.desktop.menus.files import FileActions
+from ramure.app.desktop.panels.gallery import GalleryView
+from ramure.app.desktop.panels.pca_cloud import PcaCloudView
 from ramure.app.desktop.qt_fix import protect_none
-from ramure.app.desktop.regen_panel import RegenPanel
-from ramure.app.desktop.architecture_panel import ArchitecturePanel
-from ramure.app.desktop.wood_panel import WoodPanel
-from ramure.app.desktop.details_panel import DetailsPanel
-from ramure.app.desktop.defects_panel import DefectsPanel
-from ramure.app.desktop.string_dock import StringView
-from ramure.app.desktop.variants_panel import VariantsController
-from ramure.app.desktop.view import PlantView
+from ramure.app.desktop.panels.regen import RegenPanel
+from ramure.app.desktop.panels.architecture import ArchitecturePanel
+from ramure.app.desktop.panels.wood import WoodPanel
+from ramure.app.desktop.panels.details import DetailsPanel
+from ramure.app.desktop.panels.defects import DefectsPanel
+from ramure.app.desktop.panels.string_dock import StringView
+from ramure.app.desktop.panels.variants import VariantsController
+from ramure.app.desktop.view.plant_view import PlantView
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
 
@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from types import TracebackType
     from PySide6.QtGui import QCloseEvent, QImage
     from PySide6.QtWidgets import QWidget
-    from ramure.app.desktop.qualifier_map import QualifierMapView
+    from ramure.app.desktop.panels.qualifier_map import QualifierMapView
     from ramure.app.desktop.state import Snapshot
     from ramure.app.desktop.workers import Job
 
@@ -330,14 +330,14 @@ class MainWindow(QMainWindow):
 
         variants_menu = bar.addMenu("Va&riants")
         self.variants.build_menu(variants_menu)
-        from ramure.app.desktop.study import StudyMenu
+        from ramure.app.desktop.menus.study import StudyMenu
 
         study_menu = bar.addMenu("&Study")
         self.study_menu = StudyMenu(self, study_menu)
-        from ramure.app.desktop.new_study import NewStudyActions
+        from ramure.app.desktop.menus.new_study import NewStudyActions
 
         self.new_study = NewStudyActions(self, study_menu, variants_menu)
-        from ramure.app.desktop.help import HelpMenu
+        from ramure.app.desktop.menus.help import HelpMenu
 
         self.help_menu = HelpMenu(self, bar.addMenu("&Help"))
 
@@ -781,7 +781,7 @@ class MainWindow(QMainWindow):
         """The whole window as a QImage, with the 3D view freshly painted (polished)."""
         self.view.polish()
         self.view.redraw(now=True)
-        from ramure.app.desktop.native_view import grab_with_frames  # VTK's native windows painted in
+        from ramure.app.desktop.view.native_view import grab_with_frames  # VTK's native windows painted in
 
         return grab_with_frames(self)
 

@@ -461,7 +461,7 @@ def test_desktop_qualifier_map_draws_the_matrix(sweeps, monkeypatch):
     monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
     from PySide6.QtWidgets import QApplication, QMainWindow
 
-    from ramure.app.desktop.qualifier_map import attach
+    from ramure.app.desktop.panels.qualifier_map import attach
 
     app = QApplication.instance() or QApplication([])
     sweep = sweeps["ternary_bush"]

@@ -20,7 +20,7 @@ A participant session (:class:`ParticipantWindow`) shows the pages of a
 Every answer goes straight to :class:`ramure.studies.TestSession` (one SQLite
 transaction each), and the screen is rebuilt from what is stored, so a crash
 loses at most the qualifier being typed.  A timer shows the participant's
-remaining budget.  :class:`~ramure.app.desktop.analyst.AnalystWindow` shows a
+remaining budget.  :class:`~ramure.app.desktop.menus.analyst.AnalystWindow` shows a
 study's report.
 """
 
@@ -58,7 +58,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
+from ramure.app.desktop.view.thumbnails import placeholder_image, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
 from ramure.studies.design import WORDS, ParticipantFlow, Question, StudyConfig, set_title, split_words
@@ -66,7 +66,7 @@ from ramure.studies.design import WORDS, ParticipantFlow, Question, StudyConfig,
 if TYPE_CHECKING:
     from PySide6.QtGui import QCloseEvent, QDragEnterEvent, QDragMoveEvent, QDropEvent, QImage
     from PySide6.QtWidgets import QMenu
-    from ramure.app.desktop.analyst import AnalystWindow
+    from ramure.app.desktop.menus.analyst import AnalystWindow
     from ramure.app.desktop.window import MainWindow
     from ramure.studies import Study
     from ramure.studies.session import Group, TestSession
@@ -878,7 +878,7 @@ class StudyMenu:
         menu.addAction("Analyst report…").triggered.connect(lambda: self.analyst())
 
     def _ask_study(self):
-        from ramure.app.desktop.analyst import ask_study_path
+        from ramure.app.desktop.menus.analyst import ask_study_path
 
         return ask_study_path(self.window)
 
@@ -938,7 +938,7 @@ class StudyMenu:
         return choice
 
     def analyst(self, path: str | os.PathLike | None = None) -> AnalystWindow | None:
-        from ramure.app.desktop.analyst import AnalystWindow
+        from ramure.app.desktop.menus.analyst import AnalystWindow
 
         path = path or self._ask_study()
         if not path:

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from PySide6.QtCore import QTimer
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QLineEdit, QListWidget, QPushButton, QVBoxLayout, QWidget
 
-from ramure.app.desktop.lazy_view import LazyView
+from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.fruit_defects import EXAMPLES
 from ramure.errors import RamureError
 
@@ -182,7 +182,7 @@ class DefectsPanel(QWidget):
 
 
 def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter  # native window on X11
+    from ramure.app.desktop.view.native_view import make_plotter  # native window on X11
 
     plotter = make_plotter(parent)
     plotter.set_background("white")

@@ -4,9 +4,9 @@
   heat, humidity and wind it runs in.  The whole season (every step) is computed once per
   plant and environment, in the controller's worker; moving the slider then only recolours:
   each attached leaf takes its Markov state's colour (:attr:`LeafChain.colors`) in the main
-  view, through the view's public :meth:`~ramure.app.desktop.view.PlantView.set_colors`.
+  view, through the view's public :meth:`~ramure.app.desktop.view.plant_view.PlantView.set_colors`.
   A **fallen leaf's cells are hidden** on the branches
-  (:meth:`~ramure.app.desktop.view.PlantView.set_hidden_cells`; their colour is set to the
+  (:meth:`~ramure.app.desktop.view.plant_view.PlantView.set_hidden_cells`; their colour is set to the
   background's, :data:`FALLEN_RGB`, as well) and the leaf is drawn again as a disc in its
   state's colour where it landed on the ground (an overlay actor named ``details_fallen``).
   Step 0 gives the plant its own colours back.  The selection stays red on top of the season
@@ -48,7 +48,7 @@ from PySide6.QtWidgets import (
 )
 
 from ramure.app.desktop import state
-from ramure.app.desktop.lazy_view import LazyView
+from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit, paint_adhesion, selected_fruit_surface
 from ramure.app.details_history import grow_again, last_detail, record, selected_fruit
 from ramure.errors import RamureError
@@ -614,9 +614,9 @@ def _count_box(name, low, high, value):
 
 
 def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter  # native window on X11
+    from ramure.app.desktop.view.native_view import make_plotter  # native window on X11
 
-    from ramure.app.desktop import scene
+    from ramure.app.desktop.view import scene
 
     plotter = make_plotter(parent, auto_update=False, multi_samples=0)
     scene.apply_look(plotter)

@@ -1,6 +1,6 @@
 """The variant gallery dock: the 27 picks as thumbnails; a click applies that variant.
 
-The pictures are drawn in a worker (:mod:`ramure.app.desktop.thumbnails`) or read
+The pictures are drawn in a worker (:mod:`ramure.app.desktop.view.thumbnails`) or read
 from the exploration's image files.  Clicking a thumbnail asks the window to
 regrow the selection (or the whole plant) with that pick's parameter
 combination.

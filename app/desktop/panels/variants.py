@@ -18,8 +18,9 @@ import numpy as np
 from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import QFileDialog
 
-from ramure.app.desktop import qualifier_map, variants
-from ramure.app.desktop.thumbnails import placeholder_image, same_segments, skeleton_image
+from ramure.app.desktop import variants
+from ramure.app.desktop.panels import qualifier_map
+from ramure.app.desktop.view.thumbnails import placeholder_image, same_segments, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
 

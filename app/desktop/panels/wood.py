@@ -33,7 +33,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ramure.app.desktop.lazy_view import LazyView
+from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
@@ -265,6 +265,6 @@ class WoodPanel(QWidget):
 
 
 def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter  # native window on X11
+    from ramure.app.desktop.view.native_view import make_plotter  # native window on X11
 
     return make_plotter(parent, auto_update=False, multi_samples=0)

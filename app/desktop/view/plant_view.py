@@ -1,6 +1,6 @@
 """The 3D view: the plant in a pyvista plotter widget, click and rubber-band picking.
 
-The plotter is a :class:`~ramure.app.desktop.native_view.NativeInteractor` on X11: VTK
+The plotter is a :class:`~ramure.app.desktop.view.native_view.NativeInteractor` on X11: VTK
 draws and swaps each frame straight into the widget's own X window, without the
 QOpenGLWidget's copies and Qt's OpenGL composition of pyvistaqt's ``QtInteractor``
 (about 10 ms of CPU less per frame on llvmpipe, 40 ms less for the polished frame, whose
@@ -31,9 +31,9 @@ shader) and FXAA over a picture full of edges.  So the frame right after an
 edit (a new plant version, new colours, hidden cells) or during a camera drag
 is a *draft*: the same plant, geometry and colours, with 1-pixel hairlines, no
 FXAA, and no hairline shorter than 1.5 pixels on screen (see
-:data:`~ramure.app.desktop.scene.DRAFT_MIN_LINE_PIXELS`; about 30 % of the cost).  When the user pauses for :data:`POLISH_MS`
+:data:`~ramure.app.desktop.view.scene.DRAFT_MIN_LINE_PIXELS`; about 30 % of the cost).  When the user pauses for :data:`POLISH_MS`
 (a single-shot timer that each further edit restarts) the full-quality frame
-follows.  Plants under :data:`~ramure.app.desktop.plant_actors.LOD_SEGMENTS`
+follows.  Plants under :data:`~ramure.app.desktop.view.plant_actors.LOD_SEGMENTS`
 segments are always drawn polished (their frames are cheap).  Pictures taken
 with :meth:`PlantView.grab_image` are always polished.
 """
@@ -49,13 +49,13 @@ import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, QTimer, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 
-from ramure.app.desktop.native_view import NativeInteractor, native_windows
-from ramure.app.desktop.plant_actors import PlantActors
+from ramure.app.desktop.view.native_view import NativeInteractor, native_windows
+from ramure.app.desktop.view.plant_actors import PlantActors
 from ramure.app.desktop import state
 from ramure.app.desktop.state import FRUIT_SELECTED, points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
 from ramure.errors import RamureError
-from ramure.app.desktop import scene
+from ramure.app.desktop.view import scene
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage, QKeyEvent, QResizeEvent
@@ -250,7 +250,7 @@ class PlantView(QWidget):
     """The plant, its selection in red, the selection's OBB as a red wireframe.
 
     ``native``: VTK in a native window (True), pyvistaqt's QOpenGLWidget (False), or as
-    :func:`~ramure.app.desktop.native_view.native_windows` says (None, the default).
+    :func:`~ramure.app.desktop.view.native_view.native_windows` says (None, the default).
     """
 
     cell_clicked = Signal(int, str)  # cell id (-1: nothing under the cursor), mode
@@ -406,7 +406,7 @@ class PlantView(QWidget):
 
     def plant_bounds(self) -> tuple[float, ...]:
         """The shown mesh's bounds (VTK's order): the plant actors' own (patched after an edit,
-        see :mod:`~ramure.app.desktop.plant_actors`) while the mesh shows the model's points,
+        see :mod:`~ramure.app.desktop.view.plant_actors`) while the mesh shows the model's points,
         else VTK's."""
         assert self.mesh is not None
         known = self.plant.bounds

@@ -21,7 +21,7 @@ Choices the issue leaves open, stated here:
   orbits like a turntable (VTK's terrain style: azimuth about Z and
   elevation, never any roll).  Framing fits the plant's 8 box corners into
   90 % of the view, whatever its shape (tall plants are not cropped).
-* **Draft frames** (see :mod:`ramure.app.desktop.view`) leave out the hairlines shorter
+* **Draft frames** (see :mod:`ramure.app.desktop.view.plant_view`) leave out the hairlines shorter
   than :data:`DRAFT_MIN_LINE_PIXELS` on screen (chosen again when the camera moves, so
   zooming in brings them back).  Software OpenGL pays about 0.15 microseconds per line
   however short: Honda n = 17 framed whole leaves out about half of its 131k lines, about
@@ -154,7 +154,7 @@ def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int, sides: int =
     """Per-segment RGB from per-cell ``colors``: each segment takes its first tube cell's colour.
 
     ``sides``: the mesh is known to be laid out as ``count`` tubes of ``sides`` quads first
-    (:func:`ramure.app.desktop.plant_actors.tube_layout`), so the layout is not checked again.
+    (:func:`ramure.app.desktop.view.plant_actors.tube_layout`), so the layout is not checked again.
     """
     colors = np.asarray(colors)
     if sides:
@@ -500,7 +500,7 @@ class Hairlines:
         shown.chunks.set_visible(False)
 
     def forget_kept(self) -> None:
-        """Drop the kept version (see :meth:`ramure.app.desktop.view.PlantView.forget_kept`):
+        """Drop the kept version (see :meth:`ramure.app.desktop.view.plant_view.PlantView.forget_kept`):
         its memory and actors become the spare."""
         kept, self.kept = self.kept, None
         self._free(kept)
@@ -612,7 +612,7 @@ class DraftLines:
     def update(self, renderer: Any, lines: pv.PolyData, count: int) -> None:
         """Choose among the first ``count`` lines of ``lines`` (:func:`point_lines`) for
         ``renderer``'s camera, unless they were chosen for the same view and lines."""
-        from ramure.app.desktop._lines_kernel import long_lines
+        from ramure.app.desktop.view._lines_kernel import long_lines
 
         matrix = projection_matrix(renderer)
         width, height = renderer.GetSize()
