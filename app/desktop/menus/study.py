@@ -31,7 +31,7 @@ import pathlib
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
+from PySide6.QtCore import QMimeData, QObject, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QPixmap
 from PySide6.QtWidgets import (
     QAbstractItemView,
@@ -67,7 +67,6 @@ if TYPE_CHECKING:
     from PySide6.QtGui import QCloseEvent, QDragEnterEvent, QDragMoveEvent, QDropEvent, QImage
     from PySide6.QtWidgets import QMenu
     from ramure.app.desktop.menus.analyst import AnalystWindow
-    from ramure.app.desktop.window import MainWindow
     from ramure.studies import Study
     from ramure.studies.session import Group, TestSession
 
@@ -868,11 +867,20 @@ class ParticipantWindow(QWidget):
 
 
 # -- the Study menu -------------------------------------------------------------------------
-class StudyMenu:
-    """Study ▸ Participant session… / Analyst report…"""
+class StudyMenu(QObject):
+    """Study ▸ Participant session… / Analyst report…
 
-    def __init__(self, window: MainWindow, menu: QMenu) -> None:
-        self.window = window
+    ``parent`` is the widget its dialogs open over; ``ask=False`` never asks (a new participant
+    is enrolled, tests and scripts).  A study that cannot be opened is said with :attr:`refused`.
+    """
+
+    #: A user error (a study that cannot be opened): the window reports it.
+    refused = Signal(str)
+
+    def __init__(self, menu: QMenu, parent: QWidget, ask: bool = True) -> None:
+        super().__init__(parent)
+        self.parent_widget = parent
+        self.ask = ask
         self.windows: list[QWidget] = []
         menu.addAction("Participant session…").triggered.connect(lambda: self.participant())
         menu.addAction("Analyst report…").triggered.connect(lambda: self.analyst())
@@ -880,7 +888,7 @@ class StudyMenu:
     def _ask_study(self):
         from ramure.app.desktop.menus.analyst import ask_study_path
 
-        return ask_study_path(self.window)
+        return ask_study_path(self.parent_widget)
 
     def participant(
         self,
@@ -912,9 +920,9 @@ class StudyMenu:
             elif code not in [p["code"] for p in study.participants()]:
                 study.add_participant(code, pilot=pilot)
         except RamureError as exc:
-            self.window.report_refused(str(exc))
+            self.refused.emit(str(exc))
             return None
-        win = ParticipantWindow(study, code, ask=self.window.ask)
+        win = ParticipantWindow(study, code, ask=self.ask)
         win.closed.connect(study.close)
         self.windows.append(win)
         win.show()
@@ -923,13 +931,13 @@ class StudyMenu:
     def _choose_participant(self, study, pilot=False):
         """A new code, or an existing one to resume, or a pilot run (asked in a small dialog)."""
         codes = [p["code"] for p in study.participants() if p["consent"] or not p["withdrawn_at"]]
-        if not codes or not self.window.ask:
+        if not codes or not self.ask:
             return study.add_participant(pilot=pilot)
         from PySide6.QtWidgets import QInputDialog
 
         new, trial = "New participant", "New pilot run (kept apart from the real data)"
         choice, ok = QInputDialog.getItem(
-            self.window, "Participant", "Resume a participant or start a new one:", [new, trial, *codes], 0, False
+            self.parent_widget, "Participant", "Resume a participant or start a new one:", [new, trial, *codes], 0, False
         )
         if not ok:
             return None
@@ -938,12 +946,13 @@ class StudyMenu:
         return choice
 
     def analyst(self, path: str | os.PathLike | None = None) -> AnalystWindow | None:
+        """Open a study's analyst window: who took part, and its report."""
         from ramure.app.desktop.menus.analyst import AnalystWindow
 
         path = path or self._ask_study()
         if not path:
             return None
-        win = AnalystWindow(ask=self.window.ask)
+        win = AnalystWindow(ask=self.ask)
         self.windows.append(win)
         win.show()
         win.open_study(path)

@@ -57,7 +57,7 @@ if TYPE_CHECKING:
     import pyvista as pv
     from numpy.typing import ArrayLike
     from ramure.app.desktop.controller import Controller
-    from ramure.app.desktop.window import MainWindow
+    from ramure.app.desktop.view.plant_view import PlantView
     from ramure.app.desktop.workers import Job
     from ramure.lsys.seasons import LeafChain, Season
 
@@ -122,7 +122,7 @@ class DetailsPanel(QWidget):
     def __init__(
         self,
         controller: Controller,
-        window: MainWindow | None = None,
+        view: PlantView | None = None,
         parent: QWidget | None = None,
         plotter_factory: Callable[[QWidget], Any] | None = None,
     ) -> None:
@@ -130,7 +130,7 @@ class DetailsPanel(QWidget):
         from ramure.lsys.seasons import autumn_chain
 
         self.controller = controller
-        self.main_window = window  # not self.window: that is QWidget.window()
+        self.main_view = view  # the main 3D view the season recolours (None: none, tests)
         self.chain = autumn_chain()
         self.season: Season | None = None
         self.season_rgb: np.ndarray | None = None
@@ -373,8 +373,8 @@ class DetailsPanel(QWidget):
         if self.slider.value() > 0 and self.season is not None and self.season_key == self._key():
             self._paint(self.slider.value())
 
-    def _view(self):
-        return getattr(self.main_window, "view", None)
+    def _view(self) -> PlantView | None:
+        return self.main_view
 
     # -- lichen and cracks -----------------------------------------------------------------
     def grow_lichen(self) -> Job:

@@ -798,6 +798,15 @@ class PlantView(QWidget):
         self.redraw(now=True)
         return self.frame_image()
 
+    def grab_window(self) -> QImage:
+        """The whole top-level window holding this view as a QImage, the 3D view freshly
+        painted (polished) and VTK's native windows painted in."""
+        self.polish()
+        self.redraw(now=True)
+        from ramure.app.desktop.view.native_view import grab_with_frames
+
+        return grab_with_frames(self.window())
+
     def frame_image(self) -> QImage:
         """The last frame drawn, in whatever look (:meth:`grab_image` polishes first)."""
         if isinstance(self.plotter, NativeInteractor):
