@@ -180,9 +180,8 @@ class DefectsPanel(QWidget):
         self.status.emit(f"Defects: {text}", 6000)
 
 
-def _interactor(parent):
-    from ramure.app.desktop.view.native_view import make_plotter  # native window on X11
+def _interactor(parent: QWidget) -> Any:
+    """The dock's own 3D view: a white background."""
+    from ramure.app.desktop.panels.common import dock_plotter
 
-    plotter = make_plotter(parent)
-    plotter.set_background("white")
-    return plotter
+    return dock_plotter(parent, "white")

@@ -613,11 +613,8 @@ def _count_box(name, low, high, value):
     return box
 
 
-def _interactor(parent):
-    from ramure.app.desktop.view.native_view import make_plotter  # native window on X11
+def _interactor(parent: QWidget) -> Any:
+    """The dock's own 3D view: lit and framed like the main view."""
+    from ramure.app.desktop.panels.common import dock_plotter
 
-    from ramure.app.desktop.view import scene
-
-    plotter = make_plotter(parent, auto_update=False, multi_samples=0)
-    scene.apply_look(plotter)
-    return plotter
+    return dock_plotter(parent, "scene")
