@@ -25,6 +25,7 @@ FIRST_COMPILE = (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``python -m ramure.app.desktop``."""
     p = argparse.ArgumentParser(
         prog="python -m ramure.app.desktop", description="The Ramure desktop explorer: edit, pick, regenerate, browse variants."
     )
@@ -88,6 +89,7 @@ def make_application(argv: list[str] | None = None) -> QApplication:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Open the window on the grammar named in ``argv``; returns the exit code (2: a grammar that cannot be read)."""
     args = build_parser().parse_args(argv)
     import ramure.grammars
     from ramure.app.model import Explorer

@@ -525,6 +525,7 @@ class MainWindow(QMainWindow):
             pass
 
     def show_cut(self, snap: Snapshot) -> None:
+        """Show the last regrow's cut graph in the Cut graph dock."""
         result = snap.last_result
         if result is None:
             return
@@ -540,6 +541,7 @@ class MainWindow(QMainWindow):
         self.cut_view.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; cut capacity {result.cut_value:g}")
 
     def show_planned_cut(self) -> None:
+        """Show the cut a regrow of the selection would make (the dock's Plan button)."""
 
         def plan(ex):
             cut = ex.plan()
@@ -579,6 +581,7 @@ class MainWindow(QMainWindow):
         self.docks[key].raise_()
 
     def set_kinship(self, on: bool) -> None:
+        """Colour the selection's relatives (``on``) or the selection only."""
         self.kinship = bool(on)
         self.kinship_action.setChecked(self.kinship)
         self.show_selection(self.controller.snapshot.selection)
@@ -720,6 +723,7 @@ class MainWindow(QMainWindow):
         self.view.set_busy(busy)  # the 3D view's polished frame waits for the next version
 
     def status(self, text: str, timeout: int = 4000) -> None:
+        """Show ``text`` on the status bar for ``timeout`` ms (0: until replaced); empty text clears it."""
         if text:
             self.statusBar().showMessage(text, timeout)
         else:
@@ -770,11 +774,13 @@ class MainWindow(QMainWindow):
 
     @ask.setter
     def ask(self, value: bool) -> None:
+        """Set whether the window and its menus may ask questions."""
         self._ask = bool(value)
         self.files.ask = self.study_menu.ask = self._ask
 
     # -- files and closing ------------------------------------------------------------------
     def update_recent_menu(self) -> None:
+        """Fill File > Recent files from the settings."""
         self.recent_menu.clear()
         for path in self.files.recent():
             action = self.recent_menu.addAction(path)
@@ -810,6 +816,7 @@ class MainWindow(QMainWindow):
         return self.view.grab_window()
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        """Close after the unsaved-changes question; stop tasks and jobs, then the view."""
         if not self.confirm_discard():
             event.ignore()
             return
@@ -820,4 +827,5 @@ class MainWindow(QMainWindow):
         event.accept()
 
     def run_later(self, msecs: int, fn: Callable[[], object]) -> None:
+        """Call ``fn`` after ``msecs`` in the event loop."""
         QTimer.singleShot(msecs, fn)

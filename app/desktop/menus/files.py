@@ -93,6 +93,7 @@ class FileActions(QObject):
         return [v for v in paths if isinstance(v, str) and _exists(v)]
 
     def remember(self, path: str | os.PathLike) -> None:
+        """Put ``path`` first in the recent files (at most ``MAX_RECENT``)."""
         path = str(pathlib.Path(path).resolve())
         items = [path] + [p for p in self.recent() if p != path]
         self.settings.setValue("recent", items[:MAX_RECENT])

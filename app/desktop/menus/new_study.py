@@ -124,6 +124,7 @@ class NewStudyDialog(QDialog):
         self.minutes.setEnabled(not on)
 
     def choose_folder(self) -> None:
+        """Ask for the study's folder."""
         folder = QFileDialog.getExistingDirectory(self, "Folder of the new study")
         if folder:
             self.folder.setText(folder)
@@ -174,6 +175,7 @@ class NewStudyDialog(QDialog):
         self.refused.emit(message)
 
     def copy_command(self) -> None:
+        """Copy the serve command to the clipboard."""
         QApplication.clipboard().setText(self.command.text())
         self.status.emit("Serve command copied", 5000)
 
@@ -232,6 +234,7 @@ class NewStudyDialog(QDialog):
             process.waitForFinished(2000)
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        """Stop a server started here before the dialog closes."""
         self.stop_serving()
         super().closeEvent(event)
 

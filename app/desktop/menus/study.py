@@ -168,27 +168,32 @@ class ImageList(QListWidget):
         self.setDefaultDropAction(Qt.DropAction.MoveAction)
 
     def mimeTypes(self) -> list[str]:  # noqa: N802 (Qt API)
+        """The drag format of pictures: their ids."""
         return [MIME]
 
     def mimeData(self, items: Sequence[QListWidgetItem]) -> QMimeData:  # noqa: N802 (Qt API)
+        """The dragged pictures' ids, comma-separated."""
         data = QMimeData()
         ids = [str(item.data(Qt.ItemDataRole.UserRole)) for item in items]
         data.setData(MIME, ",".join(ids).encode())
         return data
 
     def dragEnterEvent(self, event: QDragEnterEvent) -> None:  # noqa: N802 (Qt API)
+        """Accept a drag of pictures only."""
         if event.mimeData().hasFormat(MIME):
             event.acceptProposedAction()
         else:
             event.ignore()
 
     def dragMoveEvent(self, event: QDragMoveEvent) -> None:  # noqa: N802 (Qt API)
+        """Accept a drag of pictures only."""
         if event.mimeData().hasFormat(MIME):
             event.acceptProposedAction()
         else:
             event.ignore()
 
     def dropEvent(self, event: QDropEvent) -> None:  # noqa: N802 (Qt API)
+        """Pictures dropped here: hand their ids to the page, which moves them into this group."""
         if not event.mimeData().hasFormat(MIME):
             event.ignore()
             return
@@ -207,9 +212,11 @@ class ImageList(QListWidget):
         return item
 
     def image_ids(self) -> list[int]:
+        """The ids of the pictures in the list, in order."""
         return [self.item(i).data(Qt.ItemDataRole.UserRole) for i in range(self.count())]
 
     def selected_ids(self) -> list[int]:
+        """The ids of the selected pictures."""
         return [item.data(Qt.ItemDataRole.UserRole) for item in self.selectedItems()]
 
 
@@ -234,6 +241,7 @@ class LikertRow(QWidget):
         self.buttons.idClicked.connect(lambda level: self.answered.emit(self.key, level))
 
     def set_level(self, level: int | None) -> None:
+        """Check the button of ``level`` (None: none checked)."""
         self.buttons.setExclusive(False)
         for button in self.buttons.buttons():
             button.setChecked(False)
@@ -363,6 +371,7 @@ class TestPage(QWidget):
         self.refresh()
 
     def eventFilter(self, watched: object, event: object) -> bool:  # noqa: N802 (Qt API)
+        """Fit the pool's pictures when it is resized."""
         from PySide6.QtCore import QEvent
 
         if watched is self.pool and isinstance(event, QEvent) and event.type() == QEvent.Type.Resize:
@@ -397,9 +406,11 @@ class TestPage(QWidget):
 
     # -- what the participant does ---------------------------------------------------
     def partition(self) -> list[list[int]]:
+        """The groups as lists of picture ids."""
         return [list(g.images) for g in self.session.groups()]
 
     def images_dropped(self, ids: Iterable[int], target: ImageList) -> None:
+        """Pictures dropped on a group's list: move them into its group."""
         self.move_images(ids, target.target)
 
     def move_images(self, ids: Iterable[int], target: str | int) -> None:
@@ -413,9 +424,11 @@ class TestPage(QWidget):
         self._write(lambda: self.session.set_groups([g for g in groups if g]))
 
     def set_representative(self, label: int, image: int) -> None:
+        """Make ``image`` the representative of group ``label`` (saved at once)."""
         self._write(lambda: self.session.set_representative(label, image))
 
     def rate(self, label: int, key: str, level: int) -> None:
+        """Rate group ``label`` on the scale ``key`` (saved at once)."""
         self._write(lambda: self.session.rate(label, **{key: level}))
 
     def add_qualifier(self, label: int, text: str) -> bool:
@@ -433,9 +446,11 @@ class TestPage(QWidget):
         return self._write(add)
 
     def remove_qualifier(self, label: int, text: str) -> None:
+        """Take the qualifier ``text`` off group ``label`` (saved at once)."""
         self._write(lambda: self.session.remove_qualifier(label, text))
 
     def finish(self) -> None:
+        """Finish this grammar's test; the window moves on when it is saved."""
         if self._write(self.session.finish, refresh=False):
             self.finished.emit()
 
@@ -450,6 +465,7 @@ class TestPage(QWidget):
         return True
 
     def refuse(self, message: str) -> None:
+        """Say why an answer was not saved (through the participant window)."""
         self.owner.refuse(message)
 
     # -- showing what is stored --------------------------------------------------------
@@ -527,6 +543,7 @@ class QuestionsPage(QWidget):
         layout.addStretch(1)
 
     def answers(self) -> dict[str, str]:
+        """The answers typed or chosen, by question key."""
         return {k: (f.currentText() if isinstance(f, QComboBox) else f.text()) for k, f in self.fields.items()}
 
 
@@ -693,10 +710,12 @@ class ParticipantWindow(QWidget):
         QTimer.singleShot(delay, lambda: self.continue_button.setEnabled(not self.is_closed))
 
     def continue_tests(self) -> None:
+        """Leave the between-tests page for the next grammar."""
         if self.stack.currentWidget() is self.between_page:
             self.next_grammar()
 
     def give_consent(self) -> None:
+        """Record the participant's consent and show the next step."""
         try:
             self.flow.consent()
         except RamureError as exc:
@@ -762,6 +781,7 @@ class ParticipantWindow(QWidget):
         return self.show_step()
 
     def open_test(self, session: TestSession) -> TestPage:
+        """Show the test page of ``session`` (placeholders until its pictures are drawn)."""
         self.progress_label.setText(self.title(session.grammar))
         pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, "", "…")) for i in range(1, 28)}
         page = TestPage(self, session, pixmaps, self.config)
@@ -839,6 +859,7 @@ class ParticipantWindow(QWidget):
         self.withdraw_button.setEnabled(False)
 
     def update_timer(self) -> None:
+        """Show the time left (on the current test, or the study's), red in the last two minutes."""
         if self.is_closed:
             return
         if self.page is not None and not self.page.session.finished:
@@ -853,11 +874,13 @@ class ParticipantWindow(QWidget):
         self.timer_label.setStyleSheet("font-size: 14pt; font-weight: bold;" + (" color: #c00000;" if seconds < 120 else ""))
 
     def refuse(self, message: str) -> None:
+        """Say why something was not saved: a warning box when the window may ask, and ``last_message``."""
         self.last_message = message
         if self.ask:
             QMessageBox.warning(self, "Not saved", message)
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        """Stop the timer and the picture task, then say :attr:`closed` (the study closes)."""
         self.tick.stop()
         if self.image_task is not None:
             self.image_task.cancel()

@@ -73,6 +73,7 @@ class ConstantRow:
         self.high.valueChanged.connect(self._range_typed)
 
     def widgets(self) -> list[QWidget]:
+        """The row's widgets in grid order: name, slider, value, min, max."""
         return [self.label, self.slider, self.value, self.low, self.high]
 
     def set_value(self, value: float) -> None:
@@ -88,6 +89,7 @@ class ConstantRow:
             w.blockSignals(False)
 
     def set_range(self, lo: float, hi: float) -> None:
+        """The slider's range ``[lo, hi]``; ValueError unless ``hi > lo``."""
         lo, hi = float(lo), float(hi)
         if not hi > lo:
             raise ValueError(f"{self.name}: the range maximum must be above its minimum ({lo:g} .. {hi:g})")
@@ -281,4 +283,5 @@ class ConstantsPanel(QWidget):
             self._flush()
 
     def values(self) -> dict[str, float]:
+        """Each constant's value as shown."""
         return {name: row.value.value() for name, row in self.rows.items()}

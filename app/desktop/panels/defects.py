@@ -93,6 +93,7 @@ class DefectsPanel(QWidget):
         return self.view_slot.plotter()
 
     def showEvent(self, event: QShowEvent) -> None:  # noqa: N802 - Qt's name
+        """Refresh the dock's fruit when it comes on screen."""
         super().showEvent(event)
         QTimer.singleShot(0, self.refresh)
 

@@ -378,6 +378,7 @@ class DetailsPanel(QWidget):
 
     # -- lichen and cracks -----------------------------------------------------------------
     def grow_lichen(self) -> Job:
+        """Grow lichen on the selected fruit (clusters, particles, habit and seed from the dock), as a job."""
         self.list_habits()
         clusters, particles = int(self.clusters.value()), int(self.particles.value())
         habit, seed = self.habit.currentText(), int(self.seed.value())
@@ -398,10 +399,10 @@ class DetailsPanel(QWidget):
         return self.controller.submit("details lichen", run, key="details-fruit")
 
     def grow_lichen_on_bark(self) -> Job:
-        self.list_habits()
         """Grow lichen on the plant's branches (clusters, particles, habit and seed from the dock)."""
         from ramure.app.details import lichen_on_surface, plant_bark
 
+        self.list_habits()
         clusters, particles = int(self.clusters.value()), int(self.particles.value())
         habit, seed = self.habit.currentText(), int(self.seed.value())
         self.fruit_label.setText("Growing lichen on the branches…")
@@ -465,6 +466,7 @@ class DetailsPanel(QWidget):
         return self.adhesion
 
     def clear_paint(self) -> None:
+        """Forget the painted adhesion: lichen may start anywhere on the fruit."""
         self.adhesion = None
         if self.fruit is not None:
             self._show_fruit()

@@ -61,6 +61,7 @@ class QualifierMapView(QWidget):
         self.name = ""
 
     def set_unavailable(self, message: str) -> None:
+        """Show no matrix, only ``message``."""
         self.regions = None
         self.note.setText(message)
         self.redraw()
@@ -87,6 +88,7 @@ class QualifierMapView(QWidget):
         self.redraw()
 
     def redraw(self) -> None:
+        """Draw the collision matrix of the regions (nothing without them)."""
         from ramure.metrics.heatmap import draw_collision_matrix
 
         self.figure.clear()

@@ -198,6 +198,7 @@ class RegenPanel(QWidget):
         self.rho_changed.emit(value)
 
     def set_rho(self, percent: float) -> None:
+        """Show ρ at ``percent`` without emitting :attr:`rho_changed`."""
         self.rho.blockSignals(True)
         self.rho.setValue(int(round(percent)))
         self.rho_label.setText(f"ρ = {self.rho.value()}")
@@ -214,10 +215,12 @@ class RegenPanel(QWidget):
         self.cut_preview.setVisible(bool(text))
 
     def set_history(self, can_undo: bool, can_redo: bool) -> None:
+        """Enable Undo and Redo as the history allows."""
         self.undo_button.setEnabled(can_undo)
         self.redo_button.setEnabled(can_redo)
 
     def set_selection_size(self, count: int) -> None:
+        """Say on Regrow what it regrows (``count`` selected, or the whole plant); Prune needs a selection."""
         self.prune_button.setEnabled(count > 0)
         target = f"{count} selected" if count else "whole plant"
         text = f"Regrow ({target})"
@@ -265,6 +268,7 @@ class RegenPanel(QWidget):
         self.with_constants_button.setEnabled(bool(self.boxes))
 
     def values(self) -> dict[str, float]:
+        """The values in the panel's own constant boxes."""
         return {name: box.value() for name, box in self.boxes.items()}
 
     def _with_constants(self) -> None:

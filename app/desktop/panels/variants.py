@@ -163,6 +163,7 @@ class VariantsController(QObject):
 
     # -- menu -------------------------------------------------------------------
     def build_menu(self, menu: QMenu) -> None:
+        """Fill the Variants menu: explore, open an exploration folder, load study words, cancel."""
         self.explore_action = menu.addAction("Explore variants of this grammar")
         self.explore_action.triggered.connect(lambda: self.explore())  # not explore(checked)
         self.explore_action.setEnabled(variants.metrics_available() is None)
@@ -172,6 +173,7 @@ class VariantsController(QObject):
         menu.addAction("Cancel running work").triggered.connect(self.cancel_all)
 
     def fruit_action(self, menu: QMenu) -> QAction:
+        """The checkable Volumetric fruit action (and Cut fruit open) added to ``menu``."""
         action = QAction("Volumetric fruit", self.parent_widget)
         action.setCheckable(True)
         action.setEnabled(self.fruit_ok)
@@ -255,10 +257,12 @@ class VariantsController(QObject):
             self.crashed.emit(f"{type(exc).__name__}: {exc}", details)
 
     def cancel_all(self) -> None:
+        """Cancel every running task."""
         for task in list(self.tasks.values()):
             task.cancel()
 
     def busy(self) -> bool:
+        """True while a task runs."""
         return any(t.running for t in self.tasks.values())
 
     # -- explorations ---------------------------------------------------------------
@@ -293,6 +297,7 @@ class VariantsController(QObject):
         return vs is not None and vs.exploration is not None and self.text == snap.text and self.constants == snap.constants
 
     def open_exploration(self, directory: str | os.PathLike | None = None) -> VariantSet | None:
+        """Show the exploration saved in ``directory`` (asked for when None); None after saying why not."""
         if directory is None:
             directory = QFileDialog.getExistingDirectory(self.parent_widget, "Open exploration folder")
             if not directory:
@@ -323,6 +328,7 @@ class VariantsController(QObject):
         self.render_thumbnails()
 
     def render_thumbnails(self) -> Task:
+        """Draw the 27 picks' thumbnails in a task (each pick's plant, beside the base plant)."""
         vs = self.variant_set
         assert vs is not None, "set_variants() comes first"
         snap = self.controller.snapshot
@@ -350,6 +356,7 @@ class VariantsController(QObject):
         return self.run("thumbnails", work, self.gallery.set_images, "Drawing thumbnails")
 
     def plant_changed(self, snap: Snapshot) -> None:
+        """A new plant: say when the variants belong to another text or constants; redraw the fruit volumes."""
         if self.variant_set is not None and self.text is not None and snap.text != self.text:
             self.gallery.note.setText("These variants were explored for another grammar text; explore again to update them.")
         elif self.variant_set is not None and self.constants is not None and snap.constants != self.constants:
@@ -390,6 +397,7 @@ class VariantsController(QObject):
         return job
 
     def qualifier_done(self, job: Job) -> None:
+        """A qualifier job ended: keep its result and say what it did."""
         if job.name.startswith("qualifier ") and not job.stale and job.error is None:
             self.last_qualifier = job.result
             self._say(variants.qualifier_message(job.result), 15000)
@@ -456,6 +464,7 @@ class VariantsController(QObject):
             self.draw_fruit(self.controller.snapshot)
 
     def fruit_ready(self, job: Job) -> None:
+        """The fruit volumes of the current plant are built: draw them (if still wanted)."""
         if job.name != "fruit" or job.stale or job.error is not None or not self.show_fruit:
             return
         self.view.set_fruit(job.result, self.controller.snapshot.selection)
@@ -464,6 +473,7 @@ class VariantsController(QObject):
             self._say("This plant has no fruit")
 
     def fruit_clicked(self, leaf: int, mode: str) -> None:
+        """A click on a fruit volume asks for that leaf to be selected (:attr:`select_requested`)."""
         self.select_requested.emit([leaf], mode)
 
     def regrow_fruit(self, preset: str = "") -> Job:

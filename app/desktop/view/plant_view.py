@@ -600,6 +600,7 @@ class PlantView(QWidget):
         self.redraw()
 
     def fruit_colors(self, selection: Collection[int]) -> np.ndarray:
+        """The fruit volumes' cell colours, the selected fruit in the selection colour."""
         from ramure.app.desktop.state import leaf_mask
 
         if self.fruit is None:
@@ -613,15 +614,18 @@ class PlantView(QWidget):
         return rgb
 
     def set_fruit_selection(self, selection: Collection[int]) -> None:
+        """Recolour the fruit volumes for ``selection``."""
         if self.fruit is not None:
             self.fruit.cell_data["rgb"][:] = self.fruit_colors(selection)  # type: ignore[index]  # pyvista stubs
             self.fruit.Modified()
 
     def has_box(self) -> bool:
+        """True when the rubber-band box is on screen."""
         return self.box_actor is not None and bool(self.box_actor.GetVisibility())
 
     # -- coordinates -------------------------------------------------------------
     def display_size(self) -> tuple[int, ...]:
+        """The render window's size in display pixels."""
         ren_win = self.plotter.ren_win
         assert ren_win is not None, "the view is closed"
         return tuple(ren_win.GetSize())
@@ -637,6 +641,7 @@ class PlantView(QWidget):
         return QPoint(int(round(x / scale)), int(round(self.plotter.height() - 1 - y / scale)))
 
     def projection_matrix(self) -> np.ndarray:
+        """The renderer's world-to-display projection (see :func:`ramure.app.render.projection_matrix`)."""
         return scene.projection_matrix(self.plotter.renderer)
 
     def project(self, points: ArrayLike) -> np.ndarray:
@@ -770,6 +775,7 @@ class PlantView(QWidget):
         return cell
 
     def click_from_widget(self, qpoint: QPoint, mode: str) -> int:
+        """A click at widget point ``qpoint``: pick there (see :meth:`click_at`)."""
         return self.click_at(*self.to_display(qpoint), mode)
 
     def rectangle_at(self, rect: Sequence[float], mode: str = "replace") -> None:
@@ -777,9 +783,11 @@ class PlantView(QWidget):
         self.rectangle_selected.emit(tuple(float(v) for v in rect), mode)
 
     def rectangle_from_widget(self, a: QPoint, b: QPoint, mode: str) -> None:
+        """A rubber band from ``a`` to ``b`` (widget points): select inside it."""
         self.rectangle_at((*self.to_display(a), *self.to_display(b)), mode)
 
     def key_pressed(self, event: QKeyEvent) -> None:
+        """Escape clears the selection, R toggles rectangle selection."""
         if event.key() == Qt.Key.Key_Escape:
             self.escape.emit()
         elif event.key() == Qt.Key.Key_R and not event.modifiers():
@@ -788,6 +796,7 @@ class PlantView(QWidget):
             self.reset_camera()
 
     def set_rectangle_mode(self, on: bool) -> None:
+        """Drag draws a selection rectangle (``on``) or turns the camera."""
         self.rectangle_mode = bool(on)
         self.plotter.setCursor(Qt.CursorShape.CrossCursor if on else Qt.CursorShape.ArrowCursor)
 
@@ -814,6 +823,7 @@ class PlantView(QWidget):
         return self.plotter.grabFramebuffer()
 
     def close(self) -> bool:
+        """Stop the polish timer and close the plotter."""
         self._polish_timer.stop()
         self.plotter.close()
         return super().close()

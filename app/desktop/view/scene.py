@@ -214,6 +214,7 @@ class LineBuffers:
 
     @property
     def capacity(self) -> int:
+        """How many lines the buffers hold."""
         return len(self.conn) // 2
 
 
@@ -380,11 +381,13 @@ class LineChunks:
         self._drawn = ()
 
     def set_visible(self, on: bool) -> None:
+        """Show or hide every chunk."""
         self.visible = bool(on)
         for actor in self.actors:
             actor.SetVisibility(self.visible)
 
     def set_width(self, width: float) -> None:
+        """The lines' width in pixels."""
         self.width = float(width)
         for actor in self.actors:
             actor.GetProperty().SetLineWidth(self.width)
@@ -442,6 +445,7 @@ class Hairlines:
 
     @property
     def skeleton(self) -> Skeleton | None:
+        """The skeleton drawn, None before the first."""
         return None if self.shown is None else self.shown.skeleton
 
     @property
@@ -450,6 +454,7 @@ class Hairlines:
         return [] if self.shown is None else self.shown.chunks.actors
 
     def visible(self) -> bool:
+        """True when hairlines are drawn and shown."""
         return self.shown is not None and self.shown.chunks.visible
 
     def set_draft(self, draft: bool) -> None:
@@ -532,6 +537,7 @@ class Hairlines:
         back.chunks.set_visible(True)
 
     def set_colors(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
+        """Recolour the hairlines as the mesh's cells are coloured."""
         if self.shown is not None and self.shown.skeleton is not None:
             self._recolor(mesh, colors)
 
@@ -654,6 +660,7 @@ class Ground:
         self.visible = True
 
     def show(self, bounds: Sequence[float]) -> None:
+        """Lay the grid under ``bounds`` with a round step (:func:`nice_step`); the same grid as before is kept."""
         b = np.asarray(bounds, float).reshape(3, 2)
         size = float(np.max(b[:2, 1] - b[:2, 0]))
         size = max(size, float(b[2, 1] - b[2, 0]) * 0.6, 1e-6)
@@ -701,6 +708,7 @@ class Ground:
         self.set_visible(self.visible)
 
     def set_visible(self, on: bool) -> None:
+        """Show or hide the grid and its label."""
         self.visible = bool(on)
         for actor in (self.actor, self.label):
             if actor is not None:
