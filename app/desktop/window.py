@@ -20,22 +20,22 @@ from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QTabWidget
 
 from ramure.app.desktop import state
-from ramure.app.desktop.panels.constants import ConstantsPanel
 from ramure.app.desktop.controller import Busy, Controller
+from ramure.app.desktop.qt_fix import protect_none
+from ramure.app.desktop.panels import qualifier_map
+from ramure.app.desktop.panels.architecture import ArchitecturePanel
+from ramure.app.desktop.panels.constants import ConstantsPanel
 from ramure.app.desktop.panels.cut_graph import CutGraphView
+from ramure.app.desktop.panels.defects import DefectsPanel
+from ramure.app.desktop.panels.details import DetailsPanel
 from ramure.app.desktop.panels.editor import GrammarEditor
-from ramure.app.desktop.menus.files import TITLE, FileActions
 from ramure.app.desktop.panels.gallery import GalleryView
 from ramure.app.desktop.panels.pca_cloud import PcaCloudView
-from ramure.app.desktop.qt_fix import protect_none
 from ramure.app.desktop.panels.regen import RegenPanel
-from ramure.app.desktop.panels.architecture import ArchitecturePanel
-from ramure.app.desktop.panels.wood import WoodPanel
-from ramure.app.desktop.panels.details import DetailsPanel
-from ramure.app.desktop.panels.defects import DefectsPanel
 from ramure.app.desktop.panels.string_dock import StringView
-from ramure.app.desktop.panels import qualifier_map
 from ramure.app.desktop.panels.variants import VariantsController
+from ramure.app.desktop.panels.wood import WoodPanel
+from ramure.app.desktop.menus.files import TITLE, FileActions
 from ramure.app.desktop.view.plant_view import PlantView
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
