@@ -5,7 +5,7 @@ and enclosing class names do not start with '_'; ``__init__`` and other dunders 
 their class's docstring. Nested functions are skipped.  A property's setter counts as its own
 method (it says what assigning does).
 
-Usage: python .ci/public_docstrings.py [FOLDER ...]   (default: app/commands and app/jupyter);
+Usage: python .ci/public_docstrings.py [FOLDER ...]   (default: app/commands, app/jupyter, app/desktop);
 exit 1 when anything is listed.
 """
 
@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 #: the folders whose every public function has a docstring (tests/test_public_docstrings.py)
-FOLDERS = ("app/commands", "app/jupyter")
+FOLDERS = ("app/commands", "app/jupyter", "app/desktop")
 
 
 def scan(path: Path) -> tuple[int, list[str]]:

@@ -46,7 +46,7 @@ def _window(n, grammar=HONDA):
 
 def _watch_frames(plotter, stamps):
     """Append the time of every frame that reaches the screen to ``stamps``; returns the call that
-    stops watching.  The native view (:mod:`ramure.app.desktop.native_view`, the default on X11)
+    stops watching.  The native view (:mod:`ramure.app.desktop.view.native_view`, the default on X11)
     swaps its frame into its window at the end of each render (VTK's ``EndEvent``); the
     QOpenGLWidget view's frame is on screen when Qt has composed the window (``frameSwapped``)."""
     swapped = getattr(plotter, "frameSwapped", None)

@@ -161,15 +161,15 @@ def bench_context_20000_siblings():
 
 
 def _plant_view(size=(1000, 800), native=None):
-    """The desktop's 3D view (:class:`~ramure.app.desktop.view.PlantView`: its look, plant actors
+    """The desktop's 3D view (:class:`~ramure.app.desktop.view.plant_view.PlantView`: its look, plant actors
     with level of detail, hairlines, ground), shown at ``size`` and painted once (an open window).
 
     The benchmarks draw through it, so they measure what the desktop user gets.  ``native``:
-    VTK in a native window (:mod:`ramure.app.desktop.native_view`, the default on X11) or
+    VTK in a native window (:mod:`ramure.app.desktop.view.native_view`, the default on X11) or
     pyvistaqt's QOpenGLWidget (False; None: as the desktop chooses).
     """
     from ramure.app.desktop.launch import make_application
-    from ramure.app.desktop.view import PlantView
+    from ramure.app.desktop.view.plant_view import PlantView
 
     from PySide6.QtTest import QTest
 
@@ -226,7 +226,7 @@ def bench_grammar_to_pixels_honda_n17(native=None):
 
     The view (:func:`_plant_view`) is open and has painted once; ``first_frame`` is
     :meth:`PlantView.show_plant` (colours, actors, camera framed) and the paint, a draft
-    for so large a plant (see :mod:`ramure.app.desktop.view`); ``polish`` is the
+    for so large a plant (see :mod:`ramure.app.desktop.view.plant_view`); ``polish`` is the
     full-quality repaint that follows when the user pauses, ``polished_seconds`` the
     total with it (the pause itself not counted).
 
@@ -298,7 +298,8 @@ def bench_regrow_and_undo_honda_n17(native=None):
     session's part (cut + re-derivation), ``plant_seconds`` the window's snapshot (incremental
     turtle + mesh patch, string preview), ``frame_seconds`` :meth:`PlantView.show_plant` and
     the paint (``paint_seconds``) of the first frame, a draft (1-pixel hairlines, none shorter than
-    1.5 pixels on screen, no FXAA: see :mod:`ramure.app.desktop.view`).  ``*_seconds`` is the time to that draft frame, the
+    1.5 pixels on screen, no FXAA: see :mod:`ramure.app.desktop.view.plant_view`).  ``*_seconds`` is
+    the time to that draft frame, the
     figure the targets are about.  ``*_polished_seconds`` adds the full-quality repaint
     (``*_polish_seconds``) that follows once the user pauses for ``polish_delay_seconds``
     (the wait itself is not counted: it is idle time in which further edits merge).
@@ -309,7 +310,7 @@ def bench_regrow_and_undo_honda_n17(native=None):
     QOpenGLWidget view (``native=False``) after Qt has composed the window.
     """
     from ramure.app.desktop import state
-    from ramure.app.desktop.view import POLISH_MS
+    from ramure.app.desktop.view.plant_view import POLISH_MS
     from ramure.app.model import Explorer
 
     ex = Explorer(str(ROOT / "grammars" / "honda_sympodial.lsys"), n=17)

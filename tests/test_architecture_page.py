@@ -83,3 +83,16 @@ def test_floors_and_reduced_edges():
     real = make_architecture.floors(make_architecture.allowed_table())
     assert real["ramure.app"] == max(real.values()) and real["ramure.<base>"] == 0
     assert real["ramure.gmap.kernel"] < real["ramure.gmap.lsystem"] < real["ramure.gmap.organs"]
+
+
+def test_the_desktop_rooms_table_and_drawing_are_the_rooms_test():
+    text = PAGE.read_text(encoding="utf-8")
+    rows = re.findall(r"^\| (command|window|menus|panels|view|controller|helpers) \| ([^|]*) \|", text, re.M)
+    table = {name: {r.strip() for r in allowed.split(",")} - {"nothing of the desktop's"} for name, allowed in rows}
+    rooms = make_architecture.rooms_table()
+    assert table == rooms and len(rooms) == 7
+    committed = (ROOT / "docs" / "images" / "desktop.svg").read_text(encoding="utf-8")
+    assert committed == make_architecture.svg(rooms, rooms=True), (
+        "run docs/images/make_architecture.py and commit docs/images/desktop.svg"
+    )
+    assert make_architecture.floors(rooms)["window"] > make_architecture.floors(rooms)["panels"]

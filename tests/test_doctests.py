@@ -25,6 +25,9 @@ PACKAGES = [
     "ramure.app.commands",
     "ramure.app.jupyter",
     "ramure.app.desktop",
+    "ramure.app.desktop.menus",
+    "ramure.app.desktop.panels",
+    "ramure.app.desktop.view",
 ]
 
 

@@ -259,8 +259,33 @@ def run_wood(args: argparse.Namespace) -> int:
     """``ramure wood``: grow wood as a 3-G-map (a ``--species`` with ``--set`` values, or a ``.g3l``
     ``--grammar``), cut it by ``--cut`` or saw a ``--plank``, print its counts per tissue and write ``-o``
     (VTU grid, PNG or glTF/OBJ scene); returns 0."""
+    plane, plank, out = _wood_request(args)
+    t0 = time.perf_counter()
+    model, species = grow_from_args(args)
+    gm = model.gm
+    report = {"valid": gm.is_valid(), "chi": gm.euler_characteristic(), "boundary_chi": gm.boundary().euler_characteristic()}
+    seconds = time.perf_counter() - t0
+    record = _wood_record(model, species, args)
+    shown, look = None, None
+    if plane or plank or out is not None:
+        shown, look = _cut_or_saw(model, species, args, plane, plank, out, record)
+    if args.years is None:  # a grammar's #steps: years as the steps say
+        record["years"] = record["steps"] / 2
+    record.update(report)
+    record["seconds"] = round(seconds, 6)
+    record["darts_per_second"] = round(gm.n_darts / max(seconds, 1e-9))
+    if out is not None:
+        assert shown is not None  # grown above whenever there is an output
+        _write_wood(out, shown, look, plank, species, args, record)
+        record["output"] = str(out)
+    _say_wood(record, seconds, out, as_json=args.json)
+    return 0 if report["valid"] else 1
+
+
+def _wood_request(args: argparse.Namespace) -> tuple[Any, Any, pathlib.Path | None]:
+    """The ``--cut`` plane, the ``--plank`` and the ``-o`` path, checked before anything grows."""
     from ramure.gmap.organs import wood as W
-    from ramure.gmap.kernel.cut import parse_plane, plane_cut
+    from ramure.gmap.kernel.cut import parse_plane
 
     if args.species not in W.SPECIES:
         raise UserError(f"--species: unknown species '{args.species}'; choose one of {', '.join(W.SPECIES)}")
@@ -275,12 +300,16 @@ def run_wood(args: argparse.Namespace) -> int:
         out = pathlib.Path(args.output)
         if out.suffix.lower() not in SUFFIXES or out.is_dir():
             raise UserError(f"-o: write a .vtu grid, a .png picture or a .glb/.gltf/.obj scene, not '{out.name}'")
-    t0 = time.perf_counter()
-    model, species = grow_from_args(args)
+    return plane, plank, out
+
+
+def _wood_record(model: Any, species: str | None, args: argparse.Namespace) -> dict[str, Any]:
+    """What was grown: species or grammar, years, steps, seed, darts, volumes and the tissue (or
+    label) counts."""
+    from ramure.gmap.organs import wood as W
+
     gm = model.gm
-    report = {"valid": gm.is_valid(), "chi": gm.euler_characteristic(), "boundary_chi": gm.boundary().euler_characteristic()}
-    seconds = time.perf_counter() - t0
-    record = {
+    record: dict[str, Any] = {
         "species": species,
         "grammar": args.grammar,
         "years": args.years,
@@ -294,72 +323,85 @@ def run_wood(args: argparse.Namespace) -> int:
     else:
         labels = np.asarray(gm.volume_data["label"])
         record["labels"] = {str(k): int((labels == k).sum()) for k in sorted(set(labels.tolist()))}
-    shown = None
-    look: np.ndarray | None = None
-    if plane or plank or out is not None:
-        grid = _grid(model, species, convex=out is not None and out.suffix.lower() == ".vtu")
-        shown = grid
-        if plane:
-            normal, origin = plane
-            shown = plane_cut(grid, normal=normal, origin=origin)
-            if shown.n_cells == 0:
-                raise UserError(f"--cut {args.cut}: the plane leaves nothing of the wood")
-            b = np.asarray(grid.bounds, float).reshape(3, 2)
-            axis = int(np.argmax(np.abs(normal)))
-            if not b[axis, 0] < origin[axis] < b[axis, 1]:
-                raise UserError(
-                    f"--cut {args.cut}: the plane misses the wood (it spans "
-                    f"{b[axis, 0]:.4g}..{b[axis, 1]:.4g} along {'xyz'[axis]})"
-                )
-            look = np.asarray(normal, float) + (np.array([0.25, -0.35, 0.0]) if abs(normal[2]) > 0.5 else 0.0)
-        elif plank:
-            across, offset, thickness = plank
-            shown = W.plank(grid, across, offset, thickness)
-            look = -np.asarray(across)
-            if species is not None:
-                record["plank_map"] = _plank_map_facts(gm, across, offset, thickness)
-        if plane and species is not None:  # rings and knots on the cut face itself
-            record.update(W.cut_facts(grid.slice(normal=tuple(plane[0]), origin=tuple(plane[1]))))
-        elif plank and species is not None:
-            record.update(W.cut_facts(shown))
-    if args.years is None:  # a grammar's #steps: years as the steps say
-        record["years"] = record["steps"] / 2
-    record.update(report)
-    record["seconds"] = round(seconds, 6)
-    record["darts_per_second"] = round(gm.n_darts / max(seconds, 1e-9))
-    if out is not None:
-        assert shown is not None  # grown above whenever there is an output
-        if out.suffix.lower() == ".vtu":
-            write_atomic(out, lambda tmp: shown.save(tmp))
-        elif out.suffix.lower() == ".png" and plank:
-            part, at, length = W.plank_window(shown, args.length, args.at)
-            record["plank_window"] = {"at": round(at, 6), "length": round(length, 6)}
-            name = species or pathlib.Path(args.grammar).stem
-            title = f"{name}, {record['years']:g} years: {length:.3g} m of plank around z = {at:.3g} m"
-            legend = legend_for(species) if species else None
-            write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend))
-        elif out.suffix.lower() == ".png":
-            size = parse_size(args.size)
-            title = f"{species or pathlib.Path(args.grammar).stem}, {record['years']:g} years"
-            write_atomic(
-                out,
-                lambda tmp: render_wood(
-                    shown, tmp, size=size, look=look, title=title, legend=legend_for(species) if species else None
-                ),
+    return record
+
+
+def _cut_or_saw(
+    model: Any, species: str | None, args: argparse.Namespace, plane: Any, plank: Any, out: pathlib.Path | None, record: dict
+) -> tuple[Any, np.ndarray | None]:
+    """The grid to show or write (cut by the plane or sawn to the plank) and the direction to look
+    from; the cut face's or plank's rings and knots join ``record``."""
+    from ramure.gmap.organs import wood as W
+    from ramure.gmap.kernel.cut import plane_cut
+
+    grid = _grid(model, species, convex=out is not None and out.suffix.lower() == ".vtu")
+    shown, look = grid, None
+    if plane:
+        normal, origin = plane
+        shown = plane_cut(grid, normal=normal, origin=origin)
+        if shown.n_cells == 0:
+            raise UserError(f"--cut {args.cut}: the plane leaves nothing of the wood")
+        b = np.asarray(grid.bounds, float).reshape(3, 2)
+        axis = int(np.argmax(np.abs(normal)))
+        if not b[axis, 0] < origin[axis] < b[axis, 1]:
+            raise UserError(
+                f"--cut {args.cut}: the plane misses the wood (it spans {b[axis, 0]:.4g}..{b[axis, 1]:.4g} along {'xyz'[axis]})"
             )
-        else:
-            export_glb(shown, out)
-        record["output"] = str(out)
-    if args.json:
-        print(json.dumps(record))
+        look = np.asarray(normal, float) + (np.array([0.25, -0.35, 0.0]) if abs(normal[2]) > 0.5 else 0.0)
+    elif plank:
+        across, offset, thickness = plank
+        shown = W.plank(grid, across, offset, thickness)
+        look = -np.asarray(across)
+        if species is not None:
+            record["plank_map"] = _plank_map_facts(model.gm, across, offset, thickness)
+    if plane and species is not None:  # rings and knots on the cut face itself
+        record.update(W.cut_facts(grid.slice(normal=tuple(plane[0]), origin=tuple(plane[1]))))
+    elif plank and species is not None:
+        record.update(W.cut_facts(shown))
+    return shown, look
+
+
+def _write_wood(
+    out: pathlib.Path,
+    shown: Any,
+    look: np.ndarray | None,
+    plank: Any,
+    species: str | None,
+    args: argparse.Namespace,
+    record: dict,
+) -> None:
+    """Write ``shown`` to ``out``: a VTU grid, a PNG (of the plank's window when sawn) or a scene."""
+    from ramure.gmap.organs import wood as W
+
+    if out.suffix.lower() == ".vtu":
+        write_atomic(out, lambda tmp: shown.save(tmp))
+    elif out.suffix.lower() == ".png" and plank:
+        part, at, length = W.plank_window(shown, args.length, args.at)
+        record["plank_window"] = {"at": round(at, 6), "length": round(length, 6)}
+        name = species or pathlib.Path(args.grammar).stem
+        title = f"{name}, {record['years']:g} years: {length:.3g} m of plank around z = {at:.3g} m"
+        legend = legend_for(species) if species else None
+        write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend))
+    elif out.suffix.lower() == ".png":
+        size = parse_size(args.size)
+        title = f"{species or pathlib.Path(args.grammar).stem}, {record['years']:g} years"
+        legend = legend_for(species) if species else None
+        write_atomic(out, lambda tmp: render_wood(shown, tmp, size=size, look=look, title=title, legend=legend))
     else:
-        tissues = ", ".join(f"{v} {k}" for k, v in record.get("tissues", {}).items() if v)
-        print(
-            f"{record['darts']} darts, {record['volumes']} volumes ({tissues}); chi {record['chi']}, "
-            f"boundary chi {record['boundary_chi']}, {'valid' if record['valid'] else 'INVALID'}, "
-            f"{seconds:.2f} s" + (f"; wrote {out}" if out else "")
-        )
-    return 0 if report["valid"] else 1
+        export_glb(shown, out)
+
+
+def _say_wood(record: dict, seconds: float, out: pathlib.Path | None, as_json: bool) -> None:
+    """Print the record: one JSON line, or one sentence of counts."""
+    if as_json:
+        print(json.dumps(record))
+        return
+    tissues = ", ".join(f"{v} {k}" for k, v in record.get("tissues", {}).items() if v)
+    print(
+        f"{record['darts']} darts, {record['volumes']} volumes ({tissues}); chi {record['chi']}, "
+        f"boundary chi {record['boundary_chi']}, {'valid' if record['valid'] else 'INVALID'}, "
+        f"{seconds:.2f} s" + (f"; wrote {out}" if out else "")
+    )
 
 
 def _plank_map_facts(gm, normal, offset, thickness):

@@ -81,6 +81,7 @@ class Controller(QObject):
     # -- running jobs ------------------------------------------------------
     @property
     def idle(self) -> bool:
+        """True when no job is queued or running."""
         return self.jobs.idle
 
     def submit(self, name: str, fn: Callable[[Explorer], Any], key: str | None = None) -> Job:
@@ -177,6 +178,7 @@ class Controller(QObject):
         return self.submit(f"constant {name}", run, key=f"const:{name}")
 
     def set_derivation(self, n: int | None = None, seed: int | None = None) -> Job:
+        """Derive again with ``n`` steps and ``seed`` (None keeps the current one), as a job."""
         return self.submit("derivation", lambda ex: ex.set_derivation(n, seed), key="derivation")
 
     def regrow(
@@ -192,6 +194,7 @@ class Controller(QObject):
         return self.submit("regrow", run)
 
     def prune(self) -> Job:
+        """Delete the selection's cut subtrees, as a job."""
         self.edit_started.emit()
         return self.submit("prune", lambda ex: ex.prune())
 
@@ -204,17 +207,21 @@ class Controller(QObject):
         """Redo what Undo took back, in the order it was done; the job's result says what."""
         return self.submit("redo", lambda ex: _noted(ex.redo, ex))
 
-    def load_session(self, path: str | os.PathLike) -> Job:
-        """Load a session file in the worker; :attr:`replaying` follows the replay of its edits."""
-        return self.submit("load session", lambda ex: ex.load_session(path, progress=self.replaying.emit))
+    def load_session(self, path: str | os.PathLike, run_code: bool = False) -> Job:
+        """Load a session file in the worker; :attr:`replaying` follows the replay of its edits.
+        ``run_code``: the session's L-Py model may run (the caller asked the user)."""
+        return self.submit(
+            "load session", lambda ex: ex.load_session(path, progress=self.replaying.emit, run_code=run_code)
+        )
 
-    def load_grammar(self, path: str | os.PathLike) -> Job:
+    def load_grammar(self, path: str | os.PathLike, run_code: bool = False) -> Job:
         """Replace the plant by a grammar file: a fresh session and a fresh history (see
-        :meth:`Explorer.open_grammar`); the job's result is the text."""
+        :meth:`Explorer.open_grammar`); the job's result is the text.  ``run_code``: an L-Py
+        model may run (the caller asked the user)."""
         path = pathlib.Path(path)
 
         def run(ex):
-            ex.open_grammar(path)
+            ex.open_grammar(path, run_code=run_code)
             return ex.text
 
         return self.submit("open grammar", run, key="text")
@@ -258,9 +265,11 @@ class Controller(QObject):
         return self.snapshot.selection
 
     def select(self, leaf_ids: int | Iterable[int], mode: str = "replace") -> tuple[int, ...]:
+        """Select ``leaf_ids`` (``mode``: replace, add or toggle); returns the new selection."""
         return self._select(lambda ex: ex.select(leaf_ids, mode))
 
     def clear_selection(self) -> tuple[int, ...]:
+        """Select nothing; returns the (empty) selection."""
         return self._select(lambda ex: ex.clear_selection())
 
     def pick_cell(self, cell_id: int, mode: str = "replace") -> int:
@@ -310,9 +319,11 @@ class Controller(QObject):
         return state.selection_box_lines(snap.skeleton, snap.selection)
 
     def selected_modules(self) -> list[str]:
+        """The selection's modules as text, one per line (the String dock)."""
         return self.read(state.selected_modules, wait=0.05)
 
     def plan(self) -> CutResult | None:
+        """The minimum cut a regrow of the selection would make (None without a selection)."""
         return self.read(lambda ex: ex.plan(), wait=2.0)
 
     def preview(self, inline: bool = True) -> Job | tuple:

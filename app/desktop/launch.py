@@ -25,6 +25,7 @@ FIRST_COMPILE = (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``python -m ramure.app.desktop``."""
     p = argparse.ArgumentParser(
         prog="python -m ramure.app.desktop", description="The Ramure desktop explorer: edit, pick, regenerate, browse variants."
     )
@@ -77,7 +78,7 @@ def make_application(argv: list[str] | None = None) -> QApplication:
     if app is None:
         one_malloc_arena()
         app = QApplication(list(argv or sys.argv[:1]))
-        from ramure.app.desktop.native_view import native_windows
+        from ramure.app.desktop.view.native_view import native_windows
 
         if not native_windows():  # pyvistaqt's QOpenGLWidget fallback only (6-12 MB less otherwise)
             import pyvistaqt  # noqa: F401  (loaded before the first window, as before)
@@ -88,6 +89,7 @@ def make_application(argv: list[str] | None = None) -> QApplication:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Open the window on the grammar named in ``argv``; returns the exit code (2: a grammar that cannot be read)."""
     args = build_parser().parse_args(argv)
     import ramure.grammars
     from ramure.app.model import Explorer

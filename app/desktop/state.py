@@ -495,7 +495,7 @@ def cells_near_line(
     with a tolerance up to ``reach`` can hit is among them (and a few more), so a picker run
     on them alone finds what it finds on the whole mesh.  ``tubes``: (count, sides) when the
     mesh starts with ``count`` tubes of ``sides`` quads over ``2 sides`` points each, segment
-    by segment (:func:`ramure.app.desktop.plant_actors.tube_layout`): a tube is tested as a
+    by segment (:func:`ramure.app.desktop.view.plant_actors.tube_layout`): a tube is tested as a
     whole, from its points in place.  Read in chunks of :data:`NEAR_LINE_CHUNK` (a few MB of
     temporaries whatever the mesh's size).
 

@@ -55,6 +55,7 @@ class VariantSet:
         return list(vocab) if vocab else []
 
     def image_path(self, pick: Mapping[str, Any]) -> pathlib.Path | None:
+        """The picture file of ``pick`` (relative to the exploration folder), None when it has none."""
         image = pick.get("image")
         if not image:
             return None

@@ -20,22 +20,23 @@ from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QTabWidget
 
 from ramure.app.desktop import state
-from ramure.app.desktop.constants_panel import ConstantsPanel
 from ramure.app.desktop.controller import Busy, Controller
-from ramure.app.desktop.cut_graph import CutGraphView
-from ramure.app.desktop.editor import GrammarEditor
-from ramure.app.desktop.files import FileActions
-from ramure.app.desktop.gallery import GalleryView
-from ramure.app.desktop.pca_cloud import PcaCloudView
 from ramure.app.desktop.qt_fix import protect_none
-from ramure.app.desktop.regen_panel import RegenPanel
-from ramure.app.desktop.architecture_panel import ArchitecturePanel
-from ramure.app.desktop.wood_panel import WoodPanel
-from ramure.app.desktop.details_panel import DetailsPanel
-from ramure.app.desktop.defects_panel import DefectsPanel
-from ramure.app.desktop.string_dock import StringView
-from ramure.app.desktop.variants_panel import VariantsController
-from ramure.app.desktop.view import PlantView
+from ramure.app.desktop.panels import qualifier_map
+from ramure.app.desktop.panels.architecture import ArchitecturePanel
+from ramure.app.desktop.panels.constants import ConstantsPanel
+from ramure.app.desktop.panels.cut_graph import CutGraphView
+from ramure.app.desktop.panels.defects import DefectsPanel
+from ramure.app.desktop.panels.details import DetailsPanel
+from ramure.app.desktop.panels.editor import GrammarEditor
+from ramure.app.desktop.panels.gallery import GalleryView
+from ramure.app.desktop.panels.pca_cloud import PcaCloudView
+from ramure.app.desktop.panels.regen import RegenPanel
+from ramure.app.desktop.panels.string_dock import StringView
+from ramure.app.desktop.panels.variants import VariantsController
+from ramure.app.desktop.panels.wood import WoodPanel
+from ramure.app.desktop.menus.files import TITLE, FileActions
+from ramure.app.desktop.view.plant_view import PlantView
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
 
@@ -43,11 +44,11 @@ if TYPE_CHECKING:
     from types import TracebackType
     from PySide6.QtGui import QCloseEvent, QImage
     from PySide6.QtWidgets import QWidget
-    from ramure.app.desktop.qualifier_map import QualifierMapView
+    from ramure.app.desktop.panels.qualifier_map import QualifierMapView
     from ramure.app.desktop.state import Snapshot
+    from ramure.app.desktop.variants import VariantSet
     from ramure.app.desktop.workers import Job
 
-TITLE = "Ramure"
 KINSHIP_HINT = (
     "Kinship colours: red = the selected leaf and its closest kin, through yellow and green, "
     "to blue = related only through the first derivation steps"
@@ -87,13 +88,10 @@ class MainWindow(QMainWindow):
     ) -> None:
         protect_none()  # PySide6 6.12 on Python 3.11 leaks references to None: see qt_fix
         super().__init__(parent)
-        self.ask = ask  # False: never show modal questions (tests, --quit-after)
+        self._ask = ask
         self.settings = settings or QSettings("Ramure", "Ramure desktop")
         self.controller = Controller(explorer, self)
-        self.files = FileActions(self, self.settings)
         self.kinship = False
-        self.pending_open: tuple[int, pathlib.Path] | None = None
-        self.after_load: int | None = None
         self.message_box: QMessageBox | None = None
         self.last_message: str | None = None
         self.drawn_version: int | None = None
@@ -107,6 +105,7 @@ class MainWindow(QMainWindow):
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
         self.editor = GrammarEditor()
+        self.files = FileActions(self.controller, self.settings, self.editor, self.view, self, ask)
         self.constants_panel = ConstantsPanel()
         self.regen = RegenPanel()
         self.string_view = StringView()
@@ -125,11 +124,13 @@ class MainWindow(QMainWindow):
         self._dock("constants", "Constants", self.constants_panel, left)
         self._dock("regeneration", "Regeneration", self.regen, right)
         self._dock("gallery", "Gallery", self.gallery, right)
-        self._dock("details", "Details", DetailsPanel(self.controller, self), right)
+        self._dock("details", "Details", DetailsPanel(self.controller, self.view), right)
         self._dock("pca", "PCA cloud", self.pca_view, right)
         self._dock("architecture", "Architecture", ArchitecturePanel(self.controller), right)
         self._dock("wood", "Wood", WoodPanel(self.controller), right)
-        self._dock("defects", "Defects", DefectsPanel(self.controller, self), right)
+        defects = DefectsPanel(self.controller)
+        defects.status.connect(self.status)
+        self._dock("defects", "Defects", defects, right)
         self._dock("string", "String", self.string_view, bottom)
         self._dock("cut", "Cut graph", self.cut_view, bottom)
         self._group_docks()
@@ -148,7 +149,9 @@ class MainWindow(QMainWindow):
         self.statusBar().addPermanentWidget(self.progress)
         self.statusBar().addPermanentWidget(self.cancel_button)
 
-        self.variants = VariantsController(self)
+        self.variants = VariantsController(
+            self.controller, self.regen, self.gallery, self.pca_view, self.view, self.progress, self.cancel_button, self
+        )
         self._actions()
         self._connect()
         self.fit_size(1400, 880)
@@ -266,7 +269,7 @@ class MainWindow(QMainWindow):
         self.yup_action = self._action(
             f,
             "Export with Y up",
-            lambda on: None,
+            self.files.set_yup,
             checkable=True,
             tip="Swap axes on export for tools that take Y as up (Blender, glTF)",
         )
@@ -330,14 +333,17 @@ class MainWindow(QMainWindow):
 
         variants_menu = bar.addMenu("Va&riants")
         self.variants.build_menu(variants_menu)
-        from ramure.app.desktop.study import StudyMenu
+        from ramure.app.desktop.menus.study import StudyMenu
 
         study_menu = bar.addMenu("&Study")
-        self.study_menu = StudyMenu(self, study_menu)
-        from ramure.app.desktop.new_study import NewStudyActions
+        self.study_menu = StudyMenu(study_menu, self, self.ask)
+        self.study_menu.refused.connect(self.report_refused)
+        from ramure.app.desktop.menus.new_study import NewStudyActions
 
-        self.new_study = NewStudyActions(self, study_menu, variants_menu)
-        from ramure.app.desktop.help import HelpMenu
+        self.new_study = NewStudyActions(self.variants, study_menu, variants_menu, self)
+        self.new_study.status.connect(self.status)
+        self.new_study.refused.connect(self.report_refused)
+        from ramure.app.desktop.menus.help import HelpMenu
 
         self.help_menu = HelpMenu(self, bar.addMenu("&Help"))
 
@@ -373,6 +379,18 @@ class MainWindow(QMainWindow):
         r.undo.connect(self.undo)
         r.redo.connect(self.redo)
         self.cut_view.plan_button.clicked.connect(self.show_planned_cut)
+        v = self.variants
+        v.status.connect(self.status)
+        v.status_ended.connect(self._status_ended)
+        v.refused.connect(self.report_refused)
+        v.crashed.connect(self.report_crash)
+        v.select_requested.connect(lambda leaves, mode: self.run_selection(self.controller.select, leaves, mode))
+        v.variants_shown.connect(self._variants_shown)
+        fa = self.files
+        fa.status.connect(self.status)
+        fa.refused.connect(self.report_refused)
+        fa.flush_requested.connect(self.flush_edits)
+        fa.recent_changed.connect(self.update_recent_menu)
 
     # -- drawing from snapshots ---------------------------------------------------------
     def show_plant(self, snap: Snapshot, reset_camera: bool | None = None) -> None:
@@ -507,6 +525,7 @@ class MainWindow(QMainWindow):
             pass
 
     def show_cut(self, snap: Snapshot) -> None:
+        """Show the last regrow's cut graph in the Cut graph dock."""
         result = snap.last_result
         if result is None:
             return
@@ -522,6 +541,8 @@ class MainWindow(QMainWindow):
         self.cut_view.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; cut capacity {result.cut_value:g}")
 
     def show_planned_cut(self) -> None:
+        """Show the cut a regrow of the selection would make (the dock's Plan button)."""
+
         def plan(ex):
             cut = ex.plan()
             return cut, (
@@ -547,12 +568,20 @@ class MainWindow(QMainWindow):
         )
         self.open_dock("cut")
 
+    def _variants_shown(self, vs: VariantSet) -> None:
+        """A variant set on show: the gallery's picks in front of the regeneration panel, and the
+        qualifier map (made on first use, tabified with the PCA cloud)."""
+        self.open_dock("gallery")
+        self.qualifier_map = qualifier_map.attach(self, self.docks, self.view_menu)
+        self.qualifier_map.set_variants(vs)
+
     def open_dock(self, key: str) -> None:
         """Show dock ``key`` (perhaps closed at start) in front of its tab group."""
         self.docks[key].show()
         self.docks[key].raise_()
 
     def set_kinship(self, on: bool) -> None:
+        """Colour the selection's relatives (``on``) or the selection only."""
         self.kinship = bool(on)
         self.kinship_action.setChecked(self.kinship)
         self.show_selection(self.controller.snapshot.selection)
@@ -694,10 +723,16 @@ class MainWindow(QMainWindow):
         self.view.set_busy(busy)  # the 3D view's polished frame waits for the next version
 
     def status(self, text: str, timeout: int = 4000) -> None:
+        """Show ``text`` on the status bar for ``timeout`` ms (0: until replaced); empty text clears it."""
         if text:
             self.statusBar().showMessage(text, timeout)
         else:
             self.statusBar().clearMessage()
+
+    def _status_ended(self, text: str) -> None:
+        """Clear the status bar if it still shows ``text`` (a newer message stays)."""
+        if self.statusBar().currentMessage() == text:
+            self.status("")
 
     def report_refused(self, message: str) -> None:
         """A user error: the status bar and a non-blocking message box."""
@@ -732,8 +767,20 @@ class MainWindow(QMainWindow):
         box.setDetailedText(details or "")
         box.open()
 
+    @property
+    def ask(self) -> bool:
+        """False: never show modal questions (tests, ``--quit-after``); the menus follow."""
+        return self._ask
+
+    @ask.setter
+    def ask(self, value: bool) -> None:
+        """Set whether the window and its menus may ask questions."""
+        self._ask = bool(value)
+        self.files.ask = self.study_menu.ask = self._ask
+
     # -- files and closing ------------------------------------------------------------------
     def update_recent_menu(self) -> None:
+        """Fill File > Recent files from the settings."""
         self.recent_menu.clear()
         for path in self.files.recent():
             action = self.recent_menu.addAction(path)
@@ -749,8 +796,7 @@ class MainWindow(QMainWindow):
         """Unsaved changes: the model's plant differs from the file (see
         :attr:`Explorer.dirty <ramure.app.model.Explorer.dirty>`), or typing not yet sent or
         not parsed."""
-        snap = self.controller.snapshot
-        return snap.dirty or self.editor.pending() or snap.error is not None
+        return self.files.unsaved()
 
     @dirty.setter
     def dirty(self, value: bool) -> None:
@@ -761,31 +807,16 @@ class MainWindow(QMainWindow):
             self.controller.refresh()
 
     def confirm_discard(self) -> bool:
-        """True if there are no unsaved changes or the user agrees to lose them."""
-        self.flush_edits()  # a change still in its pause or its job counts
-        self.controller.wait_idle()
-        if not self.dirty or not self.ask:
-            return True
-        answer = QMessageBox.question(
-            self,
-            TITLE,
-            "The plant has unsaved changes. Save the grammar first?",
-            QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Discard | QMessageBox.StandardButton.Cancel,
-            QMessageBox.StandardButton.Save,
-        )
-        if answer == QMessageBox.StandardButton.Save:
-            return self.files.save_grammar() is not None
-        return answer == QMessageBox.StandardButton.Discard
+        """True if there are no unsaved changes or the user agrees to lose them (see
+        :meth:`FileActions.confirm_discard <ramure.app.desktop.menus.files.FileActions.confirm_discard>`)."""
+        return self.files.confirm_discard()
 
     def grab_window(self) -> QImage:
         """The whole window as a QImage, with the 3D view freshly painted (polished)."""
-        self.view.polish()
-        self.view.redraw(now=True)
-        from ramure.app.desktop.native_view import grab_with_frames  # VTK's native windows painted in
-
-        return grab_with_frames(self)
+        return self.view.grab_window()
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        """Close after the unsaved-changes question; stop tasks and jobs, then the view."""
         if not self.confirm_discard():
             event.ignore()
             return
@@ -796,4 +827,5 @@ class MainWindow(QMainWindow):
         event.accept()
 
     def run_later(self, msecs: int, fn: Callable[[], object]) -> None:
+        """Call ``fn`` after ``msecs`` in the event loop."""
         QTimer.singleShot(msecs, fn)

@@ -167,15 +167,19 @@ class Task(QObject):
 
     @property
     def cancel_event(self) -> threading.Event:
+        """The event set when the task is cancelled (for work that waits on it)."""
         return self._cancel
 
     def cancel(self) -> None:
+        """Ask the task to stop (its work checks :meth:`cancelled`)."""
         self._cancel.set()
 
     def cancelled(self) -> bool:
+        """True once cancelled."""
         return self._cancel.is_set()
 
     def start(self, pool: QThreadPool | None = None) -> Task:
+        """Run the task on ``pool`` (Qt's global pool by default); returns it."""
         self.running = True
         (pool or QThreadPool.globalInstance()).start(_Runnable(self._run))
         return self

@@ -13,7 +13,7 @@ MASSART = ROOT / "grammars" / "amap" / "massart.lsys"
 
 @pytest.fixture
 def panel(qtbot):
-    from ramure.app.desktop.architecture_panel import ArchitecturePanel
+    from ramure.app.desktop.panels.architecture import ArchitecturePanel
     from ramure.app.desktop.controller import Controller
     from ramure.app.desktop.launch import make_application
     from ramure.app.model import Explorer

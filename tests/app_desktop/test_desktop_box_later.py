@@ -3,7 +3,7 @@
 import numpy as np
 
 from ramure.app.desktop import state
-from ramure.app.desktop import view as view_module
+from ramure.app.desktop.view import plant_view as view_module
 
 
 def test_a_large_selection_gets_its_box_after_the_paint(make_window, qtbot, monkeypatch):

@@ -9,7 +9,7 @@ import sys
 import pytest
 from PySide6.QtGui import QImage
 
-from ramure.app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.view.thumbnails import pixel_variance
 from desktop_helpers import HONDA, ROOT
 
 pytestmark = pytest.mark.gui

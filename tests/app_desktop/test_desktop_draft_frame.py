@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.desktop import plant_actors, scene, view as view_module
+from ramure.app.desktop.view import plant_actors, scene, plant_view as view_module
 from desktop_helpers import settle
 
 pytestmark = pytest.mark.gui

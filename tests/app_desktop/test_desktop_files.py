@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from ramure.app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.view.thumbnails import pixel_variance
 from desktop_helpers import ROOT, settle
 
 pytestmark = pytest.mark.gui

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.desktop import plant_actors, scene
+from ramure.app.desktop.view import plant_actors, scene
 from desktop_helpers import settle
 from test_desktop_draft_frame import image_array, lines_drawn
 
@@ -97,7 +97,7 @@ def test_new_colours_show_in_the_next_frame_in_every_chunk(qtbot, monkeypatch):
     one buffer per array): a recolour, and the recolour of a version an undo shows again."""
     import pyvista as pv
 
-    from ramure.app.desktop import plant_actors
+    from ramure.app.desktop.view import plant_actors
     from ramure.app.model import Explorer
     from desktop_helpers import HONDA
 

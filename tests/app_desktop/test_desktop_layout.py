@@ -54,7 +54,7 @@ def test_the_constants_list_shows_its_last_row(window):
 
 
 def test_gallery_captions_show_whole_at_the_default_size(window, qtbot):
-    from ramure.app.desktop.thumbnails import skeleton_image
+    from ramure.app.desktop.view.thumbnails import skeleton_image
 
     w = window
     w.open_dock("gallery")
@@ -77,7 +77,7 @@ def test_gallery_captions_show_whole_at_the_default_size(window, qtbot):
 
 def test_thumbnails_show_the_part_that_differs_from_the_plant(window):
     from ramure.app.desktop import variants
-    from ramure.app.desktop.thumbnails import same_segments
+    from ramure.app.desktop.view.thumbnails import same_segments
 
     ex = window.controller.explorer
     ls = ex.lsystem

@@ -89,7 +89,7 @@ def test_each_dock_makes_its_view_when_first_shown_and_draws_in_it(qtbot, window
 
 
 def test_the_habit_names_listed_at_start_are_the_gmap_habits():
-    from ramure.app.desktop.details_panel import HABIT_NAMES
+    from ramure.app.desktop.panels.details import HABIT_NAMES
     from ramure.gmap.organs.lichen import HABITS
 
     assert list(HABIT_NAMES) == list(HABITS)

@@ -7,7 +7,7 @@ import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtTest import QTest
 
-from ramure.app.desktop import scene
+from ramure.app.desktop.view import scene
 from desktop_helpers import settle
 
 pytestmark = pytest.mark.gui

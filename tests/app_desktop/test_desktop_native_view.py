@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.desktop import scene, state
-from ramure.app.desktop.native_view import NativeInteractor, native_windows
+from ramure.app.desktop import state
+from ramure.app.desktop.view import scene
+from ramure.app.desktop.view.native_view import NativeInteractor, native_windows
 from ramure.app.model import Explorer
 from desktop_helpers import HONDA
 
@@ -46,7 +47,7 @@ def honda():
 def views(qtbot, honda):
     """A native view and a QOpenGLWidget view of the same plant, side by side, 500x400 each."""
     from ramure.app.desktop.launch import make_application
-    from ramure.app.desktop.view import PlantView
+    from ramure.app.desktop.view.plant_view import PlantView
 
     make_application()
     if not native_windows():
@@ -72,7 +73,7 @@ def views(qtbot, honda):
 def test_the_native_view_is_the_default_on_x11_and_draws_what_the_gl_widget_draws(views, qtbot):
     native, gl = views["native"], views["gl"]
     assert isinstance(native.plotter, NativeInteractor) and not isinstance(gl.plotter, NativeInteractor)
-    from ramure.app.desktop.view import PlantView
+    from ramure.app.desktop.view.plant_view import PlantView
 
     default = PlantView()
     qtbot.addWidget(default)
@@ -102,7 +103,7 @@ def test_vtk_draws_into_the_x_window_and_the_window_grab_holds_it(views, qtbot):
     # a grab of an ancestor (as MainWindow.grab_window does) holds the frame where the view is
     from PySide6.QtCore import QPoint
 
-    from ramure.app.desktop.native_view import grab_with_frames
+    from ramure.app.desktop.view.native_view import grab_with_frames
 
     grab = image_array(grab_with_frames(native))
     at = native.plotter.mapTo(native, QPoint(0, 0))
@@ -158,7 +159,7 @@ def test_views_deleted_without_close_do_not_crash(qtbot, honda):
     from PySide6.QtWidgets import QMainWindow
 
     from ramure.app.desktop.launch import make_application
-    from ramure.app.desktop.view import PlantView
+    from ramure.app.desktop.view.plant_view import PlantView
 
     make_application()
     if not native_windows():

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.desktop import state, view as view_module
+from ramure.app.desktop import state
+from ramure.app.desktop.view import plant_view as view_module
 from desktop_helpers import HONDA, settle
 
 pytestmark = pytest.mark.gui
@@ -119,7 +120,7 @@ def test_cells_near_line_hold_every_cell_the_line_passes_within_reach():
 
 def test_tube_layout_and_polygon_reading_find_the_same_cells():
     from ramure.app.model import Explorer
-    from ramure.app.desktop.plant_actors import tube_layout
+    from ramure.app.desktop.view.plant_actors import tube_layout
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
     ex = Explorer(str(HONDA), n=10)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.desktop import plant_actors
-from ramure.app.desktop.plant_actors import tube_layout
+from ramure.app.desktop.view import plant_actors
+from ramure.app.desktop.view.plant_actors import tube_layout
 from desktop_helpers import HONDA, settle
 
 pytestmark = pytest.mark.gui

@@ -63,7 +63,7 @@ def test_a_real_click_on_a_polygon_leaf_selects_it_and_regrow_redraws_leaves(mak
 
 def test_thumbnails_fill_polygon_leaves(qtbot):
     from ramure.app.desktop.launch import make_application
-    from ramure.app.desktop.thumbnails import skeleton_image
+    from ramure.app.desktop.view.thumbnails import skeleton_image
     from ramure.lsys import LSystem
 
     make_application()

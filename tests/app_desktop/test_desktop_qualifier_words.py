@@ -9,7 +9,7 @@ import pytest
 from PySide6.QtCore import QPoint, Qt
 from PySide6.QtTest import QTest
 
-from ramure.app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.view.thumbnails import pixel_variance
 from desktop_helpers import settle
 from test_desktop_variants import menu_action
 

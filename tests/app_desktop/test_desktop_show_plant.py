@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.desktop import plant_actors, scene, state
-from ramure.app.desktop.plant_actors import PlantActors
+from ramure.app.desktop import state
+from ramure.app.desktop.view import plant_actors, scene
+from ramure.app.desktop.view.plant_actors import PlantActors
 from ramure.app.model import Explorer
 from desktop_helpers import HONDA, BarePlotter, show_model_plant
 
@@ -57,7 +58,7 @@ def test_the_shown_props_bounds_and_clipping_range_are_vtks(qtbot):
     """The view frames a new version with the hairlines' bounds it knows: the same clipping
     range as VTK's own pass over every shown prop."""
     from ramure.app.desktop.launch import make_application
-    from ramure.app.desktop.view import PlantView
+    from ramure.app.desktop.view.plant_view import PlantView
 
     make_application()
     view = PlantView()

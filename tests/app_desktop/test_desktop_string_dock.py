@@ -14,7 +14,7 @@ def snap(text, n_modules=100):
 
 
 def test_only_the_more_modules_tail_is_rewritten_when_the_shown_modules_stay(qtbot):
-    from ramure.app.desktop.string_dock import StringView
+    from ramure.app.desktop.panels.string_dock import StringView
 
     view = StringView()
     qtbot.addWidget(view)

@@ -180,7 +180,7 @@ def three_grammars(tmp_path):
 
 
 def participant_window(qtbot, path, code="P1"):
-    from ramure.app.desktop.study import ParticipantWindow
+    from ramure.app.desktop.menus.study import ParticipantWindow
 
     study = Study.open(path)
     win = ParticipantWindow(study, code, ask=False)
@@ -301,7 +301,7 @@ def test_the_study_panel_reads_no_grammar_outside_its_folders(qapp, tmp_path, mo
     for sub in ("explore", "outside"):
         (folders / sub).mkdir()
     (folders / "outside" / "evil.lsys").write_text("n: 2\nw: A\np:\n  A -> F[+A]A\n")
-    from ramure.app.desktop.study import pick_images
+    from ramure.app.desktop.menus.study import pick_images
     from ramure.lsys import LSystem
 
     read = []

@@ -59,7 +59,7 @@ def test_consent_shows_the_study_contact_and_retention(qtbot, tmp_path):
     with Study.create(path, grammars={"g1": lattice_picks(seed=1)}, config=StudyConfig(contact="ada@lab.org")) as study:
         study.add_participant("P1")
     study = Study.open(path)
-    from ramure.app.desktop.study import ParticipantWindow
+    from ramure.app.desktop.menus.study import ParticipantWindow
 
     win = ParticipantWindow(study, "P1", ask=False)
     qtbot.addWidget(win)

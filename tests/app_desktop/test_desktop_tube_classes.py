@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ramure.app.desktop import plant_actors
-from ramure.app.desktop.plant_actors import PlantActors
+from ramure.app.desktop.view import plant_actors
+from ramure.app.desktop.view.plant_actors import PlantActors
 from ramure.app.model import Explorer
 from desktop_helpers import BarePlotter, show_model_plant
 

@@ -7,7 +7,7 @@ import pytest
 from PySide6.QtCore import QPoint, Qt
 
 from ramure.app.desktop.state import FRUIT_SELECTED
-from ramure.app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.view.thumbnails import pixel_variance
 from desktop_helpers import ROOT, settle
 
 pytestmark = pytest.mark.gui
@@ -189,7 +189,7 @@ def test_volumetric_fruit_can_be_picked(make_window, qtbot):
 
 
 def w_fruit_available():
-    from ramure.app.desktop.variants_panel import fruit_available
+    from ramure.app.desktop.panels.variants import fruit_available
 
     return fruit_available()
 

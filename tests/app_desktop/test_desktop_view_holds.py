@@ -113,7 +113,7 @@ def pick_only(view, actor, x, y):
     """(cell, world point) of ``actor`` alone under display ``(x, y)``, or (-1, None)."""
     from vtkmodules.vtkRenderingCore import vtkCellPicker
 
-    from ramure.app.desktop import view as view_module
+    from ramure.app.desktop.view import plant_view as view_module
 
     picker = vtkCellPicker()
     picker.SetTolerance(view_module.PICK_TOLERANCE)

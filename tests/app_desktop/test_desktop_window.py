@@ -7,7 +7,7 @@ import pytest
 from PySide6.QtCore import QPoint, Qt
 from PySide6.QtTest import QTest
 
-from ramure.app.desktop.thumbnails import pixel_variance
+from ramure.app.desktop.view.thumbnails import pixel_variance
 from desktop_helpers import STOCHASTIC, settle
 
 pytestmark = pytest.mark.gui

@@ -82,7 +82,7 @@ def app():
 
 
 def test_grow_from_the_plant_and_highlight_a_knot(app):
-    from ramure.app.desktop.wood_panel import SELECTED_RGB, WoodPanel
+    from ramure.app.desktop.panels.wood import SELECTED_RGB, WoodPanel
     from ramure.lsys import LSystem
 
     d = LSystem.from_file("abop_tree").derive(n=5)
@@ -101,7 +101,7 @@ def test_grow_from_the_plant_and_highlight_a_knot(app):
 
 
 def test_refusal_is_shown_in_the_dock(app):
-    from ramure.app.desktop.wood_panel import WoodPanel
+    from ramure.app.desktop.panels.wood import WoodPanel
 
     panel = WoodPanel(None, plotter_factory=_Plotter)
     panel.species.addItem("elm")
@@ -113,7 +113,7 @@ def test_clicking_a_branch_of_the_real_plant_paints_its_knot(app):
     """The real controller and explorer: a click on a mesh cell of a branch (pick_cell) selects its
     history leaf, and the dock paints that branch's knot, and only it."""
     from ramure.app.desktop.controller import Controller
-    from ramure.app.desktop.wood_panel import SELECTED_RGB, WoodPanel
+    from ramure.app.desktop.panels.wood import SELECTED_RGB, WoodPanel
     from ramure.app.model import Explorer
     from ramure.grammars import path
 
@@ -139,7 +139,7 @@ def test_plank_controls_saw_a_preset_board_that_fills_the_view(app):
     from PySide6.QtCore import Qt
     from PySide6.QtTest import QTest
 
-    from ramure.app.desktop.wood_panel import WoodPanel
+    from ramure.app.desktop.panels.wood import WoodPanel
     from ramure.gmap.organs import wood as W
 
     panel = WoodPanel(None, plotter_factory=_Plotter)

@@ -13,7 +13,7 @@ was when the file is refused.  ``mtg``: an MTG written by Ramure with random cha
 edits, read by :func:`ramure.lsys.mtg.parse_mtg`.  ``settings``: the desktop's settings
 file (an INI file QSettings reads) with the recent-files entry given other types (Qt's
 ``@Variant``, ``@ByteArray``, numbers, NUL bytes, long lists), read by the File menu's
-:meth:`~ramure.app.desktop.files.FileActions.recent`.  Outcomes: ``ok``, ``refused`` (a
+:meth:`~ramure.app.desktop.menus.files.FileActions.recent`.  Outcomes: ``ok``, ``refused`` (a
 RamureError), ``crash:<type>`` (a bug), ``changed`` (a refused session changed the plant:
 a bug), ``slow`` (over 5 s of CPU).  Goal: no crash, no change, nothing slow.
 """
@@ -187,7 +187,7 @@ SETTING_VALUES = [
 def settings_input(rng, folder: pathlib.Path) -> str:
     from PySide6.QtCore import QSettings
 
-    from ramure.app.desktop.files import FileActions
+    from ramure.app.desktop.menus.files import FileActions
 
     values = [SETTING_VALUES[int(i)] for i in rng.integers(0, len(SETTING_VALUES), int(rng.integers(1, 5)))]
     text = "[General]\nrecent=" + ", ".join(values) + "\n"

@@ -36,7 +36,7 @@ def test_recent_files_skip_entries_that_are_not_paths(tmp_path, stored):
     one that is not a path raised in the File menu.  Such entries are skipped."""
     from PySide6.QtCore import QSettings
 
-    from ramure.app.desktop.files import FileActions
+    from ramure.app.desktop.menus.files import FileActions
 
     good = tmp_path / "plant.lsys"
     good.write_text("n: 1\nw: F\n")

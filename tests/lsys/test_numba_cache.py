@@ -108,7 +108,7 @@ def test_processes_compiling_at_the_same_time_leave_a_usable_cache(tmp_path):
 def _kernel_modules():
     import importlib
 
-    for package in ("lsys", "gmap/kernel", "gmap/organs", "app/desktop"):
+    for package in ("lsys", "gmap/kernel", "gmap/organs", "app/desktop/view"):
         for path in sorted((ROOT / package).glob("_*kernel.py")):
             yield importlib.import_module(f"ramure.{package.replace('/', '.')}.{path.stem}")
 

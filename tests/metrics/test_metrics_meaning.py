@@ -462,15 +462,14 @@ def test_desktop_qualifier_map_draws_the_matrix(sweeps, monkeypatch):
     monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
     from PySide6.QtWidgets import QApplication, QMainWindow
 
-    from ramure.app.desktop.qualifier_map import attach
+    from ramure.app.desktop.panels.qualifier_map import attach
 
     app = QApplication.instance() or QApplication([])
     sweep = sweeps["ternary_bush"]
     exp = type("Exp", (), {"sweep": sweep, "points": DeltaPCA().fit_transform(sweep.deltas_)})()
-    window = QMainWindow()
-    window.docks = {}
-    view = attach(window)
-    assert attach(window) is view and "qualifier_map" in window.docks
+    window, docks = QMainWindow(), {}
+    view = attach(window, docks)
+    assert attach(window, docks) is view and "qualifier_map" in docks
     view.set_variants(type("VS", (), {"exploration": None, "name": "x"})())
     assert "Explore variants" in view.note.text() and not view.figure.axes
     view.set_variants(type("VS", (), {"exploration": exp, "name": "ternary_bush"})())

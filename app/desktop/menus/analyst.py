@@ -85,6 +85,7 @@ class AnalystWindow(QWidget):
         self.resize(1250, 820)
 
     def open_study(self, path: str | os.PathLike | None = None) -> Task | None:
+        """Open a study database (asked for when ``path`` is None) and write its report in a worker."""
         from ramure.studies import Study
 
         path = path or ask_study_path(self)
@@ -141,6 +142,7 @@ class AnalystWindow(QWidget):
         self.save_button.setEnabled(True)
 
     def save_report(self, folder: str | os.PathLike | None = None) -> pathlib.Path | None:
+        """Copy the report's folder into ``folder`` (asked for when None); returns where it went."""
         if self.report_dir is None:
             return None
         folder = folder or QFileDialog.getExistingDirectory(self, "Save the report in")
@@ -151,6 +153,7 @@ class AnalystWindow(QWidget):
         return target
 
     def refuse(self, message: str) -> None:
+        """Say why something cannot be done: a warning box when the window may ask, and ``last_message``."""
         self.last_message = message
         if self.ask:
             QMessageBox.warning(self, "Study", message)

@@ -5,7 +5,8 @@ thumbnails, qualifier previews) as cancellable :class:`~ramure.app.desktop.worke
 objects with the status bar's progress bar, and feeds the results to the
 gallery, the PCA dock and the regeneration panel's qualifier drop-down.
 The computations themselves are in :mod:`ramure.app.desktop.variants` and
-:mod:`ramure.metrics`.
+:mod:`ramure.metrics`.  It is handed the docks it feeds and never calls the window: messages,
+refusals, crashes, a fruit click's selection and a newly shown variant set leave as signals.
 """
 
 from __future__ import annotations
@@ -15,11 +16,12 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from PySide6.QtCore import QObject, Signal
 from PySide6.QtGui import QAction, QImage
 from PySide6.QtWidgets import QFileDialog
 
-from ramure.app.desktop import qualifier_map, variants
-from ramure.app.desktop.thumbnails import placeholder_image, same_segments, skeleton_image
+from ramure.app.desktop import variants
+from ramure.app.desktop.view.thumbnails import placeholder_image, same_segments, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
 
@@ -27,11 +29,14 @@ if TYPE_CHECKING:
     from ramure.metrics.apply import QualifierResult
     from ramure.lsys import LSystem
     from ramure.lsys.turtle import Skeleton
-    from PySide6.QtWidgets import QMenu
+    from PySide6.QtWidgets import QMenu, QProgressBar, QPushButton, QWidget
+    from ramure.app.desktop.panels.gallery import GalleryView
+    from ramure.app.desktop.panels.pca_cloud import PcaCloudView
+    from ramure.app.desktop.panels.regen import RegenPanel
+    from ramure.app.desktop.view.plant_view import PlantView
     from ramure.app.desktop.controller import Controller
     from ramure.app.desktop.state import Snapshot
     from ramure.app.desktop.variants import VariantSet
-    from ramure.app.desktop.window import MainWindow
     from ramure.app.desktop.workers import Job
 
 THUMB = 150
@@ -42,11 +47,42 @@ def fruit_available() -> bool:
     return True
 
 
-class VariantsController:
-    """Owns the current :class:`~ramure.app.desktop.variants.VariantSet` and the tasks that build it."""
+class VariantsController(QObject):
+    """Owns the current :class:`~ramure.app.desktop.variants.VariantSet` and the tasks that build it.
 
-    def __init__(self, window: MainWindow) -> None:
-        self.window = window
+    It feeds the docks it is handed (``regen``, ``gallery``, ``pca_view``, the main ``view``) and
+    shows its tasks' progress on ``progress`` with ``cancel``; ``parent`` is the widget its
+    dialogs open over.
+    """
+
+    #: A message for the status bar and how long it stays (ms; 0: until replaced).
+    status = Signal(str, int)
+    #: A task's own message is no longer true: clear the status bar if it still shows it.
+    status_ended = Signal(str)
+    #: A user error (an exploration folder that cannot be read...): the window reports it.
+    refused = Signal(str)
+    #: An unexpected error in a task: its message and traceback.
+    crashed = Signal(str, str)
+    #: A click on a fruit volume: select these leaves (``mode``: replace, add, toggle).
+    select_requested = Signal(list, str)
+    #: A variant set is on show (the window brings the gallery forward, fills the qualifier map).
+    variants_shown = Signal(object)
+
+    def __init__(
+        self,
+        controller: Controller,
+        regen: RegenPanel,
+        gallery: GalleryView,
+        pca_view: PcaCloudView,
+        view: PlantView,
+        progress: QProgressBar,
+        cancel: QPushButton,
+        parent: QWidget,
+    ) -> None:
+        super().__init__(parent)
+        self.controller = controller
+        self.regen, self.gallery, self.pca_view, self.view = regen, gallery, pca_view, view
+        self.progress, self.cancel_button, self.parent_widget = progress, cancel, parent
         self.variant_set: VariantSet | None = None
         self.text: str | None = None  # grammar text the variant set belongs to
         self.constants: dict[str, float] | None = None  # the session's constants the variants were swept from
@@ -58,28 +94,35 @@ class VariantsController:
         self.cut_fruit = False  # fruit drawn cut open (a plane through each fruit, facing the viewer)
         self.fruit_job_cut = False
         self.fruit_ok = fruit_available()
-        w = window
-        w.gallery.pick_clicked.connect(self.apply_pick)
-        w.pca_view.pick_clicked.connect(self.apply_pick)
-        w.gallery.explore_requested.connect(self.explore)
-        w.gallery.open_requested.connect(self.open_exploration)
-        w.regen.qualifier_chosen.connect(self.preview_qualifier)
-        w.regen.apply_qualifier.connect(self.apply_qualifier)
-        w.regen.regrow_fruit.connect(self.regrow_fruit)
-        w.cancel_button.clicked.connect(self.cancel_all)
-        w.view.leaf_clicked.connect(self.fruit_clicked)
-        w.controller.job_done.connect(self.qualifier_done)
+        self._connect()
         reason = variants.metrics_available()
         if reason:
-            w.gallery.set_unavailable(reason)
-            w.gallery.explore_button.setEnabled(False)
-            w.pca_view.set_unavailable(reason)
+            gallery.set_unavailable(reason)
+            gallery.explore_button.setEnabled(False)
+            pca_view.set_unavailable(reason)
         else:
-            w.gallery.set_unavailable(
+            gallery.set_unavailable(
                 "No exploration yet: Explore variants (a sweep of the constants "
                 "±10 %, one rule at a time) or open an exploration folder."
             )
         self.offer_qualifiers("The first qualifier explores the grammar's variants (once; cached).")
+
+    def _connect(self) -> None:
+        """The docks' requests to this controller."""
+        self.gallery.pick_clicked.connect(self.apply_pick)
+        self.pca_view.pick_clicked.connect(self.apply_pick)
+        self.gallery.explore_requested.connect(self.explore)
+        self.gallery.open_requested.connect(self.open_exploration)
+        self.regen.qualifier_chosen.connect(self.preview_qualifier)
+        self.regen.apply_qualifier.connect(self.apply_qualifier)
+        self.regen.regrow_fruit.connect(self.regrow_fruit)
+        self.cancel_button.clicked.connect(self.cancel_all)
+        self.view.leaf_clicked.connect(self.fruit_clicked)
+        self.controller.job_done.connect(self.qualifier_done)
+
+    def _say(self, text: str, timeout: int = 4000) -> None:
+        """Put ``text`` on the window's status bar (through :attr:`status`)."""
+        self.status.emit(text, timeout)
 
     def offer_qualifiers(self, note: str) -> None:
         """The qualifier box's list (the vocabulary, then a study's words) and its suggestions."""
@@ -87,22 +130,22 @@ class VariantsController:
 
         names = variants.vocabulary_names() + [word_label(w) for w in self.words]
         tips = {**variants.qualifier_meanings(), **{word_label(w): str(e.get("meaning", w)) for w, e in self.words.items()}}
-        self.window.regen.set_qualifiers(names, note, tips, variants.accepted_words(self.words))
+        self.regen.set_qualifiers(names, note, tips, variants.accepted_words(self.words))
 
     def load_words(self, path: str | os.PathLike | None = None) -> dict[str, dict] | None:
         """Accept a study's words (a vocabulary file from ``ramure study words``) as qualifiers,
         each with its measured direction: they join the qualifier list and its suggestions."""
         if path is None:
-            path, _ = QFileDialog.getOpenFileName(self.window, "Load study words", "", "Vocabulary files (*.json)")
+            path, _ = QFileDialog.getOpenFileName(self.parent_widget, "Load study words", "", "Vocabulary files (*.json)")
             if not path:
                 return None
         try:
             self.words = variants.read_study_words(path)
         except RamureError as exc:
-            self.window.report_refused(str(exc))
+            self.refused.emit(str(exc))
             return None
         self.offer_qualifiers(f"{len(self.words)} study words accepted: {', '.join(sorted(self.words)[:6])}.")
-        self.window.status(f"Loaded {len(self.words)} study words from {os.path.basename(path)}", 8000)
+        self._say(f"Loaded {len(self.words)} study words from {os.path.basename(path)}", 8000)
         return self.words
 
     def directions(self) -> dict[str, dict[str, float]]:
@@ -114,16 +157,13 @@ class VariantsController:
         try:
             return variants.qualifier_key(name, self.words)
         except RamureError as exc:
-            self.window.regen.qualifier_note.setText(str(exc))
-            self.window.status(str(exc), 15000)
+            self.regen.qualifier_note.setText(str(exc))
+            self._say(str(exc), 15000)
             return None
-
-    @property
-    def controller(self) -> Controller:
-        return self.window.controller
 
     # -- menu -------------------------------------------------------------------
     def build_menu(self, menu: QMenu) -> None:
+        """Fill the Variants menu: explore, open an exploration folder, load study words, cancel."""
         self.explore_action = menu.addAction("Explore variants of this grammar")
         self.explore_action.triggered.connect(lambda: self.explore())  # not explore(checked)
         self.explore_action.setEnabled(variants.metrics_available() is None)
@@ -133,7 +173,8 @@ class VariantsController:
         menu.addAction("Cancel running work").triggered.connect(self.cancel_all)
 
     def fruit_action(self, menu: QMenu) -> QAction:
-        action = QAction("Volumetric fruit", self.window)
+        """The checkable Volumetric fruit action (and Cut fruit open) added to ``menu``."""
+        action = QAction("Volumetric fruit", self.parent_widget)
         action.setCheckable(True)
         action.setEnabled(self.fruit_ok)
         action.setStatusTip(
@@ -144,7 +185,7 @@ class VariantsController:
         action.toggled.connect(self.set_fruit)
         menu.addAction(action)
         self.fruit_toggle = action
-        cut = QAction("Cut fruit open", self.window)
+        cut = QAction("Cut fruit open", self.parent_widget)
         cut.setCheckable(True)
         cut.setStatusTip(
             "Halve every fruit with a plane facing you (turn the view, then toggle again to cut along the new direction)"
@@ -167,14 +208,13 @@ class VariantsController:
         old = self.tasks.get(kind)
         if old is not None and old.running:
             old.cancel()
-        task = Task(kind, fn, self.window)
+        task = Task(kind, fn, self.parent_widget)
         self.tasks[kind] = task
-        w = self.window
         if progress:
-            w.progress.setRange(0, 0)
-            w.progress.setFormat(f"{label} %p%")
-            w.progress.show()
-            w.cancel_button.show()
+            self.progress.setRange(0, 0)
+            self.progress.setFormat(f"{label} %p%")
+            self.progress.show()
+            self.cancel_button.show()
             task.progressed.connect(self._progress)
         task.done.connect(lambda result: self._finished(task, on_done, result))
         task.failed.connect(lambda exc, details: self._failed(task, exc, details))
@@ -182,11 +222,11 @@ class VariantsController:
         task.quiet = not progress  # a quiet task (a preview) leaves the status bar alone
         task.label = f"{label}…"
         if progress:
-            w.status(task.label, 0)
+            self._say(task.label, 0)
         return task.start()
 
     def _progress(self, done, total, text) -> None:
-        bar = self.window.progress
+        bar = self.progress
         bar.setRange(0, max(total, 1))
         bar.setValue(done)
 
@@ -195,32 +235,34 @@ class VariantsController:
         if self.tasks.get(name) is task:
             del self.tasks[name]
         if not any(t.running for t in self.tasks.values()):
-            self.window.progress.hide()
-            self.window.cancel_button.hide()
+            self.progress.hide()
+            self.cancel_button.hide()
 
     def _finished(self, task, on_done, result, cancelled: bool = False) -> None:
         self._end(task)
         if cancelled:
             if not task.quiet:
-                self.window.status(f"{task.name} cancelled")
+                self._say(f"{task.name} cancelled")
             return
-        if not task.quiet and self.window.statusBar().currentMessage() == task.label:
-            self.window.status("")  # only our own message: a newer one (a qualifier's result) stays
+        if not task.quiet:
+            self.status_ended.emit(task.label)  # only our own message: a newer one (a qualifier's result) stays
         if on_done is not None and self.tasks.get(task.name) is None:
             on_done(result)
 
     def _failed(self, task, exc, details) -> None:
         self._end(task)
         if isinstance(exc, RamureError):
-            self.window.report_refused(str(exc))
+            self.refused.emit(str(exc))
         else:
-            self.window.report_crash(f"{type(exc).__name__}: {exc}", details)
+            self.crashed.emit(f"{type(exc).__name__}: {exc}", details)
 
     def cancel_all(self) -> None:
+        """Cancel every running task."""
         for task in list(self.tasks.values()):
             task.cancel()
 
     def busy(self) -> bool:
+        """True while a task runs."""
         return any(t.running for t in self.tasks.values())
 
     # -- explorations ---------------------------------------------------------------
@@ -255,14 +297,15 @@ class VariantsController:
         return vs is not None and vs.exploration is not None and self.text == snap.text and self.constants == snap.constants
 
     def open_exploration(self, directory: str | os.PathLike | None = None) -> VariantSet | None:
+        """Show the exploration saved in ``directory`` (asked for when None); None after saying why not."""
         if directory is None:
-            directory = QFileDialog.getExistingDirectory(self.window, "Open exploration folder")
+            directory = QFileDialog.getExistingDirectory(self.parent_widget, "Open exploration folder")
             if not directory:
                 return None
         try:
             vs = variants.load_exploration(directory)
         except RamureError as exc:
-            self.window.report_refused(str(exc))
+            self.refused.emit(str(exc))
             return None
         self.text, self.constants = self.controller.snapshot.text, dict(self.controller.snapshot.constants)
         self.lsystem = self._variant_lsystem()
@@ -272,21 +315,20 @@ class VariantsController:
     def set_variants(self, vs: VariantSet) -> None:
         """Show a variant set: gallery (placeholders, then thumbnails), PCA cloud, qualifiers."""
         self.variant_set = vs
-        w = self.window
-        w.gallery.set_picks(
+        self.gallery.set_picks(
             vs.picks, [placeholder_image(THUMB, f"#{p.get('id')}", "drawing…") for p in vs.picks], base=self.constants
         )
-        w.pca_view.set_variants(vs)
-        w.open_dock("gallery")  # the picks, in front of the regeneration panel
-        qualifier_map.attach(w).set_variants(vs)
-        w.regen.qualifier_note.setText(
+        self.pca_view.set_variants(vs)
+        self.variants_shown.emit(vs)  # the gallery in front of the regeneration panel, the qualifier map
+        self.regen.qualifier_note.setText(
             "" if vs.exploration is not None else "A qualifier explores this grammar's variants first."
         )
-        if vs.exploration is not None and w.regen.qualifier.currentText():
-            self.preview_qualifier(w.regen.qualifier.currentText())
+        if vs.exploration is not None and self.regen.qualifier.currentText():
+            self.preview_qualifier(self.regen.qualifier.currentText())
         self.render_thumbnails()
 
     def render_thumbnails(self) -> Task:
+        """Draw the 27 picks' thumbnails in a task (each pick's plant, beside the base plant)."""
         vs = self.variant_set
         assert vs is not None, "set_variants() comes first"
         snap = self.controller.snapshot
@@ -311,15 +353,14 @@ class VariantsController:
             progress(len(vs.picks), len(vs.picks), "thumbnails")
             return images
 
-        return self.run("thumbnails", work, self.window.gallery.set_images, "Drawing thumbnails")
+        return self.run("thumbnails", work, self.gallery.set_images, "Drawing thumbnails")
 
     def plant_changed(self, snap: Snapshot) -> None:
+        """A new plant: say when the variants belong to another text or constants; redraw the fruit volumes."""
         if self.variant_set is not None and self.text is not None and snap.text != self.text:
-            self.window.gallery.note.setText(
-                "These variants were explored for another grammar text; explore again to update them."
-            )
+            self.gallery.note.setText("These variants were explored for another grammar text; explore again to update them.")
         elif self.variant_set is not None and self.constants is not None and snap.constants != self.constants:
-            self.window.gallery.note.setText(
+            self.gallery.note.setText(
                 "The constants changed since these variants were explored; a qualifier explores again around the new values."
             )
         if self.show_fruit:
@@ -342,13 +383,13 @@ class VariantsController:
             return None
         name = key
         if not self.explored():
-            self.window.status(f"Exploring the variants before applying '{name}'…", 0)
+            self._say(f"Exploring the variants before applying '{name}'…", 0)
             return self.explore(then=lambda: self.apply_qualifier(name))
         assert self.variant_set is not None and self.variant_set.exploration is not None  # explored()
         sweep = self.variant_set.exploration.sweep
         directions = self.directions()
         job = self.controller.submit(f"qualifier {name}", lambda ex: ex.apply_qualifier(name, sweep, directions=directions))
-        self.window.status(
+        self._say(
             f"Applying '{name}': trying the best variants on the "  # after "Computing…"
             f"{'selection' if self.controller.snapshot.selection else 'whole plant'}…",
             0,
@@ -356,31 +397,32 @@ class VariantsController:
         return job
 
     def qualifier_done(self, job: Job) -> None:
+        """A qualifier job ended: keep its result and say what it did."""
         if job.name.startswith("qualifier ") and not job.stale and job.error is None:
             self.last_qualifier = job.result
-            self.window.status(variants.qualifier_message(job.result), 15000)
+            self._say(variants.qualifier_message(job.result), 15000)
 
     def preview_qualifier(self, name: str) -> Task | None:
         """Draw the whole plant with the qualifier's best-ranked variant (a thumbnail, in a task)."""
         if not self.explored():
-            self.window.regen.set_preview(None)
+            self.regen.set_preview(None)
             return None
         from ramure.metrics.qualifiers import qualifier_combination
 
         assert self.variant_set is not None and self.variant_set.exploration is not None  # explored()
         key = self._qualifier_key(name)
         if key is None:
-            self.window.regen.set_preview(None)
+            self.regen.set_preview(None)
             return None
         try:
             params = qualifier_combination(key, self.variant_set.exploration.sweep, directions=self.directions() or None)
         except RamureError as exc:
-            self.window.regen.qualifier_note.setText(str(exc))
+            self.regen.qualifier_note.setText(str(exc))
             return None
         snap = self.controller.snapshot
         ls, n, seed = self.lsystem, snap.n, snap.seed
         assert ls is not None  # a grammar is loaded before variants are drawn
-        self.window.regen.qualifier_note.setText(
+        self.regen.qualifier_note.setText(
             f"Best variant: rule {params.get('rule')}, "
             + ", ".join(f"{k}={v:g}" for k, v in params["constants"].items())
             + ". Applying tries the best few on the selection."
@@ -389,24 +431,24 @@ class VariantsController:
         def work(progress, cancelled):
             return skeleton_image(variants.variant_skeleton(ls, n, seed, params), 96)
 
-        return self.run("preview", work, self.window.regen.set_preview, "Preview", progress=False)
+        return self.run("preview", work, self.regen.set_preview, "Preview", progress=False)
 
     # -- volumetric fruit ------------------------------------------------------------
     def set_fruit(self, on: bool) -> None:
         """Volumetric fruit on/off: the volumes replace the plant's fruit spheres."""
         self.show_fruit = bool(on)
-        self.window.view.set_fruit_spheres_hidden(self.show_fruit)
+        self.view.set_fruit_spheres_hidden(self.show_fruit)
         if on:
             self.draw_fruit(self.controller.snapshot)
         else:
-            self.window.view.set_fruit(None)
+            self.view.set_fruit(None)
 
     def draw_fruit(self, snap: Snapshot) -> None:
         """Build the fruit volumes in the worker (the model caches them) and draw their surface."""
         from ramure.app.desktop.state import fruit_cut_surface, fruit_surface
 
         if self.cut_fruit:
-            camera = self.window.view.plotter.camera
+            camera = self.view.plotter.camera
             normal = np.subtract(camera.position, camera.focal_point)
             job = self.controller.submit("fruit", lambda ex: fruit_cut_surface(ex, normal), key="fruit")
         else:
@@ -422,22 +464,24 @@ class VariantsController:
             self.draw_fruit(self.controller.snapshot)
 
     def fruit_ready(self, job: Job) -> None:
+        """The fruit volumes of the current plant are built: draw them (if still wanted)."""
         if job.name != "fruit" or job.stale or job.error is not None or not self.show_fruit:
             return
-        self.window.view.set_fruit(job.result, self.controller.snapshot.selection)
+        self.view.set_fruit(job.result, self.controller.snapshot.selection)
         self.fruit_job_cut = self.cut_fruit  # what is on screen (tests)
         if job.result is None:
-            self.window.status("This plant has no fruit")
+            self._say("This plant has no fruit")
 
     def fruit_clicked(self, leaf: int, mode: str) -> None:
-        self.window.run_selection(self.controller.select, [leaf], mode)
+        """A click on a fruit volume asks for that leaf to be selected (:attr:`select_requested`)."""
+        self.select_requested.emit([leaf], mode)
 
     def regrow_fruit(self, preset: str = "") -> Job:
         """New seed (and ``preset`` shape, if given) for the selected fruit; shows the volumes."""
         job = self.controller.submit("regrow fruit", lambda ex: ex.regrow_fruit(preset=preset) if preset else ex.regrow_fruit())
         if not self.show_fruit:
             self.fruit_toggle.setChecked(True)  # fruit settings show on the volumes
-            self.window.status("Volumetric fruit shown: fruit shapes and seeds apply to the volumes", 6000)
+            self._say("Volumetric fruit shown: fruit shapes and seeds apply to the volumes", 6000)
         return job
 
 

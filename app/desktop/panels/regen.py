@@ -29,6 +29,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.app.desktop.state import changed_constants
 
 if TYPE_CHECKING:
@@ -58,6 +59,21 @@ class RegenPanel(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        self.boxes: dict[str, QDoubleSpinBox] = {}
+        self._current: dict[str, float] = {}
+        rho_row = self._rho_row()
+        buttons = self._edit_buttons()
+        self._notes()
+        self.constants_box = self._constants_group()
+        qual = self._qualifier_group()
+        self.fruit_box = self._fruit_group()
+        layout = dock_column(self, rho_row, buttons, self.cut_preview, self.note, qual, self.fruit_box)
+        layout.addWidget(self.constants_box, 1)
+        self.set_qualifiers([], "Qualifiers need a variant exploration (Variants ▸ Explore).")
+        self.set_fruit_selection(0, 0)
+
+    def _rho_row(self) -> QHBoxLayout:
+        """The ρ slider and its value."""
         self.rho = QSlider(Qt.Orientation.Horizontal)
         self.rho.setObjectName("rho")
         self.rho.setRange(1, 100)
@@ -72,7 +88,10 @@ class RegenPanel(QWidget):
         rho_row.addWidget(QLabel("ρ"))
         rho_row.addWidget(self.rho, 1)
         rho_row.addWidget(self.rho_label)
+        return rho_row
 
+    def _edit_buttons(self) -> QGridLayout:
+        """Regrow, Prune, Undo, Redo."""
         self.regrow_button = QPushButton("Regrow")
         self.regrow_button.setToolTip(
             "Regrow the selection's cut subtrees with a new seed (the whole plant when nothing is selected)"
@@ -90,6 +109,10 @@ class RegenPanel(QWidget):
         buttons.addWidget(self.prune_button, 0, 1)
         buttons.addWidget(self.undo_button, 1, 0)
         buttons.addWidget(self.redo_button, 1, 1)
+        return buttons
+
+    def _notes(self) -> None:
+        """The regrow's note (why nothing changed...) and the cut preview's line, hidden until used."""
         self.note = QLabel("")
         self.note.setObjectName("regrowNote")
         self.note.setWordWrap(True)
@@ -101,7 +124,9 @@ class RegenPanel(QWidget):
         self.cut_preview.setStyleSheet("color: #a05000;")
         self.cut_preview.hide()
 
-        self.constants_box = QGroupBox("Constants for the selection")
+    def _constants_group(self) -> QGroupBox:
+        """Constants for the selection: one box per constant, Regrow with constants, Reset."""
+        box = QGroupBox("Constants for the selection")
         self.constants_form = QFormLayout()
         host = QWidget()
         host.setLayout(self.constants_form)
@@ -114,15 +139,16 @@ class RegenPanel(QWidget):
         self.with_constants_button.clicked.connect(self._with_constants)
         self.reset_constants_button = QPushButton("Reset values")
         self.reset_constants_button.clicked.connect(lambda: self.show_constants(self._current, force=True))
-        cbox = QVBoxLayout(self.constants_box)
+        cbox = QVBoxLayout(box)
         cbox.addWidget(scroll, 1)
         row = QHBoxLayout()
         row.addWidget(self.with_constants_button)
         row.addWidget(self.reset_constants_button)
         cbox.addLayout(row)
-        self.boxes: dict[str, QDoubleSpinBox] = {}
-        self._current: dict[str, float] = {}
+        return box
 
+    def _qualifier_group(self) -> QGroupBox:
+        """The qualifier box (typed or chosen), its preview picture and Apply."""
         qual = QGroupBox("Qualifier")
         self.qualifier = QComboBox()
         self.qualifier.setObjectName("qualifier")
@@ -148,9 +174,11 @@ class RegenPanel(QWidget):
         qgrid.addWidget(self.apply_button, 1, 0)
         qgrid.addWidget(self.qualifier_note, 2, 0)
         qgrid.addWidget(self.preview, 0, 1, 3, 1)
-        self.set_qualifiers([], "Qualifiers need a variant exploration (Variants ▸ Explore).")
+        return qual
 
-        self.fruit_box = QGroupBox("Fruit")
+    def _fruit_group(self) -> QGroupBox:
+        """Fruit: a shape preset and Regrow fruit, with a note on the selection."""
+        box = QGroupBox("Fruit")
         self.fruit_preset = QComboBox()
         self.fruit_preset.setObjectName("fruitPreset")
         self.fruit_preset.addItem("same shape, new seed", "")  # the presets: once the plant has fruit
@@ -159,27 +187,18 @@ class RegenPanel(QWidget):
         self.regrow_fruit_button.clicked.connect(lambda: self.regrow_fruit.emit(self.fruit_preset.currentData() or ""))
         self.fruit_note = QLabel("")
         self.fruit_note.setWordWrap(True)
-        fgrid = QGridLayout(self.fruit_box)
+        fgrid = QGridLayout(box)
         fgrid.addWidget(self.fruit_preset, 0, 0)
         fgrid.addWidget(self.regrow_fruit_button, 0, 1)
         fgrid.addWidget(self.fruit_note, 1, 0, 1, 2)
-        self.set_fruit_selection(0, 0)
-
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(rho_row)
-        layout.addLayout(buttons)
-        layout.addWidget(self.cut_preview)
-        layout.addWidget(self.note)
-        layout.addWidget(qual)
-        layout.addWidget(self.fruit_box)
-        layout.addWidget(self.constants_box, 1)
+        return box
 
     def _rho(self, value) -> None:
         self.rho_label.setText(f"ρ = {value}")
         self.rho_changed.emit(value)
 
     def set_rho(self, percent: float) -> None:
+        """Show ρ at ``percent`` without emitting :attr:`rho_changed`."""
         self.rho.blockSignals(True)
         self.rho.setValue(int(round(percent)))
         self.rho_label.setText(f"ρ = {self.rho.value()}")
@@ -196,10 +215,12 @@ class RegenPanel(QWidget):
         self.cut_preview.setVisible(bool(text))
 
     def set_history(self, can_undo: bool, can_redo: bool) -> None:
+        """Enable Undo and Redo as the history allows."""
         self.undo_button.setEnabled(can_undo)
         self.redo_button.setEnabled(can_redo)
 
     def set_selection_size(self, count: int) -> None:
+        """Say on Regrow what it regrows (``count`` selected, or the whole plant); Prune needs a selection."""
         self.prune_button.setEnabled(count > 0)
         target = f"{count} selected" if count else "whole plant"
         text = f"Regrow ({target})"
@@ -247,6 +268,7 @@ class RegenPanel(QWidget):
         self.with_constants_button.setEnabled(bool(self.boxes))
 
     def values(self) -> dict[str, float]:
+        """The values in the panel's own constant boxes."""
         return {name: box.value() for name, box in self.boxes.items()}
 
     def _with_constants(self) -> None:

@@ -20,7 +20,7 @@ A participant session (:class:`ParticipantWindow`) shows the pages of a
 Every answer goes straight to :class:`ramure.studies.TestSession` (one SQLite
 transaction each), and the screen is rebuilt from what is stored, so a crash
 loses at most the qualifier being typed.  A timer shows the participant's
-remaining budget.  :class:`~ramure.app.desktop.analyst.AnalystWindow` shows a
+remaining budget.  :class:`~ramure.app.desktop.menus.analyst.AnalystWindow` shows a
 study's report.
 """
 
@@ -31,7 +31,7 @@ import pathlib
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from PySide6.QtCore import QMimeData, QSize, Qt, QTimer, Signal
+from PySide6.QtCore import QMimeData, QObject, QSize, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon, QPixmap
 from PySide6.QtWidgets import (
     QAbstractItemView,
@@ -58,7 +58,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ramure.app.desktop.thumbnails import placeholder_image, skeleton_image
+from ramure.app.desktop.view.thumbnails import placeholder_image, skeleton_image
 from ramure.app.desktop.workers import Task
 from ramure.errors import RamureError
 from ramure.studies.design import WORDS, ParticipantFlow, Question, StudyConfig, set_title, split_words
@@ -66,8 +66,7 @@ from ramure.studies.design import WORDS, ParticipantFlow, Question, StudyConfig,
 if TYPE_CHECKING:
     from PySide6.QtGui import QCloseEvent, QDragEnterEvent, QDragMoveEvent, QDropEvent, QImage
     from PySide6.QtWidgets import QMenu
-    from ramure.app.desktop.analyst import AnalystWindow
-    from ramure.app.desktop.window import MainWindow
+    from ramure.app.desktop.menus.analyst import AnalystWindow
     from ramure.studies import Study
     from ramure.studies.session import Group, TestSession
 
@@ -169,27 +168,32 @@ class ImageList(QListWidget):
         self.setDefaultDropAction(Qt.DropAction.MoveAction)
 
     def mimeTypes(self) -> list[str]:  # noqa: N802 (Qt API)
+        """The drag format of pictures: their ids."""
         return [MIME]
 
     def mimeData(self, items: Sequence[QListWidgetItem]) -> QMimeData:  # noqa: N802 (Qt API)
+        """The dragged pictures' ids, comma-separated."""
         data = QMimeData()
         ids = [str(item.data(Qt.ItemDataRole.UserRole)) for item in items]
         data.setData(MIME, ",".join(ids).encode())
         return data
 
     def dragEnterEvent(self, event: QDragEnterEvent) -> None:  # noqa: N802 (Qt API)
+        """Accept a drag of pictures only."""
         if event.mimeData().hasFormat(MIME):
             event.acceptProposedAction()
         else:
             event.ignore()
 
     def dragMoveEvent(self, event: QDragMoveEvent) -> None:  # noqa: N802 (Qt API)
+        """Accept a drag of pictures only."""
         if event.mimeData().hasFormat(MIME):
             event.acceptProposedAction()
         else:
             event.ignore()
 
     def dropEvent(self, event: QDropEvent) -> None:  # noqa: N802 (Qt API)
+        """Pictures dropped here: hand their ids to the page, which moves them into this group."""
         if not event.mimeData().hasFormat(MIME):
             event.ignore()
             return
@@ -208,9 +212,11 @@ class ImageList(QListWidget):
         return item
 
     def image_ids(self) -> list[int]:
+        """The ids of the pictures in the list, in order."""
         return [self.item(i).data(Qt.ItemDataRole.UserRole) for i in range(self.count())]
 
     def selected_ids(self) -> list[int]:
+        """The ids of the selected pictures."""
         return [item.data(Qt.ItemDataRole.UserRole) for item in self.selectedItems()]
 
 
@@ -235,6 +241,7 @@ class LikertRow(QWidget):
         self.buttons.idClicked.connect(lambda level: self.answered.emit(self.key, level))
 
     def set_level(self, level: int | None) -> None:
+        """Check the button of ``level`` (None: none checked)."""
         self.buttons.setExclusive(False)
         for button in self.buttons.buttons():
             button.setChecked(False)
@@ -364,6 +371,7 @@ class TestPage(QWidget):
         self.refresh()
 
     def eventFilter(self, watched: object, event: object) -> bool:  # noqa: N802 (Qt API)
+        """Fit the pool's pictures when it is resized."""
         from PySide6.QtCore import QEvent
 
         if watched is self.pool and isinstance(event, QEvent) and event.type() == QEvent.Type.Resize:
@@ -398,9 +406,11 @@ class TestPage(QWidget):
 
     # -- what the participant does ---------------------------------------------------
     def partition(self) -> list[list[int]]:
+        """The groups as lists of picture ids."""
         return [list(g.images) for g in self.session.groups()]
 
     def images_dropped(self, ids: Iterable[int], target: ImageList) -> None:
+        """Pictures dropped on a group's list: move them into its group."""
         self.move_images(ids, target.target)
 
     def move_images(self, ids: Iterable[int], target: str | int) -> None:
@@ -414,9 +424,11 @@ class TestPage(QWidget):
         self._write(lambda: self.session.set_groups([g for g in groups if g]))
 
     def set_representative(self, label: int, image: int) -> None:
+        """Make ``image`` the representative of group ``label`` (saved at once)."""
         self._write(lambda: self.session.set_representative(label, image))
 
     def rate(self, label: int, key: str, level: int) -> None:
+        """Rate group ``label`` on the scale ``key`` (saved at once)."""
         self._write(lambda: self.session.rate(label, **{key: level}))
 
     def add_qualifier(self, label: int, text: str) -> bool:
@@ -434,9 +446,11 @@ class TestPage(QWidget):
         return self._write(add)
 
     def remove_qualifier(self, label: int, text: str) -> None:
+        """Take the qualifier ``text`` off group ``label`` (saved at once)."""
         self._write(lambda: self.session.remove_qualifier(label, text))
 
     def finish(self) -> None:
+        """Finish this grammar's test; the window moves on when it is saved."""
         if self._write(self.session.finish, refresh=False):
             self.finished.emit()
 
@@ -451,6 +465,7 @@ class TestPage(QWidget):
         return True
 
     def refuse(self, message: str) -> None:
+        """Say why an answer was not saved (through the participant window)."""
         self.owner.refuse(message)
 
     # -- showing what is stored --------------------------------------------------------
@@ -528,6 +543,7 @@ class QuestionsPage(QWidget):
         layout.addStretch(1)
 
     def answers(self) -> dict[str, str]:
+        """The answers typed or chosen, by question key."""
         return {k: (f.currentText() if isinstance(f, QComboBox) else f.text()) for k, f in self.fields.items()}
 
 
@@ -694,10 +710,12 @@ class ParticipantWindow(QWidget):
         QTimer.singleShot(delay, lambda: self.continue_button.setEnabled(not self.is_closed))
 
     def continue_tests(self) -> None:
+        """Leave the between-tests page for the next grammar."""
         if self.stack.currentWidget() is self.between_page:
             self.next_grammar()
 
     def give_consent(self) -> None:
+        """Record the participant's consent and show the next step."""
         try:
             self.flow.consent()
         except RamureError as exc:
@@ -763,6 +781,7 @@ class ParticipantWindow(QWidget):
         return self.show_step()
 
     def open_test(self, session: TestSession) -> TestPage:
+        """Show the test page of ``session`` (placeholders until its pictures are drawn)."""
         self.progress_label.setText(self.title(session.grammar))
         pixmaps = {i: QPixmap.fromImage(placeholder_image(ICON, "", "…")) for i in range(1, 28)}
         page = TestPage(self, session, pixmaps, self.config)
@@ -840,6 +859,7 @@ class ParticipantWindow(QWidget):
         self.withdraw_button.setEnabled(False)
 
     def update_timer(self) -> None:
+        """Show the time left (on the current test, or the study's), red in the last two minutes."""
         if self.is_closed:
             return
         if self.page is not None and not self.page.session.finished:
@@ -854,11 +874,13 @@ class ParticipantWindow(QWidget):
         self.timer_label.setStyleSheet("font-size: 14pt; font-weight: bold;" + (" color: #c00000;" if seconds < 120 else ""))
 
     def refuse(self, message: str) -> None:
+        """Say why something was not saved: a warning box when the window may ask, and ``last_message``."""
         self.last_message = message
         if self.ask:
             QMessageBox.warning(self, "Not saved", message)
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        """Stop the timer and the picture task, then say :attr:`closed` (the study closes)."""
         self.tick.stop()
         if self.image_task is not None:
             self.image_task.cancel()
@@ -868,19 +890,28 @@ class ParticipantWindow(QWidget):
 
 
 # -- the Study menu -------------------------------------------------------------------------
-class StudyMenu:
-    """Study ▸ Participant session… / Analyst report…"""
+class StudyMenu(QObject):
+    """Study ▸ Participant session… / Analyst report…
 
-    def __init__(self, window: MainWindow, menu: QMenu) -> None:
-        self.window = window
+    ``parent`` is the widget its dialogs open over; ``ask=False`` never asks (a new participant
+    is enrolled, tests and scripts).  A study that cannot be opened is said with :attr:`refused`.
+    """
+
+    #: A user error (a study that cannot be opened): the window reports it.
+    refused = Signal(str)
+
+    def __init__(self, menu: QMenu, parent: QWidget, ask: bool = True) -> None:
+        super().__init__(parent)
+        self.parent_widget = parent
+        self.ask = ask
         self.windows: list[QWidget] = []
         menu.addAction("Participant session…").triggered.connect(lambda: self.participant())
         menu.addAction("Analyst report…").triggered.connect(lambda: self.analyst())
 
     def _ask_study(self):
-        from ramure.app.desktop.analyst import ask_study_path
+        from ramure.app.desktop.menus.analyst import ask_study_path
 
-        return ask_study_path(self.window)
+        return ask_study_path(self.parent_widget)
 
     def participant(
         self,
@@ -912,9 +943,9 @@ class StudyMenu:
             elif code not in [p["code"] for p in study.participants()]:
                 study.add_participant(code, pilot=pilot)
         except RamureError as exc:
-            self.window.report_refused(str(exc))
+            self.refused.emit(str(exc))
             return None
-        win = ParticipantWindow(study, code, ask=self.window.ask)
+        win = ParticipantWindow(study, code, ask=self.ask)
         win.closed.connect(study.close)
         self.windows.append(win)
         win.show()
@@ -923,13 +954,13 @@ class StudyMenu:
     def _choose_participant(self, study, pilot=False):
         """A new code, or an existing one to resume, or a pilot run (asked in a small dialog)."""
         codes = [p["code"] for p in study.participants() if p["consent"] or not p["withdrawn_at"]]
-        if not codes or not self.window.ask:
+        if not codes or not self.ask:
             return study.add_participant(pilot=pilot)
         from PySide6.QtWidgets import QInputDialog
 
         new, trial = "New participant", "New pilot run (kept apart from the real data)"
         choice, ok = QInputDialog.getItem(
-            self.window, "Participant", "Resume a participant or start a new one:", [new, trial, *codes], 0, False
+            self.parent_widget, "Participant", "Resume a participant or start a new one:", [new, trial, *codes], 0, False
         )
         if not ok:
             return None
@@ -938,12 +969,13 @@ class StudyMenu:
         return choice
 
     def analyst(self, path: str | os.PathLike | None = None) -> AnalystWindow | None:
-        from ramure.app.desktop.analyst import AnalystWindow
+        """Open a study's analyst window: who took part, and its report."""
+        from ramure.app.desktop.menus.analyst import AnalystWindow
 
         path = path or self._ask_study()
         if not path:
             return None
-        win = AnalystWindow(ask=self.window.ask)
+        win = AnalystWindow(ask=self.ask)
         self.windows.append(win)
         win.show()
         win.open_study(path)

@@ -102,6 +102,7 @@ class PcaCloudView(QWidget):
         return self.axes
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
+        """Lay the plot and the box list out for the dock's new size."""
         super().resizeEvent(event)
         self._arrange()
 
@@ -116,6 +117,7 @@ class PcaCloudView(QWidget):
             self.boxes_list.setWrapping(tall)
 
     def set_unavailable(self, message: str) -> None:
+        """Show no cloud, only ``message``."""
         self.variant_set = None
         self.boxes_list.clear()
         self.note.setText(message)
@@ -124,6 +126,7 @@ class PcaCloudView(QWidget):
             self.canvas.draw_idle()
 
     def set_variants(self, variant_set: VariantSet) -> None:
+        """Show ``variant_set``: its cloud, its 27 picks and one check box per qualifier box."""
         self.variant_set = variant_set
         self.boxes_list.blockSignals(True)
         self.boxes_list.clear()
@@ -146,6 +149,7 @@ class PcaCloudView(QWidget):
         self.redraw()
 
     def checked_boxes(self) -> list[str]:
+        """The names of the qualifier boxes checked."""
         return [
             self.boxes_list.item(i).text()
             for i in range(self.boxes_list.count())
@@ -153,6 +157,7 @@ class PcaCloudView(QWidget):
         ]
 
     def set_box_checked(self, name: str, on: bool = True) -> None:
+        """Check (or uncheck) the qualifier box ``name``."""
         for i in range(self.boxes_list.count()):
             item = self.boxes_list.item(i)
             if item.text() == name:
@@ -169,6 +174,7 @@ class PcaCloudView(QWidget):
         self.pick_clicked.emit(self.variant_set.picks[nearest])
 
     def redraw(self) -> None:
+        """Draw the cloud, the picks and the checked boxes again."""
         vs = self.variant_set
         if vs is None:
             if self.axes is not None:

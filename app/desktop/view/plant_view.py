@@ -1,6 +1,6 @@
 """The 3D view: the plant in a pyvista plotter widget, click and rubber-band picking.
 
-The plotter is a :class:`~ramure.app.desktop.native_view.NativeInteractor` on X11: VTK
+The plotter is a :class:`~ramure.app.desktop.view.native_view.NativeInteractor` on X11: VTK
 draws and swaps each frame straight into the widget's own X window, without the
 QOpenGLWidget's copies and Qt's OpenGL composition of pyvistaqt's ``QtInteractor``
 (about 10 ms of CPU less per frame on llvmpipe, 40 ms less for the polished frame, whose
@@ -31,9 +31,9 @@ shader) and FXAA over a picture full of edges.  So the frame right after an
 edit (a new plant version, new colours, hidden cells) or during a camera drag
 is a *draft*: the same plant, geometry and colours, with 1-pixel hairlines, no
 FXAA, and no hairline shorter than 1.5 pixels on screen (see
-:data:`~ramure.app.desktop.scene.DRAFT_MIN_LINE_PIXELS`; about 30 % of the cost).  When the user pauses for :data:`POLISH_MS`
+:data:`~ramure.app.desktop.view.scene.DRAFT_MIN_LINE_PIXELS`; about 30 % of the cost).  When the user pauses for :data:`POLISH_MS`
 (a single-shot timer that each further edit restarts) the full-quality frame
-follows.  Plants under :data:`~ramure.app.desktop.plant_actors.LOD_SEGMENTS`
+follows.  Plants under :data:`~ramure.app.desktop.view.plant_actors.LOD_SEGMENTS`
 segments are always drawn polished (their frames are cheap).  Pictures taken
 with :meth:`PlantView.grab_image` are always polished.
 """
@@ -49,13 +49,13 @@ import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, QTimer, Signal
 from PySide6.QtWidgets import QRubberBand, QVBoxLayout, QWidget
 
-from ramure.app.desktop.native_view import NativeInteractor, native_windows
-from ramure.app.desktop.plant_actors import PlantActors
+from ramure.app.desktop.view.native_view import NativeInteractor, native_windows
+from ramure.app.desktop.view.plant_actors import PlantActors
 from ramure.app.desktop import state
 from ramure.app.desktop.state import FRUIT_SELECTED, points_without_fruit, project_to_display
 from ramure.app.render import FRUIT_RGB
 from ramure.errors import RamureError
-from ramure.app.desktop import scene
+from ramure.app.desktop.view import scene
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage, QKeyEvent, QResizeEvent
@@ -250,7 +250,7 @@ class PlantView(QWidget):
     """The plant, its selection in red, the selection's OBB as a red wireframe.
 
     ``native``: VTK in a native window (True), pyvistaqt's QOpenGLWidget (False), or as
-    :func:`~ramure.app.desktop.native_view.native_windows` says (None, the default).
+    :func:`~ramure.app.desktop.view.native_view.native_windows` says (None, the default).
     """
 
     cell_clicked = Signal(int, str)  # cell id (-1: nothing under the cursor), mode
@@ -406,7 +406,7 @@ class PlantView(QWidget):
 
     def plant_bounds(self) -> tuple[float, ...]:
         """The shown mesh's bounds (VTK's order): the plant actors' own (patched after an edit,
-        see :mod:`~ramure.app.desktop.plant_actors`) while the mesh shows the model's points,
+        see :mod:`~ramure.app.desktop.view.plant_actors`) while the mesh shows the model's points,
         else VTK's."""
         assert self.mesh is not None
         known = self.plant.bounds
@@ -600,6 +600,7 @@ class PlantView(QWidget):
         self.redraw()
 
     def fruit_colors(self, selection: Collection[int]) -> np.ndarray:
+        """The fruit volumes' cell colours, the selected fruit in the selection colour."""
         from ramure.app.desktop.state import leaf_mask
 
         if self.fruit is None:
@@ -613,15 +614,18 @@ class PlantView(QWidget):
         return rgb
 
     def set_fruit_selection(self, selection: Collection[int]) -> None:
+        """Recolour the fruit volumes for ``selection``."""
         if self.fruit is not None:
             self.fruit.cell_data["rgb"][:] = self.fruit_colors(selection)  # type: ignore[index]  # pyvista stubs
             self.fruit.Modified()
 
     def has_box(self) -> bool:
+        """True when the rubber-band box is on screen."""
         return self.box_actor is not None and bool(self.box_actor.GetVisibility())
 
     # -- coordinates -------------------------------------------------------------
     def display_size(self) -> tuple[int, ...]:
+        """The render window's size in display pixels."""
         ren_win = self.plotter.ren_win
         assert ren_win is not None, "the view is closed"
         return tuple(ren_win.GetSize())
@@ -637,6 +641,7 @@ class PlantView(QWidget):
         return QPoint(int(round(x / scale)), int(round(self.plotter.height() - 1 - y / scale)))
 
     def projection_matrix(self) -> np.ndarray:
+        """The renderer's world-to-display projection (see :func:`ramure.app.render.projection_matrix`)."""
         return scene.projection_matrix(self.plotter.renderer)
 
     def project(self, points: ArrayLike) -> np.ndarray:
@@ -770,6 +775,7 @@ class PlantView(QWidget):
         return cell
 
     def click_from_widget(self, qpoint: QPoint, mode: str) -> int:
+        """A click at widget point ``qpoint``: pick there (see :meth:`click_at`)."""
         return self.click_at(*self.to_display(qpoint), mode)
 
     def rectangle_at(self, rect: Sequence[float], mode: str = "replace") -> None:
@@ -777,9 +783,11 @@ class PlantView(QWidget):
         self.rectangle_selected.emit(tuple(float(v) for v in rect), mode)
 
     def rectangle_from_widget(self, a: QPoint, b: QPoint, mode: str) -> None:
+        """A rubber band from ``a`` to ``b`` (widget points): select inside it."""
         self.rectangle_at((*self.to_display(a), *self.to_display(b)), mode)
 
     def key_pressed(self, event: QKeyEvent) -> None:
+        """Escape clears the selection, R toggles rectangle selection."""
         if event.key() == Qt.Key.Key_Escape:
             self.escape.emit()
         elif event.key() == Qt.Key.Key_R and not event.modifiers():
@@ -788,6 +796,7 @@ class PlantView(QWidget):
             self.reset_camera()
 
     def set_rectangle_mode(self, on: bool) -> None:
+        """Drag draws a selection rectangle (``on``) or turns the camera."""
         self.rectangle_mode = bool(on)
         self.plotter.setCursor(Qt.CursorShape.CrossCursor if on else Qt.CursorShape.ArrowCursor)
 
@@ -798,6 +807,15 @@ class PlantView(QWidget):
         self.redraw(now=True)
         return self.frame_image()
 
+    def grab_window(self) -> QImage:
+        """The whole top-level window holding this view as a QImage, the 3D view freshly
+        painted (polished) and VTK's native windows painted in."""
+        self.polish()
+        self.redraw(now=True)
+        from ramure.app.desktop.view.native_view import grab_with_frames
+
+        return grab_with_frames(self.window())
+
     def frame_image(self) -> QImage:
         """The last frame drawn, in whatever look (:meth:`grab_image` polishes first)."""
         if isinstance(self.plotter, NativeInteractor):
@@ -805,6 +823,7 @@ class PlantView(QWidget):
         return self.plotter.grabFramebuffer()
 
     def close(self) -> bool:
+        """Stop the polish timer and close the plotter."""
         self._polish_timer.stop()
         self.plotter.close()
         return super().close()

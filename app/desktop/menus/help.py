@@ -84,6 +84,7 @@ class HelpMenu:
             menu.addAction(action)
 
     def show(self, title: str, text: str) -> None:
+        """Show ``text`` (HTML) under ``title`` in the one help window."""
         dialog = self.dialog
         if dialog is None:
             dialog = self.dialog = QDialog(self.window)

@@ -30,6 +30,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from ramure.app.desktop.panels.common import dock_column, number_box
 from ramure.app.desktop.state import constant_range
 
 if TYPE_CHECKING:
@@ -42,14 +43,9 @@ ROWS_SHOWN = 8  # constants shown without scrolling
 SEED_LIMIT = 2.0**53  # the largest whole number a double holds exactly
 
 
-def _spin(lo=-LIMIT, hi=LIMIT, decimals=4, width=96):
-    box = QDoubleSpinBox()
-    box.setMaximumWidth(width)
-    box.setRange(lo, hi)
-    box.setDecimals(decimals)
-    box.setKeyboardTracking(False)
-    box.setAccelerated(True)
-    return box
+def _spin(width: int = 96) -> QDoubleSpinBox:
+    """A constant's value, min or max box: sent when typing ends, accelerated when held."""
+    return number_box(-LIMIT, LIMIT, 4, width=width, live=False)
 
 
 class ConstantRow:
@@ -77,6 +73,7 @@ class ConstantRow:
         self.high.valueChanged.connect(self._range_typed)
 
     def widgets(self) -> list[QWidget]:
+        """The row's widgets in grid order: name, slider, value, min, max."""
         return [self.label, self.slider, self.value, self.low, self.high]
 
     def set_value(self, value: float) -> None:
@@ -92,6 +89,7 @@ class ConstantRow:
             w.blockSignals(False)
 
     def set_range(self, lo: float, hi: float) -> None:
+        """The slider's range ``[lo, hi]``; ValueError unless ``hi > lo``."""
         lo, hi = float(lo), float(hi)
         if not hi > lo:
             raise ValueError(f"{self.name}: the range maximum must be above its minimum ({lo:g} .. {hi:g})")
@@ -187,10 +185,7 @@ class ConstantsPanel(QWidget):
         box.addWidget(self.edit_ranges)
         box.addWidget(self.empty)
         box.addWidget(scroll, 1)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(derivation)
-        layout.addWidget(consts, 1)
+        dock_column(self, derivation).addWidget(consts, 1)
 
     # -- from the model --------------------------------------------------------
     def show_snapshot(self, snap: Snapshot, grammar_constants: Mapping[str, float]) -> None:
@@ -288,4 +283,5 @@ class ConstantsPanel(QWidget):
             self._flush()
 
     def values(self) -> dict[str, float]:
+        """Each constant's value as shown."""
         return {name: row.value.value() for name, row in self.rows.items()}

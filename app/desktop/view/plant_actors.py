@@ -5,7 +5,7 @@ it is given, whether it covers a pixel or not.  Honda sympodial n = 17 has
 131,000 segments (393,000 tube quads); framed whole in the desktop view, all
 but about 500 of them are thinner than a pixel, and a repaint of every tube
 took about 150 ms.  Every segment is also drawn as a hairline
-(:class:`ramure.app.desktop.scene.Hairlines`), which is all a sub-pixel tube
+(:class:`ramure.app.desktop.view.scene.Hairlines`), which is all a sub-pixel tube
 shows as anyway.  Choices, stated here:
 
 * **Groups by radius.**  Tube segments fall in classes a factor 2 apart below

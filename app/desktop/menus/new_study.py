@@ -14,7 +14,7 @@ import json
 import os
 from typing import TYPE_CHECKING
 
-from PySide6.QtCore import QProcess, Qt
+from PySide6.QtCore import QObject, QProcess, Qt, Signal
 from PySide6.QtWidgets import (
     QApplication,
     QCheckBox,
@@ -36,17 +36,23 @@ if TYPE_CHECKING:
     from PySide6.QtGui import QCloseEvent
     from PySide6.QtWidgets import QMenu
 
-    from ramure.app.desktop.window import MainWindow
+    from ramure.app.desktop.panels.variants import VariantsController
     from ramure.app.new_study import NewStudy
     from ramure.metrics.exploration import Exploration
 
 
 class NewStudyDialog(QDialog):
-    """Folder, title and budget of a new study; after *Create*, the command that serves it."""
+    """Folder, title and budget of a new study; after *Create*, the command that serves it.
 
-    def __init__(self, window: MainWindow, exploration: Exploration, grammar: str) -> None:
-        super().__init__(window)
-        self.window_ = window
+    What it did and what it refused leave as :attr:`status` and :attr:`refused`."""
+
+    #: A message for the status bar and how long it stays (ms).
+    status = Signal(str, int)
+    #: A user error (a folder that cannot hold a study...): the window reports it.
+    refused = Signal(str)
+
+    def __init__(self, parent: QWidget | None, exploration: Exploration, grammar: str) -> None:
+        super().__init__(parent)
         self.exploration = exploration
         self.grammar = grammar
         self.made: NewStudy | None = None
@@ -118,6 +124,7 @@ class NewStudyDialog(QDialog):
         self.minutes.setEnabled(not on)
 
     def choose_folder(self) -> None:
+        """Ask for the study's folder."""
         folder = QFileDialog.getExistingDirectory(self, "Folder of the new study")
         if folder:
             self.folder.setText(folder)
@@ -159,17 +166,18 @@ class NewStudyDialog(QDialog):
         self.command.setText(made.command)
         self.served.show()
         self.create_button.setEnabled(False)
-        self.window_.status(f"New study {made.db}", 10000)
+        self.status.emit(f"New study {made.db}", 10000)
         return made
 
     def _refuse(self, message: str) -> None:
         self.note.setStyleSheet("color: #b00020;")
         self.note.setText(message)
-        self.window_.report_refused(message)
+        self.refused.emit(message)
 
     def copy_command(self) -> None:
+        """Copy the serve command to the clipboard."""
         QApplication.clipboard().setText(self.command.text())
-        self.window_.status("Serve command copied", 5000)
+        self.status.emit("Serve command copied", 5000)
 
     # -- serving here ------------------------------------------------------------------------------
     def serve_here(self) -> QProcess | None:
@@ -226,6 +234,7 @@ class NewStudyDialog(QDialog):
             process.waitForFinished(2000)
 
     def closeEvent(self, event: QCloseEvent) -> None:  # noqa: N802 (Qt API)
+        """Stop a server started here before the dialog closes."""
         self.stop_serving()
         super().closeEvent(event)
 
@@ -237,18 +246,28 @@ def _wrap(layout: QHBoxLayout) -> QWidget:
     return widget
 
 
-class NewStudyActions:
-    """Study ▸ New study from this exploration… and Variants ▸ Save exploration folder…"""
+class NewStudyActions(QObject):
+    """Study ▸ New study from this exploration… and Variants ▸ Save exploration folder…
 
-    def __init__(self, window: MainWindow, study_menu: QMenu, variants_menu: QMenu) -> None:
-        self.window = window
+    It works on the window's ``variants`` (the exploration, or one made first) and says what it
+    did with :attr:`status` and :attr:`refused`; ``parent`` is the widget dialogs open over."""
+
+    #: A message for the status bar and how long it stays (ms; 0: until replaced).
+    status = Signal(str, int)
+    #: A user error (no exploration yet, a folder that cannot be written): the window reports it.
+    refused = Signal(str)
+
+    def __init__(self, variants: VariantsController, study_menu: QMenu, variants_menu: QMenu, parent: QWidget) -> None:
+        super().__init__(parent)
+        self.variants = variants
+        self.parent_widget = parent
         self.dialog: NewStudyDialog | None = None
         study_menu.addSeparator()
         study_menu.addAction("New study from this exploration…").triggered.connect(lambda: self.new_study())
         variants_menu.addAction("Save exploration folder…").triggered.connect(lambda: self.save_exploration())
 
     def _explored(self) -> tuple[Exploration, str] | None:
-        variants = self.window.variants
+        variants = self.variants
         if not variants.explored():
             return None
         vs = variants.variant_set
@@ -259,12 +278,14 @@ class NewStudyActions:
         """Open the dialog on the window's exploration; explore first when there is none."""
         explored = self._explored()
         if explored is None:
-            self.window.status("Exploring the variants first: the study is made of the 27 picks…", 0)
-            self.window.variants.explore(then=lambda: self.new_study())
+            self.status.emit("Exploring the variants first: the study is made of the 27 picks…", 0)
+            self.variants.explore(then=lambda: self.new_study())
             return None
         if self.dialog is not None:
             self.dialog.close()
-        self.dialog = NewStudyDialog(self.window, *explored)
+        self.dialog = NewStudyDialog(self.parent_widget, *explored)
+        self.dialog.status.connect(self.status)
+        self.dialog.refused.connect(self.refused)
         self.dialog.show()
         return self.dialog
 
@@ -274,19 +295,19 @@ class NewStudyActions:
 
         explored = self._explored()
         if explored is None:
-            self.window.report_refused("Explore the variants first (Variants ▸ Explore variants of this grammar)")
+            self.refused.emit("Explore the variants first (Variants ▸ Explore variants of this grammar)")
             return False
         if directory is None:
-            directory = QFileDialog.getExistingDirectory(self.window, "Save the exploration into")
+            directory = QFileDialog.getExistingDirectory(self.parent_widget, "Save the exploration into")
             if not directory:
                 return False
         QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
         try:
             save_exploration(explored[0], directory)
         except (RamureError, OSError) as exc:
-            self.window.report_refused(str(exc))
+            self.refused.emit(str(exc))
             return False
         finally:
             QApplication.restoreOverrideCursor()
-        self.window.status(f"Exploration saved to {directory}", 10000)
+        self.status.emit(f"Exploration saved to {directory}", 10000)
         return True

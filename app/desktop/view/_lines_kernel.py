@@ -1,4 +1,4 @@
-"""The compiled pass of the draft frame's hairlines (:class:`ramure.app.desktop.scene.DraftLines`):
+"""The compiled pass of the draft frame's hairlines (:class:`ramure.app.desktop.view.scene.DraftLines`):
 which lines are at least so many pixels long on screen.  numba: numpy's projection of 262k
 points takes 10 ms (strided columns) where one pass over them takes well under one."""
 

@@ -21,7 +21,7 @@ Choices the issue leaves open, stated here:
   orbits like a turntable (VTK's terrain style: azimuth about Z and
   elevation, never any roll).  Framing fits the plant's 8 box corners into
   90 % of the view, whatever its shape (tall plants are not cropped).
-* **Draft frames** (see :mod:`ramure.app.desktop.view`) leave out the hairlines shorter
+* **Draft frames** (see :mod:`ramure.app.desktop.view.plant_view`) leave out the hairlines shorter
   than :data:`DRAFT_MIN_LINE_PIXELS` on screen (chosen again when the camera moves, so
   zooming in brings them back).  Software OpenGL pays about 0.15 microseconds per line
   however short: Honda n = 17 framed whole leaves out about half of its 131k lines, about
@@ -154,7 +154,7 @@ def segment_colors(mesh: pv.DataSet, colors: ArrayLike, count: int, sides: int =
     """Per-segment RGB from per-cell ``colors``: each segment takes its first tube cell's colour.
 
     ``sides``: the mesh is known to be laid out as ``count`` tubes of ``sides`` quads first
-    (:func:`ramure.app.desktop.plant_actors.tube_layout`), so the layout is not checked again.
+    (:func:`ramure.app.desktop.view.plant_actors.tube_layout`), so the layout is not checked again.
     """
     colors = np.asarray(colors)
     if sides:
@@ -214,6 +214,7 @@ class LineBuffers:
 
     @property
     def capacity(self) -> int:
+        """How many lines the buffers hold."""
         return len(self.conn) // 2
 
 
@@ -380,11 +381,13 @@ class LineChunks:
         self._drawn = ()
 
     def set_visible(self, on: bool) -> None:
+        """Show or hide every chunk."""
         self.visible = bool(on)
         for actor in self.actors:
             actor.SetVisibility(self.visible)
 
     def set_width(self, width: float) -> None:
+        """The lines' width in pixels."""
         self.width = float(width)
         for actor in self.actors:
             actor.GetProperty().SetLineWidth(self.width)
@@ -442,6 +445,7 @@ class Hairlines:
 
     @property
     def skeleton(self) -> Skeleton | None:
+        """The skeleton drawn, None before the first."""
         return None if self.shown is None else self.shown.skeleton
 
     @property
@@ -450,6 +454,7 @@ class Hairlines:
         return [] if self.shown is None else self.shown.chunks.actors
 
     def visible(self) -> bool:
+        """True when hairlines are drawn and shown."""
         return self.shown is not None and self.shown.chunks.visible
 
     def set_draft(self, draft: bool) -> None:
@@ -500,7 +505,7 @@ class Hairlines:
         shown.chunks.set_visible(False)
 
     def forget_kept(self) -> None:
-        """Drop the kept version (see :meth:`ramure.app.desktop.view.PlantView.forget_kept`):
+        """Drop the kept version (see :meth:`ramure.app.desktop.view.plant_view.PlantView.forget_kept`):
         its memory and actors become the spare."""
         kept, self.kept = self.kept, None
         self._free(kept)
@@ -532,6 +537,7 @@ class Hairlines:
         back.chunks.set_visible(True)
 
     def set_colors(self, mesh: pv.DataSet, colors: ArrayLike) -> None:
+        """Recolour the hairlines as the mesh's cells are coloured."""
         if self.shown is not None and self.shown.skeleton is not None:
             self._recolor(mesh, colors)
 
@@ -612,7 +618,7 @@ class DraftLines:
     def update(self, renderer: Any, lines: pv.PolyData, count: int) -> None:
         """Choose among the first ``count`` lines of ``lines`` (:func:`point_lines`) for
         ``renderer``'s camera, unless they were chosen for the same view and lines."""
-        from ramure.app.desktop._lines_kernel import long_lines
+        from ramure.app.desktop.view._lines_kernel import long_lines
 
         matrix = projection_matrix(renderer)
         width, height = renderer.GetSize()
@@ -654,6 +660,7 @@ class Ground:
         self.visible = True
 
     def show(self, bounds: Sequence[float]) -> None:
+        """Lay the grid under ``bounds`` with a round step (:func:`nice_step`); the same grid as before is kept."""
         b = np.asarray(bounds, float).reshape(3, 2)
         size = float(np.max(b[:2, 1] - b[:2, 0]))
         size = max(size, float(b[2, 1] - b[2, 0]) * 0.6, 1e-6)
@@ -701,6 +708,7 @@ class Ground:
         self.set_visible(self.visible)
 
     def set_visible(self, on: bool) -> None:
+        """Show or hide the grid and its label."""
         self.visible = bool(on)
         for actor in (self.actor, self.label):
             if actor is not None:

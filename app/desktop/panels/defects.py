@@ -16,17 +16,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from PySide6.QtCore import QTimer
+from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QLineEdit, QListWidget, QPushButton, QVBoxLayout, QWidget
 
-from ramure.app.desktop.lazy_view import LazyView
+from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.fruit_defects import EXAMPLES
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QShowEvent
     from ramure.app.desktop.controller import Controller
-    from ramure.app.desktop.window import MainWindow
     from ramure.app.desktop.workers import Job
 
 JOB = "fruit defects"
@@ -35,16 +34,17 @@ JOB = "fruit defects"
 class DefectsPanel(QWidget):
     """Kind, options, Add / Remove, the spec list, Apply; facts and a 3D view of the damaged fruit."""
 
+    #: A message for the window's status bar (a refused defect) and how long it stays (ms).
+    status = Signal(str, int)
+
     def __init__(
         self,
         controller: Controller,
-        window: MainWindow | None = None,
         parent: QWidget | None = None,
         plotter_factory: Callable[[QWidget], Any] | None = None,
     ) -> None:
         super().__init__(parent)
         self.controller = controller
-        self.main_window = window  # not self.window: that is QWidget.window()
         self.shown_leaf = None
         self.last_facts = None
         self.kind = QComboBox()
@@ -93,6 +93,7 @@ class DefectsPanel(QWidget):
         return self.view_slot.plotter()
 
     def showEvent(self, event: QShowEvent) -> None:  # noqa: N802 - Qt's name
+        """Refresh the dock's fruit when it comes on screen."""
         super().showEvent(event)
         QTimer.singleShot(0, self.refresh)
 
@@ -177,13 +178,11 @@ class DefectsPanel(QWidget):
         text = str(err).splitlines()[0] if isinstance(err, RamureError) else f"failed: {err}"
         self.facts.setText(f"Refused: {text}")
         self.facts.setStyleSheet("color: #b00020")
-        if self.main_window is not None and hasattr(self.main_window, "status"):
-            self.main_window.status(f"Defects: {text}", 6000)
+        self.status.emit(f"Defects: {text}", 6000)
 
 
-def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter  # native window on X11
+def _interactor(parent: QWidget) -> Any:
+    """The dock's own 3D view: a white background."""
+    from ramure.app.desktop.panels.common import dock_plotter
 
-    plotter = make_plotter(parent)
-    plotter.set_background("white")
-    return plotter
+    return dock_plotter(parent, "white")

@@ -61,4 +61,5 @@ class StringView(QWidget):
         self.string.setPlainText(text)
 
     def show_selection(self, lines: Iterable[str]) -> None:
+        """Show the selection's modules, one per line."""
         self.selected.setPlainText("\n".join(lines))

@@ -4,9 +4,9 @@
   heat, humidity and wind it runs in.  The whole season (every step) is computed once per
   plant and environment, in the controller's worker; moving the slider then only recolours:
   each attached leaf takes its Markov state's colour (:attr:`LeafChain.colors`) in the main
-  view, through the view's public :meth:`~ramure.app.desktop.view.PlantView.set_colors`.
+  view, through the view's public :meth:`~ramure.app.desktop.view.plant_view.PlantView.set_colors`.
   A **fallen leaf's cells are hidden** on the branches
-  (:meth:`~ramure.app.desktop.view.PlantView.set_hidden_cells`; their colour is set to the
+  (:meth:`~ramure.app.desktop.view.plant_view.PlantView.set_hidden_cells`; their colour is set to the
   background's, :data:`FALLEN_RGB`, as well) and the leaf is drawn again as a disc in its
   state's colour where it landed on the ground (an overlay actor named ``details_fallen``).
   Step 0 gives the plant its own colours back.  The selection stays red on top of the season
@@ -48,7 +48,7 @@ from PySide6.QtWidgets import (
 )
 
 from ramure.app.desktop import state
-from ramure.app.desktop.lazy_view import LazyView
+from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit, paint_adhesion, selected_fruit_surface
 from ramure.app.details_history import grow_again, last_detail, record, selected_fruit
 from ramure.errors import RamureError
@@ -57,7 +57,7 @@ if TYPE_CHECKING:
     import pyvista as pv
     from numpy.typing import ArrayLike
     from ramure.app.desktop.controller import Controller
-    from ramure.app.desktop.window import MainWindow
+    from ramure.app.desktop.view.plant_view import PlantView
     from ramure.app.desktop.workers import Job
     from ramure.lsys.seasons import LeafChain, Season
 
@@ -122,7 +122,7 @@ class DetailsPanel(QWidget):
     def __init__(
         self,
         controller: Controller,
-        window: MainWindow | None = None,
+        view: PlantView | None = None,
         parent: QWidget | None = None,
         plotter_factory: Callable[[QWidget], Any] | None = None,
     ) -> None:
@@ -130,7 +130,7 @@ class DetailsPanel(QWidget):
         from ramure.lsys.seasons import autumn_chain
 
         self.controller = controller
-        self.main_window = window  # not self.window: that is QWidget.window()
+        self.main_view = view  # the main 3D view the season recolours (None: none, tests)
         self.chain = autumn_chain()
         self.season: Season | None = None
         self.season_rgb: np.ndarray | None = None
@@ -368,11 +368,12 @@ class DetailsPanel(QWidget):
         if self.slider.value() > 0 and self.season is not None and self.season_key == self._key():
             self._paint(self.slider.value())
 
-    def _view(self):
-        return getattr(self.main_window, "view", None)
+    def _view(self) -> PlantView | None:
+        return self.main_view
 
     # -- lichen and cracks -----------------------------------------------------------------
     def grow_lichen(self) -> Job:
+        """Grow lichen on the selected fruit (clusters, particles, habit and seed from the dock), as a job."""
         self.list_habits()
         clusters, particles = int(self.clusters.value()), int(self.particles.value())
         habit, seed = self.habit.currentText(), int(self.seed.value())
@@ -393,10 +394,10 @@ class DetailsPanel(QWidget):
         return self.controller.submit("details lichen", run, key="details-fruit")
 
     def grow_lichen_on_bark(self) -> Job:
-        self.list_habits()
         """Grow lichen on the plant's branches (clusters, particles, habit and seed from the dock)."""
         from ramure.app.details import lichen_on_surface, plant_bark
 
+        self.list_habits()
         clusters, particles = int(self.clusters.value()), int(self.particles.value())
         habit, seed = self.habit.currentText(), int(self.seed.value())
         self.fruit_label.setText("Growing lichen on the branches…")
@@ -460,6 +461,7 @@ class DetailsPanel(QWidget):
         return self.adhesion
 
     def clear_paint(self) -> None:
+        """Forget the painted adhesion: lichen may start anywhere on the fruit."""
         self.adhesion = None
         if self.fruit is not None:
             self._show_fruit()
@@ -613,11 +615,8 @@ def _count_box(name, low, high, value):
     return box
 
 
-def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter  # native window on X11
+def _interactor(parent: QWidget) -> Any:
+    """The dock's own 3D view: lit and framed like the main view."""
+    from ramure.app.desktop.panels.common import dock_plotter
 
-    from ramure.app.desktop import scene
-
-    plotter = make_plotter(parent, auto_update=False, multi_samples=0)
-    scene.apply_look(plotter)
-    return plotter
+    return dock_plotter(parent, "scene")

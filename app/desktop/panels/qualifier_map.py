@@ -8,7 +8,7 @@ regions are the default vocabulary's (:func:`ramure.metrics.qualifiers.vocabular
 a variant set without a fitted sweep (an opened folder) shows its
 qualifier boxes' overlap only when the sweep is there, and says so otherwise.
 
-:func:`attach` adds the dock to a :class:`~ramure.app.desktop.window.MainWindow`
+:func:`attach` adds the dock to a ``QMainWindow``
 (tabified with the PCA cloud) the first time variants are shown.
 """
 
@@ -24,7 +24,7 @@ from ramure.errors import RamureError
 if TYPE_CHECKING:
     from PySide6.QtWidgets import QWidget
     from ramure.app.desktop.variants import VariantSet
-    from ramure.app.desktop.window import MainWindow
+    from PySide6.QtWidgets import QMainWindow, QMenu
     from ramure.metrics.qualifiers import QualifierRegions
 
 
@@ -61,6 +61,7 @@ class QualifierMapView(QWidget):
         self.name = ""
 
     def set_unavailable(self, message: str) -> None:
+        """Show no matrix, only ``message``."""
         self.regions = None
         self.note.setText(message)
         self.redraw()
@@ -87,6 +88,7 @@ class QualifierMapView(QWidget):
         self.redraw()
 
     def redraw(self) -> None:
+        """Draw the collision matrix of the regions (nothing without them)."""
         from ramure.metrics.heatmap import draw_collision_matrix
 
         self.figure.clear()
@@ -98,22 +100,20 @@ class QualifierMapView(QWidget):
         self.canvas.draw_idle()
 
 
-def attach(window: MainWindow) -> QualifierMapView:
-    """The window's qualifier map, created (and tabified with the PCA dock) on first use."""
-    view = getattr(window, "qualifier_map", None)  # a plain QMainWindow (tests) has none yet
-    if view is not None:
-        return view
-    view = window.qualifier_map = QualifierMapView()
+def attach(window: QMainWindow, docks: dict[str, QDockWidget], menu: QMenu | None = None) -> QualifierMapView:
+    """The qualifier map of ``window``, created on first use as ``docks["qualifier_map"]``:
+    tabified with ``docks["pca"]`` (and hidden with it), its toggle added to ``menu``."""
+    if "qualifier_map" in docks:
+        return docks["qualifier_map"].widget()  # type: ignore[return-value]  # made below
+    view = QualifierMapView()
     dock = QDockWidget("Qualifier map", window)
     dock.setObjectName("dock_qualifier_map")
     dock.setWidget(view)
     window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, dock)
-    docks = getattr(window, "docks", {})
     if "pca" in docks:
         window.tabifyDockWidget(docks["pca"], dock)
         if not docks["pca"].isVisible():  # closed with the PCA cloud (the View menu opens it)
             dock.hide()
-    menu = getattr(window, "view_menu", None)
     if menu is not None:
         menu.addAction(dock.toggleViewAction())
     docks["qualifier_map"] = dock

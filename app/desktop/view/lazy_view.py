@@ -63,6 +63,7 @@ class LazyView(QWidget):
         return self._plotter
 
     def showEvent(self, event: QShowEvent) -> None:  # noqa: N802 - Qt's name
+        """First on screen: make the plotter once this show's events are done."""
         super().showEvent(event)
         if self._plotter is None:  # decide once the events of this show are done (see above)
             QTimer.singleShot(0, self, self._make_if_shown)

@@ -73,6 +73,7 @@ class CutGraphView(QWidget):
         self.label_font.setPointSize(LABEL_POINTS)
 
     def clear(self, message: str) -> None:
+        """Show no graph, only ``message``."""
         self.scene.clear()
         self.labels = []
         self.layout_data = None
@@ -192,14 +193,17 @@ class CutGraphView(QWidget):
         return sum(text.isVisible() for text in self.labels)
 
     def zoom(self, factor: float) -> None:
+        """Scale the graph by ``factor`` (labels follow)."""
         self.view.scale(factor, factor)
         self.update_labels()
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
+        """Keep the graph fitted in the dock."""
         super().resizeEvent(event)
         self.fit()
 
     def eventFilter(self, obj: QObject, event: QEvent) -> bool:  # noqa: N802 (Qt API)
+        """The mouse wheel zooms instead of scrolling."""
         if obj is self.view.viewport() and isinstance(event, QWheelEvent):
             self.zoom(1.15 if event.angleDelta().y() > 0 else 1 / 1.15)
             return True

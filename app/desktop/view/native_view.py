@@ -199,6 +199,7 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
             BasePlotter.render(self)
 
     def GetRenderWindow(self) -> Any:  # noqa: N802 (VTK's name, as QtInteractor has it)
+        """The VTK render window (as pyvistaqt's QtInteractor names it)."""
         return self._RenderWindow
 
     def grab_frame(self) -> QImage:
@@ -240,14 +241,17 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
 
     # -- Qt -------------------------------------------------------------------------
     def paintEngine(self) -> None:  # type: ignore[override]  # noqa: N802 (Qt API): VTK paints this widget
+        """None: VTK paints this widget, not Qt."""
         return None
 
     def paintEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Render the VTK window once it is ready."""
         rw = self.ren_win
         if rw is not None and self._window_ready():
             rw.Render()
 
     def resizeEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Resize the VTK window to the widget (in device pixels)."""
         scale = self.devicePixelRatioF()
         w, h = max(1, round(self.width() * scale)), max(1, round(self.height() * scale))
         rw = self._RenderWindow
@@ -259,9 +263,11 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
         self.update()
 
     def sizeHint(self) -> QSize:  # noqa: N802 (Qt API)
+        """400 x 400, as pyvistaqt's interactor."""
         return QSize(400, 400)
 
     def closeEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Finalize the VTK window (the next render, if any, makes it again)."""
         if self.ren_win is not None:
             self.ren_win.Finalize()  # made again by the next render, if any
         super().closeEvent(event)
@@ -279,6 +285,7 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
             )
 
     def mousePressEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Forward a press (or double click) to the VTK interactor."""
         if self._Iren is None:
             return
         self._event_info(event, int(event.type() == QEvent.Type.MouseButtonDblClick))
@@ -286,6 +293,7 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
         self._button_event("Press")
 
     def mouseReleaseEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Forward a release to the VTK interactor."""
         if self._Iren is None:
             return
         self._event_info(event)
@@ -298,12 +306,14 @@ class NativeInteractor(QWidget, BasePlotter):  # type: ignore[misc]  # both defi
             getattr(self._Iren, f"{side}Button{kind}Event")()
 
     def mouseMoveEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Forward a move to the VTK interactor."""
         if self._Iren is None:
             return
         self._event_info(event)
         self._Iren.MouseMoveEvent()
 
     def wheelEvent(self, event: Any) -> None:  # noqa: N802 (Qt API)
+        """Forward the wheel to the VTK interactor, one step per notch (120 eighths of a degree)."""
         if self._Iren is None:
             return
         self._wheel += event.angleDelta().y()

@@ -23,17 +23,16 @@ from PySide6.QtGui import QGuiApplication
 from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
-    QDoubleSpinBox,
     QFormLayout,
     QHBoxLayout,
     QLabel,
     QPushButton,
     QSpinBox,
-    QVBoxLayout,
     QWidget,
 )
 
-from ramure.app.desktop.lazy_view import LazyView
+from ramure.app.desktop.panels.common import dock_column, dock_plotter, number_box
+from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
@@ -43,16 +42,6 @@ if TYPE_CHECKING:
 
 SELECTED_RGB = (220, 30, 30)
 PRESETS = ("flat-sawn", "quarter-sawn", "rift")  # as ramure.gmap.organs.wood.PLANK_PRESETS (gmap loads late)
-
-
-def _spin(name: str, low: float, high: float, value: float, suffix: str, decimals: int = 1) -> QDoubleSpinBox:
-    box = QDoubleSpinBox()
-    box.setObjectName(name)
-    box.setRange(low, high)
-    box.setDecimals(decimals)
-    box.setValue(value)
-    box.setSuffix(suffix)
-    return box
 
 
 class WoodPanel(QWidget):
@@ -90,14 +79,9 @@ class WoodPanel(QWidget):
         row = QHBoxLayout()
         row.addWidget(self.from_plant)
         row.addWidget(self.grow_button)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(form)
-        layout.addLayout(row)
-        layout.addLayout(self.plank_controls())
-        layout.addWidget(self.facts)
+        layout = dock_column(self, form, row, self.plank_controls(), self.facts)
         # the view and the species list: when the dock is first on screen (see lazy_view)
-        self.view_slot = LazyView(plotter_factory or _interactor, setup=lambda _plotter: self.list_species())
+        self.view_slot = LazyView(plotter_factory or dock_plotter, setup=lambda _plotter: self.list_species())
         layout.addWidget(self.view_slot, 1)
         if controller is not None and hasattr(controller, "selection_changed"):
             controller.selection_changed.connect(self.highlight_selection)
@@ -108,9 +92,9 @@ class WoodPanel(QWidget):
         self.plank_preset.setObjectName("woodPlankPreset")
         self.plank_preset.addItems(PRESETS)
         self.plank_preset.currentIndexChanged.connect(lambda _i: self.apply_preset())
-        self.plank_direction = _spin("woodPlankDirection", 0.0, 359.0, 0.0, " deg", 0)
-        self.plank_offset = _spin("woodPlankOffset", -2000.0, 2000.0, 10.0, " mm")
-        self.plank_thickness = _spin("woodPlankThickness", 0.1, 500.0, 20.0, " mm")
+        self.plank_direction = number_box(0.0, 359.0, 0, value=0.0, name="woodPlankDirection", suffix=" deg")
+        self.plank_offset = number_box(-2000.0, 2000.0, 1, value=10.0, name="woodPlankOffset", suffix=" mm")
+        self.plank_thickness = number_box(0.1, 500.0, 1, value=20.0, name="woodPlankThickness", suffix=" mm")
         self.plank_button = QPushButton("Saw plank")
         self.plank_button.setObjectName("woodPlank")
         self.plank_button.clicked.connect(self.show_plank)
@@ -262,9 +246,3 @@ class WoodPanel(QWidget):
         rgb[self.knot_mask(selection)] = SELECTED_RGB  # the grid's cells: pieces of volumes (round rings, tetrahedra)
         self.grid.cell_data["rgb"] = rgb
         self.show_grid()
-
-
-def _interactor(parent):
-    from ramure.app.desktop.native_view import make_plotter  # native window on X11
-
-    return make_plotter(parent, auto_update=False, multi_samples=0)

@@ -57,6 +57,7 @@ class GrammarHighlighter(QSyntaxHighlighter):
     COMMENT = _format("#808080", italic=True)
 
     def highlightBlock(self, text: str) -> None:  # noqa: N802 (Qt API)
+        """Colour one line: keywords, numbers, modules, then comments (a ``/* */`` may span lines)."""
         for pattern, fmt in self.RULES:
             for m in pattern.finditer(text):
                 self.setFormat(m.start(), m.end() - m.start(), fmt)
@@ -141,6 +142,7 @@ class GrammarEditor(QWidget):
         self.error: GrammarError | None = None
 
     def text(self) -> str:
+        """The editor's text."""
         return self.edit.toPlainText()
 
     def set_text(self, text: str) -> None:

@@ -1,6 +1,6 @@
 """The variant gallery dock: the 27 picks as thumbnails; a click applies that variant.
 
-The pictures are drawn in a worker (:mod:`ramure.app.desktop.thumbnails`) or read
+The pictures are drawn in a worker (:mod:`ramure.app.desktop.view.thumbnails`) or read
 from the exploration's image files.  Clicking a thumbnail asks the window to
 regrow the selection (or the whole plant) with that pick's parameter
 combination.
@@ -100,6 +100,7 @@ class GalleryView(QWidget):
         self.picks: list[dict] = []
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
+        """Fit the thumbnails to the dock's new width."""
         super().resizeEvent(event)
         self.fit_thumbnails()
 
@@ -117,6 +118,7 @@ class GalleryView(QWidget):
         self.list.doItemsLayout()  # the rows again, for this width
 
     def set_unavailable(self, message: str) -> None:
+        """Show no picks, only ``message``."""
         self.list.clear()
         self.picks = []
         self.note.setText(message)
@@ -150,6 +152,7 @@ class GalleryView(QWidget):
         self.note.setText(note or f"{len(self.picks)} picks — click one to apply it to the selection (or to the whole plant).")
 
     def set_images(self, images: Sequence[QImage | None]) -> None:
+        """Put the drawn thumbnails on the picks (None: that one is not drawn yet)."""
         for i, image in enumerate(images):
             if image is not None and i < self.list.count():
                 self.list.item(i).setIcon(QIcon(QPixmap.fromImage(image)))
