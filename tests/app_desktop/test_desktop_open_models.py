@@ -36,7 +36,7 @@ def test_an_lpy_is_refused_when_the_window_may_not_ask(make_window, qtbot, tmp_p
 def test_the_desktop_asks_once_per_folder(make_window, qtbot, tmp_path, monkeypatch):
     from PySide6.QtWidgets import QMessageBox
 
-    from ramure.app.desktop import files
+    from ramure.app.desktop.menus import files
 
     a, b = _models(tmp_path / "models")
     w = make_window(n=3)
@@ -64,7 +64,7 @@ def test_the_desktop_asks_once_per_folder(make_window, qtbot, tmp_path, monkeypa
 def test_a_no_keeps_the_plant(make_window, qtbot, tmp_path, monkeypatch):
     from PySide6.QtWidgets import QMessageBox
 
-    from ramure.app.desktop import files
+    from ramure.app.desktop.menus import files
 
     a, _ = _models(tmp_path / "models")
     w = make_window(n=3)
