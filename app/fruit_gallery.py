@@ -45,6 +45,24 @@ def species_sheet(path: str | os.PathLike, tile: int = 300, levels: int = 1, cut
         return _compose(path, rows, tile)
 
 
+def inside_sheet(path: str | os.PathLike, tile: int = 300) -> str:
+    """Every species ripe, cut along its axis (twice subdivided: skin, flesh, core or locules,
+    seeds or stone), with a legend in the species' words."""
+    from ramure.gmap.organs.fruit import build_fruit
+
+    from ramure.app.fruit_look import render_png
+
+    presets = ("round_tomato", "apple", "pear", "banana", "plum", "cherry")
+    row = []
+    with tempfile.TemporaryDirectory() as folder:
+        for preset in presets:
+            gm = build_fruit(preset, volume_levels=2)
+            out = os.path.join(folder, f"{preset}.png")
+            render_png(gm, out, size=(tile, tile), cut=((1, 0.08, 0), (0, 0, 0)))
+            row.append((out, f"{preset.replace('_', ' ')}, cut"))
+        return _compose(path, [row[:3], row[3:]], tile)
+
+
 Pair = tuple[str, str, int, str, str]
 
 
