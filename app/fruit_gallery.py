@@ -16,10 +16,22 @@ from typing import Any
 #: crack in Class I (FFV-36), so the tomato crack pair is Class II against out of grade.
 DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
     ("healed crack (apple)", "apple", 1, "crack:healed=1,rings=8-9,sector=2", "crack:healed=1,rings=5-10,sector=2"),
-    ("stem-scar crack (tomato)", "round_tomato", 1, "crack:kind=transverse,healed=1,width_mm=2", "crack:kind=concentric"),
+    (
+        "stem-scar crack (tomato)",
+        "round_tomato",
+        1,
+        "crack:kind=transverse,healed=1,rings=7-8,width_mm=2",
+        "crack:kind=concentric",
+    ),
     ("hail (tomato)", "round_tomato", 2, "hail:count=1,depth_mm=0.8,healed=1,vertex=-1", "hail:count=3,depth_mm=1.8,healed=1"),
     ("shrivel (apple)", "apple", 1, "shrink:rate=0.008", "shrink:rate=0.013"),
-    ("excrescence (tomato)", "round_tomato", 1, "excrescence:path=(6,C3,*),height_mm=1.5", "excrescence:path=(6,C3,*)"),
+    (
+        "excrescence (tomato)",
+        "round_tomato",
+        1,
+        "excrescence:path=(6,C3,*),height_mm=1.5,taper=0.8",
+        "excrescence:path=(6,C3,*),segments=3,taper=0.8",
+    ),
     ("rot (pear)", "pear", 1, "rot:at=ring8/sector3,coefficients=2.5", "rot:at=ring8/sector3"),
 ]
 
@@ -43,6 +55,24 @@ def species_sheet(path: str | os.PathLike, tile: int = 300, levels: int = 1, cut
                 row.append((out, f"{preset.replace('_', ' ')}, {stage}, {gm.meta['size_mm']:g} mm"))
             rows.append(row)
         return _compose(path, rows, tile)
+
+
+def inside_sheet(path: str | os.PathLike, tile: int = 300) -> str:
+    """Every species ripe, cut along its axis (twice subdivided: skin, flesh, core or locules,
+    seeds or stone), with a legend in the species' words."""
+    from ramure.gmap.organs.fruit import build_fruit
+
+    from ramure.app.fruit_look import render_png
+
+    presets = ("round_tomato", "apple", "pear", "banana", "plum", "cherry")
+    row = []
+    with tempfile.TemporaryDirectory() as folder:
+        for preset in presets:
+            gm = build_fruit(preset, volume_levels=2)
+            out = os.path.join(folder, f"{preset}.png")
+            render_png(gm, out, size=(tile, tile), cut=((1, 0.08, 0), (0, 0, 0)))
+            row.append((out, f"{preset.replace('_', ' ')}, cut"))
+        return _compose(path, [row[:3], row[3:]], tile)
 
 
 Pair = tuple[str, str, int, str, str]

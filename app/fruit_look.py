@@ -242,7 +242,7 @@ def render_png(
             scalars="rgb",
             rgb=True,
             smooth_shading=True,
-            split_sharp_edges=True,
+            split_sharp_edges=cut is not None,  # a cut face stays flat; the skin is smooth everywhere
             ambient=0.4 if cut is not None else 0.28,
             diffuse=0.65 if cut is not None else 0.8,
             specular=0.3,

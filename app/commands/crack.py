@@ -169,6 +169,10 @@ def run_map_crack(args: argparse.Namespace) -> int:
         **facts,
         "seconds": round(time.perf_counter() - t0, 4),
     }
+    mpu = float(gm.meta.get("mm_per_unit", 0.0) or 0.0)
+    if mpu > 0:  # a fruit knows its millimetres
+        facts["length_mm"], facts["opening_mm"] = facts["length"] * mpu, facts["opening"] * mpu
+        facts["volume_lost_mm3"] = facts["volume_lost"] * mpu**3
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         if out.suffix.lower() == ".png":

@@ -19,3 +19,18 @@ def sheet(path):
 
 
 show(sheet)
+
+
+# %%
+# Inside, cut along the axis (twice subdivided): a tomato's locules and seeds, an apple's and a
+# pear's core with their pips, a banana's pulp round its placenta, the stone of a plum and of a
+# cherry. Legends name the tissues as each species has them.
+
+from ramure.app.fruit_gallery import inside_sheet  # noqa: E402
+
+
+def cut_sheet(path):
+    inside_sheet(path, tile=240)
+
+
+show(cut_sheet)

@@ -182,7 +182,7 @@ PRESETS = {
         angleinf=-45.0,
         carpels=5,
         seeds=10,
-        mesocarp=0.7,
+        mesocarp=0.78,
         endocarp=0.06,
     ),
     "plum": dict(
@@ -200,8 +200,8 @@ PRESETS = {
         carpels=1,
         septum=0.0,
         seeds=1,
-        mesocarp=0.62,
-        endocarp=0.1,
+        mesocarp=0.8,
+        endocarp=0.06,
     ),
     "cherry": dict(
         precision=10,
@@ -216,8 +216,8 @@ PRESETS = {
         carpels=1,
         septum=0.0,
         seeds=1,
-        mesocarp=0.45,
-        endocarp=0.1,
+        mesocarp=0.8,
+        endocarp=0.06,
     ),
 }
 

@@ -215,3 +215,23 @@ def test_rot_patch_is_round_and_hail_scars_are_separate_from_crack_walls(tomato)
     assert rot.max() == pytest.approx(1.0) and rot[rot > 0].min() == pytest.approx(0.15)
     healed, _ = D.hail(tomato, count=1, depth_mm=2.0, healed=1, seed=1)
     assert np.asarray(healed.volume_data["scar"]).sum() > 0 and "corky" not in healed.volume_data
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        "hail:count=3,depth_mm=3..4,healed=1",
+        "crack:healed=1",
+        "crack:kind=concentric",
+        "rot:at=ring4/sector2,rate=0.05",
+        "shrink:rate=0.06",
+        "excrescence:path=(6,C3,*),height_mm=3",
+    ],
+)
+def test_every_defect_keeps_a_valid_ball(tomato, spec):
+    """chi = 1 for the solid and 2 for its skin after each defect (a crack is a notch, not a hole)."""
+    out, facts = apply_defects(tomato, [spec])
+    assert out.is_valid()
+    assert out.euler_characteristic() == tomato.euler_characteristic() == 1
+    assert out.boundary().euler_characteristic() == 2
+    assert facts["volume_lost_mm3"] >= 0 or spec.startswith("excrescence")  # a bump adds volume

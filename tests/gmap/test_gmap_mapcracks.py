@@ -134,6 +134,7 @@ def test_command_line_cracks_a_pine_board_and_a_fruit(tmp_path, capsys):
     facts = json.loads(capsys.readouterr().out)
     assert pv.read(tmp_path / "fruit.vtu").n_cells == facts["volumes"] > 8000  # twice subdivided: a finer crack
     assert facts["valid"] and facts["nodes"] == 6 and facts["skin_edges_opened"] > 3
+    assert 10 < facts["length_mm"] < 65 and facts["volume_lost_mm3"] > 0  # on a 65 mm tomato
     assert main(["crack", "--on", "fruit", "--anchor", "0,0,900"]) == 2
     err = capsys.readouterr().err
     assert "not on the surface" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
