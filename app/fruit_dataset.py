@@ -820,6 +820,9 @@ def _run(jobs, workers):
 
 #: How long to try to reach a Dask scheduler before giving up.
 DASK_CONNECT_SECONDS = 20.0
+#: How long a LocalCluster worker may take to start (and, once started, how long it outlives
+#: a scheduler that died with this process; it writes nothing: the files come back here).
+LOCAL_WORKER_START_SECONDS = 180.0
 
 
 def _dask_client(scheduler: str, workers: int):
@@ -832,7 +835,13 @@ def _dask_client(scheduler: str, workers: int):
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                death_timeout=LOCAL_WORKER_START_SECONDS,  # a loaded machine starts workers slowly
+            )
             return Client(cluster), cluster
         return Client(scheduler, timeout=f"{DASK_CONNECT_SECONDS}s"), None
     except (OSError, TimeoutError) as exc:

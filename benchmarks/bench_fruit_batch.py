@@ -63,7 +63,7 @@ def _dask_seconds(workers):
     from ramure.app.fruit_dataset import _warm, make_dataset
 
     folder = tempfile.mkdtemp(prefix="ramure-dask-")
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", death_timeout=180.0)
     try:
         with Client(cluster) as client:
             client.run(_warm)
