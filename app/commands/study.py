@@ -37,6 +37,14 @@ _URL = "a PostgreSQL URL (postgresql://user@host/dbname)"
 _DB_HELP = f"the study: a SQLite file, or {_URL}"
 
 
+def _folder_for_postgres(args: argparse.Namespace) -> None:
+    """Refuse ``--folder`` with a SQLite file: its folder is the file's own."""
+    from ramure.studies.pgsql import is_database_url
+
+    if args.folder is not None and not is_database_url(args.db):
+        raise UserError(f"--folder is for a study on PostgreSQL; a SQLite study's folder is the one holding {args.db}")
+
+
 def _print(obj) -> int:
     json.dump(obj, sys.stdout, indent=1, allow_nan=False, default=str)
     sys.stdout.write("\n")
@@ -97,6 +105,7 @@ def run_create(args: argparse.Namespace) -> int:
 
     if not 32 <= args.picture_size <= 2048:
         raise UserError(f"--picture-size must be 32 to 2048 pixels, not {args.picture_size}")
+    _folder_for_postgres(args)
     config = read_config(args.config) if args.config else None  # checked before any file is made
     with Study.create(
         args.db,
@@ -307,6 +316,7 @@ def run_serve(args: argparse.Namespace) -> int:
 
     if not 0 < args.port < 65536:
         raise UserError(f"--port must be from 1 to 65535, not {args.port}")
+    _folder_for_postgres(args)
 
     def announce(addresses: dict) -> None:
         _print(addresses)

@@ -138,6 +138,8 @@ def test_the_cli_creates_serves_and_analyses_a_study_from_a_url(tmp_path, pg_url
     assert code == 0 and out["grammars"] == ["honda", "tree2"] and out["db"] == url.replace(":secret@", ":***@")
     code, _, err = run(capsys, "create", url, *grammars)
     assert code == 2 and "already holds a study" in err and "secret" not in err
+    code, _, err = run(capsys, "create", str(tmp_path / "s.db"), *grammars, "--folder", str(tmp_path))
+    assert code == 2 and "--folder is for a study on PostgreSQL" in err and not (tmp_path / "s.db").exists()
 
     with Study.open(url) as study:
         assert study.grammar_source("honda") == str(explore / "honda")  # stored relative to the folder
