@@ -1794,9 +1794,18 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
         return np.hypot(x, y), np.arctan2(y, x), z
 
     r, th, z = polar(pts[cells])
-    # the edge class spanning the largest angle runs round the trunk
-    spans = [np.abs(np.angle(np.exp(1j * (th[:, e[:, 1]] - th[:, e[:, 0]])))).mean(axis=1) for e in _HEX_EDGES]
-    which = np.argmax(np.stack(spans, axis=1), axis=1)
+    corners = pts[cells]
+    centre = corners.mean(axis=1)
+    radial = centre - origin - np.einsum("mx,mx->m", centre - origin, axis_dir)[:, None] * axis_dir
+    tangent = np.cross(axis_dir, radial)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-300)[:, None]
+
+    def along_tangent(e):  # how much the class's edges run round the trunk (|cos| to the tangent)
+        vec = corners[:, e[:, 1]] - corners[:, e[:, 0]]
+        length = np.maximum(np.linalg.norm(vec, axis=2).sum(axis=1), 1e-300)
+        return np.abs(np.einsum("mkx,mx->mk", vec, tangent)).sum(axis=1) / length
+
+    which = np.argmax(np.stack([along_tangent(e) for e in _HEX_EDGES], axis=1), axis=1)
     edges = _HEX_EDGES[which]  # (m, 4, 2): the four tangential edges, each from its 'a' corner to 'b'
     m = len(rows)
     idx = np.arange(m)[:, None]
