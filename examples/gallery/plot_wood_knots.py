@@ -23,12 +23,12 @@ radius = wood.trunk_radius()
 legend = legend_for("pine")
 
 
-def board(normal, offset, thickness=0.004, length=6 * radius):
-    """A slab of the wood, ``length`` long around the knot (cross-cuts: the whole section)."""
+def board(normal, offset, thickness=0.004, length=4 * radius):
+    """A slab of the wood, ``length`` long around its largest knot (cross-cuts: the whole section)."""
     slab = W.plank(grid, normal, offset, thickness)
     if abs(normal[2]) > 0.5:
         return slab
-    return slab.clip_box((-1, 1, -1, 1, base[2] - length / 2, base[2] + length / 2), invert=False)
+    return W.plank_window(slab, length)[0]
 
 
 def flat_sawn(path):

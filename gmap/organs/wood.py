@@ -71,7 +71,9 @@ knot's corners and the trunk's rings bend around the knot by a displacement
 field from the seam (:meth:`Wood._push`): the trunk makes room for the
 square round the knot's section, and the ring cells on the seam curve in
 along its round edge, so a tangential cut shows the trunk's rings flowing
-round a round knot.  The seam uses the law's mean
+round a round knot.  The knot's pith is an arc (:meth:`Wood.knot_bender`):
+the branch leaves the trunk's pith ``KNOT_BEND`` degrees steeper than it
+leaves the bark, as a conifer's branch bends in its knot.  The seam uses the law's mean
 widths, so regrowing a branch with a new seed moves only that branch.
 
 >>> w = grow_wood("pine", years=2, branches=0)
@@ -999,6 +1001,10 @@ class Wood:
             h[0] = self.knot_length(br)
         s = np.concatenate([[0.0], np.cumsum(h)[:-1]])
         origins = p0 + h[0] * knot[0] + (s - h[0])[:, None] * frame[0][None]
+        bender = self.knot_bender(br)
+        if bender is not None:  # the branch goes on from the bent knot's end
+            end = p0 + h[0] * knot[0]
+            origins += bender(end) - end
         origins[0] = p0
         frames = np.repeat(frame[None], n_levels, axis=0)
         frames[0] = knot
@@ -1112,7 +1118,11 @@ class Wood:
             n = ax.sides
             theta = self.sector_angles(ax)
             pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
-            flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = self._pith_points(o, f, h, theta[:n], rp, n)
+            pith_pts = self._pith_points(o, f, h, theta[:n], rp, n)
+            bender = self.knot_bender(self.branches[ax.index - 1]) if ax.index > 0 else None
+            if bender is not None:  # the knot (level 0) is curved
+                pith_pts[0] = bender(pith_pts[0])
+            flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = pith_pts
             cells = np.flatnonzero((vd["axis"] == ax.index) & (vd["cell"] > 0))
             if not cells.size:
                 continue
@@ -1124,6 +1134,9 @@ class Wood:
                 pts = self._push(pts, t, profiles)
             if ax.index > 0 and ax.index - 1 in profiles:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
+            if bender is not None:
+                knot = t == 0
+                pts[knot] = bender(pts[knot])
             _put_blocks(flat, offset[cells], pts)
         return flat, offset
 
@@ -1191,7 +1204,7 @@ class Wood:
             )
             room = (1.0 if gap == 1 else self.KNOT_ROOM) * gap * math.tan(math.pi / n) * a  # 1: meet on the line
             lateral = np.minimum(1.0, room / np.maximum(rho, 1e-12))
-            out[b] = (np.minimum((a - rp) / max(cos_elev, 0.2), 0.95 * h[0]), rho, a, lateral)
+            out[b] = (np.minimum(self._bent_s(br, a - rp, cos_elev), 0.95 * h[0]), rho, a, lateral)
         return out
 
     def _nominal_rings(self, ax, depth):
@@ -1278,6 +1291,8 @@ class Wood:
     KNOT_ROOM = 0.8
     #: half-side of the square the trunk makes room for around a round knot, over the knot's radius
     KNOT_HULL = 1.3
+    #: how much steeper (degrees) a knot leaves the pith than it meets the bark: the branch bends in it
+    KNOT_BEND = 15.0
     #: steepest rise of a knot inside the trunk (degrees above the horizontal)
     KNOT_RISE = 35.0
 
@@ -1352,7 +1367,53 @@ class Wood:
         p = self.p
         angle = p["branch_angle"] if br.angle is None else br.angle
         radial = max(math.sin(math.radians(angle)), math.cos(math.radians(self.KNOT_RISE)))  # cos(elevation)
+        bend = math.radians(self.KNOT_BEND)
+        if bend > 0:  # the curved knot reaches out by (sin(e + B) - sin e) / B per unit length, not cos e
+            e = math.acos(min(radial, 1.0))
+            radial = (math.sin(e + bend) - math.sin(e)) / bend
         return max((self.trunk_radius() - p["pith_radius"]) / radial, p["branch_length"] * 0.25)
+
+    def knot_bender(self, br: Branch) -> Any:
+        """The map from the straight knot to the bent one: a function of points ``(..., 3)``, or ``None``.
+
+        The knot's pith is an arc: it leaves the trunk's pith ``KNOT_BEND``
+        degrees steeper than its straight axis and turns at a constant rate
+        until the knot's end (``knot_length``), where the branch goes on
+        (a conifer's knot, seen in a quarter-sawn board, is a spike curved up
+        towards the pith).  A point at distance ``s`` along the straight axis
+        and offset across it goes to the arc's point at arc length ``s``, its
+        offset turned with the arc; before the pith and past the knot's end
+        the axis runs straight on.
+        """
+        bend = math.radians(self.KNOT_BEND)
+        if bend <= 0:
+            return None
+        p0, frame = self.branch_frame(br, knot=True)
+        f0, up, side = frame[0], -frame[1], frame[2]
+        h0 = self.knot_length(br)
+        c0, s0 = math.cos(bend), math.sin(bend)
+
+        def bent(points: np.ndarray) -> np.ndarray:
+            rel = np.asarray(points, float) - p0
+            s = rel @ f0
+            a_up, a_side = rel @ up, rel @ side
+            alpha = bend * (1 - np.clip(s, 0.0, h0) / h0)
+            before, past = np.minimum(s, 0.0), np.maximum(s - h0, 0.0)
+            along = (h0 / bend) * (s0 - np.sin(alpha)) + past + before * c0 - a_up * np.sin(alpha)
+            rise = (h0 / bend) * (np.cos(alpha) - c0) + before * s0 + a_up * np.cos(alpha)
+            return p0 + along[..., None] * f0 + rise[..., None] * up + a_side[..., None] * side
+
+        return bent
+
+    def _bent_s(self, br: Branch, x: np.ndarray, cos_elev: float) -> np.ndarray:
+        """Arc lengths along the bent knot where it has gone ``x`` out from the trunk's pith."""
+        bend = math.radians(self.KNOT_BEND)
+        if bend <= 0:
+            return x / max(cos_elev, 0.2)
+        e = math.acos(min(cos_elev, 1.0))
+        h0 = self.knot_length(br)
+        arg = np.clip(math.sin(e + bend) - bend * x / h0, -1.0, 1.0)
+        return h0 * (1 - (np.arcsin(arg) - e) / bend)
 
     def _push(self, pts, levels, profiles):
         """Bend the trunk's rings around each knot: a displacement field from the knot's seam.
@@ -1394,7 +1455,7 @@ class Wood:
             ring = cos_th[:, None] * f[t, 1] + sin_th[:, None] * f[t, 2]
             straight = (o[t] + lift[:, None] * f[t, 0])[:, None, :] + (a_layer / math.cos(half))[None, :, None] * ring[:, None, :]
             by_layer = straight.transpose(1, 0, 2).copy()  # (layers, 4, 3)
-            seam = self._seam_map(p0, frame, s_layer, rho_layer, lateral, hull=True)
+            seam = self._seam_map(br, p0, frame, s_layer, rho_layer, lateral, hull=True)
             ring_u = np.array([-1, 0, 1, 1, 1, 0, -1, -1], float)  # the slot's boundary, corners and mid-walls
             ring_v = np.array([-1, -1, -1, 0, 1, 1, 1, 0], float)
             blend8 = _corner_blend(ring_u, ring_v)
@@ -1449,7 +1510,7 @@ class Wood:
         out[moved] += shift
         return out.reshape(pts.shape)
 
-    def _seam_map(self, p0, frame, s_layer, rho_layer, lateral, hull=False):
+    def _seam_map(self, br, p0, frame, s_layer, rho_layer, lateral, hull=False):
         """Where the knot's seam lies at slot coordinates ``(u, v)`` in ``[-1, 1]^2``, fractional layer ``j + w``.
 
         With ``hull`` (what the trunk around the knot is pushed to), the
@@ -1466,6 +1527,7 @@ class Wood:
         m = int(self.p["branch_sides"])
         scale = 1.0 / math.cos(math.pi / m)
         last = len(s_layer) - 1
+        bender = self.knot_bender(br)
 
         def at(u, v, j, w):
             j = np.asarray(j, np.int64)
@@ -1480,7 +1542,8 @@ class Wood:
                 x, y = self.KNOT_HULL * u, self.KNOT_HULL * v
             else:
                 x, y = u * np.sqrt(1 - 0.5 * v * v), v * np.sqrt(1 - 0.5 * u * u)
-            return p0 + s_at[:, None] * frame[0] + (r_at * -y)[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
+            straight = p0 + s_at[:, None] * frame[0] + (r_at * -y)[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
+            return straight if bender is None else bender(straight)
 
         return at
 
@@ -1731,9 +1794,18 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
         return np.hypot(x, y), np.arctan2(y, x), z
 
     r, th, z = polar(pts[cells])
-    # the edge class spanning the largest angle runs round the trunk
-    spans = [np.abs(np.angle(np.exp(1j * (th[:, e[:, 1]] - th[:, e[:, 0]])))).mean(axis=1) for e in _HEX_EDGES]
-    which = np.argmax(np.stack(spans, axis=1), axis=1)
+    corners = pts[cells]
+    centre = corners.mean(axis=1)
+    radial = centre - origin - np.einsum("mx,mx->m", centre - origin, axis_dir)[:, None] * axis_dir
+    tangent = np.cross(axis_dir, radial)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-300)[:, None]
+
+    def along_tangent(e):  # how much the class's edges run round the trunk (|cos| to the tangent)
+        vec = corners[:, e[:, 1]] - corners[:, e[:, 0]]
+        length = np.maximum(np.linalg.norm(vec, axis=2).sum(axis=1), 1e-300)
+        return np.abs(np.einsum("mkx,mx->mk", vec, tangent)).sum(axis=1) / length
+
+    which = np.argmax(np.stack([along_tangent(e) for e in _HEX_EDGES], axis=1), axis=1)
     edges = _HEX_EDGES[which]  # (m, 4, 2): the four tangential edges, each from its 'a' corner to 'b'
     m = len(rows)
     idx = np.arange(m)[:, None]
