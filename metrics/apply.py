@@ -402,7 +402,7 @@ def apply_qualifier(
     lets it climb to the whole plant).  See the module docstring.
     """
     rho = check_rho(rho)  # at the door: a whole-plant refusal may never reach the cut that checks it
-    model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
+    model = QualifierModel(directions=directions, regions=regions).fit(sweep, points=points)
     n_before = session.n
     with _same_cut(session):
         out = _apply(session, canonical_name(name), model, sweep, [int(x) for x in selection], rho, tries, seed, max_climb)

@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike
 
 from ramure.errors import ValueRefused
 
-from .estimator import ParamsMixin
+from .estimator import ParamsMixin, check_rows
 
 
 class DeltaPCA(ParamsMixin):
@@ -40,31 +40,29 @@ class DeltaPCA(ParamsMixin):
 
     Fitted attributes: ``components_`` (3, f), ``explained_variance_`` (3,),
     ``explained_variance_ratio_`` (3,), ``mean_`` (f,), ``scale_`` (f,) (ones
-    unless standardised), ``n_features_in_``, ``n_samples_``.
+    unless standardised), ``n_features_in_``, ``n_samples_`` (and ``feature_names_in_``
+    when fitted on a data frame).  A scikit-learn transformer: it passes ``check_estimator``
+    and works in ``make_pipeline(StandardScaler(), DeltaPCA())``.
     """
+
+    _fitted_attribute = "components_"
+    _transformer = True
 
     def __init__(self, n_components: int = 3, standardize: bool = False) -> None:
         self.n_components = n_components
         self.standardize = standardize
 
-    def _check(self, X: ArrayLike, fitting: bool) -> np.ndarray:
-        X = np.asarray(X, float)
-        if X.ndim != 2:
-            raise ValueRefused(f"expected a 2-D array of deltas (variants x metrics), got shape {X.shape}")
-        if not fitting and X.shape[1] != self.n_features_in_:
-            raise ValueRefused(f"expected {self.n_features_in_} metrics per row, got {X.shape[1]}")
-        return X
-
-    def fit(self, X: ArrayLike) -> Self:
-        X = self._check(X, fitting=True)
+    def fit(self, X: ArrayLike, y: object = None) -> Self:
+        """Fit the components on deltas ``X`` (variants x metrics); ``y`` is ignored (scikit-learn's
+        signature).  Rows with NaN or infinity are left out."""
         k = int(self.n_components)
         if k < 1:
             raise ValueRefused(f"n_components must be >= 1, not {self.n_components}")
+        X = check_rows(self, X, fitting=True)
         rows = X[np.all(np.isfinite(X), axis=1)]
         if not len(rows):
             raise ValueRefused("no valid variant to analyse (every variant failed)")
         f = X.shape[1]
-        self.n_features_in_ = f
         self.n_samples_ = len(rows)
         self.mean_ = rows.mean(axis=0)
         scale = rows.std(axis=0) if self.standardize else np.ones(f)
@@ -88,13 +86,18 @@ class DeltaPCA(ParamsMixin):
 
     def transform(self, X: ArrayLike) -> np.ndarray:
         """Project deltas (N, f) to (N, 3); NaN rows stay NaN."""
-        if not hasattr(self, "components_"):
-            raise ValueRefused("this PCA is not fitted yet: call fit(deltas) first")
-        X = self._check(X, fitting=False)
+        self._check_fitted()
+        X = check_rows(self, X, fitting=False)
         return ((X - self.mean_) / self.scale_) @ self.components_.T
 
-    def fit_transform(self, X: ArrayLike) -> np.ndarray:
+    def fit_transform(self, X: ArrayLike, y: object = None) -> np.ndarray:
+        """:meth:`fit` then :meth:`transform` on the same deltas."""
         return self.fit(X).transform(X)
+
+    def get_feature_names_out(self, input_features: object = None) -> np.ndarray:
+        """The output columns' names, ``deltapca0``, ``deltapca1``, ... (scikit-learn's spelling)."""
+        self._check_fitted()
+        return np.asarray([f"deltapca{i}" for i in range(len(self.components_))], dtype=object)
 
     def to_dict(self, metric_names: Iterable[str] | None = None) -> dict:
         """JSON-able description (what ``pca.json`` holds)."""

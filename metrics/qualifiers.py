@@ -78,7 +78,7 @@ from numpy.typing import ArrayLike
 from ramure.errors import ValueRefused
 
 from .definitions import DEFINITIONS, definition_holds
-from .estimator import ParamsMixin
+from .estimator import ParamsMixin, check_rows
 from .plant import METRIC_NAMES, metric_deltas
 from .shape import SHAPE_METRIC_NAMES, shape_deltas
 
@@ -387,8 +387,10 @@ def _deltas_of(source) -> np.ndarray:
     if deltas.ndim == 2 and deltas.shape[1] == len(METRIC_NAMES):
         deltas = np.hstack([deltas, np.where(np.isfinite(deltas[:, :1]), 0.0, np.nan) * np.ones((1, len(SHAPE_METRIC_NAMES)))])
     if deltas.ndim != 2 or deltas.shape[1] != len(QUALIFIER_METRICS):
+        features = deltas.shape[1] if deltas.ndim == 2 else "no"
         raise ValueRefused(
-            f"expected deltas of shape (N, {len(METRIC_NAMES)}) or (N, {len(QUALIFIER_METRICS)}), got {deltas.shape}"
+            f"expected deltas of shape (N, {len(METRIC_NAMES)}) or (N, {len(QUALIFIER_METRICS)}), "
+            f"got {features} feature(s) (shape {deltas.shape})"
         )
     return deltas
 
@@ -509,8 +511,14 @@ class QualifierModel(ParamsMixin):
     ``names_`` of the qualifier each variant moves most; -1 for none),
     ``usable_`` (N,) (finite and not the base plant), ``deltas_`` (N,15), ``holds_`` (N,Q) (the variant keeps the
     qualifier's definition, :mod:`ramure.metrics.definitions`), ``rules_`` (N,) or None,
-    ``picks_`` ``{name: variant}`` (whole-plant picks, pairwise distinct).
+    ``picks_`` ``{name: variant}`` (whole-plant picks, pairwise distinct), ``n_features_in_`` (10 or 15).
+
+    A scikit-learn estimator (``fit(X, y=None)``, tags, ``NotFittedError`` before ``fit``);
+    ``check_estimator``'s checks that fit on other than 10 or 15 columns do not apply
+    (tests/metrics/test_estimator_contract.py names them).
     """
+
+    _fitted_attribute = "scores_"
 
     def __init__(
         self,
@@ -524,12 +532,16 @@ class QualifierModel(ParamsMixin):
         self.refine = refine
         self.k_nearest = k_nearest
 
-    def fit(self, sweep: VariantSweep | ArrayLike, points: ArrayLike | None = None) -> Self:
-        """Fit on a fitted sweep (or a delta array (N,10)/(N,15)); ``points`` its PCA cloud (N,3)."""
+    def fit(self, X: VariantSweep | ArrayLike, y: object = None, *, points: ArrayLike | None = None) -> Self:
+        """Fit on a fitted sweep or a delta array ``X`` (N,10)/(N,15); ``points`` is the sweep's PCA
+        cloud (N,3) (for ``regions``); ``y`` is ignored (scikit-learn's signature)."""
         refine = float(self.refine)
         if not 0 <= refine <= 1:
             raise ValueRefused(f"refine must be in [0, 1], not {self.refine!r}")
+        sweep = X if hasattr(X, "deltas_") else check_rows(self, X, fitting=True)
         deltas = _deltas_of(sweep)
+        if sweep is X:
+            self.n_features_in_ = np.asarray(X.deltas_).shape[1]  # type: ignore[union-attr]
         # a metric no variant moves gets unit scale (1 % = 1): its sweep values are all 0 whatever
         # the scale, and a change measured elsewhere (one derivation step more) still counts
         scale = metric_scale(deltas)
@@ -566,8 +578,7 @@ class QualifierModel(ParamsMixin):
         return self
 
     def _fitted(self):
-        if not hasattr(self, "scores_"):
-            raise ValueRefused("this qualifier model is not fitted yet: call fit(sweep) first")
+        self._check_fitted()
 
     def index(self, name: str) -> int:
         """Position of qualifier ``name`` in ``names_`` (refuses unknown and direction-less names)."""
@@ -712,23 +723,28 @@ class QualifierRegions(ParamsMixin):
     French).  Fitted: ``names_`` (canonical, sorted), ``boxes_`` ``{name: (lo, hi)}``,
     ``centres_`` ``{name: (3,)}``, ``kept_`` ``{name: (k',3) points after trimming}``,
     ``collision_matrix_`` (q,q): row A, column B = % of A's kept points inside
-    B's box (the diagonal is 100 by construction).
+    B's box (the diagonal is 100 by construction), ``n_features_in_`` (d).  In scikit-learn's
+    form ``fit(X, y)`` takes the points ``X`` (n,d) and their qualifier names ``y`` (n,).
 
     >>> regions = QualifierRegions(trim=0).fit({"dense": [[0, 0, 0], [2, 2, 2]], "petit": [[1, 1, 1], [5, 5, 5]]})
     >>> regions.centres_["dense"].tolist(), regions.collision_matrix_.round(1).tolist()
     ([1.0, 1.0, 1.0], [[100.0, 50.0], [50.0, 100.0]])
     """
 
+    _fitted_attribute = "boxes_"
+    _y_required = True
+
     def __init__(self, trim: float = 0.07) -> None:
         self.trim = trim
 
-    def fit(self, points: Mapping[str, ArrayLike]) -> Self:
+    def fit(self, X: Mapping[str, ArrayLike] | ArrayLike, y: ArrayLike | None = None) -> Self:
+        """Fit one box per qualifier: ``X`` is ``{qualifier: (k,d) points}``, or scikit-learn's form,
+        points ``X`` (n,d) with their qualifier names ``y`` (n,).  Non-finite points are left out."""
         trim = float(self.trim)
         if not 0 <= trim < 1:
             raise ValueRefused(f"trim must be a fraction in [0, 1), not {self.trim}")
         merged: dict[str, np.ndarray] = {}
-        for name, pts in dict(points).items():
-            pts = _rows(pts)
+        for name, pts in self._groups(X, y):
             key = canonical_name(name)
             merged[key] = np.vstack([merged[key], pts]) if key in merged else pts
         merged = {k: v[np.all(np.isfinite(v), axis=1)] for k, v in merged.items()}
@@ -747,9 +763,27 @@ class QualifierRegions(ParamsMixin):
         self.collision_matrix_ = matrix
         return self
 
+    def _groups(self, X, y) -> list[tuple[str, np.ndarray]]:
+        """``(name, (k,d) points)`` pairs from a mapping, or from points and labels."""
+        if isinstance(X, Mapping) and not hasattr(X, "toarray"):  # scipy's dok arrays are dicts
+            if y is not None:
+                raise ValueRefused("give the qualifier names either as the mapping's keys or as y, not both")
+            groups = [(str(name), _rows(pts)) for name, pts in X.items()]
+            if groups:
+                self.n_features_in_ = groups[0][1].shape[1]
+            return groups
+        if y is None:
+            raise ValueRefused(
+                "QualifierRegions requires y to be passed, but the target y is None (y: the qualifier name of each point in X)"
+            )
+        X = check_rows(self, X, fitting=True)
+        labels = np.asarray(y)
+        if labels.shape != (len(X),):
+            raise ValueRefused(f"y must hold one qualifier name per point: {len(X)} names, got shape {labels.shape}")
+        return [(str(label), X[labels == label]) for label in dict.fromkeys(labels.tolist())]
+
     def _name(self, name):
-        if not hasattr(self, "boxes_"):
-            raise ValueRefused("these regions are not fitted yet: call fit(points) first")
+        self._check_fitted()
         key = canonical_name(name)
         if key not in self.boxes_:
             raise ValueRefused(f"no region for qualifier {name!r} (known: {', '.join(self.names_)})")
@@ -759,13 +793,15 @@ class QualifierRegions(ParamsMixin):
         return hasattr(self, "boxes_") and canonical_name(name) in self.boxes_
 
     def contains(self, name: str, points: ArrayLike) -> np.ndarray:
-        lo, hi = self.boxes_[self._name(name)]
+        key = self._name(name)
+        lo, hi = self.boxes_[key]
         points = _rows(points, len(lo))
         return np.all((points >= lo - 1e-12) & (points <= hi + 1e-12), axis=1)
 
     def nearest_variants(self, name: str, cloud: ArrayLike) -> np.ndarray:
         """Variant indices of ``cloud`` (N,3) by distance to the region's centre (NaN rows left out)."""
-        centre = self.centres_[self._name(name)]
+        key = self._name(name)
+        centre = self.centres_[key]
         cloud = np.asarray(cloud, float)
         ok = np.flatnonzero(np.all(np.isfinite(cloud), axis=1))
         return ok[np.argsort(np.linalg.norm(cloud[ok] - centre, axis=1), kind="stable")]
@@ -802,7 +838,7 @@ def ranked_variants(
     replace them (``"transfer"``), otherwise the default vocabulary's
     (``"vocabulary"``).  ``rules`` restricts to variants on those rules.
     """
-    model = QualifierModel(directions=directions, regions=regions).fit(sweep, points)
+    model = QualifierModel(directions=directions, regions=regions).fit(sweep, points=points)
     key = canonical_name(name)
     order = model.rank(key, rules=rules)
     source = model.sources_.get(key, "vocabulary")

@@ -301,7 +301,7 @@ def _save_directions(path, exp, regions):
     from ramure.io import write_text
     from ramure.metrics.qualifiers import QualifierModel
 
-    model = QualifierModel(regions=regions).fit(exp.sweep, exp.points)
+    model = QualifierModel(regions=regions).fit(exp.sweep, points=exp.points)
     doc = {"grammar": exp.name, **model.to_dict()}
     write_text(path, json.dumps(doc, indent=1))
 

@@ -1,7 +1,7 @@
 """Ramure in Jupyter (ipywidgets 8, JupyterLab 4): the explorer, study sessions, the study report.
 
->>> from ramure.app.jupyter import Explorer
->>> ex = Explorer("grammars/honda_sympodial.lsys", n=4, view="static")
+>>> from ramure.app.jupyter import NotebookExplorer
+>>> ex = NotebookExplorer("grammars/honda_sympodial.lsys", n=4, view="static")
 >>> len(ex.plant) > 0, ex.selection, ex.history
 (True, [], [])
 
@@ -10,8 +10,8 @@ method (``ex.select``, ``ex.regrow``, ``ex.explore_variants``...).
 """
 
 from ramure.app.jupyter._ui import side_by_side
-from ramure.app.jupyter.explorer import Explorer
+from ramure.app.jupyter.explorer import NotebookExplorer
 from ramure.app.jupyter.report import report_html, show_report
 from ramure.app.jupyter.study import StudyPanel
 
-__all__ = ["Explorer", "StudyPanel", "report_html", "show_report", "side_by_side"]
+__all__ = ["NotebookExplorer", "StudyPanel", "report_html", "show_report", "side_by_side"]

@@ -5,8 +5,8 @@ of the rows under the opened element, *Open* to go down, *Up* to go back, and *S
 select the row's internodes (an axis: itself and every axis it bears) with the selection
 panel's mode, ready to regrow or prune.
 
->>> from ramure.app.jupyter import Explorer
->>> ex = Explorer("grammars/amap/massart.lsys", n=4, view="static")
+>>> from ramure.app.jupyter import NotebookExplorer
+>>> ex = NotebookExplorer("grammars/amap/massart.lsys", n=4, view="static")
 >>> browser = ex.architecture
 >>> [label for label, _ in browser.rows.options]
 ['Axis 1 (order 1) — 12 internodes']
@@ -28,7 +28,7 @@ from ramure.lsys.amap import architecture
 
 if TYPE_CHECKING:
     from ramure.lsys.amap import Architecture
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
 
 HOW_TO = (
     "this grammar names no architecture: add lines such as <code>#amap internode F</code> and "
@@ -41,7 +41,7 @@ class ArchitectureBrowser(Breadcrumbs):
 
     WHAT = "architecture"
 
-    def __init__(self, app: Explorer) -> None:
+    def __init__(self, app: NotebookExplorer) -> None:
         super().__init__(app, "show what this element is made of", "select this element's internodes")
         self.arch: Architecture | None = None
         self.refresh()

@@ -27,14 +27,14 @@ from ramure.app.jupyter._ui import button, on_value, png_image
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.gmap.kernel.map3 import GMap3
 
 
 class DefectsTab:
     """Kind, options, Add; the spec list; Apply and Show; facts and a picture."""
 
-    def __init__(self, app: Explorer | None, size: tuple[int, int] = (420, 420)) -> None:
+    def __init__(self, app: NotebookExplorer | None, size: tuple[int, int] = (420, 420)) -> None:
         self.app = app
         self.size = size
         self.last_facts = None

@@ -33,7 +33,7 @@ from ramure.app.jupyter._ui import button, on_value, png_image
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.lsys.seasons import Season
 
 STEPS = 24
@@ -43,7 +43,7 @@ PLACES = ("anywhere", "top", "side", "bottom")  # where lichen starts / the crac
 class DetailsTab:
     """Season slider, heat, humidity, wind; Lichen and Crack buttons; facts and a picture."""
 
-    def __init__(self, app: Explorer | None, size: tuple[int, int] = (420, 420)) -> None:
+    def __init__(self, app: NotebookExplorer | None, size: tuple[int, int] = (420, 420)) -> None:
         from ramure.lsys.seasons import autumn_chain
 
         self.app = app

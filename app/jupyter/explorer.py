@@ -1,14 +1,15 @@
 """The notebook explorer: edit, select, regenerate and browse variants of one plant.
 
-:class:`Explorer` is a thin ipywidgets front end over :class:`ramure.app.model.Explorer`
-(``ex.model``), the GUI-free state the desktop window also uses.  Every button
+:class:`NotebookExplorer` is a thin ipywidgets front end over the explorer,
+:class:`ramure.app.model.Explorer` (``ex.model``), the GUI-free state the desktop window
+also uses (the one class named ``Explorer``).  Every button
 and every method below goes through the model; a refused input (a
 :class:`~ramure.lsys.errors.RamureError`) is shown on the explorer's message line —
 never as a traceback — and leaves the plant as it was.  Code and clicks mix
 freely: ``ex.plant``, ``ex.selection``, ``ex.history`` and ``ex.session`` are
 the live state.
 
->>> ex = Explorer("grammars/honda_sympodial.lsys", n=5, view="static")
+>>> ex = NotebookExplorer("grammars/honda_sympodial.lsys", n=5, view="static")
 >>> _ = ex.select_where(min_order=2)
 >>> before = ex.plant.to_string()
 >>> result = ex.regrow(constants={"a2": 25})
@@ -97,7 +98,7 @@ def fruit_presets() -> list:
 class EditPanel:
     """ρ, Regrow, Regrow with constants, the qualifier drop-down, Regrow fruit, Prune, Undo, Redo, files."""
 
-    def __init__(self, app: Explorer) -> None:
+    def __init__(self, app: NotebookExplorer) -> None:
         self.app = app
         self.rho = W.IntSlider(
             value=round(app.model.rho * 100),
@@ -203,8 +204,9 @@ class EditPanel:
             self.rho.value = rho
 
 
-class Explorer:
-    """Jupyter explorer of a grammar file path or grammar text.
+class NotebookExplorer:
+    """The Jupyter front end of the explorer (:class:`ramure.app.model.Explorer`) for a grammar:
+    a file path, a shipped grammar's name (``"honda_sympodial"``, as :func:`ramure.load`) or text.
 
     The file may be a Ramure ``.lsys``, an L-studio/cpfg ``.l``, an OpenAlea ``.mtg`` (its
     plant becomes an unsaved grammar) or an L-Py ``.lpy`` model.  **An ``.lpy`` is a Python

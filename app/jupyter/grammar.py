@@ -19,7 +19,7 @@ import ipywidgets as W
 from ramure.app.jupyter._ui import button, message_html, observe, on_value
 
 if TYPE_CHECKING:
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
 
 
 def slider_range(value: float) -> tuple[float, float]:
@@ -50,7 +50,7 @@ def constant_slider(name: str, value: float) -> W.FloatSlider:
 class GrammarPanel:
     """Text area, parse error (line/column with a caret), n, seed and constant sliders."""
 
-    def __init__(self, app: Explorer, text: str | None = None) -> None:
+    def __init__(self, app: NotebookExplorer, text: str | None = None) -> None:
         self.app = app
         model = app.model
         self.text = W.Textarea(

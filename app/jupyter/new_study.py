@@ -18,14 +18,14 @@ from ramure.app.jupyter._ui import MessageLine, button
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.app.new_study import NewStudy
 
 
 class NewStudyPanel:
     """Folder, title and budget of a new study made of the explorer's 27 picks."""
 
-    def __init__(self, app: Explorer) -> None:
+    def __init__(self, app: NotebookExplorer) -> None:
         self.app = app
         self.made: NewStudy | None = None
         self.folder = W.Text(placeholder="a new folder, e.g. studies/honda", description="folder", layout=W.Layout(width="360px"))

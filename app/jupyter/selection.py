@@ -22,7 +22,7 @@ from ramure.app.jupyter._ui import Breadcrumbs, button, observe, short_list
 from ramure.app.model import SELECT_MODES
 
 if TYPE_CHECKING:
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.app.model import Explorer as Model
 
 MAX_ROWS = 400  # children listed at once in the tree browser
@@ -31,7 +31,7 @@ MAX_ROWS = 400  # children listed at once in the tree browser
 class SelectionPanel:
     """Selection mode, leaf ids, the order/height filter, clear, and the selection summary."""
 
-    def __init__(self, app: Explorer) -> None:
+    def __init__(self, app: NotebookExplorer) -> None:
         self.app = app
         self.mode = W.ToggleButtons(
             options=SELECT_MODES,
@@ -145,7 +145,7 @@ class TreeBrowser(Breadcrumbs):
 
     WHAT = "derivation tree"
 
-    def __init__(self, app: Explorer) -> None:
+    def __init__(self, app: NotebookExplorer) -> None:
         self.info = W.HTML()
         super().__init__(app, "show this node's children", "select this leaf, or every leaf under this node", [self.info])
         observe(self.rows, lambda ch: self._describe())

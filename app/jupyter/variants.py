@@ -48,7 +48,7 @@ from ramure.errors import RamureError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.metrics.apply import QualifierResult
     from ramure.metrics.exploration import Exploration
     from ramure.metrics.sweep import VariantSweep
@@ -134,7 +134,7 @@ class Stopped(RamureError):
 class VariantPanel:
     """Explore the current grammar's variants, browse the 27 picks, apply one."""
 
-    def __init__(self, app: Explorer, thumb_size: int = 110, cache: bool = True) -> None:
+    def __init__(self, app: NotebookExplorer, thumb_size: int = 110, cache: bool = True) -> None:
         self.app = app
         self.thumb_size = thumb_size
         self.cache = cache

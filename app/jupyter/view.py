@@ -41,7 +41,7 @@ from ramure.app.render import headless_setup, frame_camera
 
 if TYPE_CHECKING:
     import pyvista as pv
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.app.model import Explorer as Model
 
 CUT = (1.0, 0.6, 0.0)  # leaves the planned cut would regrow
@@ -282,7 +282,9 @@ def resolve_backend(backend: str = "auto") -> str:
 class PlantView:
     """The 3D view of an explorer ``app`` (anything with ``.model`` and ``.pick(cell_id)``)."""
 
-    def __init__(self, app: Explorer, backend: str = "auto", size: tuple[int, int] = (480, 480), view: str = "iso") -> None:
+    def __init__(
+        self, app: NotebookExplorer, backend: str = "auto", size: tuple[int, int] = (480, 480), view: str = "iso"
+    ) -> None:
         self.app = app
         width, height = size
         self.size = (width, height)

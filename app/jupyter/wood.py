@@ -27,13 +27,13 @@ from ramure.errors import RamureError
 if TYPE_CHECKING:
     from ramure.gmap.organs.wood import Wood
     import pyvista as pv
-    from ramure.app.jupyter.explorer import Explorer
+    from ramure.app.jupyter.explorer import NotebookExplorer
 
 
 class WoodTab:
     """Species, years, *from the plant*, Grow, a cut height and the cut picture."""
 
-    def __init__(self, app: Explorer, size: tuple[int, int] = (420, 420)) -> None:
+    def __init__(self, app: NotebookExplorer, size: tuple[int, int] = (420, 420)) -> None:
         from ramure.gmap.organs.wood import SPECIES
 
         self.app = app

@@ -11,9 +11,9 @@ from jupyter_helpers import HONDA  # noqa: E402
 
 @pytest.fixture
 def explorer():
-    from ramure.app.jupyter import Explorer
+    from ramure.app.jupyter import NotebookExplorer
 
-    return Explorer(HONDA, n=5, view="static", size=(200, 200), cache=False)
+    return NotebookExplorer(HONDA, n=5, view="static", size=(200, 200), cache=False)
 
 
 @pytest.fixture(autouse=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from jupyter_helpers import ROOT
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from ramure.app.jupyter._ui import Breadcrumbs
 from ramure.app.jupyter.architecture import ArchitectureBrowser
 from ramure.app.jupyter.selection import TreeBrowser
@@ -38,7 +38,7 @@ def test_the_tree_browser_walks_by_its_buttons(explorer):
 
 
 def test_the_architecture_browser_walks_by_its_buttons():
-    ex = Explorer(str(ROOT / "grammars" / "amap" / "massart.lsys"), n=4, view="static", size=(120, 120), cache=False)
+    ex = NotebookExplorer(str(ROOT / "grammars" / "amap" / "massart.lsys"), n=4, view="static", size=(120, 120), cache=False)
     arch = ex.architecture
     _click(arch, "select")
     assert ex.message.text == "choose a row in the architecture first" and ex.selection == []

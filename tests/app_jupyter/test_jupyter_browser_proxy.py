@@ -43,7 +43,7 @@ def lab(tmp_path_factory):
     if not chromium_available():
         pytest.skip("Debian's chromium is not installed (make test's system step installs it)")
     root = tmp_path_factory.mktemp("proxylab")
-    code = f"from ramure.app.jupyter import Explorer\nex = Explorer({HONDA!r}, n=6, cache=False)\nex"
+    code = f"from ramure.app.jupyter import NotebookExplorer\nex = NotebookExplorer({HONDA!r}, n=6, cache=False)\nex"
     kernel = {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}  # no kernel dialog
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)], metadata=kernel)
     nbformat.write(nb, root / "proxy.ipynb")

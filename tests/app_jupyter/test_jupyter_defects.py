@@ -7,7 +7,7 @@ import io
 import numpy as np
 import pytest
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from jupyter_helpers import ROOT
 
 FRUIT_TREE = str(ROOT / "grammars" / "fruit_tree.lsys")
@@ -15,7 +15,7 @@ FRUIT_TREE = str(ROOT / "grammars" / "fruit_tree.lsys")
 
 @pytest.fixture(scope="module")
 def tree():
-    return Explorer(FRUIT_TREE, view="static", size=(120, 120), cache=False)
+    return NotebookExplorer(FRUIT_TREE, view="static", size=(120, 120), cache=False)
 
 
 def test_defects_tab_applies_to_the_selected_fruit_and_undoes(tree):

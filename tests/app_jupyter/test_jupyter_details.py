@@ -14,9 +14,9 @@ FRUIT_TREE = str(ROOT / "grammars" / "fruit_tree.lsys")
 
 @pytest.fixture
 def explorer():
-    from ramure.app.jupyter import Explorer
+    from ramure.app.jupyter import NotebookExplorer
 
-    return Explorer(FRUIT_TREE, n=5, view="static", size=(200, 200), cache=False)
+    return NotebookExplorer(FRUIT_TREE, n=5, view="static", size=(200, 200), cache=False)
 
 
 def _rgb(png):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from jupyter_helpers import HONDA, ROOT
 
 pytest.importorskip("gmap")
@@ -14,7 +14,7 @@ FRUIT_TREE = str(ROOT / "grammars" / "fruit_tree.lsys")
 
 @pytest.fixture(scope="module")
 def tree():
-    return Explorer(FRUIT_TREE, view="static", size=(120, 120), cache=False)
+    return NotebookExplorer(FRUIT_TREE, view="static", size=(120, 120), cache=False)
 
 
 def fruit_bounds(ex, leaf):
@@ -65,5 +65,5 @@ def test_bad_fruit_settings_are_refused(tree, settings, expected):
 
 
 def test_a_plant_without_fruit_has_no_fruit_picture():
-    ex = Explorer(HONDA, n=3, view="static", size=(80, 80))
+    ex = NotebookExplorer(HONDA, n=3, view="static", size=(80, 80))
     assert ex.fruit_png() is None and ex.edits.regrow_fruit.disabled

@@ -6,14 +6,14 @@ from __future__ import annotations
 import pytest
 
 from ramure.app.ids import format_ids, id_example, parse_ids, resolve_ids
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from ramure.app.model import Explorer as Model
 from ramure.errors import ValueRefused
 
 
 @pytest.mark.parametrize("grammar, n", [("honda_sympodial", 6), ("fruit_tree", None), ("algae", 5), ("plant_1_24a", 3)])
 def test_the_placeholder_example_selects_on_the_loaded_plant(grammar, n):
-    ex = Explorer(grammar, n=n, view="static", size=(80, 80))
+    ex = NotebookExplorer(grammar, n=n, view="static", size=(80, 80))
     panel = ex.selection_panel
     example = panel.ids.placeholder.split("e.g. ", 1)[1]
     panel.ids.value = example
@@ -26,7 +26,7 @@ def test_the_placeholder_example_selects_on_the_loaded_plant(grammar, n):
 
 
 def test_the_example_follows_the_plant():
-    ex = Explorer("honda_sympodial", n=4, view="static", size=(80, 80))
+    ex = NotebookExplorer("honda_sympodial", n=4, view="static", size=(80, 80))
     before = ex.selection_panel.ids.placeholder
     ex.set_derivation(n=6)
     after = ex.selection_panel.ids.placeholder

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from jupyter_helpers import HONDA
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from ramure.app.jupyter import mainthread
 from ramure.app.jupyter import view as view_module
 
@@ -40,7 +40,7 @@ def _from_subshell(action):
 
 
 def test_widget_callbacks_from_a_subshell_draw_on_the_main_thread(kernel_loop, monkeypatch):
-    ex = Explorer(HONDA, n=4, view="static", size=(64, 64))
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(64, 64))
     drawn_on = []
     real = view_module.plant_png
 
@@ -106,7 +106,7 @@ class _Plotter:
 
 @pytest.mark.parametrize("end", ["LeftButtonReleaseEvent", "EndInteractionEvent"])
 def test_click_selects_drag_does_not(end):
-    ex = Explorer(HONDA, n=5, view="static", size=(64, 64))
+    ex = NotebookExplorer(HONDA, n=5, view="static", size=(64, 64))
     scene = _Plotter(ex)
     picked = []
     view_module.ClickPicker(scene.pl, picked.append)
@@ -154,7 +154,7 @@ def test_starting_the_interactive_view_reaches_no_network(monkeypatch):
     import trame.widgets as trame_widgets
 
     before = "vtklocal" in trame_widgets.__dict__
-    ex = Explorer(HONDA, n=3, size=(120, 120))
+    ex = NotebookExplorer(HONDA, n=3, size=(120, 120))
     assert ex.view.backend == "server" and ex.view.fallback_reason is None, ex.message.text
     remote = [h for h in looked_up if h not in ("127.0.0.1", "localhost", "::1", "0.0.0.0", None)]
     assert remote == []
@@ -164,7 +164,7 @@ def test_starting_the_interactive_view_reaches_no_network(monkeypatch):
 def test_the_interactive_view_reframes_when_the_plant_grows():
     """After an edit that makes the plant taller the whole plant is in the picture again."""
     pytest.importorskip("trame_pyvista")
-    ex = Explorer(HONDA, n=3, view="server", size=(200, 200))
+    ex = NotebookExplorer(HONDA, n=3, view="server", size=(200, 200))
     assert ex.view.backend == "server", ex.message.text
 
     def outside():

@@ -10,11 +10,11 @@ pytest.importorskip("metrics")
 
 
 def test_new_study_button_builds_the_study_and_shows_the_serve_command(tmp_path):
-    from ramure.app.jupyter import Explorer
+    from ramure.app.jupyter import NotebookExplorer
     from ramure.studies.serve import check_servable
     from ramure.studies.storage import Study
 
-    ex = Explorer(HONDA, n=3, view="static", size=(120, 120), cache=False)
+    ex = NotebookExplorer(HONDA, n=3, view="static", size=(120, 120), cache=False)
     panel = ex.study_maker
     titles = [ex.tabs.get_title(i) for i in range(len(ex.tabs.children))]
     assert panel.widget in ex.tabs.children[titles.index("Variants")].children

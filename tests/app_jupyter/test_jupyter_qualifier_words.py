@@ -9,13 +9,13 @@ import json
 import numpy as np
 import pytest
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from jupyter_helpers import HONDA
 
 
 @pytest.fixture(scope="module")
 def explored():
-    ex = Explorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
     exp = ex.variants.explore(n=4, n_jobs=1, thumbnails=False)
     return ex, exp
 
@@ -23,7 +23,7 @@ def explored():
 @pytest.fixture
 def ex(explored):
     source, exp = explored
-    fresh = Explorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    fresh = NotebookExplorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
     fresh.variants.exploration = exp
     fresh.variants.refresh()
     fresh.refresh()
@@ -92,7 +92,7 @@ def test_the_matrix_shows_a_studys_regions_when_loaded(ex, tmp_path):
 
 
 def test_the_matrix_waits_for_an_exploration():
-    fresh = Explorer(HONDA, n=3, view="static", size=(120, 120), cache=False)
+    fresh = NotebookExplorer(HONDA, n=3, view="static", size=(120, 120), cache=False)
     assert fresh.variants.matrix.value == b"" and fresh.variants.matrix_figure is None
     assert "explore the variants first" in fresh.variants.matrix_note.value
 
@@ -108,7 +108,7 @@ def test_typed_words_reach_the_model(ex, monkeypatch):
 
 
 def test_a_refused_word_names_close_words_before_any_exploration():
-    fresh = Explorer(HONDA, n=3, view="static", size=(120, 120), cache=False)
+    fresh = NotebookExplorer(HONDA, n=3, view="static", size=(120, 120), cache=False)
     fresh.edits.qualifier.value = "taler"
     fresh.edits.apply_qualifier.click()
     assert "unknown qualifier 'taler'" in fresh.error and "did you mean taller" in fresh.error

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from jupyter_helpers import HONDA
 
 
@@ -56,7 +56,7 @@ REFUSALS = {
 @pytest.fixture(scope="module")
 def shared():
     """One explorer for every case: a refusal changes nothing, which each case checks."""
-    return Explorer(HONDA, n=4, view="static", size=(80, 80), cache=False)
+    return NotebookExplorer(HONDA, n=4, view="static", size=(80, 80), cache=False)
 
 
 @pytest.mark.parametrize("case", REFUSALS)
@@ -85,7 +85,7 @@ def test_loading_a_session_shows_the_replay_on_the_message_line(tmp_path):
     for _ in range(3):
         session.regrow([int(session.tree.leaves[-1])], rho=0.5)
     path = session.save(tmp_path / "s.json")
-    ex = Explorer(HONDA, n=3, view="static", size=(80, 80), cache=False)
+    ex = NotebookExplorer(HONDA, n=3, view="static", size=(80, 80), cache=False)
     shown = []
     show = ex.message.show
     ex.message.show = lambda text, kind="info": (shown.append(str(text)), show(text, kind))

@@ -9,13 +9,13 @@ import pytest
 
 pytest.importorskip("metrics")
 
-from ramure.app.jupyter import Explorer  # noqa: E402
+from ramure.app.jupyter import NotebookExplorer  # noqa: E402
 from jupyter_helpers import HONDA  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def explored():
-    ex = Explorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
     ex.variants.thumb_size = 40  # small thumbnails: faster
     exp = ex.explore_variants(n=4, n_jobs=1)  # the plant's n: qualifiers judge moves on the sweep's scale
     return ex, exp
@@ -25,7 +25,7 @@ def explored():
 def ex(explored):
     """A fresh explorer that already holds the shared exploration."""
     source, exp = explored
-    fresh = Explorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    fresh = NotebookExplorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
     fresh.variants.exploration, fresh.variants.thumbnails = exp, list(source.variants.thumbnails)
     fresh.variants.refresh()
     fresh.refresh()
@@ -127,7 +127,7 @@ def test_new_grammar_text_drops_the_variants(ex):
 
 
 def test_pick_needs_an_exploration_and_a_qualifier_runs_one():
-    ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
     ex.apply_pick(3)
     assert "explore the variants first" in ex.error and ex.history == []
     assert all(b.disabled for b in ex.variants.cards)
@@ -141,7 +141,7 @@ def test_pick_needs_an_exploration_and_a_qualifier_runs_one():
 
 
 def test_stop_button_cancels_a_background_exploration():
-    ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
     thread = ex.explore_variants(n=5, n_jobs=1, wait=False)
     assert thread.is_alive() and ex.variants.start.disabled
     ex.variants.stop_button.click()
@@ -152,7 +152,7 @@ def test_stop_button_cancels_a_background_exploration():
 
 
 def test_kernel_interrupt_stops_a_blocking_exploration(monkeypatch):
-    ex = Explorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(120, 120), cache=False)
 
     def interrupted(done, total, what="variants"):
         raise KeyboardInterrupt

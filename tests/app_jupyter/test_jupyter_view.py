@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from ramure.app.jupyter import view as view_module
 from ramure.app.jupyter.view import CUT, cut_leaves, resolve_backend, view_colors
 from ramure.app.render import BARK
@@ -39,7 +39,7 @@ def test_trame_failure_falls_back_to_the_picture(monkeypatch):
 
     monkeypatch.setattr(view_module, "resolve_backend", lambda backend: "server")
     monkeypatch.setattr(view_module, "TrameView", Broken)
-    ex = Explorer(HONDA, n=3, size=(100, 100))
+    ex = NotebookExplorer(HONDA, n=3, size=(100, 100))
     assert ex.view.backend == "static" and isinstance(ex.view.widget, W.Image)
     assert not ex.view.picking and ex.view.image.value[:4] == b"\x89PNG"
     assert "interactive view unavailable (RuntimeError: no server)" in ex.message.text
@@ -87,8 +87,8 @@ def test_trame_view_picks_in_a_kernel():
     nbformat = pytest.importorskip("nbformat")
     from jupyter_helpers import execute
 
-    code = f"""from ramure.app.jupyter import Explorer
-ex = Explorer({HONDA!r}, n=5)
+    code = f"""from ramure.app.jupyter import NotebookExplorer
+ex = NotebookExplorer({HONDA!r}, n=5)
 pl, sk = ex.view.trame.plotter, ex.skeleton
 k = int(np.argmax(sk.order))
 pl.renderer.SetWorldPoint(*((sk.start[k] + sk.end[k]) / 2), 1.0)
@@ -109,7 +109,7 @@ def test_the_plant_fills_and_centres_the_picture(side):
 
     from matplotlib.image import imread
 
-    ex = Explorer(HONDA, n=6, view="static", size=(160, 160))
+    ex = NotebookExplorer(HONDA, n=6, view="static", size=(160, 160))
     ex.set_view(side)
     rgb = imread(io.BytesIO(ex.png()), format="png")[..., :3]
     rows, cols = np.nonzero(np.any(rgb < 0.9, axis=2))  # not the white background
@@ -121,7 +121,7 @@ def test_the_plant_fills_and_centres_the_picture(side):
 def test_fruit_are_orange_so_red_means_selected():
     from jupyter_helpers import ROOT, red_pixels
 
-    ex = Explorer(str(ROOT / "grammars" / "fruit_tree.lsys"), view="static", size=(200, 200))
+    ex = NotebookExplorer(str(ROOT / "grammars" / "fruit_tree.lsys"), view="static", size=(200, 200))
     assert red_pixels(ex.png()) == 0
     ex.select(ex.model.fruit_ids()[:4])
     assert red_pixels(ex.png()) > 0
@@ -139,7 +139,7 @@ def test_the_trame_view_frames_the_plant_below_its_toolbar(side):
     from ramure.app.render import frame_camera
 
     assert TOOLBAR_BAND >= 20 + 36 and trame_window((160, 160)) == (160, 160 + TOOLBAR_BAND)
-    mesh = Explorer(HONDA, n=6, view="static").model.mesh
+    mesh = NotebookExplorer(HONDA, n=6, view="static").model.mesh
     width, height = trame_window((160, 160))
 
     def draw(plotter):
@@ -163,9 +163,9 @@ def test_rectangle_mode_selects_what_a_drag_encloses_in_a_kernel():
     nbformat = pytest.importorskip("nbformat")
     from jupyter_helpers import execute
 
-    code = f"""from ramure.app.jupyter import Explorer
+    code = f"""from ramure.app.jupyter import NotebookExplorer
 from vtkmodules.vtkWebCore import vtkWebApplication, vtkWebInteractionEvent
-ex = Explorer({HONDA!r}, n=6)
+ex = NotebookExplorer({HONDA!r}, n=6)
 pl = ex.view.trame.plotter
 camera = pl.camera_position
 web, L = vtkWebApplication(), vtkWebInteractionEvent.LEFT_BUTTON
@@ -257,8 +257,8 @@ def test_the_trame_frame_url_in_a_kernel():
     nbformat = pytest.importorskip("nbformat")
     from jupyter_helpers import execute
 
-    code = f"""from ramure.app.jupyter import Explorer
-ex = Explorer({HONDA!r}, n=3)
+    code = f"""from ramure.app.jupyter import NotebookExplorer
+ex = NotebookExplorer({HONDA!r}, n=3)
 print(ex.view.backend, ex.view.trame.widget.src)"""
     for switch, start in (("", "/proxy/"), ("0", "http://localhost:")):
         nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
@@ -268,7 +268,7 @@ print(ex.view.backend, ex.view.trame.widget.src)"""
 
 
 def test_the_picture_view_refuses_the_rectangle_and_says_why():
-    ex = Explorer(HONDA, n=4, view="static")
+    ex = NotebookExplorer(HONDA, n=4, view="static")
     assert ex.rectangle.disabled
     ex.set_rectangle_mode(True)
     assert not ex.rectangle.value and "needs the interactive 3D view" in ex.message.text

@@ -7,7 +7,7 @@ import base64
 import numpy as np
 import pytest
 
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer
 from ramure.app.ids import parse_ids
 from ramure.app.model import Explorer as Model
 from ramure.lsys.regen import Session
@@ -40,7 +40,7 @@ def test_grammar_error_is_shown_inline_and_keeps_the_plant(explorer):
 
 
 def test_bad_grammar_at_start_opens_with_the_error():
-    ex = Explorer("n: 2\nw: A(1\np: A(x) -> F(x)", view="static")
+    ex = NotebookExplorer("n: 2\nw: A(1\np: A(x) -> F(x)", view="static")
     assert "column 5" in ex.grammar.error.value
     assert ex.grammar.text.value.startswith("n: 2\nw: A(1")
     ex.set_text("n: 2\nw: A(1)\np: A(x) -> F(x)A(x+1)")
@@ -51,7 +51,7 @@ def test_missing_file_is_refused():
     from ramure.errors import RamureError
 
     with pytest.raises(RamureError, match="no such grammar file"):
-        Explorer("grammars/nope.lsys", view="static")
+        NotebookExplorer("grammars/nope.lsys", view="static")
 
 
 def test_sliders_stage_or_apply_constants(explorer):
@@ -242,7 +242,7 @@ def test_grammar_box_shows_n_and_seed_and_keeps_the_plant_when_sent_back(explore
 
 def test_rho_changes_the_cut():
     # with ρ low the cut climbs above a partly selected parent; with ρ high it stays low
-    ex = Explorer(HONDA, n=5, view="static", size=(120, 120))
+    ex = NotebookExplorer(HONDA, n=5, view="static", size=(120, 120))
     tree = ex.plant.tree
     branch = ex.tree.children()[0]
     leaves = [int(x) for x in ex.model.session.leaves_with_symbol("F") if x in set(tree.leaves_under(branch).tolist())]
@@ -314,9 +314,9 @@ def test_model_state_is_shared_with_app_model(explorer):
 def test_regrowing_the_whole_plant_with_new_constants_redraws():
     """A whole-plant regrow that keeps no segment of the old mesh (every tube changes) is drawn
     anew (it raised IndexError in the incremental re-mesh, which stopped explore.ipynb)."""
-    from ramure.app.jupyter import Explorer
+    from ramure.app.jupyter import NotebookExplorer
 
-    ex = Explorer(HONDA, n=5, view="static", size=(64, 64))
+    ex = NotebookExplorer(HONDA, n=5, view="static", size=(64, 64))
     before = ex.png()
     assert ex.regrow(params={"rule": 1, "constants": {"a2": 66.0}}) is not None, ex.error
     assert ex.error is None and ex.png() != before and ex.model.mesh.n_cells > 0
@@ -344,7 +344,7 @@ def test_architecture_buttons_need_an_amap_grammar(explorer):
     arch = explorer.architecture  # Honda's grammar names no architecture
     assert arch.arch is None and "#amap" in arch.crumbs.value
     assert len(arch.buttons) == 4 and all(b.disabled for b in arch.buttons) and arch.rows.disabled
-    ex = Explorer(str(ROOT / "grammars" / "amap" / "massart.lsys"), n=4, view="static", size=(120, 120), cache=False)
+    ex = NotebookExplorer(str(ROOT / "grammars" / "amap" / "massart.lsys"), n=4, view="static", size=(120, 120), cache=False)
     arch = ex.architecture
     assert arch.arch is not None and not any(b.disabled for b in arch.buttons) and not arch.rows.disabled
     ex.set_text("n: 2\nw: A(1)\np: A(x) -> F(x)A(x+1)")  # the #amap lines gone

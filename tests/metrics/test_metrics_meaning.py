@@ -341,7 +341,7 @@ def test_directions_transfer_to_an_unseen_grammar_through_metrics(sweeps):
     learnt = learn_directions(regions, exp.sweep, exp.points)
     assert max(learnt["tall"], key=lambda m: abs(learnt["tall"][m])) in ("height", "total_length", "box_volume")
     # on this grammar, the region refines the default direction
-    refined = QualifierModel(regions=regions).fit(exp.sweep, exp.points)
+    refined = QualifierModel(regions=regions).fit(exp.sweep, points=exp.points)
     assert refined.sources_["tall"] == "region" and refined.sources_["short"] == "vocabulary"
     # on a grammar never studied: the learnt direction still makes it taller
     other = sweeps["weeping"]

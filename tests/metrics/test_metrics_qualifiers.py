@@ -283,7 +283,7 @@ def test_default_points_and_study_regions_drive_the_combination(tmp_path):
         study = store.regions(exp.name, source="study:%", trim=0)
     assert study.names_ == ["round"]
     # the region refines round's direction toward the variants around pick 14
-    refined = QualifierModel(regions=study, refine=1.0).fit(exp.sweep, exp.points)
+    refined = QualifierModel(regions=study, refine=1.0).fit(exp.sweep, points=exp.points)
     plain = QualifierModel().fit(exp.sweep)
     z = standardise(np.hstack([exp.sweep.deltas_, exp.sweep.shape_deltas_]), plain.scale_)[p]
     cos = [float(m.directions_[m.index("round")] @ z) / np.linalg.norm(z) for m in (plain, refined)]
