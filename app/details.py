@@ -28,14 +28,14 @@ if TYPE_CHECKING:
     from ramure.gmap.organs.lichen import Lichen
     from ramure.gmap.organs.trimesh import TriMesh
     from ramure.gmap.organs.wood import Wood
-    from ramure.lsys.seasons import Season
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.architecture.seasons import Season
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 AGE_RGB = np.array([[107, 128, 77], [153, 173, 92], [204, 209, 128]], np.uint8)  # old inside .. young rim
 
 
 def season_at(season: Season, step: int) -> Season:
-    """The :class:`~ramure.lsys.seasons.Season` as it was at ``step``: leaves fallen later are
+    """The :class:`~ramure.lsys.architecture.seasons.Season` as it was at ``step``: leaves fallen later are
     still attached (no landing point yet)."""
     import dataclasses
 
@@ -203,11 +203,11 @@ def close_up(growth: Lichen, mesh: TriMesh) -> list:
 
 def litter_polydata(season: Season, colors: np.ndarray, step: int = -1, size: float = 0.12) -> pv.PolyData:
     """The fallen leaves at ``step`` as curled blades on compacted piles
-    (:func:`ramure.lsys.seasons.litter`), each triangle coloured by its leaf's state then
+    (:func:`ramure.lsys.architecture.seasons.litter`), each triangle coloured by its leaf's state then
     (``colors``, the chain's RGB in [0, 1], as ``rgb`` cell data) and carrying its ``leaf_id``."""
     import pyvista as pv
 
-    from ramure.lsys.seasons import litter
+    from ramure.lsys.architecture.seasons import litter
 
     step = len(season.states) - 1 if step < 0 else step
     points, triangles, leaf = litter(season, step, size)

@@ -1,7 +1,7 @@
 """Natural details kept in the session (issue 18): record what was grown, grow the last one again.
 
 Lichen on a fruit, a crack on a fruit and lichen on the bark are recorded as the session's
-data-only ``detail`` edits (:meth:`ramure.lsys.regen.Session.add_detail`) with the settings
+data-only ``detail`` edits (:meth:`ramure.lsys.regeneration.regen.Session.add_detail`) with the settings
 that made them: they are undone and redone with the other edits and saved in the session
 file. Every detail is seeded, so growing it again from its settings gives the same result;
 a front end shows the session's last detail after an undo, a redo or a load.

@@ -31,12 +31,12 @@ from typing import TYPE_CHECKING
 from ramure.errors import RamureError
 from ramure.io import read_regular
 from ramure.lsys import GrammarError, LSystem
-from ramure.lsys.grammar import read_grammar_file
-from ramure.lsys.lpy import LpyLSystem
-from ramure.lsys.regen import MAX_SESSION_BYTES
+from ramure.lsys.language.grammar import read_grammar_file
+from ramure.lsys.readers.lpy import LpyLSystem
+from ramure.lsys.regeneration.regen import MAX_SESSION_BYTES
 
 if TYPE_CHECKING:
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
 _TAIL = r"(\s*(?://.*|/\*.*)?)$"
 DEFINE_LINE = re.compile(r"^(\s*#\s*define\s+)([A-Za-z_][A-Za-z_0-9]*)(\s+)(.*?)" + _TAIL)
@@ -244,10 +244,10 @@ def open_document(path: str | os.PathLike, run_code: bool = False) -> tuple[str,
     """The text, grammar and document path of the file ``path`` opened as a plant.
 
     * ``.lsys`` and L-studio ``.l`` files: their text, read as grammars;
-    * L-Py ``.lpy`` models: their text, run as Python (:mod:`ramure.lsys.lpy`) — only with
+    * L-Py ``.lpy`` models: their text, run as Python (:mod:`ramure.lsys.readers.lpy`) — only with
       ``run_code`` (else :class:`CodeNotAllowed`, before a byte of it is read);
     * OpenAlea ``.mtg`` files (UTF-8 or Latin-1): the grammar whose axiom draws the MTG
-      (:mod:`ramure.lsys.mtg_plant`).  The MTG is imported: the document is that grammar,
+      (:mod:`ramure.lsys.architecture.mtg_plant`).  The MTG is imported: the document is that grammar,
       with no path yet (Save asks where to write it), and the MTG file is never overwritten.
     """
     path = pathlib.Path(path)
@@ -256,8 +256,8 @@ def open_document(path: str | os.PathLike, run_code: bool = False) -> tuple[str,
             raise GrammarError("cannot read the model: no such file", filename=str(path))
         raise CodeNotAllowed(path)
     if path.suffix.lower() == ".mtg":
-        from ramure.lsys.mtg_graph import read_mtg_graph
-        from ramure.lsys.mtg_plant import mtg_grammar_text
+        from ramure.lsys.architecture.mtg_graph import read_mtg_graph
+        from ramure.lsys.architecture.mtg_plant import mtg_grammar_text
 
         text = mtg_grammar_text(read_mtg_graph(path), where=str(path))
         return text, LSystem.from_text(text), None

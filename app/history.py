@@ -3,7 +3,7 @@
 :class:`~ramure.app.model.Explorer` keeps one :class:`Timeline` (both front ends undo
 through it).
 
-The model's :class:`~ramure.lsys.regen.Session` keeps the plant edits
+The model's :class:`~ramure.lsys.regeneration.regen.Session` keeps the plant edits
 (regrow, prune, constants, fruit) with their own undo and redo.  Changing the
 grammar text, the derivation count or the seed starts a new session; this
 module keeps the sessions left behind, so Undo walks back through them too.

@@ -26,7 +26,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from ramure.errors import ValueRefused
-from ramure.lsys.tree import sorted_unique
+from ramure.lsys.history.tree import sorted_unique
 
 #: Most ids one typed range may name (a typo such as 0-99999999999 must not exhaust memory).
 MAX_RANGE = 100_000

@@ -1,6 +1,6 @@
 """The explorer's state, shared by the desktop window and the Jupyter widgets.
 
-:class:`Explorer` holds the grammar text, the editing :class:`~ramure.lsys.regen.Session`,
+:class:`Explorer` holds the grammar text, the editing :class:`~ramure.lsys.regeneration.regen.Session`,
 the selection and the last cut, and turns user actions into calls on the core
 packages.  It has no GUI code: a front end calls its methods and redraws when
 :attr:`Explorer.version` changes.  Bad input is refused with a
@@ -29,9 +29,9 @@ from numpy.typing import ArrayLike
 import ramure.io as atomic
 
 from ramure.lsys import GrammarError, LSystem, load_kernels
-from ramure.lsys.select import leaves_where
-from ramure.lsys.mincut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
-from ramure.lsys.tree import concat_ranges, sorted_unique
+from ramure.lsys.regeneration.select import leaves_where
+from ramure.lsys.regeneration.mincut import FROM_AXIOM_MESSAGE, climb_levels, kinship, stranded_words
+from ramure.lsys.history.tree import concat_ranges, sorted_unique
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
 from ramure.app.document import (
@@ -44,18 +44,18 @@ from ramure.app.document import (
 )
 from ramure.app.history import Timeline, history_words
 from ramure.app.ids import not_a_leaf
-from ramure.lsys.combination import split as split_combination
-from ramure.lsys.regen import Session
-from ramure.lsys.geometry import patch_polydata, skeleton_to_polydata
-from ramure.lsys.turtle import changed_spans, reinterpret
+from ramure.lsys.engine.combination import split as split_combination
+from ramure.lsys.regeneration.regen import Session
+from ramure.lsys.interpretation.geometry import patch_polydata, skeleton_to_polydata
+from ramure.lsys.interpretation.turtle import changed_spans, reinterpret
 
 if TYPE_CHECKING:
     import pyvista as pv
     from ramure.gmap.kernel.map3 import GMap3
     from ramure.lsys import Derivation
-    from ramure.lsys.mincut import CutResult
-    from ramure.lsys.regen import RegenResult
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.regeneration.mincut import CutResult
+    from ramure.lsys.regeneration.regen import RegenResult
+    from ramure.lsys.interpretation.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
     from ramure.metrics.qualifiers import QualifierRegions
     from ramure.metrics.sweep import VariantSweep
@@ -122,13 +122,13 @@ class Explorer:
     @property
     def skeleton(self) -> Skeleton:
         """The turtle's skeleton of the current plant; after an edit only the changed part is
-        re-interpreted (:func:`ramure.lsys.turtle.reinterpret`)."""
+        re-interpreted (:func:`ramure.lsys.interpretation.turtle.reinterpret`)."""
         return self._plant()["skeleton"]
 
     @property
     def mesh(self) -> pv.PolyData:
         """The plant's mesh; after an edit only the changed tubes are rebuilt
-        (:func:`ramure.lsys.geometry.patch_polydata`).  Tubes have :func:`mesh_sides` sides.
+        (:func:`ramure.lsys.interpretation.geometry.patch_polydata`).  Tubes have :func:`mesh_sides` sides.
 
         Its points are float32 (what OpenGL draws; 9 MB less at 1.44 M modules), each the float64
         value rounded once; ``skeleton.to_polydata()`` gives float64 points when they are needed."""
@@ -416,7 +416,7 @@ class Explorer:
     def leaves_where(
         self, min_order: int | None = None, min_height: float | None = None, max_height: float | None = None
     ) -> list[int]:
-        """Leaves by a branch-order / height filter (see :func:`ramure.lsys.select.leaves_where`)."""
+        """Leaves by a branch-order / height filter (see :func:`ramure.lsys.regeneration.select.leaves_where`)."""
         return leaves_where(self.skeleton, min_order, min_height, max_height)
 
     def kinship_hues(self) -> np.ndarray | None:
@@ -759,7 +759,7 @@ class Explorer:
     ) -> None:
         """Load a session file (a fresh history, a clean document); on error the current plant is
         untouched.  ``progress(done, total)`` follows the replay of its edits (at most
-        :data:`ramure.lsys.regen.MAX_SESSION_EDITS`).
+        :data:`ramure.lsys.regeneration.regen.MAX_SESSION_EDITS`).
 
         The loaded plant is drawn before it replaces the current one (as the constructor and
         :meth:`set_text` do): a session whose plant cannot be drawn (``F(1e300)``) is refused.
@@ -808,7 +808,7 @@ class CutPreview:
     ``roots``: the cut's roots; ``leaves``: the modules of the string they hold (what will
     change, in string order); ``changed`` of ``total`` modules; ``climb``: the fewest and most
     levels the cut climbs above a selected leaf (None when nothing regrows); ``stranded``:
-    selected leaves nothing regrows (see :func:`ramure.lsys.mincut.minimum_ascension`);
+    selected leaves nothing regrows (see :func:`ramure.lsys.regeneration.mincut.minimum_ascension`);
     ``from_axiom``: a root is an axiom module.
     """
 

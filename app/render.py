@@ -17,7 +17,7 @@ from ramure.io import write_with
 
 if TYPE_CHECKING:
     import pyvista as pv
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 BARK = (0.45, 0.32, 0.2)
 LEAF = (0.3, 0.62, 0.22)

@@ -33,7 +33,7 @@ from ramure.app.render import BARK, headless_setup, frame_camera, plant_colors
 from ramure.io import write_with
 
 if TYPE_CHECKING:
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
     from ramure.metrics.exploration import Exploration
     from ramure.metrics.sweep import VariantSweep
 

@@ -13,9 +13,9 @@ import tempfile
 import numpy as np
 
 from ramure.lsys import LSystem
-from ramure.lsys.amap import architecture
-from ramure.lsys.mtg import write_mtg
-from ramure.lsys.schedule import EventScheduler
+from ramure.lsys.architecture.amap import architecture
+from ramure.lsys.architecture.mtg import write_mtg
+from ramure.lsys.architecture.schedule import EventScheduler
 from benchtools import best
 
 TREE = """

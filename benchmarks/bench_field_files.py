@@ -6,8 +6,8 @@ The public collections are not copied into the repository; point this at local c
     RAMURE_FIELD_MTG=DIR RAMURE_FIELD_CPFG=DIR python benchmarks/run.py bench_field_files
 
 ``--mtg``: every ``*.mtg`` under DIR (e.g. openalea/mtg's ``test/data``, ``src/openalea/mtg/data``
-and ``doc/user``).  A file *loads* when :mod:`ramure.lsys.mtg_graph` reads it and the plant
-it makes (:mod:`ramure.lsys.mtg_plant`) derives and draws.
+and ``doc/user``).  A file *loads* when :mod:`ramure.lsys.architecture.mtg_graph` reads it and the plant
+it makes (:mod:`ramure.lsys.architecture.mtg_plant`) derives and draws.
 ``--cpfg``: every cpfg ``*.l`` under DIR (e.g. AlgorithmicBotany/vlab's ``oofs/``), leaving out
 panel files (``panel*.l``) and lpfg's C++ files (they ``#include <lpfgall.h>``).  A file
 *loads* when it parses, derives its own ``derivation length`` (capped at
@@ -40,7 +40,7 @@ def _reason(exc: BaseException) -> str:
 def count_mtg(folder: str | os.PathLike) -> dict:
     """Counts of the MTG files under ``folder`` that load, and why the others do not."""
     from ramure.lsys import LSystem
-    from ramure.lsys.mtg_graph import read_mtg_graph
+    from ramure.lsys.architecture.mtg_graph import read_mtg_graph
 
     files = sorted(pathlib.Path(folder).rglob("*.mtg"))
     reasons: collections.Counter = collections.Counter()

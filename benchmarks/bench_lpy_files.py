@@ -5,7 +5,7 @@ openalea/lpy's ``share/``, ``models/`` and ``doc/_downloads`` (or any folder of 
 
     python benchmarks/bench_lpy_files.py DIR [DIR ...]      # one JSON line
 
-A file *derives with modules* when :mod:`ramure.lsys.lpy` runs it, derives its own
+A file *derives with modules* when :mod:`ramure.lsys.readers.lpy` runs it, derives its own
 ``derivation length`` (capped at :data:`MAX_STEPS`, and stopped after :data:`SECONDS` seconds)
 to a string of at least one module, and the turtle draws it.  Opening an ``.lpy`` file runs
 its code: run this on files you trust.  ``bench_lpy_speed`` times the derivation itself (a
@@ -106,7 +106,7 @@ def bench_lpy_speed():
     """Rule applications per second of the .lpy derivation (one Python call and one history node each)."""
     from benchtools import best
 
-    from ramure.lsys.lpy import LpyLSystem
+    from ramure.lsys.readers.lpy import LpyLSystem
 
     ls = LpyLSystem(SPEED_MODEL, "speed.lpy")
     seconds, derivation = best(ls.derive, repeats=2)

@@ -113,7 +113,7 @@ def bench_first_exploration_honda_n10():
 _QUALIFY_CHILD = r"""
 import json, sys, tempfile, time
 import numpy as np
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import explore
 from ramure.metrics.apply import apply_qualifier
 cache = tempfile.mkdtemp()

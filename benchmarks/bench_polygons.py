@@ -69,16 +69,16 @@ if __name__ == "__main__":
 
 def bench_polygons_regrow():
     """Redraw after regrowing 10 leaves of the 131k-polygon plant: the turtle over the regrown
-    regions only (polygons spliced, :func:`ramure.lsys.turtle.reinterpret`) and the patched mesh
-    (:func:`ramure.lsys.geometry.patch_polydata`).  Target: half of what the full turtle + mesh
+    regions only (polygons spliced, :func:`ramure.lsys.interpretation.turtle.reinterpret`) and the patched mesh
+    (:func:`ramure.lsys.interpretation.geometry.patch_polydata`).  Target: half of what the full turtle + mesh
     costs.  The regrow itself (cut, re-derivation) is reported apart, as ``edit_seconds``."""
     import time
 
     import numpy as np
 
-    from ramure.lsys.geometry import patch_polydata
-    from ramure.lsys.regen import Session
-    from ramure.lsys.turtle import changed_spans, reinterpret
+    from ramure.lsys.interpretation.geometry import patch_polydata
+    from ramure.lsys.regeneration.regen import Session
+    from ramure.lsys.interpretation.turtle import changed_spans, reinterpret
 
     session = Session(LSystem.from_text(PLANT.format(n=15)), seed=1)
     old = session.derivation.skeleton()

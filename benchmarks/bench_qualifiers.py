@@ -2,7 +2,7 @@
 
 For every shipped grammar with ``#define`` constants and every grammar in ``tests/data``, the
 sweep (+-10 %, plus +-25 % one constant at a time, plus the hidden constants: literals, axiom
-numbers and rule probabilities, :mod:`ramure.lsys.hidden`) is fitted and each of the 22 qualifiers is
+numbers and rule probabilities, :mod:`ramure.lsys.language.hidden`) is fitted and each of the 22 qualifiers is
 applied to the whole plant in a fresh session; the plant is then measured again, independently
 of the qualifier machinery, and each qualifier's defining metrics
 (:mod:`ramure.metrics.definitions`) compared before and after.  The collision matrix of the
@@ -27,7 +27,7 @@ import numpy as np
 from ramure.errors import RamureError
 from ramure.io import write_text
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import VariantSweep, plant_metrics, plant_shape
 from ramure.metrics.apply import apply_qualifier
 from ramure.metrics.definitions import DEFINITIONS, LABELS, metric_value

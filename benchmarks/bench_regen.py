@@ -6,8 +6,8 @@ import numpy as np
 from networkx.algorithms import flow
 
 from ramure.lsys import LSystem
-from ramure.lsys.mincut import select_roots
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.mincut import select_roots
+from ramure.lsys.regeneration.regen import Session
 
 
 def bench_cut_and_regrow_10_leaves_honda_n10():
@@ -33,7 +33,7 @@ def _big_cut(flow_func):
     d = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=17)
     tree = d.tree
     tree.leaf_spans(), tree.depth  # per-derivation caches, shared by every later cut
-    from ramure.lsys.mincut import initial_capacities
+    from ramure.lsys.regeneration.mincut import initial_capacities
 
     initial_capacities(tree)
     sel = np.random.default_rng(1).choice(tree.leaves, 1000, replace=False)

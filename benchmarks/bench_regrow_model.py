@@ -81,7 +81,7 @@ def _held_bytes(session) -> int:
 
 def bench_undo_history_honda_n17(edits: int = 20):
     """What the undo history holds after ``edits`` 10-leaf regrows on Honda n = 17 (the strings
-    its edits keep, :class:`ramure.lsys.regen.Change`): ``history_mb`` in all, ``per_edit_kb`` for
+    its edits keep, :class:`ramure.lsys.regeneration.regen.Change`): ``history_mb`` in all, ``per_edit_kb`` for
     each edit but the last (which keeps both whole strings, for a fast undo); and the process's
     resident memory growth over the edits (``rss_growth_mb``, after the first edit, which makes
     the kept previous plant).  Before the history kept differences, each regrow held its whole

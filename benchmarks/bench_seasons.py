@@ -13,7 +13,7 @@ import numpy as np
 import time
 
 from ramure.lsys import LSystem
-from ramure.lsys.seasons import age_leaves, age_states, autumn_chain
+from ramure.lsys.architecture.seasons import age_leaves, age_states, autumn_chain
 from benchtools import best
 
 # Honda's sympodial tree with a leaf on every twig: 2^13 = 8,192 leaves at n = 13, plus the

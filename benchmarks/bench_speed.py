@@ -65,7 +65,7 @@ def _median_wall_cpu(fn, repeat=5):
 
 def bench_turtle_honda_n17():
     """The compiled turtle on Honda sympodial n=17 (1.44 M modules): >= 10 M modules/s."""
-    from ramure.lsys.turtle import interpret
+    from ramure.lsys.interpretation.turtle import interpret
 
     d = LSystem.from_file("honda_sympodial").derive(n=17)
     interpret(d)  # loads numba and the cached kernel
@@ -237,7 +237,7 @@ def bench_grammar_to_pixels_honda_n17(native=None):
     from types import SimpleNamespace
 
     from ramure.app.model import mesh_sides
-    from ramure.lsys.geometry import skeleton_to_polydata
+    from ramure.lsys.interpretation.geometry import skeleton_to_polydata
 
     ls = LSystem.from_file("honda_sympodial")
     app, warm = _plant_view(native=native)

@@ -6,15 +6,15 @@
 'A(3)B(3)C(1)B(5)C(1)'
 """
 
-from .mincut import CutResult, select_roots
-from .derive import Derivation, LSystem
+from .regeneration.mincut import CutResult, select_roots
+from .engine.derive import Derivation, LSystem
 from .errors import DerivationError, GrammarError, RamureError, ValueRefused
-from .grammar import Grammar, parse_grammar
-from .lpy import LpyLSystem  # registers the .lpy reader
-from .regen import RegenResult, Session, regenerate
-from .select import leaves_where
-from .tree import DerivationTree
-from .turtle import Organs, Skeleton
+from .language.grammar import Grammar, parse_grammar
+from .readers.lpy import LpyLSystem  # registers the .lpy reader
+from .regeneration.regen import RegenResult, Session, regenerate
+from .regeneration.select import leaves_where
+from .history.tree import DerivationTree
+from .interpretation.turtle import Organs, Skeleton
 
 __all__ = [
     "CutResult",
@@ -39,7 +39,7 @@ __all__ = [
 ]
 
 #: The compiled kernels of this package (numba), loaded on first use only.
-KERNEL_MODULES = ("_branch_cut_kernel", "_context_kernel", "_derive_kernel", "_polygon_kernel", "_tree_kernel", "_turtle_kernel")
+KERNEL_MODULES = ("engine._branch_cut_kernel", "engine._context_kernel", "engine._derive_kernel", "interpretation._polygon_kernel", "history._tree_kernel", "interpretation._turtle_kernel")
 
 
 def load_kernels() -> None:

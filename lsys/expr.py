@@ -435,7 +435,7 @@ def uses_random(node: Node | Expression) -> bool:
 
 def _source(node, params, constants, src, lift=None):
     if node.kind == "num":
-        if lift and node.offset in lift:  # a hidden constant (ramure.lsys.hidden): overridable
+        if lift and node.offset in lift:  # a hidden constant (ramure.lsys.language.hidden): overridable
             return f"C.get({lift[node.offset]!r}, {node.value!r})"
         return repr(node.value)
     if node.kind == "name":
@@ -466,7 +466,7 @@ def compile_expression(
     ``uniform``/``normal``), ``n`` the number of modules evaluated.
     Unknown names raise :class:`GrammarError` here, at compile time.  ``lift``
     (``{offset: key}``) makes the literals at those offsets read ``C[key]`` when ``C``
-    has it (:mod:`ramure.lsys.hidden`).
+    has it (:mod:`ramure.lsys.language.hidden`).
     """
     body = _source(expr.node, set(params), set(constants), expr.src, lift)
     code = f"lambda V, C, R, n: _out({body}, n)"

@@ -1,4 +1,4 @@
-"""Apply a qualifier to a selection of a plant being edited (an :class:`ramure.lsys.regen.Session`).
+"""Apply a qualifier to a selection of a plant being edited (an :class:`ramure.lsys.regeneration.regen.Session`).
 
 The thesis applies the qualifier's combination to the part of the plant the
 min-cut selects.  Here the choice is checked, not assumed:
@@ -60,7 +60,7 @@ min-cut selects.  Here the choice is checked, not assumed:
 4. **One derivation step more or less** (whole plant only).  When no
    variant serves the qualifier (no constant changes the number of
    segments, say), ``n + 1`` then ``n - 1`` are tried
-   (:meth:`~ramure.lsys.regen.Session.set_steps`), alone and with the
+   (:meth:`~ramure.lsys.regeneration.regen.Session.set_steps`), alone and with the
    variants that score the qualifier highest; ``changed`` records it.  A
    refusal names what the grammar lacks ("no constant or rule changes the
    branch radii").
@@ -70,7 +70,7 @@ min-cut selects.  Here the choice is checked, not assumed:
 
 At most one edit stays in the session's history (rejected tries are undone).
 
->>> from ramure.lsys.regen import Session
+>>> from ramure.lsys.regeneration.regen import Session
 >>> from ramure.metrics import VariantSweep
 >>> sweep = VariantSweep(n=4, n_jobs=1, cache=False).fit("honda_sympodial")
 >>> s = Session("honda_sympodial", n=4)
@@ -91,8 +91,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ramure.errors import RamureError
-from ramure.lsys.mincut import check_rho, collapse_nested
-from ramure.lsys.regen import MAX_STEPS
+from ramure.lsys.regeneration.mincut import check_rho, collapse_nested
+from ramure.lsys.regeneration.regen import MAX_STEPS
 
 from .definitions import DEFINITIONS, definition_holds, lacks, metric_change, metric_changes, metric_value
 from .plant import PlantMetrics, plant_metrics
@@ -102,7 +102,7 @@ from .variants import rule_constant_names
 
 if TYPE_CHECKING:
     from ramure.lsys import LSystem, RegenResult, Session
-    from ramure.lsys.tree import DerivationTree
+    from ramure.lsys.history.tree import DerivationTree
 
     from .qualifiers import QualifierRegions
     from .sweep import VariantSweep
@@ -185,7 +185,7 @@ class QualifierResult:
 
 
 def _roots(session, selection, rho, min_ascend=1):
-    """The subtrees a regrow of ``selection`` replaces (as :func:`ramure.lsys.regen.regenerate` keeps them)."""
+    """The subtrees a regrow of ``selection`` replaces (as :func:`ramure.lsys.regeneration.regen.regenerate` keeps them)."""
     tree = session.tree
     if not len(selection):  # the whole plant: every axiom module, as Session.regrow does
         return np.flatnonzero((tree.parent == -1) & tree.alive)
@@ -443,7 +443,7 @@ def _same_cut(session):
 
     Every try starts from the same plant (rejected tries are undone), so the
     cut of (selection, rho, min_ascend) cannot change between tries; the
-    session's :meth:`~ramure.lsys.regen.Session.plan` is memoised for the
+    session's :meth:`~ramure.lsys.regeneration.regen.Session.plan` is memoised for the
     duration of one :func:`apply_qualifier` call, then restored.
     """
     plan, memo = session.plan, {}
@@ -734,7 +734,7 @@ def _level_reason(key, level, tries, steps_left=None) -> str:
 
 def _regrow(session, selection, rho, seed, params, level):
     """Apply a candidate: regrow the selection's cut (:meth:`Session.regrow`); on the whole
-    plant, a combination for every rule (``rule`` None: an axiom literal, :mod:`ramure.lsys.hidden`)
+    plant, a combination for every rule (``rule`` None: an axiom literal, :mod:`ramure.lsys.language.hidden`)
     derives the plant again (:meth:`Session.set_steps` at the same ``n``), since a regrowth
     keeps the axiom's values."""
     if not selection and params.get("rule", 0) is None:

@@ -41,7 +41,7 @@ from ramure.errors import RamureError
 from .obb import obb_from_frustums
 
 if TYPE_CHECKING:
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
     from .obb import OrientedBox
 

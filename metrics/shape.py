@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 if TYPE_CHECKING:
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 SHAPE_METRIC_NAMES = ("height", "crown_width", "branch_angle", "angle_spread", "asymmetry")
 

@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING, Self
 import numpy as np
 
 from ramure.lsys import LSystem
-from ramure.lsys.combination import combination
+from ramure.lsys.engine.combination import combination
 import ramure.grammars as grammar_files
 from ramure.errors import RamureError, ValueRefused
 
@@ -139,7 +139,7 @@ def evaluate_variants(
     failed = np.zeros(len(rules), bool)
     for i, (rule, vals) in enumerate(zip(np.asarray(rules).tolist(), np.asarray(values).tolist())):
         try:
-            # rule -1: an axiom literal (ramure.lsys.hidden), read when the plant is derived again
+            # rule -1: an axiom literal (ramure.lsys.language.hidden), read when the plant is derived again
             out[i] = measure(ls, n, seed, constants, combination(None if rule < 0 else rule, dict(zip(names, vals))))
         except (RamureError, ArithmeticError, ValueError, MemoryError):
             failed[i] = True
@@ -187,7 +187,7 @@ class VariantSweep(ParamsMixin):
         a larger step (e.g. 0.25 for +-25 %) added one constant at a time, per rule, to the
         grid (None: none); see :func:`ramure.metrics.variants.variant_design`.
     hidden
-        also vary the grammar's hidden constants (:mod:`ramure.lsys.hidden`): its numeric
+        also vary the grammar's hidden constants (:mod:`ramure.lsys.language.hidden`): its numeric
         literals and rule probabilities, one at a time (and the literals one rule writes alike,
         together), at ``+-beta`` and ``+-wide``; a grammar without ``#define`` is then swept too.
         Default False (the thesis's variants; the PCA cloud of an exploration stays as it was).

@@ -36,11 +36,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ramure.errors import RamureError, ValueRefused
-from ramure.lsys.combination import combination
+from ramure.lsys.engine.combination import combination
 
 if TYPE_CHECKING:
     from ramure.lsys import LSystem
-    from ramure.lsys.hidden import Hidden
+    from ramure.lsys.language.hidden import Hidden
 
 MODES = ("grid", "lhs", "sobol")
 MAX_VARIANTS = 200_000
@@ -57,14 +57,14 @@ class VariantDesign:
     values: np.ndarray
     beta: float
     mode: str
-    #: The hidden constants among ``names`` (:mod:`ramure.lsys.hidden`): set only where changed.
+    #: The hidden constants among ``names`` (:mod:`ramure.lsys.language.hidden`): set only where changed.
     hidden: tuple = ()
 
     def __len__(self) -> int:
         return len(self.rules)
 
     def combination(self, i: int) -> dict:
-        """Variant ``i`` as a parameter combination ``{"rule", "constants"}`` (:mod:`ramure.lsys.combination`);
+        """Variant ``i`` as a parameter combination ``{"rule", "constants"}`` (:mod:`ramure.lsys.engine.combination`);
         rule -1 (an axiom literal) is ``None``: every rule, the axiom evaluated again."""
         hidden = set(self.hidden)
         values = {
@@ -78,7 +78,7 @@ class VariantDesign:
 
 def rule_constant_names(lsystem: LSystem) -> list[set[str]]:
     """For each rule, the set of constants its condition and successor expressions read,
-    with its hidden constants (:mod:`ramure.lsys.hidden`: its literals, its probability);
+    with its hidden constants (:mod:`ramure.lsys.language.hidden`: its literals, its probability);
     then one more set: the axiom's hidden constants (read when the plant is derived again).
 
     A name that is also one of the rule's formal parameters means the parameter.
@@ -196,7 +196,7 @@ def variant_design(
     time by ``+-wide``: a larger step for grammars where ``+-beta`` moves too little
     (levels ``+-wide / beta``, beyond [-1, 1]).
 
-    ``hidden`` (``{key: (value, rule or None)}``, :mod:`ramure.lsys.hidden`) adds, after
+    ``hidden`` (``{key: (value, rule or None)}``, :mod:`ramure.lsys.language.hidden`) adds, after
     the constants' variants, each hidden constant alone at ``+-beta`` (and ``+-wide``) on
     its own rule (rule -1 for the axiom's), then each set of literals of one rule that
     write the same number, all together: the grammar's ``w*0.6`` four times becomes one knob

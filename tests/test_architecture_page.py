@@ -55,10 +55,10 @@ def test_every_name_the_page_cites_exists(page, least):
 
 def test_the_resolver_refuses_a_name_that_is_gone():
     with pytest.raises(AttributeError):
-        resolve("ramure.lsys.mincut.no_such_function")
+        resolve("ramure.lsys.regeneration.mincut.no_such_function")
     with pytest.raises((ImportError, AttributeError)):
         resolve("ramure.no_such_package.thing")
-    assert resolve("ramure.lsys.mincut.select_roots").__name__ == "select_roots"
+    assert resolve("ramure.lsys.regeneration.mincut.select_roots").__name__ == "select_roots"
 
 
 def test_the_page_table_is_the_layering_table():

@@ -167,8 +167,8 @@ def _cycles(graph):
 
 def test_the_graph_sees_lazy_imports():
     assert "ramure.gmap.kernel.mapcut" in GRAPH["ramure.gmap.kernel.cut"]  # a top-level import
-    assert "ramure.lsys.turtle" in GRAPH["ramure.lsys.derive"]  # inside Derivation.skeleton
-    assert "ramure.lsys.derive" not in GRAPH["ramure.lsys.turtle"]  # only under TYPE_CHECKING
+    assert "ramure.lsys.interpretation.turtle" in GRAPH["ramure.lsys.engine.derive"]  # inside Derivation.skeleton
+    assert "ramure.lsys.engine.derive" not in GRAPH["ramure.lsys.interpretation.turtle"]  # only under TYPE_CHECKING
 
 
 def test_every_package_imports_only_what_it_may():

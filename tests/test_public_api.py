@@ -1,6 +1,6 @@
 """Modules use each other's public names only.
 
-A cross-module import of an underscore name (``from ramure.lsys.tree import _thing``) or an
+A cross-module import of an underscore name (``from ramure.lsys.history.tree import _thing``) or an
 attribute access ``module._thing`` on an imported Ramure module couples two modules through
 a private detail; this test walks every module's source and fails on either.  Private
 *modules* (``ramure.app.jupyter._ui``) may be imported inside their own package.

@@ -24,7 +24,7 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCRIPT = """
 import ramure, ramure.grammars
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import plant_metrics
 assert "honda_sympodial" in ramure.grammars.names()
 session = Session(ramure.load("honda_sympodial"), n=6)

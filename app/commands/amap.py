@@ -13,9 +13,9 @@ import time
 
 from ramure.app.cli import UserError
 from ramure.app.commands.plant import add_grammar_options, load_and_derive, output_file
-from ramure.lsys.amap import architecture, grown_by
-from ramure.lsys.mtg import read_mtg, write_mtg
-from ramure.lsys.mtg_graph import read_mtg_graph
+from ramure.lsys.architecture.amap import architecture, grown_by
+from ramure.lsys.architecture.mtg import read_mtg, write_mtg
+from ramure.lsys.architecture.mtg_graph import read_mtg_graph
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:

@@ -16,12 +16,12 @@ import numpy as np
 from ramure.app.cli import UserError
 from ramure.io import write_with
 from ramure.app.commands.plant import add_grammar_options, load_and_derive, output_file, parse_size
-from ramure.lsys.seasons import age_leaves, autumn_chain
+from ramure.lsys.architecture.seasons import age_leaves, autumn_chain
 
 if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
-    from ramure.lsys.seasons import LeafChain, Season
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.architecture.seasons import LeafChain, Season
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 
 def _unit(text, option):

@@ -13,7 +13,7 @@ import pathlib
 from ramure.app.cli import UserError
 from ramure.io import write_text
 from ramure.lsys import LSystem
-from ramure.lsys.cpfg import to_lsys
+from ramure.lsys.language.cpfg import to_lsys
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:

@@ -358,7 +358,7 @@ def run_qualify(args: argparse.Namespace) -> int:
     shows the vocabulary, ``--matrix`` and ``--save-directions`` the learnt directions), regrowing toward
     it, and print what changed; returns 0.
     """
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
     from ramure.metrics.apply import apply_qualifier
     from ramure.metrics.exploration import explore
     from ramure.metrics.qualifiers import canonical_name, vocabulary_name

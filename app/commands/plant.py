@@ -11,14 +11,14 @@ import time
 
 from ramure.app.cli import UserError
 from ramure.lsys import LSystem
-from ramure.lsys.turtle import undrawn_symbols
+from ramure.lsys.interpretation.turtle import undrawn_symbols
 import os
 from collections.abc import Collection, Iterable, Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ramure.app.cli import Subparsers
-    from ramure.lsys.derive import Derivation
+    from ramure.lsys.engine.derive import Derivation
 
 
 def add_grammar_options(parser: argparse.ArgumentParser, derive: bool = True, file_optional: bool = False) -> None:

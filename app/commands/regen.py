@@ -12,7 +12,7 @@ from ramure.app.cli import UserError
 from ramure.errors import ValueRefused
 from ramure.app.commands.plant import add_grammar_options, output_file, parse_sets
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:

@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from ramure.app.desktop.state import Snapshot
     from ramure.app.desktop.workers import Job
     from ramure.app.history import Timeline
-    from ramure.lsys.mincut import CutResult
+    from ramure.lsys.regeneration.mincut import CutResult
 
 T = TypeVar("T")
 

@@ -33,10 +33,10 @@ if TYPE_CHECKING:
     import pyvista as pv
     from ramure.app.model import Explorer
     from ramure.lsys import GrammarError
-    from ramure.lsys.mincut import CutResult
-    from ramure.lsys.regen import RegenResult
-    from ramure.lsys.tree import DerivationTree
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.regeneration.mincut import CutResult
+    from ramure.lsys.regeneration.regen import RegenResult
+    from ramure.lsys.history.tree import DerivationTree
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 STRING_PREVIEW_MODULES = 5000  # the string dock shows at most this many modules
 #: The cut-graph dock draws a cut of at most this many tree nodes.  A quarter of Honda n = 17
@@ -456,7 +456,7 @@ def kinship_cell_colors(explorer: Explorer, mesh: pv.DataSet) -> np.ndarray | No
     on_segment = seg >= 0
     rgb[on_segment] = seg_rgb[seg[on_segment]]
     if not on_segment.all():
-        from ramure.lsys.mincut import kinship
+        from ramure.lsys.regeneration.mincut import kinship
 
         tree = explorer.derivation.tree
         _, _, leaf_rgb = kinship(tree, explorer.selection[0], n=explorer.session.n)
@@ -634,7 +634,7 @@ def cut_too_large_words(cut: CutResult) -> str:
 def cut_graph_layout(
     cut: CutResult, tree: DerivationTree, roots: Iterable[int] = (), symbols: Sequence[str] | None = None
 ) -> GraphLayout:
-    """Lay out the graph of a :class:`ramure.lsys.mincut.CutResult` as a tidy tree by derivation depth.
+    """Lay out the graph of a :class:`ramure.lsys.regeneration.mincut.CutResult` as a tidy tree by derivation depth.
 
     Each tree node ``v`` gives two vertices ``(v, "in")`` above ``(v, "out")``;
     rows are derivation depths (the source at the top, the sink at the

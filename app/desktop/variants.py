@@ -28,7 +28,7 @@ from ramure.errors import RamureError
 
 if TYPE_CHECKING:
     from ramure.lsys import LSystem
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
     from ramure.metrics.exploration import Exploration
 

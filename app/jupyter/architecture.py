@@ -1,6 +1,6 @@
 """The Architecture tab: browse a plant as axes, annual shoots, growth units and internodes.
 
-The notebook counterpart of the desktop's Architecture dock (:mod:`ramure.lsys.amap`): a list
+The notebook counterpart of the desktop's Architecture dock (:mod:`ramure.lsys.architecture.amap`): a list
 of the rows under the opened element, *Open* to go down, *Up* to go back, and *Select* to
 select the row's internodes (an axis: itself and every axis it bears) with the selection
 panel's mode, ready to regrow or prune.
@@ -24,10 +24,10 @@ import numpy as np
 
 from ramure.app.jupyter._ui import Breadcrumbs
 from ramure.errors import RamureError
-from ramure.lsys.amap import architecture
+from ramure.lsys.architecture.amap import architecture
 
 if TYPE_CHECKING:
-    from ramure.lsys.amap import Architecture
+    from ramure.lsys.architecture.amap import Architecture
     from ramure.app.jupyter.explorer import NotebookExplorer
 
 HOW_TO = (

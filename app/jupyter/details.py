@@ -2,7 +2,7 @@
 
 The notebook counterpart of the desktop's Details dock (issue 18).  A **season** slider (0..24
 steps) with heat, humidity and wind: the leaves of the explorer's plant age along the open
-Markov chain of :mod:`ramure.lsys.seasons` (computed once per plant and environment; the
+Markov chain of :mod:`ramure.lsys.architecture.seasons` (computed once per plant and environment; the
 slider only redraws), and the picture shows the plant at that step as ``ramure autumn``
 draws it: attached leaves in their state's colour, fallen ones gone from the branches and
 lying on the ground.  **Lichen** and **Crack** act on the selected fruit's closed surface
@@ -34,7 +34,7 @@ from ramure.errors import RamureError
 
 if TYPE_CHECKING:
     from ramure.app.jupyter.explorer import NotebookExplorer
-    from ramure.lsys.seasons import Season
+    from ramure.lsys.architecture.seasons import Season
 
 STEPS = 24
 PLACES = ("anywhere", "top", "side", "bottom")  # where lichen starts / the crack begins (anywhere: top)
@@ -44,7 +44,7 @@ class DetailsTab:
     """Season slider, heat, humidity, wind; Lichen and Crack buttons; facts and a picture."""
 
     def __init__(self, app: NotebookExplorer | None, size: tuple[int, int] = (420, 420)) -> None:
-        from ramure.lsys.seasons import autumn_chain
+        from ramure.lsys.architecture.seasons import autumn_chain
 
         self.app = app
         self.size = size
@@ -98,7 +98,7 @@ class DetailsTab:
 
     def compute_season(self) -> Season:
         """The whole season of the plant's leaves for the current environment (cached)."""
-        from ramure.lsys.seasons import age_leaves
+        from ramure.lsys.architecture.seasons import age_leaves
 
         model = self._model()
         key = (model.version, id(model.session), self.heat.value, self.humidity.value, self.wind.value, self.seed.value)

@@ -51,8 +51,8 @@ from ramure.errors import GrammarError, RamureError, ValueRefused
 if TYPE_CHECKING:
     from IPython.display import Image
     from ramure.lsys import Derivation
-    from ramure.lsys.regen import RegenResult, Session
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.regeneration.regen import RegenResult, Session
+    from ramure.lsys.interpretation.turtle import Skeleton
     from ramure.metrics.apply import QualifierResult
     from ramure.app.new_study import NewStudy
     from ramure.metrics.exploration import Exploration
@@ -323,7 +323,7 @@ class NotebookExplorer:
 
     @property
     def session(self) -> Session:
-        """The editing :class:`~ramure.lsys.regen.Session` (``save``, ``edits``, ``derivation``)."""
+        """The editing :class:`~ramure.lsys.regeneration.regen.Session` (``save``, ``edits``, ``derivation``)."""
         return self.model.session
 
     @property

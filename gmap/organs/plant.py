@@ -34,7 +34,7 @@ from ramure.gmap.organs.fruit import build_fruit, resolve_params
 from ramure.gmap.kernel.map3 import GMap3
 
 if TYPE_CHECKING:
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 #: Keys of an override besides fruit parameters (``defects``: defect specs recorded on the
 #: fruit, carried in ``meta["fruits"]`` and applied by whoever shows the damaged fruit).

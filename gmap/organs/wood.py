@@ -100,7 +100,7 @@ from ramure.gmap.kernel.map3 import GMap3
 if TYPE_CHECKING:
     import pyvista as pv
 
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 #: Wood tissues (volume attribute ``wood``).
 TISSUES = ("pith", "heartwood", "sapwood", "bark", "knot")

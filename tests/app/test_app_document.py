@@ -13,8 +13,8 @@ from ramure.app.cli import main
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
 from ramure.lsys import GrammarError, LSystem
-from ramure.lsys.grammar import parse_grammar
-from ramure.lsys.regen import Session
+from ramure.lsys.language.grammar import parse_grammar
+from ramure.lsys.regeneration.regen import Session
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 HONDA = ROOT / "grammars" / "honda_sympodial.lsys"

@@ -7,7 +7,7 @@ import pytest
 
 from ramure.app.model import Explorer, leaves_in_rectangle
 from ramure.lsys import RamureError
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 HONDA = "grammars/honda_sympodial.lsys"
 

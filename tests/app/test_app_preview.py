@@ -9,7 +9,7 @@ import pytest
 
 from ramure.app.model import Explorer, percent
 from ramure.errors import ValueRefused
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 HONDA = "grammars/honda_sympodial.lsys"
 

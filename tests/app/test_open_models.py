@@ -9,8 +9,8 @@ import pytest
 
 from ramure.app.document import CodeNotAllowed, CodeTrust, open_document, runs_code, session_runs_code
 from ramure.app.model import Explorer
-from ramure.lsys.lpy import LpyLSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.readers.lpy import LpyLSystem
+from ramure.lsys.regeneration.regen import Session
 
 MODEL = """\
 extern(k=2)

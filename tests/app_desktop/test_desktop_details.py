@@ -32,7 +32,7 @@ def _wait(qtbot, window, panel, text):
 
 
 def test_the_season_slider_paints_leaves_in_their_state_colours_and_grounds_fallen_ones(qtbot, window):
-    from ramure.lsys.seasons import age_leaves, autumn_chain
+    from ramure.lsys.architecture.seasons import age_leaves, autumn_chain
 
     panel = _panel(window)
     panel.slider.setFocus()

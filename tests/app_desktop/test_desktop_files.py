@@ -152,7 +152,7 @@ def test_screenshot_goes_through_a_temporary_file(make_window, tmp_path, monkeyp
 def test_loading_a_session_shows_its_replay_in_the_status_bar(make_window, qtbot, tmp_path):
     """Issue 37: a session of many edits replayed with no word; the status bar follows it."""
     from ramure.lsys import LSystem
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     session = Session(LSystem.from_file(ROOT / "grammars" / "stochastic_plant.lsys"), n=4, seed=1)
     for _ in range(3):

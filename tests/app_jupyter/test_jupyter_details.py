@@ -31,7 +31,7 @@ def _near(rgb, colour, tol=0.1):
 
 
 def test_the_season_slider_ages_the_leaves_and_redraws(explorer):
-    from ramure.lsys.seasons import age_leaves, autumn_chain
+    from ramure.lsys.architecture.seasons import age_leaves, autumn_chain
 
     tab = explorer.details
     titles = [explorer.tabs.get_title(i) for i in range(len(explorer.tabs.children))]

@@ -79,7 +79,7 @@ def test_bad_input_is_refused_on_the_message_line(case, shared):
 def test_loading_a_session_shows_the_replay_on_the_message_line(tmp_path):
     """Issue 37: a session of many edits replayed with no word; the message line follows it."""
     from ramure.lsys import LSystem
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     session = Session(LSystem.from_file(HONDA), n=4, seed=1)
     for _ in range(3):

@@ -10,7 +10,7 @@ import pytest
 from ramure.app.jupyter import NotebookExplorer
 from ramure.app.ids import parse_ids
 from ramure.app.model import Explorer as Model
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from jupyter_helpers import HONDA, red_pixels
 
 

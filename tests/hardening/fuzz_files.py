@@ -10,7 +10,7 @@ constants edit) with values of other types put at random places of its JSON, key
 deleted, edits repeated or reordered, or its text edited character by character; it is
 loaded by :meth:`ramure.app.model.Explorer.load_session` over a plant that must stay as it
 was when the file is refused.  ``mtg``: an MTG written by Ramure with random character
-edits, read by :func:`ramure.lsys.mtg.parse_mtg`.  ``settings``: the desktop's settings
+edits, read by :func:`ramure.lsys.architecture.mtg.parse_mtg`.  ``settings``: the desktop's settings
 file (an INI file QSettings reads) with the recent-files entry given other types (Qt's
 ``@Variant``, ``@ByteArray``, numbers, NUL bytes, long lists), read by the File menu's
 :meth:`~ramure.app.desktop.menus.files.FileActions.recent`.  Outcomes: ``ok``, ``refused`` (a
@@ -47,7 +47,7 @@ VALUES += [{}, {"a": 1}, [[[[0]]]], "é" * 50, {"op": "regrow"}, [None], "NaN"]
 def base_sessions() -> list[dict]:
     """Real sessions to mutate: regrows, a prune and a constants edit on two grammars."""
     from ramure.lsys import LSystem
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     out = []
     for name, n in (("ternary_branching", 3), ("stochastic_plant", 4)):
@@ -70,8 +70,8 @@ def base_sessions() -> list[dict]:
 @functools.lru_cache(maxsize=1)
 def base_mtg() -> str:
     import ramure
-    from ramure.lsys.amap import architecture
-    from ramure.lsys.mtg import mtg_text
+    from ramure.lsys.architecture.amap import architecture
+    from ramure.lsys.architecture.mtg import mtg_text
 
     return mtg_text(architecture(ramure.derive("amap/massart", n=3)))
 
@@ -150,7 +150,7 @@ def session_input(rng, folder: pathlib.Path) -> str:
 
 
 def mtg_input(rng, folder: pathlib.Path) -> str:
-    from ramure.lsys.mtg import parse_mtg
+    from ramure.lsys.architecture.mtg import parse_mtg
 
     text = base_mtg()
     if rng.random() < 0.5:

@@ -114,7 +114,7 @@ TERNARY = pathlib.Path(__file__).resolve().parents[2] / "grammars" / "ternary_br
 def _saved_session(tmp_path, edits):
     """A session file of the ternary plant with ``edits`` real regrows."""
     from ramure.lsys import LSystem
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     session = Session(LSystem.from_file("ternary_branching"), n=3, seed=1)
     for _ in range(edits):
@@ -127,7 +127,7 @@ def test_a_session_of_too_many_edits_is_refused_before_any_replay(tmp_path, monk
     import json
 
     from ramure.app.model import Explorer
-    from ramure.lsys import regen
+    from ramure.lsys.regeneration import regen
 
     path = _saved_session(tmp_path, 1)
     data = json.loads(path.read_text())

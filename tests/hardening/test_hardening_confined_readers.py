@@ -20,8 +20,8 @@ from ramure.app.cli import main
 from ramure.errors import GrammarError, RamureError
 from ramure.io import FileRefused, read_regular
 from ramure.lsys import LSystem
-from ramure.lsys.grammar import MAX_TEXT_CHARS
-from ramure.lsys.regen import Session
+from ramure.lsys.language.grammar import MAX_TEXT_CHARS
+from ramure.lsys.regeneration.regen import Session
 
 SECRET = "root:x:0:0:the-secret-line"
 
@@ -210,7 +210,7 @@ def test_a_session_file_that_is_a_pipe_is_refused(tmp_path):
 
 def test_mtg_and_g3l_readers_refuse_pipes(tmp_path):
     from ramure.gmap.lsystem.g3l import load_g3l
-    from ramure.lsys.mtg import read_mtg
+    from ramure.lsys.architecture.mtg import read_mtg
 
     for name, read in (("p.mtg", read_mtg), ("p.g3l", load_g3l)):
         fifo = tmp_path / name
@@ -238,8 +238,8 @@ def test_mutated_mtg_files_raise_only_mtg_errors():
     import numpy as np
 
     import ramure
-    from ramure.lsys.amap import architecture
-    from ramure.lsys.mtg import MTGError, mtg_text, parse_mtg
+    from ramure.lsys.architecture.amap import architecture
+    from ramure.lsys.architecture.mtg import MTGError, mtg_text, parse_mtg
 
     text = mtg_text(architecture(ramure.derive("amap/massart", n=3)))
     with pytest.raises(MTGError, match="line 1: the '# ramure-events:' header is not valid JSON"):

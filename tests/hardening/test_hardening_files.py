@@ -85,7 +85,7 @@ def test_explorer_save_grammar_full_disk_keeps_the_original(tmp_path, monkeypatc
 
 def test_session_save_goes_through_the_atomic_writer(tmp_path, monkeypatch):
     from ramure.lsys import LSystem
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     path = tmp_path / "s.json"
     path.write_text("{}")

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from ramure.lsys import LSystem, RamureError
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 ROOT = pathlib.Path(__file__).parents[2]
 CASES = {

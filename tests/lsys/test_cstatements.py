@@ -6,7 +6,7 @@ import pytest
 
 from ramure.errors import DerivationError, GrammarError
 from ramure.lsys import LSystem
-from ramure.lsys.cstatements import MAX_STATEMENTS, Scope, parse_program
+from ramure.lsys.language.cstatements import MAX_STATEMENTS, Scope, parse_program
 
 
 def run(text, **variables):

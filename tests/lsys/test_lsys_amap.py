@@ -7,9 +7,9 @@ import pytest
 
 import ramure
 from ramure.errors import GrammarError, ValueRefused
-from ramure.lsys.amap import architecture, grown_by
-from ramure.lsys.mtg import MTGError, mtg_text, parse_mtg
-from ramure.lsys.schedule import KINDS, EventScheduler
+from ramure.lsys.architecture.amap import architecture, grown_by
+from ramure.lsys.architecture.mtg import MTGError, mtg_text, parse_mtg
+from ramure.lsys.architecture.schedule import KINDS, EventScheduler
 
 MODELS = ["attims", "champagnat", "corner", "leeuwenberg", "massart", "rauh", "troll"]
 

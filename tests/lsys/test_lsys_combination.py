@@ -7,8 +7,8 @@ import pytest
 
 from ramure.errors import ValueRefused
 from ramure.lsys import LSystem
-from ramure.lsys.combination import combination, split
-from ramure.lsys.regen import Session
+from ramure.lsys.engine.combination import combination, split
+from ramure.lsys.regeneration.regen import Session
 
 TEXT = "#define k 2\n#define j 3\nn: 2\nw: A(1)B(1)\np:\n A(x) -> A(x*k)\n B(x) -> B(x*k+j)\n"
 

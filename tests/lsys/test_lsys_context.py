@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys._context_kernel import match_contexts
-from ramure.lsys.derive import bracket_matches, context_neighbours
+from ramure.lsys.engine._context_kernel import match_contexts
+from ramure.lsys.engine.derive import bracket_matches, context_neighbours
 
 OPEN, CLOSE = 0, 1
 

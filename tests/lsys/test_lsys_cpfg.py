@@ -5,8 +5,8 @@ import pathlib
 import pytest
 
 from ramure.lsys import GrammarError, LSystem
-from ramure.lsys.cpfg import parse_cpfg, to_lsys, translate
-from ramure.lsys.homomorphism import interpreted_text
+from ramure.lsys.language.cpfg import parse_cpfg, to_lsys, translate
+from ramure.lsys.interpretation.homomorphism import interpreted_text
 
 HERE = pathlib.Path(__file__).parent / "cpfg"
 
@@ -158,7 +158,7 @@ def test_polygons_spheres_and_cut_read_from_a_cpfg_file():
 
 
 def test_a_session_on_a_cpfg_file_saves_and_loads(tmp_path):
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     s = Session(LSystem.from_file(HERE / "compound_leaf.l"), n=4, seed=3)
     s.regrow(s.leaves_with_symbol("L")[:1], rho=0.5, seed=2)

@@ -6,7 +6,7 @@ import pytest
 from networkx.algorithms import flow
 
 from ramure.lsys import LSystem, ValueRefused
-from ramure.lsys.mincut import bonus_table, initial_capacities, kinship, select_roots
+from ramure.lsys.regeneration.mincut import bonus_table, initial_capacities, kinship, select_roots
 
 
 def ternary(n=3):
@@ -148,9 +148,9 @@ def test_networkx_loads_when_the_network_is_looked_at_not_for_a_cut():
     import sys
 
     code = (
-        "import sys; from ramure.lsys import LSystem; import ramure.lsys.regen; "
+        "import sys; from ramure.lsys import LSystem; import ramure.lsys.regeneration.regen; "
         "a = 'networkx' in sys.modules; "
-        "from ramure.lsys.regen import Session; s = Session(LSystem.from_file('honda_sympodial'), n=4); "
+        "from ramure.lsys.regeneration.regen import Session; s = Session(LSystem.from_file('honda_sympodial'), n=4); "
         "cut = s.plan(s.tree.leaves[:2], rho=0.5)[0]; s.regrow(s.tree.leaves[:2], rho=0.5, seed=1); "
         "b = 'networkx' in sys.modules; print(a, b, cut.graph.number_of_nodes() > 2, 'networkx' in sys.modules)"
     )
@@ -188,7 +188,7 @@ def test_the_trees_own_recursion_finds_the_max_flows_cut(name, n):
 
 
 def test_the_recursion_after_edits_and_with_ties():
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     s = Session(LSystem.from_file("honda_sympodial"), n=6, seed=0)
     leaves = s.tree.leaves
@@ -242,8 +242,8 @@ def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkey
     """path_nodes marks a tree-sized mask for large selections: the same nodes and roots as
     sorting each level (forced both ways here); collapse_nested (300 roots: its climb of all
     roots at once) keeps exactly the roots with no other root above them."""
-    from ramure.lsys import mincut as cut_module
-    from ramure.lsys.mincut import collapse_nested, path_nodes
+    from ramure.lsys.regeneration import mincut as cut_module
+    from ramure.lsys.regeneration.mincut import collapse_nested, path_nodes
 
     t = LSystem.from_file("grammars/honda_sympodial.lsys").derive(n=8).tree
     rng = np.random.default_rng(seed)
@@ -264,7 +264,7 @@ def test_large_selections_mark_nodes_in_a_mask_with_the_same_answer(seed, monkey
 def test_picked_share_counts_each_nodes_leaves_of_the_picked_kinds(count, wide):
     """The share a minimum ascension compares with rho, against a count leaf by leaf: small
     spans are counted on the spans, large ones (near the root) by running sums."""
-    from ramure.lsys.mincut import _picked_share
+    from ramure.lsys.regeneration.mincut import _picked_share
     from ramure import load
 
     tree = load("honda_sympodial").derive(n=9).tree

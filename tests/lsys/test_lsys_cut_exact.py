@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem, ValueRefused
-from ramure.lsys.mincut import FROM_AXIOM_MESSAGE, exact_capacities, initial_capacities, select_roots
-from ramure.lsys.regen import Session
-from ramure.lsys.tree import DerivationTree
+from ramure.lsys.regeneration.mincut import FROM_AXIOM_MESSAGE, exact_capacities, initial_capacities, select_roots
+from ramure.lsys.regeneration.regen import Session
+from ramure.lsys.history.tree import DerivationTree
 
 
 # -- a tree builder and the brute force -------------------------------------------------------

@@ -6,7 +6,7 @@ Every expected root below is computed by hand."""
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys.mincut import select_roots
+from ramure.lsys.regeneration.mincut import select_roots
 
 
 @pytest.mark.parametrize("m", [1, 2, 3, 4, 5, 7, 10])

@@ -6,8 +6,8 @@ import pytest
 
 from ramure.errors import RamureError
 from ramure.lsys import LSystem
-from ramure.lsys._context_kernel import neighbours, reach
-from ramure.lsys.derive import bracket_matches
+from ramure.lsys.engine._context_kernel import neighbours, reach
+from ramure.lsys.engine.derive import bracket_matches
 from tests.hardening.fuzz import aware
 
 FIELDS = ("symbol", "nparams", "parent", "step", "rule", "index_in_rule", "child_start", "child_count", "alive")

@@ -5,9 +5,9 @@ import pytest
 
 from ramure.errors import GrammarError
 from ramure.lsys import LSystem
-from ramure.lsys.polygons import triangle_areas
-from ramure.lsys.regen import Session
-from ramure.lsys.surfaces import LIBRARY, shipped
+from ramure.lsys.interpretation.polygons import triangle_areas
+from ramure.lsys.regeneration.regen import Session
+from ramure.lsys.interpretation.surfaces import LIBRARY, shipped
 
 
 def skeleton(text):

@@ -46,7 +46,7 @@ def test_a_stochastic_grammar_draws_as_before(monkeypatch):
     import numpy as np
 
     from ramure.lsys import LSystem, derive, regen
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     drawn = "n: 4\nw: A(1)\np:\n  A(x) -> F(uniform(0.5, 1.5))[+(normal(30, 5))A(x)]A(x + 1)\n"
 

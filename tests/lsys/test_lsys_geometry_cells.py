@@ -6,7 +6,7 @@ import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from ramure.lsys import LSystem, geometry
-from ramure.lsys.geometry import skeleton_to_polydata, tube_quads
+from ramure.lsys.interpretation.geometry import skeleton_to_polydata, tube_quads
 
 
 def _cells(mesh):

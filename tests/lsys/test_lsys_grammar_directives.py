@@ -3,7 +3,7 @@
 import pytest
 
 from ramure.lsys import GrammarError, LSystem
-from ramure.lsys.grammar import parse_grammar
+from ramure.lsys.language.grammar import parse_grammar
 
 
 # -- #consider: the dual of #ignore ----------------------------------------------------

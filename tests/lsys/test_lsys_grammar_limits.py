@@ -10,7 +10,7 @@ import time
 import pytest
 
 from ramure.lsys import DerivationError, GrammarError, LSystem
-from ramure.lsys.grammar import MAX_PARAMETERS, MAX_TEXT_CHARS, parse_grammar
+from ramure.lsys.language.grammar import MAX_PARAMETERS, MAX_TEXT_CHARS, parse_grammar
 
 
 def params(k, prefix=""):

@@ -5,7 +5,7 @@ weight suffix mean what they mean in ABOP and cpfg."""
 import pytest
 
 from ramure.lsys import GrammarError, LSystem
-from ramure.lsys.grammar import parse_grammar, strip_comments
+from ramure.lsys.language.grammar import parse_grammar, strip_comments
 
 HEAD = "n: 1\nw: A\np:\n"
 

@@ -4,7 +4,7 @@ import pytest
 
 from ramure.errors import RamureError
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 TEXT = """#define r 0.8
 n: 6

@@ -8,8 +8,8 @@ from hypothesis import strategies as st
 
 from ramure.errors import RamureError
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
-from ramure.lsys.tree import DerivationTree
+from ramure.lsys.regeneration.regen import Session
+from ramure.lsys.history.tree import DerivationTree
 
 GRAMMARS = {
     "honda": ("honda_sympodial", 8),
@@ -185,7 +185,7 @@ def test_sums_that_miss_an_inner_node_are_dropped_not_read_wrong(compiled):
 
 
 def test_an_entry_for_a_node_that_gains_children_is_inserted_in_order():
-    from ramure.lsys.tree import _LeafSums
+    from ramure.lsys.history.tree import _LeafSums
 
     sums = _LeafSums(100, np.array([3, 8, 20], np.int32))
     sums.count[:3], sums.weight[:3] = [1, 2, 3], [10, 20, 30]
@@ -235,7 +235,7 @@ def test_weights_are_none_where_int64_could_overflow():
 @settings(max_examples=10, deadline=None)
 @given(ops=OPS, seed=st.integers(0, 2**16))
 def test_an_edits_own_spans_are_what_comparing_the_strings_finds(name, ops, seed):
-    from ramure.lsys.turtle import changed_spans
+    from ramure.lsys.interpretation.turtle import changed_spans
 
     source, n = GRAMMARS[name]
     ls = LSystem.from_file(source) if "\n" not in source else LSystem.from_text(source)

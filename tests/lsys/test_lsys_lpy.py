@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from ramure.lsys import DerivationError, GrammarError, LSystem, Session, regenerate
-from ramure.lsys.lpy import LpyLSystem
-from ramure.lsys.lpy_plantgl import (
+from ramure.lsys.readers.lpy import LpyLSystem
+from ramure.lsys.readers.lpy_plantgl import (
     BezierCurve2D,
     Color3,
     Material,
@@ -23,7 +23,7 @@ from ramure.lsys.lpy_plantgl import (
     angle,
     cross,
 )
-from ramure.lsys.lpy_translate import LpyError, scan_modules
+from ramure.lsys.readers.lpy_translate import LpyError, scan_modules
 
 GROWTH = """\
 from random import random

@@ -14,9 +14,9 @@ from ramure.lsys import LSystem
 def test_importing_lsys_does_not_load_numba_until_a_polygon_is_triangulated():
     # numba costs about 65 MB: a CLI or metrics user who never runs a kernel must not pay it
     code = (
-        "import sys; import ramure.lsys, ramure.lsys.polygons, ramure.lsys.turtle, ramure.lsys.geometry; "
+        "import sys; import ramure.lsys, ramure.lsys.interpretation.polygons, ramure.lsys.interpretation.turtle, ramure.lsys.interpretation.geometry; "
         "a = 'numba' in sys.modules; "
-        "from ramure.lsys.polygons import triangulate; "
+        "from ramure.lsys.interpretation.polygons import triangulate; "
         "tris, owner = triangulate([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [0, 4]); "
         "print(a, 'numba' in sys.modules, len(tris), owner.tolist())"
     )
@@ -42,8 +42,8 @@ def _trace_bytes(trace):
 
 
 def test_the_turtle_trace_keeps_int32_positions_and_no_copy_of_the_parameters():
-    from ramure.lsys.regen import Session
-    from ramure.lsys.turtle import interpret_string
+    from ramure.lsys.regeneration.regen import Session
+    from ramure.lsys.interpretation.turtle import interpret_string
 
     from ramure.lsys import load_kernels
 
@@ -67,8 +67,8 @@ def test_the_turtle_trace_keeps_int32_positions_and_no_copy_of_the_parameters():
 
 
 def test_an_edit_keeps_the_trace_int32_and_equal_to_a_fresh_interpretation():
-    from ramure.lsys.regen import Session
-    from ramure.lsys.turtle import changed_spans, interpret_string, reinterpret
+    from ramure.lsys.regeneration.regen import Session
+    from ramure.lsys.interpretation.turtle import changed_spans, interpret_string, reinterpret
 
     ls = LSystem.from_file("honda_sympodial")
     session = Session(ls, n=9)
@@ -91,7 +91,7 @@ def test_an_edit_keeps_the_trace_int32_and_equal_to_a_fresh_interpretation():
 
 def test_the_explorer_mesh_has_float32_points_and_int32_ids_and_the_library_mesh_float64():
     from ramure.app.model import Explorer, mesh_sides
-    from ramure.lsys.geometry import skeleton_to_polydata
+    from ramure.lsys.interpretation.geometry import skeleton_to_polydata
 
     ex = Explorer("grammars/fruit_tree.lsys", n=5)
     mesh = ex.mesh
@@ -113,7 +113,7 @@ def test_the_explorer_mesh_has_float32_points_and_int32_ids_and_the_library_mesh
 
 
 def test_tube_points_by_blocks_equal_one_block(monkeypatch):
-    from ramure.lsys import geometry
+    from ramure.lsys.interpretation import geometry
 
     sk = LSystem.from_file("honda_sympodial").derive(8).skeleton()
     args = (sk.start, sk.end, sk.normal, sk.base_radius, sk.top_radius, 5)
@@ -156,7 +156,7 @@ def _spans_reference(old, new):
 
 
 def test_changed_spans_match_a_reference_on_random_edits():
-    from ramure.lsys.turtle import changed_spans
+    from ramure.lsys.interpretation.turtle import changed_spans
 
     rng = np.random.default_rng(3)
     fresh = 1000
@@ -176,8 +176,8 @@ def test_changed_spans_match_a_reference_on_random_edits():
 
 
 def test_changed_spans_of_a_large_plant_allocate_no_int64_copy_of_the_string():
-    from ramure.lsys.regen import Session
-    from ramure.lsys.turtle import changed_spans
+    from ramure.lsys.regeneration.regen import Session
+    from ramure.lsys.interpretation.turtle import changed_spans
 
     session = Session(LSystem.from_file("honda_sympodial"), n=13)
     tree = session.derivation.tree
@@ -195,7 +195,7 @@ def test_changed_spans_of_a_large_plant_allocate_no_int64_copy_of_the_string():
 
 def test_cell_data_past_a_byte_takes_int16_and_keeps_its_values():
     from ramure.lsys import LSystem
-    from ramure.lsys.geometry import skeleton_to_polydata, value_dtype
+    from ramure.lsys.interpretation.geometry import skeleton_to_polydata, value_dtype
 
     deep = 200  # branch orders 0 .. 200 and 200 leaves: past int8
     sk = LSystem.from_text("n: 0\n#organ Leaf\nw: " + "F[" * deep + "F" + "Leaf(1)]" * deep + "\n").derive().skeleton()

@@ -8,7 +8,7 @@ import pytest
 
 from ramure.app.model import Explorer
 from ramure.lsys import LSystem
-from ramure.lsys.tree import DerivationTree
+from ramure.lsys.history.tree import DerivationTree
 
 
 def random_tree(rng, nodes=3000, width=3):

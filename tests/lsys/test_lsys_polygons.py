@@ -7,8 +7,8 @@ import pytest
 
 from ramure.errors import DerivationError, GrammarError
 from ramure.lsys import LSystem
-from ramure.lsys.polygons import Polygons, triangle_areas, triangulate
-from ramure.lsys.regen import Session
+from ramure.lsys.interpretation.polygons import Polygons, triangle_areas, triangulate
+from ramure.lsys.regeneration.regen import Session
 
 S18, C18 = math.sin(math.radians(18)), math.cos(math.radians(18))
 
@@ -301,7 +301,7 @@ def test_a_picked_polygon_leaf_is_selected_and_regrown_with_fresh_leaf_ids():
 
 
 def test_an_edit_near_a_polygon_that_crosses_a_branch_redraws_the_whole_plant():
-    from ramure.lsys.turtle import changed_spans, interpret_string, reinterpret
+    from ramure.lsys.interpretation.turtle import changed_spans, interpret_string, reinterpret
 
     # ABOP fig. 5.5-style: each '{' opens in a branch and closes after its ']'
     s = Session(LSystem.from_text("n: 5\nw: [A][B]\np:\n A -> [+A{.].C.}\n B -> [-B{.].C.}\n C -> GC"), seed=1)

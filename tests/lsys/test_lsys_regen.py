@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem, RamureError
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 HONDA = "grammars/honda_sympodial.lsys"
 
@@ -134,8 +134,8 @@ def test_whole_plant_regrow_equals_a_fresh_derivation_even_with_context():
 
 
 def test_older_edits_keep_only_what_they_replaced_and_undo_redo_stay_exact():
-    from ramure.lsys.regen import KEEP_STRINGS
-    from ramure.lsys.turtle import changed_spans
+    from ramure.lsys.regeneration.regen import KEEP_STRINGS
+    from ramure.lsys.interpretation.turtle import changed_spans
 
     s = Session(HONDA, n=9)
     rng = np.random.default_rng(5)

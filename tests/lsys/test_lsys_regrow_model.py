@@ -3,8 +3,8 @@
 import numpy as np
 
 from ramure.app.model import Explorer, mesh_sides
-from ramure.lsys.geometry import skeleton_to_polydata
-from ramure.lsys.turtle import interpret_string
+from ramure.lsys.interpretation.geometry import skeleton_to_polydata
+from ramure.lsys.interpretation.turtle import interpret_string
 
 from test_lsys_turtle_edits import assert_same, assert_same_mesh
 
@@ -69,7 +69,7 @@ def test_a_regrow_that_overflows_names_the_module_a_full_turtle_names():
 
 def test_collapse_nested_keeps_the_highest_roots_of_few_or_many():
     from ramure.lsys import LSystem
-    from ramure.lsys.mincut import collapse_nested
+    from ramure.lsys.regeneration.mincut import collapse_nested
 
     tree = LSystem.from_file("honda_sympodial").derive(n=10).tree
     rng = np.random.default_rng(0)

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from ramure.lsys import GrammarError, LSystem
-from ramure.lsys.homomorphism import interpreted, interpreted_text
-from ramure.lsys.regen import Session, regenerate
+from ramure.lsys.interpretation.homomorphism import interpreted, interpreted_text
+from ramure.lsys.regeneration.regen import Session, regenerate
 
 SYMBOLS = "ABCDF+-"
 

@@ -7,7 +7,7 @@ import pytest
 
 import ramure
 from ramure.errors import ValueRefused
-from ramure.lsys.seasons import LeafChain, age_leaves, autumn_chain, bilinear
+from ramure.lsys.architecture.seasons import LeafChain, age_leaves, autumn_chain, bilinear
 
 N = 100_000
 
@@ -168,7 +168,7 @@ def test_command_line_ages_a_plant_and_draws_the_ground(tmp_path):
 
 
 def test_polygon_leaves_age_fall_and_keep_their_streams_through_a_regrow():
-    from ramure.lsys.seasons import plant_leaves
+    from ramure.lsys.architecture.seasons import plant_leaves
 
     session = ramure.Session(ramure.load("abop/bush_1_25"), n=4)
     skeleton = session.derivation.skeleton()
@@ -215,7 +215,7 @@ def _area(points, triangles):
 
 
 def test_a_rolled_blade_keeps_its_area_and_lifts_its_edges_by_the_bend():
-    from ramure.lsys.seasons import leaf_shape
+    from ramure.lsys.architecture.seasons import leaf_shape
 
     flat_points, triangles = leaf_shape(1.0, 0.5, rows=41, cols=21)
     u = np.linspace(0, 1, 20001)
@@ -231,7 +231,7 @@ def test_a_rolled_blade_keeps_its_area_and_lifts_its_edges_by_the_bend():
 
 
 def _column(n, thickness=0.02):
-    from ramure.lsys.seasons import Season
+    from ramure.lsys.architecture.seasons import Season
 
     ground = np.column_stack([np.full(n, 0.1), np.full(n, 0.1), thickness * (np.arange(n) + 0.5)])
     return Season(
@@ -246,7 +246,7 @@ def _column(n, thickness=0.02):
 
 
 def test_a_pile_compacts_to_the_closed_form():
-    from ramure.lsys.seasons import COMPACTED, COMPACTION_DEPTH, pile_heights
+    from ramure.lsys.architecture.seasons import COMPACTED, COMPACTION_DEPTH, pile_heights
 
     n, t = 12, 0.02
     z = pile_heights(_column(n, t))
@@ -258,7 +258,7 @@ def test_a_pile_compacts_to_the_closed_form():
 
 
 def test_litter_curls_the_leaves_that_lay_longest():
-    from ramure.lsys.seasons import leaf_shape, litter
+    from ramure.lsys.architecture.seasons import leaf_shape, litter
 
     season = _column(2)
     season.fall_step[:] = [0, 2]  # the first fell two steps before the second

@@ -7,7 +7,7 @@ import pytest
 
 from ramure.errors import DerivationError
 from ramure.lsys import LSystem
-from ramure.lsys.tree import DerivationTree
+from ramure.lsys.history.tree import DerivationTree
 
 
 def test_parent_child_start_and_the_string_are_int32_and_ids_handed_out_are_int64():
@@ -71,7 +71,7 @@ def test_appending_values_past_int16_widens_and_past_int32_is_refused():
 
 
 def test_the_string_stays_int32_through_edits_and_undo_swaps_back_the_very_array():
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     s = Session(LSystem.from_file("honda_sympodial"), n=9)
     t = s.derivation.tree
@@ -92,7 +92,7 @@ def test_the_string_stays_int32_through_edits_and_undo_swaps_back_the_very_array
 def test_every_step_hands_the_compiled_assemble_an_int32_string(monkeypatch):
     """Decomposed strings and regrown roots come as int64 ids: a step takes them as the tree's
     int32 string, so the compiled pass has one signature to load (and the string one dtype)."""
-    import ramure.lsys._derive_kernel as kernel
+    import ramure.lsys.engine._derive_kernel as kernel
 
     seen = []
     compiled = kernel.assemble

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 
 def _both(tree):
@@ -54,7 +54,7 @@ def test_compiled_tree_passes_equal_the_numpy_passes_through_edits(name, n):
 
 
 def test_cut_leaf_weights_and_counts_from_the_compiled_passes():
-    from ramure.lsys.mincut import _leaf_weight_prefix, _LeafCounts
+    from ramure.lsys.regeneration.mincut import _leaf_weight_prefix, _LeafCounts
 
     session = Session(LSystem.from_file("honda_sympodial"), n=13)
     session.regrow(session.tree.leaves[[5, 500, 5000]], rho=0.5, seed=3)

@@ -6,7 +6,7 @@ import pytest
 import ramure.grammars as grammar_files
 from ramure.errors import DerivationError
 from ramure.lsys import LSystem
-from ramure.lsys.turtle import SYMBOL_ACTIONS, TurtleAction, interpret, interpret_string
+from ramure.lsys.interpretation.turtle import SYMBOL_ACTIONS, TurtleAction, interpret, interpret_string
 
 import turtle_reference
 

@@ -6,9 +6,9 @@ import pytest
 from ramure.errors import ValueRefused
 from ramure.app.model import Explorer, mesh_sides
 from ramure.lsys import LSystem
-from ramure.lsys.geometry import skeleton_to_polydata
-from ramure.lsys.regen import Session
-from ramure.lsys.turtle import changed_spans, interpret_string, reinterpret
+from ramure.lsys.interpretation.geometry import skeleton_to_polydata
+from ramure.lsys.regeneration.regen import Session
+from ramure.lsys.interpretation.turtle import changed_spans, interpret_string, reinterpret
 
 FIELDS = ("start", "end", "normal", "base_radius", "top_radius", "order", "leaf_id", "color", "parent")
 

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys import turtle
-from ramure.lsys._turtle_kernel import bracket_pairs32
-from ramure.lsys._turtle_kernel import walk as compiled_walk
-from ramure.lsys._turtle_walk import FULL, REGION, SEEK, initial_state
-from ramure.lsys._turtle_walk import walk as plain_walk
-from ramure.lsys.polygons import _gather
+from ramure.lsys.interpretation import turtle
+from ramure.lsys.interpretation._turtle_kernel import bracket_pairs32
+from ramure.lsys.interpretation._turtle_kernel import walk as compiled_walk
+from ramure.lsys.interpretation._turtle_walk import FULL, REGION, SEEK, initial_state
+from ramure.lsys.interpretation._turtle_walk import walk as plain_walk
+from ramure.lsys.interpretation.polygons import _gather
 
 # stochastic, context-sensitive, polygons, tropism and $, organs, surfaces and spheres, colours
 GRAMMARS = [
@@ -184,7 +184,7 @@ def test_a_new_process_draws_a_small_plant_without_loading_numba():
 
 
 def test_numpy_bracket_pairs_equal_the_kernels():
-    from ramure.lsys import _turtle_walk
+    from ramure.lsys.interpretation import _turtle_walk
 
     rng = np.random.default_rng(4)
     cases = [np.zeros(0, np.int8), np.array([11, 12], np.int8), np.array([12, 11], np.int8)]
@@ -203,7 +203,7 @@ def test_numpy_bracket_pairs_equal_the_kernels():
 
 
 def test_numpy_kept_modules_equal_the_kernels():
-    from ramure.lsys import _turtle_kernel, _turtle_walk
+    from ramure.lsys.interpretation import _turtle_kernel, _turtle_walk
 
     rng = np.random.default_rng(5)
     for _ in range(200):
@@ -245,7 +245,7 @@ def test_a_new_process_edits_a_small_plant_without_numba_or_networkx():
 
 @pytest.mark.parametrize("name", ["honda_sympodial", "apricot_tree", "abop/bush_1_25"])
 def test_an_edit_reinterprets_alike_with_either_walk(name, monkeypatch):
-    from ramure.lsys.regen import Session
+    from ramure.lsys.regeneration.regen import Session
 
     skeletons = []
     for compiled in (True, False):

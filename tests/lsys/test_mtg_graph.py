@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from ramure.lsys.mtg import MTGError
-from ramure.lsys.mtg_graph import parse_mtg_graph, read_mtg_graph
+from ramure.lsys.architecture.mtg import MTGError
+from ramure.lsys.architecture.mtg_graph import parse_mtg_graph, read_mtg_graph
 
 CLASSES = """CODE:\tFORM-A
 CLASSES:
@@ -159,7 +159,7 @@ def test_mutated_files_raise_only_mtg_errors():
     import random
 
     from ramure.lsys import LSystem
-    from ramure.lsys.mtg_plant import mtg_grammar_text
+    from ramure.lsys.architecture.mtg_plant import mtg_grammar_text
 
     rnd = random.Random(7)
     read = 0

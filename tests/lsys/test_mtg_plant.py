@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys.mtg_graph import parse_mtg_graph
-from ramure.lsys.mtg_plant import BRANCH_ANGLE, DIVERGENCE, PLANT_SPACING, mtg_grammar_text
+from ramure.lsys.architecture.mtg_graph import parse_mtg_graph
+from ramure.lsys.architecture.mtg_plant import BRANCH_ANGLE, DIVERGENCE, PLANT_SPACING, mtg_grammar_text
 
 HEAD = """CODE:\tFORM-A
 CLASSES:
@@ -66,7 +66,7 @@ def test_a_latin1_mtg_file_opens_as_a_plant(tmp_path):
 
 
 def test_a_misread_mtg_is_a_grammar_file_error(tmp_path):
-    from ramure.lsys.mtg import MTGError
+    from ramure.lsys.architecture.mtg import MTGError
 
     path = tmp_path / "bad.mtg"
     path.write_text(TOPOLOGY.replace("/P2/E1", "/P2/X1"))
@@ -76,8 +76,8 @@ def test_a_misread_mtg_is_a_grammar_file_error(tmp_path):
 
 def test_an_mtg_written_with_geometry_rebuilds_the_same_plant(tmp_path):
     import ramure
-    from ramure.lsys.amap import architecture
-    from ramure.lsys.mtg import parse_mtg, write_mtg
+    from ramure.lsys.architecture.amap import architecture
+    from ramure.lsys.architecture.mtg import parse_mtg, write_mtg
 
     derivation = ramure.derive("amap/massart", n=3)
     original = derivation.skeleton()

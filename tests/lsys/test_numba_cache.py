@@ -27,7 +27,7 @@ if "--runtime-from-cache" in sys.argv:  # numba's runtime module must come from 
         raise AssertionError("the runtime module was compiled")
 
     nrtdynmod.create_nrt_module = refuse
-from ramure.lsys import _turtle_kernel as K
+from ramure.lsys.interpretation import _turtle_kernel as K
 symbols = np.array([5, 1, 5, 1, 5, 2, 2, 5, 1, 5, 2], np.int8)   # x [ x [ x ] ] x [ x ]
 match = np.empty(len(symbols), np.int32)
 balanced = K.fill_bracket_pairs(symbols, 1, 2, match)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ramure.errors import RamureError, ValueRefused
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 
 SHRUB = pathlib.Path(__file__).parents[1] / "data" / "grammars" / "shrub.lsys"
 

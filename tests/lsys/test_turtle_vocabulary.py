@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys import turtle
+from ramure.lsys.interpretation import turtle
 
 
 def colours(axiom):
@@ -28,8 +28,8 @@ def test_a_cpfg_file_uses_the_same_colour_steps():
 
 def test_check_notes_the_modules_that_nothing_draws(tmp_path, capsys):
     from ramure.app.cli import main
-    from ramure.lsys.grammar import parse_grammar
-    from ramure.lsys.turtle import undrawn_symbols
+    from ramure.lsys.language.grammar import parse_grammar
+    from ramure.lsys.interpretation.turtle import undrawn_symbols
 
     text = "#amap internode F\n#amap uc U\nn: 1\nw: A\np:\n A -> U F[+A]Q~leaf(1)B\ninterpretation:\n B -> F\n"
     assert undrawn_symbols(parse_grammar(text)) == ["Q"]  # A is rewritten, B interpreted, U an #amap mark
@@ -96,11 +96,11 @@ def test_the_environment_query_is_refused_by_name():
         LSystem.from_text(QUERY.replace("?U(0,0,0)", "?E(1)"), filename="query.l")
 
 
-# -- the commands of several parameters (ramure.lsys._turtle_rich), values computed by hand --------
+# -- the commands of several parameters (ramure.lsys.interpretation._turtle_rich), values computed by hand --------
 
 
 def lpy_skeleton(axiom, head=""):
-    from ramure.lsys.lpy import LpyLSystem
+    from ramure.lsys.readers.lpy import LpyLSystem
 
     return LpyLSystem(f"{head}\nAxiom: {axiom}\nderivation length: 1\nendlsystem\n").derive().skeleton()
 
@@ -225,8 +225,8 @@ def test_tilde_l_is_the_predefined_leaf():
 
 
 def test_check_knows_the_new_commands():
-    from ramure.lsys.grammar import parse_grammar
-    from ramure.lsys.turtle import undrawn_symbols
+    from ramure.lsys.language.grammar import parse_grammar
+    from ramure.lsys.interpretation.turtle import undrawn_symbols
 
     text = "n: 0\nw: @M(1,2,3)@R(1,0,0)@Tp(0,0,1)@o(1)@c(1)@B(1,1)@Gs@Gc@Ge~l(1)\n"
     assert undrawn_symbols(parse_grammar(text)) == []

@@ -5,7 +5,7 @@ branch stack; inside a polygon F/f move and record a vertex, no tropism),
 spheres ``@O``, surfaces ``~name``, ``@Ts(e)`` and ``;(i)``, written as plainly
 as the rest; the polygons it records are compared too.
 
-The fast turtle (:func:`ramure.lsys.turtle.interpret`) must give the same
+The fast turtle (:func:`ramure.lsys.interpretation.turtle.interpret`) must give the same
 skeleton as this one to 1e-9 (tests/lsys/test_lsys_turtle*.py); the speed
 benchmark also loads it to report the speed-up measured in the same run.
 """
@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from ramure.errors import DerivationError
-from ramure.lsys.turtle import Organs, Skeleton
+from ramure.lsys.interpretation.turtle import Organs, Skeleton
 
 _ACTIONS = {
     "F": 1,

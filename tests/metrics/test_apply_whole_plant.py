@@ -8,7 +8,7 @@ import numpy as np
 
 from ramure.errors import RamureError
 
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import VariantSweep
 from ramure.metrics.apply import apply_qualifier
 from ramure.metrics.qualifiers import QualifierModel

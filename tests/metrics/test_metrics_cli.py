@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ramure.app.cli import main
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import plant_metrics
 
 HONDA = "grammars/honda_sympodial.lsys"

@@ -9,7 +9,7 @@ import pytest
 
 from ramure.errors import RamureError, ValueRefused
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import DeltaPCA, VariantSweep, explore
 from ramure.metrics import apply as apply_module
 from ramure.metrics.apply import apply_qualifier

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem, RamureError
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import VariantSweep, explore, plant_metrics
 from ramure.metrics.apply import apply_qualifier
 from ramure.metrics.plant import METRIC_NAMES

@@ -9,7 +9,7 @@ import pytest
 
 from ramure.app.model import Explorer
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import VariantSweep
 from ramure.metrics.apply import apply_qualifier
 from ramure.metrics.qualifiers import VOCABULARY

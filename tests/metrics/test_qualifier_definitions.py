@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from ramure.lsys import LSystem
-from ramure.lsys.regen import Session
+from ramure.lsys.regeneration.regen import Session
 from ramure.metrics import VariantSweep, plant_metrics, plant_shape
 from ramure.metrics.apply import apply_qualifier
 from ramure.metrics.definitions import (

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ramure.app.desktop.view.plant_view import PlantView
     from ramure.app.desktop.workers import Job
 
-GRAMMAR_FILTER = (  # .l: L-studio/cpfg (ramure.lsys.cpfg); .lpy: L-Py models; .mtg: OpenAlea MTGs
+GRAMMAR_FILTER = (  # .l: L-studio/cpfg (ramure.lsys.language.cpfg); .lpy: L-Py models; .mtg: OpenAlea MTGs
     "Plants (*.lsys *.l *.lpy *.mtg);;L-system grammars (*.lsys *.l);;L-Py models (*.lpy);;OpenAlea MTG (*.mtg);;All files (*)"
 )
 #: The settings key of the folders whose L-Py models the user allowed to run (asked once per folder).

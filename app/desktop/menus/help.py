@@ -59,7 +59,7 @@ def keys_html() -> str:
 
 def grammar_html() -> str:
     """The grammar reference (the parser module's documentation) as preformatted text."""
-    from ramure.lsys import grammar
+    from ramure.lsys.language import grammar
 
     return "<h3>Grammar reference</h3><pre>" + html.escape(grammar.__doc__ or "") + "</pre>"
 

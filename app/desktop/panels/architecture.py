@@ -1,6 +1,6 @@
 """The Architecture dock: the plant as axes, annual shoots, growth units and internodes.
 
-For a grammar with ``#amap`` annotations (see :mod:`ramure.lsys.amap`), the dock shows a tree
+For a grammar with ``#amap`` annotations (see :mod:`ramure.lsys.architecture.amap`), the dock shows a tree
 Plant → Axis (order, bearer) → Annual shoot → Growth unit → Internode. Clicking a row selects
 its internodes in the 3D view (an axis selects itself and every axis it bears), ready to be
 regrown or pruned like any selection. A grammar without annotations says how to add them.
@@ -17,7 +17,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QHeaderView, QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
 
 from ramure.errors import RamureError
-from ramure.lsys.amap import Architecture, architecture
+from ramure.lsys.architecture.amap import Architecture, architecture
 
 if TYPE_CHECKING:
     from ramure.app.desktop.controller import Controller

@@ -1,6 +1,6 @@
 """The Details dock: leaves that age and fall, lichen and cracks on a fruit (issue 18).
 
-* **Season**: a slider over the time steps of :func:`ramure.lsys.seasons.age_leaves` with the
+* **Season**: a slider over the time steps of :func:`ramure.lsys.architecture.seasons.age_leaves` with the
   heat, humidity and wind it runs in.  The whole season (every step) is computed once per
   plant and environment, in the controller's worker; moving the slider then only recolours:
   each attached leaf takes its Markov state's colour (:attr:`LeafChain.colors`) in the main
@@ -59,7 +59,7 @@ if TYPE_CHECKING:
     from ramure.app.desktop.controller import Controller
     from ramure.app.desktop.view.plant_view import PlantView
     from ramure.app.desktop.workers import Job
-    from ramure.lsys.seasons import LeafChain, Season
+    from ramure.lsys.architecture.seasons import LeafChain, Season
 
 #: The lichen habits of :data:`ramure.gmap.organs.lichen.HABITS`, listed without loading gmap.
 HABIT_NAMES = ("crustose", "foliose", "fruticose")
@@ -127,7 +127,7 @@ class DetailsPanel(QWidget):
         plotter_factory: Callable[[QWidget], Any] | None = None,
     ) -> None:
         super().__init__(parent)
-        from ramure.lsys.seasons import autumn_chain
+        from ramure.lsys.architecture.seasons import autumn_chain
 
         self.controller = controller
         self.main_view = view  # the main 3D view the season recolours (None: none, tests)
@@ -278,7 +278,7 @@ class DetailsPanel(QWidget):
 
     def compute_season(self) -> Job:
         """Age the plant's leaves over every step in the worker; the slider then shows a step."""
-        from ramure.lsys.seasons import age_leaves
+        from ramure.lsys.architecture.seasons import age_leaves
 
         key, chain = self._key(), self.chain
         _, heat, humidity, wind, seed = key

@@ -26,7 +26,7 @@ from PySide6.QtGui import (
 )
 from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
 
-from ramure.lsys.grammar import starts_line_comment
+from ramure.lsys.language.grammar import starts_line_comment
 
 if TYPE_CHECKING:
     from ramure.lsys import GrammarError

@@ -28,7 +28,7 @@ from ramure.errors import RamureError
 if TYPE_CHECKING:
     from ramure.metrics.apply import QualifierResult
     from ramure.lsys import LSystem
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
     from PySide6.QtWidgets import QMenu, QProgressBar, QPushButton, QWidget
     from ramure.app.desktop.panels.gallery import GalleryView
     from ramure.app.desktop.panels.pca_cloud import PcaCloudView

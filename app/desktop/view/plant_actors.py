@@ -35,7 +35,7 @@ shows as anyway.  Choices, stated here:
 * Shading is flat, as before (the tubes' facets show; no point normals are
   computed: flat interpolation ignores them).
 
-A mesh whose cells are not laid out as :func:`ramure.lsys.geometry.polydata_from_parts`
+A mesh whose cells are not laid out as :func:`ramure.lsys.interpretation.geometry.polydata_from_parts`
 lays them out (tube quads segment by segment, then triangles) is drawn as one
 actor, as it is.
 """
@@ -49,7 +49,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     import pyvista as pv
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 #: A tube class is drawn when its thickest tube is at least this many pixels wide.
 MIN_PIXELS = 0.5
@@ -101,7 +101,7 @@ def box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 def tube_layout(mesh: pv.PolyData, segments: int) -> int:
     """Sides per tube if ``mesh``'s cells are ``segments`` tubes' quads, segment by segment,
-    then only triangles (the layout of :func:`ramure.lsys.geometry.polydata_from_parts`); else 0."""
+    then only triangles (the layout of :func:`ramure.lsys.interpretation.geometry.polydata_from_parts`); else 0."""
     if segments == 0 or mesh.GetNumberOfVerts() or mesh.GetNumberOfLines() or mesh.GetNumberOfStrips():
         return 0
     if "segment" not in mesh.cell_data:
@@ -405,7 +405,7 @@ class PlantActors:
 
     def _build(self, g: _Group) -> None:
         """``g``'s points and cells gathered from the full mesh."""
-        from ramure.lsys.geometry import cell_array, tube_quads
+        from ramure.lsys.interpretation.geometry import cell_array, tube_quads
         import pyvista as pv
 
         mesh = self.mesh

@@ -230,7 +230,7 @@ class _NearCells:
         units; ``tubes``: see :func:`~ramure.app.desktop.state.cells_near_line`); returns the
         locator over them (``bins``: :func:`_near_bins`) for the picker, None if there are none."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
-        from ramure.lsys.geometry import cell_array
+        from ramure.lsys.interpretation.geometry import cell_array
 
         start, end, tolerance = line
         polys = mesh.GetPolys()

@@ -48,7 +48,7 @@ import pyvista as pv
 from ramure.app.render import projection_matrix  # shared with the notebook's view
 
 if TYPE_CHECKING:
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 BACKGROUND_BOTTOM = "#eef0f2"
 BACKGROUND_TOP = "#b9c6d3"
@@ -199,7 +199,7 @@ class LineBuffers:
     """Memory the cells and colours of a line set of up to ``capacity`` lines are written into
     (:func:`skeleton_lines`): a new plant version's hairlines go into the buffers of the version
     dropped, so they are written into memory already touched (fresh pages cost this machine
-    several ms).  The points are the skeleton's own (:meth:`ramure.lsys.turtle.Skeleton.ends`)."""
+    several ms).  The points are the skeleton's own (:meth:`ramure.lsys.interpretation.turtle.Skeleton.ends`)."""
 
     conn: np.ndarray  # (2 capacity,) int32
     colors: np.ndarray  # (2 capacity, 4) uint8: RGBA, alpha 255 (see point_colors)
@@ -226,7 +226,7 @@ def segment_lines(start: ArrayLike, end: ArrayLike) -> pv.PolyData:
 
 def skeleton_lines(skeleton: Skeleton, buffers: LineBuffers | None = None) -> pv.PolyData:
     """Every segment of ``skeleton`` as a line (:func:`point_lines`): its points are the
-    skeleton's :meth:`~ramure.lsys.turtle.Skeleton.ends`, read by VTK in place."""
+    skeleton's :meth:`~ramure.lsys.interpretation.turtle.Skeleton.ends`, read by VTK in place."""
     return point_lines(skeleton.ends(), buffers)
 
 
@@ -249,7 +249,7 @@ def point_lines(points: np.ndarray, buffers: LineBuffers | None = None) -> pv.Po
 def line_cells(conn: np.ndarray) -> Any:
     """A ``vtkCellArray`` of lines between the point ids ``conn`` ((n, 2) int32, C order), read
     by VTK in place (the caller keeps ``conn`` alive)."""
-    from ramure.lsys.geometry import cell_array
+    from ramure.lsys.interpretation.geometry import cell_array
 
     _counting(len(conn))
     return cell_array(_EVENS[: len(conn) + 1], conn.ravel())

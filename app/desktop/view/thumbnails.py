@@ -20,7 +20,7 @@ from PySide6.QtGui import QColor, QImage, QPainter, QPen, QPolygonF
 from ramure.app.render import BARK, FRUIT, LEAF
 
 if TYPE_CHECKING:
-    from ramure.lsys.turtle import Skeleton
+    from ramure.lsys.interpretation.turtle import Skeleton
 
 
 #: The most polygons a thumbnail fills (beyond, every k-th one).
