@@ -172,7 +172,7 @@ def check_rows(estimator: ParamsMixin, X: Any, *, fitting: bool) -> np.ndarray:
         if names is not None:
             estimator.feature_names_in_ = names  # type: ignore[attr-defined]
         elif hasattr(estimator, "feature_names_in_"):
-            del estimator.feature_names_in_  # type: ignore[attr-defined]
+            del estimator.feature_names_in_
         return X
     expected = estimator.n_features_in_  # type: ignore[attr-defined]
     if X.shape[1] != expected:
