@@ -1,5 +1,15 @@
 """L-systems with derivation history: grammar language, derivation, turtle, regeneration.
 
+The package is split into rooms by purpose, each a sub-package whose docstring says what it
+owns and may import (``tests/test_layering.py``, ``LSYS_ROOMS``, enforces it), from the
+bottom floor up: :mod:`~ramure.lsys.architecture` (AMAP, MTG, seasons) and
+:mod:`~ramure.lsys.history` (the derivation-history tree); :mod:`~ramure.lsys.interpretation`
+(the turtle, polygons, surfaces, meshes); :mod:`~ramure.lsys.language` (the ``.lsys`` and
+cpfg grammars); :mod:`~ramure.lsys.engine` (derivation); :mod:`~ramure.lsys.regeneration`
+(minimum cut, regrowth) and :mod:`~ramure.lsys.readers` (L-Py).  :mod:`ramure.lsys.errors` and
+:mod:`ramure.lsys.expr` (the expression language) stand below them all.  The names below are
+the package's front door.
+
 >>> from ramure.lsys import LSystem
 >>> d = LSystem.from_text("n: 2\\nw: A(1)\\np:\\n A(x) -> A(x+1)B(x+1)C(1)\\n B(y) -> B(y+3)").derive()
 >>> d.to_string()
@@ -39,7 +49,14 @@ __all__ = [
 ]
 
 #: The compiled kernels of this package (numba), loaded on first use only.
-KERNEL_MODULES = ("engine._branch_cut_kernel", "engine._context_kernel", "engine._derive_kernel", "interpretation._polygon_kernel", "history._tree_kernel", "interpretation._turtle_kernel")
+KERNEL_MODULES = (
+    "engine._branch_cut_kernel",
+    "engine._context_kernel",
+    "engine._derive_kernel",
+    "interpretation._polygon_kernel",
+    "history._tree_kernel",
+    "interpretation._turtle_kernel",
+)
 
 
 def load_kernels() -> None:

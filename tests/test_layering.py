@@ -72,6 +72,28 @@ ALLOWED = {
 }
 
 
+#: The rooms of ``ramure.lsys`` (its sub-packages) and what each may import inside ``ramure.lsys``
+#: besides itself; outside it, every room may import what ``ALLOWED["ramure.lsys"]`` says.
+#: ``LSYS_ROOT`` stands for the modules directly in ``lsys/`` (``errors``, ``expr``: the
+#: expression language), below every room; ``ramure.lsys`` itself is the front door.  Floors,
+#: from the bottom: root; architecture, history; interpretation; language; engine;
+#: regeneration, readers (``docs/images/lsys_rooms.py`` prints them from the source).
+LSYS_ROOT = "ramure.lsys.<root>"
+LSYS_ROOMS = {
+    LSYS_ROOT: set(),
+    "ramure.lsys.architecture": {LSYS_ROOT},
+    "ramure.lsys.history": {LSYS_ROOT},
+    "ramure.lsys.interpretation": {LSYS_ROOT, "ramure.lsys.history"},
+    "ramure.lsys.language": {LSYS_ROOT, "ramure.lsys.architecture", "ramure.lsys.interpretation"},
+    "ramure.lsys.engine": {LSYS_ROOT, "ramure.lsys.architecture", "ramure.lsys.history"}
+    | {"ramure.lsys.interpretation", "ramure.lsys.language"},
+    "ramure.lsys.regeneration": {LSYS_ROOT, "ramure.lsys.history", "ramure.lsys.interpretation", "ramure.lsys.engine"},
+    "ramure.lsys.readers": {LSYS_ROOT, "ramure.lsys.history", "ramure.lsys.interpretation", "ramure.lsys.language"}
+    | {"ramure.lsys.engine"},
+}
+LSYS_ROOMS["ramure.lsys"] = set(LSYS_ROOMS)
+
+
 def _modules():
     """``{dotted name: path}`` of every Ramure module, as installed."""
     out = {}
@@ -94,8 +116,9 @@ def _unchecked(tree):
     return skip
 
 
-def _imports(name, path):
-    """The Ramure modules ``name`` imports, lazy imports included."""
+def _imports(name, path, front_doors=False):
+    """The Ramure modules ``name`` imports, lazy imports included; an import of a package the
+    module stands in (its front door) is left out unless ``front_doors``."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     skip, found = _unchecked(tree), set()
     here = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
@@ -109,12 +132,14 @@ def _imports(name, path):
             source = ".".join(filter(None, (base, node.module)))
             found |= {source} | {f"{source}.{alias.name}" for alias in node.names}
     own_front_doors = {m for m in found if MODULES.get(m, pathlib.Path()).name == "__init__.py" and name.startswith(m + ".")}
-    return {m for m in found if m in MODULES and m != name} - own_front_doors
+    return {m for m in found if m in MODULES and m != name} - (set() if front_doors else own_front_doors)
 
 
 def _package(module):
     if module.startswith("ramure.app"):
         return "ramure.app"
+    if module.startswith("ramure.lsys"):  # its rooms are checked by LSYS_ROOMS
+        return "ramure.lsys"
     if module == "ramure":
         return "ramure"
     if module.count(".") == 1 and module.startswith("ramure.") and MODULES[module].parent == ROOT / "ramure":
@@ -203,3 +228,51 @@ def test_no_module_imports_itself_back():
 def test_the_cycle_finder_finds_a_lazy_cycle():
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [{"a", "b", "c"}]
     assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+# -- the rooms of ramure.lsys -----------------------------------------------------------------------
+
+
+def _room(module):
+    """The lsys room of an lsys module: its sub-package, LSYS_ROOT or the front door."""
+    if module == "ramure.lsys":
+        return module
+    if MODULES[module].parent == ROOT / "lsys" and MODULES[module].name != "__init__.py":
+        return LSYS_ROOT
+    return ".".join(module.split(".")[:3])
+
+
+LSYS_GRAPH = {name: _imports(name, path, front_doors=True) for name, path in MODULES.items() if name.startswith("ramure.lsys")}
+
+
+def test_every_lsys_room_is_in_the_table():
+    rooms = {f"ramure.lsys.{p.parent.name}" for p in (ROOT / "lsys").glob("*/__init__.py")}
+    assert rooms == set(LSYS_ROOMS) - {LSYS_ROOT, "ramure.lsys"}
+    assert {_room(name) for name in LSYS_GRAPH} == set(LSYS_ROOMS)
+
+
+def test_every_lsys_room_imports_only_what_it_may():
+    bad = []
+    for name, targets in LSYS_GRAPH.items():
+        here = _room(name)
+        inside = sorted(t for t in targets if t.startswith("ramure.lsys"))
+        bad += [f"{name} imports {t}" for t in inside if _room(t) not in LSYS_ROOMS[here] | {here}]
+    assert bad == []
+
+
+def test_the_lsys_rooms_are_acyclic():
+    assert _cycles(LSYS_ROOMS) == []
+    rooms: dict[str, set[str]] = {}
+    for name, targets in LSYS_GRAPH.items():
+        here = _room(name)
+        rooms.setdefault(here, set()).update(_room(t) for t in targets if t.startswith("ramure.lsys") and _room(t) != here)
+    assert _cycles(rooms) == []
+    assert all(LSYS_ROOMS[r] >= imported for r, imported in rooms.items())
+
+
+def test_the_room_check_sees_a_lazy_upward_import():
+    # derive (engine) imports the turtle (interpretation) inside a function: allowed downward;
+    # the same import the other way round would be refused
+    assert "ramure.lsys.interpretation.turtle" in LSYS_GRAPH["ramure.lsys.engine.derive"]
+    assert "ramure.lsys.engine" not in LSYS_ROOMS["ramure.lsys.interpretation"]
+    assert _room("ramure.lsys.expr") == LSYS_ROOT and _room("ramure.lsys") == "ramure.lsys"

@@ -785,7 +785,7 @@ def bracket_matches(symbols: np.ndarray, open_id: int | None, close_id: int | No
     """
     if open_id is None or close_id is None:
         return np.full(len(symbols), -1, np.int64)
-    from ..interpretation._turtle_kernel import bracket_pairs
+    from ..interpretation.turtle import bracket_pairs
 
     match, _ = bracket_pairs(np.asarray(symbols), open_id, close_id)
     return match

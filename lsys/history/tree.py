@@ -849,3 +849,11 @@ def concat_ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
     total = int(counts.sum())
     offsets = np.repeat(starts - np.cumsum(counts) + counts, counts)
     return offsets + np.arange(total, dtype=np.int64)
+
+
+def leaf_weight_prefix(depth: np.ndarray, leaves: np.ndarray) -> np.ndarray:
+    """Prefix sums of ``2**depth[leaves]`` in int64, one compiled pass without a gathered copy
+    (numba loads on the first call); the caller checks the sums cannot overflow."""
+    from ._tree_kernel import leaf_weight_prefix as compiled
+
+    return compiled(depth, leaves)

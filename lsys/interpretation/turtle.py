@@ -377,6 +377,15 @@ def _balanced(acts):
     return bool(_bracket_pairs(acts)[1])
 
 
+def bracket_pairs(symbols: np.ndarray, open_id: int, close_id: int) -> tuple[np.ndarray, bool]:
+    """For each open bracket the position of its close and vice versa (-1 elsewhere), and whether
+    all are balanced: one compiled pass (numba loads on the first call).  The engine uses it to
+    match ``[`` and ``]`` in a string of module ids."""
+    from ._turtle_kernel import bracket_pairs as compiled
+
+    return compiled(symbols, open_id, close_id)
+
+
 def _bracket_pairs(acts):
     """(match, balanced): bracket matches of the string (int32, -1 unmatched), compiled or numpy."""
     if compiled_walk(len(acts)):

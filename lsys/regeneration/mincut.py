@@ -114,7 +114,7 @@ def _leaf_weight_prefix(tree):
         whole = tree.depth
         top = int(whole.max()) if whole.size else 0
         if top + int(np.ceil(np.log2(len(tree.leaves) + 1))) < 62 and tree.size >= 50_000:
-            from ..history._tree_kernel import leaf_weight_prefix
+            from ..history.tree import leaf_weight_prefix
 
             return leaf_weight_prefix(whole, tree.leaves)  # one pass, no gathered copy
         depth = whole[tree.leaves].astype(np.int64)

@@ -45,7 +45,9 @@ def test_a_stochastic_grammar_draws_as_before(monkeypatch):
     # the generator is made on first use: the same draws as numpy's default_rng(seed) made at once
     import numpy as np
 
-    from ramure.lsys import LSystem, derive, regen
+    from ramure.lsys import LSystem
+    from ramure.lsys.engine import derive
+    from ramure.lsys.regeneration import regen
     from ramure.lsys.regeneration.regen import Session
 
     drawn = "n: 4\nw: A(1)\np:\n  A(x) -> F(uniform(0.5, 1.5))[+(normal(30, 5))A(x)]A(x + 1)\n"

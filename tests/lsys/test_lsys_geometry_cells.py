@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from ramure.lsys import LSystem, geometry
+from ramure.lsys import LSystem
+from ramure.lsys.interpretation import geometry
 from ramure.lsys.interpretation.geometry import skeleton_to_polydata, tube_quads
 
 

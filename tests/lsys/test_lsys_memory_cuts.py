@@ -14,7 +14,8 @@ from ramure.lsys import LSystem
 def test_importing_lsys_does_not_load_numba_until_a_polygon_is_triangulated():
     # numba costs about 65 MB: a CLI or metrics user who never runs a kernel must not pay it
     code = (
-        "import sys; import ramure.lsys, ramure.lsys.interpretation.polygons, ramure.lsys.interpretation.turtle, ramure.lsys.interpretation.geometry; "
+        "import sys; import ramure.lsys, ramure.lsys.interpretation.polygons, ramure.lsys.interpretation.turtle; "
+        "import ramure.lsys.interpretation.geometry; "
         "a = 'numba' in sys.modules; "
         "from ramure.lsys.interpretation.polygons import triangulate; "
         "tris, owner = triangulate([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [0, 4]); "

@@ -109,8 +109,8 @@ def _kernel_modules():
     import importlib
 
     for package in ("lsys", "gmap/kernel", "gmap/organs", "app/desktop/view"):
-        for path in sorted((ROOT / package).glob("_*kernel.py")):
-            yield importlib.import_module(f"ramure.{package.replace('/', '.')}.{path.stem}")
+        for path in sorted((ROOT / package).rglob("_*kernel.py")):  # lsys keeps its kernels in its rooms
+            yield importlib.import_module("ramure." + ".".join(path.relative_to(ROOT).with_suffix("").parts))
 
 
 def test_every_kernel_loads_its_cache_lightly_and_writes_it_in_our_own_folders():
@@ -146,7 +146,7 @@ def test_no_module_uses_numbas_njit_directly():
 
 def test_git_ignores_the_cache_files():
     paths = [
-        "lsys/__pycache__/_turtle_kernel.walk-91.py311.nbi",
+        "lsys/interpretation/__pycache__/_turtle_kernel.walk-91.py311.nbi",
         "gmap/organs/__pycache__/_dla_kernel.grow-14.py311.1.nbc",
         "ramure/__pycache__/numba_runtime-0123456789abcdef0123.bin",
     ]
