@@ -1,6 +1,6 @@
 """``njit`` for Ramure's compiled kernels: numba's, with its on-disk cache loaded lightly.
 
-Every kernel (``ramure.lsys._*_kernel``, ``ramure.gmap._*_kernel``) is decorated with
+Every kernel (``ramure.lsys.ROOM._*_kernel``, ``ramure.gmap.ROOM._*_kernel``) is decorated with
 ``@njit(cache=True, ...)`` from here.  The first run after an install compiles each kernel
 once (LLVM; 15-25 s for all of them) and numba saves the machine code next to the module
 (``__pycache__/*.nbi`` index and ``*.nbc`` code, written to a temporary name then renamed, so
