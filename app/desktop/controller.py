@@ -210,9 +210,7 @@ class Controller(QObject):
     def load_session(self, path: str | os.PathLike, run_code: bool = False) -> Job:
         """Load a session file in the worker; :attr:`replaying` follows the replay of its edits.
         ``run_code``: the session's L-Py model may run (the caller asked the user)."""
-        return self.submit(
-            "load session", lambda ex: ex.load_session(path, progress=self.replaying.emit, run_code=run_code)
-        )
+        return self.submit("load session", lambda ex: ex.load_session(path, progress=self.replaying.emit, run_code=run_code))
 
     def load_grammar(self, path: str | os.PathLike, run_code: bool = False) -> Job:
         """Replace the plant by a grammar file: a fresh session and a fresh history (see

@@ -417,7 +417,7 @@ class _Translator:
     def at_module(self, number, text, original, i):
         m = re.match(r"@([A-Za-z#]+)", text[i:])
         name = "@" + (m.group(1) if m else "")
-        from ..interpretation._turtle_rich import CPFG_CODES, SYMBOL_CODES
+        from ..interpretation.turtle import CPFG_CODES, SYMBOL_CODES  # the rich walk's tables
         from ..interpretation.turtle import SYMBOL_ACTIONS
 
         drawn = [*SYMBOL_ACTIONS, *SYMBOL_CODES, *CPFG_CODES]

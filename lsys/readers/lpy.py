@@ -178,6 +178,9 @@ def _builtins() -> dict:
 class LpyLSystem(LSystem):
     """An L-Py model ready to derive (see the module's docstring: opening one runs its code)."""
 
+    #: The suffix of the reader its text needs: a session of it names it (``Session.save``).
+    READER = ".lpy"
+
     def __init__(self, text: str, filename: str | None = None) -> None:
         main, init = _split_init(text)
         self.translation = translate(main, filename)

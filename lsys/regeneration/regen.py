@@ -773,9 +773,7 @@ _READERS = (".lpy", ".lsys")
 def _reader(lsystem, filename):
     """The suffix whose reader parses ``lsystem``'s text when the file name would not say it:
     ``.lpy`` for an L-Py model, ``.lsys`` for the grammar an MTG file became; else None."""
-    from ..readers.lpy import LpyLSystem
-
-    if isinstance(lsystem, LpyLSystem):
+    if getattr(lsystem, "READER", None) == ".lpy":  # an L-Py model (ramure.lsys.readers.lpy), read by name
         return ".lpy"
     if filename and str(filename).lower().endswith(".mtg"):
         return ".lsys"

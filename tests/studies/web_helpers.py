@@ -48,9 +48,7 @@ def make_study(
             ]
         specs[f"g{g}"] = picks
     where = db if db is not None else folder / "study.db"
-    Study.create(
-        where, grammars=specs, name="web-study", budget_minutes=budget_minutes, folder=folder, config=config
-    ).close()
+    Study.create(where, grammars=specs, name="web-study", budget_minutes=budget_minutes, folder=folder, config=config).close()
     return where
 
 
