@@ -206,7 +206,7 @@ def bench_qualifier_grid():
             move = f"{f['worst_margin']:.3g} ({f['worst_qualifier']})"
             head.append(f"| {f['grammar']} | {f['refused']} | {move} | {f['synonyms']} |")
         else:
-            head.append(f"| {f['grammar']} | not swept (no `#define` constant, literal or probability) | | |")
+            head.append(f"| {f['grammar']} | not swept (no number to vary) | | |")
     head += [
         "",
         f"3 tips selected: qualifiers that replaced the whole plant — conifer {tips['conifer']} of 22, "

@@ -653,7 +653,7 @@ def _steps_reason(key, tries, part=False) -> str:
         best = max(forward, key=lambda t: t.score)
         return f"n {best.params['n']}{where} moves {key} but moves {best.rival} more"
     what = DEFINITIONS[key].sentence() if key in DEFINITIONS else f"move {key}"
-    ns = [str(n) for n in sorted({t.params["n"] for t in tries}, reverse=True)]
+    ns = [str(n) for n in sorted({t.params["n"] for t in tries}, key=lambda n: int(n), reverse=True)]
     if len(ns) > 1:
         return f"neither n {' nor n '.join(ns)}{where} {what}"
     return f"n {ns[0]}{where} also fails: nothing there {what}"

@@ -215,8 +215,14 @@ def variant_design(
         raise RamureError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
     if int(n_rules) < 1:
         raise RamureError("the grammar has no production rule to vary")
+    no_constant = names is None and not any(v != 0 for v in constants.values())
+    if hidden is not None and not hidden and no_constant:
+        raise RamureError(
+            "the grammar has no non-zero #define constant, numeric literal or rule probability to vary: "
+            "its modules carry no numbers (add #define lines or parameters)"
+        )
     hidden = dict(hidden or {})
-    if hidden and names is None and not any(v != 0 for v in constants.values()):
+    if hidden and no_constant:
         names = ()  # only hidden constants to vary
     else:
         names = choose_constants(constants, names)

@@ -219,3 +219,10 @@ def test_hidden_constants_sweep_a_grammar_without_define_and_say_what_they_chang
     i = texts.index("the axiom (the plant derived again): !(0.1) -> !(0.11)")
     assert sweep.combination(i) == {"rule": None, "constants": {"~w0.0": 0.11}}
     assert sweep.deltas_[i, 9] == pytest.approx(10.0)  # mean radius +10 %
+
+
+def test_a_grammar_without_any_number_says_so_with_hidden_constants():
+    from ramure.lsys import LSystem
+
+    with pytest.raises(RamureError, match="no non-zero #define constant, numeric literal or rule probability"):
+        VariantSweep(n_jobs=1, cache=False, hidden=True).fit(LSystem.from_text("n: 2\nw: A\np:\n A -> F[+A][-A]A\n"))
