@@ -2147,7 +2147,7 @@ def knot_states(grid: pv.DataSet) -> tuple[int, int]:
     ids = _knot_cells(grid)
     if not ids.size:
         return 0, 0
-    part = grid.extract_cells(ids)  # type: ignore[arg-type]  # pyvista stubs want int64
+    part = grid.extract_cells(ids)
     conn = part.connectivity()
     region = np.asarray(conn.cell_data["RegionId"])
     n = int(region.max()) + 1 if region.size else 0
