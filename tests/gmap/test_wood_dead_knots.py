@@ -135,3 +135,22 @@ def test_branch_life_rule_and_dart_estimate():
 def test_bad_deaths_are_refused(deaths):
     with pytest.raises(ValueRefused):
         W.grow_wood("pine", years=5, branches=[(1, 2)], branch_deaths=deaths)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 39 (a): levels are glued cell i to cell i, not by year")
+def test_no_ring_ends_on_a_level_boundary():
+    """Across every level boundary a trunk wood cell is sewn to a cell of its own year.
+
+    Today cell ``i`` of level ``t`` is sewn to cell ``i`` of level ``t - 1``, which is a year
+    older wherever the two levels differ in age (every internode, and a node's level against the
+    level below it): each ring meets the next older one there, the step seen in boards.  Gluing by
+    year (cell ``i`` to cell ``i + 2 (age difference)``) needs the thesis's transition wedges for
+    the older level's inner cells.
+    """
+    wood = W.grow_wood("pine", years=6, branches=[(2, 3)])
+    vd = wood.gm.volume_data
+    a, b = contacts(wood)
+    trunk_wood = (vd["axis"] == 0) & np.isin(vd["wood"], LATER)
+    across = trunk_wood[a] & trunk_wood[b] & (vd["level"][a] != vd["level"][b])
+    assert across.sum() > 100
+    assert np.array_equal(vd["year"][a[across]], vd["year"][b[across]])
