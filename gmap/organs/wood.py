@@ -1813,7 +1813,7 @@ def regrow_branch(wood: Wood, b: int, seed: int) -> Wood:
     new = Wood(
         wood.p,
         wood.seed,
-        [Branch(y, s, br.seed) for (y, s), br in zip(slots, wood.branches)],
+        [Branch(y, s, br.seed, death=br.death) for (y, s), br in zip(slots, wood.branches)],
         wood.species,
         wood.trunk_frames,
         wood.final_years,

@@ -131,6 +131,12 @@ def test_branch_life_rule_and_dart_estimate():
     assert long_stub.gm.n_darts == W.estimated_darts(long_stub.p, 8, [1], [4])
 
 
+def test_regrowing_a_branch_keeps_the_deaths(mixed):
+    again = W.regrow_branch(mixed, 0, seed=5)
+    assert again.knot_counts() == {"live": 1, "dead": 1} and again.branches[1].death == 4
+    assert np.array_equal(again.gm.volume_data["dead"], mixed.gm.volume_data["dead"])
+
+
 @pytest.mark.parametrize("deaths", [{0: 1}, {0: 0}, {3: 5}])
 def test_bad_deaths_are_refused(deaths):
     with pytest.raises(ValueRefused):
