@@ -9,7 +9,9 @@ Examples::
     ramure wood --from-plant grammars/abop_tree.lsys -n 6 --years 8 -o tree.glb
 
 JSON keys: species, years, steps (half-years), seed, darts, volumes, tissues (volumes per tissue),
-rings and knots at the cut or plank (when one is asked for), chi, boundary_chi,
+branches (``{"live": n, "dead": m}``: knots grown, alive and dead; ``--set branch_life=N`` kills a
+branch N years after its birth), rings and knots (live_knots, dead_knots) at the cut or plank
+(when one is asked for), chi, boundary_chi,
 valid, seconds (growth + checks), darts_per_second, output.
 """
 
@@ -320,6 +322,7 @@ def _wood_record(model: Any, species: str | None, args: argparse.Namespace) -> d
     }
     if isinstance(model, W.Wood):  # a species' wood (a grammar's has labels only)
         record["tissues"] = model.tissue_counts()
+        record["branches"] = model.knot_counts()
     else:
         labels = np.asarray(gm.volume_data["label"])
         record["labels"] = {str(k): int((labels == k).sum()) for k in sorted(set(labels.tolist()))}
@@ -397,8 +400,10 @@ def _say_wood(record: dict, seconds: float, out: pathlib.Path | None, as_json: b
         print(json.dumps(record))
         return
     tissues = ", ".join(f"{v} {k}" for k, v in record.get("tissues", {}).items() if v)
+    knots = record.get("branches")
+    knots_text = f"; knots: {knots['live']} live, {knots['dead']} dead" if knots else ""
     print(
-        f"{record['darts']} darts, {record['volumes']} volumes ({tissues}); chi {record['chi']}, "
+        f"{record['darts']} darts, {record['volumes']} volumes ({tissues}){knots_text}; chi {record['chi']}, "
         f"boundary chi {record['boundary_chi']}, {'valid' if record['valid'] else 'INVALID'}, "
         f"{seconds:.2f} s" + (f"; wrote {out}" if out else "")
     )

@@ -75,8 +75,10 @@ class WoodTab:
         self.grid = W_.smooth_grid(self.wood, W_.to_grid(self.wood))  # round rings in the picture
         gm = self.wood.gm
         counts = ", ".join(f"{v} {k}" for k, v in self.wood.tissue_counts().items() if v)
+        knots = self.wood.knot_counts()
         self.facts.value = (
-            f"<small>{gm.n_darts:,} darts, {gm.n_volumes:,} volumes ({counts}); {len(self.wood.branches)} knot(s)</small>"
+            f"<small>{gm.n_darts:,} darts, {gm.n_volumes:,} volumes ({counts}); "
+            f"knots: {knots['live']} live, {knots['dead']} dead</small>"
         )
         self.show_cut()
 
@@ -89,7 +91,8 @@ class WoodTab:
         lo, hi = self.grid.bounds[4], self.grid.bounds[5]
         z = lo + self.height.value * (hi - lo)
         part = self.grid.slice(normal="z", origin=(0.0, 0.0, z))
-        return part, z, (cut_facts(part) if part.n_cells else {"rings": 0, "knots": 0})
+        empty = {"rings": 0, "knots": 0, "live_knots": 0, "dead_knots": 0}
+        return part, z, (cut_facts(part) if part.n_cells else empty)
 
     def show_cut(self) -> None:
         """Render the cut to the picture (off-screen)."""

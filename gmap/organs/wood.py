@@ -76,6 +76,25 @@ the branch leaves the trunk's pith ``KNOT_BEND`` degrees steeper than it
 leaves the bark, as a conifer's branch bends in its knot.  The seam uses the law's mean
 widths, so regrowing a branch with a new seed moves only that branch.
 
+*Live and dead knots (a choice; the thesis has none).*  A branch dies in a
+year set per branch (``Branch.death``, ``grow_wood(branch_deaths=...)``) or
+by the rule ``branch_life`` (it dies that many years after its birth; the
+lower branches, born first, die first).  From then on its knot stops
+growing with the trunk: the branch grows no more length, its cambium stops,
+and the cells its levels held at death keep the roles they had -- knot wood
+inside, the branch's own bark outside (volume attribute ``dead``).  Its
+stacks go on receiving one cell a half-year, sewn to the slot walls as
+before: these are the trunk's later rings (trunk wood of the trunk's years,
+the same year as the wall cell they meet), which encase the dead knot.  So
+a dead knot meets the later wood only through a layer of bark tissue: the
+boundary is sewn through bark (never knot wood to later trunk wood, a test
+checks it), the solid stays one ball, and a cut shows a dark ring round a
+dead knot where a live knot's rings run into the trunk's.  The knot's
+volume stops growing from its death step on.  What is not modelled: the
+dead stub breaking off, after which the later rings would close over the
+knot's end (occlusion); here the encased knot runs out to the bark, as a
+dead branch's stub does while it stays on the tree.
+
 >>> w = grow_wood("pine", years=2, branches=0)
 >>> w.gm.n_darts == trunk_darts(16, 2), w.gm.euler_characteristic()
 (True, 1)
@@ -130,6 +149,7 @@ _COMMON = dict(
     reaction_angle=0.0,
     width_floor=0.35,
     height_jitter=0.0,
+    branch_life=0,
 )
 
 #: Species presets: geometry in metres, widths per half-year cell, colours as hex RGB.
@@ -204,6 +224,7 @@ PARAMETERS = {
     "reaction": "extra ring width on the reaction side (0 = none, 0.5 = +50 %)",
     "reaction_angle": "direction of the reaction side (degrees about the axis)",
     "height_jitter": "relative random variation of the yearly height growth",
+    "branch_life": "years a branch lives before it dies and its knot is encased (0: never dies)",
 }
 
 #: Lengths (m) among the parameters, and the largest accepted: growth of a kilometre a year or
@@ -301,28 +322,52 @@ def _check(p) -> None:
     need(0 <= p["height_jitter"] < 1, f"height_jitter must be in [0, 1), got {p['height_jitter']}")
     need(0 < p["branch_angle"] < 180, f"branch_angle must be in (0, 180) degrees, got {p['branch_angle']}")
     need(
-        p["branches"] >= 0 and p["sapwood_rings"] >= 0 and p["heartwood_age"] >= 0 and p["branch_levels"] >= 0,
-        "branches, branch_levels, sapwood_rings and heartwood_age must be >= 0",
+        p["branches"] >= 0
+        and p["sapwood_rings"] >= 0
+        and p["heartwood_age"] >= 0
+        and p["branch_levels"] >= 0
+        and p.get("branch_life", 0) >= 0,
+        "branches, branch_levels, branch_life, sapwood_rings and heartwood_age must be >= 0",
     )
 
 
-def estimated_darts(p: Mapping[str, Any], years: int, branch_years: Sequence[int] = ()) -> int:
+def death_year(p: Mapping[str, Any], born: int, death: int | None = None) -> int | None:
+    """The year a branch born in ``born`` dies: ``death`` if given, else ``born + branch_life``
+    (``None``: it never dies, ``branch_life = 0``).
+
+    >>> death_year({"branch_life": 4}, 3), death_year({"branch_life": 0}, 3), death_year({}, 3, 5)
+    (7, None, 5)
+    """
+    if death is not None:
+        return int(death)
+    life = int(p.get("branch_life", 0))
+    return born + life if life > 0 else None
+
+
+def estimated_darts(
+    p: Mapping[str, Any], years: int, branch_years: Sequence[int] = (), deaths: Sequence[int | None] | None = None
+) -> int:
     """Darts the wood will have: the trunk's closed form plus each branch's (a branch born in
     year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years, of at most
     ``branch_levels`` levels);
     nodes add one pith prism and its stacks per year with branches, less one stack per branch
     (its slot); the walls of a slot are cut in ``branch_sides / 4`` pieces, one per knot cell
-    facing them.  Exact for :func:`grow_wood` (measured: a knot of 16 sides grown ``y`` years
-    adds ``3 (28 + 144 y)`` darts of cuts)."""
+    facing them.  A branch that dies in year ``D`` grows no level after it (``D - j`` levels at
+    most); its stacks go on (the rings that encase its knot).  ``deaths`` gives each branch's
+    death year (``None``: :func:`death_year`'s rule).  Exact for :func:`grow_wood` (measured: a
+    knot of 16 sides grown ``y`` years adds ``3 (28 + 144 y)`` darts of cuts)."""
     s, b = int(p["sides"]), int(p["branch_sides"])
     total = trunk_darts(s, years)
     born = [int(y) for y in branch_years]
     for j in sorted(set(born)):  # the node level and its stacks, less the slots
         total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
     cap = int(p.get("branch_levels", 0))
-    for j in branch_years:
+    for c, j in enumerate(branch_years):
         y = years - int(j)
         kept = y if cap == 0 else min(y, cap)  # levels t < kept, level t lived y - t years
+        dies = death_year(p, int(j), None if deaths is None else deaths[c])
+        if dies is not None:
+            kept = min(kept, max(dies - int(j), 1))
         total += 12 * b * kept + 144 * b * (kept * y - kept * (kept - 1) // 2)
         # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
         # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
@@ -376,6 +421,7 @@ class Branch:
     seed: int
     level: int = -1  # the trunk level (a short node) the branch grows from
     angle: float | None = None  # insertion angle from the trunk axis (degrees); None: the species'
+    death: int | None = None  # the year it dies (None: the species' ``branch_life`` rule)
 
 
 @dataclass
@@ -488,9 +534,10 @@ class Wood:
             ("key", np.int64),
         ):
             gm.add_volume_data(name, dtype, fill=-1 if dtype is not np.float64 else 0.0)
+        gm.add_volume_data("dead", np.int8, fill=0)  # 1: part of a dead knot (see _kill_branches)
         self._corner = np.zeros(0, np.int16)  # template corner per dart (-1: made by a split)
         if years:  # one allocation up front instead of doublings
-            est = estimated_darts(params, int(years), [br.year for br in (branches or [])])
+            est = estimated_darts(params, int(years), [br.year for br in (branches or [])], [br.death for br in (branches or [])])
             if est <= MAX_DARTS:
                 gm.reserve(est)
                 self._corner = np.full(est, -1, np.int16)
@@ -501,6 +548,8 @@ class Wood:
         self._sewn_layers: dict[int, int] = {}  # branch index -> slot layers sewn so far
         #: branch index -> its axis (``axes`` holds them in birth order, which need not be branch order)
         self.branch_axis: dict[int, Axis] = {}
+        #: dead branch index -> (half-years each level had lived, cells each level held) at its death
+        self.dead: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     # ------------------------------------------------------------------ growth
     @property
@@ -511,6 +560,7 @@ class Wood:
         """One half-year: length growth and new branches in spring, then one ring layer."""
         spring = self.steps % 2 == 0
         if spring:
+            self._kill_branches()
             born = [br for br in self.branches if br.year == self.year]
             if born:  # a short node carries the new branches, then the internode
                 self._grow_length(self.trunk, "node")
@@ -531,6 +581,56 @@ class Wood:
         self._sync_corner()
         self.assign_roles()
 
+    def death_year(self, b: int) -> int | None:
+        """The year branch ``b`` dies (:func:`death_year`), or ``None``."""
+        br = self.branches[b]
+        return death_year(self.p, br.year, br.death)
+
+    def _kill_branches(self) -> None:
+        """Branches whose death year has come die: their knots stop growing with the trunk.
+
+        A dead branch grows no more length, and its cambium stops: the cells
+        each level holds at death keep the roles they had (knot wood inside,
+        the branch's bark outside, :meth:`assign_roles`), and the ``dead``
+        volume attribute marks them and the branch's pith.  Its stacks go on
+        receiving one cell a half-year, sewn to the trunk's slot walls as
+        before: they are the trunk's later rings, trunk wood of the trunk's
+        years, which encase the dead knot.  So the boundary between a dead
+        knot and the later wood is sewn through a layer of bark tissue (the
+        knot's own bark at death), never knot wood to trunk wood: a loose,
+        bark-lined knot; the solid stays one ball (chi = 1).
+        """
+        for b, ax in self.branch_axis.items():
+            if b in self.dead or self.death_year(b) != self.year:
+                continue
+            lived = self.steps - np.asarray(ax.level_step, np.int64)
+            # every level keeps the knot's full depth: the stub's outer cells (born after death
+            # when the stub is young) are its bark, so the knot's wood never meets later wood
+            held = np.full(len(ax.levels), int(ax.count.max(initial=0)), np.int64)
+            self.dead[b] = (lived, held)
+
+    def knot_counts(self) -> dict[str, int]:
+        """Knots (branches born so far) that are alive and that are dead."""
+        born = list(self.branch_axis)
+        dead = sum(1 for b in born if b in self.dead)
+        return {"live": len(born) - dead, "dead": dead}
+
+    def _frozen(self, axis: np.ndarray, level: np.ndarray, cell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per volume: whether it belongs to a dead knot, and the half-years it had lived at death.
+
+        A dead branch's pith prisms and the cells its levels held at death
+        are the dead knot; ``lived`` is -1 elsewhere.
+        """
+        frozen = np.zeros(len(axis), bool)
+        lived = np.full(len(axis), -1, np.int64)
+        for b, (q_d, n_d) in self.dead.items():
+            on = np.flatnonzero((axis == b + 1) & (level >= 0) & (level < len(n_d)))
+            lv = level[on]
+            mine = on[cell[on] <= n_d[lv]]
+            frozen[mine] = True
+            lived[mine] = q_d[level[mine]]
+        return frozen, lived
+
     def _branch_grows(self, b: int) -> bool:
         """Whether branch ``b`` still grows in length: below ``branch_levels`` levels (0: always).
 
@@ -540,6 +640,8 @@ class Wood:
         times the darts of the trunk's rings (30 years, 20 branches: 9.2
         million darts against 3.6 million with stubs).
         """
+        if b in self.dead:  # a dead branch grows no more
+            return False
         cap = int(self.p.get("branch_levels", 0))
         return cap == 0 or len(self.branch_axis[b].levels) < cap
 
@@ -911,6 +1013,10 @@ class Wood:
             on = is_cell & (axis == ax.index)
             born_level[on] = steps[level[on]]
         q = self.steps - born_level  # half-years the stack has lived
+        frozen, lived = self._frozen(axis, level, cell)
+        sheath = (axis > 0) & is_cell & ~frozen & np.isin(axis - 1, list(self.dead))  # rings round a dead knot
+        q = np.where(frozen, lived, q)  # a dead knot's cells keep the roles they had at its death
+        vd["dead"][:] = frozen
         wood = is_cell & (cell <= q)
         bark = is_cell & ~wood
         season = np.where(wood, (cell - 1) % 2, -1)
@@ -926,7 +1032,7 @@ class Wood:
         tissue = vd["wood"]
         y_now = self.year + (1 if self.steps % 2 else 0)  # years begun
         from_bark = y_now - year
-        trunk = axis == 0
+        trunk = (axis == 0) | sheath  # the rings laid round a dead knot are the trunk's
         heart = trunk & wood & (from_bark > p["sapwood_rings"]) & (y_now > p["heartwood_age"])
         tissue[trunk & wood] = CODES["sapwood"]
         tissue[heart] = CODES["heartwood"]
@@ -1215,7 +1321,10 @@ class Wood:
         """
         p = self.p
         cell = np.arange(1, depth + 1)
-        q = self.steps - ax.level_step[0]
+        q = np.full(depth, self.steps - ax.level_step[0])
+        if ax.index - 1 in self.dead:  # a dead knot's cells keep their roles (bark stays bark)
+            q_d, n_d = self.dead[ax.index - 1]
+            q = np.where(cell <= n_d[0], q_d[0], q)
         lo, hi = self.law((cell + 1) // 2, (cell - 1) % 2, None, 1)
         bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"])
         width = np.where(cell <= q, 0.5 * (lo + hi), bark)
@@ -1615,6 +1724,7 @@ def grow_wood(
     check_every_step: bool = False,
     embed_every_step: bool = False,
     branch_seeds: Mapping[int, int] | None = None,
+    branch_deaths: Mapping[int, int] | None = None,
     **params: Any,
 ) -> Wood:
     """Grow ``years`` years (``2 * years`` half-year steps) of wood; returns the :class:`Wood`.
@@ -1622,6 +1732,8 @@ def grow_wood(
     ``branches``: a number (placed by :func:`place_branches`; default the
     species' ``branches``) or a list of ``(year, sector)`` pairs.
     ``branch_seeds`` maps a branch index to its seed (regrowth).
+    ``branch_deaths`` maps a branch index to the year it dies (after the
+    year it is born); the others follow ``branch_life`` (0: they never die).
     """
     if isinstance(branches, str):  # from the command line (--set branches=3)
         params = {**params, "branches": branches}
@@ -1643,7 +1755,8 @@ def grow_wood(
         raise ValueRefused("two branches share one trunk face (same year and sector)")
     for i, s in (branch_seeds or {}).items():
         placed[int(i)].seed = mix(int(s), 1000 + int(i))
-    est = estimated_darts(p, years, [b.year for b in placed])
+    _set_deaths(placed, branch_deaths)
+    est = estimated_darts(p, years, [b.year for b in placed], [b.death for b in placed])
     if est > MAX_DARTS:
         raise ValueRefused(
             f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}; grow fewer years or branches"
@@ -1665,8 +1778,19 @@ def grow_wood(
         "seed": int(seed),
         "params": {k: v for k, v in p.items() if k != "colors"},
         "branches": slots,
+        "deaths": [wood.death_year(b) for b in range(len(placed))],
     }
     return wood
+
+
+def _set_deaths(placed: list[Branch], deaths: Mapping[int, int] | None) -> None:
+    """Set each branch's death year from ``deaths`` (branch index -> year), checked."""
+    for i, year in (deaths or {}).items():
+        if not 0 <= int(i) < len(placed):
+            raise ValueRefused(f"branch_deaths: no branch {i} (there are {len(placed)})")
+        if int(year) <= placed[int(i)].year:
+            raise ValueRefused(f"branch {i} is born in year {placed[int(i)].year}: it must die later, not in year {year}")
+        placed[int(i)].death = int(year)
 
 
 def check_years(years: float) -> int:
@@ -1689,7 +1813,7 @@ def regrow_branch(wood: Wood, b: int, seed: int) -> Wood:
     new = Wood(
         wood.p,
         wood.seed,
-        [Branch(y, s, br.seed) for (y, s), br in zip(slots, wood.branches)],
+        [Branch(y, s, br.seed, death=br.death) for (y, s), br in zip(slots, wood.branches)],
         wood.species,
         wood.trunk_frames,
         wood.final_years,
@@ -1991,23 +2115,46 @@ def _knot_centre(slab):
 
 
 def cut_facts(grid: pv.DataSet) -> dict[str, Any]:
-    """``{"rings": ..., "knots": ...}`` of a cut or plank: distinct trunk ring years, branch regions."""
+    """``{"rings", "knots", "live_knots", "dead_knots"}`` of a cut or plank: distinct trunk ring
+    years, knot regions, and how many of them are alive and dead (:func:`knot_states`)."""
     axis = np.asarray(grid.cell_data["axis"])
     tissue = np.asarray(grid.cell_data["wood"])
     year = np.asarray(grid.cell_data["year"])
     trunk_wood = (axis == 0) & np.isin(tissue, [CODES["sapwood"], CODES["heartwood"]])
     rings = int(len(np.unique(year[trunk_wood])))
-    return {"rings": rings, "knots": knot_regions(grid)}
+    live, dead = knot_states(grid)
+    return {"rings": rings, "knots": live + dead, "live_knots": live, "dead_knots": dead}
+
+
+def _knot_cells(grid: pv.DataSet) -> np.ndarray:
+    """Ids of a grid's knot cells: a branch's (``axis >= 1``) pith, wood and bark; the rings laid
+    round a dead knot are trunk wood (sapwood, heartwood) and not part of it."""
+    data = grid.cell_data
+    knot = np.asarray(data["axis"]) >= 1
+    if "wood" in data:
+        knot &= ~np.isin(np.asarray(data["wood"]), [CODES["sapwood"], CODES["heartwood"]])
+    return np.flatnonzero(knot)
 
 
 def knot_regions(grid: pv.DataSet) -> int:
-    """Number of connected regions of branch cells (``axis >= 1``) in a grid."""
-    ids = np.flatnonzero(np.asarray(grid.cell_data["axis"]) >= 1)
+    """Number of connected regions of knot cells (branch cells but the rings round a dead knot)."""
+    return sum(knot_states(grid))
+
+
+def knot_states(grid: pv.DataSet) -> tuple[int, int]:
+    """``(live, dead)``: the grid's knot regions, a region dead if it holds a dead knot's cell
+    (cell data ``dead``; without it every knot is alive)."""
+    ids = _knot_cells(grid)
     if not ids.size:
-        return 0
-    part = grid.extract_cells(ids)  # type: ignore[arg-type]  # pyvista stubs want int64
+        return 0, 0
+    part = grid.extract_cells(ids)
     conn = part.connectivity()
-    return int(len(np.unique(conn.cell_data["RegionId"])))
+    region = np.asarray(conn.cell_data["RegionId"])
+    n = int(region.max()) + 1 if region.size else 0
+    if "dead" not in conn.cell_data:
+        return n, 0
+    dead_regions = np.unique(region[np.asarray(conn.cell_data["dead"]) > 0])
+    return n - len(dead_regions), len(dead_regions)
 
 
 def knot_roundness(section: pv.DataSet, normal: ArrayLike) -> list[float]:

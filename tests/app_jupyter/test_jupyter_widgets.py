@@ -335,6 +335,7 @@ def test_picture_tabs_show_no_broken_image_before_their_first_action(explorer):
     ex.wood.years.value = 2
     ex.wood.grow()
     assert ex.wood.picture.value[:4] == b"\x89PNG" and ex.wood.picture.layout.display is None
+    assert "live, 0 dead" in ex.wood.facts.value  # the species' branches live (branch_life = 0)
     assert ex.view.image.layout.display is None  # the plant's picture is there from the start
 
 

@@ -91,6 +91,7 @@ def test_grow_from_the_plant_and_highlight_a_knot(app):
     panel.from_plant.setChecked(True)
     wood = panel.grow()
     assert wood is not None and wood.branches and "knot" in panel.facts.text()
+    assert f"knots: {len(wood.branch_axis)} live, 0 dead" in panel.facts.text()  # a plant's branches live
     grid, kwargs = panel.plotter.clipped[-1]
     assert kwargs["normal"] == "z" and np.array_equal(np.unique(grid.cell_data["volume"]), np.arange(wood.gm.n_volumes))
     leaf = panel.branch_leaves[0][0]
@@ -163,6 +164,7 @@ def test_plank_controls_saw_a_preset_board_that_fills_the_view(app):
     offset = panel.plank_offset.value() / 1000  # the spin box shows tenths of a millimetre
     assert along_normal.min() >= offset - 1e-9 and along_normal.max() <= offset + 0.02 + 1e-9  # the slab asked for
     assert plotter.parallel and not kwargs["lighting"] and "rings" in panel.facts.text()
+    assert " live, " in panel.facts.text() and " dead)" in panel.facts.text()  # the plank's knots, by state
     position, focal, up = (np.asarray(v) for v in plotter.camera_position)
     assert np.allclose(up, [1, 0, 0], atol=1e-9) and (position - focal)[1] < 0  # face-on, from the pith's side
     length = np.ptp(np.asarray(mesh.points)[:, 2])

@@ -145,7 +145,8 @@ class WoodPanel(QWidget):
         if hasattr(p, "render"):
             p.render()
         self.facts.setText(
-            f"Plank {self.plank_preset.currentText()}: {facts['rings']} rings, {facts['knots']} knot(s); "
+            f"Plank {self.plank_preset.currentText()}: {facts['rings']} rings, {facts['knots']} knot(s) "
+            f"({facts['live_knots']} live, {facts['dead_knots']} dead); "
             f"{length:.3g} m shown around z = {at:.3g} m, seen from the pith's side."
         )
         return part
@@ -193,12 +194,12 @@ class WoodPanel(QWidget):
             QGuiApplication.restoreOverrideCursor()
         self.wood, self.grid = wood, W.smooth_grid(wood, W.to_grid(wood))  # round rings in the picture
         self.show_grid()
-        counts = wood.tissue_counts()
+        counts, knots = wood.tissue_counts(), wood.knot_counts()
         gm = wood.gm
         self.facts.setText(
             f"{gm.n_darts:,} darts, {gm.n_volumes:,} volumes; "
             + ", ".join(f"{v} {k}" for k, v in counts.items() if v)
-            + f"; {len(wood.branches)} knot(s). Drag the plane to cut."
+            + f"; knots: {knots['live']} live, {knots['dead']} dead. Drag the plane to cut."
         )
         return wood
 
