@@ -233,7 +233,8 @@ COCO files and manifest, whatever the number of workers or the cluster.
 - `fruit_NNNN.vtu`: the damaged fruit's cells in millimetres (frame of the cameras), with cell
   data `tissue`, `defect` (index + 1 of the first defect owning the cell, 0 none) and
   `defect_bits` (bit i: defect i): the 3D ground truth.
-- `fruit_NNNN.json`: the labels: recipe, malformation, defects with their facts and `cells`,
+- `fruit_NNNN.json`: the labels: recipe, malformation, defects with their facts and `cells`
+  (`dropped_defects`: random draws this fruit's shape refused, with the reason),
   the grade and its reasons, split, and per view the camera, the scene, and per defect its
   mask (RLE), pixels, `changed_pixels`, `seen_area_fraction` and `visible`.
 - `coco_train.json`, `coco_val.json`, `coco_test.json`, `coco_all.json`: COCO instance

@@ -215,7 +215,8 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
         "variation": 0.0 if malform else recipe.get("variation", 0.0),
         "malformation": None if not malform else {**malform, **shape_facts(clean)},
     }
-    gm, facts = apply_defects(clean, specs, size_mm=size_mm, seed=recipe["seed"])
+    gm, facts, specs, dropped = _apply_what_applies(clean, specs, size_mm, recipe["seed"])
+    labels["dropped_defects"] = dropped
     whole = [spec for spec in specs if spec[0] not in CATEGORY_ID]  # shrinkage: no place of its own
     if len(whole) == len(specs):
         reference = gm  # nothing located: the fruit is its own reference
@@ -231,6 +232,24 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
         volumes=gm.n_volumes,
     )
     return reference, gm, labels
+
+
+def _apply_what_applies(clean, specs, size_mm, seed):
+    """Apply the specs; if the fruit refuses one (a crack that would turn a cell inside out on
+    this shape...), drop specs from the last until the rest apply, so one rare draw never
+    stops a batch.  Returns ``(map, facts, applied specs, dropped [{kind, reason}])``."""
+    from ramure.gmap.organs.defect_specs import apply_defects
+
+    reason = None
+    for keep in range(len(specs), 0, -1):
+        try:
+            gm, facts = apply_defects(clean, specs[:keep], size_mm=size_mm, seed=seed)
+        except RamureError as exc:
+            reason = reason or str(exc)
+            continue
+        return gm, facts, specs[:keep], [{"kind": kind, "reason": reason} for kind, _ in specs[keep:]]
+    gm, facts = apply_defects(clean, [], size_mm=size_mm, seed=seed)
+    return gm, facts, [], [{"kind": kind, "reason": reason} for kind, _ in specs]
 
 
 def defect_cells(clean: GMap3, damaged: GMap3, fact: Mapping[str, Any]) -> np.ndarray:

@@ -352,3 +352,19 @@ def test_an_unreachable_scheduler_is_refused_before_anything_is_written(tmp_path
     with pytest.raises(F.RamureError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
         F.make_dataset(tmp_path / "ds", count=1, scheduler="tcp://127.0.0.1:9")
     assert not (tmp_path / "ds").exists()
+
+
+def test_a_defect_the_fruit_refuses_is_dropped_and_said():
+    """One rare draw the fruit refuses must not stop a batch of thousands: it is dropped,
+    with the reason, and the other defects stay."""
+    recipe = {
+        "preset": "round_tomato",
+        "malform": None,
+        "variation": 0.0,
+        "defects": [("rot", {"rate": 0.03}), ("hail", {"count": 10**6})],
+        "seed": 3,
+    }
+    _, _, record = F.build_one(recipe)
+    assert [d["kind"] for d in record["defects"]] == ["rot"]
+    assert record["dropped_defects"] == [{"kind": "hail", "reason": record["dropped_defects"][0]["reason"]}]
+    assert "hail count" in record["dropped_defects"][0]["reason"]
