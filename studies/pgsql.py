@@ -149,18 +149,18 @@ class PgCursor:
     ``rowcount`` and ``description``."""
 
     def __init__(self, cursor: Any, lastrowid: int | None = None) -> None:
-        self._cursor = cursor
+        self._cursor = cursor  # None: a statement that returns nothing (a pragma, no rows to write)
         self.lastrowid = lastrowid
-        self.rowcount = cursor.rowcount
-        self.description = cursor.description
+        self.rowcount = cursor.rowcount if cursor is not None else -1
+        self.description = cursor.description if cursor is not None else None
 
     def fetchone(self) -> tuple | None:
-        if self._cursor.description is None:
+        if self.description is None:
             return None
         return self._cursor.fetchone()
 
     def fetchall(self) -> list[tuple]:
-        if self._cursor.description is None:
+        if self.description is None:
             return []
         return self._cursor.fetchall()
 
@@ -209,6 +209,11 @@ class PgConnection:
         return str(self.raw.info.dbname)
 
     @property
+    def broken(self) -> bool:
+        """Whether the connection to the server is lost (a restart, a network cut): open a new one."""
+        return bool(self.raw.broken or self.raw.closed)
+
+    @property
     def in_transaction(self) -> bool:
         return self._depth > 0
 
@@ -230,11 +235,11 @@ class PgConnection:
     def _run(self, text: str, params: tuple | None) -> Any:
         """Execute ``text`` (PostgreSQL's spelling), with any pending settings in the same round trip
         (the client-side cursor sends several statements at once; the last one's result is read)."""
-        cursor = self.raw.cursor()
         ahead = [part for part in (self._pending, self._begin) if part]  # no placeholder or % in them
         if ahead:
             text, self._pending, self._begin = "; ".join([*ahead, text]), "", ""
         try:
+            cursor = self.raw.cursor()
             cursor.execute(text, params)
         except self._psycopg.Error as exc:
             raise _as_sqlite_error(exc) from None
@@ -244,11 +249,11 @@ class PgConnection:
 
     def executemany(self, sql: str, rows: Iterable[Sequence]) -> PgCursor:
         """Run one statement for each row of ``rows``."""
-        cursor = self.raw.cursor()
         rows = [tuple(r) for r in rows]
         if not rows:
-            return PgCursor(cursor)
+            return PgCursor(None)
         try:
+            cursor = self.raw.cursor()
             cursor.executemany(translate(sql), rows)
         except self._psycopg.Error as exc:
             raise _as_sqlite_error(exc) from None
@@ -258,9 +263,9 @@ class PgConnection:
     def _pragma(self, name: str, value: str) -> PgCursor:
         if name == "synchronous" and value in ("FULL", "NORMAL", "OFF", "EXTRA"):
             self._pending = f"SET synchronous_commit = {'off' if value in ('NORMAL', 'OFF') else 'on'}"
-            return PgCursor(self.raw.cursor())
+            return PgCursor(None)
         if name == "foreign_keys":  # always enforced by PostgreSQL
-            return PgCursor(self.raw.cursor())
+            return PgCursor(None)
         raise sqlite3.OperationalError(f"PRAGMA {name} is SQLite's; this study is on PostgreSQL")
 
     def __enter__(self) -> PgConnection:

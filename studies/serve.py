@@ -247,8 +247,22 @@ class StudyServer:
                 self._flush()
         except sqlite3.Error as exc:
             done = [(future, None, exc) for future, _, _ in done]
+        if self._study is not None and getattr(self._study.conn, "broken", False):
+            self._forget_connection()
         for future, value, error in done:
             future.set_exception(error) if error is not None else future.set_result(value)
+
+    def _forget_connection(self) -> None:
+        """The database server went away (a PostgreSQL restart): this batch's requests got a 503;
+        the next call opens the study again.  Sessions and answer counts are read afresh from
+        it, so an answer the server lost with its connection is asked for again, never assumed."""
+        try:
+            self._study.close()  # type: ignore[union-attr]
+        except Exception:  # noqa: BLE001 - already broken; nothing more to release
+            pass
+        self._study = None
+        self._sessions.clear()
+        self._versions.clear()
 
     def _flush(self) -> None:
         """Put every answer committed since the last flush on disk: one transaction at

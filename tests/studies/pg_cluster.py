@@ -59,11 +59,12 @@ class Cluster:
         self.bin = postgres_bin()
         if self.bin is None:
             raise RuntimeError(why_not())
-        self.root = pathlib.Path(tempfile.mkdtemp(prefix="ramure-pg-"))
+        self.as_root = os.geteuid() == 0
+        # As root the server's user must reach the folder: /tmp, not a TMPDIR under /root.
+        self.root = pathlib.Path(tempfile.mkdtemp(prefix="ramure-pg-", dir="/tmp" if self.as_root else None))
         self.data = self.root / "data"
         self.port = _free_port()
         self.fsync = fsync
-        self.as_root = os.geteuid() == 0
         self._count = 0
 
     def _run(self, *argv: str) -> subprocess.CompletedProcess:

@@ -203,3 +203,39 @@ def test_a_sqlite_url_names_the_file(tmp_path, monkeypatch):
     Study.create("sqlite:///rel.db", grammars={"honda": lattice_picks(seed=1)}).close()
     with Study.open(f"sqlite:///{tmp_path / 'rel.db'}", readonly=True) as study:
         assert study.path == tmp_path / "rel.db" and study.grammars == ["honda"] and not study.postgres
+
+
+def test_the_web_server_opens_the_study_again_after_postgresql_drops_its_connection(tmp_path, pg_url):
+    """A database restart cuts the server's connection: the request then gets a 503 and stores
+    nothing, and the next one is served on a new connection, with the answer counts read again."""
+    import warnings
+
+    import psycopg
+
+    pytest.importorskip("starlette")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from starlette.testclient import TestClient
+    from web_helpers import WebParticipant, make_study
+
+    from ramure.studies.serve import StudyServer, make_app
+
+    server = StudyServer(make_study(tmp_path, db=pg_url))
+    with TestClient(make_app(server)) as client:
+        p = WebParticipant(client)
+        p.send(action="groups", groups=[p.state["pictures"][:13], p.state["pictures"][13:]])
+        with psycopg.connect(pg_url, autocommit=True) as admin:  # what a restart does to the server's connection
+            others = "datname = current_database() AND pid <> pg_backend_pid()"
+            admin.execute(f"SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE {others}")
+        body = {"version": p.state["version"], "part": 1, "action": "rate", "group": 1, "usefulness": 4}
+        r = client.post(f"/api/p/{p.code}/answer", json=body, headers=p.headers)
+        assert r.status_code == 503 and "try again" in r.json()["error"]
+        assert p.get_state()["version"] == body["version"] and p.state["groups"][0]["usefulness"] is None
+        p.send(action="rate", group=1, usefulness=4)
+        assert p.state["groups"][0]["usefulness"] == 4
+    server.close()
+    with Study.open(pg_url, readonly=True) as study:
+        rows = study.conn.execute("SELECT label, usefulness FROM groups ORDER BY label").fetchall()
+        assert rows == [(1, 4), (2, None)]
+        actions = [e["action"] for e in study.events(p.code)]
+        assert actions[-3:] == ["group", "resume", "rate"]  # the test resumed on the new connection
