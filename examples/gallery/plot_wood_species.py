@@ -1,0 +1,59 @@
+"""
+Four woods: pine, larch, elm and oak
+====================================
+
+Each species grows 14 years on a 3D generalized map with its own ring width law
+(latewood share), heartwood, branch pattern (pine's whorls, larch's scattered
+branches, elm's two ranks, oak's clusters) and bark (shed beyond a species
+thickness; plates for the conifers, ridges for the broadleaves).  A cross-cut
+shows the rings, the sapwood and heartwood, and the bark; a flat-sawn board
+shows the arches with each species' texture: oak's band of earlywood pores and
+its broad rays, elm's pores and wavy latewood bands, the resin canals of pine
+and larch.  Branch wood is darker on its lower side in the conifers
+(compression wood) and paler on its upper side in the broadleaves (tension
+wood).  See :mod:`ramure.gmap.organs.wood_species` for the sources of the numbers.
+"""
+
+import numpy as np
+
+from ramure.app.commands.wood import legend_for, render_plank
+from ramure.gmap.organs import wood as W
+
+from _show import show
+
+YEARS = 14
+
+
+def grown(species):
+    """The species' wood and its picture grid (rings drawn round)."""
+    wood = W.grow_wood(species, years=YEARS, height=0.3)
+    return wood, W.smooth_grid(wood, W.to_grid(wood))
+
+
+def clear_height(wood):
+    """Half-way up the lowest year from the fifth on with no branch: a cut between knots."""
+    busy = {br.year for br in wood.branches}
+    year = next((y for y in range(4, YEARS - 2) if y not in busy), 4)
+    return (year + 0.5) * wood.p["height"]
+
+
+def cross_cut(species, path):
+    wood, grid = grown(species)
+    z = clear_height(wood)
+    slab = W.plank(grid, (0.0, 0.0, 1.0), z, 0.004)
+    title = f"{species}: cross-cut at {z:.2f} m"
+    render_plank(slab, path, np.array([0.0, 0.0, 1.0]), title=title, legend=legend_for(species), species=species)
+
+
+def flat_sawn(species, path):
+    wood, grid = grown(species)
+    offset = 0.45 * wood.trunk_radius()
+    slab = W.plank(grid, (1.0, 0.0, 0.0), offset, 0.004)
+    part = W.plank_window(slab, 6 * wood.trunk_radius())[0]
+    title = f"{species}: flat-sawn, {100 * offset:.1f} cm from the pith"
+    render_plank(part, path, (1, 0, 0), title=title, legend=legend_for(species), species=species)
+
+
+for name in ("pine", "larch", "elm", "oak"):
+    show(cross_cut, name)
+    show(flat_sawn, name)
