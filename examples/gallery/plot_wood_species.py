@@ -2,7 +2,7 @@
 Four woods: pine, larch, elm and oak
 ====================================
 
-Each species grows 14 years on a 3D generalized map with its own ring width law
+Each species grows 18 years on a 3D generalized map with its own ring width law
 (latewood share), heartwood, branch pattern (pine's whorls, larch's scattered
 branches, elm's two ranks, oak's clusters) and bark (shed beyond a species
 thickness; plates for the conifers, ridges for the broadleaves).  A cross-cut
@@ -21,7 +21,7 @@ from ramure.gmap.organs import wood as W
 
 from _show import show
 
-YEARS = 14
+YEARS = 18
 
 
 def grown(species):
@@ -31,9 +31,10 @@ def grown(species):
 
 
 def clear_height(wood):
-    """Half-way up the lowest year from the fifth on with no branch: a cut between knots."""
+    """Half-way up the lowest year from the third on with no branch in it or the next: a cut
+    between knots, low enough for the heartwood."""
     busy = {br.year for br in wood.branches}
-    year = next((y for y in range(4, YEARS - 2) if y not in busy), 4)
+    year = next((y for y in range(2, YEARS - 2) if not busy & {y, y + 1}), 2)
     return (year + 0.5) * wood.p["height"]
 
 

@@ -449,9 +449,10 @@ def _rays(s_phi, r, z, rays):
     r_band = (band + 0.5) * rays["length"]
     s = phi * r_band  # the ray keeps its angle along its radial length
     i = np.floor(s / rays["spacing"])
-    kz = np.floor(z / (1.5 * rays["height"]) + _hash(41, i, band))
+    shift = _hash(41, i, band)  # rays of one column are staggered along the grain
+    kz = np.floor(z / (1.5 * rays["height"]) + shift)
     cs = (i + 0.5 + 0.3 * (_hash(42, i, band, kz) - 0.5)) * rays["spacing"]
-    cz = (kz + 0.5) * 1.5 * rays["height"]
+    cz = (kz + 0.5 - shift) * 1.5 * rays["height"]
     w = 0.5 * rays["width"] * (0.5 + _hash(43, i, band, kz))
     along = np.clip(1.0 - ((z - cz) / (0.5 * rays["height"])) ** 2, 0.0, 1.0)
     return np.abs(s - cs) * r / np.maximum(r_band, 1e-9) < w * np.sqrt(along)
