@@ -253,7 +253,7 @@ SPECIES: dict[str, dict[str, Any]] = {
         ),
         texture=dict(
             pores=dict(size=0.0003, spacing=0.0006),
-            rays=dict(width=0.0005, height=0.012, spacing=0.004, length=0.02, lighten=0.35),
+            rays=dict(width=0.0005, height=0.025, spacing=0.0025, length=0.012, lighten=0.35),
         ),
     ),
 }

@@ -104,8 +104,8 @@ def test_refusal_is_shown_in_the_dock(app):
     from ramure.app.desktop.panels.wood import WoodPanel
 
     panel = WoodPanel(None, plotter_factory=_Plotter)
-    panel.species.addItem("elm")
-    panel.species.setCurrentText("elm")
+    panel.species.addItem("baobab")
+    panel.species.setCurrentText("baobab")
     assert panel.grow() is None and "Refused" in panel.facts.text()
 
 
