@@ -114,9 +114,10 @@ def render_plank(
     surface = part.extract_surface(algorithm="dataset_surface")
     plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
     if species is not None and all(k in part.cell_data for k in ("wood", "season", "axis")):
+        from ramure.gmap.organs.wood import CODES
         from ramure.gmap.organs.wood_species import texture_face
 
-        face = texture_face(part, normal, species, pixel=2.0 * scale / h, up=up)
+        face = texture_face(part, normal, species, pixel=2.0 * scale / h, codes=CODES, up=up)
         if face.n_points:
             plotter.add_mesh(face, scalars="rgb", rgb=True, lighting=False, name="texture")
     plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method

@@ -302,15 +302,29 @@ def shed_profile(widths: ArrayLike, cap: float) -> np.ndarray:
     return np.maximum(np.minimum(w, cap - before), SHED_WIDTH)
 
 
+def u01(*columns: ArrayLike) -> np.ndarray:
+    """Uniform numbers in [0, 1) from integer key arrays: splitmix64 steps, the values of
+    ``ramure.gmap.organs.wood.u01_array`` (which this module must not import: wood imports it)."""
+    arrays = [np.asarray(c) for c in columns]
+    h = np.full(np.broadcast(*arrays).shape, 0x9E3779B97F4A7C15, np.uint64)
+    with np.errstate(over="ignore"):
+        for c in arrays:
+            h ^= c.astype(np.int64).astype(np.uint64)
+            h *= np.uint64(0xBF58476D1CE4E5B9)
+            h ^= h >> np.uint64(31)
+            h *= np.uint64(0x94D049BB133111EB)
+            h ^= h >> np.uint64(29)
+    h &= np.uint64((1 << 63) - 1)
+    return h.view(np.int64) / float(1 << 63)
+
+
 def roughness(p: Mapping[str, Any], seed: ArrayLike, axis: ArrayLike, level: ArrayLike, sector: ArrayLike) -> np.ndarray:
     """True where a stack lies in a bark fissure: plates at random, or ridges that interlace."""
-    from ramure.gmap.organs.wood import u01_array
-
     seed, axis, level, sector = (np.asarray(a, np.int64) for a in (seed, axis, level, sector))
     if p.get("bark_pattern") == "ridges":
-        shift = np.floor(2.0 * u01_array(seed, 32, level // 3)).astype(np.int64)
+        shift = np.floor(2.0 * u01(seed, 32, level // 3)).astype(np.int64)
         return (sector + shift) % 2 == 0
-    return u01_array(seed, 31, level, sector) < 0.4
+    return u01(seed, 31, level, sector) < 0.4
 
 
 def shed_bark(
@@ -425,9 +439,7 @@ def bark_rgb(species: str, marks: np.ndarray) -> np.ndarray:
 
 # ---------------------------------------------------------------------- texture
 def _hash(*cols: ArrayLike) -> np.ndarray:
-    from ramure.gmap.organs.wood import u01_array
-
-    return u01_array(*(np.asarray(c, np.int64) for c in cols))
+    return u01(*(np.asarray(c, np.int64) for c in cols))
 
 
 def _speckle(s, r, z, size, spacing, key, z_len=0.006):
@@ -458,25 +470,26 @@ def _rays(s_phi, r, z, rays):
     return np.abs(s - cs) * r / np.maximum(r_band, 1e-9) < w * np.sqrt(along)
 
 
-def texture_rgb(
-    species: str, points: np.ndarray, rgb: np.ndarray, tissue: np.ndarray, season: np.ndarray, axis: np.ndarray
-) -> np.ndarray:
+#: Seasons of the ``season`` volume attribute (as in :mod:`ramure.gmap.organs.wood`).
+EARLY, LATE = 0, 1
+
+
+def texture_rgb(species: str, points: np.ndarray, rgb: np.ndarray, wood: np.ndarray, season: np.ndarray) -> np.ndarray:
     """Colours of points on a cut face of a species' trunk wood with its pores, resin canals and rays.
 
     The trunk's pith is the z axis (a species' wood grows straight up);
-    knots, pith and bark keep their colours.  Ring-porous earlywood gets
+    ``wood`` flags the trunk's wood (sapwood or heartwood): knots, pith and
+    bark keep their colours.  Ring-porous earlywood gets
     dark pores, elm's latewood wavy bands of small pores, pine and larch's
     latewood resin canals; rays are paler ribbons (oak's broad, elm's fine).
     """
-    from ramure.gmap.organs.wood import CODES, EARLY, LATE
-
     tex = SPECIES[species].get("texture", {})
     out = np.asarray(rgb, float).copy()
     x, y, z = points[:, 0], points[:, 1], points[:, 2]
     r = np.hypot(x, y)
     phi = np.arctan2(y, x) + np.pi
     s = phi * r
-    wood = (axis == 0) & np.isin(tissue, [CODES["sapwood"], CODES["heartwood"]])
+    wood = np.asarray(wood, bool)
     early, late = wood & (season == EARLY), wood & (season == LATE)
     if "rays" in tex:
         ray = wood & _rays((phi, None), r, z, tex["rays"])
@@ -495,14 +508,22 @@ def texture_rgb(
     return np.clip(out, 0, 255).astype(np.uint8)
 
 
-def texture_face(part: pv.DataSet, normal: ArrayLike, species: str, pixel: float, up: ArrayLike | None = None) -> pv.PolyData:
+def texture_face(
+    part: pv.DataSet,
+    normal: ArrayLike,
+    species: str,
+    pixel: float,
+    codes: Mapping[str, int],
+    up: ArrayLike | None = None,
+) -> pv.PolyData:
     """A textured plane over the face of ``part`` seen from ``-normal`` (the face nearer the pith
     of a plank): points ``pixel`` apart, point data ``rgb``.
 
     The plane lies a hair in front of the face and samples the cells a hair
     behind it (``rgb``, ``wood``, ``season``, ``axis``), then
-    :func:`texture_rgb` adds pores and rays.  Points outside the part are
-    dropped.
+    :func:`texture_rgb` adds pores and rays to the trunk's sapwood and
+    heartwood (``codes``: the wood's tissue codes).  Points outside the part
+    are dropped.
     """
     import pyvista as pv
 
@@ -526,7 +547,8 @@ def texture_face(part: pv.DataSet, normal: ArrayLike, species: str, pixel: float
     sampled = probe.sample(part)
     valid = np.asarray(sampled.point_data["vtkValidPointMask"]).astype(bool)
     data = {k: np.asarray(sampled.point_data[k]) for k in ("rgb", "wood", "season", "axis")}
-    rgb = texture_rgb(species, np.asarray(probe.points), data["rgb"], data["wood"], data["season"], data["axis"])
+    wood = (data["axis"] == 0) & np.isin(data["wood"], [codes["sapwood"], codes["heartwood"]])
+    rgb = texture_rgb(species, np.asarray(probe.points), data["rgb"], wood, data["season"])
     grid = pv.StructuredGrid(*(flat + (depth - eps) * n).T.reshape(3, ni, nj, 1))
     grid.point_data["rgb"] = rgb.reshape(ni, nj, 3).transpose(1, 0, 2).reshape(-1, 3)
     grid.point_data["valid"] = valid.reshape(ni, nj).T.ravel().astype(np.uint8)

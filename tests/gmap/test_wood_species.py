@@ -155,20 +155,22 @@ def test_texture_pores_and_rays():
     n = 40000
     pts = np.column_stack([rng.uniform(0.01, 0.04, n), rng.uniform(-0.02, 0.02, n), rng.uniform(0, 0.1, n)])
     base = np.full((n, 3), 200, np.uint8)
-    tissue = np.full(n, W.CODES["sapwood"])
-    axis = np.zeros(n, int)
+    wood = np.ones(n, bool)
     early, late = np.full(n, W.EARLY), np.full(n, W.LATE)
+    assert (S.EARLY, S.LATE) == (W.EARLY, W.LATE)
     dark = {}
     for name in SPECIES:
-        e = S.texture_rgb(name, pts, base, tissue, early, axis).astype(int).sum(axis=1)
-        la = S.texture_rgb(name, pts, base, tissue, late, axis).astype(int).sum(axis=1)
+        e = S.texture_rgb(name, pts, base, wood, early).astype(int).sum(axis=1)
+        la = S.texture_rgb(name, pts, base, wood, late).astype(int).sum(axis=1)
         dark[name] = (np.mean(e < 500), np.mean(la < 500), np.mean(e > 630))  # 630: broad rays are bright, fine ones faint
     assert dark["oak"][0] > 0.05 and dark["elm"][0] > 0.05  # ring-porous earlywood
     assert dark["pine"][0] == 0 and dark["larch"][0] == 0  # no pores in softwoods
     assert dark["pine"][1] > 0 and dark["elm"][1] > 0  # resin canals; elm's latewood bands
     assert dark["oak"][2] > 0.01 and dark["oak"][2] > 3 * dark["elm"][2]  # oak's broad rays
-    knot = S.texture_rgb("oak", pts, base, tissue, early, np.ones(n, int))
+    knot = S.texture_rgb("oak", pts, base, ~wood, early)  # knots, pith and bark stay plain
     assert np.all(knot == base)
+    keys = [np.arange(50), 7, np.arange(50) % 3]
+    assert np.array_equal(S.u01(*keys), W.u01_array(*keys))  # the wood's own hash
 
 
 @pytest.mark.parametrize("name", ["larch", "elm"])
