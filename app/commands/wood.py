@@ -9,7 +9,8 @@ Examples::
     ramure wood --from-plant grammars/abop_tree.lsys -n 6 --years 8 -o tree.glb
 
 JSON keys: species, years, steps (half-years), seed, darts, volumes, tissues (volumes per tissue),
-rings and knots at the cut or plank (when one is asked for), chi, boundary_chi,
+bark_mm (the trunk's thickest and mean bark), bark_shed (shed bark cells), reaction (compression
+and tension wood volumes), rings and knots at the cut or plank (when one is asked for), chi, boundary_chi,
 valid, seconds (growth + checks), darts_per_second, output.
 """
 
@@ -348,7 +349,11 @@ def _wood_record(model: Any, species: str | None, args: argparse.Namespace) -> d
         "volumes": gm.n_volumes,
     }
     if isinstance(model, W.Wood):  # a species' wood (a grammar's has labels only)
+        from ramure.gmap.organs.wood_species import bark_and_reaction_facts
+
         record["tissues"] = model.tissue_counts()
+        vd = gm.volume_data
+        record.update(bark_and_reaction_facts(vd, (vd["axis"] == 0) & (vd["wood"] == W.CODES["bark"])))
     else:
         labels = np.asarray(gm.volume_data["label"])
         record["labels"] = {str(k): int((labels == k).sum()) for k in sorted(set(labels.tolist()))}

@@ -556,3 +556,24 @@ def texture_face(
     return surface.threshold(0.5, scalars="valid", preference="point", all_scalars=True).extract_surface(
         algorithm="dataset_surface"
     )
+
+
+# ---------------------------------------------------------------------- facts
+def bark_and_reaction_facts(volume_data: Mapping[str, np.ndarray], trunk_bark: np.ndarray) -> dict[str, Any]:
+    """Facts for ``ramure wood --json``: the trunk's thickest and mean bark (mm, flakes included,
+    over its stacks), the shed bark cells, and the reaction-wood volumes by kind.
+
+    ``trunk_bark`` flags the trunk's bark volumes (the caller knows the tissue codes).
+    """
+    level = np.asarray(volume_data["level"], np.int64)[trunk_bark]
+    sector = np.asarray(volume_data["sector"], np.int64)[trunk_bark]
+    width = np.asarray(volume_data["width"], float)[trunk_bark]
+    marks = np.asarray(volume_data["bark"])
+    reaction = np.asarray(volume_data["reaction"])
+    stacks = np.unique(level * (int(sector.max(initial=0)) + 1) + sector, return_inverse=True)[1]
+    per_stack = np.bincount(stacks, width) if width.size else np.zeros(1)
+    return {
+        "bark_mm": {"max": round(1000 * float(per_stack.max()), 3), "mean": round(1000 * float(per_stack.mean()), 3)},
+        "bark_shed": int((marks >= SHED_PLATE).sum()),
+        "reaction": {"compression": int((reaction == COMPRESSION).sum()), "tension": int((reaction == TENSION).sum())},
+    }

@@ -178,3 +178,7 @@ def test_cli_species(capsys, name):
     assert main(["wood", "--species", name, "--years", "3", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert r["species"] == name and (r["chi"], r["boundary_chi"]) == (1, 2)
+    assert r["reaction"]["tension" if name == "elm" else "compression"] > 0
+    assert r["reaction"]["compression" if name == "elm" else "tension"] == 0
+    cap = 1000 * min(W.SPECIES[name]["bark_cap"], W.SPECIES[name]["bark_ratio"] * 0.05)
+    assert 0 < r["bark_mm"]["mean"] <= r["bark_mm"]["max"] < cap + 3 * 1000 * S.SHED_WIDTH
