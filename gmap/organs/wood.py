@@ -20,6 +20,9 @@ colour follow its position.  Hence bark is always the outer layer (spec
 decision 7: one bark layer per year with its own thickness law), sapwood is
 the outer ``sapwood_rings`` rings, heartwood the rings inside once the tree is
 older than ``heartwood_age`` years (younger trees are all sapwood inside).
+The outer bark is shed beyond the species' live thickness, deeper in its
+fissures, and branch wood carries compression or tension wood on its lower or
+upper side: :mod:`ramure.gmap.organs.wood_species` (species table, sources).
 
 *Widths.*  A wood cell's radial width is drawn in its law's bounds,
 ``[lo, hi] x f(c) x reaction(phi)``: ``lo, hi`` per season, ``f(c) =
