@@ -51,7 +51,7 @@ def test_bark_is_shed_to_the_species_thickness(trunks, name):
 
 @pytest.mark.parametrize("name", SPECIES)
 def test_bark_outline_is_rough_plates_or_ridges(trunks, name):
-    """The embedded outer radius varies round the trunk: fissures cut into the bark."""
+    """The outer radius of the stacks (wood + bark) varies round the trunk: fissures cut into the bark."""
     w = trunks[name]
     stacks = _stack_bark(w)
     level = 2
