@@ -10,8 +10,9 @@ Examples::
 
 JSON keys: species, years, steps (half-years), seed, darts, volumes, tissues (volumes per tissue),
 branches (``{"live": n, "dead": m}``: knots grown, alive and dead; ``--set branch_life=N`` kills a
-branch N years after its birth), rings and knots (live_knots, dead_knots) at the cut or plank
-(when one is asked for), chi, boundary_chi,
+branch N years after its birth), bark_mm (the trunk's thickest and mean bark), bark_shed (shed bark
+cells), reaction (compression and tension wood volumes), rings and knots (live_knots, dead_knots) at
+the cut or plank (when one is asked for), chi, boundary_chi,
 valid, seconds (growth + checks), darts_per_second, output.
 """
 
@@ -92,11 +93,15 @@ def render_plank(
     size: tuple[int, int] = (900, 900),
     title: str | None = None,
     legend: Sequence[tuple[str, Any]] | None = None,
+    species: str | None = None,
 ) -> str | os.PathLike:
     """Render a length of plank face-on to PNG: the trunk axis across the picture, the board filling it.
 
     A parallel projection looks at the face nearer the pith (at the plank's
     offset), unlit so the colours are the tissues'; the length runs left to right.
+    With ``species`` (and the part's ``wood``, ``season`` and ``axis`` cell
+    data) the face is drawn at one point a pixel with the species' pores,
+    resin canals and rays (:func:`ramure.gmap.organs.wood_species.texture_face`).
     """
     from ramure.app.render import headless_setup
 
@@ -111,6 +116,13 @@ def render_plank(
     plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
     surface = part.extract_surface(algorithm="dataset_surface")
     plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
+    if species is not None and all(k in part.cell_data for k in ("wood", "season", "axis")):
+        from ramure.gmap.organs.wood import CODES
+        from ramure.gmap.organs.wood_species import texture_face
+
+        face = texture_face(part, normal, species, pixel=2.0 * scale / h, codes=CODES, up=up)
+        if face.n_points:
+            plotter.add_mesh(face, scalars="rgb", rgb=True, lighting=False, name="texture")
     plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method
     plotter.camera_position = [tuple(position), tuple(focal), tuple(up)]
     plotter.camera.parallel_scale = scale
@@ -184,9 +196,27 @@ def legend_for(species: str) -> list[tuple[str, Any]]:
         ("heartwood, latewood", c["heartwood"][1]),
         ("sapwood, earlywood", c["sapwood"][0]),
         ("sapwood, latewood", c["sapwood"][1]),
-        ("bark", c["bark"]),
+        ("inner bark", c["bark"][0]),
+        ("bark plates" if SPECIES[species].get("bark_pattern") == "plates" else "bark ridges", c["bark"][1]),
+        ("bark fissures", c["bark"][2]),
         ("knot (branch wood)", c["knot"][1]),
+        (
+            "compression wood" if SPECIES[species].get("kind") == "softwood" else "tension wood",
+            _reaction_hex(species),
+        ),
     ]
+
+
+def _reaction_hex(species: str) -> str:
+    """The colour of a species' reaction wood in a knot's latewood, as the pictures draw it."""
+    from ramure.gmap.organs.wood import SPECIES
+    from ramure.gmap.organs.wood_species import COMPRESSION, TENSION, reaction_rgb
+
+    late = SPECIES[species]["colors"]["knot"][1]
+    rgb = np.array([[int(late[i : i + 2], 16) for i in (1, 3, 5)]], float)
+    mark = COMPRESSION if SPECIES[species].get("kind") == "softwood" else TENSION
+    r, g, b = reaction_rgb(rgb, np.array([mark]))[0].astype(int)
+    return f"#{r:02x}{g:02x}{b:02x}"
 
 
 def parse_sets(pairs: Iterable[str]) -> dict[str, str]:
@@ -321,8 +351,12 @@ def _wood_record(model: Any, species: str | None, args: argparse.Namespace) -> d
         "volumes": gm.n_volumes,
     }
     if isinstance(model, W.Wood):  # a species' wood (a grammar's has labels only)
+        from ramure.gmap.organs.wood_species import bark_and_reaction_facts
+
         record["tissues"] = model.tissue_counts()
         record["branches"] = model.knot_counts()
+        vd = gm.volume_data
+        record.update(bark_and_reaction_facts(vd, (vd["axis"] == 0) & (vd["wood"] == W.CODES["bark"])))
     else:
         labels = np.asarray(gm.volume_data["label"])
         record["labels"] = {str(k): int((labels == k).sum()) for k in sorted(set(labels.tolist()))}
@@ -384,7 +418,7 @@ def _write_wood(
         name = species or pathlib.Path(args.grammar).stem
         title = f"{name}, {record['years']:g} years: {length:.3g} m of plank around z = {at:.3g} m"
         legend = legend_for(species) if species else None
-        write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend))
+        write_atomic(out, lambda tmp: render_plank(part, tmp, plank[0], parse_size(args.size), title, legend, species))
     elif out.suffix.lower() == ".png":
         size = parse_size(args.size)
         title = f"{species or pathlib.Path(args.grammar).stem}, {record['years']:g} years"
@@ -441,7 +475,7 @@ def export_glb(grid: pv.UnstructuredGrid, path: str | os.PathLike) -> pathlib.Pa
 def register(sub: Subparsers) -> None:
     """Add ``wood`` (volumetric wood, its cuts and planks) to the CLI's subcommands."""
     p = sub.add_parser("wood", help="grow volumetric wood (rings, knots, bark); cut it; facts, PNG, VTU or GLB")
-    p.add_argument("--species", default="pine", help="species preset: pine or oak (default pine)")
+    p.add_argument("--species", default="pine", help="species preset: pine, larch, elm or oak (default pine)")
     p.add_argument(
         "--years",
         type=int,

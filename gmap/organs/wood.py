@@ -20,6 +20,9 @@ colour follow its position.  Hence bark is always the outer layer (spec
 decision 7: one bark layer per year with its own thickness law), sapwood is
 the outer ``sapwood_rings`` rings, heartwood the rings inside once the tree is
 older than ``heartwood_age`` years (younger trees are all sapwood inside).
+The outer bark is shed beyond the species' live thickness, deeper in its
+fissures, and branch wood carries compression or tension wood on its lower or
+upper side: :mod:`ramure.gmap.organs.wood_species` (species table, sources).
 
 *Widths.*  A wood cell's radial width is drawn in its law's bounds,
 ``[lo, hi] x f(c) x reaction(phi)``: ``lo, hi`` per season, ``f(c) =
@@ -115,6 +118,7 @@ from ramure.gmap.kernel import prism as _prism
 from ramure.gmap.kernel.errors import GMapError, ValueRefused
 from ramure.gmap.lsystem.engine import mix
 from ramure.gmap.kernel.map3 import GMap3
+from ramure.gmap.organs import wood_species as _species
 
 if TYPE_CHECKING:
     import pyvista as pv
@@ -136,68 +140,9 @@ MIN_SECTOR_GAP = 3
 #: Most darts a wood may have (about 450 bytes each).
 MAX_DARTS = 8_000_000
 
-_COMMON = dict(
-    sides=16,
-    branch_sides=16,
-    branch_levels=2,
-    branch_angle=60.0,
-    branch_length=0.15,
-    branch_scale=0.5,
-    branches=3,
-    branch_start=1,
-    reaction=0.0,
-    reaction_angle=0.0,
-    width_floor=0.35,
-    height_jitter=0.0,
-    branch_life=0,
-)
-
-#: Species presets: geometry in metres, widths per half-year cell, colours as hex RGB.
-SPECIES: dict[str, dict[str, Any]] = {
-    "pine": dict(
-        _COMMON,
-        pith_radius=0.003,
-        height=0.5,
-        early_min=0.0025,
-        early_max=0.0045,
-        late_min=0.0008,
-        late_max=0.0018,
-        decay=25.0,
-        bark_min=0.0010,
-        bark_max=0.0018,
-        sapwood_rings=6,
-        heartwood_age=8,
-        colors=dict(
-            pith="#5b3b22",
-            heartwood=("#d7a467", "#a8662f"),
-            sapwood=("#f3deb0", "#cf9d5c"),
-            bark="#5a3b28",
-            knot=("#8a5527", "#5b3314"),
-        ),
-    ),
-    "oak": dict(
-        _COMMON,
-        pith_radius=0.0025,
-        height=0.35,
-        early_min=0.0008,
-        early_max=0.0012,
-        late_min=0.0010,
-        late_max=0.0028,
-        decay=40.0,
-        bark_min=0.0012,
-        bark_max=0.0022,
-        sapwood_rings=10,
-        heartwood_age=12,
-        branch_angle=50.0,
-        colors=dict(
-            pith="#4a3520",
-            heartwood=("#b58a55", "#7f5630"),
-            sapwood=("#ead6ad", "#c9a677"),
-            bark="#4b4138",
-            knot=("#6d4a2a", "#4a2f18"),
-        ),
-    ),
-}
+#: Species presets (pine, larch, elm, oak), their sources and their bark, reaction wood and
+#: texture: :mod:`ramure.gmap.organs.wood_species`.
+SPECIES = _species.SPECIES
 
 #: Parameters a user may set (``--set name=value``) with their meaning.
 PARAMETERS = {
@@ -225,11 +170,23 @@ PARAMETERS = {
     "reaction_angle": "direction of the reaction side (degrees about the axis)",
     "height_jitter": "relative random variation of the yearly height growth",
     "branch_life": "years a branch lives before it dies and its knot is encased (0: never dies)",
+    **_species.PARAMETERS,
 }
 
 #: Lengths (m) among the parameters, and the largest accepted: growth of a kilometre a year or
 #: a ring a kilometre wide is a typo, and 1e308 would make coordinates that are not finite.
-LENGTHS = ("pith_radius", "height", "early_min", "early_max", "late_min", "late_max", "bark_min", "bark_max", "branch_length")
+LENGTHS = (
+    "pith_radius",
+    "height",
+    "early_min",
+    "early_max",
+    "late_min",
+    "late_max",
+    "bark_min",
+    "bark_max",
+    "bark_cap",
+    "branch_length",
+)
 MAX_LENGTH = 1000.0
 #: Most faces of the trunk's pith prisms (a round trunk needs tens, not thousands).
 MAX_SIDES = 1024
@@ -329,6 +286,7 @@ def _check(p) -> None:
         and p.get("branch_life", 0) >= 0,
         "branches, branch_levels, branch_life, sapwood_rings and heartwood_age must be >= 0",
     )
+    _species.check(p)
 
 
 def death_year(p: Mapping[str, Any], born: int, death: int | None = None) -> int | None:
@@ -532,6 +490,8 @@ class Wood:
             ("born", np.int16),
             ("rule", np.int8),
             ("key", np.int64),
+            ("reaction", np.int8),
+            ("bark", np.int8),
         ):
             gm.add_volume_data(name, dtype, fill=-1 if dtype is not np.float64 else 0.0)
         gm.add_volume_data("dead", np.int8, fill=0)  # 1: part of a dead knot (see _kill_branches)
@@ -1027,7 +987,9 @@ class Wood:
         vd["season"][:] = season
         vd["ring"][:] = ring
         vd["year"][:] = np.where(is_cell, year, vd["year"])
-        width = self._widths(wood, bark, axis, level, vd["sector"].astype(np.int64), cell, ring, season, year, bark_layer)
+        sector = vd["sector"].astype(np.int64)
+        width = self._widths(wood, bark, axis, level, sector, cell, ring, season, year, bark_layer)
+        width, vd["bark"][:] = self._shed(width, wood, bark, axis, level, sector, cell - q - 1)
         vd["width"][:] = np.where(is_cell, width, 0.0)
         tissue = vd["wood"]
         y_now = self.year + (1 if self.steps % 2 else 0)  # years begun
@@ -1039,6 +1001,31 @@ class Wood:
         tissue[bark] = CODES["bark"]
         tissue[~trunk & wood] = CODES["knot"]
         vd["label"][is_cell] = np.where(bark[is_cell], "K", np.where(season[is_cell] == EARLY, "R", "S"))
+        vd["reaction"][:] = _species.reaction_marks(p, axis, sector, wood, self.trunk.sides)
+
+    def _shed(self, width, wood, bark, axis, level, sector, depth):
+        """Bark widths shed beyond the species' live thickness, and the ``bark`` attribute
+        (:func:`ramure.gmap.organs.wood_species.shed_bark`): one id per stack, dense."""
+        p = self.p
+        sides = np.zeros(len(self.axes), np.int64)
+        size = np.zeros(len(self.axes), np.int64)
+        for i, ax in enumerate(self.axes):
+            sides[i], size[i] = ax.sides, max(len(ax.levels), 1) * ax.sides
+        index = np.zeros(max(ax.index for ax in self.axes) + 1, np.int64)
+        index[[ax.index for ax in self.axes]] = np.arange(len(self.axes))
+        cells = wood | bark
+        a = index[np.where(cells, axis, 0)]
+        stack = np.where(cells, (np.cumsum(size) - size)[a] + level * sides[a] + sector, 0)
+        scale = np.where(axis == 0, 1.0, p["branch_scale"])
+        radius = np.bincount(stack[wood], width[wood], minlength=int(size.sum()))
+        radius = p["pith_radius"] * scale + radius[stack]
+        seeds = np.array([ax.seed for ax in self.axes], np.int64)[a]
+        fissure = _species.roughness(p, seeds, axis, level, sector)
+        mark = np.full(len(width), _species.BARK_NONE, np.int8)
+        kept, mark[bark] = _species.shed_bark(p, stack[bark], depth[bark], width[bark], radius[bark], fissure[bark])
+        width = width.copy()
+        width[bark] = kept
+        return width, mark
 
     def law(
         self, ring: np.ndarray, season: np.ndarray, sector_angle: np.ndarray | None = None, axis: int = 0
@@ -1129,7 +1116,8 @@ class Wood:
         rings = np.arange(1, years + 1)
         lo_e, hi_e = self.law(rings, np.zeros_like(rings), None, 0)
         lo_l, hi_l = self.law(rings, np.ones_like(rings), None, 0)
-        return float(p["pith_radius"] + 0.5 * (lo_e + hi_e + lo_l + hi_l).sum() + 0.5 * (p["bark_min"] + p["bark_max"]) * years)
+        wood = p["pith_radius"] + 0.5 * (lo_e + hi_e + lo_l + hi_l).sum()
+        return float(wood + _species.nominal_bark(p, years, wood))
 
     def year_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(origins, frames, heights)`` of the trunk's yearly growth units (straight, or a plant's)."""
@@ -1328,6 +1316,9 @@ class Wood:
         lo, hi = self.law((cell + 1) // 2, (cell - 1) % 2, None, 1)
         bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"])
         width = np.where(cell <= q, 0.5 * (lo + hi), bark)
+        wood = cell <= q  # the bark past the species' live thickness is shed (wood_species)
+        cap = float(_species.bark_cap(p, p["pith_radius"] * p["branch_scale"] + width[wood].sum()))
+        width[~wood] = _species.shed_profile(width[~wood], cap)
         return p["pith_radius"] * p["branch_scale"] + np.concatenate([[0.0], np.cumsum(width)])
 
     def _seat_knot(self, ax, cells, pts, radii, profile):
@@ -1468,8 +1459,8 @@ class Wood:
         lo_l, hi_l = self.law(rings, np.ones_like(rings), None, 1)
         per_year = 0.5 * (lo_e + hi_e + lo_l + hi_l)
         cum = np.concatenate([[0.0], np.cumsum(per_year)])
-        bark = p["branch_scale"] * 0.5 * (p["bark_min"] + p["bark_max"]) * years_here
-        return p["pith_radius"] * p["branch_scale"] + cum[years_here.astype(int)] + bark
+        wood = p["pith_radius"] * p["branch_scale"] + cum[years_here.astype(int)]
+        return wood + _species.nominal_bark(p, years_here, wood, p["branch_scale"])
 
     def knot_length(self, br: Branch) -> float:
         """Length of the branch's first level (the knot): from the pith face past the trunk's final radius."""
@@ -1706,6 +1697,8 @@ def place_branches(p: Mapping[str, Any], years: int, seed: int, count: int | np.
     if count > faces:
         shown = f"{count:,}" if count < 10**9 else f"{float(count):.3g}"
         raise ValueRefused(f"{shown} branches do not fit: {span + 1} years of {p['sides']} trunk faces hold at most {faces:,}")
+    if int(p.get("whorl", 1)) > 1 or p.get("divergence", 137.5) != 137.5:  # the species' pattern
+        return [Branch(y, k, mix(seed, 1000 + i)) for i, (y, k) in enumerate(_species.place_whorls(p, years, seed, count))]
     n = int(p["sides"])
     turn = int(mix(seed, 11) % n)
     out = []
@@ -1843,6 +1836,12 @@ def cell_colors(volume_data: Mapping[str, np.ndarray], species: str = "pine") ->
         pair = value if isinstance(value, tuple) else (value, value)
         for s in (EARLY, LATE):
             out[(tissue == code) & (np.maximum(season, 0) == s)] = _hex(pair[s])
+    if "reaction" in volume_data:  # compression / tension wood (wood_species)
+        out = _species.reaction_rgb(out, np.asarray(volume_data["reaction"])).astype(np.uint8)
+    if "bark" in volume_data:  # inner bark, plates or ridges, fissures
+        marks = np.asarray(volume_data["bark"])
+        is_bark = (tissue == CODES["bark"]) & (marks >= 0)
+        out[is_bark] = _species.bark_rgb(species, marks[is_bark]).astype(np.uint8)
     return out
 
 

@@ -21,7 +21,8 @@ def test_wood_legend_is_drawn_on_a_light_box():
         assert surface.n_cells == 6 * 4  # the cube's outer faces, 2x2 per side
         assert plotter.legend.GetUseBackground()
         assert plotter.legend.GetBackgroundColor() == pytest.approx((0.96, 0.96, 0.94), abs=1 / 255)
-        assert plotter.legend.GetNumberOfEntries() == 7  # pith, heartwood and sapwood early/late, bark, knot
+        # pith, heartwood and sapwood early/late, inner bark, ridges, fissures, knot, tension wood
+        assert plotter.legend.GetNumberOfEntries() == 10
         assert plotter.legend.GetEntryTextProperty().GetColor() == pytest.approx((0.08, 0.08, 0.08))
         assert plotter.legend.GetEntryIcon(3).GetPointData().GetScalars().GetTuple3(0) == (234, 214, 173)  # oak sapwood
     finally:

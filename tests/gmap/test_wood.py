@@ -5,6 +5,7 @@ import pytest
 import pyvista as pv
 
 from ramure.gmap.organs import wood as W
+from ramure.gmap.organs.wood_species import SHED_WIDTH
 from ramure.gmap.kernel.errors import ValueRefused
 from ramure.gmap.kernel.topology import assert_solid
 
@@ -80,7 +81,8 @@ def test_ring_widths_stay_inside_the_law(trunk6):
     base = on_line & (np.abs(pos[:, 2]) < 1e-9)  # the base: no taper there
     radii = np.sort(r[base]) * np.cos(np.pi / n)  # corner radius -> apothem
     steps = np.diff(radii)
-    widths_lo = min(trunk6.p["late_min"], trunk6.p["early_min"]) * trunk6.p["width_floor"]
+    # the outer bark is shed down to flakes SHED_WIDTH thick (wood_species)
+    widths_lo = min(trunk6.p["late_min"] * trunk6.p["width_floor"], trunk6.p["early_min"] * trunk6.p["width_floor"], SHED_WIDTH)
     widths_hi = max(trunk6.p["early_max"], trunk6.p["bark_max"])
     assert np.all(steps > widths_lo - 1e-12) and np.all(steps < widths_hi + 1e-12)
 
@@ -268,7 +270,7 @@ def test_regrowing_a_branch_changes_only_it_and_its_neighbours(knotty):
     [
         (dict(years=0), "years"),
         (dict(years=-2), "years"),
-        (dict(species="elm"), "unknown species"),
+        (dict(species="baobab"), "unknown species"),
         (dict(colour=3), "unknown wood parameter"),
         (dict(early_min=float("nan")), "finite"),
         (dict(late_min=-0.001), "positive"),
@@ -631,11 +633,12 @@ def test_corner_blend_equals_the_broadcast_formula_bit_for_bit():
     assert np.allclose(got.sum(axis=1), 1.0)  # a partition of unity over the four corners
 
 
-def test_smooth_grid_draws_round_rings_and_keeps_the_cells_data(trunk6):
+def test_smooth_grid_draws_round_rings_and_keeps_the_cells_data():
     """Pictures cut each trunk ring cell in four along its arc: in a cross-cut the bark's outline has
     a vertex every 5.6 degrees (a 64-gon) where the kernel's cells give one every 22.5 (a 16-gon),
     the new vertices on the arcs (as far from the axis as the old ones); every picture cell keeps
-    its volume's data."""
+    its volume's data.  The bark is smooth here (no fissures: ``fissure_depth=1``)."""
+    trunk6 = W.grow_wood("pine", years=6, branches=0, fissure_depth=1.0)
     raw = W.to_grid(trunk6)
     smooth = W.smooth_grid(trunk6, raw)
 

@@ -76,7 +76,7 @@ def test_plank_png_is_a_readable_board_around_a_knot(capsys, tmp_path):
     columns = np.flatnonzero(board.any(axis=0))
     assert columns.size > 0.9 * 600  # the length chosen fills the picture's width
     rows = np.flatnonzero(board[:, 90])
-    assert rows.size > 0.2 * 600  # and the board is a board, not a line
+    assert rows.size > 0.18 * 600  # and the board is a board, not a line (0.2 before the bark was shed)
     early, late = (np.array(rgb_of(c)) for c in W.SPECIES["pine"]["colors"]["sapwood"])
     lines = 0
     for x in range(90, 520, 30):  # columns across the board, away from its ends
@@ -125,7 +125,7 @@ def test_grammar_option_runs_a_g3l(capsys):
     "argv, words",
     [
         (["--years", "0"], "years"),
-        (["--species", "elm"], "unknown species"),
+        (["--species", "baobab"], "unknown species"),
         (["--set", "early_min=nan"], "finite"),
         (["--set", "late_min=0.01", "--set", "late_max=0.001"], "must not exceed"),
         (["--set", "sides=2"], "at least 3"),

@@ -105,8 +105,8 @@ def test_refusal_is_shown_in_the_dock(app):
     from ramure.app.desktop.panels.wood import WoodPanel
 
     panel = WoodPanel(None, plotter_factory=_Plotter)
-    panel.species.addItem("elm")
-    panel.species.setCurrentText("elm")
+    panel.species.addItem("baobab")
+    panel.species.setCurrentText("baobab")
     assert panel.grow() is None and "Refused" in panel.facts.text()
 
 
@@ -159,7 +159,10 @@ def test_plank_controls_saw_a_preset_board_that_fills_the_view(app):
     QTest.keyClicks(panel.plank_direction, "90")  # a board facing +y
     QTest.mouseClick(panel.plank_button, Qt.MouseButton.LeftButton)
     plotter = panel.plotter
-    mesh, kwargs = plotter.meshes[-1]
+    named = {kw.get("name"): (m, kw) for m, kw in plotter.meshes}
+    mesh, kwargs = named["plank"]
+    texture = named["texture"][0]  # the species' pores and rays, one point a pixel, on the face
+    assert texture.n_points > 1000 and np.ptp(np.asarray(texture.point_data["rgb"]), axis=0).max() > 0
     along_normal = np.asarray(mesh.points)[:, 1]
     offset = panel.plank_offset.value() / 1000  # the spin box shows tenths of a millimetre
     assert along_normal.min() >= offset - 1e-9 and along_normal.max() <= offset + 0.02 + 1e-9  # the slab asked for
@@ -174,4 +177,4 @@ def test_plank_controls_saw_a_preset_board_that_fills_the_view(app):
     assert 0.9 < fill <= 1.0  # the cut face fills the view
     panel.plank_offset.setValue(2000.0)
     QTest.mouseClick(panel.plank_button, Qt.MouseButton.LeftButton)
-    assert "Refused" in panel.facts.text() and "misses" in panel.facts.text() and len(plotter.meshes) == 1
+    assert "Refused" in panel.facts.text() and "misses" in panel.facts.text() and len(plotter.meshes) == 2

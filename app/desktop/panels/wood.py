@@ -117,6 +117,19 @@ class WoodPanel(QWidget):
             offset = preset_offset(self.grid, self.plank_preset.currentText(), thickness)
         self.plank_offset.setValue(1000.0 * offset)
 
+    def add_texture(self, part: Any, normal: Any, pixel: float, up: Any) -> None:
+        """The species' pores, resin canals and rays on the board's face, one point a pixel
+        (:func:`ramure.gmap.organs.wood_species.texture_face`), as ``ramure wood --plank`` draws them."""
+        from ramure.gmap.organs import wood as W
+        from ramure.gmap.organs.wood_species import texture_face
+
+        species = self.species.currentText()
+        if species not in W.SPECIES or not all(k in part.cell_data for k in ("wood", "season", "axis")):
+            return
+        face = texture_face(part, normal, species, pixel=max(pixel, 1e-5), codes=W.CODES, up=up)
+        if face.n_points:
+            self.plotter.add_mesh(face, scalars="rgb", rgb=True, lighting=False, name="texture")
+
     def show_plank(self) -> Any:
         """Saw the plank the controls describe and show a length of it around a knot, face-on, filling the view."""
         from ramure.gmap.organs import wood as W
@@ -138,6 +151,7 @@ class WoodPanel(QWidget):
         p.add_mesh(part.extract_surface(algorithm="dataset_surface"), scalars="rgb", rgb=True, lighting=False, name="plank")
         w, h = p.window_size
         position, focal, up, scale = W.plank_camera(part.points, normal, w / h if w > 0 and h > 0 else 1.0)
+        self.add_texture(part, normal, 2.0 * scale / max(h, 1), up)
         p.enable_parallel_projection()
         p.camera_position = [tuple(position), tuple(focal), tuple(up)]
         p.camera.parallel_scale = scale
