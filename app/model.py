@@ -91,6 +91,7 @@ class Explorer:
         self.error: GrammarError | None = None  # the last grammar error, shown by the front end
         self.rho = 0.5
         self.selection: list[int] = []
+        self.fruit_region: dict | None = None  # {"leaf": id, "region": labels}: select_fruit_region
         self.last_result: RegenResult | None = None
         self.summary: str | None = None  # what the last edit changed (edit_summary)
         self.note: str | None = None  # why the last edit changed nothing on screen, if it did not
@@ -551,6 +552,61 @@ class Explorer:
         specs = check_specs(specs)
         shown = damaged_fruit(self, leaf, specs)
         self.last_result = self.session.regrow_fruit([leaf], seed=fruit_settings(self, leaf)["seed"], defects=specs)
+        self._changed()
+        return shown
+
+    def select_fruit_region(self, how: str, *args: Any, mode: str = "replace", leaf: int | None = None) -> dict:
+        """Select a region of the selected fruit (not an edit: a selection, kept by edits).
+
+        ``how``: ``"pattern"`` (args: a label pattern such as ``"(9, C*, *)"``), ``"point"``
+        (args: a picked skin point and a brush radius, plant units) or ``"rectangle"`` (args:
+        a camera's 4x4 world-to-clip matrix, the viewport size and a display rectangle, as
+        :meth:`leaves_in_view`).  ``mode``: replace, add or remove cells (a brush adds).
+        Returns :attr:`fruit_region` (``{"leaf": id, "region": labels}``).
+        """
+        from ramure.app import fruit_regions as R
+
+        pick = {"pattern": R.by_pattern, "point": R.at_point}.get(how)
+        if pick is None and how != "rectangle":
+            raise ValueRefused(f"select a fruit region by pattern, point or rectangle, not {how!r}")
+        if how == "rectangle":
+            matrix, size, rect = args
+            leaf, facing = R.facing_cells(self, matrix, leaf)
+            keys = leaves_in_rectangle(facing["keys"], project_to_display(matrix, facing["centres"], size), rect)
+            region = R.cells_of_keys(keys, facing["ph"])
+        else:
+            leaf, region = pick(self, *args, leaf=leaf)
+        old = self.fruit_region
+        same = old is not None and old["leaf"] == leaf
+        self.fruit_region = {"leaf": leaf, "region": R.combine(old["region"] if same else None, region, mode)}
+        return self.fruit_region
+
+    def clear_fruit_region(self) -> None:
+        self.fruit_region = None
+
+    def regrow_fruit_region(self, blend: int = 1, **params: Any) -> tuple[GMap3, dict]:
+        """Regrow the selected region of the fruit with other shape ``params`` (a local
+        malformation: ``largeur``, ``creux``, ``hamp`` ...): one undoable edit recording the
+        region on the fruit; the rest of the fruit keeps its bytes (see
+        :mod:`ramure.gmap.organs.regions`).  Returns what the Defects view shows ``(map, facts)``."""
+        from ramure.app.fruit_defects import damaged_fruit, fruit_settings
+        from ramure.gmap.organs.fruit import regrow_region
+        from ramure.gmap.organs.regions import check_region
+
+        if self.fruit_region is None:
+            raise ValueRefused("select a region of a fruit first (a pattern, a click or a rubber band)")
+        if not params:
+            raise ValueRefused("give the region new parameters (e.g. largeur=70): nothing would change")
+        leaf = self.fruit_region["leaf"]
+        if leaf not in set(self.fruit_ids()):
+            raise ValueRefused(f"fruit {leaf} is no longer on the plant: select a region again")
+        s = fruit_settings(self, leaf)
+        region = check_region({**self.fruit_region["region"], "params": params, "blend": blend})
+        before, _ = damaged_fruit(self, leaf, specs=[])
+        regrow_region(before, region, params)  # refused here (nothing of its own to move, bad values) before recording
+        regions = [*s["regions"], region]
+        shown = damaged_fruit(self, leaf, regions=regions)
+        self.last_result = self.session.regrow_fruit([leaf], seed=s["seed"], regions=regions)
         self._changed()
         return shown
 

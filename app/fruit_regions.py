@@ -1,0 +1,169 @@
+"""Regions of the selected fruit: selected, shown and regrown (the work behind the desktop's
+Defects dock and the Jupyter Defects tab; no Qt, no widgets).
+
+A region is selected on the selected fruit of the plant (:func:`ramure.app.fruit_defects.selected_fruit`)
+by a label pattern (Bohl's ``(9, C*, *)``), a click or brush on the skin (a point and a
+radius) or a rubber band (a screen rectangle: the skin cells whose face centres project
+inside it, through :func:`ramure.app.model.project_to_display` and
+:func:`ramure.app.model.leaves_in_rectangle`, the helpers the plant's rubber band uses).
+Every selection is stored as labels (the pattern, or ``[ring, sector]`` cells), so it names
+the same part of the fruit in the plant's coarse fruit and in the Defects view's subdivided
+one.  The selection is state of the explorer (:attr:`ramure.app.model.Explorer.fruit_region`),
+not an edit; regrowing it is one undoable edit (:meth:`ramure.app.model.Explorer.regrow_fruit_region`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ramure.errors import ValueRefused
+
+if TYPE_CHECKING:
+    import pyvista as pv
+    from ramure.app.model import Explorer
+    from ramure.gmap.kernel.map3 import GMap3
+
+#: The colour a selected region is drawn in (mixed with the fruit's own: HIGHLIGHT_MIX of it).
+HIGHLIGHT_RGB = (40, 200, 255)
+HIGHLIGHT_MIX = 0.7
+#: Selection modes of a region (as the plant's selection).
+MODES = ("replace", "add", "remove")
+
+
+def _fruit(ex: Explorer, leaf: int | None) -> tuple[int, GMap3]:
+    from ramure.app.fruit_defects import selected_fruit
+
+    leaf = selected_fruit(ex) if leaf is None else int(leaf)
+    return leaf, ex.fruit_volume(leaf)
+
+
+def combine(old: Mapping[str, Any] | None, new: Mapping[str, Any], mode: str) -> dict[str, Any]:
+    """``new`` region combined with ``old`` (same fruit) by ``mode``: cells add and remove;
+    a pattern replaces (it is a selection of its own).
+
+    >>> combine({"cells": [[1, 1]]}, {"cells": [[2, 2]]}, "add")
+    {'cells': [[1, 1], [2, 2]]}
+    """
+    from ramure.gmap.organs.regions import check_region
+
+    if mode not in MODES:
+        raise ValueRefused(f"region mode is one of {', '.join(MODES)}, not {mode!r}")
+    new = check_region(new)
+    if mode == "replace" or old is None or "cells" not in old or "cells" not in new:
+        if mode == "remove":
+            raise ValueRefused("nothing to remove from: the region is a pattern or empty")
+        return new
+    have = {tuple(c) for c in old["cells"]}
+    got = {tuple(c) for c in new["cells"]}
+    cells = have | got if mode == "add" else have - got
+    if not cells:
+        raise ValueRefused("that would leave the region empty")
+    return check_region({"cells": sorted(cells)})
+
+
+def by_pattern(ex: Explorer, pattern: str, leaf: int | None = None) -> tuple[int, dict]:
+    """The region a label pattern names on the selected fruit (checked: it names cells)."""
+    from ramure.gmap.organs.regions import region_volumes
+
+    leaf, gm = _fruit(ex, leaf)
+    region = {"path": str(pattern)}
+    region_volumes(gm, region)
+    return leaf, region
+
+
+def at_point(ex: Explorer, point: ArrayLike, radius: float = 0.0, leaf: int | None = None) -> tuple[int, dict]:
+    """The skin cells within ``radius`` (plant units) of a picked ``point``, the nearest always."""
+    from ramure.gmap.organs.regions import cells_near
+
+    if not float(radius) >= 0:
+        raise ValueRefused(f"brush radius must be >= 0, got {radius}")
+    leaf, gm = _fruit(ex, leaf)
+    return leaf, {"cells": cells_near(gm, point, float(radius))}
+
+
+def facing_cells(ex: Explorer, matrix: ArrayLike, leaf: int | None = None) -> tuple[int, dict]:
+    """What a rubber band on the fruit selects by: the centres of the skin faces facing the
+    camera (``centres``), a key per face (``keys`` = ring * ph + sector) and ``ph``.  The far
+    side of the fruit is left out: a rubber band drawn on the skin one sees selects that skin
+    (:meth:`ramure.app.model.Explorer.select_fruit_region` projects them as
+    :meth:`ramure.app.model.Explorer.leaves_in_view` projects the plant's points)."""
+    from ramure.gmap.organs.regions import skin_cells
+
+    leaf, gm = _fruit(ex, leaf)
+    centres, cells, outward = skin_cells(gm)
+    ph = int(cells[:, 1].max()) + 1
+    front = np.einsum("ij,j->i", outward, view_direction(matrix)) < 0
+    return leaf, {"centres": centres[front], "keys": (cells[:, 0] * ph + cells[:, 1])[front], "ph": ph}
+
+
+def cells_of_keys(keys: Sequence[int], ph: int) -> dict:
+    """The region of the skin cells with ``keys`` (ring * ph + sector); refused when empty.
+
+    >>> cells_of_keys([23, 5], 10)
+    {'cells': [[2, 3], [0, 5]]}
+    """
+    if not len(keys):
+        raise ValueRefused("the rectangle holds none of the fruit's skin: draw it over the selected fruit")
+    return {"cells": [[int(k) // ph, int(k) % ph] for k in keys]}
+
+
+def view_direction(matrix: ArrayLike) -> np.ndarray:
+    """The camera's viewing direction (world, unit) read from a world-to-clip matrix: the
+    gradient of clip ``w`` (perspective) or of clip depth (parallel projection).
+
+    >>> view_direction(np.diag([1.0, 1.0, -1.0, 1.0])).tolist()
+    [0.0, 0.0, -1.0]
+    """
+    m = np.asarray(matrix, float).reshape(4, 4)
+    d = m[3, :3] if np.linalg.norm(m[3, :3]) > 1e-12 else m[2, :3]
+    return d / max(float(np.linalg.norm(d)), 1e-300)
+
+
+def region_mask(gm: GMap3, region: Mapping[str, Any], leaf: int | None = None) -> np.ndarray:
+    """Mask over ``gm``'s volumes: the region's (only fruit ``leaf``'s when ``gm`` holds several)."""
+    from ramure.gmap.organs.regions import region_volumes
+
+    keep = np.zeros(gm.n_volumes, bool)
+    keep[region_volumes(gm, region)] = True
+    if leaf is not None and "leaf_id" in gm.volume_data:
+        keep &= np.asarray(gm.volume_data["leaf_id"]) == int(leaf)
+    return keep
+
+
+def highlight(surface: pv.PolyData, mask: np.ndarray, scalars: str = "rgb") -> pv.PolyData:
+    """``surface`` (cell data ``volume`` and ``rgb``, or none) with the cells of the volumes in
+    ``mask`` drawn in the highlight colour; a new mesh."""
+    out = surface.copy()
+    vol = np.asarray(out.cell_data["volume"], np.int64)
+    if scalars in out.cell_data:
+        rgb = np.asarray(out.cell_data[scalars], float).reshape(-1, 3)
+    else:
+        rgb = np.full((out.n_cells, 3), 200.0)
+    on = mask[vol]
+    rgb[on] = (1 - HIGHLIGHT_MIX) * rgb[on] + HIGHLIGHT_MIX * np.asarray(HIGHLIGHT_RGB, float)
+    out.cell_data[scalars] = np.clip(np.round(rgb), 0, 255).astype(np.uint8)
+    out.cell_data["region"] = on
+    return out
+
+
+def shown(ex: Explorer) -> tuple[GMap3, pv.PolyData]:
+    """The selected fruit as the Defects view shows it (subdivided, damaged) and its coloured
+    skin with the current region highlighted."""
+    from ramure.app.fruit_defects import damaged_fruit, surface
+
+    if ex.fruit_region is None:
+        raise ValueRefused("select a region of the fruit first (a pattern, a click or a rubber band)")
+    gm, _ = damaged_fruit(ex, ex.fruit_region["leaf"])
+    return gm, highlight(surface(gm), region_mask(gm, ex.fruit_region["region"]))
+
+
+def png_bytes(ex: Explorer, size: tuple[int, int] = (420, 420)) -> bytes:
+    """An off-screen PNG of the selected fruit with its region highlighted."""
+    from ramure.app.fruit_defects import png_of_surface
+
+    _, skin = shown(ex)
+    return png_of_surface(skin, size)

@@ -1,0 +1,165 @@
+"""Regions of one fruit (issue 40 §6): selected by rubber band, brush and label pattern,
+regrown alone, the rest byte-identical, undoable."""
+
+import numpy as np
+import pytest
+
+from ramure.app import fruit_defects as FD
+from ramure.app import fruit_regions as FR
+from ramure.app.model import Explorer
+from ramure.errors import RamureError
+from ramure.gmap.organs.fruit import build_fruit, regrow_region
+from ramure.gmap.organs.regions import check_region, region_darts, region_volumes, skin_cells
+
+
+@pytest.fixture
+def ex():
+    from ramure import grammars
+
+    ex = Explorer(grammars.path("fruit_tree"), n=5)
+    ex.select([ex.fruit_ids()[0]])
+    return ex
+
+
+def _camera_matrix(gm, size=(400, 300)):
+    """A perspective camera in front of the fruit (looking along +y at its centre)."""
+    import pyvista as pv
+
+    _, pos = gm.vertex_positions()
+    centre, extent = pos.mean(axis=0), float(np.ptp(pos, axis=0).max())
+    cam = pv.Camera()
+    cam.position = tuple(centre - np.array([0.0, 4.0 * extent, 0.0]))
+    cam.focal_point = tuple(centre)
+    cam.up = (0.0, 0.0, 1.0)
+    m = cam.GetCompositeProjectionTransformMatrix(size[0] / size[1], -1, 1)
+    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)]), centre
+
+
+def _bytes_outside(gm, mask):
+    """Every column of the darts in ``mask`` (positions, involutions, attributes), as bytes."""
+    cols = [gm.alpha[:, mask].tobytes()] + [np.asarray(gm.dart_data[k])[mask].tobytes() for k in sorted(gm.dart_data)]
+    return b"".join(cols)
+
+
+def test_rubber_band_selects_the_skin_facing_the_camera(ex):
+    leaf = ex.fruit_region is None and ex.selection[0]
+    gm = ex.fruit_volume(leaf)
+    matrix, centre = _camera_matrix(gm)
+    size = (400, 300)
+    region = ex.select_fruit_region("rectangle", matrix, size, (180, 130, 220, 170))["region"]
+    cells = np.asarray(region["cells"])
+    assert 2 <= len(cells) < 40  # a patch, not the whole fruit
+    centres, all_cells, outward = skin_cells(gm)
+    key = all_cells[:, 0] * 100 + all_cells[:, 1]
+    picked = np.isin(key, cells[:, 0] * 100 + cells[:, 1])
+    # every picked cell has a skin face towards the camera (-y); the far side is never picked
+    facing = {int(k) for k in key[outward[:, 1] < 0]}
+    behind = {int(k) for k in key} - facing
+    assert {int(k) for k in key[picked]} <= facing and behind and not behind & {int(k) for k in key[picked]}
+    # a brush adds the cells near a skin point; remove takes them out again
+    grown = ex.select_fruit_region("point", centres[~picked][0], 0.0, mode="add")["region"]
+    assert len(grown["cells"]) == len(cells) + 1
+    back = ex.select_fruit_region("point", centres[~picked][0], 0.0, mode="remove")["region"]
+    assert back["cells"] == region["cells"]
+
+
+def test_regions_regrow_alone_byte_identical_outside_and_undo(ex):
+    leaf = ex.selection[0]
+    before, _ = FD.damaged_fruit(ex, leaf)
+    chi = before.euler_characteristic()
+    gm = ex.fruit_volume(leaf)
+    matrix, _ = _camera_matrix(gm)
+    band = ex.select_fruit_region("rectangle", matrix, (400, 300), (175, 125, 225, 175))["region"]
+    after, _ = ex.regrow_fruit_region(largeur=75.0)
+    inside = region_darts(before, band)
+    assert 0 < inside.sum() < before.n_darts
+    assert _bytes_outside(after, ~inside) == _bytes_outside(before, ~inside)
+    moved = np.linalg.norm(after.points - before.points, axis=1)
+    assert moved[inside].max() > 0.05 * float(np.ptp(before.points, axis=0).max())  # a visible bulge
+    assert after.is_valid() and after.euler_characteristic() == chi
+    # then a label pattern, on top of the first region: the first stays, the rest is untouched
+    ex.select_fruit_region("pattern", "(8, C*, *)")
+    twice, _ = ex.regrow_fruit_region(creux=0.3, nbprotus=5)
+    ring8 = region_darts(before, {"path": "(8, C*, *)"})
+    assert _bytes_outside(twice, ~ring8) == _bytes_outside(after, ~ring8)
+    assert not np.array_equal(twice.points[ring8], after.points[ring8])
+    assert twice.is_valid() and twice.euler_characteristic() == chi
+    # the plant's coarse fruit shows the regions too; other fruit are untouched
+    assert len(FD.fruit_settings(ex, leaf)["regions"]) == 2
+    # undo twice: the original bytes
+    ex.undo()
+    ex.undo()
+    restored, _ = FD.damaged_fruit(ex, leaf)
+    assert _bytes_outside(restored, np.ones(restored.n_darts, bool)) == _bytes_outside(before, np.ones(before.n_darts, bool))
+    ex.redo()
+    again, _ = FD.damaged_fruit(ex, leaf)
+    np.testing.assert_array_equal(again.points, after.points)
+
+
+def test_regions_survive_subdivision():
+    """A region names the same cells at every level: its volumes' (ring, sector) agree."""
+    region = {"path": "(7, C2, *)"}
+    coarse = build_fruit("round_tomato")
+    fine = build_fruit("round_tomato", volume_levels=2)
+    key = lambda gm, v: {(int(gm.volume_data["ring"][i]), int(gm.volume_data["sector"][i])) for i in v}  # noqa: E731
+    assert key(coarse, region_volumes(coarse, region)) == key(fine, region_volumes(fine, region)) == {(7, 1)}
+    assert len(region_volumes(fine, region)) >= 64  # one coarse cell, 8 x 8 children (and seed cells)
+    out = regrow_region(fine, region, {"largeur": 70.0}, blend=2)
+    inside = region_darts(fine, region)
+    np.testing.assert_array_equal(out.points[~inside], fine.points[~inside])
+    assert out.is_valid() and out.euler_characteristic() == fine.euler_characteristic()
+
+
+def test_plant_fruit_keeps_its_place_and_size(ex):
+    leaf = ex.selection[0]
+    coarse = ex.fruit_volume(leaf)
+    block = {"cells": [[4, 2], [4, 3], [5, 2], [5, 3]]}  # one skin vertex of its own, coarse
+    centres, cells, _ = skin_cells(coarse)
+    mine = centres[np.isin(cells[:, 0] * 100 + cells[:, 1], [402, 403, 502, 503])]
+    point = mine.mean(axis=0)  # the block's shared skin vertex, about
+    radius = 1.05 * float(np.linalg.norm(mine - point, axis=1).max())
+    for cell in block["cells"]:
+        ex.select_fruit_region("pattern", f"({cell[0]}, C{cell[1] + 1}, *)", mode="add")
+    assert ex.fruit_region["region"] == {"path": "(5, C4, *)"}  # a pattern replaces
+    ex.select_fruit_region("point", point, 1e-9)
+    ex.select_fruit_region("point", point, radius, mode="add")
+    assert ex.fruit_region["region"] == block
+    ex.regrow_fruit_region(largeur=90.0)
+    grown = ex.fruit_volume(leaf)
+    inside = region_darts(coarse, block)
+    np.testing.assert_array_equal(grown.points[~inside], coarse.points[~inside])
+    assert not np.array_equal(grown.points[inside], coarse.points[inside])
+    # a ring of the coarse fruit has no vertex of its own: the plant's fruit stays, the
+    # Defects view's subdivided fruit changes
+    ex.select_fruit_region("pattern", "(7, C*, *)")
+    shown, _ = ex.regrow_fruit_region(largeur=90.0)
+    np.testing.assert_array_equal(ex.fruit_volume(leaf).points, grown.points)
+    assert shown.is_valid()
+
+
+def test_refusals_change_nothing(ex):
+    edits = len(ex.session.edits)
+    with pytest.raises(RamureError, match="select a region"):
+        ex.regrow_fruit_region(largeur=70.0)
+    with pytest.raises(RamureError, match="stage 9 is past"):
+        ex.select_fruit_region("pattern", "(3, C1, 9)")
+    ex.select_fruit_region("pattern", "(3, C*, *)")
+    with pytest.raises(RamureError, match="cannot change precision"):
+        ex.regrow_fruit_region(precision=12)
+    with pytest.raises(RamureError, match="unknown fruit parameter"):
+        ex.regrow_fruit_region(bogus=1.0)
+    with pytest.raises(RamureError, match="new parameters"):
+        ex.regrow_fruit_region()
+    with pytest.raises(RamureError, match="either a 'path'"):
+        check_region({"path": "(1)", "cells": [[1, 1]]})
+    assert len(ex.session.edits) == edits
+
+
+def test_region_is_highlighted(ex):
+    ex.select_fruit_region("pattern", "(6, C*, *)")
+    gm, skin = FR.shown(ex)
+    lit = np.asarray(skin.cell_data["region"], bool)
+    assert 0 < lit.sum() < skin.n_cells
+    rgb = np.asarray(skin.cell_data["rgb"], float)
+    # lit cells lean to the highlight's blue, the others keep the fruit's red
+    assert rgb[lit, 2].mean() > rgb[~lit, 2].mean() + 80
