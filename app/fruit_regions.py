@@ -34,11 +34,13 @@ HIGHLIGHT_MIX = 0.7
 MODES = ("replace", "add", "remove")
 
 
-def _fruit(ex: Explorer, leaf: int | None) -> tuple[int, GMap3]:
+def _fruit(ex: Explorer, leaf: int | None, on: GMap3 | None = None) -> tuple[int, GMap3]:
+    """The fruit's leaf id and the map a click was made on: ``on`` (the Defects view's
+    fruit) or the plant's fruit."""
     from ramure.app.fruit_defects import selected_fruit
 
     leaf = selected_fruit(ex) if leaf is None else int(leaf)
-    return leaf, ex.fruit_volume(leaf)
+    return leaf, ex.fruit_volume(leaf) if on is None else on
 
 
 def combine(old: Mapping[str, Any] | None, new: Mapping[str, Any], mode: str) -> dict[str, Any]:
@@ -65,27 +67,48 @@ def combine(old: Mapping[str, Any] | None, new: Mapping[str, Any], mode: str) ->
     return check_region({"cells": sorted(cells)})
 
 
-def by_pattern(ex: Explorer, pattern: str, leaf: int | None = None) -> tuple[int, dict]:
+def parse_params(text: str) -> dict[str, Any]:
+    """``"largeur=75, creux=0.4"`` -> ``{"largeur": "75", "creux": "0.4"}`` (converted and
+    checked by the fruit builder); refused when empty or not ``name=value``.
+
+    >>> parse_params("largeur=75, creux=0.4")
+    {'largeur': '75', 'creux': '0.4'}
+    """
+    out = {}
+    for item in filter(None, (x.strip() for x in str(text).split(","))):
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise ValueRefused(f"region parameters are name=value, separated by commas; got '{item}'")
+        out[name.strip()] = value.strip()
+    if not out:
+        raise ValueRefused("give the region new parameters, e.g. largeur=75")
+    return out
+
+
+def by_pattern(ex: Explorer, pattern: str, leaf: int | None = None, on: GMap3 | None = None) -> tuple[int, dict]:
     """The region a label pattern names on the selected fruit (checked: it names cells)."""
     from ramure.gmap.organs.regions import region_volumes
 
-    leaf, gm = _fruit(ex, leaf)
+    leaf, gm = _fruit(ex, leaf, on)
     region = {"path": str(pattern)}
     region_volumes(gm, region)
     return leaf, region
 
 
-def at_point(ex: Explorer, point: ArrayLike, radius: float = 0.0, leaf: int | None = None) -> tuple[int, dict]:
-    """The skin cells within ``radius`` (plant units) of a picked ``point``, the nearest always."""
+def at_point(
+    ex: Explorer, point: ArrayLike, radius: float = 0.0, leaf: int | None = None, on: GMap3 | None = None
+) -> tuple[int, dict]:
+    """The skin cells within ``radius`` of a picked ``point`` (units and frame of the map
+    clicked on: ``on``, else the plant's fruit), the nearest always."""
     from ramure.gmap.organs.regions import cells_near
 
     if not float(radius) >= 0:
         raise ValueRefused(f"brush radius must be >= 0, got {radius}")
-    leaf, gm = _fruit(ex, leaf)
+    leaf, gm = _fruit(ex, leaf, on)
     return leaf, {"cells": cells_near(gm, point, float(radius))}
 
 
-def facing_cells(ex: Explorer, matrix: ArrayLike, leaf: int | None = None) -> tuple[int, dict]:
+def facing_cells(ex: Explorer, matrix: ArrayLike, leaf: int | None = None, on: GMap3 | None = None) -> tuple[int, dict]:
     """What a rubber band on the fruit selects by: the centres of the skin faces facing the
     camera (``centres``), a key per face (``keys`` = ring * ph + sector) and ``ph``.  The far
     side of the fruit is left out: a rubber band drawn on the skin one sees selects that skin
@@ -93,7 +116,7 @@ def facing_cells(ex: Explorer, matrix: ArrayLike, leaf: int | None = None) -> tu
     :meth:`ramure.app.model.Explorer.leaves_in_view` projects the plant's points)."""
     from ramure.gmap.organs.regions import skin_cells
 
-    leaf, gm = _fruit(ex, leaf)
+    leaf, gm = _fruit(ex, leaf, on)
     centres, cells, outward = skin_cells(gm)
     ph = int(cells[:, 1].max()) + 1
     front = np.einsum("ij,j->i", outward, view_direction(matrix)) < 0

@@ -555,13 +555,17 @@ class Explorer:
         self._changed()
         return shown
 
-    def select_fruit_region(self, how: str, *args: Any, mode: str = "replace", leaf: int | None = None) -> dict:
+    def select_fruit_region(
+        self, how: str, *args: Any, mode: str = "replace", leaf: int | None = None, on: GMap3 | None = None
+    ) -> dict:
         """Select a region of the selected fruit (not an edit: a selection, kept by edits).
 
         ``how``: ``"pattern"`` (args: a label pattern such as ``"(9, C*, *)"``), ``"point"``
         (args: a picked skin point and a brush radius, plant units) or ``"rectangle"`` (args:
         a camera's 4x4 world-to-clip matrix, the viewport size and a display rectangle, as
         :meth:`leaves_in_view`).  ``mode``: replace, add or remove cells (a brush adds).
+        ``on``: the map the point or the camera refers to (the Defects view's subdivided
+        fruit), default the plant's fruit; the region is labels either way.
         Returns :attr:`fruit_region` (``{"leaf": id, "region": labels}``).
         """
         from ramure.app import fruit_regions as R
@@ -571,11 +575,11 @@ class Explorer:
             raise ValueRefused(f"select a fruit region by pattern, point or rectangle, not {how!r}")
         if how == "rectangle":
             matrix, size, rect = args
-            leaf, facing = R.facing_cells(self, matrix, leaf)
+            leaf, facing = R.facing_cells(self, matrix, leaf, on)
             keys = leaves_in_rectangle(facing["keys"], project_to_display(matrix, facing["centres"], size), rect)
             region = R.cells_of_keys(keys, facing["ph"])
         else:
-            leaf, region = pick(self, *args, leaf=leaf)
+            leaf, region = pick(self, *args, leaf=leaf, on=on)
         old = self.fruit_region
         same = old is not None and old["leaf"] == leaf
         self.fruit_region = {"leaf": leaf, "region": R.combine(old["region"] if same else None, region, mode)}
@@ -588,7 +592,10 @@ class Explorer:
         """Regrow the selected region of the fruit with other shape ``params`` (a local
         malformation: ``largeur``, ``creux``, ``hamp`` ...): one undoable edit recording the
         region on the fruit; the rest of the fruit keeps its bytes (see
-        :mod:`ramure.gmap.organs.regions`).  Returns what the Defects view shows ``(map, facts)``."""
+        :mod:`ramure.gmap.organs.regions`).  ``blend``: edges over which the change fades in
+        from the region's rim (1, the default: every vertex of the region's own takes the new
+        shape, a raised or sunk patch; 2 or more peak at the middle, which on a small region
+        of a once-subdivided fruit looks crumpled).  Returns what the Defects view shows ``(map, facts)``."""
         from ramure.app.fruit_defects import damaged_fruit, fruit_settings
         from ramure.gmap.organs.fruit import regrow_region
         from ramure.gmap.organs.regions import check_region
