@@ -524,6 +524,16 @@ class NotebookExplorer:
         self.warm_up()
         return found
 
+    def select_fruit_rectangle(self, rect: Sequence[float], mode: str = "replace") -> dict | None:
+        """Select the region of the selected fruit whose skin, facing the camera, falls inside
+        ``rect`` (pixels of the 3D view, origin bottom left, as :meth:`select_rectangle`); the
+        Defects tab draws it (:meth:`~ramure.app.model.Explorer.select_fruit_region`)."""
+        if self.view.trame is None:
+            self.message.show(NO_RECTANGLE, "error")
+            return None
+        matrix, size = self.view.trame.camera()
+        return self.defects._selected(lambda model: model.select_fruit_region("rectangle", matrix, size, rect, mode=mode))
+
     def pick(self, cell_id: int, mode: str | None = None) -> None:
         """Select the leaf that drew mesh cell ``cell_id`` (what a click in the 3D view does)."""
         mode = mode or self.selection_panel.mode.value
