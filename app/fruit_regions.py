@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 
 #: The colour a selected region is drawn in (mixed with the fruit's own: HIGHLIGHT_MIX of it).
 HIGHLIGHT_RGB = (40, 200, 255)
-HIGHLIGHT_MIX = 0.7
+HIGHLIGHT_MIX = 0.55
 #: Selection modes of a region (as the plant's selection).
 MODES = ("replace", "add", "remove")
 
@@ -91,6 +91,16 @@ def by_pattern(ex: Explorer, pattern: str, leaf: int | None = None, on: GMap3 | 
 
     leaf, gm = _fruit(ex, leaf, on)
     region = {"path": str(pattern)}
+    region_volumes(gm, region)
+    return leaf, region
+
+
+def by_cells(ex: Explorer, cells: Sequence[Sequence[int]], leaf: int | None = None, on: GMap3 | None = None) -> tuple[int, dict]:
+    """The region of the given ``[ring, sector]`` skin cells (checked: they are the fruit's)."""
+    from ramure.gmap.organs.regions import region_volumes
+
+    leaf, gm = _fruit(ex, leaf, on)
+    region = {"cells": [[int(r), int(s)] for r, s in cells]}
     region_volumes(gm, region)
     return leaf, region
 
@@ -190,3 +200,62 @@ def png_bytes(ex: Explorer, size: tuple[int, int] = (420, 420)) -> bytes:
 
     _, skin = shown(ex)
     return png_of_surface(skin, size)
+
+
+#: Options that say where a defect is; placing it in a region replaces them.
+PLACE_OPTIONS = ("at", "vertex", "sector", "rings", "path", "count")
+
+
+def centre_cell(gm: GMap3, region: Mapping[str, Any]) -> tuple[int, int]:
+    """The region's skin cell nearest the middle of its skin (``(ring, sector)``)."""
+    from ramure.gmap.organs.regions import region_volumes, skin_cells
+
+    vols = region_volumes(gm, region)
+    vd = gm.volume_data
+    keys = {(int(vd["ring"][v]), int(vd["sector"][v])) for v in vols if vd["sector"][v] >= 0}
+    centres, cells, _ = skin_cells(gm)
+    mine = np.array([(int(r), int(s)) in keys for r, s in cells], bool)
+    if not mine.any():
+        raise ValueRefused("the region has no skin: a defect is placed on the skin (select skin cells)")
+    at = centres[mine]
+    best = int(np.argmin(np.linalg.norm(at - at.mean(axis=0), axis=1)))
+    r, s = cells[mine][best]
+    return int(r), int(s)
+
+
+def defect_here(gm: GMap3, region: Mapping[str, Any], spec: str) -> str:
+    """Defect ``spec`` (``"hail:depth_mm=2"``, options as the Defects list takes them) placed in
+    the region: hail and rot at its centre cell (``at=ringR/sectorS``), a crack along the
+    centre sector over the region's rings, an excrescence on the region's pattern (or its
+    centre cell).  The place options the spec had are replaced (so moving a defect is placing
+    it again).  Shrinkage is the whole fruit's and is refused.
+
+    >>> from ramure.gmap.organs.fruit import build_fruit
+    >>> defect_here(build_fruit("round_tomato"), {"cells": [[4, 2], [5, 2], [6, 2]]}, "crack:depth=1")
+    'crack:depth=1,sector=2,rings=4-6'
+    """
+    kind, _, rest = str(spec).partition(":")
+    kind = kind.strip().lower()
+    kept = [x.strip() for x in _split(rest) if x.strip() and x.split("=")[0].strip() not in PLACE_OPTIONS]
+    r, s = centre_cell(gm, region)
+    if kind in ("hail", "rot"):
+        place = [f"at=ring{r}/sector{s}"]
+    elif kind == "crack":
+        vd = gm.volume_data
+        from ramure.gmap.organs.regions import region_volumes
+
+        vols = region_volumes(gm, region)
+        rings = vd["ring"][vols][vd["sector"][vols] == s]
+        place = [f"sector={s}", f"rings={int(rings.min())}-{int(rings.max())}"]
+    elif kind == "excrescence":
+        place = [f"path={region['path']}" if "path" in region else f"path=({r}, C{s + 1}, *)"]
+    else:
+        raise ValueRefused(f"a {kind or 'defect'} is not placed in a region (shrinkage is the whole fruit's)")
+    return f"{kind}:{','.join(kept + place)}"
+
+
+def _split(text: str) -> list[str]:
+    """Options split on the commas outside parentheses (a path holds commas)."""
+    from ramure.gmap.organs.defect_specs import _split_options
+
+    return _split_options(text)

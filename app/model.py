@@ -560,7 +560,8 @@ class Explorer:
     ) -> dict:
         """Select a region of the selected fruit (not an edit: a selection, kept by edits).
 
-        ``how``: ``"pattern"`` (args: a label pattern such as ``"(9, C*, *)"``), ``"point"``
+        ``how``: ``"pattern"`` (args: a label pattern such as ``"(9, C*, *)"``), ``"cells"``
+        (args: ``[ring, sector]`` pairs), ``"point"``
         (args: a picked skin point and a brush radius, plant units) or ``"rectangle"`` (args:
         a camera's 4x4 world-to-clip matrix, the viewport size and a display rectangle, as
         :meth:`leaves_in_view`).  ``mode``: replace, add or remove cells (a brush adds).
@@ -570,9 +571,9 @@ class Explorer:
         """
         from ramure.app import fruit_regions as R
 
-        pick = {"pattern": R.by_pattern, "point": R.at_point}.get(how)
+        pick = {"pattern": R.by_pattern, "point": R.at_point, "cells": R.by_cells}.get(how)
         if pick is None and how != "rectangle":
-            raise ValueRefused(f"select a fruit region by pattern, point or rectangle, not {how!r}")
+            raise ValueRefused(f"select a fruit region by pattern, cells, point or rectangle, not {how!r}")
         if how == "rectangle":
             matrix, size, rect = args
             leaf, facing = R.facing_cells(self, matrix, leaf, on)
@@ -616,6 +617,29 @@ class Explorer:
         self.last_result = self.session.regrow_fruit([leaf], seed=s["seed"], regions=regions)
         self._changed()
         return shown
+
+    def place_defect_in_region(self, spec: str, replace: int | None = None) -> tuple[GMap3, dict]:
+        """Place defect ``spec`` (``"hail:depth_mm=3"``) in the selected region of the fruit
+        (:func:`ramure.app.fruit_regions.defect_here`) and record the fruit's defects with it:
+        one undoable edit.  ``replace``: the index of a recorded defect to move there instead
+        of adding one.  Returns what the Defects view shows ``(map, facts)``."""
+        from ramure.app.fruit_defects import damaged_fruit, fruit_settings
+        from ramure.app.fruit_regions import defect_here
+
+        if self.fruit_region is None:
+            raise ValueRefused("select a region of a fruit first (a pattern, a click or a rubber band)")
+        leaf = self.fruit_region["leaf"]
+        if leaf not in self.selection:
+            self.selection = [leaf, *[x for x in self.selection if x != leaf]]
+        specs = list(fruit_settings(self, leaf)["defects"])
+        gm, _ = damaged_fruit(self, leaf, specs=[])
+        if replace is not None:
+            if not 0 <= int(replace) < len(specs):
+                raise ValueRefused(f"the fruit has {len(specs)} defect(s): no defect {replace} to move")
+            specs[int(replace)] = defect_here(gm, self.fruit_region["region"], specs[int(replace)])
+        else:
+            specs.append(defect_here(gm, self.fruit_region["region"], spec))
+        return self.set_fruit_defects(specs)
 
     def fruit_volumes(self, preset: str = "round_tomato", seed: int = 0, **kwargs: Any) -> GMap3:
         """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""

@@ -62,13 +62,14 @@ class DefectsTab:
         self.region_params = W.Text(value="largeur=75", description="regrow with")
         self.region_button = button("Select region", self.select_region)
         self.regrow_button = button("Regrow region", self.regrow_region)
+        self.place_button = button("Place defect in region", self.place_in_region)
         self.widget = W.VBox(
             [
                 W.HBox([self.kind, self.options, self.add_button]),
                 self.specs,
                 W.HBox([self.apply_button, self.show_button, button("Clear", self.clear)]),
                 W.HBox([self.region_pattern, self.region_button]),
-                W.HBox([self.region_params, self.regrow_button]),
+                W.HBox([self.region_params, self.regrow_button, self.place_button]),
                 self.facts,
                 self.picture,
             ]
@@ -153,6 +154,20 @@ class DefectsTab:
         if found is not None:
             self.show()
         return found
+
+    def place_in_region(self, spec: str | None = None) -> tuple[GMap3, dict] | None:
+        """Add a defect (default: the kind and options fields) placed in the selected region to
+        the fruit's recorded defects: one undoable edit."""
+        if self.app is None:
+            return self._refused("this tab needs an explorer (DefectsTab(explorer))")
+        options = self.options.value.strip()
+        spec = spec if spec is not None else (f"{self.kind.value}:{options}" if options else self.kind.value)
+        model = self.app.model
+        shown = self.app.run(lambda: model.place_defect_in_region(spec), note="defect placed in the region; Undo takes it back")
+        if shown is not None:
+            self.specs.value = "\n".join(shown[1]["specs"])
+            self._draw(*shown)
+        return shown
 
     def regrow_region(self, params: str | None = None) -> tuple[GMap3, dict] | None:
         """Regrow the selected region with ``params`` (text ``largeur=75,creux=0.4``, default

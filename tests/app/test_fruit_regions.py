@@ -163,3 +163,31 @@ def test_region_is_highlighted(ex):
     rgb = np.asarray(skin.cell_data["rgb"], float)
     # lit cells lean to the highlight's blue, the others keep the fruit's red
     assert rgb[lit, 2].mean() > rgb[~lit, 2].mean() + 80
+
+
+def test_defects_placed_and_moved_in_a_region(ex):
+    leaf = ex.selection[0]
+    ex.select_fruit_region("pattern", "(3, C2, *)")
+    gm, facts = ex.place_defect_in_region("hail:depth_mm=2,healed=0")
+    assert FD.fruit_settings(ex, leaf)["defects"] == ["hail:depth_mm=2,healed=0,at=ring3/sector1"]
+    before, _ = FD.damaged_fruit(ex, leaf, specs=[])
+    moved = np.linalg.norm(gm.points - before.points, axis=1) > 1e-9
+    vd = gm.volume_data
+    sectors = np.unique(vd["sector"][gm.dart_volume[moved]])
+    rings = np.unique(vd["ring"][gm.dart_volume[moved]])
+    assert set(sectors.tolist()) <= {0, 1, 2} and set(rings.tolist()) <= {2, 3, 4}  # the crater is there
+    # move it to another region, and add a crack along a rubber-band-like set of cells
+    ex.select_fruit_region("pattern", "(6, C7, *)")
+    ex.place_defect_in_region("", replace=0)
+    ex.select_fruit_region("cells", [[4, 5], [5, 5], [6, 5]])
+    ex.place_defect_in_region("crack:kind=longitudinal,depth=1,width_mm=1")
+    assert FD.fruit_settings(ex, leaf)["defects"] == [
+        "hail:depth_mm=2,healed=0,at=ring6/sector6",
+        "crack:kind=longitudinal,depth=1,width_mm=1,sector=5,rings=4-6",
+    ]
+    with pytest.raises(RamureError, match="whole fruit"):
+        ex.place_defect_in_region("shrink:rate=0.1")
+    ex.undo()
+    ex.undo()
+    ex.undo()
+    assert FD.fruit_settings(ex, leaf)["defects"] == []

@@ -65,6 +65,20 @@ def test_select_a_region_regrow_it_and_undo(qtbot, window, artifacts):
     qtbot.mouseClick(panel.region_regrow, Qt.MouseButton.LeftButton)
     _wait(qtbot, window, panel, "Regrown:")
     assert len(ex.session.edits) == edits + 1 and ex.session.fruit_overrides()[fruit]["regions"][0]["cells"] == region["cells"]
+    # hail placed in the region from the kind and options fields: one more edit, in the list
+    panel.kind.setCurrentIndex(panel.kind.findText("hail"))
+    panel.options.setText("depth_mm=3")
+    qtbot.mouseClick(panel.region_place, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Placed in:")
+    assert panel.spec_list() == ex.session.fruit_overrides()[fruit]["defects"] and panel.spec_list()[0].startswith(
+        "hail:depth_mm=3,at="
+    )
+    panel.plotter.screenshot(str(artifacts / "desktop_region_hail.png"))
+    window.activateWindow()
+    qtbot.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    settle(qtbot, window)
+    window.controller.select([fruit])
+    _wait(qtbot, window, panel, "skin cells of fruit")
     regrown = np.asarray(_mesh(panel).points)
     assert regrown.shape == plain.shape and np.abs(regrown - plain).max() > 0.02 * np.ptp(plain, axis=0).max()
     panel.plotter.screenshot(str(artifacts / "desktop_region_regrown.png"))

@@ -12,7 +12,9 @@ nothing.
 **Regions** (issue 40 §6): in the dock's view a right-button drag draws a rubber band over
 the skin (Shift adds, Ctrl removes), a right click brushes the skin cells within the
 *brush* radius (mm) of the point (Shift adds, Ctrl removes); *Select* takes a label pattern
-such as ``(9, C*, *)``.  The region is drawn in a light blue.  *Regrow region* re-derives it
+such as ``(9, C*, *)``.  The region is drawn in a light blue.  *Place defect there* adds the
+defect of the kind and options fields at the region (hail and rot at its centre, a crack
+along it, an excrescence on it).  *Regrow region* re-derives it
 with the parameters typed beside it (``largeur=75,creux=0.4``): one undoable edit, the rest of
 the fruit unchanged (:mod:`ramure.app.fruit_regions`).  The work runs in the controller's worker; the logic is
 :mod:`ramure.app.fruit_defects`, shared with the Jupyter tab.
@@ -102,6 +104,10 @@ class DefectsPanel(QWidget):
         self.region_regrow = QPushButton("Regrow region")
         self.region_regrow.setObjectName("regionRegrow")
         self.region_regrow.clicked.connect(self.regrow_region)
+        self.region_place = QPushButton("Place defect there")
+        self.region_place.setObjectName("regionPlace")
+        self.region_place.setToolTip("Add the defect kind and options above, placed in the selected region")
+        self.region_place.clicked.connect(self.place_in_region)
         self.facts = QLabel("Select a fruit, add defects, press Apply.")
         self.facts.setObjectName("defectsFacts")
         self.facts.setWordWrap(True)
@@ -125,6 +131,7 @@ class DefectsPanel(QWidget):
         regrow = QHBoxLayout()
         regrow.addWidget(self.region_params, 1)
         regrow.addWidget(self.region_regrow)
+        regrow.addWidget(self.region_place)
         layout.addLayout(regions)
         layout.addLayout(regrow)
         layout.addWidget(self.facts)
@@ -229,6 +236,13 @@ class DefectsPanel(QWidget):
 
         return self.controller.submit(JOB, run)
 
+    def place_in_region(self) -> Job:
+        """Add the defect of the kind and options fields, placed in the selected region, to the
+        fruit's recorded defects: one undoable edit."""
+        options = self.options.text().strip()
+        spec = f"{self.kind.currentText()}:{options}" if options else self.kind.currentText()
+        return self.controller.submit(JOB, lambda ex: ("placed", _with_region(ex, ex.place_defect_in_region(spec))))
+
     def regrow_region(self) -> Job:
         """Regrow the selected region with the typed parameters: one undoable edit."""
         from ramure.app.fruit_regions import parse_params
@@ -259,10 +273,13 @@ class DefectsPanel(QWidget):
             shown = (*shown, None)
         gm, facts, region = shown
         self._show(gm, facts, keep_list=(what in ("applied", "region", "regrown")), region=region)
+        if what == "placed":
+            self.specs.clear()
+            self.specs.addItems(facts["specs"])
         if region is not None:
             from ramure.gmap.organs.regions import region_text
 
-            verb = "Regrown" if what == "regrown" else "Region"
+            verb = {"regrown": "Regrown", "placed": "Placed in"}.get(what, "Region")
             self.facts.setText(f"{verb}: {region_text(region)} of fruit {facts['leaf']}. {self.facts.text()}")
 
     def _show(self, gm, facts, keep_list=False, region=None):
