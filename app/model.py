@@ -641,6 +641,27 @@ class Explorer:
             specs.append(defect_here(gm, self.fruit_region["region"], spec))
         return self.set_fruit_defects(specs)
 
+    def fruit_bounds(self, leaves: Iterable[int] | None = None) -> tuple[float, ...] | None:
+        """Bounds ``(x0, x1, y0, y1, z0, z1)`` round fruit ``leaves`` (default: the selected
+        fruit, or every fruit when none is selected), from the turtle's organs: a fruit hangs
+        from its stem point along the heading and is ``size`` long, so its box is centred half a
+        size down the heading, 0.6 size either way (a little margin).  None without fruit."""
+        organs = self.skeleton.organs
+        fruit = np.flatnonzero(np.asarray(organs.kind) == "Fruit")
+        if not len(fruit):
+            return None
+        ids = np.asarray(organs.leaf_id)[fruit]
+        wanted = [int(x) for x in (self.selection if leaves is None else leaves)]
+        chosen = fruit[np.isin(ids, wanted)] if wanted else fruit
+        if not len(chosen):
+            chosen = fruit
+        pos = np.asarray(organs.position, float)[chosen].reshape(-1, 3)
+        heading = np.asarray(organs.frame, float)[chosen][:, 0, :]
+        size = np.asarray(organs.size, float)[chosen].reshape(-1, 1)
+        centre = pos + 0.5 * size * heading
+        lo, hi = (centre - 0.6 * size).min(axis=0), (centre + 0.6 * size).max(axis=0)
+        return tuple(float(v) for v in np.column_stack([lo, hi]).ravel())
+
     def fruit_volumes(self, preset: str = "round_tomato", seed: int = 0, **kwargs: Any) -> GMap3:
         """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""
 
