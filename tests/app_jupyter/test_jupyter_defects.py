@@ -101,3 +101,24 @@ def test_defects_tab_selects_a_region_shows_it_and_regrows_it(tree, tmp_path):
     assert "cannot change precision" in ex.message.text and len(ex.history) == edits + 1
     ex.undo()
     assert "regions" not in ex.model.session.fruit_overrides().get(fruit, {})
+
+
+def test_zoom_to_fruit_frames_the_selected_fruit(tree):
+    from PIL import Image
+
+    ex = tree
+    ex.view.zoom_to(None)
+    whole = np.asarray(Image.open(io.BytesIO(ex.view.png())).convert("RGB"), float)
+    fruit = ex.model.fruit_ids()[0]
+    ex.select([fruit])
+    ex.zoom_fruit.value = True  # the button
+    bounds = ex.view.zoom
+    assert bounds == ex.model.fruit_bounds([fruit])
+    zoomed = np.asarray(Image.open(io.BytesIO(ex.view.png())).convert("RGB"), float)
+
+    def reddish(img):  # the selected fruit is drawn red
+        return ((img[..., 0] > 150) & (img[..., 1] < 90) & (img[..., 2] < 90)).mean()
+
+    assert reddish(zoomed) > 4 * max(reddish(whole), 1e-4)
+    ex.zoom_fruit.value = False
+    assert ex.view.zoom is None
