@@ -54,13 +54,13 @@ def combine(old: Mapping[str, Any] | None, new: Mapping[str, Any], mode: str) ->
 
     if mode not in MODES:
         raise ValueRefused(f"region mode is one of {', '.join(MODES)}, not {mode!r}")
-    new = check_region(new)
-    if mode == "replace" or old is None or "cells" not in old or "cells" not in new:
+    checked = check_region(new)
+    if mode == "replace" or old is None or "cells" not in old or "cells" not in checked:
         if mode == "remove":
             raise ValueRefused("nothing to remove from: the region is a pattern or empty")
-        return new
+        return checked
     have = {tuple(c) for c in old["cells"]}
-    got = {tuple(c) for c in new["cells"]}
+    got = {tuple(c) for c in checked["cells"]}
     cells = have | got if mode == "add" else have - got
     if not cells:
         raise ValueRefused("that would leave the region empty")

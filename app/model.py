@@ -572,18 +572,19 @@ class Explorer:
         from ramure.app import fruit_regions as R
 
         pick = {"pattern": R.by_pattern, "point": R.at_point, "cells": R.by_cells}.get(how)
-        if pick is None and how != "rectangle":
-            raise ValueRefused(f"select a fruit region by pattern, cells, point or rectangle, not {how!r}")
         if how == "rectangle":
             matrix, size, rect = args
             leaf, facing = R.facing_cells(self, matrix, leaf, on)
             keys = leaves_in_rectangle(facing["keys"], project_to_display(matrix, facing["centres"], size), rect)
             region = R.cells_of_keys(keys, facing["ph"])
-        else:
+        elif pick is not None:
             leaf, region = pick(self, *args, leaf=leaf, on=on)
+        else:
+            raise ValueRefused(f"select a fruit region by pattern, cells, point or rectangle, not {how!r}")
         old = self.fruit_region
         same = old is not None and old["leaf"] == leaf
-        self.fruit_region = {"leaf": leaf, "region": R.combine(old["region"] if same else None, region, mode)}
+        kept = old["region"] if old is not None and same else None
+        self.fruit_region = {"leaf": leaf, "region": R.combine(kept, region, mode)}
         return self.fruit_region
 
     def clear_fruit_region(self) -> None:

@@ -609,10 +609,10 @@ def fruit_cut_surface(explorer: Explorer, normal: Sequence[float]) -> pv.PolyDat
     """
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
-    count = len(explorer.fruit_ids())
-    if not count:
+    fruit_count = len(explorer.fruit_ids())
+    if not fruit_count:
         return None
-    gm = explorer.fruit_volumes(volume_levels=1 if count <= CUT_FINE_FRUIT else 0)
+    gm = explorer.fruit_volumes(volume_levels=1 if fruit_count <= CUT_FINE_FRUIT else 0)
     grid = to_unstructured_grid(gm)
     grid.cell_data["tissue_rgb"] = tissue_colours(gm, grid)
     leaf = np.asarray(grid.cell_data["leaf_id"], np.int64)

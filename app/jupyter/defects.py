@@ -149,6 +149,8 @@ class DefectsTab:
     def _selected(self, select):
         from ramure.gmap.organs.regions import region_text
 
+        if self.app is None:
+            return self._refused("this tab needs an explorer (DefectsTab(explorer))")
         model = self.app.model
         found = self.app.run(lambda: select(model), note=lambda: f"region: {region_text(model.fruit_region['region'])}")
         if found is not None:

@@ -521,7 +521,7 @@ def build_fruit(
     if regions:
 
         def build(changes):
-            return built_unplaced(resolve_params(preset, **{**p, **changes}), seed, *levels, tissues)[0]
+            return built_unplaced(resolve_params(preset, **{**p, **changes}), seed, levels[0], levels[1], tissues)[0]
 
         gm = _regions.apply_regions(gm, regions, build)
     _place(gm, stem, anchor, size, origin, frame, before)

@@ -23,9 +23,10 @@ the fruit unchanged (:mod:`ramure.app.fruit_regions`).  The work runs in the con
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, QTimer, Signal
+from PySide6.QtGui import QMouseEvent
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -331,6 +332,9 @@ class _RegionMouse(QObject):
 
     def eventFilter(self, obj: QObject, event: QEvent) -> bool:  # noqa: N802 - Qt's name
         kind = event.type()
+        if kind not in (QEvent.Type.MouseButtonPress, QEvent.Type.MouseMove, QEvent.Type.MouseButtonRelease):
+            return False
+        event = cast(QMouseEvent, event)
         if kind == QEvent.Type.MouseButtonPress and event.button() == Qt.MouseButton.RightButton:
             self.start = event.position().toPoint()
             self.band.setGeometry(QRect(self.start, QSize()))
