@@ -255,7 +255,16 @@ def defect_here(gm: GMap3, region: Mapping[str, Any], spec: str) -> str:
 
 
 def _split(text: str) -> list[str]:
-    """Options split on the commas outside parentheses (a path holds commas)."""
-    from ramure.gmap.organs.defect_specs import _split_options
+    """Options split on the commas outside parentheses (a path holds commas).
 
-    return _split_options(text)
+    >>> _split("path=(3, C1, *),height_mm=2")
+    ['path=(3, C1, *)', 'height_mm=2']
+    """
+    items, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if ch == "," and depth == 0:
+            items.append(text[start:i])
+            start = i + 1
+    items.append(text[start:])
+    return items

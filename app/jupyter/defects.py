@@ -25,7 +25,7 @@ undoable edit, the rest of the fruit unchanged (:mod:`ramure.app.fruit_regions`)
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import ipywidgets as W
@@ -36,6 +36,7 @@ from ramure.app.jupyter._ui import button, on_value, png_image
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
+    from ramure.app.model import Explorer
     from ramure.app.jupyter.explorer import NotebookExplorer
     from ramure.gmap.kernel.map3 import GMap3
 
@@ -129,7 +130,7 @@ class DefectsTab:
             return self._refused("this tab needs an explorer (DefectsTab(explorer))")
         text = (pattern if pattern is not None else self.region_pattern.value).strip() or "(5, C*, *)"
         self.region_pattern.value = text
-        return self._selected(lambda model: model.select_fruit_region("pattern", text))
+        return self.select_with(lambda model: model.select_fruit_region("pattern", text))
 
     def select_point(self, point: Sequence[float], radius_mm: float = 8.0, mode: str = "replace") -> dict | None:
         """Brush: the skin cells within ``radius_mm`` of ``point`` (the plant's frame)."""
@@ -144,9 +145,10 @@ class DefectsTab:
             per_mm = float(np.ptp(pos, axis=0).max()) / float(gm.meta.get("size_mm") or 65.0)
             return model.select_fruit_region("point", point, radius_mm * per_mm, mode=mode)
 
-        return self._selected(pick)
+        return self.select_with(pick)
 
-    def _selected(self, select):
+    def select_with(self, select: Callable[[Explorer], dict]) -> dict | None:
+        """Run ``select(model)`` (a region selection), say what it selected and draw it."""
         from ramure.gmap.organs.regions import region_text
 
         if self.app is None:

@@ -539,7 +539,7 @@ class NotebookExplorer:
             self.message.show(NO_RECTANGLE, "error")
             return None
         matrix, size = self.view.trame.camera()
-        return self.defects._selected(lambda model: model.select_fruit_region("rectangle", matrix, size, rect, mode=mode))
+        return self.defects.select_with(lambda model: model.select_fruit_region("rectangle", matrix, size, rect, mode=mode))
 
     def zoom_to_fruit(self, on: bool = True) -> tuple[float, ...] | None:
         """Frame the selected fruit (every fruit when none is selected) in the 3D view, or the

@@ -542,7 +542,12 @@ def build_fruit(
     }
     if regions:
         gm.meta["regions"] = [dict(r) for r in regions]
-    extent = float((before.max(axis=0) - before.min(axis=0)).max()) * gm.meta.pop("_scale")
+    scale = gm.meta.pop("_scale")
+    if regions:  # measured without them: a region never rescales the fruit
+        extent = float((before.max(axis=0) - before.min(axis=0)).max()) * scale
+    else:  # measured on the placed fruit, to the last bit as before regions existed
+        _, pos = gm.vertex_positions()
+        extent = float((pos.max(axis=0) - pos.min(axis=0)).max())
     gm.meta["extent"] = extent  # without its regions: what sizes and placements use
     gm.meta["mm_per_unit"] = gm.meta["size_mm"] / max(extent, 1e-12)
     return gm

@@ -191,3 +191,16 @@ def test_defects_placed_and_moved_in_a_region(ex):
     ex.undo()
     ex.undo()
     assert FD.fruit_settings(ex, leaf)["defects"] == []
+
+
+def test_a_session_file_keeps_the_regions(ex, tmp_path):
+    leaf = ex.selection[0]
+    ex.select_fruit_region("cells", [[4, 2], [4, 3], [5, 2], [5, 3]])
+    grown, _ = ex.regrow_fruit_region(largeur="80")
+    ex.save_session(tmp_path / "regions.json")
+    from ramure import grammars
+
+    again = Explorer(grammars.path("fruit_tree"), n=5)
+    again.load_session(tmp_path / "regions.json")
+    assert FD.fruit_settings(again, leaf)["regions"] == FD.fruit_settings(ex, leaf)["regions"]
+    np.testing.assert_array_equal(FD.damaged_fruit(again, leaf)[0].points, grown.points)
