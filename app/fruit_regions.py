@@ -85,12 +85,31 @@ def parse_params(text: str) -> dict[str, Any]:
     return out
 
 
+def split_pattern(text: str) -> dict[str, str]:
+    """A typed pattern as a region: the path, and the sub-label pattern after it if any.
+
+    >>> split_pattern("(5, C*, *) E(^b)"), split_pattern("(9, C*, *)")
+    ({'path': '(5, C*, *)', 'faces': 'E(^b)'}, {'path': '(9, C*, *)'})
+    """
+    text = str(text).strip()
+    close = text.find(")") if text.startswith("(") else -1
+    if close < 0 or not text[close + 1 :].strip():
+        return {"path": text}
+    return {"path": text[: close + 1], "faces": text[close + 1 :].strip()}
+
+
 def by_pattern(ex: Explorer, pattern: str, leaf: int | None = None, on: GMap3 | None = None) -> tuple[int, dict]:
-    """The region a label pattern names on the selected fruit (checked: it names cells)."""
+    """The region a label pattern names on the selected fruit (checked: it names cells): a
+    path, optionally followed by a sub-label pattern, ``(5, C*, *) E(^b[a-z]*$)``."""
     from ramure.gmap.organs.regions import region_volumes
 
+    region = split_pattern(pattern)
+    if on is None and "faces" in region:  # sub-labels exist once subdivided: check on the Defects view's fruit
+        from ramure.app.fruit_defects import damaged_fruit, selected_fruit
+
+        leaf = selected_fruit(ex) if leaf is None else int(leaf)
+        on = damaged_fruit(ex, leaf, specs=[])[0]
     leaf, gm = _fruit(ex, leaf, on)
-    region = {"path": str(pattern)}
     region_volumes(gm, region)
     return leaf, region
 

@@ -13,6 +13,12 @@ file holds them):
     whole branch columns (skin to trunk), what a click, a brush or a rubber band on the
     skin picks (:func:`cells_near`, :func:`skin_cells`).
 
+Either may be narrowed by ``"faces": "E(^b[a-z]*$)"``, Bohl's sub-label regular expression
+(thesis §2.4.2, ``A_{E(F)}``): only the volumes with a face of that label (``O``, ``E``,
+``Ck``) whose sub-label matches (:func:`re.search`; subdivision appends one letter per level,
+``a`` top-left, ``b`` bottom-left, ``c`` bottom-right, ``d`` top-right) stay, so ``^b`` names
+the bottom-left quarter of each skin face at every later level.
+
 **Regenerating a region** (:func:`ramure.gmap.organs.fruit.regrow_region`, then
 :func:`regrow_region` here) re-derives the fruit grammar with other
 shape parameters (a local malformation: ``largeur``, ``creux``, ``nbprotus``, ``hamp``,
@@ -38,6 +44,7 @@ True
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
@@ -52,7 +59,8 @@ from ramure.gmap.kernel.map3 import GMap3
 #: Parameters a region may not change: they change the fruit's topology.
 TOPOLOGY_PARAMS = ("precision", "ph", "carpels", "seeds", "septum")
 #: Keys of a region dict besides its selector (``path`` or ``cells``).
-REGION_KEYS = ("path", "cells", "params", "blend")
+REGION_KEYS = ("path", "cells", "faces", "params", "blend")
+_FACES = re.compile(r"^\s*(?P<label>[OoEe]|[Cc]\d+)\s*\((?P<regex>.*)\)\s*$")
 
 
 def check_region(region: Mapping[str, Any]) -> dict[str, Any]:
@@ -69,6 +77,15 @@ def check_region(region: Mapping[str, Any]) -> dict[str, Any]:
     if ("path" in region) == ("cells" in region):
         raise ValueRefused("a fruit region has either a 'path' (a label pattern such as (9, C*, *)) or 'cells'")
     out: dict[str, Any] = {}
+    if "faces" in region:
+        m = _FACES.match(str(region["faces"]))
+        if not m:
+            raise ValueRefused(f"faces is a face label and a sub-label pattern, e.g. E(^b[a-z]*$), got {region['faces']!r}")
+        try:
+            re.compile(m.group("regex"))
+        except re.error as err:
+            raise ValueRefused(f"faces {region['faces']!r}: not a regular expression ({err})") from None
+        out["faces"] = str(region["faces"]).strip()
     if "path" in region:
         from ramure.gmap.organs.excrescence import parse_path
 
@@ -124,9 +141,27 @@ def region_volumes(gm: GMap3, region: Mapping[str, Any]) -> np.ndarray:
         cells = np.asarray(region["cells"], np.int64)
         keep = (sector >= 0) & np.isin(ring * ph + sector, cells[:, 0] * ph + cells[:, 1])
         vols = np.flatnonzero(keep)
+    if "faces" in region:
+        vols = _with_faces(gm, vols, region["faces"])
     if not len(vols):
         raise ValueRefused(f"the region {region_text(region)} names no cell of this fruit")
     return np.unique(vols)
+
+
+def _with_faces(gm: GMap3, vols: np.ndarray, faces: str) -> np.ndarray:
+    """The volumes of ``vols`` with a face of the label whose sub-label matches the pattern."""
+    from ramure.gmap.kernel.prism import face_label_code
+    from ramure.gmap.kernel.storage import sublabel_name
+
+    m = _FACES.match(faces)
+    assert m is not None  # checked by check_region
+    code, pattern = face_label_code(m.group("label")), re.compile(m.group("regex"))
+    data = gm.dart_data
+    darts = np.flatnonzero((data["face"] == code) & np.isin(gm.dart_volume, vols))
+    subs = np.asarray(data["sublabel"])[darts]
+    names = {int(c): bool(pattern.search(sublabel_name(int(c)))) for c in np.unique(subs)}
+    hit = np.array([names[int(c)] for c in subs], bool) if len(subs) else np.zeros(0, bool)
+    return np.unique(gm.dart_volume[darts[hit]]).astype(np.int64)
 
 
 def region_text(region: Mapping[str, Any]) -> str:
@@ -135,10 +170,11 @@ def region_text(region: Mapping[str, Any]) -> str:
     >>> region_text({"cells": [[1, 2], [1, 3]]}), region_text({"path": "(9, C*, *)"})
     ('2 skin cells', '(9, C*, *)')
     """
+    faces = f" {region['faces']}" if "faces" in region else ""
     if "path" in region:
-        return str(region["path"])
+        return str(region["path"]) + faces
     n = len(region.get("cells", ()))
-    return f"{n} skin cell{'s' if n != 1 else ''}"
+    return f"{n} skin cell{'s' if n != 1 else ''}{faces}"
 
 
 def region_darts(gm: GMap3, region: Mapping[str, Any]) -> np.ndarray:

@@ -204,3 +204,43 @@ def test_a_session_file_keeps_the_regions(ex, tmp_path):
     again.load_session(tmp_path / "regions.json")
     assert FD.fruit_settings(again, leaf)["regions"] == FD.fruit_settings(ex, leaf)["regions"]
     np.testing.assert_array_equal(FD.damaged_fruit(again, leaf)[0].points, grown.points)
+
+
+def test_sub_label_patterns_narrow_a_region_and_survive_subdivision():
+    """Bohl's E(^b[a-z]*$): the bottom-left quarter of each skin face, at every level."""
+    once = build_fruit("round_tomato", volume_levels=1)
+    twice = build_fruit("round_tomato", volume_levels=2)
+    ring = {"path": "(5, C*, *)"}
+    quarter = {**ring, "faces": "E(^b[a-z]*$)"}
+    all_once, q_once = region_volumes(once, ring), region_volumes(once, quarter)
+    # one skin cell in four of ring 5 (each coarse branch has 2 x 2 skin children)
+    skin_once = region_volumes(once, {**ring, "faces": "E(.*)"})
+    assert len(q_once) * 4 == len(skin_once) and set(q_once) < set(skin_once) < set(all_once)
+    q_twice = region_volumes(twice, quarter)
+    assert len(q_twice) == 4 * len(q_once)  # the same quarters, subdivided once more
+    # the quarters' skin centres are the same part of the fruit: near the once-level ones
+    c1 = once.volume_centroids()[q_once].mean(axis=0)
+    c2 = twice.volume_centroids()[q_twice].mean(axis=0)
+    assert np.linalg.norm(c1 - c2) < 0.05 * float(np.ptp(once.points, axis=0).max())
+    out = regrow_region(twice, quarter, {"largeur": 70.0})
+    inside = region_darts(twice, quarter)
+    np.testing.assert_array_equal(out.points[~inside], twice.points[~inside])
+    assert out.is_valid() and not np.array_equal(out.points[inside], twice.points[inside])
+    with pytest.raises(RamureError, match="sub-label pattern"):
+        check_region({"path": "(1)", "faces": "E^b"})
+
+
+def test_a_typed_pattern_with_sub_labels(ex):
+    found = ex.select_fruit_region("pattern", "(5, C*, *) E(^[ab])")["region"]
+    assert found == {"path": "(5, C*, *)", "faces": "E(^[ab])"}
+    before, _ = FD.damaged_fruit(ex, ex.selection[0], regions=[])
+    inside = region_darts(before, found)
+    assert 0 < inside.sum() < region_darts(before, {"path": "(5, C*, *)"}).sum()
+    # on the once-subdivided fruit these are strips one cell wide: nothing of their own to move
+    edits = len(ex.session.edits)
+    with pytest.raises(RamureError, match="no vertex of its own"):
+        ex.regrow_fruit_region(largeur=72.0)
+    assert len(ex.session.edits) == edits
+    # a hail placed there lands in the strip's middle cell, by labels
+    ex.place_defect_in_region("hail:depth_mm=2")
+    assert FD.fruit_settings(ex, ex.selection[0])["defects"][0].startswith("hail:depth_mm=2,at=ring5/sector")
