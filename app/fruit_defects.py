@@ -70,13 +70,19 @@ def fruit_settings(ex: Explorer, leaf: int) -> dict:
         "size": float(spec["size"]),
         "params": dict(spec["params"]),
         "defects": list(defects),
+        "regions": list(ex.session.fruit_overrides().get(leaf, {}).get("regions", [])),
     }
 
 
 def damaged_fruit(
-    ex: Explorer, leaf: int | None = None, specs: Iterable[object] | None = None, size_mm: float | None = None
+    ex: Explorer,
+    leaf: int | None = None,
+    specs: Iterable[object] | None = None,
+    size_mm: float | None = None,
+    regions: Iterable[Mapping[str, Any]] | None = None,
 ) -> tuple[GMap3, dict]:
-    """Fruit ``leaf`` (default: the selected one) rebuilt and damaged by ``specs`` (default: its
+    """Fruit ``leaf`` (default: the selected one) rebuilt with its ``regions`` (default: its
+    recorded ones, see :mod:`ramure.app.fruit_regions`) and damaged by ``specs`` (default: its
     recorded defects); returns ``(map, facts)``.  ``size_mm`` None: the preset's real size."""
     from ramure.gmap.organs.defect_specs import apply_defects
     from ramure.gmap.organs.fruit import build_fruit
@@ -84,7 +90,9 @@ def damaged_fruit(
     leaf = selected_fruit(ex) if leaf is None else leaf
     s = fruit_settings(ex, leaf)
     specs = s["defects"] if specs is None else check_specs(specs)
-    gm = build_fruit(s["preset"], seed=s["seed"], volume_levels=LEVELS, size_mm=size_mm, **s["params"])
+    if regions is not None:
+        s["regions"] = list(regions)
+    gm = build_fruit(s["preset"], seed=s["seed"], volume_levels=LEVELS, size_mm=size_mm, regions=s["regions"], **s["params"])
     gm, facts = apply_defects(gm, specs, seed=s["seed"])
     return gm, {**facts, "leaf": leaf, "specs": list(specs)}
 
@@ -110,6 +118,11 @@ def facts_text(facts: Mapping[str, Any]) -> str:
 
 def png_bytes(gm: GMap3, size: tuple[int, int] = (420, 420)) -> bytes:
     """An off-screen PNG of the damaged fruit (tissue colours), seen from the side and above."""
+    return png_of_surface(surface(gm), size)
+
+
+def png_of_surface(skin: pv.PolyData, size: tuple[int, int] = (420, 420)) -> bytes:
+    """An off-screen PNG of a fruit's coloured skin (cell data ``rgb``), seen from the side and above."""
     import os
     import tempfile
 
@@ -119,7 +132,6 @@ def png_bytes(gm: GMap3, size: tuple[int, int] = (420, 420)) -> bytes:
     import numpy as np
     import pyvista as pv
 
-    skin = surface(gm)
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method

@@ -91,6 +91,7 @@ class Explorer:
         self.error: GrammarError | None = None  # the last grammar error, shown by the front end
         self.rho = 0.5
         self.selection: list[int] = []
+        self.fruit_region: dict | None = None  # {"leaf": id, "region": labels}: select_fruit_region
         self.last_result: RegenResult | None = None
         self.summary: str | None = None  # what the last edit changed (edit_summary)
         self.note: str | None = None  # why the last edit changed nothing on screen, if it did not
@@ -553,6 +554,114 @@ class Explorer:
         self.last_result = self.session.regrow_fruit([leaf], seed=fruit_settings(self, leaf)["seed"], defects=specs)
         self._changed()
         return shown
+
+    def select_fruit_region(
+        self, how: str, *args: Any, mode: str = "replace", leaf: int | None = None, on: GMap3 | None = None
+    ) -> dict:
+        """Select a region of the selected fruit (not an edit: a selection, kept by edits).
+
+        ``how``: ``"pattern"`` (args: a label pattern such as ``"(9, C*, *)"``), ``"cells"``
+        (args: ``[ring, sector]`` pairs), ``"point"``
+        (args: a picked skin point and a brush radius, plant units) or ``"rectangle"`` (args:
+        a camera's 4x4 world-to-clip matrix, the viewport size and a display rectangle, as
+        :meth:`leaves_in_view`).  ``mode``: replace, add or remove cells (a brush adds).
+        ``on``: the map the point or the camera refers to (the Defects view's subdivided
+        fruit), default the plant's fruit; the region is labels either way.
+        Returns :attr:`fruit_region` (``{"leaf": id, "region": labels}``).
+        """
+        from ramure.app import fruit_regions as R
+
+        pick = {"pattern": R.by_pattern, "point": R.at_point, "cells": R.by_cells}.get(how)
+        if how == "rectangle":
+            matrix, size, rect = args
+            leaf, facing = R.facing_cells(self, matrix, leaf, on)
+            keys = leaves_in_rectangle(facing["keys"], project_to_display(matrix, facing["centres"], size), rect)
+            region = R.cells_of_keys(keys, facing["ph"])
+        elif pick is not None:
+            leaf, region = pick(self, *args, leaf=leaf, on=on)
+        else:
+            raise ValueRefused(f"select a fruit region by pattern, cells, point or rectangle, not {how!r}")
+        old = self.fruit_region
+        same = old is not None and old["leaf"] == leaf
+        kept = old["region"] if old is not None and same else None
+        self.fruit_region = {"leaf": leaf, "region": R.combine(kept, region, mode)}
+        return self.fruit_region
+
+    def clear_fruit_region(self) -> None:
+        self.fruit_region = None
+
+    def regrow_fruit_region(self, blend: int = 1, **params: Any) -> tuple[GMap3, dict]:
+        """Regrow the selected region of the fruit with other shape ``params`` (a local
+        malformation: ``largeur``, ``creux``, ``hamp`` ...): one undoable edit recording the
+        region on the fruit; the rest of the fruit keeps its bytes (see
+        :mod:`ramure.gmap.organs.regions`).  ``blend``: edges over which the change fades in
+        from the region's rim (1, the default: every vertex of the region's own takes the new
+        shape, a raised or sunk patch; 2 or more peak at the middle, which on a small region
+        of a once-subdivided fruit looks crumpled).  Returns what the Defects view shows ``(map, facts)``."""
+        from ramure.app.fruit_defects import damaged_fruit, fruit_settings
+        from ramure.gmap.organs.fruit import regrow_region
+        from ramure.gmap.organs.regions import check_region
+
+        if self.fruit_region is None:
+            raise ValueRefused("select a region of a fruit first (a pattern, a click or a rubber band)")
+        if not params:
+            raise ValueRefused("give the region new parameters (e.g. largeur=70): nothing would change")
+        leaf = self.fruit_region["leaf"]
+        if leaf not in set(self.fruit_ids()):
+            raise ValueRefused(f"fruit {leaf} is no longer on the plant: select a region again")
+        s = fruit_settings(self, leaf)
+        region = check_region({**self.fruit_region["region"], "params": params, "blend": blend})
+        before, _ = damaged_fruit(self, leaf, specs=[])
+        regrow_region(before, region, params)  # refused here (nothing of its own to move, bad values) before recording
+        regions = [*s["regions"], region]
+        shown = damaged_fruit(self, leaf, regions=regions)
+        self.last_result = self.session.regrow_fruit([leaf], seed=s["seed"], regions=regions)
+        self._changed()
+        return shown
+
+    def place_defect_in_region(self, spec: str, replace: int | None = None) -> tuple[GMap3, dict]:
+        """Place defect ``spec`` (``"hail:depth_mm=3"``) in the selected region of the fruit
+        (:func:`ramure.app.fruit_regions.defect_here`) and record the fruit's defects with it:
+        one undoable edit.  ``replace``: the index of a recorded defect to move there instead
+        of adding one.  Returns what the Defects view shows ``(map, facts)``."""
+        from ramure.app.fruit_defects import damaged_fruit, fruit_settings
+        from ramure.app.fruit_regions import defect_here
+
+        if self.fruit_region is None:
+            raise ValueRefused("select a region of a fruit first (a pattern, a click or a rubber band)")
+        leaf = self.fruit_region["leaf"]
+        if leaf not in self.selection:
+            self.selection = [leaf, *[x for x in self.selection if x != leaf]]
+        specs = list(fruit_settings(self, leaf)["defects"])
+        gm, _ = damaged_fruit(self, leaf, specs=[])
+        if replace is not None:
+            if not 0 <= int(replace) < len(specs):
+                raise ValueRefused(f"the fruit has {len(specs)} defect(s): no defect {replace} to move")
+            specs[int(replace)] = defect_here(gm, self.fruit_region["region"], specs[int(replace)])
+        else:
+            specs.append(defect_here(gm, self.fruit_region["region"], spec))
+        return self.set_fruit_defects(specs)
+
+    def fruit_bounds(self, leaves: Iterable[int] | None = None) -> tuple[float, ...] | None:
+        """Bounds ``(x0, x1, y0, y1, z0, z1)`` round fruit ``leaves`` (default: the selected
+        fruit, or every fruit when none is selected), from the turtle's organs: a fruit hangs
+        from its stem point along the heading and is ``size`` long, so its box is centred half a
+        size down the heading, 0.6 size either way (a little margin).  None without fruit."""
+        organs = self.skeleton.organs
+        fruit = np.flatnonzero(np.asarray(organs.kind) == "Fruit")
+        if not len(fruit):
+            return None
+        ids = np.asarray(organs.leaf_id)[fruit]
+        wanted = [int(x) for x in (self.selection if leaves is None else leaves)]
+        chosen = fruit[np.isin(ids, wanted)] if wanted else fruit
+        if not len(chosen):
+            chosen = fruit
+        pos = np.asarray(organs.position, float)[chosen].reshape(-1, 3)
+        heading = np.asarray(organs.frame, float)[chosen][:, 0, :]
+        size = np.asarray(organs.size, float)[chosen].reshape(-1, 1)
+        centre = pos + 0.5 * size * heading
+        lo, hi = (centre - 0.6 * size).min(axis=0), (centre + 0.6 * size).max(axis=0)
+        return tuple(float(v) for v in np.column_stack([lo, hi]).ravel())
 
     def fruit_volumes(self, preset: str = "round_tomato", seed: int = 0, **kwargs: Any) -> GMap3:
         """The plant's fruit as one volumetric 3G-map (gmap), with per-fruit edits applied."""

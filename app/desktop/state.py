@@ -32,6 +32,7 @@ from ramure.app.render import plant_colors
 if TYPE_CHECKING:
     import pyvista as pv
     from ramure.app.model import Explorer
+    from ramure.gmap.kernel.map3 import GMap3
     from ramure.lsys import GrammarError
     from ramure.lsys.regeneration.mincut import CutResult
     from ramure.lsys.regeneration.regen import RegenResult
@@ -573,19 +574,47 @@ def fruit_surface(explorer: Explorer) -> pv.PolyData | None:
     return explorer.fruit_surface()
 
 
+#: Plants with at most this many fruit are cut open subdivided once (every tissue shows).
+CUT_FINE_FRUIT = 60
+
+
+def tissue_colours(gm: GMap3, grid: pv.UnstructuredGrid) -> np.ndarray:
+    """uint8 RGB per cell of ``grid`` (the grid of the plant's fruit ``gm``): each fruit's
+    tissues in its own species' colours at its ripeness (a mixed tree keeps each fruit's)."""
+    from ramure.gmap.organs.species import cell_rgb, check_stage, species_of
+
+    leaf = np.asarray(grid.cell_data["leaf_id"], np.int64)
+    tissue = np.asarray(grid.cell_data["tissue"])
+    centres = np.asarray(grid.cell_centers().points)
+    rgb = np.zeros((grid.n_cells, 3), np.uint8)
+    for fruit in gm.meta.get("fruits", []):
+        mine = leaf == int(fruit["leaf_id"])
+        if mine.any():
+            species = species_of(fruit["preset"])
+            rgb[mine] = cell_rgb(tissue[mine], species, check_stage(species, None), centres[mine], None, int(fruit["seed"]))
+    return rgb
+
+
 def fruit_cut_surface(explorer: Explorer, normal: Sequence[float]) -> pv.PolyData | None:
     """The volumetric fruit cut open: each fruit loses the half in front of a plane through its
     own centre (``normal`` points at the viewer), so every fruit shows its inside.
 
     Whole cells are kept or dropped (no clipping): the exposed faces are the cells' own walls,
-    so skin, flesh and locules read as the 3G-map's volumes.  Returns a surface with
-    ``leaf_id`` and ``tissue`` per cell, or None without fruit.
+    so skin, flesh and locules read as the 3G-map's volumes.  Up to :data:`CUT_FINE_FRUIT`
+    fruit are cut once volume-subdivided, with their tissues (skin, flesh, locules, seeds;
+    about 50 ms a fruit, in the worker); more are cut coarse (columella and pericarp only).
+    Returns a surface with
+    ``leaf_id``, ``tissue`` and ``tissue_rgb`` (each fruit's species colours for its tissues
+    at its ripeness, :func:`ramure.gmap.organs.species.cell_rgb`) per cell, or None without fruit.
     """
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
 
-    if not explorer.fruit_ids():
+    fruit_count = len(explorer.fruit_ids())
+    if not fruit_count:
         return None
-    grid = to_unstructured_grid(explorer.fruit_volumes())
+    gm = explorer.fruit_volumes(volume_levels=1 if fruit_count <= CUT_FINE_FRUIT else 0)
+    grid = to_unstructured_grid(gm)
+    grid.cell_data["tissue_rgb"] = tissue_colours(gm, grid)
     leaf = np.asarray(grid.cell_data["leaf_id"], np.int64)
     centres = np.asarray(grid.cell_centers().points)
     ids, inverse = np.unique(leaf, return_inverse=True)

@@ -308,6 +308,13 @@ class MainWindow(QMainWindow):
             tip="Colour the plant by derivation kinship to one selected leaf",
         )
         self._action(v, "Frame the whole plant", lambda: self.view.reset_camera(), "Home")
+        self._action(
+            v,
+            "Zoom to fruit",
+            self.zoom_to_fruit,
+            "F",
+            tip="Frame the selected fruit (every fruit when none is selected); Home frames the plant again",
+        )
         camera = v.addMenu("Camera")
         for name, key in (("front", "Ctrl+1"), ("side", "Ctrl+2"), ("top", "Ctrl+3"), ("iso", "Ctrl+4")):
             self._action(
@@ -580,6 +587,19 @@ class MainWindow(QMainWindow):
         self.docks[key].show()
         self.docks[key].raise_()
 
+    def zoom_to_fruit(self) -> None:
+        """Frame the selected fruit, or every fruit when none is selected (View ▸ Zoom to fruit);
+        the bounds are read in the worker, which owns the explorer."""
+        self.controller.submit("zoom to fruit", lambda ex: ex.fruit_bounds())
+
+    def _zoomed(self, job) -> None:
+        if job.error is not None:
+            self.status(f"Zoom to fruit: {job.error}")
+        elif job.result is None:
+            self.status("This plant has no fruit to zoom to")
+        else:
+            self.view.zoom_to(job.result)
+
     def set_kinship(self, on: bool) -> None:
         """Colour the selection's relatives (``on``) or the selection only."""
         self.kinship = bool(on)
@@ -690,6 +710,8 @@ class MainWindow(QMainWindow):
                 self.controller.preview(inline=False)
         elif job.name in ("undo", "redo") and job.error is None:
             self.after_history(job.result)
+        elif job.name == "zoom to fruit":
+            self._zoomed(job)
 
     def after_history(self, note: str) -> None:
         """After Undo or Redo: say what it did; the editor shows the model's text again, without

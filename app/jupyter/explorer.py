@@ -263,6 +263,13 @@ class NotebookExplorer:
             layout=W.Layout(width="110px"),
         )
         on_value(self.rectangle, self.set_rectangle_mode)
+        self.zoom_fruit = W.ToggleButton(
+            value=False,
+            description="zoom to fruit",
+            tooltip="frame the selected fruit (every fruit when none is selected); again: the whole plant",
+            layout=W.Layout(width="120px"),
+        )
+        on_value(self.zoom_fruit, lambda on: self.zoom_to_fruit(bool(on)))
         picking = (
             "click a branch to select it; ▭ rectangle: drag to select the branches inside"
             if self.view.picking
@@ -271,7 +278,7 @@ class NotebookExplorer:
         centre = W.VBox(
             [
                 self.view.widget,
-                W.HBox([self.camera, self.show_cut, self.rectangle]),
+                W.HBox([self.camera, self.show_cut, self.rectangle, self.zoom_fruit]),
                 self.preview_line,
                 W.HTML(f"<small>{picking}</small>"),
             ]
@@ -523,6 +530,26 @@ class NotebookExplorer:
         self.run(apply, note=lambda: f"rectangle: {len(found)} leaves ({mode}); {self.model.status()}")
         self.warm_up()
         return found
+
+    def select_fruit_rectangle(self, rect: Sequence[float], mode: str = "replace") -> dict | None:
+        """Select the region of the selected fruit whose skin, facing the camera, falls inside
+        ``rect`` (pixels of the 3D view, origin bottom left, as :meth:`select_rectangle`); the
+        Defects tab draws it (:meth:`~ramure.app.model.Explorer.select_fruit_region`)."""
+        if self.view.trame is None:
+            self.message.show(NO_RECTANGLE, "error")
+            return None
+        matrix, size = self.view.trame.camera()
+        return self.defects.select_with(lambda model: model.select_fruit_region("rectangle", matrix, size, rect, mode=mode))
+
+    def zoom_to_fruit(self, on: bool = True) -> tuple[float, ...] | None:
+        """Frame the selected fruit (every fruit when none is selected) in the 3D view, or the
+        whole plant again (``on=False``); returns the box framed (the desktop's View ▸ Zoom to fruit)."""
+        bounds = self.run(self.model.fruit_bounds) if on else None
+        if on and bounds is None:
+            self.message.show("this plant has no fruit to zoom to", "note")
+            return None
+        self.view.zoom_to(bounds)
+        return bounds
 
     def pick(self, cell_id: int, mode: str | None = None) -> None:
         """Select the leaf that drew mesh cell ``cell_id`` (what a click in the 3D view does)."""

@@ -148,24 +148,42 @@ def mesh_png(
     view: str = "iso",
     background: str = "white",
     fill: float = 0.9,
+    bounds: Sequence[float] | None = None,
 ) -> bytes:
     """PNG bytes of a plant mesh coloured by ``rgb`` per cell (default: bark/leaf/fruit),
-    framed so the plant fills ``fill`` of the picture."""
+    framed so the plant (or the box ``bounds``: a zoom to fruit) fills ``fill`` of the picture."""
 
     def draw(plotter) -> None:
         if mesh.n_cells:
             shown = mesh.copy(deep=False)
             shown.cell_data["rgb"] = base_colors(mesh) if rgb is None else np.asarray(rgb)
             plotter.add_mesh(shown, scalars="rgb", rgb=True)
+            if bounds is not None:
+                frame_camera(plotter, tuple(bounds), view)
+                fit_view(plotter, _corners(bounds), fill)
+                return
             frame_camera(plotter, mesh.bounds, view)
             fit_view(plotter, mesh.points, fill)
 
     return _screenshot(size, draw, background)
 
 
-def plant_png(model: Model, size: tuple[int, int] = (480, 480), view: str = "iso", show_cut: bool = False) -> bytes:
-    """PNG bytes of the model's current plant as the explorer colours it."""
-    return mesh_png(model.mesh, view_colors(model, show_cut), size, view)
+def _corners(bounds: Sequence[float]) -> np.ndarray:
+    """The 8 corners of a box ``(x0, x1, y0, y1, z0, z1)``."""
+    b = np.reshape(np.asarray(bounds, float), (3, 2))
+    return np.array(np.meshgrid(*b, indexing="ij")).reshape(3, -1).T
+
+
+def plant_png(
+    model: Model,
+    size: tuple[int, int] = (480, 480),
+    view: str = "iso",
+    show_cut: bool = False,
+    bounds: Sequence[float] | None = None,
+) -> bytes:
+    """PNG bytes of the model's current plant as the explorer colours it (``bounds``: framed on
+    that box, e.g. :meth:`ramure.app.model.Explorer.fruit_bounds`)."""
+    return mesh_png(model.mesh, view_colors(model, show_cut), size, view, bounds=bounds)
 
 
 def fruit_png(
@@ -294,6 +312,7 @@ class PlantView:
         self.image = png_image()
         self._shown: tuple | None = None  # the key of what the view shows
         self._png: tuple[tuple, bytes] | None = None
+        self.zoom: tuple[float, ...] | None = None  # a box the view is framed on (zoom to fruit), None: the plant
         self.trame: TrameView | None = None
         self.fallback_reason: str | None = None
         if self.backend != "static":
@@ -312,14 +331,21 @@ class PlantView:
     def key(self) -> tuple:
         """What the picture depends on (model version, selection, cut, camera, size); equal keys, same picture."""
         m = self.app.model
-        return (m.version, tuple(m.selection), m.rho if self.show_cut else None, self.show_cut, self.view, self.size)
+        return (m.version, tuple(m.selection), m.rho if self.show_cut else None, self.show_cut, self.view, self.size, self.zoom)
 
     def png(self) -> bytes:
         """The current picture (re-rendered only when something changed)."""
         key = self.key()
         if self._png is None or self._png[0] != key:
-            self._png = (key, plant_png(self.app.model, self.size, self.view, self.show_cut))
+            self._png = (key, plant_png(self.app.model, self.size, self.view, self.show_cut, self.zoom))
         return self._png[1]
+
+    def zoom_to(self, bounds: Sequence[float] | None) -> None:
+        """Frame the box ``bounds`` (a fruit), or the whole plant again (None)."""
+        self.zoom = None if bounds is None else tuple(float(v) for v in bounds)
+        if self.trame is not None:
+            self.trame.zoom_to(self.zoom)
+        self.refresh()
 
     def refresh(self) -> None:
         """Redraw after a change of plant, selection, camera side or cut preview."""
@@ -643,6 +669,16 @@ class TrameView:
         self.plotter.camera_position = [tuple(centre + direction * size * 2.2), tuple(centre), (0.0, 0.0, 1.0)]
         self.plotter.reset_camera(bounds=tuple(b.ravel()))  # type: ignore[call-arg]  # pyvista stubs: decorated method
         self._frame(mesh)
+
+    def zoom_to(self, bounds: Sequence[float] | None) -> None:
+        """Frame ``bounds`` from where the camera looks now (None: the whole plant again)."""
+        model = self.owner.app.model
+        if bounds is None:
+            self.reframe(model.mesh)
+        else:
+            frame_camera(self.plotter, tuple(bounds), self.owner.view)
+            fit_view(self.plotter, _corners(bounds), 0.9, top=TOOLBAR_BAND / self.plotter.window_size[1])
+        self._push()
 
     def _frame(self, mesh) -> None:
         if mesh.n_cells:

@@ -33,7 +33,7 @@ from ramure.gmap.organs.malform import shape_facts
 DEFECT_OPTIONS = {
     "shrink": ("rate", "steps", "kind", "wrinkle"),
     "rot": ("vertex", "at", "coefficients", "rate", "steps"),
-    "hail": ("count", "depth_mm", "stop", "vertex", "healed"),
+    "hail": ("count", "depth_mm", "stop", "vertex", "at", "healed"),
     "crack": ("kind", "sector", "rings", "depth", "width_mm", "healed"),
     "excrescence": ("path", "height_mm", "segments", "taper"),
 }
@@ -204,6 +204,8 @@ def _apply_one(gm, kind, opts, size_mm, seed):
             raise GMapError("excrescence: give a path, e.g. excrescence:path=(9, C*, *)")
         return excrescence(gm, opts["path"], opts.get("height_mm", 3.0), opts.get("segments", 1), opts.get("taper", 0.5), size_mm)
     vertices = None if "vertex" not in opts else [opts["vertex"]]
+    if "at" in opts:  # the middle of a branch's skin, named by labels (survives subdivision)
+        vertices = [skin_vertex_at(gm, *opts["at"])]
     return hail(
         gm, vertices, opts.get("depth_mm", (2.0, 6.0)), opts.get("count"), opts.get("stop"), size_mm, seed, opts.get("healed", 0)
     )

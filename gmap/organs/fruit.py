@@ -52,7 +52,7 @@ parameters ``carpels``, ``exocarp``, ``mesocarp``, ``endocarp``, ``septum``,
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -61,6 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from ramure.gmap.kernel import frames as _frames
 from ramure.gmap.kernel import prism as _prism
 from ramure.gmap.kernel import subdivide as _subdivide
+from ramure.gmap.organs import regions as _regions
 from ramure.gmap.organs import species as _species
 from ramure.gmap.organs import tissue as _tissue
 from ramure.gmap.kernel.errors import ValueRefused
@@ -469,6 +470,7 @@ def build_fruit(
     anchor: str = "center",
     ripeness: str | None = None,
     size_mm: float | None = None,
+    regions: Sequence[Mapping[str, Any]] = (),
     **params: object,
 ) -> GMap3:
     """Build a volumetric fruit from a preset and parameter overrides.
@@ -486,6 +488,11 @@ def build_fruit(
     :mod:`ramure.gmap.organs.species`) and the real size ``size_mm`` (the
     preset's, :data:`ramure.gmap.organs.species.SIZE_MM`, unless given): the
     millimetres of the defects and of the pictures.
+
+    ``regions`` (see :mod:`ramure.gmap.organs.regions`): parts of the fruit, named by
+    label, re-derived with their own shape parameters after the rest is built; the
+    placement (centre, size) is that of the fruit without them, so a region never moves
+    the rest of the fruit.
 
     >>> gm = build_fruit("banana", precision=6, ph=6)
     >>> gm.counts()["volumes"], gm.is_valid()
@@ -509,15 +516,16 @@ def build_fruit(
             f"{levels[1]}): lower precision or ph, or subdivide fewer times"
         )
     t0 = time.perf_counter()
-    gm = build_shape(**p)
-    stem = _stem_point(gm, p)
-    if volume_levels:
-        gm = _subdivide.volume(gm, volume_levels)
-        if tissues:
-            gm = _tissue.differentiate(gm, rng=np.random.default_rng(seed), **{k: p[k] for k in _tissue.DEFAULTS})
-    if surface_levels:
-        gm = _subdivide.surface(gm, surface_levels)
-    _place(gm, stem, anchor, size, origin, frame)
+    gm, stem = built_unplaced(p, seed, volume_levels, surface_levels, tissues)
+    _, before = gm.vertex_positions()
+    if regions:
+
+        def build(changes):
+            return built_unplaced(resolve_params(preset, **{**p, **changes}), seed, levels[0], levels[1], tissues)[0]
+
+        gm = _regions.apply_regions(gm, regions, build)
+    _place(gm, stem, anchor, size, origin, frame, before)
+    placed = gm.meta
     gm.meta = {
         "preset": preset,
         "species": species,
@@ -529,10 +537,36 @@ def build_fruit(
         "volume_levels": int(volume_levels),
         "surface_levels": int(surface_levels),
         "seconds": time.perf_counter() - t0,
+        "placement": placed["placement"],
+        "_scale": placed["_scale"],
     }
-    _, pos = gm.vertex_positions()
-    gm.meta["mm_per_unit"] = gm.meta["size_mm"] / max(float((pos.max(axis=0) - pos.min(axis=0)).max()), 1e-12)
+    if regions:
+        gm.meta["regions"] = [dict(r) for r in regions]
+    scale = gm.meta.pop("_scale")
+    if regions:  # measured without them: a region never rescales the fruit
+        extent = float((before.max(axis=0) - before.min(axis=0)).max()) * scale
+    else:  # measured on the placed fruit, to the last bit as before regions existed
+        _, pos = gm.vertex_positions()
+        extent = float((pos.max(axis=0) - pos.min(axis=0)).max())
+    gm.meta["extent"] = extent  # without its regions: what sizes and placements use
+    gm.meta["mm_per_unit"] = gm.meta["size_mm"] / max(extent, 1e-12)
     return gm
+
+
+def built_unplaced(
+    p: Mapping[str, Any], seed: int, volume_levels: int, surface_levels: int, tissues: bool = True
+) -> tuple[GMap3, np.ndarray]:
+    """The fruit of resolved parameters ``p`` in its own frame (before placement), and its
+    stem point: shape, volume subdivisions, tissues, surface subdivisions."""
+    gm = build_shape(**p)
+    stem = _stem_point(gm, p)
+    if volume_levels:
+        gm = _subdivide.volume(gm, volume_levels)
+        if tissues:
+            gm = _tissue.differentiate(gm, rng=np.random.default_rng(seed), **{k: p[k] for k in _tissue.DEFAULTS})
+    if surface_levels:
+        gm = _subdivide.surface(gm, surface_levels)
+    return gm, stem
 
 
 def _stem_point(gm, p):
@@ -543,8 +577,9 @@ def _stem_point(gm, p):
     return gm.points[mask].mean(axis=0)
 
 
-def _place(gm, stem, anchor, size, origin, frame):
-    _, pos = gm.vertex_positions()
+def _place(gm, stem, anchor, size, origin, frame, pos):
+    """Move, scale and turn ``gm`` as :func:`build_fruit` says, by the vertex positions ``pos``
+    of the fruit without regions; the scale is left in ``gm.meta["_scale"]``."""
     lo, hi = pos.min(axis=0), pos.max(axis=0)
     ref = 0.5 * (lo + hi) if anchor == "center" else stem
     scale = 1.0
@@ -558,3 +593,29 @@ def _place(gm, stem, anchor, size, origin, frame):
         rot = np.stack([f[1], f[2], f[0]])  # local x -> L, y -> U, z (axis) -> H
     off = np.zeros(3) if origin is None else np.asarray(origin, float).reshape(3)
     gm.transform(rotation=rot, scale=scale, offset=off - scale * ref @ rot)
+    gm.meta = {**(gm.meta or {}), "_scale": scale, "placement": {"rotation": rot.tolist(), "scale": scale}}
+
+
+def regrow_region(gm: GMap3, region: Mapping[str, Any], params: Mapping[str, Any], blend: int | None = None) -> GMap3:
+    """``gm`` (a fruit :func:`build_fruit` made) with ``region`` re-derived with shape
+    ``params``: the fruit is built again from ``gm.meta``'s recipe, as is and with the
+    changes, in ``gm``'s frame, and the region's own vertices move by the difference (see
+    :mod:`ramure.gmap.organs.regions`); every dart outside the region keeps its bytes.
+
+    >>> gm = build_fruit("round_tomato", volume_levels=1)
+    >>> out = regrow_region(gm, {"cells": [[4, 2], [4, 3]]}, {"largeur": 70.0})
+    >>> out.is_valid(), bool((out.points != gm.points).any())
+    (True, True)
+    """
+    meta = gm.meta or {}
+    if "preset" not in meta or "params" not in meta:
+        raise ValueRefused("this map does not say how it was built (meta preset and params): build it with build_fruit")
+    changes = _regions.check_params(params)
+    levels = (int(meta.get("volume_levels", 0)), int(meta.get("surface_levels", 0)))
+    place = meta.get("placement") or {"rotation": np.eye(3).tolist(), "scale": 1.0}
+    pair = []
+    for p in (resolve_params(meta["preset"], **meta["params"]), resolve_params(meta["preset"], **{**meta["params"], **changes})):
+        built, _ = built_unplaced(p, int(meta.get("seed", 0)), *levels)
+        built.transform(rotation=np.asarray(place["rotation"], float), scale=float(place["scale"]))
+        pair.append(built)
+    return _regions.regrow_region(gm, region, pair[0], pair[1], blend=blend)

@@ -37,8 +37,10 @@ if TYPE_CHECKING:
     from ramure.lsys.interpretation.turtle import Skeleton
 
 #: Keys of an override besides fruit parameters (``defects``: defect specs recorded on the
-#: fruit, carried in ``meta["fruits"]`` and applied by whoever shows the damaged fruit).
-OVERRIDE_KEYS = ("preset", "seed", "size", "defects")
+#: fruit, carried in ``meta["fruits"]`` and applied by whoever shows the damaged fruit;
+#: ``regions``: parts of the fruit regrown with their own parameters, see
+#: :mod:`ramure.gmap.organs.regions`, applied when the fruit is built).
+OVERRIDE_KEYS = ("preset", "seed", "size", "defects", "regions")
 
 
 def _organ_arrays(positions, frames, sizes, leaf_ids):
@@ -116,7 +118,13 @@ def fruits_from_organs(
     local = {}
     fruits = []
     for k, spec in enumerate(specs):  # one step per fruit, not per dart
-        key = (spec["preset"], tuple(sorted(spec["params"].items())), spec["seed"] if tissues_random else None)
+        regions = list(spec.get("regions", []))
+        key = (
+            spec["preset"],
+            tuple(sorted(spec["params"].items())),
+            spec["seed"] if tissues_random or regions else None,
+            repr(regions),
+        )
         if key not in local:
             gm = build_fruit(
                 spec["preset"],
@@ -124,10 +132,10 @@ def fruits_from_organs(
                 volume_levels=volume_levels,
                 surface_levels=surface_levels,
                 anchor="stem",
+                regions=regions,
                 **spec["params"],
             )
-            _, p = gm.vertex_positions()
-            local[key] = (gm, float((p.max(axis=0) - p.min(axis=0)).max()))
+            local[key] = (gm, float(gm.meta["extent"]))  # without regions: they never move the rest
         gm, extent = local[key]
         gm = gm.copy()
         f = fruit_frame(fr[k])
@@ -154,6 +162,7 @@ def fruits_from_organs(
                 "size": float(s["size"]),
                 "params": s["params"],
                 "defects": list(s.get("defects", [])),
+                "regions": list(s.get("regions", [])),
             }
             for lid, s in zip(leaf, specs)
         ],

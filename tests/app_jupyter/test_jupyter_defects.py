@@ -64,3 +64,61 @@ def test_bad_specs_are_refused_and_change_nothing(tree):
     tab.specs.value = "excrescence:path=(3, C1, 0)"  # an inner cell: no free face
     tab.apply_button.click()
     assert len(ex.history) == edits and "free face" in ex.message.text
+
+
+def test_defects_tab_selects_a_region_shows_it_and_regrows_it(tree, tmp_path):
+    from PIL import Image
+
+    ex, tab = tree, tree.defects
+    fruit = ex.model.fruit_ids()[0]
+    ex.select([fruit])
+    tab.show()
+    plain = np.asarray(Image.open(io.BytesIO(tab.picture.value)).convert("RGB"), float)
+    tab.region_pattern.value = "(4, C*, *)"
+    tab.region_button.click()
+    assert ex.model.fruit_region == {"leaf": fruit, "region": {"path": "(4, C*, *)"}}
+    lit = np.asarray(Image.open(io.BytesIO(tab.picture.value)).convert("RGB"), float)
+    blue = (lit[..., 2] > lit[..., 0] + 15).sum()  # the highlight: blue over a red fruit
+    assert blue > 200 and (plain[..., 2] > plain[..., 0] + 15).sum() < blue / 10
+    (tmp_path / "region.png").write_bytes(tab.picture.value)
+    # a brush at a skin point adds cells (a pattern is replaced by them)
+    gm = ex.model.fruit_volume(fruit)
+    from ramure.gmap.organs.regions import skin_cells
+
+    centres, cells, _ = skin_cells(gm)
+    found = tab.select_point(centres[len(centres) // 2], radius_mm=1.0)
+    assert found is not None and found["region"]["cells"] == [cells[len(cells) // 2].tolist()]
+    tab.region_pattern.value = "(3, C*, *)"
+    tab.region_button.click()
+    edits = len(ex.history)
+    tab.region_params.value = "largeur=80"
+    tab.regrow_button.click()
+    assert len(ex.history) == edits + 1 and ex.history[-1]["settings"]["regions"][0]["path"] == "(3, C*, *)"
+    grown = np.asarray(Image.open(io.BytesIO(tab.picture.value)).convert("RGB"), float)
+    assert np.abs(grown - lit).max() > 50
+    tab.region_params.value = "precision=3"
+    tab.regrow_button.click()  # refused: a region keeps the fruit's cells
+    assert "cannot change precision" in ex.message.text and len(ex.history) == edits + 1
+    ex.undo()
+    assert "regions" not in ex.model.session.fruit_overrides().get(fruit, {})
+
+
+def test_zoom_to_fruit_frames_the_selected_fruit(tree):
+    from PIL import Image
+
+    ex = tree
+    ex.view.zoom_to(None)
+    whole = np.asarray(Image.open(io.BytesIO(ex.view.png())).convert("RGB"), float)
+    fruit = ex.model.fruit_ids()[0]
+    ex.select([fruit])
+    ex.zoom_fruit.value = True  # the button
+    bounds = ex.view.zoom
+    assert bounds == ex.model.fruit_bounds([fruit])
+    zoomed = np.asarray(Image.open(io.BytesIO(ex.view.png())).convert("RGB"), float)
+
+    def reddish(img):  # the selected fruit is drawn red
+        return ((img[..., 0] > 150) & (img[..., 1] < 90) & (img[..., 2] < 90)).mean()
+
+    assert reddish(zoomed) > 4 * max(reddish(whole), 1e-4)
+    ex.zoom_fruit.value = False
+    assert ex.view.zoom is None

@@ -441,6 +441,16 @@ class PlantView(QWidget):
         self.auto_framed = True
         self.redraw()
 
+    def zoom_to(self, bounds: Sequence[float] | None) -> None:
+        """Frame ``bounds`` (x0, x1, y0, y1, z0, z1: a fruit, see
+        :meth:`ramure.app.model.Explorer.fruit_bounds`) from the current view direction; the
+        plant is no longer refitted on a resize (the user chose this view)."""
+        if bounds is None:
+            return
+        scene.fit_camera(self.plotter, bounds, self.view_name, clip_bounds=self.shown_bounds())
+        self.auto_framed = False
+        self.redraw()
+
     def reset_clipping(self) -> None:
         """The camera's near and far planes around everything shown (the camera does not move)."""
         clip = self.shown_bounds()
@@ -607,10 +617,13 @@ class PlantView(QWidget):
             return np.zeros((0, 3), np.uint8)
         rgb = np.empty((self.fruit.n_cells, 3), np.uint8)
         rgb[:] = FRUIT_RGB
-        if "tissue" in self.fruit.cell_data:  # a cut fruit: inner tissues paler than the skin
-            level = np.clip(np.asarray(self.fruit.cell_data["tissue"], float), 0, 3)[:, None] * 0.22
-            rgb[:] = np.asarray(FRUIT_RGB) + (255 - np.asarray(FRUIT_RGB)) * level
-        rgb[leaf_mask(self.fruit.cell_data["leaf_id"], selection)] = FRUIT_SELECTED
+        selected = leaf_mask(self.fruit.cell_data["leaf_id"], selection)
+        if "tissue_rgb" in self.fruit.cell_data:  # a cut fruit: every tissue in its species' colour
+            rgb[:] = np.asarray(self.fruit.cell_data["tissue_rgb"], np.uint8)
+            tint = 0.8 * rgb[selected] + 0.2 * np.asarray(FRUIT_SELECTED, float)  # selected: tinted, still readable
+            rgb[selected] = np.clip(np.round(tint), 0, 255).astype(np.uint8)
+            return rgb
+        rgb[selected] = FRUIT_SELECTED
         return rgb
 
     def set_fruit_selection(self, selection: Collection[int]) -> None:
