@@ -129,9 +129,11 @@ def random_recipe(rng: np.random.Generator, preset: str = "round_tomato", levels
     A malformation with probability 0.3 (a named shape or Grammar 3.1 at a rate up to 0.4),
     else a natural variation (Grammar 3.1 at a rate up to 0.06), so clean fruit vary too.
     Then 0, 1 or 2 defect kinds (:data:`DEFECT_COUNT_P`) drawn without replacement, each
-    kind of :data:`DEFECT_KINDS` as likely; ranges in :data:`RANDOM_RANGES`.
+    kind of :data:`DEFECT_KINDS` as likely; ranges in :data:`RANDOM_RANGES`.  Last, the
+    ripeness: one of the species' stages (:func:`ramure.gmap.organs.species.stages`), each as likely.
     """
     from ramure.gmap.organs.malform import SHAPES
+    from ramure.gmap.organs.species import species_of, stages
 
     r = RANDOM_RANGES
     variation = round(float(rng.uniform(*r["variation_rate"])), 3)  # used when not malformed
@@ -145,12 +147,14 @@ def random_recipe(rng: np.random.Generator, preset: str = "round_tomato", levels
     kinds = [str(k) for k in rng.choice(DEFECT_KINDS, n, replace=False)]
     specs = [(kind, _random_spec(rng, kind, levels)) for kind in kinds]
     specs.sort(key=lambda s: APPLY_ORDER.index(s[0]))
+    seed = int(rng.integers(0, 2**31 - 1))
     return {
         "preset": preset,
         "malform": malform,
         "variation": variation,
         "defects": specs,
-        "seed": int(rng.integers(0, 2**31 - 1)),
+        "seed": seed,
+        "ripeness": str(rng.choice(stages(species_of(preset)))),
     }
 
 
@@ -202,7 +206,14 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
         params = malform_params(recipe["preset"], seed=recipe["seed"], **malform)
     elif recipe.get("variation"):  # a slight natural variation of a fruit that is not malformed
         params = malform_params(recipe["preset"], seed=recipe["seed"], rate=recipe["variation"])
-    clean = build_fruit(recipe["preset"], seed=recipe["seed"], volume_levels=levels, **params)
+    clean = build_fruit(
+        recipe["preset"],
+        seed=recipe["seed"],
+        volume_levels=levels,
+        ripeness=recipe.get("ripeness"),
+        size_mm=size_mm,
+        **params,
+    )
     specs = [(kind, _fit(clean, kind, dict(opts))) for kind, opts in recipe["defects"]]
     from ramure.gmap.organs.defects import mm_per_unit
 
@@ -210,6 +221,7 @@ def build_one(recipe: dict, levels: int = 1, size_mm: float = 65.0) -> tuple[GMa
     labels = {
         "preset": recipe["preset"],
         "seed": recipe["seed"],
+        "ripeness": clean.meta.get("ripeness"),
         "model_frame": {"centre": [float(x) for x in (lo + hi) / 2], "mm_per_unit": float(mm_per_unit(clean, size_mm))},
         "params": params,
         "variation": 0.0 if malform else recipe.get("variation", 0.0),
@@ -316,17 +328,22 @@ def close_plotter() -> None:
 
 
 def _cell_rgb(surface) -> np.ndarray:
-    """Picture colour of each surface face, from its cell's tissue."""
+    """Picture colour of each surface face: its cell's species colour, ripeness and damage marks
+    (``rgb``, :func:`ramure.app.fruit_look.coloured_grid`), else its tissue's plain colour."""
     from ramure.gmap.organs.tissue import tissue_rgb
 
+    if "rgb" in surface.cell_data:
+        return np.asarray(surface.cell_data["rgb"], np.uint8)
     return tissue_rgb(surface.cell_data["tissue"])
 
 
 def _mm_grid(gm, centre, scale):
-    """The map as a grid in millimetres about ``centre`` (model units times ``scale``)."""
-    from ramure.gmap.kernel.pyvista import to_unstructured_grid
+    """The map as a grid in millimetres about ``centre`` (model units times ``scale``), its cells
+    coloured as the species looks at its ripeness, with the defects' marks (corky healed walls,
+    wet wounds, bruises, rot): :func:`ramure.app.fruit_look.coloured_grid`, seeded by the fruit."""
+    from ramure.app.fruit_look import coloured_grid
 
-    grid = to_unstructured_grid(gm)
+    grid = coloured_grid(gm, seed=int(gm.meta.get("seed", 0) or 0))
     grid.points = (np.asarray(grid.points) - centre) * scale
     return grid
 
@@ -634,7 +651,7 @@ def make_dataset(
     defects: str = "random",
     preset: str = "round_tomato",
     levels: int = 1,
-    size_mm: float = 65.0,
+    size_mm: float | None = None,
     workers: int = 2,
     picture: tuple[int, int] = PICTURE,
     resume: bool = False,
@@ -648,6 +665,8 @@ def make_dataset(
     """Write ``count`` labelled fruit into ``folder`` (see the module docstring); the summary
     (the manifest, plus ``"seconds"``).
 
+    ``size_mm``: the fruit's real size in millimetres (default the preset's:
+    :data:`ramure.gmap.organs.species.SIZE_MM`, a cherry tomato 25, a banana 180).
     ``coco_masks``: ``"rle"`` (exact) or ``"polygon"`` in the COCO files (see
     :func:`ramure.app.fruit_coco.coco_records`).  ``scheduler``: None (a process pool of ``workers``), ``"local"`` (a Dask
     ``LocalCluster`` of ``workers`` processes) or a Dask scheduler address
@@ -673,6 +692,10 @@ def make_dataset(
         raise ValueRefused(f"--views must be a whole number in 1..64, got {views}")
     if stage not in (*STAGES, "mixed"):
         raise ValueRefused(f"--stage must be one of {', '.join(STAGES)} or mixed, got {stage!r}")
+    if size_mm is None:
+        from ramure.gmap.organs.species import SIZE_MM
+
+        size_mm = SIZE_MM[preset]
     if not (np.isfinite(size_mm) and size_mm > 0):
         raise ValueRefused(f"--size-mm must be a finite number > 0, got {size_mm}")
     if coco_masks not in MASK_FORMATS:

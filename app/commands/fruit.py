@@ -330,7 +330,12 @@ def register(sub: Subparsers) -> None:
         choices=[1, 2],
         help="volume subdivisions: 1 (exocarp, mesocarp; fast, default) or 2 (+ endocarp, locules, seeds)",
     )
-    b.add_argument("--size-mm", type=float, default=65.0, help="fruit size in millimetres (default 65)")
+    b.add_argument(
+        "--size-mm",
+        type=float,
+        default=None,
+        help="fruit size in millimetres (default the preset's real size: cherry tomato 25, round tomato 65, banana 180...)",
+    )
     b.add_argument("--workers", type=int, default=2, help="worker processes (default 2; with --scheduler local, Dask workers)")
     b.add_argument("--views", type=int, default=4, help="pictures per fruit, each with its own camera and light (default 4)")
     b.add_argument(
