@@ -779,7 +779,7 @@ def undrawn_symbols(grammar: Grammar) -> list[str]:
     """
     rules = [*grammar.rules, *grammar.decomposition, *grammar.interpretation]
     written = {m.symbol for m in grammar.axiom} | {m.symbol for r in rules for m in r.successor}
-    rewritten = {r.pred.symbol for r in rules}
+    rewritten = {p.symbol for r in rules for p in r.strict}  # cpfg: a predecessor of several modules
     special = {"%", "*", *QUERIES}  # the branch cut, ABOP's any-context, the query modules
     marks = {entry[1] for entry in grammar.amap}  # '#amap' markers mean architecture, not drawing
     return sorted(

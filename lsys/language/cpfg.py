@@ -23,7 +23,22 @@ cpfg                             Ramure
 ``warnings`` / ``no warnings``   ignored (after ``homomorphism``/``decomposition``)
 ``ran(x)`` / ``nran(m, s)``      ``uniform(0, x)`` / ``normal(m, s)``
 ``endlsystem``                   end of the grammar
+``XF(x) --> ...``                a predecessor of several modules (``#dialect cpfg``)
 ===============================  ========================================================
+
+**Module names.**  cpfg's lexer reads a module name as *one character*
+(``lsys_input.l``: a symbol is any single character but ``< > : *`` and
+blanks; ``@``, ``?`` and ``~`` take the next character as part of the
+command), so ``spikef`` is the six modules ``s p i k e f`` and ``XF(x)`` is
+``X`` then ``F(x)``: the parameters belong to the character before ``(``.
+Ramure's ``.lsys`` language reads undeclared names the same way.  A strict
+predecessor may be several modules (cpfg's ``Strictpred : FormalModules``):
+it matches a run of modules with the same symbols and numbers of
+parameters, nothing skipped, and the run is rewritten as a whole (see
+:meth:`ramure.lsys.LSystem.rewrite`).  A module written with another number
+of parameters than a rule's predecessor is not rewritten by that rule, as
+in cpfg (``.lsys`` refuses it).  Both come with ``#dialect cpfg``, which
+the translation ends with.
 
 Refused with a :class:`~ramure.errors.GrammarError` naming the construct
 (line, column, caret): ``#include`` (view, surface and other files) and the
@@ -616,6 +631,7 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
     head = [f"/* Imported from {name} by 'ramure import'. The cpfg view file (angle, widths) is not read. */"]
     if angle is not None:
         head.append(f"#angle {angle:g}")
+    head.append("#dialect cpfg")  # cpfg's matching and turtle (lsys.language.grammar)
     body = [line.rstrip() for line in translate(text, filename).split("\n")]
     while body and not body[-1]:
         body.pop()
@@ -630,14 +646,13 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     programs = translator.programs(lines)
     rule_blocks = translator.parsed_rule_blocks(lines)
     every = [*programs.values(), *(b for pair in rule_blocks.values() for b in pair if b is not None)]
-    body = "\n".join(out.text for out in outs) + _globals(every, outs)
+    body = "\n".join(out.text for out in outs) + _globals(every, outs) + "\n#dialect cpfg"
     try:
         grammar = parse_grammar(body, filename)
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
     grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
-    grammar.dialect = "cpfg"  # the turtle reads @Gc, @Ge and @o as cpfg does
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         if rule.line in rule_blocks:
             rule.blocks = rule_blocks[rule.line]
