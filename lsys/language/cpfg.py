@@ -24,6 +24,8 @@ cpfg                             Ramure
 ``ran(x)`` / ``nran(m, s)``      ``uniform(0, x)`` / ``normal(m, s)``
 ``endlsystem``                   end of the grammar
 ``XF(x) --> ...``                a predecessor of several modules (``#dialect cpfg``)
+``func(id, x)``                  the view file's ``.func`` functions
+                                 (:mod:`ramure.lsys.language.cpfg_functions`)
 ===============================  ========================================================
 
 **Module names.**  cpfg's lexer reads a module name as *one character*
@@ -114,8 +116,9 @@ class _Out:
 
 
 class _Translator:
-    def __init__(self, filename=None) -> None:
+    def __init__(self, filename=None, functions=None) -> None:
         self.filename = filename
+        self.functions = functions or {}  # func(id, x) of the view file (lsys.language.cpfg_functions)
         self.section = "production"
         self.lsystems = 0
         self.ended = False
@@ -190,7 +193,7 @@ class _Translator:
                     continue
                 text, line, column = block
                 try:
-                    programs.append(parse_program(text, line, column, lines))
+                    programs.append(parse_program(text, line, column, lines, self.functions))
                 except GrammarError as err:
                     err.filename = self.filename
                     raise
@@ -254,7 +257,7 @@ class _Translator:
             if key in out:
                 raise self.error(f"a second '{name}:' block", number, 1, lines[number - 1])
             try:
-                out[key] = parse_program("\n".join(pieces), number, column, lines)
+                out[key] = parse_program("\n".join(pieces), number, column, lines, self.functions)
             except GrammarError as err:
                 err.filename = self.filename
                 raise
@@ -627,6 +630,17 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
     Errors are those of :func:`parse_cpfg` (``.l`` lines and columns).
     """
     parse_cpfg(text, filename)  # refuse what cannot be translated, at the .l file's line and column
+    calls = re.search(r"\bfunc\s*\(", strip_c_comments(text))
+    if calls:
+        line = text[: calls.start()].count("\n") + 1
+        column = calls.start() - (text.rfind("\n", 0, calls.start()) + 1) + 1
+        raise GrammarError(
+            "func(id, x) reads the view file's function files, which a .lsys file cannot name: open the .l file itself",
+            line,
+            column,
+            text.split("\n")[line - 1],
+            filename=filename,
+        )
     name = pathlib.Path(filename).name if filename else "a cpfg file"
     head = [f"/* Imported from {name} by 'ramure import'. The cpfg view file (angle, widths) is not read. */"]
     if angle is not None:
@@ -641,14 +655,15 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
 def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     """Parse a cpfg ``.l`` file's text; errors name the ``.l`` line and column."""
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    translator = _Translator(filename)
+    functions, names = _view_functions(text, filename)
+    translator = _Translator(filename, functions)
     outs = translator.translate(text)
     programs = translator.programs(lines)
     rule_blocks = translator.parsed_rule_blocks(lines)
     every = [*programs.values(), *(b for pair in rule_blocks.values() for b in pair if b is not None)]
     body = "\n".join(out.text for out in outs) + _globals(every, outs) + "\n#dialect cpfg"
     try:
-        grammar = parse_grammar(body, filename)
+        grammar = parse_grammar(body, filename, functions, names)
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
@@ -662,6 +677,20 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
         rule.text = bare[rule.line - 1].strip()  # and name the rule as the .l file writes it
     _locate_in_l_file(grammar, outs, lines, filename)
     return grammar
+
+
+def _view_functions(text, filename):
+    """({"func": tables} or {}, {function-set name: id}) of the view file beside ``filename``,
+    read only when the text calls ``func`` (:mod:`ramure.lsys.language.cpfg_functions`)."""
+    if filename is None or not re.search(r"\bfunc\s*\(", strip_c_comments(text)):
+        return {}, {}
+    from .cpfg_functions import view_tables
+    from .grammar import confinement_root
+
+    root = confinement_root(filename)
+    assert root is not None  # a file name gives a folder
+    tables, names = view_tables(filename, root)
+    return ({"func": tables} if tables is not None else {}), names
 
 
 def _globals(programs, outs):
@@ -688,6 +717,11 @@ def _locate_in_l_file(grammar, outs, lines, filename):
 def _in_cpfg_words(err, outs, lines, filename):
     """The error of the translated text, located in the ``.l`` file and worded in cpfg's keywords."""
     message = err.message
+    if message.startswith("unknown function 'func'"):
+        message += (
+            ": func(id, x) reads the functions a cpfg view file names ('function: f.func' lines), "
+            "and no view file beside the .l file (same name with .v) names any"
+        )
     for lsys_word, cpfg_word in (("'n: ...'", "'derivation length: ...'"), ("'w: ...'", "'axiom: ...'")):
         message = message.replace(lsys_word, cpfg_word)
     line, column, source = err.line, err.column, err.source_line

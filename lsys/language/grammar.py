@@ -1082,8 +1082,13 @@ def confinement_root(filename: str | os.PathLike | None) -> pathlib.Path | None:
     return pathlib.Path(filename).absolute().parent.resolve() if filename else None
 
 
-def parse_grammar(text: str, filename: str | None = None) -> Grammar:
+def parse_grammar(
+    text: str, filename: str | None = None, functions: dict | None = None, constants: dict[str, float] | None = None
+) -> Grammar:
     """Parse grammar text.  Raises :class:`~ramure.lsys.errors.GrammarError` with line and column.
+
+    ``functions`` and ``constants`` are known before the first line (the cpfg reader gives
+    ``func`` and the names of a view file's function set this way).
 
     >>> g = parse_grammar("n: 2\\nw: A(1)\\np:\\n A(x) -> A(x+1)B(x+1)C(1)\\n B(y) -> B(y+3)")
     >>> [str(r.pred) for r in g.rules]
@@ -1096,7 +1101,10 @@ def parse_grammar(text: str, filename: str | None = None) -> Grammar:
             filename=filename,
         )
     try:
-        return GrammarParser(text, filename).parse()
+        parser = GrammarParser(text, filename)
+        parser.functions.update(functions or {})  # e.g. cpfg's func(id, x) (lsys.language.cpfg_functions)
+        parser.constants.update(constants or {})
+        return parser.parse()
     except GrammarError as err:
         if filename and not err.filename:
             err.filename = filename
