@@ -789,6 +789,10 @@ def undrawn_symbols(grammar: Grammar) -> list[str]:
     )
 
 
+#: cpfg commands read but not drawn (``ramure check`` notes them with the others nothing draws):
+#: symbol -> what it would have done.
+NOT_DRAWN = {"@Tx": "a texture (Ramure draws colours and materials, not textures)"}
+
 #: Query modules (cpfg, L-Py): symbol -> the columns of :func:`turtle_states` they receive.
 QUERIES = {"?P": slice(0, 3), "?H": slice(3, 6), "?L": slice(6, 9), "?U": slice(9, 12)}
 

@@ -24,6 +24,8 @@ cpfg                             Ramure
 ``ran(x)`` / ``nran(m, s)``      ``uniform(0, x)`` / ``normal(m, s)``
 ``endlsystem``                   end of the grammar
 ``XF(x) --> ...``                a predecessor of several modules (``#dialect cpfg``)
+``@Gt(a, b)``                    a generalised cylinder's tangent coefficients (drawn)
+``@Tx(id)``                      a texture: read, not drawn (``ramure check`` notes it)
 ``func(id, x)``                  the view file's ``.func`` functions
                                  (:mod:`ramure.lsys.language.cpfg_functions`)
 ===============================  ========================================================
@@ -85,6 +87,7 @@ _AT_MEANING = {
     "M": "absolute moves",
     "R": "absolute headings",
     "Tf": "texture",
+    "Tx": "texture",
     "D": "scale factor",
     "b": "blackboard",
     "Ca": "contours",
@@ -436,8 +439,10 @@ class _Translator:
         m = re.match(r"@([A-Za-z#]+)", text[i:])
         name = "@" + (m.group(1) if m else "")
         from ..interpretation.turtle import CPFG_CODES, SYMBOL_CODES  # the rich walk's tables
-        from ..interpretation.turtle import SYMBOL_ACTIONS
+        from ..interpretation.turtle import NOT_DRAWN, SYMBOL_ACTIONS
 
+        if any(text.startswith(k, i) and not text[i + len(k) : i + len(k) + 1].isalpha() for k in NOT_DRAWN):
+            return  # read, not drawn: 'ramure check' notes it
         drawn = [*SYMBOL_ACTIONS, *SYMBOL_CODES, *CPFG_CODES]
         known = sorted({s for s in drawn if s.startswith("@")}, key=lambda s: (-len(s), s))  # what the turtle draws
         if any(name.startswith(k) and not name[len(k) : len(k) + 1].isalpha() for k in known) or any(

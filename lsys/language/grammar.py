@@ -708,7 +708,7 @@ class GrammarParser:
         if self._token_key != key:
             names = sorted(key, key=len, reverse=True)
             # @O (sphere), @Ts (elasticity), the other @ commands and ~name (a surface) are single modules
-            at_names = r"@Ts|@Tp|@Gs|@Gc|@Ge|@O|@o|@c|@v|@M|@R|@B|@#|@!"
+            at_names = r"@Ts|@Tp|@Tx|@Gs|@Gc|@Ge|@Gt|@O|@o|@c|@v|@M|@R|@B|@#|@!"
             self._token_re = re.compile("|".join([*(re.escape(n) for n in names), at_names, r"\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
             self._token_key = key
         return self._token_re
