@@ -5,7 +5,7 @@ function that evaluates it for *all* modules matched by a rule at once: formal
 parameters are numpy arrays, constants are looked up at call time (so editing
 ``LSystem.constants`` needs no re-parse).
 
-Precedence, lowest first: ``||``; ``&&``; ``== != =``; ``< > <= >=``;
+Precedence, lowest first: C's ``c ? a : b`` (right-associative); ``||``; ``&&``; ``== != =``; ``< > <= >=``;
 ``+ -``; ``* / %``; unary ``- + !``; ``^`` (right-associative, so
 ``-2^2 == -4``).  ``=`` is equality, as in ABOP conditions.
 
@@ -180,7 +180,7 @@ def tokenize(src: Source) -> list[Token]:
                 j += 1
             tokens.append(Token("name", text[i:j], i))
             i = j
-        elif ch in "(),":
+        elif ch in "(),?:":
             tokens.append(Token(ch, ch, i))
             i += 1
         else:
@@ -255,6 +255,12 @@ class _Parser:
         left = self.unary()
         while True:
             tok = self.peek()
+            if tok.kind == "?" and min_prec == 0:  # C's c ? a : b, below every operator
+                self.take()
+                chosen = self.expression(0)
+                self.expect(":", "':' of 'condition ? value : other value'")
+                other = self.expression(0)
+                return self.node("choice", "?", (left, chosen, other), tok.offset)
             if tok.kind != "op" or tok.text not in _BINARY:
                 return left
             prec = _BINARY[tok.text][0]
@@ -467,6 +473,8 @@ def _source(node, params, constants, src, lift=None):
         return {"-": "(-{0})", "+": "(+{0})", "!": "_f(np.logical_not({0}))"}[node.value].format(*parts)
     if node.kind == "binary":
         return _BINARY[node.value][1].format(*parts)
+    if node.kind == "choice":
+        return f"_pick({parts[0]}, lambda: {parts[1]}, lambda: {parts[2]})"
     if node.kind == "tables":
         return f"_tables({parts[0]}, {parts[1]}, {node.value.values!r})"
     return FUNCTIONS[node.value][1].format(*parts)
@@ -486,13 +494,24 @@ def compile_expression(
     """
     body = _source(expr.node, set(params), set(constants), expr.src, lift)
     code = f"lambda V, C, R, n: _out({body}, n)"
-    names = {"np": np, "_out": _broadcast, "_f": _as_float, "_alea": _alea, "_tables": _tables}
+    names = {"np": np, "_out": _broadcast, "_f": _as_float, "_alea": _alea, "_tables": _tables, "_pick": _pick}
     return eval(code, names)  # noqa: S307 - generated from our own AST
 
 
 def _alea(R, a, b, n):
     """``alea(a, b)``: a uniform draw between the smaller and the larger bound (each argument evaluated once)."""
     return R.uniform(np.minimum(a, b), np.maximum(a, b), n)
+
+
+def _pick(condition, chosen, other):
+    """``condition ? chosen : other`` over arrays: both branches are computed (numpy), the one a
+    module does not take may fail (``x > 0 ? 1/x : 0``) without error; the taken one must be finite."""
+    with np.errstate(all="ignore"):
+        a, b = np.asarray(chosen(), float), np.asarray(other(), float)
+    out = np.where(np.asarray(condition) != 0, a, b)
+    if not np.all(np.isfinite(out)):
+        raise FloatingPointError("invalid value in the branch a '? :' takes")
+    return out
 
 
 def _tables(ident, x, values):
