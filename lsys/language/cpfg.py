@@ -26,6 +26,8 @@ cpfg                             Ramure
 ``XF(x) --> ...``                a predecessor of several modules (``#dialect cpfg``)
 ``@Gt(a, b)``                    a generalised cylinder's tangent coefficients (drawn)
 ``@Tx(id)``                      a texture: read, not drawn (``ramure check`` notes it)
+``?E(v, i)`` with honda81        answered by Ramure's built-in honda81 (the ``.e`` file
+                                 names it; :mod:`ramure.lsys.language.cpfg_environment`)
 ``func(id, x)``                  the view file's ``.func`` functions
                                  (:mod:`ramure.lsys.language.cpfg_functions`)
 ===============================  ========================================================
@@ -46,8 +48,9 @@ the translation ends with.
 
 Refused with a :class:`~ramure.errors.GrammarError` naming the construct
 (line, column, caret): ``#include`` (view, surface and other files) and the
-other preprocessor commands; a second ``Lsystem:`` (sub-L-systems); query and
-communication modules ``?P ?H ?L ?U ?E`` and sub-L-system calls ``?(...)``;
+other preprocessor commands; a second ``Lsystem:`` (sub-L-systems); ``?E`` modules
+of another environment program than honda81 (named, from the ``.e`` file) and
+sub-L-system calls ``?(...)``;
 ``@`` modules Ramure does not draw (e.g. ``@Gs`` generalised cylinders);
 C blocks ``{ ... }`` in a rule's condition; cpfg's ``start:``/``end:``
 statement blocks and ``define:`` blocks.  Trigonometry is in degrees, as in
@@ -65,6 +68,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..errors import GrammarError
+from .cpfg_environment import BUILT_IN
 from .grammar import CONTINUATION, Grammar, parse_grammar, strip_comments
 
 #: Suffixes read as cpfg files by :meth:`ramure.lsys.LSystem.from_file`.
@@ -119,8 +123,9 @@ class _Out:
 
 
 class _Translator:
-    def __init__(self, filename=None, functions=None) -> None:
+    def __init__(self, filename=None, functions=None, environment=None) -> None:
         self.filename = filename
+        self.environment = environment or {}  # the .e file's program (lsys.language.cpfg_environment)
         self.functions = functions or {}  # func(id, x) of the view file (lsys.language.cpfg_functions)
         self.section = "production"
         self.lsystems = 0
@@ -412,12 +417,12 @@ class _Translator:
                 depth -= 1
             elif depth == 0 and c == "?" and text[i + 1 : i + 2] not in ("P", "H", "L", "U"):
                 nxt = text[i + 1 : i + 2]
+                if nxt == "E" and self.environment.get("program") in BUILT_IN:
+                    i += 1
+                    continue
                 what = _QUERY.get(nxt, "the sub-L-system call ?(...)" if nxt == "(" else "the query module ?")
                 if nxt == "E":
-                    what += (
-                        " talks to an environment program (named in cpfg's -e file: light, space, a field "
-                        "simulator) that Ramure does not run, so it"
-                    )
+                    what += self.missing_environment()
                 raise self.error(f"{what} is not supported", number, i + 1, original)
             elif depth == 0 and c == "@":
                 self.at_module(number, text, original, i)
@@ -434,6 +439,19 @@ class _Translator:
                 out.edits.append((m.start(), len(m.group()), len(new)))
         out.edits.sort()
         return out
+
+    def missing_environment(self):
+        """Why a ``?E`` cannot be answered: the program the ``.e`` file names, or no ``.e`` file."""
+        program, where = self.environment.get("program"), self.environment.get("file")
+        if program:
+            return (
+                f" talks to the environment program {program} (named in {where}), which Ramure does not run "
+                f"(Ramure answers {', '.join(BUILT_IN)} itself), so it"
+            )
+        return (
+            " talks to an environment program (named in cpfg's -e file, here none beside the .l file: "
+            f"Ramure answers {', '.join(BUILT_IN)} itself), so it"
+        )
 
     def at_module(self, number, text, original, i):
         m = re.match(r"@([A-Za-z#]+)", text[i:])
@@ -661,7 +679,8 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     """Parse a cpfg ``.l`` file's text; errors name the ``.l`` line and column."""
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     functions, names = _view_functions(text, filename)
-    translator = _Translator(filename, functions)
+    environment = _environment(text, filename)
+    translator = _Translator(filename, functions, environment)
     outs = translator.translate(text)
     programs = translator.programs(lines)
     rule_blocks = translator.parsed_rule_blocks(lines)
@@ -672,6 +691,7 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
+    grammar.environment = environment if environment.get("program") in BUILT_IN else {}
     grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         if rule.line in rule_blocks:
@@ -682,6 +702,18 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
         rule.text = bare[rule.line - 1].strip()  # and name the rule as the .l file writes it
     _locate_in_l_file(grammar, outs, lines, filename)
     return grammar
+
+
+def _environment(text, filename):
+    """The ``.e`` file's environment beside ``filename``, read only when the text has ``?E``."""
+    if filename is None or "?E" not in strip_c_comments(text):
+        return {}
+    from .cpfg_environment import read_environment
+    from .grammar import confinement_root
+
+    root = confinement_root(filename)
+    assert root is not None
+    return read_environment(filename, root)
 
 
 def _view_functions(text, filename):

@@ -172,13 +172,13 @@ def view_tables(l_file: str | os.PathLike, root: pathlib.Path) -> tuple[Tables |
     view = view_file(l_file)
     if view is None:
         return None, {}
-    text = _read(view, root, None)
+    text = read_confined(view, root, None)
     functions: list[tuple[str, np.ndarray]] = []
     names: dict[str, float] = {}
     for m in _VIEW_LINE.finditer(text):
         line = text[: m.start()].count("\n") + 1
         where = (str(view), line, text.split("\n")[line - 1])
-        body = _read(view.parent / m.group(2), root, where)
+        body = read_confined(view.parent / m.group(2), root, where)
         if m.group(1):  # a function set replaces what came before; its names become constants
             functions = function_set(body, str(view.parent / m.group(2)))
             names = {name.rsplit(".", 1)[0]: float(k) for k, (name, _) in enumerate(functions, start=1)}
@@ -190,14 +190,15 @@ def view_tables(l_file: str | os.PathLike, root: pathlib.Path) -> tuple[Tables |
     return Tables(tuple(tuple(float(v) for v in values) for _, values in functions)), names
 
 
-def _read(path: pathlib.Path, root: pathlib.Path, where: tuple | None) -> str:
-    """A file's text, refused unless it is a regular file inside ``root``."""
+def read_confined(path: pathlib.Path, root: pathlib.Path, where: tuple | None) -> str:
+    """A file's text (Latin-1, as cpfg's files are), refused unless it is a regular file inside
+    ``root``; the refusal names ``where`` (file, line, source line) when given, else the file."""
     resolved = path.resolve()
     try:
         if not resolved.is_relative_to(root):
-            raise FileRefused("cpfg function", path, f"it lies outside the grammar's folder {root}")
-        return read_regular(resolved, MAX_FILE_BYTES, "cpfg function").decode("latin-1")
+            raise FileRefused("cpfg file", path, f"it lies outside the grammar's folder {root}")
+        return read_regular(resolved, MAX_FILE_BYTES, "cpfg file").decode("latin-1")
     except FileRefused as exc:
         filename, line, source = where if where else (str(path), None, None)
-        message = f"cannot read {path.name} for func(): {exc.reason}"
+        message = f"cannot read {path.name}: {exc.reason}"
         raise GrammarError(message, line, 1 if line else None, source, filename=filename) from None

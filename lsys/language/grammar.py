@@ -271,6 +271,9 @@ class Grammar:
     #: (``@Gc`` a cylinder's control point, ``@o(d)`` a diameter), else ``""``.  cpfg files
     #: (and ``.lsys`` text with ``#dialect cpfg``) may have several-module predecessors.
     dialect: str = ""
+    #: The built-in environment cpfg's ``?E`` modules talk to (:mod:`ramure.lsys.language.cpfg_environment`):
+    #: ``{"program": "honda81", "radius": r, "3d": bool}``, else empty.
+    environment: dict = field(default_factory=dict)
 
     def symbol_id(self, name: str) -> int:
         return self.symbols.index(name)
@@ -709,7 +712,7 @@ class GrammarParser:
             names = sorted(key, key=len, reverse=True)
             # @O (sphere), @Ts (elasticity), the other @ commands and ~name (a surface) are single modules
             at_names = r"@Ts|@Tp|@Tx|@Gs|@Gc|@Ge|@Gt|@O|@o|@c|@v|@M|@R|@B|@#|@!"
-            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), at_names, r"\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
+            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), at_names, r"\?[PHLUE]|~[A-Za-z_]\w*", r"\S"]))
             self._token_key = key
         return self._token_re
 
