@@ -184,7 +184,7 @@ class LSystem:
     # -- compilation -------------------------------------------------------
     def _compile(self, rule):
         formals, consts = rule.formals, self.constants
-        sources = {}
+        sources: dict[str, tuple[int | str, int]] = {}  # slot: 0, -k / +k contexts, "s1"... a predecessor's later modules
         for k, pattern in enumerate(reversed(rule.left), start=1):
             for j, name in enumerate(pattern.params):
                 sources[name] = (-k, j)
@@ -483,7 +483,7 @@ class LSystem:
             window = slice(m, m + ok.size)
             ok &= (symbols[window] == self._sym[pattern.symbol]) & (nparams[window] == len(pattern.params)) & free[window]
         cand = np.flatnonzero(ok)
-        slots = {f"s{m}": cand + m for m in range(1, k)}
+        slots: dict[int | str, np.ndarray] = {f"s{m}": cand + m for m in range(1, k)}
         if cand.size and (rule.left or rule.right):
             if "neighbours" not in cache:
                 cache["neighbours"] = context_neighbours(symbols, *self.bracket_ids, self.ignore_ids)

@@ -597,10 +597,10 @@ class GrammarParser:
             index, rgba = parse_material(self, line, rest)
             self.materials[index] = rgba
         elif name == "dialect":
-            word = text[rest:].strip().lower()
-            if word not in ("cpfg", "ramure"):
+            dialect = text[rest:].strip().lower()
+            if dialect not in ("cpfg", "ramure"):
                 raise line.error(f"#dialect is 'cpfg' or 'ramure', not '{text[rest:].strip()}'", rest + 1)
-            self.dialect = "" if word == "ramure" else word
+            self.dialect = "" if dialect == "ramure" else dialect
         elif name == "tropism":
             words = [(w.group(), rest + w.start()) for w in re.finditer(r"\S+", text[rest:])]
             if len(words) != 4:
