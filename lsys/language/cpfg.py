@@ -218,7 +218,8 @@ class _Translator:
         if colon < 0 or (arrow >= 0 and (brace < colon or arrow < brace)):
             return False  # no head going on over lines, no block before the arrow
         word = s[:colon].strip().lower()
-        return word not in ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
+        keywords = ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
+        return word not in (*keywords, "homomorphism", "decomposition")  # 'homomorphism: no warnings' too
 
     def block_rule_line(self, number, s):
         """A line of ``pred : {pre} condition {post} --> successor``: the rule is written on the
