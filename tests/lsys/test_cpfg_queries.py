@@ -61,3 +61,18 @@ def test_without_an_e_file_the_refusal_says_so(tmp_path):
     path.write_text("derivation length: 1\naxiom: A?E(1)\n")
     with pytest.raises(GrammarError, match="here none beside the .l file"):
         LSystem.from_file(path)
+
+
+@pytest.mark.parametrize("three_d", [True, False])
+def test_honda81_agrees_with_its_double_loop(three_d):
+    import numpy as np
+
+    from ramure.lsys.interpretation.environment import honda81
+
+    rng = np.random.default_rng(3)
+    points, vigor, index = rng.random((300, 3)), rng.integers(0, 3, 300).astype(float), rng.integers(0, 2, 300)
+    flat = points[:, [0, 1, 2] if three_d else [0, 2]]
+    gap = ((flat[:, None] - flat[None]) ** 2).sum(-1)
+    blocked = (gap <= 0.1**2) & (vigor[:, None] <= vigor[None]) & (index[:, None] == index[None])
+    np.fill_diagonal(blocked, False)
+    assert np.array_equal(honda81(points, vigor, index, 0.1, three_d), np.where(blocked.any(1), 0.0, 1.0))
