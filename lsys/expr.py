@@ -5,7 +5,7 @@ function that evaluates it for *all* modules matched by a rule at once: formal
 parameters are numpy arrays, constants are looked up at call time (so editing
 ``LSystem.constants`` needs no re-parse).
 
-Precedence, lowest first: ``||``; ``&&``; ``== != =``; ``< > <= >=``;
+Precedence, lowest first: C's ``c ? a : b`` (right-associative); ``||``; ``&&``; ``== != =``; ``< > <= >=``;
 ``+ -``; ``* / %``; unary ``- + !``; ``^`` (right-associative, so
 ``-2^2 == -4``).  ``=`` is equality, as in ABOP conditions.
 
@@ -124,6 +124,16 @@ class Function:
     body: Node
 
 
+@dataclass(frozen=True)
+class Tables:
+    """Functions of one variable given as values at evenly spaced x in [0, 1], called as
+    ``func(id, x)`` (cpfg's user functions, ids from 1; :mod:`ramure.lsys.language.cpfg_functions`):
+    linear between the values, ``x`` clamped to [0, 1].  Put in a parser's ``functions``
+    under the name ``func``."""
+
+    values: tuple  # one tuple of floats per function
+
+
 class Source:
     """A piece of grammar text with its position, to point errors at the right column."""
 
@@ -170,7 +180,7 @@ def tokenize(src: Source) -> list[Token]:
                 j += 1
             tokens.append(Token("name", text[i:j], i))
             i = j
-        elif ch in "(),":
+        elif ch in "(),?:":
             tokens.append(Token(ch, ch, i))
             i += 1
         else:
@@ -245,6 +255,12 @@ class _Parser:
         left = self.unary()
         while True:
             tok = self.peek()
+            if tok.kind == "?" and min_prec == 0:  # C's c ? a : b, below every operator
+                self.take()
+                chosen = self.expression(0)
+                self.expect(":", "':' of 'condition ? value : other value'")
+                other = self.expression(0)
+                return self.node("choice", "?", (left, chosen, other), tok.offset)
             if tok.kind != "op" or tok.text not in _BINARY:
                 return left
             prec = _BINARY[tok.text][0]
@@ -288,6 +304,10 @@ class _Parser:
                 args.append(self.expression(0))
         self.expect(")", "')' closing the call")
         name = name_tok.text
+        if isinstance(self.functions.get(name), Tables):
+            if len(args) != 2:
+                raise self.src.error(f"{name}() takes 2 arguments (id, x), got {len(args)}", name_tok.offset)
+            return self.node("tables", self.functions[name], tuple(args), name_tok.offset)
         if name == self.defining:
             raise self.src.error(f"function '{name}' calls itself: recursive functions are not allowed", name_tok.offset)
         if name in self.functions:
@@ -453,6 +473,10 @@ def _source(node, params, constants, src, lift=None):
         return {"-": "(-{0})", "+": "(+{0})", "!": "_f(np.logical_not({0}))"}[node.value].format(*parts)
     if node.kind == "binary":
         return _BINARY[node.value][1].format(*parts)
+    if node.kind == "choice":
+        return f"_pick({parts[0]}, lambda: {parts[1]}, lambda: {parts[2]})"
+    if node.kind == "tables":
+        return f"_tables({parts[0]}, {parts[1]}, {node.value.values!r})"
     return FUNCTIONS[node.value][1].format(*parts)
 
 
@@ -470,12 +494,38 @@ def compile_expression(
     """
     body = _source(expr.node, set(params), set(constants), expr.src, lift)
     code = f"lambda V, C, R, n: _out({body}, n)"
-    return eval(code, {"np": np, "_out": _broadcast, "_f": _as_float, "_alea": _alea})  # noqa: S307 - generated from our own AST
+    names = {"np": np, "_out": _broadcast, "_f": _as_float, "_alea": _alea, "_tables": _tables, "_pick": _pick}
+    return eval(code, names)  # noqa: S307 - generated from our own AST
 
 
 def _alea(R, a, b, n):
     """``alea(a, b)``: a uniform draw between the smaller and the larger bound (each argument evaluated once)."""
     return R.uniform(np.minimum(a, b), np.maximum(a, b), n)
+
+
+def _pick(condition, chosen, other):
+    """``condition ? chosen : other`` over arrays: both branches are computed (numpy), the one a
+    module does not take may fail (``x > 0 ? 1/x : 0``) without error; the taken one must be finite."""
+    with np.errstate(all="ignore"):
+        a, b = np.asarray(chosen(), float), np.asarray(other(), float)
+    out = np.where(np.asarray(condition) != 0, a, b)
+    if not np.all(np.isfinite(out)):
+        raise FloatingPointError("invalid value in the branch a '? :' takes")
+    return out
+
+
+def _tables(ident, x, values):
+    """``func(id, x)`` over arrays: function ``id`` (1, 2, ...) of ``values`` at ``x`` in [0, 1]."""
+    ident, x = np.broadcast_arrays(np.asarray(ident, float), np.clip(np.asarray(x, float), 0.0, 1.0))
+    out = np.full(x.shape, np.nan)
+    for k, ys in enumerate(values, start=1):
+        mask = ident == k
+        if mask.any():
+            out[mask] = np.interp(x[mask], np.linspace(0.0, 1.0, len(ys)), ys)
+    if np.isnan(out).any():
+        bad = float(ident[np.isnan(out)].flat[0])
+        raise ValueError(f"func({bad:g}, x): the view file names {len(values)} function(s), ids 1 to {len(values)}")
+    return out
 
 
 def _as_float(value):

@@ -11,7 +11,7 @@ import time
 
 from ramure.app.cli import UserError
 from ramure.lsys import LSystem
-from ramure.lsys.interpretation.turtle import undrawn_symbols
+from ramure.lsys.interpretation.turtle import NOT_DRAWN, undrawn_symbols
 import os
 from collections.abc import Collection, Iterable, Sequence
 from typing import TYPE_CHECKING
@@ -142,6 +142,9 @@ def run_check(args: argparse.Namespace) -> int:
         f"{len(ls.constants)} constant(s), n = {g.n}, seed = {ls.seed}, axiom {axiom}"
     )
     undrawn = undrawn_symbols(g)
+    for symbol in [s for s in undrawn if s in NOT_DRAWN]:
+        print(f"note: {symbol} is read but not drawn: {NOT_DRAWN[symbol]}")
+    undrawn = [s for s in undrawn if s not in NOT_DRAWN]
     if undrawn:
         print(f"note: nothing draws {', '.join(undrawn)} (no turtle meaning, and no rule rewrites or interprets it)")
     return 0

@@ -27,6 +27,7 @@ Random numbers (rule draws, ``uniform``/``normal``) come from one seeded
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 from collections.abc import Callable, Collection, Mapping
@@ -113,6 +114,8 @@ class LSystem:
         #: combination may set like ``#define`` names; without an override, the grammar's values.
         self.hidden: dict[str, Hidden] = grammar_hidden(grammar)
         self._rules = [self._compile(r) for r in grammar.rules]
+        #: Rules whose strict predecessor is several modules (cpfg), matched before the groups.
+        self._sequences = [r.index for r in grammar.rules if r.sequence]
         self._groups = self._make_groups()
         self.bracket_ids = (self._sym.get("["), self._sym.get("]"))
         self.ignore_ids = {self._sym[s] for s in grammar.ignore if s in self._sym}
@@ -181,12 +184,15 @@ class LSystem:
     # -- compilation -------------------------------------------------------
     def _compile(self, rule):
         formals, consts = rule.formals, self.constants
-        sources = {}
+        sources: dict[str, tuple[int | str, int]] = {}  # slot: 0, -k / +k contexts, "s1"... a predecessor's later modules
         for k, pattern in enumerate(reversed(rule.left), start=1):
             for j, name in enumerate(pattern.params):
                 sources[name] = (-k, j)
         for j, name in enumerate(rule.pred.params):
             sources[name] = (0, j)
+        for m, pattern in enumerate(rule.sequence, start=1):  # the strict predecessor's later modules
+            for j, name in enumerate(pattern.params):
+                sources[name] = (f"s{m}", j)
         for k, pattern in enumerate(rule.right, start=1):
             for j, name in enumerate(pattern.params):
                 sources[name] = (k, j)
@@ -214,7 +220,8 @@ class LSystem:
     def _make_groups(self):
         groups: dict[tuple, list[int]] = {}
         for rule in self.grammar.rules:
-            groups.setdefault(rule.group_key(), []).append(rule.index)
+            if not rule.sequence:  # several-module predecessors: _choose_sequences
+                groups.setdefault(rule.group_key(), []).append(rule.index)
         out = []
         for (sym, arity, left, right), members in groups.items():
             probs = [self.grammar.rules[i].probability for i in members]
@@ -333,6 +340,8 @@ class LSystem:
         chosen = np.full(len(string), -1, np.int32)
         free = np.ones(len(string), bool) if frozen is None else ~frozen
         context: dict = {}
+        if self._sequences:
+            self._choose_sequences(tree, string, symbols, nparams, free, chosen, context, rng, constants, rule_constants)
         by_symbol: dict[int, np.ndarray] = {}
         for group in self._choice_plan(len(string)):
             if isinstance(group, _Run):
@@ -404,6 +413,98 @@ class LSystem:
             run.want_arity,
             run.sides,
         )
+
+    def _choose_sequences(self, tree, string, symbols, nparams, free, chosen, cache, rng, constants, rule_constants) -> None:
+        """cpfg's several-module strict predecessors (``XF(x) --> ...``), before the other rules.
+
+        As cpfg reads a string, left to right: at each position the first such rule (file
+        order) whose modules follow each other there (same symbols and numbers of parameters,
+        nothing skipped), whose contexts match (the left one before its first module, the right
+        one after its last) and whose condition holds takes those modules; the scan goes on
+        after them, so matches never overlap.  The first module gets the successor; the others
+        get none (in the history they end, like a module rewritten by ``*``).  One-module
+        rules then rewrite the modules no such rule took: where both could apply at one
+        position the several-module rule wins (cpfg would try them in file order).
+        """
+        erased = len(self._rules)  # the successor table's empty entry
+        evaluate = functools.partial(self._evaluate, rule_constants=rule_constants, constants=constants, rng=rng)
+        found, matches = self._sequence_matches(tree, string, symbols, nparams, free, cache, evaluate)
+        accepted: dict[int, list[int]] = {}
+        rows: dict[int, list] = {}
+        end = -1
+        for pos, r in found:
+            crule = self._rules[r]
+            if pos <= end:
+                continue
+            if crule.blocks is not None:  # statement blocks run module by module, in string order
+                cand, ctx = matches[r]
+                i = int(np.searchsorted(cand, pos))
+                at, one = cand[i : i + 1], {slot: nodes[i : i + 1] for slot, nodes in ctx.items()}
+                V = self._variables(crule, at, one, tree, string)
+                if not evaluate(crule.condition, V, r, n=1, tree=tree, string=string, pos=at, what="condition")[0]:
+                    continue
+                rows.setdefault(r, []).extend(crule.blocks.take())
+            end = pos + len(crule.rule.sequence)
+            chosen[pos] = r
+            chosen[pos + 1 : end + 1] = erased
+            accepted.setdefault(r, []).append(pos)
+        for r, positions in accepted.items():
+            cand, ctx = matches[r]
+            at = np.searchsorted(cand, positions)
+            cache[r] = {"pos": cand[at], **{slot: nodes[at] for slot, nodes in ctx.items()}}
+            if r in rows:
+                self._rules[r].blocks.rows = rows[r]  # what _successor_params takes, in string order
+
+    def _sequence_matches(self, tree, string, symbols, nparams, free, cache, evaluate):
+        """Every several-module rule's matches: ([(position, rule)] sorted, whose condition
+        (without statement blocks) holds, and {rule: (positions, context nodes)})."""
+        found: list[tuple[int, int]] = []
+        matches: dict[int, tuple[np.ndarray, dict]] = {}
+        for r in self._sequences:
+            cand, ctx = self._sequence_candidates(self.grammar.rules[r], symbols, nparams, free, string, cache)
+            if not cand.size:
+                continue
+            crule, ok = self._rules[r], np.ones(cand.size, bool)
+            if crule.condition is not None and crule.blocks is None:  # all at once
+                V = self._variables(crule, cand, ctx, tree, string)
+                ok = evaluate(crule.condition, V, r, n=cand.size, tree=tree, string=string, pos=cand, what="condition")
+            matches[r] = (cand, ctx)
+            found.extend((int(p), r) for p in cand[np.asarray(ok, bool)])
+        return sorted(found), matches
+
+    def _sequence_candidates(self, rule, symbols, nparams, free, string, cache):
+        """Where ``rule``'s strict predecessor (several modules) and contexts match: (first
+        positions, {slot: node ids}) with slots ``s1``... for its later modules, -1... and 1...
+        for its left and right context modules."""
+        strict, n = rule.strict, len(symbols)
+        k = len(strict)
+        ok = np.ones(max(n - k + 1, 0), bool)
+        for m, pattern in enumerate(strict):
+            window = slice(m, m + ok.size)
+            ok &= (symbols[window] == self._sym[pattern.symbol]) & (nparams[window] == len(pattern.params)) & free[window]
+        cand = np.flatnonzero(ok)
+        slots: dict[int | str, np.ndarray] = {f"s{m}": cand + m for m in range(1, k)}
+        if cand.size and (rule.left or rule.right):
+            if "neighbours" not in cache:
+                cache["neighbours"] = context_neighbours(symbols, *self.bracket_ids, self.ignore_ids)
+            good = np.ones(cand.size, bool)
+            for side, patterns, start in ((-1, rule.left[::-1], cand), (1, rule.right, cand + k - 1)):
+                if patterns:
+                    hit, at = self._side_context(patterns, side, start, symbols, nparams, cache["neighbours"])
+                    good &= hit
+                    slots.update({side * (j + 1): row for j, row in enumerate(at)})
+            cand = cand[good]
+            slots = {slot: positions[good] for slot, positions in slots.items()}
+        return cand, {slot: string[positions] for slot, positions in slots.items()}
+
+    def _side_context(self, patterns, side, start, symbols, nparams, neighbours):
+        """(ok, positions per context module) of one side's context, walked from ``start``."""
+        from ._context_kernel import match_contexts
+
+        want = np.array([self._sym[p.symbol] for p in patterns], np.int64)
+        arity = np.array([len(p.params) for p in patterns], np.int64)
+        sides = np.full(len(patterns), side, np.int64)
+        return match_contexts(start, *neighbours, symbols, nparams, want, arity, sides)
 
     def _variables(self, crule, positions, ctx_nodes, tree, string):
         nodes = string[positions]
@@ -500,9 +601,9 @@ class LSystem:
         """
         table = self._successor_table()
         nrules = len(self._rules)
-        counts = np.bincount(chosen + 1, minlength=nrules + 1)[1:]
+        counts = np.bincount(chosen + 1, minlength=nrules + 2)[1 : nrules + 1]  # chosen == nrules: erased
         made = counts * table.length[:-1]
-        total = len(string) + int(made.sum() - counts.sum())
+        total = len(string) + int(made.sum()) - int(np.count_nonzero(chosen >= 0))
         if total > self.max_modules:
             raise DerivationError(
                 f"step {step} would make {total:,} modules, more than the limit of "

@@ -27,7 +27,11 @@ vectors, curves).  Meanings follow cpfg and L-Py (L-Py's helpcard; the cpfg 3.0 
 ``@Gs @Gc(n) @Ge(n)``    cpfg's generalised cylinder: between ``@Gs`` and ``@Ge`` the ``F`` of
                          the same branch only move; each control point ``@Gc``/``@Ge`` draws
                          the Hermite curve from the previous one (tangents: the headings,
-                         length 1.2 times the chord), in n segments (default 1)
+                         length 1.2 times the chord, see ``@Gt``), in n segments (default 1)
+``@Gt(a,b)``             cpfg's tangent coefficients at the control points that follow (turtle
+                         state, kept by branches): the curve arriving at a control point has
+                         a tangent ``a`` times the chord, the one leaving it ``b`` (one
+                         parameter: both); cpfg >= 3.4 (``general.c``), default 1.2 and 1.2
 ``@Gc @Ge`` (L-Py)       StartGC / EndGC: Ramure's tubes already join (nothing to do)
 ``SetGuide(c,l)``        the ``F``/``f``/``nF`` that follow (in branches too, each with its own
                          copy) move along the 2D curve c rescaled to length l (x along the
@@ -88,7 +92,8 @@ RICH_FIRST = 25
     CONTOUR_DRAW,
     RESOLUTION,
     N_DRAW,
-) = range(RICH_FIRST, RICH_FIRST + 29)
+    GC_TANGENTS,
+) = range(RICH_FIRST, RICH_FIRST + 30)
 
 #: Symbols of both dialects (cpfg's ``@Gc`` and ``@o`` differ: see :func:`symbol_codes`).
 SYMBOL_CODES = {
@@ -127,7 +132,7 @@ SYMBOL_CODES = {
     "nF": N_DRAW,
 }
 #: cpfg's meanings where they differ from L-Py's.
-CPFG_CODES = {"@Gc": GC_POINT, "@Ge": GC_END, "@o": CIRCLE_D}
+CPFG_CODES = {"@Gc": GC_POINT, "@Ge": GC_END, "@o": CIRCLE_D, "@Gt": GC_TANGENTS}
 
 #: Points of a circle (``@o``, ``@c``) and of a sampled guide or contour curve.
 CIRCLE_POINTS = 16
@@ -259,7 +264,8 @@ class Rich:
         self._blend_of: dict[tuple, int] = {}
         #: the first module given what it cannot use: (string position, why), raised by the turtle
         self.problem: tuple[int, str] | None = None
-        self.gc: tuple | None = None  # cpfg cylinder: (position, heading, width) of the last control point
+        self.gc: tuple | None = None  # cpfg cylinder: (position, heading, width, leaving coefficient) of the last point
+        self.tangents = (TANGENT_COEFFICIENT, TANGENT_COEFFICIENT)  # @Gt: arriving, leaving
         self.guide: dict | None = None
         self.contour: np.ndarray | None = None
         self.stack: list[tuple] = []  # at each '[': tropism direction, guide, contour, cylinder
@@ -267,13 +273,13 @@ class Rich:
     def push(self, tx: float, ty: float, tz: float) -> None:
         """A branch starts: it inherits the guide (its own copy) and the contour, and starts
         outside any cpfg cylinder (the parent's resumes at ``]``)."""
-        self.stack.append((tx, ty, tz, self.guide, self.contour, self.gc))
+        self.stack.append((tx, ty, tz, self.guide, self.contour, self.gc, self.tangents))
         self.guide = dict(self.guide) if self.guide is not None else None
         self.gc = None
 
     def pop(self) -> tuple[float, float, float]:
         """A branch ends: the parent's state again; returns its tropism direction."""
-        tx, ty, tz, self.guide, self.contour, self.gc = self.stack.pop()
+        tx, ty, tz, self.guide, self.contour, self.gc, self.tangents = self.stack.pop()
         return tx, ty, tz
 
     # -- one module ---------------------------------------------------------------------
@@ -315,7 +321,10 @@ class Rich:
         elif a == INTERPOLATE:
             st[13] = self._blend(_arg(v, 0, st[13]), _arg(v, 1, st[13]), _arg(v, 2, 0.5))
         elif a == GC_START:
-            self.gc = (p, h, width)
+            self.gc = (p, h, width, self.tangents[1])
+        elif a == GC_TANGENTS:
+            if v:
+                self.tangents = (v[0], _arg(v, 1, v[0]))
         elif a in (GC_POINT, GC_END):
             self._cylinder(st, i, p, h, width, int(_arg(v, 0, 1.0)), seg, order, seek, full, seg_base)
             if a == GC_END:
@@ -419,12 +428,12 @@ class Rich:
     def _cylinder(self, st, i, p, h, width, pieces, seg, order, seek, full, seg_base):
         """cpfg's control point: the Hermite curve from the last control point to here."""
         if self.gc is None:
-            self.gc = (p, h, width)
+            self.gc = (p, h, width, self.tangents[1])
             return
-        p0, h0, w0 = self.gc
+        p0, h0, w0, leaving = self.gc
         chord = math.dist(p0, p)
-        t0 = [x * chord * TANGENT_COEFFICIENT for x in h0]
-        t1 = [x * chord * TANGENT_COEFFICIENT for x in h]
+        t0 = [x * chord * leaving for x in h0]
+        t1 = [x * chord * self.tangents[0] for x in h]
         pieces = max(1, min(pieces, 1000))
         prev = p0
         for k in range(1, pieces + 1):
@@ -436,7 +445,7 @@ class Rich:
             if math.dist(prev, point) > 0:
                 self._segment(st, i, prev, point, seg, order, seek, full, seg_base, width=w)
             prev = point
-        self.gc = (p, h, width)
+        self.gc = (p, h, width, self.tangents[1])
 
     def _set_guide(self, raw, v, p, h, l, i=-1):  # noqa: E741
         pts = curve_points(raw[0], 3) if raw else None

@@ -779,8 +779,8 @@ def undrawn_symbols(grammar: Grammar) -> list[str]:
     """
     rules = [*grammar.rules, *grammar.decomposition, *grammar.interpretation]
     written = {m.symbol for m in grammar.axiom} | {m.symbol for r in rules for m in r.successor}
-    rewritten = {r.pred.symbol for r in rules}
-    special = {"%", "*", *QUERIES}  # the branch cut, ABOP's any-context, the query modules
+    rewritten = {p.symbol for r in rules for p in r.strict}  # cpfg: a predecessor of several modules
+    special = {"%", "*", "?E", *QUERIES}  # the branch cut, ABOP's any-context, the query modules
     marks = {entry[1] for entry in grammar.amap}  # '#amap' markers mean architecture, not drawing
     return sorted(
         s
@@ -788,6 +788,10 @@ def undrawn_symbols(grammar: Grammar) -> list[str]:
         if s not in SYMBOL_ACTIONS and s not in SYMBOL_CODES and s not in CPFG_CODES and not s.startswith(SURFACE_PREFIX)
     )
 
+
+#: cpfg commands read but not drawn (``ramure check`` notes them with the others nothing draws):
+#: symbol -> what it would have done.
+NOT_DRAWN = {"@Tx": "a texture (Ramure draws colours and materials, not textures)"}
 
 #: Query modules (cpfg, L-Py): symbol -> the columns of :func:`turtle_states` they receive.
 QUERIES = {"?P": slice(0, 3), "?H": slice(3, 6), "?L": slice(6, 9), "?U": slice(9, 12)}
@@ -821,6 +825,29 @@ def turtle_states(lsys: LSystem, tree: DerivationTree, leaves: ArrayLike, positi
     return out
 
 
+def _answer_environment(lsys, tree, string, symbol, first_new) -> None:
+    """Answer the ``?E`` modules with the grammar's built-in environment
+    (:mod:`ramure.lsys.interpretation.environment`): every ``?E`` of the string is a query, the
+    ones the last step wrote get the answer in their first parameter (as ``?P``)."""
+    from .environment import honda81
+
+    settings = getattr(lsys.grammar, "environment", {}) or {}
+    where = np.flatnonzero((tree.symbol[string] == symbol) & (tree.nparams[string] > 0))
+    if settings.get("program") != "honda81" or not where.size:
+        return
+    nodes = string[where]
+    states = turtle_states(lsys, tree, string, where)
+    params = np.asarray(tree.params[nodes], float)
+    index = np.where(tree.nparams[nodes] > 1, params[:, 1] if params.shape[1] > 1 else 0.0, 0.0)
+    answers = honda81(states[:, 0:3], params[:, 0], index, float(settings["radius"]), bool(settings["3d"]))
+    new = nodes >= first_new
+    if new.any():
+        start = int(nodes[new].min())
+        block = np.asarray(tree.params[start:], float).copy()  # written back whole, as answer_queries does
+        block[nodes[new] - start, 0] = answers[new]
+        tree.params[start:] = block
+
+
 def answer_queries(lsys: LSystem, tree: DerivationTree, string: np.ndarray, first_new: int = 0) -> None:
     """Set the parameters of the query modules ``?P ?H ?L ?U`` of ``string`` written by the last
     step (node ids from ``first_new``) to the turtle's position, heading, left and up vectors
@@ -829,6 +856,8 @@ def answer_queries(lsys: LSystem, tree: DerivationTree, string: np.ndarray, firs
     step that wrote it (the history tree keeps each node's parameters): rewrite it by itself
     (``?P(x,y,z) --> ?P(x,y,z)``) to have it refreshed every step."""
     ids = {s: i for i, s in enumerate(lsys.symbols)}
+    if "?E" in ids:
+        _answer_environment(lsys, tree, string, ids["?E"], first_new)
     wanted = {ids[s]: cols for s, cols in QUERIES.items() if s in ids}
     if not wanted:
         return

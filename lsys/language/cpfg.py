@@ -23,12 +23,34 @@ cpfg                             Ramure
 ``warnings`` / ``no warnings``   ignored (after ``homomorphism``/``decomposition``)
 ``ran(x)`` / ``nran(m, s)``      ``uniform(0, x)`` / ``normal(m, s)``
 ``endlsystem``                   end of the grammar
+``XF(x) --> ...``                a predecessor of several modules (``#dialect cpfg``)
+``@Gt(a, b)``                    a generalised cylinder's tangent coefficients (drawn)
+``@Tx(id)``                      a texture: read, not drawn (``ramure check`` notes it)
+``?E(v, i)`` with honda81        answered by Ramure's built-in honda81 (the ``.e`` file
+                                 names it; :mod:`ramure.lsys.language.cpfg_environment`)
+``func(id, x)``                  the view file's ``.func`` functions
+                                 (:mod:`ramure.lsys.language.cpfg_functions`)
 ===============================  ========================================================
+
+**Module names.**  cpfg's lexer reads a module name as *one character*
+(``lsys_input.l``: a symbol is any single character but ``< > : *`` and
+blanks; ``@``, ``?`` and ``~`` take the next character as part of the
+command), so ``spikef`` is the six modules ``s p i k e f`` and ``XF(x)`` is
+``X`` then ``F(x)``: the parameters belong to the character before ``(``.
+Ramure's ``.lsys`` language reads undeclared names the same way.  A strict
+predecessor may be several modules (cpfg's ``Strictpred : FormalModules``):
+it matches a run of modules with the same symbols and numbers of
+parameters, nothing skipped, and the run is rewritten as a whole (see
+:meth:`ramure.lsys.LSystem.rewrite`).  A module written with another number
+of parameters than a rule's predecessor is not rewritten by that rule, as
+in cpfg (``.lsys`` refuses it).  Both come with ``#dialect cpfg``, which
+the translation ends with.
 
 Refused with a :class:`~ramure.errors.GrammarError` naming the construct
 (line, column, caret): ``#include`` (view, surface and other files) and the
-other preprocessor commands; a second ``Lsystem:`` (sub-L-systems); query and
-communication modules ``?P ?H ?L ?U ?E`` and sub-L-system calls ``?(...)``;
+other preprocessor commands; a second ``Lsystem:`` (sub-L-systems); ``?E`` modules
+of another environment program than honda81 (named, from the ``.e`` file) and
+sub-L-system calls ``?(...)``;
 ``@`` modules Ramure does not draw (e.g. ``@Gs`` generalised cylinders);
 C blocks ``{ ... }`` in a rule's condition; cpfg's ``start:``/``end:``
 statement blocks and ``define:`` blocks.  Trigonometry is in degrees, as in
@@ -46,6 +68,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..errors import GrammarError
+from .cpfg_environment import BUILT_IN
 from .grammar import CONTINUATION, Grammar, parse_grammar, strip_comments
 
 #: Suffixes read as cpfg files by :meth:`ramure.lsys.LSystem.from_file`.
@@ -68,6 +91,7 @@ _AT_MEANING = {
     "M": "absolute moves",
     "R": "absolute headings",
     "Tf": "texture",
+    "Tx": "texture",
     "D": "scale factor",
     "b": "blackboard",
     "Ca": "contours",
@@ -99,8 +123,10 @@ class _Out:
 
 
 class _Translator:
-    def __init__(self, filename=None) -> None:
+    def __init__(self, filename=None, functions=None, environment=None) -> None:
         self.filename = filename
+        self.environment = environment or {}  # the .e file's program (lsys.language.cpfg_environment)
+        self.functions = functions or {}  # func(id, x) of the view file (lsys.language.cpfg_functions)
         self.section = "production"
         self.lsystems = 0
         self.ended = False
@@ -175,7 +201,7 @@ class _Translator:
                     continue
                 text, line, column = block
                 try:
-                    programs.append(parse_program(text, line, column, lines))
+                    programs.append(parse_program(text, line, column, lines, self.functions))
                 except GrammarError as err:
                     err.filename = self.filename
                     raise
@@ -192,7 +218,8 @@ class _Translator:
         if colon < 0 or (arrow >= 0 and (brace < colon or arrow < brace)):
             return False  # no head going on over lines, no block before the arrow
         word = s[:colon].strip().lower()
-        return word not in ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
+        keywords = ("lsystem", "derivation length", "axiom", "ignore", "consider", "seed", "maximum depth")
+        return word not in (*keywords, "homomorphism", "decomposition")  # 'homomorphism: no warnings' too
 
     def block_rule_line(self, number, s):
         """A line of ``pred : {pre} condition {post} --> successor``: the rule is written on the
@@ -239,7 +266,7 @@ class _Translator:
             if key in out:
                 raise self.error(f"a second '{name}:' block", number, 1, lines[number - 1])
             try:
-                out[key] = parse_program("\n".join(pieces), number, column, lines)
+                out[key] = parse_program("\n".join(pieces), number, column, lines, self.functions)
             except GrammarError as err:
                 err.filename = self.filename
                 raise
@@ -391,12 +418,12 @@ class _Translator:
                 depth -= 1
             elif depth == 0 and c == "?" and text[i + 1 : i + 2] not in ("P", "H", "L", "U"):
                 nxt = text[i + 1 : i + 2]
+                if nxt == "E" and self.environment.get("program") in BUILT_IN:
+                    i += 1
+                    continue
                 what = _QUERY.get(nxt, "the sub-L-system call ?(...)" if nxt == "(" else "the query module ?")
                 if nxt == "E":
-                    what += (
-                        " talks to an environment program (named in cpfg's -e file: light, space, a field "
-                        "simulator) that Ramure does not run, so it"
-                    )
+                    what += self.missing_environment()
                 raise self.error(f"{what} is not supported", number, i + 1, original)
             elif depth == 0 and c == "@":
                 self.at_module(number, text, original, i)
@@ -414,12 +441,27 @@ class _Translator:
         out.edits.sort()
         return out
 
+    def missing_environment(self):
+        """Why a ``?E`` cannot be answered: the program the ``.e`` file names, or no ``.e`` file."""
+        program, where = self.environment.get("program"), self.environment.get("file")
+        if program:
+            return (
+                f" talks to the environment program {program} (named in {where}), which Ramure does not run "
+                f"(Ramure answers {', '.join(BUILT_IN)} itself), so it"
+            )
+        return (
+            " talks to an environment program (named in cpfg's -e file, here none beside the .l file: "
+            f"Ramure answers {', '.join(BUILT_IN)} itself), so it"
+        )
+
     def at_module(self, number, text, original, i):
         m = re.match(r"@([A-Za-z#]+)", text[i:])
         name = "@" + (m.group(1) if m else "")
         from ..interpretation.turtle import CPFG_CODES, SYMBOL_CODES  # the rich walk's tables
-        from ..interpretation.turtle import SYMBOL_ACTIONS
+        from ..interpretation.turtle import NOT_DRAWN, SYMBOL_ACTIONS
 
+        if any(text.startswith(k, i) and not text[i + len(k) : i + len(k) + 1].isalpha() for k in NOT_DRAWN):
+            return  # read, not drawn: 'ramure check' notes it
         drawn = [*SYMBOL_ACTIONS, *SYMBOL_CODES, *CPFG_CODES]
         known = sorted({s for s in drawn if s.startswith("@")}, key=lambda s: (-len(s), s))  # what the turtle draws
         if any(name.startswith(k) and not name[len(k) : len(k) + 1].isalpha() for k in known) or any(
@@ -612,10 +654,22 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
     Errors are those of :func:`parse_cpfg` (``.l`` lines and columns).
     """
     parse_cpfg(text, filename)  # refuse what cannot be translated, at the .l file's line and column
+    calls = re.search(r"\bfunc\s*\(", strip_c_comments(text))
+    if calls:
+        line = text[: calls.start()].count("\n") + 1
+        column = calls.start() - (text.rfind("\n", 0, calls.start()) + 1) + 1
+        raise GrammarError(
+            "func(id, x) reads the view file's function files, which a .lsys file cannot name: open the .l file itself",
+            line,
+            column,
+            text.split("\n")[line - 1],
+            filename=filename,
+        )
     name = pathlib.Path(filename).name if filename else "a cpfg file"
     head = [f"/* Imported from {name} by 'ramure import'. The cpfg view file (angle, widths) is not read. */"]
     if angle is not None:
         head.append(f"#angle {angle:g}")
+    head.append("#dialect cpfg")  # cpfg's matching and turtle (lsys.language.grammar)
     body = [line.rstrip() for line in translate(text, filename).split("\n")]
     while body and not body[-1]:
         body.pop()
@@ -625,19 +679,21 @@ def to_lsys(text: str, filename: str | None = None, angle: float | None = None) 
 def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
     """Parse a cpfg ``.l`` file's text; errors name the ``.l`` line and column."""
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    translator = _Translator(filename)
+    functions, names = _view_functions(text, filename)
+    environment = _environment(text, filename)
+    translator = _Translator(filename, functions, environment)
     outs = translator.translate(text)
     programs = translator.programs(lines)
     rule_blocks = translator.parsed_rule_blocks(lines)
     every = [*programs.values(), *(b for pair in rule_blocks.values() for b in pair if b is not None)]
-    body = "\n".join(out.text for out in outs) + _globals(every, outs)
+    body = "\n".join(out.text for out in outs) + _globals(every, outs) + "\n#dialect cpfg"
     try:
-        grammar = parse_grammar(body, filename)
+        grammar = parse_grammar(body, filename, functions, names)
     except GrammarError as err:
         raise _in_cpfg_words(err, outs, lines, filename) from None
     grammar.text = text
+    grammar.environment = environment if environment.get("program") in BUILT_IN else {}
     grammar.programs = programs  # run by LSystem.derive: Define, Start, StartEach, EndEach, End
-    grammar.dialect = "cpfg"  # the turtle reads @Gc, @Ge and @o as cpfg does
     for rule in [*grammar.rules, *grammar.decomposition, *grammar.interpretation]:
         if rule.line in rule_blocks:
             rule.blocks = rule_blocks[rule.line]
@@ -647,6 +703,32 @@ def parse_cpfg(text: str, filename: str | None = None) -> Grammar:
         rule.text = bare[rule.line - 1].strip()  # and name the rule as the .l file writes it
     _locate_in_l_file(grammar, outs, lines, filename)
     return grammar
+
+
+def _environment(text, filename):
+    """The ``.e`` file's environment beside ``filename``, read only when the text has ``?E``."""
+    if filename is None or "?E" not in strip_c_comments(text):
+        return {}
+    from .cpfg_environment import read_environment
+    from .grammar import confinement_root
+
+    root = confinement_root(filename)
+    assert root is not None
+    return read_environment(filename, root)
+
+
+def _view_functions(text, filename):
+    """({"func": tables} or {}, {function-set name: id}) of the view file beside ``filename``,
+    read only when the text calls ``func`` (:mod:`ramure.lsys.language.cpfg_functions`)."""
+    if filename is None or not re.search(r"\bfunc\s*\(", strip_c_comments(text)):
+        return {}, {}
+    from .cpfg_functions import view_tables
+    from .grammar import confinement_root
+
+    root = confinement_root(filename)
+    assert root is not None  # a file name gives a folder
+    tables, names = view_tables(filename, root)
+    return ({"func": tables} if tables is not None else {}), names
 
 
 def _globals(programs, outs):
@@ -673,6 +755,11 @@ def _locate_in_l_file(grammar, outs, lines, filename):
 def _in_cpfg_words(err, outs, lines, filename):
     """The error of the translated text, located in the ``.l`` file and worded in cpfg's keywords."""
     message = err.message
+    if message.startswith("unknown function 'func'"):
+        message += (
+            ": func(id, x) reads the functions a cpfg view file names ('function: f.func' lines), "
+            "and no view file beside the .l file (same name with .v) names any"
+        )
     for lsys_word, cpfg_word in (("'n: ...'", "'derivation length: ...'"), ("'w: ...'", "'axiom: ...'")):
         message = message.replace(lsys_word, cpfg_word)
     line, column, source = err.line, err.column, err.source_line

@@ -69,13 +69,14 @@ class Scope:
 class _Expr:
     """An expression of a block, its array reads ``a[i]`` replaced by placeholders."""
 
-    def __init__(self, text: str, line: int | None, column: int, source_line: str | None) -> None:
+    def __init__(self, text: str, line: int | None, column: int, source_line: str | None, functions: dict | None = None) -> None:
         self.reads: list[tuple[str, _Expr, str]] = []  # (array, index, placeholder)
+        self.functions = functions
         text = self._arrays(text, line, column, source_line)
         for pattern, new in RENAMED:
             text = pattern.sub(new, text)
         self.source = Source(text, line, column, source_line)
-        self.expr: Expression = parse_expression(self.source)
+        self.expr: Expression = parse_expression(self.source, functions=functions)
         self.names = sorted({name for name, _ in names_used(self.expr)})
         self.fn = compile_expression(self.expr, self.names, ())
 
@@ -88,7 +89,7 @@ class _Expr:
             if close < 0:
                 raise GrammarError("a '[' is never closed", line, column + m.end() - 1, source_line)
             placeholder = f"__array{len(self.reads)}"
-            index = _Expr(text[m.end() : close], line, column + m.end(), source_line)
+            index = _Expr(text[m.end() : close], line, column + m.end(), source_line, self.functions)
             self.reads.append((m.group(1), index, placeholder))
             out.append(text[at : m.start()] + placeholder)
             at = close + 1
@@ -288,8 +289,9 @@ class Declare(Statement):
 class _Text:
     """The block's text and where it stands in the file (line and column of each offset)."""
 
-    def __init__(self, text: str, line: int | None, column: int, lines: list[str] | None) -> None:
+    def __init__(self, text: str, line: int | None, column: int, lines: list[str] | None, functions: dict | None = None) -> None:
         self.text, self.line, self.column, self.lines = text, line, column, lines
+        self.functions = functions  # e.g. cpfg's func(id, x)
 
     def where(self, offset: int) -> tuple[int | None, int, str | None]:
         before = self.text[:offset]
@@ -309,13 +311,16 @@ class _Text:
         if not piece.strip():
             raise self.error("an expression is missing here", start)
         line, column, source = self.where(start + lead)
-        return _Expr(piece.strip().replace("\n", " "), line, column, source)
+        return _Expr(piece.strip().replace("\n", " "), line, column, source, self.functions)
 
 
-def parse_program(text: str, line: int | None = None, column: int = 1, lines: list[str] | None = None) -> Block:
+def parse_program(
+    text: str, line: int | None = None, column: int = 1, lines: list[str] | None = None, functions: dict | None = None
+) -> Block:
     """Parse the statements of ``text`` (a braced block or bare statements); ``line`` and
-    ``column`` place its first character in the file (whose ``lines`` errors quote)."""
-    source = _Text(text, line, column, lines)
+    ``column`` place its first character in the file (whose ``lines`` errors quote);
+    ``functions`` are called as in rules (cpfg's ``func``)."""
+    source = _Text(text, line, column, lines, functions)
     parser = _Parser(source)
     body = parser.statements(len(text))
     return Block(body)

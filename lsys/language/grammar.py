@@ -62,6 +62,13 @@ Directives (one per line):
     the random seed a plant of this grammar is derived with (a whole number
     >= 0; default 0).  The explorers write it when the user changes the seed,
     so a saved grammar grows the plant that was on screen.
+``#dialect cpfg``
+    match rules as cpfg does (the cpfg reader writes it; ``ramure import`` keeps it):
+    a rule's strict predecessor may be several modules (``XF(x) -> ...``,
+    ``spikef -> ...``: one module per letter, as cpfg reads names), and a module
+    written with another number of parameters than a rule's predecessor is
+    simply not rewritten by that rule (instead of being an error).  The turtle
+    reads ``@Gc``, ``@o`` ... as cpfg does.  ``#dialect ramure`` is the default.
 ``n: N``, ``w: axiom``, ``p:``
     derivation count, axiom, then one rule per line.
 
@@ -190,13 +197,21 @@ class Rule:
     #: cpfg's statement blocks before and after the condition (``A : {...} c {...} --> B``):
     #: (:class:`ramure.lsys.language.cstatements.Block` or None, the same), else None.
     blocks: tuple | None = None
+    #: The modules of a several-module strict predecessor after the first (``pred``), as cpfg
+    #: writes ``XF(x) --> ...`` (``#dialect cpfg``); empty for a one-module predecessor.
+    sequence: list = field(default_factory=list)
 
     @property
     def formals(self) -> list[str]:
         names = []
-        for pattern in [*self.left, self.pred, *self.right]:
+        for pattern in [*self.left, self.pred, *self.sequence, *self.right]:
             names.extend(pattern.params)
         return names
+
+    @property
+    def strict(self) -> list[Pattern]:
+        """The strict predecessor's modules: ``pred`` and, in cpfg, the ``sequence`` after it."""
+        return [self.pred, *self.sequence]
 
     @property
     def is_context_sensitive(self) -> bool:
@@ -204,12 +219,13 @@ class Rule:
 
     def group_key(self) -> tuple:
         """Rules with the same key compete for the same modules (stochastic choice)."""
-        return (
+        key = (
             self.pred.symbol,
             len(self.pred.params),
             tuple((p.symbol, len(p.params)) for p in self.left),
             tuple((p.symbol, len(p.params)) for p in self.right),
         )
+        return key + (tuple((p.symbol, len(p.params)) for p in self.sequence),) if self.sequence else key
 
     def __str__(self) -> str:
         return self.text.strip()
@@ -252,8 +268,12 @@ class Grammar:
     #: :class:`ramure.lsys.language.cstatements.Block`), run by :meth:`ramure.lsys.LSystem.derive`.
     programs: dict = field(default_factory=dict)
     #: The language the text was written in where the turtle reads a symbol its way: ``"cpfg"``
-    #: (``@Gc`` a cylinder's control point, ``@o(d)`` a diameter), else ``""``.
+    #: (``@Gc`` a cylinder's control point, ``@o(d)`` a diameter), else ``""``.  cpfg files
+    #: (and ``.lsys`` text with ``#dialect cpfg``) may have several-module predecessors.
     dialect: str = ""
+    #: The built-in environment cpfg's ``?E`` modules talk to (:mod:`ramure.lsys.language.cpfg_environment`):
+    #: ``{"program": "honda81", "radius": r, "3d": bool}``, else empty.
+    environment: dict = field(default_factory=dict)
 
     def symbol_id(self, name: str) -> int:
         return self.symbols.index(name)
@@ -371,6 +391,7 @@ class GrammarParser:
         self.section = "production"  # the rules section being read (production, interpretation, ...)
         self.section_lines: dict[str, list[list]] = {"interpretation": [], "decomposition": []}
         self.depths = {"interpretation": 1, "decomposition": 1}
+        self.dialect = ""  # '#dialect cpfg': cpfg's matching (several-module predecessors, any arity written)
         self._token_key: tuple[str, ...] | None = None
         self._token_re: re.Pattern[str] | None = None
 
@@ -471,6 +492,7 @@ class GrammarParser:
             amap=tuple(self.amap),
             interpretation_depth=self.depths["interpretation"],
             decomposition_depth=self.depths["decomposition"],
+            dialect=self.dialect,
         )
         for name, entries in self.section_lines.items():
             setattr(grammar, name, [_located(self.rule, entry[0], i, *entry) for i, entry in enumerate(entries)])
@@ -574,6 +596,11 @@ class GrammarParser:
 
             index, rgba = parse_material(self, line, rest)
             self.materials[index] = rgba
+        elif name == "dialect":
+            dialect = text[rest:].strip().lower()
+            if dialect not in ("cpfg", "ramure"):
+                raise line.error(f"#dialect is 'cpfg' or 'ramure', not '{text[rest:].strip()}'", rest + 1)
+            self.dialect = "" if dialect == "ramure" else dialect
         elif name == "tropism":
             words = [(w.group(), rest + w.start()) for w in re.finditer(r"\S+", text[rest:])]
             if len(words) != 4:
@@ -584,7 +611,7 @@ class GrammarParser:
             raise line.error(
                 f"unknown directive '#{m.group(1)}' (known: #define, #function, #include, #module, #organ, "
                 "#ignore, #consider, #angle, #step, #width, #widthscale, #seed, #tropism, #amap, #surface, #material, "
-                "#interpretation_depth, #decomposition_depth)",
+                "#interpretation_depth, #decomposition_depth, #dialect)",
                 start + 1,
             )
 
@@ -684,8 +711,8 @@ class GrammarParser:
         if self._token_key != key:
             names = sorted(key, key=len, reverse=True)
             # @O (sphere), @Ts (elasticity), the other @ commands and ~name (a surface) are single modules
-            at_names = r"@Ts|@Tp|@Gs|@Gc|@Ge|@O|@o|@c|@v|@M|@R|@B|@#|@!"
-            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), at_names, r"\?[PHLU]|~[A-Za-z_]\w*", r"\S"]))
+            at_names = r"@Ts|@Tp|@Tx|@Gs|@Gc|@Ge|@Gt|@O|@o|@c|@v|@M|@R|@B|@#|@!"
+            self._token_re = re.compile("|".join([*(re.escape(n) for n in names), at_names, r"\?[PHLUE]|~[A-Za-z_]\w*", r"\S"]))
             self._token_key = key
         return self._token_re
 
@@ -743,8 +770,12 @@ class GrammarParser:
         pred_end = gt if gt >= 0 else pattern_end
         pred = self.modules_at(line, pred_start, pred_end, formal=True)
         right = self.modules_at(line, gt + 1, pattern_end, formal=True) if gt >= 0 else []
-        if len(pred) != 1:
-            raise line.error("a rule's predecessor must be exactly one module", pred_start + 1)
+        if not pred or len(pred) > 1 and self.dialect != "cpfg":
+            raise line.error(
+                "a rule's predecessor must be exactly one module (several, as in cpfg's 'XF(x) --> ...', "
+                "only with '#dialect cpfg')",
+                pred_start + 1,
+            )
         left, right = _context(line, left), _context(line, right)
         for ctx in (left, right):
             for p in ctx:
@@ -753,6 +784,7 @@ class GrammarParser:
         pieces = [(line, arrow + width, end), *continuations]
         rule_text = " ".join(pl.text[a:b].strip() for pl, a, b in [(line, start, end), *continuations])
         rule = Rule(index, line.number, rule_text, line.original, pred[0], [], left, right, None, probability)
+        rule.sequence = pred[1:]
         formals = rule.formals
         dup = {f for f in formals if formals.count(f) > 1}
         if dup:
@@ -763,6 +795,8 @@ class GrammarParser:
                 rule.condition = parse_expression(line.source(colon + 1, arrow), functions=self.functions)
                 compile_expression(rule.condition, formals, self.constants)
         pieces, rule.weight = self._weight(pieces)
+        if rule.sequence and (rule.weight is not None or probability is not None):
+            raise line.error("a rule whose predecessor is several modules cannot be stochastic", pred_start + 1)
         if rule.weight is not None and probability is not None:
             raise line.error(
                 "a rule has either a probability prefix ('.5 A -> B') or a weight suffix ('A -> B : 0.5'), not both",
@@ -969,7 +1003,7 @@ def _check(grammar):
         for rules in groups.values():
             _check_probabilities(rules)
     arities: dict[str, set[int]] = {}
-    for rule in every:
+    for rule in every if grammar.dialect != "cpfg" else []:  # cpfg: a rule matches its own arity only
         arities.setdefault(rule.pred.symbol, set()).add(len(rule.pred.params))
     written = [(spec, None) for spec in grammar.axiom]
     written += [(spec, rule) for rule in every for spec in rule.successor]
@@ -986,7 +1020,7 @@ def _check(grammar):
         if spec.symbol not in symbols:
             symbols.append(spec.symbol)
     for rule in every:
-        for p in [*rule.left, rule.pred, *rule.right]:
+        for p in [*rule.left, rule.pred, *rule.sequence, *rule.right]:
             if p.symbol not in symbols:
                 symbols.append(p.symbol)
     grammar.symbols = symbols
@@ -1051,8 +1085,13 @@ def confinement_root(filename: str | os.PathLike | None) -> pathlib.Path | None:
     return pathlib.Path(filename).absolute().parent.resolve() if filename else None
 
 
-def parse_grammar(text: str, filename: str | None = None) -> Grammar:
+def parse_grammar(
+    text: str, filename: str | None = None, functions: dict | None = None, constants: dict[str, float] | None = None
+) -> Grammar:
     """Parse grammar text.  Raises :class:`~ramure.lsys.errors.GrammarError` with line and column.
+
+    ``functions`` and ``constants`` are known before the first line (the cpfg reader gives
+    ``func`` and the names of a view file's function set this way).
 
     >>> g = parse_grammar("n: 2\\nw: A(1)\\np:\\n A(x) -> A(x+1)B(x+1)C(1)\\n B(y) -> B(y+3)")
     >>> [str(r.pred) for r in g.rules]
@@ -1065,7 +1104,10 @@ def parse_grammar(text: str, filename: str | None = None) -> Grammar:
             filename=filename,
         )
     try:
-        return GrammarParser(text, filename).parse()
+        parser = GrammarParser(text, filename)
+        parser.functions.update(functions or {})  # e.g. cpfg's func(id, x) (lsys.language.cpfg_functions)
+        parser.constants.update(constants or {})
+        return parser.parse()
     except GrammarError as err:
         if filename and not err.filename:
             err.filename = filename

@@ -246,6 +246,7 @@ class LpyLSystem(LSystem):
             context=lambda: context,
             execContext=lambda: context,
             isAnimationEnabled=lambda: False,
+            ParameterSet=lpy_plantgl.ParameterSet,  # openalea.lpy's, as every .lpy file sees it
         )
         ns.update(overrides)
         self._exec(self._init, ns)

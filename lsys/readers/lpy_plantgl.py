@@ -411,6 +411,46 @@ class QuantisedFunction:
         return self(x)
 
 
+class ParameterSet:
+    """L-Py's ``ParameterSet`` (from ``openalea.lpy``): named values read and set as attributes,
+    the parameter bag of a module (``I(ParameterSet(diameter=0.1))``, then ``p.diameter``).
+
+    >>> p = ParameterSet(age=0); q = p.copy(); q.age += 1
+    >>> p.age, q.age, q.hasattr("age"), p.parameter_names()
+    (0, 1, True, ['age'])
+    """
+
+    def __init__(self, **values: Any) -> None:
+        self.__dict__.update(values)
+
+    def copy(self) -> ParameterSet:
+        """A new set with the same values (a shallow copy, as L-Py's)."""
+        return ParameterSet(**self.__dict__)
+
+    def set(self, **values: Any) -> None:
+        """Set several values at once."""
+        self.__dict__.update(values)
+
+    def setdefault(self, **values: Any) -> None:
+        """Set the values not set yet."""
+        for name, value in values.items():
+            self.__dict__.setdefault(name, value)
+
+    def hasattr(self, name: str) -> bool:
+        """Whether the set has a value of that name."""
+        return name in self.__dict__
+
+    def parameter_names(self) -> list[str]:
+        """The names set, in the order they were set."""
+        return list(self.__dict__)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ParameterSet) and self.__dict__ == other.__dict__
+
+    def __repr__(self) -> str:
+        return f"ParameterSet({', '.join(f'{k}={v!r}' for k, v in self.__dict__.items())})"
+
+
 def names() -> dict[str, Any]:
     """Every name of this small PlantGL (what ``from openalea.plantgl.all import *`` gives)."""
     shown = (

@@ -217,3 +217,9 @@ def test_a_deep_maximum_depth_is_a_cap():
     text = "derivation length: 1\naxiom: A\nA --> B\ndecomposition\nmaximum depth: 500\nB --> C\nC --> F\nendlsystem\n"
     d = LSystem.from_text(text, filename="deep.l").derive()
     assert d.to_string() == "F"
+
+
+def test_homomorphism_no_warnings_after_the_productions_opens_the_section():
+    text = "derivation length: 1\naxiom: A\nA --> AB\nhomomorphism: no warnings\nB --> [F]\nendlsystem\n"
+    d = LSystem.from_text(text, "h.l").derive()
+    assert d.to_string() == "AB" and interpreted_text(d) == "A[F]"

@@ -356,3 +356,18 @@ def test_ramure_check_counts_an_lpy_files_rules(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "ok — 2 rule(s) (and 1 decomposition, 1 interpretation), 1 constant(s), n = 2" in out
     assert out.split("\n")[0].endswith("axiom A(1)B")
+
+
+def test_parameter_sets_carry_named_values_through_rules_and_drawing():
+    from ramure.lsys.readers.lpy import LpyLSystem
+
+    text = (
+        "Axiom: I(ParameterSet(diameter=0.5, length=2))\nderivation length: 2\nproduction:\nI(p) :\n"
+        "  q = p.copy()\n  q.length = p.length / 2\n  produce I(q) I(q)\ninterpretation:\n"
+        "I(p) --> _(p.diameter) F(p.length)\nendlsystem\n"
+    )
+    d = LpyLSystem(text).derive()
+    sk = d.skeleton()
+    assert len(d) == 4 and np.allclose(sk.length, [0.5] * 4)  # 2 halved twice, four pieces
+    plain = LpyLSystem("Axiom: _(0.5) F(0.5)\nderivation length: 0\nendlsystem\n").derive().skeleton()
+    assert np.allclose(sk.base_radius, plain.base_radius[0])  # the diameter read from the set
