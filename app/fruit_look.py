@@ -58,17 +58,22 @@ def coloured_grid(gm: GMap3, stage: str | None = None, seed: int = 0) -> pv.Unst
     and field data ``materials`` (JSON: one material per tissue, see
     :func:`ramure.gmap.organs.species.materials`), ``species``, ``ripeness`` and ``mm_per_unit``."""
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
-    from ramure.gmap.organs.species import MARKS, cell_rgb, check_stage, materials
+    from ramure.gmap.organs.species import CODES, MARKS, cell_rgb, check_stage, materials
 
     species, ripe = species_of(gm)
     stage = check_stage(species, stage or ripe)
     grid = to_unstructured_grid(gm)
     marks = {k: np.asarray(grid.cell_data[k]) for k in MARKS if k in grid.cell_data}
     centres = grid.cell_centers().points
-    grid.cell_data["rgb"] = cell_rgb(grid.cell_data["tissue"], species, stage, centres, marks, seed)
+    tissue = np.asarray(grid.cell_data["tissue"])
+    grid.cell_data["rgb"] = cell_rgb(tissue, species, stage, centres, marks, seed)
     if "corky" in marks or "wound" in marks:  # crack walls: coloured_surface keeps the mark on the walls only
         plain = {k: v for k, v in marks.items() if k not in ("corky", "wound")}
-        grid.cell_data["rgb_skin"] = cell_rgb(grid.cell_data["tissue"], species, stage, centres, plain, seed)
+        grid.cell_data["rgb_skin"] = cell_rgb(tissue, species, stage, centres, plain, seed)
+    whole = tissue == CODES["pericarp"]
+    if whole.any():  # a fruit not subdivided: skin outside, flesh on a cut (cut_in_flesh)
+        inner = np.where(whole, CODES["mesocarp"], tissue)
+        grid.cell_data["rgb_cut"] = cell_rgb(inner, species, stage, centres, marks, seed)
     grid.field_data["materials"] = np.array([json.dumps(materials(species, stage))])
     grid.field_data["species"] = np.array([species])
     grid.field_data["ripeness"] = np.array([stage])
@@ -92,6 +97,23 @@ def coloured_surface(grid: pv.UnstructuredGrid) -> pv.PolyData:
     skin_face = np.abs(np.einsum("ij,ij->i", n, out)) > 0.7
     rgb = np.asarray(surface.cell_data["rgb"]).copy()
     rgb[skin_face] = np.asarray(surface.cell_data["rgb_skin"])[skin_face]
+    surface.cell_data["rgb"] = rgb
+    return surface
+
+
+def cut_in_flesh(surface: pv.PolyData, normal: Any, origin: Any) -> pv.PolyData:
+    """Colour the faces a plane cut made (on the plane, facing along its normal) with ``rgb_cut``
+    where the grid had it: a fruit that is not subdivided is one pericarp tissue, skin-coloured,
+    and its cut shows the flesh."""
+    if "rgb_cut" not in surface.cell_data or surface.n_cells == 0:
+        return surface
+    n = np.asarray(normal, float) / max(float(np.linalg.norm(normal)), 1e-12)
+    centres = np.asarray(surface.cell_centers().points, float)
+    b = np.asarray(surface.bounds, float).reshape(3, 2)
+    tol = 1e-6 * max(float(np.max(b[:, 1] - b[:, 0])), 1e-12)
+    on_plane = np.abs((centres - np.asarray(origin, float)) @ n) < tol
+    rgb = np.asarray(surface.cell_data["rgb"]).copy()
+    rgb[on_plane] = np.asarray(surface.cell_data["rgb_cut"])[on_plane]
     surface.cell_data["rgb"] = rgb
     return surface
 
@@ -234,6 +256,8 @@ def render_png(
     whole = grid.extract_surface(algorithm="dataset_surface")
     shown = grid if cut is None else plane_cut(grid, normal=cut[0], origin=cut[1], mode="clip")
     surface = coloured_surface(shown)
+    if cut is not None:
+        surface = cut_in_flesh(surface, cut[0], cut[1])
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method

@@ -245,7 +245,7 @@ def cell_rgb(
     rgb = table(species, stage)[codes].astype(float)
     stage = check_stage(species, stage)
     ids = np.arange(len(codes))
-    skin = codes == CODES["exocarp"]
+    skin = (codes == CODES["exocarp"]) | (codes == CODES["pericarp"])  # a fruit not subdivided is skin outside
     if centres is not None and len(codes):
         c = np.asarray(centres, float).reshape(-1, 3)
         mid = 0.5 * (c.min(axis=0) + c.max(axis=0))

@@ -99,3 +99,22 @@ def test_plant_export_has_one_material_per_fruit_tissue(tmp_path):
     srgb = np.array(hex_rgb(palette("tomato")["exocarp"])) / 255.0
     linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
     assert np.allclose(skin["pbrMetallicRoughness"]["baseColorFactor"][:3], linear, atol=0.01)
+
+
+def test_a_fruit_not_subdivided_shows_flesh_where_cut_and_skin_outside(tmp_path):
+    """At volume level 0 a fruit is one pericarp tissue: its cut showed the skin's colour."""
+    from ramure.gmap.organs.species import palette
+
+    apple = build_fruit("apple", ripeness="green")
+    centre = np.asarray(L.coloured_grid(apple).center)
+    L.render_png(apple, tmp_path / "cut.png", size=(240, 240), cut=((0.0, 1.0, 0.0), centre), legend=False)
+    L.render_png(apple, tmp_path / "whole.png", size=(240, 240), legend=False)
+    colours = palette("apple", "green")
+    flesh, skin = np.array(hex_rgb(colours["mesocarp"])), np.array(hex_rgb(colours["exocarp"]))
+
+    def share_nearer(img, a, b):
+        px = img[_fruit_mask(img)]
+        return (np.abs(px - a).sum(axis=1) < np.abs(px - b).sum(axis=1)).mean()
+
+    assert share_nearer(_pixels(tmp_path / "cut.png"), flesh, skin) > 0.5  # the cut face fills most of it
+    assert share_nearer(_pixels(tmp_path / "whole.png"), flesh, skin) < 0.1  # uncut: skin all round
