@@ -338,7 +338,7 @@ def base_colors(mesh: pv.DataSet) -> np.ndarray:
 _BASE_COLORS: list[tuple[tuple[str, int], np.ndarray]] = []
 
 
-KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (lsys.geometry.KIND_FRUIT)
+KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (ramure.lsys.interpretation.geometry.KIND_FRUIT)
 FRUIT_SELECTED = (40, 110, 255)  # a selected fruit: blue, never mistaken for a ripe one
 
 
