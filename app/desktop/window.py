@@ -35,7 +35,7 @@ from ramure.app.desktop.panels.regen import RegenPanel
 from ramure.app.desktop.panels.string_dock import StringView
 from ramure.app.desktop.panels.variants import VariantsController
 from ramure.app.desktop.panels.wood import WoodPanel
-from ramure.app.desktop.menus.files import TITLE, FileActions
+from ramure.app.desktop.menus.files import OPEN_TITLE, TITLE, FileActions
 from ramure.app.desktop.view.plant_view import PlantView
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
@@ -257,7 +257,7 @@ class MainWindow(QMainWindow):
     def _actions(self) -> None:
         bar = self.menuBar()
         f = bar.addMenu("&File")
-        self._action(f, "&Open grammar…", lambda: self.files.open_grammar(), QKeySequence.StandardKey.Open)
+        self._action(f, f"&{OPEN_TITLE}…", lambda: self.files.open_grammar(), QKeySequence.StandardKey.Open)
         self._action(f, "&Save grammar", lambda: self.files.save_grammar(), QKeySequence.StandardKey.Save)
         self._action(f, "Save grammar &as…", lambda: self.files.save_grammar(ask=True), QKeySequence.StandardKey.SaveAs)
         f.addSeparator()
