@@ -13,7 +13,6 @@ import pathlib
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, TypeVar
 
-import numpy as np
 
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
@@ -37,6 +36,7 @@ from ramure.app.desktop.panels.variants import VariantsController
 from ramure.app.desktop.panels.wood import WoodPanel
 from ramure.app.desktop.menus.files import OPEN_TITLE, TITLE, FileActions
 from ramure.app.desktop.view.plant_view import PlantView
+from ramure.app.desktop.view.presenter import PlantPresenter
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
 
@@ -91,19 +91,13 @@ class MainWindow(QMainWindow):
         self._ask = ask
         self.settings = settings or QSettings("Ramure", "Ramure desktop")
         self.controller = Controller(explorer, self)
-        self.kinship = False
         self.message_box: QMessageBox | None = None
         self.last_message: str | None = None
-        self.drawn_version: int | None = None
         self.shown_text = explorer.text  # the model's grammar text the editor last showed
-        # the current plant draws what the plant drawn before it drew (see after_regrow)
-        self.same_as_before = False
-        # the cut preview: (version, selection, rho) it was computed for, and its leaves (orange)
-        self.preview_key: tuple | None = None
-        self.cut_leaves: np.ndarray = np.zeros(0, np.int64)
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
+        self.presenter = PlantPresenter(self.controller, self.view, self)
         self.editor = GrammarEditor()
         self.files = FileActions(self.controller, self.settings, self.editor, self.view, self, ask)
         self.constants_panel = ConstantsPanel()
@@ -162,7 +156,7 @@ class MainWindow(QMainWindow):
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
         self.editor.set_text(self.controller.snapshot.text)
         self.shown_text = self.controller.snapshot.text
-        self.show_plant(self.controller.snapshot, reset_camera=True)
+        self.presenter.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
         QTimer.singleShot(0, self._full_tab_titles)  # dock tabs never read "Req…"
 
@@ -354,9 +348,13 @@ class MainWindow(QMainWindow):
 
     def _connect(self) -> None:
         c = self.controller
-        c.plant_changed.connect(self.show_plant)
+        c.plant_changed.connect(self.presenter.show_plant)
         c.state_changed.connect(self.show_state)
-        c.selection_changed.connect(self.show_selection)
+        c.selection_changed.connect(self.presenter.show_selection)
+        p = self.presenter
+        p.plant_shown.connect(self._plant_shown)
+        p.selection_shown.connect(self.show_selection_docks)
+        p.cut_message.connect(self.regen.set_cut_preview)
         c.job_done.connect(self._job_done)
         c.job_done.connect(self.variants.fruit_ready)
         c.refused.connect(self.report_refused)
@@ -392,26 +390,9 @@ class MainWindow(QMainWindow):
         fa.flush_requested.connect(self.flush_edits)
         fa.recent_changed.connect(self.update_recent_menu)
 
-    # -- drawing from snapshots ---------------------------------------------------------
-    def show_plant(self, snap: Snapshot, reset_camera: bool | None = None) -> None:
-        """A new plant version: redraw the 3D view and every view of the plant.  The camera
-        stays where it is on an edit; ``reset_camera`` None frames the plant again only when
-        the derivation count changed (a plant of another size)."""
-        shown = self.view.snapshot
-        old = getattr(shown, "skeleton", None)  # compared after the frame (no copy)
-        if reset_camera is None:
-            reset_camera = shown is not None and shown.n != snap.n
-        self.base_colors = state.base_colors(snap.mesh)
-        self.fruit_leaves = state.fruit_leaves(snap.mesh)
-        self.set_cut_preview(None)  # a new plant: the preview of the old one is gone
-        self.view.show_plant(snap, self.plant_colors(snap.selection), reset_camera)
-        self.drawn_version = snap.version
-        if snap.selection:
-            self.request_preview()  # e.g. the part a regrow kept selected
-        self.show_selection(snap.selection, recolour=False, docks=False)
-        # the edit's frame first (a draft for a large plant); the docks follow in the same turn
-        self.view.redraw(now=True)
-        self.same_as_before = old is not None and state.same_plant((old.start, old.end), snap.skeleton)
+    # -- the docks follow the view ----------------------------------------------------
+    def _plant_shown(self, snap: Snapshot) -> None:
+        """A new plant version is on screen (:class:`PlantPresenter` drew it): the docks follow."""
         self.show_selection_docks(snap.selection)
         self.string_view.show_snapshot(snap)
         self.show_state(snap)
@@ -442,82 +423,15 @@ class MainWindow(QMainWindow):
             return  # the editor's own text (perhaps "30." for 30), or the user is typing
         self.editor.replace_text(snap.text)
 
-    def plant_colors(self, selection: Sequence[int]) -> np.ndarray:
-        """Per-cell RGB of the shown plant: the selection red, or the kinship hues."""
-        snap = self.controller.snapshot
-        return state.cell_colors(
-            snap.mesh, selection, self._kinship_colors(selection), base=self.base_colors, cut=self._cut_for(snap, selection)
-        )
-
-    def _cut_for(self, snap: Snapshot, selection: Sequence[int]) -> np.ndarray:
-        """The preview's leaves when they were computed for this plant, selection and ρ."""
-        key = (snap.version, tuple(selection), snap.rho)
-        return self.cut_leaves if self.preview_key == key else np.zeros(0, np.int64)
-
-    def request_preview(self) -> None:
-        """Show the selection's cut preview: at once on a small plant, else when its job is done."""
-        result = self.controller.preview()
-        if isinstance(result, tuple):
-            self.set_cut_preview(result)
-
-    def set_cut_preview(self, result: tuple | None) -> None:
-        """Show a preview job's result ``(version, selection, rho, CutPreview)``: the leaves a regrow
-        would change in orange, the sentence in the regeneration panel (nothing for a stale one)."""
-        snap = self.controller.snapshot
-        if result is None or result[3] is None:
-            self.preview_key, self.cut_leaves = None, np.zeros(0, np.int64)
-            self.regen.set_cut_preview("")
-            return
-        version, selection, rho, preview = result
-        if (version, selection, rho) != (snap.version, tuple(snap.selection), snap.rho):
-            return  # the selection or ρ changed since: a newer preview job follows
-        self.preview_key, self.cut_leaves = (version, selection, rho), preview.leaves
-        self.regen.set_cut_preview(preview.message)
-        if self.drawn_version == snap.version:
-            self.show_selection(snap.selection, docks=False)
-
-    def _kinship_colors(self, selection: Sequence[int]) -> np.ndarray | None:
-        if self.kinship and len(selection) == 1:
-            try:
-                return self.controller.kinship_colors()
-            except RamureError:
-                return None
-        return None
-
-    def show_selection(self, selection: Sequence[int], recolour: bool = True, docks: bool = True) -> None:
-        """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe
-        (``recolour`` False: the plant was just drawn in :meth:`plant_colors`); ``docks``: the
-        panels' part too (:meth:`show_selection_docks`; a new version's frame comes first)."""
-        snap = self.controller.snapshot
-        kin = self._kinship_colors(selection) if recolour or self.kinship else None
-        if docks and tuple(selection) != (self.preview_key or (None, ()))[1]:
-            self.regen.set_cut_preview("")  # the selection changed: its preview is on its way
-            if len(selection):
-                self.request_preview()
-        if recolour:
-            cut = self._cut_for(snap, selection)
-            self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors, cut=cut))
-        self.view.set_fruit_selection(selection)
-        self.view.set_selected_segments(
-            np.flatnonzero(state.leaf_mask(snap.segment_leaf, selection)) if len(selection) and kin is None else []
-        )
-        try:
-            self.view.set_box_for(self.controller.selection_box if selection else None, len(selection))
-        except RamureError:
-            self.view.set_box(None)
-        if docks:
-            self.show_selection_docks(selection)
-
     def show_selection_docks(self, selection: Sequence[int]) -> None:
         """The selection in the panels: counts, status line, the string dock's modules."""
         snap = self.controller.snapshot
         self.regen.set_selection_size(len(selection))
-        self.regen.set_fruit_selection(
-            int(np.isin(self.fruit_leaves, selection).sum()), len(self.fruit_leaves), self.variants.fruit_ok
-        )
+        fruit = self.presenter.fruit_leaves
+        self.regen.set_fruit_selection(self.presenter.fruit_selected(selection), len(fruit), self.variants.fruit_ok)
         if self.status_label.text() != snap.status:
             self.status_label.setText(snap.status)
-        if self.kinship:  # say what the colours mean, or what they need
+        if self.presenter.kinship:  # say what the colours mean, or what they need
             self.status(KINSHIP_HINT if len(selection) == 1 else KINSHIP_NEEDS_ONE, 10000)
         try:
             self.string_view.show_selection(self.controller.selected_modules() if selection else [])
@@ -581,10 +495,9 @@ class MainWindow(QMainWindow):
         self.docks[key].raise_()
 
     def set_kinship(self, on: bool) -> None:
-        """Colour the selection's relatives (``on``) or the selection only."""
-        self.kinship = bool(on)
-        self.kinship_action.setChecked(self.kinship)
-        self.show_selection(self.controller.snapshot.selection)
+        """Colour the selection's relatives (``on``) or the selection only (the menu entry follows)."""
+        self.kinship_action.setChecked(bool(on))
+        self.presenter.set_kinship(on)
 
     # -- user actions -------------------------------------------------------------------
     def _text_settled(self, text) -> None:
@@ -655,12 +568,10 @@ class MainWindow(QMainWindow):
 
     def select_rectangle(self, rect: Sequence[float], mode: str = "replace") -> list[int] | None:
         """Select the branches whose midpoints project inside display rectangle ``rect``."""
-        snap = self.controller.snapshot
-        if self.drawn_version != snap.version:
+        points = self.presenter.rectangle_points()
+        if points is None:
             return None
-        # branches by their midpoints, leaves and fruit by their centres
-        xy = self.view.project(np.concatenate([snap.midpoints, snap.organ_points]))
-        leaves = np.concatenate([snap.segment_leaf, snap.organ_leaves])
+        xy, leaves = points
         found = self.run_selection(self.controller.select_rectangle, xy, rect, mode, leaves)
         if found is not None:
             self.status(f"Rectangle: {len(found)} leaves ({mode})")
@@ -681,9 +592,9 @@ class MainWindow(QMainWindow):
         elif job.name.startswith(("regrow", "prune")) and job.error is None:
             self.after_regrow(job)
         elif job.name == "preview" and job.error is None:
-            self.set_cut_preview(job.result)
+            self.presenter.set_cut_preview(job.result)
         elif job.name == "rho" and job.error is None:
-            self.set_cut_preview(None)  # the preview of the old ρ: a new one follows
+            self.presenter.set_cut_preview(None)  # the preview of the old ρ: a new one follows
             if self.controller.snapshot.selection:
                 # asked here, after the ρ job: a preview job queued with the keystroke could be
                 # replaced into a place before a later ρ job and then be cleared by it
@@ -708,7 +619,7 @@ class MainWindow(QMainWindow):
         note = ""
         if job.name == "regrow" and snap.note:  # e.g. new constants on a part made in the last step
             note = snap.note[0].upper() + snap.note[1:] + "."
-        elif job.name == "regrow" and self.same_as_before:
+        elif job.name == "regrow" and self.presenter.same_as_before:
             note = SAME_PLANT
         elif job.name == "regrow" and snap.selection:
             note = REGROWN

@@ -37,12 +37,12 @@ def test_session_round_trip(make_window, qtbot, tmp_path):
 
 def test_a_corrupt_session_is_refused(make_window, qtbot, tmp_path):
     w = make_window()
-    version = w.drawn_version
+    version = w.presenter.drawn_version
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "ramure-session", "version": 1, "grammar": "n: 1\\nw: F"')
     w.files.load_session(bad)
     settle(qtbot, w)
-    assert "JSON" in w.last_message and w.drawn_version == version
+    assert "JSON" in w.last_message and w.presenter.drawn_version == version
 
 
 def test_open_and_save_grammar(make_window, qtbot, tmp_path):
