@@ -19,7 +19,9 @@ from typing import TYPE_CHECKING
 
 from PySide6.QtCore import QEvent, QObject, QPointF, QRectF, Qt
 from PySide6.QtGui import QBrush, QColor, QFont, QFontMetrics, QPainter, QPen, QWheelEvent
-from PySide6.QtWidgets import QGraphicsItem, QGraphicsScene, QGraphicsView, QHBoxLayout, QLabel, QPushButton, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QGraphicsItem, QGraphicsScene, QGraphicsView, QHBoxLayout, QLabel, QPushButton, QWidget
+
+from ramure.app.desktop.panels.common import dock_column
 
 if TYPE_CHECKING:
     from PySide6.QtWidgets import QGraphicsSimpleTextItem
@@ -61,11 +63,7 @@ class CutGraphView(QWidget):
         bottom.addWidget(legend)
         bottom.addStretch(1)
         bottom.addWidget(self.hint)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(top)
-        layout.addLayout(bottom)
-        layout.addWidget(self.view, 1)
+        dock_column(self, top, bottom).addWidget(self.view, 1)
         self.layout_data: GraphLayout | None = None
         self.labels: list[QGraphicsSimpleTextItem] = []
         self.label_width = 0.0

@@ -17,8 +17,9 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from PySide6.QtCore import QTimer, Signal
-from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QLineEdit, QListWidget, QPushButton, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QLineEdit, QListWidget, QPushButton, QWidget
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.fruit_defects import EXAMPLES
 from ramure.errors import RamureError
@@ -75,12 +76,7 @@ class DefectsPanel(QWidget):
         buttons = QHBoxLayout()
         buttons.addWidget(self.remove_button)
         buttons.addWidget(self.apply_button, 1)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(row)
-        layout.addWidget(self.specs)
-        layout.addLayout(buttons)
-        layout.addWidget(self.facts)
+        layout = dock_column(self, row, self.specs, buttons, self.facts)
         self.view_slot = LazyView(plotter_factory or _interactor)  # made when the dock is first shown
         layout.addWidget(self.view_slot, 1)
         controller.job_done.connect(self._job_done)

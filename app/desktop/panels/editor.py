@@ -24,8 +24,9 @@ from PySide6.QtGui import (
     QTextCursor,
     QTextOption,
 )
-from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QWidget
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.lsys.language.grammar import starts_line_comment
 
 if TYPE_CHECKING:
@@ -130,8 +131,7 @@ class GrammarEditor(QWidget):
         self.message.setWordWrap(True)
         self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         self.message.setStyleSheet("color: #b00020;")
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(0, 0, 0, 0)
+        layout = dock_column(self, margin=0)  # the text reaches the dock's frame
         layout.addWidget(self.edit, 1)
         layout.addWidget(self.message)
         self.timer = QTimer(self)

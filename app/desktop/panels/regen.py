@@ -29,7 +29,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ramure.app.desktop.panels.common import dock_column
+from ramure.app.desktop.panels.common import dock_column, number_box
 from ramure.app.desktop.state import changed_constants
 
 if TYPE_CHECKING:
@@ -257,10 +257,7 @@ class RegenPanel(QWidget):
                 self.constants_form.removeRow(0)
             self.boxes = {}
             for name in constants:
-                box = QDoubleSpinBox()
-                box.setObjectName(f"regen_{name}")
-                box.setRange(-1e9, 1e9)
-                box.setDecimals(4)
+                box = number_box(-1e9, 1e9, 4, name=f"regen_{name}")
                 self.boxes[name] = box
                 self.constants_form.addRow(name, box)
         for name, box in self.boxes.items():
