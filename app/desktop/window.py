@@ -18,7 +18,6 @@ from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QTabWidget
 
-from ramure.app.desktop import state
 from ramure.app.desktop.controller import Busy, Controller
 from ramure.app.desktop.qt_fix import protect_none
 from ramure.app.desktop.panels import qualifier_map
@@ -103,7 +102,7 @@ class MainWindow(QMainWindow):
         self.constants_panel = ConstantsPanel()
         self.regen = RegenPanel()
         self.string_view = StringView()
-        self.cut_view = CutGraphView()
+        self.cut_view = CutGraphView(self.controller)
         self.gallery = GalleryView()
         self.pca_view = PcaCloudView()
         self.qualifier_map: QualifierMapView | None = None  # made by qualifier_map.attach when first used
@@ -376,7 +375,8 @@ class MainWindow(QMainWindow):
         r.prune.connect(self._prune)
         r.undo.connect(self.undo)
         r.redo.connect(self.redo)
-        self.cut_view.plan_button.clicked.connect(self.show_planned_cut)
+        self.cut_view.refused.connect(self.report_refused)
+        self.cut_view.to_front.connect(lambda show: self.open_dock("cut") if show else self.docks["cut"].raise_())
         v = self.variants
         v.status.connect(self.status)
         v.status_ended.connect(self._status_ended)
@@ -396,7 +396,7 @@ class MainWindow(QMainWindow):
         self.show_selection_docks(snap.selection)
         self.string_view.show_snapshot(snap)
         self.show_state(snap)
-        self.show_cut(snap)
+        self.cut_view.show_snapshot(snap)
         self.variants.plant_changed(snap)
 
     def show_state(self, snap: Snapshot) -> None:
@@ -437,50 +437,6 @@ class MainWindow(QMainWindow):
             self.string_view.show_selection(self.controller.selected_modules() if selection else [])
         except RamureError:
             pass
-
-    def show_cut(self, snap: Snapshot) -> None:
-        """Show the last regrow's cut graph in the Cut graph dock."""
-        result = snap.last_result
-        if result is None:
-            return
-        if snap.cut_layout is None:
-            cut = result.cut
-            words = state.edit_words(result)
-            self.cut_view.clear(
-                f"Last edit: {words}. {state.cut_too_large_words(cut)}"
-                if cut is not None
-                else f"Last {result.op}: the whole plant (no cut)."
-            )
-            return
-        self.cut_view.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; cut capacity {result.cut_value:g}")
-
-    def show_planned_cut(self) -> None:
-        """Show the cut a regrow of the selection would make (the dock's Plan button)."""
-
-        def plan(ex):
-            cut = ex.plan()
-            return cut, (
-                state.cut_graph_layout(cut, ex.derivation.tree, cut.roots, ex.lsystem.symbols)
-                if state.drawable_cut(cut)
-                else None
-            )
-
-        try:
-            cut, layout = self.controller.read(plan, wait=2.0)
-        except RamureError as exc:
-            self.report_refused(str(exc))
-            return
-        if cut is None:
-            self.cut_view.clear("Select branches first: the cut is planned for the selection.")
-            return
-        if layout is None:
-            self.cut_view.clear(f"Planned cut for the selection, cut value {cut.cut_value:g}. {state.cut_too_large_words(cut)}")
-            self.docks["cut"].raise_()
-            return
-        self.cut_view.show_layout(
-            layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, cut value {cut.cut_value:g}"
-        )
-        self.open_dock("cut")
 
     def _variants_shown(self, vs: VariantSet) -> None:
         """A variant set on show: the gallery's picks in front of the regeneration panel, and the

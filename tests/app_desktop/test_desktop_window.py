@@ -399,3 +399,21 @@ def test_wide_cut_graph_stays_readable(make_window, qtbot, artifacts):
     node = next(v for v in layout.positions if isinstance(v, tuple))
     assert f"node {node[0]} (" in cut._tooltip(layout, node, node in layout.source_side)
     w.grab_window().save(str(artifacts / "desktop_cut_graph.png"))
+
+
+def test_the_cut_docks_plan_button_plans_the_selection(make_window, qtbot):
+    # the dock plans by itself (the window only connects its signals): no selection, a sentence;
+    # a selection, its graph with the roots the model plans, and the closed dock opened in front
+    w = make_window(n=6)
+    cut = w.cut_view
+    assert not w.docks["cut"].isVisible()  # closed at start
+    cut.plan_button.click()
+    assert cut.title.text() == "Select branches first: the cut is planned for the selection."
+    assert cut.layout_data is None and not w.docks["cut"].isVisible()
+    snap = w.controller.snapshot
+    w.controller.select(snap.segment_leaf[-3:])
+    settle(qtbot, w)
+    planned = w.controller.explorer.plan()
+    cut.plan_button.click()
+    assert cut.layout_data is not None and w.docks["cut"].isVisible()
+    assert cut.title.text().startswith(f"Planned cut for the selection: roots {planned.roots.tolist()[:12]}")
