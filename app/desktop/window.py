@@ -18,7 +18,9 @@ from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QTabWidget
 
+from ramure.app.desktop import state
 from ramure.app.desktop.controller import Busy, Controller
+from ramure.app.desktop.state import SAME_PLANT
 from ramure.app.desktop.qt_fix import protect_none
 from ramure.app.desktop.panels import qualifier_map
 from ramure.app.desktop.panels.architecture import ArchitecturePanel
@@ -64,13 +66,6 @@ DOCK_WIDTH = 280  # each side column at the default size: the plant keeps over h
 CLOSED_AT_START = ("pca", "architecture", "wood", "defects", "string", "cut")
 
 BUSY = "Computing…"
-SAME_PLANT = (
-    "Regrowing gave the same plant: this grammar is deterministic (no rule probabilities, "
-    "no uniform() or normal() draws), so a new seed grows the same branches. To change the "
-    "selected part: type values under 'Constants for the selection' and press 'Regrow with "
-    "constants', apply a qualifier, or open a stochastic grammar."
-)
-REGROWN = "The regrown part stays selected (red): Regrow again for another seed, Esc clears, Ctrl+Z undoes."
 KINSHIP_NEEDS_ONE = "Kinship colours: click exactly one branch to colour the plant by kinship to it"
 
 
@@ -92,7 +87,6 @@ class MainWindow(QMainWindow):
         self.controller = Controller(explorer, self)
         self.message_box: QMessageBox | None = None
         self.last_message: str | None = None
-        self.shown_text = explorer.text  # the model's grammar text the editor last showed
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
@@ -153,8 +147,7 @@ class MainWindow(QMainWindow):
         self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [DOCK_WIDTH, DOCK_WIDTH], Qt.Orientation.Horizontal)
         self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [400, 380], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
-        self.editor.set_text(self.controller.snapshot.text)
-        self.shown_text = self.controller.snapshot.text
+        self.editor.show_model_text(self.controller.snapshot.text)
         self.presenter.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
         QTimer.singleShot(0, self._full_tab_titles)  # dock tabs never read "Req…"
@@ -409,19 +402,9 @@ class MainWindow(QMainWindow):
         self.undo_action.setEnabled(snap.can_undo)
         self.redo_action.setEnabled(snap.can_redo)
         self.status_label.setText(snap.status)
-        self._sync_editor(snap)
+        self.editor.follow(snap)
         name = pathlib.Path(snap.path).name if snap.path else "untitled"
         self.setWindowTitle(f"{name}{' *' if self.dirty else ''} — {TITLE}")
-
-    def _sync_editor(self, snap) -> None:
-        """Show the model's grammar text when something other than typing changed it (a slider,
-        Undo, Redo, a file): the editor and the constants are one state."""
-        if snap.text == self.shown_text:
-            return
-        self.shown_text = snap.text
-        if snap.job == "grammar" or self.editor.pending():
-            return  # the editor's own text (perhaps "30." for 30), or the user is typing
-        self.editor.replace_text(snap.text)
 
     def show_selection_docks(self, selection: Sequence[int]) -> None:
         """The selection in the panels: counts, status line, the string dock's modules."""
@@ -561,24 +544,14 @@ class MainWindow(QMainWindow):
     def after_history(self, note: str) -> None:
         """After Undo or Redo: say what it did; the editor shows the model's text again, without
         the error of text typed since (an undo took that text back)."""
-        snap = self.controller.snapshot
-        if snap.error is None and not self.editor.pending():
-            self.shown_text = snap.text
-            self.editor.replace_text(snap.text)
-            self.editor.show_error(None)
+        self.editor.show_undone(self.controller.snapshot)
         self.regen.set_note(note)
         self.status(note, 8000)
 
     def after_regrow(self, job: Job) -> None:
         """Say what the regrow did; on a deterministic grammar, say why nothing changed."""
         snap = self.controller.snapshot
-        note = ""
-        if job.name == "regrow" and snap.note:  # e.g. new constants on a part made in the last step
-            note = snap.note[0].upper() + snap.note[1:] + "."
-        elif job.name == "regrow" and self.presenter.same_as_before:
-            note = SAME_PLANT
-        elif job.name == "regrow" and snap.selection:
-            note = REGROWN
+        note = state.regrow_note(job.name, snap.note, self.presenter.same_as_before, len(snap.selection) > 0)
         self.regen.set_note(note)
         self.status(SAME_PLANT if note == SAME_PLANT else snap.status, 0)
 

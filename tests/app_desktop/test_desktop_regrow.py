@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 
-from ramure.app.desktop.window import SAME_PLANT
+from ramure.app.desktop.state import SAME_PLANT
 from desktop_helpers import STOCHASTIC, settle
 
 pytestmark = pytest.mark.gui
