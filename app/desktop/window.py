@@ -395,10 +395,7 @@ class MainWindow(QMainWindow):
     def show_state(self, snap: Snapshot) -> None:
         """Same plant, other state: constants, undo/redo, status line, grammar error."""
         self.constants_panel.show_snapshot(snap, snap.grammar_constants)
-        self.regen.show_constants(snap.constants)
-        if not self.regen.rho.isSliderDown():
-            self.regen.set_rho(snap.rho * 100)
-        self.regen.set_history(snap.can_undo, snap.can_redo)
+        self.regen.show_state(snap)
         self.undo_action.setEnabled(snap.can_undo)
         self.redo_action.setEnabled(snap.can_redo)
         self.status_label.setText(snap.status)

@@ -34,6 +34,7 @@ from ramure.app.desktop.state import changed_constants
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage
+    from ramure.app.desktop.state import Snapshot
 
 THUMB = 96
 
@@ -203,6 +204,14 @@ class RegenPanel(QWidget):
         self.rho.setValue(int(round(percent)))
         self.rho_label.setText(f"ρ = {self.rho.value()}")
         self.rho.blockSignals(False)
+
+    def show_state(self, snap: Snapshot) -> None:
+        """The snapshot's part of the panel: the part's constants, ρ (not while the slider is
+        held: the user's own value) and what Undo and Redo can do."""
+        self.show_constants(snap.constants)
+        if not self.rho.isSliderDown():
+            self.set_rho(snap.rho * 100)
+        self.set_history(snap.can_undo, snap.can_redo)
 
     def set_note(self, text: str) -> None:
         """A word under the buttons about the last regrow (hidden when empty)."""
