@@ -2,8 +2,11 @@
 
 :class:`MainWindow` wires widgets to the :class:`~ramure.app.desktop.controller.Controller`:
 widgets emit what the user asked for, the controller runs it on the model
-(in the worker when it changes the plant), and the window redraws from the
-snapshot it publishes.  No algorithm lives here.
+(in the worker when it changes the plant), and the snapshot it publishes goes
+to the :class:`~ramure.app.desktop.view.presenter.PlantPresenter`, which draws
+it in the 3D view, and to the docks, which show their own part of it.  The
+window makes the docks, the menus and the view, connects their signals and
+keeps the status bar; no drawing and no algorithm live here.
 """
 
 from __future__ import annotations
