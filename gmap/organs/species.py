@@ -232,14 +232,14 @@ def cell_rgb(
     skin cell in nine, fixed by the cell's number and ``seed``).  ``marks`` are per-cell
     columns in [0, 1] written by the defects (:mod:`ramure.gmap.organs.defects`):
 
-    ``corky``     a healed crack's wall: corky brown :data:`CORK` (whole weight; a renderer
-                  colours the walls only, :func:`ramure.app.fruit_look.coloured_surface`);
-    ``wound``     a fresh wound's wall: the flesh colour, wet and lighter than the skin;
-    ``scar``      a healed hail pit: corky brown on the skin;
-    ``bruise``    under a hail pit: the flesh darkens towards :data:`BRUISE` (up to 60 %);
-    ``rot``       rot intensity: browning (rot > 0), water-soaked dark (> 0.5), a grey-green
-                  mould fuzz at the centre (> 0.8);
-    ``organ``     1 = stem, 2 = calyx.
+    - ``corky``: a healed crack's wall: corky brown :data:`CORK` (whole weight; a renderer
+      colours the walls only, :func:`ramure.app.fruit_look.coloured_surface`);
+    - ``wound``: a fresh wound's wall: the flesh colour, wet and lighter than the skin;
+    - ``scar``: a healed hail pit: corky brown on the skin;
+    - ``bruise``: under a hail pit: the flesh darkens towards :data:`BRUISE` (up to 60 %);
+    - ``rot``: rot intensity: browning (rot > 0), water-soaked dark (> 0.5), a grey-green
+      mould fuzz at the centre (> 0.8);
+    - ``organ``: 1 = stem, 2 = calyx.
     """
     codes = np.asarray(tissue, np.int64)
     rgb = table(species, stage)[codes].astype(float)
