@@ -11,9 +11,9 @@ marks (healed cork, bruise, rot), all numpy, no plotting library.
 
 Sizes (largest extent of the fruit, mm; :data:`SIZE_MM`), with their sources:
 
-===============  ======  ===========================================================================
+================ ======  ===========================================================================
 preset           mm      source
-===============  ======  ===========================================================================
+================ ======  ===========================================================================
 round_tomato     65      UNECE FFV-36 (2017) size code: round tomatoes sold from 35 mm; 57-67 mm
                          is the common "M" grade of the EU marketing standard (Reg. 543/2011)
 cherry_tomato    25      FFV-36: "cherry" tomatoes (cocktail included) are the type under the 35 mm
@@ -27,7 +27,7 @@ apple            75      FFV-50 (2017): Class I minimum 60 mm diameter for large
                          65-80 mm is the common size
 plum             45      FFV-29 (plums): minimum 35 mm for large-fruited varieties; 40-55 mm usual
 cherry           26      FFV-13 (cherries): Class I minimum 20 mm; sweet cherries 22-30 mm
-===============  ======  ===========================================================================
+================ ======  ===========================================================================
 
 Choices where nothing says more: three or four stages per species, colours picked from photos
 of the named stage (tomato stages after the USDA colour chart green / breaker-turning / red);
