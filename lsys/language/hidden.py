@@ -34,8 +34,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from ..expr import Node
+
+if TYPE_CHECKING:
+    from .grammar import Grammar
 
 #: A number as the tokenizer reads one (``1``, ``.5``, ``2.``, ``1e-3``).
 _NUMBER = re.compile(r"(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -100,7 +104,7 @@ def _span(module_text: str, arg_texts: list[str], arg: int, offset: int) -> tupl
     return None if m is None else (m.start(), m.end())
 
 
-def grammar_hidden(grammar) -> dict[str, Hidden]:  # noqa: ANN001 - a ramure.lsys.language.grammar.Grammar
+def grammar_hidden(grammar: Grammar) -> dict[str, Hidden]:
     """Every hidden constant of ``grammar`` (see the module docstring), keyed, in rule order."""
     out: dict[str, Hidden] = {}
     for rule in grammar.rules:
