@@ -163,7 +163,7 @@ seconds = {{}}
 clock = {{}}
 
 def frame_end(*_args):  # the first frame rendered once the new version is on screen
-    if clock and window.drawn_version != clock["version"] and "t" not in clock:
+    if clock and window.presenter.drawn_version != clock["version"] and "t" not in clock:
         clock["t"] = time.perf_counter()
         clock["loop"].quit()
 
@@ -173,7 +173,7 @@ def edit(name, action):
     loop = QEventLoop()
     QTimer.singleShot(120_000, loop.quit)  # a frame that never comes: NaN seconds
     clock.clear()
-    clock.update(version=window.drawn_version, loop=loop)
+    clock.update(version=window.presenter.drawn_version, loop=loop)
     t0, c0 = time.perf_counter(), time.process_time()
     action()
     loop.exec()

@@ -199,6 +199,31 @@ def edit_words(result: RegenResult) -> str:
     return f"{result.op if result.op != 'regrow' else 'regrew'} {parts} ({result.removed:,} modules replaced by {result.added:,})"
 
 
+#: Why a regrow drew the same plant, and what to do instead (the regeneration panel's note).
+SAME_PLANT = (
+    "Regrowing gave the same plant: this grammar is deterministic (no rule probabilities, "
+    "no uniform() or normal() draws), so a new seed grows the same branches. To change the "
+    "selected part: type values under 'Constants for the selection' and press 'Regrow with "
+    "constants', apply a qualifier, or open a stochastic grammar."
+)
+#: The note after a regrow of a selection.
+REGROWN = "The regrown part stays selected (red): Regrow again for another seed, Esc clears, Ctrl+Z undoes."
+
+
+def regrow_note(job: str, note: str | None, same_as_before: bool, selected: bool) -> str:
+    """The regeneration panel's note after edit ``job`` ("regrow", "prune", ...): the model's
+    ``note`` as a sentence (e.g. new constants on a part made in the last step), else
+    :data:`SAME_PLANT` when the regrow drew the plant drawn before it, else :data:`REGROWN`
+    when a part stays ``selected``; "" after any other edit."""
+    if job != "regrow":
+        return ""
+    if note:
+        return note[0].upper() + note[1:] + "."
+    if same_as_before:
+        return SAME_PLANT
+    return REGROWN if selected else ""
+
+
 def regrown_leaves(explorer: Explorer, result: RegenResult | None) -> list[int]:
     """The leaves a regrow put in the string, sorted (:func:`ramure.app.model.regrown_leaves`)."""
     from ramure.app.model import regrown_leaves as model_regrown_leaves
@@ -339,7 +364,7 @@ def base_colors(mesh: pv.DataSet) -> np.ndarray:
 _BASE_COLORS: list[tuple[tuple[str, int], np.ndarray]] = []
 
 
-KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (lsys.geometry.KIND_FRUIT)
+KIND_FRUIT = 2  # mesh cell_data["kind"] of a Fruit organ (ramure.lsys.interpretation.geometry.KIND_FRUIT)
 FRUIT_SELECTED = (40, 110, 255)  # a selected fruit: blue, never mistaken for a ripe one
 
 

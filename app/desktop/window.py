@@ -2,8 +2,11 @@
 
 :class:`MainWindow` wires widgets to the :class:`~ramure.app.desktop.controller.Controller`:
 widgets emit what the user asked for, the controller runs it on the model
-(in the worker when it changes the plant), and the window redraws from the
-snapshot it publishes.  No algorithm lives here.
+(in the worker when it changes the plant), and the snapshot it publishes goes
+to the :class:`~ramure.app.desktop.view.presenter.PlantPresenter`, which draws
+it in the 3D view, and to the docks, which show their own part of it.  The
+window makes the docks, the menus and the view, connects their signals and
+keeps the status bar; no drawing and no algorithm live here.
 """
 
 from __future__ import annotations
@@ -13,7 +16,6 @@ import pathlib
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, TypeVar
 
-import numpy as np
 
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
@@ -21,6 +23,7 @@ from PySide6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QPr
 
 from ramure.app.desktop import state
 from ramure.app.desktop.controller import Busy, Controller
+from ramure.app.desktop.state import SAME_PLANT
 from ramure.app.desktop.qt_fix import protect_none
 from ramure.app.desktop.panels import qualifier_map
 from ramure.app.desktop.panels.architecture import ArchitecturePanel
@@ -35,8 +38,9 @@ from ramure.app.desktop.panels.regen import RegenPanel
 from ramure.app.desktop.panels.string_dock import StringView
 from ramure.app.desktop.panels.variants import VariantsController
 from ramure.app.desktop.panels.wood import WoodPanel
-from ramure.app.desktop.menus.files import TITLE, FileActions
+from ramure.app.desktop.menus.files import OPEN_TITLE, TITLE, FileActions
 from ramure.app.desktop.view.plant_view import PlantView
+from ramure.app.desktop.view.presenter import PlantPresenter
 from ramure.app.model import Explorer
 from ramure.errors import RamureError
 
@@ -65,13 +69,6 @@ DOCK_WIDTH = 280  # each side column at the default size: the plant keeps over h
 CLOSED_AT_START = ("pca", "architecture", "wood", "defects", "string", "cut")
 
 BUSY = "Computing…"
-SAME_PLANT = (
-    "Regrowing gave the same plant: this grammar is deterministic (no rule probabilities, "
-    "no uniform() or normal() draws), so a new seed grows the same branches. To change the "
-    "selected part: type values under 'Constants for the selection' and press 'Regrow with "
-    "constants', apply a qualifier, or open a stochastic grammar."
-)
-REGROWN = "The regrown part stays selected (red): Regrow again for another seed, Esc clears, Ctrl+Z undoes."
 KINSHIP_NEEDS_ONE = "Kinship colours: click exactly one branch to colour the plant by kinship to it"
 
 
@@ -91,25 +88,18 @@ class MainWindow(QMainWindow):
         self._ask = ask
         self.settings = settings or QSettings("Ramure", "Ramure desktop")
         self.controller = Controller(explorer, self)
-        self.kinship = False
         self.message_box: QMessageBox | None = None
         self.last_message: str | None = None
-        self.drawn_version: int | None = None
-        self.shown_text = explorer.text  # the model's grammar text the editor last showed
-        # the current plant draws what the plant drawn before it drew (see after_regrow)
-        self.same_as_before = False
-        # the cut preview: (version, selection, rho) it was computed for, and its leaves (orange)
-        self.preview_key: tuple | None = None
-        self.cut_leaves: np.ndarray = np.zeros(0, np.int64)
 
         self.view = PlantView(self)
         self.setCentralWidget(self.view)
+        self.presenter = PlantPresenter(self.controller, self.view, self)
         self.editor = GrammarEditor()
         self.files = FileActions(self.controller, self.settings, self.editor, self.view, self, ask)
         self.constants_panel = ConstantsPanel()
         self.regen = RegenPanel()
         self.string_view = StringView()
-        self.cut_view = CutGraphView()
+        self.cut_view = CutGraphView(self.controller)
         self.gallery = GalleryView()
         self.pca_view = PcaCloudView()
         self.qualifier_map: QualifierMapView | None = None  # made by qualifier_map.attach when first used
@@ -160,9 +150,8 @@ class MainWindow(QMainWindow):
         self.resizeDocks([self.docks["grammar"], self.docks["regeneration"]], [DOCK_WIDTH, DOCK_WIDTH], Qt.Orientation.Horizontal)
         self.resizeDocks([self.docks["grammar"], self.docks["constants"]], [400, 380], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["string"]], [190], Qt.Orientation.Vertical)
-        self.editor.set_text(self.controller.snapshot.text)
-        self.shown_text = self.controller.snapshot.text
-        self.show_plant(self.controller.snapshot, reset_camera=True)
+        self.editor.show_model_text(self.controller.snapshot.text)
+        self.presenter.show_plant(self.controller.snapshot, reset_camera=True)
         self.mark_saved()
         QTimer.singleShot(0, self._full_tab_titles)  # dock tabs never read "Req…"
 
@@ -257,7 +246,7 @@ class MainWindow(QMainWindow):
     def _actions(self) -> None:
         bar = self.menuBar()
         f = bar.addMenu("&File")
-        self._action(f, "&Open grammar…", lambda: self.files.open_grammar(), QKeySequence.StandardKey.Open)
+        self._action(f, f"&{OPEN_TITLE}…", lambda: self.files.open_grammar(), QKeySequence.StandardKey.Open)
         self._action(f, "&Save grammar", lambda: self.files.save_grammar(), QKeySequence.StandardKey.Save)
         self._action(f, "Save grammar &as…", lambda: self.files.save_grammar(ask=True), QKeySequence.StandardKey.SaveAs)
         f.addSeparator()
@@ -361,9 +350,13 @@ class MainWindow(QMainWindow):
 
     def _connect(self) -> None:
         c = self.controller
-        c.plant_changed.connect(self.show_plant)
+        c.plant_changed.connect(self.presenter.show_plant)
         c.state_changed.connect(self.show_state)
-        c.selection_changed.connect(self.show_selection)
+        c.selection_changed.connect(self.presenter.show_selection)
+        p = self.presenter
+        p.plant_shown.connect(self._plant_shown)
+        p.selection_shown.connect(self.show_selection_docks)
+        p.cut_message.connect(self.regen.set_cut_preview)
         c.job_done.connect(self._job_done)
         c.job_done.connect(self.variants.fruit_ready)
         c.refused.connect(self.report_refused)
@@ -385,7 +378,8 @@ class MainWindow(QMainWindow):
         r.prune.connect(self._prune)
         r.undo.connect(self.undo)
         r.redo.connect(self.redo)
-        self.cut_view.plan_button.clicked.connect(self.show_planned_cut)
+        self.cut_view.refused.connect(self.report_refused)
+        self.cut_view.to_front.connect(lambda show: self.open_dock("cut") if show else self.docks["cut"].raise_())
         v = self.variants
         v.status.connect(self.status)
         v.status_ended.connect(self._status_ended)
@@ -399,181 +393,40 @@ class MainWindow(QMainWindow):
         fa.flush_requested.connect(self.flush_edits)
         fa.recent_changed.connect(self.update_recent_menu)
 
-    # -- drawing from snapshots ---------------------------------------------------------
-    def show_plant(self, snap: Snapshot, reset_camera: bool | None = None) -> None:
-        """A new plant version: redraw the 3D view and every view of the plant.  The camera
-        stays where it is on an edit; ``reset_camera`` None frames the plant again only when
-        the derivation count changed (a plant of another size)."""
-        shown = self.view.snapshot
-        old = getattr(shown, "skeleton", None)  # compared after the frame (no copy)
-        if reset_camera is None:
-            reset_camera = shown is not None and shown.n != snap.n
-        self.base_colors = state.base_colors(snap.mesh)
-        self.fruit_leaves = state.fruit_leaves(snap.mesh)
-        self.set_cut_preview(None)  # a new plant: the preview of the old one is gone
-        self.view.show_plant(snap, self.plant_colors(snap.selection), reset_camera)
-        self.drawn_version = snap.version
-        if snap.selection:
-            self.request_preview()  # e.g. the part a regrow kept selected
-        self.show_selection(snap.selection, recolour=False, docks=False)
-        # the edit's frame first (a draft for a large plant); the docks follow in the same turn
-        self.view.redraw(now=True)
-        self.same_as_before = old is not None and state.same_plant((old.start, old.end), snap.skeleton)
+    # -- the docks follow the view ----------------------------------------------------
+    def _plant_shown(self, snap: Snapshot) -> None:
+        """A new plant version is on screen (:class:`PlantPresenter` drew it): the docks follow."""
         self.show_selection_docks(snap.selection)
         self.string_view.show_snapshot(snap)
         self.show_state(snap)
-        self.show_cut(snap)
+        self.cut_view.show_snapshot(snap)
         self.variants.plant_changed(snap)
 
     def show_state(self, snap: Snapshot) -> None:
         """Same plant, other state: constants, undo/redo, status line, grammar error."""
         self.constants_panel.show_snapshot(snap, snap.grammar_constants)
-        self.regen.show_constants(snap.constants)
-        if not self.regen.rho.isSliderDown():
-            self.regen.set_rho(snap.rho * 100)
-        self.regen.set_history(snap.can_undo, snap.can_redo)
+        self.regen.show_state(snap)
         self.undo_action.setEnabled(snap.can_undo)
         self.redo_action.setEnabled(snap.can_redo)
         self.status_label.setText(snap.status)
-        self._sync_editor(snap)
+        self.editor.follow(snap)
         name = pathlib.Path(snap.path).name if snap.path else "untitled"
         self.setWindowTitle(f"{name}{' *' if self.dirty else ''} — {TITLE}")
-
-    def _sync_editor(self, snap) -> None:
-        """Show the model's grammar text when something other than typing changed it (a slider,
-        Undo, Redo, a file): the editor and the constants are one state."""
-        if snap.text == self.shown_text:
-            return
-        self.shown_text = snap.text
-        if snap.job == "grammar" or self.editor.pending():
-            return  # the editor's own text (perhaps "30." for 30), or the user is typing
-        self.editor.replace_text(snap.text)
-
-    def plant_colors(self, selection: Sequence[int]) -> np.ndarray:
-        """Per-cell RGB of the shown plant: the selection red, or the kinship hues."""
-        snap = self.controller.snapshot
-        return state.cell_colors(
-            snap.mesh, selection, self._kinship_colors(selection), base=self.base_colors, cut=self._cut_for(snap, selection)
-        )
-
-    def _cut_for(self, snap: Snapshot, selection: Sequence[int]) -> np.ndarray:
-        """The preview's leaves when they were computed for this plant, selection and ρ."""
-        key = (snap.version, tuple(selection), snap.rho)
-        return self.cut_leaves if self.preview_key == key else np.zeros(0, np.int64)
-
-    def request_preview(self) -> None:
-        """Show the selection's cut preview: at once on a small plant, else when its job is done."""
-        result = self.controller.preview()
-        if isinstance(result, tuple):
-            self.set_cut_preview(result)
-
-    def set_cut_preview(self, result: tuple | None) -> None:
-        """Show a preview job's result ``(version, selection, rho, CutPreview)``: the leaves a regrow
-        would change in orange, the sentence in the regeneration panel (nothing for a stale one)."""
-        snap = self.controller.snapshot
-        if result is None or result[3] is None:
-            self.preview_key, self.cut_leaves = None, np.zeros(0, np.int64)
-            self.regen.set_cut_preview("")
-            return
-        version, selection, rho, preview = result
-        if (version, selection, rho) != (snap.version, tuple(snap.selection), snap.rho):
-            return  # the selection or ρ changed since: a newer preview job follows
-        self.preview_key, self.cut_leaves = (version, selection, rho), preview.leaves
-        self.regen.set_cut_preview(preview.message)
-        if self.drawn_version == snap.version:
-            self.show_selection(snap.selection, docks=False)
-
-    def _kinship_colors(self, selection: Sequence[int]) -> np.ndarray | None:
-        if self.kinship and len(selection) == 1:
-            try:
-                return self.controller.kinship_colors()
-            except RamureError:
-                return None
-        return None
-
-    def show_selection(self, selection: Sequence[int], recolour: bool = True, docks: bool = True) -> None:
-        """Recolour the plant: the selection red (or kinship hues), its OBB as a red wireframe
-        (``recolour`` False: the plant was just drawn in :meth:`plant_colors`); ``docks``: the
-        panels' part too (:meth:`show_selection_docks`; a new version's frame comes first)."""
-        snap = self.controller.snapshot
-        kin = self._kinship_colors(selection) if recolour or self.kinship else None
-        if docks and tuple(selection) != (self.preview_key or (None, ()))[1]:
-            self.regen.set_cut_preview("")  # the selection changed: its preview is on its way
-            if len(selection):
-                self.request_preview()
-        if recolour:
-            cut = self._cut_for(snap, selection)
-            self.view.set_colors(state.cell_colors(snap.mesh, selection, kin, base=self.base_colors, cut=cut))
-        self.view.set_fruit_selection(selection)
-        self.view.set_selected_segments(
-            np.flatnonzero(state.leaf_mask(snap.segment_leaf, selection)) if len(selection) and kin is None else []
-        )
-        try:
-            self.view.set_box_for(self.controller.selection_box if selection else None, len(selection))
-        except RamureError:
-            self.view.set_box(None)
-        if docks:
-            self.show_selection_docks(selection)
 
     def show_selection_docks(self, selection: Sequence[int]) -> None:
         """The selection in the panels: counts, status line, the string dock's modules."""
         snap = self.controller.snapshot
         self.regen.set_selection_size(len(selection))
-        self.regen.set_fruit_selection(
-            int(np.isin(self.fruit_leaves, selection).sum()), len(self.fruit_leaves), self.variants.fruit_ok
-        )
+        fruit = self.presenter.fruit_leaves
+        self.regen.set_fruit_selection(self.presenter.fruit_selected(selection), len(fruit), self.variants.fruit_ok)
         if self.status_label.text() != snap.status:
             self.status_label.setText(snap.status)
-        if self.kinship:  # say what the colours mean, or what they need
+        if self.presenter.kinship:  # say what the colours mean, or what they need
             self.status(KINSHIP_HINT if len(selection) == 1 else KINSHIP_NEEDS_ONE, 10000)
         try:
             self.string_view.show_selection(self.controller.selected_modules() if selection else [])
         except RamureError:
             pass
-
-    def show_cut(self, snap: Snapshot) -> None:
-        """Show the last regrow's cut graph in the Cut graph dock."""
-        result = snap.last_result
-        if result is None:
-            return
-        if snap.cut_layout is None:
-            cut = result.cut
-            words = state.edit_words(result)
-            self.cut_view.clear(
-                f"Last edit: {words}. {state.cut_too_large_words(cut)}"
-                if cut is not None
-                else f"Last {result.op}: the whole plant (no cut)."
-            )
-            return
-        self.cut_view.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; cut capacity {result.cut_value:g}")
-
-    def show_planned_cut(self) -> None:
-        """Show the cut a regrow of the selection would make (the dock's Plan button)."""
-
-        def plan(ex):
-            cut = ex.plan()
-            return cut, (
-                state.cut_graph_layout(cut, ex.derivation.tree, cut.roots, ex.lsystem.symbols)
-                if state.drawable_cut(cut)
-                else None
-            )
-
-        try:
-            cut, layout = self.controller.read(plan, wait=2.0)
-        except RamureError as exc:
-            self.report_refused(str(exc))
-            return
-        if cut is None:
-            self.cut_view.clear("Select branches first: the cut is planned for the selection.")
-            return
-        if layout is None:
-            self.cut_view.clear(f"Planned cut for the selection, cut value {cut.cut_value:g}. {state.cut_too_large_words(cut)}")
-            self.docks["cut"].raise_()
-            return
-        self.cut_view.show_layout(
-            layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, cut value {cut.cut_value:g}"
-        )
-        self.open_dock("cut")
 
     def _variants_shown(self, vs: VariantSet) -> None:
         """A variant set on show: the gallery's picks in front of the regeneration panel, and the
@@ -601,10 +454,9 @@ class MainWindow(QMainWindow):
             self.view.zoom_to(job.result)
 
     def set_kinship(self, on: bool) -> None:
-        """Colour the selection's relatives (``on``) or the selection only."""
-        self.kinship = bool(on)
-        self.kinship_action.setChecked(self.kinship)
-        self.show_selection(self.controller.snapshot.selection)
+        """Colour the selection's relatives (``on``) or the selection only (the menu entry follows)."""
+        self.kinship_action.setChecked(bool(on))
+        self.presenter.set_kinship(on)
 
     # -- user actions -------------------------------------------------------------------
     def _text_settled(self, text) -> None:
@@ -675,12 +527,10 @@ class MainWindow(QMainWindow):
 
     def select_rectangle(self, rect: Sequence[float], mode: str = "replace") -> list[int] | None:
         """Select the branches whose midpoints project inside display rectangle ``rect``."""
-        snap = self.controller.snapshot
-        if self.drawn_version != snap.version:
+        points = self.presenter.rectangle_points()
+        if points is None:
             return None
-        # branches by their midpoints, leaves and fruit by their centres
-        xy = self.view.project(np.concatenate([snap.midpoints, snap.organ_points]))
-        leaves = np.concatenate([snap.segment_leaf, snap.organ_leaves])
+        xy, leaves = points
         found = self.run_selection(self.controller.select_rectangle, xy, rect, mode, leaves)
         if found is not None:
             self.status(f"Rectangle: {len(found)} leaves ({mode})")
@@ -701,9 +551,9 @@ class MainWindow(QMainWindow):
         elif job.name.startswith(("regrow", "prune")) and job.error is None:
             self.after_regrow(job)
         elif job.name == "preview" and job.error is None:
-            self.set_cut_preview(job.result)
+            self.presenter.set_cut_preview(job.result)
         elif job.name == "rho" and job.error is None:
-            self.set_cut_preview(None)  # the preview of the old ρ: a new one follows
+            self.presenter.set_cut_preview(None)  # the preview of the old ρ: a new one follows
             if self.controller.snapshot.selection:
                 # asked here, after the ρ job: a preview job queued with the keystroke could be
                 # replaced into a place before a later ρ job and then be cleared by it
@@ -716,24 +566,14 @@ class MainWindow(QMainWindow):
     def after_history(self, note: str) -> None:
         """After Undo or Redo: say what it did; the editor shows the model's text again, without
         the error of text typed since (an undo took that text back)."""
-        snap = self.controller.snapshot
-        if snap.error is None and not self.editor.pending():
-            self.shown_text = snap.text
-            self.editor.replace_text(snap.text)
-            self.editor.show_error(None)
+        self.editor.show_undone(self.controller.snapshot)
         self.regen.set_note(note)
         self.status(note, 8000)
 
     def after_regrow(self, job: Job) -> None:
         """Say what the regrow did; on a deterministic grammar, say why nothing changed."""
         snap = self.controller.snapshot
-        note = ""
-        if job.name == "regrow" and snap.note:  # e.g. new constants on a part made in the last step
-            note = snap.note[0].upper() + snap.note[1:] + "."
-        elif job.name == "regrow" and self.same_as_before:
-            note = SAME_PLANT
-        elif job.name == "regrow" and snap.selection:
-            note = REGROWN
+        note = state.regrow_note(job.name, snap.note, self.presenter.same_as_before, len(snap.selection) > 0)
         self.regen.set_note(note)
         self.status(SAME_PLANT if note == SAME_PLANT else snap.status, 0)
 

@@ -11,9 +11,9 @@ marks (healed cork, bruise, rot), all numpy, no plotting library.
 
 Sizes (largest extent of the fruit, mm; :data:`SIZE_MM`), with their sources:
 
-===============  ======  ===========================================================================
+================ ======  ===========================================================================
 preset           mm      source
-===============  ======  ===========================================================================
+================ ======  ===========================================================================
 round_tomato     65      UNECE FFV-36 (2017) size code: round tomatoes sold from 35 mm; 57-67 mm
                          is the common "M" grade of the EU marketing standard (Reg. 543/2011)
 cherry_tomato    25      FFV-36: "cherry" tomatoes (cocktail included) are the type under the 35 mm
@@ -27,7 +27,7 @@ apple            75      FFV-50 (2017): Class I minimum 60 mm diameter for large
                          65-80 mm is the common size
 plum             45      FFV-29 (plums): minimum 35 mm for large-fruited varieties; 40-55 mm usual
 cherry           26      FFV-13 (cherries): Class I minimum 20 mm; sweet cherries 22-30 mm
-===============  ======  ===========================================================================
+================ ======  ===========================================================================
 
 Choices where nothing says more: three or four stages per species, colours picked from photos
 of the named stage (tomato stages after the USDA colour chart green / breaker-turning / red);
@@ -232,14 +232,14 @@ def cell_rgb(
     skin cell in nine, fixed by the cell's number and ``seed``).  ``marks`` are per-cell
     columns in [0, 1] written by the defects (:mod:`ramure.gmap.organs.defects`):
 
-    ``corky``     a healed crack's wall: corky brown :data:`CORK` (whole weight; a renderer
-                  colours the walls only, :func:`ramure.app.fruit_look.coloured_surface`);
-    ``wound``     a fresh wound's wall: the flesh colour, wet and lighter than the skin;
-    ``scar``      a healed hail pit: corky brown on the skin;
-    ``bruise``    under a hail pit: the flesh darkens towards :data:`BRUISE` (up to 60 %);
-    ``rot``       rot intensity: browning (rot > 0), water-soaked dark (> 0.5), a grey-green
-                  mould fuzz at the centre (> 0.8);
-    ``organ``     1 = stem, 2 = calyx.
+    - ``corky``: a healed crack's wall: corky brown :data:`CORK` (whole weight; a renderer
+      colours the walls only, :func:`ramure.app.fruit_look.coloured_surface`);
+    - ``wound``: a fresh wound's wall: the flesh colour, wet and lighter than the skin;
+    - ``scar``: a healed hail pit: corky brown on the skin;
+    - ``bruise``: under a hail pit: the flesh darkens towards :data:`BRUISE` (up to 60 %);
+    - ``rot``: rot intensity: browning (rot > 0), water-soaked dark (> 0.5), a grey-green
+      mould fuzz at the centre (> 0.8);
+    - ``organ``: 1 = stem, 2 = calyx.
     """
     codes = np.asarray(tissue, np.int64)
     rgb = table(species, stage)[codes].astype(float)

@@ -296,7 +296,7 @@ class LSystem:
         tree.leaves = ids
         rng = seeded_generator(seed)
         string = decompose(self, tree, ids, 0, 0, rng, consts)  # the axiom too (no decomposition: ids)
-        string = cut_string(self, tree, string)  # '%' cuts the rest of its branch (lsys.branch_cut)
+        string = cut_string(self, tree, string)  # '%' cuts the rest of its branch (ramure.lsys.engine.branch_cut)
         answer_queries(self, tree, string)  # ?P ?H ?L ?U, if any
         for step in range(1, n + 1):
             blocks.run("starteach")

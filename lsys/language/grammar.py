@@ -383,7 +383,7 @@ class GrammarParser:
         self.tropism: tuple[float, ...] | None = None
         self.amap: list[tuple] = []
         self.surfaces: dict[str, SurfaceDefinition] = {}
-        self.materials: dict[int, tuple[float, ...]] = {}  # #surface and #material (lsys.surfaces, lsys.materials)
+        self.materials: dict[int, tuple[float, ...]] = {}  # #surface, #material: interpretation.surfaces, .materials
         self.n: int | None = None
         self.seed: int | None = None
         self.axiom: list[ModuleSpec] | None = None

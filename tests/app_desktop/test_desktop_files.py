@@ -37,12 +37,12 @@ def test_session_round_trip(make_window, qtbot, tmp_path):
 
 def test_a_corrupt_session_is_refused(make_window, qtbot, tmp_path):
     w = make_window()
-    version = w.drawn_version
+    version = w.presenter.drawn_version
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "ramure-session", "version": 1, "grammar": "n: 1\\nw: F"')
     w.files.load_session(bad)
     settle(qtbot, w)
-    assert "JSON" in w.last_message and w.drawn_version == version
+    assert "JSON" in w.last_message and w.presenter.drawn_version == version
 
 
 def test_open_and_save_grammar(make_window, qtbot, tmp_path):
@@ -107,7 +107,12 @@ def test_obj_export_has_groups_materials_normals_volumetric_fruit_and_y_up(make_
     text = obj.read_text()
     lines = text.splitlines()
     (mtl,) = tmp_path.glob("plant.*.mtl")
-    assert f"mtllib {mtl.name}" in text and mtl.read_text().count("newmtl") == 3
+    assert f"mtllib {mtl.name}" in text
+    # bark, leaf and one material per fruit tissue in the species' colours (fruit_exocarp, ...)
+    materials = [ln.split()[1] for ln in mtl.read_text().splitlines() if ln.startswith("newmtl ")]
+    tissues = np.unique(np.asarray(w.view.fruit.cell_data["tissue"]))
+    assert materials[:2] == ["bark", "leaves"] and len(materials) == 2 + len(tissues)
+    assert all(name.startswith("fruit_") for name in materials[2:])
     groups = [ln.split()[1] for ln in lines if ln.startswith("g ")]
     assert groups[0] == "bark" and groups[-1] == "fruit"
     vertices = np.array([[float(v) for v in ln.split()[1:]] for ln in lines if ln.startswith("v ")])
@@ -115,7 +120,10 @@ def test_obj_export_has_groups_materials_normals_volumetric_fruit_and_y_up(make_
     assert len(normals) == len(vertices) and np.allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-2)
     start = lines.index("g fruit")
     fruit_vertices = sum(1 for ln in lines[start:] if ln.startswith("v "))
-    assert fruit_vertices == w.view.fruit.extract_surface(algorithm="dataset_surface").n_points  # the volumes, not the spheres
+    # the volumes' surface, not the spheres: each tissue's part holds the points its faces use
+    surface = w.view.fruit.extract_surface(algorithm="dataset_surface")
+    tissue = np.asarray(surface.cell_data["tissue"])
+    assert fruit_vertices == sum(surface.extract_cells(np.flatnonzero(tissue == t)).n_points for t in tissues)
     bounds = np.asarray(w.view.mesh.bounds).reshape(3, 2)
     height = bounds[2, 1] - bounds[2, 0]
     assert abs((vertices[:, 1].max() - vertices[:, 1].min()) - height) < 0.05 * height + 1e-6  # Y up

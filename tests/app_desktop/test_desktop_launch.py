@@ -24,12 +24,12 @@ def test_a_shipped_name_opens_the_shipped_file(given, capsys, tmp_path, monkeypa
     class Stop(RamureError):
         pass
 
-    def explorer(source, n=None, seed=0):
-        seen.append(source)
+    def explorer(source, n=None, seed=0, run_code=False):
+        seen.append((source, run_code))
         raise Stop("stop here")
 
     monkeypatch.chdir(tmp_path)  # not the repository: the name must resolve through the package
     monkeypatch.setattr("ramure.app.model.Explorer", explorer)
     assert launch.main([given]) == 2
-    assert seen == [ramure.grammars.path("honda_sympodial")]
+    assert seen == [(ramure.grammars.path("honda_sympodial"), True)]  # named on the command line: runs as derive does
     assert "stop here" in capsys.readouterr().err

@@ -87,3 +87,20 @@ def test_an_mtg_opens_as_a_plant(make_window, qtbot, tmp_path):
     ex = w.controller.explorer
     assert ex.path is None and len(ex.skeleton) == 3  # E1, E2 and the branch E3
     assert "w:" in w.editor.text()  # the grammar the MTG became
+
+
+def test_file_open_is_named_for_every_plant_file_it_opens(make_window, qtbot, monkeypatch):
+    # the first File entry opens grammars, L-Py models and MTGs: "Open plant…", not "Open grammar…"
+    from PySide6.QtGui import QKeySequence
+
+    w = make_window(n=3)
+    file_top = next(a for a in w.menuBar().actions() if a.text() == "&File")
+    first = file_top.menu().actions()[0]
+    assert first.text() == "&Open plant…"
+    assert first.shortcut() == QKeySequence(QKeySequence.StandardKey.Open)
+    asked = []
+    monkeypatch.setattr(w.files, "_ask_open", lambda title, filters: asked.append((title, filters)))
+    first.trigger()  # the dialog is asked for with the same name and every plant format
+    ((title, filters),) = asked
+    assert title == "Open plant"
+    assert all(f"*.{suffix}" in filters.split(";;")[0] for suffix in ("lsys", "l", "lpy", "mtg"))

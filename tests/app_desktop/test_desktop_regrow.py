@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 
-from ramure.app.desktop.window import SAME_PLANT
+from ramure.app.desktop.state import SAME_PLANT
 from desktop_helpers import STOCHASTIC, settle
 
 pytestmark = pytest.mark.gui
@@ -126,6 +126,6 @@ def test_quarter_regrow_then_delete_a_regrown_branch_then_a_constant(make_window
     qtbot.waitUntil(lambda: ex.constants["a2"] == 45.0, timeout=10_000)
     settle(qtbot, w)
     assert crashes == []
-    assert ex.derivation.tree.size == first_size and w.drawn_version == w.controller.snapshot.version
+    assert ex.derivation.tree.size == first_size and w.presenter.drawn_version == w.controller.snapshot.version
     assert "constants changed, whole plant re-derived" in w.status_label.text()
     assert w.view.mesh.n_cells == w.controller.snapshot.mesh.n_cells > 0

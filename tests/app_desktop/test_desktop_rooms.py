@@ -205,3 +205,29 @@ def test_each_room_says_what_it_owns_and_may_import():
     for room in ROOMS:
         doc = ast.get_docstring(ast.parse((DESKTOP / room / "__init__.py").read_text(encoding="utf-8")))
         assert doc and "import" in doc and "window" in doc, room
+
+
+#: What the 3D view draws with: the presenter (``view/presenter.py``) calls these, the window never.
+DRAWING = {"set_colors", "show_plant", "set_box_for", "set_box", "set_selected_segments", "set_fruit_selection", "project"}
+
+
+def view_drawing_calls(source: str) -> list[str]:
+    """The calls of ``source`` on ``self.view`` that draw (one line each)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in DRAWING:
+            receiver = node.func.value
+            if isinstance(receiver, ast.Attribute) and receiver.attr == "view":
+                found.append(f"line {node.lineno}: {ast.unparse(node.func)}")
+    return found
+
+
+def test_the_window_only_assembles_the_presenter_draws():
+    assert view_drawing_calls("def f(self):\n    self.view.set_colors(c)\n    self.view.reset_camera()\n") == [
+        "line 2: self.view.set_colors"
+    ]
+    assert view_drawing_calls((DESKTOP / "window.py").read_text(encoding="utf-8")) == []
+    presenter = (DESKTOP / "view" / "presenter.py").read_text(encoding="utf-8")
+    assert {call.split(".")[-1] for call in view_drawing_calls(presenter)} == DRAWING
+    # the colour, preview and kinship state lives with the drawing, not in the window
+    assert not {"base_colors", "fruit_leaves", "preview_key", "cut_leaves", "drawn_version", "kinship"} & MEMBERS

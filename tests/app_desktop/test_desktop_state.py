@@ -185,3 +185,15 @@ def test_regrown_leaves_are_the_added_nodes_in_the_string(grammar, n):
         assert got == expected and len(got) > 0
         ex.select(got, "replace")  # every one is a leaf the model accepts (else ValueRefused)
         assert sorted(ex.selection) == got
+
+
+def test_the_regrow_note_says_why_and_what_next():
+    from ramure.app.desktop.state import REGROWN, SAME_PLANT, regrow_note
+
+    assert regrow_note("regrow", "new constants apply from the next step", True, True) == (
+        "New constants apply from the next step."
+    )  # the model's own words come first
+    assert regrow_note("regrow", None, True, True) == SAME_PLANT  # a deterministic grammar
+    assert regrow_note("regrow", "", False, True) == REGROWN
+    assert regrow_note("regrow", None, False, False) == ""
+    assert regrow_note("prune", "a note", True, True) == ""  # only a regrow gets a note

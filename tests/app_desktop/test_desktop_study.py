@@ -313,3 +313,23 @@ def test_the_study_panel_reads_no_grammar_outside_its_folders(qapp, tmp_path, mo
         images = pick_images(study, "honda", size=16, grammars_dir=folders / "outside")
     assert sorted(images) == list(range(1, 28))
     assert [p.name for p in read] == (["evil.lsys"] if reads else [])  # refused: placeholders, the file never read
+
+
+def test_the_participant_pages_share_one_reading_column(qtbot):
+    from PySide6.QtWidgets import QFormLayout, QLabel, QPushButton, QWidget
+
+    from ramure.app.desktop.launch import make_application
+    from ramure.app.desktop.menus.study import READING_WIDTH, reading_column
+
+    make_application()
+    page, text, button, form = QWidget(), QLabel("consent"), QPushButton("Start"), QFormLayout()
+    reading_column(page, text, 16, form, button)
+    (column,) = [page.layout().itemAt(i).widget() for i in range(page.layout().count()) if page.layout().itemAt(i).widget()]
+    assert column.maximumWidth() == READING_WIDTH == 760
+    inner = column.layout()
+    kinds = []
+    for i in range(inner.count()):
+        item = inner.itemAt(i)
+        kinds.append(item.widget() or item.layout() or (item.spacerItem().sizeHint().height() or "stretch"))
+    assert kinds == ["stretch", text, 16, form, button, "stretch"]
+    assert [inner.stretch(i) for i in (0, 5)] == [1, 2]  # a third of the free height above

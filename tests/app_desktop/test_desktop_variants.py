@@ -211,7 +211,7 @@ def test_volumes_hide_the_fruit_spheres_and_regrow_fruit_with_a_preset(make_wind
     w.controller.select([branch])
     assert not w.regen.regrow_fruit_button.isEnabled()  # a branch is no fruit
 
-    fruit = w.fruit_leaves.tolist()
+    fruit = w.presenter.fruit_leaves.tolist()
     w.controller.select(fruit[:2])
     assert w.regen.regrow_fruit_button.isEnabled() and "2 of" in w.regen.fruit_note.text()
     w.regen.fruit_preset.setCurrentIndex(w.regen.fruit_preset.findData("pear"))
@@ -235,7 +235,7 @@ def test_a_rectangle_selects_fruit_and_they_turn_blue(make_window, qtbot):
     from PySide6.QtTest import QTest
 
     w = make_window(ROOT / "grammars" / "fruit_tree.lsys", n=4)
-    total = len(w.fruit_leaves)
+    total = len(w.presenter.fruit_leaves)
     assert total > 0
     size = w.view.plotter.size()
     QTest.mousePress(
@@ -247,7 +247,7 @@ def test_a_rectangle_selects_fruit_and_they_turn_blue(make_window, qtbot):
     )
     settle(qtbot, w)
     selected = set(w.controller.explorer.selection)
-    assert set(w.fruit_leaves.tolist()) <= selected  # every fruit, not 0 of 20
+    assert set(w.presenter.fruit_leaves.tolist()) <= selected  # every fruit, not 0 of 20
     assert f"{total} of {total} fruit selected" in w.regen.fruit_note.text()
     mesh = w.view.mesh
     fruit = np.asarray(mesh.cell_data["kind"]) == 2

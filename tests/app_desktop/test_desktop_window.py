@@ -159,7 +159,7 @@ def test_regrow_changes_only_the_cut_subtrees_and_undo_restores(make_window, qtb
     result = w.controller.snapshot.last_result
     assert f"regrew {result.removed} of {len(before_leaves)} modules" in w.status_label.text()  # the share
     assert "roots [" not in w.status_label.text()  # the user's words, not the algorithm's
-    assert w.drawn_version == w.controller.snapshot.version
+    assert w.presenter.drawn_version == w.controller.snapshot.version
     assert w.cut_view.layout_data is not None  # the cut graph dock shows the last cut
     QTest.keyClick(w.view.plotter, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     settle(qtbot, w)
@@ -196,7 +196,7 @@ def test_prune_and_regrow_with_constants(make_window, qtbot):
 
 def test_invalid_grammar_shows_the_error_and_keeps_the_plant(make_window, qtbot):
     w = make_window()
-    version, cells = w.drawn_version, w.view.mesh.n_cells
+    version, cells = w.presenter.drawn_version, w.view.mesh.n_cells
     text = w.editor.text()
     bad = text.replace("F(l)[&(a1)", "F(l*zz)[&(a1)")
     line = next(i for i, t in enumerate(bad.splitlines(), 1) if "zz" in t)
@@ -206,11 +206,11 @@ def test_invalid_grammar_shows_the_error_and_keeps_the_plant(make_window, qtbot)
     settle(qtbot, w)
     assert "zz" in w.editor.message.text()
     assert w.editor.underlined() == (line, column)
-    assert w.drawn_version == version and w.view.mesh.n_cells == cells
+    assert w.presenter.drawn_version == version and w.view.mesh.n_cells == cells
     assert w.controller.explorer.document_text() == text  # the model kept the last good grammar
     # fixing it derives the new text and clears the underline
     w.editor.edit.setPlainText(text.replace("#define a2 60", "#define a2 45"))
-    qtbot.waitUntil(lambda: w.editor.error is None and w.drawn_version != version, timeout=5000)
+    qtbot.waitUntil(lambda: w.editor.error is None and w.presenter.drawn_version != version, timeout=5000)
     assert w.editor.underlined() is None and w.controller.explorer.constants["a2"] == 45
 
 
@@ -229,10 +229,10 @@ def test_stale_results_are_dropped(make_window, qtbot):
 
 def test_constant_slider_rederives(make_window, qtbot):
     w = make_window()
-    version = w.drawn_version
+    version = w.presenter.drawn_version
     old_bounds = w.view.mesh.bounds
     w.constants_panel.set_constant("a2", 20.0)
-    qtbot.waitUntil(lambda: w.drawn_version != version, timeout=5000)
+    qtbot.waitUntil(lambda: w.presenter.drawn_version != version, timeout=5000)
     settle(qtbot, w)
     assert w.controller.explorer.constants["a2"] == 20.0
     assert w.view.mesh.bounds != old_bounds
@@ -270,17 +270,17 @@ def test_a_slider_drag_is_one_undo_step(make_window, qtbot):
 
 def test_bad_values_are_refused_and_a_crash_keeps_the_plant(make_window, qtbot):
     w = make_window()
-    version = w.drawn_version
+    version = w.presenter.drawn_version
     w.controller.set_constant("a2", float("nan"))
     settle(qtbot, w)
-    assert "finite" in w.last_message and w.drawn_version == version
+    assert "finite" in w.last_message and w.presenter.drawn_version == version
 
     def boom(ex):
         raise RuntimeError("simulated bug")
 
     w.controller.submit("boom", boom)
     settle(qtbot, w)
-    assert "simulated bug" in w.last_message and w.drawn_version == version
+    assert "simulated bug" in w.last_message and w.presenter.drawn_version == version
     w.controller.select([])
     w._prune()
     assert "select" in w.last_message
@@ -399,3 +399,21 @@ def test_wide_cut_graph_stays_readable(make_window, qtbot, artifacts):
     node = next(v for v in layout.positions if isinstance(v, tuple))
     assert f"node {node[0]} (" in cut._tooltip(layout, node, node in layout.source_side)
     w.grab_window().save(str(artifacts / "desktop_cut_graph.png"))
+
+
+def test_the_cut_docks_plan_button_plans_the_selection(make_window, qtbot):
+    # the dock plans by itself (the window only connects its signals): no selection, a sentence;
+    # a selection, its graph with the roots the model plans, and the closed dock opened in front
+    w = make_window(n=6)
+    cut = w.cut_view
+    assert not w.docks["cut"].isVisible()  # closed at start
+    cut.plan_button.click()
+    assert cut.title.text() == "Select branches first: the cut is planned for the selection."
+    assert cut.layout_data is None and not w.docks["cut"].isVisible()
+    snap = w.controller.snapshot
+    w.controller.select(snap.segment_leaf[-3:])
+    settle(qtbot, w)
+    planned = w.controller.explorer.plan()
+    cut.plan_button.click()
+    assert cut.layout_data is not None and w.docks["cut"].isVisible()
+    assert cut.title.text().startswith(f"Planned cut for the selection: roots {planned.roots.tolist()[:12]}")

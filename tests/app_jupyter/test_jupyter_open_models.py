@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from ramure.app.document import CodeNotAllowed
-from ramure.app.jupyter import Explorer
+from ramure.app.jupyter import NotebookExplorer as Explorer
 
 MODEL = "Axiom: A(1)\nderivation length: 2\nproduction:\nA(x) --> F(x)[+A(x+1)]A(x+1)\nendlsystem\n"
 MTG = (

@@ -32,6 +32,8 @@ if TYPE_CHECKING:
     from ramure.app.desktop.view.plant_view import PlantView
     from ramure.app.desktop.workers import Job
 
+#: File ▸ Open's title: it opens a plant from a grammar, an L-Py model or an MTG, not only a grammar.
+OPEN_TITLE = "Open plant"
 GRAMMAR_FILTER = (  # .l: L-studio/cpfg (ramure.lsys.language.cpfg); .lpy: L-Py models; .mtg: OpenAlea MTGs
     "Plants (*.lsys *.l *.lpy *.mtg);;L-system grammars (*.lsys *.l);;L-Py models (*.lpy);;OpenAlea MTG (*.mtg);;All files (*)"
 )
@@ -191,8 +193,9 @@ class FileActions(QObject):
 
     # -- grammar ----------------------------------------------------------------
     def open_grammar(self, path: str | os.PathLike | None = None) -> Job | None:
-        """Load a grammar file as a fresh plant (after the unsaved-changes prompt)."""
-        path = self._path_to_open(path, "Open grammar", GRAMMAR_FILTER)
+        """Load a plant file (a grammar, an L-Py model or an MTG: :data:`GRAMMAR_FILTER`) as a
+        fresh plant, after the unsaved-changes prompt (File ▸ Open plant…)."""
+        path = self._path_to_open(path, OPEN_TITLE, GRAMMAR_FILTER)
         if path is None:
             return None
         path = pathlib.Path(path)

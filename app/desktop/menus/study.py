@@ -45,6 +45,7 @@ from PySide6.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QLayout,
     QLineEdit,
     QListView,
     QListWidget,
@@ -508,6 +509,32 @@ class TestPage(QWidget):
         )
 
 
+#: The widest a participant's reading column grows (pixels): lines stay short enough to read.
+READING_WIDTH = 760
+
+
+def reading_column(page: QWidget, *parts: QWidget | QLayout | int) -> None:
+    """Lay ``parts`` out on ``page`` in a centred column at most :data:`READING_WIDTH` wide,
+    a third of the free height above and two thirds below; an ``int`` is a gap in pixels.
+    The participants' pages (consent, instructions, questions) share it."""
+    column = QWidget()
+    column.setMaximumWidth(READING_WIDTH)
+    inner = QVBoxLayout(column)
+    inner.addStretch(1)
+    for part in parts:
+        if isinstance(part, int):
+            inner.addSpacing(part)
+        elif isinstance(part, QLayout):
+            inner.addLayout(part)
+        else:
+            inner.addWidget(part)
+    inner.addStretch(2)
+    layout = QHBoxLayout(page)
+    layout.addStretch(1)
+    layout.addWidget(column, 4)
+    layout.addStretch(1)
+
+
 class QuestionsPage(QWidget):
     """A page of questions (attention checks, demographics): a list to choose from, or a text box."""
 
@@ -529,18 +556,7 @@ class QuestionsPage(QWidget):
         self.next_button = QPushButton("Continue")
         self.next_button.setMinimumHeight(36)
         self.next_button.clicked.connect(lambda: self.send(self.answers()))
-        column = QWidget()
-        column.setMaximumWidth(760)
-        inner = QVBoxLayout(column)
-        inner.addStretch(1)
-        inner.addWidget(QLabel(html_text(title, "")))
-        inner.addLayout(form)
-        inner.addWidget(self.next_button)
-        inner.addStretch(2)
-        layout = QHBoxLayout(self)
-        layout.addStretch(1)
-        layout.addWidget(column, 4)
-        layout.addStretch(1)
+        reading_column(self, QLabel(html_text(title, "")), form, self.next_button)
 
     def answers(self) -> dict[str, str]:
         """The answers typed or chosen, by question key."""
@@ -625,19 +641,7 @@ class ParticipantWindow(QWidget):
         self.start_button.setMinimumHeight(36)
         self.agree.toggled.connect(self.start_button.setEnabled)
         self.start_button.clicked.connect(self.give_consent)
-        column = QWidget()
-        column.setMaximumWidth(760)
-        inner = QVBoxLayout(column)
-        inner.addStretch(1)
-        inner.addWidget(text)
-        inner.addSpacing(16)
-        inner.addWidget(self.agree)
-        inner.addWidget(self.start_button)
-        inner.addStretch(2)
-        layout = QHBoxLayout(page)
-        layout.addStretch(1)
-        layout.addWidget(column, 4)
-        layout.addStretch(1)
+        reading_column(page, text, 16, self.agree, self.start_button)
         return page
 
     def _info_page(self):
@@ -653,17 +657,7 @@ class ParticipantWindow(QWidget):
         button.setObjectName("infoContinue")
         button.setMinimumHeight(36)
         button.clicked.connect(self._acknowledge)
-        column = QWidget()
-        column.setMaximumWidth(760)
-        inner = QVBoxLayout(column)
-        inner.addStretch(1)
-        inner.addWidget(label)
-        inner.addWidget(button)
-        inner.addStretch(2)
-        layout = QHBoxLayout(page)
-        layout.addStretch(1)
-        layout.addWidget(column, 4)
-        layout.addStretch(1)
+        reading_column(page, label, button)
         return page, label, button
 
     def _between_page(self):

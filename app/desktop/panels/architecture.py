@@ -14,8 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QHeaderView, QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QHeaderView, QLabel, QTreeWidget, QTreeWidgetItem, QWidget
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.errors import RamureError
 from ramure.lsys.architecture.amap import Architecture, architecture
 
@@ -43,10 +44,7 @@ class ArchitecturePanel(QWidget):
         header.setSectionResizeMode(0, QHeaderView.ResizeMode.Stretch)
         header.setSectionResizeMode(1, QHeaderView.ResizeMode.ResizeToContents)
         self.tree.itemClicked.connect(self._select_item)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.summary)
-        layout.addWidget(self.tree, 1)
+        dock_column(self, self.summary).addWidget(self.tree, 1)
         controller.plant_changed.connect(lambda _snap: self.rebuild())
         self.rebuild()
 

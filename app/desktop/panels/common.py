@@ -1,7 +1,8 @@
 """What the docks share: their outer column, their number boxes and their own 3D views.
 
-Each dock used to build these by hand (the Wood and Constants docks each had a spin-box
-builder, three docks each a plotter maker); one spelling here keeps their look the same.
+Each dock used to build these by hand (the Wood, Constants and Details docks each had a
+spin-box builder, three docks each a plotter maker, eleven docks their own margins); one
+spelling here keeps their look the same.
 """
 
 from __future__ import annotations
@@ -35,20 +36,24 @@ def number_box(
     value: float | None = None,
     name: str = "",
     suffix: str = "",
+    step: float = 0.0,
     width: int = 0,
     live: bool = True,
 ) -> QDoubleSpinBox:
     """A spin box for a decimal number in ``[low, high]``.
 
-    ``name`` is its Qt object name (tests and style sheets find it), ``width`` a maximum width
-    (0: none).  ``live=False`` sends a value only when typing ends (no keyboard tracking) and
-    speeds up a held arrow: the constants' boxes, where each value re-derives the plant."""
+    ``name`` is its Qt object name (tests and style sheets find it), ``step`` what an arrow
+    adds (0: Qt's 1), ``width`` a maximum width (0: none).  ``live=False`` sends a value only
+    when typing ends (no keyboard tracking) and speeds up a held arrow: the constants' boxes,
+    where each value re-derives the plant."""
     box = QDoubleSpinBox()
     if name:
         box.setObjectName(name)
     if width:
         box.setMaximumWidth(width)
     box.setRange(low, high)
+    if step:
+        box.setSingleStep(step)
     box.setDecimals(decimals)
     if value is not None:
         box.setValue(value)

@@ -17,14 +17,19 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from PySide6.QtCore import QEvent, QObject, QPointF, QRectF, Qt
+from PySide6.QtCore import QEvent, QObject, QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QFont, QFontMetrics, QPainter, QPen, QWheelEvent
-from PySide6.QtWidgets import QGraphicsItem, QGraphicsScene, QGraphicsView, QHBoxLayout, QLabel, QPushButton, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QGraphicsItem, QGraphicsScene, QGraphicsView, QHBoxLayout, QLabel, QPushButton, QWidget
+
+from ramure.app.desktop import state
+from ramure.app.desktop.panels.common import dock_column
+from ramure.errors import RamureError
 
 if TYPE_CHECKING:
     from PySide6.QtWidgets import QGraphicsSimpleTextItem
     from PySide6.QtGui import QResizeEvent
-    from ramure.app.desktop.state import GraphLayout
+    from ramure.app.desktop.controller import Controller
+    from ramure.app.desktop.state import GraphLayout, Snapshot
 
 SOURCE_COLOR = QColor("#3b6fd8")
 SINK_COLOR = QColor("#e08a1e")
@@ -34,10 +39,18 @@ LABEL_POINTS = 8
 
 
 class CutGraphView(QWidget):
-    """A zoomable drawing of a cut graph, with a legend and a "plan for selection" button."""
+    """A zoomable drawing of a cut graph, with a legend and a "plan for selection" button.
 
-    def __init__(self, parent: QWidget | None = None) -> None:
+    Given a ``controller``, the button plans the selection's cut (:meth:`plan`); a refusal is
+    emitted as :attr:`refused`, and :attr:`to_front` asks for the dock in front of its tabs
+    (True: opened too, it may be closed)."""
+
+    refused = Signal(str)
+    to_front = Signal(bool)
+
+    def __init__(self, controller: Controller | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        self.controller = controller
         self.scene = QGraphicsScene(self)
         self.view = QGraphicsView(self.scene)
         self.view.setRenderHint(QPainter.RenderHint.Antialiasing)
@@ -47,6 +60,8 @@ class CutGraphView(QWidget):
         self.title = QLabel("No cut yet: select branches, then Regrow or Prune.")
         self.title.setWordWrap(True)
         self.plan_button = QPushButton("Show the cut for the selection")
+        if controller is not None:
+            self.plan_button.clicked.connect(self.plan)
         legend = QLabel(
             '<span style="color:#3b6fd8">● source side</span> &nbsp; '
             '<span style="color:#e08a1e">● sink side</span> &nbsp; '
@@ -61,16 +76,55 @@ class CutGraphView(QWidget):
         bottom.addWidget(legend)
         bottom.addStretch(1)
         bottom.addWidget(self.hint)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(top)
-        layout.addLayout(bottom)
-        layout.addWidget(self.view, 1)
+        dock_column(self, top, bottom).addWidget(self.view, 1)
         self.layout_data: GraphLayout | None = None
         self.labels: list[QGraphicsSimpleTextItem] = []
         self.label_width = 0.0
         self.label_font = QFont()
         self.label_font.setPointSize(LABEL_POINTS)
+
+    def show_snapshot(self, snap: Snapshot) -> None:
+        """Show the last regrow's cut graph (nothing before the first edit)."""
+        result = snap.last_result
+        if result is None:
+            return
+        if snap.cut_layout is None:
+            cut = result.cut
+            words = state.edit_words(result)
+            self.clear(
+                f"Last edit: {words}. {state.cut_too_large_words(cut)}"
+                if cut is not None
+                else f"Last {result.op}: the whole plant (no cut)."
+            )
+            return
+        self.show_layout(snap.cut_layout, f"Last edit: {state.edit_words(result)}; cut capacity {result.cut_value:g}")
+
+    def plan(self) -> None:
+        """Show the cut a regrow of the selection would make (the Plan button)."""
+
+        def plan(ex):
+            cut = ex.plan()
+            return cut, (
+                state.cut_graph_layout(cut, ex.derivation.tree, cut.roots, ex.lsystem.symbols)
+                if state.drawable_cut(cut)
+                else None
+            )
+
+        assert self.controller is not None  # the button is connected only with one
+        try:
+            cut, layout = self.controller.read(plan, wait=2.0)
+        except RamureError as exc:
+            self.refused.emit(str(exc))
+            return
+        if cut is None:
+            self.clear("Select branches first: the cut is planned for the selection.")
+            return
+        if layout is None:
+            self.clear(f"Planned cut for the selection, cut value {cut.cut_value:g}. {state.cut_too_large_words(cut)}")
+            self.to_front.emit(False)
+            return
+        self.show_layout(layout, f"Planned cut for the selection: roots {cut.roots.tolist()[:12]}, cut value {cut.cut_value:g}")
+        self.to_front.emit(True)
 
     def clear(self, message: str) -> None:
         """Show no graph, only ``message``."""

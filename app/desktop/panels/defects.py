@@ -36,10 +36,10 @@ from PySide6.QtWidgets import (
     QListWidget,
     QPushButton,
     QRubberBand,
-    QVBoxLayout,
     QWidget,
 )
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.fruit_defects import EXAMPLES
 from ramure.errors import RamureError
@@ -119,11 +119,6 @@ class DefectsPanel(QWidget):
         buttons = QHBoxLayout()
         buttons.addWidget(self.remove_button)
         buttons.addWidget(self.apply_button, 1)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(row)
-        layout.addWidget(self.specs)
-        layout.addLayout(buttons)
         regions = QHBoxLayout()
         regions.addWidget(QLabel("Region"))
         regions.addWidget(self.region_pattern, 1)
@@ -133,9 +128,7 @@ class DefectsPanel(QWidget):
         regrow.addWidget(self.region_params, 1)
         regrow.addWidget(self.region_regrow)
         regrow.addWidget(self.region_place)
-        layout.addLayout(regions)
-        layout.addLayout(regrow)
-        layout.addWidget(self.facts)
+        layout = dock_column(self, row, self.specs, buttons, regions, regrow, self.facts)
         self.view_slot = LazyView(plotter_factory or _interactor)  # made when the dock is first shown
         layout.addWidget(self.view_slot, 1)
         controller.job_done.connect(self._job_done)

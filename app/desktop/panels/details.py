@@ -34,7 +34,6 @@ import numpy as np
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import (
     QComboBox,
-    QDoubleSpinBox,
     QFormLayout,
     QGroupBox,
     QHBoxLayout,
@@ -47,6 +46,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from ramure.app.desktop.panels.common import dock_column, number_box
 from ramure.app.desktop import state
 from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.details import crack_on_fruit, diagonal, lichen_on_fruit, paint_adhesion, selected_fruit_surface
@@ -178,11 +178,7 @@ class DetailsPanel(QWidget):
         self.slider.setRange(0, SEASON_STEPS)
         self.slider.valueChanged.connect(self.show_step)
         self.heat, self.humidity = _unit_box("detailsHeat", 0.5), _unit_box("detailsHumidity", 0.5)
-        self.wind = QDoubleSpinBox()
-        self.wind.setObjectName("detailsWind")
-        self.wind.setRange(0.0, 2.0)
-        self.wind.setSingleStep(0.05)
-        self.wind.setDecimals(2)
+        self.wind = number_box(0.0, 2.0, 2, name="detailsWind", step=0.05)
         self.wind.setToolTip("wind strength along x, in plant units per step (leaves fall and drift)")
         self.seed = QSpinBox()
         self.seed.setObjectName("detailsSeed")
@@ -262,8 +258,7 @@ class DetailsPanel(QWidget):
         self.controls.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.controls.setWidget(controls)
         self.controls.setMinimumHeight(60)
-        self.box = QVBoxLayout(self)
-        self.box.setContentsMargins(2, 2, 2, 2)
+        self.box = dock_column(self)
         self.box.addWidget(self.controls, 2)
 
     # -- season ----------------------------------------------------------------------------
@@ -598,13 +593,7 @@ class DetailsPanel(QWidget):
 
 
 def _unit_box(name, value):
-    box = QDoubleSpinBox()
-    box.setObjectName(name)
-    box.setRange(0.0, 1.0)
-    box.setSingleStep(0.1)
-    box.setDecimals(2)
-    box.setValue(value)
-    return box
+    return number_box(0.0, 1.0, 2, value=value, name=name, step=0.1)
 
 
 def _count_box(name, low, high, value):

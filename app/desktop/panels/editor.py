@@ -24,12 +24,14 @@ from PySide6.QtGui import (
     QTextCursor,
     QTextOption,
 )
-from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QLabel, QPlainTextEdit, QTextEdit, QWidget
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.lsys.language.grammar import starts_line_comment
 
 if TYPE_CHECKING:
     from ramure.lsys import GrammarError
+    from ramure.app.desktop.state import Snapshot
 
 DEBOUNCE_MS = 350
 
@@ -130,8 +132,7 @@ class GrammarEditor(QWidget):
         self.message.setWordWrap(True)
         self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         self.message.setStyleSheet("color: #b00020;")
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(0, 0, 0, 0)
+        layout = dock_column(self, margin=0)  # the text reaches the dock's frame
         layout.addWidget(self.edit, 1)
         layout.addWidget(self.message)
         self.timer = QTimer(self)
@@ -140,6 +141,30 @@ class GrammarEditor(QWidget):
         self.timer.timeout.connect(lambda: self.text_settled.emit(self.text()))
         self.edit.textChanged.connect(self.timer.start)
         self.error: GrammarError | None = None
+        self.shown_text = ""  # the model's grammar text the editor last showed
+
+    def show_model_text(self, text: str) -> None:
+        """Show the model's ``text`` as it stands (the window's first plant)."""
+        self.set_text(text)
+        self.shown_text = text
+
+    def follow(self, snap: Snapshot) -> None:
+        """Show the model's grammar text when something other than typing changed it (a slider,
+        Undo, Redo, a file): the editor and the constants are one state."""
+        if snap.text == self.shown_text:
+            return
+        self.shown_text = snap.text
+        if snap.job == "grammar" or self.pending():
+            return  # the editor's own text (perhaps "30." for 30), or the user is typing
+        self.replace_text(snap.text)
+
+    def show_undone(self, snap: Snapshot) -> None:
+        """After Undo or Redo: the model's text again, without the error of text typed since (an
+        undo took that text back); typing still in its pause, or a refused text, stays."""
+        if snap.error is None and not self.pending():
+            self.shown_text = snap.text
+            self.replace_text(snap.text)
+            self.show_error(None)
 
     def text(self) -> str:
         """The editor's text."""

@@ -13,7 +13,9 @@ from typing import TYPE_CHECKING, Any
 
 from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QIcon, QPixmap
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QWidget
+
+from ramure.app.desktop.panels.common import dock_column
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage, QResizeEvent
@@ -92,11 +94,7 @@ class GalleryView(QWidget):
         buttons = QHBoxLayout()  # under the note: the dock stays narrow beside the plant
         buttons.addWidget(self.explore_button)
         buttons.addWidget(self.open_button)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.note)
-        layout.addLayout(buttons)
-        layout.addWidget(self.list, 1)
+        dock_column(self, self.note, buttons).addWidget(self.list, 1)
         self.picks: list[dict] = []
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)

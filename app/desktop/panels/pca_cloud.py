@@ -15,7 +15,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QIcon, QPixmap
-from PySide6.QtWidgets import QLabel, QListWidget, QListWidgetItem, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QLabel, QListWidget, QListWidgetItem, QSplitter, QWidget
+
+from ramure.app.desktop.panels.common import dock_column
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QResizeEvent
@@ -75,10 +77,7 @@ class PcaCloudView(QWidget):
         split.addWidget(self.boxes_list)
         split.setStretchFactor(0, 1)
         split.setStretchFactor(1, 0)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.note)
-        layout.addWidget(split, 1)
+        dock_column(self, self.note).addWidget(split, 1)
         self._arrange()
         self.variant_set: VariantSet | None = None
         self.pick_artist = None

@@ -17,8 +17,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QCheckBox, QDockWidget, QLabel, QScrollArea, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QCheckBox, QDockWidget, QLabel, QScrollArea, QWidget
 
+from ramure.app.desktop.panels.common import dock_column
 from ramure.errors import RamureError
 
 if TYPE_CHECKING:
@@ -52,9 +53,7 @@ class QualifierMapView(QWidget):
         self.note.setWordWrap(True)
         self.french = QCheckBox("French names")
         self.french.toggled.connect(lambda _: self.redraw())
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.note)
+        layout = dock_column(self, self.note)
         layout.addWidget(self.canvas_area, 1)
         layout.addWidget(self.french)
         self.regions: QualifierRegions | None = None

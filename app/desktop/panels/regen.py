@@ -29,11 +29,12 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ramure.app.desktop.panels.common import dock_column
+from ramure.app.desktop.panels.common import dock_column, number_box
 from ramure.app.desktop.state import changed_constants
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage
+    from ramure.app.desktop.state import Snapshot
 
 THUMB = 96
 
@@ -204,6 +205,14 @@ class RegenPanel(QWidget):
         self.rho_label.setText(f"ρ = {self.rho.value()}")
         self.rho.blockSignals(False)
 
+    def show_state(self, snap: Snapshot) -> None:
+        """The snapshot's part of the panel: the part's constants, ρ (not while the slider is
+        held: the user's own value) and what Undo and Redo can do."""
+        self.show_constants(snap.constants)
+        if not self.rho.isSliderDown():
+            self.set_rho(snap.rho * 100)
+        self.set_history(snap.can_undo, snap.can_redo)
+
     def set_note(self, text: str) -> None:
         """A word under the buttons about the last regrow (hidden when empty)."""
         self.note.setText(text)
@@ -257,10 +266,7 @@ class RegenPanel(QWidget):
                 self.constants_form.removeRow(0)
             self.boxes = {}
             for name in constants:
-                box = QDoubleSpinBox()
-                box.setObjectName(f"regen_{name}")
-                box.setRange(-1e9, 1e9)
-                box.setDecimals(4)
+                box = number_box(-1e9, 1e9, 4, name=f"regen_{name}")
                 self.boxes[name] = box
                 self.constants_form.addRow(name, box)
         for name, box in self.boxes.items():

@@ -6,8 +6,10 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from PySide6.QtGui import QFontDatabase
-from PySide6.QtWidgets import QLabel, QPlainTextEdit, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QLabel, QPlainTextEdit, QSplitter, QWidget
 from PySide6.QtCore import Qt
+
+from ramure.app.desktop.panels.common import dock_column
 
 if TYPE_CHECKING:
     from ramure.app.desktop.state import Snapshot
@@ -35,10 +37,7 @@ class StringView(QWidget):
         split.addWidget(self.string)
         split.addWidget(self.selected)
         split.setSizes([3, 1])
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addWidget(self.summary)
-        layout.addWidget(split, 1)
+        dock_column(self, self.summary).addWidget(split, 1)
 
     def show_snapshot(self, snap: Snapshot) -> None:
         """Show the snapshot's string.  Laying out the 5,000-module preview costs 20-50 ms, so
