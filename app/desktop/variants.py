@@ -117,14 +117,21 @@ def explore_plant(
     progress: Callable[[int, int], None] | None = None,
     cancel: threading.Event | Callable[[], bool] | None = None,
     n_jobs: int | None = None,
+    hidden: bool = False,
+    wide: float | None = None,
 ) -> VariantSet:
-    """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`ramure.metrics.explore`)."""
+    """Sweep ``lsystem``'s variants, run the PCA and pick 27 (see :func:`ramure.metrics.explore`).
+
+    ``hidden`` also varies the grammar's hidden constants (literals, rule probabilities) and
+    ``wide`` adds a larger step (e.g. 0.25), as ``ramure explore --hidden --wide``; both off by
+    default, so the default cloud is the thesis's ±10 % sweep of the ``#define`` constants.
+    """
     reason = metrics_available()
     if reason:
         raise RamureError(reason)
     from ramure.metrics import VariantSweep, explore
 
-    sweep = VariantSweep(n=n, seed=seed, n_jobs=n_jobs, mp_context="forkserver")
+    sweep = VariantSweep(n=n, seed=seed, n_jobs=n_jobs, mp_context="forkserver", hidden=hidden, wide=wide)
     exp = explore(lsystem, progress=progress, cancel=cancel, sweep=sweep)
     picks = exp.pick_records()
     name = exp.name

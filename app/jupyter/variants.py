@@ -172,6 +172,24 @@ class VariantPanel:
         self.jobs = W.BoundedIntText(
             value=1, min=1, max=64, description="workers", style={"description_width": "55px"}, layout=W.Layout(width="130px")
         )
+        # issue 35's larger space, off by default: the default PCA cloud (486 variants on Honda) stays
+        self.hidden = W.Checkbox(
+            value=False,
+            description="hidden constants",
+            indent=False,
+            tooltip="also vary the numeric literals and rule probabilities (VariantSweep hidden=True)",
+            layout=W.Layout(width="140px"),
+        )
+        self.wide = W.BoundedFloatText(
+            value=0.0,
+            min=0.0,
+            max=0.9,
+            step=0.05,
+            description="wide",
+            tooltip="a larger step (0.25: +-25 %) added one constant at a time; 0: none",
+            style={"description_width": "35px"},
+            layout=W.Layout(width="110px"),
+        )
         self.start = button(
             "Explore variants",
             lambda: self.explore(wait=False),
@@ -206,7 +224,7 @@ class VariantPanel:
         self.box_toggles = W.VBox()
         self.widget = W.VBox(
             [
-                W.HBox([self.n, self.beta, self.jobs, self.start, self.stop_button]),
+                W.HBox([self.n, self.beta, self.jobs, self.hidden, self.wide, self.start, self.stop_button]),
                 W.HBox([self.bar, self.progress_text]),
                 self.note,
                 self.thumb_css,
@@ -248,17 +266,22 @@ class VariantPanel:
         n_jobs: int | None = None,
         wait: bool = True,
         thumbnails: bool = True,
+        hidden: bool | None = None,
+        wide: float | None = None,
     ) -> Exploration | threading.Thread:
         """Sweep the current grammar, run the PCA, pick 27 and render their thumbnails.
 
         With ``wait`` (the default from code) this blocks and returns the
-        exploration; otherwise it starts a thread and returns it.
+        exploration; otherwise it starts a thread and returns it.  ``hidden``
+        and ``wide`` (0: none) set the tab's boxes: the grammar's hidden
+        constants and a larger step (e.g. 0.25), as ``ramure explore --hidden
+        --wide 0.25``; both off by default so the default cloud stays the thesis's.
         """
         if self.running is not None and self.running.is_alive():
             raise RamureError("an exploration is already running: stop it first")
         from ramure.metrics import VariantSweep
 
-        for widget, value in ((self.n, n), (self.beta, beta), (self.jobs, n_jobs)):
+        for widget, value in ((self.n, n), (self.beta, beta), (self.jobs, n_jobs), (self.hidden, hidden), (self.wide, wide)):
             if value is not None:
                 widget.value = value
         # a kernel always runs threads, so worker processes are started by a fork server, not forked
@@ -267,6 +290,8 @@ class VariantPanel:
             beta=self.beta.value,
             n_jobs=self.jobs.value,
             cache=self.cache,
+            hidden=bool(self.hidden.value),
+            wide=float(self.wide.value) or None,
             mp_context="forkserver" if self.jobs.value > 1 else None,
         )
         self._sweep = sweep

@@ -606,9 +606,9 @@ class Session:
             prune=edit["op"] == "prune",
             steps=edit.get("steps", 0),
         )
-        return RegenResult(
-            edit["op"],
-            change.roots,
+        return RegenResult(  # the roots in the plan's order (ascending ids), not the string order
+            edit["op"],  # regenerate re-derives them in: a result names the part the preview showed
+            np.sort(change.roots),
             cut_roots,
             min_roots,
             change.removed_leaves,

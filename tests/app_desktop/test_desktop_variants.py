@@ -322,3 +322,29 @@ def test_the_qualifier_box_takes_the_words_people_type(make_window, qtbot):
         w.regen.apply_button.clicked.connect(lambda: w.regen.apply_qualifier.emit(box.currentText()))
         qtbot.mouseClick(w.regen.apply_button, Qt.MouseButton.LeftButton)
     assert applied.args == ["plus touffu"]
+
+
+def test_variants_dock_offers_hidden_constants_and_wide_steps(make_window, qtbot, monkeypatch):
+    """The dock's boxes reach the sweep as the CLI's --hidden --wide 0.25 (issue 35); both off by
+    default, so the default cloud (and its count, 486 on Honda n=4) stays the thesis's."""
+    from ramure.app.desktop import variants as desktop_variants
+    from ramure.errors import RamureError
+
+    asked = []
+
+    def explore_plant(ls, n, seed, **kwargs):
+        asked.append({k: kwargs[k] for k in ("hidden", "wide")})
+        raise RamureError("enough: the options were read")
+
+    monkeypatch.setattr(desktop_variants, "explore_plant", explore_plant)
+    w = make_window(n=4)
+    gallery = w.variants.gallery
+    assert not gallery.hidden_box.isChecked() and gallery.wide_box.value() == 0.0
+    assert gallery.wide_box.text() == "no wide step" and gallery.hidden_box.isVisibleTo(w)
+    for hidden, wide in ((False, 0.0), (True, 0.25)):
+        gallery.hidden_box.setChecked(hidden)
+        gallery.wide_box.setValue(wide)
+        w.variants.explore(n_jobs=1)
+        qtbot.waitUntil(lambda: not w.variants.busy(), timeout=20000)
+    assert asked == [{"hidden": False, "wide": None}, {"hidden": True, "wide": 0.25}]
+    assert w.variants.variant_set is None  # the refusal was reported, nothing shown

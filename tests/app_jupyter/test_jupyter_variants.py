@@ -215,3 +215,18 @@ def test_a_file_that_is_not_a_qualifier_store_is_refused(ex, tmp_path):
     (tmp_path / "q.sqlite").write_text("not a database")
     ex.load_qualifiers(tmp_path / "q.sqlite")
     assert "qualifier store" in ex.error and ex.variants.regions is None
+
+
+def test_hidden_constants_and_wide_steps_are_options_off_by_default(monkeypatch):
+    """The tab's boxes reach the sweep as the CLI's --hidden --wide 0.25 (issue 35); off by default."""
+    ex = NotebookExplorer(HONDA, n=4, view="static", size=(160, 160), cache=False)
+    runs = []
+    monkeypatch.setattr(ex.variants, "_run", lambda sweep, lsystem, thumbnails: runs.append(sweep) or sweep)
+    default = ex.variants.explore(n=4, n_jobs=1, thumbnails=False)
+    assert (default.hidden, default.wide) == (False, None) and not ex.variants.hidden.value
+    larger = ex.variants.explore(n=4, n_jobs=1, thumbnails=False, hidden=True, wide=0.25)
+    assert (larger.hidden, larger.wide) == (True, 0.25) and ex.variants.hidden.value and ex.variants.wide.value == 0.25
+    ls = ex.model.variant_lsystem()  # the larger space has more variants; the default cloud is unchanged
+    assert default.fit(ls).n_variants_ == 486 and larger.fit(ls).n_variants_ == 518
+    ex.variants.wide.value = 0.0  # 0 in the box: no wide step
+    assert ex.variants.explore(wait=True, thumbnails=False).wide is None and len(runs) == 3

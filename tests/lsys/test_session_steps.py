@@ -76,3 +76,19 @@ def test_a_selection_regrows_one_step_more_or_less_inside_only(tmp_path):
     with pytest.raises(ValueRefused, match="one step less"):
         s.regrow(tips, steps=-1)
     assert len(s.edits) == edits
+
+
+@pytest.mark.parametrize("steps", [0, 1])
+def test_a_regrow_reports_the_roots_the_plan_showed(steps):
+    """Two roots whose string order is not their id order (161 is drawn before 53): a regrow (one
+    step more included) or a prune reports the plan's roots in the plan's order, so a qualifier's
+    result names the part its preview showed (it reported the string order, order-dependently)."""
+    s = Session("plant_1_24d", n=4)
+    selection = [505, 517]
+    shown = s.plan(selection, 0.5)[1]
+    first = s.tree.string_spans(shown)[0]
+    assert shown.tolist() == [53, 161] and first[0] > first[1]
+    result = s.regrow(selection, seed=2, steps=steps)
+    assert result.roots.tolist() == shown.tolist() and result.change.roots.tolist() == [161, 53]
+    s.undo()
+    assert s.prune(selection).roots.tolist() == [53, 161]

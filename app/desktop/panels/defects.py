@@ -29,7 +29,6 @@ from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QSize, Qt, QTimer, Si
 from PySide6.QtGui import QMouseEvent
 from PySide6.QtWidgets import (
     QComboBox,
-    QDoubleSpinBox,
     QHBoxLayout,
     QLabel,
     QLineEdit,
@@ -39,7 +38,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from ramure.app.desktop.panels.common import dock_column
+from ramure.app.desktop.panels.common import dock_column, number_box
 from ramure.app.desktop.view.lazy_view import LazyView
 from ramure.app.fruit_defects import EXAMPLES
 from ramure.errors import RamureError
@@ -94,11 +93,7 @@ class DefectsPanel(QWidget):
         self.region_select = QPushButton("Select")
         self.region_select.setObjectName("regionSelect")
         self.region_select.clicked.connect(self.select_pattern)
-        self.brush = QDoubleSpinBox()
-        self.brush.setObjectName("regionBrush")
-        self.brush.setRange(0.0, 100.0)
-        self.brush.setValue(8.0)
-        self.brush.setSuffix(" mm")
+        self.brush = number_box(0.0, 100.0, 2, value=8.0, name="regionBrush", suffix=" mm")
         self.brush.setToolTip("Brush radius: a right click selects the skin cells this close")
         self.region_params = QLineEdit("largeur=75")
         self.region_params.setObjectName("regionParams")

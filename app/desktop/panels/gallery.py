@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING, Any
 
 from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QIcon, QPixmap
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QWidget
+from PySide6.QtWidgets import QCheckBox, QHBoxLayout, QLabel, QListView, QListWidget, QListWidgetItem, QPushButton, QWidget
 
-from ramure.app.desktop.panels.common import dock_column
+from ramure.app.desktop.panels.common import dock_column, number_box
 
 if TYPE_CHECKING:
     from PySide6.QtGui import QImage, QResizeEvent
@@ -79,6 +79,13 @@ class GalleryView(QWidget):
         self.note.setWordWrap(True)
         self.explore_button = QPushButton("Explore variants")
         self.explore_button.clicked.connect(self.explore_requested)
+        # issue 35's larger space, off by default: the default PCA cloud and its count stay the thesis's
+        self.hidden_box = QCheckBox("Hidden constants")
+        self.hidden_box.setToolTip("Also vary the numeric literals and rule probabilities (ramure explore --hidden)")
+        self.wide_box = number_box(0.0, 0.9, 2, step=0.05)
+        self.wide_box.setPrefix("wide ±")
+        self.wide_box.setSpecialValueText("no wide step")
+        self.wide_box.setToolTip("A larger step added one constant at a time, e.g. 0.25 (ramure explore --wide 0.25)")
         self.open_button = QPushButton("Open exploration…")
         self.open_button.clicked.connect(self.open_requested)
         self.list = QListWidget()
@@ -94,8 +101,16 @@ class GalleryView(QWidget):
         buttons = QHBoxLayout()  # under the note: the dock stays narrow beside the plant
         buttons.addWidget(self.explore_button)
         buttons.addWidget(self.open_button)
-        dock_column(self, self.note, buttons).addWidget(self.list, 1)
+        options = QHBoxLayout()
+        options.addWidget(self.hidden_box)
+        options.addWidget(self.wide_box)
+        dock_column(self, self.note, buttons, options).addWidget(self.list, 1)
         self.picks: list[dict] = []
+
+    def sweep_options(self) -> dict[str, Any]:
+        """``{"hidden": bool, "wide": float or None}``: the larger space of variants the boxes ask for."""
+        wide = round(float(self.wide_box.value()), 2)
+        return {"hidden": self.hidden_box.isChecked(), "wide": wide or None}
 
     def resizeEvent(self, event: QResizeEvent) -> None:  # noqa: N802 (Qt API)
         """Fit the thumbnails to the dock's new width."""

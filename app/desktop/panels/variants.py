@@ -276,10 +276,11 @@ class VariantsController(QObject):
         snap = self.controller.snapshot
         text, constants, n, seed = snap.text, dict(snap.constants), snap.n, snap.seed
         ls = self._variant_lsystem()
+        options = self.gallery.sweep_options()  # hidden constants, wide step: the dock's boxes
 
         def work(progress, cancelled):
             return variants.explore_plant(
-                ls, n, seed, progress=lambda d, t: progress(d, t, "variants"), cancel=cancelled, n_jobs=n_jobs
+                ls, n, seed, progress=lambda d, t: progress(d, t, "variants"), cancel=cancelled, n_jobs=n_jobs, **options
             )
 
         def done(vs) -> None:
