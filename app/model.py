@@ -571,7 +571,8 @@ class Explorer:
         """
         from ramure.app import fruit_regions as R
 
-        pick = {"pattern": R.by_pattern, "point": R.at_point, "cells": R.by_cells}.get(how)
+        picks: dict[str, Callable[..., tuple[int, Any]]] = {"pattern": R.by_pattern, "point": R.at_point, "cells": R.by_cells}
+        pick = picks.get(how)
         if how == "rectangle":
             matrix, size, rect = args
             leaf, facing = R.facing_cells(self, matrix, leaf, on)
