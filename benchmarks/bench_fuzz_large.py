@@ -75,7 +75,7 @@ def bench_fuzz_large() -> dict:
             with log.open("a") as stream:
                 stream.write(json.dumps(record) + "\n")
         per_reader[reader].update(inputs=record["inputs"], crashes=record["crashes"], slow=record["slow"])
-        per_reader[reader].update(record["outcomes"])
+        per_reader[reader].update({f"outcome {k}": n for k, n in record["outcomes"].items()})  # "slow" is a key of both
         peak = max(peak, record.get("peak_mb", 0.0))
         if "died" in record:
             died.append(f"{reader}/{seed}: {record['died']}")
