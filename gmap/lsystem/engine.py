@@ -458,22 +458,29 @@ class G3LDerivation:
         out = np.zeros(len(vols), bool)
         if not len(vols):
             return out
+        free, walk, nb = self._free_face_neighbours(vols, face, rule, col)
+        there = np.maximum(nb, 0)
+        code = _prism.face_label_code(other)
+        hit = (walk >= 0) & (gm.volume_data["label"][gm.dart_volume[there]] == sym) & (gm.dart_data["face"][there] == code)
+        out[free] = hit.any(axis=1)
+        return out
+
+    def _free_face_neighbours(self, vols, face, rule, col):
+        """For ``vols``: which have a free face ``face`` (bool per volume), then, one row per such
+        volume, the face's darts (``-1`` padded) and each dart's boundary neighbour (``-1`` there)."""
+        gm = self.gm
         self._face_codes(vols, face, rule, col)
         starts = _ops.face_starts(gm, vols, face)
         free = starts >= 0
         free[free] = _ops.face_is_free(gm, starts[free])
         if not free.any():
-            return out
+            empty = np.zeros((0, 0), np.int64)
+            return free, empty, empty
         walk, _ = gm.face_walk(starts[free])
         mine = walk >= 0
         nb = np.full(walk.shape, -1, np.int64)
         nb[mine] = _ops.boundary_neighbour(gm, walk[mine])
-        hit = np.zeros(walk.shape, bool)
-        there = nb[mine]
-        code = _prism.face_label_code(other)
-        hit[mine] = (gm.volume_data["label"][gm.dart_volume[there]] == sym) & (gm.dart_data["face"][there] == code)
-        out[free] = hit.any(axis=1)
-        return out
+        return free, walk, nb
 
     # ------------------------------------------------------------------ operators
     def _faces_of(self, rule, spec, vols, scope):
@@ -700,17 +707,10 @@ class G3LDerivation:
         gm, vd = self.gm, self.gm.volume_data
         if not len(vols):
             return []
-        self._face_codes(vols, face_a, rule, 1)
-        starts = _ops.face_starts(gm, vols, face_a)
-        free = starts >= 0
-        free[free] = _ops.face_is_free(gm, starts[free])
-        walk, _ = gm.face_walk(starts[free])
-        mine = walk >= 0
-        nb = np.full(walk.shape, -1, np.int64)
-        nb[mine] = _ops.boundary_neighbour(gm, walk[mine])
+        free, walk, nb = self._free_face_neighbours(vols, face_a, rule, 1)
         there = np.maximum(nb, 0)
         owner = vols[free][:, None]
-        hit = mine & (vd["label"][gm.dart_volume[there]] == sym_b) & (gm.dart_data["face"][there] == code_b)
+        hit = (walk >= 0) & (vd["label"][gm.dart_volume[there]] == sym_b) & (gm.dart_data["face"][there] == code_b)
         hit &= gm.dart_volume[there] != owner
         hit[hit] = _ops.face_is_free(gm, there[hit])
         return [(int(v), walk[i][hit[i]], nb[i][hit[i]]) for i, v in enumerate(vols[free].tolist()) if hit[i].any()]
