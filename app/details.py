@@ -195,9 +195,7 @@ def close_up(growth: Lichen, mesh: TriMesh) -> list:
     members = growth.cluster == biggest
     centre = growth.position[members].mean(axis=0)
     extent = max(float(np.ptp(growth.position[members], axis=0).max()), 10 * growth.r)
-    outward = mesh.normals[growth.triangle[members]].mean(axis=0)
-    outward /= max(np.linalg.norm(outward), 1e-12)
-    up = np.array([0.0, 0.0, 1.0]) if abs(outward[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    outward, up = _looking_out(mesh, growth.triangle[members])
     return [tuple(centre + outward * extent * 3.2 + up * extent * 0.6), tuple(centre), tuple(up)]
 
 
@@ -222,15 +220,20 @@ def facing(growth: Lichen, mesh: TriMesh) -> list:
     """A camera that shows the whole surface from the side where its lichen grows: along the
     particles' mean outward normal, far enough for the surface to fill about two thirds of the
     picture.  A fixed camera sees the far side of the fruit half the time, and the lichen with it."""
-    normals = mesh.normals[growth.triangle]
-    outward = normals.mean(axis=0)
-    outward /= max(np.linalg.norm(outward), 1e-12)
+    outward, up = _looking_out(mesh, growth.triangle)
     lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
     centre, radius = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
-    up = np.array([0.0, 0.0, 1.0]) if abs(outward[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
     side = np.cross(outward, up)
     eye = centre + (outward + 0.25 * side + 0.2 * up) * radius * 2.6
     return [tuple(eye), tuple(centre), tuple(up)]
+
+
+def _looking_out(mesh: TriMesh, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unit mean outward normal of ``triangles`` and an up vector not along it (z, else y)."""
+    outward = mesh.normals[triangles].mean(axis=0)
+    outward /= max(np.linalg.norm(outward), 1e-12)
+    up = np.array([0.0, 0.0, 1.0]) if abs(outward[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    return outward, up
 
 
 def crack_on_fruit(ex: Explorer, nodes: int = 15, seed: int = 0, anchor: Any = None) -> dict:
