@@ -59,7 +59,7 @@ from ramure.studies.session import TestSession, picture_labels
 if TYPE_CHECKING:
     from starlette.applications import Starlette
 
-    from ramure.studies.design import Step
+    from ramure.studies.design import ParticipantFlow, Step
 
     from ramure.studies.picks import Pick
     from ramure.studies.storage import Study
@@ -358,22 +358,20 @@ class StudyServer:
             self._shown[key] = (session.labels(), {pid: i for i, pid in enumerate(session.order())})
         return self._shown[key]
 
-    def _step(self, code: str) -> Step:
-        """The page participant ``code`` is on (:class:`~ramure.studies.design.ParticipantFlow`)."""
+    def _current(self, code: str) -> tuple[ParticipantFlow, Step, TestSession | None]:
+        """Participant ``code``'s flow (:class:`~ramure.studies.design.ParticipantFlow`, the study's
+        config read once), the page they are on and, on a picture set, its session (started or resumed)."""
         from ramure.studies.design import ParticipantFlow
 
-        return ParticipantFlow(self.study, code, front_end="web").step()
-
-    def _current(self, code: str) -> tuple[Step, TestSession | None]:
-        """The participant's page and, on a picture set, its session (started or resumed)."""
-        step = self._step(code)
+        flow = ParticipantFlow(self.study, code, front_end="web")
+        step = flow.step()
         if step.kind != "test":
-            return step, None
+            return flow, step, None
         assert step.grammar is not None  # a test step names its set
         key = (code, step.grammar)
         if key not in self._sessions:
             self._sessions[key] = self.study.session(code, step.grammar, front_end="web")
-        return step, self._sessions[key]
+        return flow, step, self._sessions[key]
 
     def state(self, code: str, token: str | None) -> dict:
         """Everything the participant page shows, in the participant's own picture labels."""
@@ -381,11 +379,9 @@ class StudyServer:
         return self._state(code)
 
     def _state(self, code: str) -> dict:
-        step, session = self._current(code)
-        config = self.study.config()
-        out: dict[str, Any] = dict(
-            code=code, version=self.version(code), part=None, parts=step.total or len(grammar_order(self.study, code))
-        )
+        flow, step, session = self._current(code)
+        config = flow.config
+        out: dict[str, Any] = dict(code=code, version=self.version(code), part=None, parts=step.total or len(flow.grammars))
         out.update(levels=list(config.levels), title=step.title)
         if step.kind == "done":
             out.update(
@@ -437,9 +433,9 @@ class StudyServer:
         self.check_participant(code, token)
         if body.get("version") != self.version(code):
             raise RequestRefused(409, "this answer was made on an older page (a repeat, or another tab); reload the page")
-        step, session = self._current(code)
+        flow, step, session = self._current(code)
         if "page" in body:
-            self._answer_page(code, step, body)
+            self._answer_page(flow, step, body)
         else:
             if session is None or body.get("part") != step.number:
                 raise RequestRefused(409, "this part is already finished; reload the page")
@@ -449,12 +445,9 @@ class StudyServer:
         self._versions[code] += 1
         return self._state(code)
 
-    def _answer_page(self, code: str, step: Step, body: dict) -> None:
-        from ramure.studies.design import ParticipantFlow
-
+    def _answer_page(self, flow: ParticipantFlow, step: Step, body: dict) -> None:
         if body.get("page") != step.kind or step.kind not in PAGES:
             raise RequestRefused(409, "this page is already done; reload the page")
-        flow = ParticipantFlow(self.study, code, front_end="web")
         if step.kind in ("instructions", "practice"):
             flow.acknowledge(step.kind)
             return
