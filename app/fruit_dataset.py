@@ -328,13 +328,9 @@ def close_plotter() -> None:
 
 
 def _cell_rgb(surface) -> np.ndarray:
-    """Picture colour of each surface face: its cell's species colour, ripeness and damage marks
-    (``rgb``, :func:`ramure.app.fruit_look.coloured_grid`), else its tissue's plain colour."""
-    from ramure.gmap.organs.tissue import tissue_rgb
-
-    if "rgb" in surface.cell_data:
-        return np.asarray(surface.cell_data["rgb"], np.uint8)
-    return tissue_rgb(surface.cell_data["tissue"])
+    """Picture colour of each surface face: its cell's species colour, ripeness and damage marks,
+    which every grid of the batch carries (``rgb``, made by :func:`_mm_grid`)."""
+    return np.asarray(surface.cell_data["rgb"], np.uint8)
 
 
 def _mm_grid(gm, centre, scale):
