@@ -167,7 +167,7 @@ def accessibility(mesh: TriMesh, reference: float | None = None, iterations: int
     normals = _vertex_normals(mesh)
     edge = float(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).mean())
     radius = np.full(len(points), reference)
-    hidden = np.flatnonzero(~_empty(tree, points, normals, np.full(len(points), reference)))  # the rest are open
+    hidden = np.flatnonzero(~_empty(tree, points, normals, radius))  # the others are open at the reference
     low = np.full(len(hidden), np.log(min(edge / 10, reference)))
     high = np.full(len(hidden), np.log(reference))
     for _ in range(iterations):
