@@ -33,6 +33,9 @@ from ramure.studies.picks import N_PICKS
 from ramure.studies.qualifiers import MAX_QUALIFIER_CHARS
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from ramure.studies.design import Question
     from ramure.studies.storage import Study
 
 
@@ -90,7 +93,8 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         with Study.open(source, readonly=True) as study:
             return load_study_data(study, finished_only, include_pilot)
     conn = source.conn
-    practice = source.config().practice_set  # sorted to learn the task: never analysed
+    config = source.config()
+    practice = config.practice_set  # sorted to learn the task: never analysed
     grammars = [r for r in conn.execute("SELECT id, name FROM grammars WHERE name IS NOT ? ORDER BY id", (practice,))]
     gindex = {gid: i for i, (gid, _) in enumerate(grammars)}
     n_g = len(grammars)
@@ -147,7 +151,7 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
         f"JOIN tests t ON t.id = g.test_id {where} ORDER BY q.id"
     ).fetchall()
     name = conn.execute("SELECT name FROM study").fetchone()[0]
-    missed = attention_missed(source, [c for _, c in people])
+    missed = attention_missed(source, [c for _, c in people], config.attention_checks)
     return StudyData(
         name=name,
         grammars=[n for _, n in grammars],
@@ -171,10 +175,10 @@ def load_study_data(source: Study | str | os.PathLike, finished_only: bool = Tru
     )
 
 
-def attention_missed(study: Study, codes: list[str]) -> np.ndarray:
-    """Per participant of ``codes``: how many of the study's attention checks were answered with
-    another option than the expected one (a check left unanswered on a stored page counts)."""
-    checks = study.config().attention_checks
+def attention_missed(study: Study, codes: list[str], checks: Sequence[Question]) -> np.ndarray:
+    """Per participant of ``codes``: how many of the attention ``checks`` (the study config's)
+    were answered with another option than the expected one (a check left unanswered on a
+    stored page counts)."""
     out = np.zeros(len(codes), np.int64)
     if not checks:
         return out
