@@ -15,7 +15,7 @@ whole loop at n <= 6, through the model the front ends use
 (:class:`ramure.app.model.Explorer`): open, draw, measure, select leaves, regrow,
 undo, redo, undo.  The outcome is one of ``ok``, ``refused:<RamureError
 subclass>``, ``crash:<exception type>`` (a bug: anything but a RamureError),
-``slow`` (over 5 s), ``hang`` (over 30 s, stopped by an alarm); the stage is the
+``slow`` (over 5 s), ``hang`` (stopped after 30 s of CPU or 300 s of waiting); the stage is the
 deepest one the input reached (:data:`STAGES`).  The tables printed at the end
 count each outcome and each stage; the first crashing inputs are kept in full
 (``--keep DIR`` writes them to files).  Goal: zero crashes, zero slow inputs,
@@ -30,7 +30,6 @@ import contextlib
 import json
 import pathlib
 import re
-import signal
 import sys
 import time
 import traceback
@@ -39,6 +38,7 @@ import numpy as np
 
 from ramure.errors import RamureError, ValueRefused
 from ramure.lsys import LSystem
+from tests.hardening.watchdog import Hang, bounded
 
 GRAMMARS = sorted((pathlib.Path(__file__).resolve().parents[2] / "grammars").glob("*.lsys"))
 TEXTS = [p.read_text(encoding="utf-8") for p in GRAMMARS]
@@ -75,14 +75,6 @@ EXTREMES = [
     "1e-308",
 ]
 CHARS = "AFB[]()<>:->*.,0123456789+-/^&!|$'#\n wpn=;{}%?ωé\t\""
-
-
-class Hang(Exception):
-    pass
-
-
-def _alarm(_signum, _frame):
-    raise Hang()
 
 
 # -- generators ---------------------------------------------------------------------------------
@@ -322,10 +314,9 @@ def run_one(text, rng):
     than RamureError are crashes)."""
     t0 = time.process_time()  # CPU seconds: the wall clock also counts the other jobs of a shared machine
     reached = ["none"]
-    signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(HANG_SECONDS)
     try:
-        core_loop(text, rng, reached)
+        with bounded(HANG_SECONDS):
+            core_loop(text, rng, reached)
         outcome = "ok"
     except Hang:
         outcome = "hang"
@@ -335,8 +326,6 @@ def run_one(text, rng):
         outcome = "crash:RecursionError"
     except Exception as exc:  # noqa: BLE001 - the point is to count them
         outcome = f"crash:{type(exc).__name__}"
-    finally:
-        signal.alarm(0)
     seconds = time.process_time() - t0
     if outcome in ("ok",) or outcome.startswith("refused"):
         if seconds > SLOW_SECONDS:

@@ -6,7 +6,7 @@ Run from the repository root::
 
 runs one fuzzer in this process after ``resource.setrlimit(RLIMIT_AS, 2 GB)`` and prints one
 JSON line: the inputs, the outcomes, ``crashes`` (exceptions other than RamureError, and
-writes by read commands), ``slow`` (over 5 s of CPU, or stopped after 30 s), the peak memory
+writes by read commands), ``slow`` (over 5 s of CPU, or stopped after 30 s of CPU), the peak memory
 (``VmHWM``) and the seconds.  ``benchmarks/bench_fuzz_large.py`` runs every reader this way,
 in chunks, for the large run of 100,000 inputs.
 
