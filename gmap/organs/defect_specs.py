@@ -148,7 +148,11 @@ def apply_defects(
         "volume_before_mm3": before * scale**3,
         "volume_lost_mm3": (before - after) * scale**3,
         "grade": grade(records),
-        "unece": grade_unece(records, species, {"volume_lost_fraction": (before - after) / before, **shape}),
+        "unece": grade_unece(
+            records,
+            species,
+            {"volume_lost_fraction": (before - after) / before, "preset": gm.meta.get("preset"), **shape},
+        ),
     }
 
 

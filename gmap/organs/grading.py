@@ -1,33 +1,61 @@
 """UNECE quality classes (Extra, Class I, Class II, out of grade) from measured defects.
 
 The tables below are data: one :class:`Limit` per (species, defect measure), with the most a
-fruit may show in each class and the clause of the standard it comes from.  :func:`grade_unece`
-measures each defect from the facts of :func:`ramure.gmap.organs.defect_specs.apply_defects`
-(millimetres, mm², fractions) and the fruit's shape (:func:`ramure.gmap.organs.malform.shape_facts`),
-and returns the best class every limit allows, with each failed limit and by how much.
+fruit may show in each class, the clause of the standard it comes from, and, for the classes
+whose number was read in a text (``checked``), the words read (``quote``) and where
+(``source``).  :func:`grade_unece` measures each defect from the facts of
+:func:`ramure.gmap.organs.defect_specs.apply_defects` (millimetres, mm², fractions) and the
+fruit's shape (:func:`ramure.gmap.organs.malform.shape_facts`), and returns the best class every
+limit allows, with each failed limit, by how much, and whether that number was checked.
 
-Standards (texts of the UNECE Working Party on Agricultural Quality Standards):
+Standards: tomatoes **UNECE FFV-36** (2017), apples **FFV-50** (2017/2020), pears **FFV-51**
+(2017/2020), texts of the UNECE Working Party on Agricultural Quality Standards, copied word
+for word by the EU marketing standards (Reg. (EU) 543/2011 Annex I Part B, then 2019/428 and
+2023/2429) and explained by the OECD brochures.  Those copies count as sources.
 
-* tomatoes, **UNECE FFV-36** (2017 edition): minimum requirements II.A (intact, sound, fresh in
-  appearance; the OECD explanatory brochure excludes "unhealed cracks (concentric or radial)" and
-  "unhealed damage caused by hail, showing deep pitting"); Extra II.B.i ("free from defects,
-  with the exception of very slight superficial defects"); Class I II.B.ii ("free of cracks",
-  "slight skin defects", the brochure: "hail damage ... allowed" when slight); Class II II.B.iii
-  ("healed cracks not more than 3 cm in length for round, ribbed or oblong tomatoes").
-* apples, **UNECE FFV-50** (2017/2020): II.B.ii Class I "slight skin defects which must not
-  extend over more than 2 cm in length for defects of elongated shape, 1 cm² of total surface
-  area for other defects", "slight bruising not exceeding 1 cm² in total area, not
-  discoloured"; II.B.iii Class II: 4 cm, 2.5 cm², bruising 1.5 cm² "which may be slightly
-  discoloured".
-* pears, **UNECE FFV-51** (2017/2020): II.B.ii Class I 2 cm / 1 cm²; II.B.iii Class II 4 cm /
-  2.5 cm²; minimum requirements exclude "damage due to hail" that is severe and "serious bruising".
+Where each checked number was read (the ``source`` of its row):
 
-What was and was not found: the search tool returned the texts' structure and the tomato
-brochure's wording (Class I free of cracks, slight hail damage allowed; unhealed cracks and deep
-hail pits excluded), not the clause text with the numbers for apples and pears, nor any number
-for "slight" hail damage or shrivel.  Every limit carries ``verified``: False where the number is
-recalled from the standard, not checked against its text here, and ``chosen`` where the standard
-gives no number and Ramure chose one conservatively (the tighter reading).
+* minimum requirements, all three species: "intact", "sound; produce affected by rotting or
+  deterioration such as to make it unfit for consumption is excluded" -- the apple standard of
+  Reg. (EU) 543/2011 Annex I Part B Part 1 (consolidated text, vdocuments.net "Commission
+  Implementing Regulation (EU) No 543/2011 ... Part 1 of Part B Marketing standard for apples"),
+  the pear standard of Reg. (EU) 2019/428 Annex Part 6 as retained in the UK
+  (legislation.gov.uk/eur/2019/428/annex/part/6), and the OECD tomato brochure's text on
+  leafconagro.com/minimum-requirements-of-tomatoes, which also reads "the tomatoes must not
+  have any damage or injury affecting the integrity of the produce" and excludes "unhealed
+  cracks (concentric or radial) caused by growth phenomena" and "unhealed damage caused by
+  hail, showing deep pitting or corky roughness";
+* tomatoes, cracks: Extra "free from greenbacks and other defects", Class I "They must be free
+  of cracks and visible greenbacks" (OECD brochure text, leafconagro.com/classification-of-tomatoes);
+  "Healed Cracks Class I – None allowed Class II - Healed cracks not more than 3cm in length for
+  round, ribbed or oblong tomatoes" (Ian Hewett, Horticultural Marketing Inspectorate (UK),
+  "Tomatoes" training slides on the UNECE standard, Ghana 2011, paperzz.com/doc/6905452);
+* pears, Class II elongated skin defects: "Skin defects which must not extend over more than
+  4 cm in length for defects of elongated shape" and "Of total surface area for other defects
+  including slightly discoloured bruising" -- the AGMARK (India) pear grade, which reproduces
+  the UNECE Class II wording (its scab clause names Venturia), as transcribed in a public
+  repository's data file (exact-string search of the code index; the index does not name the
+  repository).  That second sentence puts a pear's slightly discoloured bruise inside the
+  Class II area for other defects, so the pear bruise limit of Class II is that area
+  (2.5 cm²), not the Class I 1 cm² the table had (fixed here; the 2.5 itself is not checked).
+
+What was searched and not found (every row with a class missing from ``checked``): the
+clause texts of FFV-50 and FFV-51 Class I and II with their numbers (2 cm, 1 cm², 4 cm,
+2.5 cm², bruising 1 / 1.5 cm²).  The stored pages of docslib.org, readkong.com,
+docplayer.net, legislation.gov.uk and vdocuments.net hold those standards, but only their
+first pages (notes, definition, minimum requirements) are searchable; queries on the class
+wording ("slight skin defects which must not extend over more than", "slight bruising not
+exceeding", "Venturia inaequalis ... 0.25 cm²", in cm², cm 2 and comma-decimal spellings)
+over the pages, docs, code and issues corpora, and exact-string searches of the code index,
+found no text with the apple numbers.  One public note paraphrases FFV-50 Class I (in Hebrew)
+as slight bruising up to 1 cm² not discoloured and elongated defects up to 2 cm: it agrees
+with the table, but a paraphrase is not the clause, so those numbers stay unchecked.
+Nothing gives a number for "slight" hail damage, "deep pitting" or shrivel: those rows are
+``chosen`` (Ramure picked the tighter reading) and say so in their ``note``.
+
+Commercial type: FFV-36 allows Class II healed cracks "for round, ribbed or oblong tomatoes";
+a cherry tomato (preset ``cherry_tomato``, passed as ``fruit["preset"]``) gets none in any
+class (:data:`TYPE_OVERRIDES`), the reading of that "for".
 
 Bananas (**UNECE FFV-35**) and plums (**FFV-29**) or cherries (**FFV-13**) have standards of
 their own; their classes are not tabulated here (:data:`NOT_TABULATED`): those fruit get the
@@ -41,7 +69,7 @@ OECD rule check only and ``grade_unece`` says so.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from ramure.gmap.kernel.errors import ValueRefused
@@ -49,12 +77,18 @@ from ramure.gmap.kernel.errors import ValueRefused
 #: The classes, best first, then the verdict when even Class II fails.
 CLASSES = ("Extra", "Class I", "Class II")
 OUT = "out of grade"
+ALL = CLASSES
 
 
 @dataclass(frozen=True)
 class Limit:
     """The most a fruit may show of one measure in each class (``None``: no limit in that class;
-    ``math.inf`` never appears: a class without a limit says None)."""
+    ``math.inf`` never appears: a class without a limit says None).
+
+    ``checked`` names the classes whose bound was read in ``quote`` (the standard's words, or
+    a copy's, exactly as read) at ``source``; ``chosen`` says Ramure picked the number where
+    the text gives none; ``note`` says what is missing or how the number was read.
+    """
 
     measure: str
     unit: str
@@ -62,31 +96,73 @@ class Limit:
     class_i: float | None
     class_ii: float | None
     clause: str
-    verified: bool = True
+    checked: tuple[str, ...] = ()
     chosen: bool = False
+    quote: str = ""
+    source: str = ""
     note: str = ""
 
     def bound(self, cls: str) -> float | None:
         """The limit of class ``cls``."""
         return {"Extra": self.extra, "Class I": self.class_i, "Class II": self.class_ii}[cls]
 
+    @property
+    def verified(self) -> bool:
+        """True when every class's bound was read in the quoted text."""
+        return set(CLASSES) <= set(self.checked)
 
-_ELONGATED = "II.B.ii/iii: skin defects of elongated shape 2 cm / 4 cm"
-_OTHER = "II.B.ii/iii: other skin defects 1 cm2 / 2.5 cm2 total"
+
+_MIN_REQ = (
+    "Reg. (EU) 543/2011 Annex I Part B Part 1 (apples, consolidated, vdocuments.net); Reg. (EU) 2019/428 Annex Part 6 "
+    "(pears, legislation.gov.uk/eur/2019/428/annex/part/6); OECD tomato brochure text "
+    "(leafconagro.com/minimum-requirements-of-tomatoes)"
+)
+_OECD_TOMATO = "OECD tomato brochure text for FFV-36 (leafconagro.com/classification-of-tomatoes)"
+_HEWETT = (
+    "I. Hewett, Horticultural Marketing Inspectorate (UK), 'Tomatoes' training slides on the UNECE standard, "
+    "Ghana 2011 (paperzz.com/doc/6905452/tomatoes-ghana-2011)"
+)
+_AGMARK_PEAR = (
+    "AGMARK (India) pear grade, Class II, reproducing the UNECE FFV-51 wording; transcribed in a public repository "
+    "data file (code index, exact-string search)"
+)
+_NOT_FOUND = "clause text with this number not found (see the module docstring); recalled from the standard"
 
 #: Measures every species shares: soundness and freshness (minimum requirements) and shape.
 _COMMON = [
-    Limit("rot_cells", "cells", 0, 0, 0, "II.A minimum requirements: sound, produce affected by rotting is excluded"),
-    Limit("unhealed_wounds", "count", 0, 0, 0, "II.A minimum requirements: intact (fresh cracks, open hail wounds)"),
+    Limit(
+        "rot_cells",
+        "cells",
+        0,
+        0,
+        0,
+        "II.A minimum requirements: sound, produce affected by rotting is excluded",
+        checked=ALL,
+        quote="sound; produce affected by rotting or deterioration such as to make it unfit for consumption is excluded",
+        source=_MIN_REQ,
+    ),
+    Limit(
+        "unhealed_wounds",
+        "count",
+        0,
+        0,
+        0,
+        "II.A minimum requirements: intact (fresh cracks, open hail wounds)",
+        checked=ALL,
+        quote="intact … must not have any damage or injury affecting the integrity of the produce",
+        source=_MIN_REQ,
+    ),
     Limit(
         "volume_lost_fraction",
         "fraction",
         0.01,
         0.03,
         0.05,
-        "II.A minimum requirements: fresh in appearance (no withering)",
+        "tomatoes II.A: fresh in appearance; apples, pears II: after dispatch 'a slight lack of freshness and turgidity'",
         chosen=True,
-        note="the standard gives no number; 1 / 3 / 5 % volume lost chosen (shrivel shows from about 5 %)",
+        quote="TOMATOES MUST NOT SHOW ANY SIGN OF WITHERING OR LOSS OF FIRMNESS",
+        source=_MIN_REQ,
+        note="the standards give no number; 1 / 3 / 5 % volume lost chosen (shrivel shows from about 5 %)",
     ),
     Limit(
         "lopsidedness",
@@ -101,11 +177,26 @@ _COMMON = [
     Limit("excrescence_mm", "mm", 0, 2.0, None, "II.B: shape and development", chosen=True, note="tallest excrescence"),
 ]
 
+_ELONGATED = "II.B.ii/iii: skin defects of elongated shape 2 cm / 4 cm"
+_OTHER = "II.B.ii/iii: other skin defects 1 cm2 / 2.5 cm2 total"
+
 STANDARDS: dict[str, dict[str, Any]] = {
     "tomato": {
         "standard": "UNECE FFV-36 (2017)",
         "limits": [
-            Limit("crack_count", "count", 0, 0, None, "II.B.i Extra free from defects; II.B.ii Class I: free of cracks"),
+            Limit(
+                "crack_count",
+                "count",
+                0,
+                0,
+                None,
+                "II.B.i Extra free from defects; II.B.ii Class I: free of cracks; II.B.iii Class II healed cracks",
+                checked=ALL,
+                quote="Extra: They must be free from greenbacks and other defects … Class I: They must be free of cracks "
+                "and visible greenbacks. … Class II - Healed cracks not more than 3cm in length",
+                source=f"{_OECD_TOMATO}; {_HEWETT}",
+                note="Class II has no count limit: its healed cracks are limited by length (healed_crack_mm)",
+            ),
             Limit(
                 "healed_crack_mm",
                 "mm",
@@ -113,6 +204,10 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 0,
                 30.0,
                 "II.B.iii Class II: healed cracks not more than 3 cm in length (round, ribbed, oblong tomatoes)",
+                checked=ALL,
+                quote="Healed Cracks Class I – None allowed Class II - Healed cracks not more than 3cm in length for "
+                "round, ribbed or oblong tomatoes",
+                source=_HEWETT,
             ),
             Limit(
                 "hail_area_mm2",
@@ -122,6 +217,9 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 250.0,
                 "II.B.ii Class I slight skin defects (brochure: hail damage allowed); II.B.iii Class II skin defects",
                 chosen=True,
+                quote="Slight skin defects such as scorching due to sun or chemical treatment, hail damage or slight "
+                "damage caused by pests or disease are allowed",
+                source=_OECD_TOMATO,
                 note="'slight' has no number: 0.5 cm2 (Class I) and 2.5 cm2 (Class II, as apples) chosen",
             ),
             Limit(
@@ -132,6 +230,8 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 2.0,
                 "II.A (brochure): unhealed hail damage showing deep pitting is excluded",
                 chosen=True,
+                quote="UNHEALED DAMAGE CAUSED BY HAIL, SHOWING DEEP PITTING OR CORKY ROUGHNESS",
+                source=_MIN_REQ,
                 note="'deep pitting' has no number: 1 mm (Class I) and 2 mm (Class II) chosen",
             ),
         ],
@@ -139,8 +239,16 @@ STANDARDS: dict[str, dict[str, Any]] = {
     "apple": {
         "standard": "UNECE FFV-50 (2017)",
         "limits": [
-            Limit("healed_crack_mm", "mm", 0, 20.0, 40.0, _ELONGATED, verified=False),
-            Limit("hail_area_mm2", "mm2", 0, 100.0, 250.0, _OTHER, verified=False),
+            Limit(
+                "healed_crack_mm",
+                "mm",
+                0,
+                20.0,
+                40.0,
+                _ELONGATED,
+                note=f"{_NOT_FOUND}; a paraphrase of FFV-50 Class I (elongated defects up to 2 cm) agrees",
+            ),
+            Limit("hail_area_mm2", "mm2", 0, 100.0, 250.0, _OTHER, note=_NOT_FOUND),
             Limit(
                 "bruise_area_mm2",
                 "mm2",
@@ -148,28 +256,55 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 100.0,
                 150.0,
                 "II.B.ii/iii: slight bruising 1 cm2 not discoloured / 1.5 cm2 slightly discoloured",
-                verified=False,
+                note=f"{_NOT_FOUND}; a paraphrase of FFV-50 Class I (bruising up to 1 cm2, not discoloured) agrees",
             ),
         ],
     },
     "pear": {
         "standard": "UNECE FFV-51 (2017)",
         "limits": [
-            Limit("healed_crack_mm", "mm", 0, 20.0, 40.0, _ELONGATED, verified=False),
-            Limit("hail_area_mm2", "mm2", 0, 100.0, 250.0, _OTHER, verified=False),
+            Limit(
+                "healed_crack_mm",
+                "mm",
+                0,
+                20.0,
+                40.0,
+                _ELONGATED,
+                checked=("Class II",),
+                quote="Skin defects which must not extend over more than 4 cm in length for defects of elongated shape",
+                source=_AGMARK_PEAR,
+                note="Class I 2 cm: " + _NOT_FOUND,
+            ),
+            Limit("hail_area_mm2", "mm2", 0, 100.0, 250.0, _OTHER, note=_NOT_FOUND),
             Limit(
                 "bruise_area_mm2",
                 "mm2",
                 0,
                 100.0,
-                100.0,
-                "II.A: serious bruising excluded; II.B.ii slight bruising",
-                verified=False,
-                chosen=True,
-                note="bruise area for pears not found: the apple's Class I 1 cm2 used for both classes",
+                250.0,
+                "II.A: serious bruising excluded; II.B.ii slight bruising 1 cm2; II.B.iii slightly discoloured bruising "
+                "counts in the 2.5 cm2 of other defects",
+                quote="Of total surface area for other defects including slightly discoloured bruising",
+                source=_AGMARK_PEAR,
+                note="Class II: the quote puts bruising inside the other-defects area, so its bound is hail_area_mm2's "
+                "(whose 2.5 cm2 is not checked); Class I 1 cm2: " + _NOT_FOUND,
             ),
         ],
     },
+}
+
+#: Rows that change with the commercial type (preset), by species, preset and measure.
+TYPE_OVERRIDES: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
+    "tomato": {
+        "cherry_tomato": {
+            "healed_crack_mm": {
+                "class_ii": 0,
+                "checked": ("Extra", "Class I"),
+                "note": "FFV-36 allows Class II healed cracks 'for round, ribbed or oblong tomatoes': none for cherry "
+                "tomatoes (the reading of that 'for')",
+            }
+        }
+    }
 }
 
 #: Species with a UNECE standard whose classes Ramure does not tabulate (OECD rule check only).
@@ -181,13 +316,15 @@ NOT_TABULATED = {
 }
 
 
-def limits(species: str) -> list[Limit]:
-    """Every limit applied to ``species``: the shared minimum requirements and shape, then its table."""
+def limits(species: str, preset: str | None = None) -> list[Limit]:
+    """Every limit applied to ``species``: the shared minimum requirements and shape, then its
+    table, with the rows its commercial type ``preset`` changes (:data:`TYPE_OVERRIDES`)."""
     if species in NOT_TABULATED:
         return []
     if species not in STANDARDS:
         raise ValueRefused(f"no grading table for species {species!r}; known: {', '.join([*STANDARDS, *NOT_TABULATED])}")
-    return [*_COMMON, *STANDARDS[species]["limits"]]
+    changes = TYPE_OVERRIDES.get(species, {}).get(preset or "", {})
+    return [replace(lim, **changes.get(lim.measure, {})) for lim in [*_COMMON, *STANDARDS[species]["limits"]]]
 
 
 def measures(facts: Sequence[Mapping[str, Any]], fruit: Mapping[str, Any] | None = None) -> dict[str, float]:
@@ -239,12 +376,14 @@ def grade_unece(facts: Sequence[Mapping[str, Any]], species: str, fruit: Mapping
     Returns ``grade`` (Extra, Class I, Class II, out of grade, or None when the species is not
     tabulated), ``standard``, ``measures`` and ``failed``: one record per limit a class failed
     (``class``, ``measure``, ``limit``, ``measured``, ``by`` = measured - limit, ``unit``,
-    ``clause``, ``verified``, ``chosen``), and ``reasons``, one sentence per failure of the
-    class just above the grade (or of Class II when out of grade).
+    ``clause``, ``verified``: that class's number was read in a text, ``chosen``), and
+    ``reasons``, one sentence per failure of the class just above the grade (or of Class II
+    when out of grade).  ``fruit`` may carry ``preset`` (the commercial type, e.g.
+    ``cherry_tomato``) besides the measures :func:`measures` reads.
     """
     if species in NOT_TABULATED:
         return {"grade": None, "standard": NOT_TABULATED[species], "measures": {}, "failed": [], "reasons": []}
-    table = limits(species)
+    table = limits(species, (fruit or {}).get("preset"))
     measured = measures(facts, fruit)
     failed = []
     for cls in CLASSES:
@@ -261,7 +400,7 @@ def grade_unece(facts: Sequence[Mapping[str, Any]], species: str, fruit: Mapping
                         "by": float(value - bound),
                         "unit": lim.unit,
                         "clause": lim.clause,
-                        "verified": lim.verified,
+                        "verified": cls in lim.checked,
                         "chosen": lim.chosen,
                     }
                 )
@@ -282,6 +421,6 @@ def grade_unece(facts: Sequence[Mapping[str, Any]], species: str, fruit: Mapping
     }
 
 
-def table_rows(species: str) -> list[dict[str, Any]]:
-    """The species' limits as plain records (for docs, JSON and tests)."""
-    return [asdict(lim) for lim in limits(species)]
+def table_rows(species: str, preset: str | None = None) -> list[dict[str, Any]]:
+    """The species' limits as plain records (for docs, JSON and tests), with ``verified``."""
+    return [{**asdict(lim), "verified": lim.verified} for lim in limits(species, preset)]
