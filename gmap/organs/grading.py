@@ -29,7 +29,23 @@ Where each checked number was read (the ``source`` of its row):
   of cracks and visible greenbacks" (OECD brochure text, leafconagro.com/classification-of-tomatoes);
   "Healed Cracks Class I – None allowed Class II - Healed cracks not more than 3cm in length for
   round, ribbed or oblong tomatoes" (Ian Hewett, Horticultural Marketing Inspectorate (UK),
-  "Tomatoes" training slides on the UNECE standard, Ghana 2011, paperzz.com/doc/6905452);
+  "Tomatoes" training slides on the UNECE standard, Ghana 2011, paperzz.com/doc/6905452); the
+  German federal inspection (BLE, FAQ TOM_05 on Reg. 543/2011 Annex I Part B Part 10): "Tomaten
+  der Klasse II können mehrere vernarbte Risse von höchstens 3 cm Länge aufweisen" (several
+  healed cracks, each up to 3 cm: the table compares the longest);
+* ribbed tomatoes, Class I: "bei gerippten Tomaten vernarbte Risse (Länge maximal 1 cm)"
+  (aid infodienst, "Tomaten: Einkauf und Kennzeichnung", aid.de/inhalt/einkauf-und-kennzeichnung-6299);
+* apples, skin defects and bruises (Reg. 543/2011 Annex I Part B Part 1, the words of FFV-50
+  II.B.ii/iii as German inspectors state them): Class I "leichte längliche Schalenfehler bis zu
+  2 cm Länge, sonstige Schalenfehler bis zu einer Gesamtfläche von 1 cm2 pro Frucht", Class II
+  "längliche Schalenfehler bis zu 4 cm Länge, sonstige Schalenfehler bis zu einer Gesamtfläche
+  von 2,5 cm2 pro Frucht", and hail damage is graded as these defects ("Hagelschäden können
+  unter die Kategorie folgender zulässiger Fehler fallen") -- Landwirtschaftskammer
+  Niedersachsen, "Hagelschaden bei Apfel – wie ist die Qualität zu beurteilen?"
+  (lwk-niedersachsen.de/lwk/news/34964); bruises: "nicht mehr als 1 cm² ... Klasse I ...,
+  sofern das Fruchtfleisch nicht verfärbt ist", "nicht größer als 1,5 cm² ... nur leichte,
+  unverkorkte Verfärbungen ... Klasse II" (BLE, FAQ APF_07 "Wie tief müssen Äpfel geschält
+  werden ...", on Reg. 543/2011 Annex I Part B Part 1);
 * pears, Class II elongated skin defects: "Skin defects which must not extend over more than
   4 cm in length for defects of elongated shape" and "Of total surface area for other defects
   including slightly discoloured bruising" -- the AGMARK (India) pear grade, which reproduces
@@ -39,23 +55,24 @@ Where each checked number was read (the ``source`` of its row):
   Class II area for other defects, so the pear bruise limit of Class II is that area
   (2.5 cm²), not the Class I 1 cm² the table had (fixed here; the 2.5 itself is not checked).
 
-What was searched and not found (every row with a class missing from ``checked``): the
-clause texts of FFV-50 and FFV-51 Class I and II with their numbers (2 cm, 1 cm², 4 cm,
-2.5 cm², bruising 1 / 1.5 cm²).  The stored pages of docslib.org, readkong.com,
-docplayer.net, legislation.gov.uk and vdocuments.net hold those standards, but only their
-first pages (notes, definition, minimum requirements) are searchable; queries on the class
-wording ("slight skin defects which must not extend over more than", "slight bruising not
-exceeding", "Venturia inaequalis ... 0.25 cm²", in cm², cm 2 and comma-decimal spellings)
-over the pages, docs, code and issues corpora, and exact-string searches of the code index,
-found no text with the apple numbers.  One public note paraphrases FFV-50 Class I (in Hebrew)
-as slight bruising up to 1 cm² not discoloured and elongated defects up to 2 cm: it agrees
-with the table, but a paraphrase is not the clause, so those numbers stay unchecked.
-Nothing gives a number for "slight" hail damage, "deep pitting" or shrivel: those rows are
-``chosen`` (Ramure picked the tighter reading) and say so in their ``note``.
+What was searched and not found (every class missing from a row's ``checked``): the pear
+Class I numbers (2 cm, 1 cm², bruising 1 cm²) and Class II area (2.5 cm²), and any Extra
+number for apples and pears (the text allows "very slight superficial defects" with no
+number; 0 is the table's reading).  The stored pages of docslib.org, readkong.com,
+docplayer.net/.org, legislation.gov.uk, vdocuments.net, vog.de and the OECD pear brochure
+copies hold FFV-51 or its EU copy, but only their first pages (notes, definition, minimum
+requirements) are searchable; queries on the class wording (English "slight skin defects
+which must not extend over more than", "slight bruising not exceeding", "Venturia ... 0.25
+cm²"; German "Druckstellen", "Schalenfehler"; French "meurtrissures") over the pages, docs,
+code and issues corpora, and exact-string searches of the code index, found no pear text with
+those numbers.  Nothing gives a number for "slight" hail damage on tomatoes, "deep pitting"
+or shrivel: those rows are ``chosen`` (Ramure picked the tighter reading) and say so in their
+``note``.
 
-Commercial type: FFV-36 allows Class II healed cracks "for round, ribbed or oblong tomatoes";
-a cherry tomato (preset ``cherry_tomato``, passed as ``fruit["preset"]``) gets none in any
-class (:data:`TYPE_OVERRIDES`), the reading of that "for".
+Commercial type (:data:`TYPE_OVERRIDES`, chosen by ``fruit["preset"]``): FFV-36 allows Class
+II healed cracks "for round, ribbed or oblong tomatoes", so a cherry tomato gets none in any
+class (the reading of that "for"); a ribbed tomato may show healed cracks up to 1 cm in
+Class I.
 
 Bananas (**UNECE FFV-35**) and plums (**FFV-29**) or cherries (**FFV-13**) have standards of
 their own; their classes are not tabulated here (:data:`NOT_TABULATED`): those fruit get the
@@ -126,7 +143,15 @@ _AGMARK_PEAR = (
     "AGMARK (India) pear grade, Class II, reproducing the UNECE FFV-51 wording; transcribed in a public repository "
     "data file (code index, exact-string search)"
 )
+_BLE_TOMATO = "BLE (German federal inspection), FAQ TOM_05 on Reg. (EU) 543/2011 Annex I Part B Part 10"
+_AID_TOMATO = "aid infodienst, 'Tomaten: Einkauf und Kennzeichnung' (aid.de/inhalt/einkauf-und-kennzeichnung-6299)"
+_LWK_APPLE = (
+    "Landwirtschaftskammer Niedersachsen, 'Hagelschaden bei Apfel – wie ist die Qualität zu beurteilen?' "
+    "(lwk-niedersachsen.de/lwk/news/34964), on the EU apple standard (Reg. (EU) 543/2011 Annex I Part B Part 1)"
+)
+_BLE_APPLE = "BLE (German federal inspection), FAQ APF_07 on Reg. (EU) 543/2011 Annex I Part B Part 1"
 _NOT_FOUND = "clause text with this number not found (see the module docstring); recalled from the standard"
+_EXTRA_NONE = "Extra: the text allows 'very slight superficial defects' with no number; 0 is the table's reading"
 
 #: Measures every species shares: soundness and freshness (minimum requirements) and shape.
 _COMMON = [
@@ -206,8 +231,10 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 "II.B.iii Class II: healed cracks not more than 3 cm in length (round, ribbed, oblong tomatoes)",
                 checked=ALL,
                 quote="Healed Cracks Class I – None allowed Class II - Healed cracks not more than 3cm in length for "
-                "round, ribbed or oblong tomatoes",
-                source=_HEWETT,
+                "round, ribbed or oblong tomatoes … Tomaten der Klasse II können mehrere vernarbte Risse von höchstens "
+                "3 cm Länge aufweisen",
+                source=f"{_HEWETT}; {_BLE_TOMATO}",
+                note="several healed cracks may each reach 3 cm (BLE): the measure is the longest",
             ),
             Limit(
                 "hail_area_mm2",
@@ -246,9 +273,26 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 20.0,
                 40.0,
                 _ELONGATED,
-                note=f"{_NOT_FOUND}; a paraphrase of FFV-50 Class I (elongated defects up to 2 cm) agrees",
+                checked=("Class I", "Class II"),
+                quote="Klasse I … leichte längliche Schalenfehler bis zu 2 cm Länge … Klasse II … längliche "
+                "Schalenfehler bis zu 4 cm Länge",
+                source=_LWK_APPLE,
+                note=_EXTRA_NONE,
             ),
-            Limit("hail_area_mm2", "mm2", 0, 100.0, 250.0, _OTHER, note=_NOT_FOUND),
+            Limit(
+                "hail_area_mm2",
+                "mm2",
+                0,
+                100.0,
+                250.0,
+                _OTHER,
+                checked=("Class I", "Class II"),
+                quote="Hagelschäden können unter die Kategorie folgender zulässiger Fehler fallen … Klasse I … sonstige "
+                "Schalenfehler bis zu einer Gesamtfläche von 1 cm2 pro Frucht … Klasse II … sonstige Schalenfehler bis "
+                "zu einer Gesamtfläche von 2,5 cm2 pro Frucht",
+                source=_LWK_APPLE,
+                note=_EXTRA_NONE,
+            ),
             Limit(
                 "bruise_area_mm2",
                 "mm2",
@@ -256,7 +300,14 @@ STANDARDS: dict[str, dict[str, Any]] = {
                 100.0,
                 150.0,
                 "II.B.ii/iii: slight bruising 1 cm2 not discoloured / 1.5 cm2 slightly discoloured",
-                note=f"{_NOT_FOUND}; a paraphrase of FFV-50 Class I (bruising up to 1 cm2, not discoloured) agrees",
+                checked=("Class I", "Class II"),
+                quote="Bedecken die sichtbaren Druckstellen auf einem Apfel insgesamt nicht mehr als 1 cm², könnte der "
+                "Apfel der Klasse I entsprechen, sofern das Fruchtfleisch nicht verfärbt ist. … Bei Früchten, die "
+                "äußerlich sichtbare Druckstellen aufweisen, die zusammengenommen nicht größer als 1,5 cm² sind, … "
+                "Zeigt die geschälte Frucht nur leichte, unverkorkte Verfärbungen, handelt es sich um eine Frucht der "
+                "Klasse II.",
+                source=_BLE_APPLE,
+                note=_EXTRA_NONE,
             ),
         ],
     },
@@ -303,7 +354,22 @@ TYPE_OVERRIDES: dict[str, dict[str, dict[str, dict[str, Any]]]] = {
                 "note": "FFV-36 allows Class II healed cracks 'for round, ribbed or oblong tomatoes': none for cherry "
                 "tomatoes (the reading of that 'for')",
             }
-        }
+        },
+        "ribbed_tomato": {
+            "crack_count": {
+                "class_i": None,
+                "checked": ("Extra",),
+                "note": "ribbed tomatoes may show healed cracks in Class I, limited by length (healed_crack_mm)",
+            },
+            "healed_crack_mm": {
+                "class_i": 10.0,
+                "checked": ("Class I", "Class II"),
+                "quote": "Außerdem sind bei gerippten Tomaten vernarbte Risse (Länge maximal 1 cm) … zulässig. … Tomaten "
+                "der Klasse II können mehrere vernarbte Risse von höchstens 3 cm Länge aufweisen",
+                "source": f"{_AID_TOMATO}; {_BLE_TOMATO}",
+                "note": "Extra 0: ribbed tomatoes' Class I allowance does not reach Extra (the table's reading)",
+            },
+        },
     }
 }
 
