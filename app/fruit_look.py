@@ -11,7 +11,8 @@ the defects panel and the gallery.  Choices:
 * **Stem and calyx** are surface decorations (:func:`stem_and_calyx`), not cells: a stalk along
   the axis at the stem scar, and for tomatoes five sepals laid on the shoulder (each sepal point
   is dropped onto the skin by a ray, so they follow any shape).  Sizes in millimetres per
-  species (:data:`STEMS`).
+  species (:data:`STEMS`); colour per species
+  (:func:`ramure.gmap.organs.species.stem_colour`: green for tomatoes and cherries).
 * **Smooth shading** with sharp edges split (a cut face stays flat), a little specular gloss.
 * **Physical scale.**  The camera is orthographic and its frame is fixed by the fruit's real
   size (``gm.meta["size_mm"]`` times :data:`FRAME_MARGIN`), never refitted to what is left:
@@ -140,7 +141,7 @@ def stem_and_calyx(gm: GMap3, skin: pv.PolyData | None = None) -> pv.PolyData:
     """Stem (a bent tube) and, for tomatoes, a calyx of sepals on the skin; cell data ``rgb``."""
     import pyvista as pv
 
-    from ramure.gmap.organs.species import CALYX, STEM, hex_rgb
+    from ramure.gmap.organs.species import CALYX, hex_rgb, stem_colour
 
     species, _ = species_of(gm)
     length, radius, bend, sepals = STEMS.get(species, STEMS["tomato"])
@@ -156,7 +157,7 @@ def stem_and_calyx(gm: GMap3, skin: pv.PolyData | None = None) -> pv.PolyData:
     t = np.linspace(0.0, 1.0, 12)
     path = base + (length / mpu) * (t[:, None] * axis + bend * t[:, None] ** 2 * side) - 0.15 * (length / mpu) * axis
     stem = pv.Spline(path, 24).tube(radius=radius / mpu, n_sides=12, capping=True).triangulate()
-    stem.cell_data["rgb"] = np.tile(np.array(hex_rgb(STEM), np.uint8), (stem.n_cells, 1))
+    stem.cell_data["rgb"] = np.tile(np.array(hex_rgb(stem_colour(species)), np.uint8), (stem.n_cells, 1))
     parts = [stem]
     if sepals and skin is not None:
         parts.append(_calyx(skin, base, axis, side, sepals, 0.28 * float(gm.meta.get("size_mm", 65.0)) / mpu, hex_rgb(CALYX)))

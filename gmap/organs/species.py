@@ -87,6 +87,13 @@ BRUISE = "#5a2c1a"
 #: Stem (stalk) and calyx.
 STEM = "#6b5a2e"
 CALYX = "#3f6b2a"
+#: Stalks that are green, not woody brown, when the fruit is fresh: a tomato's pedicel (green
+#: like its sepals) and a cherry's long stalk (UNECE FFV-13 asks for fresh stalks; a brown one
+#: is an old one).  Other species keep :data:`STEM` (apple, pear: woody).
+STEM_BY_SPECIES = {"tomato": "#4c7a2c", "cherry": "#6f8c34"}
+#: A turning tomato's shoulders stay green longest (the USDA colour classes: the break from
+#: green starts at the blossom end; "turning" is 10 to 30 % of the surface coloured).
+TURNING_SHOULDER = "#a8b44c"
 
 
 def _stage(skin: str, flesh: str, **inside: str) -> dict[str, str]:
@@ -192,6 +199,11 @@ def shown_name(species: str, tissue: str) -> str:
     return SHOWN_AS.get(species, {}).get(tissue, tissue)
 
 
+def stem_colour(species: str) -> str:
+    """Hex colour of the species' stalk: green for tomatoes and cherries, woody brown otherwise."""
+    return STEM_BY_SPECIES.get(species, STEM)
+
+
 def hex_rgb(color: str) -> tuple[int, int, int]:
     """``"#a0b1c2"`` -> ``(160, 177, 194)``."""
     return int(color[1:3], 16), int(color[3:5], 16), int(color[5:7], 16)
@@ -227,9 +239,11 @@ def cell_rgb(
 ) -> np.ndarray:
     """uint8 RGB per cell: the species' colour for the cell's tissue at ``stage``, then its marks.
 
-    ``centres`` (cell centres, the fruit's axis along +z) place an apple's blush (``bicolour``:
-    skin cells facing +x, up to 70 % red) and a banana's brown flecks (``flecked``: about one
-    skin cell in nine, fixed by the cell's number and ``seed``).  ``marks`` are per-cell
+    ``centres`` (cell centres, the fruit's axis along +z, the stem end up) place an apple's
+    blush (``bicolour``: skin cells facing +x, up to 70 % red), a turning tomato's green
+    shoulders (``turning``: the skin turns up to 60 % yellow-green :data:`TURNING_SHOULDER` towards the
+    stem end, none at the blossom end, where colour breaks first) and a banana's brown flecks
+    (``flecked``: about one skin cell in nine, fixed by the cell's number and ``seed``).  ``marks`` are per-cell
     columns in [0, 1] written by the defects (:mod:`ramure.gmap.organs.defects`):
 
     - ``corky``: a healed crack's wall: corky brown :data:`CORK` (whole weight; a renderer
@@ -255,6 +269,10 @@ def cell_rgb(
             facing = np.clip(rel[:, 0] / radial, -1.0, 1.0)
             streak = 0.06 * _hash01(ids, seed)
             rgb[skin] = _mix(rgb[skin], BLUSH, (0.7 * (0.5 + 0.5 * facing) + streak)[skin])
+        if species == "tomato" and stage == "turning":
+            half = max(0.5 * float(np.ptp(c[:, 2])), 1e-12)
+            up = np.clip(rel[:, 2] / half, -1.0, 1.0)  # -1 blossom end .. +1 stem end
+            rgb[skin] = _mix(rgb[skin], TURNING_SHOULDER, (0.6 * np.clip((up + 0.6) / 1.6, 0.0, 1.0) ** 1.5)[skin])
     if species == "banana" and stage == "flecked":
         fleck = skin & (_hash01(ids, seed + 1) < 0.11)
         rgb[fleck] = _mix(rgb[fleck], FLECK, 0.85 * np.ones(int(fleck.sum())))
@@ -277,7 +295,7 @@ def cell_rgb(
     rgb[mould] = _mix(rgb[mould], ROT["mould"], 0.35 + 0.3 * _hash01(ids[mould], seed + 2))
     rgb = _mix(rgb, CORK, np.maximum(mark("corky"), mark("scar")))
     organ = np.asarray(marks.get("organ", np.zeros(n)), np.int64).reshape(n)
-    rgb[organ == 1] = hex_rgb(STEM)
+    rgb[organ == 1] = hex_rgb(stem_colour(species))
     rgb[organ == 2] = hex_rgb(CALYX)
     return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
 
@@ -294,7 +312,8 @@ def materials(species: str, stage: str | None = None) -> list[dict[str, object]]
         {"name": f"{species}_{name}", "tissue": name, "shown_as": shown_name(species, name), "rgb": _unit(colours[name])}
         for name in TISSUES
     ]
-    extra = {"cork": CORK, "bruise": BRUISE, "stem": STEM, "calyx": CALYX, **{f"rot_{k}": v for k, v in ROT.items()}}
+    extra = {"cork": CORK, "bruise": BRUISE, "stem": stem_colour(species), "calyx": CALYX}
+    extra.update({f"rot_{k}": v for k, v in ROT.items()})
     out += [{"name": name, "tissue": None, "shown_as": name.replace("_", " "), "rgb": _unit(c)} for name, c in extra.items()]
     return out
 

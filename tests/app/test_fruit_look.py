@@ -118,3 +118,12 @@ def test_a_fruit_not_subdivided_shows_flesh_where_cut_and_skin_outside(tmp_path)
 
     assert share_nearer(_pixels(tmp_path / "cut.png"), flesh, skin) > 0.5  # the cut face fills most of it
     assert share_nearer(_pixels(tmp_path / "whole.png"), flesh, skin) < 0.1  # uncut: skin all round
+
+
+def test_drawn_stalk_is_the_species_colour():
+    cherry = L.stem_and_calyx(build_fruit("cherry", volume_levels=1))
+    apple = L.stem_and_calyx(build_fruit("apple", volume_levels=1))
+    r, g, _ = np.asarray(cherry.cell_data["rgb"], int).mean(axis=0)
+    assert g > r + 15  # a fresh cherry's stalk is green
+    r, g, _ = np.asarray(apple.cell_data["rgb"], int).mean(axis=0)
+    assert r > g  # an apple's is woody brown

@@ -78,6 +78,28 @@ def test_bicolour_apple_blushes_on_one_side_and_flecks_stay_put():
     assert 0.04 < dark < 0.2
 
 
+def test_turning_tomato_colours_from_the_blossom_end():
+    tissue = np.full(3, CODES["exocarp"])
+    centres = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # blossom end, equator, stem end
+    rgb = SP.cell_rgb(tissue, "tomato", "turning", centres)
+    hue = _hue(rgb)
+    assert tuple(rgb[0]) == SP.hex_rgb(SP.palette("tomato", "turning")["exocarp"])  # coloured first: the stage's own
+    assert hue[0] < hue[1] < hue[2] and hue[2] - hue[0] > 12  # shoulders stay yellow-green
+    red = SP.cell_rgb(tissue, "tomato", "red", centres)
+    assert (red == red[0]).all()  # a ripe tomato is red all over
+
+
+def test_tomato_and_cherry_stalks_are_green_apple_and_pear_woody():
+    for species in ("tomato", "cherry"):
+        r, g, b = SP.hex_rgb(SP.stem_colour(species))
+        assert g > r > b, species
+    for species in ("apple", "pear"):
+        r, g, b = SP.hex_rgb(SP.stem_colour(species))
+        assert r > g > b, species
+    stem = next(m for m in SP.materials("cherry") if m["name"] == "stem")
+    assert stem["rgb"][1] > stem["rgb"][0]
+
+
 @pytest.fixture(scope="module")
 def tomato():
     return build_fruit("round_tomato", volume_levels=1)
