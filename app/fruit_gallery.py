@@ -36,8 +36,20 @@ DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
 ]
 
 
+#: Presets whose skin pattern is finer than a once-subdivided cell: a ripe banana's sugar spots
+#: are a few millimetres across, its once-subdivided peel faces about 9.5 mm (4.7 mm twice), so
+#: a fleck one face wide read as a black patch; the sheets draw these presets twice subdivided.
+FINE_SKIN = ("banana",)
+
+
+def sheet_levels(preset: str, levels: int) -> int:
+    """The volume levels a sheet draws ``preset`` at: ``levels``, at least 2 for :data:`FINE_SKIN`."""
+    return max(levels, 2) if preset in FINE_SKIN else levels
+
+
 def species_sheet(path: str | os.PathLike, tile: int = 300, levels: int = 1, cut: bool = False) -> str:
-    """Every species at three ripeness stages (apples at their four colours), one row each."""
+    """Every species at three ripeness stages (apples at their four colours), one row each
+    (``levels`` volume levels, :func:`sheet_levels`)."""
     from ramure.gmap.organs.fruit import build_fruit
     from ramure.gmap.organs.species import SPECIES_OF, stages
 
@@ -49,7 +61,7 @@ def species_sheet(path: str | os.PathLike, tile: int = 300, levels: int = 1, cut
             species = SPECIES_OF[preset]
             row = []
             for stage in stages(species) if species == "apple" else stages(species)[-3:]:
-                gm = build_fruit(preset, volume_levels=2 if cut else levels, ripeness=stage)
+                gm = build_fruit(preset, volume_levels=2 if cut else sheet_levels(preset, levels), ripeness=stage)
                 out = os.path.join(folder, f"{preset}_{stage}.png")
                 render_png(gm, out, size=(tile, tile), cut=((1, 0.08, 0), (0, 0, 0)) if cut else None, legend=cut)
                 row.append((out, f"{preset.replace('_', ' ')}, {stage}, {gm.meta['size_mm']:g} mm"))

@@ -127,3 +127,16 @@ def test_drawn_stalk_is_the_species_colour():
     assert g > r + 15  # a fresh cherry's stalk is green
     r, g, _ = np.asarray(apple.cell_data["rgb"], int).mean(axis=0)
     assert r > g  # an apple's is woody brown
+
+
+def test_species_sheet_draws_banana_flecks_on_a_finer_peel():
+    from ramure.app.fruit_gallery import sheet_levels
+
+    assert [sheet_levels(p, 1) for p in ("banana", "apple", "round_tomato")] == [2, 1, 1]
+    assert sheet_levels("banana", 3) == 3
+    faces = {}
+    for levels in (1, sheet_levels("banana", 1)):
+        gm = build_fruit("banana", volume_levels=levels, ripeness="flecked")
+        surface = L.whole_marked(L.coloured_grid(gm)).compute_cell_sizes()
+        faces[levels] = float(np.sqrt(np.median(surface.cell_data["Area"]))) * gm.meta["mm_per_unit"]
+    assert faces[1] > 8.0 and faces[2] < 5.0  # a fleck is one face: sugar spots are a few mm
