@@ -15,7 +15,7 @@ from typing import Any
 #: Defect pairs: (title, preset, volume levels, better spec, worse spec).  Tomatoes tolerate no
 #: crack in Class I (FFV-36), so the tomato crack pair is Class II against out of grade.
 DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
-    ("healed crack (apple)", "apple", 1, "crack:healed=1,rings=8-9,sector=2", "crack:healed=1,rings=5-10,sector=2"),
+    ("healed crack (apple)", "apple", 1, "crack:healed=1,rings=8-9,sector=2", "crack:healed=1,rings=7-10,sector=2"),
     (
         "stem-scar crack (tomato)",
         "round_tomato",

@@ -4,9 +4,10 @@ Fruit defects graded by the UNECE standards
 
 Each defect class twice, a better and a worse case side by side, with the UNECE class
 computed from the measured defect (``ramure.gmap.organs.grading``): a healed crack on an apple
-(FFV-50: Class I up to 2 cm), a crack round a tomato's stem scar (FFV-36: healed, Class II;
-fresh, out of grade), hail (a corky scar over a bruise), shrivel (wrinkled skin), an
-excrescence and rot (browning, water-soaking, mould: out of grade in every class).
+(FFV-50: Class I up to 2 cm, Class II up to 4 cm), a crack round a tomato's stem scar (FFV-36:
+no crack in Class I; healed, Class II; fresh, out of grade), hail (a corky scar over a bruise),
+shrivel (wrinkled skin), an excrescence and rot (browning, water-soaking, mould: out of grade
+in every class).
 """
 
 from ramure.app.fruit_gallery import defect_sheet
