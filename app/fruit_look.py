@@ -13,7 +13,9 @@ the defects panel and the gallery.  Choices:
   is dropped onto the skin by a ray, so they follow any shape).  Sizes in millimetres per
   species (:data:`STEMS`); colour per species
   (:func:`ramure.gmap.organs.species.stem_colour`: green for tomatoes and cherries).
-* **Smooth shading** with sharp edges split (a cut face stays flat), a little specular gloss.
+* **Smooth shading** with sharp edges split (a cut face stays flat), a little specular gloss,
+  none to speak of on a plum (:data:`GLOSS`): its skin is "practically covered with bloom"
+  (UNECE FFV-29 asks that of Extra plums, "according to the variety"), a matte waxy dust.
 * **Physical scale.**  The camera is orthographic and its frame is fixed by the fruit's real
   size (``gm.meta["size_mm"]`` times :data:`FRAME_MARGIN`), never refitted to what is left:
   a shrivelled fruit is smaller in the picture than the fresh one.  The PNG carries text
@@ -44,6 +46,10 @@ STEMS = {
     "plum": (9.0, 0.9, 0.2, 0),
     "cherry": (38.0, 0.8, 0.4, 0),
 }
+
+
+#: Specular strength of the skin by species (others: ``"default"``); a plum's bloom is matte.
+GLOSS = {"default": 0.3, "plum": 0.05}
 
 
 def species_of(gm: GMap3) -> tuple[str, str]:
@@ -270,7 +276,7 @@ def render_png(
             split_sharp_edges=cut is not None,  # a cut face stays flat; the skin is smooth everywhere
             ambient=0.4 if cut is not None else 0.28,
             diffuse=0.65 if cut is not None else 0.8,
-            specular=0.3,
+            specular=GLOSS.get(species, GLOSS["default"]),
             specular_power=18,
         )
         if decorations:

@@ -140,3 +140,23 @@ def test_species_sheet_draws_banana_flecks_on_a_finer_peel():
         surface = L.whole_marked(L.coloured_grid(gm)).compute_cell_sizes()
         faces[levels] = float(np.sqrt(np.median(surface.cell_data["Area"]))) * gm.meta["mm_per_unit"]
     assert faces[1] > 8.0 and faces[2] < 5.0  # a fleck is one face: sugar spots are a few mm
+
+
+def _brightest_inside(path):
+    """The largest min-channel of the picture's pixels well inside the fruit: how white its
+    highlight is (the outline's blend with the white background left out)."""
+    a = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    inside = a.sum(axis=2) < 700
+    core = inside.copy()
+    for dy in range(-4, 5):
+        for dx in range(-4, 5):
+            core &= np.roll(np.roll(inside, dy, 0), dx, 1)
+    return int(a[core].min(axis=1).max())
+
+
+def test_plum_bloom_is_matte(tmp_path, monkeypatch):
+    plum = build_fruit("plum", volume_levels=1)
+    L.render_png(plum, tmp_path / "matte.png", size=(160, 160), legend=False, decorations=False)
+    monkeypatch.setitem(L.GLOSS, "plum", L.GLOSS["default"])
+    L.render_png(plum, tmp_path / "glossy.png", size=(160, 160), legend=False, decorations=False)
+    assert _brightest_inside(tmp_path / "glossy.png") >= _brightest_inside(tmp_path / "matte.png") + 10
