@@ -78,7 +78,8 @@ class WoodTab:
         knots = self.wood.knot_counts()
         self.facts.value = (
             f"<small>{gm.n_darts:,} darts, {gm.n_volumes:,} volumes ({counts}); "
-            f"knots: {knots['live']} live, {knots['dead']} dead</small>"
+            f"knots: {knots['live']} live, {knots['dead']} dead"
+            f"{W_.orders_text(self.wood.knot_orders(), gm.meta.get('left_out'))}</small>"
         )
         self.show_cut()
 

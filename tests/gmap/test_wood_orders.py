@@ -1,5 +1,7 @@
 """Branches of every order become wood: a branch on a branch is a knot in its host's wood."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -153,3 +155,18 @@ def test_a_cut_through_a_first_order_branch_shows_its_second_order_knot(plant):
     assert np.count_nonzero(sub_knot & (tissue == W.CODES["knot"])) > 20  # the knot's wood, in rings
     host_cells = axis == w.branches[b].parent + 1
     assert np.count_nonzero(host_cells & (level >= 1)) > 20  # cut along its host past the trunk's bark
+
+
+def test_cli_counts_knots_by_order_and_refuses_over_the_dart_limit(capsys, monkeypatch):
+    from ramure.app.cli import main
+
+    assert main(["wood", "--from-plant", "abop_tree", "-n", "5", "--years", "5", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["knots_by_order"] == {"1": 3, "2": 2, "3": 1} and record["branches"]["live"] == 6
+    assert record["left_out"]["beyond_stub"] == 1 and record["valid"] and record["chi"] == 1
+    assert main(["wood", "--from-plant", "abop_tree", "-n", "5", "--years", "5"]) == 0
+    assert "(by order 1: 3, 2: 2, 3: 1)" in capsys.readouterr().out
+    monkeypatch.setattr(W, "MAX_DARTS", 100_000)
+    assert main(["wood", "--from-plant", "abop_tree", "-n", "5", "--years", "5"]) == 2
+    err = capsys.readouterr().err
+    assert "more than the limit of 100,000" in err and "3 of order 1, 2 of order 2, 1 of order 3" in err

@@ -213,7 +213,9 @@ class WoodPanel(QWidget):
         self.facts.setText(
             f"{gm.n_darts:,} darts, {gm.n_volumes:,} volumes; "
             + ", ".join(f"{v} {k}" for k, v in counts.items() if v)
-            + f"; knots: {knots['live']} live, {knots['dead']} dead. Drag the plane to cut."
+            + f"; knots: {knots['live']} live, {knots['dead']} dead"
+            + W.orders_text(wood.knot_orders(), gm.meta.get("left_out"))
+            + ". Drag the plane to cut."
         )
         return wood
 
