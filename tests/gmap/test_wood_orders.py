@@ -153,6 +153,10 @@ def test_a_cut_through_a_first_order_branch_shows_its_second_order_knot(plant):
     tissue = np.asarray(slab.cell_data["wood"])
     sub_knot = (axis == b + 1) & (level == 0)
     assert np.count_nonzero(sub_knot & (tissue == W.CODES["knot"])) > 20  # the knot's wood, in rings
+    ring, year = np.asarray(slab.cell_data["ring"]), np.asarray(slab.cell_data["year"])
+    age = 5 - w.branches[b].year  # every ring of the knot, each laid in its year, shows in the board
+    assert set(ring[sub_knot & (ring > 0)].tolist()) == set(range(1, age + 1))
+    assert set(year[sub_knot & (ring > 0)].tolist()) == set(range(w.branches[b].year, 5))
     host_cells = axis == w.branches[b].parent + 1
     assert np.count_nonzero(host_cells & (level >= 1)) > 20  # cut along its host past the trunk's bark
 
