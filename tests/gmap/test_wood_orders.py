@@ -174,3 +174,15 @@ def test_cli_counts_knots_by_order_and_refuses_over_the_dart_limit(capsys, monke
     assert main(["wood", "--from-plant", "abop_tree", "-n", "5", "--years", "5"]) == 2
     err = capsys.readouterr().err
     assert "more than the limit of 100,000" in err and "3 of order 1, 2 of order 2, 1 of order 3" in err
+
+
+def test_without_derivation_steps_a_branch_is_born_by_its_place_on_its_host(plant):
+    sk, _, _ = plant
+    w = W.from_skeleton(sk, 6, branch_levels=0)  # years from heights on the trunk, places along hosts
+    assert_solid(w.gm)
+    orders = W.branch_orders(w.branches)
+    assert w.knot_orders() == {"1": 3, "2": 6, "3": 4, "4": 1} and w.gm.n_darts == _estimate(w)
+    assert orders == sorted(orders)  # order by order: a host is listed before its branches
+    for br in w.branches:
+        if br.parent >= 0:  # on the year's shoot of its host, after the host's birth, before the last year
+            assert w.branches[br.parent].year < br.year < 5
