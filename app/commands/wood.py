@@ -10,10 +10,13 @@ Examples::
 
 JSON keys: species, years, steps (half-years), seed, darts, volumes, tissues (volumes per tissue),
 branches (``{"live": n, "dead": m}``: knots grown, alive and dead; ``--set branch_life=N`` kills a
-branch N years after its birth), bark_mm (the trunk's thickest and mean bark), bark_shed (shed bark
-cells), reaction (compression and tension wood volumes), rings and knots (live_knots, dead_knots) at
-the cut or plank (when one is asked for), chi, boundary_chi,
-valid, seconds (growth + checks), darts_per_second, output.
+branch N years after its birth), knots_by_order (``{"1": n1, "2": n2, ...}``: knots in the trunk, in
+first-order branches, ...), left_out (with ``--from-plant``: the plant's branches not in the wood, by
+reason: last_year, too_close, beyond_stub -- born after their host's stub of ``branch_levels`` levels
+ended; ``--set branch_levels=0`` keeps whole branches --, host_dead, over_max, on_left_out),
+bark_mm (the trunk's thickest and mean bark), bark_shed (shed bark cells), reaction (compression
+and tension wood volumes), rings and knots (live_knots, dead_knots) at the cut or plank (when one is
+asked for), chi, boundary_chi, valid, seconds (growth + checks), darts_per_second, output.
 """
 
 from __future__ import annotations
@@ -355,6 +358,9 @@ def _wood_record(model: Any, species: str | None, args: argparse.Namespace) -> d
 
         record["tissues"] = model.tissue_counts()
         record["branches"] = model.knot_counts()
+        record["knots_by_order"] = model.knot_orders()
+        if "left_out" in gm.meta:  # a plant's branches that are not in the wood, by reason
+            record["left_out"] = dict(gm.meta["left_out"])
         vd = gm.volume_data
         record.update(bark_and_reaction_facts(vd, (vd["axis"] == 0) & (vd["wood"] == W.CODES["bark"])))
     else:
@@ -436,6 +442,10 @@ def _say_wood(record: dict, seconds: float, out: pathlib.Path | None, as_json: b
     tissues = ", ".join(f"{v} {k}" for k, v in record.get("tissues", {}).items() if v)
     knots = record.get("branches")
     knots_text = f"; knots: {knots['live']} live, {knots['dead']} dead" if knots else ""
+    if knots:
+        from ramure.gmap.organs.wood import orders_text
+
+        knots_text += orders_text(record.get("knots_by_order", {}), record.get("left_out"))
     print(
         f"{record['darts']} darts, {record['volumes']} volumes ({tissues}){knots_text}; chi {record['chi']}, "
         f"boundary chi {record['boundary_chi']}, {'valid' if record['valid'] else 'INVALID'}, "
@@ -497,7 +507,10 @@ def register(sub: Subparsers) -> None:
         help="grow a 3Gmap L-system instead of the species model (its #steps half-years, unless --years)",
     )
     p.add_argument(
-        "--from-plant", default=None, metavar="FILE.lsys", help="wood of a derived plant: its trunk and first branches"
+        "--from-plant",
+        default=None,
+        metavar="FILE.lsys",
+        help="wood of a derived plant: its trunk and its branches of every order (stubs of branch_levels levels)",
     )
     p.add_argument("-n", type=int, default=None, help="with --from-plant: derivation steps")
     p.add_argument("--cut", default=None, metavar="AXIS=VALUE", help="keep what lies below the plane, e.g. z=1.0")

@@ -2,7 +2,7 @@
 
 The notebook counterpart of the desktop's Wood dock (:mod:`ramure.gmap.organs.wood`): choose a
 species and years, tick *from the plant* to grow the wood of the plant shown above (its trunk
-and first branches, ages from the derivation steps), press *Grow*; the picture shows the wood
+and branches of every order, ages from the derivation steps), press *Grow*; the picture shows the wood
 cut across at the chosen height (a VTK slice, seen from above), with pith, rings, heartwood, sapwood, bark and
 knots in their colours.  Moving the height re-cuts the grown wood without growing it again.
 
@@ -78,7 +78,8 @@ class WoodTab:
         knots = self.wood.knot_counts()
         self.facts.value = (
             f"<small>{gm.n_darts:,} darts, {gm.n_volumes:,} volumes ({counts}); "
-            f"knots: {knots['live']} live, {knots['dead']} dead</small>"
+            f"knots: {knots['live']} live, {knots['dead']} dead"
+            f"{W_.orders_text(self.wood.knot_orders(), gm.meta.get('left_out'))}</small>"
         )
         self.show_cut()
 

@@ -98,6 +98,18 @@ dead stub breaking off, after which the later rings would close over the
 knot's end (occlusion); here the encased knot runs out to the bark, as a
 dead branch's stub does while it stays on the tree.
 
+*Branches on branches (a choice; the thesis only tried them, without
+collision handling).*  A branch may grow on a branch (``Branch.parent``):
+in the year it is born its host grows a short node (at most half a year's
+``branch_length``) under the rest of that year's length, and the sub-branch
+starts on the node's pith face, its knot sewn into the slot's walls exactly
+as a first-order knot into the trunk's, its rings bending the host's
+(:meth:`Wood._push` on the host's axis).  So the host must be growing in
+length that year: a branch is a stub of ``branch_levels`` years (0: no
+limit), and a sub-branch born after its host's stub stopped, or after its
+host died, is refused (:func:`check_hosts`; :func:`from_skeleton` leaves it
+out and counts it).  Any order: a sub-branch can host sub-branches.
+
 >>> w = grow_wood("pine", years=2, branches=0)
 >>> w.gm.n_darts == trunk_darts(16, 2), w.gm.euler_characteristic()
 (True, 1)
@@ -107,6 +119,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -303,7 +316,11 @@ def death_year(p: Mapping[str, Any], born: int, death: int | None = None) -> int
 
 
 def estimated_darts(
-    p: Mapping[str, Any], years: int, branch_years: Sequence[int] = (), deaths: Sequence[int | None] | None = None
+    p: Mapping[str, Any],
+    years: int,
+    branch_years: Sequence[int] = (),
+    deaths: Sequence[int | None] | None = None,
+    parents: Sequence[int] | None = None,
 ) -> int:
     """Darts the wood will have: the trunk's closed form plus each branch's (a branch born in
     year ``j`` is a trunk of ``branch_sides`` sides grown ``years - j`` years, of at most
@@ -312,13 +329,20 @@ def estimated_darts(
     (its slot); the walls of a slot are cut in ``branch_sides / 4`` pieces, one per knot cell
     facing them.  A branch that dies in year ``D`` grows no level after it (``D - j`` levels at
     most); its stacks go on (the rings that encase its knot).  ``deaths`` gives each branch's
-    death year (``None``: :func:`death_year`'s rule).  Exact for :func:`grow_wood` (measured: a
+    death year (``None``: :func:`death_year`'s rule).  ``parents`` gives each branch's host
+    (-1: the trunk; else the index of the branch it grows on, :class:`Branch`): a branch
+    carrying sub-branches grows a node of ``branch_sides`` sides in each year some are born on
+    it, like the trunk's.  Exact for :func:`grow_wood` (measured: a
     knot of 16 sides grown ``y`` years adds ``3 (28 + 144 y)`` darts of cuts)."""
     s, b = int(p["sides"]), int(p["branch_sides"])
     total = trunk_darts(s, years)
+    host = [-1] * len(branch_years) if parents is None else [int(h) for h in parents]
     born = [int(y) for y in branch_years]
-    for j in sorted(set(born)):  # the node level and its stacks, less the slots
-        total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
+    for h in sorted(set(host)):  # the node levels and their stacks, less the slots
+        sides = s if h < 0 else b
+        mine = [y for y, hh in zip(born, host) if hh == h]
+        for j in sorted(set(mine)):
+            total += 12 * sides + 48 * (sides - mine.count(j)) * 3 * (years - j)
     cap = int(p.get("branch_levels", 0))
     for c, j in enumerate(branch_years):
         y = years - int(j)
@@ -372,7 +396,12 @@ def u01_array(*columns: ArrayLike) -> np.ndarray:
 
 @dataclass
 class Branch:
-    """A branch: born in ``year`` on trunk level ``year``, sector ``sector`` (0-based)."""
+    """A branch: born in ``year`` on its host's level ``level``, sector ``sector`` (0-based).
+
+    The host is the trunk (``parent = -1``) or the branch of index ``parent``
+    (listed before it): a second-order branch's knot lies in its first-order
+    branch's wood as a first-order knot lies in the trunk's.
+    """
 
     year: int
     sector: int
@@ -380,6 +409,7 @@ class Branch:
     level: int = -1  # the trunk level (a short node) the branch grows from
     angle: float | None = None  # insertion angle from the trunk axis (degrees); None: the species'
     death: int | None = None  # the year it dies (None: the species' ``branch_life`` rule)
+    parent: int = -1  # the branch it grows on (index; -1: the trunk), see :func:`check_hosts`
 
 
 @dataclass
@@ -423,6 +453,60 @@ _PARTS = {"whole": 0, "node": 1, "internode": 2}
 #: the knot's four seam corners in slot coordinates (u, v): (-,-), (+,-), (+,+), (-,+)
 _SU = np.array([-1.0, 1.0, 1.0, -1.0])
 _SV = np.array([-1.0, -1.0, 1.0, 1.0])
+
+
+def branch_direction(f: np.ndarray, phi: float, elev: float) -> np.ndarray:
+    """Frame (rows H, L, U) of a branch leaving a level of frame ``f`` (rows H, L, U) at angle
+    ``phi`` about it, ``elev`` radians above the level's cross-section (towards its H).
+
+    The knot's side 0 faces the slot's bottom wall (the sew puts it there),
+    side 1 the wall at sector ``k + 1``: L points down the host, away from H.
+
+    >>> np.round(branch_direction(np.eye(3)[[2, 0, 1]], 0.0, 0.0), 6).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]
+    """
+    radial = math.cos(phi) * f[1] + math.sin(phi) * f[2]
+    d = math.cos(elev) * radial + math.sin(elev) * f[0]
+    d = d / np.linalg.norm(d)
+    down = -f[0] + (f[0] @ d) * d
+    left = down / np.linalg.norm(down)
+    d0, d1, d2 = d
+    l0, l1, l2 = left  # np.cross(d, left), term for term, without its overhead
+    return np.array([d, left, [d1 * l2 - d2 * l1, d2 * l0 - d0 * l2, d0 * l1 - d1 * l0]])
+
+
+#: rounds of :func:`split_corners` (a knot's walls cut an edge in at most ``branch_sides / 4``
+#: pieces; each round shrinks the error of a chain of ``q - 1`` cuts by ``cos(pi / q)`` at most)
+SPLIT_ROUNDS = 60
+
+
+def split_corners(gm: GMap3, split: np.ndarray) -> None:
+    """Corners of the darts ``split`` made by edge cuts: each the mean of its edge's two
+    neighbours (``alpha0`` and ``alpha0 alpha1``), solved by ``SPLIT_ROUNDS`` Jacobi rounds.
+
+    An edge cut in ``q`` pieces has ``q - 1`` cut vertices whose neighbours
+    are cut vertices too: one round of midpoints reads the table's unset
+    rows for them.  Only the corners of volumes that count in the vertex
+    average matter: a cut on a knot's seam (every cut, on a trunk's knots)
+    meets an ``exclusive`` knot volume, which alone places it, so
+    :meth:`Wood.embed` keeps one round for the others; a sub-branch's slot in
+    the node next to its host's knot cuts the host's knot (exclusive too),
+    whose cut darts get these rounds.  The neighbours are darts of the same
+    volume (``alpha0``, ``alpha1`` stay in it), so ``split`` may be any
+    volumes' cut darts.  Starts from each cut dart's volume centre.
+    """
+    corners = gm.corners
+    a0, a1 = gm.alpha[0], gm.alpha[1]
+    left, right = a0[split], a0[a1[split]]
+    vol = gm.dart_volume[split].astype(np.int64)
+    keep = np.ones(len(corners), bool)
+    keep[split] = False
+    own = gm.dart_volume[: len(corners)].astype(np.int64)
+    count = np.bincount(own[keep], minlength=int(vol.max()) + 1)
+    centre = np.stack([np.bincount(own[keep], corners[keep, j], minlength=len(count)) for j in range(3)], axis=1)
+    corners[split] = centre[vol] / np.maximum(count[vol], 1)[:, None]
+    for _ in range(SPLIT_ROUNDS):
+        corners[split] = 0.5 * (corners[left] + corners[right])
 
 
 def _corner_blend(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -497,7 +581,10 @@ class Wood:
         gm.add_volume_data("dead", np.int8, fill=0)  # 1: part of a dead knot (see _kill_branches)
         self._corner = np.zeros(0, np.int16)  # template corner per dart (-1: made by a split)
         if years:  # one allocation up front instead of doublings
-            est = estimated_darts(params, int(years), [br.year for br in (branches or [])], [br.death for br in (branches or [])])
+            listed = branches or []
+            est = estimated_darts(
+                params, int(years), [br.year for br in listed], [br.death for br in listed], [br.parent for br in listed]
+            )
             if est <= MAX_DARTS:
                 gm.reserve(est)
                 self._corner = np.full(est, -1, np.int16)
@@ -521,7 +608,7 @@ class Wood:
         spring = self.steps % 2 == 0
         if spring:
             self._kill_branches()
-            born = [br for br in self.branches if br.year == self.year]
+            born = [br for br in self.branches if br.year == self.year and br.parent < 0]
             if born:  # a short node carries the new branches, then the internode
                 self._grow_length(self.trunk, "node")
                 for br in born:
@@ -529,17 +616,33 @@ class Wood:
                 self._grow_length(self.trunk, "internode")
             else:
                 self._grow_length(self.trunk)
-            for b, br in enumerate(self.branches):
+            for b, br in enumerate(self.branches):  # hosts come first: a sub-branch's node exists when it starts
                 if br.year == self.year:
                     self._start_branch(b, br)
                 elif br.year < self.year and self._branch_grows(b):
-                    self._grow_length(self.branch_axis[b])
+                    self._grow_branch(b)
         for _ in range(2 if spring else 1):
             self._add_layer()
             self._sew_knots()
         self.steps += 1
         self._sync_corner()
         self.assign_roles()
+
+    def _grow_branch(self, b: int) -> None:
+        """A year's length of branch ``b``: a node and an internode when sub-branches are born on it."""
+        ax = self.branch_axis[b]
+        kids = [c for c in self.branches if c.parent == b and c.year == self.year]
+        if not kids:
+            self._grow_length(ax)
+            return
+        self._grow_length(ax, "node")
+        for c in kids:
+            c.level = len(ax.levels) - 1
+        self._grow_length(ax, "internode")
+
+    def host(self, br: Branch) -> Axis:
+        """The axis a branch grows on: the trunk, or its parent branch's axis."""
+        return self.trunk if br.parent < 0 else self.branch_axis[br.parent]
 
     def death_year(self, b: int) -> int | None:
         """The year branch ``b`` dies (:func:`death_year`), or ``None``."""
@@ -575,6 +678,12 @@ class Wood:
         dead = sum(1 for b in born if b in self.dead)
         return {"live": len(born) - dead, "dead": dead}
 
+    def knot_orders(self) -> dict[str, int]:
+        """Knots (branches born so far) by order: ``"1"`` in the trunk, ``"2"`` in first-order branches..."""
+        orders = branch_orders(self.branches)
+        counts = Counter(orders[b] for b in self.branch_axis)
+        return {str(o): counts[o] for o in sorted(counts)}
+
     def _frozen(self, axis: np.ndarray, level: np.ndarray, cell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per volume: whether it belongs to a dead knot, and the half-years it had lived at death.
 
@@ -603,7 +712,7 @@ class Wood:
         if b in self.dead:  # a dead branch grows no more
             return False
         cap = int(self.p.get("branch_levels", 0))
-        return cap == 0 or len(self.branch_axis[b].levels) < cap
+        return cap == 0 or len({year for year, _ in self.branch_axis[b].parts}) < cap  # years: a node is no year
 
     def _sync_corner(self) -> None:
         n = self.gm.n_darts
@@ -655,16 +764,19 @@ class Wood:
                 ax.alive[t, k] = False
 
     def _start_branch(self, b, br):
-        """The branch's first pith prism, its O face sewn onto the trunk's pith face in the slot."""
-        self.trunk.missing.add((br.level, br.sector))
-        if br.level < len(self.trunk.alive):
-            self.trunk.alive[br.level, br.sector] = False
+        """The branch's first pith prism, its O face sewn onto its host's pith face in the slot."""
+        host = self.host(br)
+        if br.parent >= 0 and not (0 < br.level < len(host.levels) and host.parts[br.level] == (self.year, "node")):
+            raise ValueRefused(f"branch {b}: its host branch {br.parent} grows no node in year {self.year} (see check_hosts)")
+        host.missing.add((br.level, br.sector))
+        if br.level < len(host.alive):
+            host.alive[br.level, br.sector] = False
         ax = Axis(b + 1, int(self.p["branch_sides"]), self.steps, br.seed, address=mix(1000 + b))
         self.axes.append(ax)
         self.branch_axis[b] = ax
         self._grow_length(ax)
         gm = self.gm
-        slot = self._anchors([self.trunk.levels[br.level]], f"C{br.sector + 1}")
+        slot = self._anchors([host.levels[br.level]], f"C{br.sector + 1}")
         base = self._anchors([ax.levels[0]], "O")
         self._cut_slot(int(slot[0]), ax.sides // 4)
         gm.sew3(slot, base)
@@ -755,20 +867,21 @@ class Wood:
         """
         from ramure.gmap.kernel.identify import boundary_neighbour
 
-        gm, trunk = self.gm, self.trunk
-        n = trunk.sides
+        gm = self.gm
         c1 = _prism.face_label_code("C1")
         vd = gm.volume_data
         while True:
             walls, labels, want = [], [], []
             for b, done in self._sewn_layers.items():
                 br = self.branches[b]
+                host = self.host(br)  # the trunk, or the branch a sub-branch grows on
+                n = host.sides
                 t, k, i = br.level, br.sector, done + 1
                 if self.branch_axis[b].count[0].min() < i:  # the knot's ring cell i is not born yet
                     continue
                 for tt, kk, label in ((t, (k - 1) % n, "C2"), (t, (k + 1) % n, "C4"), (t - 1, k, "C3"), (t + 1, k, "C1")):
-                    if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk] and trunk.count[tt, kk] >= i:
-                        walls.append(trunk.cells[tt, kk, i - 1])
+                    if 0 <= tt < len(host.levels) and host.alive[tt, kk] and host.count[tt, kk] >= i:
+                        walls.append(host.cells[tt, kk, i - 1])
                         labels.append(label)
                         want.append((b, i))
             if not walls:
@@ -847,16 +960,17 @@ class Wood:
         return np.concatenate(out_darts), np.concatenate(out_rows)
 
     def _near_slots(self, parts) -> np.ndarray:
-        """Mask over this layer's new cells: those on a trunk stack walling a knot's slot."""
-        walls = np.zeros((len(self.trunk.levels) + 2, self.trunk.sides), bool)
-        n = self.trunk.sides
+        """Mask over this layer's new cells: those on a host's stack walling a knot's slot."""
+        walls = {ax.index: np.zeros((len(ax.levels) + 2, ax.sides), bool) for ax, *_ in parts}
         for b in self._sewn_layers:
-            t, k = self.branches[b].level, self.branches[b].sector
+            br = self.branches[b]
+            host = self.host(br)
+            n, mask = host.sides, walls[host.index]
+            t, k = br.level, br.sector
             for tt, kk in ((t, (k - 1) % n), (t, (k + 1) % n), (t - 1, k), (t + 1, k)):
                 if tt >= 0:
-                    walls[tt, kk] = True
-        masks = [walls[t, k] if ax.index == 0 else np.zeros(len(t), bool) for ax, t, k, *_ in parts]
-        return np.concatenate(masks)
+                    mask[tt, kk] = True
+        return np.concatenate([walls[ax.index][t, k] for ax, t, k, *_ in parts])
 
     def _match_supports(self, support: np.ndarray, first: np.ndarray) -> None:
         """Split the O edges of fresh cubes ``first`` as the edges of their ``support`` faces are split.
@@ -1090,7 +1204,11 @@ class Wood:
         p0, knot = self.branch_frame(br, knot=True)
         _, frame = self.branch_frame(br)
         h = np.full(n_levels, p["branch_length"])
-        if n_levels:  # the first level spans the trunk's final radius: the knot
+        kind = np.array([_PARTS[part] for _, part in ax.parts[:n_levels]], np.int64)
+        if np.any(kind > 0):  # a year with sub-branches: a short node, then the rest of the year's length
+            short = self.branch_node_height()
+            h = np.where(kind == 1, short, np.where(kind == 2, p["branch_length"] - short, h))
+        if n_levels:  # the first level spans the host's final radius: the knot
             h[0] = self.knot_length(br)
         s = np.concatenate([[0.0], np.cumsum(h)[:-1]])
         origins = p0 + h[0] * knot[0] + (s - h[0])[:, None] * frame[0][None]
@@ -1150,6 +1268,22 @@ class Wood:
         self._node = 1.6 * float(self.nominal_radius(probe, np.zeros(1), years)[0])
         return self._node
 
+    def branch_node_height(self) -> float:
+        """Height of a node a branch grows in a year with sub-branches: the trunk's node height
+        (:meth:`node_height`), at most half a year's ``branch_length`` (a choice: one rule for every order)."""
+        return min(self.node_height(), 0.5 * float(self.p["branch_length"]))
+
+    @staticmethod
+    def sector_centre(ax: Axis, k: int) -> float:
+        """Angle of the middle of sector ``k`` of an axis (see :meth:`sector_angles`)."""
+        if ax.index == 0:
+            return 2 * np.pi * k / ax.sides
+        return 2 * np.pi * (k + 0.5 - ax.sides / 8) / ax.sides
+
+    def pith_apothem(self, ax: Axis) -> float:
+        """Apothem of an axis's pith prisms (a branch's is ``branch_scale`` times the trunk's)."""
+        return float(self.p["pith_radius"] * (1.0 if ax.index == 0 else self.p["branch_scale"]))
+
     def branch_frame(self, br: Branch, knot: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Base point (centre of the trunk face) and frame (H along the branch) of a branch.
 
@@ -1162,9 +1296,10 @@ class Wood:
         read-only.
         """
         p = self.p
-        o, f, h = self.level_frames(self.trunk)
-        t = br.level  # the frame reads only the trunk's level t: kept while that level stays as it is
-        level = (o[t].tobytes(), f[t].tobytes(), float(h[t]), self.trunk.sides)
+        host = self.host(br)
+        o, f, h = self.level_frames(host)
+        t = br.level  # the frame reads only the host's level t: kept while that level stays as it is
+        level = (o[t].tobytes(), f[t].tobytes(), float(h[t]), host.sides, host.index)
         key = (level, br.level, br.sector, br.angle, bool(knot), p["pith_radius"], p["branch_angle"], self.KNOT_RISE)
         memo = self.__dict__.setdefault("_branch_frames_memo", {})
         hit = memo.get(key)
@@ -1178,24 +1313,16 @@ class Wood:
 
     def _branch_frame(self, br, knot):
         p = self.p
-        o, f, h = self.level_frames(self.trunk)
-        n = self.trunk.sides
-        phi = 2 * np.pi * br.sector / n
+        host = self.host(br)
+        o, f, h = self.level_frames(host)
+        phi = self.sector_centre(host, br.sector)
         t = br.level
         radial = math.cos(phi) * f[t, 1] + math.sin(phi) * f[t, 2]
-        p0 = o[t] + 0.5 * h[t] * f[t, 0] + p["pith_radius"] * radial
+        p0 = o[t] + 0.5 * h[t] * f[t, 0] + self.pith_apothem(host) * radial
         elev = math.radians(90.0 - (p["branch_angle"] if br.angle is None else br.angle))
         if knot:
             elev = max(min(elev, math.radians(self.KNOT_RISE)), -math.radians(self.KNOT_RISE))
-        d = math.cos(elev) * radial + math.sin(elev) * f[t, 0]
-        d = d / np.linalg.norm(d)
-        # the knot's side 0 faces the slot's bottom wall (the sew puts it there), side 1 the wall at
-        # sector k + 1: L points down the trunk, away from d
-        down = -f[t, 0] + (f[t, 0] @ d) * d
-        left = down / np.linalg.norm(down)
-        d0, d1, d2 = d
-        l0, l1, l2 = left  # np.cross(d, left), term for term, without its overhead
-        return p0, np.array([d, left, [d1 * l2 - d2 * l1, d2 * l0 - d0 * l2, d0 * l1 - d1 * l0]])
+        return p0, branch_direction(f[t], phi, elev)
 
     def default_corners(self) -> tuple[np.ndarray, np.ndarray]:
         """Default corners of every volume, flat: ``(points (sum 2n, 3), offset per volume)``."""
@@ -1226,6 +1353,9 @@ class Wood:
             pts = self._cube_points(o, f, h, t, k, theta, r_in, r_out, n, bottom=bottom, top=top)
             if ax.index == 0 and len(self.axes) > 1 and self.bend_rings:
                 pts = self._push(pts, t, profiles)
+            elif ax.index > 0 and self.bend_rings and any(c.parent == ax.index - 1 for c in self.branches):
+                outside = t > 0  # a sub-branch's slot lies in a node past the knot: the knot is not pushed
+                pts[outside] = self._push(pts[outside], t[outside], profiles, ax)
             if ax.index > 0 and ax.index - 1 in profiles:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
             if bender is not None:
@@ -1262,14 +1392,15 @@ class Wood:
         adjacent sectors (no wall between) both end on their common corner
         line (``d a_j tan(pi / n)``).
         """
-        gm, trunk = self.gm, self.trunk
-        n = trunk.sides
-        rp = self.p["pith_radius"]
-        o_t, f_t, _ = self.level_frames(trunk)
+        gm = self.gm
         out = {}
         for b, br in enumerate(self.branches):
             if b not in self._sewn_layers:
                 continue
+            trunk = self.host(br)  # the trunk, or the branch a sub-branch grows on
+            n = trunk.sides
+            rp = self.pith_apothem(trunk)
+            _, f_t, _ = self.level_frames(trunk)
             ax = self.branch_axis[b]
             t, k = br.level, br.sector
             depth = int(ax.count[0].max())
@@ -1286,13 +1417,13 @@ class Wood:
                     a[j] = a[j - 1] + (a[j - 1] - a[j - 2] if j > 1 else rp)
             rho = self._nominal_rings(ax, depth)
             _, f, h = self.level_frames(ax)
-            phi = 2 * np.pi * k / n
+            phi = self.sector_centre(trunk, k)
             cos_elev = abs(f[0, 0] @ (math.cos(phi) * f_t[t, 1] + math.sin(phi) * f_t[t, 2]))
             gap = min(
                 [
                     min((k - o.sector) % n, (o.sector - k) % n)
                     for c, o in enumerate(self.branches)
-                    if c != b and c in self._sewn_layers and o.level == t
+                    if c != b and c in self._sewn_layers and o.level == t and o.parent == br.parent
                 ]
                 or [n]
             )
@@ -1463,7 +1594,7 @@ class Wood:
         return wood + _species.nominal_bark(p, years_here, wood, p["branch_scale"])
 
     def knot_length(self, br: Branch) -> float:
-        """Length of the branch's first level (the knot): from the pith face past the trunk's final radius."""
+        """Length of the branch's first level (the knot): from the pith face past its host's final radius."""
         p = self.p
         angle = p["branch_angle"] if br.angle is None else br.angle
         radial = max(math.sin(math.radians(angle)), math.cos(math.radians(self.KNOT_RISE)))  # cos(elevation)
@@ -1471,7 +1602,17 @@ class Wood:
         if bend > 0:  # the curved knot reaches out by (sin(e + B) - sin e) / B per unit length, not cos e
             e = math.acos(min(radial, 1.0))
             radial = (math.sin(e + bend) - math.sin(e)) / bend
-        return max((self.trunk_radius() - p["pith_radius"]) / radial, p["branch_length"] * 0.25)
+        host = self.host(br)
+        return max((self.host_radius(br) - self.pith_apothem(host)) / radial, p["branch_length"] * 0.25)
+
+    def host_radius(self, br: Branch) -> float:
+        """The final radius of a branch's host where it grows: the trunk's base radius, or the
+        parent branch's radius at the year of the node it grows from (the law's mean widths)."""
+        if br.parent < 0:
+            return self.trunk_radius()
+        years = self.final_years or (self.year + 1)
+        probe = Branch(br.year, 0, 0)  # the host's wood there was laid down from the sub-branch's year on
+        return float(self.nominal_radius(probe, np.zeros(1), years)[0])
 
     def knot_bender(self, br: Branch) -> Any:
         """The map from the straight knot to the bent one: a function of points ``(..., 3)``, or ``None``.
@@ -1515,7 +1656,7 @@ class Wood:
         arg = np.clip(math.sin(e + bend) - bend * x / h0, -1.0, 1.0)
         return h0 * (1 - (np.arcsin(arg) - e) / bend)
 
-    def _push(self, pts, levels, profiles):
+    def _push(self, pts, levels, profiles, host=None):
         """Bend the trunk's rings around each knot: a displacement field from the knot's seam.
 
         At slot layer ``j`` each of the tunnel's four corner lines (sector
@@ -1531,10 +1672,12 @@ class Wood:
         several knots reach a corner their fields are blended with weights
         ``1 / q^2`` (``q`` the distance outside each slot over its reach), so
         each knot's own field holds on its seam and two knots of one year do
-        not push the same cells twice.
+        not push the same cells twice.  ``host`` is the axis whose cells ``pts`` are (the trunk
+        by default; a branch's for its sub-branches' knots, whose slots lie in its nodes).
         """
-        o, f, h = self.level_frames(self.trunk)
-        n = self.trunk.sides
+        host = self.trunk if host is None else host
+        o, f, h = self.level_frames(host)
+        n = host.sides
         half = math.pi / n
         levels = np.asarray(levels)
         base = pts.reshape(-1, 3)
@@ -1542,11 +1685,11 @@ class Wood:
         num = np.zeros_like(base)
         den = np.zeros(len(base))
         for b, br in enumerate(self.branches):
-            if b not in profiles:
+            if b not in profiles or self.host(br) is not host:
                 continue
             s_layer, rho_layer, a_layer, lateral = profiles[b]
             cells = np.flatnonzero(np.abs(levels - br.level) <= 1)  # the slot lies in its node level
-            t, phi = br.level, 2 * np.pi * br.sector / n
+            t, phi = br.level, self.sector_centre(host, br.sector)
             p0, frame = self.branch_frame(br, knot=True)
             # (4, layers, 3): the four corners (-,-), (+,-), (+,+), (-,+) at once, same arithmetic per corner
             cos_th = np.array([math.cos(phi + su * half) for su in _SU])
@@ -1659,6 +1802,9 @@ class Wood:
             corners = gm.corners
             a0, a1 = gm.alpha[0], gm.alpha[1]
             corners[split] = 0.5 * (corners[a0[split]] + corners[a0[a1[split]]])
+            knots = split[gm.volume_data["exclusive"][gm.dart_volume[split]]]
+            if knots.size:  # cuts in a knot's own volumes (a sub-branch next to its host's knot)
+                split_corners(gm, knots)
         return gm.embed()
 
     # ------------------------------------------------------------------ facts
@@ -1723,7 +1869,9 @@ def grow_wood(
     """Grow ``years`` years (``2 * years`` half-year steps) of wood; returns the :class:`Wood`.
 
     ``branches``: a number (placed by :func:`place_branches`; default the
-    species' ``branches``) or a list of ``(year, sector)`` pairs.
+    species' ``branches``) or a list of ``(year, sector)`` pairs, or
+    ``(year, sector, parent)`` triples for branches on branches (``parent``
+    the index of the branch it grows on, -1 the trunk; :func:`check_hosts`).
     ``branch_seeds`` maps a branch index to its seed (regrowth).
     ``branch_deaths`` maps a branch index to the year it dies (after the
     year it is born); the others follow ``branch_life`` (0: they never die).
@@ -1737,19 +1885,22 @@ def grow_wood(
         placed = place_branches(p, years, seed, branches)
     else:
         placed = []
-        for i, (year, sector) in enumerate(branches):
-            if not 0 <= int(year) < years or not 0 <= int(sector) < p["sides"]:
+        for i, item in enumerate(branches):
+            year, sector, parent = (*item, -1) if len(item) == 2 else item
+            sides = p["sides"] if int(parent) < 0 else p["branch_sides"]
+            if not 0 <= int(year) < years or not 0 <= int(sector) < sides:
                 raise ValueRefused(
-                    f"branch {i}: year must be in 0..{years - 1} and sector in 0..{p['sides'] - 1}, got ({year}, {sector})"
+                    f"branch {i}: year must be in 0..{years - 1} and sector in 0..{sides - 1}, got ({year}, {sector})"
                 )
-            placed.append(Branch(int(year), int(sector), mix(seed, 1000 + i)))
+            placed.append(Branch(int(year), int(sector), mix(seed, 1000 + i), parent=int(parent)))
     slots = [(b.year, b.sector) for b in placed]
-    if len(set(slots)) != len(slots):
-        raise ValueRefused("two branches share one trunk face (same year and sector)")
+    if len({(b.year, b.sector, b.parent) for b in placed}) != len(placed):
+        raise ValueRefused("two branches share one face of their host (same year and sector)")
     for i, s in (branch_seeds or {}).items():
         placed[int(i)].seed = mix(int(s), 1000 + int(i))
     _set_deaths(placed, branch_deaths)
-    est = estimated_darts(p, years, [b.year for b in placed], [b.death for b in placed])
+    check_hosts(p, placed, years)
+    est = estimated_darts(p, years, [b.year for b in placed], [b.death for b in placed], [b.parent for b in placed])
     if est > MAX_DARTS:
         raise ValueRefused(
             f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}; grow fewer years or branches"
@@ -1773,7 +1924,37 @@ def grow_wood(
         "branches": slots,
         "deaths": [wood.death_year(b) for b in range(len(placed))],
     }
+    if any(b.parent >= 0 for b in placed):
+        wood.gm.meta["parents"] = [b.parent for b in placed]
     return wood
+
+
+def check_hosts(p: Mapping[str, Any], branches: Sequence[Branch], years: int) -> None:
+    """Refuse (:class:`ValueRefused`) a branch on a branch that its host cannot carry.
+
+    A sub-branch born in year ``y`` on branch ``h`` (born in ``j``) sits on
+    the node ``h`` grows in year ``y``: ``h`` is listed before it, ``j < y <
+    years``, the node lies within the stub (``y - j < branch_levels`` when
+    that is not 0: level 0 is the knot, one level a year after) and ``h`` is
+    alive then (``y`` before its death year).
+    """
+    cap = int(p.get("branch_levels", 0))
+    for i, br in enumerate(branches):
+        if br.parent < 0:
+            continue
+        if br.parent >= i:
+            raise ValueRefused(f"branch {i}: its host (branch {br.parent}) must be listed before it")
+        host = branches[br.parent]
+        if not host.year < br.year < years:
+            raise ValueRefused(f"branch {i}: born in year {br.year}, it must come after its host's year {host.year}")
+        if cap and br.year - host.year >= cap:
+            raise ValueRefused(
+                f"branch {i}: its host branch {br.parent} is a stub of {cap} levels (branch_levels) that ends "
+                f"before year {br.year}; set branch_levels=0 for whole branches"
+            )
+        dies = death_year(p, host.year, host.death)
+        if dies is not None and br.year >= dies:
+            raise ValueRefused(f"branch {i}: its host branch {br.parent} dies in year {dies}, before it is born in {br.year}")
 
 
 def _set_deaths(placed: list[Branch], deaths: Mapping[int, int] | None) -> None:
@@ -1806,7 +1987,7 @@ def regrow_branch(wood: Wood, b: int, seed: int) -> Wood:
     new = Wood(
         wood.p,
         wood.seed,
-        [Branch(y, s, br.seed, death=br.death) for (y, s), br in zip(slots, wood.branches)],
+        [Branch(y, s, br.seed, death=br.death, angle=br.angle, parent=br.parent) for (y, s), br in zip(slots, wood.branches)],
         wood.species,
         wood.trunk_frames,
         wood.final_years,
@@ -2215,6 +2396,149 @@ def _subtree_leaves(skeleton, segment):
     return sorted(set(np.asarray(skeleton.leaf_id)[inside].tolist()))
 
 
+def _continuations(skeleton) -> dict[int, int]:
+    """Segment -> the segment continuing its axis (same order, growing from it)."""
+    order, parent = np.asarray(skeleton.order), np.asarray(skeleton.parent)
+    out: dict[int, int] = {}
+    for i in np.flatnonzero((parent >= 0) & (order == order[np.maximum(parent, 0)])).tolist():
+        out.setdefault(int(parent[i]), int(i))
+    return out
+
+
+def _axis_chain(first: int, cont: Mapping[int, int], limit: int) -> list[int]:
+    """Segment ``first`` and the segments continuing its axis, base to tip."""
+    chain = [int(first)]
+    while chain[-1] in cont and len(chain) <= limit:
+        chain.append(cont[chain[-1]])
+    return chain
+
+
+def skeleton_branches(
+    skeleton: Skeleton,
+    p: Mapping[str, Any],
+    years: int,
+    frames: np.ndarray,
+    cuts: np.ndarray,
+    arc: np.ndarray,
+    chain: np.ndarray,
+    seed: int = 0,
+    steps: int | None = None,
+    leaf_steps: ArrayLike | None = None,
+    max_branches: int | None = None,
+) -> tuple[list[Branch], list[int], dict[str, int]]:
+    """The plant's branches of every order as :class:`Branch` es, hosts before the branches on them.
+
+    Order by order: the first-order branches on the trunk (``chain``, cut at
+    ``cuts`` along its arc ``arc``, unit frames ``frames``), then the
+    second-order ones on each kept first-order branch, and so on.  A branch's
+    birth year is the year of the derivation step that made the segment it
+    grows from (``leaf_steps`` and ``steps`` given), else from where it grows:
+    its height on the trunk, or its place along its host branch (the host
+    grows from the year after its birth to the last year).  Its sector and
+    insertion angle come from its direction in its host's frame (a host
+    branch's frame is the one the wood gives it, :func:`branch_direction`).
+    Left out, and counted in the returned ``left_out``: branches born in the
+    last year (no ring yet) or on a host not yet born (``last_year``); less
+    than ``MIN_SECTOR_GAP`` faces from an earlier branch of the same host
+    and year (``too_close``); born on a host branch past its stub, whose
+    ``branch_levels`` levels end before the year the branch is born
+    (``beyond_stub``; ``branch_levels=0`` keeps whole branches) or after
+    the host's death (``host_dead``); past ``max_branches`` in all
+    (``over_max``).  Branches growing on a left-out branch are not in the
+    wood either (``on_left_out``).  Returns the branches, the skeleton
+    segment each starts at, and ``left_out``.
+    """
+    start, end = np.asarray(skeleton.start, float), np.asarray(skeleton.end, float)
+    order, parent = np.asarray(skeleton.order), np.asarray(skeleton.parent)
+    leaf_id = np.asarray(skeleton.leaf_id)
+    cont = _continuations(skeleton)
+    cap = int(p.get("branch_levels", 0))
+    left_out = dict.fromkeys(("last_year", "too_close", "beyond_stub", "host_dead", "over_max", "on_left_out"), 0)
+    branches: list[Branch] = []
+    segments: list[int] = []
+    host_frames: list[np.ndarray] = []  # each kept branch's frame past its knot
+    # hosts: (branch index or -1, chain of segments, arc along it, sides)
+    hosts = [(-1, np.asarray(chain, np.int64), np.asarray(arc, float))]
+    seen = 0
+    while seen < len(hosts):
+        h, axis_chain, axis_arc = hosts[seen]
+        seen += 1
+        on = np.flatnonzero(np.isin(parent, axis_chain) & (order > order[axis_chain[0]]))
+        where = {int(c): i for i, c in enumerate(axis_chain.tolist())}
+        n = int(p["sides"] if h < 0 else p["branch_sides"])
+        used: set[tuple[int, int]] = set()
+        for i in on.tolist():
+            if order[i] != order[axis_chain[0]] + 1:
+                continue
+            par = int(parent[i])
+            at = axis_arc[where[par] + 1]
+            if h < 0:
+                year = int(min(np.searchsorted(cuts, at, side="right") - 1, years - 1))
+                f = frames[year]
+            else:
+                born = branches[h].year
+                share = at / axis_arc[-1] if axis_arc[-1] > 0 else 1.0
+                year = born + 1 + int(share * max(years - 2 - born, 0))
+                f = host_frames[h]
+            if leaf_steps is not None and steps:
+                step = int(np.asarray(leaf_steps)[int(leaf_id[par])])
+                year = int(min(years - 1, max(0, step * years // max(int(steps), 1))))
+            d = end[i] - start[i]
+            if max_branches is not None and len(branches) >= max_branches:
+                left_out["over_max"] += 1
+                continue
+            if h >= 0:
+                host = branches[h]
+                dies = death_year(p, host.year, host.death)
+                if year <= host.year or year >= years - 1 or not np.linalg.norm(d) > 0:
+                    left_out["last_year"] += 1
+                    continue
+                if cap and year - host.year >= cap:
+                    left_out["beyond_stub"] += 1
+                    continue
+                if dies is not None and year >= dies:
+                    left_out["host_dead"] += 1
+                    continue
+            elif not np.linalg.norm(d) > 0 or year >= years - 1:
+                left_out["last_year"] += 1
+                continue
+            az = math.atan2(d @ f[2], d @ f[1])
+            if h < 0:
+                sector = int(round(az / (2 * np.pi / n))) % n
+            else:  # a branch's sector k is centred on 2 pi (k + 1/2 - n/8) / n (Wood.sector_angles)
+                sector = int(round(az * n / (2 * np.pi) - 0.5 + n / 8)) % n
+            angle = float(np.clip(math.degrees(math.acos(np.clip(d @ f[0] / np.linalg.norm(d), -1, 1))), 5, 175))
+            if any(y == year and min((sector - k) % n, (k - sector) % n) < MIN_SECTOR_GAP for y, k in used):
+                left_out["too_close"] += 1  # the thesis's topological correction: too close
+                continue
+            used.add((year, sector))
+            branches.append(Branch(year, sector, mix(seed, 1000 + len(branches)), angle=angle, parent=h))
+            segments.append(int(i))
+            centre = 2 * np.pi * sector / n if h < 0 else 2 * np.pi * (sector + 0.5 - n / 8) / n
+            host_frames.append(branch_direction(f, centre, math.radians(90.0 - angle)))
+            sub_chain = np.array(_axis_chain(int(i), cont, len(order)), np.int64)
+            seg = np.linalg.norm(end[sub_chain] - start[sub_chain], axis=1)
+            hosts.append((len(branches) - 1, sub_chain, np.concatenate([[0.0], np.cumsum(seg)])))
+        for i in on.tolist():  # the branches on a left-out branch
+            if order[i] == order[axis_chain[0]] + 1 and int(i) not in segments:
+                left_out["on_left_out"] += _subtree_branches(order, parent, int(i))
+    return branches, segments, left_out
+
+
+def _subtree_branches(order: np.ndarray, parent: np.ndarray, segment: int) -> int:
+    """Branches (axis starts) growing on the axis from ``segment`` and on those, at any depth."""
+    inside = np.zeros(len(parent), bool)
+    inside[segment] = True
+    for _ in range(len(parent)):
+        grow = ~inside & (parent >= 0) & inside[np.maximum(parent, 0)]
+        if not grow.any():
+            break
+        inside |= grow
+    starts = inside & (parent >= 0) & (order > order[np.maximum(parent, 0)])
+    starts[segment] = False
+    return int(starts.sum())
+
+
 def from_skeleton(
     skeleton: Skeleton,
     years: int,
@@ -2222,24 +2546,35 @@ def from_skeleton(
     seed: int = 0,
     steps: int | None = None,
     leaf_steps: ArrayLike | None = None,
-    max_branches: int = 24,
+    max_branches: int | None = None,
     **params: Any,
 ) -> Wood:
-    """Volumetric wood of a derived Ramure plant: its trunk and first branches.
+    """Volumetric wood of a derived Ramure plant: its trunk and its branches of every order.
 
     The trunk polyline (order-0 segments from the base) is cut into
     ``years`` yearly units of equal length; each unit's frame follows the
     polyline there (a bent trunk bends the pith and its rings).  Each
-    first-order branch growing from the trunk becomes a knot: its birth year
-    is the year of the trunk unit it grows from -- from the derivation step
-    that made its parent trunk segment when ``leaf_steps`` (the history
-    tree's ``step`` array) and ``steps`` are given, else from its height --
-    its sector from its azimuth and its insertion angle from its direction.
-    Branches born the same year less than ``MIN_SECTOR_GAP`` trunk faces
-    from an earlier one (the thesis's "topological correction" refusing a
-    branch too close to another: two knots of one node that near crowd the
-    ring between them), or born in the last year, are left out; at most
-    ``max_branches`` are kept.
+    first-order branch growing from the trunk becomes a knot in the trunk, and
+    each branch growing on a branch a knot in that branch's wood, in a node
+    its host grows in the branch's birth year, and so on
+    (:func:`skeleton_branches`: birth years from the derivation, sectors and
+    insertion angles from the directions).  Branches born the same year on
+    the same host less than ``MIN_SECTOR_GAP`` faces from an earlier one
+    (the thesis's "topological correction" refusing a branch too close to
+    another: two knots of one node that near crowd the ring between them),
+    or born in the last year, are left out.
+
+    *The dart budget (a choice).*  A branch is grown as a stub of
+    ``branch_levels`` yearly levels (the species' 2: its knot and one year
+    past its host's bark; 0 keeps whole branches), so a sub-branch is in
+    the wood only if it is born while its host's stub still grows (within
+    ``branch_levels - 1`` years of the host's birth); the others are left
+    out and counted (``gm.meta["left_out"]``, ``beyond_stub``).  No count
+    cap: ``max_branches`` (default none) keeps at most that many knots of
+    every order, in order.  The wood's darts are :func:`estimated_darts`
+    (exact) and are checked before growing: over ``MAX_DARTS`` the wood is
+    refused with the knots by order and what to change.
+    ``gm.meta["orders"]`` gives each branch's order (1 on the trunk).
     Units are the plant's.
     """
     years = check_years(years)
@@ -2259,37 +2594,17 @@ def from_skeleton(
 
     frames = frame_from(heading, np.cross(heading, [0.0, 0.0, 1.0]) + np.array([1e-9, 1.0, 0.0]))
     frames = frame_from(heading, np.repeat(frames[:1, 1], years, axis=0))  # one turn of L for all units
-    branches: list[Branch] = []
-    used: set[tuple[int, int]] = set()
-    leaves: list[list[int]] = []
-    order, parent = np.asarray(skeleton.order), np.asarray(skeleton.parent)
-    on_trunk = np.flatnonzero((order == order.min() + 1) & np.isin(parent, chain))
-    where_in_chain = {int(c): i for i, c in enumerate(chain)}
-    n = int(p["sides"])
-    for i in on_trunk:  # one step per first-order branch
-        par = int(parent[i])
-        at = arc[where_in_chain[par] + 1]
-        year = int(min(np.searchsorted(cuts, at, side="right") - 1, years - 1))
-        if leaf_steps is not None and steps:
-            step = int(np.asarray(leaf_steps)[int(skeleton.leaf_id[par])])
-            year = int(min(years - 1, max(0, step * years // max(int(steps), 1))))
-        d = end[i] - start[i]
-        if not np.linalg.norm(d) > 0 or year >= years - 1:
-            continue
-        f = frames[year]
-        az = math.atan2(d @ f[2], d @ f[1])
-        sector = int(round(az / (2 * np.pi / n))) % n
-        angle = math.degrees(math.acos(np.clip(d @ f[0] / np.linalg.norm(d), -1, 1)))
-        if any(y == year and min((sector - k) % n, (k - sector) % n) < MIN_SECTOR_GAP for y, k in used):
-            continue  # the thesis's topological correction: too close
-        used.add((year, sector))
-        branches.append(Branch(year, sector, mix(seed, 1000 + len(branches)), angle=float(np.clip(angle, 5, 175))))
-        leaves.append(_subtree_leaves(skeleton, int(i)))
-        if len(branches) >= max_branches:
-            break
-    est = estimated_darts(p, years, [b.year for b in branches])
+    branches, segments, left_out = skeleton_branches(
+        skeleton, p, years, frames, cuts, arc, chain, seed=seed, steps=steps, leaf_steps=leaf_steps, max_branches=max_branches
+    )
+    orders = branch_orders(branches)
+    est = estimated_darts(p, years, [b.year for b in branches], None, [b.parent for b in branches])
     if est > MAX_DARTS:
-        raise ValueRefused(f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,}")
+        by_order = ", ".join(f"{n} of order {o}" for o, n in sorted(Counter(orders).items()))
+        raise ValueRefused(
+            f"this wood would have about {est:,} darts, more than the limit of {MAX_DARTS:,} "
+            f"(knots: {by_order or 'none'}); grow fewer years, derive fewer steps or set branch_levels lower"
+        )
     t0 = time.perf_counter()
     wood = Wood(p, seed, branches, species, trunk_frames=(pos[:-1], frames, h), years=years)
     for _ in range(2 * years):
@@ -2302,9 +2617,51 @@ def from_skeleton(
         "seed": int(seed),
         "from": "skeleton",
         "branches": [(b.year, b.sector) for b in branches],
-        "branch_leaves": leaves,
+        "parents": [b.parent for b in branches],
+        "orders": orders,
+        "left_out": left_out,
+        "branch_segments": segments,  # the skeleton segment each branch starts at
+        "branch_leaves": _own_leaves(skeleton, branches, segments),
     }
     return wood
+
+
+def _own_leaves(skeleton, branches, segments):
+    """Per branch, the history leaves of its plant branch less those of its sub-branches in the
+    wood: each leaf maps to the knot of the deepest branch of the wood it grows on."""
+    leaves = [set(_subtree_leaves(skeleton, i)) for i in segments]
+    own = [set(x) for x in leaves]
+    for b, br in enumerate(branches):
+        if br.parent >= 0:
+            own[br.parent] -= leaves[b]
+    return [sorted(x) for x in own]
+
+
+def orders_text(knots_by_order: Mapping[str, int], left_out: Mapping[str, int] | None = None) -> str:
+    """The knots by order and the plant's branches left out, as words (empty for trunk knots only).
+
+    >>> orders_text({"1": 3, "2": 2}, {"last_year": 7, "beyond_stub": 1, "too_close": 0})
+    ' (by order 1: 3, 2: 2); left out: 7 last year, 1 beyond stub'
+    """
+    text = ""
+    if knots_by_order and max(int(o) for o in knots_by_order) > 1:
+        text = " (by order " + ", ".join(f"{o}: {n}" for o, n in knots_by_order.items()) + ")"
+    left = {k: v for k, v in (left_out or {}).items() if v}
+    if left:
+        text += "; left out: " + ", ".join(f"{n} {k.replace('_', ' ')}" for k, n in left.items())
+    return text
+
+
+def branch_orders(branches: Sequence[Branch]) -> list[int]:
+    """Each branch's order: 1 on the trunk, one more than its host's on a branch.
+
+    >>> branch_orders([Branch(1, 0, 0), Branch(2, 3, 0, parent=0), Branch(3, 1, 0, parent=1)])
+    [1, 2, 3]
+    """
+    out: list[int] = []
+    for br in branches:
+        out.append(1 if br.parent < 0 else out[br.parent] + 1)
+    return out
 
 
 def plank_map(gm: GMap3, normal: ArrayLike, offset: float, thickness: float) -> GMap3:

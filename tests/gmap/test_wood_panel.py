@@ -92,6 +92,7 @@ def test_grow_from_the_plant_and_highlight_a_knot(app):
     wood = panel.grow()
     assert wood is not None and wood.branches and "knot" in panel.facts.text()
     assert f"knots: {len(wood.branch_axis)} live, 0 dead" in panel.facts.text()  # a plant's branches live
+    assert "(by order 1: 3, 2: 2, 3: 1); left out: 7 last year, 1 beyond stub" in panel.facts.text()
     grid, kwargs = panel.plotter.clipped[-1]
     assert kwargs["normal"] == "z" and np.array_equal(np.unique(grid.cell_data["volume"]), np.arange(wood.gm.n_volumes))
     leaf = panel.branch_leaves[0][0]

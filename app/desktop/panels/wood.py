@@ -5,8 +5,9 @@ earlywood/latewood rings, heartwood, sapwood, bark and knots, see
 :mod:`ramure.gmap.organs.wood`) appears in the dock's own 3D view, clipped by a
 plane widget you drag and turn (VTK clip, re-cut live).  *From the current
 plant* grows the wood of the plant shown in the main window: its trunk and
-first branches, with their ages from the derivation steps.  Selecting a
-branch of that plant in the main view paints its knot red in the cut.
+branches of every order (a branch's branches are knots in its wood), with
+their ages from the derivation steps.  Selecting a branch of that plant in
+the main view paints its knot red in the cut.
 
 Growth runs in the GUI thread (a 10-year trunk takes about a second; the
 dock shows a busy cursor); the refusal of bad input is shown in the dock.
@@ -213,7 +214,9 @@ class WoodPanel(QWidget):
         self.facts.setText(
             f"{gm.n_darts:,} darts, {gm.n_volumes:,} volumes; "
             + ", ".join(f"{v} {k}" for k, v in counts.items() if v)
-            + f"; knots: {knots['live']} live, {knots['dead']} dead. Drag the plane to cut."
+            + f"; knots: {knots['live']} live, {knots['dead']} dead"
+            + W.orders_text(wood.knot_orders(), gm.meta.get("left_out"))
+            + ". Drag the plane to cut."
         )
         return wood
 
