@@ -1,0 +1,360 @@
+"""A region of a map refined alone, the rest byte-identical (issue 40 §6, a local precision).
+
+:func:`refine_volumes` splits the given volumes ``levels`` times into hexahedra (x8 volumes
+per level, each edge in 2) while every dart of every other volume keeps its bytes: its
+position, its four involutions and its attributes.  That forbids splitting any face, edge
+or vertex the region shares with the outside, so the refinement is *pillowed* (the
+hexahedral meshers' name for it):
+
+1. **Rim.**  The region's faces glued to a volume outside are its rim.  Each rim face stays
+   whole, with its darts (ids, ``alpha0``, ``alpha1``, ``alpha3`` to the outside) as they
+   were; only their ``alpha2`` and volume change.
+2. **Core.**  A copy of the region in which every vertex on the rim is moved ``inset`` of the
+   way into the region (along the region's edges leaving the rim, so inner layers keep their
+   faces; a rim vertex on the skin moves along the skin) is subdivided
+   ``levels`` times (:func:`ramure.gmap.kernel.subdivide.volume`).  Vertices on the core's
+   faces towards the rim take linear positions (corners, edge midpoints, face centroids),
+   the rest of its skin Catmull-Clark's, as a subdivided fruit has.
+3. **Pillows.**  Between each rim face and its refined copy in the core, a transition cell:
+   its outer face is the rim face (whole), its inner face the ``4**levels`` sub-faces of the
+   core, its sides one polygon per rim edge (the rim edge, then the core's ``2**levels``
+   segments): the cell where the precision changes.  Neighbouring pillows share their sides;
+   a side reaching the skin is skin.
+
+New darts take the ids of the region's darts that are not on the rim, then ids after the
+last; new volumes take the region's volume ids, then ids after the last, so ids outside the
+region never move.  Every new volume copies its parent's row (a fruit's ``ring``,
+``sector``, tissue), so label patterns still select it, and gains ``refined`` (how many
+times its parent was refined, 0 for the volumes as built) and ``sub`` (its number among its
+parent's children, from 1; the pillows come after the core's children; 0 as built).  A
+fruit's radial layer (Bohl's radial stage) is frozen in ``layer`` before the first
+refinement, since the layer of a cell is otherwise measured from the finest cell at the skin
+(:func:`ramure.gmap.organs.defects.radial_layers`).  The Euler characteristic is kept (the
+region is cut into more cells, its union is the same).
+
+>>> from ramure.gmap.organs.fruit import build_fruit
+>>> from ramure.gmap.organs.regions import region_volumes
+>>> gm = build_fruit("round_tomato")
+>>> vols = region_volumes(gm, {"path": "(5, C3, *)"})
+>>> out = refine_volumes(gm, vols)
+>>> out.is_valid(), out.euler_characteristic() == gm.euler_characteristic()
+(True, True)
+>>> out.n_volumes - gm.n_volumes  # 8 hexahedra, 5 pillows (none on the skin face), less itself
+12
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ramure.gmap.kernel import subdivide as _subdivide
+from ramure.gmap.kernel.errors import GMapError, ValueRefused
+from ramure.gmap.kernel.map3 import GMap3
+from ramure.gmap.kernel.prism import FACE_I
+
+#: Most refinement levels of one region (x8 cells each).
+MAX_LEVELS = 3
+#: Kind of point of the 8 children of a dart in volume subdivision (corner, edge, face, cell).
+_CHILD_KIND = np.array([0, 1, 1, 2, 1, 2, 2, 3])
+
+
+def _free(alpha: np.ndarray) -> np.ndarray:
+    return alpha[3] == np.arange(alpha.shape[1])
+
+
+def _cross(alpha: np.ndarray, darts: np.ndarray) -> np.ndarray:
+    """For free (``alpha3``) ``darts``: the free dart met going round the dart's edge
+    through the volumes (``alpha2``, then ``alpha3 alpha2`` until free)."""
+    x = alpha[2][darts]
+    todo = np.flatnonzero(alpha[3][x] != x)
+    while len(todo):
+        x[todo] = alpha[2][alpha[3][x[todo]]]
+        todo = todo[alpha[3][x[todo]] != x[todo]]
+    return x
+
+
+def _pair_means(keys: np.ndarray, items: np.ndarray, values: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean of ``values`` per key over the distinct ``(key, item)`` pairs, and the pair counts."""
+    big = int(items.max(initial=0)) + 1
+    _, first = np.unique(keys * big + items, return_index=True)
+    k = keys[first]
+    n = np.bincount(k, minlength=count)
+    mean = np.stack([np.bincount(k, values[first, j], minlength=count) for j in range(3)], axis=1)
+    return mean / np.maximum(n, 1)[:, None], n
+
+
+def _inset(core: GMap3, rim: np.ndarray, inset: float) -> None:
+    """Move the core's vertices on rim faces ``inset`` of the way into the region (in place).
+
+    A vertex moves along the region's edges that leave it off the rim (on the skin: along
+    the skin's), so the layers inside (exocarp, mesocarp ...) keep their faces; with no such
+    edge (a corner of the region) it moves towards the centroids of its cells, or of its
+    skin faces on the skin."""
+    vid, nv = core.cells(0)
+    eid, ne = core.cells(1)
+    side, ns = core.orbit_ids("01")
+    free = _free(core.alpha)
+    skin = free & ~rim
+    on_rim = np.bincount(vid[rim], minlength=nv) > 0
+    on_skin = np.bincount(vid[skin], minlength=nv) > 0
+    edge_rim = np.bincount(eid[rim], minlength=ne) > 0
+    edge_skin = np.bincount(eid[skin], minlength=ne) > 0
+    pts = core.points
+    step = pts[core.alpha[0]] - pts
+    # fallbacks: the centroids of the cells round the vertex; on the skin, of its skin faces
+    into, _ = _pair_means(vid, core.dart_volume.astype(np.int64), core.volume_centroids()[core.dart_volume] - pts, nv)
+    if skin.any():
+        per = np.bincount(side, minlength=ns)
+        centre = np.stack([np.bincount(side, pts[:, j], minlength=ns) for j in range(3)], axis=1) / np.maximum(per, 1)[:, None]
+        d = np.flatnonzero(skin)
+        along, _ = _pair_means(vid[d], side[d], centre[side[d]] - pts[d], nv)
+        into[on_skin] = along[on_skin]
+    # along the edges off the rim (on the skin: the skin's edges off the rim)
+    off = ~edge_rim[eid] & (edge_skin[eid] | ~on_skin[vid])
+    d = np.flatnonzero(off)
+    edges, n_edges = _pair_means(vid[d], eid[d], step[d], nv)
+    into = np.where((n_edges > 0)[:, None], edges, into)
+    move = on_rim[vid]
+    pts[move] += inset * into[vid[move]]
+    core.corners[:] = pts
+    core.mark_changed()
+
+
+def _subdivided(core: GMap3, levels: int) -> GMap3:
+    """``core`` subdivided ``levels`` times; points on faces towards the rim (``_rim``) linear."""
+    for _ in range(levels):
+        parent = core
+        core = _subdivide.volume(parent, 1)
+        rim = _free(parent.alpha) & parent.dart_data["_rim"]
+        vid, nv = parent.cells(0)
+        eid, ne = parent.cells(1)
+        side, ns = parent.orbit_ids("01")
+        on = [np.bincount(k[rim], minlength=c) > 0 for k, c in ((vid, nv), (eid, ne), (side, ns))]
+        pts = parent.points
+        per = np.bincount(side, minlength=ns)
+        centre = np.stack([np.bincount(side, pts[:, j], minlength=ns) for j in range(3)], axis=1) / np.maximum(per, 1)[:, None]
+        p = np.repeat(np.arange(parent.n_darts), 8)
+        kind = np.tile(_CHILD_KIND, parent.n_darts)
+        linear = np.zeros((core.n_darts, 3))
+        touch = np.zeros(core.n_darts, bool)
+        for k, key, lin in (
+            (0, vid, pts),
+            (1, eid, 0.5 * (pts + pts[parent.alpha[0]])),
+            (2, side, centre[side]),
+        ):
+            sel = np.flatnonzero(kind == k)
+            hit = sel[on[k][key[p[sel]]]]
+            touch[hit] = True
+            linear[hit] = lin[p[hit]]
+        core.points[touch] = linear[touch]
+        core.corners[:] = core.points
+        core.mark_changed()
+    return core
+
+
+def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float | None = None) -> GMap3:
+    """``gm`` with ``volumes`` refined ``levels`` times and pillowed at their rim (a new
+    map; see the module docstring); every dart of every other volume keeps its bytes.
+
+    ``inset``: how far rim vertices move into the region, as a fraction of the edge leaving
+    the rim (default ``1 / (2 ** levels + 1)``: the pillow is as thick as the refined cells
+    next to it)."""
+    levels = int(levels)
+    if not 1 <= levels <= MAX_LEVELS:
+        raise ValueRefused(f"a region is refined 1 to {MAX_LEVELS} times (x2 to x{2**MAX_LEVELS} precision), got {levels}")
+    inset = 1.0 / (2**levels + 1) if inset is None else float(inset)
+    if not 0.0 < inset < 1.0:
+        raise ValueRefused(f"inset is a fraction between 0 and 1, got {inset}")
+    vols = np.unique(np.asarray(volumes, np.int64))
+    if not len(vols) or vols[0] < 0 or vols[-1] >= gm.n_volumes:
+        raise GMapError(f"refine: volume ids must be in 0..{gm.n_volumes - 1} and at least one")
+    n = gm.n_darts
+    ids = np.arange(n)
+    alpha = gm.alpha.astype(np.int64)
+    vol = gm.dart_volume.astype(np.int64)
+    chosen = np.zeros(gm.n_volumes, bool)
+    chosen[vols] = True
+    inside = chosen[vol]
+    rim = inside & (alpha[3] != ids) & ~inside[alpha[3]]
+
+    # 1. the core: the region alone, rim faces free, rim vertices inset, subdivided
+    region = np.flatnonzero(inside)
+    m = len(region)
+    loc = np.full(n, -1, np.int64)
+    loc[region] = np.arange(m)
+    ca = loc[alpha[:, region]]
+    ca[3] = np.where(inside[alpha[3, region]], ca[3], np.arange(m))
+    data = gm.dart_data
+    darts = {k: np.asarray(data[k])[region] for k in data}
+    darts["volume"] = np.searchsorted(vols, vol[region]).astype(np.int32)
+    darts["_src"] = region.astype(np.int64)
+    darts["_rim"] = rim[region]
+    vdata = {k: np.asarray(v)[vols] for k, v in gm.volume_data.items()}
+    vdata["_parent"] = vols
+    core = GMap3.from_arrays(ca, darts, vdata, {**gm.dart_rules(), "_src": "copy", "_rim": "copy"})
+    _inset(core, rim[region], inset)
+    core = _subdivided(core, levels)
+    M = core.n_darts
+    kc = core.alpha.astype(np.int64)
+    face_rim = _free(kc) & core.dart_data["_rim"]
+
+    # 2. the pillows' darts: mirrors of the core's rim sub-faces, side faces
+    side0, _ = gm.orbit_ids("01")
+    src = core.dart_data["_src"].astype(np.int64)
+    tops = np.flatnonzero(face_rim)  # core darts under a pillow's inner face
+    q = len(tops)
+    cross = _cross(kc, tops)
+    same = face_rim[cross] & (side0[src[cross]] == side0[src[tops]])
+    edge = tops[~same]  # core darts along the pillow's side faces
+    b = len(edge)
+    rims = np.flatnonzero(rim)  # original darts of the pillows' outer faces
+    r = len(rims)
+    step = 8**levels
+    corner = loc[rims] * step  # the core dart at the inset corner, along the same edge
+    # new darts, in order: core (M), top (q), u (b), bottom side (r), lateral (r), lateral top (r)
+    o_top, o_u, o_bot = M, M + q, M + q + b
+    o_lat, o_latt = o_bot + r, o_bot + 2 * r
+    total = o_bot + 3 * r
+    top_of = np.full(M, -1, np.int64)
+    top_of[tops] = o_top + np.arange(q)
+    u_of = np.full(M, -1, np.int64)
+    u_of[edge] = o_u + np.arange(b)
+    side_of = np.full(n, -1, np.int64)  # rim dart -> its index among rims
+    side_of[rims] = np.arange(r)
+    rim_at = np.full(M, -1, np.int64)  # core corner dart -> rim index
+    rim_at[corner] = np.arange(r)
+    if (face_rim[corner] == 0).any():
+        raise GMapError("refine: a rim corner lost its place in the core (internal error)")
+
+    # alpha of the new darts, in "new" numbering: orig darts as -1 - id
+    A = np.empty((4, total), np.int64)
+    A[:, :M] = kc
+    A[3, tops] = top_of[tops]
+    t = top_of[tops]
+    A[0, t], A[1, t], A[3, t] = top_of[kc[0, tops]], top_of[kc[1, tops]], tops
+    A[2, t] = np.where(same, top_of[cross], u_of[tops])
+    u = u_of[edge]
+    xe = cross[~same]
+    A[0, u] = u_of[kc[0, edge]]
+    A[2, u] = top_of[edge]
+    A[3, u] = np.where(face_rim[xe], u_of[xe], u)
+    y = kc[1, edge]  # along the sub-face's other edge at the same corner
+    yc = _cross(kc, y)
+    inner = face_rim[yc] & (side0[src[yc]] == side0[src[y]])
+    A[1, u] = np.where(inner, u_of[kc[1, yc]], -1)
+    at_corner = ~inner
+    k_r = rim_at[edge[at_corner]]
+    if (k_r < 0).any():
+        raise GMapError("refine: a side face's corner is not a rim corner (internal error)")
+    A[1, u[at_corner]] = o_latt + k_r
+    bot, lat, latt = o_bot + np.arange(r), o_lat + np.arange(r), o_latt + np.arange(r)
+    A[0, bot] = o_bot + side_of[alpha[0, rims]]
+    A[1, bot] = lat
+    A[2, bot] = -1 - rims
+    A[0, lat], A[0, latt] = latt, lat
+    A[1, lat], A[1, latt] = bot, u_of[corner]
+    A[2, lat] = o_lat + side_of[alpha[1, rims]]
+    A[2, latt] = o_latt + side_of[alpha[1, rims]]
+    z = cross[np.searchsorted(tops, corner)]  # round the inset corner's edge in the core
+    other = np.where(face_rim[z], rim_at[z], -1)
+    if (face_rim[z] & (other < 0)).any():
+        raise GMapError("refine: two pillows meet off a rim corner (internal error)")
+    for base in (o_bot, o_lat, o_latt):
+        A[3, base + np.arange(r)] = np.where(other >= 0, base + other, base + np.arange(r))
+
+    # 3. ids: new darts fill the region's non-rim ids, then come after the last
+    slots = np.concatenate([np.flatnonzero(inside & ~rim), n + np.arange(max(total - (m - r), 0))])
+    if total < m - r:
+        raise GMapError("refine: fewer darts than the region had (internal error)")
+    new_id = slots[:total]
+    N = n + total - (m - r)
+
+    def to_id(x: np.ndarray) -> np.ndarray:
+        return np.where(x < 0, -1 - x, new_id[np.maximum(x, 0)])
+
+    out_alpha = np.empty((4, N), np.int64)
+    out_alpha[:, :n] = alpha
+    out_alpha[:, new_id] = to_id(A)
+    out_alpha[2, rims] = new_id[bot]
+
+    # 4. volumes: core children, then one pillow per rim face; region ids first
+    faces, face_idx = np.unique(side0[rims], return_inverse=True)
+    nc = core.n_volumes
+    n_new = nc + len(faces)
+    vslots = np.concatenate([vols, gm.n_volumes + np.arange(max(n_new - len(vols), 0))])
+    cvol = core.dart_volume.astype(np.int64)
+    pillow_of_rim = nc + face_idx
+    new_vol = np.empty(total, np.int64)
+    new_vol[:M] = cvol
+    new_vol[t] = pillow_of_rim[side_of[src[tops]]]
+    new_vol[u] = pillow_of_rim[side_of[src[edge]]]
+    for base in (o_bot, o_lat, o_latt):
+        new_vol[base : base + r] = pillow_of_rim
+    if (side_of[src[tops]] < 0).any():
+        raise GMapError("refine: a rim sub-face lost its rim dart (internal error)")
+    parent_new = np.concatenate(
+        [core.volume_data["_parent"].astype(np.int64), vol[rims[np.unique(face_idx, return_index=True)[1]]]]
+    )
+
+    # 5. dart columns: every new dart copies a source dart (core or original), then fixes
+    csrc = np.empty(total, np.int64)  # >= 0: core dart; < 0: -1 - original dart
+    csrc[:M] = np.arange(M)
+    csrc[t], csrc[u] = tops, edge
+    csrc[bot], csrc[lat], csrc[latt] = -1 - rims, -1 - rims, corner
+    cdata = core.dart_data
+    out_darts = {}
+    for name in data:
+        col = np.asarray(data[name])
+        new = np.empty((N,) + col.shape[1:], col.dtype)
+        new[:n] = col
+        from_core = csrc >= 0
+        vals = np.empty((total,) + col.shape[1:], col.dtype)
+        vals[from_core] = np.asarray(cdata[name])[csrc[from_core]]
+        vals[~from_core] = col[-1 - csrc[~from_core]]
+        new[new_id] = vals
+        out_darts[name] = new
+    vid_new = vslots[new_vol]
+    out_darts["volume"][new_id] = vid_new
+    out_darts["volume"][rims] = vslots[pillow_of_rim]
+    sides = np.concatenate([u, bot, lat, latt])
+    out_darts["face"][new_id[sides]] = FACE_I
+    out_darts["sublabel"][new_id[sides]] = 0
+    out_darts["fcorner"][new_id[sides]] = -1
+    out_darts["forward"][new_id[sides]] = False
+    out_darts["sup"][new_id] = -1
+    out_darts["corner"][new_id] = out_darts["point"][new_id]
+
+    # 6. volume rows: parents' rows, with refined / sub / layer
+    vd = gm.volume_data
+    V = max(gm.n_volumes, int(vslots[:n_new].max()) + 1)
+    out_vol = {}
+    for name in vd:
+        col = np.asarray(vd[name])
+        new = np.empty((V,) + col.shape[1:], col.dtype)
+        new[: gm.n_volumes] = col
+        new[vslots[:n_new]] = col[parent_new]
+        out_vol[name] = new
+    if "parent" in out_vol:
+        out_vol["parent"][vslots[:n_new]] = -1
+    refined = np.zeros(V, np.int16) if "refined" not in vd else out_vol["refined"]
+    refined[vslots[:n_new]] = (np.asarray(vd["refined"])[parent_new] if "refined" in vd else 0) + levels
+    order = np.argsort(parent_new, kind="stable")
+    sub = np.empty(n_new, np.int32)
+    starts = np.searchsorted(parent_new[order], parent_new[order])
+    sub[order] = np.arange(n_new) - starts + 1
+    subs = np.zeros(V, np.int32) if "sub" not in vd else out_vol["sub"]
+    subs[vslots[:n_new]] = sub
+    out_vol["refined"], out_vol["sub"] = refined, subs
+    if "ring" in vd and "layer" not in vd:
+        from ramure.gmap.organs.defects import radial_layers
+
+        _, layer = radial_layers(gm)
+        lay = np.full(V, -1, np.int16)
+        lay[: gm.n_volumes] = layer
+        lay[vslots[:n_new]] = layer[parent_new]
+        out_vol["layer"] = lay
+    rules = {k: v for k, v in gm.dart_rules().items()}
+    out = GMap3.from_arrays(out_alpha, out_darts, out_vol, rules)
+    out.meta = dict(gm.meta)
+    return out

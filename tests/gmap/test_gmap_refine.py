@@ -1,0 +1,141 @@
+"""A fruit region at another precision (issue 40 §6): refined alone and pillowed at its rim,
+every dart outside byte-identical, the map valid, χ kept, the labels still naming it."""
+
+import numpy as np
+import pytest
+
+from ramure.errors import RamureError
+from ramure.gmap.kernel.measure import volumes
+from ramure.gmap.organs.defects import radial_layers
+from ramure.gmap.organs.fruit import build_fruit, regrow_region
+from ramure.gmap.organs.refine import refine_volumes
+from ramure.gmap.organs.regions import refine_levels, region_volumes
+
+
+@pytest.fixture(scope="module")
+def fruit():
+    return build_fruit("round_tomato", volume_levels=1)
+
+
+def _bytes(gm, darts):
+    """Every column of ``darts`` (involutions, positions, attributes), as bytes."""
+    return b"".join([gm.alpha[:, darts].tobytes()] + [np.asarray(gm.dart_data[k])[darts].tobytes() for k in sorted(gm.dart_data)])
+
+
+def _rim_faces(gm, vols):
+    """Faces ``<a0,a1>`` of ``vols`` glued to a volume outside, counted independently."""
+    inside = np.isin(gm.dart_volume, vols)
+    a3 = gm.alpha[3]
+    rim = inside & (a3 != np.arange(gm.n_darts)) & ~inside[a3]
+    side, _ = gm.orbit_ids("01")
+    return len(np.unique(side[rim]))
+
+
+@pytest.mark.parametrize(
+    ("region", "levels"),
+    [
+        ({"path": "(5, C*, *)"}, 1),
+        ({"cells": [[4, 2], [4, 3], [5, 2], [5, 3]]}, 1),
+        ({"path": "(3, C2, *)"}, 2),
+        ({"path": "(6)"}, 1),
+    ],
+)
+def test_refined_region_leaves_the_rest_byte_identical(fruit, region, levels):
+    vols = region_volumes(fruit, region)
+    out = refine_volumes(fruit, vols, levels)
+    outside = np.flatnonzero(~np.isin(fruit.dart_volume, vols))
+    assert _bytes(out, outside) == _bytes(fruit, outside)  # positions, alphas, attributes
+    assert out.is_valid() and out.euler_characteristic() == fruit.euler_characteristic() == 1
+    # every cell of the region (all hexahedra here) becomes 8**levels, plus one pillow per rim face
+    assert np.all(fruit.volume_data["degree"][vols] == 4)
+    made = 8**levels * len(vols) + _rim_faces(fruit, vols)
+    assert out.n_volumes == fruit.n_volumes - len(vols) + made
+    assert out.counts()["volumes"] == out.n_volumes  # every id is a volume: none left empty
+    # ids outside never move; the region's ids are reused and the new ones follow
+    assert np.array_equal(np.unique(out.dart_volume[outside]), np.setdiff1d(np.arange(fruit.n_volumes), vols))
+    # the label pattern names exactly the refined cells and the pillows
+    again = region_volumes(out, region)
+    assert len(again) == made
+    assert np.all(out.volume_data["refined"][again] == levels) and not out.volume_data["refined"][outside_vols(fruit, vols)].any()
+    assert sorted(np.unique(out.volume_data["sub"][again]))[0] == 1
+
+
+def outside_vols(gm, vols):
+    return np.setdiff1d(np.arange(gm.n_volumes), vols)
+
+
+def test_refined_cells_tile_the_region_without_overlap(fruit):
+    """Inside the fruit (no skin to smooth) the refined cells fill exactly the region: the sum
+    of their unsigned volumes is the region's, so none is turned inside out or overlaps."""
+    vols = region_volumes(fruit, {"path": "(4, C*, 0)"})  # the inner radial stage, off the skin
+    before = volumes(fruit)
+    for levels in (1, 2):
+        out = refine_volumes(fruit, vols, levels)
+        after = volumes(out)
+        new = region_volumes(out, {"path": "(4, C*, 0)"})
+        assert after[new].sum() == pytest.approx(before[vols].sum(), rel=1e-9)
+        assert after[new].min() > 1e-4 * before[vols].mean()  # no flat cell
+        assert after[new].max() < before[vols].max()  # every one smaller than a cell it came from
+
+
+def test_labels_and_radial_stages_survive_refinement(fruit):
+    out = regrow_region(fruit, {"path": "(5, C*, *)"}, {"precision": 20})
+    # the fruit still has its 2 radial layers (the finer skin cells would count 4)
+    assert radial_layers(out)[0] == radial_layers(fruit)[0] == 2
+    for path in ("(4, C*, *)", "(6, C3, 1)", "(9, C*, *)"):
+        assert np.array_equal(region_volumes(out, {"path": path}), region_volumes(fruit, {"path": path}))
+    skin = region_volumes(fruit, {"path": "(5, C3, 1)"})
+    finer = region_volumes(out, {"path": "(5, C3, 1)"})
+    assert len(finer) > 8 * len(skin)  # its children and its pillows, still at stage 1, sector C3
+    assert set(out.volume_data["tissue"][finer]) <= set(fruit.volume_data["tissue"][skin])
+    # sub-labels of the skin's faces still narrow the region (Bohl's E(...)); a face of the
+    # refined skin gained a letter
+    quarter = region_volumes(out, {"path": "(5, C*, *)", "faces": "E(^b[a-z]*$)"})
+    assert 0 < len(quarter) < len(region_volumes(out, {"path": "(5, C*, *)", "faces": "E(.*)"}))
+
+
+def test_precision_steps_and_refusals(fruit):
+    assert [refine_levels(10, p) for p in (10, 20, 40, 80)] == [0, 1, 2, 3]
+    region = {"path": "(5, C3, *)"}
+    with pytest.raises(RamureError, match="cannot be coarser"):
+        regrow_region(fruit, region, {"precision": 5})
+    with pytest.raises(RamureError, match="times 2, 4 or 8"):
+        regrow_region(fruit, region, {"precision": 30})
+    with pytest.raises(RamureError, match="whole number"):
+        regrow_region(fruit, region, {"precision": "fine"})
+    with pytest.raises(RamureError, match="cannot change ph"):
+        regrow_region(fruit, region, {"ph": 12})
+    with pytest.raises(RamureError, match="1 to 3 times"):
+        refine_volumes(fruit, region_volumes(fruit, region), 4)
+    same = regrow_region(fruit, region, {"precision": 10})  # the fruit's own: nothing to do
+    assert same.n_darts == fruit.n_darts
+
+
+def test_shape_and_precision_together(fruit):
+    """A region with a shape change and a finer precision: shaped first, then refined."""
+    region = {"cells": [[4, 2], [4, 3], [5, 2], [5, 3]]}
+    out = regrow_region(fruit, region, {"largeur": 75.0, "precision": 20})
+    shaped = regrow_region(fruit, region, {"largeur": 75.0})
+    vols = region_volumes(fruit, region)
+    outside = np.flatnonzero(~np.isin(fruit.dart_volume, vols))
+    assert _bytes(out, outside) == _bytes(fruit, outside)
+    assert out.is_valid() and out.euler_characteristic() == 1
+    # the refined skin lies on the shaped region: its bulge is kept
+    _, pos = out.vertex_positions()
+    _, shaped_pos = shaped.vertex_positions()
+    _, old_pos = fruit.vertex_positions()
+    centre = old_pos.mean(axis=0)
+    reach = lambda p: float(np.linalg.norm(p[:, :2] - centre[:2], axis=1).max())  # noqa: E731
+    assert reach(pos) > reach(old_pos) + 0.5 * (reach(shaped_pos) - reach(old_pos))
+
+
+def test_build_fruit_applies_a_precision_region():
+    region = {"path": "(5, C*, *)", "params": {"precision": 20}}
+    plain = build_fruit("round_tomato")  # the plant's coarse fruit (no volume subdivision)
+    built = build_fruit("round_tomato", regions=[region])
+    vols = region_volumes(plain, region)
+    outside = np.flatnonzero(~np.isin(plain.dart_volume, vols))
+    assert _bytes(built, outside) == _bytes(plain, outside)
+    assert built.is_valid() and built.euler_characteristic() == plain.euler_characteristic()
+    assert len(region_volumes(built, region)) > 8 * len(vols)
+    assert built.meta["regions"] == [region]
