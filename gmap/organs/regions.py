@@ -313,13 +313,15 @@ def apply_regions(
         if shape:
             gm = regrow_region(gm, region, reference, build(shape), strict=False)
     for region, wanted in finer:
-        gm = refine_region(gm, region, wanted, precision)
+        gm = refine_region(gm, region, wanted, precision, strict=False)
     return gm
 
 
-def refine_region(gm: GMap3, region: Mapping[str, Any], wanted: int, precision: int | None) -> GMap3:
+def refine_region(gm: GMap3, region: Mapping[str, Any], wanted: int, precision: int | None, strict: bool = True) -> GMap3:
     """``gm`` with ``region`` refined to ``wanted`` stages on a fruit of ``precision`` stages
-    (default ``gm.meta["params"]["precision"]``; see :func:`refine_levels`)."""
+    (default ``gm.meta["params"]["precision"]``; see :func:`refine_levels`).  A region naming
+    no cell of ``gm`` is refused, or leaves ``gm`` as it is when not ``strict`` (a sub-label
+    pattern on the plant's coarse fruit, whose faces have no sub-labels yet)."""
     from ramure.gmap.organs.refine import refine_volumes
 
     if precision is None:
@@ -327,7 +329,15 @@ def refine_region(gm: GMap3, region: Mapping[str, Any], wanted: int, precision: 
     if precision is None:
         raise ValueRefused("this map does not say its precision (meta params): build it with build_fruit")
     levels = refine_levels(int(precision), int(wanted))
-    return refine_volumes(gm, region_volumes(gm, region), levels) if levels else gm
+    if not levels:
+        return gm
+    try:
+        vols = region_volumes(gm, region)
+    except ValueRefused:
+        if strict:
+            raise
+        return gm
+    return refine_volumes(gm, vols, levels)
 
 
 def skin_cells(gm: GMap3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

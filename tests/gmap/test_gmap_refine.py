@@ -139,3 +139,33 @@ def test_build_fruit_applies_a_precision_region():
     assert built.is_valid() and built.euler_characteristic() == plain.euler_characteristic()
     assert len(region_volumes(built, region)) > 8 * len(vols)
     assert built.meta["regions"] == [region]
+
+
+def test_overlapping_regions_refine_twice_and_defects_still_apply():
+    """A region refined inside a refined one is refined again (pillows are cells as any
+    other); hail, cracks and rot still apply to the refined fruit, which stays valid."""
+    from ramure.gmap.organs.defect_specs import apply_defects
+
+    ring = {"path": "(5, C*, *)", "params": {"precision": 20}}
+    patch = {"cells": [[5, 2], [6, 2]], "params": {"precision": 20}}
+    once = build_fruit("round_tomato", volume_levels=1, regions=[ring])
+    twice = build_fruit("round_tomato", volume_levels=1, regions=[ring, patch])
+    assert twice.is_valid() and twice.euler_characteristic() == 1
+    outside = np.flatnonzero(~np.isin(once.dart_volume, region_volumes(once, patch)))
+    assert _bytes(twice, outside) == _bytes(once, outside)
+    assert np.any(twice.volume_data["refined"] == 2)  # the cells of (5, C3) refined twice
+    for spec in ("hail:depth_mm=2,at=ring5/sector2", "crack:kind=longitudinal,depth=1,width_mm=1,sector=5,rings=4-6"):
+        damaged, facts = apply_defects(once, [spec], seed=0)
+        assert damaged.is_valid() and facts["volume_lost_fraction"] > 0
+
+
+def test_a_sub_label_region_is_skipped_where_faces_have_no_sub_labels():
+    """The plant's coarse fruit has no sub-labels yet: a region narrowed by one names no cell
+    there and is left out (the Defects view's subdivided fruit is refined)."""
+    region = {"path": "(5, C*, *)", "faces": "E(^b[a-z]*$)", "params": {"precision": 20}}
+    coarse = build_fruit("round_tomato", regions=[region])
+    assert coarse.n_darts == build_fruit("round_tomato").n_darts
+    with pytest.raises(RamureError, match="names no cell"):
+        regrow_region(build_fruit("round_tomato"), region, {"precision": 20})
+    fine = build_fruit("round_tomato", volume_levels=1, regions=[region])
+    assert fine.is_valid() and fine.n_darts > 48000
