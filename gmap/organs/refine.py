@@ -57,6 +57,9 @@ from ramure.gmap.kernel.prism import FACE_I
 
 #: Most refinement levels of one region (x8 cells each).
 MAX_LEVELS = 3
+#: Most darts a refined map may have (as :data:`ramure.gmap.organs.fruit.MAX_DARTS`): a large
+#: region refined 3 times is refused, not an out-of-memory.
+MAX_DARTS = 8_000_000
 #: Kind of point of the 8 children of a dart in volume subdivision (corner, edge, face, cell).
 _CHILD_KIND = np.array([0, 1, 1, 2, 1, 2, 2, 3])
 
@@ -180,6 +183,12 @@ def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float 
     chosen[vols] = True
     inside = chosen[vol]
     rim = inside & (alpha[3] != ids) & ~inside[alpha[3]]
+    estimate = n + int(inside.sum()) * (8**levels - 1)
+    if estimate > MAX_DARTS:
+        raise ValueRefused(
+            f"this region refined {levels} time(s) would give the map about {estimate:,} darts, more than the "
+            f"limit of {MAX_DARTS:,}: select a smaller region or a lower precision"
+        )
 
     # 1. the core: the region alone, rim faces free, rim vertices inset, subdivided
     region = np.flatnonzero(inside)

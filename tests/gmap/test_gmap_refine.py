@@ -111,6 +111,8 @@ def test_precision_steps_and_refusals(fruit):
         regrow_region(fruit, region, {"ph": 12})
     with pytest.raises(RamureError, match="1 to 3 times"):
         refine_volumes(fruit, region_volumes(fruit, region), 4)
+    with pytest.raises(RamureError, match="more than the limit"):  # the whole fruit x8: 24 million darts
+        regrow_region(fruit, {"path": "(*, C*, *)"}, {"precision": 80})
     same = regrow_region(fruit, region, {"precision": 10})  # the fruit's own: nothing to do
     assert same.n_darts == fruit.n_darts
 
