@@ -175,3 +175,17 @@ def test_a_sub_label_region_is_skipped_where_faces_have_no_sub_labels():
         regrow_region(build_fruit("round_tomato"), region, {"precision": 20})
     fine = build_fruit("round_tomato", volume_levels=1, regions=[region])
     assert fine.is_valid() and fine.n_darts > 48000
+
+
+def test_a_trunk_prism_of_the_coarse_fruit():
+    """The coarse fruit's trunk stage is one 10-sided prism: refined once it becomes one
+    hexahedron per corner (20) and a pillow on each of its 12 faces, all shared."""
+    coarse = build_fruit("round_tomato")
+    vols = region_volumes(coarse, {"path": "(5)"})
+    assert len(vols) == 1 and coarse.volume_data["degree"][vols[0]] == 10
+    out = refine_volumes(coarse, vols)
+    assert out.n_volumes == coarse.n_volumes - 1 + 20 + 12
+    assert out.is_valid() and out.euler_characteristic() == coarse.euler_characteristic()
+    outside = np.flatnonzero(coarse.dart_volume != vols[0])
+    assert _bytes(out, outside) == _bytes(coarse, outside)
+    assert volumes(out)[region_volumes(out, {"path": "(5)"})].sum() == pytest.approx(volumes(coarse)[vols[0]], rel=1e-9)
