@@ -47,6 +47,8 @@ region is cut into more cells, its union is the same).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -159,6 +161,18 @@ def _subdivided(core: GMap3, levels: int) -> GMap3:
     return core
 
 
+class _NewDarts(NamedTuple):
+    """The darts a refinement makes, numbered ``0..len-1`` (core first), before ids are given."""
+
+    alpha: np.ndarray  # (4, k): new darts by that numbering, an original dart d as -1 - d
+    source: np.ndarray  # (k,): the dart each copies its columns from (core dart, or -1 - original)
+    volume: np.ndarray  # (k,): local volume, the core's first then one pillow per rim face
+    sides: np.ndarray  # new darts on the pillows' side faces (inner faces, label I)
+    bottom: np.ndarray  # (r,): the side-face dart alpha2-glued to each rim dart
+    rims: np.ndarray  # (r,): the rim darts (original ids), the pillows' outer faces
+    parents: np.ndarray  # per local volume: the original volume it comes from
+
+
 def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float | None = None) -> GMap3:
     """``gm`` with ``volumes`` refined ``levels`` times and pillowed at their rim (a new
     map; see the module docstring); every dart of every other volume keeps its bytes.
@@ -175,43 +189,51 @@ def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float 
     vols = np.unique(np.asarray(volumes, np.int64))
     if not len(vols) or vols[0] < 0 or vols[-1] >= gm.n_volumes:
         raise GMapError(f"refine: volume ids must be in 0..{gm.n_volumes - 1} and at least one")
-    n = gm.n_darts
-    ids = np.arange(n)
-    alpha = gm.alpha.astype(np.int64)
-    vol = gm.dart_volume.astype(np.int64)
     chosen = np.zeros(gm.n_volumes, bool)
     chosen[vols] = True
-    inside = chosen[vol]
-    rim = inside & (alpha[3] != ids) & ~inside[alpha[3]]
-    estimate = n + int(inside.sum()) * (8**levels - 1)
+    inside = chosen[gm.dart_volume]
+    a3 = gm.alpha[3]
+    rim = inside & (a3 != np.arange(gm.n_darts)) & ~inside[a3]
+    estimate = gm.n_darts + int(inside.sum()) * (8**levels - 1)
     if estimate > MAX_DARTS:
         raise ValueRefused(
             f"this region refined {levels} time(s) would give the map about {estimate:,} darts, more than the "
             f"limit of {MAX_DARTS:,}: select a smaller region or a lower precision"
         )
+    core, loc = _core(gm, vols, inside, rim, levels, inset)
+    return _assembled(gm, core, vols, inside, levels, _new_darts(gm, core, loc, rim, levels))
 
-    # 1. the core: the region alone, rim faces free, rim vertices inset, subdivided
+
+def _core(gm, vols, inside, rim, levels, inset):
+    """The region alone (rim faces free, rim vertices inset) subdivided ``levels`` times, and
+    each original dart's index in the region (-1 outside)."""
     region = np.flatnonzero(inside)
     m = len(region)
-    loc = np.full(n, -1, np.int64)
+    loc = np.full(gm.n_darts, -1, np.int64)
     loc[region] = np.arange(m)
+    alpha = gm.alpha.astype(np.int64)
     ca = loc[alpha[:, region]]
     ca[3] = np.where(inside[alpha[3, region]], ca[3], np.arange(m))
     data = gm.dart_data
     darts = {k: np.asarray(data[k])[region] for k in data}
-    darts["volume"] = np.searchsorted(vols, vol[region]).astype(np.int32)
+    darts["volume"] = np.searchsorted(vols, gm.dart_volume[region]).astype(np.int32)
     darts["_src"] = region.astype(np.int64)
     darts["_rim"] = rim[region]
     vdata = {k: np.asarray(v)[vols] for k, v in gm.volume_data.items()}
     vdata["_parent"] = vols
     core = GMap3.from_arrays(ca, darts, vdata, {**gm.dart_rules(), "_src": "copy", "_rim": "copy"})
     _inset(core, rim[region], inset)
-    core = _subdivided(core, levels)
+    return _subdivided(core, levels), loc
+
+
+def _new_darts(gm, core, loc, rim, levels) -> _NewDarts:
+    """The refined core's darts, then the pillows': a mirror of each core dart under a rim
+    face (their inner faces), and their side faces (one polygon per rim edge: the rim edge,
+    two lateral edges, the core's segments along the inset edge)."""
+    alpha = gm.alpha.astype(np.int64)
     M = core.n_darts
     kc = core.alpha.astype(np.int64)
     face_rim = _free(kc) & core.dart_data["_rim"]
-
-    # 2. the pillows' darts: mirrors of the core's rim sub-faces, side faces
     side0, _ = gm.orbit_ids("01")
     src = core.dart_data["_src"].astype(np.int64)
     tops = np.flatnonzero(face_rim)  # core darts under a pillow's inner face
@@ -222,9 +244,8 @@ def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float 
     b = len(edge)
     rims = np.flatnonzero(rim)  # original darts of the pillows' outer faces
     r = len(rims)
-    step = 8**levels
-    corner = loc[rims] * step  # the core dart at the inset corner, along the same edge
-    # new darts, in order: core (M), top (q), u (b), bottom side (r), lateral (r), lateral top (r)
+    corner = loc[rims] * 8**levels  # the core dart at the inset corner, along the same edge
+    # numbering: core (M), top (q), u (b), bottom side (r), lateral (r), lateral top (r)
     o_top, o_u, o_bot = M, M + q, M + q + b
     o_lat, o_latt = o_bot + r, o_bot + 2 * r
     total = o_bot + 3 * r
@@ -232,14 +253,13 @@ def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float 
     top_of[tops] = o_top + np.arange(q)
     u_of = np.full(M, -1, np.int64)
     u_of[edge] = o_u + np.arange(b)
-    side_of = np.full(n, -1, np.int64)  # rim dart -> its index among rims
+    side_of = np.full(gm.n_darts, -1, np.int64)  # rim dart -> its index among rims
     side_of[rims] = np.arange(r)
     rim_at = np.full(M, -1, np.int64)  # core corner dart -> rim index
     rim_at[corner] = np.arange(r)
-    if (face_rim[corner] == 0).any():
-        raise GMapError("refine: a rim corner lost its place in the core (internal error)")
+    if not face_rim[corner].all() or (side_of[src[tops]] < 0).any():
+        raise GMapError("refine: a rim face lost its place in the core (internal error)")
 
-    # alpha of the new darts, in "new" numbering: orig darts as -1 - id
     A = np.empty((4, total), np.int64)
     A[:, :M] = kc
     A[3, tops] = top_of[tops]
@@ -254,12 +274,11 @@ def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float 
     y = kc[1, edge]  # along the sub-face's other edge at the same corner
     yc = _cross(kc, y)
     inner = face_rim[yc] & (side0[src[yc]] == side0[src[y]])
-    A[1, u] = np.where(inner, u_of[kc[1, yc]], -1)
-    at_corner = ~inner
-    k_r = rim_at[edge[at_corner]]
+    k_r = rim_at[edge[~inner]]
     if (k_r < 0).any():
         raise GMapError("refine: a side face's corner is not a rim corner (internal error)")
-    A[1, u[at_corner]] = o_latt + k_r
+    A[1, u] = np.where(inner, u_of[kc[1, yc]], -1)
+    A[1, u[~inner]] = o_latt + k_r
     bot, lat, latt = o_bot + np.arange(r), o_lat + np.arange(r), o_latt + np.arange(r)
     A[0, bot] = o_bot + side_of[alpha[0, rims]]
     A[1, bot] = lat
@@ -275,98 +294,93 @@ def refine_volumes(gm: GMap3, volumes: ArrayLike, levels: int = 1, inset: float 
     for base in (o_bot, o_lat, o_latt):
         A[3, base + np.arange(r)] = np.where(other >= 0, base + other, base + np.arange(r))
 
-    # 3. ids: new darts fill the region's non-rim ids, then come after the last
-    slots = np.concatenate([np.flatnonzero(inside & ~rim), n + np.arange(max(total - (m - r), 0))])
-    if total < m - r:
-        raise GMapError("refine: fewer darts than the region had (internal error)")
-    new_id = slots[:total]
-    N = n + total - (m - r)
-
-    def to_id(x: np.ndarray) -> np.ndarray:
-        return np.where(x < 0, -1 - x, new_id[np.maximum(x, 0)])
-
-    out_alpha = np.empty((4, N), np.int64)
-    out_alpha[:, :n] = alpha
-    out_alpha[:, new_id] = to_id(A)
-    out_alpha[2, rims] = new_id[bot]
-
-    # 4. volumes: core children, then one pillow per rim face; region ids first
     faces, face_idx = np.unique(side0[rims], return_inverse=True)
-    nc = core.n_volumes
-    n_new = nc + len(faces)
-    vslots = np.concatenate([vols, gm.n_volumes + np.arange(max(n_new - len(vols), 0))])
-    cvol = core.dart_volume.astype(np.int64)
-    pillow_of_rim = nc + face_idx
-    new_vol = np.empty(total, np.int64)
-    new_vol[:M] = cvol
-    new_vol[t] = pillow_of_rim[side_of[src[tops]]]
-    new_vol[u] = pillow_of_rim[side_of[src[edge]]]
-    for base in (o_bot, o_lat, o_latt):
-        new_vol[base : base + r] = pillow_of_rim
-    if (side_of[src[tops]] < 0).any():
-        raise GMapError("refine: a rim sub-face lost its rim dart (internal error)")
-    parent_new = np.concatenate(
-        [core.volume_data["_parent"].astype(np.int64), vol[rims[np.unique(face_idx, return_index=True)[1]]]]
-    )
+    pillow = core.n_volumes + face_idx  # per rim dart
+    volume = np.empty(total, np.int64)
+    volume[:M] = core.dart_volume
+    volume[t], volume[u] = pillow[side_of[src[tops]]], pillow[side_of[src[edge]]]
+    volume[o_bot:] = np.tile(pillow, 3)
+    source = np.empty(total, np.int64)
+    source[:M] = np.arange(M)
+    source[t], source[u] = tops, edge
+    source[bot], source[lat], source[latt] = -1 - rims, -1 - rims, corner
+    first = np.unique(face_idx, return_index=True)[1]
+    parents = np.concatenate([core.volume_data["_parent"].astype(np.int64), gm.dart_volume[rims[first]].astype(np.int64)])
+    return _NewDarts(A, source, volume, np.concatenate([u, bot, lat, latt]), bot, rims, parents)
 
-    # 5. dart columns: every new dart copies a source dart (core or original), then fixes
-    csrc = np.empty(total, np.int64)  # >= 0: core dart; < 0: -1 - original dart
-    csrc[:M] = np.arange(M)
-    csrc[t], csrc[u] = tops, edge
-    csrc[bot], csrc[lat], csrc[latt] = -1 - rims, -1 - rims, corner
-    cdata = core.dart_data
+
+def _assembled(gm, core, vols, inside, levels, new: _NewDarts) -> GMap3:
+    """The refined map: the new darts take the region's non-rim dart ids then ids after the
+    last, the new volumes the region's volume ids then ids after the last."""
+    n = gm.n_darts
+    total = len(new.source)
+    free_ids = np.flatnonzero(inside)
+    free_ids = free_ids[~np.isin(free_ids, new.rims)]
+    if total < len(free_ids):
+        raise GMapError("refine: fewer darts than the region had (internal error)")
+    new_id = np.concatenate([free_ids, n + np.arange(total - len(free_ids))])
+    N = n + total - len(free_ids)
+    out_alpha = np.empty((4, N), np.int64)
+    out_alpha[:, :n] = gm.alpha
+    out_alpha[:, new_id] = np.where(new.alpha < 0, -1 - new.alpha, new_id[np.maximum(new.alpha, 0)])
+    out_alpha[2, new.rims] = new_id[new.bottom]
+
+    n_new = len(new.parents)
+    vol_id = np.concatenate([vols, gm.n_volumes + np.arange(max(n_new - len(vols), 0))])[:n_new]
+    data, cdata = gm.dart_data, core.dart_data
+    from_core = new.source >= 0
     out_darts = {}
     for name in data:
         col = np.asarray(data[name])
-        new = np.empty((N,) + col.shape[1:], col.dtype)
-        new[:n] = col
-        from_core = csrc >= 0
+        column = np.empty((N,) + col.shape[1:], col.dtype)
+        column[:n] = col
         vals = np.empty((total,) + col.shape[1:], col.dtype)
-        vals[from_core] = np.asarray(cdata[name])[csrc[from_core]]
-        vals[~from_core] = col[-1 - csrc[~from_core]]
-        new[new_id] = vals
-        out_darts[name] = new
-    vid_new = vslots[new_vol]
-    out_darts["volume"][new_id] = vid_new
-    out_darts["volume"][rims] = vslots[pillow_of_rim]
-    sides = np.concatenate([u, bot, lat, latt])
-    out_darts["face"][new_id[sides]] = FACE_I
-    out_darts["sublabel"][new_id[sides]] = 0
-    out_darts["fcorner"][new_id[sides]] = -1
-    out_darts["forward"][new_id[sides]] = False
+        vals[from_core] = np.asarray(cdata[name])[new.source[from_core]]
+        vals[~from_core] = col[-1 - new.source[~from_core]]
+        column[new_id] = vals
+        out_darts[name] = column
+    out_darts["volume"][new_id] = vol_id[new.volume]
+    out_darts["volume"][new.rims] = vol_id[new.volume[new.bottom]]
+    sides = new_id[new.sides]
+    out_darts["face"][sides] = FACE_I
+    out_darts["sublabel"][sides] = 0
+    out_darts["fcorner"][sides] = -1
+    out_darts["forward"][sides] = False
     out_darts["sup"][new_id] = -1
     out_darts["corner"][new_id] = out_darts["point"][new_id]
+    out = GMap3.from_arrays(out_alpha, out_darts, _volume_rows(gm, vol_id, new.parents, levels), gm.dart_rules())
+    out.meta = dict(gm.meta)
+    return out
 
-    # 6. volume rows: parents' rows, with refined / sub / layer
+
+def _volume_rows(gm: GMap3, vol_id: np.ndarray, parents: np.ndarray, levels: int) -> dict[str, np.ndarray]:
+    """Volume columns: each new volume ``vol_id[i]`` copies ``parents[i]``'s row, with
+    ``refined`` (+ levels), ``sub`` (1.. among its parent's children) and a fruit's ``layer``."""
     vd = gm.volume_data
-    V = max(gm.n_volumes, int(vslots[:n_new].max()) + 1)
-    out_vol = {}
+    V = max(gm.n_volumes, int(vol_id.max()) + 1)
+    out = {}
     for name in vd:
         col = np.asarray(vd[name])
-        new = np.empty((V,) + col.shape[1:], col.dtype)
-        new[: gm.n_volumes] = col
-        new[vslots[:n_new]] = col[parent_new]
-        out_vol[name] = new
-    if "parent" in out_vol:
-        out_vol["parent"][vslots[:n_new]] = -1
-    refined = np.zeros(V, np.int16) if "refined" not in vd else out_vol["refined"]
-    refined[vslots[:n_new]] = (np.asarray(vd["refined"])[parent_new] if "refined" in vd else 0) + levels
-    order = np.argsort(parent_new, kind="stable")
-    sub = np.empty(n_new, np.int32)
-    starts = np.searchsorted(parent_new[order], parent_new[order])
-    sub[order] = np.arange(n_new) - starts + 1
-    subs = np.zeros(V, np.int32) if "sub" not in vd else out_vol["sub"]
-    subs[vslots[:n_new]] = sub
-    out_vol["refined"], out_vol["sub"] = refined, subs
-    if "ring" in vd and "layer" not in vd:
+        rows = np.empty((V,) + col.shape[1:], col.dtype)
+        rows[: gm.n_volumes] = col
+        rows[vol_id] = col[parents]
+        out[name] = rows
+    if "parent" in out:
+        out["parent"][vol_id] = -1
+    if "refined" not in out:
+        out["refined"] = np.zeros(V, np.int16)
+    out["refined"][vol_id] = (np.asarray(vd["refined"])[parents] if "refined" in vd else 0) + levels
+    order = np.argsort(parents, kind="stable")
+    sub = np.empty(len(parents), np.int32)
+    sub[order] = np.arange(len(parents)) - np.searchsorted(parents[order], parents[order]) + 1
+    if "sub" not in out:
+        out["sub"] = np.zeros(V, np.int32)
+    out["sub"][vol_id] = sub
+    if "ring" in vd and "layer" not in vd:  # a fruit's radial layers, frozen before its cells change
         from ramure.gmap.organs.defects import radial_layers
 
         _, layer = radial_layers(gm)
-        lay = np.full(V, -1, np.int16)
-        lay[: gm.n_volumes] = layer
-        lay[vslots[:n_new]] = layer[parent_new]
-        out_vol["layer"] = lay
-    rules = {k: v for k, v in gm.dart_rules().items()}
-    out = GMap3.from_arrays(out_alpha, out_darts, out_vol, rules)
-    out.meta = dict(gm.meta)
+        out["layer"] = np.full(V, -1, np.int16)
+        out["layer"][: gm.n_volumes] = layer
+        out["layer"][vol_id] = layer[parents]
     return out
