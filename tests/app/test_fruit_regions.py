@@ -159,7 +159,7 @@ def test_refusals_change_nothing(ex):
     assert len(ex.session.edits) == edits
 
 
-def test_a_region_at_a_finer_precision_is_one_undoable_edit(ex):
+def test_a_region_at_a_finer_precision_is_one_undoable_edit(ex, tmp_path):
     leaf = ex.selection[0]
     before, _ = FD.damaged_fruit(ex, leaf)
     everything = np.ones(before.n_darts, bool)
@@ -189,6 +189,21 @@ def test_a_region_at_a_finer_precision_is_one_undoable_edit(ex):
     ex.redo()
     redone, _ = FD.damaged_fruit(ex, leaf)
     assert _bytes_outside(redone, np.ones(redone.n_darts, bool)) == _bytes_outside(finer, np.ones(finer.n_darts, bool))
+    # a hail placed in the refined region lands there, by labels, on the refined cells
+    ex.select([leaf])
+    ex.select_fruit_region("cells", [[4, 2], [4, 3], [5, 2], [5, 3]])
+    hit, facts = ex.place_defect_in_region("hail:depth_mm=2,healed=0")
+    assert hit.is_valid() and facts["volume_lost_fraction"] > 0
+    moved = np.linalg.norm(hit.points[: finer.n_darts] - finer.points, axis=1) > 1e-9
+    assert set(np.unique(hit.volume_data["ring"][hit.dart_volume[: finer.n_darts][moved]]).tolist()) <= {3, 4, 5, 6}
+    # a session file keeps the precision region: the same bytes once loaded
+    ex.save_session(tmp_path / "finer.json")
+    from ramure import grammars
+
+    again = Explorer(grammars.path("fruit_tree"), n=5)
+    again.load_session(tmp_path / "finer.json")
+    loaded, _ = FD.damaged_fruit(again, leaf)
+    assert _bytes_outside(loaded, np.ones(loaded.n_darts, bool)) == _bytes_outside(hit, np.ones(hit.n_darts, bool))
 
 
 def test_region_is_highlighted(ex):
