@@ -598,7 +598,9 @@ class Explorer:
         :mod:`ramure.gmap.organs.regions`).  ``blend``: edges over which the change fades in
         from the region's rim (1, the default: every vertex of the region's own takes the new
         shape, a raised or sunk patch; 2 or more peak at the middle, which on a small region
-        of a once-subdivided fruit looks crumpled).  Returns what the Defects view shows ``(map, facts)``."""
+        of a once-subdivided fruit looks crumpled).  ``precision`` (the fruit's times 2, 4 or 8)
+        refines the region alone, pillowed at its rim (:mod:`ramure.gmap.organs.refine`); a
+        coarser one is refused.  Returns what the Defects view shows ``(map, facts)``."""
         from ramure.app.fruit_defects import damaged_fruit, fruit_settings
         from ramure.gmap.organs.fruit import regrow_region
         from ramure.gmap.organs.regions import check_region
@@ -612,8 +614,11 @@ class Explorer:
             raise ValueRefused(f"fruit {leaf} is no longer on the plant: select a region again")
         s = fruit_settings(self, leaf)
         region = check_region({**self.fruit_region["region"], "params": params, "blend": blend})
-        before, _ = damaged_fruit(self, leaf, specs=[])
-        regrow_region(before, region, params)  # refused here (nothing of its own to move, bad values) before recording
+        # refused here (nothing of its own to move, bad values) before recording; on the
+        # fruit's cells as built (a finer precision of an earlier region comes after shapes)
+        as_built = [{**r, "params": {k: v for k, v in r.get("params", {}).items() if k != "precision"}} for r in s["regions"]]
+        before, _ = damaged_fruit(self, leaf, specs=[], regions=as_built)
+        regrow_region(before, region, params)
         regions = [*s["regions"], region]
         shown = damaged_fruit(self, leaf, regions=regions)
         self.last_result = self.session.regrow_fruit([leaf], seed=s["seed"], regions=regions)

@@ -71,6 +71,26 @@ def parse_subdivide(specs: Iterable[str]) -> dict[str, int]:
     return levels
 
 
+def parse_region(text: str) -> dict[str, Any]:
+    """``--region`` text as a fruit region: a label pattern, then the region's parameters.
+
+    >>> parse_region("(5, C*, *) precision=20")
+    {'path': '(5, C*, *)', 'params': {'precision': 20}}
+    >>> parse_region("(5, C*, *) E(^b) largeur=75")
+    {'faces': 'E(^b)', 'path': '(5, C*, *)', 'params': {'largeur': '75'}}
+    """
+    from ramure.app.fruit_regions import parse_params, split_pattern
+    from ramure.gmap.organs.regions import check_region
+
+    end = str(text).rfind(")")
+    if end < 0 or not text[end + 1 :].strip():
+        raise UserError(
+            f"--region {text!r}: a label pattern and the region's parameters, e.g. '(5, C*, *) precision=20' "
+            "or '(5, C*, *) largeur=75,creux=0.4'"
+        )
+    return check_region({**split_pattern(text[: end + 1]), "params": parse_params(text[end + 1 :])})
+
+
 def parse_sets(pairs: Iterable[str]) -> dict[str, float | str]:
     """``["precision=12"]`` -> ``{"precision": "12"}`` (the fruit builder converts and checks)."""
     out = {}
@@ -163,6 +183,7 @@ def run_fruit(args: argparse.Namespace) -> int:
     plane = parse_plane(args.cut) if args.cut else None  # checked even without -o
     size = parse_size(args.size)
     defects = [parse_defect(spec) for spec in args.defect]  # checked before building
+    regions = [parse_region(text) for text in args.region]
     params: dict[str, Any] = dict(parse_sets(args.set))  # Any: mypy checks ** values against every keyword
     malformation = None
     if args.malform:
@@ -178,6 +199,7 @@ def run_fruit(args: argparse.Namespace) -> int:
         surface_levels=levels["surface_levels"],
         ripeness=args.ripeness,
         size_mm=args.size_mm,
+        regions=regions,
         **params,
     )
     if malformation is not None:
@@ -268,6 +290,15 @@ def register(sub: Subparsers) -> None:
         help="surface:N or volume:N subdivisions (repeatable); volume:N also builds tissues",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (seed placement)")
+    p.add_argument(
+        "--region",
+        action="append",
+        default=[],
+        metavar="PATTERN PARAMS",
+        help="regrow a region alone (repeatable): a label pattern and its parameters, e.g. "
+        "'(5, C*, *) largeur=75' (a local malformation) or '(5, C*, *) precision=20' (finer cells "
+        "there: the fruit's precision times 2, 4 or 8); the rest of the fruit is not touched",
+    )
     p.add_argument("--cut", default=None, metavar="AXIS=VALUE", help="show the inside: keep what lies behind the plane, e.g. z=0")
     p.add_argument(
         "--cut-mode",

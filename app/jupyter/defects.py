@@ -60,7 +60,11 @@ class DefectsTab:
         self.apply_button = button("Apply to the selected fruit", self.apply)
         self.show_button = button("Show", self.show)
         self.region_pattern = W.Text(value="", placeholder="(5, C*, *)", description="region")
-        self.region_params = W.Text(value="largeur=75", description="regrow with")
+        self.region_params = W.Text(
+            value="largeur=75",
+            description="regrow with",
+            tooltip="shape parameters (largeur=75, creux=0.4) or a finer precision (precision=20: twice the fruit's)",
+        )
         self.region_button = button("Select region", self.select_region)
         self.regrow_button = button("Regrow region", self.regrow_region)
         self.place_button = button("Place defect in region", self.place_in_region)

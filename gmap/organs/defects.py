@@ -879,11 +879,19 @@ CRACK_CAP = 0.3
 
 
 def radial_layers(gm: GMap3) -> tuple[int, np.ndarray]:
-    """``(layers, layer per volume)``: radial layers of a volume-subdivided fruit, 0 = skin."""
+    """``(layers, layer per volume)``: radial layers of a volume-subdivided fruit, 0 = skin.
+
+    Measured from the cells' ``radial`` coordinate; a fruit with a refined region keeps the
+    layers it had before (``layer``, frozen by :func:`ramure.gmap.organs.refine.refine_volumes`),
+    as its finer cells would count more layers."""
     vd = gm.volume_data
     branch = vd["order"] >= 1
     if "excrescence" in vd:  # grown on the skin: not a pericarp layer
         branch &= vd["excrescence"] == 0
+    if "layer" in vd:
+        layer = vd["layer"].astype(np.int64)
+        branch &= layer >= 0
+        return (int(layer[branch].max()) + 1 if branch.any() else 0), np.where(branch, layer, -1)
     idx = _index(gm)
     cell = idx.by_cell
     rho = (cell @ gm.dart_data["radial"][idx.first]) / np.maximum(np.diff(cell.indptr), 1)

@@ -523,7 +523,7 @@ def build_fruit(
         def build(changes):
             return built_unplaced(resolve_params(preset, **{**p, **changes}), seed, levels[0], levels[1], tissues)[0]
 
-        gm = _regions.apply_regions(gm, regions, build)
+        gm = _regions.apply_regions(gm, regions, build, int(p["precision"]))
     _place(gm, stem, anchor, size, origin, frame, before)
     placed = gm.meta
     gm.meta = {
@@ -601,6 +601,8 @@ def regrow_region(gm: GMap3, region: Mapping[str, Any], params: Mapping[str, Any
     ``params``: the fruit is built again from ``gm.meta``'s recipe, as is and with the
     changes, in ``gm``'s frame, and the region's own vertices move by the difference (see
     :mod:`ramure.gmap.organs.regions`); every dart outside the region keeps its bytes.
+    A finer ``precision`` (the fruit's times 2, 4 or 8) then refines the region
+    (:func:`ramure.gmap.organs.refine.refine_volumes`); a coarser one is refused.
 
     >>> gm = build_fruit("round_tomato", volume_levels=1)
     >>> out = regrow_region(gm, {"cells": [[4, 2], [4, 3]]}, {"largeur": 70.0})
@@ -611,6 +613,18 @@ def regrow_region(gm: GMap3, region: Mapping[str, Any], params: Mapping[str, Any
     if "preset" not in meta or "params" not in meta:
         raise ValueRefused("this map does not say how it was built (meta preset and params): build it with build_fruit")
     changes = _regions.check_params(params)
+    wanted = changes.pop("precision", None)
+    if wanted is not None:
+        _regions.refine_levels(int(meta["params"]["precision"]), wanted)  # refused before any work
+    if changes:
+        gm = _shape_regrown(gm, meta, region, changes, blend)
+    if wanted is not None:
+        gm = _regions.refine_region(gm, region, wanted, int(meta["params"]["precision"]))
+    return gm
+
+
+def _shape_regrown(gm, meta, region, changes, blend):
+    """``gm`` with the region's own vertices moved to the fruit built with shape ``changes``."""
     levels = (int(meta.get("volume_levels", 0)), int(meta.get("surface_levels", 0)))
     place = meta.get("placement") or {"rotation": np.eye(3).tolist(), "scale": 1.0}
     pair = []

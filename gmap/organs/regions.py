@@ -28,9 +28,22 @@ a volume outside stays where it was, so every dart of a volume outside the regio
 bytes (position and attributes), and the topology is untouched, so the map stays valid and
 its Euler characteristic is kept.  ``blend`` (hops) fades the change in from the region's
 rim: a free vertex ``h`` edges from the nearest pinned vertex moves ``min(1, h / blend)``
-of the way.  Parameters that change the topology (``precision``, ``ph``, the carpels and
-seeds) are refused: a local change of precision would split the faces the region shares with
-its neighbours, and their darts would change.
+of the way.
+
+**Another precision** (``precision`` = the fruit's times 2, 4 or 8: :func:`refine_levels`)
+refines the region alone, 1 to 3 times, by :func:`ramure.gmap.organs.refine.refine_volumes`:
+its cells are split into eight each time, and a transition cell at each face the region
+shares with the outside keeps that face whole, so every dart outside keeps its bytes, the
+map stays valid and its Euler characteristic is kept.  The refined cells and the transition
+cells carry their parent's ring, sector and radial layer (plus ``refined`` and ``sub``), so
+the region's pattern still names them.  The choice: refining, rather than deriving the
+grammar again at the finer precision and splicing its cells in, keeps the fruit's shape
+exactly where it was (a finer mesh of the same fruit) and needs no second build.  A
+coarser precision is refused (merging cells would change the faces they share with the
+outside), and so are ``ph``, the carpels, the seeds and the septum, which change the whole
+fruit's cells.  Shape changes are applied first, then refinements, in the order of the
+regions (a shape change moves vertices of the fruit as built; a refinement then
+interpolates the moved ones).
 
 >>> from ramure.gmap.organs.fruit import build_fruit, regrow_region
 >>> gm = build_fruit("round_tomato", volume_levels=1)
@@ -40,6 +53,9 @@ True
 >>> out = regrow_region(gm, region, {"largeur": 70.0})
 >>> out.is_valid(), out.euler_characteristic() == gm.euler_characteristic()
 (True, True)
+>>> finer = regrow_region(gm, region, {"precision": 20})  # twice the fruit's 10
+>>> len(region_volumes(finer, region)), finer.is_valid()
+(760, True)
 """
 
 from __future__ import annotations
@@ -56,8 +72,9 @@ from scipy.sparse import csgraph
 from ramure.gmap.kernel.errors import GMapError, ValueRefused
 from ramure.gmap.kernel.map3 import GMap3
 
-#: Parameters a region may not change: they change the fruit's topology.
-TOPOLOGY_PARAMS = ("precision", "ph", "carpels", "seeds", "septum")
+#: Parameters a region may not change: they change the whole fruit's topology
+#: (``precision`` may be made finer: :func:`refine_levels`).
+TOPOLOGY_PARAMS = ("ph", "carpels", "seeds", "septum")
 #: Keys of a region dict besides its selector (``path`` or ``cells``).
 REGION_KEYS = ("path", "cells", "faces", "params", "blend")
 _FACES = re.compile(r"^\s*(?P<label>[OoEe]|[Cc]\d+)\s*\((?P<regex>.*)\)\s*$")
@@ -121,8 +138,40 @@ def check_params(params: Mapping[str, Any]) -> dict[str, Any]:
                 f"a region cannot change {name}: it changes the fruit's cells, so darts outside the region "
                 "would change (regrow the whole fruit for that)"
             )
+        if name == "precision":
+            try:
+                value = int(value)
+            except (TypeError, ValueError):
+                raise ValueRefused(f"a region's precision is a whole number of stages, got {value!r}") from None
+            if value < 1:
+                raise ValueRefused(f"a region's precision is a whole number of stages >= 1, got {value}")
         out[str(name)] = value
     return out
+
+
+def refine_levels(fruit_precision: int, precision: int) -> int:
+    """How many times a region is refined for ``precision`` on a fruit of ``fruit_precision``:
+    ``precision`` must be the fruit's times 2, 4 or 8 (1 to 3 levels; the fruit's own: 0).
+
+    >>> refine_levels(10, 20), refine_levels(10, 80), refine_levels(10, 10)
+    (1, 3, 0)
+    """
+    from ramure.gmap.organs.refine import MAX_LEVELS
+
+    base, wanted = int(fruit_precision), int(precision)
+    if wanted < base:
+        raise ValueRefused(
+            f"a region cannot be coarser than its fruit (precision {wanted} < {base}): merging its cells "
+            "would change the faces it shares with the rest (regrow the whole fruit for that)"
+        )
+    for levels in range(MAX_LEVELS + 1):
+        if wanted == base * 2**levels:
+            return levels
+    steps = ", ".join(str(base * 2**k) for k in range(1, MAX_LEVELS + 1))
+    raise ValueRefused(
+        f"a region's precision is the fruit's ({base}) times 2, 4 or 8 ({steps}), got {wanted}: "
+        "a region is refined by halving its cells"
+    )
 
 
 def region_volumes(gm: GMap3, region: Mapping[str, Any]) -> np.ndarray:
@@ -247,16 +296,48 @@ def regrow_region(
     return out
 
 
-def apply_regions(gm: GMap3, regions: Iterable[Mapping[str, Any]], build: Callable[[dict], GMap3]) -> GMap3:
+def apply_regions(
+    gm: GMap3, regions: Iterable[Mapping[str, Any]], build: Callable[[dict], GMap3], precision: int | None = None
+) -> GMap3:
     """Every region with ``params`` regrown in turn on ``gm`` (``build(params)``: the fruit
     built with those parameters in ``gm``'s frame; a region with no vertex of its own at
-    this level is skipped, see :func:`regrow_region`)."""
+    this level is skipped, see :func:`regrow_region`), then every region with a finer
+    ``precision`` than the fruit's (``precision``) refined, in order (:func:`refine_levels`)."""
     reference = gm
+    finer = []
     for region in regions:
         region = check_region(region)
-        if region.get("params"):
-            gm = regrow_region(gm, region, reference, build(region["params"]), strict=False)
+        shape = dict(region.get("params", {}))
+        if "precision" in shape:
+            finer.append((region, shape.pop("precision")))
+        if shape:
+            gm = regrow_region(gm, region, reference, build(shape), strict=False)
+    for region, wanted in finer:
+        gm = refine_region(gm, region, wanted, precision, strict=False)
     return gm
+
+
+def refine_region(gm: GMap3, region: Mapping[str, Any], wanted: int, precision: int | None, strict: bool = True) -> GMap3:
+    """``gm`` with ``region`` refined to ``wanted`` stages on a fruit of ``precision`` stages
+    (default ``gm.meta["params"]["precision"]``; see :func:`refine_levels`).  A region naming
+    no cell of ``gm`` is refused, or leaves ``gm`` as it is when not ``strict`` (a sub-label
+    pattern on the plant's coarse fruit, whose faces have no sub-labels yet)."""
+    from ramure.gmap.organs.refine import refine_volumes
+
+    if precision is None:
+        precision = (gm.meta or {}).get("params", {}).get("precision")
+    if precision is None:
+        raise ValueRefused("this map does not say its precision (meta params): build it with build_fruit")
+    levels = refine_levels(int(precision), int(wanted))
+    if not levels:
+        return gm
+    try:
+        vols = region_volumes(gm, region)
+    except ValueRefused:
+        if strict:
+            raise
+        return gm
+    return refine_volumes(gm, vols, levels)
 
 
 def skin_cells(gm: GMap3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -144,8 +144,12 @@ def test_refusals_change_nothing(ex):
     with pytest.raises(RamureError, match="stage 9 is past"):
         ex.select_fruit_region("pattern", "(3, C1, 9)")
     ex.select_fruit_region("pattern", "(3, C*, *)")
-    with pytest.raises(RamureError, match="cannot change precision"):
+    with pytest.raises(RamureError, match="times 2, 4 or 8"):  # finer precision: see the next test
         ex.regrow_fruit_region(precision=12)
+    with pytest.raises(RamureError, match="cannot be coarser"):
+        ex.regrow_fruit_region(precision=5)
+    with pytest.raises(RamureError, match="cannot change ph"):
+        ex.regrow_fruit_region(ph=12)
     with pytest.raises(RamureError, match="unknown fruit parameter"):
         ex.regrow_fruit_region(bogus=1.0)
     with pytest.raises(RamureError, match="new parameters"):
@@ -153,6 +157,53 @@ def test_refusals_change_nothing(ex):
     with pytest.raises(RamureError, match="either a 'path'"):
         check_region({"path": "(1)", "cells": [[1, 1]]})
     assert len(ex.session.edits) == edits
+
+
+def test_a_region_at_a_finer_precision_is_one_undoable_edit(ex, tmp_path):
+    leaf = ex.selection[0]
+    before, _ = FD.damaged_fruit(ex, leaf)
+    everything = np.ones(before.n_darts, bool)
+    ex.select_fruit_region("cells", [[4, 2], [4, 3], [5, 2], [5, 3]])
+    region = ex.fruit_region["region"]
+    finer, _ = ex.regrow_fruit_region(precision=20)
+    inside = region_darts(before, region)
+    n = before.n_darts
+    assert _bytes_outside(finer, np.r_[~inside, np.zeros(finer.n_darts - n, bool)]) == _bytes_outside(before, ~inside)
+    assert finer.is_valid() and finer.euler_characteristic() == before.euler_characteristic()
+    # 16 cells of the once-subdivided fruit, 8 each, and a pillow per face towards the rest
+    assert len(region_volumes(finer, region)) > 8 * len(region_volumes(before, region))
+    assert FD.fruit_settings(ex, leaf)["regions"] == [{**region, "params": {"precision": 20}, "blend": 1}]
+    assert ex.fruit_volume(leaf).is_valid()  # the plant's coarse fruit is refined there too
+    # a shape change on top: the precision region stays, the shape applies under it
+    ex.select_fruit_region("pattern", "(8, C*, *)")
+    both, _ = ex.regrow_fruit_region(largeur=75.0)
+    assert both.is_valid() and both.n_darts == finer.n_darts
+    ring8 = region_darts(finer, {"path": "(8, C*, *)"})
+    assert not np.array_equal(both.points[ring8], finer.points[ring8])
+    ex.undo()
+    again, _ = FD.damaged_fruit(ex, leaf)
+    assert _bytes_outside(again, np.ones(again.n_darts, bool)) == _bytes_outside(finer, np.ones(finer.n_darts, bool))
+    ex.undo()
+    restored, _ = FD.damaged_fruit(ex, leaf)
+    assert _bytes_outside(restored, np.ones(restored.n_darts, bool)) == _bytes_outside(before, everything)
+    ex.redo()
+    redone, _ = FD.damaged_fruit(ex, leaf)
+    assert _bytes_outside(redone, np.ones(redone.n_darts, bool)) == _bytes_outside(finer, np.ones(finer.n_darts, bool))
+    # a hail placed in the refined region lands there, by labels, on the refined cells
+    ex.select([leaf])
+    ex.select_fruit_region("cells", [[4, 2], [4, 3], [5, 2], [5, 3]])
+    hit, facts = ex.place_defect_in_region("hail:depth_mm=2,healed=0")
+    assert hit.is_valid() and facts["volume_lost_fraction"] > 0
+    moved = np.linalg.norm(hit.points[: finer.n_darts] - finer.points, axis=1) > 1e-9
+    assert set(np.unique(hit.volume_data["ring"][hit.dart_volume[: finer.n_darts][moved]]).tolist()) <= {3, 4, 5, 6}
+    # a session file keeps the precision region: the same bytes once loaded
+    ex.save_session(tmp_path / "finer.json")
+    from ramure import grammars
+
+    again = Explorer(grammars.path("fruit_tree"), n=5)
+    again.load_session(tmp_path / "finer.json")
+    loaded, _ = FD.damaged_fruit(again, leaf)
+    assert _bytes_outside(loaded, np.ones(loaded.n_darts, bool)) == _bytes_outside(hit, np.ones(hit.n_darts, bool))
 
 
 def test_region_is_highlighted(ex):

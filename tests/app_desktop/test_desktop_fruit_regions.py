@@ -89,3 +89,38 @@ def test_select_a_region_regrow_it_and_undo(qtbot, window, artifacts):
     window.controller.select([fruit])
     _wait(qtbot, window, panel, f"Fruit {fruit}: no defects")
     np.testing.assert_array_equal(np.asarray(_mesh(panel).points), plain)
+
+
+def test_regrow_a_region_at_a_finer_precision_and_undo(qtbot, window, artifacts):
+    """``precision=20`` typed in the regrow field: the region alone gets finer cells (the
+    view's skin has more faces, the rest of its points stay), one edit, undone by Ctrl+Z."""
+    panel = window.docks["defects"].widget()
+    ex = window.controller.explorer
+    fruit = ex.fruit_ids()[1]
+    window.controller.select([fruit])
+    _wait(qtbot, window, panel, f"Fruit {fruit}: no defects")
+    plain = _mesh(panel)
+    plain_points, plain_cells = np.asarray(plain.points).copy(), plain.n_cells
+    panel.region_pattern.setFocus()
+    qtbot.keyClicks(panel.region_pattern, "(5, C*, *)")
+    qtbot.mouseClick(panel.region_select, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Region: (5, C*, *)")
+    edits = len(ex.session.edits)
+    panel.region_params.setText("precision=20")
+    qtbot.mouseClick(panel.region_regrow, Qt.MouseButton.LeftButton)
+    _wait(qtbot, window, panel, "Regrown:")
+    assert len(ex.session.edits) == edits + 1
+    assert ex.session.fruit_overrides()[fruit]["regions"][0]["params"] == {"precision": 20}
+    finer = _mesh(panel)
+    assert finer.n_cells > plain_cells + 3 * 10 * 4  # ring 5's skin, 4 times as many faces
+    lit = np.asarray(finer.cell_data["region"], bool)
+    assert 0 < lit.sum() < finer.n_cells  # the refined region is still the selection
+    image = panel.plotter.screenshot(str(artifacts / "desktop_region_finer.png"), return_img=True)
+    assert image.reshape(-1, image.shape[-1]).std(axis=0).max() > 10
+    window.activateWindow()
+    qtbot.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    settle(qtbot, window)
+    assert "regions" not in ex.session.fruit_overrides().get(fruit, {})
+    window.controller.select([fruit])
+    _wait(qtbot, window, panel, f"Fruit {fruit}:")
+    np.testing.assert_array_equal(np.asarray(_mesh(panel).points), plain_points)

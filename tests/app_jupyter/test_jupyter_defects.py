@@ -97,8 +97,15 @@ def test_defects_tab_selects_a_region_shows_it_and_regrows_it(tree, tmp_path):
     grown = np.asarray(Image.open(io.BytesIO(tab.picture.value)).convert("RGB"), float)
     assert np.abs(grown - lit).max() > 50
     tab.region_params.value = "precision=3"
-    tab.regrow_button.click()  # refused: a region keeps the fruit's cells
-    assert "cannot change precision" in ex.message.text and len(ex.history) == edits + 1
+    tab.regrow_button.click()  # refused: merging cells would change the faces shared with the rest
+    assert "cannot be coarser" in ex.message.text and len(ex.history) == edits + 1
+    tab.region_params.value = "precision=20"  # twice the fruit's: the region alone is refined
+    tab.regrow_button.click()
+    assert len(ex.history) == edits + 2 and ex.history[-1]["settings"]["regions"][1]["params"] == {"precision": 20}
+    finer = np.asarray(Image.open(io.BytesIO(tab.picture.value)).convert("RGB"), float)
+    assert finer.std(axis=(0, 1)).max() > 10  # a fruit, not a blank picture
+    (tmp_path / "region_finer.png").write_bytes(tab.picture.value)
+    ex.undo()
     ex.undo()
     assert "regions" not in ex.model.session.fruit_overrides().get(fruit, {})
 

@@ -36,6 +36,16 @@ def test_set_and_subdivide_change_the_model(capsys):
     assert record["valid"] is True
 
 
+def test_region_at_a_finer_precision(capsys):
+    plain = run_json(capsys, "--preset", "round_tomato")
+    finer = run_json(capsys, "--preset", "round_tomato", "--region", "(5, C*, *) precision=20")
+    # ring 5 of the coarse tomato: 10 cells round the trunk, each 8 hexahedra and a pillow on
+    # each face it shares with the rest (its O face, C1, C3 and, for the trunk prism, its caps)
+    assert finer["valid"] is True and plain["valid"] is True
+    assert finer["volumes"] > plain["volumes"] - 11 + 8 * 10
+    assert finer["vertices"] - finer["edges"] + finer["faces"] - finer["volumes"] == 1
+
+
 def test_vtu_output_holds_the_cut_fruit(capsys, tmp_path):
     out = tmp_path / "tomato.vtu"
     record = run_json(capsys, "--cut", "z=0", "-o", str(out))
@@ -55,6 +65,10 @@ def test_vtu_output_holds_the_cut_fruit(capsys, tmp_path):
         (["--subdivide", "volume:x"], "not a whole number"),
         (["--cut", "w=1", "-o", "x.vtu"], "cut plane"),
         (["-o", "tomato.obj"], ".png picture or a .vtu grid"),
+        (["--region", "(5, C*, *)"], "a label pattern and the region's parameters"),
+        (["--region", "(5, C*, *) precision=30"], "times 2, 4 or 8"),
+        (["--region", "(5, C*, *) precision=5"], "cannot be coarser"),
+        (["--region", "(5, C*, *) ph=12"], "cannot change ph"),
     ],
 )
 def test_user_errors_print_one_line_and_exit_2(capsys, argv, message):

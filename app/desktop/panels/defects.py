@@ -97,6 +97,10 @@ class DefectsPanel(QWidget):
         self.brush.setToolTip("Brush radius: a right click selects the skin cells this close")
         self.region_params = QLineEdit("largeur=75")
         self.region_params.setObjectName("regionParams")
+        self.region_params.setToolTip(
+            "Shape parameters (largeur=75, creux=0.4 ...) or a finer precision (precision=20: twice "
+            "the fruit's 10), comma-separated; the rest of the fruit is not touched"
+        )
         self.region_regrow = QPushButton("Regrow region")
         self.region_regrow.setObjectName("regionRegrow")
         self.region_regrow.clicked.connect(self.regrow_region)
