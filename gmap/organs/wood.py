@@ -192,18 +192,25 @@ MAX_LENGTH = 1000.0
 MAX_SIDES = 1024
 
 
+#: Darts a level glued by year adds per sector: its first cells' bottom faces cut in three
+#: (two edge cuts, 8 darts each, shared by two sectors; two chords of 4 darts), :meth:`Wood._bridge`.
+BRIDGE_DARTS = 24
+
+
 def trunk_darts(sides: int, years: int) -> int:
     """Darts of a branch-free trunk after ``years`` years (closed form).
 
     Levels ``t = 0..Y-1`` (one pith ``sides``-prism each, ``12 sides`` darts);
     level ``t`` has lived ``2 (Y - t)`` half-years, so each of its ``sides``
     stacks holds ``2 (Y - t)`` wood cells and ``Y - t`` bark cells, cubes of 48
-    darts: ``darts = 12 s Y + 48 s * 3 * Y (Y + 1) / 2``.
+    darts; each level ``t >= 1`` is glued by year to the one below
+    (:meth:`Wood._bridge`), ``BRIDGE_DARTS`` per sector:
+    ``darts = 12 s Y + 48 s * 3 * Y (Y + 1) / 2 + 24 s (Y - 1)``.
 
     >>> trunk_darts(16, 10)
-    128640
+    132096
     """
-    return 12 * sides * years + 48 * sides * 3 * years * (years + 1) // 2
+    return 12 * sides * years + 48 * sides * 3 * years * (years + 1) // 2 + BRIDGE_DARTS * sides * max(years - 1, 0)
 
 
 def trunk_volumes(sides: int, years: int) -> int:
@@ -319,6 +326,8 @@ def estimated_darts(
     born = [int(y) for y in branch_years]
     for j in sorted(set(born)):  # the node level and its stacks, less the slots
         total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
+        if 1 <= j < years:  # a node carrying knots is glued cell to cell, not by year
+            total -= BRIDGE_DARTS * s
     cap = int(p.get("branch_levels", 0))
     for c, j in enumerate(branch_years):
         y = years - int(j)
@@ -940,6 +949,9 @@ class Wood:
         gm = self.gm
         a_parts: list[np.ndarray] = []
         b_parts: list[np.ndarray] = []
+        along_a: list[np.ndarray] = [np.zeros(0, np.int64)]
+        along_b: list[np.ndarray] = [np.zeros(0, np.int64)]
+        bridges: list[tuple[np.ndarray, np.ndarray]] = []
         start = 0
         for ax, t, k, i, _ in parts:
             f = first[start : start + len(t)].astype(np.int64)
@@ -949,14 +961,90 @@ class Wood:
             ok = ax.alive[t, kr] & (ax.count[t, kr] >= i) & (right != f)
             a_parts.append(f[ok] + _C2)  # C2 of this cube, dart 0 ...
             b_parts.append(right[ok] + _C4 + 1)  # ... meets C4 of the next, dart 1: same edge, same vertex
-            tb = np.maximum(t - 1, 0)  # the stack below, same layer
-            ok = (t > 0) & ax.alive[tb, k] & (ax.count[tb, k] >= i)
-            a_parts.append(ax.cells[tb, k, i - 1][ok] + _C3)  # top of the cube below, dart 0
+            tb = np.maximum(t - 1, 0)  # the stack below, its cell of the same year
+            j = i + self.year_shift(ax)[t]
+            ok = (t > 0) & ax.alive[tb, k] & (ax.count[tb, k] >= j) & (j == i)
+            a_parts.append(ax.cells[tb, k, j - 1][ok] + _C3)  # top of the cube below, dart 0
             b_parts.append(f[ok] + _C1 + 1)  # bottom of this one, dart 1
+            later = (t > 0) & (j > i) & (i > 1)  # a level younger than the one below: by year
+            later &= ax.alive[tb, k] & (ax.count[tb, k] >= j)
+            along_a.append(ax.cells[tb, k, np.maximum(j - 1, 0)][later] + _C3)
+            along_b.append(f[later] + _C1)
+            new_level = np.flatnonzero((t > 0) & (j > i) & (i == 1))
+            if new_level.size:  # one new level at a time: its shift is one number
+                below = ax.cells[tb[new_level], k[new_level], : int(j[new_level].max())]
+                bridges.append((f[new_level], below))
         a, b = np.concatenate(a_parts), np.concatenate(b_parts)
         if a.size:
             fresh = gm.alpha[3][a] == a
             gm.sew3(a[fresh], b[fresh])
+        for cubes, below in bridges:
+            if len(cubes):
+                self._bridge(cubes, below)
+        a, b = np.concatenate(along_a), np.concatenate(along_b)
+        if a.size:
+            gm.identify(a, b)
+
+    def year_shift(self, ax: Axis) -> np.ndarray:
+        """Per level ``t`` of ``ax``: how many cells more the level below holds in each stack, ``0`` or ``2``.
+
+        Level ``t`` is glued to level ``t - 1`` *by year*: its cell ``i``
+        meets cell ``i + shift[t]`` below, the cell laid in the same
+        half-year (issue 39: no ring ends on a level boundary).  The shift
+        is the levels' age difference in half-years: 2 for a level grown a
+        year after the one below it, 0 for a node's internode (same year)
+        and for level 0.  Only the trunk's levels are glued by year, and only
+        where level ``t`` is a ring of stacks with no knot slot (a node
+        carrying knots keeps the cell-``i``-to-cell-``i`` gluing: its slot's
+        walls are sewn to the knot layer by layer); branch levels (stubs
+        outside the trunk) keep it too.
+        """
+        shift = np.zeros(len(ax.levels), np.int64)
+        if ax.index != 0 or len(ax.levels) < 2:
+            return shift
+        steps = np.asarray(ax.level_step, np.int64)
+        shift[1:] = steps[1:] - steps[:-1]
+        whole = ax.alive[: len(ax.levels)].all(axis=1) if len(ax.alive) else np.zeros(len(ax.levels), bool)
+        return np.where(whole, shift, 0)
+
+    def _bridge(self, cubes: np.ndarray, below: np.ndarray) -> None:
+        """Sew the first cells ``cubes`` of a new level onto cells ``below[:, 0..s]`` of the level below.
+
+        The level below is ``s`` half-years older (``s = below.shape[1] - 1``):
+        its inner cells ``1..s`` were laid before the new level existed, and
+        their growth cones end at the level boundary (the apex of those
+        years' cones).  The new level's cell 1 is laid in the same half-year
+        as cell ``s + 1`` below.  So cell 1's bottom face (C1) is cut
+        radially into ``s + 1`` quads: its two radial edges into ``s + 1``
+        pieces (an edge shared with the next sector is cut once, for both),
+        then ``s`` chords across; piece ``j`` (from the pith out) is
+        identified with the top face (C3) of cell ``j`` below.  The older
+        inner cells end on the younger level's first ring cell, no ring meets
+        a ring of another year.  Topology only (labels and shared edges);
+        the embedding puts the pieces' vertices where the cells below end
+        (:meth:`embed`).
+        """
+        gm = self.gm
+        cubes = np.asarray(cubes, np.int64)
+        pieces = below.shape[1]
+        c2, o_code = _prism.face_label_code("C2"), _prism.face_label_code("O")
+        walk, _ = gm.face_walk(cubes + _C1)
+        edges = walk[:, 0:8:2]
+        across = gm.dart_data["face"][gm.alpha[2][edges]]
+        self._cut_edges(edges[np.arange(len(cubes)), np.argmax(across == c2, axis=1)], np.full(len(cubes), pieces))
+        walk, length = gm.face_walk(cubes + _C1)
+        n_edges = 2 * pieces + 2
+        if not np.all(length == 2 * n_edges):
+            raise GMapError("a new level's first cell does not have its bottom edges cut for the level below")
+        edges = walk[:, 0 : 2 * n_edges : 2]
+        across = gm.dart_data["face"][gm.alpha[2][edges]]
+        inner = np.argmax(across == o_code, axis=1)
+        rows = np.arange(len(cubes))
+        sub = [edges[rows, inner]] + [edges[rows, (inner + 1 + r) % n_edges] for r in range(1, pieces)]
+        for r in range(1, pieces):  # chord r: side vertex r to the facing vertex r on the other side
+            gm.split_faces(sub[r], np.full(len(cubes), 2 * pieces + 1 - 2 * r))
+        for r in range(pieces):  # piece r shares an edge with cell r + 1 below once piece r - 1 is sewn
+            gm.identify(sub[r], below[:, r] + _C3)
 
     # ------------------------------------------------------------------ roles
     def assign_roles(self) -> None:
@@ -1399,28 +1487,42 @@ class Wood:
     def _tapers(self, ax, cells, t, k, radii, rp):
         """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
 
-        A stack holds one year's cells more than the stack above it; the top
-        corners of those outer cells are drawn in towards the radius where the
-        stack above ends (``R + TAPER (r - R)``), so each level tapers into the
-        next and the apex closes, instead of leaving flat steps.  Bottom
-        corners keep their radii (``None``); a knot's bottom corners are set
-        by :meth:`_seat_knot`.  Topology is unchanged.
+        A stack holds one year's cells more than the stack above it.  Where
+        the level above is glued cell to cell (:meth:`year_shift` 0), those
+        are its outer cells: their top corners are drawn in towards the
+        radius where the stack above ends (``R + TAPER (r - R)``), so each
+        level tapers into the next and the apex closes, instead of leaving
+        flat steps.  Where the level above is glued by year (shift ``s``),
+        this stack's cells ``1..s`` were laid before the level above existed
+        and their growth cones end at the boundary: their top corners (and
+        the inner top corner of cell ``s + 1``) are drawn in to the pith,
+        ``r_p + TAPER (r - r_p)`` (the cone's apex), and only the cells past
+        the ``count + s`` the level above meets (its oldest bark) taper as
+        before.  Bottom corners keep their radii (``None``); a knot's bottom
+        corners are set by :meth:`_seat_knot`.  Topology is unchanged.
         """
         vd = self.gm.volume_data
         cell = vd["cell"][cells].astype(np.int64)
         n_levels, n = len(ax.levels), ax.sides
         count = np.zeros((n_levels + 1, n), np.int64)  # cells per stack; a slot never tapers
         count[: len(ax.count)] = np.where(ax.alive, ax.count, 10**6)
-        above = count[t + 1, k]
+        shift = np.zeros(n_levels + 1, np.int64)
+        shift[:n_levels] = self.year_shift(ax)
+        s_up = np.where(count[t + 1, k] > 0, shift[t + 1], 0)
+        above = count[t + 1, k] + s_up  # the cells of this stack the level above meets
         table = np.full((n_levels, n, int(cell.max()) + 1), rp)
         table[t, k, cell] = radii[cells]
         m = np.minimum(above, cell)
         base = np.where(m > 0, table[t, k, np.maximum(m, 0)], rp)
         exposed = cell > above
         eps = self.TAPER
+        apex = table[t, k, np.minimum(s_up, table.shape[2] - 1)]  # outer radius of cell s
+        apex_tol = 1e-9 * np.maximum(apex, 1.0)
 
         def top(r):
-            return np.where(exposed, base + eps * (r - base), r)
+            out = np.where(exposed, base + eps * (r - base), r)
+            cone = (s_up > 0) & (r <= apex + apex_tol)  # a cone that ends here: to the pith
+            return np.where(cone, rp + eps * (r - rp), out)
 
         return None, top
 
@@ -1659,7 +1761,34 @@ class Wood:
             corners = gm.corners
             a0, a1 = gm.alpha[0], gm.alpha[1]
             corners[split] = 0.5 * (corners[a0[split]] + corners[a0[a1[split]]])
+            self._bridge_corners(split)
         return gm.embed()
+
+    def _bridge_corners(self, split: np.ndarray) -> None:
+        """Corners of the darts :meth:`_bridge` made: those of the cells below at the same vertex.
+
+        A new level's first cell has its bottom face cut where the older
+        level's inner cells end; its darts there have no template corner, so
+        they take the corner of the dart across the face (``alpha3``, or
+        ``alpha3 alpha2`` from a side face), a template corner of the cell
+        below: the vertex sits where the older cells put it.
+        """
+        gm = self.gm
+        vd = gm.volume_data
+        vol = gm.dart_volume[split]
+        level = vd["level"][vol].astype(np.int64)
+        shifted = self.year_shift(self.trunk)
+        mine = (vd["axis"][vol] == 0) & (vd["cell"][vol] == 1) & (level > 0)
+        mine[mine] = shifted[level[mine]] > 0
+        darts = split[mine]
+        if not darts.size:
+            return
+        tpl, corners = self.corner, gm.corners
+        a2, a3 = gm.alpha[2], gm.alpha[3]
+        across = a3[darts].astype(np.int64)
+        other = np.where(tpl[across] >= 0, across, a3[a2[darts]].astype(np.int64))
+        ok = tpl[other] >= 0
+        corners[darts[ok]] = corners[other[ok]]
 
     # ------------------------------------------------------------------ facts
     def check_topology(self) -> None:
@@ -1872,6 +2001,50 @@ _HEX_EDGES = np.array(
 )
 
 
+def bridged_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.UnstructuredGrid:
+    """``grid`` with each trunk cell :meth:`Wood._bridge` cut drawn as one hexahedron of its 8 corners.
+
+    A level's first ring cell, glued by year to the level below, has its
+    bottom face cut in three, so :func:`to_grid` writes it as a polyhedron
+    (tetrahedra).  Its extra vertices lie on its bottom edges (the embedding
+    puts them where the older cells end, on the level's boundary plane), so
+    the hexahedron of its 8 template corners has the same shape; pictures
+    then round it like every other ring cell (:func:`smooth_grid`).
+    """
+    import pyvista as pv
+
+    gm, vd = wood.gm, wood.gm.volume_data
+    shift = wood.year_shift(wood.trunk)
+    level = vd["level"].astype(np.int64)
+    bridged = (vd["axis"] == 0) & (vd["cell"] == 1) & (level > 0)
+    bridged[bridged] = shift[np.minimum(level[bridged], len(shift) - 1)] > 0
+    owner = np.asarray(grid.cell_data["volume"])
+    drop = bridged[owner] & (grid.celltypes != 12)
+    vols = np.unique(owner[drop])
+    if not vols.size:
+        return grid
+    row = np.full(gm.n_volumes, -1, np.int64)
+    row[vols] = np.arange(len(vols))
+    tpl = wood.corner
+    darts = np.flatnonzero((row[gm.dart_volume] >= 0) & (tpl >= 0) & (tpl < 8))
+    corner_dart = np.full((len(vols), 8), -1, np.int64)
+    corner_dart[row[gm.dart_volume[darts]], tpl[darts]] = darts
+    if np.any(corner_dart < 0):
+        raise GMapError("a bridged ring cell has lost a corner")
+    pts = gm.points[corner_dart]  # (m, 8, 3), VTK order: inner quad 0..3, outer quad 4..7
+    up = np.einsum("mx,mx->m", np.cross(pts[:, 1] - pts[:, 0], pts[:, 3] - pts[:, 0]), pts[:, 4] - pts[:, 0]) >= 0
+    order = np.where(up[:, None], np.arange(8), np.array([0, 3, 2, 1, 4, 7, 6, 5]))
+    conn = np.arange(8 * len(vols)).reshape(-1, 8)[np.arange(len(vols))[:, None], order]
+    hexes = pv.UnstructuredGrid(
+        np.hstack([np.full((len(vols), 1), 8), conn]).ravel(), np.full(len(vols), 12, np.uint8), pts.reshape(-1, 3)
+    )
+    first = np.zeros(gm.n_volumes, np.int64)
+    first[owner[::-1]] = np.arange(len(owner))[::-1]  # a grid row of each volume, for its data
+    for name in grid.cell_data.keys():
+        hexes.cell_data[name] = np.asarray(grid.cell_data[name])[first[vols]]
+    return pv.merge([grid.extract_cells(~drop), hexes], merge_points=False)
+
+
 def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.UnstructuredGrid:
     """A picture grid whose trunk rings are round: each trunk ring cell cut in ``parts`` along its arc.
 
@@ -1889,6 +2062,7 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
 
     if parts <= 1:
         return grid
+    grid = bridged_as_hexahedra(wood, grid)
     vd = wood.gm.volume_data
     owner = np.asarray(grid.cell_data["volume"])
     hexa = (grid.celltypes == 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)
