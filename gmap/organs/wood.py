@@ -195,6 +195,9 @@ MAX_SIDES = 1024
 #: Darts a level glued by year adds per sector: its first cells' bottom faces cut in three
 #: (two edge cuts, 8 darts each, shared by two sectors; two chords of 4 darts), :meth:`Wood._bridge`.
 BRIDGE_DARTS = 24
+#: Darts per quarter of a knot's sides its node's gluing by year adds (its first ring's bottoms
+#: facing the older level cut in three, the slot's corners), less 32: 48 q - 32 a knot.
+KNOT_BRIDGE_DARTS = 48
 
 
 def trunk_darts(sides: int, years: int) -> int:
@@ -326,8 +329,6 @@ def estimated_darts(
     born = [int(y) for y in branch_years]
     for j in sorted(set(born)):  # the node level and its stacks, less the slots
         total += 12 * s + 48 * (s - born.count(j)) * 3 * (years - j)
-        if 1 <= j < years:  # a node carrying knots is glued cell to cell, not by year
-            total -= BRIDGE_DARTS * s
     cap = int(p.get("branch_levels", 0))
     for c, j in enumerate(branch_years):
         y = years - int(j)
@@ -339,6 +340,8 @@ def estimated_darts(
         # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
         # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
         total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
+        if 1 <= int(j) < years:  # its node is glued by year: the knot's first ring meets three cells
+            total += KNOT_BRIDGE_DARTS * (b // 4) - 32  # below (Wood._split_knot_bottoms), measured
     return total
 
 
@@ -755,7 +758,11 @@ class Wood:
 
         Layer ``i`` of a slot is walled by four trunk faces: C2 of stack
         ``(t, k-1)``, C4 of ``(t, k+1)``, C3 of ``(t-1, k)`` and C1 of
-        ``(t+1, k)``, cell ``i`` of each.  Its partner is the knot cell whose
+        ``(t+1, k)``, cell ``i`` of each -- of the bottom wall, a year older
+        and glued by year (:meth:`year_shift` ``s``), cell ``i + s``, and its
+        cells ``1..s`` (whose cones end there) meet the knot's first ring
+        too, in ``s`` rounds more after layer 1 (:meth:`_split_knot_bottoms`
+        cut its bottom faces for them).  Its partner is the knot cell whose
         C1 face lies across the wall face's inner edge on the boundary (found
         by turning around that edge, :func:`ramure.gmap.kernel.identify.boundary_neighbour`):
         layer ``i - 1`` (or the pith face, for ``i = 1``) is sewn already, so
@@ -768,16 +775,24 @@ class Wood:
         n = trunk.sides
         c1 = _prism.face_label_code("C1")
         vd = gm.volume_data
+        shift = self.year_shift(trunk)
         while True:
             walls, labels, want = [], [], []
             for b, done in self._sewn_layers.items():
                 br = self.branches[b]
-                t, k, i = br.level, br.sector, done + 1
+                t, k, r = br.level, br.sector, done + 1
+                s = int(shift[t]) if 0 < t < len(shift) else 0
+                # round r: the knot's ring i against the walls' cells of its year; its first ring
+                # meets the bottom wall's cells 1..s + 1 in s + 1 rounds (the older cones end there)
+                i = 1 if r <= s + 1 else r - s
                 if self.branch_axis[b].count[0].min() < i:  # the knot's ring cell i is not born yet
                     continue
                 for tt, kk, label in ((t, (k - 1) % n, "C2"), (t, (k + 1) % n, "C4"), (t - 1, k, "C3"), (t + 1, k, "C1")):
-                    if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk] and trunk.count[tt, kk] >= i:
-                        walls.append(trunk.cells[tt, kk, i - 1])
+                    c = (r if r <= s + 1 else i + s) if label == "C3" else i
+                    if label != "C3" and i == 1 and r > 1:
+                        continue  # the side and top walls' first cells are sewn in round 1
+                    if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk] and trunk.count[tt, kk] >= c:
+                        walls.append(trunk.cells[tt, kk, c - 1])
                         labels.append(label)
                         want.append((b, i))
             if not walls:
@@ -836,23 +851,34 @@ class Wood:
             self._cut_edges(walk[fresh, np.argmax(outer[fresh], axis=1)], np.full(len(fresh), q))
         walk, length = gm.face_walk(anchors)
         across = gm.dart_data["face"][gm.alpha[2][np.maximum(walk, 0)]]
-        n_edges = 2 * q + 2
-        ready = np.flatnonzero(length == 2 * n_edges)
-        out_darts, out_rows = [anchors[length != 2 * n_edges]], [rows[length != 2 * n_edges]]
+        at_vertex = np.where(walk >= 0, walk, 0)[:, 0::2]
+        edge_ok = walk[:, 0::2] >= 0
+        n_inner = ((across[:, 0::2] == o_code) & edge_ok).sum(axis=1)
+        n_outer = ((across[:, 0::2] == e_code) & edge_ok).sum(axis=1)
+        # ready: inner and outer edges in q pieces, and faces not split yet (a side wall's first
+        # cell may have its bottom edge in pieces too, :meth:`_bridge`: 2q + 2 edges or more)
+        ready = np.flatnonzero((n_inner == q) & (n_outer == q) & (length >= 2 * (2 * q + 2)))
+        done = np.setdiff1d(rows, ready)
+        out_darts, out_rows = [anchors[done]], [rows[done]]
         if not ready.size:
             return np.concatenate(out_darts), np.concatenate(out_rows)
-        edge_darts = walk[ready, 0 : 2 * n_edges : 2]  # dart starting edge e, at vertex e
-        inner = across[ready, 0 : 2 * n_edges : 2] == o_code
-        if not np.all(inner.sum(axis=1) == q):
-            raise GMapError("a slot wall's inner edge is not split into one piece per knot cell")
-        first_inner = inner & ~np.roll(inner, 1, axis=1)
-        e0 = np.argmax(first_inner, axis=1)
-        pick = np.arange(len(ready))
-        sub = np.stack([edge_darts[pick, (e0 + r) % n_edges] for r in range(q)], axis=1)
-        for r in range(1, q):  # chord r: inner vertex r to outer vertex r, 2q + 1 - 2r corners on
-            gm.split_faces(sub[:, r], np.full(len(ready), 2 * q + 1 - 2 * r))
-        out_darts.append(sub.ravel())
-        out_rows.append(np.repeat(rows[ready], q))
+        degrees = length[ready] // 2
+        for deg in np.unique(degrees):  # faces of one degree at a time
+            these = ready[degrees == deg]
+            edge_darts = at_vertex[these, :deg]  # dart starting edge e, at vertex e
+            inner = across[these, 0 : 2 * deg : 2] == o_code
+            outer = across[these, 0 : 2 * deg : 2] == e_code
+            first_inner = inner & ~np.roll(inner, 1, axis=1)
+            e0 = np.argmax(first_inner, axis=1)
+            pick = np.arange(len(these))
+            # edges from the end of the inner run to the start of the outer run, walking on
+            order = (e0[:, None] + q + np.arange(deg)[None, :]) % deg
+            cross = np.argmax(outer[pick[:, None], order], axis=1)
+            sub = np.stack([edge_darts[pick, (e0 + r) % deg] for r in range(q)], axis=1)
+            for r in range(1, q):  # chord r: inner vertex r to outer vertex r, 2 (q - r) + cross corners on
+                gm.split_faces(sub[:, r], 2 * (q - r) + cross)
+            out_darts.append(sub.ravel())
+            out_rows.append(np.repeat(rows[these], q))
         return np.concatenate(out_darts), np.concatenate(out_rows)
 
     def _near_slots(self, parts) -> np.ndarray:
@@ -951,7 +977,7 @@ class Wood:
         b_parts: list[np.ndarray] = []
         along_a: list[np.ndarray] = [np.zeros(0, np.int64)]
         along_b: list[np.ndarray] = [np.zeros(0, np.int64)]
-        bridges: list[tuple[np.ndarray, np.ndarray]] = []
+        bridges: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         start = 0
         for ax, t, k, i, _ in parts:
             f = first[start : start + len(t)].astype(np.int64)
@@ -973,14 +999,16 @@ class Wood:
             new_level = np.flatnonzero((t > 0) & (j > i) & (i == 1))
             if new_level.size:  # one new level at a time: its shift is one number
                 below = ax.cells[tb[new_level], k[new_level], : int(j[new_level].max())]
-                bridges.append((f[new_level], below))
+                lone = ~ax.alive[t[new_level], (k[new_level] - 1) % ax.sides]  # a knot's slot on its C4 side
+                bridges.append((f[new_level], below, lone))
         a, b = np.concatenate(a_parts), np.concatenate(b_parts)
         if a.size:
             fresh = gm.alpha[3][a] == a
             gm.sew3(a[fresh], b[fresh])
-        for cubes, below in bridges:
+        for cubes, below, lone in bridges:
             if len(cubes):
-                self._bridge(cubes, below)
+                self._bridge(cubes, below, lone)
+        self._split_knot_bottoms(parts, first)
         a, b = np.concatenate(along_a), np.concatenate(along_b)
         if a.size:
             gm.identify(a, b)
@@ -993,21 +1021,19 @@ class Wood:
         half-year (issue 39: no ring ends on a level boundary).  The shift
         is the levels' age difference in half-years: 2 for a level grown a
         year after the one below it, 0 for a node's internode (same year)
-        and for level 0.  Only the trunk's levels are glued by year, and only
-        where level ``t`` is a ring of stacks with no knot slot (a node
-        carrying knots keeps the cell-``i``-to-cell-``i`` gluing: its slot's
-        walls are sewn to the knot layer by layer); branch levels (stubs
-        outside the trunk) keep it too.
+        and for level 0.  Only the trunk's levels are glued by year (a node
+        carrying knots too: its slot's bottom wall meets the knot by year,
+        :meth:`_sew_knots`); branch levels (stubs outside the trunk) keep
+        the cell-``i``-to-cell-``i`` gluing.
         """
         shift = np.zeros(len(ax.levels), np.int64)
         if ax.index != 0 or len(ax.levels) < 2:
             return shift
         steps = np.asarray(ax.level_step, np.int64)
         shift[1:] = steps[1:] - steps[:-1]
-        whole = ax.alive[: len(ax.levels)].all(axis=1) if len(ax.alive) else np.zeros(len(ax.levels), bool)
-        return np.where(whole, shift, 0)
+        return shift
 
-    def _bridge(self, cubes: np.ndarray, below: np.ndarray) -> None:
+    def _bridge(self, cubes: np.ndarray, below: np.ndarray, lone_c4: np.ndarray | None = None) -> None:
         """Sew the first cells ``cubes`` of a new level onto cells ``below[:, 0..s]`` of the level below.
 
         The level below is ``s`` half-years older (``s = below.shape[1] - 1``):
@@ -1015,36 +1041,91 @@ class Wood:
         their growth cones end at the level boundary (the apex of those
         years' cones).  The new level's cell 1 is laid in the same half-year
         as cell ``s + 1`` below.  So cell 1's bottom face (C1) is cut
-        radially into ``s + 1`` quads: its two radial edges into ``s + 1``
-        pieces (an edge shared with the next sector is cut once, for both),
-        then ``s`` chords across; piece ``j`` (from the pith out) is
-        identified with the top face (C3) of cell ``j`` below.  The older
-        inner cells end on the younger level's first ring cell, no ring meets
-        a ring of another year.  Topology only (labels and shared edges);
-        the embedding puts the pieces' vertices where the cells below end
-        (:meth:`embed`).
+        radially into ``s + 1`` quads (:meth:`_split_bottoms`) and piece
+        ``j`` (from the pith out) is identified with the top face (C3) of
+        cell ``j`` below.  The older inner cells end on the younger level's
+        first ring cell, no ring meets a ring of another year.  ``lone_c4``
+        marks the cubes whose C4 side has no stack (a knot's slot): that
+        edge is theirs alone and is cut too.  Topology only (labels and
+        shared edges); the embedding puts the pieces' vertices where the
+        cells below end (:meth:`embed`).
+        """
+        cubes = np.asarray(cubes, np.int64)
+        lone = np.zeros(len(cubes), bool) if lone_c4 is None else np.asarray(lone_c4, bool)
+        sub = self._split_bottoms(cubes, cubes[lone], cubes, below.shape[1])
+        for r, piece in enumerate(sub):  # piece r shares an edge with cell r + 1 below once piece r - 1 is sewn
+            self.gm.identify(piece, below[:, r] + _C3)
+
+    def _split_knot_bottoms(self, parts, first) -> None:
+        """A new knot's first ring cells that face its slot's bottom wall: bottoms cut like :meth:`_bridge`'s.
+
+        The slot's bottom wall is the top of the trunk level under the node,
+        ``s`` half-years older: its cells ``1..s + 1`` meet the knot's first
+        ring (the older cones end there, as under a trunk cell), its cell
+        ``i + s`` the knot's ring ``i`` (:meth:`_sew_knots`).  So the C1 face
+        of each of the knot's first cells that faces the bottom wall (sides
+        ``0..m/4 - 1``, where the sew puts them) is cut radially into ``s + 1``
+        pieces, and the edges on the slot's two bottom corners too (the side
+        walls' first cells have theirs cut by :meth:`_bridge`).
+        """
+        shift = self.year_shift(self.trunk)
+        start = 0
+        for ax, t, k, i, _ in parts:
+            f = first[start : start + len(t)].astype(np.int64)
+            start += len(t)
+            if ax.index == 0:
+                continue
+            br = self.branches[ax.index - 1]
+            s = int(shift[br.level]) if 0 < br.level < len(shift) else 0
+            new = (t == 0) & (i == 1)
+            if s == 0 or not new.any():
+                continue
+            q = ax.sides // 4
+            by_sector = np.full(ax.sides, -1, np.int64)
+            by_sector[k[new]] = f[new]
+            if np.any(by_sector < 0):
+                raise GMapError("a knot's first ring is not complete")
+            bottom = by_sector[:q]
+            self._split_bottoms(by_sector[np.r_[ax.sides - 1, 0:q]], np.zeros(0, np.int64), bottom, s + 1)
+
+    def _split_bottoms(self, cut_c2: np.ndarray, cut_c4: np.ndarray, split: np.ndarray, pieces: int) -> list[np.ndarray]:
+        """Cut the bottom faces (C1) of cubes ``split`` radially into ``pieces`` quads, from the O side out.
+
+        The radial edge of C1 with C2 of each cube of ``cut_c2`` and with C4
+        of each of ``cut_c4`` is cut into ``pieces`` (a cube's C2 edge is its
+        right neighbour's C4 edge once they are joined: cut once, for both),
+        then ``pieces - 1`` chords join the cut points across each face of
+        ``split``, whose two radial edges must be cut.  Found by the faces'
+        labels, never by coordinates.  Returns, per piece, one dart of it for
+        each cube of ``split`` (piece 0 holds the edge shared with the O face).
         """
         gm = self.gm
-        cubes = np.asarray(cubes, np.int64)
-        pieces = below.shape[1]
-        c2, o_code = _prism.face_label_code("C2"), _prism.face_label_code("O")
-        walk, _ = gm.face_walk(cubes + _C1)
-        edges = walk[:, 0:8:2]
-        across = gm.dart_data["face"][gm.alpha[2][edges]]
-        self._cut_edges(edges[np.arange(len(cubes)), np.argmax(across == c2, axis=1)], np.full(len(cubes), pieces))
-        walk, length = gm.face_walk(cubes + _C1)
+        c2, c4, o_code = (_prism.face_label_code(x) for x in ("C2", "C4", "O"))
+        darts = []
+        for cubes, code in ((cut_c2, c2), (cut_c4, c4)):
+            cubes = np.asarray(cubes, np.int64)
+            if cubes.size:
+                walk, _ = gm.face_walk(cubes + _C1)
+                edges = walk[:, 0:8:2]
+                across = gm.dart_data["face"][gm.alpha[2][edges]]
+                if not np.all((across == code).any(axis=1)):
+                    raise GMapError("a ring cell's bottom face has lost a radial edge")
+                darts.append(edges[np.arange(len(cubes)), np.argmax(across == code, axis=1)])
+        if darts:
+            self._cut_edges(np.concatenate(darts), np.full(sum(len(d) for d in darts), pieces))
+        split = np.asarray(split, np.int64)
+        walk, length = gm.face_walk(split + _C1)
         n_edges = 2 * pieces + 2
         if not np.all(length == 2 * n_edges):
-            raise GMapError("a new level's first cell does not have its bottom edges cut for the level below")
+            raise GMapError("a ring cell's bottom face does not have its radial edges cut in pieces")
         edges = walk[:, 0 : 2 * n_edges : 2]
         across = gm.dart_data["face"][gm.alpha[2][edges]]
         inner = np.argmax(across == o_code, axis=1)
-        rows = np.arange(len(cubes))
+        rows = np.arange(len(split))
         sub = [edges[rows, inner]] + [edges[rows, (inner + 1 + r) % n_edges] for r in range(1, pieces)]
         for r in range(1, pieces):  # chord r: side vertex r to the facing vertex r on the other side
-            gm.split_faces(sub[r], np.full(len(cubes), 2 * pieces + 1 - 2 * r))
-        for r in range(pieces):  # piece r shares an edge with cell r + 1 below once piece r - 1 is sewn
-            gm.identify(sub[r], below[:, r] + _C3)
+            gm.split_faces(sub[r], np.full(len(split), 2 * pieces + 1 - 2 * r))
+        return sub
 
     # ------------------------------------------------------------------ roles
     def assign_roles(self) -> None:
@@ -1354,6 +1435,7 @@ class Wood:
         n = trunk.sides
         rp = self.p["pith_radius"]
         o_t, f_t, _ = self.level_frames(trunk)
+        shift = self.year_shift(trunk)
         out = {}
         for b, br in enumerate(self.branches):
             if b not in self._sewn_layers:
@@ -1362,10 +1444,12 @@ class Wood:
             t, k = br.level, br.sector
             depth = int(ax.count[0].max())
             a, used = np.zeros(depth + 1), np.zeros(depth + 1)
+            s = int(shift[t]) if 0 < t < len(shift) else 0
             for tt, kk in ((t, (k - 1) % n), (t, (k + 1) % n), (t - 1, k), (t + 1, k)):
                 if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk]:
-                    c = min(int(trunk.count[tt, kk]), depth)
-                    a[1 : c + 1] += radii[gm.dart_volume[trunk.cells[tt, kk, :c]]]
+                    off = s if tt == t - 1 else 0  # the bottom wall meets the knot by year
+                    c = max(min(int(trunk.count[tt, kk]) - off, depth), 0)
+                    a[1 : c + 1] += radii[gm.dart_volume[trunk.cells[tt, kk, off : off + c]]]
                     used[1 : c + 1] += 1
             a[0], used[0] = rp, 1
             a /= np.maximum(used, 1)
@@ -1762,7 +1846,38 @@ class Wood:
             a0, a1 = gm.alpha[0], gm.alpha[1]
             corners[split] = 0.5 * (corners[a0[split]] + corners[a0[a1[split]]])
             self._bridge_corners(split)
+            self._knot_bridge_corners(split)
         return gm.embed()
+
+    def _knot_bridge_corners(self, split: np.ndarray) -> None:
+        """Corners of the darts :meth:`_split_knot_bottoms` made: evenly along each cut edge.
+
+        A knot's first ring cell facing the bottom wall has its bottom edges
+        cut in ``s + 1`` pieces; the side faces hold each cut edge whole, so
+        a cut point there is the midpoint of its two neighbours along the
+        edge, solved by a few sweeps (pieces of equal length); the bottom
+        pieces' darts at that point take its corner.  Knot cells are
+        exclusive: the bottom wall's cells end where these put them.
+        """
+        gm = self.gm
+        vd = gm.volume_data
+        vol = gm.dart_volume[split]
+        mine = split[(vd["axis"][vol] > 0) & (vd["level"][vol] == 0) & (vd["cell"][vol] == 1)]
+        if not mine.size:
+            return
+        face = gm.dart_data["face"]
+        sides = np.isin(face[mine], [_prism.face_label_code("C2"), _prism.face_label_code("C4")])
+        chain = mine[sides]
+        corners = gm.corners
+        a0, a1, a2 = gm.alpha[0], gm.alpha[1], gm.alpha[2]
+        for _ in range(64):  # Jacobi sweeps: the error halves each time, down to rounding
+            corners[chain] = 0.5 * (corners[a0[chain]] + corners[a0[a1[chain]]])
+        rest = mine[~sides]
+        for step in (lambda d: a2[d], lambda d: a2[a1[d]]):  # a bottom dart on the edge, then on a chord
+            other = step(rest).astype(np.int64)
+            on_side = np.isin(other, chain)
+            corners[rest[on_side]] = corners[other[on_side]]
+            rest = rest[~on_side]
 
     def _bridge_corners(self, split: np.ndarray) -> None:
         """Corners of the darts :meth:`_bridge` made: those of the cells below at the same vertex.

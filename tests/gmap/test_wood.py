@@ -188,17 +188,19 @@ def _knot_ring_neighbours(wood, b):
 def test_knots_are_sewn_to_the_ring_cells_around_them(knotty):
     """Each knot ring cell's C1 face is alpha3-sewn to its piece of the slot wall of its layer (4 walls
     x N layers, N = 3 (Y - j) cells per stack, each wall cut in m / 4 pieces for a knot of m sides),
-    and the knot's pith to the trunk's pith face: m N + 1 faces."""
+    and the knot's pith to the trunk's pith face: m N + 1 faces.  The bottom wall is the level under
+    the node, a year older, glued by year: its cell i + 2 meets the knot's ring i, its cells 1, 2 and
+    3 the knot's first ring, whose m / 4 bottom faces are cut in three: 2 m / 4 faces more."""
     vd = knotty.gm.volume_data
     m = knotty.p["branch_sides"]
     assert m == 16  # as many sides as the trunk's
     for b, br in enumerate(knotty.branches):
         rings, faces = _knot_ring_neighbours(knotty, b)
         n = 3 * (6 - br.year)
-        assert faces == m * n + 1
-        assert len(rings) == 4 * n
+        assert faces == m * n + 1 + 2 * (m // 4)
+        assert len(rings) == 4 * n + 2
         layers = sorted(vd["cell"][list(rings)].tolist())
-        assert layers == sorted(list(range(1, n + 1)) * 4)  # one wall cell per layer and side
+        assert layers == sorted(list(range(1, n + 1)) * 3 + list(range(1, n + 3)))  # one wall cell per layer and side
         assert set(vd["level"][list(rings)].tolist()) == {br.level - 1, br.level, br.level + 1}
 
 
@@ -261,7 +263,8 @@ def test_regrowing_a_branch_changes_only_it_and_its_neighbours(knotty):
     neighbours = set(gm.dart_volume[gm.alpha[3][inside]].tolist())
     assert set(moved.tolist()) <= set(branch.tolist()) | neighbours
     rings, _ = _knot_ring_neighbours(knotty, 1)  # the knot is sewn: ring cells among its neighbours
-    assert len(rings) == 4 * 3 * (6 - knotty.branches[1].year) and rings <= neighbours
+    # four walls of 3 (Y - j) layers; the bottom wall (glued by year) meets the knot with 2 cells more
+    assert len(rings) == 4 * 3 * (6 - knotty.branches[1].year) + 2 and rings <= neighbours
     # stronger here: the seam follows the law's means, so no neighbour moves (the knot's far end does)
     assert set(moved.tolist()) <= set(branch.tolist()) and moved.size
 
@@ -413,7 +416,7 @@ def _ring_clearance(wood, b):
 def test_trunk_rings_deflect_round_a_knot(knotty):
     """The trunk's rings bend away round each knot: their vertices off the seam keep more than a knot
     radius from it (the ring cells on the seam curve in along its round edge), where straight rings
-    would come within 0.2-0.3 radii of it."""
+    would come within 0.3-0.4 radii of it (the levels glued by year taper into each other)."""
     bent = [_ring_clearance(knotty, b) for b in range(3)]
     knotty.bend_rings = False
     knotty.embed()
@@ -421,7 +424,7 @@ def test_trunk_rings_deflect_round_a_knot(knotty):
     knotty.bend_rings = True
     knotty.embed()
     assert min(bent) > 1.1  # 1.18, 1.22 and 1.21
-    assert max(straight) < 0.4  # 0.19, 0.27 and 0.27
+    assert max(straight) < 0.5  # 0.30, 0.36 and 0.40
 
 
 def test_the_branch_bends_inside_its_knot(knotty):
