@@ -11,6 +11,19 @@ New cells are added on the free outer face of each stack (the thesis's
 "add a volume on a face") and identified with their neighbours around the
 axis (C2 | C4) and along it (C1 | C3) through the edge they share.
 
+*Levels are glued by year (issue 39 (a)).*  Level ``t`` is a year younger
+than level ``t - 1`` (or of the same year, a node's internode), so its
+stacks hold 2 wood cells and a bark cell fewer.  Its cell ``i`` meets cell
+``i + s`` below (``s`` the age difference in half-years,
+:meth:`Wood.year_shift`): the cell laid in the same half-year, so a ring
+runs on across the boundary and a board shows no step there.  The older
+level's cells ``1..s`` (the year before level ``t`` existed) end on level
+``t``'s first cell, whose bottom face is cut in ``s + 1`` pieces
+(:meth:`Wood._bridge`): the apex of their growth cone, drawn in to the pith
+(:meth:`Wood._tapers`), as a real year's cone closes at the top of its
+shoot.  A node carrying knots is glued so too, its slot's bottom wall
+meeting each knot ring by year (:meth:`Wood._sew_knots`).
+
 *Cambium (a choice; the thesis has no bark).*  Cells are added outside, but
 the cambium lies under the bark: after each step the roles are re-read from
 the inside of each stack -- the ``q`` inner cells are wood, the outer ones
@@ -968,7 +981,9 @@ class Wood:
         """Identify each new cube with its neighbours through the edges they share.
 
         Around the axis: C2 of (t, k, i) with C4 of (t, k+1, i); along it: C1 of
-        (t, k, i) with C3 of (t-1, k, i).  The neighbours are found by the
+        (t, k, i) with C3 of (t-1, k, i + s), the cell of the same year
+        (:meth:`year_shift`; a new level's first cells through
+        :meth:`_bridge`, a new knot's through :meth:`_split_knot_bottoms`).  The neighbours are found by the
         stacks' bookkeeping (same pith edge, same layer), never by coordinates;
         the two darts paired sit on the edge the faces share.
         """

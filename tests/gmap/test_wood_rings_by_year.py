@@ -80,3 +80,19 @@ def test_rings_run_on_across_a_level_boundary_without_a_step(trunk6):
     assert max(steps) < 0.05 * widths.min()
     # and the cone of year 1 (below only) closes at the pith there: a sliver, not a whole ring
     assert below[1] - trunk6.p["pith_radius"] < 0.15 * (below[2] - below[1])
+
+
+def test_rings_run_on_across_a_knots_node_without_a_step():
+    """The node carrying a knot is glued by year too: opposite the knot, across the node's bottom
+    (z = 1 m, a year younger than the level below), each year of the node ends where it ends below.
+    Glued cell to cell it ended where the next older year ended below (4.5 mm off here)."""
+    wood = W.grow_wood("pine", years=6, branches=[(2, 3)])
+    o, _, _ = wood.level_frames(wood.trunk)
+    z = float(o[wood.branches[0].level][2])
+    grid = W.to_grid(wood)
+    angle = 2 * np.pi * (3 + 8) / 16 + 0.3  # across the trunk from the knot's sector
+    below, above = _year_edges(grid, z - 1e-4, angle), _year_edges(grid, z + 1e-4, angle)
+    years = [y for y in range(2, 6)]
+    assert all(y in below and y in above for y in years)
+    widths = np.diff([below[y] for y in years])
+    assert max(abs(below[y] - above[y]) for y in years) < 0.05 * widths.min()
