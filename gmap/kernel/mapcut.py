@@ -184,12 +184,13 @@ def _grown(sd, gm):
 
 
 def _split_crossing_edges(gm, sd, vid):
-    """Split every edge from s < 0 to s > 0 at the plane; one dart per edge (by its vertex pair)."""
+    """Split every edge from s < 0 to s > 0 at the plane; one dart per edge (by its edge orbit: two
+    edges may join the same two vertices, e.g. a diagonal along cut points that lie on a line)."""
     a0 = gm.alpha[0]
     d = np.flatnonzero((sd < 0) & (sd[a0] > 0))
     if d.size:
-        key = vid[d].astype(np.int64) * (int(vid.max()) + 1) + vid[a0[d]]
-        _, first = np.unique(key, return_index=True)
+        edge, _ = gm.cells(1)
+        _, first = np.unique(edge[d], return_index=True)
         d = d[first]
         gm.split_edge(d, sd[d] / (sd[d] - sd[a0[d]]))
     return _grown(sd, gm)

@@ -11,6 +11,19 @@ New cells are added on the free outer face of each stack (the thesis's
 "add a volume on a face") and identified with their neighbours around the
 axis (C2 | C4) and along it (C1 | C3) through the edge they share.
 
+*Levels are glued by year (issue 39 (a)).*  Level ``t`` is a year younger
+than level ``t - 1`` (or of the same year, a node's internode), so its
+stacks hold 2 wood cells and a bark cell fewer.  Its cell ``i`` meets cell
+``i + s`` below (``s`` the age difference in half-years,
+:meth:`Wood.year_shift`): the cell laid in the same half-year, so a ring
+runs on across the boundary and a board shows no step there.  The older
+level's cells ``1..s`` (the year before level ``t`` existed) end on level
+``t``'s first cell, whose bottom face is cut in ``s + 1`` pieces
+(:meth:`Wood._bridge`): the apex of their growth cone, drawn in to the pith
+(:meth:`Wood._tapers`), as a real year's cone closes at the top of its
+shoot.  A node carrying knots is glued so too, its slot's bottom wall
+meeting each knot ring by year (:meth:`Wood._sew_knots`).
+
 *Cambium (a choice; the thesis has no bark).*  Cells are added outside, but
 the cambium lies under the bark: after each step the roles are re-read from
 the inside of each stack -- the ``q`` inner cells are wood, the outer ones
@@ -205,18 +218,28 @@ MAX_LENGTH = 1000.0
 MAX_SIDES = 1024
 
 
+#: Darts a level glued by year adds per sector: its first cells' bottom faces cut in three
+#: (two edge cuts, 8 darts each, shared by two sectors; two chords of 4 darts), :meth:`Wood._bridge`.
+BRIDGE_DARTS = 24
+#: Darts per quarter of a knot's sides its node's gluing by year adds (its first ring's bottoms
+#: facing the older level cut in three, the slot's corners), less 32: 48 q - 32 a knot.
+KNOT_BRIDGE_DARTS = 48
+
+
 def trunk_darts(sides: int, years: int) -> int:
     """Darts of a branch-free trunk after ``years`` years (closed form).
 
     Levels ``t = 0..Y-1`` (one pith ``sides``-prism each, ``12 sides`` darts);
     level ``t`` has lived ``2 (Y - t)`` half-years, so each of its ``sides``
     stacks holds ``2 (Y - t)`` wood cells and ``Y - t`` bark cells, cubes of 48
-    darts: ``darts = 12 s Y + 48 s * 3 * Y (Y + 1) / 2``.
+    darts; each level ``t >= 1`` is glued by year to the one below
+    (:meth:`Wood._bridge`), ``BRIDGE_DARTS`` per sector:
+    ``darts = 12 s Y + 48 s * 3 * Y (Y + 1) / 2 + 24 s (Y - 1)``.
 
     >>> trunk_darts(16, 10)
-    128640
+    132096
     """
-    return 12 * sides * years + 48 * sides * 3 * years * (years + 1) // 2
+    return 12 * sides * years + 48 * sides * 3 * years * (years + 1) // 2 + BRIDGE_DARTS * sides * max(years - 1, 0)
 
 
 def trunk_volumes(sides: int, years: int) -> int:
@@ -354,6 +377,8 @@ def estimated_darts(
         # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
         # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
         total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
+        if host[c] < 0 and 1 <= int(j) < years:  # a trunk node is glued by year: the knot's first ring meets three cells
+            total += KNOT_BRIDGE_DARTS * (b // 4) - 32  # below (Wood._split_knot_bottoms), measured
     return total
 
 
@@ -858,7 +883,11 @@ class Wood:
 
         Layer ``i`` of a slot is walled by four trunk faces: C2 of stack
         ``(t, k-1)``, C4 of ``(t, k+1)``, C3 of ``(t-1, k)`` and C1 of
-        ``(t+1, k)``, cell ``i`` of each.  Its partner is the knot cell whose
+        ``(t+1, k)``, cell ``i`` of each -- of the bottom wall, a year older
+        and glued by year (:meth:`year_shift` ``s``), cell ``i + s``, and its
+        cells ``1..s`` (whose cones end there) meet the knot's first ring
+        too, in ``s`` rounds more after layer 1 (:meth:`_split_knot_bottoms`
+        cut its bottom faces for them).  Its partner is the knot cell whose
         C1 face lies across the wall face's inner edge on the boundary (found
         by turning around that edge, :func:`ramure.gmap.kernel.identify.boundary_neighbour`):
         layer ``i - 1`` (or the pith face, for ``i = 1``) is sewn already, so
@@ -870,18 +899,27 @@ class Wood:
         gm = self.gm
         c1 = _prism.face_label_code("C1")
         vd = gm.volume_data
+        shifts: dict[int, np.ndarray] = {}  # per host (a branch's parent): year_shift
         while True:
             walls, labels, want = [], [], []
             for b, done in self._sewn_layers.items():
                 br = self.branches[b]
                 host = self.host(br)  # the trunk, or the branch a sub-branch grows on
                 n = host.sides
-                t, k, i = br.level, br.sector, done + 1
+                t, k, r = br.level, br.sector, done + 1
+                shift = shifts.setdefault(br.parent, self.year_shift(host))
+                s = int(shift[t]) if 0 < t < len(shift) else 0
+                # round r: the knot's ring i against the walls' cells of its year; its first ring
+                # meets the bottom wall's cells 1..s + 1 in s + 1 rounds (the older cones end there)
+                i = 1 if r <= s + 1 else r - s
                 if self.branch_axis[b].count[0].min() < i:  # the knot's ring cell i is not born yet
                     continue
                 for tt, kk, label in ((t, (k - 1) % n, "C2"), (t, (k + 1) % n, "C4"), (t - 1, k, "C3"), (t + 1, k, "C1")):
-                    if 0 <= tt < len(host.levels) and host.alive[tt, kk] and host.count[tt, kk] >= i:
-                        walls.append(host.cells[tt, kk, i - 1])
+                    c = (r if r <= s + 1 else i + s) if label == "C3" else i
+                    if label != "C3" and i == 1 and r > 1:
+                        continue  # the side and top walls' first cells are sewn in round 1
+                    if 0 <= tt < len(host.levels) and host.alive[tt, kk] and host.count[tt, kk] >= c:
+                        walls.append(host.cells[tt, kk, c - 1])
                         labels.append(label)
                         want.append((b, i))
             if not walls:
@@ -940,23 +978,34 @@ class Wood:
             self._cut_edges(walk[fresh, np.argmax(outer[fresh], axis=1)], np.full(len(fresh), q))
         walk, length = gm.face_walk(anchors)
         across = gm.dart_data["face"][gm.alpha[2][np.maximum(walk, 0)]]
-        n_edges = 2 * q + 2
-        ready = np.flatnonzero(length == 2 * n_edges)
-        out_darts, out_rows = [anchors[length != 2 * n_edges]], [rows[length != 2 * n_edges]]
+        at_vertex = np.where(walk >= 0, walk, 0)[:, 0::2]
+        edge_ok = walk[:, 0::2] >= 0
+        n_inner = ((across[:, 0::2] == o_code) & edge_ok).sum(axis=1)
+        n_outer = ((across[:, 0::2] == e_code) & edge_ok).sum(axis=1)
+        # ready: inner and outer edges in q pieces, and faces not split yet (a side wall's first
+        # cell may have its bottom edge in pieces too, :meth:`_bridge`: 2q + 2 edges or more)
+        ready = np.flatnonzero((n_inner == q) & (n_outer == q) & (length >= 2 * (2 * q + 2)))
+        done = np.setdiff1d(rows, ready)
+        out_darts, out_rows = [anchors[done]], [rows[done]]
         if not ready.size:
             return np.concatenate(out_darts), np.concatenate(out_rows)
-        edge_darts = walk[ready, 0 : 2 * n_edges : 2]  # dart starting edge e, at vertex e
-        inner = across[ready, 0 : 2 * n_edges : 2] == o_code
-        if not np.all(inner.sum(axis=1) == q):
-            raise GMapError("a slot wall's inner edge is not split into one piece per knot cell")
-        first_inner = inner & ~np.roll(inner, 1, axis=1)
-        e0 = np.argmax(first_inner, axis=1)
-        pick = np.arange(len(ready))
-        sub = np.stack([edge_darts[pick, (e0 + r) % n_edges] for r in range(q)], axis=1)
-        for r in range(1, q):  # chord r: inner vertex r to outer vertex r, 2q + 1 - 2r corners on
-            gm.split_faces(sub[:, r], np.full(len(ready), 2 * q + 1 - 2 * r))
-        out_darts.append(sub.ravel())
-        out_rows.append(np.repeat(rows[ready], q))
+        degrees = length[ready] // 2
+        for deg in np.unique(degrees):  # faces of one degree at a time
+            these = ready[degrees == deg]
+            edge_darts = at_vertex[these, :deg]  # dart starting edge e, at vertex e
+            inner = across[these, 0 : 2 * deg : 2] == o_code
+            outer = across[these, 0 : 2 * deg : 2] == e_code
+            first_inner = inner & ~np.roll(inner, 1, axis=1)
+            e0 = np.argmax(first_inner, axis=1)
+            pick = np.arange(len(these))
+            # edges from the end of the inner run to the start of the outer run, walking on
+            order = (e0[:, None] + q + np.arange(deg)[None, :]) % deg
+            cross = np.argmax(outer[pick[:, None], order], axis=1)
+            sub = np.stack([edge_darts[pick, (e0 + r) % deg] for r in range(q)], axis=1)
+            for r in range(1, q):  # chord r: inner vertex r to outer vertex r, 2 (q - r) + cross corners on
+                gm.split_faces(sub[:, r], 2 * (q - r) + cross)
+            out_darts.append(sub.ravel())
+            out_rows.append(np.repeat(rows[these], q))
         return np.concatenate(out_darts), np.concatenate(out_rows)
 
     def _near_slots(self, parts) -> np.ndarray:
@@ -1047,13 +1096,18 @@ class Wood:
         """Identify each new cube with its neighbours through the edges they share.
 
         Around the axis: C2 of (t, k, i) with C4 of (t, k+1, i); along it: C1 of
-        (t, k, i) with C3 of (t-1, k, i).  The neighbours are found by the
+        (t, k, i) with C3 of (t-1, k, i + s), the cell of the same year
+        (:meth:`year_shift`; a new level's first cells through
+        :meth:`_bridge`, a new knot's through :meth:`_split_knot_bottoms`).  The neighbours are found by the
         stacks' bookkeeping (same pith edge, same layer), never by coordinates;
         the two darts paired sit on the edge the faces share.
         """
         gm = self.gm
         a_parts: list[np.ndarray] = []
         b_parts: list[np.ndarray] = []
+        along_a: list[np.ndarray] = [np.zeros(0, np.int64)]
+        along_b: list[np.ndarray] = [np.zeros(0, np.int64)]
+        bridges: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         start = 0
         for ax, t, k, i, _ in parts:
             f = first[start : start + len(t)].astype(np.int64)
@@ -1063,14 +1117,145 @@ class Wood:
             ok = ax.alive[t, kr] & (ax.count[t, kr] >= i) & (right != f)
             a_parts.append(f[ok] + _C2)  # C2 of this cube, dart 0 ...
             b_parts.append(right[ok] + _C4 + 1)  # ... meets C4 of the next, dart 1: same edge, same vertex
-            tb = np.maximum(t - 1, 0)  # the stack below, same layer
-            ok = (t > 0) & ax.alive[tb, k] & (ax.count[tb, k] >= i)
-            a_parts.append(ax.cells[tb, k, i - 1][ok] + _C3)  # top of the cube below, dart 0
+            tb = np.maximum(t - 1, 0)  # the stack below, its cell of the same year
+            j = i + self.year_shift(ax)[t]
+            ok = (t > 0) & ax.alive[tb, k] & (ax.count[tb, k] >= j) & (j == i)
+            a_parts.append(ax.cells[tb, k, j - 1][ok] + _C3)  # top of the cube below, dart 0
             b_parts.append(f[ok] + _C1 + 1)  # bottom of this one, dart 1
+            later = (t > 0) & (j > i) & (i > 1)  # a level younger than the one below: by year
+            later &= ax.alive[tb, k] & (ax.count[tb, k] >= j)
+            along_a.append(ax.cells[tb, k, np.maximum(j - 1, 0)][later] + _C3)
+            along_b.append(f[later] + _C1)
+            new_level = np.flatnonzero((t > 0) & (j > i) & (i == 1))
+            if new_level.size:  # one new level at a time: its shift is one number
+                below = ax.cells[tb[new_level], k[new_level], : int(j[new_level].max())]
+                lone = ~ax.alive[t[new_level], (k[new_level] - 1) % ax.sides]  # a knot's slot on its C4 side
+                bridges.append((f[new_level], below, lone))
         a, b = np.concatenate(a_parts), np.concatenate(b_parts)
         if a.size:
             fresh = gm.alpha[3][a] == a
             gm.sew3(a[fresh], b[fresh])
+        for cubes, below, lone in bridges:
+            if len(cubes):
+                self._bridge(cubes, below, lone)
+        self._split_knot_bottoms(parts, first)
+        a, b = np.concatenate(along_a), np.concatenate(along_b)
+        if a.size:
+            gm.identify(a, b)
+
+    def year_shift(self, ax: Axis) -> np.ndarray:
+        """Per level ``t`` of ``ax``: how many cells more the level below holds in each stack, ``0`` or ``2``.
+
+        Level ``t`` is glued to level ``t - 1`` *by year*: its cell ``i``
+        meets cell ``i + shift[t]`` below, the cell laid in the same
+        half-year (issue 39: no ring ends on a level boundary).  The shift
+        is the levels' age difference in half-years: 2 for a level grown a
+        year after the one below it, 0 for a node's internode (same year)
+        and for level 0.  Only the trunk's levels are glued by year (a node
+        carrying knots too: its slot's bottom wall meets the knot by year,
+        :meth:`_sew_knots`); branch levels (stubs outside the trunk) keep
+        the cell-``i``-to-cell-``i`` gluing.
+        """
+        shift = np.zeros(len(ax.levels), np.int64)
+        if ax.index != 0 or len(ax.levels) < 2:
+            return shift
+        steps = np.asarray(ax.level_step, np.int64)
+        shift[1:] = steps[1:] - steps[:-1]
+        return shift
+
+    def _bridge(self, cubes: np.ndarray, below: np.ndarray, lone_c4: np.ndarray | None = None) -> None:
+        """Sew the first cells ``cubes`` of a new level onto cells ``below[:, 0..s]`` of the level below.
+
+        The level below is ``s`` half-years older (``s = below.shape[1] - 1``):
+        its inner cells ``1..s`` were laid before the new level existed, and
+        their growth cones end at the level boundary (the apex of those
+        years' cones).  The new level's cell 1 is laid in the same half-year
+        as cell ``s + 1`` below.  So cell 1's bottom face (C1) is cut
+        radially into ``s + 1`` quads (:meth:`_split_bottoms`) and piece
+        ``j`` (from the pith out) is identified with the top face (C3) of
+        cell ``j`` below.  The older inner cells end on the younger level's
+        first ring cell, no ring meets a ring of another year.  ``lone_c4``
+        marks the cubes whose C4 side has no stack (a knot's slot): that
+        edge is theirs alone and is cut too.  Topology only (labels and
+        shared edges); the embedding puts the pieces' vertices where the
+        cells below end (:meth:`embed`).
+        """
+        cubes = np.asarray(cubes, np.int64)
+        lone = np.zeros(len(cubes), bool) if lone_c4 is None else np.asarray(lone_c4, bool)
+        sub = self._split_bottoms(cubes, cubes[lone], cubes, below.shape[1])
+        for r, piece in enumerate(sub):  # piece r shares an edge with cell r + 1 below once piece r - 1 is sewn
+            self.gm.identify(piece, below[:, r] + _C3)
+
+    def _split_knot_bottoms(self, parts, first) -> None:
+        """A new knot's first ring cells that face its slot's bottom wall: bottoms cut like :meth:`_bridge`'s.
+
+        The slot's bottom wall is the top of the trunk level under the node,
+        ``s`` half-years older: its cells ``1..s + 1`` meet the knot's first
+        ring (the older cones end there, as under a trunk cell), its cell
+        ``i + s`` the knot's ring ``i`` (:meth:`_sew_knots`).  So the C1 face
+        of each of the knot's first cells that faces the bottom wall (sides
+        ``0..m/4 - 1``, where the sew puts them) is cut radially into ``s + 1``
+        pieces, and the edges on the slot's two bottom corners too (the side
+        walls' first cells have theirs cut by :meth:`_bridge`).
+        """
+        start = 0
+        for ax, t, k, i, _ in parts:
+            f = first[start : start + len(t)].astype(np.int64)
+            start += len(t)
+            if ax.index == 0:
+                continue
+            br = self.branches[ax.index - 1]
+            shift = self.year_shift(self.host(br))  # zeros on a branch host: its levels are glued by index
+            s = int(shift[br.level]) if 0 < br.level < len(shift) else 0
+            new = (t == 0) & (i == 1)
+            if s == 0 or not new.any():
+                continue
+            q = ax.sides // 4
+            by_sector = np.full(ax.sides, -1, np.int64)
+            by_sector[k[new]] = f[new]
+            if np.any(by_sector < 0):
+                raise GMapError("a knot's first ring is not complete")
+            bottom = by_sector[:q]
+            self._split_bottoms(by_sector[np.r_[ax.sides - 1, 0:q]], np.zeros(0, np.int64), bottom, s + 1)
+
+    def _split_bottoms(self, cut_c2: np.ndarray, cut_c4: np.ndarray, split: np.ndarray, pieces: int) -> list[np.ndarray]:
+        """Cut the bottom faces (C1) of cubes ``split`` radially into ``pieces`` quads, from the O side out.
+
+        The radial edge of C1 with C2 of each cube of ``cut_c2`` and with C4
+        of each of ``cut_c4`` is cut into ``pieces`` (a cube's C2 edge is its
+        right neighbour's C4 edge once they are joined: cut once, for both),
+        then ``pieces - 1`` chords join the cut points across each face of
+        ``split``, whose two radial edges must be cut.  Found by the faces'
+        labels, never by coordinates.  Returns, per piece, one dart of it for
+        each cube of ``split`` (piece 0 holds the edge shared with the O face).
+        """
+        gm = self.gm
+        c2, c4, o_code = (_prism.face_label_code(x) for x in ("C2", "C4", "O"))
+        darts = []
+        for cubes, code in ((cut_c2, c2), (cut_c4, c4)):
+            cubes = np.asarray(cubes, np.int64)
+            if cubes.size:
+                walk, _ = gm.face_walk(cubes + _C1)
+                edges = walk[:, 0:8:2]
+                across = gm.dart_data["face"][gm.alpha[2][edges]]
+                if not np.all((across == code).any(axis=1)):
+                    raise GMapError("a ring cell's bottom face has lost a radial edge")
+                darts.append(edges[np.arange(len(cubes)), np.argmax(across == code, axis=1)])
+        if darts:
+            self._cut_edges(np.concatenate(darts), np.full(sum(len(d) for d in darts), pieces))
+        split = np.asarray(split, np.int64)
+        walk, length = gm.face_walk(split + _C1)
+        n_edges = 2 * pieces + 2
+        if not np.all(length == 2 * n_edges):
+            raise GMapError("a ring cell's bottom face does not have its radial edges cut in pieces")
+        edges = walk[:, 0 : 2 * n_edges : 2]
+        across = gm.dart_data["face"][gm.alpha[2][edges]]
+        inner = np.argmax(across == o_code, axis=1)
+        rows = np.arange(len(split))
+        sub = [edges[rows, inner]] + [edges[rows, (inner + 1 + r) % n_edges] for r in range(1, pieces)]
+        for r in range(1, pieces):  # chord r: side vertex r to the facing vertex r on the other side
+            gm.split_faces(sub[r], np.full(len(split), 2 * pieces + 1 - 2 * r))
+        return sub
 
     # ------------------------------------------------------------------ roles
     def assign_roles(self) -> None:
@@ -1400,15 +1585,18 @@ class Wood:
             trunk = self.host(br)  # the trunk, or the branch a sub-branch grows on
             n = trunk.sides
             rp = self.pith_apothem(trunk)
+            shift = self.year_shift(trunk)
             _, f_t, _ = self.level_frames(trunk)
             ax = self.branch_axis[b]
             t, k = br.level, br.sector
             depth = int(ax.count[0].max())
             a, used = np.zeros(depth + 1), np.zeros(depth + 1)
+            s = int(shift[t]) if 0 < t < len(shift) else 0
             for tt, kk in ((t, (k - 1) % n), (t, (k + 1) % n), (t - 1, k), (t + 1, k)):
                 if 0 <= tt < len(trunk.levels) and trunk.alive[tt, kk]:
-                    c = min(int(trunk.count[tt, kk]), depth)
-                    a[1 : c + 1] += radii[gm.dart_volume[trunk.cells[tt, kk, :c]]]
+                    off = s if tt == t - 1 else 0  # the bottom wall meets the knot by year
+                    c = max(min(int(trunk.count[tt, kk]) - off, depth), 0)
+                    a[1 : c + 1] += radii[gm.dart_volume[trunk.cells[tt, kk, off : off + c]]]
                     used[1 : c + 1] += 1
             a[0], used[0] = rp, 1
             a /= np.maximum(used, 1)
@@ -1530,28 +1718,42 @@ class Wood:
     def _tapers(self, ax, cells, t, k, radii, rp):
         """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
 
-        A stack holds one year's cells more than the stack above it; the top
-        corners of those outer cells are drawn in towards the radius where the
-        stack above ends (``R + TAPER (r - R)``), so each level tapers into the
-        next and the apex closes, instead of leaving flat steps.  Bottom
-        corners keep their radii (``None``); a knot's bottom corners are set
-        by :meth:`_seat_knot`.  Topology is unchanged.
+        A stack holds one year's cells more than the stack above it.  Where
+        the level above is glued cell to cell (:meth:`year_shift` 0), those
+        are its outer cells: their top corners are drawn in towards the
+        radius where the stack above ends (``R + TAPER (r - R)``), so each
+        level tapers into the next and the apex closes, instead of leaving
+        flat steps.  Where the level above is glued by year (shift ``s``),
+        this stack's cells ``1..s`` were laid before the level above existed
+        and their growth cones end at the boundary: their top corners (and
+        the inner top corner of cell ``s + 1``) are drawn in to the pith,
+        ``r_p + TAPER (r - r_p)`` (the cone's apex), and only the cells past
+        the ``count + s`` the level above meets (its oldest bark) taper as
+        before.  Bottom corners keep their radii (``None``); a knot's bottom
+        corners are set by :meth:`_seat_knot`.  Topology is unchanged.
         """
         vd = self.gm.volume_data
         cell = vd["cell"][cells].astype(np.int64)
         n_levels, n = len(ax.levels), ax.sides
         count = np.zeros((n_levels + 1, n), np.int64)  # cells per stack; a slot never tapers
         count[: len(ax.count)] = np.where(ax.alive, ax.count, 10**6)
-        above = count[t + 1, k]
+        shift = np.zeros(n_levels + 1, np.int64)
+        shift[:n_levels] = self.year_shift(ax)
+        s_up = np.where(count[t + 1, k] > 0, shift[t + 1], 0)
+        above = count[t + 1, k] + s_up  # the cells of this stack the level above meets
         table = np.full((n_levels, n, int(cell.max()) + 1), rp)
         table[t, k, cell] = radii[cells]
         m = np.minimum(above, cell)
         base = np.where(m > 0, table[t, k, np.maximum(m, 0)], rp)
         exposed = cell > above
         eps = self.TAPER
+        apex = table[t, k, np.minimum(s_up, table.shape[2] - 1)]  # outer radius of cell s
+        apex_tol = 1e-9 * np.maximum(apex, 1.0)
 
         def top(r):
-            return np.where(exposed, base + eps * (r - base), r)
+            out = np.where(exposed, base + eps * (r - base), r)
+            cone = (s_up > 0) & (r <= apex + apex_tol)  # a cone that ends here: to the pith
+            return np.where(cone, rp + eps * (r - rp), out)
 
         return None, top
 
@@ -1805,7 +2007,65 @@ class Wood:
             knots = split[gm.volume_data["exclusive"][gm.dart_volume[split]]]
             if knots.size:  # cuts in a knot's own volumes (a sub-branch next to its host's knot)
                 split_corners(gm, knots)
+            self._bridge_corners(split)
+            self._knot_bridge_corners(split)
         return gm.embed()
+
+    def _knot_bridge_corners(self, split: np.ndarray) -> None:
+        """Corners of the darts :meth:`_split_knot_bottoms` made: evenly along each cut edge.
+
+        A knot's first ring cell facing the bottom wall has its bottom edges
+        cut in ``s + 1`` pieces; the side faces hold each cut edge whole, so
+        a cut point there is the midpoint of its two neighbours along the
+        edge, solved by a few sweeps (pieces of equal length); the bottom
+        pieces' darts at that point take its corner.  Knot cells are
+        exclusive: the bottom wall's cells end where these put them.
+        """
+        gm = self.gm
+        vd = gm.volume_data
+        vol = gm.dart_volume[split]
+        mine = split[(vd["axis"][vol] > 0) & (vd["level"][vol] == 0) & (vd["cell"][vol] == 1)]
+        if not mine.size:
+            return
+        face = gm.dart_data["face"]
+        sides = np.isin(face[mine], [_prism.face_label_code("C2"), _prism.face_label_code("C4")])
+        chain = mine[sides]
+        corners = gm.corners
+        a0, a1, a2 = gm.alpha[0], gm.alpha[1], gm.alpha[2]
+        for _ in range(64):  # Jacobi sweeps: the error halves each time, down to rounding
+            corners[chain] = 0.5 * (corners[a0[chain]] + corners[a0[a1[chain]]])
+        rest = mine[~sides]
+        for step in (lambda d: a2[d], lambda d: a2[a1[d]]):  # a bottom dart on the edge, then on a chord
+            other = step(rest).astype(np.int64)
+            on_side = np.isin(other, chain)
+            corners[rest[on_side]] = corners[other[on_side]]
+            rest = rest[~on_side]
+
+    def _bridge_corners(self, split: np.ndarray) -> None:
+        """Corners of the darts :meth:`_bridge` made: those of the cells below at the same vertex.
+
+        A new level's first cell has its bottom face cut where the older
+        level's inner cells end; its darts there have no template corner, so
+        they take the corner of the dart across the face (``alpha3``, or
+        ``alpha3 alpha2`` from a side face), a template corner of the cell
+        below: the vertex sits where the older cells put it.
+        """
+        gm = self.gm
+        vd = gm.volume_data
+        vol = gm.dart_volume[split]
+        level = vd["level"][vol].astype(np.int64)
+        shifted = self.year_shift(self.trunk)
+        mine = (vd["axis"][vol] == 0) & (vd["cell"][vol] == 1) & (level > 0)
+        mine[mine] = shifted[level[mine]] > 0
+        darts = split[mine]
+        if not darts.size:
+            return
+        tpl, corners = self.corner, gm.corners
+        a2, a3 = gm.alpha[2], gm.alpha[3]
+        across = a3[darts].astype(np.int64)
+        other = np.where(tpl[across] >= 0, across, a3[a2[darts]].astype(np.int64))
+        ok = tpl[other] >= 0
+        corners[darts[ok]] = corners[other[ok]]
 
     # ------------------------------------------------------------------ facts
     def check_topology(self) -> None:
@@ -2053,6 +2313,50 @@ _HEX_EDGES = np.array(
 )
 
 
+def bridged_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.UnstructuredGrid:
+    """``grid`` with each trunk cell :meth:`Wood._bridge` cut drawn as one hexahedron of its 8 corners.
+
+    A level's first ring cell, glued by year to the level below, has its
+    bottom face cut in three, so :func:`to_grid` writes it as a polyhedron
+    (tetrahedra).  Its extra vertices lie on its bottom edges (the embedding
+    puts them where the older cells end, on the level's boundary plane), so
+    the hexahedron of its 8 template corners has the same shape; pictures
+    then round it like every other ring cell (:func:`smooth_grid`).
+    """
+    import pyvista as pv
+
+    gm, vd = wood.gm, wood.gm.volume_data
+    shift = wood.year_shift(wood.trunk)
+    level = vd["level"].astype(np.int64)
+    bridged = (vd["axis"] == 0) & (vd["cell"] == 1) & (level > 0)
+    bridged[bridged] = shift[np.minimum(level[bridged], len(shift) - 1)] > 0
+    owner = np.asarray(grid.cell_data["volume"])
+    drop = bridged[owner] & (grid.celltypes != 12)
+    vols = np.unique(owner[drop])
+    if not vols.size:
+        return grid
+    row = np.full(gm.n_volumes, -1, np.int64)
+    row[vols] = np.arange(len(vols))
+    tpl = wood.corner
+    darts = np.flatnonzero((row[gm.dart_volume] >= 0) & (tpl >= 0) & (tpl < 8))
+    corner_dart = np.full((len(vols), 8), -1, np.int64)
+    corner_dart[row[gm.dart_volume[darts]], tpl[darts]] = darts
+    if np.any(corner_dart < 0):
+        raise GMapError("a bridged ring cell has lost a corner")
+    pts = gm.points[corner_dart]  # (m, 8, 3), VTK order: inner quad 0..3, outer quad 4..7
+    up = np.einsum("mx,mx->m", np.cross(pts[:, 1] - pts[:, 0], pts[:, 3] - pts[:, 0]), pts[:, 4] - pts[:, 0]) >= 0
+    order = np.where(up[:, None], np.arange(8), np.array([0, 3, 2, 1, 4, 7, 6, 5]))
+    conn = np.arange(8 * len(vols)).reshape(-1, 8)[np.arange(len(vols))[:, None], order]
+    hexes = pv.UnstructuredGrid(
+        np.hstack([np.full((len(vols), 1), 8), conn]).ravel(), np.full(len(vols), 12, np.uint8), pts.reshape(-1, 3)
+    )
+    first = np.zeros(gm.n_volumes, np.int64)
+    first[owner[::-1]] = np.arange(len(owner))[::-1]  # a grid row of each volume, for its data
+    for name in grid.cell_data.keys():
+        hexes.cell_data[name] = np.asarray(grid.cell_data[name])[first[vols]]
+    return pv.merge([grid.extract_cells(~drop), hexes], merge_points=False)
+
+
 def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.UnstructuredGrid:
     """A picture grid whose trunk rings are round: each trunk ring cell cut in ``parts`` along its arc.
 
@@ -2070,6 +2374,7 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
 
     if parts <= 1:
         return grid
+    grid = bridged_as_hexahedra(wood, grid)
     vd = wood.gm.volume_data
     owner = np.asarray(grid.cell_data["volume"])
     hexa = (grid.celltypes == 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)

@@ -47,9 +47,10 @@ def _ray_layers(grid, z, angle, radius):
     pts = np.stack([t * np.cos(angle), t * np.sin(angle), np.full_like(t, z)], axis=1)
     cells = grid.find_containing_cell(pts)
     cells = cells[cells >= 0]
-    keep = np.concatenate([[True], cells[1:] != cells[:-1]])
-    cells = cells[keep]
     cd = grid.cell_data
+    volume = np.asarray(cd["volume"])[cells]  # a polyhedron is drawn as tetrahedra: one volume, many cells
+    keep = np.concatenate([[True], volume[1:] != volume[:-1]])
+    cells = cells[keep]
     return [(int(cd["wood"][c]), int(cd["year"][c]), int(cd["season"][c])) for c in cells]
 
 
@@ -187,17 +188,19 @@ def _knot_ring_neighbours(wood, b):
 def test_knots_are_sewn_to_the_ring_cells_around_them(knotty):
     """Each knot ring cell's C1 face is alpha3-sewn to its piece of the slot wall of its layer (4 walls
     x N layers, N = 3 (Y - j) cells per stack, each wall cut in m / 4 pieces for a knot of m sides),
-    and the knot's pith to the trunk's pith face: m N + 1 faces."""
+    and the knot's pith to the trunk's pith face: m N + 1 faces.  The bottom wall is the level under
+    the node, a year older, glued by year: its cell i + 2 meets the knot's ring i, its cells 1, 2 and
+    3 the knot's first ring, whose m / 4 bottom faces are cut in three: 2 m / 4 faces more."""
     vd = knotty.gm.volume_data
     m = knotty.p["branch_sides"]
     assert m == 16  # as many sides as the trunk's
     for b, br in enumerate(knotty.branches):
         rings, faces = _knot_ring_neighbours(knotty, b)
         n = 3 * (6 - br.year)
-        assert faces == m * n + 1
-        assert len(rings) == 4 * n
+        assert faces == m * n + 1 + 2 * (m // 4)
+        assert len(rings) == 4 * n + 2
         layers = sorted(vd["cell"][list(rings)].tolist())
-        assert layers == sorted(list(range(1, n + 1)) * 4)  # one wall cell per layer and side
+        assert layers == sorted(list(range(1, n + 1)) * 3 + list(range(1, n + 3)))  # one wall cell per layer and side
         assert set(vd["level"][list(rings)].tolist()) == {br.level - 1, br.level, br.level + 1}
 
 
@@ -260,7 +263,8 @@ def test_regrowing_a_branch_changes_only_it_and_its_neighbours(knotty):
     neighbours = set(gm.dart_volume[gm.alpha[3][inside]].tolist())
     assert set(moved.tolist()) <= set(branch.tolist()) | neighbours
     rings, _ = _knot_ring_neighbours(knotty, 1)  # the knot is sewn: ring cells among its neighbours
-    assert len(rings) == 4 * 3 * (6 - knotty.branches[1].year) and rings <= neighbours
+    # four walls of 3 (Y - j) layers; the bottom wall (glued by year) meets the knot with 2 cells more
+    assert len(rings) == 4 * 3 * (6 - knotty.branches[1].year) + 2 and rings <= neighbours
     # stronger here: the seam follows the law's means, so no neighbour moves (the knot's far end does)
     assert set(moved.tolist()) <= set(branch.tolist()) and moved.size
 
@@ -412,7 +416,7 @@ def _ring_clearance(wood, b):
 def test_trunk_rings_deflect_round_a_knot(knotty):
     """The trunk's rings bend away round each knot: their vertices off the seam keep more than a knot
     radius from it (the ring cells on the seam curve in along its round edge), where straight rings
-    would come within 0.2-0.3 radii of it."""
+    would come within 0.3-0.4 radii of it (the levels glued by year taper into each other)."""
     bent = [_ring_clearance(knotty, b) for b in range(3)]
     knotty.bend_rings = False
     knotty.embed()
@@ -420,7 +424,7 @@ def test_trunk_rings_deflect_round_a_knot(knotty):
     knotty.bend_rings = True
     knotty.embed()
     assert min(bent) > 1.1  # 1.18, 1.22 and 1.21
-    assert max(straight) < 0.4  # 0.19, 0.27 and 0.27
+    assert max(straight) < 0.5  # 0.30, 0.36 and 0.40
 
 
 def test_the_branch_bends_inside_its_knot(knotty):
@@ -445,7 +449,9 @@ def test_map_cut_and_picture_cut_agree_across_the_trunk(trunk6):
 
     part = cut_map(trunk6.gm, (0, 0, 1), (0, 0, 0.7))
     grid = W.to_grid(trunk6).clip(normal=(0, 0, 1), origin=(0, 0, 0.7), invert=True)
-    a = to_unstructured_grid(part).compute_cell_sizes()["Volume"].sum()
+    # as tetrahedra on both sides: a level's first ring cells, glued by year, are polyhedra (their
+    # bottom faces cut in three), which VTK measures inexactly as polyhedron cells
+    a = to_unstructured_grid(part, convex=True).compute_cell_sizes()["Volume"].sum()
     b = grid.compute_cell_sizes()["Volume"].sum()
     assert abs(a - b) <= 1e-9 * b
 
@@ -656,7 +662,13 @@ def test_smooth_grid_draws_round_rings_and_keeps_the_cells_data():
     assert gap_smooth == pytest.approx(22.5 / 4, abs=0.01)
     assert r_smooth.min() >= 0.995 * r_raw.min()  # on the arcs, not on the chords
     ring_cells = int(((trunk6.gm.volume_data["cell"] > 0) & (trunk6.gm.volume_data["axis"] == 0)).sum())
-    assert smooth.n_cells == raw.n_cells + 3 * ring_cells
+    hexed = W.bridged_as_hexahedra(trunk6, raw)  # a level's first ring cells as one hexahedron each
+    vd = trunk6.gm.volume_data
+    rings = np.flatnonzero((vd["axis"] == 0) & (vd["cell"] > 0))
+    owner = np.asarray(hexed.cell_data["volume"])
+    assert np.array_equal(np.bincount(owner, minlength=len(vd["cell"]))[rings], np.ones(len(rings)))
+    assert np.all(hexed.celltypes[np.isin(owner, rings)] == 12)
+    assert smooth.n_cells == hexed.n_cells + 3 * ring_cells
     owner = np.asarray(smooth.cell_data["volume"])
     assert np.array_equal(smooth.cell_data["ring"], trunk6.gm.volume_data["ring"][owner])
     v_raw, v_smooth = (g.compute_cell_sizes()["Volume"].sum() for g in (raw, smooth))

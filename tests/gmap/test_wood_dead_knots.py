@@ -143,20 +143,26 @@ def test_bad_deaths_are_refused(deaths):
         W.grow_wood("pine", years=5, branches=[(1, 2)], branch_deaths=deaths)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 39 (a): levels are glued cell i to cell i, not by year")
 def test_no_ring_ends_on_a_level_boundary():
     """Across every level boundary a trunk wood cell is sewn to a cell of its own year.
 
-    Today cell ``i`` of level ``t`` is sewn to cell ``i`` of level ``t - 1``, which is a year
-    older wherever the two levels differ in age (every internode, and a node's level against the
-    level below it): each ring meets the next older one there, the step seen in boards.  Gluing by
-    year (cell ``i`` to cell ``i + 2 (age difference)``) needs the thesis's transition wedges for
-    the older level's inner cells.
+    Cell ``i`` of level ``t`` is sewn to cell ``i + s`` of level ``t - 1``, ``s`` the levels' age
+    difference in half-years (2, or 0 between a node and its internode), a knot's node included
+    (:meth:`Wood._bridge`).  The exception is the cone apex: the older level's cells ``1..s``
+    (the year before level ``t`` existed) end on level ``t``'s first cell.
     """
     wood = W.grow_wood("pine", years=6, branches=[(2, 3)])
     vd = wood.gm.volume_data
     a, b = contacts(wood)
     trunk_wood = (vd["axis"] == 0) & np.isin(vd["wood"], LATER)
     across = trunk_wood[a] & trunk_wood[b] & (vd["level"][a] != vd["level"][b])
-    assert across.sum() > 100
-    assert np.array_equal(vd["year"][a[across]], vd["year"][b[across]])
+    upper = np.where(vd["level"][a] > vd["level"][b], a, b)
+    lower = np.where(vd["level"][a] > vd["level"][b], b, a)
+    apex = (vd["cell"][upper] == 1) & (vd["cell"][lower] <= 2) & (vd["year"][lower] == vd["year"][upper] - 1)
+    assert across.sum() > 100 and (across & apex).sum() > 0
+    rest = across & ~apex
+    assert np.array_equal(vd["year"][a[rest]], vd["year"][b[rest]])
+    # the node carrying the knot (level 2) is glued by year too: its first cells end the cones below
+    node = wood.branches[0].level
+    assert np.any(rest & (vd["level"][upper] == node) & (vd["level"][lower] == node - 1))
+    assert np.any(across & apex & (vd["level"][upper] == node))
