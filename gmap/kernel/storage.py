@@ -752,7 +752,7 @@ class MapStorage:
             old = memo.get(key)
             state = self._grown_orbits(key, old) if old is not None else None
             if state is None:
-                ids, count = orbit_labels(self.alpha[list(key)])
+                ids, count = orbit_labels(self.alpha, select=key)
                 state = _OrbitState.fresh(ids, count, self._alpha_snapshot(), self._alpha.shape[1])
             memo[key] = self._cache[cache_key] = state
         return state
@@ -1266,7 +1266,7 @@ class Boundary:
 
     def orbit_ids(self, involutions: str | Sequence[int]) -> tuple[np.ndarray, int]:
         key = sorted({int(i) for i in involutions})
-        return orbit_labels(self.alpha[key])
+        return orbit_labels(self.alpha, select=key)
 
     def counts(self) -> dict[str, int]:
         return {

@@ -422,3 +422,63 @@ def _assert_walks(gm, starts):
             if cur == d:
                 break
         assert length == len(want) and row[:length].tolist() == want and np.all(row[length:] == -1)
+
+
+def _alpha_view(gm, spare=7):
+    """``gm``'s alpha as the kernel holds it after growth: int32 rows with spare capacity (a strided view)."""
+    room = np.empty((4, gm.n_darts + spare), np.int32)
+    room[:, : gm.n_darts] = gm.alpha
+    return room[:, : gm.n_darts]
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("key", [(0, 1, 2, 3), (1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2), (1, 2), (3,)])
+def test_orbit_labels_select_equals_copied_rows(key, compiled, monkeypatch):
+    """``select`` on a strided int32 alpha labels as the int64 copy of those rows (the old call)."""
+    gm = GMap3()
+    a, b, c = gm.add_prisms(5, 3)
+    gm.sew3(gm.prism_face(a, 5, "E"), gm.prism_face(b, 5, "O"))
+    gm.sew3(gm.prism_face(b, 5, "E"), gm.prism_face(c, 5, "O"))
+    gm.add_prisms(4)  # and a free cube
+    alpha = _alpha_view(gm)
+    assert not alpha.flags.c_contiguous
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: compiled)
+    labels, count = graphs.orbit_labels(alpha, select=key)
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: False)
+    want, want_count = graphs.orbit_labels(np.array(gm.alpha[list(key)], np.int64))
+    assert labels.dtype == np.int32 and count == want_count and np.array_equal(labels, want)
+    assert count == gm.orbit_count(key)
+
+
+def test_orbit_labels_select_falls_back_when_not_an_involution(monkeypatch):
+    """A selected row that is not an involution takes the strong search: the same partition as before."""
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: True)
+    rows = np.array([[1, 0, 3, 2, 4], [0, 1, 2, 3, 4], [1, 2, 0, 3, 4]], np.int32)  # row 2: a 3-cycle
+    labels, count = graphs.orbit_labels(rows, select=(0, 2))
+    assert count == 2 and labels[0] == labels[1] == labels[2] == labels[3] != labels[4]
+    labels, count = graphs.orbit_labels(rows, select=(1,))
+    assert count == 5 and labels.tolist() == [0, 1, 2, 3, 4]
+
+
+def test_orbit_labels_of_alpha_makes_no_widened_copy(monkeypatch):
+    """Labelling 3 rows of an int32 alpha allocates far less than their int64 copy (3 x 8 bytes a dart).
+
+    Before, ``orbit_labels(alpha[key])`` copied the rows (12 bytes a dart), widened them
+    to int64 (24) and made int64 temporaries for the involution check: the growth
+    peak of the 30-year pine (2.8 million darts) was there.
+    """
+    import tracemalloc
+
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: True)
+    gm = GMap3()
+    gm.add_prisms(8, count=2000)
+    n = gm.n_darts
+    graphs.orbit_labels(gm.alpha, select=(1, 2, 3))  # compiled and loaded before measuring
+    tracemalloc.start()
+    try:
+        labels, count = graphs.orbit_labels(gm.alpha, select=(1, 2, 3))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert count == 2000 * 16  # free prisms of order 8: 16 vertices each
+    assert peak < 10 * n, f"{peak / n:.1f} bytes a dart"  # int32 parents and labels: 8
