@@ -46,7 +46,9 @@ def compiled_pays(n: int) -> bool:
     return n >= COMPILED_FROM or "numba" in sys.modules
 
 
-def orbit_labels(rows: ArrayLike, involutions: bool | None = None, select: Sequence[int] | None = None) -> tuple[np.ndarray, int]:
+def orbit_labels(
+    rows: ArrayLike, involutions: bool | None = None, select: Sequence[int] | None = None, out: np.ndarray | None = None
+) -> tuple[np.ndarray, int]:
     """``(labels int32, count)``: orbits of the maps ``rows`` (k, n) (``rows[i][d]`` = image of d).
 
     When every row is an involution (a map's alpha_i, valid or not, usually
@@ -57,7 +59,9 @@ def orbit_labels(rows: ArrayLike, involutions: bool | None = None, select: Seque
     ``involutions=True``: the caller knows every row is an involution of
     ``0..n-1`` (the check is skipped); None checks.  ``select``: take only
     these rows of ``rows`` (a map's ``alpha`` and a cell's involutions),
-    without copying them out first.
+    without copying them out first.  ``out``: an int32 buffer of at least n
+    entries; the labels are written to ``out[:n]`` and that view is returned
+    (the kernel's orbit states keep labels with room to grow: no copy).
 
     The compiled path checks and unites in one pass over the rows as they
     are (int32 alpha stays int32): no widened copy, no per-row temporaries.
@@ -71,9 +75,14 @@ def orbit_labels(rows: ArrayLike, involutions: bool | None = None, select: Seque
     if compiled_pays(n):
         from ._components_kernel import involution_components
 
-        labels, count, ok = involution_components(rows, np.arange(rows.shape[0]) if select is None else np.array(select))
+        buffer = np.empty(n, np.int32) if out is None else out
+        count, ok = involution_components(rows, np.arange(rows.shape[0]) if select is None else np.array(select), buffer)
         if ok:
-            return labels, int(count)
+            return buffer[:n], int(count)
+    if out is not None:
+        labels, count = orbit_labels(rows, involutions, select)
+        out[:n] = labels
+        return out[:n], count
     if select is not None:
         rows = rows[select]
     ar = np.arange(n)

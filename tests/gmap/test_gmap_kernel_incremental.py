@@ -448,6 +448,11 @@ def test_orbit_labels_select_equals_copied_rows(key, compiled, monkeypatch):
     want, want_count = graphs.orbit_labels(np.array(gm.alpha[list(key)], np.int64))
     assert labels.dtype == np.int32 and count == want_count and np.array_equal(labels, want)
     assert count == gm.orbit_count(key)
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: compiled)
+    buffer = np.full(gm.n_darts + 5, -7, np.int32)  # labels with room, written in place (the orbit states' raw numbers)
+    into, count = graphs.orbit_labels(alpha, select=key, out=buffer)
+    assert np.shares_memory(into, buffer) and np.array_equal(buffer[: gm.n_darts], want) and count == want_count
+    assert buffer[gm.n_darts :].tolist() == [-7] * 5
 
 
 def test_orbit_labels_select_falls_back_when_not_an_involution(monkeypatch):
