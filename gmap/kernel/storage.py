@@ -668,6 +668,15 @@ class MapStorage:
         if strict and len(np.unique(starts)) != len(starts):
             raise GMapError("two of the given darts are the same dart")
         mark = self._marks()
+        if strict and compiled_pays(self.n_darts):  # one compiled search: the calls, not the darts, cost here
+            from ramure.gmap.kernel._walk_kernel import orbit_members
+
+            found, which, status = orbit_members(self.alpha, np.asarray(key, np.int64), starts, mark)
+            if status == 1:
+                raise GMapError("two of the given darts lie in the same orbit")
+            if status == 0:
+                order = np.argsort(found)
+                return found[order], which[order]
         rows = [self._alpha[i] for i in key]
         frontier = np.unique(starts)
         mark[starts[::-1]] = np.arange(len(starts))[::-1]  # a repeated start keeps its first index

@@ -487,3 +487,62 @@ def test_orbit_labels_of_alpha_makes_no_widened_copy(monkeypatch):
         tracemalloc.stop()
     assert count == 2000 * 16  # free prisms of order 8: 16 vertices each
     assert peak < 10 * n, f"{peak / n:.1f} bytes a dart"  # int32 parents and labels: 8
+
+
+def _orbit_test_map():
+    """Three prisms in a column, the middle one's edges split: orbits of several sizes."""
+    gm = GMap3()
+    a, b, c = gm.add_prisms(5, 3)
+    gm.sew3(gm.prism_face(a, 5, "E"), gm.prism_face(b, 5, "O"))
+    gm.sew3(gm.prism_face(b, 5, "E"), gm.prism_face(c, 5, "O"))
+    gm.split_edge([gm.prism_face(b, 5, "C2"), gm.prism_face(b, 5, "C4")], [0.3, 0.6])
+    return gm
+
+
+@pytest.mark.parametrize("key", [(0, 2, 3), (2, 3), (0, 1, 2), (1, 2, 3), (0, 1, 2, 3), (3,)])
+def test_compiled_orbits_from_equals_the_numpy_walk(key, monkeypatch):
+    """Members (sorted) and the index of each member's start: the compiled search as the numpy one."""
+    gm = _orbit_test_map()
+    ids, count = gm.orbit_ids(key)
+    firsts = np.unique(ids, return_index=True)[1]  # one dart of each orbit
+    starts = firsts[np.linspace(0, count - 1, min(count, 5)).astype(int)][::-1]  # some orbits, not in dart order
+    from ramure.gmap.kernel import _walk_kernel
+
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr(storage, "compiled_pays", lambda n, compiled=compiled: compiled)
+        with mock.patch.object(_walk_kernel, "orbit_members", wraps=_walk_kernel.orbit_members) as search:
+            out.append(gm.orbits_from(starts, key))
+        assert search.call_count == int(compiled)  # compiled: one search, not the numpy rings
+    (m1, l1), (m2, l2) = out
+    assert np.array_equal(m1, m2) and np.array_equal(l1, l2)
+    assert np.all(np.diff(m1) > 0) and set(l1.tolist()) == set(range(len(starts)))
+    for j, s in enumerate(starts):  # each start's orbit is the one gm.orbit gives
+        assert np.array_equal(m1[l1 == j], np.sort(gm.orbit(int(s), key)))
+    assert np.all(gm._marks() == -1)  # the scratch is left clean
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_orbits_from_refuses_two_starts_in_one_orbit(compiled, monkeypatch):
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: compiled)
+    gm = _orbit_test_map()
+    other = int(gm.alpha[0][7])  # same edge as dart 7
+    with pytest.raises(GMapError, match="same orbit"):
+        gm.orbits_from([7, 100, other], (0, 2, 3))
+    assert np.all(gm._marks() == -1)
+    members, labels = gm.orbits_from([7, other], (0, 2, 3), strict=False)  # not strict: one orbit, both starts allowed
+    assert len(members) == len(gm.orbit(7, (0, 2, 3)))
+
+
+@pytest.mark.parametrize("cubes", [1, 5, 6, 7, 40])
+def test_compiled_orbits_from_grows_its_room(cubes, monkeypatch):
+    """Whole cubes (48 darts) from one dart each: the search outgrows its first room (8 darts a start).
+
+    With 6 cubes the room is full exactly when the next start comes (it wrote past it once).
+    """
+    gm = GMap3()
+    first = gm.add_prisms(4, cubes)
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: True)
+    members, labels = gm.orbits_from(first[::-1], (0, 1, 2))
+    assert np.array_equal(members, np.arange(48 * cubes))
+    assert np.array_equal(labels, (cubes - 1 - np.arange(48 * cubes) // 48))
