@@ -515,7 +515,8 @@ class Operations(MapStorage):
         frac = np.where(same_side, t[which], 1.0 - t[which])
         alpha = self._alpha
         old_a0 = alpha[0][members].astype(np.int64)
-        new = self._new_darts(len(members)).astype(np.int64)
+        # every column (by its rule) and every alpha row of the new darts is written below: no fill pass
+        new = self._new_darts(len(members), skip=tuple(self._rules), free=()).astype(np.int64)
         alpha = self._alpha
 
         def nmap(x):  # old member dart -> its new dart
