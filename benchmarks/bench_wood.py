@@ -106,8 +106,8 @@ def bench_wood_30_years_20_branches():
     2,820,624 darts.  Issue 39 found 3.5 s and 1,035 MB; then 2.36 s and 802 MB.  The kernel's
     orbit labels then stopped copying alpha into int64, the embedding its per-dart corner sizes,
     orbits_from its numpy rings: on the shared 2-core machine (CPU seconds, 7 runs paired with
-    the code before, medians) growth 2.22 -> 1.58 s, the check 0.77 -> 0.21 s, peak RSS
-    801 -> 608 MB; ``benchmarks/wood_digest.py`` shows the maps unchanged.
+    the code before, medians) growth 1.85 -> 1.36 s, the check 0.67 -> 0.19 s, peak RSS
+    801 -> 609 MB; ``benchmarks/wood_digest.py`` shows the maps unchanged.
     """
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     _CPU.clear()
