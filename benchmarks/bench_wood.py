@@ -5,8 +5,8 @@ The thesis reports about 5 s on a Pentium IV 2.66 GHz for its trunk with
 branches, with no size stated.  Targets: growth with the embedding every step
 plus validity and chi checks <= 0.5 s; a cut picture <= 33 ms after the first
 conversion; ``cut_map`` <= 100 ms (when the kernel has it); a 30-year trunk
-with 20 branches <= 5 s and <= 2 GB.  Medians of a few runs; the machine is
-shared, so figures move with the load.
+with 20 branches <= 2 s and <= 800 MB (issue 39; issue 13 asked 5 s and 2 GB).
+Medians of a few runs; the machine is shared, so figures move with the load.
 """
 
 from __future__ import annotations
@@ -101,7 +101,14 @@ def bench_wood_cut_map():
 
 
 def bench_wood_30_years_20_branches():
-    """A 30-year trunk with 20 branches, grown and embedded: <= 5 s and <= 2 GB (one check after, timed apart)."""
+    """A 30-year trunk with 20 branches, grown and embedded: <= 2 s and <= 800 MB (issue 39; one check after, timed apart).
+
+    2,820,624 darts.  Issue 39 found 3.5 s and 1,035 MB; then 2.36 s and 802 MB.  The kernel's
+    orbit labels then stopped copying alpha into int64, the embedding its per-dart corner sizes,
+    orbits_from its numpy rings: on the shared 2-core machine (CPU seconds, 7 runs paired with
+    the code before, medians) growth 1.85 -> 1.36 s, the check 0.67 -> 0.19 s, peak RSS
+    801 -> 609 MB; ``benchmarks/wood_digest.py`` shows the maps unchanged.
+    """
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     _CPU.clear()
     t0, c0 = time.perf_counter(), time.process_time()
@@ -114,14 +121,15 @@ def bench_wood_30_years_20_branches():
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     rec = _record(
         seconds,
-        5.0,
+        2.0,
         w.gm,
         peak_rss_mb=round(peak_mb),
         rss_before_mb=round(before / 1024),
         cpu_seconds=round(cpu, 3),
         check_seconds=round(check, 3),
     )
-    rec["ok"] = bool(rec["ok"] and peak_mb <= 2048)
+    rec["target_peak_rss_mb"] = 800
+    rec["ok"] = bool(rec["ok"] and peak_mb <= 800)
     return rec
 
 

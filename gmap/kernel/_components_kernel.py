@@ -33,17 +33,23 @@ def _union(parent, a, b):
 
 
 @njit(cache=True)
-def _numbered(parent):
-    n = parent.size
-    labels = np.empty(n, np.int32)
+def _number_into(parent, labels):
+    """Write each node's component number into ``labels[:n]``; return the count."""
     count = 0
-    for x in range(n):  # a root is its component's smallest node: it comes first
+    for x in range(parent.size):  # a root is its component's smallest node: it comes first
         root = _find(parent, x)
         if root == x:
             labels[x] = count
             count += 1
         else:
             labels[x] = labels[root]
+    return count
+
+
+@njit(cache=True)
+def _numbered(parent):
+    labels = np.empty(parent.size, np.int32)
+    count = _number_into(parent, labels)
     return labels, count
 
 
@@ -56,6 +62,33 @@ def rows_components(rows):
         for d in range(n):
             _union(parent, d, rows[i, d])
     return _numbered(parent)
+
+
+@njit(cache=True)
+def involution_components(rows, select, out):
+    """Components of the rows ``select`` of ``rows`` (k, n), checked to be involutions of ``0..n-1``.
+
+    Labels (numbered by smallest node, as :func:`rows_components`) go to
+    ``out[:n]`` (int32, at least n long: the caller's buffer, room included);
+    returns ``(count, ok)``.  ``ok`` is False (``out`` partly written) when a
+    link leaves ``0..n-1`` or a row is not an involution: the caller then
+    takes the general path.  The check and the unions share one pass over
+    the links, in the rows' own integer type (no widened copy), each link
+    united once.
+    """
+    n = rows.shape[1]
+    parent = np.empty(n, np.int32)  # half the memory of int64 (a map's dart ids are int32)
+    for d in range(n):
+        parent[d] = d
+    for i in select:
+        row = rows[i]
+        for d in range(n):
+            y = row[d]
+            if y < 0 or y >= n or row[y] != d:
+                return 0, False
+            if y > d:
+                _union(parent, d, y)
+    return _number_into(parent, out), True
 
 
 @njit(cache=True)
@@ -160,17 +193,18 @@ def boundary_counts(alpha, n):
     builds the surface with numpy.
     """
     local = np.empty(n, np.int32)  # surface number of each free dart (-1: not on the surface)
-    every = np.empty(n, np.int64)
     m = 0
     row3 = alpha[3]
     for d in range(n):
         if row3[d] == d:
             local[d] = m
-            every[m] = d
             m += 1
         else:
             local[d] = -1
-    darts = every[:m]
+    darts = np.empty(m, np.int64)  # the surface's darts only (not one slot per dart of the map)
+    for d in range(n):
+        if local[d] >= 0:
+            darts[local[d]] = d
     b0 = np.empty(m, np.int64)
     b1 = np.empty(m, np.int64)
     b2 = np.empty(m, np.int64)

@@ -14,6 +14,23 @@ from ramure.jit import njit
 
 
 @njit(cache=True)
+def inverse_orbit_sizes(raw, find, count):
+    """``1 / size`` of each dart's orbit (``find[raw[d]]``, two-level labels), as float64.
+
+    The same doubles as ``1.0 / np.bincount(ids).astype(float)[ids]`` (an
+    exact integer divided once): :meth:`GMap3.embed` weighs each corner's
+    darts with them without keeping per-dart sizes between calls.
+    """
+    sizes = np.zeros(count, np.int64)
+    for d in range(raw.size):
+        sizes[find[raw[d]]] += 1
+    out = np.empty(raw.size)
+    for d in range(raw.size):
+        out[d] = 1.0 / np.float64(sizes[find[raw[d]]])
+    return out
+
+
+@njit(cache=True)
 def weighted_sums(raw, find, weight, corners, count):
     """``(sums (count, 3), total (count,))``: weighted corner sums and weights per vertex.
 

@@ -25,6 +25,7 @@ ids out of range and for strong components of maps that are not involutions.
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -45,7 +46,9 @@ def compiled_pays(n: int) -> bool:
     return n >= COMPILED_FROM or "numba" in sys.modules
 
 
-def orbit_labels(rows: ArrayLike, involutions: bool | None = None) -> tuple[np.ndarray, int]:
+def orbit_labels(
+    rows: ArrayLike, involutions: bool | None = None, select: Sequence[int] | None = None, out: np.ndarray | None = None
+) -> tuple[np.ndarray, int]:
     """``(labels int32, count)``: orbits of the maps ``rows`` (k, n) (``rows[i][d]`` = image of d).
 
     When every row is an involution (a map's alpha_i, valid or not, usually
@@ -54,12 +57,34 @@ def orbit_labels(rows: ArrayLike, involutions: bool | None = None) -> tuple[np.n
     search, and blind to repeated links).  Otherwise repeats are turned into
     self-loops and strong components are taken, as scipy requires.
     ``involutions=True``: the caller knows every row is an involution of
-    ``0..n-1`` (the check is skipped); None checks.
+    ``0..n-1`` (the check is skipped); None checks.  ``select``: take only
+    these rows of ``rows`` (a map's ``alpha`` and a cell's involutions),
+    without copying them out first.  ``out``: an int32 buffer of at least n
+    entries; the labels are written to ``out[:n]`` and that view is returned
+    (the kernel's orbit states keep labels with room to grow: no copy).
+
+    The compiled path checks and unites in one pass over the rows as they
+    are (int32 alpha stays int32): no widened copy, no per-row temporaries.
     """
     rows = np.asarray(rows)
-    k, n = rows.shape
+    if select is not None:
+        select = [int(i) for i in select]
+    k, n = (len(select), rows.shape[1]) if select is not None else rows.shape
     if n == 0:
         return np.zeros(0, np.int32), 0
+    if compiled_pays(n):
+        from ._components_kernel import involution_components
+
+        buffer = np.empty(n, np.int32) if out is None else out
+        count, ok = involution_components(rows, np.arange(rows.shape[0]) if select is None else np.array(select), buffer)
+        if ok:
+            return buffer[:n], int(count)
+    if out is not None:
+        labels, count = orbit_labels(rows, involutions, select)
+        out[:n] = labels
+        return out[:n], count
+    if select is not None:
+        rows = rows[select]
     ar = np.arange(n)
     in_range = bool(involutions) or (rows.min() >= 0 and rows.max() < n)
     if in_range and (involutions or all(np.array_equal(row[row], ar) for row in rows)):

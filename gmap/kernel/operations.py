@@ -139,12 +139,12 @@ class Operations(MapStorage):
         d["sublabel"][rows] = 0
         per_prism(d["fcorner"])[:] = t.fcorner[None, :]
         per_prism(d["forward"])[:] = t.forward[None, :]
+        corner = per_prism(d["corner"])
         if unit:
-            corner_points = _prism.unit_corners(n)[t.corner][None]
-        else:
-            corner_points = _prism.corners(n, origins, frames, sizes)[:, t.corner, :]
-        per_prism(d["corner"])[:] = corner_points
-        per_prism(d["point"])[:] = corner_points
+            corner[:] = _prism.unit_corners(n)[t.corner][None]
+        else:  # gathered straight into the rows: no (count, darts, 3) temporary
+            np.take(_prism.corners(n, origins, frames, sizes), t.corner, axis=1, out=corner)
+        per_prism(d["point"])[:] = corner
         per_prism(d["vcorner"])[:] = t.corner[None, :]
         d["sup"][rows] = -1
         for name, rule in self._rules.items():
@@ -515,7 +515,8 @@ class Operations(MapStorage):
         frac = np.where(same_side, t[which], 1.0 - t[which])
         alpha = self._alpha
         old_a0 = alpha[0][members].astype(np.int64)
-        new = self._new_darts(len(members)).astype(np.int64)
+        # every column (by its rule) and every alpha row of the new darts is written below: no fill pass
+        new = self._new_darts(len(members), skip=tuple(self._rules), free=()).astype(np.int64)
         alpha = self._alpha
 
         def nmap(x):  # old member dart -> its new dart

@@ -254,10 +254,15 @@ class _OrbitState:
         #: new orbits ``new_loc``, numbered after the old ones), else None
         self.base, self.new_loc = base, new_loc
 
+    @staticmethod
+    def room(n: int, room: int = 0) -> np.ndarray:
+        """An int32 buffer for ``n`` raw numbers, with room for ``room`` darts (the map's reserve) or half as many again."""
+        return np.empty(max(16, n + n // 2, room), np.int32)
+
     @classmethod
     def fresh(cls, ids, count, snap, room=0) -> _OrbitState:
         """A state of the labels ``ids``, with room for ``room`` darts (the map's reserve) or half as many again."""
-        raw = np.empty(max(16, len(ids) + len(ids) // 2, room), np.int32)
+        raw = cls.room(len(ids), room)
         raw[: len(ids)] = ids
         return cls(raw, [len(ids)], len(ids), np.arange(count, dtype=np.int32), count, snap)
 
@@ -663,6 +668,15 @@ class MapStorage:
         if strict and len(np.unique(starts)) != len(starts):
             raise GMapError("two of the given darts are the same dart")
         mark = self._marks()
+        if strict and compiled_pays(self.n_darts):  # one compiled search: the calls, not the darts, cost here
+            from ramure.gmap.kernel._walk_kernel import orbit_members
+
+            found, which, status = orbit_members(self.alpha, np.asarray(key, np.int64), starts, mark)
+            if status == 1:
+                raise GMapError("two of the given darts lie in the same orbit")
+            if status == 0:
+                order = np.argsort(found)
+                return found[order], which[order]
         rows = [self._alpha[i] for i in key]
         frontier = np.unique(starts)
         mark[starts[::-1]] = np.arange(len(starts))[::-1]  # a repeated start keeps its first index
@@ -690,10 +704,13 @@ class MapStorage:
         return members, labels
 
     def _marks(self):
-        """A per-dart scratch array of -1 (orbit walks set and reset only what they touch)."""
+        """A per-dart scratch array of -1 (orbit walks set and reset only what they touch).
+
+        int32: it holds indices of starts or faces, fewer than the darts (whose ids are int32).
+        """
         n = self._alpha.shape[1]
         if self._scratch is None or len(self._scratch) < n:
-            self._scratch = np.full(max(n, 16), -1, np.int64)
+            self._scratch = np.full(max(n, 16), -1, np.int32)
         return self._scratch
 
     def orbit_ids(self, involutions: str | Sequence[int]) -> tuple[np.ndarray, int]:
@@ -752,8 +769,9 @@ class MapStorage:
             old = memo.get(key)
             state = self._grown_orbits(key, old) if old is not None else None
             if state is None:
-                ids, count = orbit_labels(self.alpha[list(key)])
-                state = _OrbitState.fresh(ids, count, self._alpha_snapshot(), self._alpha.shape[1])
+                raw = _OrbitState.room(self.n_darts, self._alpha.shape[1])
+                ids, count = orbit_labels(self.alpha, select=key, out=raw)  # written in place: no copy
+                state = _OrbitState(raw, [len(ids)], len(ids), np.arange(count, dtype=np.int32), count, self._alpha_snapshot())
             memo[key] = self._cache[cache_key] = state
         return state
 
@@ -1080,7 +1098,13 @@ class MapStorage:
         vweight = self._volumes["weight"]
         exclusive = self._volumes["exclusive"]
         if np.all(vweight == 1.0):
-            weight = self._inverse_corner_sizes()
+            if compiled and "corner_weights" not in self._cache:  # one pass, no per-dart sizes kept (16 bytes a dart)
+                from ._embed_kernel import inverse_orbit_sizes
+
+                corner = self._orbit_state((1, 2))
+                weight = inverse_orbit_sizes(corner.raw[: self.n_darts], corner.find, corner.count)
+            else:
+                weight = self._inverse_corner_sizes()
         else:
             weight = vweight[vol].astype(float) / self._corner_sizes()
         any_exclusive = bool(exclusive.any())
@@ -1266,7 +1290,7 @@ class Boundary:
 
     def orbit_ids(self, involutions: str | Sequence[int]) -> tuple[np.ndarray, int]:
         key = sorted({int(i) for i in involutions})
-        return orbit_labels(self.alpha[key])
+        return orbit_labels(self.alpha, select=key)
 
     def counts(self) -> dict[str, int]:
         return {

@@ -129,6 +129,29 @@ def test_compiled_embedding_equals_the_numpy_sums_bit_for_bit(weights, compiled,
     assert np.array_equal(gm.dart_data["point"], want[ids])
 
 
+def test_compiled_embedding_keeps_no_per_dart_corner_sizes(monkeypatch):
+    """Weights 1: the compiled embedding weighs corners from their labels and keeps no per-dart arrays.
+
+    Before, it cached each dart's corner size and its inverse (2 x 8 bytes a dart, with room
+    to grow: about 45 MB on the 30-year pine) for as long as the map lived.
+    """
+    from ramure.gmap.kernel._embed_kernel import inverse_orbit_sizes
+
+    monkeypatch.setattr("ramure.gmap.kernel.storage.compiled_pays", lambda n: True)
+    gm = GMap3()
+    gm.add_prisms(4)
+    grow(gm, [gm.face_of(0, "C1")], 16, height=2.0, width=[[0.8, 0.8]], exclusive=True)
+    grow(gm, gm.face_of([0, 0], ["C2", "E"]), 4, height=0.5)
+    gm.mark_changed()  # as after any edit: nothing derived is cached
+    gm.__dict__.pop("_corner_memo", None)
+    gm.embed()
+    assert "corner_weights" not in gm.cache and getattr(gm, "_corner_memo", None) is None
+    ids, count = gm.orbit_ids("12")
+    inverse = inverse_orbit_sizes(ids, np.arange(count, dtype=np.int32), count)
+    assert np.array_equal(inverse, 1.0 / np.bincount(ids).astype(float)[ids])  # the same doubles
+    assert set(np.unique(inverse).tolist()) <= {1 / 6, 1 / 4, 1 / 8}  # prism corners: 3 edges, split ones: 2 or 4
+
+
 def test_compiled_embedding_with_a_radial_scalar_equals_the_numpy_one(monkeypatch):
     """The radial scalar takes the per-dart labels path of the compiled pass: same points, same radial."""
     out = []

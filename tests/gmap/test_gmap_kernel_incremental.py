@@ -422,3 +422,127 @@ def _assert_walks(gm, starts):
             if cur == d:
                 break
         assert length == len(want) and row[:length].tolist() == want and np.all(row[length:] == -1)
+
+
+def _alpha_view(gm, spare=7):
+    """``gm``'s alpha as the kernel holds it after growth: int32 rows with spare capacity (a strided view)."""
+    room = np.empty((4, gm.n_darts + spare), np.int32)
+    room[:, : gm.n_darts] = gm.alpha
+    return room[:, : gm.n_darts]
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("key", [(0, 1, 2, 3), (1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2), (1, 2), (3,)])
+def test_orbit_labels_select_equals_copied_rows(key, compiled, monkeypatch):
+    """``select`` on a strided int32 alpha labels as the int64 copy of those rows (the old call)."""
+    gm = GMap3()
+    a, b, c = gm.add_prisms(5, 3)
+    gm.sew3(gm.prism_face(a, 5, "E"), gm.prism_face(b, 5, "O"))
+    gm.sew3(gm.prism_face(b, 5, "E"), gm.prism_face(c, 5, "O"))
+    gm.add_prisms(4)  # and a free cube
+    alpha = _alpha_view(gm)
+    assert not alpha.flags.c_contiguous
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: compiled)
+    labels, count = graphs.orbit_labels(alpha, select=key)
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: False)
+    want, want_count = graphs.orbit_labels(np.array(gm.alpha[list(key)], np.int64))
+    assert labels.dtype == np.int32 and count == want_count and np.array_equal(labels, want)
+    assert count == gm.orbit_count(key)
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: compiled)
+    buffer = np.full(gm.n_darts + 5, -7, np.int32)  # labels with room, written in place (the orbit states' raw numbers)
+    into, count = graphs.orbit_labels(alpha, select=key, out=buffer)
+    assert np.shares_memory(into, buffer) and np.array_equal(buffer[: gm.n_darts], want) and count == want_count
+    assert buffer[gm.n_darts :].tolist() == [-7] * 5
+
+
+def test_orbit_labels_select_falls_back_when_not_an_involution(monkeypatch):
+    """A selected row that is not an involution takes the strong search: the same partition as before."""
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: True)
+    rows = np.array([[1, 0, 3, 2, 4], [0, 1, 2, 3, 4], [1, 2, 0, 3, 4]], np.int32)  # row 2: a 3-cycle
+    labels, count = graphs.orbit_labels(rows, select=(0, 2))
+    assert count == 2 and labels[0] == labels[1] == labels[2] == labels[3] != labels[4]
+    labels, count = graphs.orbit_labels(rows, select=(1,))
+    assert count == 5 and labels.tolist() == [0, 1, 2, 3, 4]
+
+
+def test_orbit_labels_of_alpha_makes_no_widened_copy(monkeypatch):
+    """Labelling 3 rows of an int32 alpha allocates far less than their int64 copy (3 x 8 bytes a dart).
+
+    Before, ``orbit_labels(alpha[key])`` copied the rows (12 bytes a dart), widened them
+    to int64 (24) and made int64 temporaries for the involution check: the growth
+    peak of the 30-year pine (2.8 million darts) was there.
+    """
+    import tracemalloc
+
+    monkeypatch.setattr(graphs, "compiled_pays", lambda n: True)
+    gm = GMap3()
+    gm.add_prisms(8, count=2000)
+    n = gm.n_darts
+    graphs.orbit_labels(gm.alpha, select=(1, 2, 3))  # compiled and loaded before measuring
+    tracemalloc.start()
+    try:
+        labels, count = graphs.orbit_labels(gm.alpha, select=(1, 2, 3))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert count == 2000 * 16  # free prisms of order 8: 16 vertices each
+    assert peak < 10 * n, f"{peak / n:.1f} bytes a dart"  # int32 parents and labels: 8
+
+
+def _orbit_test_map():
+    """Three prisms in a column, the middle one's edges split: orbits of several sizes."""
+    gm = GMap3()
+    a, b, c = gm.add_prisms(5, 3)
+    gm.sew3(gm.prism_face(a, 5, "E"), gm.prism_face(b, 5, "O"))
+    gm.sew3(gm.prism_face(b, 5, "E"), gm.prism_face(c, 5, "O"))
+    gm.split_edge([gm.prism_face(b, 5, "C2"), gm.prism_face(b, 5, "C4")], [0.3, 0.6])
+    return gm
+
+
+@pytest.mark.parametrize("key", [(0, 2, 3), (2, 3), (0, 1, 2), (1, 2, 3), (0, 1, 2, 3), (3,)])
+def test_compiled_orbits_from_equals_the_numpy_walk(key, monkeypatch):
+    """Members (sorted) and the index of each member's start: the compiled search as the numpy one."""
+    gm = _orbit_test_map()
+    ids, count = gm.orbit_ids(key)
+    firsts = np.unique(ids, return_index=True)[1]  # one dart of each orbit
+    starts = firsts[np.linspace(0, count - 1, min(count, 5)).astype(int)][::-1]  # some orbits, not in dart order
+    from ramure.gmap.kernel import _walk_kernel
+
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr(storage, "compiled_pays", lambda n, compiled=compiled: compiled)
+        with mock.patch.object(_walk_kernel, "orbit_members", wraps=_walk_kernel.orbit_members) as search:
+            out.append(gm.orbits_from(starts, key))
+        assert search.call_count == int(compiled)  # compiled: one search, not the numpy rings
+    (m1, l1), (m2, l2) = out
+    assert np.array_equal(m1, m2) and np.array_equal(l1, l2)
+    assert np.all(np.diff(m1) > 0) and set(l1.tolist()) == set(range(len(starts)))
+    for j, s in enumerate(starts):  # each start's orbit is the one gm.orbit gives
+        assert np.array_equal(m1[l1 == j], np.sort(gm.orbit(int(s), key)))
+    assert np.all(gm._marks() == -1)  # the scratch is left clean
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_orbits_from_refuses_two_starts_in_one_orbit(compiled, monkeypatch):
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: compiled)
+    gm = _orbit_test_map()
+    other = int(gm.alpha[0][7])  # same edge as dart 7
+    with pytest.raises(GMapError, match="same orbit"):
+        gm.orbits_from([7, 100, other], (0, 2, 3))
+    assert np.all(gm._marks() == -1)
+    members, labels = gm.orbits_from([7, other], (0, 2, 3), strict=False)  # not strict: one orbit, both starts allowed
+    assert len(members) == len(gm.orbit(7, (0, 2, 3)))
+
+
+@pytest.mark.parametrize("cubes", [1, 5, 6, 7, 40])
+def test_compiled_orbits_from_grows_its_room(cubes, monkeypatch):
+    """Whole cubes (48 darts) from one dart each: the search outgrows its first room (8 darts a start).
+
+    With 6 cubes the room is full exactly when the next start comes (it wrote past it once).
+    """
+    gm = GMap3()
+    first = gm.add_prisms(4, cubes)
+    monkeypatch.setattr(storage, "compiled_pays", lambda n: True)
+    members, labels = gm.orbits_from(first[::-1], (0, 1, 2))
+    assert np.array_equal(members, np.arange(48 * cubes))
+    assert np.array_equal(labels, (cubes - 1 - np.arange(48 * cubes) // 48))
