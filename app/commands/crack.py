@@ -161,7 +161,10 @@ def run_map_crack(args: argparse.Namespace) -> int:
         _, pos = gm.vertex_positions()
         anchor = tuple(pos[np.argmax(pos[:, 2])])
     direction = _vector(args.direction, "--direction") if args.direction else direction
-    cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t)
+    from ramure.gmap.organs.mapcracks import PULL, PULL_LONG_CELLS
+
+    pull = PULL_LONG_CELLS if args.on == "wood" else PULL  # a board's cells run its length
+    cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t, pull=pull)
     facts = {
         "on": args.on,
         "darts": int(cracked.n_darts),

@@ -1,0 +1,102 @@
+"""Cracks cut through a 3-G-map's cells along their curve, not along its grid (issue 40, item 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ramure.gmap.organs.crackcut import Curve
+from ramure.gmap.organs.cracks import random_pattern
+from ramure.gmap.organs.fruit import build_fruit
+from ramure.gmap.organs.mapcracks import Skin, crack_curves, crack_edges, crack_map, mouth_edges
+
+
+@pytest.fixture(scope="module")
+def fruit():
+    return build_fruit("round_tomato", volume_levels=1)  # skin edges about 8 units, 110 across
+
+
+@pytest.fixture(scope="module")
+def skin(fruit):
+    return Skin(fruit)
+
+
+@pytest.fixture(scope="module")
+def side(skin):
+    return skin.pos[skin.used][np.argmax(skin.pos[skin.used, 0])]
+
+
+def _to_curves(points, curves):
+    """Distance of each point to the nearest of the crack's chains."""
+    return np.min([np.linalg.norm(c.nearest(points)[2] - points, axis=1) for c in curves], axis=0)
+
+
+def _to_segments(points, a, b):
+    """Distance of each point to the nearest segment ``a[k] -> b[k]``."""
+    ab = b - a
+    t = np.clip(np.einsum("pkj,kj->pk", points[:, None, :] - a[None], ab) / np.einsum("kj,kj->k", ab, ab), 0, 1)
+    foot = a[None] + t[:, :, None] * ab[None]
+    return np.linalg.norm(foot - points[:, None, :], axis=2).min(axis=1)
+
+
+def test_the_ribbon_field_measures_across_and_down():
+    """On a straight chain over a flat skin, ``s`` is the offset across the crack and ``depth``
+    the distance under the skin, whatever the point's place along the chain."""
+    x = np.linspace(0.0, 10.0, 11)
+    points = np.c_[x, np.zeros(11), np.zeros(11)]
+    normal = np.tile([0.0, 0.0, 1.0], (11, 1))
+    side = np.cross(np.tile([1.0, 0.0, 0.0], (11, 1)), normal)  # d x n = (0, -1, 0)
+    curve = Curve(points, normal, side, np.full(11, 0.5), np.full(11, 3.0))
+    p = np.array([[2.5, 0.7, -1.0], [7.25, -0.3, -2.0], [0.0, 0.0, 0.0], [12.0, 0.0, 0.0]])
+    f = curve.field(p)
+    np.testing.assert_allclose(f["s"], [-0.7, 0.3, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(f["depth"], [1.0, 2.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(f["along"], [2.5, 7.25, 0.0, 10.0], atol=1e-12)
+    assert f["inside"].tolist() == [True, True, False, False]
+
+
+@pytest.mark.parametrize("seed, nodes, branching", [(0, 12, 0.3), (5, 7, 0.0)])
+def test_the_crack_follows_its_curve_not_the_grid(fruit, skin, side, seed, nodes, branching):
+    pattern = random_pattern(nodes, seed=seed, length=8.0, width=0.0, depth=8.0, branching=branching)
+    out, facts = crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1))
+    assert facts["valid"] and (facts["euler_after"], facts["skin_euler_after"]) == (1, 2)
+    curves = crack_curves(skin, pattern, side, (0, 0, 1))
+    edge = skin.mean_edge
+    walls = np.flatnonzero(np.asarray(out.dart_data["crack"]) == 1)
+    mouth = mouth_edges(out, walls)  # on the skin, both lips (shut: the crack has no width here)
+    _, pos = out.vertex_positions()
+    a, b = pos[mouth[:, 0]], pos[mouth[:, 1]]
+    # every corner and every edge middle of the crack's mouth lies on its curve ...
+    assert _to_curves(np.r_[a, b, (a + b) / 2], curves).max() < 0.05 * edge
+    # ... and the mouth runs the curve's whole way (every sample of the curve is next to it)
+    samples = np.concatenate([c.points for c in curves])
+    assert _to_segments(samples, a, b).max() < 0.25 * edge
+    # the old crack, along the skin's edges, was off the same curve by more than half an edge
+    old = np.array(list(crack_edges(skin, pattern, side, (0, 0, 1)))).ravel()
+    assert _to_curves(skin.pos[old], curves).max() > 0.5 * edge
+    # its length is the curve's (both lips counted once), and the pattern's to a few per cent
+    curve_length = sum(c.length[-1] for c in curves)
+    assert facts["length"] == pytest.approx(0.5 * np.linalg.norm(a - b, axis=1).sum(), rel=1e-9)
+    assert facts["length"] == pytest.approx(curve_length, rel=0.03)
+    assert facts["length"] == pytest.approx(pattern.total_length(), rel=0.05)
+    # cutting alone keeps the fruit's volume: a shut crack loses nothing
+    assert abs(facts["volume_lost"]) < 1e-9 * facts["volume_before"]
+    assert facts["volume_after"] == pytest.approx(facts["volume_before"], rel=1e-5)
+
+
+def test_an_open_crack_is_centred_on_its_curve_and_loses_its_gap(fruit, skin, side):
+    pattern = random_pattern(7, seed=5, length=8.0, width=1.0, depth=8.0, branching=0.0)
+    out, facts = crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1))
+    assert facts["valid"] and facts["opening"] > 0 and facts["narrowed"] == 1.0
+    curves = crack_curves(skin, pattern, side, (0, 0, 1))
+    walls = np.flatnonzero(np.asarray(out.dart_data["crack"]) == 1)
+    mouth = mouth_edges(out, walls)
+    _, pos = out.vertex_positions()
+    lips = np.unique(mouth)
+    off = curves[0].field(pos[lips])
+    # the lips part to both sides of the curve, no wider than the opening, none on the curve
+    # but the tips (which stay shut)
+    assert (off["s"] > 0.05).sum() > 5 and (off["s"] < -0.05).sum() > 5
+    assert np.abs(off["s"]).max() <= 0.5 * facts["opening"] + 1e-9
+    # the volume lost is the gap: positive, and less than the mouth's length x opening x depth
+    assert 0 < facts["volume_lost"] < facts["length"] * facts["opening"] * 8.0
