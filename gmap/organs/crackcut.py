@@ -402,3 +402,60 @@ def _chosen(gm: GMap3, curve: Curve, centres: np.ndarray, pos: np.ndarray, end: 
         return near & f["inside"]
     tip = curve.points[end]
     return near & (np.linalg.norm(centres - tip, axis=1) < 2 * reach + curve.depth[end])
+
+
+def ring_curve(
+    mesh: TriMesh,
+    height: float,
+    arc: float = 360.0,
+    start: float = 0.0,
+    width: float = 1.0,
+    depth: float = 1.0,
+    axis: tuple[float, float] = (0.0, 0.0),
+    spacing: float | None = None,
+) -> Curve:
+    """A concentric crack's curve: the skin's section by the plane ``z = height`` (the outer
+    loop round the vertical axis through ``axis``), from ``start`` degrees (from +x, counter-
+    clockwise seen from above) over ``arc`` degrees, ``width``/``depth`` all along.
+
+    A tomato's concentric (growth) cracks circle the stem scar: this is that circle on the true
+    skin, not a walk. A closed ring (``arc`` 360) is refused: unsewn all round, the cap round the
+    stem would come off (use at most 350 degrees). Points are ``spacing`` apart (default an
+    eighth of the skin's mean triangle edge)."""
+    import pyvista as pv
+
+    if not (np.isfinite(arc) and 0 < arc <= 350):
+        raise GMapError(f"a concentric crack runs over 0 < arc <= 350 degrees (a closed ring would cut the cap off), not {arc}")
+    tris = np.c_[np.full(len(mesh.triangles), 3), mesh.triangles].ravel()
+    surface = pv.PolyData(mesh.points, tris)
+    section = surface.slice(normal=(0.0, 0.0, 1.0), origin=(axis[0], axis[1], float(height)))
+    if section.n_points < 3:
+        raise GMapError(f"the plane z = {height:g} misses the skin: no concentric crack there")
+    loops = section.connectivity()
+    region = np.asarray(loops.point_data["RegionId"])
+    p = np.asarray(loops.points)
+    rho = np.hypot(p[:, 0] - axis[0], p[:, 1] - axis[1])
+    outer = max(np.unique(region), key=lambda r: rho[region == r].mean())
+    p = p[region == outer]
+    theta = np.degrees(np.arctan2(p[:, 1] - axis[1], p[:, 0] - axis[0]))
+    turn = (theta - start) % 360.0
+    order = np.argsort(turn)
+    p, turn = p[order], turn[order]
+    p, turn = np.r_[p[-1:], p, p[:1]], np.r_[turn[-1] - 360.0, turn, turn[0] + 360.0]  # closed round
+    inside = (turn > 0) & (turn < arc)
+    ends = [np.array([np.interp(x, turn, p[:, j]) for j in range(3)]) for x in (0.0, arc)]
+    p = np.vstack([ends[0], p[inside], ends[1]])  # from exactly ``start`` to ``start + arc``
+    steps = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    along = np.r_[0.0, np.cumsum(steps)]
+    edge = float(np.linalg.norm(mesh.points[mesh.triangles[:, 0]] - mesh.points[mesh.triangles[:, 1]], axis=1).mean())
+    step = edge / 8 if spacing is None else float(spacing)
+    at = np.linspace(0.0, along[-1], max(int(np.ceil(along[-1] / step)) + 1, 2))
+    points = np.stack([np.interp(at, along, p[:, j]) for j in range(3)], axis=1)
+    normal = np.empty_like(points)
+    for i, x in enumerate(points):
+        tri, points[i], _ = mesh.closest_point(x)
+        normal[i] = mesh.normals[tri]
+    side = np.cross(np.gradient(points, axis=0), normal)
+    side /= np.maximum(np.linalg.norm(side, axis=1, keepdims=True), 1e-300)
+    k = len(points)
+    return Curve(points, normal, side, np.full(k, float(width)), np.full(k, float(depth)))

@@ -7,29 +7,27 @@ own faces, so the cracked map is still a map: it can be cut, measured, cracked a
 1. **Skin**: the map's boundary surface (its alpha3-free faces, triangulated) as a closed
    :class:`~ramure.gmap.organs.trimesh.TriMesh` whose points are the map's vertices.
 2. **Projection**: the pattern is walked over the skin from an anchor and a direction
-   (:func:`ramure.gmap.organs.cracks.project`), densely (samples about a third of a skin edge
-   apart).
-3. **Snapping**: each sample snaps to its nearest skin vertex; consecutive vertices are
-   joined by shortest paths along skin edges. The crack on the skin is this set of edges.
-   Each edge takes the profile (half-width ``w``, depth ``h``) of the sample it ends at.
-4. **Strip**: under each crack edge the interior face (shared by two volumes) that goes
-   most straight inward is chosen, then deeper ones, layer after layer, each continuing the
-   previous face as straight as the cells allow, while the layer's inner edge is less than
-   ``h`` below the skin (at least one layer). A face is taken only if its vertices off the
-   crack are inside the solid (never on the skin): the crack never cuts through to another
-   side, so a ball stays a ball (chi = 1, the skin chi = 2).
-5. **Unsewing**: the strip's faces are alpha3-unsewn (:meth:`GMap3.unsew3`). The kernel's
-   vertex and edge orbits then split by themselves along the crack; the strip's bottom and
+   (:func:`ramure.gmap.organs.cracks.project`), densely (samples an eighth of a skin edge
+   apart), and split into chains rounded at the pattern's nodes (:func:`crack_curves`).
+3. **Cutting** (issue 40): the cells under each chain are cut along its ribbon, the curve
+   swept down the skin normals to the depth ``h``, through skin faces and the cells under
+   them wherever the curve crosses them (:mod:`ramure.gmap.organs.crackcut`). The crack's
+   mouth is where the ribbon meets the skin: it follows the curve, not the skin's edges (the
+   crack used to be snapped to skin vertices, a staircase along the grid; :func:`crack_edges`
+   still gives that old path). The cut stays under the skin (cells whose centroid is less
+   than ``h`` deep), so a ball stays a ball (chi = 1, the skin chi = 2).
+4. **Unsewing**: the cuts' new faces are alpha3-unsewn (:meth:`GMap3.unsew3`). The kernel's
+   vertex and edge orbits then split by themselves along the crack; the cut's bottom and
    the crack's tips stay sewn (a notch, like :func:`ramure.gmap.organs.defects.crack`).
-6. **Marking**: the darts of the crack's walls get the dart attribute ``crack = 1`` (rule
+5. **Marking**: the darts of the crack's walls get the dart attribute ``crack = 1`` (rule
    copy, so later subdivisions keep it); :func:`wall_faces` lists them on the skin.
-7. **Opening**: every vertex copy made by the split moves off the crack into its own side,
+6. **Opening**: every vertex copy made by the split moves off the crack into its own side,
    by ``w`` times ``1 - depth/h`` (a V-shaped section, 0 at the bottom), capped at
-   :data:`OPEN_CAP` of its shortest edge leaving the crack plane so no cell turns inside out.
+   :data:`OPEN_CAP` of the crack's typical room across its plane so no cell turns inside out.
 
 **Growth**: at time ``t0`` an arc keeps the samples up to the part of its length grown by
 then (:meth:`CrackPattern.progress`); growing nodes scale their profiles. Samples are those
-of the fully grown crack, so a crack at a later time holds every edge of an earlier one:
+of the fully grown crack, so a crack at a later time runs along an earlier one and further:
 its length never decreases, and from ``max(t_i + Δt_i)`` on it is the static crack.
 
 >>> from ramure.gmap.organs.fruit import build_fruit
@@ -179,15 +177,27 @@ def crack_map(
     the volume of every cell at it: on a board, whose cells run the board's length, use a
     smaller fraction (the command uses :data:`PULL_LONG_CELLS`).
     """
-    from ramure.gmap.organs.crackcut import SNAP, ribbon_cut
-    from ramure.gmap.organs.defects import cell_volumes, orientation
-    from ramure.gmap.kernel.measure import total_volume
-
     t_start = time.perf_counter()
     skin = Skin(gm)
     if anchor is None:
         anchor = skin.pos[skin.used[np.argmax(skin.pos[skin.used, 2])]]
     curves = crack_curves(skin, pattern, anchor, direction, t0)
+    out, facts = crack_along(gm, curves, pull, skin)
+    facts = {"nodes": len(pattern), **facts, "seconds": round(time.perf_counter() - t_start, 4)}
+    return out, facts
+
+
+def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None = None) -> tuple[GMap3, dict[str, Any]]:
+    """Crack a 3-G-map along the given chains on its skin (:class:`ramure.gmap.organs.crackcut.Curve`,
+    e.g. from :func:`crack_curves` or :func:`ramure.gmap.organs.crackcut.ring_curve`): cut the
+    cells under each, unsew the cuts' faces, open them (see :func:`crack_map`). Returns
+    ``(map, facts)``; ``gm`` is not changed."""
+    from ramure.gmap.organs.crackcut import SNAP, ribbon_cut
+    from ramure.gmap.organs.defects import cell_volumes, orientation
+    from ramure.gmap.kernel.measure import total_volume
+
+    t_start = time.perf_counter()
+    skin = Skin(gm) if skin is None else skin
     out = gm.copy()
     before = (gm.euler_characteristic(), gm.boundary().euler_characteristic(), gm.cells(0)[1], gm.n_volumes)
     if "crack" not in out.dart_data:
@@ -229,7 +239,6 @@ def crack_map(
     else:
         raise GMapError("the crack's opening turned a cell inside out even 8 times narrower: use a narrower crack")
     facts = {
-        "nodes": len(pattern),
         "chains": len(curves),
         "skin_edges": len(mouth),
         "skin_edges_opened": len(mouth),
@@ -311,8 +320,9 @@ def wall_faces(gm: GMap3) -> np.ndarray:
 def crack_edges(
     skin: Skin, pattern: CrackPattern, anchor: ArrayLike, direction: ArrayLike, t0: float | None = None
 ) -> dict[tuple[int, int], tuple[float, float]]:
-    """Skin edges ``(a, b)`` (map vertex ids, a < b) of the crack at ``t0``, each with its
-    profile ``(w, h)``.
+    """Skin edges ``(a, b)`` (map vertex ids, a < b) of the crack at ``t0`` snapped to the skin's
+    own edges, each with its profile ``(w, h)``: the path :func:`crack_map` took before issue 40
+    (a staircase along the grid), kept to compare with.
 
     Every sample of the fully grown crack gets the time the crack reaches it; the edges of the
     snapped paths are taken in that order and an edge that would close a loop is left out, so

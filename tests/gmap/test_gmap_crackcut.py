@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ramure.gmap.kernel.errors import GMapError
 from ramure.gmap.organs.crackcut import Curve
 from ramure.gmap.organs.cracks import random_pattern
 from ramure.gmap.organs.fruit import build_fruit
@@ -100,3 +101,46 @@ def test_an_open_crack_is_centred_on_its_curve_and_loses_its_gap(fruit, skin, si
     assert np.abs(off["s"]).max() <= 0.5 * facts["opening"] + 1e-9
     # the volume lost is the gap: positive, and less than the mouth's length x opening x depth
     assert 0 < facts["volume_lost"] < facts["length"] * facts["opening"] * 8.0
+
+
+def test_a_concentric_crack_follows_the_circle_round_the_stem(fruit, skin):
+    from ramure.gmap.organs.crackcut import ring_curve
+    from ramure.gmap.organs.mapcracks import crack_along
+
+    top = float(skin.pos[skin.used, 2].max())
+    curve = ring_curve(skin.mesh, top - 15.0, arc=120.0, start=-60.0, width=0.0, depth=6.0)
+    # the curve is the skin's level section: one height, a circle's arc round the axis
+    rho = np.hypot(curve.points[:, 0], curve.points[:, 1])
+    theta = np.degrees(np.arctan2(curve.points[:, 1], curve.points[:, 0]))
+    assert np.ptp(curve.points[:, 2]) < 1e-9 and np.ptp(rho) < 0.05 * rho.mean()
+    assert theta[0] == pytest.approx(-60.0, abs=1.0) and theta[-1] == pytest.approx(60.0, abs=1.0)
+    assert curve.length[-1] == pytest.approx(np.radians(120.0) * rho.mean(), rel=0.01)
+    out, facts = crack_along(fruit, [curve])
+    assert facts["valid"] and (facts["euler_after"], facts["skin_euler_after"]) == (1, 2)
+    walls = np.flatnonzero(np.asarray(out.dart_data["crack"]) == 1)
+    mouth = mouth_edges(out, walls)
+    _, pos = out.vertex_positions()
+    a, b = pos[mouth[:, 0]], pos[mouth[:, 1]]
+    assert _to_curves(np.r_[a, b, (a + b) / 2], [curve]).max() < 0.05 * skin.mean_edge
+    assert np.abs(np.r_[a, b][:, 2] - (top - 15.0)).max() < 0.05 * skin.mean_edge  # level all round
+    assert facts["length"] == pytest.approx(curve.length[-1], rel=0.01)
+    with pytest.raises(GMapError, match="closed ring"):
+        ring_curve(skin.mesh, top - 15.0, arc=360.0)
+    with pytest.raises(GMapError, match="misses the skin"):
+        ring_curve(skin.mesh, top + 50.0, arc=90.0)
+
+
+def test_the_command_cracks_a_fruit_round_its_stem(tmp_path, capsys):
+    import json
+
+    from ramure.app.cli import main
+
+    assert main(["crack", "--on", "fruit", "--ring", "120", "--json", "-o", str(tmp_path / "ring.vtp")]) == 0
+    facts = json.loads(capsys.readouterr().out)
+    assert facts["valid"] and facts["ring_degrees"] == 120.0 and facts["euler_after"] == 1
+    assert facts["volume_lost_mm3"] > 0 and 20 < facts["length_mm"] < 80  # a third of the way round
+    assert main(["crack", "--on", "wood", "--ring", "90"]) == 2
+    assert "for --on fruit" in capsys.readouterr().err
+    assert main(["crack", "--on", "fruit", "--ring", "400"]) == 2
+    err = capsys.readouterr().err
+    assert "closed ring" in err and "Traceback" not in err
