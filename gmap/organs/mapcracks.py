@@ -190,10 +190,12 @@ def crack_map(
 def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None = None) -> tuple[GMap3, dict[str, Any]]:
     """Crack a 3-G-map along the given chains on its skin (:class:`ramure.gmap.organs.crackcut.Curve`,
     e.g. from :func:`crack_curves` or :func:`ramure.gmap.organs.crackcut.ring_curve`): cut the
-    cells under each, unsew the cuts' faces, open them (see :func:`crack_map`). Returns
-    ``(map, facts)``; ``gm`` is not changed."""
+    cells under each, unsew the cuts' faces, open them (see :func:`crack_map`); the cells with
+    a crack wall get the volume mark ``wound = 1`` (as :func:`ramure.gmap.organs.defects.crack`
+    marks its fresh walls: a per-cell label in the VTU). Returns ``(map, facts)``; ``gm`` is
+    not changed."""
     from ramure.gmap.organs.crackcut import SNAP, ribbon_cut
-    from ramure.gmap.organs.defects import cell_volumes, orientation
+    from ramure.gmap.organs.defects import _mark, cell_volumes, orientation
     from ramure.gmap.kernel.measure import total_volume
 
     t_start = time.perf_counter()
@@ -223,6 +225,8 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
     faces_unsewn = len(np.unique(out.cells(2)[0][walls]))
     split_volume = total_volume(out)
     out.unsew3(walls)
+    # per-cell label for datasets (the VTU's cell data): cells with a crack wall are wounds
+    _mark(out, "wound", np.unique(out.dart_volume[walls]), 1.0)
     sign = orientation(out)
     points, corners = out.points.copy(), out.corners.copy()
     narrowed, held = 1.0, np.zeros(out.cells(0)[1], bool)

@@ -80,6 +80,9 @@ def test_the_crack_follows_its_curve_not_the_grid(fruit, skin, side, seed, nodes
     assert facts["length"] == pytest.approx(0.5 * np.linalg.norm(a - b, axis=1).sum(), rel=1e-9)
     assert facts["length"] == pytest.approx(curve_length, rel=0.03)
     assert facts["length"] == pytest.approx(pattern.total_length(), rel=0.05)
+    # the cells along the crack are labelled, and only they (the dataset's per-cell defect mark)
+    wounded = np.flatnonzero(np.asarray(out.volume_data["wound"]) == 1)
+    assert np.array_equal(wounded, np.unique(out.dart_volume[walls])) and len(wounded) >= facts["cells_split"]
     # cutting alone keeps the fruit's volume: a shut crack loses nothing
     assert abs(facts["volume_lost"]) < 1e-9 * facts["volume_before"]
     assert facts["volume_after"] == pytest.approx(facts["volume_before"], rel=1e-5)

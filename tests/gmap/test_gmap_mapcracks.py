@@ -139,7 +139,9 @@ def test_command_line_cracks_a_pine_board_and_a_fruit(tmp_path, capsys):
     import pyvista as pv
 
     facts = json.loads(capsys.readouterr().out)
-    assert pv.read(tmp_path / "fruit.vtu").n_cells == facts["volumes"] > 8000  # twice subdivided: a finer crack
+    grid = pv.read(tmp_path / "fruit.vtu")
+    assert grid.n_cells == facts["volumes"] > 8000  # twice subdivided: a finer crack
+    assert 0 < (grid.cell_data["wound"] == 1).sum() <= 2 * facts["faces_unsewn"]  # each wall has two cells
     assert facts["valid"] and facts["nodes"] == 6 and facts["skin_edges_opened"] > 3
     assert 10 < facts["length_mm"] < 65 and facts["volume_lost_mm3"] > 0  # on a 65 mm tomato
     assert main(["crack", "--on", "fruit", "--anchor", "0,0,900"]) == 2
