@@ -72,6 +72,12 @@ class Curve:
     depth: np.ndarray
     starts_free: bool = True
 
+    def _tree(self) -> cKDTree:
+        """A k-d tree of the points, built once (the points never change)."""
+        if getattr(self, "_kd", None) is None:
+            self._kd = cKDTree(self.points)
+        return self._kd
+
     @property
     def length(self) -> np.ndarray:
         steps = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
@@ -82,7 +88,7 @@ class Curve:
         on segment ``segment`` at fraction ``t`` (0..1)."""
         a, b = self.points[:-1], self.points[1:]
         k = len(a)
-        near = cKDTree(self.points).query(p)[1]
+        near = self._tree().query(p)[1]
         best_d = np.full(len(p), np.inf)
         seg = np.zeros(len(p), np.int64)
         frac = np.zeros(len(p))
@@ -138,10 +144,7 @@ class Curve:
         kernel = np.ones(2 * k + 1) / (2 * k + 1)
         smooth = np.stack([np.convolve(padded[:, j], kernel, mode="valid") for j in range(3)], axis=1)
         smooth[0], smooth[-1] = p[0], p[-1]
-        points, normal = np.empty_like(smooth), np.empty_like(smooth)
-        for i, x in enumerate(smooth):
-            tri, points[i], _ = mesh.closest_point(x)
-            normal[i] = mesh.normals[tri]
+        points, normal = onto(mesh, smooth)
         d = np.gradient(points, axis=0)
         side = np.cross(d, normal)
         side /= np.maximum(np.linalg.norm(side, axis=1, keepdims=True), 1e-300)
@@ -162,6 +165,39 @@ class Curve:
         n = self.normal[end]
         d = d - (d @ n) * n  # across the curve, along the normal: the end is cut square
         return p, d / max(float(np.linalg.norm(d)), 1e-300)
+
+
+def onto(mesh: TriMesh, points: np.ndarray, candidates: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """Points (n, 3) near ``mesh`` moved to its surface: ``(points on it, normal of their
+    triangle)``, among the ``candidates`` triangles whose centres are nearest each point (the
+    points lie within a triangle's size of the surface: a curve rounded on it)."""
+    points = np.asarray(points, np.float64)
+    tris = mesh.points[mesh.triangles]  # (t, 3, 3)
+    k = min(candidates, len(tris))
+    cand = cKDTree(tris.mean(axis=1)).query(points, k=k)[1].reshape(len(points), k)
+    a, b, c = (tris[cand, j] for j in range(3))  # (n, k, 3)
+    p = points[:, None, :]
+    n = mesh.normals[cand]
+    inside = p - np.einsum("nkj,nkj->nk", p - a, n)[..., None] * n
+    v0, v1, v2 = b - a, c - a, inside - a
+    d00, d01, d11 = (v0 * v0).sum(-1), (v0 * v1).sum(-1), (v1 * v1).sum(-1)
+    d20, d21 = (v2 * v0).sum(-1), (v2 * v1).sum(-1)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    v, w = (d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den
+    within = (v >= 0) & (w >= 0) & (v + w <= 1)
+    options = [np.where(within[..., None], inside, np.inf)]
+    for s, e in ((a, b), (b, c), (c, a)):
+        edge = e - s
+        t = np.clip(np.einsum("nkj,nkj->nk", p - s, edge) / np.maximum((edge * edge).sum(-1), 1e-300), 0, 1)
+        options.append(s + t[..., None] * edge)
+    stack = np.stack(options)  # (4, n, k, 3)
+    dist = np.linalg.norm(stack - p[None], axis=-1)
+    dist[~np.isfinite(dist)] = np.inf
+    flat = dist.transpose(1, 0, 2).reshape(len(points), -1)  # (n, 4 k)
+    best = flat.argmin(axis=1)
+    option, slot = best // k, best % k
+    rows = np.arange(len(points))
+    return stack[option, rows, slot], mesh.normals[cand[rows, slot]]
 
 
 def chains(arcs: list, parent: np.ndarray, times: list[np.ndarray], width: list, depth: list, until: float) -> list[Curve]:
@@ -330,7 +366,8 @@ def _root(field: Field, p: np.ndarray, q: np.ndarray, steps: int = 30) -> np.nda
 def _split_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> tuple[np.ndarray, bool]:
     """:func:`ramure.gmap.kernel.mapcut.cut_map`'s face step, where a corner moved onto the
     cut that only touches it in a face (its two neighbours in the face on one side) is not a
-    crossing of that face."""
+    crossing of that face, and a face the cut does not cross cleanly takes its cells out of
+    ``crossing`` (changed in place) instead of refusing the whole crack."""
     darts, labels, count = _band_sides(gm, crossing)
     neg, pos = _signs(labels, count, sd[darts])
     both = neg & pos
@@ -353,8 +390,6 @@ def _split_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> tuple[np.nd
     after = np.sign(value[rows, (k + 1) % degree])
     zero = ok & (value == 0) & ~(before * after > 0)
     nz = zero.sum(axis=1)
-    if np.any(nz < 2) or np.any(nz % 2):
-        raise GMapError("the crack's cut meets a face without crossing it cleanly: use a finer map")
     order = np.argsort(~zero, axis=1, kind="stable")
     rows = np.arange(len(todo))
     gap = np.diff(order, axis=1)
@@ -362,10 +397,17 @@ def _split_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> tuple[np.nd
     first = np.argmax(gap >= 2, axis=1)
     has = gap[rows, first] >= 2
     a = np.where(has, order[rows, first], order[:, 0])
-    b = np.where(has, order[rows, first + 1], order[rows, nz - 1])
-    if np.any(b - a < 2):
-        raise GMapError("the crack's cut runs along a face: use a finer map")
-    gm.split_faces(corners[rows, a], b - a)
+    b = np.where(has, order[rows, first + 1], order[rows, np.maximum(nz - 1, 0)])
+    # a face the cut meets at an odd count of corners, or along one of its edges, is left whole
+    # and its cells uncut (the crack ends at them, as at a tip)
+    bad = (nz < 2) | (nz % 2 == 1) | (b - a < 2)
+    if bad.any():
+        left = rep[todo[bad]]
+        crossing[gm.dart_volume[np.r_[left, gm.alpha[3][left]]]] = False
+        keep = ~bad
+        corners, a, b, nz, rows = corners[keep], a[keep], b[keep], nz[keep], np.arange(int(keep.sum()))
+    if len(rows):
+        gm.split_faces(corners[rows, a], b - a)
     return _grown(sd, gm), bool(np.any(nz > 2))
 
 
@@ -451,10 +493,7 @@ def ring_curve(
     step = edge / 8 if spacing is None else float(spacing)
     at = np.linspace(0.0, along[-1], max(int(np.ceil(along[-1] / step)) + 1, 2))
     points = np.stack([np.interp(at, along, p[:, j]) for j in range(3)], axis=1)
-    normal = np.empty_like(points)
-    for i, x in enumerate(points):
-        tri, points[i], _ = mesh.closest_point(x)
-        normal[i] = mesh.normals[tri]
+    points, normal = onto(mesh, points)
     side = np.cross(np.gradient(points, axis=0), normal)
     side /= np.maximum(np.linalg.norm(side, axis=1, keepdims=True), 1e-300)
     k = len(points)
