@@ -218,13 +218,13 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
     walls = walls[out.alpha[3][walls] != walls]  # new walls, still sewn
     if walls.size == 0:
         raise GMapError("the crack found no cell to cut under its path: use a finer map or a longer crack")
-    mouth = mouth_edges(out, walls)
-    _, pos = out.vertex_positions()
-    length = float(np.linalg.norm(pos[mouth[:, 0]] - pos[mouth[:, 1]], axis=1).sum())
     old_vid, n_old = out.cells(0)
-    faces_unsewn = len(np.unique(out.cells(2)[0][walls]))
     split_volume = total_volume(out)
-    out.unsew3(walls)
+    walls, dropped = _unsew_chains(out, walls, curves, int(before[0]))
+    mouth = mouth_edges(out, walls)  # after unsewing: each mouth edge twice, once per lip
+    _, pos = out.vertex_positions()
+    length = 0.5 * float(np.linalg.norm(pos[mouth[:, 0]] - pos[mouth[:, 1]], axis=1).sum())
+    faces_unsewn = len(np.unique(out.cells(2)[0][walls])) // 2
     # per-cell label for datasets (the VTU's cell data): cells with a crack wall are wounds
     _mark(out, "wound", np.unique(out.dart_volume[walls]), 1.0)
     sign = orientation(out)
@@ -244,8 +244,9 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
         raise GMapError("the crack's opening turned a cell inside out even 8 times narrower: use a narrower crack")
     facts = {
         "chains": len(curves),
-        "skin_edges": len(mouth),
-        "skin_edges_opened": len(mouth),
+        "chains_left_shut": dropped,
+        "skin_edges": len(mouth) // 2,
+        "skin_edges_opened": len(mouth) // 2,
         "length": round(length, 9),
         "faces_unsewn": faces_unsewn,
         "cells_split": int(out.n_volumes - before[3]),
@@ -267,6 +268,40 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
     # the gap: what the opening took from the cut cells (cutting itself keeps the volume)
     facts["volume_lost"] = split_volume - facts["volume_after"]
     return out, facts
+
+
+def _unsew_chains(gm: GMap3, walls: np.ndarray, curves: list, euler: int) -> tuple[np.ndarray, int]:
+    """Unsew the cut faces ``walls`` chain by chain (a face goes with the chain nearest its
+    centre), keeping a chain's unsewing only if the map's Euler characteristic stays ``euler``:
+    a chain that meets another one twice, or itself, would cut a tunnel or a piece off (the old
+    crack left out skin edges closing a loop). Its faces stay sewn and lose the ``crack`` mark.
+    Returns (the wall darts unsewn, the count of chains left shut)."""
+    fid, n_faces = gm.cells(2)
+    faces, first = np.unique(fid[walls], return_index=True)
+    centre = np.zeros((n_faces, 3))
+    count = np.bincount(fid[walls], minlength=n_faces)
+    for j in range(3):
+        centre[:, j] = np.bincount(fid[walls], gm.points[walls, j], minlength=n_faces)
+    centre = centre[faces] / count[faces, None]
+    gap = np.stack([np.linalg.norm(c.nearest(centre)[2] - centre, axis=1) for c in curves])
+    chain = np.full(n_faces, -1, np.int64)
+    chain[faces] = gap.argmin(axis=0)
+    shut = 0
+    for k in range(len(curves)):
+        darts = walls[chain[fid[walls]] == k]
+        if not darts.size:
+            continue
+        walk, _ = gm.face_walk(darts)
+        side = walk[walk >= 0]
+        partner = gm.alpha[3][side].copy()
+        gm.unsew3(darts)
+        if gm.euler_characteristic() != euler:
+            gm.alpha[3][side], gm.alpha[3][partner] = partner, side
+            gm.mark_changed()
+            gm.dart_data["crack"][np.r_[side, partner]] = 0
+            shut += 1
+    walls = walls[gm.alpha[3][walls] == walls]
+    return walls, shut
 
 
 def crack_curves(skin: Skin, pattern: CrackPattern, anchor: ArrayLike, direction: ArrayLike, t0: float | None = None) -> list:

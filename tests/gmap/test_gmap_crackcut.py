@@ -147,3 +147,14 @@ def test_the_command_cracks_a_fruit_round_its_stem(tmp_path, capsys):
     assert main(["crack", "--on", "fruit", "--ring", "400"]) == 2
     err = capsys.readouterr().err
     assert "closed ring" in err and "Traceback" not in err
+
+
+def test_a_chain_that_would_cut_a_tunnel_stays_shut(fruit, skin):
+    """This crack's branches meet again under the fruit: unsewn, one chain would close a loop
+    (chi 0, a tunnel). It stays shut; the others open, and the fruit stays a ball."""
+    anchor = skin.pos[skin.used][np.argmin(np.linalg.norm(skin.pos[skin.used] - (17.38, 23.93, -42.46), axis=1))]
+    pattern = random_pattern(12, seed=7, length=8.0, width=3.0, depth=8.0)
+    out, facts = crack_map(fruit, pattern, anchor=anchor, direction=(0.3646, 0.2941, 0.0284))
+    assert facts["chains"] > facts["chains_left_shut"] >= 1
+    assert facts["valid"] and (facts["euler_after"], facts["skin_euler_after"]) == (1, 2)
+    assert out.euler_characteristic() == 1 and facts["length"] > 0 and facts["opened_vertices"] > 0
