@@ -221,6 +221,11 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
     old_vid, n_old = out.cells(0)
     split_volume = total_volume(out)
     walls, dropped = _unsew_chains(out, walls, curves, int(before[0]))
+    if walls.size == 0:
+        raise GMapError(
+            "the crack cannot open here without cutting a piece off the model or a tunnel through it: "
+            "move its anchor or make it shallower"
+        )
     mouth = mouth_edges(out, walls)  # after unsewing: each mouth edge twice, once per lip
     _, pos = out.vertex_positions()
     length = 0.5 * float(np.linalg.norm(pos[mouth[:, 0]] - pos[mouth[:, 1]], axis=1).sum())

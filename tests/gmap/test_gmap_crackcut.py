@@ -158,3 +158,14 @@ def test_a_chain_that_would_cut_a_tunnel_stays_shut(fruit, skin):
     assert facts["chains"] > facts["chains_left_shut"] >= 1
     assert facts["valid"] and (facts["euler_after"], facts["skin_euler_after"]) == (1, 2)
     assert out.euler_characteristic() == 1 and facts["length"] > 0 and facts["opened_vertices"] > 0
+
+
+def test_a_crack_that_can_only_cut_a_piece_off_is_refused():
+    """Right across the stem scar, where the cells meet at the axis, this crack's only chain
+    would cut pieces off the tomato (three pieces, chi 6): refused in one line, not left shut."""
+    fruit = build_fruit("round_tomato", volume_levels=2)
+    skin = Skin(fruit)
+    scar = skin.pos[skin.used][np.argmin(np.linalg.norm(skin.pos[skin.used] - (-2.57, 0.42, 33.70), axis=1))]
+    pattern = random_pattern(6, seed=0, length=8.0, width=3.0, depth=8.0)
+    with pytest.raises(GMapError, match="cutting a piece off"):
+        crack_map(fruit, pattern, anchor=scar, direction=(0.2987, -0.2741, -0.8906))
