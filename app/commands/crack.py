@@ -120,9 +120,8 @@ def crack_model(
     """The 3-G-map to crack and where a crack starts by default: ``(map, anchor, direction,
     species)``.
 
-    ``fruit``: a round tomato subdivided twice (8,000 cells: a crack follows cell faces, so
-    finer cells make a finer, less stair-stepped crack), the crack from the side (+x)
-    towards the stem (+z).
+    ``fruit``: a round tomato subdivided twice (8,000 cells; the crack cuts through them along
+    its curve), the crack from the side (+x) towards the stem (+z).
     ``wood``: a board of a ``years``-year pine trunk (no branches): sawn through the pith, as
     thick as the trunk's radius, and cross-cut at mid-height (three kernel map cuts); the
     crack is an **end check**, from the pith on the board's end grain outwards (+y), the way
@@ -161,14 +160,13 @@ def run_map_crack(args: argparse.Namespace) -> int:
         _, pos = gm.vertex_positions()
         anchor = tuple(pos[np.argmax(pos[:, 2])])
     direction = _vector(args.direction, "--direction") if args.direction else direction
-    from ramure.gmap.organs.mapcracks import PULL, PULL_LONG_CELLS
-
-    pull = PULL_LONG_CELLS if args.on == "wood" else PULL  # a board's cells run its length
     if args.ring is not None:
-        cracked, facts = ring_crack(gm, args, anchor if args.anchor else None, pull)
+        cracked, facts = ring_crack(gm, args, anchor if args.anchor else None)
         anchor = facts.pop("anchor")
     else:
-        cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t, pull=pull)
+        # a board's end check runs along a ray: its grid's sector faces are radial planes
+        follow = "edges" if args.on == "wood" else "curve"
+        cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t, follow=follow)
     facts = {
         "on": args.on,
         "darts": int(cracked.n_darts),
@@ -202,7 +200,7 @@ def run_map_crack(args: argparse.Namespace) -> int:
 RING_BELOW_TOP = 0.12
 
 
-def ring_crack(gm: GMap3, args: argparse.Namespace, anchor: Sequence[float] | None, pull: float) -> tuple[GMap3, dict]:
+def ring_crack(gm: GMap3, args: argparse.Namespace, anchor: Sequence[float] | None) -> tuple[GMap3, dict]:
     """``--ring DEG``: a concentric crack round the fruit's vertical axis, the skin's section at
     the anchor's height (default :data:`RING_BELOW_TOP` of the height below the top, on the
     shoulders round the stem scar), over ``DEG`` degrees centred on the anchor's side (+x by
@@ -221,7 +219,7 @@ def ring_crack(gm: GMap3, args: argparse.Namespace, anchor: Sequence[float] | No
         curve = ring_curve(skin.mesh, height, args.ring, middle - args.ring / 2, args.width, args.depth)
     except GMapError as err:
         raise UserError(str(err)) from None
-    cracked, facts = crack_along(gm, [curve], pull, skin)
+    cracked, facts = crack_along(gm, [curve], skin=skin)
     mid = curve.points[len(curve.points) // 2]
     return cracked, {"ring_degrees": float(args.ring), "ring_height": height, **facts, "anchor": tuple(mid)}
 

@@ -200,6 +200,32 @@ def onto(mesh: TriMesh, points: np.ndarray, candidates: int = 12) -> tuple[np.nd
     return stack[option, rows, slot], mesh.normals[cand[rows, slot]]
 
 
+def thickness(mesh: TriMesh, points: np.ndarray, normals: np.ndarray, chunk: int = 64) -> np.ndarray:
+    """Distance from each skin point inward (along ``-normal``) to the skin's other side: the
+    nearest hit of the ray beyond a thousandth of the mesh's size (Moeller-Trumbore, in chunks of
+    ``chunk`` rays against every triangle); ``inf`` where the ray leaves without a hit."""
+    tris = mesh.points[mesh.triangles]
+    a = tris[:, 0]
+    e1, e2 = tris[:, 1] - a, tris[:, 2] - a
+    skip = 1e-3 * float(np.ptp(mesh.points, axis=0).max())
+    out = np.full(len(points), np.inf)
+    for lo in range(0, len(points), chunk):
+        o = np.asarray(points[lo : lo + chunk], np.float64)[:, None, :]
+        d = -np.asarray(normals[lo : lo + chunk], np.float64)[:, None, :]
+        h = np.cross(d, e2[None])
+        det = np.einsum("rtj,tj->rt", h, e1)
+        ok = np.abs(det) > 1e-300
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        sv = o - a[None]
+        u = np.einsum("rtj,rtj->rt", sv, h) * inv
+        q = np.cross(sv, e1[None])
+        v = np.einsum("rtj,rtj->rt", d, q) * inv
+        t = np.einsum("tj,rtj->rt", e2, q) * inv
+        hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > skip)
+        out[lo : lo + chunk] = np.where(hit, t, np.inf).min(axis=1)
+    return out
+
+
 def chains(arcs: list, parent: np.ndarray, times: list[np.ndarray], width: list, depth: list, until: float) -> list[Curve]:
     """Chains of the walked pattern's ``arcs`` (``(i, j, samples)`` as from
     :func:`ramure.gmap.organs.cracks.project`), each sample kept while its time (``times``, per

@@ -64,9 +64,8 @@ if TYPE_CHECKING:
 #: A split vertex moves at most this fraction of the crack's typical room across its plane.
 OPEN_CAP = 0.3
 #: Corners of a cut cell nearer the crack than this fraction of their shortest edge are moved
-#: onto it first (no sliver cells); :data:`PULL_LONG_CELLS` for cells much longer than wide.
+#: onto it first (no sliver cells).
 PULL = 0.15
-PULL_LONG_CELLS = 0.05
 
 
 def _fan(surface: pv.PolyData) -> pv.PolyData:
@@ -126,7 +125,16 @@ class Skin:
             (np.r_[length, length], (np.r_[keys[:, 0], keys[:, 1]], np.r_[keys[:, 1], keys[:, 0]])), shape=(nv, nv)
         )
         self.mean_edge = float(length.mean())
+        self.edge_mid = (self.pos[keys[:, 0]] + self.pos[keys[:, 1]]) / 2
+        self.edge_length = length
         self.tree = cKDTree(self.pos[self.used])
+
+    def edge_near(self, point: ArrayLike, radius: float) -> float:
+        """Median length of the skin edges whose middles lie within ``radius`` of ``point`` (the
+        whole skin's when none does): the skin's grain where a crack runs. A board's skin has
+        long edges along its length and short ones on its end grain, so its mean says little."""
+        near = np.linalg.norm(self.edge_mid - np.asarray(point, np.float64), axis=1) <= radius
+        return float(np.median(self.edge_length[near] if near.any() else self.edge_length))
 
     def snap(self, points: ArrayLike) -> np.ndarray:
         """Nearest skin vertex (map vertex id) of each point."""
@@ -159,6 +167,7 @@ def crack_map(
     direction: ArrayLike = (1.0, 0.0, 0.0),
     t0: float | None = None,
     pull: float = PULL,
+    follow: str = "curve",
 ) -> tuple[GMap3, dict[str, Any]]:
     """Crack a 3-G-map along ``pattern`` grown until ``t0`` (default: fully grown).
 
@@ -173,10 +182,17 @@ def crack_map(
     the tomato).
 
     ``pull``: a corner of a cut cell nearer the crack than this fraction of its shortest edge
-    is moved onto it, so the cut leaves no sliver cell (0 moves none). Moving a corner changes
-    the volume of every cell at it: on a board, whose cells run the board's length, use a
-    smaller fraction (the command uses :data:`PULL_LONG_CELLS`).
+    is moved onto it, so the cut leaves no sliver cell (0 moves none).
+    ``follow="edges"``: the path before issue 40, along the skin's edges and the faces under
+    them (:func:`ramure.gmap.organs.edgecracks.crack_map_edges`); the command uses it on wood,
+    whose grid's sector faces are the radial planes an end check runs along.
     """
+    if follow not in ("curve", "edges"):
+        raise GMapError(f"a crack follows its 'curve' or the map's 'edges', not {follow!r}")
+    if follow == "edges":
+        from ramure.gmap.organs.edgecracks import crack_map_edges
+
+        return crack_map_edges(gm, pattern, anchor, direction, t0)
     t_start = time.perf_counter()
     skin = Skin(gm)
     if anchor is None:
@@ -311,13 +327,17 @@ def _unsew_chains(gm: GMap3, walls: np.ndarray, curves: list, euler: int) -> tup
 
 def crack_curves(skin: Skin, pattern: CrackPattern, anchor: ArrayLike, direction: ArrayLike, t0: float | None = None) -> list:
     """The crack's chains on the skin at ``t0`` (:class:`ramure.gmap.organs.crackcut.Curve`):
-    the pattern walked densely (samples an eighth of a skin edge apart, at most 4096 per arc),
+    the pattern walked densely (samples an eighth of a skin edge apart, the median edge within
+    the pattern's length of the anchor, at most 4096 per arc),
     each sample kept once the crack has reached it, its profile scaled by the growth, the
-    chain's corners rounded over a skin edge (:meth:`~ramure.gmap.organs.crackcut.Curve.rounded`).
-    This is the curve the crack's mouth follows."""
-    from ramure.gmap.organs.crackcut import chains
+    chain's corners rounded over a skin edge (:meth:`~ramure.gmap.organs.crackcut.Curve.rounded`),
+    its depth at most half the model's thickness under it
+    (:func:`~ramure.gmap.organs.crackcut.thickness`: a crack over a board's edge does not cut
+    through the board). This is the curve the crack's mouth follows."""
+    from ramure.gmap.organs.crackcut import chains, thickness
 
-    spacing = skin.mean_edge / 8
+    edge = skin.edge_near(anchor, max(pattern.total_length(), 1e-300))
+    spacing = edge / 8
     per_arc = int(np.clip(np.ceil(pattern.length[1:].max(initial=0) / spacing), 4, 4096))
     _, arcs = project(skin.mesh, pattern, anchor, direction, samples_per_arc=per_arc)
     grown_at = float((pattern.start + pattern.duration).max()) + 1.0
@@ -331,7 +351,10 @@ def crack_curves(skin: Skin, pattern: CrackPattern, anchor: ArrayLike, direction
         times.append(pattern.start[i] + u * (pattern.start[j] - pattern.start[i]))
         width.append((1 - u) * pattern.width[i] * scale[i] + u * pattern.width[j] * scale[j])
         depth.append((1 - u) * pattern.depth[i] * scale[i] + u * pattern.depth[j] * scale[j])
-    return [c.rounded(skin.mean_edge, skin.mesh) for c in chains(arcs, pattern.parent, times, width, depth, when)]
+    curves = [c.rounded(edge, skin.mesh) for c in chains(arcs, pattern.parent, times, width, depth, when)]
+    for c in curves:  # never deeper than half the model there: a crack never cuts through
+        c.depth = np.minimum(c.depth, 0.5 * thickness(skin.mesh, c.points, c.normal))
+    return curves
 
 
 def mouth_edges(gm: GMap3, walls: np.ndarray) -> np.ndarray:

@@ -169,3 +169,28 @@ def test_a_crack_that_can_only_cut_a_piece_off_is_refused():
     pattern = random_pattern(6, seed=0, length=8.0, width=3.0, depth=8.0)
     with pytest.raises(GMapError, match="cutting a piece off"):
         crack_map(fruit, pattern, anchor=scar, direction=(0.2987, -0.2741, -0.8906))
+
+
+def test_thickness_is_the_chord_through_the_model():
+    """From a sphere's skin straight in, the other side is a diameter away (2 R); depths are
+    capped at half of it, so a crack never cuts through a thin board or a fruit's neck."""
+    import pyvista as pv
+
+    from ramure.gmap.organs.crackcut import thickness
+    from ramure.gmap.organs.trimesh import from_polydata
+
+    mesh = from_polydata(pv.Sphere(radius=3.0, theta_resolution=48, phi_resolution=48))
+    tri = np.arange(0, len(mesh.triangles), 97)
+    centres = mesh.points[mesh.triangles[tri]].mean(axis=1)
+    normals = mesh.normals[tri] * np.sign(np.einsum("ij,ij->i", mesh.normals[tri], centres))[:, None]  # outward
+    t = thickness(mesh, centres, normals)
+    np.testing.assert_allclose(t, 6.0, rtol=0.01)
+    assert np.isinf(thickness(mesh, centres[:3], -normals[:3])).all()  # pointing out: no other side
+
+
+def test_the_old_path_along_the_edges_is_kept_by_name(fruit, side):
+    pattern = random_pattern(8, seed=2, length=8.0, width=3.0, depth=8.0)
+    out, facts = crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1), follow="edges")
+    assert facts["valid"] and facts["euler_after"] == 1 and out.n_volumes == fruit.n_volumes  # no cell cut
+    with pytest.raises(GMapError, match="follows its 'curve'"):
+        crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1), follow="grid")
