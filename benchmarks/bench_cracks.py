@@ -40,7 +40,8 @@ def bench_crack_63_nodes_on_38k_triangles():
 
 def bench_map_crack_on_a_tomato():
     """A 63-node crack cut topologically into a round tomato subdivided once (48,000 darts,
-    1,000 cells): skin, projection, snapping, strip, unsewing, opening and the chi checks.
+    1,000 cells): skin, projection, rounding, the cut through the cells under each chain,
+    unsewing, opening and the chi checks.
     No thesis figure (the thesis carves surfaces only); budget: interactive, <= 2 s."""
     import numpy as np
 

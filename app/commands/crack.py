@@ -120,9 +120,8 @@ def crack_model(
     """The 3-G-map to crack and where a crack starts by default: ``(map, anchor, direction,
     species)``.
 
-    ``fruit``: a round tomato subdivided twice (8,000 cells: a crack follows cell faces, so
-    finer cells make a finer, less stair-stepped crack), the crack from the side (+x)
-    towards the stem (+z).
+    ``fruit``: a round tomato subdivided twice (8,000 cells; the crack cuts through them along
+    its curve), the crack from the side (+x) towards the stem (+z).
     ``wood``: a board of a ``years``-year pine trunk (no branches): sawn through the pith, as
     thick as the trunk's radius, and cross-cut at mid-height (three kernel map cuts); the
     crack is an **end check**, from the pith on the board's end grain outwards (+y), the way
@@ -161,7 +160,13 @@ def run_map_crack(args: argparse.Namespace) -> int:
         _, pos = gm.vertex_positions()
         anchor = tuple(pos[np.argmax(pos[:, 2])])
     direction = _vector(args.direction, "--direction") if args.direction else direction
-    cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t)
+    if args.ring is not None:
+        cracked, facts = ring_crack(gm, args, anchor if args.anchor else None)
+        anchor = facts.pop("anchor")
+    else:
+        # a board's end check runs along a ray: its grid's sector faces are radial planes
+        follow = "edges" if args.on == "wood" else "curve"
+        cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t, follow=follow)
     facts = {
         "on": args.on,
         "darts": int(cracked.n_darts),
@@ -189,6 +194,34 @@ def run_map_crack(args: argparse.Namespace) -> int:
         f"{facts['faces_unsewn']} faces unsewn, chi {facts['euler_before']} -> {facts['euler_after']}"
     )
     return 0
+
+
+#: A concentric crack's default height: this fraction of the fruit's height below its top.
+RING_BELOW_TOP = 0.12
+
+
+def ring_crack(gm: GMap3, args: argparse.Namespace, anchor: Sequence[float] | None) -> tuple[GMap3, dict]:
+    """``--ring DEG``: a concentric crack round the fruit's vertical axis, the skin's section at
+    the anchor's height (default :data:`RING_BELOW_TOP` of the height below the top, on the
+    shoulders round the stem scar), over ``DEG`` degrees centred on the anchor's side (+x by
+    default). The facts carry the anchor (the arc's middle) for the picture's camera."""
+    from ramure.gmap.organs.crackcut import ring_curve
+    from ramure.gmap.organs.mapcracks import Skin, crack_along
+    from ramure.gmap.kernel.errors import GMapError
+
+    if args.on != "fruit":
+        raise UserError("--ring (a concentric crack round the stem) is for --on fruit")
+    skin = Skin(gm)
+    low, high = float(skin.pos[skin.used, 2].min()), float(skin.pos[skin.used, 2].max())
+    height = high - RING_BELOW_TOP * (high - low) if anchor is None else float(anchor[2])
+    middle = 0.0 if anchor is None else float(np.degrees(np.arctan2(anchor[1], anchor[0])))
+    try:
+        curve = ring_curve(skin.mesh, height, args.ring, middle - args.ring / 2, args.width, args.depth)
+    except GMapError as err:
+        raise UserError(str(err)) from None
+    cracked, facts = crack_along(gm, [curve], skin=skin)
+    mid = curve.points[len(curve.points) // 2]
+    return cracked, {"ring_degrees": float(args.ring), "ring_height": height, **facts, "anchor": tuple(mid)}
 
 
 def render_map_crack(
@@ -289,6 +322,14 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--smooth", type=float, default=None, help="bound the change of turning angles (degrees)")
     p.add_argument("--symmetry", type=int, default=1, help="copies around the root (a circular crack)")
     p.add_argument("--anchor", help="X,Y,Z near the surface (default: top centre of the model)")
+    p.add_argument(
+        "--ring",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="with --on fruit: a concentric crack round the stem over DEG degrees (<= 350), at the "
+        "anchor's height and centred on its side (default: 12%% of the height below the top, +x)",
+    )
     p.add_argument("--direction", default=None, help="initial direction X,Y,Z (default 1,0,0; 0,1,0 on wood)")
     p.add_argument("--t", type=float, default=None, help="the crack grown until this time (default: grown)")
     p.add_argument("--speed", type=float, default=1.0, help="growth speed v (t_j = t_i + delta / v)")

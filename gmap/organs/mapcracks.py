@@ -7,29 +7,27 @@ own faces, so the cracked map is still a map: it can be cut, measured, cracked a
 1. **Skin**: the map's boundary surface (its alpha3-free faces, triangulated) as a closed
    :class:`~ramure.gmap.organs.trimesh.TriMesh` whose points are the map's vertices.
 2. **Projection**: the pattern is walked over the skin from an anchor and a direction
-   (:func:`ramure.gmap.organs.cracks.project`), densely (samples about a third of a skin edge
-   apart).
-3. **Snapping**: each sample snaps to its nearest skin vertex; consecutive vertices are
-   joined by shortest paths along skin edges. The crack on the skin is this set of edges.
-   Each edge takes the profile (half-width ``w``, depth ``h``) of the sample it ends at.
-4. **Strip**: under each crack edge the interior face (shared by two volumes) that goes
-   most straight inward is chosen, then deeper ones, layer after layer, each continuing the
-   previous face as straight as the cells allow, while the layer's inner edge is less than
-   ``h`` below the skin (at least one layer). A face is taken only if its vertices off the
-   crack are inside the solid (never on the skin): the crack never cuts through to another
-   side, so a ball stays a ball (chi = 1, the skin chi = 2).
-5. **Unsewing**: the strip's faces are alpha3-unsewn (:meth:`GMap3.unsew3`). The kernel's
-   vertex and edge orbits then split by themselves along the crack; the strip's bottom and
+   (:func:`ramure.gmap.organs.cracks.project`), densely (samples an eighth of a skin edge
+   apart), and split into chains rounded at the pattern's nodes (:func:`crack_curves`).
+3. **Cutting** (issue 40): the cells under each chain are cut along its ribbon, the curve
+   swept down the skin normals to the depth ``h``, through skin faces and the cells under
+   them wherever the curve crosses them (:mod:`ramure.gmap.organs.crackcut`). The crack's
+   mouth is where the ribbon meets the skin: it follows the curve, not the skin's edges (the
+   crack used to be snapped to skin vertices, a staircase along the grid; :func:`crack_edges`
+   still gives that old path). The cut stays under the skin (cells whose centroid is less
+   than ``h`` deep), so a ball stays a ball (chi = 1, the skin chi = 2).
+4. **Unsewing**: the cuts' new faces are alpha3-unsewn (:meth:`GMap3.unsew3`). The kernel's
+   vertex and edge orbits then split by themselves along the crack; the cut's bottom and
    the crack's tips stay sewn (a notch, like :func:`ramure.gmap.organs.defects.crack`).
-6. **Marking**: the darts of the crack's walls get the dart attribute ``crack = 1`` (rule
+5. **Marking**: the darts of the crack's walls get the dart attribute ``crack = 1`` (rule
    copy, so later subdivisions keep it); :func:`wall_faces` lists them on the skin.
-7. **Opening**: every vertex copy made by the split moves off the crack into its own side,
+6. **Opening**: every vertex copy made by the split moves off the crack into its own side,
    by ``w`` times ``1 - depth/h`` (a V-shaped section, 0 at the bottom), capped at
-   :data:`OPEN_CAP` of its shortest edge leaving the crack plane so no cell turns inside out.
+   :data:`OPEN_CAP` of the crack's typical room across its plane so no cell turns inside out.
 
 **Growth**: at time ``t0`` an arc keeps the samples up to the part of its length grown by
 then (:meth:`CrackPattern.progress`); growing nodes scale their profiles. Samples are those
-of the fully grown crack, so a crack at a later time holds every edge of an earlier one:
+of the fully grown crack, so a crack at a later time runs along an earlier one and further:
 its length never decreases, and from ``max(t_i + Δt_i)`` on it is the static crack.
 
 >>> from ramure.gmap.organs.fruit import build_fruit
@@ -63,10 +61,11 @@ if TYPE_CHECKING:
 
     from ramure.gmap.kernel.map3 import GMap3
 
-#: A split vertex moves at most this fraction of its shortest edge leaving the crack plane.
+#: A split vertex moves at most this fraction of the crack's typical room across its plane.
 OPEN_CAP = 0.3
-#: Layers of cells a crack may go down at most.
-MAX_LAYERS = 64
+#: Corners of a cut cell nearer the crack than this fraction of their shortest edge are moved
+#: onto it first (no sliver cells).
+PULL = 0.15
 
 
 def _fan(surface: pv.PolyData) -> pv.PolyData:
@@ -126,7 +125,16 @@ class Skin:
             (np.r_[length, length], (np.r_[keys[:, 0], keys[:, 1]], np.r_[keys[:, 1], keys[:, 0]])), shape=(nv, nv)
         )
         self.mean_edge = float(length.mean())
+        self.edge_mid = (self.pos[keys[:, 0]] + self.pos[keys[:, 1]]) / 2
+        self.edge_length = length
         self.tree = cKDTree(self.pos[self.used])
+
+    def edge_near(self, point: ArrayLike, radius: float) -> float:
+        """Median length of the skin edges whose middles lie within ``radius`` of ``point`` (the
+        whole skin's when none does): the skin's grain where a crack runs. A board's skin has
+        long edges along its length and short ones on its end grain, so its mean says little."""
+        near = np.linalg.norm(self.edge_mid - np.asarray(point, np.float64), axis=1) <= radius
+        return float(np.median(self.edge_length[near] if near.any() else self.edge_length))
 
     def snap(self, points: ArrayLike) -> np.ndarray:
         """Nearest skin vertex (map vertex id) of each point."""
@@ -145,8 +153,11 @@ class Skin:
         return out[::-1]
 
 
-#: How many times a crack too wide for its cells is halved before it is refused.
+#: How many times a crack too wide for its cells is halved (1, 1/2, 1/4, 1/8).
 OPEN_TRIES = 4
+#: Then how many rounds the corners of the cells it still turns inside out are held in place
+#: (thin cells where two chains of a crack cross), before it is refused.
+HOLD_TRIES = 4
 
 
 def crack_map(
@@ -155,70 +166,211 @@ def crack_map(
     anchor: ArrayLike | None = None,
     direction: ArrayLike = (1.0, 0.0, 0.0),
     t0: float | None = None,
+    pull: float = PULL,
+    follow: str = "curve",
 ) -> tuple[GMap3, dict[str, Any]]:
     """Crack a 3-G-map along ``pattern`` grown until ``t0`` (default: fully grown).
 
-    ``anchor`` defaults to the skin's highest vertex. Returns ``(map, facts)``; the input map
-    is not changed. Refused (one line each): a map without a closed skin, an anchor off the
-    skin, a direction along the normal, a crack that finds no interior face to open.
-    A crack whose opening would turn a cell inside out is opened half as wide, up to
-    :data:`OPEN_TRIES` times (``narrowed`` in the facts: 1, 0.5, 0.25 or 0.125), so the
-    command's defaults always open a crack (issue 40: they failed on the tomato).
+    The crack follows its curve on the skin, cutting through the cells under it
+    (:mod:`ramure.gmap.organs.crackcut`), not the skin's existing edges: its mouth is the
+    polyline where its ribbon meets the skin's faces. ``anchor`` defaults to the skin's
+    highest vertex. Returns ``(map, facts)``; the input map is not changed. Refused (one line
+    each): a map without a closed skin, an anchor off the skin, a direction along the normal,
+    a crack that finds no cell to cut. A crack whose opening would turn a cell inside out is
+    opened half as wide, up to :data:`OPEN_TRIES` times (``narrowed`` in the facts: 1, 0.5,
+    0.25 or 0.125), so the command's defaults always open a crack (issue 40: they failed on
+    the tomato).
+
+    ``pull``: a corner of a cut cell nearer the crack than this fraction of its shortest edge
+    is moved onto it, so the cut leaves no sliver cell (0 moves none).
+    ``follow="edges"``: the path before issue 40, along the skin's edges and the faces under
+    them (:func:`ramure.gmap.organs.edgecracks.crack_map_edges`); the command uses it on wood,
+    whose grid's sector faces are the radial planes an end check runs along.
     """
+    if follow not in ("curve", "edges"):
+        raise GMapError(f"a crack follows its 'curve' or the map's 'edges', not {follow!r}")
+    if follow == "edges":
+        from ramure.gmap.organs.edgecracks import crack_map_edges
+
+        return crack_map_edges(gm, pattern, anchor, direction, t0)
     t_start = time.perf_counter()
     skin = Skin(gm)
     if anchor is None:
         anchor = skin.pos[skin.used[np.argmax(skin.pos[skin.used, 2])]]
-    edges = crack_edges(skin, pattern, anchor, direction, t0)
-    out = gm.copy()
-    before = (gm.euler_characteristic(), gm.boundary().euler_characteristic(), gm.cells(0)[1])
-    strip, face_width, face_depth, layers = _strip(gm, out, skin, edges)
-    if not strip:
-        raise GMapError("the crack found no face between two cells under its path: use a finer map or a longer crack")
-    from ramure.gmap.organs.defects import cell_volumes, orientation
+    curves = crack_curves(skin, pattern, anchor, direction, t0)
+    out, facts = crack_along(gm, curves, pull, skin)
+    facts = {"nodes": len(pattern), **facts, "seconds": round(time.perf_counter() - t_start, 4)}
+    return out, facts
+
+
+def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None = None) -> tuple[GMap3, dict[str, Any]]:
+    """Crack a 3-G-map along the given chains on its skin (:class:`ramure.gmap.organs.crackcut.Curve`,
+    e.g. from :func:`crack_curves` or :func:`ramure.gmap.organs.crackcut.ring_curve`): cut the
+    cells under each, unsew the cuts' faces, open them (see :func:`crack_map`); the cells with
+    a crack wall get the volume mark ``wound = 1`` (as :func:`ramure.gmap.organs.defects.crack`
+    marks its fresh walls: a per-cell label in the VTU). Returns ``(map, facts)``; ``gm`` is
+    not changed."""
+    from ramure.gmap.organs.crackcut import SNAP, ribbon_cut
+    from ramure.gmap.organs.defects import _mark, cell_volumes, orientation
     from ramure.gmap.kernel.measure import total_volume
 
-    sign = orientation(out)
-    before_volume = total_volume(gm)
-    exposed = np.concatenate(list(strip.values()))
+    t_start = time.perf_counter()
+    skin = Skin(gm) if skin is None else skin
+    out = gm.copy()
+    before = (gm.euler_characteristic(), gm.boundary().euler_characteristic(), gm.cells(0)[1], gm.n_volumes)
     if "crack" not in out.dart_data:
         out.add_dart_data("crack", np.int8, rule="copy")
-    out.dart_data["crack"][exposed] = 1
+    old_walls = np.asarray(out.dart_data["crack"]) == 1
+    for curve in curves:  # each chain's new faces are walls; later cuts split them, the mark follows
+        new, seams = ribbon_cut(out, curve, SNAP * skin.mean_edge, pull)
+        out.dart_data["crack"][seams] = 0
+        out.dart_data["crack"][new] = 1
+    mark = np.asarray(out.dart_data["crack"]) == 1
+    fid, n_faces = out.cells(2)
+    fresh = mark & ~np.r_[old_walls, np.zeros(out.n_darts - len(old_walls), bool)]  # not a wall of an older crack
+    mark |= (np.bincount(fid, fresh, n_faces) > 0)[fid]
+    out.dart_data["crack"][mark] = 1  # a wall split by a later cut is a wall all round
+    walls = np.flatnonzero(mark)
+    walls = walls[out.alpha[3][walls] != walls]  # new walls, still sewn
+    if walls.size == 0:
+        raise GMapError("the crack found no cell to cut under its path: use a finer map or a longer crack")
+    old_vid, n_old = out.cells(0)
+    split_volume = total_volume(out)
+    walls, dropped = _unsew_chains(out, walls, curves, int(before[0]))
+    if walls.size == 0:
+        raise GMapError(
+            "the crack cannot open here without cutting a piece off the model or a tunnel through it: "
+            "move its anchor or make it shallower"
+        )
+    mouth = mouth_edges(out, walls)  # after unsewing: each mouth edge twice, once per lip
+    _, pos = out.vertex_positions()
+    length = 0.5 * float(np.linalg.norm(pos[mouth[:, 0]] - pos[mouth[:, 1]], axis=1).sum())
+    faces_unsewn = len(np.unique(out.cells(2)[0][walls])) // 2
+    # per-cell label for datasets (the VTU's cell data): cells with a crack wall are wounds
+    _mark(out, "wound", np.unique(out.dart_volume[walls]), 1.0)
+    sign = orientation(out)
     points, corners = out.points.copy(), out.corners.copy()
-    narrowed = 1.0
-    for _ in range(OPEN_TRIES):  # a crack too wide for its cells opens narrower, not at all
-        widths = {f: w * narrowed for f, w in dict(face_width).items()}
-        moved, opening = _open(out, exposed, strip, widths, face_depth, skin)
-        if not (cell_volumes(out, sign) <= 0).any():
+    narrowed, held = 1.0, np.zeros(out.cells(0)[1], bool)
+    for attempt in range(OPEN_TRIES + HOLD_TRIES):  # a crack too wide for its cells opens narrower
+        moved, opening = _open(out, walls, old_vid, curves, narrowed, held)
+        bad = cell_volumes(out, sign) <= 0
+        if not bad.any():
             break
         out.points[:], out.corners[:] = points, corners
-        narrowed *= 0.5
+        if attempt < OPEN_TRIES - 1:
+            narrowed *= 0.5
+        else:  # still too wide at an eighth: the corners of the cells it turns stay where they are
+            held[out.cells(0)[0][bad[out.dart_volume]]] = True
     else:
         raise GMapError("the crack's opening turned a cell inside out even 8 times narrower: use a narrower crack")
-    opened = [e for e, k in zip(edges, layers) if k > 0]
-    length = float(sum(np.linalg.norm(skin.pos[a] - skin.pos[b]) for a, b in opened))
     facts = {
-        "nodes": len(pattern),
-        "skin_edges": len(edges),
-        "skin_edges_opened": len(opened),
+        "chains": len(curves),
+        "chains_left_shut": dropped,
+        "skin_edges": len(mouth) // 2,
+        "skin_edges_opened": len(mouth) // 2,
         "length": round(length, 9),
-        "faces_unsewn": len(strip),
-        "layers": int(max(layers, default=0)),
-        "duplicated_vertices": int(out.cells(0)[1] - before[2]),
+        "faces_unsewn": faces_unsewn,
+        "cells_split": int(out.n_volumes - before[3]),
+        "cut_vertices": int(n_old - before[2]),
+        "duplicated_vertices": int(out.cells(0)[1] - n_old),
         "opened_vertices": moved,
         "opening": opening,
         "narrowed": narrowed,
+        "held_vertices": int(held.sum()),
         "euler_before": int(before[0]),
         "euler_after": int(out.euler_characteristic()),
         "skin_euler_before": int(before[1]),
         "skin_euler_after": int(out.boundary().euler_characteristic()),
         "valid": bool(out.is_valid()),
-        "volume_before": before_volume,
+        "volume_before": total_volume(gm),
         "volume_after": total_volume(out),
         "seconds": round(time.perf_counter() - t_start, 4),
     }
-    facts["volume_lost"] = facts["volume_before"] - facts["volume_after"]
+    # the gap: what the opening took from the cut cells (cutting itself keeps the volume)
+    facts["volume_lost"] = split_volume - facts["volume_after"]
     return out, facts
+
+
+def _unsew_chains(gm: GMap3, walls: np.ndarray, curves: list, euler: int) -> tuple[np.ndarray, int]:
+    """Unsew the cut faces ``walls`` chain by chain (a face goes with the chain nearest its
+    centre), keeping a chain's unsewing only if the map's Euler characteristic stays ``euler``:
+    a chain that meets another one twice, or itself, would cut a tunnel or a piece off (the old
+    crack left out skin edges closing a loop). Its faces stay sewn and lose the ``crack`` mark.
+    Returns (the wall darts unsewn, the count of chains left shut)."""
+    fid, n_faces = gm.cells(2)
+    faces, first = np.unique(fid[walls], return_index=True)
+    centre = np.zeros((n_faces, 3))
+    count = np.bincount(fid[walls], minlength=n_faces)
+    for j in range(3):
+        centre[:, j] = np.bincount(fid[walls], gm.points[walls, j], minlength=n_faces)
+    centre = centre[faces] / count[faces, None]
+    gap = np.stack([np.linalg.norm(c.nearest(centre)[2] - centre, axis=1) for c in curves])
+    chain = np.full(n_faces, -1, np.int64)
+    chain[faces] = gap.argmin(axis=0)
+    shut = 0
+    for k in range(len(curves)):
+        darts = walls[chain[fid[walls]] == k]
+        if not darts.size:
+            continue
+        walk, _ = gm.face_walk(darts)
+        side = walk[walk >= 0]
+        partner = gm.alpha[3][side].copy()
+        gm.unsew3(darts)
+        if gm.euler_characteristic() != euler:
+            gm.alpha[3][side], gm.alpha[3][partner] = partner, side
+            gm.mark_changed()
+            gm.dart_data["crack"][np.r_[side, partner]] = 0
+            shut += 1
+    walls = walls[gm.alpha[3][walls] == walls]
+    return walls, shut
+
+
+def crack_curves(skin: Skin, pattern: CrackPattern, anchor: ArrayLike, direction: ArrayLike, t0: float | None = None) -> list:
+    """The crack's chains on the skin at ``t0`` (:class:`ramure.gmap.organs.crackcut.Curve`):
+    the pattern walked densely (samples an eighth of a skin edge apart, the median edge within
+    the pattern's length of the anchor, at most 4096 per arc),
+    each sample kept once the crack has reached it, its profile scaled by the growth, the
+    chain's corners rounded over a skin edge (:meth:`~ramure.gmap.organs.crackcut.Curve.rounded`),
+    its depth at most half the model's thickness under it
+    (:func:`~ramure.gmap.organs.crackcut.thickness`: a crack over a board's edge does not cut
+    through the board). This is the curve the crack's mouth follows."""
+    from ramure.gmap.organs.crackcut import chains, thickness
+
+    edge = skin.edge_near(anchor, max(pattern.total_length(), 1e-300))
+    spacing = edge / 8
+    per_arc = int(np.clip(np.ceil(pattern.length[1:].max(initial=0) / spacing), 4, 4096))
+    _, arcs = project(skin.mesh, pattern, anchor, direction, samples_per_arc=per_arc)
+    grown_at = float((pattern.start + pattern.duration).max()) + 1.0
+    when = grown_at if t0 is None else float(t0)
+    if when <= 0:
+        return []
+    _, _, scale = pattern.progress(when)
+    times, width, depth = [], [], []
+    for i, j, samples in arcs:
+        u = np.array([s[3] for s in samples])
+        times.append(pattern.start[i] + u * (pattern.start[j] - pattern.start[i]))
+        width.append((1 - u) * pattern.width[i] * scale[i] + u * pattern.width[j] * scale[j])
+        depth.append((1 - u) * pattern.depth[i] * scale[i] + u * pattern.depth[j] * scale[j])
+    curves = [c.rounded(edge, skin.mesh) for c in chains(arcs, pattern.parent, times, width, depth, when)]
+    for c in curves:  # never deeper than half the model there: a crack never cuts through
+        c.depth = np.minimum(c.depth, 0.5 * thickness(skin.mesh, c.points, c.normal))
+    return curves
+
+
+def mouth_edges(gm: GMap3, walls: np.ndarray) -> np.ndarray:
+    """``(k, 2)`` vertex ids of the crack's mouth: edges shared by a wall dart and a skin dart
+    (alpha3-free, not a wall) of ``gm``, each once (call it before the walls are unsewn)."""
+    edge, n_edges = gm.orbit_ids("023")
+    is_wall = np.zeros(gm.n_darts, bool)
+    is_wall[walls] = True
+    free = (gm.alpha[3] == np.arange(gm.n_darts)) & ~is_wall
+    on_skin = np.zeros(n_edges, bool)
+    on_skin[edge[free]] = True
+    at = walls[on_skin[edge[walls]]]
+    _, first = np.unique(edge[at], return_index=True)
+    vid, _ = gm.cells(0)
+    d = at[first]
+    return np.c_[vid[d], vid[gm.alpha[0][d]]]
 
 
 def wall_faces(gm: GMap3) -> np.ndarray:
@@ -235,8 +387,9 @@ def wall_faces(gm: GMap3) -> np.ndarray:
 def crack_edges(
     skin: Skin, pattern: CrackPattern, anchor: ArrayLike, direction: ArrayLike, t0: float | None = None
 ) -> dict[tuple[int, int], tuple[float, float]]:
-    """Skin edges ``(a, b)`` (map vertex ids, a < b) of the crack at ``t0``, each with its
-    profile ``(w, h)``.
+    """Skin edges ``(a, b)`` (map vertex ids, a < b) of the crack at ``t0`` snapped to the skin's
+    own edges, each with its profile ``(w, h)``: the path :func:`crack_map` took before issue 40
+    (a staircase along the grid), kept to compare with.
 
     Every sample of the fully grown crack gets the time the crack reaches it; the edges of the
     snapped paths are taken in that order and an edge that would close a loop is left out, so
@@ -287,206 +440,54 @@ def crack_edges(
     return edges
 
 
-def _face_darts(gm, dart):
-    """The darts of ``dart``'s face in this volume, walking a0, a1, a0, ... from it."""
-    a0, a1 = gm.alpha[0], gm.alpha[1]
-    out, d = [dart], dart
-    for k in range(4096):
-        d = a0[d] if k % 2 == 0 else a1[d]
-        if d == dart:
-            return out
-        out.append(int(d))
-    raise GMapError("a face walk does not close: the map is not valid")
-
-
-def _strip(gm, out, skin, edges):
-    """Choose and unsew the strip's faces (navigating ``gm``, unsewing ``out``); returns
-    ``(darts of both sides per face, half-width per face, depth per face, layers per crack edge)``.
-
-    A face is unsewn only if that keeps the solid's Euler characteristic (checked on the
-    orbits of its own vertices and edges): strips of two crack edges that meet deep inside
-    would make a tunnel, so the second one stops there.
-    """
-    a2, a3 = gm.alpha[2], gm.alpha[3]
-    vid, fid = skin.vid, gm.cells(2)[0]
-    centres = gm.volume_centroids()
-    strip: dict[int, np.ndarray] = {}  # face id -> its darts on both sides
-    width: dict[int, float] = {}
-    depth: dict[int, float] = {}
-    layers: list[int] = []
-    for (a, b), (w, h) in edges.items():
-        d = skin.edge_dart[(a, b)]
-        mid = (skin.pos[a] + skin.pos[b]) / 2
-        inward = _mean_centre(gm, d, centres) - mid  # from the skin into the cells at the edge
-        inward /= max(np.linalg.norm(inward), 1e-300)
-        around: list[int] = []
-        x = int(a2[d])
-        while a3[x] != x and len(around) < 64:
-            around.append(x)
-            x = int(a2[a3[x]])
-        taken, edge, previous_dir, ends = 0, {a, b}, inward, (a, b)
-        while around and taken < MAX_LAYERS:
-            best = _straightest(gm, skin, around, fid, strip, edge, ends, previous_dir, 0.05 if taken == 0 else 0.3)
-            if best is None:
-                break
-            x, darts, direction = best
-            inner = _opposite(darts, vid, edge)
-            if not _keeps_euler(out, x):
-                break
-            walk, _ = out.face_walk([x])
-            face = walk[walk >= 0]
-            face = np.r_[face, out.alpha[3][face]]
-            out.unsew3([x])
-            below = float((skin.pos[list(inner)].mean(axis=0) - mid) @ inward) if inner else np.inf
-            strip[fid[x]] = face
-            width[fid[x]] = w
-            depth[fid[x]] = h
-            taken += 1
-            if inner is None or below >= h:
-                break
-            inner_dart = next(y for y in darts if vid[y] in inner and vid[gm.alpha[0][y]] in inner)
-            edge, previous_dir, ends = set(inner), direction, tuple(inner)
-            around = _faces_around(gm, inner_dart)
-        layers.append(taken)
-    return strip, width, depth, layers
-
-
-def _straightest(gm, skin, around, fid, strip, edge, ends, previous_dir, least):
-    """Among the faces ``around`` an edge, the one going on most straight (None if none has a
-    cosine above ``least`` with ``previous_dir`` or each touches the skin off the crack).
-
-    Under the skin any face going inward will do (in wood, a crack may follow a ring: a
-    shake); deeper, a face must go on within about 70 degrees."""
-    best, score_best = None, least
-    vid = skin.vid
-    start = (skin.pos[ends[0]] + skin.pos[ends[1]]) / 2
-    for x in around:
-        if fid[x] in strip:
-            continue
-        darts = _face_darts(gm, x)
-        verts = {int(vid[y]) for y in darts}
-        off = verts - edge
-        if not off or skin.on_skin[list(off)].any():
-            continue
-        direction = skin.pos[list(verts)].mean(axis=0) - start
-        direction /= max(np.linalg.norm(direction), 1e-300)
-        score = float(direction @ previous_dir)
-        if score > score_best:
-            best, score_best = (x, darts, direction), score
-    return best
-
-
-def _keeps_euler(gm, dart) -> bool:
-    """Would unsewing ``dart``'s face keep V - E + F - C? (Local: only the orbits of the face's
-    vertices and edges can change; the face itself becomes two.)"""
-    walk, _ = gm.face_walk([dart])
-    darts = walk[walk >= 0]
-    partners = gm.alpha[3][darts]
-    cut = set(darts.tolist()) | set(partners.tolist())
-    seeds = list(cut)
-    change = 1  # the face becomes two
-    for involutions, sign in (((1, 2, 3), 1), ((0, 2, 3), -1)):
-        change += sign * (_components(gm, seeds, involutions, cut) - _components(gm, seeds, involutions, set()))
-    return change == 0
-
-
-def _components(gm, seeds, involutions, cut):
-    """Orbits (under ``involutions``) through ``seeds``, with alpha3 of the darts in ``cut`` freed."""
-    alpha = gm.alpha
-    seen, count = set(), 0
-    for s in seeds:
-        if s in seen:
-            continue
-        count += 1
-        stack = [s]
-        seen.add(s)
-        while stack:
-            d = stack.pop()
-            for i in involutions:
-                e = d if (i == 3 and d in cut) else int(alpha[i][d])
-                if e not in seen:
-                    seen.add(e)
-                    stack.append(e)
-    return count
-
-
-def _mean_centre(gm, dart, centres):
-    """Mean centre of the volumes around the edge of a skin ``dart``."""
-    a2, a3 = gm.alpha[2], gm.alpha[3]
-    vols, x = [int(gm.dart_volume[dart])], int(a2[dart])
-    while a3[x] != x and len(vols) < 64:
-        x = int(a3[x])
-        vols.append(int(gm.dart_volume[x]))
-        x = int(a2[x])
-    return centres[vols].mean(axis=0)
-
-
-def _opposite(darts, vid, edge):
-    """The face's edge that touches none of ``edge``'s vertices (None for a triangle)."""
-    verts = [int(vid[y]) for y in darts[0::2]]
-    k = len(verts)
-    for i in range(k):
-        p, q = verts[i], verts[(i + 1) % k]
-        if p not in edge and q not in edge:
-            return (p, q)
-    return None
-
-
-def _faces_around(gm, dart):
-    """One dart per face around the (interior) edge of ``dart``, all on that edge."""
-    a2, a3 = gm.alpha[2], gm.alpha[3]
-    out, x = [], int(dart)
-    for _ in range(128):
-        x = int(a2[x])
-        if a3[x] == x:
-            return []  # the edge reaches the skin elsewhere: stop here
-        out.append(x)
-        x = int(a3[x])
-        if x == dart or a2[x] == dart:
-            break
-    return out
-
-
-def _open(gm, exposed, strip, face_width, face_depth, skin):
-    """Move each vertex copy the split made off the crack, into its own side: along the mean
-    normal of its crack faces (pointing out of their cells), by the faces' half-width tapered
-    with depth, capped by :data:`OPEN_CAP` of its shortest edge leaving the crack plane."""
+def _open(
+    gm: GMap3, walls: np.ndarray, old_vid: np.ndarray, curves: list, narrowed: float, held: np.ndarray
+) -> tuple[int, float]:
+    """Move each vertex copy the unsewing made off the crack, into its own cells: along the
+    ribbon's side vector at its nearest curve sample (the sign pointing from its cells to the
+    walls, reversed), by the sample's half-width times ``narrowed``, tapered with depth to 0
+    at ``h``, capped by :data:`OPEN_CAP` of the crack's median room across (the distance, across
+    the crack plane, to a vertex's nearest neighbour off it: so the lips run even) and by half
+    its own, times ``narrowed``; ``held`` vertices stay.
+    Returns (copies moved, widest opening)."""
     vid, nv = gm.cells(0)
     old = np.zeros(nv, np.int64)
-    old[vid] = skin.vid
-    copies = np.bincount(old, minlength=len(skin.pos))
-    ex = np.unique(vid[exposed])
+    old[vid] = old_vid
+    copies = np.bincount(old, minlength=int(old_vid.max()) + 1)
+    ex = np.unique(vid[walls])
     split = ex[copies[old[ex]] > 1]
     if split.size == 0:
         return 0, 0.0
     _, pos = gm.vertex_positions()
     centres = gm.volume_centroids()
-    normal = np.zeros((nv, 3))
-    reach = np.zeros(nv)
-    for f, darts in strip.items():
-        half = len(darts) // 2
-        for side in (darts[:half], darts[half:]):  # the face as seen from each of its two cells
-            corners = vid[side[0::2]]
-            p = pos[corners]
-            n = np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)  # Newell
-            if n @ (p.mean(axis=0) - centres[gm.dart_volume[side[0]]]) < 0:
-                n = -n
-            n /= max(np.linalg.norm(n), 1e-300)
-            np.add.at(normal, np.unique(corners), n)
-        w, h = face_width[f], face_depth[f]
-        for v in np.unique(vid[darts]):
-            below = float(skin.tree.query(pos[v])[0])
-            taper = 1.0 if h <= 0 else max(0.0, 1.0 - below / h)
-            reach[v] = max(reach[v], w * taper)
-    unit = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    points = np.concatenate([c.points for c in curves])
+    side = np.concatenate([c.side for c in curves])
+    normal = np.concatenate([c.normal for c in curves])
+    width = np.concatenate([c.width for c in curves])
+    depth = np.concatenate([c.depth for c in curves])
+    near = cKDTree(points).query(pos[vid[walls]])[1]
+    toward = np.sign(np.einsum("ij,ij->i", pos[vid[walls]] - centres[gm.dart_volume[walls]], side[near]))
+    unit = np.zeros((nv, 3))
+    np.add.at(unit, vid[walls], toward[:, None] * side[near])
+    unit /= np.maximum(np.linalg.norm(unit, axis=1, keepdims=True), 1e-300)
+    at = cKDTree(points).query(pos[split])[1]
+    below = np.einsum("ij,ij->i", points[at] - pos[split], normal[at])
+    taper = np.where(depth[at] > 0, np.clip(1.0 - below / np.maximum(depth[at], 1e-300), 0.0, 1.0), 1.0)
+    reach = width[at] * taper
     u, w = vid, vid[gm.alpha[0]]
     vec = pos[w] - pos[u]
     elen = np.linalg.norm(vec, axis=1)
-    across = np.abs(np.einsum("ij,ij->i", vec, unit[u])) > 0.5 * elen
-    shortest = np.full(nv, np.inf)
-    np.minimum.at(shortest, u[across], elen[across])
-    step = np.minimum(reach[split], OPEN_CAP * shortest[split])
-    step[~np.isfinite(step)] = 0.0
+    rise = np.abs(np.einsum("ij,ij->i", vec, unit[u]))
+    across = rise > 0.2 * elen  # edges leaving the crack plane (not along a wall)
+    room = np.full(nv, np.inf)
+    np.minimum.at(room, u[across], rise[across])  # how far the next vertex across lies
+    own = room[split]
+    typical = float(np.median(own[np.isfinite(own)])) if np.isfinite(own).any() else 0.0
+    own[~np.isfinite(own)] = typical
+    # one cap for the whole crack (its cells' typical room across), so the lips run even; a
+    # vertex with less room (a cell the cut left thin) opens at most half of it
+    step = narrowed * np.minimum(np.minimum(reach, OPEN_CAP * typical), 0.5 * own)
+    step[held[split]] = 0.0
     new = pos.copy()
     new[split] = pos[split] - step[:, None] * unit[split]
     take = np.isin(vid, split)
