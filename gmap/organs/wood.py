@@ -77,7 +77,10 @@ along its round edge, so a tangential cut shows the trunk's rings flowing
 round a round knot.  The knot's pith is an arc (:meth:`Wood.knot_bender`):
 the branch leaves the trunk's pith ``KNOT_BEND`` degrees steeper than it
 leaves the bark, as a conifer's branch bends in its knot.  The seam uses the law's mean
-widths, so regrowing a branch with a new seed moves only that branch.
+widths, so regrowing a branch with a new seed moves only that branch.  On a knot's section the
+trunk's rings sag into the trunk above a rising knot (the inner rings' deflection); the outer
+rings and the bark meet the knot's upper side at their own apothem instead, and the knot's end
+goes out with them (:meth:`Wood._level_seam`), so no trunk bark lies inside the wood.
 
 *Live and dead knots (a choice; the thesis has none).*  A branch dies in a
 year set per branch (``Branch.death``, ``grow_wood(branch_deaths=...)``) or
@@ -1214,6 +1217,8 @@ class Wood:
             pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
             pith_pts = self._pith_points(o, f, h, theta[:n], rp, n)
             bender = self.knot_bender(self.branches[ax.index - 1]) if ax.index > 0 else None
+            if ax.index > 0 and len(ax.levels):  # the knot's end keeps the trunk's apothem on its upper side
+                pith_pts[0, n:] = self._level_knot_end(self.branches[ax.index - 1], pith_pts[0, n:])
             if bender is not None:  # the knot (level 0) is curved
                 pith_pts[0] = bender(pith_pts[0])
             flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = pith_pts
@@ -1228,6 +1233,10 @@ class Wood:
                 pts = self._push(pts, t, profiles)
             if ax.index > 0 and ax.index - 1 in profiles:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
+            if ax.index > 0:
+                knot = np.flatnonzero(t == 0)
+                top = [2, 3, 6, 7]
+                pts[knot[:, None], top] = self._level_knot_end(self.branches[ax.index - 1], pts[knot[:, None], top])
             if bender is not None:
                 knot = t == 0
                 pts[knot] = bender(pts[knot])
@@ -1345,10 +1354,76 @@ class Wood:
         kk = vd["sector"][sel].astype(np.int64)
         out = pts.copy()
         for corner, th, j in ((0, theta[kk], i - 1), (1, theta[kk + 1], i - 1), (4, theta[kk], i), (5, theta[kk + 1], i)):
-            s_at, r = s_layer[j], rho_layer[j]
+            r = rho_layer[j]
+            br = self.branches[ax.index - 1]
+            s_at = self._level_seam(br, frame, s_layer[j], c * r * np.cos(th), self._outer_weight(br, j))
             radial = np.cos(th)[:, None] * f[0, 1] + (lateral[j] * np.sin(th))[:, None] * f[0, 2]
             out[level0, corner] = p0 + s_at[:, None] * frame[0] + (c * r)[:, None] * radial
         return out
+
+    #: slot layers (half-years) over which the seam goes from following the knot's section to
+    #: following the trunk's rings, under the knot's outer wood (see ``_level_seam``)
+    LEVEL_RAMP = 6
+
+    def _outer_weight(self, br: Branch, j: np.ndarray) -> np.ndarray:
+        """0 for the knot's inner slot layers, 1 from its outer wood layer out (bark), linear over ``LEVEL_RAMP``.
+
+        A dead knot keeps the ramp it had at its death (its cells keep their
+        places; the rings laid round it after are all at weight 1).
+        """
+        b = self.branches.index(br)
+        q = self.steps - self.branch_axis[b].level_step[0]  # wood layers of the knot and its node's walls
+        if b in self.dead:
+            q = int(self.dead[b][0][0])
+        return np.clip((np.asarray(j, float) - (q - self.LEVEL_RAMP)) / self.LEVEL_RAMP, 0.0, 1.0)
+
+    def _level_shift(self, br: Branch, frame: np.ndarray, s: np.ndarray, down: np.ndarray) -> np.ndarray:
+        """How far along the knot a point ``down`` off its axis (towards the trunk's base) at ``s`` goes to
+        keep the trunk apothem of its axis point: ``-down tan(e)`` on the knot's upper side (``down < 0``),
+        ``e`` the knot's local elevation (the bent knot's, ``e + KNOT_BEND (1 - s / h)``); 0 below it."""
+        _, f, _ = self.level_frames(self.trunk)
+        e = math.asin(float(np.clip(frame[0] @ f[br.level, 0], -0.99, 0.99)))
+        h0 = self.knot_length(br)
+        local = e + math.radians(self.KNOT_BEND) * (1 - np.clip(np.asarray(s, float), 0.0, h0) / h0)
+        return -np.minimum(np.asarray(down, float), 0.0) * np.tan(np.clip(local, 0.0, 1.2))
+
+    def _level_seam(self, br: Branch, frame: np.ndarray, s: np.ndarray, down: np.ndarray, weight: np.ndarray) -> np.ndarray:
+        """Where along the knot a seam point ``down`` off its axis (towards the trunk's base) meets its ring.
+
+        Slot layer ``j`` is where the trunk's ring ``j`` (apothem ``a_j``)
+        meets the knot, at ``s_j`` along the knot's axis.  A point off the
+        axis, across a rising knot, lies nearer the trunk's pith than the
+        axis point on the knot's upper side, by ``|down| sin(e)``: on a
+        knot's section the trunk's ring sags into the trunk above the knot,
+        which is how the inner rings deflect round a knot in a flat-sawn
+        board.  The outer rings and the bark must not sag (the upper wall's
+        outer bark would lie inside the wood, a wedge of bark over the knot
+        in boards): with ``weight`` 1 the point goes :meth:`_level_shift`
+        along the knot so the ring keeps its apothem where it meets the
+        knot's upper side (a choice: ``weight`` ramps from 0 to 1 over the
+        ``LEVEL_RAMP`` layers under the knot's outer wood,
+        :meth:`_outer_weight`; the lower side bulges out as before, a collar,
+        and is left as it is).  The knot's end is moved out with it
+        (:meth:`_level_knot_end`), so a seam point never passes it.
+        """
+        s = np.asarray(s, float)
+        return s + self._level_shift(br, frame, s, down) * weight
+
+    def _level_knot_end(self, br: Branch, points: np.ndarray) -> np.ndarray:
+        """The knot's end corners (straight, before the bend) moved out along the knot on its upper side.
+
+        The knot's first level ends on a section square to its axis at
+        ``h`` past the trunk's final radius; on a rising knot that section's
+        upper edge lies inside the trunk, and the upper wall's bark, sewn to
+        the knot's bark there, would follow it in.  Each end corner goes
+        :meth:`_level_shift` (at ``s = h``) along the knot, so the end's
+        upper edge keeps the apothem of the knot's axis end.
+        """
+        p0, frame = self.branch_frame(br, knot=True)
+        rel = np.asarray(points, float) - p0
+        down = rel @ frame[1]
+        shift = self._level_shift(br, frame, np.full(down.shape, self.knot_length(br)), down)
+        return points + shift[..., None] * frame[0]
 
     def _radii(self):
         """Outer apothem of every cell: pith radius plus the widths of its stack up to it."""
@@ -1610,7 +1685,7 @@ class Wood:
         out[moved] += shift
         return out.reshape(pts.shape)
 
-    def _seam_map(self, br, p0, frame, s_layer, rho_layer, lateral, hull=False):
+    def _seam_map(self, br, p0, frame, s_layer, rho_layer, lateral, hull=False, level=False):
         """Where the knot's seam lies at slot coordinates ``(u, v)`` in ``[-1, 1]^2``, fractional layer ``j + w``.
 
         With ``hull`` (what the trunk around the knot is pushed to), the
@@ -1642,7 +1717,10 @@ class Wood:
                 x, y = self.KNOT_HULL * u, self.KNOT_HULL * v
             else:
                 x, y = u * np.sqrt(1 - 0.5 * v * v), v * np.sqrt(1 - 0.5 * u * u)
-            straight = p0 + s_at[:, None] * frame[0] + (r_at * -y)[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
+            down = r_at * -y
+            if level:
+                s_at = self._level_seam(br, frame, s_at, down, self._outer_weight(br, j + w))
+            straight = p0 + s_at[:, None] * frame[0] + down[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
             return straight if bender is None else bender(straight)
 
         return at

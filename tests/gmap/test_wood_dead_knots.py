@@ -160,3 +160,43 @@ def test_no_ring_ends_on_a_level_boundary():
     across = trunk_wood[a] & trunk_wood[b] & (vd["level"][a] != vd["level"][b])
     assert across.sum() > 100
     assert np.array_equal(vd["year"][a[across]], vd["year"][b[across]])
+
+
+def enclosed_bark(wood, grid, b, out, step=1 / 80):
+    """Area (in R^2) of the bark, other than a dead knot's own, that a flat-sawn section ``out`` R
+    from the pith through knot ``b`` shows with no air beside it: bark inside the wood."""
+    from scipy import ndimage
+
+    vd, radius = wood.gm.volume_data, wood.trunk_radius()
+    base, frame = wood.branch_frame(wood.branches[b], knot=True)
+    side = 1.0 if frame[0][0] > 0 else -1.0  # the knot faces +x or -x
+    x = side * out * radius
+    zc = base[2] + out * radius * frame[0][2] / abs(frame[0][0])
+    y = np.arange(-1.2, 1.2, step) * radius
+    z = zc + np.arange(-1.5, 1.5, step) * radius
+    yy, zz = np.meshgrid(y, z)
+    cell = grid.find_containing_cell(np.stack([np.full(yy.size, x), yy.ravel(), zz.ravel()], 1))
+    owner = np.asarray(grid.cell_data["volume"])[np.maximum(cell, 0)]
+    air = (cell < 0).reshape(yy.shape)
+    bark = (~air.ravel() & (vd["wood"][owner] == C["bark"]) & (vd["dead"][owner] == 0)).reshape(yy.shape)
+    regions, _ = ndimage.label(ndimage.binary_dilation(bark, iterations=2))  # a thin band sampled in pieces is one
+    open_air = np.unique(regions[bark & ndimage.binary_dilation(air, iterations=3)])
+    return float((bark & ~np.isin(regions, open_air)).sum() * step * step)
+
+
+@pytest.mark.parametrize("species", ["pine", "oak"])
+def test_no_bark_lies_inside_the_wood_beside_a_knot(species):
+    """Flat-sawn boards through a live and a dead knot show bark only at the board's edges or as
+    the dead knot's lining: the upper wall's bark does not follow a rising knot into the trunk.
+
+    Before the fix the wall above each knot sagged along the knot's section, and boards 0.6 R
+    from the pith showed a wedge of the trunk's bark over the knot (0.06 R^2 in oak's dead knot,
+    0.11 R^2 over pine's live knot).
+    """
+    wood = W.grow_wood(species, years=12, branches=[(3, 0), (2, 8)], branch_deaths={1: 4}, height=0.3)
+    grid = W.to_grid(wood)
+    areas = {(b, out): enclosed_bark(wood, grid, b, out) for b in (0, 1) for out in (0.45, 0.6, 0.75)}
+    assert max(areas.values()) == 0.0, areas
+    # the sampling sees bark: the boards' edges and the dead knot's lining are there
+    vd = wood.gm.volume_data
+    assert np.any((vd["dead"] == 1) & (vd["wood"] == C["bark"]))
