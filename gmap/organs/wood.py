@@ -93,13 +93,17 @@ stacks go on receiving one cell a half-year, sewn to the slot walls as
 before: these are the trunk's later rings (trunk wood of the trunk's years,
 the same year as the wall cell they meet), which encase the dead knot.  So
 a dead knot meets the later wood only through a layer of bark tissue: the
-boundary is sewn through bark (never knot wood to later trunk wood, a test
+boundary is sewn through bark along the stub (never knot wood to later trunk wood, a test
 checks it), the solid stays one ball, and a cut shows a dark ring round a
 dead knot where a live knot's rings run into the trunk's.  The knot's
-volume stops growing from its death step on.  What is not modelled: the
-dead stub breaking off, after which the later rings would close over the
-knot's end (occlusion); here the encased knot runs out to the bark, as a
-dead branch's stub does while it stays on the tree.
+volume stops growing from its death step on.  *Occlusion*: at death a cap level
+is grown on the stub's end (:meth:`Wood._cap_stub`): a disc of cells of
+the death year covers the end face, and the cap's stacks grow with the
+others, so the later rings run up the stub and turn over its end on nested
+cones (:meth:`Wood._cap_corners`): the dead knot is buried, no face of it
+on the boundary, its length what it was at death.  Over the end face the
+later wood meets the knot's wood (a stub's end has no bark); along it, the
+bark lining.  What is not modelled: the stub breaking off.
 
 >>> w = grow_wood("pine", years=2, branches=0)
 >>> w.gm.n_darts == trunk_darts(16, 2), w.gm.euler_characteristic()
@@ -315,7 +319,8 @@ def estimated_darts(
     (its slot); the walls of a slot are cut in ``branch_sides / 4`` pieces, one per knot cell
     facing them.  A branch that dies in year ``D`` grows no level after it (``D - j`` levels at
     most); its stacks go on (the rings that encase its knot).  ``deaths`` gives each branch's
-    death year (``None``: :func:`death_year`'s rule).  Exact for :func:`grow_wood` (measured: a
+    death year (``None``: :func:`death_year`'s rule); a branch dead before ``years`` gets a cap
+    level on its stub's end (:meth:`Wood._cap_stub`).  Exact for :func:`grow_wood` (measured: a
     knot of 16 sides grown ``y`` years adds ``3 (28 + 144 y)`` darts of cuts)."""
     s, b = int(p["sides"]), int(p["branch_sides"])
     total = trunk_darts(s, years)
@@ -330,6 +335,9 @@ def estimated_darts(
         if dies is not None:
             kept = min(kept, max(dies - int(j), 1))
         total += 12 * b * kept + 144 * b * (kept * y - kept * (kept - 1) // 2)
+        if dies is not None and dies < years:  # the cap on the stub (Wood._cap_stub): a pith prism and
+            # c = 3 (D - year of the top level) cells a stack at death, then 3 a year
+            total += 12 * b + 48 * b * (3 * (dies - (int(j) + kept - 1)) + 3 * (years - dies))
         # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
         # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
         total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
@@ -513,6 +521,8 @@ class Wood:
         self.branch_axis: dict[int, Axis] = {}
         #: dead branch index -> (half-years each level had lived, cells each level held) at its death
         self.dead: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: dead branch index -> (its cap level, cells each cap stack got at death, the death year)
+        self.caps: dict[int, tuple[int, int, int]] = {}
 
     # ------------------------------------------------------------------ growth
     @property
@@ -571,6 +581,37 @@ class Wood:
             # when the stub is young) are its bark, so the knot's wood never meets later wood
             held = np.full(len(ax.levels), int(ax.count.max(initial=0)), np.int64)
             self.dead[b] = (lived, held)
+            self._cap_stub(b)
+
+    def _cap_stub(self, b: int) -> None:
+        """Close the later rings over dead branch ``b``'s stub: one cap level on its end (occlusion).
+
+        At death the stub's end is a disc: the E face of its top pith prism
+        and the C3 faces of the ``c`` cells each of its top level's stacks
+        holds.  A cap level is grown on it (:meth:`_grow_length`, the pith
+        prism sewn to that E face) and each cap stack gets ``c`` cells at
+        once, cell ``i`` sewn (C1) to the top level's cell ``i`` and round
+        its level (C2 | C4): the stub's end is covered in the step it dies,
+        and its length stays what it was.  From then on the cap's stacks grow
+        one cell a half-year with every other stack, cell ``i`` sewn to cell
+        ``i`` of the top level: the trunk's later rings run up the stub and
+        on over its end (:meth:`_cap_corners` draws them closing over it).
+        Cap cells are trunk tissue (:meth:`assign_roles`), never the dead
+        knot's, so no face of the dead knot stays on the boundary once the
+        trunk's rings have passed its depth.
+        """
+        ax = self.branch_axis[b]
+        top = len(ax.levels) - 1
+        c = int(ax.count[top].max(initial=0))
+        self._grow_length(ax)
+        cap = top + 1
+        self.caps[b] = (cap, c, self.year)
+        k = np.arange(ax.sides)
+        t = np.full(ax.sides, cap)
+        for i in range(1, c + 1):
+            below = ax.cells[t, k, max(i - 2, 0)]
+            support = below + 8 if i > 1 else ax.levels[cap] + 4 * ax.sides + 8 * k
+            self._add_layer([(ax, t, k, np.full(ax.sides, i), support.astype(np.int64))])
 
     def knot_counts(self) -> dict[str, int]:
         """Knots (branches born so far) that are alive and that are dead."""
@@ -891,11 +932,15 @@ class Wood:
                 cuts.append(int(pieces[e]) - 1)
         self._cut_edges(np.array(darts, np.int64), np.array(cuts, np.int64) + 1)
 
-    def _add_layer(self):
-        """One new cube on the outside of every stack, then the joins around and along each axis."""
+    def _add_layer(self, only: list | None = None):
+        """One new cube on the outside of every stack, then the joins around and along each axis.
+
+        ``only``: the stacks to grow, ``[(axis, t, k, i, support)]`` (a dead stub's cap,
+        :meth:`_cap_stub`); every alive stack by default.
+        """
         gm = self.gm
-        parts = []
-        for ax in self.axes:  # one step per axis, arrays over its stacks
+        parts = [] if only is None else only
+        for ax in self.axes if only is None else ():  # one step per axis, arrays over its stacks
             t, k = np.nonzero(ax.alive)
             i = ax.count[t, k] + 1
             # fresh template darts keep their ids and labels: E of a cube is first + 8,
@@ -975,16 +1020,17 @@ class Wood:
             steps = np.array(ax.level_step + [0], np.int64)
             on = is_cell & (axis == ax.index)
             born_level[on] = steps[level[on]]
+        disc, disc_year = self._cap_roles(axis, level, cell, born_level)
         q = self.steps - born_level  # half-years the stack has lived
         frozen, lived = self._frozen(axis, level, cell)
         sheath = (axis > 0) & is_cell & ~frozen & np.isin(axis - 1, list(self.dead))  # rings round a dead knot
         q = np.where(frozen, lived, q)  # a dead knot's cells keep the roles they had at its death
         vd["dead"][:] = frozen
-        wood = is_cell & (cell <= q)
+        wood = is_cell & ((cell <= q) | disc)
         bark = is_cell & ~wood
-        season = np.where(wood, (cell - 1) % 2, -1)
+        season = np.where(wood & ~disc, (cell - 1) % 2, np.where(disc, EARLY, -1))
         ring = np.where(wood, (cell + 1) // 2, -1)
-        year = np.where(wood, born_level // 2 + (cell - 1) // 2, -1)
+        year = np.where(wood, np.where(disc, disc_year, born_level // 2 + (cell - 1) // 2), -1)
         bark_layer = np.where(bark, (q + 1) // 2 - (cell - q) + 1, -1)  # 1 = oldest, outermost
         year = np.where(bark, born_level // 2 + bark_layer - 1, year)
         vd["season"][:] = season
@@ -1003,8 +1049,32 @@ class Wood:
         tissue[heart] = CODES["heartwood"]
         tissue[bark] = CODES["bark"]
         tissue[~trunk & wood] = CODES["knot"]
+        for b, (cap, _, died) in self.caps.items():  # a cap's centre: wood of the death year
+            old = y_now - died > p["sapwood_rings"] and y_now > p["heartwood_age"]
+            tissue[gm.dart_volume[self.branch_axis[b].levels[cap]]] = CODES["heartwood" if old else "sapwood"]
         vd["label"][is_cell] = np.where(bark[is_cell], "K", np.where(season[is_cell] == EARLY, "R", "S"))
         vd["reaction"][:] = _species.reaction_marks(p, axis, sector, wood, self.trunk.sides)
+
+    def _cap_roles(
+        self, axis: np.ndarray, level: np.ndarray, cell: np.ndarray, born_level: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Roles of the cap cells on dead stubs (:meth:`_cap_stub`): ``(disc, year)`` per volume.
+
+        A cap stack's cell ``i`` past the ``c`` it got at death continues
+        cell ``i`` of the stub's top level (the same ring, year and role: its
+        ``born_level`` is set to the top level's, in place); the ``c`` cells
+        of the disc that first covers the stub's end are wood of the death
+        year (``disc``; a choice: the first later wood closes the end).
+        """
+        disc = np.zeros(len(axis), bool)
+        year = np.zeros(len(axis), np.int64)
+        for b, (cap, c, died) in self.caps.items():
+            ax = self.branch_axis[b]
+            on = (axis == ax.index) & (level == cap) & (cell > 0)
+            born_level[on] = ax.level_step[cap - 1]
+            disc |= on & (cell <= c)
+            year[on] = died
+        return disc, year
 
     def _shed(self, width, wood, bark, axis, level, sector, depth):
         """Bark widths shed beyond the species' live thickness, and the ``bark`` attribute
@@ -1235,13 +1305,75 @@ class Wood:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
             if ax.index > 0:
                 knot = np.flatnonzero(t == 0)
-                top = [2, 3, 6, 7]
-                pts[knot[:, None], top] = self._level_knot_end(self.branches[ax.index - 1], pts[knot[:, None], top])
+                ends = [2, 3, 6, 7]
+                pts[knot[:, None], ends] = self._level_knot_end(self.branches[ax.index - 1], pts[knot[:, None], ends])
             if bender is not None:
                 knot = t == 0
                 pts[knot] = bender(pts[knot])
+            if ax.index - 1 in self.caps:  # a dead stub's cap closes over its end
+                self._cap_corners(ax.index - 1, cells, t, k, pts, pith_pts)
+                flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = pith_pts
             _put_blocks(flat, offset[cells], pts)
         return flat, offset
+
+    #: radius of the channel the cap's rings leave on a dead stub's axis, over the stub's end radius
+    CAP_CHANNEL = 0.1
+
+    def _cap_corners(
+        self, b: int, cells: np.ndarray, t: np.ndarray, k: np.ndarray, pts: np.ndarray, pith_pts: np.ndarray
+    ) -> None:
+        """Corners of dead stub ``b``'s cap (:meth:`_cap_stub`), in place in ``pts`` and ``pith_pts``.
+
+        The cap's bottom corners are the stub's end corners (its top level's
+        top corners, as drawn).  A top corner is its bottom corner lifted
+        along the stub's axis: a point at radius ``r`` from the axis goes to
+        height ``w + max(r - R, 0)`` over the end and radius ``rho min(r /
+        R, 1)`` (``R`` the stub's radius at its end, ``w`` a mean earlywood
+        width, ``rho = CAP_CHANNEL R``).  So the disc laid at death covers
+        the end, and every later ring (radius ``r > R`` on the stub's side)
+        turns over the end on a cone and runs in to the axis: in a cut along
+        the stub the rings laid after death close over its end, nested.  A
+        choice: each cap stack is one column of cells, so each ring reaches
+        the boundary on a thin channel of radius ``rho`` round the axis (a
+        scar over the stub) instead of closing on the axis itself.
+        """
+        cap, c, _ = self.caps[b]
+        top = cap - 1
+        n = pith_pts.shape[1] // 2
+        cell = self.gm.volume_data["cell"][cells].astype(np.int64)
+        end = pith_pts[top, n:]
+        centre = end.mean(axis=0)
+        along = centre - pith_pts[top, :n].mean(axis=0)
+        along /= np.linalg.norm(along)
+        on_top, on_cap = np.flatnonzero(t == top), np.flatnonzero(t == cap)
+        depth = int(cell[on_cap].max(initial=0))
+        if not on_cap.size or depth < 1:
+            return
+        table = np.zeros((n, depth + 1, 4, 3))  # the top level's top corners 3, 2, 7, 6 per (sector, cell)
+        sel = on_top[cell[on_top] <= depth]
+        table[k[sel], cell[sel]] = pts[sel][:, [3, 2, 7, 6]]
+
+        def radius(points):
+            rel = points - centre
+            return np.linalg.norm(rel - (rel @ along)[..., None] * along, axis=-1)
+
+        r_end = float(radius(table[:, min(c, depth), 2:]).mean()) if c > 0 else float(radius(end).mean())
+        width = 0.5 * (self.p["early_min"] + self.p["early_max"])
+        rho = self.CAP_CHANNEL * r_end
+
+        def lift(points):
+            rel = points - centre
+            h = rel @ along
+            radial = rel - h[..., None] * along
+            r = np.maximum(np.linalg.norm(radial, axis=-1), 1e-300)
+            up = h + width + np.maximum(r - r_end, 0.0)
+            return centre + up[..., None] * along + (rho * np.minimum(r / r_end, 1.0) / r)[..., None] * radial
+
+        bottom = table[k[on_cap], cell[on_cap]]
+        pts[on_cap[:, None], [0, 1, 4, 5]] = bottom
+        pts[on_cap[:, None], [3, 2, 7, 6]] = lift(bottom)
+        pith_pts[cap, :n] = end
+        pith_pts[cap, n:] = lift(end)
 
     @staticmethod
     def sector_angles(ax: Axis) -> np.ndarray:
