@@ -1536,10 +1536,14 @@ class Wood:
         ``LEVEL_RAMP`` layers under the knot's outer wood,
         :meth:`_outer_weight`; the lower side bulges out as before, a collar,
         and is left as it is).  The knot's end is moved out with it
-        (:meth:`_level_knot_end`), so a seam point never passes it.
+        (:meth:`_level_knot_end`), and a seam point goes no farther than
+        the end's shift past ``0.95 h`` (the seam's old cap), so it never
+        passes the end.
         """
         s = np.asarray(s, float)
-        return s + self._level_shift(br, frame, s, down) * weight
+        h0 = self.knot_length(br)
+        end = np.maximum(s, 0.95 * h0) + self._level_shift(br, frame, np.full(s.shape, h0), down)  # the end's shift
+        return s + np.minimum(self._level_shift(br, frame, s, down), end - s) * weight
 
     def _level_knot_end(self, br: Branch, points: np.ndarray) -> np.ndarray:
         """The knot's end corners (straight, before the bend) moved out along the knot on its upper side.
