@@ -7,7 +7,9 @@ it, born in year 4, dies in year 7 (``grow_wood(branch_deaths={1: 7})``; ``--set
 kills every branch N years after its birth). A cross-cut through each knot shows the difference a
 sawyer looks for: the live knot's rings run into the trunk's (an intergrown, tight knot), while the
 dead knot keeps its bark as a dark ring and the trunk's later rings wrap round it (an encased,
-loose knot). A flat-sawn board through the dead knot shows the same black ring on its face.
+loose knot). A flat-sawn board through the dead knot shows the same black ring on its face. A
+radial cut along the dead branch shows its occlusion: the rings laid after its death run up the
+stub and close over its end, so the dead knot is buried in the wood (``Wood._cap_stub``).
 """
 
 import numpy as np
@@ -43,6 +45,15 @@ def flat_sawn_dead(path):
     render_plank(part, path, (1, 0, 0), title=title, legend=legend)
 
 
+def along_dead_stub(path):
+    phi = 2 * np.pi * wood.branches[1].sector / wood.trunk.sides
+    normal = np.array([-np.sin(phi), np.cos(phi), 0.0])  # the plane holds the trunk's axis and the branch
+    slab = W.plank(grid, normal, -0.002, 0.004)
+    part = W.plank_window(slab, 6 * radius, at=knot_height(1, 1.6))[0]
+    render_plank(part, path, normal, title="radial cut along the dead branch: later rings close over its stub", legend=legend)
+
+
 show(cross_cut, 0)
 show(cross_cut, 1)
 show(flat_sawn_dead)
+show(along_dead_stub)

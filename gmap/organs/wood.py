@@ -90,7 +90,10 @@ along its round edge, so a tangential cut shows the trunk's rings flowing
 round a round knot.  The knot's pith is an arc (:meth:`Wood.knot_bender`):
 the branch leaves the trunk's pith ``KNOT_BEND`` degrees steeper than it
 leaves the bark, as a conifer's branch bends in its knot.  The seam uses the law's mean
-widths, so regrowing a branch with a new seed moves only that branch.
+widths, so regrowing a branch with a new seed moves only that branch.  On a knot's section the
+trunk's rings sag into the trunk above a rising knot (the inner rings' deflection); the outer
+rings and the bark meet the knot's upper side at their own apothem instead, and the knot's end
+goes out with them (:meth:`Wood._level_seam`), so no trunk bark lies inside the wood.
 
 *Live and dead knots (a choice; the thesis has none).*  A branch dies in a
 year set per branch (``Branch.death``, ``grow_wood(branch_deaths=...)``) or
@@ -103,13 +106,17 @@ stacks go on receiving one cell a half-year, sewn to the slot walls as
 before: these are the trunk's later rings (trunk wood of the trunk's years,
 the same year as the wall cell they meet), which encase the dead knot.  So
 a dead knot meets the later wood only through a layer of bark tissue: the
-boundary is sewn through bark (never knot wood to later trunk wood, a test
+boundary is sewn through bark along the stub (never knot wood to later trunk wood, a test
 checks it), the solid stays one ball, and a cut shows a dark ring round a
 dead knot where a live knot's rings run into the trunk's.  The knot's
-volume stops growing from its death step on.  What is not modelled: the
-dead stub breaking off, after which the later rings would close over the
-knot's end (occlusion); here the encased knot runs out to the bark, as a
-dead branch's stub does while it stays on the tree.
+volume stops growing from its death step on.  *Occlusion*: at death a cap level
+is grown on the stub's end (:meth:`Wood._cap_stub`): a disc of cells of
+the death year covers the end face, and the cap's stacks grow with the
+others, so the later rings run up the stub and turn over its end on nested
+cones (:meth:`Wood._cap_corners`): the dead knot is buried, no face of it
+on the boundary, its length what it was at death.  Over the end face the
+later wood meets the knot's wood (a stub's end has no bark); along it, the
+bark lining.  What is not modelled: the stub breaking off.
 
 *Branches on branches (a choice; the thesis only tried them, without
 collision handling).*  A branch may grow on a branch (``Branch.parent``):
@@ -352,7 +359,8 @@ def estimated_darts(
     (its slot); the walls of a slot are cut in ``branch_sides / 4`` pieces, one per knot cell
     facing them.  A branch that dies in year ``D`` grows no level after it (``D - j`` levels at
     most); its stacks go on (the rings that encase its knot).  ``deaths`` gives each branch's
-    death year (``None``: :func:`death_year`'s rule).  ``parents`` gives each branch's host
+    death year (``None``: :func:`death_year`'s rule); a branch dead before ``years`` gets a cap
+    level on its stub's end (:meth:`Wood._cap_stub`).  ``parents`` gives each branch's host
     (-1: the trunk; else the index of the branch it grows on, :class:`Branch`): a branch
     carrying sub-branches grows a node of ``branch_sides`` sides in each year some are born on
     it, like the trunk's.  Exact for :func:`grow_wood` (measured: a
@@ -374,6 +382,9 @@ def estimated_darts(
         if dies is not None:
             kept = min(kept, max(dies - int(j), 1))
         total += 12 * b * kept + 144 * b * (kept * y - kept * (kept - 1) // 2)
+        if dies is not None and dies < years:  # the cap on the stub (Wood._cap_stub): a pith prism and
+            # c = 3 (D - year of the top level) cells a stack at death, then 3 a year
+            total += 12 * b + 48 * b * (3 * (dies - (int(j) + kept - 1)) + 3 * (years - dies))
         # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
         # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
         total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
@@ -622,6 +633,8 @@ class Wood:
         self.branch_axis: dict[int, Axis] = {}
         #: dead branch index -> (half-years each level had lived, cells each level held) at its death
         self.dead: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: dead branch index -> (its cap level, cells each cap stack got at death, the death year)
+        self.caps: dict[int, tuple[int, int, int]] = {}
 
     # ------------------------------------------------------------------ growth
     @property
@@ -696,6 +709,37 @@ class Wood:
             # when the stub is young) are its bark, so the knot's wood never meets later wood
             held = np.full(len(ax.levels), int(ax.count.max(initial=0)), np.int64)
             self.dead[b] = (lived, held)
+            self._cap_stub(b)
+
+    def _cap_stub(self, b: int) -> None:
+        """Close the later rings over dead branch ``b``'s stub: one cap level on its end (occlusion).
+
+        At death the stub's end is a disc: the E face of its top pith prism
+        and the C3 faces of the ``c`` cells each of its top level's stacks
+        holds.  A cap level is grown on it (:meth:`_grow_length`, the pith
+        prism sewn to that E face) and each cap stack gets ``c`` cells at
+        once, cell ``i`` sewn (C1) to the top level's cell ``i`` and round
+        its level (C2 | C4): the stub's end is covered in the step it dies,
+        and its length stays what it was.  From then on the cap's stacks grow
+        one cell a half-year with every other stack, cell ``i`` sewn to cell
+        ``i`` of the top level: the trunk's later rings run up the stub and
+        on over its end (:meth:`_cap_corners` draws them closing over it).
+        Cap cells are trunk tissue (:meth:`assign_roles`), never the dead
+        knot's, so no face of the dead knot stays on the boundary once the
+        trunk's rings have passed its depth.
+        """
+        ax = self.branch_axis[b]
+        top = len(ax.levels) - 1
+        c = int(ax.count[top].max(initial=0))
+        self._grow_length(ax)
+        cap = top + 1
+        self.caps[b] = (cap, c, self.year)
+        k = np.arange(ax.sides)
+        t = np.full(ax.sides, cap)
+        for i in range(1, c + 1):
+            below = ax.cells[t, k, max(i - 2, 0)]
+            support = below + 8 if i > 1 else ax.levels[cap] + 4 * ax.sides + 8 * k
+            self._add_layer([(ax, t, k, np.full(ax.sides, i), support.astype(np.int64))])
 
     def knot_counts(self) -> dict[str, int]:
         """Knots (branches born so far) that are alive and that are dead."""
@@ -1014,6 +1058,8 @@ class Wood:
         for b in self._sewn_layers:
             br = self.branches[b]
             host = self.host(br)
+            if host.index not in walls:  # the host grows no cell in this layer (a dead stub's cap alone)
+                continue
             n, mask = host.sides, walls[host.index]
             t, k = br.level, br.sector
             for tt, kk in ((t, (k - 1) % n), (t, (k + 1) % n), (t - 1, k), (t + 1, k)):
@@ -1051,11 +1097,15 @@ class Wood:
                 cuts.append(int(pieces[e]) - 1)
         self._cut_edges(np.array(darts, np.int64), np.array(cuts, np.int64) + 1)
 
-    def _add_layer(self):
-        """One new cube on the outside of every stack, then the joins around and along each axis."""
+    def _add_layer(self, only: list | None = None):
+        """One new cube on the outside of every stack, then the joins around and along each axis.
+
+        ``only``: the stacks to grow, ``[(axis, t, k, i, support)]`` (a dead stub's cap,
+        :meth:`_cap_stub`); every alive stack by default.
+        """
         gm = self.gm
-        parts = []
-        for ax in self.axes:  # one step per axis, arrays over its stacks
+        parts = [] if only is None else only
+        for ax in self.axes if only is None else ():  # one step per axis, arrays over its stacks
             t, k = np.nonzero(ax.alive)
             i = ax.count[t, k] + 1
             # fresh template darts keep their ids and labels: E of a cube is first + 8,
@@ -1271,16 +1321,17 @@ class Wood:
             steps = np.array(ax.level_step + [0], np.int64)
             on = is_cell & (axis == ax.index)
             born_level[on] = steps[level[on]]
+        disc, disc_year = self._cap_roles(axis, level, cell, born_level)
         q = self.steps - born_level  # half-years the stack has lived
         frozen, lived = self._frozen(axis, level, cell)
         sheath = (axis > 0) & is_cell & ~frozen & np.isin(axis - 1, list(self.dead))  # rings round a dead knot
         q = np.where(frozen, lived, q)  # a dead knot's cells keep the roles they had at its death
         vd["dead"][:] = frozen
-        wood = is_cell & (cell <= q)
+        wood = is_cell & ((cell <= q) | disc)
         bark = is_cell & ~wood
-        season = np.where(wood, (cell - 1) % 2, -1)
+        season = np.where(wood & ~disc, (cell - 1) % 2, np.where(disc, EARLY, -1))
         ring = np.where(wood, (cell + 1) // 2, -1)
-        year = np.where(wood, born_level // 2 + (cell - 1) // 2, -1)
+        year = np.where(wood, np.where(disc, disc_year, born_level // 2 + (cell - 1) // 2), -1)
         bark_layer = np.where(bark, (q + 1) // 2 - (cell - q) + 1, -1)  # 1 = oldest, outermost
         year = np.where(bark, born_level // 2 + bark_layer - 1, year)
         vd["season"][:] = season
@@ -1299,8 +1350,32 @@ class Wood:
         tissue[heart] = CODES["heartwood"]
         tissue[bark] = CODES["bark"]
         tissue[~trunk & wood] = CODES["knot"]
+        for b, (cap, _, died) in self.caps.items():  # a cap's centre: wood of the death year
+            old = y_now - died > p["sapwood_rings"] and y_now > p["heartwood_age"]
+            tissue[gm.dart_volume[self.branch_axis[b].levels[cap]]] = CODES["heartwood" if old else "sapwood"]
         vd["label"][is_cell] = np.where(bark[is_cell], "K", np.where(season[is_cell] == EARLY, "R", "S"))
         vd["reaction"][:] = _species.reaction_marks(p, axis, sector, wood, self.trunk.sides)
+
+    def _cap_roles(
+        self, axis: np.ndarray, level: np.ndarray, cell: np.ndarray, born_level: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Roles of the cap cells on dead stubs (:meth:`_cap_stub`): ``(disc, year)`` per volume.
+
+        A cap stack's cell ``i`` past the ``c`` it got at death continues
+        cell ``i`` of the stub's top level (the same ring, year and role: its
+        ``born_level`` is set to the top level's, in place); the ``c`` cells
+        of the disc that first covers the stub's end are wood of the death
+        year (``disc``; a choice: the first later wood closes the end).
+        """
+        disc = np.zeros(len(axis), bool)
+        year = np.zeros(len(axis), np.int64)
+        for b, (cap, c, died) in self.caps.items():
+            ax = self.branch_axis[b]
+            on = (axis == ax.index) & (level == cap) & (cell > 0)
+            born_level[on] = ax.level_step[cap - 1]
+            disc |= on & (cell <= c)
+            year[on] = died
+        return disc, year
 
     def _shed(self, width, wood, bark, axis, level, sector, depth):
         """Bark widths shed beyond the species' live thickness, and the ``bark`` attribute
@@ -1526,6 +1601,8 @@ class Wood:
             pith = gm.dart_volume[np.array(ax.levels, np.int64)].astype(np.int64)
             pith_pts = self._pith_points(o, f, h, theta[:n], rp, n)
             bender = self.knot_bender(self.branches[ax.index - 1]) if ax.index > 0 else None
+            if ax.index > 0 and len(ax.levels):  # the knot's end keeps the trunk's apothem on its upper side
+                pith_pts[0, n:] = self._level_knot_end(self.branches[ax.index - 1], pith_pts[0, n:])
             if bender is not None:  # the knot (level 0) is curved
                 pith_pts[0] = bender(pith_pts[0])
             flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = pith_pts
@@ -1543,11 +1620,77 @@ class Wood:
                 pts[outside] = self._push(pts[outside], t[outside], profiles, ax)
             if ax.index > 0 and ax.index - 1 in profiles:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
+            if ax.index > 0:
+                knot = np.flatnonzero(t == 0)
+                ends = [2, 3, 6, 7]
+                pts[knot[:, None], ends] = self._level_knot_end(self.branches[ax.index - 1], pts[knot[:, None], ends])
             if bender is not None:
                 knot = t == 0
                 pts[knot] = bender(pts[knot])
+            if ax.index - 1 in self.caps:  # a dead stub's cap closes over its end
+                self._cap_corners(ax.index - 1, cells, t, k, pts, pith_pts)
+                flat[offset[pith][:, None] + np.arange(2 * n)[None, :]] = pith_pts
             _put_blocks(flat, offset[cells], pts)
         return flat, offset
+
+    #: radius of the channel the cap's rings leave on a dead stub's axis, over the stub's end radius
+    CAP_CHANNEL = 0.1
+
+    def _cap_corners(
+        self, b: int, cells: np.ndarray, t: np.ndarray, k: np.ndarray, pts: np.ndarray, pith_pts: np.ndarray
+    ) -> None:
+        """Corners of dead stub ``b``'s cap (:meth:`_cap_stub`), in place in ``pts`` and ``pith_pts``.
+
+        The cap's bottom corners are the stub's end corners (its top level's
+        top corners, as drawn).  A top corner is its bottom corner lifted
+        along the stub's axis: a point at radius ``r`` from the axis goes to
+        height ``w + max(r - R, 0)`` over the end and radius ``rho min(r /
+        R, 1)`` (``R`` the stub's radius at its end, ``w`` a mean earlywood
+        width, ``rho = CAP_CHANNEL R``).  So the disc laid at death covers
+        the end, and every later ring (radius ``r > R`` on the stub's side)
+        turns over the end on a cone and runs in to the axis: in a cut along
+        the stub the rings laid after death close over its end, nested.  A
+        choice: each cap stack is one column of cells, so each ring reaches
+        the boundary on a thin channel of radius ``rho`` round the axis (a
+        scar over the stub) instead of closing on the axis itself.
+        """
+        cap, c, _ = self.caps[b]
+        top = cap - 1
+        n = pith_pts.shape[1] // 2
+        cell = self.gm.volume_data["cell"][cells].astype(np.int64)
+        end = pith_pts[top, n:]
+        centre = end.mean(axis=0)
+        along = centre - pith_pts[top, :n].mean(axis=0)
+        along /= np.linalg.norm(along)
+        on_top, on_cap = np.flatnonzero(t == top), np.flatnonzero(t == cap)
+        depth = int(cell[on_cap].max(initial=0))
+        if not on_cap.size or depth < 1:
+            return
+        table = np.zeros((n, depth + 1, 4, 3))  # the top level's top corners 3, 2, 7, 6 per (sector, cell)
+        sel = on_top[cell[on_top] <= depth]
+        table[k[sel], cell[sel]] = pts[sel][:, [3, 2, 7, 6]]
+
+        def radius(points):
+            rel = points - centre
+            return np.linalg.norm(rel - (rel @ along)[..., None] * along, axis=-1)
+
+        r_end = float(radius(table[:, min(c, depth), 2:]).mean()) if c > 0 else float(radius(end).mean())
+        width = 0.5 * (self.p["early_min"] + self.p["early_max"])
+        rho = self.CAP_CHANNEL * r_end
+
+        def lift(points):
+            rel = points - centre
+            h = rel @ along
+            radial = rel - h[..., None] * along
+            r = np.maximum(np.linalg.norm(radial, axis=-1), 1e-300)
+            up = h + width + np.maximum(r - r_end, 0.0)
+            return centre + up[..., None] * along + (rho * np.minimum(r / r_end, 1.0) / r)[..., None] * radial
+
+        bottom = table[k[on_cap], cell[on_cap]]
+        pts[on_cap[:, None], [0, 1, 4, 5]] = bottom
+        pts[on_cap[:, None], [3, 2, 7, 6]] = lift(bottom)
+        pith_pts[cap, :n] = end
+        pith_pts[cap, n:] = lift(end)
 
     @staticmethod
     def sector_angles(ax: Axis) -> np.ndarray:
@@ -1664,10 +1807,80 @@ class Wood:
         kk = vd["sector"][sel].astype(np.int64)
         out = pts.copy()
         for corner, th, j in ((0, theta[kk], i - 1), (1, theta[kk + 1], i - 1), (4, theta[kk], i), (5, theta[kk + 1], i)):
-            s_at, r = s_layer[j], rho_layer[j]
+            r = rho_layer[j]
+            br = self.branches[ax.index - 1]
+            s_at = self._level_seam(br, frame, s_layer[j], c * r * np.cos(th), self._outer_weight(br, j))
             radial = np.cos(th)[:, None] * f[0, 1] + (lateral[j] * np.sin(th))[:, None] * f[0, 2]
             out[level0, corner] = p0 + s_at[:, None] * frame[0] + (c * r)[:, None] * radial
         return out
+
+    #: slot layers (half-years) over which the seam goes from following the knot's section to
+    #: following the trunk's rings, under the knot's outer wood (see ``_level_seam``)
+    LEVEL_RAMP = 6
+
+    def _outer_weight(self, br: Branch, j: np.ndarray) -> np.ndarray:
+        """0 for the knot's inner slot layers, 1 from its outer wood layer out (bark), linear over ``LEVEL_RAMP``.
+
+        A dead knot keeps the ramp it had at its death (its cells keep their
+        places; the rings laid round it after are all at weight 1).
+        """
+        b = self.branches.index(br)
+        q = self.steps - self.branch_axis[b].level_step[0]  # wood layers of the knot and its node's walls
+        if b in self.dead:
+            q = int(self.dead[b][0][0])
+        return np.clip((np.asarray(j, float) - (q - self.LEVEL_RAMP)) / self.LEVEL_RAMP, 0.0, 1.0)
+
+    def _level_shift(self, br: Branch, frame: np.ndarray, s: np.ndarray, down: np.ndarray) -> np.ndarray:
+        """How far along the knot a point ``down`` off its axis (towards the trunk's base) at ``s`` goes to
+        keep the trunk apothem of its axis point: ``-down tan(e)`` on the knot's upper side (``down < 0``),
+        ``e`` the knot's local elevation (the bent knot's, ``e + KNOT_BEND (1 - s / h)``); 0 below it."""
+        _, f, _ = self.level_frames(self.trunk)
+        e = math.asin(float(np.clip(frame[0] @ f[br.level, 0], -0.99, 0.99)))
+        h0 = self.knot_length(br)
+        local = e + math.radians(self.KNOT_BEND) * (1 - np.clip(np.asarray(s, float), 0.0, h0) / h0)
+        return -np.minimum(np.asarray(down, float), 0.0) * np.tan(np.clip(local, 0.0, 1.2))
+
+    def _level_seam(self, br: Branch, frame: np.ndarray, s: np.ndarray, down: np.ndarray, weight: np.ndarray) -> np.ndarray:
+        """Where along the knot a seam point ``down`` off its axis (towards the trunk's base) meets its ring.
+
+        Slot layer ``j`` is where the trunk's ring ``j`` (apothem ``a_j``)
+        meets the knot, at ``s_j`` along the knot's axis.  A point off the
+        axis, across a rising knot, lies nearer the trunk's pith than the
+        axis point on the knot's upper side, by ``|down| sin(e)``: on a
+        knot's section the trunk's ring sags into the trunk above the knot,
+        which is how the inner rings deflect round a knot in a flat-sawn
+        board.  The outer rings and the bark must not sag (the upper wall's
+        outer bark would lie inside the wood, a wedge of bark over the knot
+        in boards): with ``weight`` 1 the point goes :meth:`_level_shift`
+        along the knot so the ring keeps its apothem where it meets the
+        knot's upper side (a choice: ``weight`` ramps from 0 to 1 over the
+        ``LEVEL_RAMP`` layers under the knot's outer wood,
+        :meth:`_outer_weight`; the lower side bulges out as before, a collar,
+        and is left as it is).  The knot's end is moved out with it
+        (:meth:`_level_knot_end`), and a seam point goes no farther than
+        the end's shift past ``0.95 h`` (the seam's old cap), so it never
+        passes the end.
+        """
+        s = np.asarray(s, float)
+        h0 = self.knot_length(br)
+        end = np.maximum(s, 0.95 * h0) + self._level_shift(br, frame, np.full(s.shape, h0), down)  # the end's shift
+        return s + np.minimum(self._level_shift(br, frame, s, down), end - s) * weight
+
+    def _level_knot_end(self, br: Branch, points: np.ndarray) -> np.ndarray:
+        """The knot's end corners (straight, before the bend) moved out along the knot on its upper side.
+
+        The knot's first level ends on a section square to its axis at
+        ``h`` past the trunk's final radius; on a rising knot that section's
+        upper edge lies inside the trunk, and the upper wall's bark, sewn to
+        the knot's bark there, would follow it in.  Each end corner goes
+        :meth:`_level_shift` (at ``s = h``) along the knot, so the end's
+        upper edge keeps the apothem of the knot's axis end.
+        """
+        p0, frame = self.branch_frame(br, knot=True)
+        rel = np.asarray(points, float) - p0
+        down = rel @ frame[1]
+        shift = self._level_shift(br, frame, np.full(down.shape, self.knot_length(br)), down)
+        return points + shift[..., None] * frame[0]
 
     def _radii(self):
         """Outer apothem of every cell: pith radius plus the widths of its stack up to it."""
@@ -1955,7 +2168,7 @@ class Wood:
         out[moved] += shift
         return out.reshape(pts.shape)
 
-    def _seam_map(self, br, p0, frame, s_layer, rho_layer, lateral, hull=False):
+    def _seam_map(self, br, p0, frame, s_layer, rho_layer, lateral, hull=False, level=False):
         """Where the knot's seam lies at slot coordinates ``(u, v)`` in ``[-1, 1]^2``, fractional layer ``j + w``.
 
         With ``hull`` (what the trunk around the knot is pushed to), the
@@ -1987,7 +2200,10 @@ class Wood:
                 x, y = self.KNOT_HULL * u, self.KNOT_HULL * v
             else:
                 x, y = u * np.sqrt(1 - 0.5 * v * v), v * np.sqrt(1 - 0.5 * u * u)
-            straight = p0 + s_at[:, None] * frame[0] + (r_at * -y)[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
+            down = r_at * -y
+            if level:
+                s_at = self._level_seam(br, frame, s_at, down, self._outer_weight(br, j + w))
+            straight = p0 + s_at[:, None] * frame[0] + down[:, None] * frame[1] + (r_at * x * lat)[:, None] * frame[2]
             return straight if bender is None else bender(straight)
 
         return at
