@@ -148,6 +148,7 @@ def crack_model(
 def run_map_crack(args: argparse.Namespace) -> int:
     """``--on fruit|wood``: the crack cut topologically into a 3-G-map (:mod:`ramure.gmap.organs.mapcracks`)."""
     from ramure.gmap.organs.mapcracks import crack_map
+    from ramure.gmap.organs.edgecracks import crack_map_edges
 
     out = output_file(args.output, (".png", ".vtu", ".vtp")) if args.output else None
     size = parse_size(args.size)
@@ -165,8 +166,8 @@ def run_map_crack(args: argparse.Namespace) -> int:
         anchor = facts.pop("anchor")
     else:
         # a board's end check runs along a ray: its grid's sector faces are radial planes
-        follow = "edges" if args.on == "wood" else "curve"
-        cracked, facts = crack_map(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t, follow=follow)
+        crack = crack_map_edges if args.on == "wood" else crack_map
+        cracked, facts = crack(gm, _pattern(args), anchor=anchor, direction=direction, t0=args.t)
     facts = {
         "on": args.on,
         "darts": int(cracked.n_darts),

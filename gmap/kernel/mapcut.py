@@ -100,7 +100,7 @@ def cut_map(gm: GMap3, normal: str | ArrayLike, origin: ArrayLike | None = None)
             break
     else:
         raise GMapError("cut_map: a face crosses the plane too many times; subdivide the model or move the plane")
-    sd = _split_crossing_volumes(out, sd, crossing)
+    sd = split_crossing_volumes(out, sd, crossing)
     front = np.bincount(out.dart_volume, sd > 0, minlength=out.n_volumes) > 0
     out.remove_volumes(np.flatnonzero(front))
     _manual(out)
@@ -178,7 +178,7 @@ def _diagonals(pos, vid, walk, degree):
     return start, step
 
 
-def _grown(sd, gm):
+def pad_new_darts(sd: np.ndarray, gm: GMap3) -> np.ndarray:
     """``sd`` extended with zeros for the darts made since (every new dart lies on the plane)."""
     return np.concatenate([sd, np.zeros(gm.n_darts - len(sd))])
 
@@ -193,10 +193,10 @@ def _split_crossing_edges(gm, sd, vid):
         _, first = np.unique(edge[d], return_index=True)
         d = d[first]
         gm.split_edge(d, sd[d] / (sd[d] - sd[a0[d]]))
-    return _grown(sd, gm)
+    return pad_new_darts(sd, gm)
 
 
-def _band_sides(gm, crossing):
+def band_sides(gm: GMap3, crossing: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Face sides ``<a0,a1>`` of the darts of the crossing volumes, labelled locally."""
     darts = np.flatnonzero(crossing[gm.dart_volume])
     nb = np.stack([np.searchsorted(darts, gm.alpha[0][darts]), np.searchsorted(darts, gm.alpha[1][darts])], 1)
@@ -204,15 +204,16 @@ def _band_sides(gm, crossing):
     return darts, labels, count
 
 
-def _signs(labels, count, sd_band):
+def band_signs(labels: np.ndarray, count: int, sd_band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per label ``0..count-1``: whether any of its darts lies below, and above, the plane."""
     neg = np.bincount(labels, sd_band < 0, minlength=count) > 0
     pos = np.bincount(labels, sd_band > 0, minlength=count) > 0
     return neg, pos
 
 
 def _split_crossing_faces(gm, sd, crossing):
-    darts, labels, count = _band_sides(gm, crossing)
-    neg, pos = _signs(labels, count, sd[darts])
+    darts, labels, count = band_sides(gm, crossing)
+    neg, pos = band_signs(labels, count, sd[darts])
     both = neg & pos
     if not both.any():
         return sd, False
@@ -243,10 +244,10 @@ def _split_crossing_faces(gm, sd, crossing):
     if np.any(b - a < 2):
         raise GMapError("cut_map: a face lies along the plane without crossing it; move the plane")
     gm.split_faces(corners[rows, a], b - a)
-    return _grown(sd, gm), bool(np.any(nz > 2))
+    return pad_new_darts(sd, gm), bool(np.any(nz > 2))
 
 
-def _split_crossing_volumes(gm, sd, crossing):
+def split_crossing_volumes(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> np.ndarray:
     """Split the crossing volumes along their on-plane loops, one loop per volume per round.
 
     A warped volume can meet the plane in several loops (its faces crossing
@@ -254,8 +255,8 @@ def _split_crossing_volumes(gm, sd, crossing):
     others end up in one of the two parts and are split by later rounds.
     """
     for _ in range(16):
-        darts, labels, count = _band_sides(gm, crossing)
-        neg, pos = _signs(labels, count, sd[darts])
+        darts, labels, count = band_sides(gm, crossing)
+        neg, pos = band_signs(labels, count, sd[darts])
         a0, a2 = gm.alpha[0], gm.alpha[2]
         other = labels[np.searchsorted(darts, a2[darts])]
         on_plane = (sd[darts] == 0) & (sd[a0[darts]] == 0)
@@ -264,7 +265,7 @@ def _split_crossing_volumes(gm, sd, crossing):
             return sd
         path, more = _one_loop_per_volume(gm, path)
         gm.split_volumes(path, (FACE_CUT, FACE_CUT), many=True)
-        sd = _grown(sd, gm)
+        sd = pad_new_darts(sd, gm)
         crossing = np.concatenate([crossing, np.ones(gm.n_volumes - len(crossing), bool)])
         if not more:
             return sd

@@ -42,7 +42,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ramure.gmap.kernel.errors import GMapError
-from ramure.gmap.kernel.mapcut import _band_sides, _grown, _signs, _split_crossing_volumes
+from ramure.gmap.kernel.mapcut import band_sides, pad_new_darts, band_signs, split_crossing_volumes
 
 #: A cut's field at points: ``(value, unit gradient)``.
 Field = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -337,7 +337,7 @@ def split_cells(
     if field is not None:  # the new edges across faces are chords of the cut: bend them too
         sd = _bend(gm, sd, crossing, field)
     before = gm.n_darts
-    _split_crossing_volumes(gm, sd, crossing)
+    split_crossing_volumes(gm, sd, crossing)
     return np.arange(before, gm.n_darts)
 
 
@@ -394,8 +394,8 @@ def _split_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> tuple[np.nd
     cut that only touches it in a face (its two neighbours in the face on one side) is not a
     crossing of that face, and a face the cut does not cross cleanly takes its cells out of
     ``crossing`` (changed in place) instead of refusing the whole crack."""
-    darts, labels, count = _band_sides(gm, crossing)
-    neg, pos = _signs(labels, count, sd[darts])
+    darts, labels, count = band_sides(gm, crossing)
+    neg, pos = band_signs(labels, count, sd[darts])
     both = neg & pos
     if not both.any():
         return sd, False
@@ -434,7 +434,7 @@ def _split_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> tuple[np.nd
         corners, a, b, nz, rows = corners[keep], a[keep], b[keep], nz[keep], np.arange(int(keep.sum()))
     if len(rows):
         gm.split_faces(corners[rows, a], b - a)
-    return _grown(sd, gm), bool(np.any(nz > 2))
+    return pad_new_darts(sd, gm), bool(np.any(nz > 2))
 
 
 def ribbon_cut(gm: GMap3, curve: Curve, snap: float, pull: float = 0.15) -> tuple[np.ndarray, np.ndarray]:

@@ -520,7 +520,7 @@ def _laplacian_solver(idx, wt):
 MARK_COLUMNS = ("corky", "wound", "scar", "bruise", "rot")
 
 
-def _mark(gm: GMap3, name: str, volumes: ArrayLike, value: float | np.ndarray, keep_max: bool = False) -> None:
+def mark_volumes(gm: GMap3, name: str, volumes: ArrayLike, value: float | np.ndarray, keep_max: bool = False) -> None:
     """Set the volume mark ``name`` of ``volumes`` to ``value`` (created at 0 on first use)."""
     if name not in gm.volume_data:
         gm.add_volume_data(name, np.float32, fill=0.0)
@@ -564,7 +564,7 @@ def rot(
     centres = out.volume_centroids()[cells]
     d = np.linalg.norm(centres - _index(out).positions(out)[int(vertex)], axis=1)
     t = (d - d.min()) / max(float(d.max() - d.min()), 1e-12)
-    _mark(out, "rot", cells, 1.0 - 0.85 * t, keep_max=True)
+    mark_volumes(out, "rot", cells, 1.0 - 0.85 * t, keep_max=True)
     return out, {"kind": "rot", "vertex": int(vertex), "coefficients": coef, "ring_cells": [int(len(r)) for r in rings]}
 
 
@@ -775,7 +775,7 @@ class _Digger:
         new_vol = idx.volumes(pos, cells)
         if np.any(new_vol <= 0):
             raise GMapError(f"hail: the crater at vertex {v} ({d_mm:.3g} mm) turns a cell inside out; use shallower craters")
-        self._mark(v, cells)
+        self.mark_volumes(v, cells)
         lost = float(old_vol.sum() - new_vol.sum())
         return {
             "vertex": int(v),
@@ -797,13 +797,13 @@ class _Digger:
         spacing = float(np.linalg.norm(pos[rim] - pos[v], axis=1).mean()) * self.scale if rim.size else 0.0
         return spacing * 0.5 / (1.0 - HAIL_RIM)
 
-    def _mark(self, v: int, cells: np.ndarray) -> None:
+    def mark_volumes(self, v: int, cells: np.ndarray) -> None:
         """Bruise under the pit (1 at the hit, 0.6 round it); a healed pit's corky scar."""
-        _mark(self.out, "bruise", cells, 0.6, keep_max=True)
+        mark_volumes(self.out, "bruise", cells, 0.6, keep_max=True)
         hit = self.idx.cells_at(np.array([v], np.int64))
-        _mark(self.out, "bruise", hit, 1.0, keep_max=True)
+        mark_volumes(self.out, "bruise", hit, 1.0, keep_max=True)
         if self.healed:
-            _mark(self.out, "scar", hit[self.on_skin_cell[hit]], 1.0)
+            mark_volumes(self.out, "scar", hit[self.on_skin_cell[hit]], 1.0)
 
 
 def hail_sites(gm: GMap3) -> np.ndarray:
@@ -1034,9 +1034,9 @@ def _mark_crack_walls(out: GMap3, exposed: np.ndarray, heal: np.ndarray, vol: np
     if "healed" not in out.dart_data:
         out.add_dart_data("healed", np.int8, rule="copy")
     out.dart_data["healed"][exposed[heal]] = 1
-    _mark(out, "wound", np.unique(vol[exposed]), 1.0)
-    _mark(out, "wound", np.unique(vol[exposed[heal]]), 0.0)
-    _mark(out, "corky", np.unique(vol[exposed[heal]]), 1.0)
+    mark_volumes(out, "wound", np.unique(vol[exposed]), 1.0)
+    mark_volumes(out, "wound", np.unique(vol[exposed[heal]]), 0.0)
+    mark_volumes(out, "corky", np.unique(vol[exposed[heal]]), 1.0)
 
 
 def _gap_volume(out, strip, side_a_darts, opening):

@@ -167,7 +167,6 @@ def crack_map(
     direction: ArrayLike = (1.0, 0.0, 0.0),
     t0: float | None = None,
     pull: float = PULL,
-    follow: str = "curve",
 ) -> tuple[GMap3, dict[str, Any]]:
     """Crack a 3-G-map along ``pattern`` grown until ``t0`` (default: fully grown).
 
@@ -183,16 +182,10 @@ def crack_map(
 
     ``pull``: a corner of a cut cell nearer the crack than this fraction of its shortest edge
     is moved onto it, so the cut leaves no sliver cell (0 moves none).
-    ``follow="edges"``: the path before issue 40, along the skin's edges and the faces under
-    them (:func:`ramure.gmap.organs.edgecracks.crack_map_edges`); the command uses it on wood,
-    whose grid's sector faces are the radial planes an end check runs along.
+    The path before issue 40, along the skin's edges and the faces under them, is
+    :func:`ramure.gmap.organs.edgecracks.crack_map_edges`; the command uses it on wood, whose
+    grid's sector faces are the radial planes an end check runs along.
     """
-    if follow not in ("curve", "edges"):
-        raise GMapError(f"a crack follows its 'curve' or the map's 'edges', not {follow!r}")
-    if follow == "edges":
-        from ramure.gmap.organs.edgecracks import crack_map_edges
-
-        return crack_map_edges(gm, pattern, anchor, direction, t0)
     t_start = time.perf_counter()
     skin = Skin(gm)
     if anchor is None:
@@ -211,7 +204,7 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
     marks its fresh walls: a per-cell label in the VTU). Returns ``(map, facts)``; ``gm`` is
     not changed."""
     from ramure.gmap.organs.crackcut import SNAP, ribbon_cut
-    from ramure.gmap.organs.defects import _mark, cell_volumes, orientation
+    from ramure.gmap.organs.defects import mark_volumes, cell_volumes, orientation
     from ramure.gmap.kernel.measure import total_volume
 
     t_start = time.perf_counter()
@@ -247,7 +240,7 @@ def crack_along(gm: GMap3, curves: list, pull: float = PULL, skin: Skin | None =
     length = 0.5 * float(np.linalg.norm(pos[mouth[:, 0]] - pos[mouth[:, 1]], axis=1).sum())
     faces_unsewn = len(np.unique(out.cells(2)[0][walls])) // 2
     # per-cell label for datasets (the VTU's cell data): cells with a crack wall are wounds
-    _mark(out, "wound", np.unique(out.dart_volume[walls]), 1.0)
+    mark_volumes(out, "wound", np.unique(out.dart_volume[walls]), 1.0)
     sign = orientation(out)
     points, corners = out.points.copy(), out.corners.copy()
     narrowed, held = 1.0, np.zeros(out.cells(0)[1], bool)

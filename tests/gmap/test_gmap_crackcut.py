@@ -190,7 +190,7 @@ def test_thickness_is_the_chord_through_the_model():
 
 def test_the_old_path_along_the_edges_is_kept_by_name(fruit, side):
     pattern = random_pattern(8, seed=2, length=8.0, width=3.0, depth=8.0)
-    out, facts = crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1), follow="edges")
+    from ramure.gmap.organs.edgecracks import crack_map_edges
+
+    out, facts = crack_map_edges(fruit, pattern, anchor=side, direction=(0, 0, 1))
     assert facts["valid"] and facts["euler_after"] == 1 and out.n_volumes == fruit.n_volumes  # no cell cut
-    with pytest.raises(GMapError, match="follows its 'curve'"):
-        crack_map(fruit, pattern, anchor=side, direction=(0, 0, 1), follow="grid")
