@@ -62,6 +62,10 @@ def _load_lightly(dispatcher: Any) -> Any:
 def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:
     """Cached machine code for ``sig``, or None (then numba compiles, refreshing its compiler).
 
+    A cache file that cannot be read back (``pickle`` refuses it: a damaged file) counts as
+    no cache: the kernel compiles and numba writes the file anew, where numba's own loader
+    would raise.
+
     The runtime (NRT) must be up: the cached code calls its allocation and reference
     counting (:func:`initialize_runtime`)."""
     initialize_runtime(target_context)
@@ -71,6 +75,8 @@ def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:
         if os.name == "nt" and exc.errno == errno.EACCES:
             return None  # numba then compiles
         raise
+    except Exception:  # noqa: BLE001 - a damaged cache file (cut short, or its index out of step
+        return None  # with it after the source changed under a running process): compile anew
 
 
 def initialize_runtime(target_context: Any) -> None:

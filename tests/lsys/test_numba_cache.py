@@ -152,3 +152,13 @@ def test_git_ignores_the_cache_files():
     ]
     done = subprocess.run(["git", "-C", str(ROOT), "check-ignore", *paths], capture_output=True, text=True, timeout=60)
     assert done.stdout.split() == paths, done.stderr
+
+
+def test_a_damaged_cache_file_compiles_anew_instead_of_failing(tmp_path):
+    assert _run(tmp_path)["misses"] == 1
+    (code,) = [p for p in tmp_path.rglob("*.nbc") if "fill_bracket_pairs" in p.name]
+    code.write_bytes(b"\n" + code.read_bytes()[1:])  # the first byte damaged: pickle refuses it
+    again = _run(tmp_path)
+    assert again["match"] == EXPECTED_MATCH and again["compiled"] == ["fill_bracket_pairs"]
+    third = _run(tmp_path)  # and the file written anew loads
+    assert (third["misses"], third["hits"]) == (0, 1)
