@@ -1,0 +1,247 @@
+"""Round damage marks on a fruit's skin: hail pits and rot lesions drawn as discs, not as the
+skin faces of the cells the defects marked (no Qt; pyvista meshes, numpy).
+
+The defects mark whole cells (:mod:`ramure.gmap.organs.defects`: ``scar`` and ``bruise`` at a
+hail pit, ``rot`` round a lesion); coloured per face, a mark is a square aligned with the mesh.
+Here each mark becomes a :class:`Disc` found from the marked skin faces:
+
+* a **hail pit**: centred on the hit skin vertex (the vertex whose skin faces all carry the
+  full bruise), of the radius the grading uses (the half-depth radius of
+  :func:`ramure.gmap.organs.defects.hail`: ``s / 2 / (1 - HAIL_RIM)``, ``s`` the mean length
+  of the vertex's skin edges), healed when its faces carry the ``scar``;
+* a **rot lesion**: one per connected patch of rotting skin faces, centred on the patch's
+  vertex with the most rot round it, of the patch's equivalent radius (the disc of its area).
+
+:func:`draw_round_marks` then subdivides the skin faces near each disc (midpoints, so the
+shape does not move) until a face is a small fraction of the radius, and colours every face
+by its centroid's distance from the disc's centre (:func:`ramure.gmap.organs.species.round_mark_rgb`).
+Distances are straight lines, taken only on the disc's side of the fruit (face normal within
+90 degrees of the disc's): over a mark a few millimetres across on a fruit centimetres
+across, this is the distance along the skin to within a percent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import pyvista as pv
+
+#: A subdivided face's longest edge is at most this fraction of the disc's radius.
+FINE_EDGE = 0.08
+#: At most this many midpoint subdivisions (each splits a triangle in four).
+MAX_LEVELS = 5
+#: Skin faces face outward: ``|normal . radial|`` above this (walls of a crack are below).
+SKIN_COSINE = 0.7
+
+
+@dataclass(frozen=True)
+class Disc:
+    """A round mark: ``kind`` (``"hail"`` or ``"rot"``), centre and outward normal, radius
+    (model units), healed (a hail pit's corky scar)."""
+
+    kind: str
+    centre: np.ndarray
+    normal: np.ndarray
+    radius: float
+    healed: bool = False
+
+
+def skin_faces(surface: pv.PolyData, centre: np.ndarray) -> np.ndarray:
+    """Boolean per face: faces turned outward (not a crack's walls), see :data:`SKIN_COSINE`."""
+    normals = surface.compute_normals(cell_normals=True, point_normals=False, auto_orient_normals=True)
+    n = np.asarray(normals.cell_data["Normals"], float)
+    out = np.asarray(surface.cell_centers().points, float) - np.asarray(centre, float)
+    out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
+    return np.abs(np.einsum("ij,ij->i", n, out)) > SKIN_COSINE
+
+
+def _faces(surface: pv.PolyData) -> tuple[np.ndarray, np.ndarray]:
+    """``(point ids, face of each)`` of every face corner, in face order (any polygon sizes)."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    polys = surface.GetPolys()
+    offsets = vtk_to_numpy(polys.GetOffsetsArray()).astype(np.int64)
+    ids = vtk_to_numpy(polys.GetConnectivityArray()).astype(np.int64)
+    return ids, np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+
+
+def _edges(ids: np.ndarray, face: np.ndarray) -> np.ndarray:
+    """``(n, 2)`` point ids of each face's edges (corner to next corner round the face)."""
+    first = np.r_[True, face[1:] != face[:-1]]
+    start = np.maximum.accumulate(np.where(first, np.arange(len(face)), 0))
+    last = np.r_[face[1:] != face[:-1], True]
+    nxt = np.where(last, start, np.arange(len(face)) + 1)
+    return np.stack([ids, ids[nxt]], axis=1)
+
+
+def mark_discs(surface: pv.PolyData, centre: np.ndarray) -> list[Disc]:
+    """The round marks of a fruit's outer surface (cell data ``bruise``, ``scar``, ``rot`` as
+    :func:`ramure.app.fruit_look.coloured_grid` carries them; see the module docstring)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from ramure.gmap.organs.defects import HAIL_RIM
+
+    if surface.n_cells == 0 or not any(k in surface.cell_data for k in ("bruise", "rot")):
+        return []
+    skin = skin_faces(surface, centre)
+    ids, face = _faces(surface)
+    pts = np.asarray(surface.points, float)
+    n_pts = len(pts)
+    normals = np.asarray(
+        surface.compute_normals(cell_normals=True, point_normals=False, auto_orient_normals=True).cell_data["Normals"]
+    )
+    discs: list[Disc] = []
+    on_skin = skin[face]
+    all_count = np.bincount(ids[on_skin], minlength=n_pts)
+    if "bruise" in surface.cell_data:
+        bruise = np.asarray(surface.cell_data["bruise"], float)
+        scar = np.asarray(surface.cell_data["scar"], float) if "scar" in surface.cell_data else np.zeros(surface.n_cells)
+        hit = skin & (bruise >= 0.999)
+        hit_count = np.bincount(ids[hit[face]], minlength=n_pts)
+        centres = np.flatnonzero((hit_count >= 3) & (hit_count == all_count))
+        edges = np.unique(np.sort(_edges(ids, face)[on_skin], axis=1), axis=0)  # each skin edge once
+        length = np.linalg.norm(pts[edges[:, 0]] - pts[edges[:, 1]], axis=1)
+        for p in centres.tolist():
+            near = (edges[:, 0] == p) | (edges[:, 1] == p)
+            s = float(length[near].mean()) if near.any() else 0.0
+            mine = np.unique(face[(ids == p) & hit[face]])
+            nrm = normals[mine].mean(axis=0)
+            discs.append(
+                Disc(
+                    "hail",
+                    pts[p],
+                    nrm / max(np.linalg.norm(nrm), 1e-12),
+                    0.5 * s / (1.0 - HAIL_RIM),
+                    bool(scar[mine].mean() > 0.5),
+                )
+            )
+    if "rot" in surface.cell_data:
+        rot = np.asarray(surface.cell_data["rot"], float)
+        rotten = skin & (rot > 0)
+        if rotten.any():
+            area = np.asarray(surface.compute_cell_sizes(length=False, volume=False).cell_data["Area"], float)
+            keep = rotten[face]
+            inc = coo_matrix((np.ones(int(keep.sum())), (face[keep], ids[keep])), shape=(surface.n_cells, n_pts)).tocsr()
+            _, label = connected_components(inc @ inc.T, directed=False)
+            around = np.bincount(ids[keep], weights=rot[face[keep]], minlength=n_pts)
+            for lab in np.unique(label[rotten]).tolist():
+                patch = rotten & (label == lab)
+                corners = np.unique(ids[patch[face]])
+                p = int(corners[np.argmax(around[corners])])
+                nrm = (normals[patch] * area[patch, None]).sum(axis=0)
+                radius = float(np.sqrt(area[patch].sum() / np.pi))
+                discs.append(Disc("rot", pts[p], nrm / max(np.linalg.norm(nrm), 1e-12), radius))
+    return discs
+
+
+def subdivide(
+    points: np.ndarray, tris: np.ndarray, levels: int, normals: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """Midpoint subdivision of triangles ``levels`` times: ``(points, triangles, parent,
+    normals)``; new points are appended after ``points`` (shared between neighbours),
+    ``parent`` is each new triangle's row in ``tris``.  Point ``normals``, when given, are
+    carried to each midpoint as the normalised mean of its edge's ends, so a subdivided patch
+    shades as smoothly as the faces it replaces (flat midpoint normals made it faceted)."""
+    nrm = None if normals is None else np.asarray(normals, float)
+    pts = np.asarray(points, float)
+    tri = np.asarray(tris, np.int64).reshape(-1, 3)
+    parent = np.arange(len(tri))
+    for _ in range(int(levels)):
+        n = len(tri)
+        e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+        uniq, inv = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True)
+        mid = (len(pts) + np.arange(len(uniq)))[inv.reshape(-1)].reshape(3, n).T
+        pts = np.vstack([pts, 0.5 * (pts[uniq[:, 0]] + pts[uniq[:, 1]])])
+        if nrm is not None:
+            m = nrm[uniq[:, 0]] + nrm[uniq[:, 1]]
+            nrm = np.vstack([nrm, m / np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-12)])
+        a, b, c = tri.T
+        m01, m12, m20 = mid.T
+        tri = np.concatenate([np.stack(x, axis=1) for x in ((a, m01, m20), (m01, b, m12), (m20, m12, c), (m01, m12, m20))])
+        parent = np.tile(parent, 4)
+    return pts, tri, parent, nrm
+
+
+def draw_round_marks(surface: pv.PolyData, centre: np.ndarray, seed: int = 0) -> pv.PolyData:
+    """The surface with its hail pits and rot lesions drawn round (module docstring).
+
+    ``surface`` carries cell data ``rgb`` (drawn colours) and ``rgb_plain`` (the same without
+    bruise, scar and rot; :func:`ramure.app.fruit_look.coloured_grid`).  Skin faces take
+    ``rgb_plain`` with the discs painted on, other faces (a crack's walls) keep ``rgb``.
+    Returned triangulated, cell data ``rgb``; the surface itself when it has no round mark.
+    """
+    import pyvista as pv
+
+    from ramure.gmap.organs.species import HAIL_HALO, round_mark_rgb
+
+    discs = mark_discs(surface, centre) if "rgb_plain" in surface.cell_data else []
+    if not discs:
+        return surface
+    skin = skin_faces(surface, centre)
+    base = np.where(skin[:, None], surface.cell_data["rgb_plain"], surface.cell_data["rgb"]).astype(float)
+    work = pv.PolyData(surface.points, surface.faces)
+    work.cell_data["face"] = np.arange(surface.n_cells)
+    tri_mesh = work.triangulate()
+    tris = np.asarray(tri_mesh.faces, np.int64).reshape(-1, 4)[:, 1:]
+    owner = np.asarray(tri_mesh.cell_data["face"], np.int64)
+    pts = np.asarray(tri_mesh.points, float)
+    mid = pts[tris].mean(axis=1)
+    size = np.linalg.norm(pts[tris] - mid[:, None, :], axis=2).max(axis=1)
+    near = np.zeros(len(tris), bool)
+    levels = 0
+    for d in discs:
+        reach = (HAIL_HALO if d.kind == "hail" else 1.0) * MARK_REACH * d.radius
+        close = skin[owner] & (np.linalg.norm(mid - d.centre, axis=1) < reach + size)
+        near |= close
+        if close.any():
+            edge = 2.0 * float(size[close].max())
+            levels = max(levels, int(np.ceil(np.log2(max(edge / (FINE_EDGE * d.radius), 1.0)))))
+    levels = min(levels, MAX_LEVELS)
+    smooth = tri_mesh.compute_normals(cell_normals=False, point_normals=True, split_vertices=False)
+    fine_pts, fine_tris, parent, fine_nrm = subdivide(pts, tris[near], levels, np.asarray(smooth.point_data["Normals"]))
+    all_tris = np.vstack([tris[~near], fine_tris])
+    all_owner = np.concatenate([owner[~near], owner[near][parent]])
+    rgb = base[all_owner]
+    fine = np.zeros(len(all_tris), bool)
+    fine[int((~near).sum()) :] = True
+    tri_mid = fine_pts[all_tris[fine]].mean(axis=1)
+    tri_nrm = np.cross(
+        fine_pts[all_tris[fine][:, 1]] - fine_pts[all_tris[fine][:, 0]],
+        fine_pts[all_tris[fine][:, 2]] - fine_pts[all_tris[fine][:, 0]],
+    )
+    painted = rgb[fine]
+    for k, d in enumerate(discs):
+        facing = tri_nrm @ d.normal > 0
+        rel = (tri_mid - d.centre) / d.radius
+        u = np.where(facing, np.linalg.norm(rel, axis=1), np.inf)
+        e1 = np.cross(d.normal, [1.0, 0.0, 0.0] if abs(d.normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        xy = np.stack([rel @ e1, rel @ np.cross(d.normal, e1)], axis=1)
+        painted = round_mark_rgb(painted, d.kind, u, d.healed, xy, seed + k)
+    rgb[fine] = painted
+    out = pv.PolyData(fine_pts, np.hstack([np.full((len(all_tris), 1), 3, np.int64), all_tris]).ravel())
+    out.point_data["Normals"] = fine_nrm
+    out.point_data.active_normals_name = "Normals"
+    out.cell_data["rgb"] = np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
+    out.cell_data["fine"] = fine
+    return out
+
+
+#: Faces out to this many radii (times the halo for hail) round a disc are subdivided.
+MARK_REACH = 1.25
+
+
+def mark_area(surface: pv.PolyData, disc: Disc) -> float:
+    """Area (model units squared) of ``surface``'s faces (drawn by :func:`draw_round_marks`)
+    where ``disc``'s weight is at least one half: the mark a viewer sees."""
+    from ramure.gmap.organs.species import mark_weight
+
+    mids = np.asarray(surface.cell_centers().points, float)
+    area = np.asarray(surface.compute_cell_sizes(length=False, volume=False).cell_data["Area"], float)
+    inside = mark_weight(np.linalg.norm(mids - disc.centre, axis=1) / disc.radius) >= 0.5
+    return float(area[inside].sum())
