@@ -22,7 +22,7 @@ across, this is the distance along the skin to within a percent.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -38,16 +38,18 @@ MAX_LEVELS = 5
 SKIN_COSINE = 0.7
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Disc:
     """A round mark: ``kind`` (``"hail"`` or ``"rot"``), centre and outward normal, radius
-    (model units), healed (a hail pit's corky scar)."""
+    (model units), healed (a hail pit's corky scar), and ``faces``: the surface's marked faces
+    it was found from (their cells are the defect's)."""
 
     kind: str
     centre: np.ndarray
     normal: np.ndarray
     radius: float
     healed: bool = False
+    faces: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
 def skin_faces(surface: pv.PolyData, centre: np.ndarray) -> np.ndarray:
@@ -111,15 +113,9 @@ def mark_discs(surface: pv.PolyData, centre: np.ndarray) -> list[Disc]:
             s = float(length[near].mean()) if near.any() else 0.0
             mine = np.unique(face[(ids == p) & hit[face]])
             nrm = normals[mine].mean(axis=0)
-            discs.append(
-                Disc(
-                    "hail",
-                    pts[p],
-                    nrm / max(np.linalg.norm(nrm), 1e-12),
-                    0.5 * s / (1.0 - HAIL_RIM),
-                    bool(scar[mine].mean() > 0.5),
-                )
-            )
+            radius = 0.5 * s / (1.0 - HAIL_RIM)
+            unit = nrm / max(np.linalg.norm(nrm), 1e-12)
+            discs.append(Disc("hail", pts[p], unit, radius, bool(scar[mine].mean() > 0.5), mine))
     if "rot" in surface.cell_data:
         rot = np.asarray(surface.cell_data["rot"], float)
         rotten = skin & (rot > 0)
@@ -135,7 +131,8 @@ def mark_discs(surface: pv.PolyData, centre: np.ndarray) -> list[Disc]:
                 p = int(corners[np.argmax(around[corners])])
                 nrm = (normals[patch] * area[patch, None]).sum(axis=0)
                 radius = float(np.sqrt(area[patch].sum() / np.pi))
-                discs.append(Disc("rot", pts[p], nrm / max(np.linalg.norm(nrm), 1e-12), radius))
+                unit = nrm / max(np.linalg.norm(nrm), 1e-12)
+                discs.append(Disc("rot", pts[p], unit, radius, False, np.flatnonzero(patch)))
     return discs
 
 
@@ -167,29 +164,51 @@ def subdivide(
     return pts, tri, parent, nrm
 
 
-def draw_round_marks(surface: pv.PolyData, centre: np.ndarray, seed: int = 0) -> pv.PolyData:
+def draw_round_marks(
+    surface: pv.PolyData,
+    centre: np.ndarray,
+    seed: int = 0,
+    feature_angle: float | None = None,
+    discs: list[Disc] | None = None,
+) -> pv.PolyData:
     """The surface with its hail pits and rot lesions drawn round (module docstring).
 
     ``surface`` carries cell data ``rgb`` (drawn colours) and ``rgb_plain`` (the same without
     bruise, scar and rot; :func:`ramure.app.fruit_look.coloured_grid`).  Skin faces take
     ``rgb_plain`` with the discs painted on, other faces (a crack's walls) keep ``rgb``.
-    Returned triangulated, cell data ``rgb``; the surface itself when it has no round mark.
+    ``discs``: those of :func:`mark_discs` (found when None).
+
+    Returned triangulated, with point ``Normals`` for smooth shading (a renderer must use
+    them, not recompute them: a subdivided face's midpoints would shade flat), split where
+    faces meet at more than ``feature_angle`` degrees (None: not split), and cell data
+    ``rgb``, ``face`` (the face of ``surface`` each comes from) and ``mark_bits`` (bit ``k``:
+    disc ``k``'s weight is at least one half there, :func:`ramure.gmap.organs.species.mark_weight`).
+    The surface itself when it has no round mark.
     """
     import pyvista as pv
 
-    from ramure.gmap.organs.species import HAIL_HALO, round_mark_rgb
+    from ramure.gmap.organs.species import HAIL_HALO, mark_weight, round_mark_rgb
 
-    discs = mark_discs(surface, centre) if "rgb_plain" in surface.cell_data else []
-    if not discs:
+    if discs is None:
+        discs = mark_discs(surface, centre) if "rgb_plain" in surface.cell_data else []
+    if not discs or "rgb_plain" not in surface.cell_data:
         return surface
     skin = skin_faces(surface, centre)
+    outward = np.asarray(
+        surface.compute_normals(cell_normals=True, point_normals=False, auto_orient_normals=True).cell_data["Normals"], float
+    )
     base = np.where(skin[:, None], surface.cell_data["rgb_plain"], surface.cell_data["rgb"]).astype(float)
     work = pv.PolyData(surface.points, surface.faces)
     work.cell_data["face"] = np.arange(surface.n_cells)
-    tri_mesh = work.triangulate()
-    tris = np.asarray(tri_mesh.faces, np.int64).reshape(-1, 4)[:, 1:]
-    owner = np.asarray(tri_mesh.cell_data["face"], np.int64)
-    pts = np.asarray(tri_mesh.points, float)
+    shaded = work.triangulate().compute_normals(
+        cell_normals=False,
+        point_normals=True,
+        split_vertices=feature_angle is not None,
+        feature_angle=30.0 if feature_angle is None else float(feature_angle),
+    )
+    tris = np.asarray(shaded.faces, np.int64).reshape(-1, 4)[:, 1:]
+    owner = np.asarray(shaded.cell_data["face"], np.int64)
+    pts = np.asarray(shaded.points, float)
     mid = pts[tris].mean(axis=1)
     size = np.linalg.norm(pts[tris] - mid[:, None, :], axis=2).max(axis=1)
     near = np.zeros(len(tris), bool)
@@ -201,34 +220,35 @@ def draw_round_marks(surface: pv.PolyData, centre: np.ndarray, seed: int = 0) ->
         if close.any():
             edge = 2.0 * float(size[close].max())
             levels = max(levels, int(np.ceil(np.log2(max(edge / (FINE_EDGE * d.radius), 1.0)))))
-    levels = min(levels, MAX_LEVELS)
-    smooth = tri_mesh.compute_normals(cell_normals=False, point_normals=True, split_vertices=False)
-    fine_pts, fine_tris, parent, fine_nrm = subdivide(pts, tris[near], levels, np.asarray(smooth.point_data["Normals"]))
+    fine_pts, fine_tris, parent, fine_nrm = subdivide(
+        pts, tris[near], min(levels, MAX_LEVELS), np.asarray(shaded.point_data["Normals"], float)
+    )
     all_tris = np.vstack([tris[~near], fine_tris])
     all_owner = np.concatenate([owner[~near], owner[near][parent]])
     rgb = base[all_owner]
+    bits = np.zeros(len(all_tris), np.int64)
     fine = np.zeros(len(all_tris), bool)
     fine[int((~near).sum()) :] = True
     tri_mid = fine_pts[all_tris[fine]].mean(axis=1)
-    tri_nrm = np.cross(
-        fine_pts[all_tris[fine][:, 1]] - fine_pts[all_tris[fine][:, 0]],
-        fine_pts[all_tris[fine][:, 2]] - fine_pts[all_tris[fine][:, 0]],
-    )
     painted = rgb[fine]
+    fine_bits = bits[fine]
     for k, d in enumerate(discs):
-        facing = tri_nrm @ d.normal > 0
+        facing = outward[all_owner[fine]] @ d.normal > 0  # not through a thin fruit to its far side
         rel = (tri_mid - d.centre) / d.radius
         u = np.where(facing, np.linalg.norm(rel, axis=1), np.inf)
         e1 = np.cross(d.normal, [1.0, 0.0, 0.0] if abs(d.normal[0]) < 0.9 else [0.0, 1.0, 0.0])
         e1 /= np.linalg.norm(e1)
         xy = np.stack([rel @ e1, rel @ np.cross(d.normal, e1)], axis=1)
         painted = round_mark_rgb(painted, d.kind, u, d.healed, xy, seed + k)
+        fine_bits |= np.where(mark_weight(u) >= 0.5, np.int64(1) << min(k, 62), np.int64(0))
     rgb[fine] = painted
+    bits[fine] = fine_bits
     out = pv.PolyData(fine_pts, np.hstack([np.full((len(all_tris), 1), 3, np.int64), all_tris]).ravel())
     out.point_data["Normals"] = fine_nrm
     out.point_data.active_normals_name = "Normals"
     out.cell_data["rgb"] = np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
-    out.cell_data["fine"] = fine
+    out.cell_data["face"] = all_owner
+    out.cell_data["mark_bits"] = bits
     return out
 
 

@@ -141,3 +141,31 @@ def test_a_fruit_without_round_marks_is_left_as_it_is():
     grid = L.coloured_grid(damaged, round_marks=True)
     surface = L.coloured_surface(grid)
     assert M.draw_round_marks(surface, np.asarray(grid.center, float)) is surface
+
+
+def test_batch_masks_of_round_marks_are_the_drawn_discs():
+    """``ramure fruit batch``: a hail pit's and a rot lesion's masks are the round marks the
+    pictures show, not their cells' squares (whose corners are plain skin)."""
+    from ramure.app import fruit_dataset as F
+    from ramure.app.fruit_views import rle_decode
+
+    recipe = F.random_recipe(F.fruit_rng(1, 0))
+    hail = {"count": 2, "depth_mm": (2.0, 3.0), "stop": "mesocarp"}
+    recipe.update(malform=None, defects=[("hail", hail), ("rot", {"rate": 0.3})])
+    clean, damaged, labels = F.build_one(recipe)
+    records, pictures, cleans, grid = F.render_views(0, 1, clean, damaged, labels, 65.0, 4, "plain", (256, 256))
+    assert "rgb_plain" not in grid.cell_data  # the written grid is as before
+    checked = set()
+    for record, img, ref in zip(records, pictures, cleans):
+        strong = np.abs(img.astype(int) - ref.astype(int)).max(axis=2) > 60
+        for d in record["defects"]:
+            mask = rle_decode(d["segmentation"])
+            if mask.sum() < 100:
+                continue
+            px = img[mask].astype(float)
+            if d["kind"] == "hail":  # a fresh pit: dark bruise; cell masks: 0.69 and 0.78 here
+                assert strong[mask].mean() >= 0.95
+            elif d["kind"] == "rot":  # brown, not red skin; cell masks: 0.78 and 0.83 here
+                assert (px[:, 1] > 0.4 * px[:, 0]).mean() >= 0.95
+            checked.add(d["kind"])
+    assert checked == {"hail", "rot"}
