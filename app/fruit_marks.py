@@ -42,7 +42,9 @@ SKIN_COSINE = 0.7
 class Disc:
     """A round mark: ``kind`` (``"hail"`` or ``"rot"``), centre and outward normal, radius
     (model units), healed (a hail pit's corky scar), and ``faces``: the surface's marked faces
-    it was found from (their cells are the defect's)."""
+    it was found from (their cells are the defect's); a hail pit's ``depth`` below its first
+    ring of skin vertices and ``bowl``, the radius where the crater meets the untouched skin
+    (twice that ring's mean distance), both model units."""
 
     kind: str
     centre: np.ndarray
@@ -50,6 +52,8 @@ class Disc:
     radius: float
     healed: bool = False
     faces: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    depth: float = 0.0
+    bowl: float = 0.0
 
 
 def skin_faces(surface: pv.PolyData, centre: np.ndarray) -> np.ndarray:
@@ -115,7 +119,9 @@ def mark_discs(surface: pv.PolyData, centre: np.ndarray) -> list[Disc]:
             nrm = normals[mine].mean(axis=0)
             radius = 0.5 * s / (1.0 - HAIL_RIM)
             unit = nrm / max(np.linalg.norm(nrm), 1e-12)
-            discs.append(Disc("hail", pts[p], unit, radius, bool(scar[mine].mean() > 0.5), mine))
+            depth = _pit_depth(pts, edges, p, unit, 1.0 - HAIL_RIM)
+            healed = bool(scar[mine].mean() > 0.5)
+            discs.append(Disc("hail", pts[p], unit, radius, healed, mine, depth, 2.0 * s))
     if "rot" in surface.cell_data:
         rot = np.asarray(surface.cell_data["rot"], float)
         rotten = skin & (rot > 0)
@@ -134,6 +140,28 @@ def mark_discs(surface: pv.PolyData, centre: np.ndarray) -> list[Disc]:
                 unit = nrm / max(np.linalg.norm(nrm), 1e-12)
                 discs.append(Disc("rot", pts[p], unit, radius, False, np.flatnonzero(patch)))
     return discs
+
+
+def _pit_depth(pts: np.ndarray, edges: np.ndarray, p: int, normal: np.ndarray, share: float) -> float:
+    """A crater's depth at its centre ``p`` below the skin it was dug into (model units).
+
+    The crater pushed ``p`` in by ``D`` and its first ring of skin vertices by ``(1 - share) D``
+    (``share = 1 - HAIL_RIM``); the second ring did not move.  Each ring vertex's height over
+    ``p`` along ``normal`` is then ``share D - k r^2 / 2`` (first ring) or ``D - k r^2 / 2``
+    (second), ``r`` its distance across and ``k`` the skin's curvature: ``D`` and ``k`` by
+    least squares.  0 when the rings are missing."""
+    first = np.setdiff1d(edges[(edges[:, 0] == p) | (edges[:, 1] == p)].ravel(), [p])
+    touch = np.isin(edges[:, 0], first) | np.isin(edges[:, 1], first)
+    second = np.setdiff1d(edges[touch].ravel(), np.r_[first, p])
+    if first.size == 0 or second.size == 0:
+        return 0.0
+    ring = np.r_[first, second]
+    rel = pts[ring] - pts[p]
+    height = rel @ normal
+    across = np.linalg.norm(rel - np.outer(height, normal), axis=1)
+    a = np.stack([np.r_[np.full(first.size, share), np.ones(second.size)], -0.5 * across**2], axis=1)
+    (depth, _), *_ = np.linalg.lstsq(a, height, rcond=None)
+    return max(float(depth), 0.0)
 
 
 def subdivide(
@@ -223,6 +251,9 @@ def draw_round_marks(
     fine_pts, fine_tris, parent, fine_nrm = subdivide(
         pts, tris[near], min(levels, MAX_LEVELS), np.asarray(shaded.point_data["Normals"], float)
     )
+    for d in discs:
+        if d.depth > 0 and d.bowl > 0:
+            fine_nrm = _pit_normals(fine_pts, fine_nrm, d)
     all_tris = np.vstack([tris[~near], fine_tris])
     all_owner = np.concatenate([owner[~near], owner[near][parent]])
     rgb = base[all_owner]
@@ -249,6 +280,24 @@ def draw_round_marks(
     out.cell_data["rgb"] = np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
     out.cell_data["face"] = all_owner
     out.cell_data["mark_bits"] = bits
+    return out
+
+
+def _pit_normals(points: np.ndarray, normals: np.ndarray, disc: Disc) -> np.ndarray:
+    """Shading normals tilted as a smooth bowl would tilt them, so the pit reads as a pit.
+
+    The crater's mesh is a few flat faces whose smoothed normals hardly tilt; the bowl
+    ``z = -depth cos^2(pi r / (2 bowl))`` (``r`` along the skin from the centre, out to
+    ``bowl``) has slope ``depth pi / (2 bowl) sin(pi r / bowl)``, and each point's normal
+    leans that much towards the centre.  Only the shading changes, not the geometry."""
+    rel = points - disc.centre
+    flat = rel - np.outer(rel @ disc.normal, disc.normal)
+    r = np.linalg.norm(flat, axis=1)
+    sel = (r < disc.bowl) & (r > 0) & (normals @ disc.normal > 0.5) & (np.abs(rel @ disc.normal) < disc.bowl)
+    slope = disc.depth * np.pi / (2.0 * disc.bowl) * np.sin(np.pi * r[sel] / disc.bowl)
+    out = normals.copy()
+    tilted = normals[sel] - slope[:, None] * flat[sel] / r[sel, None]
+    out[sel] = tilted / np.linalg.norm(tilted, axis=1, keepdims=True)
     return out
 
 

@@ -71,6 +71,27 @@ def test_a_drawn_pit_has_the_graded_area(hail_tomato):
     assert drawn.n_cells > surface.n_cells  # the faces round the pit were subdivided
 
 
+@pytest.mark.parametrize("levels, depth", [(2, 0.8), (2, 1.8), (1, 3.0)])
+def test_a_pit_is_shaded_as_deep_as_it_was_dug(levels, depth):
+    gm = build_fruit("round_tomato", volume_levels=levels)
+    damaged, facts = apply_defects(gm, [_first_site(gm, HAIL.replace("depth_mm=0.8", f"depth_mm={depth}"))])
+    grid = L.coloured_grid(damaged, round_marks=True)
+    surface = L.coloured_surface(grid)
+    centre = np.asarray(grid.center, float)
+    (disc,) = M.mark_discs(surface, centre)
+    mpu = damaged.meta["mm_per_unit"]
+    dug = facts["defects"][0]["craters"][0]["actual_depth_mm"]
+    assert disc.depth * mpu == pytest.approx(dug, rel=0.25)  # measured 0.91, 1.91 and 3.68 mm
+    drawn = M.draw_round_marks(surface, centre)
+    normals = np.asarray(drawn.point_data["Normals"])
+    rel = np.asarray(drawn.points) - disc.centre
+    across = rel - np.outer(rel @ disc.normal, disc.normal)
+    r = np.linalg.norm(across, axis=1)
+    wall = (r > 0.3 * disc.bowl) & (r < 0.7 * disc.bowl) & (np.abs(rel @ disc.normal) < disc.bowl)
+    inward = -np.einsum("ij,ij->i", normals[wall], across[wall] / r[wall, None])
+    assert wall.sum() > 50 and np.median(inward) > 0.5 * dug / mpu / disc.bowl  # the walls lean in
+
+
 def test_a_fresh_pit_is_bruised_not_corky(tmp_path):
     gm = build_fruit("round_tomato", volume_levels=2)
     damaged, _ = apply_defects(gm, [_first_site(gm, HAIL.replace("healed=1", "healed=0"))])
