@@ -30,8 +30,9 @@ import numpy as np
 if TYPE_CHECKING:
     import pyvista as pv
 
-#: A subdivided face's longest edge is at most this fraction of the disc's radius.
-FINE_EDGE = 0.08
+#: A subdivided face's longest edge is at most this fraction of the disc's radius, by kind
+#: (a rot lesion's mould colonies are a tenth of its radius across).
+FINE_EDGE = {"hail": 0.08, "rot": 0.035}
 #: At most this many midpoint subdivisions (each splits a triangle in four).
 MAX_LEVELS = 5
 #: Skin faces face outward: ``|normal . radial|`` above this (walls of a crack are below).
@@ -57,12 +58,21 @@ class Disc:
 
 
 def skin_faces(surface: pv.PolyData, centre: np.ndarray) -> np.ndarray:
-    """Boolean per face: faces turned outward (not a crack's walls), see :data:`SKIN_COSINE`."""
+    """Boolean per face: the skin.  An uncut fruit's outer faces are all skin but a crack's
+    walls: faces of the cells a crack marked (cell data ``corky``, ``wound``) turned away from
+    the direction out of ``centre`` (``|normal . radial|`` at most :data:`SKIN_COSINE`).  The
+    radial test alone failed on a curved banana, whose skin is far from radial."""
+    walls = np.zeros(surface.n_cells, bool)
+    for name in ("corky", "wound"):
+        if name in surface.cell_data:
+            walls |= np.asarray(surface.cell_data[name], float) > 0
+    if not walls.any():
+        return np.ones(surface.n_cells, bool)
     normals = surface.compute_normals(cell_normals=True, point_normals=False, auto_orient_normals=True)
     n = np.asarray(normals.cell_data["Normals"], float)
     out = np.asarray(surface.cell_centers().points, float) - np.asarray(centre, float)
     out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
-    return np.abs(np.einsum("ij,ij->i", n, out)) > SKIN_COSINE
+    return ~walls | (np.abs(np.einsum("ij,ij->i", n, out)) > SKIN_COSINE)
 
 
 def _faces(surface: pv.PolyData) -> tuple[np.ndarray, np.ndarray]:
@@ -247,7 +257,7 @@ def draw_round_marks(
         near |= close
         if close.any():
             edge = 2.0 * float(size[close].max())
-            levels = max(levels, int(np.ceil(np.log2(max(edge / (FINE_EDGE * d.radius), 1.0)))))
+            levels = max(levels, int(np.ceil(np.log2(max(edge / (FINE_EDGE[d.kind] * d.radius), 1.0)))))
     fine_pts, fine_tris, parent, fine_nrm = subdivide(
         pts, tris[near], min(levels, MAX_LEVELS), np.asarray(shaded.point_data["Normals"], float)
     )

@@ -190,3 +190,22 @@ def test_batch_masks_of_round_marks_are_the_drawn_discs():
                 assert (px[:, 1] > 0.4 * px[:, 0]).mean() >= 0.95
             checked.add(d["kind"])
     assert checked == {"hail", "rot"}
+
+
+def test_a_rot_lesion_on_a_curved_banana_is_found_and_drawn():
+    """The banana's skin is far from radial: every outer face of an uncut, uncracked fruit is skin."""
+    banana = build_fruit("banana", volume_levels=1, ripeness="yellow")
+    rotten, _ = apply_defects(banana, ["rot:at=ring6/sector1"])
+    grid = L.coloured_grid(rotten, round_marks=True)
+    surface = L.coloured_surface(grid)
+    centre = np.asarray(grid.center, float)
+    (disc,) = M.mark_discs(surface, centre)  # none when skin had to face away from the centre
+    skin = surface.compute_cell_sizes(length=False, volume=False)
+    rot = np.asarray(surface.cell_data["rot"]) > 0
+    assert np.pi * disc.radius**2 == pytest.approx(float(np.asarray(skin.cell_data["Area"])[rot].sum()))
+    drawn = M.draw_round_marks(surface, centre)
+    brown = np.array(hex_rgb(ROT["brown"]), float)
+    mids = np.asarray(drawn.cell_centers().points)
+    inner = np.linalg.norm(mids - disc.centre, axis=1) < 0.3 * disc.radius
+    colours = np.asarray(drawn.cell_data["rgb"], float)[inner]
+    assert inner.sum() > 100 and np.median(np.abs(colours - brown).max(axis=1)) < 40  # brown, not yellow
