@@ -380,8 +380,9 @@ def render_views(
     same = clean is damaged  # no located defect: one surface, one picture per view
     clean_surface = surface if same else _mm_grid(clean, centre, scale).extract_surface(algorithm="dataset_surface")
     face_cell = np.asarray(surface.cell_data["vtkOriginalCellIds"], np.int64)
+    pixel = size_mm / (max(V.FILL) * picture[1])  # mm: the largest a fruit is drawn
     surface, face_cell, round_bits, owner = _round_marks(
-        surface, face_cell, bits, labels["defects"], grid, int(damaged.meta.get("seed", 0) or 0)
+        surface, face_cell, bits, labels["defects"], grid, int(damaged.meta.get("seed", 0) or 0), pixel
     )
     for g in (grid, clean_surface):  # colours without the marks: only for drawing them
         if "rgb_plain" in g.cell_data:
@@ -451,9 +452,10 @@ def render_views(
 ROUND_KINDS = ("hail", "rot")
 
 
-def _round_marks(surface, face_cell, bits, defects, grid, seed):
+def _round_marks(surface, face_cell, bits, defects, grid, seed, pixel):
     """Draw the hail pits and rot lesions round (:func:`ramure.app.fruit_marks.draw_round_marks`,
-    normals split at the renderer's 50 degrees, mould placed by ``seed``):
+    normals split at the renderer's 50 degrees, mould placed by ``seed``, faces down to about
+    two ``pixel`` (mm) across):
     ``(surface, face cell, round_bits, owner)``.
 
     ``owner`` (None when nothing is drawn round): the face of ``surface`` each drawn face is
@@ -466,7 +468,7 @@ def _round_marks(surface, face_cell, bits, defects, grid, seed):
 
     centre = np.asarray(grid.center, float)
     discs = mark_discs(surface, centre) if "rgb_plain" in surface.cell_data else []
-    drawn = draw_round_marks(surface, centre, seed=seed, feature_angle=50.0, discs=discs)
+    drawn = draw_round_marks(surface, centre, seed=seed, feature_angle=50.0, discs=discs, pixel=pixel)
     if drawn is surface:
         return surface, face_cell, None, None
     round_mask = 0

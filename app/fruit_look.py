@@ -277,7 +277,7 @@ def render_png(
     else:  # hail pits and rot lesions round, not the square skin faces of their cells (a cut keeps them per cell)
         from ramure.app.fruit_marks import draw_round_marks
 
-        surface = draw_round_marks(surface, np.asarray(grid.center, float))
+        surface = draw_round_marks(surface, np.asarray(grid.center, float), pixel=frame / size[1])
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method

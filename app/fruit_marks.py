@@ -208,13 +208,16 @@ def draw_round_marks(
     seed: int = 0,
     feature_angle: float | None = None,
     discs: list[Disc] | None = None,
+    pixel: float = 0.0,
 ) -> pv.PolyData:
     """The surface with its hail pits and rot lesions drawn round (module docstring).
 
     ``surface`` carries cell data ``rgb`` (drawn colours) and ``rgb_plain`` (the same without
     bruise, scar and rot; :func:`ramure.app.fruit_look.coloured_grid`).  Skin faces take
     ``rgb_plain`` with the discs painted on, other faces (a crack's walls) keep ``rgb``.
-    ``discs``: those of :func:`mark_discs` (found when None).
+    ``discs``: those of :func:`mark_discs` (found when None).  ``pixel``: the picture's
+    pixel in model units: faces are not subdivided below about two of them (a batch's small
+    pictures need far fewer faces than the gallery's close-ups).
 
     Returned triangulated, with point ``Normals`` for smooth shading (a renderer must use
     them, not recompute them: a subdivided face's midpoints would shade flat), split where
@@ -257,7 +260,8 @@ def draw_round_marks(
         near |= close
         if close.any():
             edge = 2.0 * float(size[close].max())
-            levels = max(levels, int(np.ceil(np.log2(max(edge / (FINE_EDGE[d.kind] * d.radius), 1.0)))))
+            want = max(FINE_EDGE[d.kind] * d.radius, 2.0 * pixel)
+            levels = max(levels, int(np.ceil(np.log2(max(edge / want, 1.0)))))
     fine_pts, fine_tris, parent, fine_nrm = subdivide(
         pts, tris[near], min(levels, MAX_LEVELS), np.asarray(shaded.point_data["Normals"], float)
     )
@@ -274,14 +278,15 @@ def draw_round_marks(
     painted = rgb[fine]
     fine_bits = bits[fine]
     for k, d in enumerate(discs):
-        facing = outward[all_owner[fine]] @ d.normal > 0  # not through a thin fruit to its far side
         rel = (tri_mid - d.centre) / d.radius
-        u = np.where(facing, np.linalg.norm(rel, axis=1), np.inf)
+        u = np.linalg.norm(rel, axis=1)
+        # only faces the mark reaches, and not through a thin fruit to its far side
+        hit = np.flatnonzero((u < HAIL_HALO + 0.1) & (outward[all_owner[fine]] @ d.normal > 0))
         e1 = np.cross(d.normal, [1.0, 0.0, 0.0] if abs(d.normal[0]) < 0.9 else [0.0, 1.0, 0.0])
         e1 /= np.linalg.norm(e1)
-        xy = np.stack([rel @ e1, rel @ np.cross(d.normal, e1)], axis=1)
-        painted = round_mark_rgb(painted, d.kind, u, d.healed, xy, seed + k)
-        fine_bits |= np.where(mark_weight(u) >= 0.5, np.int64(1) << min(k, 62), np.int64(0))
+        xy = np.stack([rel[hit] @ e1, rel[hit] @ np.cross(d.normal, e1)], axis=1)
+        painted[hit] = round_mark_rgb(painted[hit], d.kind, u[hit], d.healed, xy, seed + k)
+        fine_bits[hit[mark_weight(u[hit]) >= 0.5]] |= np.int64(1) << min(k, 62)
     rgb[fine] = painted
     bits[fine] = fine_bits
     out = pv.PolyData(fine_pts, np.hstack([np.full((len(all_tris), 1), 3, np.int64), all_tris]).ravel())

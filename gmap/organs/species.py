@@ -359,11 +359,12 @@ def round_mark_rgb(
             rng = np.random.default_rng(seed)
             at = np.sqrt(rng.uniform(0.0, 0.5**2, count))[:, None] * _unit_circle(rng.uniform(0, 2 * np.pi, count))
             size = rng.uniform(small, large, count)
-            p = np.asarray(xy, float).reshape(-1, 2)
+            inner = np.flatnonzero(u < 0.5 + large)  # where colonies can be
+            p = np.asarray(xy, float).reshape(-1, 2)[inner]
             spot = np.zeros(len(p))
             for c, r in zip(at, size):  # a few colonies: one array pass each
                 spot = np.maximum(spot, 1.0 - _smoothstep(0.6 * r, r, np.linalg.norm(p - c, axis=1)))
-            out = _mix(out, ROT["mould"], 0.75 * spot * w)
+            out[inner] = _mix(out[inner], ROT["mould"], 0.75 * spot * w[inner])
         return out
     raise ValueRefused(f"round marks are hail or rot, got {kind!r}")
 

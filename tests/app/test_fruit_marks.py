@@ -174,7 +174,10 @@ def test_batch_masks_of_round_marks_are_the_drawn_discs():
     hail = {"count": 2, "depth_mm": (2.0, 3.0), "stop": "mesocarp"}
     recipe.update(malform=None, defects=[("hail", hail), ("rot", {"rate": 0.3})])
     clean, damaged, labels = F.build_one(recipe)
-    records, pictures, cleans, grid = F.render_views(0, 1, clean, damaged, labels, 65.0, 4, "plain", (256, 256))
+    try:
+        records, pictures, cleans, grid = F.render_views(0, 1, clean, damaged, labels, 65.0, 4, "plain", (256, 256))
+    finally:
+        F.close_plotter()  # no GL context left open in this process for a later batch's workers
     assert "rgb_plain" not in grid.cell_data  # the written grid is as before
     checked = set()
     for record, img, ref in zip(records, pictures, cleans):
