@@ -13,8 +13,11 @@ Here each mark becomes a :class:`Disc` found from the marked skin faces:
   vertex with the most rot round it, of the patch's equivalent radius (the disc of its area).
 
 :func:`draw_round_marks` then subdivides the skin faces near each disc (midpoints, so the
-shape does not move) until a face is a small fraction of the radius, and colours every face
-by its centroid's distance from the disc's centre (:func:`ramure.gmap.organs.species.round_mark_rgb`).
+shape does not move): finely where the colour changes sharply (the mark's edge, mould), less
+in the soft bruise halo, not below two pixels (:func:`_levels`); and colours every face by
+its centroid's distance from the disc's centre (:func:`ramure.gmap.organs.species.round_mark_rgb`).
+Neighbouring faces subdivided to different levels meet at T-junctions: their midpoints lie on
+the shared edge, so no gap opens (none seen in the batch's face-id pictures).
 Distances are straight lines, taken only on the disc's side of the fruit (face normal within
 90 degrees of the disc's): over a mark a few millimetres across on a fruit centimetres
 across, this is the distance along the skin to within a percent.
@@ -33,6 +36,8 @@ if TYPE_CHECKING:
 #: A subdivided face's longest edge is at most this fraction of the disc's radius, by kind
 #: (a rot lesion's mould colonies are a tenth of its radius across).
 FINE_EDGE = {"hail": 0.08, "rot": 0.035}
+#: Where a mark's colour changes softly, faces down to this fraction of its radius.
+SOFT_EDGE = 0.3
 #: At most this many midpoint subdivisions (each splits a triangle in four).
 MAX_LEVELS = 5
 #: Skin faces face outward: ``|normal . radial|`` above this (walls of a crack are below).
@@ -250,45 +255,34 @@ def draw_round_marks(
     tris = np.asarray(shaded.faces, np.int64).reshape(-1, 4)[:, 1:]
     owner = np.asarray(shaded.cell_data["face"], np.int64)
     pts = np.asarray(shaded.points, float)
-    mid = pts[tris].mean(axis=1)
-    size = np.linalg.norm(pts[tris] - mid[:, None, :], axis=2).max(axis=1)
-    near = np.zeros(len(tris), bool)
-    levels = 0
-    for d in discs:
-        reach = (HAIL_HALO if d.kind == "hail" else 1.0) * MARK_REACH * d.radius
-        close = skin[owner] & (np.linalg.norm(mid - d.centre, axis=1) < reach + size)
-        near |= close
-        if close.any():
-            edge = 2.0 * float(size[close].max())
-            want = max(FINE_EDGE[d.kind] * d.radius, 2.0 * pixel)
-            levels = max(levels, int(np.ceil(np.log2(max(edge / want, 1.0)))))
-    fine_pts, fine_tris, parent, fine_nrm = subdivide(
-        pts, tris[near], min(levels, MAX_LEVELS), np.asarray(shaded.point_data["Normals"], float)
-    )
+    level = np.where(skin[owner], _levels(pts, tris, discs, pixel), 0)
+    near = level > 0
+    fine_pts, fine_nrm = pts, np.asarray(shaded.point_data["Normals"], float)
+    pieces, owners = [tris[~near]], [owner[~near]]
+    for lv in np.unique(level[near]).tolist():  # each level apart: a shared edge's midpoints coincide
+        group = np.flatnonzero(level == lv)
+        fine_pts, new, parent, fine_nrm = subdivide(fine_pts, tris[group], lv, fine_nrm)
+        pieces.append(new)
+        owners.append(owner[group][parent])
     for d in discs:
         if d.depth > 0 and d.bowl > 0:
             fine_nrm = _pit_normals(fine_pts, fine_nrm, d)
-    all_tris = np.vstack([tris[~near], fine_tris])
-    all_owner = np.concatenate([owner[~near], owner[near][parent]])
+    all_tris = np.vstack(pieces)
+    all_owner = np.concatenate(owners)
     rgb = base[all_owner]
     bits = np.zeros(len(all_tris), np.int64)
-    fine = np.zeros(len(all_tris), bool)
-    fine[int((~near).sum()) :] = True
-    tri_mid = fine_pts[all_tris[fine]].mean(axis=1)
-    painted = rgb[fine]
-    fine_bits = bits[fine]
+    tri_mid = fine_pts[all_tris].mean(axis=1)
+    painted_skin = skin[all_owner]
     for k, d in enumerate(discs):
         rel = (tri_mid - d.centre) / d.radius
         u = np.linalg.norm(rel, axis=1)
-        # only faces the mark reaches, and not through a thin fruit to its far side
-        hit = np.flatnonzero((u < HAIL_HALO + 0.1) & (outward[all_owner[fine]] @ d.normal > 0))
+        # only skin faces the mark reaches, and not through a thin fruit to its far side
+        hit = np.flatnonzero((u < HAIL_HALO + 0.1) & painted_skin & (outward[all_owner] @ d.normal > 0))
         e1 = np.cross(d.normal, [1.0, 0.0, 0.0] if abs(d.normal[0]) < 0.9 else [0.0, 1.0, 0.0])
         e1 /= np.linalg.norm(e1)
         xy = np.stack([rel[hit] @ e1, rel[hit] @ np.cross(d.normal, e1)], axis=1)
-        painted[hit] = round_mark_rgb(painted[hit], d.kind, u[hit], d.healed, xy, seed + k)
-        fine_bits[hit[mark_weight(u[hit]) >= 0.5]] |= np.int64(1) << min(k, 62)
-    rgb[fine] = painted
-    bits[fine] = fine_bits
+        rgb[hit] = round_mark_rgb(rgb[hit], d.kind, u[hit], d.healed, xy, seed + k)
+        bits[hit[mark_weight(u[hit]) >= 0.5]] |= np.int64(1) << min(k, 62)
     out = pv.PolyData(fine_pts, np.hstack([np.full((len(all_tris), 1), 3, np.int64), all_tris]).ravel())
     out.point_data["Normals"] = fine_nrm
     out.point_data.active_normals_name = "Normals"
@@ -296,6 +290,36 @@ def draw_round_marks(
     out.cell_data["face"] = all_owner
     out.cell_data["mark_bits"] = bits
     return out
+
+
+def _levels(pts: np.ndarray, tris: np.ndarray, discs: list[Disc], pixel: float) -> np.ndarray:
+    """Midpoint subdivisions each triangle needs (0 to :data:`MAX_LEVELS`): where a mark's
+    colour changes sharply (its edge, a rot lesion's mould) faces shrink to
+    :data:`FINE_EDGE` of its radius, where it changes softly (a pit's bruise halo, the soaked
+    band) to :data:`SOFT_EDGE`, never below two ``pixel``; elsewhere none.  A triangle's
+    nearest and farthest distances from a disc's centre are taken over a grid of 15 points
+    on it, the nearest less a tenth of its longest edge."""
+    from ramure.gmap.organs.species import HAIL_HALO, MARK_EDGE
+
+    corners = pts[tris]
+    longest = np.max(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2), axis=1)
+    grid = np.array([(i, j, 4 - i - j) for i in range(5) for j in range(5 - i)], float) / 4.0
+    samples = np.einsum("sk,tkd->tsd", grid, corners)
+    need = np.zeros(len(tris))
+    for d in discs:
+        dist = np.linalg.norm(samples - d.centre, axis=2)
+        lo = (dist.min(axis=1) - 0.1 * longest) / d.radius
+        hi = dist.max(axis=1) / d.radius
+        sharp = (lo < MARK_EDGE[1] + 0.05) & (hi > MARK_EDGE[0] - 0.05)
+        soft_to = HAIL_HALO if d.kind == "hail" else MARK_EDGE[0]
+        soft = (lo < soft_to) & (hi > 0.4)
+        if d.kind == "rot":  # the mould colonies, out to half the radius and a colony
+            sharp |= lo < 0.65
+        want = np.where(sharp, FINE_EDGE[d.kind] * d.radius, np.where(soft, SOFT_EDGE * d.radius, np.inf))
+        want = np.maximum(want, 2.0 * pixel)
+        ratio = np.where(np.isfinite(want), longest / want, 0.0)
+        need = np.maximum(need, np.ceil(np.log2(np.maximum(ratio, 1.0))))
+    return np.minimum(need, MAX_LEVELS).astype(np.int64)
 
 
 def _pit_normals(points: np.ndarray, normals: np.ndarray, disc: Disc) -> np.ndarray:
@@ -314,10 +338,6 @@ def _pit_normals(points: np.ndarray, normals: np.ndarray, disc: Disc) -> np.ndar
     tilted = normals[sel] - slope[:, None] * flat[sel] / r[sel, None]
     out[sel] = tilted / np.linalg.norm(tilted, axis=1, keepdims=True)
     return out
-
-
-#: Faces out to this many radii (times the halo for hail) round a disc are subdivided.
-MARK_REACH = 1.25
 
 
 def mark_area(surface: pv.PolyData, disc: Disc) -> float:
