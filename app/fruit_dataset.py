@@ -339,7 +339,7 @@ def _mm_grid(gm, centre, scale):
     wet wounds, bruises, rot): :func:`ramure.app.fruit_look.coloured_grid`, seeded by the fruit."""
     from ramure.app.fruit_look import coloured_grid
 
-    grid = coloured_grid(gm, seed=int(gm.meta.get("seed", 0) or 0))
+    grid = coloured_grid(gm, seed=int(gm.meta.get("seed", 0) or 0), round_marks=True)
     grid.points = (np.asarray(grid.points) - centre) * scale
     return grid
 
@@ -380,8 +380,17 @@ def render_views(
     same = clean is damaged  # no located defect: one surface, one picture per view
     clean_surface = surface if same else _mm_grid(clean, centre, scale).extract_surface(algorithm="dataset_surface")
     face_cell = np.asarray(surface.cell_data["vtkOriginalCellIds"], np.int64)
+    pixel = size_mm / (max(V.FILL) * picture[1])  # mm: the largest a fruit is drawn
+    surface, face_cell, round_bits, owner = _round_marks(
+        surface, face_cell, bits, labels["defects"], grid, int(damaged.meta.get("seed", 0) or 0), pixel
+    )
+    for g in (grid, clean_surface):  # colours without the marks: only for drawing them
+        if "rgb_plain" in g.cell_data:
+            g.cell_data.remove("rgb_plain")
     cell_bits = bits[face_cell]
     face_bits = _face_bits(surface, cell_bits, labels["defects"])
+    if round_bits is not None:
+        face_bits = round_bits(face_bits)
     face_area = np.asarray(surface.compute_cell_sizes(length=False, volume=False).cell_data["Area"])
     rgb, clean_rgb = _cell_rgb(surface), _cell_rgb(clean_surface)
     renderer = _renderer(picture)
@@ -400,6 +409,8 @@ def render_views(
         pix_cells = np.where(seen, cell_bits[np.where(seen, faces, 0)], 0)
         seen_faces = np.zeros(surface.n_cells, bool)
         seen_faces[faces[seen]] = True
+        if owner is not None:  # drawn round: a face is seen when any piece of the face it was cut from is
+            seen_faces = np.bincount(owner[seen_faces], minlength=int(owner.max()) + 1)[owner] > 0
         defects = []
         for i, fact in enumerate(labels["defects"]):
             if fact["kind"] not in CATEGORY_ID:
@@ -435,6 +446,49 @@ def render_views(
         pictures.append(img)
         cleans.append(ref)
     return records, pictures, cleans, grid
+
+
+#: Defect kinds drawn as round marks (:mod:`ramure.app.fruit_marks`): their masks are the drawn discs.
+ROUND_KINDS = ("hail", "rot")
+
+
+def _round_marks(surface, face_cell, bits, defects, grid, seed, pixel):
+    """Draw the hail pits and rot lesions round (:func:`ramure.app.fruit_marks.draw_round_marks`,
+    normals split at the renderer's 50 degrees, mould placed by ``seed``, faces down to about
+    two ``pixel`` (mm) across):
+    ``(surface, face cell, round_bits, owner)``.
+
+    ``owner`` (None when nothing is drawn round): the face of ``surface`` each drawn face is
+    cut from.  ``round_bits`` (None then too) turns per-face defect bits into the
+    drawn surface's: a hail or rot defect that has a disc keeps its bit only on the faces
+    where one of its discs weighs at least one half, so its mask is the round mark the
+    picture shows, not the square skin faces of its cells.  A disc belongs to the defects
+    whose cells carry the faces it was found from."""
+    from ramure.app.fruit_marks import draw_round_marks, mark_discs
+
+    centre = np.asarray(grid.center, float)
+    discs = mark_discs(surface, centre) if "rgb_plain" in surface.cell_data else []
+    drawn = draw_round_marks(surface, centre, seed=seed, feature_angle=50.0, discs=discs, pixel=pixel)
+    if drawn is surface:
+        return surface, face_cell, None, None
+    round_mask = 0
+    for i, fact in enumerate(defects):
+        if fact["kind"] in ROUND_KINDS:
+            round_mask |= 1 << min(i, 30)
+    disc_bits = [int(np.bitwise_or.reduce(bits[face_cell[d.faces]], initial=0)) & round_mask for d in discs]
+    marks = np.asarray(drawn.cell_data["mark_bits"], np.int64)
+    owner = np.asarray(drawn.cell_data["face"], np.int64)
+    face_cell = face_cell[owner]
+
+    def round_bits(face_bits: np.ndarray) -> np.ndarray:
+        out = face_bits.copy()
+        for mine in disc_bits:
+            out &= ~np.int32(mine)
+        for k, mine in enumerate(disc_bits):
+            out[(marks >> min(k, 62)) & 1 == 1] |= np.int32(mine)
+        return out
+
+    return drawn, face_cell, round_bits, owner
 
 
 #: A crack's mask is its walls: faces of its cells turned away from the fruit's centre by

@@ -7,7 +7,9 @@ the defects panel and the gallery.  Choices:
 * **Colours** come from :func:`ramure.gmap.organs.species.cell_rgb`: the species and ripeness
   stored in ``gm.meta`` by :func:`ramure.gmap.organs.fruit.build_fruit` (a map without them is
   a red tomato), the damage marks the defects write (corky healed walls, wet fresh wounds,
-  bruises under hail pits, rot browning, water-soaking and mould).
+  bruises under hail pits, rot browning, water-soaking and mould).  Hail pits and rot lesions
+  are drawn round on a locally subdivided skin (:mod:`ramure.app.fruit_marks`), not as the
+  square skin faces of their cells; a cut picture keeps them per cell.
 * **Stem and calyx** are surface decorations (:func:`stem_and_calyx`), not cells: a stalk along
   the axis at the stem scar, and for tomatoes five sepals laid on the shoulder (each sepal point
   is dropped onto the skin by a ray, so they follow any shape).  Sizes in millimetres per
@@ -60,10 +62,14 @@ def species_of(gm: GMap3) -> tuple[str, str]:
     return species, check_stage(species, gm.meta.get("ripeness"))
 
 
-def coloured_grid(gm: GMap3, stage: str | None = None, seed: int = 0) -> pv.UnstructuredGrid:
+def coloured_grid(gm: GMap3, stage: str | None = None, seed: int = 0, round_marks: bool = False) -> pv.UnstructuredGrid:
     """The fruit's cells as an UnstructuredGrid with cell data ``rgb`` (species colours and damage)
     and field data ``materials`` (JSON: one material per tissue, see
-    :func:`ramure.gmap.organs.species.materials`), ``species``, ``ripeness`` and ``mm_per_unit``."""
+    :func:`ramure.gmap.organs.species.materials`), ``species``, ``ripeness`` and ``mm_per_unit``.
+
+    ``round_marks``: also ``rgb_plain``, the colours without the hail and rot marks (scar,
+    bruise, rot) nor a crack's, when the fruit has any, for
+    :func:`ramure.app.fruit_marks.draw_round_marks` to paint them round."""
     from ramure.gmap.kernel.pyvista import to_unstructured_grid
     from ramure.gmap.organs.species import CODES, MARKS, cell_rgb, check_stage, materials
 
@@ -77,6 +83,9 @@ def coloured_grid(gm: GMap3, stage: str | None = None, seed: int = 0) -> pv.Unst
     if "corky" in marks or "wound" in marks:  # crack walls: coloured_surface keeps the mark on the walls only
         plain = {k: v for k, v in marks.items() if k not in ("corky", "wound")}
         grid.cell_data["rgb_skin"] = cell_rgb(tissue, species, stage, centres, plain, seed)
+    if round_marks and any(k in marks for k in ("scar", "bruise", "rot")):
+        plain = {k: v for k, v in marks.items() if k not in ("corky", "wound", "scar", "bruise", "rot")}
+        grid.cell_data["rgb_plain"] = cell_rgb(tissue, species, stage, centres, plain, seed)
     whole = tissue == CODES["pericarp"]
     if whole.any():  # a fruit not subdivided: skin outside, flesh on a cut (cut_in_flesh)
         inner = np.where(whole, CODES["mesocarp"], tissue)
@@ -252,7 +261,7 @@ def render_png(
     headless_setup()
     import pyvista as pv
 
-    grid = coloured_grid(gm, stage)
+    grid = coloured_grid(gm, stage, round_marks=cut is None)
     species, ripe = str(grid.field_data["species"][0]), str(grid.field_data["ripeness"][0])
     mpu = float(gm.meta.get("mm_per_unit", 0.0) or 0.0)
     real = float(gm.meta.get("size_mm", 65.0))
@@ -265,6 +274,10 @@ def render_png(
     surface = coloured_surface(shown)
     if cut is not None:
         surface = cut_in_flesh(surface, cut[0], cut[1])
+    else:  # hail pits and rot lesions round, not the square skin faces of their cells (a cut keeps them per cell)
+        from ramure.app.fruit_marks import draw_round_marks
+
+        surface = draw_round_marks(surface, np.asarray(grid.center, float), pixel=frame / size[1])
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     try:
         plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method

@@ -217,7 +217,7 @@ class ViewRenderer:
                 scalars="rgb",
                 rgb=True,
                 smooth_shading=True,
-                split_sharp_edges=True,
+                split_sharp_edges=mesh.point_data.active_normals is None,  # round marks bring their own
                 feature_angle=50.0,
                 diffuse=0.85,
                 specular_power=30.0,

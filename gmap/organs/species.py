@@ -300,6 +300,75 @@ def cell_rgb(
     return np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
 
 
+def _unit_circle(angle: np.ndarray) -> np.ndarray:
+    return np.stack([np.cos(angle), np.sin(angle)], axis=1)
+
+
+def _smoothstep(lo: float, hi: float, x: np.ndarray) -> np.ndarray:
+    t = np.clip((np.asarray(x, float) - lo) / (hi - lo), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+#: A round mark's edge: its weight falls from 1 to 0 between these fractions of its radius
+#: (0.5 at the radius itself, so the mark's area at weight 0.5 is the disc's).
+MARK_EDGE = (0.85, 1.15)
+#: A hail pit's bruise shows through the skin round the pit out to this many radii.
+HAIL_HALO = 1.7
+
+
+def mark_weight(u: ArrayLike) -> np.ndarray:
+    """Weight of a round mark at ``u`` = distance from its centre over its radius: 1 inside,
+    a smoothstep down to 0 across :data:`MARK_EDGE`, exactly 0.5 at ``u = 1``."""
+    return 1.0 - _smoothstep(MARK_EDGE[0], MARK_EDGE[1], u)
+
+
+#: Mould colonies on a rot lesion: how many, and their radius range (fractions of the lesion's).
+MOULD_SPOTS = (16, 0.05, 0.11)
+
+
+def round_mark_rgb(
+    rgb: ArrayLike, kind: str, u: ArrayLike, healed: bool = False, xy: ArrayLike | None = None, seed: int = 0
+) -> np.ndarray:
+    """Skin colours (float RGB per face, 0..255) with one round mark painted on.
+
+    ``u`` is each face's distance from the mark's centre along the skin over the mark's
+    radius (:func:`mark_weight` gives the mark's extent); ``xy`` the same offset in the skin's
+    tangent plane, in radii (``(n, 2)``; places the mould, fixed by ``seed``).  ``kind``:
+
+    - ``"hail"``: a pit.  Healed (``healed``): a corky brown :data:`CORK` scar filling the pit,
+      fresh: the flesh's :data:`BRUISE` showing dark through the skin; either way a soft
+      bruise round it fading out at :data:`HAIL_HALO` radii.
+    - ``"rot"``: a lesion: browning :data:`ROT` ``brown`` all over, a darker water-soaked band
+      towards the rim, and :data:`MOULD_SPOTS` round grey-white mould colonies scattered over
+      its inner half (none drawn without ``xy``).
+    """
+    out = np.asarray(rgb, float).reshape(-1, 3).copy()
+    u = np.asarray(u, float).reshape(-1)
+    w = mark_weight(u)
+    if kind == "hail":
+        halo = 1.0 - _smoothstep(0.9, HAIL_HALO, u)
+        out = _mix(out, BRUISE, 0.35 * halo)
+        out = _mix(out, CORK, 0.92 * w) if healed else _mix(out, BRUISE, 0.55 * w)
+        return out
+    if kind == "rot":
+        out = _mix(out, ROT["brown"], 0.85 * w)
+        band = _smoothstep(0.45, 0.8, u) * w
+        out = _mix(out, ROT["soaked"], 0.75 * band)
+        if xy is not None:
+            count, small, large = MOULD_SPOTS
+            rng = np.random.default_rng(seed)
+            at = np.sqrt(rng.uniform(0.0, 0.5**2, count))[:, None] * _unit_circle(rng.uniform(0, 2 * np.pi, count))
+            size = rng.uniform(small, large, count)
+            inner = np.flatnonzero(u < 0.5 + large)  # where colonies can be
+            p = np.asarray(xy, float).reshape(-1, 2)[inner]
+            spot = np.zeros(len(p))
+            for c, r in zip(at, size):  # a few colonies: one array pass each
+                spot = np.maximum(spot, 1.0 - _smoothstep(0.6 * r, r, np.linalg.norm(p - c, axis=1)))
+            out[inner] = _mix(out[inner], ROT["mould"], 0.75 * spot * w[inner])
+        return out
+    raise ValueRefused(f"round marks are hail or rot, got {kind!r}")
+
+
 #: Damage and organ columns :func:`cell_rgb` reads from a grid's cell data.
 MARKS = ("corky", "wound", "scar", "bruise", "rot", "organ")
 
