@@ -87,7 +87,9 @@ knot's corners and the trunk's rings bend around the knot by a displacement
 field from the seam (:meth:`Wood._push`): the trunk makes room for the
 square round the knot's section, and the ring cells on the seam curve in
 along its round edge, so a tangential cut shows the trunk's rings flowing
-round a round knot.  The knot's pith is an arc (:meth:`Wood.knot_bender`):
+round a round knot.  The push moves a ring's corners round and along the
+trunk, not out of their ring (:meth:`Wood._keep_apothem`), so the stem stays
+round and tapering past a whorl (issue 39: it swelled into a bottle).  The knot's pith is an arc (:meth:`Wood.knot_bender`):
 the branch leaves the trunk's pith ``KNOT_BEND`` degrees steeper than it
 leaves the bark, as a conifer's branch bends in its knot.  The seam uses the law's mean
 widths, so regrowing a branch with a new seed moves only that branch.  On a knot's section the
@@ -2090,7 +2092,8 @@ class Wood:
         several knots reach a corner their fields are blended with weights
         ``1 / q^2`` (``q`` the distance outside each slot over its reach), so
         each knot's own field holds on its seam and two knots of one year do
-        not push the same cells twice.  ``host`` is the axis whose cells ``pts`` are (the trunk
+        not push the same cells twice.  The field has no part across the trunk's rings
+        (:meth:`_keep_apothem`, :meth:`_on_ring`).  ``host`` is the axis whose cells ``pts`` are (the trunk
         by default; a branch's for its sub-branches' knots, whose slots lie in its nodes).
         """
         host = self.trunk if host is None else host
