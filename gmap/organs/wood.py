@@ -87,7 +87,9 @@ knot's corners and the trunk's rings bend around the knot by a displacement
 field from the seam (:meth:`Wood._push`): the trunk makes room for the
 square round the knot's section, and the ring cells on the seam curve in
 along its round edge, so a tangential cut shows the trunk's rings flowing
-round a round knot.  The knot's pith is an arc (:meth:`Wood.knot_bender`):
+round a round knot.  The push moves a ring's corners round and along the
+trunk, not out of their ring (:meth:`Wood._keep_apothem`), so the stem stays
+round and tapering past a whorl (issue 39: it swelled into a bottle).  The knot's pith is an arc (:meth:`Wood.knot_bender`):
 the branch leaves the trunk's pith ``KNOT_BEND`` degrees steeper than it
 leaves the bark, as a conifer's branch bends in its knot.  The seam uses the law's mean
 widths, so regrowing a branch with a new seed moves only that branch.  On a knot's section the
@@ -1927,6 +1929,9 @@ class Wood:
     KNOT_BEND = 15.0
     #: steepest rise of a knot inside the trunk (degrees above the horizontal)
     KNOT_RISE = 35.0
+    #: share of a knot's push reach next to its slot where the trunk's corners follow the knot's
+    #: seam rather than their rings' circles (:meth:`_on_ring`)
+    RING_FREE = 0.5
 
     def _tapers(self, ax, cells, t, k, radii, rp):
         """Radius maps for the bottom and top corners of ``cells`` (the thesis's wedges, geometrically).
@@ -2087,7 +2092,8 @@ class Wood:
         several knots reach a corner their fields are blended with weights
         ``1 / q^2`` (``q`` the distance outside each slot over its reach), so
         each knot's own field holds on its seam and two knots of one year do
-        not push the same cells twice.  ``host`` is the axis whose cells ``pts`` are (the trunk
+        not push the same cells twice.  The field has no part across the trunk's rings
+        (:meth:`_keep_apothem`, :meth:`_on_ring`).  ``host`` is the axis whose cells ``pts`` are (the trunk
         by default; a branch's for its sub-branches' knots, whose slots lie in its nodes).
         """
         host = self.trunk if host is None else host
@@ -2099,6 +2105,7 @@ class Wood:
         per = pts.shape[1]
         num = np.zeros_like(base)
         den = np.zeros(len(base))
+        share = np.ones(len(base))  # how far each corner goes back onto its ring (_on_ring)
         for b, br in enumerate(self.branches):
             if b not in profiles or self.host(br) is not host:
                 continue
@@ -2153,6 +2160,9 @@ class Wood:
             terms += upper
             terms *= blend
             field = seam(u, v, lo, frac[:, 0]) - terms.sum(axis=1)
+            radial = rel[near] - z[near, None] * f[t, 0]  # across the trunk, of length r_h
+            s_at = (1 - frac[:, 0]) * s_layer[lo] + frac[:, 0] * s_layer[hi]
+            field = self._keep_apothem(br, frame, field, radial, f[t, 0], v, s_at)
             reach = np.maximum(2 * np.maximum(size_layer[lo], size_layer[hi]), 1e-12)
             q = outside[near] / reach
             fade = np.clip(1 - q, 0, 1)
@@ -2161,12 +2171,69 @@ class Wood:
             field *= (weight * fade)[:, None]
             num[at] += field
             den[at] += weight
+            share[at] = np.minimum(share[at], np.clip(q / self.RING_FREE, 0.0, 1.0))
         moved = np.flatnonzero(den > 0)
         out = base.copy()
         shift = num[moved]
         shift /= den[moved, None]
         out[moved] += shift
+        out[moved] = self._on_ring(host, base[moved], out[moved], levels[moved // per], share[moved])
         return out.reshape(pts.shape)
+
+    def _on_ring(self, host: Axis, before: np.ndarray, after: np.ndarray, levels: np.ndarray, share: np.ndarray) -> np.ndarray:
+        """Corners ``after`` put back at the distance from their level's axis they had ``before`` the push.
+
+        Each knot's field has no part across the rings (:meth:`_keep_apothem`),
+        but its move round the trunk runs along the knot's tangent, off the
+        ring's circle, and the blend of several knots' moves cuts inside it.
+        So the corner goes back to its ring across the axis of its level,
+        keeping its height and its angle round the axis, by the ``share``
+        (0 to 1) given per corner: near a slot the corners keep the knot's
+        seam (whose own corners lie on its flat sections, off the ring;
+        bringing their neighbours onto the ring there turns cells inside
+        out), from ``RING_FREE`` of the field's reach out they are on the ring.
+        """
+        o, f, _ = self.level_frames(host)
+        up = f[levels, 0]
+        rel_b, rel_a = before - o[levels], after - o[levels]
+        across_b = rel_b - np.einsum("ij,ij->i", rel_b, up)[:, None] * up
+        across_a = rel_a - np.einsum("ij,ij->i", rel_a, up)[:, None] * up
+        scale = np.linalg.norm(across_b, axis=1) / np.maximum(np.linalg.norm(across_a, axis=1), 1e-300)
+        return after + (share * (scale - 1.0))[:, None] * across_a
+
+    def _keep_apothem(
+        self, br: Branch, frame: np.ndarray, field: np.ndarray, radial: np.ndarray, up: np.ndarray, v: np.ndarray, s: np.ndarray
+    ) -> np.ndarray:
+        """The knot's push ``field`` at trunk corners with no part across the trunk's rings (issue 39).
+
+        The seam's hull (:meth:`_seam_map`) lies off the trunk's ring
+        cylinders: its lower side juts out by ``d sin(e)`` on a knot rising
+        at ``e`` (its upper side sinks in as much), and its sides run on the
+        knot's straight tangent, out of the ring's arc.  Faded over twice
+        its size, that radial part pushed every ring and the bark out all
+        round a whorl, the log a bottle (level 0 of a 15-year pine 86 mm at
+        its top for 62 mm at its base, mean over its sectors).  So the
+        radial part ``d_r`` of the field (``radial`` the corner's offset
+        across the trunk's axis ``up``) is removed, and on the knot's lower
+        and upper sides (weight ``|v|``, the slot coordinate) it is turned
+        into a slide along the trunk, ``-d_r tan(e)`` with ``e`` the bent
+        knot's local elevation at ``s``: the point moves as if along the
+        knot, so it keeps its distance from the knot's axis (the rings stay
+        clear of the knot).  The move round the trunk, along its tangent,
+        is bent back onto the ring's circle after the knots' fields are
+        blended (:meth:`_on_ring`).
+        The corners on the seam keep the knot's own corners (its volumes
+        are exclusive).
+        """
+        _, f, _ = self.level_frames(self.host(br))
+        e = math.asin(float(np.clip(frame[0] @ f[br.level, 0], -0.99, 0.99)))
+        h0 = self.knot_length(br)
+        local = e + math.radians(self.KNOT_BEND) * (1 - np.clip(s, 0.0, h0) / h0)
+        r_h = np.maximum(np.linalg.norm(radial, axis=1), 1e-300)
+        unit = radial / r_h[:, None]
+        d_r = np.einsum("ij,ij->i", field, unit)
+        slide = -d_r * np.tan(np.clip(local, -1.2, 1.2)) * np.abs(v)
+        return field - d_r[:, None] * unit + slide[:, None] * up[None, :]
 
     def _seam_map(self, br, p0, frame, s_layer, rho_layer, lateral, hull=False, level=False):
         """Where the knot's seam lies at slot coordinates ``(u, v)`` in ``[-1, 1]^2``, fractional layer ``j + w``.

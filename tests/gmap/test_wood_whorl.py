@@ -1,0 +1,105 @@
+"""A whorl does not make a bottle of the log (issue 39): the knots' push bends the trunk's rings
+round each knot but keeps every ring, and the bark, on its cylinder, so the stem's outer radius
+goes on tapering past the node instead of jumping by a knot's radius all round it."""
+
+import numpy as np
+import pytest
+
+from ramure.gmap.kernel.topology import assert_solid
+from ramure.gmap.organs import wood as W
+
+WHORL = [(1, 0), (1, 5), (1, 11)]  # three branches of year 1, as a pine's whorl
+
+
+@pytest.fixture(scope="module")
+def whorl():
+    return W.grow_wood("pine", years=10, seed=0, branches=WHORL)
+
+
+def outer_radii(wood: W.Wood) -> np.ndarray:
+    """``(levels, sectors, 2)``: the largest distance from the trunk's axis of the drawn vertices of
+    each trunk stack's outermost cell, at the level's bottom and top (NaN in a knot's slot).  The
+    vertices a branch's volumes share (the knot's seam and its end) are left out: the branch leaves
+    the trunk there."""
+    gm = wood.gm
+    vid, pos = gm.vertex_positions()
+    on_branch = np.zeros(len(pos), bool)
+    on_branch[vid[gm.volume_data["axis"][gm.dart_volume] > 0]] = True
+    order = np.argsort(gm.dart_volume, kind="stable")
+    starts = np.searchsorted(gm.dart_volume[order], np.arange(len(gm.volume_data["cell"]) + 1))
+    ax = wood.trunk
+    o, f, h = wood.level_frames(ax)
+    out = np.full((len(ax.levels), ax.sides, 2), np.nan)
+    for t in range(len(ax.levels)):
+        middle = o[t, 2] + 0.5 * h[t]
+        for k in range(ax.sides):
+            if not ax.alive[t, k]:
+                continue
+            vol = gm.dart_volume[ax.cells[t, k, int(ax.count[t, k]) - 1]]
+            v = np.unique(vid[order[starts[vol] : starts[vol + 1]]])
+            pts = pos[v[~on_branch[v]]]
+            r = np.hypot(pts[:, 0], pts[:, 1])
+            low, high = pts[:, 2] < middle, pts[:, 2] >= middle
+            out[t, k] = (r[low].max() if low.any() else np.nan), (r[high].max() if high.any() else np.nan)
+    return out
+
+
+def swelling(radii: np.ndarray) -> float:
+    """Largest outer radius over the narrowest one below it in the same sector, less 1, over the
+    trunk read upwards level by level (bottom, then top)."""
+    worst = 0.0
+    for k in range(radii.shape[1]):
+        along = radii[:, k].reshape(-1)
+        along = along[~np.isnan(along)]
+        narrowest = np.minimum.accumulate(along)
+        worst = max(worst, float(np.max(along[1:] / narrowest[:-1])) - 1)
+    return worst
+
+
+def test_the_log_tapers_past_a_whorl(whorl):
+    """Away from the knots (sectors neither holding a knot nor next to one) every sector's outer
+    radius is non-increasing upwards within 3 % (it swelled by 40 %, the knots' push moving the bark
+    out all round the node), and the stem's mean radius at the node is as without knots.  Next to a
+    knot the seam's flat sections, off the round trunk, still swell it by under 8 % (was 44 %)."""
+    bent = outer_radii(whorl)
+    whorl.bend_rings = False
+    whorl.embed()
+    straight = outer_radii(whorl)
+    whorl.bend_rings = True
+    whorl.embed()
+    n = whorl.trunk.sides
+    near = {(k + d) % n for _, k in WHORL for d in (-1, 0, 1)}
+    far = [k for k in range(n) if k not in near]
+    assert len(far) == 7
+    assert swelling(bent[:, far]) < 0.03
+    assert swelling(straight) < 0.03
+    assert swelling(bent) < 0.08
+    node = WHORL[0][0]  # the node's level: the bottom of its level and the top of the level below
+    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.035)
+    assert np.nanmean(bent[node, :, 0]) == pytest.approx(np.nanmean(straight[node, :, 0]), rel=0.035)
+
+
+def test_a_whorl_stays_a_valid_ball_with_the_estimated_darts(whorl):
+    assert_solid(whorl.gm)
+    assert whorl.gm.euler_characteristic() == 1
+    assert whorl.gm.n_darts == W.estimated_darts(whorl.p, 10, [y for y, _ in WHORL])
+
+
+def test_the_push_moves_ring_corners_round_the_trunk_not_out(whorl):
+    """Away from the knots' sectors the push moves trunk corners by centimetres round and along the
+    trunk but at most 2.5 mm out from its axis (it moved them 18 mm out), and none in."""
+    vd = whorl.gm.volume_data
+    flat, offset = whorl.default_corners()
+    whorl.bend_rings = False
+    straight, _ = whorl.default_corners()
+    whorl.bend_rings = True
+    n = whorl.trunk.sides
+    near = [(k + d) % n for _, k in WHORL for d in (-1, 0, 1)]
+    trunk = (vd["axis"] == 0) & (vd["cell"] > 0) & (np.abs(vd["level"] - 1) <= 1)
+    cells = np.flatnonzero(trunk & ~np.isin(vd["sector"], near))
+    rows = (offset[cells][:, None] + np.arange(8)[None, :]).reshape(-1)
+    moved = np.linalg.norm(flat[rows] - straight[rows], axis=1)
+    assert moved.max() > 0.02  # 34 mm
+    out = np.hypot(flat[rows, 0], flat[rows, 1]) - np.hypot(straight[rows, 0], straight[rows, 1])
+    assert out.max() < 2.5e-3  # 2.2 mm
+    assert out.min() > -1e-6
