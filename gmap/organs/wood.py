@@ -2971,9 +2971,8 @@ def _trunk_chain(skeleton):
     return np.array(chain)
 
 
-def _subtree_leaves(skeleton, segment):
-    """History-leaf ids of a segment and every segment growing from it."""
-    parent = np.asarray(skeleton.parent)
+def _subtree(parent: np.ndarray, segment: int) -> np.ndarray:
+    """Mask of a segment and every segment growing from it, at any depth."""
     inside = np.zeros(len(parent), bool)
     inside[segment] = True
     for _ in range(len(parent)):
@@ -2981,6 +2980,12 @@ def _subtree_leaves(skeleton, segment):
         if not grow.any():
             break
         inside |= grow
+    return inside
+
+
+def _subtree_leaves(skeleton, segment):
+    """History-leaf ids of a segment and every segment growing from it."""
+    inside = _subtree(np.asarray(skeleton.parent), segment)
     return sorted(set(np.asarray(skeleton.leaf_id)[inside].tolist()))
 
 
@@ -3115,13 +3120,7 @@ def skeleton_branches(
 
 def _subtree_branches(order: np.ndarray, parent: np.ndarray, segment: int) -> int:
     """Branches (axis starts) growing on the axis from ``segment`` and on those, at any depth."""
-    inside = np.zeros(len(parent), bool)
-    inside[segment] = True
-    for _ in range(len(parent)):
-        grow = ~inside & (parent >= 0) & inside[np.maximum(parent, 0)]
-        if not grow.any():
-            break
-        inside |= grow
+    inside = _subtree(parent, segment)
     starts = inside & (parent >= 0) & (order > order[np.maximum(parent, 0)])
     starts[segment] = False
     return int(starts.sum())
