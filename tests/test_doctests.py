@@ -32,12 +32,19 @@ PACKAGES = [
 
 
 def _modules():
+    """Every module of the packages, sub-packages at any depth included (the rooms of
+    ``ramure.lsys`` and ``ramure.gmap``: ``iter_modules`` alone stopped at the first level)."""
     names = []
     for package in PACKAGES:
         names.append(package)
         module = importlib.import_module(package)
-        names += [f"{package}.{m.name}" for m in pkgutil.iter_modules(module.__path__) if not m.ispkg]
+        names += [m.name for m in pkgutil.walk_packages(module.__path__, prefix=f"{package}.")]
     return sorted(set(names))
+
+
+def test_the_rooms_examples_are_collected():
+    found = set(_modules())
+    assert {"ramure.gmap.organs.wood", "ramure.gmap.kernel.map3", "ramure.lsys.engine.derive"} <= found
 
 
 @pytest.mark.parametrize("name", _modules())

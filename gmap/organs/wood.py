@@ -500,7 +500,7 @@ def branch_direction(f: np.ndarray, phi: float, elev: float) -> np.ndarray:
     The knot's side 0 faces the slot's bottom wall (the sew puts it there),
     side 1 the wall at sector ``k + 1``: L points down the host, away from H.
 
-    >>> np.round(branch_direction(np.eye(3)[[2, 0, 1]], 0.0, 0.0), 6).tolist()
+    >>> (np.round(branch_direction(np.eye(3)[[2, 0, 1]], 0.0, 0.0), 6) + 0.0).tolist()  # + 0.0: no -0.0
     [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]
     """
     radial = math.cos(phi) * f[1] + math.sin(phi) * f[2]
