@@ -25,6 +25,7 @@ from cached machine code as well (:func:`initialize_runtime`: about 20 MB less).
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 import pathlib
@@ -56,6 +57,8 @@ def _load_lightly(dispatcher: Any) -> Any:
     cache = getattr(dispatcher, "_cache", None)
     if isinstance(cache, Cache) and hasattr(cache, "_load_overload"):
         cache.load_overload = types.MethodType(_load_overload, cache)  # type: ignore[method-assign]  # this instance only
+    if isinstance(cache, Cache) and hasattr(cache, "_save_overload") and hasattr(cache, "_cache_file"):
+        cache.save_overload = types.MethodType(_save_overload, cache)  # type: ignore[method-assign]  # this instance only
     return dispatcher
 
 
@@ -63,8 +66,8 @@ def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:
     """Cached machine code for ``sig``, or None (then numba compiles, refreshing its compiler).
 
     A cache file that cannot be read back (``pickle`` refuses it: a damaged file) counts as
-    no cache: the kernel compiles and numba writes the file anew, where numba's own loader
-    would raise.
+    no cache: the kernel compiles and :func:`_save_overload` writes the file anew, where
+    numba's own loader would raise.
 
     The runtime (NRT) must be up: the cached code calls its allocation and reference
     counting (:func:`initialize_runtime`)."""
@@ -77,6 +80,24 @@ def _load_overload(cache: Any, sig: Any, target_context: Any) -> Any:
         raise
     except Exception:  # noqa: BLE001 - a damaged cache file (cut short, or its index out of step
         return None  # with it after the source changed under a running process): compile anew
+
+
+def _save_overload(cache: Any, sig: Any, data: Any) -> None:
+    """numba's ``save_overload``, mending a damaged index: numba's own raises when the kernel's
+    index file cannot be read back (cut short, or rewritten under a running process), so the
+    computation failed after compiling.  Here the index is written anew (the other entries are
+    lost: they compile again once) and the save tried once more; if that fails too, the kernel
+    runs uncached."""
+    try:
+        cache._save_overload(sig, data)
+        return
+    except OSError:
+        pass  # as numba's own guard: an unwritable folder is no reason to fail
+    except Exception:  # noqa: BLE001 - a damaged index: start it again
+        with contextlib.suppress(OSError):
+            os.unlink(cache._cache_file._index_path)
+    with contextlib.suppress(Exception):
+        cache._save_overload(sig, data)
 
 
 def initialize_runtime(target_context: Any) -> None:

@@ -162,3 +162,14 @@ def test_a_damaged_cache_file_compiles_anew_instead_of_failing(tmp_path):
     assert again["match"] == EXPECTED_MATCH and again["compiled"] == ["fill_bracket_pairs"]
     third = _run(tmp_path)  # and the file written anew loads
     assert (third["misses"], third["hits"]) == (0, 1)
+
+
+def test_a_damaged_index_is_written_anew(tmp_path):
+    assert _run(tmp_path)["misses"] == 1
+    (index,) = [p for p in tmp_path.rglob("*.nbi") if "fill_bracket_pairs" in p.name]
+    head = index.read_bytes()[:40]
+    index.write_bytes(head)  # cut short after numba's version: the rest does not unpickle
+    again = _run(tmp_path)
+    assert again["match"] == EXPECTED_MATCH and again["compiled"] == ["fill_bracket_pairs"]
+    third = _run(tmp_path)
+    assert (third["misses"], third["hits"]) == (0, 1)  # the index was written anew
