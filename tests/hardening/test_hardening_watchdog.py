@@ -15,7 +15,7 @@ def test_a_busy_input_is_stopped_after_its_cpu_seconds():
     with pytest.raises(Hang), bounded(0.2):
         while True:
             pass
-    assert 0.2 <= time.process_time() - start < 1.0
+    assert 0.15 <= time.process_time() - start < 1.0  # the profiling timer and process_time count apart
 
 
 def test_waiting_is_not_cpu_but_the_wall_backstop_stops_it():
