@@ -537,11 +537,15 @@ def split_corners(gm: GMap3, split: np.ndarray) -> None:
     a0, a1 = gm.alpha[0], gm.alpha[1]
     left, right = a0[split], a0[a1[split]]
     vol = gm.dart_volume[split].astype(np.int64)
-    keep = np.ones(len(corners), bool)
-    keep[split] = False
-    own = gm.dart_volume[: len(corners)].astype(np.int64)
-    count = np.bincount(own[keep], minlength=int(vol.max()) + 1)
-    centre = np.stack([np.bincount(own[keep], corners[keep, j], minlength=len(count)) for j in range(3)], axis=1)
+    own = gm.dart_volume[: len(corners)]
+    need = np.zeros(max(int(own.max()), int(vol.max())) + 1, bool)
+    need[vol] = True
+    pick = need[own]  # the darts of the split darts' volumes only (the same sums, in the same order)
+    pick[split] = False
+    darts = np.flatnonzero(pick)
+    mine = own[darts].astype(np.int64)
+    count = np.bincount(mine, minlength=len(need))
+    centre = np.stack([np.bincount(mine, corners[darts, j], minlength=len(need)) for j in range(3)], axis=1)
     corners[split] = centre[vol] / np.maximum(count[vol], 1)[:, None]
     for _ in range(SPLIT_ROUNDS):
         corners[split] = 0.5 * (corners[left] + corners[right])
