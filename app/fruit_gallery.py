@@ -14,6 +14,11 @@ from typing import Any
 
 #: Defect pairs: (title, preset, volume levels, better spec, worse spec).  Tomatoes tolerate no
 #: crack in Class I (FFV-36), so the tomato crack pair is Class II against out of grade.
+#: Shrivel: about 2 % and 4 % of the volume lost (Class I up to 3 %, Class II up to 5 %,
+#: :mod:`ramure.gmap.organs.grading`), creased six times the shrink defect's default
+#: (``wrinkle=6``: about 0.34 and 0.67 mm deep on a 75 mm apple, the default's 0.06 and 0.11 mm
+#: do not show), twice subdivided so a crease spans several skin faces, under a raking light
+#: (:data:`RAKING`).
 DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
     ("healed crack (apple)", "apple", 1, "crack:healed=1,rings=8-9,sector=2", "crack:healed=1,rings=7-10,sector=2"),
     (
@@ -24,7 +29,7 @@ DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
         "crack:kind=concentric",
     ),
     ("hail (tomato)", "round_tomato", 2, "hail:count=1,depth_mm=0.8,healed=1,vertex=-1", "hail:count=3,depth_mm=1.8,healed=1"),
-    ("shrivel (apple)", "apple", 1, "shrink:rate=0.008", "shrink:rate=0.013"),
+    ("shrivel (apple)", "apple", 2, "shrink:rate=0.003,wrinkle=6", "shrink:rate=0.006,wrinkle=6"),
     (
         "excrescence (tomato)",
         "round_tomato",
@@ -34,6 +39,16 @@ DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
     ),
     ("rot (pear)", "pear", 1, "rot:at=ring8/sector3,coefficients=2.5", "rot:at=ring8/sector3"),
 ]
+
+
+#: Defect kinds the sheet draws under a raking light (:func:`ramure.app.fruit_look.raking_lights`):
+#: shallow relief (shrivel creases) that a frontal light flattens.
+RAKING = ("shrink",)
+
+
+def sheet_light(spec: str) -> str:
+    """The light the defect sheet draws ``spec`` under: ``"raking"`` for :data:`RAKING` kinds."""
+    return "raking" if spec.split(":", 1)[0].strip() in RAKING else "front"
 
 
 #: Presets whose skin pattern is finer than a once-subdivided cell: a ripe banana's sugar spots
@@ -107,7 +122,7 @@ def defect_sheet(path: str | os.PathLike, tile: int = 320, pairs: Sequence[Pair]
                 damaged, facts = apply_defects(gm, [spec])
                 grade = facts["unece"]["grade"] or "not tabulated"
                 out = os.path.join(folder, f"{i}_{j}.png")
-                render_png(damaged, out, size=(tile, tile), view="defect", legend=False)
+                render_png(damaged, out, size=(tile, tile), view="defect", legend=False, light=sheet_light(spec))
                 row.append((out, f"{title}: {grade}"))
                 shown.append({"defect": title, "spec": spec, "grade": grade, "reasons": facts["unece"]["reasons"]})
             rows.append(row)

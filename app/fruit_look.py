@@ -245,6 +245,7 @@ def render_png(
     stage: str | None = None,
     frame_mm: float | None = None,
     decorations: bool = True,
+    light: str = "front",
 ) -> dict[str, Any]:
     """Render a fruit map to a PNG at a physical scale; returns the picture's metadata.
 
@@ -252,12 +253,18 @@ def render_png(
     ``view``: ``"side"`` (from the side, a little above), ``"top"`` (down the axis onto the stem
     scar), ``"bottom"``, ``"defect"`` (facing the damaged cells, :func:`defect_direction`) or a
     direction.  ``frame_mm``: the frame's width in millimetres (default
-    the fruit's real size times :data:`FRAME_MARGIN`).  Metadata: ``mm_per_pixel``, ``species``,
+    the fruit's real size times :data:`FRAME_MARGIN`).  ``light``: ``"front"`` (pyvista's light
+    kit, soft and from about the camera) or ``"raking"`` (:func:`raking_lights`: a low light from
+    the side, so shallow relief such as shrivel wrinkles casts shading).  Metadata: ``mm_per_pixel``, ``species``,
     ``ripeness``, written into the PNG as text chunks too.
     """
     from ramure.app.render import headless_setup
     from ramure.gmap.kernel.cut import plane_cut
 
+    if light not in ("front", "raking"):
+        from ramure.errors import ValueRefused
+
+        raise ValueRefused(f"light must be front or raking, got {light!r}")
     headless_setup()
     import pyvista as pv
 
@@ -307,6 +314,10 @@ def render_png(
         look = _direction(defect_direction(whole_marked(grid), centre) if view == "defect" else view, cut)
         up = (0.0, 0.0, 1.0) if abs(look[2]) < 0.9 else (0.0, 1.0, 0.0)
         plotter.camera_position = [tuple(centre + look * frame * 4.0), tuple(centre), up]
+        if light == "raking":
+            plotter.remove_all_lights()
+            for lamp in raking_lights(look, up):
+                plotter.add_light(lamp)
         plotter.enable_parallel_projection()  # type: ignore[call-arg]  # pyvista stubs: decorated method
         plotter.camera.parallel_scale = 0.5 * frame
         plotter.camera.clipping_range = (frame * 0.5, frame * 8.0)
@@ -318,6 +329,32 @@ def render_png(
     meta = {"mm_per_pixel": frame * mpu / size[1], "species": species, "ripeness": ripe, "size_mm": real}
     _write_png(path, image, meta)
     return meta
+
+
+#: Raking light: its angle from the line of sight (degrees; 90 grazes the skin facing the
+#: camera) and the strength of the frontal fill that keeps the shadowed side readable.
+RAKING_ANGLE = 80.0
+RAKING_FILL = 0.2
+
+
+def raking_lights(look: Any, up: Any) -> list[pv.Light]:
+    """A low light from the picture's left, :data:`RAKING_ANGLE` degrees off the line of sight
+    (``look``, from the fruit towards the camera), plus a weak frontal fill
+    (:data:`RAKING_FILL`).  Both are camera-independent directional lights: a crease facing the
+    lamp is lit, the one behind it is in shade, as a grower tilts a fruit to the window."""
+    import pyvista as pv
+
+    look = np.asarray(look, float) / np.linalg.norm(look)
+    up = np.asarray(up, float)
+    left = np.cross(look, up)  # the picture's left as seen from the camera
+    left /= max(float(np.linalg.norm(left)), 1e-12)
+    a = np.radians(RAKING_ANGLE)
+    towards = np.cos(a) * look + np.sin(a) * (left)
+    lamp = pv.Light(position=tuple(towards), focal_point=(0.0, 0.0, 0.0), intensity=1.0 - RAKING_FILL * 0.5)
+    fill = pv.Light(position=tuple(look), focal_point=(0.0, 0.0, 0.0), intensity=RAKING_FILL)
+    for light in (lamp, fill):
+        light.positional = False
+    return [lamp, fill]
 
 
 def _legend(plotter, entries, size):

@@ -83,6 +83,44 @@ def test_defect_sheet_grades_are_computed_and_ordered(tmp_path):
     assert Image.open(tmp_path / "sheet.png").size == (320, 2 * (160 + 22))
 
 
+def _shading_change(path, fresh):
+    """Pixels inside both silhouettes (6 px in from their edges) whose luminance differs from
+    the fresh fruit's picture by more than 10 levels: the shading the creases add."""
+    from scipy import ndimage
+
+    lum = [_pixels(p) @ np.array([0.299, 0.587, 0.114]) for p in (path, fresh)]
+    inside = ndimage.binary_erosion((lum[0] < 235) & (lum[1] < 235), iterations=6)
+    return int((np.abs(lum[0] - lum[1])[inside] > 10).sum())
+
+
+def test_shrivel_pair_is_class_i_and_ii_and_class_ii_creases_show(tmp_path):
+    from ramure.app.fruit_gallery import DEFECT_PAIRS, sheet_light
+
+    _, preset, levels, better, worse = next(p for p in DEFECT_PAIRS if p[0].startswith("shrivel"))
+    assert sheet_light(worse) == "raking" and sheet_light("rot:at=ring8/sector3") == "front"
+    fresh = build_fruit(preset, volume_levels=levels)
+    kw = {"size": (320, 320), "view": "defect", "legend": False, "light": "raking"}
+    L.render_png(fresh, tmp_path / "fresh.png", **kw)
+    grades, change = [], []
+    for name, spec in (("better", better), ("worse", worse)):
+        damaged, facts = apply_defects(fresh, [spec])
+        grades.append(facts["unece"]["grade"])
+        meta = L.render_png(damaged, tmp_path / f"{name}.png", **kw)
+        assert meta["size_mm"] == 75.0  # the frame is the fresh fruit's: never refitted to the shrunk one
+        change.append(_shading_change(tmp_path / f"{name}.png", tmp_path / "fresh.png"))
+    assert grades == ["Class I", "Class II"]  # 1-3 % and 3-5 % volume lost
+    # measured 229 and 531 pixels; the former specs (rate 0.008 / 0.013, once subdivided) gave about 60 and 200
+    assert change[1] > 400 and change[1] > 1.8 * change[0]
+
+
+def test_render_refuses_an_unknown_light(tomato, tmp_path):
+    from ramure.errors import ValueRefused
+
+    with pytest.raises(ValueRefused, match="light must be front or raking"):
+        L.render_png(tomato, tmp_path / "x.png", light="sideways")
+    assert not (tmp_path / "x.png").exists()
+
+
 def test_plant_export_has_one_material_per_fruit_tissue(tmp_path):
     from ramure.app.export import export_mesh, read_glb
     from ramure.app.model import Explorer
