@@ -14,11 +14,11 @@ from typing import Any
 
 #: Defect pairs: (title, preset, volume levels, better spec, worse spec).  Tomatoes tolerate no
 #: crack in Class I (FFV-36), so the tomato crack pair is Class II against out of grade.
-#: Shrivel: about 2 % and 4 % of the volume lost (Class I up to 3 %, Class II up to 5 %,
-#: :mod:`ramure.gmap.organs.grading`), creased six times the shrink defect's default
-#: (``wrinkle=6``: about 0.34 and 0.67 mm deep on a 75 mm apple, the default's 0.06 and 0.11 mm
-#: do not show), twice subdivided so a crease spans several skin faces, under a raking light
-#: (:data:`RAKING`).
+#: Shrivel: 2.1 % and 4.2 % of the volume lost (Class I up to 3 %, Class II up to 5 %,
+#: :mod:`ramure.gmap.organs.grading`), creased nine times the shrink defect's default
+#: (``wrinkle=9``: 0.42 and 0.84 mm deep on a 75 mm apple; the default's 0.05 and 0.09 mm do
+#: not show) in 6 mm waves (fine shrivel, still 2.4 skin faces a wave when twice subdivided;
+#: the default, a seventh of the fruit, reads as dents), under a raking light (:data:`RAKING`).
 DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
     ("healed crack (apple)", "apple", 1, "crack:healed=1,rings=8-9,sector=2", "crack:healed=1,rings=7-10,sector=2"),
     (
@@ -29,7 +29,7 @@ DEFECT_PAIRS: list[tuple[str, str, int, str, str]] = [
         "crack:kind=concentric",
     ),
     ("hail (tomato)", "round_tomato", 2, "hail:count=1,depth_mm=0.8,healed=1,vertex=-1", "hail:count=3,depth_mm=1.8,healed=1"),
-    ("shrivel (apple)", "apple", 2, "shrink:rate=0.003,wrinkle=6", "shrink:rate=0.006,wrinkle=6"),
+    ("shrivel (apple)", "apple", 2, "shrink:rate=0.0025,wrinkle=9,wave_mm=6", "shrink:rate=0.005,wrinkle=9,wave_mm=6"),
     (
         "excrescence (tomato)",
         "round_tomato",

@@ -7,6 +7,7 @@ functions of :mod:`ramure.gmap.organs.defects` and :mod:`ramure.gmap.organs.excr
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -31,7 +32,7 @@ from ramure.gmap.organs.malform import shape_facts
 
 #: Defect kinds and the options each accepts (``kind:name=value,...``).
 DEFECT_OPTIONS = {
-    "shrink": ("rate", "steps", "kind", "wrinkle"),
+    "shrink": ("rate", "steps", "kind", "wrinkle", "wave_mm"),
     "rot": ("vertex", "at", "coefficients", "rate", "steps"),
     "hail": ("count", "depth_mm", "stop", "vertex", "at", "healed"),
     "crack": ("kind", "sector", "rings", "depth", "width_mm", "healed"),
@@ -159,15 +160,22 @@ def apply_defects(
 def _shrivel(gm, opts, size_mm, seed):
     """Shrink, then wrinkle the skin: ``wrinkle`` (default 1) times half the radius the fruit lost
     (a 65 mm tomato shrunk 10 % per edge creases about 1.6 mm deep); ``wrinkle=0`` keeps it
-    smooth (the thesis's homothety)."""
-    out, facts = shrink(gm, opts.get("rate", 0.1), opts.get("steps", 1), rate_kind=opts.get("kind", "edge"))
+    smooth (the thesis's homothety).  ``wave_mm``: the creases' wavelength in millimetres
+    (default :data:`~ramure.gmap.organs.defects.WRINKLE_WAVELENGTH` of the fruit's size); keep
+    it above twice the skin faces' width (about 2.5 mm on a twice subdivided 75 mm apple), or
+    the skin only samples an alias of the pattern."""
     factor = opts.get("wrinkle", 1.0)
     if factor < 0:
         raise GMapError(f"shrink wrinkle must be >= 0 (0: smooth), got {factor}")
+    wave = opts.get("wave_mm")
+    if wave is not None and not (math.isfinite(wave) and wave > 0):
+        raise GMapError(f"shrink wave_mm must be > 0 mm, got {wave}")
+    out, facts = shrink(gm, opts.get("rate", 0.1), opts.get("steps", 1), rate_kind=opts.get("kind", "edge"))
     linear = 1.0 - facts["volume_kept"] ** (1.0 / 3.0)
     amplitude = factor * 0.5 * (0.5 * size_mm) * linear
     if amplitude > 0:
-        out, w = wrinkle(out, amplitude, size_mm=size_mm * (1.0 - linear), seed=seed)
+        out, w = wrinkle(out, amplitude, wave, size_mm=size_mm * (1.0 - linear), seed=seed)
+        facts["wrinkle_wavelength_mm"] = w["wavelength_mm"]
         after = float(volumes_at(out, out.points).sum())
         facts.update(wrinkle_mm=w["amplitude_mm"], volume_after=after, volume_lost=facts["volume_before"] - after)
         facts["volume_kept"] = after / facts["volume_before"]

@@ -109,8 +109,8 @@ def test_shrivel_pair_is_class_i_and_ii_and_class_ii_creases_show(tmp_path):
         assert meta["size_mm"] == 75.0  # the frame is the fresh fruit's: never refitted to the shrunk one
         change.append(_shading_change(tmp_path / f"{name}.png", tmp_path / "fresh.png"))
     assert grades == ["Class I", "Class II"]  # 1-3 % and 3-5 % volume lost
-    # measured 229 and 531 pixels; the former specs (rate 0.008 / 0.013, once subdivided) gave about 60 and 200
-    assert change[1] > 400 and change[1] > 1.8 * change[0]
+    # measured 53 and 375 pixels; the former specs (rate 0.008 / 0.013, once subdivided) gave about 60 and 200
+    assert change[1] > 250 and change[1] > 4 * change[0]
 
 
 def test_render_refuses_an_unknown_light(tomato, tmp_path):

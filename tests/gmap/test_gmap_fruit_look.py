@@ -231,6 +231,18 @@ def test_shrivel_wrinkles_the_skin_and_is_no_homothety(tomato):
         apply_defects(tomato, ["shrink:rate=0.05,wrinkle=-1"])
 
 
+def test_shrivel_wavelength_is_chosen_in_mm_and_checked(tomato):
+    default, facts = apply_defects(tomato, ["shrink:rate=0.06"])
+    fine, fine_facts = apply_defects(tomato, ["shrink:rate=0.06,wave_mm=12"])
+    size = facts["size_mm"] * (1 - facts["defects"][0]["edge_rate"])  # the shrunk fruit's size
+    assert facts["defects"][0]["wrinkle_wavelength_mm"] == pytest.approx(size * D.WRINKLE_WAVELENGTH, rel=0.02)
+    assert fine_facts["defects"][0]["wrinkle_wavelength_mm"] == pytest.approx(12.0)
+    assert fine.is_valid() and not np.allclose(fine.points, default.points)  # another crease pattern
+    for bad in ("0", "-3", "nan"):
+        with pytest.raises(GMapError, match="wave_mm must be > 0"):
+            apply_defects(tomato, [f"shrink:rate=0.05,wave_mm={bad}"])
+
+
 def test_rot_patch_is_round_and_hail_scars_are_separate_from_crack_walls(tomato):
     out, _ = apply_defects(tomato, ["rot:at=ring4/sector2"])
     rot = np.asarray(out.volume_data["rot"])
