@@ -143,7 +143,8 @@ class Operations(MapStorage):
         if unit:
             corner[:] = _prism.unit_corners(n)[t.corner][None]
         else:  # gathered straight into the rows: no (count, darts, 3) temporary
-            np.take(_prism.corners(n, origins, frames, sizes), t.corner, axis=1, out=corner)
+            # mode='clip': the template's corner ids are valid, and 'raise' buffers out (2.5x slower)
+            np.take(_prism.corners(n, origins, frames, sizes), t.corner, axis=1, out=corner, mode="clip")
         per_prism(d["point"])[:] = corner
         per_prism(d["vcorner"])[:] = t.corner[None, :]
         d["sup"][rows] = -1
