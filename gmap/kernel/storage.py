@@ -1175,7 +1175,8 @@ class MapStorage:
                 ids = state.labels()
                 sizes = np.empty(max(n + n // 2 + 16, self._alpha.shape[1]))  # room for growth (the reserve)
                 inverse = np.empty_like(sizes)
-                np.take(np.bincount(ids, minlength=state.count).astype(float), ids, out=sizes[:n])
+                counts = np.bincount(ids, minlength=state.count).astype(float)
+                np.take(counts, ids, out=sizes[:n], mode="clip")  # ids < count; 'raise' would buffer out
                 np.divide(1.0, sizes[:n], out=inverse[:n])
             self._corner_memo = (state.sid, n, sizes, inverse)
             self._cache["corner_weights"] = (sizes[:n], inverse[:n])
