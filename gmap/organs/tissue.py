@@ -291,7 +291,8 @@ def _core_band(gm, carpels, low, high, seed_band, kernel, pips, pip_width):
     (:func:`axial_coordinates`, outline :data:`CORE_ROUNDING`) become flesh (mesocarp): a
     pome's core and a drupe's stone fill the middle of the fruit, not its whole height.
     The centred fraction ``kernel`` of the band (an oval as wide as the locules) turns its
-    columella and locule cells into seed: a drupe's kernel, inside the stone's shell (the endocarp).
+    columella and locule cells into seed: a drupe's kernel, inside the stone's shell (the endocarp);
+    a fruit without locules (one volume subdivision) has no shell, hence no kernel.
     ``pips`` > 0 pips per carpel, stacked along the centred fraction ``seed_band`` of the band,
     are the locule cells inside a lens ``pip_width`` of the carpel's angle wide centred on
     the carpel (the ovules sit in the middle of each locule), 0.9 of its share of the band high.
@@ -303,7 +304,7 @@ def _core_band(gm, carpels, low, high, seed_band, kernel, pips, pip_width):
     in_band = core & (s >= low) & (s <= high)
     reach = CORE_ROUNDING * (r[in_band].max() if in_band.any() else 1.0)
     tissue[core & (((s - mid) / half) ** 2 + (r / reach) ** 2 > 1.0)] = CODES["mesocarp"]
-    if kernel > 0:
+    if kernel > 0 and (tissue == CODES["locule"]).any():  # no locules (one subdivision): no shell round it
         filling = np.isin(tissue, [CODES["columella"], CODES["locule"]])
         fill_reach = CORE_ROUNDING * (r[filling].max() if filling.any() else 1.0)
         tissue[filling & (((s - mid) / (kernel * half)) ** 2 + (r / fill_reach) ** 2 <= 1.0)] = CODES["seed"]

@@ -72,6 +72,8 @@ def test_drupe_kernel_lies_inside_its_stone(fruits, name):
     kernel_share, _ = _span(gm, ("seed",))
     stone_share, _ = _span(gm, STONE_TISSUES + ("seed",))
     assert 0.3 * stone_share < kernel_share < stone_share
+    coarse = build_fruit(name, volume_levels=1)  # no locules, no shell: no kernel on the flesh
+    assert coarse.is_valid() and not (coarse.volume_data["tissue"] == CODES["seed"]).any()
 
 
 @pytest.mark.parametrize("name", ["apple", "plum", "cherry"])
