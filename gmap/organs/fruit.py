@@ -139,7 +139,21 @@ PRESETS = {
         anglesup=0.0,
         carpels=2,
     ),
-    "pear": dict(precision=20, ph=10, longueur=17.0, fc="pear", largeur=60.0, fb="pear", nbvolangle=0, carpels=5),
+    "pear": dict(
+        precision=20,
+        ph=10,
+        longueur=17.0,
+        fc="pear",
+        largeur=60.0,
+        fb="pear",
+        nbvolangle=0,
+        carpels=5,
+        seeds=0,
+        pips=2,
+        core_low=0.08,
+        core_high=0.5,
+        seed_band=0.7,
+    ),
     "elongated_tomato": dict(
         precision=20,
         ph=10,
@@ -171,6 +185,13 @@ PRESETS = {
     # one kernel in a stone (the differentiation's endocarp and locules, see
     # :mod:`ramure.gmap.organs.species`), a shallow stem cavity; the plum is oval with its
     # suture (one shallow groove: nbprotus=1, creux=0.88).
+    # Inside (issue 40): the core or stone fills an oval band of the axis (core_low ..
+    # core_high, chosen so the measured span over the fruit's height is what a lengthwise cut
+    # shows): an apple's core the middle 0.44 of the height (a third to a half), with two
+    # whole-cell pips per carpel (pips=2, ten in all, in the band's middle 60 %); a pear's
+    # core the wide blossom half (0.09 .. 0.49 of the height), ten pips likewise; a plum's
+    # stone 0.62 of its length (55-65 %), a cherry's 0.51 of its height (45-55 %), each with
+    # a kernel filling the middle 60 % of the stone inside its shell (kernel=0.6).
     "apple": dict(
         precision=12,
         ph=12,
@@ -182,9 +203,13 @@ PRESETS = {
         anglesup=25.0,
         angleinf=-45.0,
         carpels=5,
-        seeds=10,
+        seeds=0,
+        pips=2,
         mesocarp=0.78,
         endocarp=0.06,
+        core_low=0.25,
+        core_high=0.8,
+        seed_band=0.6,
     ),
     "plum": dict(
         precision=10,
@@ -200,9 +225,12 @@ PRESETS = {
         anglesup=0.0,
         carpels=1,
         septum=0.0,
-        seeds=1,
+        seeds=0,
         mesocarp=0.8,
         endocarp=0.06,
+        core_low=0.2,
+        core_high=0.8,
+        kernel=0.6,
     ),
     "cherry": dict(
         precision=10,
@@ -216,9 +244,12 @@ PRESETS = {
         anglesup=0.0,
         carpels=1,
         septum=0.0,
-        seeds=1,
+        seeds=0,
         mesocarp=0.8,
         endocarp=0.06,
+        core_low=0.22,
+        core_high=0.78,
+        kernel=0.6,
     ),
 }
 

@@ -31,6 +31,14 @@ seeds are rounded by ``seed_smoothing`` surface subdivisions of those cells
 only (their neighbours' faces follow).  The thesis relabels whole cells as
 seeds; here a whole cell would be as deep as the locule, hence the cuts.
 
+A core band (``core_low``, ``core_high``, fractions of the axis; default the whole axis)
+bounds the core along the fruit: core tissues outside an oval over that band become flesh,
+so an apple's core and a drupe's stone sit in the middle of the height with flesh above and
+below.  ``kernel`` fills the middle of a drupe's stone with seed cells (its kernel), ``pips``
+makes whole-cell pips per carpel in the middle (``seed_band``) of the core, ``pip_width`` of
+the carpel's angle wide (the thesis's whole-cell seeds, large enough to show in a cut); see
+:func:`_core_band`.  With the defaults nothing changes.
+
 Thicknesses ``exocarp``, ``mesocarp`` and ``endocarp`` are *fractions of the
 local pericarp depth* (core surface to skin; the locules take the rest): the
 vertices between layers are moved along each radial line to these depths, as
@@ -81,7 +89,16 @@ DEFAULTS = {
     "septum": 0.25,
     "seeds": 120,
     "seed_smoothing": 1,
+    "core_low": 0.0,
+    "core_high": 1.0,
+    "seed_band": 1.0,
+    "kernel": 0.0,
+    "pips": 0,
+    "pip_width": 0.6,
 }
+
+#: Tissues of the core (a pome's core and cavities, a drupe's stone) that :func:`core_band` bounds.
+CORE_TISSUES = ("columella", "endocarp", "locule", "septum")
 
 
 def check_params(p: Mapping[str, float]) -> None:
@@ -100,6 +117,17 @@ def check_params(p: Mapping[str, float]) -> None:
         raise ValueRefused(f"seeds must be >= 0, got {p['seeds']}")
     if not 0 <= p["seed_smoothing"] <= 3:
         raise ValueRefused(f"seed_smoothing must be in 0..3, got {p['seed_smoothing']}")
+    lo, hi = p.get("core_low", 0.0), p.get("core_high", 1.0)
+    if not 0 <= lo < hi <= 1:
+        raise ValueRefused(f"the core band needs 0 <= core_low < core_high <= 1 (fractions of the axis), got {lo}..{hi}")
+    if not 0 < p.get("seed_band", 1.0) <= 1:
+        raise ValueRefused(f"seed_band is a fraction of the core band in (0, 1], got {p['seed_band']}")
+    if not 0 <= p.get("kernel", 0.0) <= 1:
+        raise ValueRefused(f"kernel is a fraction of the core band in [0, 1], got {p['kernel']}")
+    if not 0 <= p.get("pips", 0) <= 16:
+        raise ValueRefused(f"pips (whole-cell pips per carpel) must be in 0..16, got {p['pips']}")
+    if not 0 < p.get("pip_width", 0.6) <= 1:
+        raise ValueRefused(f"pip_width is a fraction of a carpel's angle in (0, 1], got {p['pip_width']}")
 
 
 def tissue_counts(gm: GMap3) -> dict[str, int]:
@@ -155,6 +183,12 @@ def differentiate(
     septum: float = 0.25,
     seeds: int = 40,
     seed_smoothing: int = 1,
+    core_low: float = 0.0,
+    core_high: float = 1.0,
+    seed_band: float = 1.0,
+    kernel: float = 0.0,
+    pips: int = 0,
+    pip_width: float = 0.6,
     rng: int | np.random.Generator | None = None,
 ) -> GMap3:
     """Assign tissues to a volume-subdivided fruit and shape its layers; returns a map.
@@ -173,6 +207,12 @@ def differentiate(
             septum=septum,
             seeds=seeds,
             seed_smoothing=seed_smoothing,
+            core_low=core_low,
+            core_high=core_high,
+            seed_band=seed_band,
+            kernel=kernel,
+            pips=pips,
+            pip_width=pip_width,
         )
     )
     rng = np.random.default_rng(rng)
@@ -197,9 +237,84 @@ def differentiate(
     tissue[branch & on_skin] = CODES["exocarp"]
     inner = np.isin(tissue, [CODES["endocarp"], CODES["locule"]])
     tissue[inner & _in_septum(gm, carpels, septum)] = CODES["septum"]
+    allowed = None
+    if (core_low, core_high, kernel, pips) != (0.0, 1.0, 0.0, 0) or seed_band < 1:
+        allowed = _core_band(gm, carpels, core_low, core_high, seed_band, kernel, pips, pip_width)
     _place_layers(gm, layers, depths)
-    cells, inner = _pick_seeds(gm, seeds, rng)
+    cells, inner = _pick_seeds(gm, seeds, rng, allowed)
     return _carve_seeds(gm, cells, inner, seed_smoothing)
+
+
+def axial_coordinates(gm: GMap3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each volume's centroid in the fruit's own axial coordinates: ``(s, r, theta)``.
+
+    ``s`` is where it lies along the axis, 0 at the blossom end of the columella (the trunk),
+    1 at its stem end: the length of the rings below plus the centroid's offset along its
+    ring's axis (each ring's own axis, so a bent axis is followed), over the trunk's whole
+    length (its vertices' furthest reach along the last ring's axis).  ``r`` is the distance
+    from the ring's axis and ``theta`` the angle about it (radians, from the ring frame's L
+    row towards its U row, as the septa are placed).
+    """
+    vd = gm.volume_data
+    ring = vd["ring"].astype(np.int64)
+    trunk = np.flatnonzero(vd["order"] == 0)
+    n = int(ring.max()) + 1
+    rings, first = np.unique(ring[trunk], return_index=True)
+    origin = np.zeros((n, 3))
+    frame = np.tile(np.eye(3), (n, 1, 1))
+    origin[rings] = vd["origin"][trunk[first]]
+    frame[rings] = vd["frame"][trunk[first]]
+    axis = frame[:, 0]
+    below = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(origin, axis=0), axis=1))])
+    last = gm.points[np.isin(gm.dart_volume, trunk[ring[trunk] == n - 1])]
+    total = below[-1] + (float(np.max((last - origin[-1]) @ axis[-1])) if len(last) else 0.0)
+    rel = gm.volume_centroids() - origin[ring]
+    along = np.sum(rel * axis[ring], axis=1)
+    f = frame[ring]
+    x, y = np.sum(rel * f[:, 1], axis=1), np.sum(rel * f[:, 2], axis=1)
+    r = np.linalg.norm(rel - along[:, None] * axis[ring], axis=1)
+    return (below[ring] + along) / max(total, 1e-12), r, np.arctan2(y, x)
+
+
+#: A core's or stone's outline in a lengthwise cut: cells are kept where
+#: ``((s - mid) / half)**2 + (r / (CORE_ROUNDING * r_max))**2 <= 1`` (an oval whose widest part,
+#: at mid-height, keeps every core cell: ``r_max`` is the core cells' largest distance from the
+#: axis; a larger value gives squarer ends).  A choice, judged on the cut pictures.
+CORE_ROUNDING = 1.25
+
+
+def _core_band(gm, carpels, low, high, seed_band, kernel, pips, pip_width):
+    """Bound the core along the axis, place a drupe's kernel and whole-cell pips.
+
+    Returns the volumes where carved seeds may be picked.  Core tissues
+    (:data:`CORE_TISSUES`) outside an oval spanning ``low .. high`` of the axis
+    (:func:`axial_coordinates`, outline :data:`CORE_ROUNDING`) become flesh (mesocarp): a
+    pome's core and a drupe's stone fill the middle of the fruit, not its whole height.
+    The centred fraction ``kernel`` of the band (an oval as wide as the locules) turns its
+    columella and locule cells into seed: a drupe's kernel, inside the stone's shell (the endocarp);
+    a fruit without locules (one volume subdivision) has no shell, hence no kernel.
+    ``pips`` > 0 pips per carpel, stacked along the centred fraction ``seed_band`` of the band,
+    are the locule cells inside a lens ``pip_width`` of the carpel's angle wide centred on
+    the carpel (the ovules sit in the middle of each locule), 0.9 of its share of the band high.
+    """
+    tissue = gm.volume_data["tissue"]
+    s, r, theta = axial_coordinates(gm)
+    mid, half = 0.5 * (low + high), 0.5 * (high - low)
+    core = np.isin(tissue, [CODES[name] for name in CORE_TISSUES])
+    in_band = core & (s >= low) & (s <= high)
+    reach = CORE_ROUNDING * (r[in_band].max() if in_band.any() else 1.0)
+    tissue[core & (((s - mid) / half) ** 2 + (r / reach) ** 2 > 1.0)] = CODES["mesocarp"]
+    if kernel > 0 and (tissue == CODES["locule"]).any():  # no locules (one subdivision): no shell round it
+        filling = np.isin(tissue, [CODES["columella"], CODES["locule"]])
+        fill_reach = CORE_ROUNDING * (r[filling].max() if filling.any() else 1.0)
+        tissue[filling & (((s - mid) / (kernel * half)) ** 2 + (r / fill_reach) ** 2 <= 1.0)] = CODES["seed"]
+    if pips > 0:
+        u = np.mod(theta / (2 * np.pi) * carpels, 1.0) - 0.5  # 0 at a carpel's centre
+        share = 2.0 * seed_band * half / pips
+        centres = mid - seed_band * half + share * (np.arange(pips) + 0.5)
+        lens = ((s[:, None] - centres) / (0.45 * share)) ** 2 + (u[:, None] / (0.5 * pip_width)) ** 2
+        tissue[(lens.min(axis=1) <= 1.0) & (tissue == CODES["locule"])] = CODES["seed"]
+    return np.abs(s - mid) <= seed_band * half
 
 
 def _in_septum(gm, carpels, septum):
@@ -256,8 +371,9 @@ def _place_layers(gm, layers, depths) -> None:
 SEED_SPAN = (0.2, 0.45)
 
 
-def _pick_seeds(gm, count, rng):
-    """Up to ``count`` random locule cells glued to the columella, not to the exocarp, sharing no vertex.
+def _pick_seeds(gm, count, rng, allowed=None):
+    """Up to ``count`` random locule cells glued to the columella, not to the exocarp, sharing no vertex
+    (and, when ``allowed`` is given, among the volumes it marks).
 
     Returns ``(volumes, inner_darts)``: each cell and a dart of its face on the columella.
     """
@@ -269,6 +385,8 @@ def _pick_seeds(gm, count, rng):
     touch = sewn[(here == CODES["locule"]) & (there == CODES["columella"])]
     near_skin = np.unique(vol[sewn[there == CODES["exocarp"]]])
     touch = touch[~np.isin(vol[touch], near_skin)]
+    if allowed is not None:
+        touch = touch[allowed[vol[touch]]]
     cells, first = np.unique(vol[touch], return_index=True)
     if not count or cells.size == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
