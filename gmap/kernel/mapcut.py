@@ -196,7 +196,7 @@ def _split_crossing_edges(gm, sd, vid):
     return pad_new_darts(sd, gm)
 
 
-def band_sides(gm: GMap3, crossing: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+def _band_sides(gm: GMap3, crossing: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Face sides ``<a0,a1>`` of the darts of the crossing volumes, labelled locally."""
     darts = np.flatnonzero(crossing[gm.dart_volume])
     nb = np.stack([np.searchsorted(darts, gm.alpha[0][darts]), np.searchsorted(darts, gm.alpha[1][darts])], 1)
@@ -204,43 +204,59 @@ def band_sides(gm: GMap3, crossing: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return darts, labels, count
 
 
-def band_signs(labels: np.ndarray, count: int, sd_band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _band_signs(labels: np.ndarray, count: int, sd_band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per label ``0..count-1``: whether any of its darts lies below, and above, the plane."""
     neg = np.bincount(labels, sd_band < 0, minlength=count) > 0
     pos = np.bincount(labels, sd_band > 0, minlength=count) > 0
     return neg, pos
 
 
-def _split_crossing_faces(gm, sd, crossing):
-    darts, labels, count = band_sides(gm, crossing)
-    neg, pos = band_signs(labels, count, sd[darts])
+def crossed_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> np.ndarray | None:
+    """One dart of each face of the ``crossing`` volumes with corners on both sides of the
+    plane (signed distances ``sd``), one side of a sewn face only; None if there is none."""
+    darts, labels, count = _band_sides(gm, crossing)
+    neg, pos = _band_signs(labels, count, sd[darts])
     both = neg & pos
     if not both.any():
-        return sd, False
+        return None
     rep = np.full(count, -1, np.int64)
     rep[labels[::-1]] = darts[::-1]  # smallest dart of each side
     cand = np.flatnonzero(both)  # their partners' volumes hold both signs too
     at = np.minimum(np.searchsorted(darts, gm.alpha[3][rep[cand]]), len(darts) - 1)
     partner = np.where(darts[at] == gm.alpha[3][rep[cand]], labels[at], cand)
-    todo = cand[cand <= partner]
-    walk, _ = gm.face_walk(rep[todo])
+    return rep[cand[cand <= partner]]
+
+
+def on_plane_runs(zero: np.ndarray, nz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per face (rows of ``zero``: its corners on the plane, in walk order; ``nz`` their count),
+    the corners ``a < b`` to split between: two on-plane corners consecutive in walk order with
+    a run of corners between them (all on one side), else the run that wraps round.  A face
+    crossing more than twice (non-convex after embedding) keeps its other crossings for the
+    next round."""
+    k = np.argsort(~zero, axis=1, kind="stable")  # on-plane corners first, in walk order
+    rows = np.arange(len(zero))
+    gap = np.diff(k, axis=1)
+    gap = np.where(np.arange(gap.shape[1])[None, :] < (nz - 1)[:, None], gap, 0)
+    first = np.argmax(gap >= 2, axis=1)  # two on-plane corners with a run between
+    has = gap[rows, first] >= 2
+    a = np.where(has, k[rows, first], k[:, 0])
+    b = np.where(has, k[rows, first + 1], k[rows, np.maximum(nz - 1, 0)])
+    return a, b
+
+
+def _split_crossing_faces(gm, sd, crossing):
+    faces = crossed_faces(gm, sd, crossing)
+    if faces is None:
+        return sd, False
+    walk, _ = gm.face_walk(faces)
     corners = walk[:, 0::2]
     ok = corners >= 0
     zero = ok & (sd[np.maximum(corners, 0)] == 0)
     nz = zero.sum(axis=1)
     if np.any(nz < 2) or np.any(nz % 2):
         raise GMapError("cut_map: a face touches the plane without crossing it cleanly; move the plane")
-    # split between two on-plane corners that are consecutive in walk order: the corners between
-    # them all lie on one side.  A face crossing more than twice (non-convex after embedding) keeps
-    # its other crossings for the next round.
-    k = np.argsort(~zero, axis=1, kind="stable")  # on-plane corners first, in walk order
-    rows = np.arange(len(todo))
-    gap = np.diff(k, axis=1)
-    gap = np.where(np.arange(gap.shape[1])[None, :] < (nz - 1)[:, None], gap, 0)
-    first = np.argmax(gap >= 2, axis=1)  # two on-plane corners with a run between
-    has = gap[rows, first] >= 2
-    a = np.where(has, k[rows, first], k[:, 0])
-    b = np.where(has, k[rows, first + 1], k[rows, nz - 1])  # else: the run that wraps round
+    a, b = on_plane_runs(zero, nz)
+    rows = np.arange(len(faces))
     if np.any(b - a < 2):
         raise GMapError("cut_map: a face lies along the plane without crossing it; move the plane")
     gm.split_faces(corners[rows, a], b - a)
@@ -255,8 +271,8 @@ def split_crossing_volumes(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> n
     others end up in one of the two parts and are split by later rounds.
     """
     for _ in range(16):
-        darts, labels, count = band_sides(gm, crossing)
-        neg, pos = band_signs(labels, count, sd[darts])
+        darts, labels, count = _band_sides(gm, crossing)
+        neg, pos = _band_signs(labels, count, sd[darts])
         a0, a2 = gm.alpha[0], gm.alpha[2]
         other = labels[np.searchsorted(darts, a2[darts])]
         on_plane = (sd[darts] == 0) & (sd[a0[darts]] == 0)

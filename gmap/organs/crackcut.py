@@ -42,7 +42,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ramure.gmap.kernel.errors import GMapError
-from ramure.gmap.kernel.mapcut import band_sides, pad_new_darts, band_signs, split_crossing_volumes
+from ramure.gmap.kernel.mapcut import crossed_faces, on_plane_runs, pad_new_darts, split_crossing_volumes
 
 #: A cut's field at points: ``(value, unit gradient)``.
 Field = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -394,41 +394,27 @@ def _split_faces(gm: GMap3, sd: np.ndarray, crossing: np.ndarray) -> tuple[np.nd
     cut that only touches it in a face (its two neighbours in the face on one side) is not a
     crossing of that face, and a face the cut does not cross cleanly takes its cells out of
     ``crossing`` (changed in place) instead of refusing the whole crack."""
-    darts, labels, count = band_sides(gm, crossing)
-    neg, pos = band_signs(labels, count, sd[darts])
-    both = neg & pos
-    if not both.any():
+    faces = crossed_faces(gm, sd, crossing)
+    if faces is None:
         return sd, False
-    rep = np.full(count, -1, np.int64)
-    rep[labels[::-1]] = darts[::-1]
-    cand = np.flatnonzero(both)
-    at = np.minimum(np.searchsorted(darts, gm.alpha[3][rep[cand]]), len(darts) - 1)
-    partner = np.where(darts[at] == gm.alpha[3][rep[cand]], labels[at], cand)
-    todo = cand[cand <= partner]
-    walk, length = gm.face_walk(rep[todo])
+    walk, length = gm.face_walk(faces)
     corners = walk[:, 0::2]
     ok = corners >= 0
     degree = (length // 2)[:, None]
     value = np.where(ok, sd[np.maximum(corners, 0)], np.nan)
     k = np.arange(corners.shape[1])[None, :]
-    rows = np.arange(len(todo))[:, None]
+    rows = np.arange(len(faces))[:, None]
     before = np.sign(value[rows, (k - 1) % degree])
     after = np.sign(value[rows, (k + 1) % degree])
     zero = ok & (value == 0) & ~(before * after > 0)
     nz = zero.sum(axis=1)
-    order = np.argsort(~zero, axis=1, kind="stable")
-    rows = np.arange(len(todo))
-    gap = np.diff(order, axis=1)
-    gap = np.where(np.arange(gap.shape[1])[None, :] < (nz - 1)[:, None], gap, 0)
-    first = np.argmax(gap >= 2, axis=1)
-    has = gap[rows, first] >= 2
-    a = np.where(has, order[rows, first], order[:, 0])
-    b = np.where(has, order[rows, first + 1], order[rows, np.maximum(nz - 1, 0)])
+    a, b = on_plane_runs(zero, nz)
+    rows = np.arange(len(faces))
     # a face the cut meets at an odd count of corners, or along one of its edges, is left whole
     # and its cells uncut (the crack ends at them, as at a tip)
     bad = (nz < 2) | (nz % 2 == 1) | (b - a < 2)
     if bad.any():
-        left = rep[todo[bad]]
+        left = faces[bad]
         crossing[gm.dart_volume[np.r_[left, gm.alpha[3][left]]]] = False
         keep = ~bad
         corners, a, b, nz, rows = corners[keep], a[keep], b[keep], nz[keep], np.arange(int(keep.sum()))
