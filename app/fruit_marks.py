@@ -261,7 +261,9 @@ def draw_round_marks(
     pieces, owners = [tris[~near]], [owner[~near]]
     for lv in np.unique(level[near]).tolist():  # each level apart: a shared edge's midpoints coincide
         group = np.flatnonzero(level == lv)
-        fine_pts, new, parent, fine_nrm = subdivide(fine_pts, tris[group], lv, fine_nrm)
+        fine_pts, new, parent, nrm = subdivide(fine_pts, tris[group], lv, fine_nrm)
+        assert nrm is not None  # normals in, normals out
+        fine_nrm = nrm
         pieces.append(new)
         owners.append(owner[group][parent])
     for d in discs:

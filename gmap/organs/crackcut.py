@@ -297,16 +297,17 @@ def split_cells(
     elen = np.linalg.norm(pos[vid[gm.alpha[0]]] - pos[vid], axis=1)
     shortest = np.full(nv, np.inf)
     np.minimum.at(shortest, vid[in_cell], elen[in_cell])
-    pull = np.isfinite(shortest) & (np.abs(s) < pull * shortest)
+    close = np.isfinite(shortest) & (np.abs(s) < pull * shortest)
     s = np.where(np.abs(s) < snap, snap, s)
-    if pull.any():
-        moved = pos[pull] - s[pull, None] * grad[pull]
-        for _ in range(2 if field is not None else 0):
-            moved -= field(moved)[0][:, None] * grad[pull]
-        take = pull[vid]
-        gm.points[take] = moved[np.searchsorted(np.flatnonzero(pull), vid[take])]
+    if close.any():
+        moved = pos[close] - s[close, None] * grad[close]
+        if field is not None:
+            for _ in range(2):
+                moved -= field(moved)[0][:, None] * grad[close]
+        take = close[vid]
+        gm.points[take] = moved[np.searchsorted(np.flatnonzero(close), vid[take])]
         gm.corners[take] = gm.points[take]
-        s = np.where(pull, 0.0, s)
+        s = np.where(close, 0.0, s)
     sd = s[vid]
     if field is not None:
         sd = _bend(gm, sd, cells, field)

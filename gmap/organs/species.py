@@ -304,7 +304,7 @@ def _unit_circle(angle: np.ndarray) -> np.ndarray:
     return np.stack([np.cos(angle), np.sin(angle)], axis=1)
 
 
-def _smoothstep(lo: float, hi: float, x: np.ndarray) -> np.ndarray:
+def _smoothstep(lo: float, hi: float, x: ArrayLike) -> np.ndarray:
     t = np.clip((np.asarray(x, float) - lo) / (hi - lo), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
 
