@@ -109,8 +109,11 @@ def bench_wood_30_years_20_branches():
     the code before, medians) growth 1.85 -> 1.36 s, the check 0.67 -> 0.19 s, peak RSS
     801 -> 609 MB; ``benchmarks/wood_digest.py`` shows the maps unchanged.  Levels glued by
     year, dead stubs capped and branches of every order then added work and 14,336 darts; the
-    corner gathers stopped buffering (``np.take(mode="clip")``): 1.68-1.79 s at load 2, 612 MB.
+    corner gathers stopped buffering (``np.take(mode="clip")``).  Timed after a 3-year wood has
+    loaded the compiled kernels (``bench_first_call`` times that load): quiet, 7 processes,
+    growth 1.45-1.92 s, median 1.60 s; 576 MiB.
     """
+    W.grow_wood("pine", years=3, branches=2)  # warm: the kernels load from numba's cache once a process
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     _CPU.clear()
     t0, c0 = time.perf_counter(), time.process_time()
