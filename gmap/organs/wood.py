@@ -957,7 +957,9 @@ class Wood:
                 host = self.host(br)  # the trunk, or the branch a sub-branch grows on
                 n = host.sides
                 t, k, r = br.level, br.sector, done + 1
-                shift = shifts.setdefault(br.parent, self.year_shift(host))
+                if br.parent not in shifts:
+                    shifts[br.parent] = self.year_shift(host)
+                shift = shifts[br.parent]
                 s = int(shift[t]) if 0 < t < len(shift) else 0
                 # round r: the knot's ring i against the walls' cells of its year; its first ring
                 # meets the bottom wall's cells 1..s + 1 in s + 1 rounds (the older cones end there)
