@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 
 from ramure.gmap.kernel.errors import GMapError
 from ramure.gmap.organs.cracks import CrackPattern
-from ramure.gmap.organs.mapcracks import OPEN_CAP, OPEN_TRIES, Skin, crack_edges
+from ramure.gmap.organs.mapcracks import OPEN_CAP, OPEN_TRIES, Skin, crack_edges, open_copies, split_copies
 
 if TYPE_CHECKING:
     from ramure.gmap.kernel.map3 import GMap3
@@ -268,12 +268,7 @@ def _open(gm, exposed, strip, face_width, face_depth, skin):
     """Move each vertex copy the split made off the crack, into its own side: along the mean
     normal of its crack faces (pointing out of their cells), by the faces' half-width tapered
     with depth, capped by :data:`OPEN_CAP` of its shortest edge leaving the crack plane."""
-    vid, nv = gm.cells(0)
-    old = np.zeros(nv, np.int64)
-    old[vid] = skin.vid
-    copies = np.bincount(old, minlength=len(skin.pos))
-    ex = np.unique(vid[exposed])
-    split = ex[copies[old[ex]] > 1]
+    vid, nv, split = split_copies(gm, skin.vid, exposed)
     if split.size == 0:
         return 0, 0.0
     _, pos = gm.vertex_positions()
@@ -304,9 +299,4 @@ def _open(gm, exposed, strip, face_width, face_depth, skin):
     np.minimum.at(shortest, u[across], elen[across])
     step = np.minimum(reach[split], OPEN_CAP * shortest[split])
     step[~np.isfinite(step)] = 0.0
-    new = pos.copy()
-    new[split] = pos[split] - step[:, None] * unit[split]
-    take = np.isin(vid, split)
-    gm.points[take] = new[vid[take]]
-    gm.corners[take] = new[vid[take]]
-    return int((step > 0).sum()), float(2.0 * step.max())
+    return open_copies(gm, vid, pos, split, step, unit)

@@ -433,6 +433,31 @@ def crack_edges(
     return edges
 
 
+def split_copies(gm: GMap3, old_vid: np.ndarray, darts: np.ndarray) -> tuple[np.ndarray, int, np.ndarray]:
+    """``(vid, nv, split)``: the map's vertex id of each dart, their count, and the vertices of
+    ``darts`` that are copies of one vertex of before the unsewing (``old_vid``: each dart's
+    vertex then), which an opening moves apart."""
+    vid, nv = gm.cells(0)
+    old = np.zeros(nv, np.int64)
+    old[vid] = old_vid
+    copies = np.bincount(old, minlength=int(old_vid.max()) + 1)
+    ex = np.unique(vid[darts])
+    return vid, nv, ex[copies[old[ex]] > 1]
+
+
+def open_copies(
+    gm: GMap3, vid: np.ndarray, pos: np.ndarray, split: np.ndarray, step: np.ndarray, unit: np.ndarray
+) -> tuple[int, float]:
+    """Move the vertices ``split`` by ``-step`` along their ``unit`` vectors (points and corners
+    of their darts); returns (vertices moved, widest opening: twice the largest step)."""
+    new = pos.copy()
+    new[split] = pos[split] - step[:, None] * unit[split]
+    take = np.isin(vid, split)
+    gm.points[take] = new[vid[take]]
+    gm.corners[take] = new[vid[take]]
+    return int((step > 0).sum()), float(2.0 * step.max())
+
+
 def _open(
     gm: GMap3, walls: np.ndarray, old_vid: np.ndarray, curves: list, narrowed: float, held: np.ndarray
 ) -> tuple[int, float]:
@@ -443,12 +468,7 @@ def _open(
     the crack plane, to a vertex's nearest neighbour off it: so the lips run even) and by half
     its own, times ``narrowed``; ``held`` vertices stay.
     Returns (copies moved, widest opening)."""
-    vid, nv = gm.cells(0)
-    old = np.zeros(nv, np.int64)
-    old[vid] = old_vid
-    copies = np.bincount(old, minlength=int(old_vid.max()) + 1)
-    ex = np.unique(vid[walls])
-    split = ex[copies[old[ex]] > 1]
+    vid, nv, split = split_copies(gm, old_vid, walls)
     if split.size == 0:
         return 0, 0.0
     _, pos = gm.vertex_positions()
@@ -481,9 +501,4 @@ def _open(
     # vertex with less room (a cell the cut left thin) opens at most half of it
     step = narrowed * np.minimum(np.minimum(reach, OPEN_CAP * typical), 0.5 * own)
     step[held[split]] = 0.0
-    new = pos.copy()
-    new[split] = pos[split] - step[:, None] * unit[split]
-    take = np.isin(vid, split)
-    gm.points[take] = new[vid[take]]
-    gm.corners[take] = new[vid[take]]
-    return int((step > 0).sum()), float(2.0 * step.max())
+    return open_copies(gm, vid, pos, split, step, unit)
