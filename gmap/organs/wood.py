@@ -1953,8 +1953,11 @@ class Wood:
         the inner top corner of cell ``s + 1``) are drawn in to the pith,
         ``r_p + TAPER (r - r_p)`` (the cone's apex), and only the cells past
         the ``count + s`` the level above meets (its oldest bark) taper as
-        before.  Bottom corners keep their radii (``None``); a knot's bottom
-        corners are set by :meth:`_seat_knot`.  Topology is unchanged.
+        before.  A year split in a node and an internode spreads its taper
+        over both (:meth:`_year_spread`); other bottom corners keep their
+        radii; a knot's bottom corners are set by :meth:`_seat_knot`.  Both
+        maps take ``(r, outer)``, ``outer`` for a cell's outer corners.
+        Topology is unchanged.
         """
         vd = self.gm.volume_data
         cell = vd["cell"][cells].astype(np.int64)
@@ -1974,12 +1977,67 @@ class Wood:
         apex = table[t, k, np.minimum(s_up, table.shape[2] - 1)]  # outer radius of cell s
         apex_tol = 1e-9 * np.maximum(apex, 1.0)
 
-        def top(r):
+        spread = self._year_spread(ax, t, k, cell, table, count, shift)
+
+        def bottom(r, outer):
+            return spread(r, outer, 0)
+
+        def top(r, outer):
+            r = spread(r, outer, 1)
             out = np.where(exposed, base + eps * (r - base), r)
             cone = (s_up > 0) & (r <= apex + apex_tol)  # a cone that ends here: to the pith
             return np.where(cone, rp + eps * (r - rp), out)
 
-        return None, top
+        return bottom, top
+
+    def _year_spread(self, ax, t, k, cell, table, count, shift):
+        """Radius map ``(r, outer, end) -> r'`` that spreads a year's taper over its node and internode.
+
+        A year that carries knots is two levels: a short node (the slot's
+        height) and the internode above it, glued cell to cell (same year).
+        Each ring narrows by one year's width from the level below (glued by
+        year, :meth:`year_shift`) to its own radius.  Left alone, the node
+        would take that step within its few centimetres and show a kink in
+        every ring of a flat-sawn board at each whorl.  A level boundary's
+        vertex is the average of the corners that meet there (:meth:`embed`),
+        so a ring of a plain year runs from ``r + W/2`` to ``r - W/2``, ``W =
+        A - r`` one year's width and ``A`` the radius where the ring leaves
+        the level below (that level's cell ``i + s``): its bottom corner is
+        at ``r``, the level below's top corner at ``A``.  A year split in a
+        node and an internode does the same over its whole height: the
+        node's top corners and the internode's bottom ones are both at ``A +
+        (1/2 + f) (r - A)``, ``f`` the node's share of the year's height, so
+        the ring narrows by ``f W`` in the node, not ``W / 2``.  ``end`` is 0 for bottom corners, 1 for top ones;
+        ``outer`` tells a cell's outer corners from its inner ones.  Other
+        levels, branches, and stacks the level below cannot match keep ``r``.
+        """
+        n_levels = len(ax.levels)
+        if ax.index != 0 or n_levels < 3:
+            return lambda r, outer, end: r
+        kind = np.array([_PARTS[part] for _, part in ax.parts[:n_levels]], np.int64)
+        h = self.level_frames(ax)[2]
+        node = np.zeros(n_levels, bool)
+        node[1:-1] = (kind[1:-1] == 1) & (kind[2:] == 2) & (shift[1 : n_levels - 1] > 0) & (shift[2:n_levels] == 0)
+        below = np.full(n_levels, -1, np.int64)  # the level the year leaves, per level of the year
+        weights = np.zeros((n_levels, 2))  # share of the way to r at the bottom and at the top
+        nodes = np.flatnonzero(node)
+        below[nodes], below[nodes + 1] = nodes - 1, nodes - 1
+        frac = h[nodes] / (h[nodes] + h[nodes + 1])
+        weights[nodes] = np.stack([np.ones_like(frac), 0.5 + frac], axis=1)
+        weights[nodes + 1] = np.stack([0.5 + frac, np.ones_like(frac)], axis=1)
+        b = below[t]
+        s = np.where(b >= 0, shift[np.maximum(b + 1, 0)], 0)
+        ok = (b >= 0) & ax.alive[np.maximum(b, 0), k] & (count[np.maximum(b, 0), k] >= cell + s)
+        j_out = np.minimum(cell + s, table.shape[2] - 1)
+        a_out = table[np.maximum(b, 0), k, j_out]
+        a_in = table[np.maximum(b, 0), k, np.maximum(j_out - 1, 0)]
+        w = weights[t]
+
+        def spread(r, outer, end):
+            a = a_out if outer else a_in
+            return np.where(ok, a + w[:, end] * (r - a), r)
+
+        return spread
 
     @staticmethod
     def _cube_points(o, f, h, t, k, theta, r_in, r_out, n, bottom=None, top=None):
@@ -1989,17 +2047,17 @@ class Wood:
         h``) between angles ``theta[k[j]]`` and ``theta[k[j] + 1]``; the radial
         directions and level tops are computed once per (level, angle) and
         gathered.  ``bottom`` and ``top`` map the radii of the bottom and top
-        corners (tapers).
+        corners (tapers), called as ``(r, outer)``.
         """
         c = 1.0 / math.cos(math.pi / n)
-        bottom = bottom or (lambda r: r)
-        top = top or (lambda r: r)
+        bottom = bottom or (lambda r, outer: r)
+        top = top or (lambda r, outer: r)
         radial = np.cos(theta)[None, :, None] * f[:, 1][:, None, :] + np.sin(theta)[None, :, None] * f[:, 2][:, None, :]
         r0, r1 = radial[t, k], radial[t, k + 1]
         low, high = o[t], (o + h[:, None] * f[:, 0])[t]
         out = np.empty((len(t), 8, 3))
-        for base, r in ((0, r_in), (4, r_out)):
-            rb, rt = (c * bottom(r))[:, None], (c * top(r))[:, None]
+        for base, r, outer in ((0, r_in, False), (4, r_out, True)):
+            rb, rt = (c * bottom(r, outer))[:, None], (c * top(r, outer))[:, None]
             out[:, base + 0] = low + rb * r0
             out[:, base + 1] = low + rb * r1
             out[:, base + 2] = high + rt * r1
@@ -2655,9 +2713,13 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     ``parts`` hexahedra across its sector, the new points interpolated in
     polar coordinates about its level's axis (radius, angle and height
     linear), so the rings are drawn with ``16 parts`` sides, on circles.
-    Other cells (pith, knots, the tetrahedra round a knot) are kept; the
-    volumes are not the kernel's any more (arcs, not chords): measure a
-    :func:`to_grid`.
+    The cells bent round a knot are rounded too (a flat-sawn board shows
+    arches there, not the chevrons of the 16-gon's facets).  An arc edge
+    that a cell left whole also holds (the pith's wedges, the tetrahedra
+    of the slot walls round a knot, the knot's own cells) stays a chord,
+    cut at the same points, so no gap opens between a rounded cell and
+    its neighbour.  Other cells are kept; the volumes are not the kernel's
+    any more (arcs, not chords): measure a :func:`to_grid`.
     """
     import pyvista as pv
 
@@ -2667,12 +2729,6 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     vd = wood.gm.volume_data
     owner = np.asarray(grid.cell_data["volume"])
     hexa = (grid.celltypes == 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)
-    n = wood.trunk.sides
-    for br in wood.branches:  # the stacks round a slot are bent by the knot: kept as they are
-        if br.level >= 0:
-            near_level = np.abs(vd["level"][owner].astype(np.int64) - br.level) <= 1
-            gap = np.abs((vd["sector"][owner].astype(np.int64) - br.sector + n // 2) % n - n // 2)
-            hexa &= ~(near_level & (gap <= 2))
     rows = np.flatnonzero(hexa)
     if not rows.size:
         return grid
@@ -2711,6 +2767,7 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     ra, ta, za = r[idx, edges[:, :, 0]], th[idx, edges[:, :, 0]], z[idx, edges[:, :, 0]]
     rb, tb, zb = r[idx, edges[:, :, 1]], th[idx, edges[:, :, 1]], z[idx, edges[:, :, 1]]
     tb = ta + np.angle(np.exp(1j * (tb - ta)))  # the short way round
+    chord = _chord_edges(grid, ~hexa, a, b)  # (m, 4): edges a cell left whole holds too
     new_pts, new_cells = [pts], []
     ring = [a]
     base = len(pts)
@@ -2722,6 +2779,7 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
             + zz[..., None] * axis_dir[:, None, :]
             + rr[..., None] * (np.cos(tt)[..., None] * e1[:, None, :] + np.sin(tt)[..., None] * e2[:, None, :])
         )
+        p = np.where(chord[..., None], (1 - w) * pts[a] + w * pts[b], p)
         new_pts.append(p.reshape(-1, 3))
         ring.append(base + np.arange(4 * m).reshape(m, 4))
         base += 4 * m
@@ -2747,6 +2805,48 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
         sub.cell_data[name] = np.concatenate([np.asarray(grid.cell_data[name])[rows]] * parts)
     out = pv.merge([old, sub], merge_points=False)
     return out
+
+
+def _chord_edges(grid: pv.UnstructuredGrid, whole: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Which edges ``a[i, j] - b[i, j]`` (grid point ids) join two points of one of the cells ``whole``.
+
+    Points are matched by position (the grid's pieces are merged without
+    merging points), rounded to a nanometre.  Every pair of a cell's points
+    counts (a tetrahedron's six edges, a wedge's or a hexahedron's edges
+    and diagonals): a pair that is no edge of that cell is never an arc
+    edge of a neighbour, so counting it changes nothing.  ``a, b`` hold
+    each hexahedron's four tangential edges, inner bottom and top, then
+    outer bottom and top: under an outer edge that stays a chord, the
+    inner one stays a chord too (a rounded inner arc under a chord would
+    cross a ring thinner than its bulge), and so on inwards across the
+    rings at that height.  A rounded outer arc over an inner chord (the
+    ring next to the pith) bulges away and is kept.
+    """
+    pts = np.asarray(grid.points)
+    _, pid = np.unique(np.round(pts * 1e9).astype(np.int64), axis=0, return_inverse=True)
+    pid = pid.reshape(-1)
+    n_ids = int(pid.max()) + 1 if pid.size else 1
+    conn = np.asarray(grid.cell_connectivity, np.int64)
+    offsets = np.asarray(grid.cell_offsets, np.int64)
+    sizes = np.diff(offsets)
+    keys = [np.zeros(0, np.int64)]
+    for size in np.unique(sizes[whole]):
+        rows = np.flatnonzero(whole & (sizes == size))
+        ids = pid[conn[offsets[rows][:, None] + np.arange(size)]]
+        i, j = np.triu_indices(int(size), 1)
+        lo, hi = np.minimum(ids[:, i], ids[:, j]), np.maximum(ids[:, i], ids[:, j])
+        keys.append((lo * n_ids + hi).reshape(-1))
+    held = np.unique(np.concatenate(keys))
+    pa, pb = pid[a], pid[b]
+    want = np.minimum(pa, pb) * n_ids + np.maximum(pa, pb)
+    chord = np.isin(want, held)
+    while True:  # under an outer chord the inner arc stays a chord too: a thin ring never turns over
+        below = chord.copy()
+        below[:, :2] |= chord[:, 2:]
+        spread = np.isin(want, want[below])
+        if np.array_equal(spread, chord):
+            return chord
+        chord = spread
 
 
 def parse_plank(text: str) -> tuple[np.ndarray, float, float]:

@@ -639,6 +639,52 @@ def test_corner_blend_equals_the_broadcast_formula_bit_for_bit():
     assert np.allclose(got.sum(axis=1), 1.0)  # a partition of unity over the four corners
 
 
+def _coverage(grid, height: float, inner: float, outer: float, n: int = 4000) -> np.ndarray:
+    """How many triangles of a cross-cut of ``grid`` at ``height`` hold each of ``n`` random points of
+    the annulus ``inner < r < outer`` around the trunk's axis (1 everywhere: no gap, no overlap)."""
+    section = grid.slice(normal=(0, 0, 1), origin=(0, 0, height)).triangulate()
+    tri = section.points[np.asarray(section.faces).reshape(-1, 4)[:, 1:]][:, :, :2]
+    rng = np.random.default_rng(0)
+    r, a = np.sqrt(rng.uniform(inner**2, outer**2, n)), rng.uniform(0, 2 * np.pi, n)
+    q = np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
+    count = np.zeros(n, np.int64)
+    for i in range(0, len(tri), 2000):
+        t = tri[i : i + 2000]
+        v0, v1, v2 = t[:, 0], t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+        det = v1[:, 0] * v2[:, 1] - v1[:, 1] * v2[:, 0]
+        ok = np.abs(det) > 1e-20
+        det = np.where(ok, det, 1.0)[:, None]
+        w = q[None] - v0[:, None]
+        s = (w[..., 0] * v2[:, None, 1] - w[..., 1] * v2[:, None, 0]) / det
+        u = (v1[:, None, 0] * w[..., 1] - v1[:, None, 1] * w[..., 0]) / det
+        count += (ok[:, None] & (s >= 0) & (u >= 0) & (s + u <= 1)).sum(axis=0)
+    return count
+
+
+def test_smooth_grid_rounds_the_rings_round_a_knot_and_leaves_no_gap():
+    """The ring cells bent round a knot are drawn round too (a flat-sawn board shows arches there,
+    not the 16-gon's chevrons): two sectors from the knot, in its node level, each is cut in four.
+    Arcs that a cell left whole also holds (the slot walls' tetrahedra) stay chords, so a cross-cut
+    through the node is covered everywhere between the pith and the bark (no gap), and twice only
+    where the kernel's own cells overlap (a few points in a thousand next to a slot)."""
+    wood = W.grow_wood("pine", years=12, branches=[(3, 0), (5, 6), (7, 11)], height=0.3)
+    raw = W.to_grid(wood)
+    smooth = W.smooth_grid(wood, raw)
+    vd, n = wood.gm.volume_data, wood.trunk.sides
+    owner = np.asarray(smooth.cell_data["volume"])
+    o, _, h = wood.level_frames(wood.trunk)
+    radius = wood.trunk_radius()
+    for br in wood.branches[:2]:
+        near = (vd["axis"] == 0) & (vd["cell"] > 0) & (vd["level"] == br.level)
+        near &= np.isin(vd["sector"], [(br.sector - 2) % n, (br.sector + 2) % n])
+        assert np.count_nonzero(near[owner]) == 4 * np.count_nonzero(near)
+        height = float(o[br.level, 2] + 0.5 * h[br.level])
+        count = _coverage(smooth, height, 0.15 * radius, 0.6 * radius)
+        before = _coverage(raw, height, 0.15 * radius, 0.6 * radius)
+        assert np.count_nonzero(count == 0) == 0
+        assert np.count_nonzero(count > 1) <= max(np.count_nonzero(before > 1), 0.001 * len(count))
+
+
 def test_smooth_grid_draws_round_rings_and_keeps_the_cells_data():
     """Pictures cut each trunk ring cell in four along its arc: in a cross-cut the bark's outline has
     a vertex every 5.6 degrees (a 64-gon) where the kernel's cells give one every 22.5 (a 16-gon),

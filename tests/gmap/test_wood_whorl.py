@@ -103,3 +103,32 @@ def test_the_push_moves_ring_corners_round_the_trunk_not_out(whorl):
     out = np.hypot(flat[rows, 0], flat[rows, 1]) - np.hypot(straight[rows, 0], straight[rows, 1])
     assert out.max() < 2.5e-3  # 2.2 mm
     assert out.min() > -1e-6
+
+
+def ring_corner(wood: W.Wood, level: int, sector: int, cell: int, top: bool) -> tuple[float, float]:
+    """Mean distance from the axis and mean height of a trunk cell's outer corners, bottom or top."""
+    gm, vd = wood.gm, wood.gm.volume_data
+    vol = np.flatnonzero((vd["axis"] == 0) & (vd["level"] == level) & (vd["sector"] == sector) & (vd["cell"] == cell))
+    darts = np.flatnonzero(np.isin(gm.dart_volume, vol) & np.isin(wood.corner, [6, 7] if top else [4, 5]))
+    p = gm.points[darts]
+    return float(np.hypot(p[:, 0], p[:, 1]).mean()), float(p[:, 2].mean())
+
+
+@pytest.mark.parametrize("cell", [2, 4, 6])
+def test_a_year_with_knots_narrows_over_its_whole_height_not_in_its_node(cell):
+    """A year carrying a knot is a short node and a tall internode, glued cell to cell.  Each ring
+    narrows by one year's width from the year below to its own radius; that narrowing is spread over
+    the year's height (node and internode), so the node, a tenth of the year's height, takes about a
+    tenth of it.  Taken in the node alone (half of it, as before), every ring of a flat-sawn board
+    kinks at each whorl.  Measured on the side away from the knot, out of its push."""
+    wood = W.grow_wood("pine", years=8, branches=[(3, 0)], height=0.3)
+    br = wood.branches[0]
+    t, away = br.level, (br.sector + wood.trunk.sides // 2) % wood.trunk.sides
+    assert [part for _, part in wood.trunk.parts[t : t + 2]] == ["node", "internode"]
+    r0, z0 = ring_corner(wood, t, away, cell, top=False)
+    r1, z1 = ring_corner(wood, t, away, cell, top=True)
+    r2, z2 = ring_corner(wood, t + 1, away, cell, top=True)
+    assert r0 > r1 > r2  # the ring narrows upwards all the way
+    height_share = (z1 - z0) / (z2 - z0)
+    assert 0.05 < height_share < 0.15
+    assert (r0 - r1) / (r0 - r2) == pytest.approx(height_share, abs=0.04)
