@@ -1973,11 +1973,19 @@ class Wood:
         m = np.minimum(above, cell)
         base = np.where(m > 0, table[t, k, np.maximum(m, 0)], rp)
         exposed = cell > above
+        # where the trunk's level above goes on, the stack's outer corner at the boundary is the
+        # average of its cell m's top and the level above's outermost cell's bottom (embed): close
+        # onto that (next to a knot's slot the push places that corner: left as it was)
+        up = np.minimum(t + 1, n_levels - 1)
+        goes_on = (ax.index == 0) & (t + 1 < n_levels) & (count[t + 1, k] > 0) & (count[t + 1, k] < 10**6) & (m > s_up)
+        goes_on &= ax.alive[up, (k - 1) % n] & ax.alive[up, (k + 1) % n]
+        upper = table[up, k, np.clip(m - s_up, 0, table.shape[2] - 1)]
+        base = np.where(exposed & goes_on, 0.5 * (base + upper), base)
         eps = self.TAPER
         apex = table[t, k, np.minimum(s_up, table.shape[2] - 1)]  # outer radius of cell s
         apex_tol = 1e-9 * np.maximum(apex, 1.0)
 
-        spread = self._year_spread(ax, t, k, cell, table, count, shift)
+        spread = self._year_spread(ax, t, k, cell, table, count, shift, rp)
 
         def bottom(r, outer):
             return spread(r, outer, 0)
@@ -1990,26 +1998,27 @@ class Wood:
 
         return bottom, top
 
-    def _year_spread(self, ax, t, k, cell, table, count, shift):
+    def _year_spread(self, ax, t, k, cell, table, count, shift, rp):
         """Radius map ``(r, outer, end) -> r'`` that spreads a year's taper over its node and internode.
 
         A year that carries knots is two levels: a short node (the slot's
         height) and the internode above it, glued cell to cell (same year).
-        Each ring narrows by one year's width from the level below (glued by
-        year, :meth:`year_shift`) to its own radius.  Left alone, the node
-        would take that step within its few centimetres and show a kink in
-        every ring of a flat-sawn board at each whorl.  A level boundary's
-        vertex is the average of the corners that meet there (:meth:`embed`),
-        so a ring of a plain year runs from ``r + W/2`` to ``r - W/2``, ``W =
-        A - r`` one year's width and ``A`` the radius where the ring leaves
-        the level below (that level's cell ``i + s``): its bottom corner is
-        at ``r``, the level below's top corner at ``A``.  A year split in a
-        node and an internode does the same over its whole height: the
-        node's top corners and the internode's bottom ones are both at ``A +
-        (1/2 + f) (r - A)``, ``f`` the node's share of the year's height, so
-        the ring narrows by ``f W`` in the node, not ``W / 2``.  ``end`` is 0 for bottom corners, 1 for top ones;
-        ``outer`` tells a cell's outer corners from its inner ones.  Other
-        levels, branches, and stacks the level below cannot match keep ``r``.
+        A level boundary's vertex is the average of the corners that meet
+        there (:meth:`embed`): a ring whose radius is ``r_n`` in the node
+        and ``r_i`` in the internode (their widths are drawn apart), ``A`` in
+        the level below (its cell ``i + s``, glued by year) and ``U`` in the
+        level above the internode is at ``B0 = (A + r_n) / 2`` at the node's
+        bottom and at ``B1 = (r_i + U) / 2`` at the internode's top.  Left
+        alone, the node's top would sit at ``(r_n + r_i) / 2``, so the node
+        would take half the year's change within its few centimetres and
+        kink every ring of a flat-sawn board at each whorl.  Instead the
+        node's top corners and the internode's bottom ones are both at ``B0
+        + f (B1 - B0)``, ``f`` the node's share of the year's height: the
+        ring runs linearly over the whole year.  ``end`` is 0 for bottom
+        corners, 1 for top ones; ``outer`` tells a cell's outer corners from
+        its inner ones.  Other levels, branches, and stacks the levels
+        around cannot match keep ``r`` (the apex of a cone that ends at the
+        internode's top is drawn in by :meth:`_tapers` as before).
         """
         n_levels = len(ax.levels)
         if ax.index != 0 or n_levels < 3:
@@ -2018,24 +2027,44 @@ class Wood:
         h = self.level_frames(ax)[2]
         node = np.zeros(n_levels, bool)
         node[1:-1] = (kind[1:-1] == 1) & (kind[2:] == 2) & (shift[1 : n_levels - 1] > 0) & (shift[2:n_levels] == 0)
-        below = np.full(n_levels, -1, np.int64)  # the level the year leaves, per level of the year
-        weights = np.zeros((n_levels, 2))  # share of the way to r at the bottom and at the top
         nodes = np.flatnonzero(node)
-        below[nodes], below[nodes + 1] = nodes - 1, nodes - 1
-        frac = h[nodes] / (h[nodes] + h[nodes + 1])
-        weights[nodes] = np.stack([np.ones_like(frac), 0.5 + frac], axis=1)
-        weights[nodes + 1] = np.stack([0.5 + frac, np.ones_like(frac)], axis=1)
-        b = below[t]
-        s = np.where(b >= 0, shift[np.maximum(b + 1, 0)], 0)
-        ok = (b >= 0) & ax.alive[np.maximum(b, 0), k] & (count[np.maximum(b, 0), k] >= cell + s)
-        j_out = np.minimum(cell + s, table.shape[2] - 1)
-        a_out = table[np.maximum(b, 0), k, j_out]
-        a_in = table[np.maximum(b, 0), k, np.maximum(j_out - 1, 0)]
-        w = weights[t]
+        first = np.full(n_levels, -1, np.int64)  # the node of the year, per level of the year
+        first[nodes], first[nodes + 1] = nodes, nodes
+        frac = np.zeros(n_levels)
+        frac[nodes] = h[nodes] / (h[nodes] + h[nodes + 1])
+        moved = np.zeros((n_levels, 2), bool)  # which end of each level's corners is moved
+        moved[nodes, 1] = moved[nodes + 1, 0] = True
+        y = first[t]
+        f = frac[np.maximum(y, 0)]
+        n = ax.sides
+        yy = np.maximum(y, 0)
+        clear = ax.alive[yy, k] & ax.alive[yy, (k - 1) % n] & ax.alive[yy, (k + 1) % n]
+        y = np.where(clear, y, -1)  # a slot and the stacks either side: the knots' push places them
+
+        def radius_at(level, j, valid):  # the table's outer radius of cell j (0: the pith) where valid
+            lv = np.clip(level, 0, n_levels - 1)
+            inside = valid & (level >= 0) & (level < n_levels) & (j >= 0) & (j <= cell.max())
+            inside &= ax.alive[lv, k] & (count[lv, k] >= j) & (count[lv, k] < 10**6)
+            return np.where(inside, table[lv, k, np.clip(j, 0, table.shape[2] - 1)], np.nan)
+
+        s_below = shift[np.maximum(y, 0)]
+        s_above = shift[np.clip(y + 2, 0, len(shift) - 1)]
+        ends = {}
+        for outer in (False, True):
+            j = cell - (0 if outer else 1)
+            a = radius_at(y - 1, j + s_below, y >= 0)
+            r_node = radius_at(y, j, y >= 0)
+            r_int = radius_at(y + 1, j, y >= 0)
+            u = radius_at(y + 2, j - s_above, (y >= 0) & (j - s_above >= 1))
+            u = np.where(np.isnan(u), r_int, u)
+            b0, b1 = 0.5 * (a + r_node), 0.5 * (r_int + u)
+            cone = (y >= 0) & (j <= s_above) & (y + 2 < n_levels)  # ends at the internode's top: its apex
+            b1 = np.where(cone, rp + self.TAPER * (r_int - rp), b1)
+            ends[outer] = b0 + f * (b1 - b0)  # NaN where a level does not match: keep r
 
         def spread(r, outer, end):
-            a = a_out if outer else a_in
-            return np.where(ok, a + w[:, end] * (r - a), r)
+            target = ends[outer]
+            return np.where(moved[t, end] & ~np.isnan(target), target, r)
 
         return spread
 

@@ -75,7 +75,10 @@ def test_the_log_tapers_past_a_whorl(whorl):
     assert swelling(straight) < 0.03
     assert swelling(bent) < 0.08
     node = WHORL[0][0]  # the node's level: the bottom of its level and the top of the level below
-    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.035)
+    # over all sectors the collar beside each slot (6 % over 9 sectors of 16) is in the mean; away
+    # from the knots the level below the node ends as without knots
+    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.04)
+    assert np.nanmean(bent[node - 1, far, 1]) == pytest.approx(np.nanmean(straight[node - 1, far, 1]), rel=0.01)
     assert np.nanmean(bent[node, :, 0]) == pytest.approx(np.nanmean(straight[node, :, 0]), rel=0.035)
 
 
@@ -132,3 +135,20 @@ def test_a_year_with_knots_narrows_over_its_whole_height_not_in_its_node(cell):
     height_share = (z1 - z0) / (z2 - z0)
     assert 0.05 < height_share < 0.15
     assert (r0 - r1) / (r0 - r2) == pytest.approx(height_share, abs=0.04)
+
+
+@pytest.mark.parametrize(("branches", "sector"), [([(3, 0), (5, 6), (7, 11)], 3), ([], 9)])
+def test_the_bark_outline_has_no_step_at_a_level_boundary(branches, sector):
+    """A stack holds one year's bark cell more than the stack above it; that outermost cell closes
+    at the top of its level onto the boundary vertex, which is the average of the cells that meet
+    there, not onto its inner neighbour's own radius (which left a flat shoulder of 1.1 to 1.4 mm
+    in the bark's outline at every level).  Away from the knots (three sectors or more), the
+    outline's radius just under a boundary and just over it differ by under 0.3 mm."""
+    wood = W.grow_wood("pine", years=12, branches=branches, height=0.3)
+    ax = wood.trunk
+    steps = []
+    for t in range(len(ax.levels) - 1):
+        below, _ = ring_corner(wood, t, sector, int(ax.count[t, sector]), top=True)
+        above, _ = ring_corner(wood, t + 1, sector, int(ax.count[t + 1, sector]), top=False)
+        steps.append(abs(below - above))
+    assert max(steps) < 3e-4
