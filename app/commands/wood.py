@@ -102,6 +102,8 @@ def render_plank(
 
     A parallel projection looks at the face nearer the pith (at the plank's
     offset), unlit so the colours are the tissues'; the length runs left to right.
+    The board fills the picture but for the title's band and the legend's box
+    (:func:`plank_view`): neither covers wood.
     With ``species`` (and the part's ``wood``, ``season`` and ``axis`` cell
     data) the face is drawn at one point a pixel with the species' pores,
     resin canals and rays (:func:`ramure.gmap.organs.wood_species.texture_face`).
@@ -111,10 +113,8 @@ def render_plank(
     headless_setup()
     import pyvista as pv
 
-    from ramure.gmap.organs.wood import plank_camera
-
     w, h = size
-    position, focal, up, scale = plank_camera(part.points, normal, w / h, room_below=0.4)
+    position, focal, up, scale = plank_view(part.points, normal, size, legend, title)
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
     surface = part.extract_surface(algorithm="dataset_surface")
@@ -140,6 +140,40 @@ def render_plank(
     return path
 
 
+TITLE_PX = 30
+"""Pixels kept free at the top of a plank picture for its title (``add_text`` at font size 10 is 10 to 18 px
+high from 300 to 1400 px pictures, from 5 px down)."""
+EDGE = 0.02
+"""The legend box's distance from the picture's right and bottom edges, a fraction of the picture."""
+
+
+def plank_view(
+    points: ArrayLike,
+    normal: ArrayLike,
+    size: tuple[int, int],
+    legend: Sequence[tuple[str, Any]] | None = None,
+    title: str | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """:func:`~ramure.gmap.organs.wood.plank_camera` for a ``size`` picture with a title and a legend that
+    cover no wood.
+
+    The title keeps a band of :data:`TITLE_PX` at the top; the legend's box
+    (:func:`legend_box_size`, in the lower right corner) keeps the view either
+    below the board or beside it, whichever leaves the board larger (below on a tie).
+    Without a legend the board fills the whole picture under the title.
+    """
+    from ramure.gmap.organs.wood import plank_camera
+
+    w, h = size
+    top = 1.0 - TITLE_PX / h if title else 1.0
+    windows = [(0.0, 0.0, 1.0, top)]
+    if legend:
+        box_w, box_h = legend_box_size(legend)
+        windows = [(0.0, box_h + 2 * EDGE, 1.0, top), (0.0, 0.0, 1.0 - box_w - 2 * EDGE, top)]  # below, beside
+    cameras = [plank_camera(points, normal, w / h, window) for window in windows]
+    return min(cameras, key=lambda camera: camera[3])  # the smallest scale: the largest board
+
+
 def add_wood_actors(
     plotter: pv.Plotter, grid: pv.DataSet, legend: Sequence[tuple[str, Any]] | None = None, name: str = "wood"
 ) -> pv.PolyData:
@@ -160,20 +194,26 @@ def add_legend_box(plotter: pv.Plotter, legend: Sequence[tuple[str, Any]]) -> No
     """
     from pyvista import Color
 
-    longest = max(len(label) for label, _ in legend)
     box = plotter.add_legend(
         [[label, color] for label, color in legend],  # type: ignore[arg-type]  # pyvista: a decorated method reads as unbound
         bcolor=(0.96, 0.96, 0.94),
         border=True,
         face="rectangle",
     )
-    width, height = min(0.6, 0.018 * longest + 0.05), min(0.4, 0.04 * len(legend) + 0.01)
-    box.SetPosition(1.0 - width - 0.02, 0.02)  # text scales to the box: size it to the names
+    width, height = legend_box_size(legend)
+    box.SetPosition(1.0 - width - EDGE, EDGE)  # text scales to the box: size it to the names
     box.SetPosition2(width, height)
     for i, (label, color) in enumerate(legend):
         box.SetEntry(i, swatch(Color(color).int_rgb), label, (0.08, 0.08, 0.08))
         box.SetEntrySymbol(i, None)
     box.GetEntryTextProperty().SetColor(0.08, 0.08, 0.08)
+
+
+def legend_box_size(legend: Sequence[tuple[str, Any]]) -> tuple[float, float]:
+    """``(width, height)`` of a legend's box, fractions of the picture: wide enough for the longest name
+    (at most 0.6), 0.04 high a line (at most 0.4)."""
+    longest = max(len(label) for label, _ in legend)
+    return min(0.6, 0.018 * longest + 0.05), min(0.4, 0.04 * len(legend) + 0.01)
 
 
 def swatch(rgb: Sequence[int], size: int = 8) -> Any:
