@@ -102,6 +102,8 @@ def render_plank(
 
     A parallel projection looks at the face nearer the pith (at the plank's
     offset), unlit so the colours are the tissues'; the length runs left to right.
+    The board fills the picture but for the title's band and the legend's box
+    (:func:`plank_view`): neither covers wood.
     With ``species`` (and the part's ``wood``, ``season`` and ``axis`` cell
     data) the face is drawn at one point a pixel with the species' pores,
     resin canals and rays (:func:`ramure.gmap.organs.wood_species.texture_face`).
@@ -111,13 +113,11 @@ def render_plank(
     headless_setup()
     import pyvista as pv
 
-    from ramure.gmap.organs.wood import plank_camera
-
     w, h = size
-    position, focal, up, scale = plank_camera(part.points, normal, w / h, room_below=0.4)
+    surface = part.extract_surface(algorithm="dataset_surface")
+    (position, focal, up, scale), legend_at = plank_view(surface, normal, size, legend, title)
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
-    surface = part.extract_surface(algorithm="dataset_surface")
     plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
     if species is not None and all(k in part.cell_data for k in ("wood", "season", "axis")):
         from ramure.gmap.organs.wood import CODES
@@ -132,12 +132,96 @@ def render_plank(
     distance = float(np.linalg.norm(position - focal))
     plotter.camera.clipping_range = (distance * 0.5, distance * 1.5)
     if legend:
-        add_legend_box(plotter, legend)
+        add_legend_box(plotter, legend, legend_at)
     if title:
         plotter.add_text(title, font_size=10, color="black")
     plotter.screenshot(str(path))
     plotter.close()
     return path
+
+
+TITLE_PX = 30
+"""Pixels kept free at the top of a plank picture for its title (``add_text`` at font size 10 is 10 to 18 px
+high from 300 to 1400 px pictures, from 5 px down)."""
+EDGE = 0.02
+"""The legend box's distance from the picture's right and bottom edges, a fraction of the picture."""
+
+
+Camera = tuple[np.ndarray, np.ndarray, np.ndarray, float]
+"""``(position, focal point, view up, parallel scale)``, as :func:`~ramure.gmap.organs.wood.plank_camera` gives."""
+
+
+def plank_view(
+    surface: pv.PolyData,
+    normal: ArrayLike,
+    size: tuple[int, int],
+    legend: Sequence[tuple[str, Any]] | None = None,
+    title: str | None = None,
+) -> tuple[Camera, tuple[float, float] | None]:
+    """The camera of a ``size`` picture of a plank's ``surface`` and where its legend's box goes (its lower
+    left corner, fractions of the picture; ``None`` without a legend), so that neither the legend nor the
+    title covers wood.
+
+    The title keeps a band of :data:`TITLE_PX` at the top.  The legend's box
+    (:func:`legend_box_size`) goes to the lower right with the board above it
+    or beside it, or over an empty corner of the board's box (lower or upper
+    right: a quarter-sawn board's branch rising from it leaves one), the board
+    then smaller in steps of 5 % down to 70 % if needs be.  Of the places
+    where the box, grown by :data:`EDGE`, meets none of the surface's
+    triangles, the one that leaves the board largest wins (the first listed on
+    a tie: below, beside, over).  Without a legend the board fills the
+    picture under the title.
+    """
+    from ramure.gmap.organs.wood import plank_camera
+
+    w, h = size
+    top = 1.0 - TITLE_PX / h if title else 1.0
+    if not legend:
+        return plank_camera(surface.points, normal, w / h, (0.0, 0.0, 1.0, top)), None
+    box_w, box_h = legend_box_size(legend)
+    solid = surface.triangulate()
+    triangles = np.asarray(solid.points)[solid.regular_faces]
+    cameras = [(plank_camera(surface.points, normal, w / h, window), at) for window, at in legend_places(box_w, box_h, top)]
+    for camera, at in sorted(cameras, key=lambda pair: pair[0][3]):  # the largest board first; ties as listed
+        box = (at[0] - EDGE, at[1] - EDGE, at[0] + box_w + EDGE, at[1] + box_h + EDGE)
+        if not hits_box(on_view(triangles, camera, w / h), box):
+            return camera, at
+    return cameras[0]  # below the board, whose window the box never meets
+
+
+def legend_places(box_w: float, box_h: float, top: float) -> list[tuple[tuple[float, float, float, float], tuple[float, float]]]:
+    """``(window, legend box's lower left corner)`` pairs to try, fractions of the picture: below the board,
+    beside it, then over the lower or upper right corner of its window, shrunk from 1 to 0.7 in steps of
+    0.05 away from the box.  ``top`` is the title band's lower edge."""
+    lower, upper = (1.0 - box_w - EDGE, EDGE), (1.0 - box_w - EDGE, min(top, 1.0 - EDGE) - box_h)
+    places = [((0.0, box_h + 2 * EDGE, 1.0, top), lower), ((0.0, 0.0, 1.0 - box_w - 2 * EDGE, top), lower)]
+    for shrink in (1.0, 0.95, 0.9, 0.85, 0.8, 0.75, 0.7):
+        places.append(((0.0, top * (1.0 - shrink), shrink, top), lower))
+        places.append(((0.0, 0.0, shrink, top * shrink), upper))
+    return places
+
+
+def on_view(points: np.ndarray, camera: Camera, aspect: float) -> np.ndarray:
+    """``points`` (..., 3) as ``(x, y)`` fractions of a parallel view from its lower left corner."""
+    position, focal, up, scale = camera
+    look = (focal - position) / np.linalg.norm(focal - position)
+    right = np.cross(look, up)
+    offset = points - focal
+    return np.stack([0.5 + offset @ right / (2 * scale * aspect), 0.5 + offset @ up / (2 * scale)], axis=-1)
+
+
+def hits_box(triangles: np.ndarray, box: tuple[float, float, float, float]) -> bool:
+    """Whether any of the 2D ``triangles`` (n, 3, 2) meets the box ``(x0, y0, x1, y1)``: none of the box's
+    axes nor the triangle's edge normals separates them."""
+    x0, y0, x1, y1 = box
+    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
+    near = triangles[(hi[:, 0] >= x0) & (lo[:, 0] <= x1) & (hi[:, 1] >= y0) & (lo[:, 1] <= y1)]
+    edges = np.roll(near, -1, axis=1) - near
+    normals = np.stack([-edges[..., 1], edges[..., 0]], axis=-1)  # (m, 3, 2)
+    ends = np.einsum("mkd,mjd->mkj", normals, near)  # each normal's projections of the triangle's corners
+    corners = np.einsum("mkd,cd->mkc", normals, [[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    apart = (ends.max(axis=2) < corners.min(axis=2)) | (ends.min(axis=2) > corners.max(axis=2))
+    return bool((~apart.any(axis=1)).any())
 
 
 def add_wood_actors(
@@ -153,27 +237,36 @@ def add_wood_actors(
     return surface
 
 
-def add_legend_box(plotter: pv.Plotter, legend: Sequence[tuple[str, Any]]) -> None:
+def add_legend_box(plotter: pv.Plotter, legend: Sequence[tuple[str, Any]], at: tuple[float, float] | None = None) -> None:
     """A legend that reads: dark text on a light box, each name after a swatch of its colour.
+
+    ``at`` is the box's lower left corner (fractions of the picture); by default
+    the box sits in the lower right corner, :data:`EDGE` from the edges.
 
     (pyvista's legend writes each name in its own colour: pale sapwood vanished on grey.)
     """
     from pyvista import Color
 
-    longest = max(len(label) for label, _ in legend)
     box = plotter.add_legend(
         [[label, color] for label, color in legend],  # type: ignore[arg-type]  # pyvista: a decorated method reads as unbound
         bcolor=(0.96, 0.96, 0.94),
         border=True,
         face="rectangle",
     )
-    width, height = min(0.6, 0.018 * longest + 0.05), min(0.4, 0.04 * len(legend) + 0.01)
-    box.SetPosition(1.0 - width - 0.02, 0.02)  # text scales to the box: size it to the names
+    width, height = legend_box_size(legend)
+    box.SetPosition(*(at or (1.0 - width - EDGE, EDGE)))  # text scales to the box: size it to the names
     box.SetPosition2(width, height)
     for i, (label, color) in enumerate(legend):
         box.SetEntry(i, swatch(Color(color).int_rgb), label, (0.08, 0.08, 0.08))
         box.SetEntrySymbol(i, None)
     box.GetEntryTextProperty().SetColor(0.08, 0.08, 0.08)
+
+
+def legend_box_size(legend: Sequence[tuple[str, Any]]) -> tuple[float, float]:
+    """``(width, height)`` of a legend's box, fractions of the picture: wide enough for the longest name
+    (at most 0.6), 0.04 high a line (at most 0.4)."""
+    longest = max(len(label) for label, _ in legend)
+    return min(0.6, 0.018 * longest + 0.05), min(0.4, 0.04 * len(legend) + 0.01)
 
 
 def swatch(rgb: Sequence[int], size: int = 8) -> Any:

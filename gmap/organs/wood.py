@@ -2962,29 +2962,41 @@ def preset_offset(grid: pv.DataSet, preset: str, thickness: float) -> float:
 
 
 def plank_camera(
-    points: ArrayLike, normal: ArrayLike, aspect: float = 1.0, room_below: float = 0.0
+    points: ArrayLike,
+    normal: ArrayLike,
+    aspect: float = 1.0,
+    window: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """``(position, focal point, view up, parallel scale)`` that show a plank's face filling a view.
 
     The camera faces the board's inner face (the one at ``offset``, nearer the
     pith: a flat-sawn board's arches); the trunk axis (z) runs across the
-    view, the board's width up; ``aspect`` is width over height; ``room_below`` is the share of the view's height
-    left free under the board (for a legend).
+    view, the board's width up; ``aspect`` is width over height.  ``window`` is
+    the part of the view the board fills, ``(left, bottom, right, top)`` as
+    fractions of the view from its lower left corner (the rest is free for a
+    title or a legend): the board's bounding box is centred in it and fills it
+    but for a 2 % margin on its tighter side.
     """
     n = np.asarray(normal, float)
     n = n / np.linalg.norm(n)
-    along = np.array([0.0, 0.0, 1.0])
-    up = np.cross(n, along)
+    up = np.cross(n, [0.0, 0.0, 1.0])
     if not np.linalg.norm(up) > 1e-6:  # a cross-cut plank (normal z): x across, y up
-        along, up = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+        up = np.array([0.0, 1.0, 0.0])
     up = up / np.linalg.norm(up)
+    right = np.cross(n, up)  # the view's right: direction of projection x view up
     pts = np.asarray(points, float)
-    length = float(np.ptp(pts @ along)) or 1.0
-    width = float(np.ptp(pts @ up)) or 1.0
-    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-    scale = 0.5 * max(length / aspect, width / (1.0 - room_below)) * 1.04
-    focal = centre - up * room_below * scale
+    across, high, deep = pts @ right, pts @ up, pts @ n
+    length, width = float(np.ptp(across)) or 1.0, float(np.ptp(high)) or 1.0
+    x0, y0, x1, y1 = window
+    scale = 0.5 * max(length / (aspect * (x1 - x0)), width / (y1 - y0)) * 1.04
+    centre = right * _middle(across) + up * _middle(high) + n * _middle(deep)  # of the board's box
+    focal = centre - right * (x0 + x1 - 1.0) * scale * aspect - up * (y0 + y1 - 1.0) * scale  # the window's off centre
     return focal - n * length * 3.0, focal, up, scale  # from the pith's side: the face at ``offset``
+
+
+def _middle(values: np.ndarray) -> float:
+    """Halfway between the least and the greatest of ``values``."""
+    return 0.5 * float(values.min() + values.max())
 
 
 def plank_window(slab: pv.DataSet, length: float | None = None, at: float | None = None) -> tuple[pv.DataSet, float, float]:
