@@ -10,8 +10,11 @@ HONDA = ROOT / "grammars" / "honda_sympodial.lsys"
 STOCHASTIC = ROOT / "grammars" / "stochastic_plant.lsys"
 
 
-def settle(qtbot, window, timeout=20.0):
-    """Wait until every model job is delivered and the view has painted."""
+def settle(qtbot, window, timeout=60.0):
+    """Wait until every model job is delivered and the view has painted.
+
+    A liveness bound, not a speed test: a large plant's regrow took over 20 s once in a
+    clean-clone run on the 2 cores shared with two other builds (speed is benchmarked)."""
     assert window.controller.wait_idle(timeout), "a model job did not finish in time"
     qtbot.waitUntil(lambda: not window.variants.busy(), timeout=int(timeout * 1000))
     window.view.redraw(now=True)
