@@ -12,7 +12,10 @@ rays' silver figure, with each species' texture: oak's band of earlywood pores a
 its broad rays, elm's pores and wavy latewood bands, the resin canals of pine
 and larch.  Branch wood is darker on its lower side in the conifers
 (compression wood) and paler on its upper side in the broadleaves (tension
-wood).  See :mod:`ramure.gmap.organs.wood_species` for the sources of the numbers.
+wood).  Last, each species' knots: a 12-year tree with two branches on one side, the lower
+one alive, the upper one dead since year 7, cross-cut through each knot (the live knot's rings run
+into the trunk's; the dead one is ringed with its bark and encased).  See
+:mod:`ramure.gmap.organs.wood_species` for the sources of the numbers.
 """
 
 import numpy as np
@@ -76,7 +79,25 @@ def quarter_sawn(species, path):
     render_plank(part, path, normal, title=title, legend=legend_for(species), species=species)
 
 
+def knot_cuts(species, path):
+    """Cross-cuts through a live knot and a dead one, side by side (the dead one on the right)."""
+    wood = W.grow_wood(species, years=12, branches=[(3, 0), (4, 1)], branch_deaths={1: 7}, height=0.3)
+    grid, radius = W.smooth_grid(wood, W.to_grid(wood)), wood.trunk_radius()
+    cuts = []
+    for b in (0, 1):
+        base, frame = wood.branch_frame(wood.branches[b], knot=True)
+        rise = frame[0][2] / max(np.hypot(frame[0][0], frame[0][1]), 1e-9)
+        height = float(base[2] + 0.5 * radius * rise)  # half-way out along the knot
+        cut = W.plank(grid, (0.0, 0.0, 1.0), height, 0.004)
+        cut.translate((-2.4 * radius * b, 0.0, -height), inplace=True)  # +x is drawn on the left
+        cuts.append(cut)
+    title = f"{species}: live knot (left), dead knot (right)"
+    both = cuts[0].merge(cuts[1])
+    render_plank(both, path, np.array([0.0, 0.0, 1.0]), title=title, legend=legend_for(species), species=species)
+
+
 for name in ("pine", "larch", "elm", "oak"):
     show(cross_cut, name)
     show(flat_sawn, name)
     show(quarter_sawn, name)
+    show(knot_cuts, name)

@@ -287,3 +287,24 @@ def test_the_cap_closes_in_nested_cones(occluded):
         top = pos[vid[darts + 40]]  # a dart of each cell's C4 face (its side), its height over the end
         tip.append(float(((top - o[cap - 1]) @ f[cap - 1, 0]).max()))
     assert np.all(np.diff(tip) > 0)  # nested: each ring's cone reaches farther over the end
+
+
+@pytest.mark.parametrize("species", ["pine", "larch", "elm", "oak"])
+def test_every_species_has_a_live_intergrown_knot_and_a_dead_encased_one(species):
+    """The gallery's knot cuts for each species (``plot_wood_species.knot_cuts``): the lower branch
+    lives, its knot wood sewn to the trunk's later wood; the upper one dies in year 7, its knot
+    lined with its bark on all 16 sides and meeting later wood only through it (or over its
+    stub's end, the cap)."""
+    wood = W.grow_wood(species, years=12, branches=[(3, 0), (4, 1)], branch_deaths={1: 7}, height=0.3)
+    assert wood.knot_counts() == {"live": 1, "dead": 1}
+    vd = wood.gm.volume_data
+    a, b = contacts(wood)
+    later_wood = np.isin(vd["wood"], LATER) & (vd["year"] >= 7) & (vd["axis"] == 0)
+    live_wood = (vd["axis"] == 1) & (vd["wood"] == C["knot"])
+    assert np.any(live_wood[a] & later_wood[b])
+    dead_wood = (vd["dead"] == 1) & (vd["wood"] == C["knot"]) & (vd["cell"] > 0)
+    cap = (vd["axis"] == 2) & (vd["level"] == wood.caps[1][0])
+    assert not np.any(dead_wood[a] & later_wood[b] & ~cap[b])
+    dead_bark = (vd["dead"] == 1) & (vd["wood"] == C["bark"]) & (vd["axis"] == 2) & (vd["level"] == 0)
+    assert len(np.unique(vd["sector"][dead_bark])) == 16
+    assert np.any(dead_bark[a] & later_wood[b])
