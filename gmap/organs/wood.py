@@ -2040,7 +2040,7 @@ class Wood:
         levels, branches, and stacks the level below cannot match keep ``r``.
         """
         n_levels = len(ax.levels)
-        if ax.index != 0 or n_levels < 3:
+        if n_levels < 3:  # every axis: a branch carrying sub-branches grows node years too
             return lambda r, outer, end: r
         kind = np.array([_PARTS[part] for _, part in ax.parts[:n_levels]], np.int64)
         h = self.level_frames(ax)[2]
