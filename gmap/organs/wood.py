@@ -22,7 +22,11 @@ level's cells ``1..s`` (the year before level ``t`` existed) end on level
 (:meth:`Wood._bridge`): the apex of their growth cone, drawn in to the pith
 (:meth:`Wood._tapers`), as a real year's cone closes at the top of its
 shoot.  A node carrying knots is glued so too, its slot's bottom wall
-meeting each knot ring by year (:meth:`Wood._sew_knots`).
+meeting each knot ring by year (:meth:`Wood._sew_knots`).  So is every
+branch: its knot (level 0) is its first year, the stub's level ``t`` its
+year ``t + 1``, so the knot's first ring closes its cone at the knot's end
+and a branch's rings run on past each of its level boundaries (issue 39), a
+branch carrying sub-branches included.
 
 *Cambium (a choice; the thesis has no bark).*  Cells are added outside, but
 the cambium lies under the bark: after each step the roles are re-read from
@@ -365,7 +369,9 @@ def estimated_darts(
     level on its stub's end (:meth:`Wood._cap_stub`).  ``parents`` gives each branch's host
     (-1: the trunk; else the index of the branch it grows on, :class:`Branch`): a branch
     carrying sub-branches grows a node of ``branch_sides`` sides in each year some are born on
-    it, like the trunk's.  Exact for :func:`grow_wood` (measured: a
+    it, like the trunk's.  A branch's levels are glued by year as the
+    trunk's (:meth:`Wood.year_shift`): ``BRIDGE_DARTS`` per side for each
+    level past the knot (a cap has none).  Exact for :func:`grow_wood` (measured: a
     knot of 16 sides grown ``y`` years adds ``3 (28 + 144 y)`` darts of cuts)."""
     s, b = int(p["sides"]), int(p["branch_sides"])
     total = trunk_darts(s, years)
@@ -384,14 +390,15 @@ def estimated_darts(
         if dies is not None:
             kept = min(kept, max(dies - int(j), 1))
         total += 12 * b * kept + 144 * b * (kept * y - kept * (kept - 1) // 2)
+        total += BRIDGE_DARTS * b * max(kept - 1, 0)  # its levels past the knot are glued by year too
         if dies is not None and dies < years:  # the cap on the stub (Wood._cap_stub): a pith prism and
             # c = 3 (D - year of the top level) cells a stack at death, then 3 a year
             total += 12 * b + 48 * b * (3 * (dies - (int(j) + kept - 1)) + 3 * (years - dies))
         # a knot of b = 4q sides: its slot's walls are cut in q, 28 darts for the pith face and 48 per
         # layer (4 walls of 12 darts) for each extra piece, 3 layers (two of wood, one of bark) a year
         total += (b // 4 - 1) * (28 + 144 * (years - int(j)))
-        if host[c] < 0 and 1 <= int(j) < years:  # a trunk node is glued by year: the knot's first ring meets three cells
-            total += KNOT_BRIDGE_DARTS * (b // 4) - 32  # below (Wood._split_knot_bottoms), measured
+        if 1 <= int(j) < years:  # a node (the trunk's or a branch's) is glued by year: the knot's first ring
+            total += KNOT_BRIDGE_DARTS * (b // 4) - 32  # meets three cells below (Wood._split_knot_bottoms), measured
     return total
 
 
@@ -711,9 +718,11 @@ class Wood:
             if b in self.dead or self.death_year(b) != self.year:
                 continue
             lived = self.steps - np.asarray(ax.level_step, np.int64)
-            # every level keeps the knot's full depth: the stub's outer cells (born after death
-            # when the stub is young) are its bark, so the knot's wood never meets later wood
-            held = np.full(len(ax.levels), int(ax.count.max(initial=0)), np.int64)
+            # every level keeps the knot's depth less its year shift (the cells of the knot's outer
+            # cells' years, glued by year): the stub's outer cells (born after death when the stub
+            # is young) are its bark, so the knot's wood never meets later wood, and the bark
+            # lining runs on across the stub's level boundaries as the rings do
+            held = int(ax.count.max(initial=0)) - np.cumsum(self.year_shift(ax))
             self.dead[b] = (lived, held)
             self._cap_stub(b)
 
@@ -1209,17 +1218,36 @@ class Wood:
         half-year (issue 39: no ring ends on a level boundary).  The shift
         is the levels' age difference in half-years: 2 for a level grown a
         year after the one below it, 0 for a node's internode (same year)
-        and for level 0.  Only the trunk's levels are glued by year (a node
-        carrying knots too: its slot's bottom wall meets the knot by year,
-        :meth:`_sew_knots`); branch levels (stubs outside the trunk) keep
-        the cell-``i``-to-cell-``i`` gluing.
+        and for level 0.  Every axis is glued so, the trunk and each branch
+        (a node carrying knots too: its slot's bottom wall meets the knot by
+        year, :meth:`_sew_knots`).  On a branch, level 0 is the knot, the
+        branch's first year (it starts on its host's pith in the spring it
+        is born), and level 1 its second year's shoot, past the host's bark:
+        shift 2, so the knot's first ring is the apex of its cone and closes
+        at the knot's end, and ring ``i`` of the stub runs on from the
+        knot's ring ``i + 1`` (a choice: the model's knot is the branch's
+        first year's length).  A dead stub's cap (:meth:`_cap_stub`) has
+        shift 0: its cells continue the top level's cell for cell.
         """
         shift = np.zeros(len(ax.levels), np.int64)
-        if ax.index != 0 or len(ax.levels) < 2:
+        if len(ax.levels) < 2:
             return shift
         steps = np.asarray(ax.level_step, np.int64)
         shift[1:] = steps[1:] - steps[:-1]
+        cap = self.caps.get(ax.index - 1) if ax.index > 0 else None
+        if cap is not None and cap[0] < len(shift):
+            shift[cap[0]] = 0
         return shift
+
+    def level_shifts(self, axis: ArrayLike, level: ArrayLike) -> np.ndarray:
+        """:meth:`year_shift` of each ``(axis index, level)`` pair (0 for a level an axis lacks, or -1)."""
+        axis, level = np.asarray(axis, np.int64), np.asarray(level, np.int64)
+        width = max(len(ax.levels) for ax in self.axes) + 1
+        table = np.zeros((max(ax.index for ax in self.axes) + 1, width), np.int64)
+        for ax in self.axes:  # one row per axis: tens of axes, not one per volume
+            table[ax.index, : len(ax.levels)] = self.year_shift(ax)
+        ok = (axis >= 0) & (axis < len(table)) & (level >= 0) & (level < width)
+        return np.where(ok, table[np.where(ok, axis, 0), np.where(ok, level, 0)], 0)
 
     def _bridge(self, cubes: np.ndarray, below: np.ndarray, lone_c4: np.ndarray | None = None) -> None:
         """Sew the first cells ``cubes`` of a new level onto cells ``below[:, 0..s]`` of the level below.
@@ -1247,8 +1275,8 @@ class Wood:
     def _split_knot_bottoms(self, parts, first) -> None:
         """A new knot's first ring cells that face its slot's bottom wall: bottoms cut like :meth:`_bridge`'s.
 
-        The slot's bottom wall is the top of the trunk level under the node,
-        ``s`` half-years older: its cells ``1..s + 1`` meet the knot's first
+        The slot's bottom wall is the top of the host's level under the node
+        (the trunk's, or a branch's for a sub-branch), ``s`` half-years older: its cells ``1..s + 1`` meet the knot's first
         ring (the older cones end there, as under a trunk cell), its cell
         ``i + s`` the knot's ring ``i`` (:meth:`_sew_knots`).  So the C1 face
         of each of the knot's first cells that faces the bottom wall (sides
@@ -1263,7 +1291,7 @@ class Wood:
             if ax.index == 0:
                 continue
             br = self.branches[ax.index - 1]
-            shift = self.year_shift(self.host(br))  # zeros on a branch host: its levels are glued by index
+            shift = self.year_shift(self.host(br))  # a branch host's levels are glued by year too
             s = int(shift[br.level]) if 0 < br.level < len(shift) else 0
             new = (t == 0) & (i == 1)
             if s == 0 or not new.any():
@@ -2021,7 +2049,7 @@ class Wood:
         internode's top is drawn in by :meth:`_tapers` as before).
         """
         n_levels = len(ax.levels)
-        if ax.index != 0 or n_levels < 3:
+        if n_levels < 3:  # every axis: a branch carrying sub-branches grows node years too
             return lambda r, outer, end: r
         kind = np.array([_PARTS[part] for _, part in ax.parts[:n_levels]], np.int64)
         h = self.level_frames(ax)[2]
@@ -2429,10 +2457,7 @@ class Wood:
         gm = self.gm
         vd = gm.volume_data
         vol = gm.dart_volume[split]
-        level = vd["level"][vol].astype(np.int64)
-        shifted = self.year_shift(self.trunk)
-        mine = (vd["axis"][vol] == 0) & (vd["cell"][vol] == 1) & (level > 0)
-        mine[mine] = shifted[level[mine]] > 0
+        mine = (vd["cell"][vol] == 1) & (self.level_shifts(vd["axis"][vol], vd["level"][vol]) > 0)
         darts = split[mine]
         if not darts.size:
             return
@@ -2690,22 +2715,31 @@ _HEX_EDGES = np.array(
 
 
 def bridged_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.UnstructuredGrid:
-    """``grid`` with each trunk cell :meth:`Wood._bridge` cut drawn as one hexahedron of its 8 corners.
+    """``grid`` with each ring cell :meth:`Wood._bridge` cut drawn as one hexahedron of its 8 corners.
 
-    A level's first ring cell, glued by year to the level below, has its
-    bottom face cut in three, so :func:`to_grid` writes it as a polyhedron
+    A level's first ring cell (the trunk's or a branch's), glued by year to
+    the level below, has its bottom face cut in three, so :func:`to_grid` writes it as a polyhedron
     (tetrahedra).  Its extra vertices lie on its bottom edges (the embedding
     puts them where the older cells end, on the level's boundary plane), so
     the hexahedron of its 8 template corners has the same shape; pictures
-    then round it like every other ring cell (:func:`smooth_grid`).
+    then round it like every other ring cell (:func:`smooth_grid`).  A
+    branch's cell that also walls a sub-branch's slot (its faces cut and
+    seated on the knot) is left in its pieces: its hexahedron would leave a
+    hole by the knot (a trunk's is drawn whole, as before: its rounded
+    neighbours meet its corners).
     """
     import pyvista as pv
 
     gm, vd = wood.gm, wood.gm.volume_data
-    shift = wood.year_shift(wood.trunk)
-    level = vd["level"].astype(np.int64)
-    bridged = (vd["axis"] == 0) & (vd["cell"] == 1) & (level > 0)
-    bridged[bridged] = shift[np.minimum(level[bridged], len(shift) - 1)] > 0
+    bridged = (vd["cell"] == 1) & (wood.level_shifts(vd["axis"], vd["level"]) > 0)
+    # a branch's cell cut elsewhere too (a slot's wall: a sub-branch's knot seats its faces) keeps
+    # its pieces: only cut points on its bottom face lie on the hexahedron's faces (the trunk's
+    # stay whole: smooth_grid rounds their neighbours, which then meet the hexahedron's corners)
+    tpl, face, a1, a2 = wood.corner, gm.dart_data["face"], gm.alpha[1], gm.alpha[2]
+    cut = np.flatnonzero((tpl < 0) & (bridged & (vd["axis"] > 0))[gm.dart_volume[: gm.n_darts]])
+    c1 = _prism.face_label_code("C1")
+    off = (face[cut] != c1) & (face[a2[cut]] != c1) & (face[a2[a1[cut]]] != c1)
+    bridged[gm.dart_volume[cut[off]]] = False
     owner = np.asarray(grid.cell_data["volume"])
     drop = bridged[owner] & (grid.celltypes != 12)
     vols = np.unique(owner[drop])
