@@ -2044,9 +2044,10 @@ class Wood:
         + f (B1 - B0)``, ``f`` the node's share of the year's height: the
         ring runs linearly over the whole year.  ``end`` is 0 for bottom
         corners, 1 for top ones; ``outer`` tells a cell's outer corners from
-        its inner ones.  Other levels, branches, and stacks the levels
-        around cannot match keep ``r`` (the apex of a cone that ends at the
-        internode's top is drawn in by :meth:`_tapers` as before).
+        its inner ones.  Every axis (a branch carrying sub-branches has
+        node years too); other levels, and stacks the levels around cannot
+        match or that flank a slot, keep ``r`` (the apex of a cone that ends
+        at the internode's top is drawn in by :meth:`_tapers` as before).
         """
         n_levels = len(ax.levels)
         if n_levels < 3:  # every axis: a branch carrying sub-branches grows node years too
