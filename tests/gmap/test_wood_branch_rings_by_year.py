@@ -9,6 +9,8 @@ import pytest
 from ramure.gmap.kernel.topology import assert_solid
 from ramure.gmap.organs import wood as W
 
+from wood_helpers import contacts
+
 C = W.CODES
 
 #: a branch born in year 2 (sector 0), grown to its full length: levels 0 (the knot) to 5
@@ -25,14 +27,6 @@ def long_branch():
 @pytest.fixture(scope="module")
 def forked():
     return W.grow_wood("pine", years=7, check_every_step=True, **FORKED)
-
-
-def contacts(wood):
-    gm = wood.gm
-    d = np.arange(gm.n_darts)
-    a3 = gm.alpha[3][: gm.n_darts]
-    sewn = a3 != d
-    return gm.dart_volume[d[sewn]].astype(np.int64), gm.dart_volume[a3[sewn]].astype(np.int64)
 
 
 def _enclosed_air(grid, centre, u, v, span=0.02, step=0.0002):

@@ -12,6 +12,8 @@ from ramure.gmap.kernel.errors import ValueRefused
 from ramure.gmap.kernel.topology import assert_solid
 from ramure.gmap.organs import wood as W
 
+from wood_helpers import contacts
+
 C = W.CODES
 LATER = [C["sapwood"], C["heartwood"]]
 
@@ -20,15 +22,6 @@ LATER = [C["sapwood"], C["heartwood"]]
 def mixed():
     # two branches of year 1 facing +x (sectors 0 and 1 of 16): branch 0 lives, branch 1 dies in year 3
     return W.grow_wood("pine", years=7, branches=[(1, 0), (2, 1)], branch_deaths={1: 4}, height=0.12)
-
-
-def contacts(wood):
-    """Volume pairs (a, b) sewn face to face (both directions)."""
-    gm = wood.gm
-    d = np.arange(gm.n_darts)
-    a3 = gm.alpha[3][: gm.n_darts]
-    sewn = a3 != d
-    return gm.dart_volume[d[sewn]].astype(np.int64), gm.dart_volume[a3[sewn]].astype(np.int64)
 
 
 def test_a_dead_knots_wood_stops_growing_and_a_live_one_does_not():

@@ -7,6 +7,8 @@ import pytest
 from ramure.gmap.kernel.topology import assert_solid
 from ramure.gmap.organs import wood as W
 
+from wood_helpers import contacts
+
 C = W.CODES
 LATER = [C["sapwood"], C["heartwood"]]
 
@@ -14,14 +16,6 @@ LATER = [C["sapwood"], C["heartwood"]]
 @pytest.fixture(scope="module")
 def trunk6():
     return W.grow_wood("pine", years=6, branches=0)
-
-
-def contacts(wood):
-    gm = wood.gm
-    d = np.arange(gm.n_darts)
-    a3 = gm.alpha[3][: gm.n_darts]
-    sewn = a3 != d
-    return gm.dart_volume[d[sewn]].astype(np.int64), gm.dart_volume[a3[sewn]].astype(np.int64)
 
 
 def test_each_ring_meets_its_own_year_and_the_older_cones_end_on_the_first_cell(trunk6):
