@@ -3001,12 +3001,15 @@ def plank_camera(
     normal: ArrayLike,
     aspect: float = 1.0,
     window: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
+    upright: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """``(position, focal point, view up, parallel scale)`` that show a plank's face filling a view.
 
     The camera faces the board's inner face (the one at ``offset``, nearer the
     pith: a flat-sawn board's arches); the trunk axis (z) runs across the
-    view, the board's width up; ``aspect`` is width over height.  ``window`` is
+    view, the board's width up, or with ``upright`` the trunk axis up (as the
+    tree stood: for a view taller than wide, such as a dock); a cross-cut
+    (normal z) is drawn the same either way.  ``aspect`` is width over height.  ``window`` is
     the part of the view the board fills, ``(left, bottom, right, top)`` as
     fractions of the view from its lower left corner (the rest is free for a
     title or a legend): the board's bounding box is centred in it and fills it
@@ -3017,6 +3020,8 @@ def plank_camera(
     up = np.cross(n, [0.0, 0.0, 1.0])
     if not np.linalg.norm(up) > 1e-6:  # a cross-cut plank (normal z): x across, y up
         up = np.array([0.0, 1.0, 0.0])
+    elif upright:  # the trunk axis up: z less its part along the normal
+        up = np.array([0.0, 0.0, 1.0]) - n[2] * n
     up = up / np.linalg.norm(up)
     right = np.cross(n, up)  # the view's right: direction of projection x view up
     pts = np.asarray(points, float)

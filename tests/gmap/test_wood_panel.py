@@ -179,3 +179,33 @@ def test_plank_controls_saw_a_preset_board_that_fills_the_view(app):
     panel.plank_offset.setValue(2000.0)
     QTest.mouseClick(panel.plank_button, Qt.MouseButton.LeftButton)
     assert "Refused" in panel.facts.text() and "misses" in panel.facts.text() and len(plotter.meshes) == 2
+
+
+class _TallPlotter(_Plotter):
+    window_size = (300, 600)  # a dock's view: taller than wide
+
+
+def test_a_tall_dock_shows_the_board_upright_and_filling_it(app):
+    """In a view taller than wide the board is drawn as the tree stood, the trunk axis up, so it
+    fills the view's height instead of lying across its width (it filled a third of a 276 x 503
+    dock)."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    from ramure.app.desktop.panels.wood import WoodPanel
+
+    panel = WoodPanel(None, plotter_factory=_TallPlotter)
+    panel.years.setValue(4)
+    assert panel.grow() is not None
+    QTest.mouseClick(panel.plank_button, Qt.MouseButton.LeftButton)
+    plotter = panel.plotter
+    mesh = {kw.get("name"): m for m, kw in plotter.meshes}["plank"]
+    position, focal, up = (np.asarray(v) for v in plotter.camera_position)
+    assert np.allclose(up, [0, 0, 1], atol=1e-9)  # the trunk axis up
+    pts = np.asarray(mesh.points)
+    right = np.cross(focal - position, up)
+    right /= np.linalg.norm(right)
+    length, width = np.ptp(pts[:, 2]), np.ptp(pts @ right)
+    scale = plotter.camera.parallel_scale
+    fill = max(length / (2 * scale), width / (2 * scale * 300 / 600))
+    assert 0.9 < fill <= 1.0 and length / (2 * scale) > 0.9  # the board's length fills the height

@@ -151,7 +151,8 @@ class WoodPanel(QWidget):
         p.clear()
         p.add_mesh(part.extract_surface(algorithm="dataset_surface"), scalars="rgb", rgb=True, lighting=False, name="plank")
         w, h = p.window_size
-        position, focal, up, scale = W.plank_camera(part.points, normal, w / h if w > 0 and h > 0 else 1.0)
+        aspect = w / h if w > 0 and h > 0 else 1.0
+        position, focal, up, scale = W.plank_camera(part.points, normal, aspect, upright=aspect < 1.0)  # a tall dock: as it grew
         self.add_texture(part, normal, 2.0 * scale / max(h, 1), up)
         p.enable_parallel_projection()
         p.camera_position = [tuple(position), tuple(focal), tuple(up)]
