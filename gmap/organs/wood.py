@@ -2005,8 +2005,8 @@ class Wood:
         # average of its cell m's top and the level above's outermost cell's bottom (embed): close
         # onto that (next to a knot's slot the push places that corner: left as it was)
         up = np.minimum(t + 1, n_levels - 1)
-        goes_on = (ax.index == 0) & (t + 1 < n_levels) & (count[t + 1, k] > 0) & (count[t + 1, k] < 10**6) & (m > s_up)
-        goes_on &= ax.alive[up, (k - 1) % n] & ax.alive[up, (k + 1) % n]
+        goes_on = (ax.index == 0) & (t + 1 < n_levels) & (count[t + 1, k] > 0) & (m > s_up)
+        goes_on &= self._clear_of_slots(ax, up, k)
         upper = table[up, k, np.clip(m - s_up, 0, table.shape[2] - 1)]
         base = np.where(exposed & goes_on, 0.5 * (base + upper), base)
         eps = self.TAPER
@@ -2065,15 +2065,12 @@ class Wood:
         moved[nodes, 1] = moved[nodes + 1, 0] = True
         y = first[t]
         f = frac[np.maximum(y, 0)]
-        n = ax.sides
-        yy = np.maximum(y, 0)
-        clear = ax.alive[yy, k] & ax.alive[yy, (k - 1) % n] & ax.alive[yy, (k + 1) % n]
-        y = np.where(clear, y, -1)  # a slot and the stacks either side: the knots' push places them
+        y = np.where(self._clear_of_slots(ax, np.maximum(y, 0), k), y, -1)  # the knots' push places those
 
         def radius_at(level, j, valid):  # the table's outer radius of cell j (0: the pith) where valid
             lv = np.clip(level, 0, n_levels - 1)
             inside = valid & (level >= 0) & (level < n_levels) & (j >= 0) & (j <= cell.max())
-            inside &= ax.alive[lv, k] & (count[lv, k] >= j) & (count[lv, k] < 10**6)
+            inside &= ax.alive[lv, k] & (count[lv, k] >= j)
             return np.where(inside, table[lv, k, np.clip(j, 0, table.shape[2] - 1)], np.nan)
 
         s_below = shift[np.maximum(y, 0)]
@@ -2096,6 +2093,13 @@ class Wood:
             return np.where(moved[t, end] & ~np.isnan(target), target, r)
 
         return spread
+
+    @staticmethod
+    def _clear_of_slots(ax: Axis, level: np.ndarray, k: np.ndarray) -> np.ndarray:
+        """Whether stack ``k`` of ``level`` and the stacks either side of it are alive (no knot's slot):
+        the corners of a slot's walls are placed by the knots' push (:meth:`_push`), not by the tapers."""
+        n = ax.sides
+        return ax.alive[level, k] & ax.alive[level, (k - 1) % n] & ax.alive[level, (k + 1) % n]
 
     @staticmethod
     def _cube_points(o, f, h, t, k, theta, r_in, r_out, n, bottom=None, top=None):
