@@ -5,6 +5,7 @@ goes on tapering past the node instead of jumping by a knot's radius all round i
 import numpy as np
 import pytest
 
+from ramure.gmap.kernel.prism import face_label_code
 from ramure.gmap.kernel.topology import assert_solid
 from ramure.gmap.organs import wood as W
 
@@ -19,12 +20,15 @@ def whorl():
 def outer_radii(wood: W.Wood) -> np.ndarray:
     """``(levels, sectors, 2)``: the largest distance from the trunk's axis of the drawn vertices of
     each trunk stack's outermost cell, at the level's bottom and top (NaN in a knot's slot).  The
-    vertices a branch's volumes share (the knot's seam and its end) are left out: the branch leaves
-    the trunk there."""
+    vertices a branch's volumes share (the knot's seam and its end) are left out, and the top faces
+    of the bark the bottom wall closes under each knot (:func:`under_knots`): the branch leaves the
+    trunk there."""
     gm = wood.gm
     vid, pos = gm.vertex_positions()
     on_branch = np.zeros(len(pos), bool)
     on_branch[vid[gm.volume_data["axis"][gm.dart_volume] > 0]] = True
+    under = under_knots(wood)  # the trunk's bark closing under each knot's lower bark ring
+    on_branch[vid[np.isin(gm.dart_volume, under) & (gm.dart_data["face"] == face_label_code("C3"))]] = True
     order = np.argsort(gm.dart_volume, kind="stable")
     starts = np.searchsorted(gm.dart_volume[order], np.arange(len(gm.volume_data["cell"]) + 1))
     ax = wood.trunk
@@ -42,6 +46,21 @@ def outer_radii(wood: W.Wood) -> np.ndarray:
             low, high = pts[:, 2] < middle, pts[:, 2] >= middle
             out[t, k] = (r[low].max() if low.any() else np.nan), (r[high].max() if high.any() else np.nan)
     return out
+
+
+def under_knots(wood: W.Wood) -> np.ndarray:
+    """Volumes of each slot's bottom wall past the knot's last ring (:meth:`Wood._close_under_knots`):
+    their top faces lie on the knot's section, under its lower bark ring, which juts out of the trunk
+    under a rising knot, so they reach as far out as the knot's seam does."""
+    ax, gm = wood.trunk, wood.gm
+    shift = wood.year_shift(ax)
+    out = []
+    for b, br in enumerate(wood.branches):
+        t, k = br.level - 1, br.sector
+        last = int(wood.branch_axis[b].count[0].max()) + int(shift[br.level])
+        if br.parent < 0 and ax.alive[t, k] and ax.count[t, k] > last:
+            out.extend(gm.dart_volume[ax.cells[t, k, last : ax.count[t, k]]].tolist())
+    return np.array(out, np.int64)
 
 
 def swelling(radii: np.ndarray) -> float:
