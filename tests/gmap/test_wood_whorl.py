@@ -51,7 +51,8 @@ def outer_radii(wood: W.Wood) -> np.ndarray:
 def under_knots(wood: W.Wood) -> np.ndarray:
     """Volumes of each slot's bottom wall past the knot's last ring (:meth:`Wood._close_under_knots`):
     their top faces lie on the knot's section, under its lower bark ring, which juts out of the trunk
-    under a rising knot, so they reach as far out as the knot's seam does."""
+    under a rising knot, so they reach past it (by 1.3 to 2.2 mm past the seam's farthest vertex, on a
+    12-year pine's knots and a 10-year whorl's)."""
     ax, gm = wood.trunk, wood.gm
     shift = wood.year_shift(ax)
     out = []
@@ -79,7 +80,9 @@ def test_the_log_tapers_past_a_whorl(whorl):
     """Away from the knots (sectors neither holding a knot nor next to one) every sector's outer
     radius is non-increasing upwards within 3 % (it swelled by 40 %, the knots' push moving the bark
     out all round the node), and the stem's mean radius at the node is as without knots.  Next to a
-    knot the seam's flat sections, off the round trunk, still swell it by under 8 % (was 44 %)."""
+    knot too (it swelled by 44 %, then 6 %: the bottom wall's outer bark, folded under the knot at the
+    trunk's apothem pushed round it, see test_wood_under_knot.py; that bark now closes on the knot's
+    section, left out with the seam): 2.8 %, as far from it."""
     bent = outer_radii(whorl)
     whorl.bend_rings = False
     whorl.embed()
@@ -92,11 +95,11 @@ def test_the_log_tapers_past_a_whorl(whorl):
     assert len(far) == 7
     assert swelling(bent[:, far]) < 0.03
     assert swelling(straight) < 0.03
-    assert swelling(bent) < 0.08
+    assert swelling(bent) < 0.03
     node = WHORL[0][0]  # the node's level: the bottom of its level and the top of the level below
-    # over all sectors the collar beside each slot (6 % over 9 sectors of 16) is in the mean; away
-    # from the knots the level below the node ends as without knots
-    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.04)
+    # over all sectors (0.5 %; with the folded bark's corners beside each slot 3.7 %, 6 % over 9
+    # sectors of 16) and away from the knots the level below the node ends as without knots
+    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.01)
     assert np.nanmean(bent[node - 1, far, 1]) == pytest.approx(np.nanmean(straight[node - 1, far, 1]), rel=0.01)
     assert np.nanmean(bent[node, :, 0]) == pytest.approx(np.nanmean(straight[node, :, 0]), rel=0.035)
 
