@@ -1651,9 +1651,11 @@ class Wood:
             pts = self._cube_points(o, f, h, t, k, theta, r_in, r_out, n, bottom=bottom, top=top)
             if ax.index == 0 and len(self.axes) > 1 and self.bend_rings:
                 pts = self._push(pts, t, profiles)
+                self._close_under_knots(ax, cells, pts, radii, profiles)
             elif ax.index > 0 and self.bend_rings and any(c.parent == ax.index - 1 for c in self.branches):
                 outside = t > 0  # a sub-branch's slot lies in a node past the knot: the knot is not pushed
                 pts[outside] = self._push(pts[outside], t[outside], profiles, ax)
+                self._close_under_knots(ax, cells, pts, radii, profiles)
             if ax.index > 0 and ax.index - 1 in profiles:
                 pts = self._seat_knot(ax, cells, pts, radii, profiles[ax.index - 1])
             if ax.index > 0:
@@ -1892,7 +1894,8 @@ class Wood:
         knot's upper side (a choice: ``weight`` ramps from 0 to 1 over the
         ``LEVEL_RAMP`` layers under the knot's outer wood,
         :meth:`_outer_weight`; the lower side bulges out as before, a collar,
-        and is left as it is).  The knot's end is moved out with it
+        and is left as it is: the bottom wall's outer bark closes under it,
+        :meth:`_close_under_knots`).  The knot's end is moved out with it
         (:meth:`_level_knot_end`), and a seam point goes no farther than
         the end's shift past ``0.95 h`` (the seam's old cap), so it never
         passes the end.
@@ -2305,6 +2308,82 @@ class Wood:
         out[moved] += shift
         out[moved] = self._on_ring(host, base[moved], out[moved], levels[moved // per], share[moved])
         return out.reshape(pts.shape)
+
+    def _close_under_knots(self, host: Axis, cells: np.ndarray, pts: np.ndarray, radii: np.ndarray, profiles) -> None:
+        """Top corners of the bottom wall's cells past a knot's last ring, in place in ``pts``.
+
+        The slot's bottom wall (stack ``k`` of the level under the knot's
+        node, a year older) holds ``s`` cells more than the knot's ``N``
+        rings (its cone's apex, :meth:`year_shift`) and, as an older stack,
+        one or more bark cells past cell ``N + s``, which no knot cell
+        meets.  The first one's top face has the knot's last ring on its
+        inner edge (the knot's corners round the ring's lower quarter) and
+        one straight outer edge between the slot's two lower corner lines.
+        The push (:meth:`_push`) left that edge at the trunk's apothem,
+        inside the ring, which juts out of the trunk under a rising knot
+        (``d sin(e)``), so those cells came out turned over at their top
+        (issue 39: 26 of 4,000 points of a cross-cut under a pine's knot in
+        two cells).  A choice: the outer edge goes onto the square round the
+        knot's last ring (half-side ``r / cos(pi / m)``, the ring's own
+        corners' radius), below the ring's two lower diagonal corners on the
+        knot's section, so the top face lies on that section between the
+        round ring and its square, never crossing it; each further cell
+        stands ``TAPER`` times its radius past cell ``N + s`` out from there
+        (a stack's exposed top closes so, :meth:`_tapers`), along the
+        section's downward side.  The corners of the stacks either side of
+        the wall at those vertices go there too, so the vertex is where all
+        its volumes put it.
+        """
+        n = host.sides
+        if not host.alive.size:
+            return
+        c_n = 1.0 / math.cos(math.pi / n)
+        c_m = 1.0 / math.cos(math.pi / int(self.p["branch_sides"]))
+        row = np.full(len(self.gm.volume_data["cell"]), -1, np.int64)
+        row[cells] = np.arange(len(cells))
+        shift = self.year_shift(host)
+        for b, br in enumerate(self.branches):
+            if b not in profiles or self.host(br) is not host or br.level < 1:
+                continue
+            t, k = br.level - 1, br.sector
+            if host.index > 0 and t == 0:  # the bottom wall is the host's knot: placed by its seat
+                continue
+            s_layer, rho_layer, _, lateral = profiles[b]
+            last = len(s_layer) - 1 + int(shift[br.level])  # the wall's cell meeting the knot's last ring
+            if not host.alive[t, k] or host.count[t, k] <= last:
+                continue
+            p0, frame = self.branch_frame(br, knot=True)
+            r = c_m * rho_layer[-1]
+            side = np.array([-1.0, 1.0]) * (r * lateral[-1] / math.sqrt(2.0))  # under the diagonal corners
+            down = np.array([r / math.sqrt(2.0), r])  # the ring's diagonal corner, the square's corner
+            weight = self._outer_weight(br, np.full(2, len(s_layer) - 1))
+            s_at = self._level_seam(br, frame, np.full(2, s_layer[-1]), down, weight)
+            ring, square = (p0 + s_at[j] * frame[0] + down[j] * frame[1] + side[:, None] * frame[2] for j in (0, 1))
+            bender = self.knot_bender(br)
+            if bender is not None:
+                ring, square = bender(ring), bender(square)
+            out = square - ring
+            out /= np.linalg.norm(out, axis=1, keepdims=True)
+            # (sector, corner, line, inner) for every top corner on the lower corner lines
+            for kk, corner, line, inner in (
+                (k, 3, 0, True), (k, 7, 0, False), (k, 2, 1, True), (k, 6, 1, False),
+                ((k - 1) % n, 2, 0, True), ((k - 1) % n, 6, 0, False),
+                ((k + 1) % n, 3, 1, True), ((k + 1) % n, 7, 1, False),
+            ):  # fmt: skip
+                if not host.alive[t, kk]:
+                    continue
+                cell = np.arange(last + 1, int(host.count[t, kk]) + 1)  # cells past the knot's last ring
+                depth = cell - 1 if inner else cell  # the cell whose outer radius the corner is at
+                cell, depth = cell[depth > last], depth[depth > last]  # (depth == last: the knot's corner)
+                if not cell.size:
+                    continue
+                stack = np.where(depth <= host.count[t, k], k, kk)  # the wall's radii where it reaches
+                vol = self.gm.dart_volume[host.cells[t, stack, depth - 1]]
+                base = self.gm.dart_volume[host.cells[t, stack, last - 1]]
+                at = row[self.gm.dart_volume[host.cells[t, kk, cell - 1]]]
+                keep = at >= 0
+                lift = self.TAPER * c_n * (radii[vol] - radii[base])
+                pts[at[keep], corner] = square[line] + lift[keep, None] * out[line]
 
     def _on_ring(self, host: Axis, before: np.ndarray, after: np.ndarray, levels: np.ndarray, share: np.ndarray) -> np.ndarray:
         """Corners ``after`` put back at the distance from their level's axis they had ``before`` the push.

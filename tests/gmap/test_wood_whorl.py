@@ -5,6 +5,7 @@ goes on tapering past the node instead of jumping by a knot's radius all round i
 import numpy as np
 import pytest
 
+from ramure.gmap.kernel.prism import face_label_code
 from ramure.gmap.kernel.topology import assert_solid
 from ramure.gmap.organs import wood as W
 
@@ -19,12 +20,15 @@ def whorl():
 def outer_radii(wood: W.Wood) -> np.ndarray:
     """``(levels, sectors, 2)``: the largest distance from the trunk's axis of the drawn vertices of
     each trunk stack's outermost cell, at the level's bottom and top (NaN in a knot's slot).  The
-    vertices a branch's volumes share (the knot's seam and its end) are left out: the branch leaves
-    the trunk there."""
+    vertices a branch's volumes share (the knot's seam and its end) are left out, and the top faces
+    of the bark the bottom wall closes under each knot (:func:`under_knots`): the branch leaves the
+    trunk there."""
     gm = wood.gm
     vid, pos = gm.vertex_positions()
     on_branch = np.zeros(len(pos), bool)
     on_branch[vid[gm.volume_data["axis"][gm.dart_volume] > 0]] = True
+    under = under_knots(wood)  # the trunk's bark closing under each knot's lower bark ring
+    on_branch[vid[np.isin(gm.dart_volume, under) & (gm.dart_data["face"] == face_label_code("C3"))]] = True
     order = np.argsort(gm.dart_volume, kind="stable")
     starts = np.searchsorted(gm.dart_volume[order], np.arange(len(gm.volume_data["cell"]) + 1))
     ax = wood.trunk
@@ -44,6 +48,22 @@ def outer_radii(wood: W.Wood) -> np.ndarray:
     return out
 
 
+def under_knots(wood: W.Wood) -> np.ndarray:
+    """Volumes of each slot's bottom wall past the knot's last ring (:meth:`Wood._close_under_knots`):
+    their top faces lie on the knot's section, under its lower bark ring, which juts out of the trunk
+    under a rising knot, so they reach past it (by 1.3 to 2.2 mm past the seam's farthest vertex, on a
+    12-year pine's knots and a 10-year whorl's)."""
+    ax, gm = wood.trunk, wood.gm
+    shift = wood.year_shift(ax)
+    out = []
+    for b, br in enumerate(wood.branches):
+        t, k = br.level - 1, br.sector
+        last = int(wood.branch_axis[b].count[0].max()) + int(shift[br.level])
+        if br.parent < 0 and ax.alive[t, k] and ax.count[t, k] > last:
+            out.extend(gm.dart_volume[ax.cells[t, k, last : ax.count[t, k]]].tolist())
+    return np.array(out, np.int64)
+
+
 def swelling(radii: np.ndarray) -> float:
     """Largest outer radius over the narrowest one below it in the same sector, less 1, over the
     trunk read upwards level by level (bottom, then top)."""
@@ -60,7 +80,9 @@ def test_the_log_tapers_past_a_whorl(whorl):
     """Away from the knots (sectors neither holding a knot nor next to one) every sector's outer
     radius is non-increasing upwards within 3 % (it swelled by 40 %, the knots' push moving the bark
     out all round the node), and the stem's mean radius at the node is as without knots.  Next to a
-    knot the seam's flat sections, off the round trunk, still swell it by under 8 % (was 44 %)."""
+    knot too (it swelled by 44 %, then 6 %: the bottom wall's outer bark, folded under the knot at the
+    trunk's apothem pushed round it, see test_wood_under_knot.py; that bark now closes on the knot's
+    section, left out with the seam): 2.8 %, as far from it."""
     bent = outer_radii(whorl)
     whorl.bend_rings = False
     whorl.embed()
@@ -73,11 +95,11 @@ def test_the_log_tapers_past_a_whorl(whorl):
     assert len(far) == 7
     assert swelling(bent[:, far]) < 0.03
     assert swelling(straight) < 0.03
-    assert swelling(bent) < 0.08
+    assert swelling(bent) < 0.03
     node = WHORL[0][0]  # the node's level: the bottom of its level and the top of the level below
-    # over all sectors the collar beside each slot (6 % over 9 sectors of 16) is in the mean; away
-    # from the knots the level below the node ends as without knots
-    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.04)
+    # over all sectors (0.5 %; with the folded bark's corners beside each slot 3.7 %, 6 % over 9
+    # sectors of 16) and away from the knots the level below the node ends as without knots
+    assert np.nanmean(bent[node - 1, :, 1]) == pytest.approx(np.nanmean(straight[node - 1, :, 1]), rel=0.01)
     assert np.nanmean(bent[node - 1, far, 1]) == pytest.approx(np.nanmean(straight[node - 1, far, 1]), rel=0.01)
     assert np.nanmean(bent[node, :, 0]) == pytest.approx(np.nanmean(straight[node, :, 0]), rel=0.035)
 
