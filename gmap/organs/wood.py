@@ -2848,16 +2848,11 @@ def seated_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.Unstructure
     ok = np.isfinite(corners).all(axis=(1, 2))
     ok[extra_cell[on < 0]] = False
     pid, held = _held_pairs(grid, (grid.celltypes != 12) & ~np.isin(owner, vols))
-    n_ids = int(pid.max()) + 1
-
-    grid_hash = _hash(grid.points)
-    by_hash = np.argsort(grid_hash)
 
     def straight(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # edges a cell left whole holds
-        at = [by_hash[np.minimum(np.searchsorted(grid_hash[by_hash], _hash(p)), len(by_hash) - 1)] for p in (a, b)]
-        ia, ib = at
-        found = (grid_hash[ia] == _hash(a)) & (grid_hash[ib] == _hash(b))
-        return found & np.isin(_pair_keys(pid[ia], pid[ib], n_ids), held)
+        ia, ib = _find(np.asarray(grid.points), a), _find(np.asarray(grid.points), b)
+        keys = _pair_keys(pid[ia], pid[ib], int(pid.max()) + 1)
+        return (ia >= 0) & (ib >= 0) & np.isin(keys, held)
 
     pieces, rows, points = [], [], []
     base = 0
