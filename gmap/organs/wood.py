@@ -2851,6 +2851,228 @@ def bridged_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.Unstructur
     return pv.merge([grid.extract_cells(~drop), hexes], merge_points=False)
 
 
+def _keys(points: ArrayLike) -> np.ndarray:
+    """Points rounded to a nanometre, as integer rows (the grid's pieces are matched by position)."""
+    return np.round(np.asarray(points) * 1e9).astype(np.int64)
+
+
+def _hash(points: ArrayLike) -> np.ndarray:
+    """One integer per point, by its position to a nanometre (:func:`_keys`): a 1-d key, so that
+    matching points by position is a sort of integers, not of rows."""
+    k = _keys(points)
+    return (k[..., 0] * 2_654_435_761 + k[..., 1]) * 805_459_861 + k[..., 2]  # wraps round: a hash
+
+
+def _find(table: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """Row of ``table`` (k, 3) at each point of ``query`` (n, 3), matched to a nanometre; -1 where none."""
+    h = _hash(table)
+    order = np.argsort(h, kind="stable")
+    sorted_h = h[order]
+    q = _hash(query)
+    at = np.minimum(np.searchsorted(sorted_h, q), max(len(h) - 1, 0))
+    if not len(h):
+        return np.full(len(q), -1, np.int64)
+    return np.where(sorted_h[at] == q, order[at], -1)
+
+
+#: the twelve edges of a VTK hexahedron, class by class as in _HEX_EDGES (edge e is in class e // 4)
+_EDGE_LIST = _HEX_EDGES.reshape(-1, 2)
+
+
+def seated_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.UnstructuredGrid:
+    """``grid`` with each trunk ring cell seated on a knot drawn as a row of hexahedra (pictures only).
+
+    A knot's slot walls (the node's ring cells on either side of the knot)
+    and the ring cells over and under it have one face seated on the knot:
+    two parallel edges of that face bend round the knot through extra
+    vertices (three each), so :func:`to_grid` writes these cells as
+    polyhedra, cut in tetrahedra.  Those tetrahedra's long skew faces break
+    the rings into kinks and steep jogs where a board cuts them (a ring
+    crossed a wall in two straight pieces meeting at 45 degrees), and
+    :func:`smooth_grid` cannot round them (a cross-cut showed the 16-gon's
+    facets beside every knot).  Here such a cell is drawn as ``n + 1``
+    hexahedra across its seated edges: each piece joins two consecutive
+    vertices of the seated edges to two points on the opposite parallel
+    edges, which are cut in ``n + 1`` equal parts: the same shares on both
+    (so the pieces cut the far face of the cell along its own bilinear
+    lines and leave no gap to the neighbour there) and on every cell
+    (neighbours sharing a far edge cut it at the same points).  A far edge
+    along the trunk is cut straight, one round it in polar coordinates
+    about the level's axis, as :func:`smooth_grid` cuts the neighbour's arc
+    (three extra vertices: at its very points), or straight where a cell
+    left whole holds it.  The seated vertices and faces
+    are the kernel's, so the knot's cells meet the same faces as before.
+    A cell whose extra vertices lie otherwise is left in its pieces.
+    """
+    import pyvista as pv
+
+    gm, vd = wood.gm, wood.gm.volume_data
+    owner = np.asarray(grid.cell_data["volume"])
+    poly = (grid.celltypes != 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)
+    vols = np.unique(owner[poly])
+    if not vols.size:
+        return grid
+    m = len(vols)
+    corners, masks, extra, extra_mask, extra_cell = _cell_points(wood, vols)
+    edge_mask = masks[:, _EDGE_LIST[:, 0]] & masks[:, _EDGE_LIST[:, 1]]  # (m, 12): the two faces of each edge
+    hit = edge_mask[extra_cell] == extra_mask[:, None]
+    on = np.where(hit.sum(axis=1) == 1, np.argmax(hit, axis=1), -1)  # the edge each extra vertex lies on
+    count = np.zeros((m, 12), np.int64)
+    np.add.at(count, (extra_cell[on >= 0], on[on >= 0]), 1)
+    # the seated vertices are the knot's too (a bridged cell's bottom is cut at trunk points only)
+    knot = np.flatnonzero(vd["axis"][gm.dart_volume[: gm.n_darts]] > 0)
+    seat = (on >= 0) & np.isin(_hash(extra), _hash(gm.points[knot]))
+    seated = np.zeros((m, 12), np.int64)
+    np.add.at(seated, (extra_cell[seat], on[seat]), 1)
+    ok = np.isfinite(corners).all(axis=(1, 2))
+    ok[extra_cell[on < 0]] = False
+    pid, held = _held_pairs(grid, (grid.celltypes != 12) & ~np.isin(owner, vols))
+
+    def straight(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # edges a cell left whole holds
+        ia, ib = _find(np.asarray(grid.points), a), _find(np.asarray(grid.points), b)
+        keys = _pair_keys(pid[ia], pid[ib], int(pid.max()) + 1)
+        return (ia >= 0) & (ib >= 0) & np.isin(keys, held)
+
+    pieces, rows, points = [], [], []
+    base = 0
+    done = np.zeros(m, bool)
+    pairs = [(a, b) for a in range(12) for b in range(a + 1, 12) if a // 4 == b // 4]  # parallel edges
+    for e0, e1 in pairs:
+        n = count[:, e0]
+        # no vertex on the class's two other edges (there go the pieces' points); one on an edge
+        # across (a bridged cell's bottom face, cut where the older cells end) is drawn straight,
+        # as bridged_as_hexahedra draws it
+        others = count[:, 4 * (e0 // 4) : 4 * (e0 // 4) + 4].sum(axis=1) - count[:, e0] - count[:, e1]
+        pick = ok & ~done & (n > 0) & (count[:, e1] == n) & (others == 0)
+        pick &= (seated[:, e0] == n) & (seated[:, e1] == n)
+        pick &= (edge_mask[:, e0] & edge_mask[:, e1]) != 0  # both on one face: the seated one
+        for k in np.unique(n[pick]):
+            g = np.flatnonzero(pick & (n == k))
+            path = np.full((len(g), 2, int(k), 3), np.nan)
+            for side, e in enumerate((e0, e1)):
+                x = np.flatnonzero((on == e) & pick[extra_cell] & (count[extra_cell, e0] == k))
+                local = np.searchsorted(g, extra_cell[x])
+                a, b = corners[extra_cell[x], _EDGE_LIST[e, 0]], corners[extra_cell[x], _EDGE_LIST[e, 1]]
+                t = np.einsum("ix,ix->i", extra[x] - a, b - a) / np.einsum("ix,ix->i", b - a, b - a)
+                order = np.lexsort((t, local))
+                path[:, side] = extra[x[order]].reshape(len(g), int(k), 3)
+            cells, pts = _seated_rows(wood, vols[g], corners[g], (e0, e1), path, straight)
+            pieces.append(cells + base)
+            points.append(pts)
+            base += len(pts)
+            rows.append(np.repeat(vols[g], k + 1))
+            done[g] = True
+    if not pieces:
+        return grid
+    first = np.zeros(gm.n_volumes, np.int64)
+    first[owner[::-1]] = np.arange(len(owner))[::-1]  # a grid row of each volume, for its data
+    conn = np.concatenate(pieces)
+    hexes = pv.UnstructuredGrid(
+        np.hstack([np.full((len(conn), 1), 8), conn]).ravel(), np.full(len(conn), 12, np.uint8), np.concatenate(points)
+    )
+    which = first[np.concatenate(rows)]
+    for name in grid.cell_data.keys():
+        hexes.cell_data[name] = np.asarray(grid.cell_data[name])[which]
+    keep: Any = ~np.isin(owner, vols[done])  # the grid's other rows (a boolean mask)
+    return pv.merge([grid.extract_cells(keep), hexes], merge_points=False)
+
+
+def _cell_points(wood: Wood, vols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The template corners of volumes ``vols`` and their other vertices, with the faces they lie on.
+
+    Returns the corners (m, 8, 3) (NaN where missing) and their faces as
+    bit masks (m, 8) (bit ``c`` for the dart label ``face == c``), then each
+    extra vertex (one per volume and position): its point, face mask and
+    row in ``vols``.
+    """
+    gm = wood.gm
+    row = np.full(gm.n_volumes, -1, np.int64)
+    row[vols] = np.arange(len(vols))
+    darts = np.flatnonzero(row[gm.dart_volume[: gm.n_darts]] >= 0)
+    tpl = wood.corner[darts]
+    bit = np.left_shift(1, gm.dart_data["face"][darts].astype(np.int64))
+    key = np.concatenate([row[gm.dart_volume[darts]][:, None], _keys(gm.points[darts])], axis=1)
+    uniq, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inv = inv.reshape(-1)
+    mask = np.zeros(len(uniq), np.int64)
+    np.bitwise_or.at(mask, inv, bit)
+    corner = np.full(len(uniq), -1, np.int64)
+    corner[inv[(tpl >= 0) & (tpl < 8)]] = tpl[(tpl >= 0) & (tpl < 8)]
+    cell, pts = uniq[:, 0], gm.points[darts[first]]
+    corners = np.full((len(vols), 8, 3), np.nan)
+    masks = np.zeros((len(vols), 8), np.int64)
+    at = corner >= 0
+    corners[cell[at], corner[at]] = pts[at]
+    masks[cell[at], corner[at]] = mask[at]
+    return corners, masks, pts[~at], mask[~at], cell[~at]
+
+
+def _seated_rows(
+    wood: Wood,
+    vols: np.ndarray,
+    corners: np.ndarray,
+    seats: tuple[int, int],
+    seated: np.ndarray,
+    straight: Any,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n + 1`` hexahedra of each cell ``vols`` across its seated edges (:func:`seated_as_hexahedra`).
+
+    ``corners`` (m, 8, 3) are the cells' template corners, ``seats`` the two seated edges (of one
+    class of ``_EDGE_LIST``) and ``seated`` (m, 2, n, 3) their extra vertices
+    in order from the edge's first corner.  ``straight(a, b)`` tells which
+    edges must stay straight.  Returns the connectivity (m (n + 1), 8), each
+    piece in its cell's VTK order, and the points it indexes.
+    """
+    m, n = len(vols), seated.shape[2]
+    cls = seats[0] // 4
+    edges = _HEX_EDGES[cls]  # (4, 2): the class's four parallel edges, first corner to second
+    chain = np.zeros((m, 4, n + 2, 3))  # the points along each of them
+    chain[:, :, 0] = corners[:, edges[:, 0]]
+    chain[:, :, -1] = corners[:, edges[:, 1]]
+    for side, e in enumerate(seats):
+        chain[:, e % 4, 1:-1] = seated[:, side]
+    o, f, _ = wood.level_frames(wood.trunk)
+    level = wood.gm.volume_data["level"][vols].astype(np.int64)
+    w = np.broadcast_to(np.arange(1, n + 1) / (n + 1), (m, n))
+    for s in range(4):
+        if 4 * cls + s in seats:
+            continue
+        a, b = chain[:, s, 0], chain[:, s, -1]
+        along = np.abs(np.einsum("mx,mx->m", b - a, f[level, 0])) > 0.5 * np.linalg.norm(b - a, axis=1)
+        flat = along | straight(a, b)
+        line = a[:, None] + w[..., None] * (b - a)[:, None]
+        chain[:, s, 1:-1] = np.where(flat[:, None, None], line, _polar_lerp(a, b, w, o[level], f[level]))
+    slot = np.zeros(8, np.int64)  # corner c: on the class's edge slot[c], at its first (0) or second (1) end
+    end = np.zeros(8, np.int64)
+    for k in range(4):
+        slot[edges[k]] = k
+        end[edges[k, 1]] = 1
+    ids = np.arange(m * 4 * (n + 2)).reshape(m, 4, n + 2)
+    cells = ids[np.arange(m)[:, None, None], slot[None, None, :], np.arange(n + 1)[None, :, None] + end[None, None, :]]
+    c = corners
+    up = np.einsum("mx,mx->m", np.cross(c[:, 1] - c[:, 0], c[:, 3] - c[:, 0]), c[:, 4] - c[:, 0]) >= 0
+    order = np.where(up[:, None], np.arange(8), np.array([0, 3, 2, 1, 4, 7, 6, 5]))  # as bridged_as_hexahedra
+    cells = np.take_along_axis(cells, np.broadcast_to(order[:, None, :], cells.shape), axis=2)
+    return cells.reshape(-1, 8), chain.reshape(-1, 3)
+
+
+def _polar_lerp(a: np.ndarray, b: np.ndarray, w: np.ndarray, origin: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """Points (m, k, 3) at shares ``w`` (m, k) from ``a`` to ``b`` (m, 3), radius, angle and height
+    linear about each level's axis (``origin`` (m, 3); ``frame`` (m, 3, 3): the axis, then two across),
+    the short way round: where :func:`smooth_grid` draws its arcs."""
+    rel_a, rel_b = a - origin, b - origin
+
+    def polar(rel):
+        x, y = np.einsum("mx,mx->m", rel, frame[:, 1]), np.einsum("mx,mx->m", rel, frame[:, 2])
+        return np.hypot(x, y), np.arctan2(y, x), np.einsum("mx,mx->m", rel, frame[:, 0])
+
+    (ra, ta, za), (rb, tb, zb) = polar(rel_a), polar(rel_b)
+    tb = ta + np.angle(np.exp(1j * (tb - ta)))
+    r, t, z = (lo[:, None] + w * (hi - lo)[:, None] for lo, hi in ((ra, rb), (ta, tb), (za, zb)))
+    across = np.cos(t)[..., None] * frame[:, None, 1] + np.sin(t)[..., None] * frame[:, None, 2]
+    return origin[:, None] + z[..., None] * frame[:, None, 0] + r[..., None] * across
+
+
 def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.UnstructuredGrid:
     """A picture grid whose trunk rings are round: each trunk ring cell cut in ``parts`` along its arc.
 
@@ -2865,14 +3087,18 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     that a cell left whole also holds (the pith's wedges, the tetrahedra
     of the slot walls round a knot, the knot's own cells) stays a chord,
     cut at the same points, so no gap opens between a rounded cell and
-    its neighbour.  Other cells are kept; the volumes are not the kernel's
+    its neighbour.  The ring cells seated on a knot are first drawn as
+    rows of hexahedra (:func:`seated_as_hexahedra`) and rounded too, each
+    piece the way its cell's pieces are rounded together (the edge class
+    most round the trunk over all of them: a thin piece by the pith could
+    pick another).  Other cells are kept; the volumes are not the kernel's
     any more (arcs, not chords): measure a :func:`to_grid`.
     """
     import pyvista as pv
 
     if parts <= 1:
         return grid
-    grid = bridged_as_hexahedra(wood, grid)
+    grid = bridged_as_hexahedra(wood, seated_as_hexahedra(wood, grid))
     vd = wood.gm.volume_data
     owner = np.asarray(grid.cell_data["volume"])
     hexa = (grid.celltypes == 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)
@@ -2906,7 +3132,12 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
         length = np.maximum(np.linalg.norm(vec, axis=2).sum(axis=1), 1e-300)
         return np.abs(np.einsum("mkx,mx->mk", vec, tangent)).sum(axis=1) / length
 
-    which = np.argmax(np.stack([along_tangent(e) for e in _HEX_EDGES], axis=1), axis=1)
+    # per volume (a seated cell's pieces, :func:`seated_as_hexahedra`, all cut the same way round)
+    score = np.stack([along_tangent(e) for e in _HEX_EDGES], axis=1)
+    vol = np.unique(owner[rows], return_inverse=True)[1].reshape(-1)
+    total = np.zeros((int(vol.max()) + 1, 3))
+    np.add.at(total, vol, score)
+    which = np.argmax(total[vol], axis=1)
     edges = _HEX_EDGES[which]  # (m, 4, 2): the four tangential edges, each from its 'a' corner to 'b'
     m = len(rows)
     idx = np.arange(m)[:, None]
@@ -2969,8 +3200,31 @@ def _chord_edges(grid: pv.UnstructuredGrid, whole: np.ndarray, a: np.ndarray, b:
     rings at that height.  A rounded outer arc over an inner chord (the
     ring next to the pith) bulges away and is kept.
     """
-    pts = np.asarray(grid.points)
-    _, pid = np.unique(np.round(pts * 1e9).astype(np.int64), axis=0, return_inverse=True)
+    pid, held = _held_pairs(grid, whole)
+    want = _pair_keys(pid[a], pid[b], int(pid.max()) + 1 if pid.size else 1)
+    edge, inv = np.unique(want, return_inverse=True)  # each edge once, however many cells hold it
+    inv = inv.reshape(want.shape)
+    is_chord = np.isin(edge, held)
+    while True:  # under an outer chord the inner arc stays a chord too: a thin ring never turns over
+        chord = is_chord[inv]
+        below = chord.copy()
+        below[:, :2] |= chord[:, 2:]
+        if np.array_equal(below, chord):
+            return chord
+        is_chord[inv[below]] = True
+
+
+def _pair_keys(pa: np.ndarray, pb: np.ndarray, n_ids: int) -> np.ndarray:
+    """One integer per unordered pair of point ids (``n_ids`` of them)."""
+    return np.minimum(pa, pb) * n_ids + np.maximum(pa, pb)
+
+
+def _held_pairs(grid: pv.UnstructuredGrid, whole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of points that one of the cells ``whole`` holds: the grid points' ids by position
+    (rounded to a nanometre: the grid's pieces are merged without merging points), and the sorted
+    pair keys (:func:`_pair_keys`).  Every pair of a cell's points counts (a tetrahedron's six
+    edges, a wedge's or a hexahedron's edges and diagonals)."""
+    _, pid = np.unique(_hash(grid.points), return_inverse=True)
     pid = pid.reshape(-1)
     n_ids = int(pid.max()) + 1 if pid.size else 1
     conn = np.asarray(grid.cell_connectivity, np.int64)
@@ -2981,19 +3235,8 @@ def _chord_edges(grid: pv.UnstructuredGrid, whole: np.ndarray, a: np.ndarray, b:
         rows = np.flatnonzero(whole & (sizes == size))
         ids = pid[conn[offsets[rows][:, None] + np.arange(size)]]
         i, j = np.triu_indices(int(size), 1)
-        lo, hi = np.minimum(ids[:, i], ids[:, j]), np.maximum(ids[:, i], ids[:, j])
-        keys.append((lo * n_ids + hi).reshape(-1))
-    held = np.unique(np.concatenate(keys))
-    pa, pb = pid[a], pid[b]
-    want = np.minimum(pa, pb) * n_ids + np.maximum(pa, pb)
-    chord = np.isin(want, held)
-    while True:  # under an outer chord the inner arc stays a chord too: a thin ring never turns over
-        below = chord.copy()
-        below[:, :2] |= chord[:, 2:]
-        spread = np.isin(want, want[below])
-        if np.array_equal(spread, chord):
-            return chord
-        chord = spread
+        keys.append(_pair_keys(ids[:, i], ids[:, j], n_ids).reshape(-1))
+    return pid, np.unique(np.concatenate(keys))
 
 
 def parse_plank(text: str) -> tuple[np.ndarray, float, float]:
