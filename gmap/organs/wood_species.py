@@ -78,8 +78,9 @@ if TYPE_CHECKING:
 SHED_WIDTH = 5e-5
 
 #: ``bark`` volume attribute: not bark, inner bark (the newest layer), outer bark on a plate or
-#: ridge, outer bark in a fissure, shed on a plate, shed in a fissure.
-BARK_NONE, BARK_INNER, BARK_PLATE, BARK_FISSURE, SHED_PLATE, SHED_FISSURE = -1, 0, 1, 2, 3, 4
+#: ridge, outer bark in a fissure, shed on a plate, shed in a fissure, and the bark of a dead
+#: knot that the trunk's later rings encase (``Wood.assign_roles``; drawn as dark as a fissure).
+BARK_NONE, BARK_INNER, BARK_PLATE, BARK_FISSURE, SHED_PLATE, SHED_FISSURE, BARK_ENCASED = -1, 0, 1, 2, 3, 4, 5
 
 #: ``reaction`` volume attribute: none, compression wood (softwoods), tension wood (hardwoods).
 REACTION_NONE, COMPRESSION, TENSION = 0, 1, 2
@@ -432,10 +433,15 @@ def reaction_rgb(rgb: np.ndarray, marks: np.ndarray) -> np.ndarray:
 
 
 def bark_rgb(species: str, marks: np.ndarray) -> np.ndarray:
-    """Bark colours by ``bark`` attribute: inner bark, plates (or ridges), fissures."""
+    """Bark colours by ``bark`` attribute: inner bark, plates (or ridges), fissures.
+
+    A dead knot's encased bark (:data:`BARK_ENCASED`) takes the fissure colour, the species'
+    darkest: the dead bark round an encased knot is "a dark ring of bark around the eye of the
+    knot" in the lumber glossaries, with no pale living inner bark left in it.
+    """
     inner, plate, fissure = (_rgb(c) for c in SPECIES[species]["colors"]["bark"])
-    table = np.array([inner, plate, fissure, plate, fissure])
-    return table[np.clip(marks, 0, 4)]
+    table = np.array([inner, plate, fissure, plate, fissure, fissure])
+    return table[np.clip(marks, 0, BARK_ENCASED)]
 
 
 # ---------------------------------------------------------------------- texture
@@ -575,6 +581,6 @@ def bark_and_reaction_facts(volume_data: Mapping[str, np.ndarray], trunk_bark: n
     per_stack = np.bincount(stacks, width) if width.size else np.zeros(1)
     return {
         "bark_mm": {"max": round(1000 * float(per_stack.max()), 3), "mean": round(1000 * float(per_stack.mean()), 3)},
-        "bark_shed": int((marks >= SHED_PLATE).sum()),
+        "bark_shed": int(np.isin(marks, (SHED_PLATE, SHED_FISSURE)).sum()),
         "reaction": {"compression": int((reaction == COMPRESSION).sum()), "tension": int((reaction == TENSION).sum())},
     }
