@@ -115,7 +115,8 @@ a dead knot meets the later wood only through a layer of bark tissue: the
 boundary is sewn through bark along the stub (never knot wood to later trunk wood, a test
 checks it), the solid stays one ball, and a cut shows a dark ring round a
 dead knot where a live knot's rings run into the trunk's.  That bark is kept
-whole, as dark as the species' bark fissures (:meth:`_kill_branches`).  Inside the radius the trunk had at the death
+whole, as dark as the species' bark fissures (:meth:`_kill_branches`), and the later rings
+round it are trunk wood, with no reaction wood.  Inside the radius the trunk had at the death
 the dead knot is intergrown, as the wood grew round a live branch (a sound knot near the
 pith, a loose one outside it).  The knot's
 volume stops growing from its death step on.  *Occlusion*: at death a cap level
@@ -1412,7 +1413,8 @@ class Wood:
             old = y_now - died > p["sapwood_rings"] and y_now > p["heartwood_age"]
             tissue[gm.dart_volume[self.branch_axis[b].levels[cap]]] = CODES["heartwood" if old else "sapwood"]
         vd["label"][is_cell] = np.where(bark[is_cell], "K", np.where(season[is_cell] == EARLY, "R", "S"))
-        vd["reaction"][:] = _species.reaction_marks(p, axis, sector, wood, self.trunk.sides)
+        reacts = wood & ((axis == 0) | (tissue == CODES["knot"]))  # not the later rings round a dead knot
+        vd["reaction"][:] = _species.reaction_marks(p, axis, sector, reacts, self.trunk.sides)
 
     def _cap_roles(
         self, axis: np.ndarray, level: np.ndarray, cell: np.ndarray, born_level: np.ndarray

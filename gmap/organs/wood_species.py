@@ -397,7 +397,9 @@ def reaction_marks(p: Mapping[str, Any], axis: np.ndarray, sector: np.ndarray, w
     """``reaction`` attribute of every volume: compression wood (softwoods) on the lower side of
     every branch, tension wood (hardwoods) on its upper side; in the trunk, on the wide side set
     by ``reaction`` and ``reaction_angle`` (a leaning stem's lower side for softwoods, upper for
-    hardwoods), when ``reaction > 0``.
+    hardwoods), when ``reaction > 0``.  ``wood`` flags the volumes that may react: the caller
+    leaves out the trunk's later rings round a dead knot (on a branch's axis, but trunk wood
+    laid after the branch died, which no branch's weight bends).
 
     A branch's sectors are numbered from its knot's side on the slot's
     bottom wall (``Wood.branch_frame``: sectors ``0 .. m/4 - 1`` face it),
@@ -527,10 +529,11 @@ def texture_face(
     of a plank): points ``pixel`` apart, point data ``rgb``.
 
     The plane lies a hair in front of the face and samples the cells a hair
-    behind it (``rgb``, ``wood``, ``season``, ``axis``), then
-    :func:`texture_rgb` adds pores and rays to the trunk's sapwood and
-    heartwood (``codes``: the wood's tissue codes).  Points outside the part
-    are dropped.
+    behind it (``rgb``, ``wood``, ``season``), then :func:`texture_rgb` adds
+    pores and rays to the trunk's sapwood and heartwood (``codes``: the
+    wood's tissue codes), wherever they lie: the trunk's rings laid round a
+    dead knot and over its stub's end (on the branch's axis) are trunk wood
+    too, and look it.  Points outside the part are dropped.
     """
     import pyvista as pv
 
@@ -553,8 +556,8 @@ def texture_face(
     probe = pv.PolyData(flat + (depth + eps) * n)
     sampled = probe.sample(part)
     valid = np.asarray(sampled.point_data["vtkValidPointMask"]).astype(bool)
-    data = {k: np.asarray(sampled.point_data[k]) for k in ("rgb", "wood", "season", "axis")}
-    wood = (data["axis"] == 0) & np.isin(data["wood"], [codes["sapwood"], codes["heartwood"]])
+    data = {k: np.asarray(sampled.point_data[k]) for k in ("rgb", "wood", "season")}
+    wood = np.isin(data["wood"], [codes["sapwood"], codes["heartwood"]])
     rgb = texture_rgb(species, np.asarray(probe.points), data["rgb"], wood, data["season"])
     grid = pv.StructuredGrid(*(flat + (depth - eps) * n).T.reshape(3, ni, nj, 1))
     grid.point_data["rgb"] = rgb.reshape(ni, nj, 3).transpose(1, 0, 2).reshape(-1, 3)

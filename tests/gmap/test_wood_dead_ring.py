@@ -1,5 +1,6 @@
 """The dark ring round a dead knot (issue 39, wood a woodworker would accept): the bark a branch
-has when it dies is kept whole and drawn dark, and its cells are sound."""
+has when it dies is kept whole and drawn dark, its cells are sound, and the trunk's later rings
+round it are trunk wood (no reaction tint, the trunk's texture)."""
 
 import numpy as np
 import pytest
@@ -197,3 +198,52 @@ def test_the_dead_knots_bark_is_whole_and_dark():
     assert np.isin(vd["bark"][trunk_bark], [S.SHED_PLATE, S.SHED_FISSURE]).any()
     facts = S.bark_and_reaction_facts(vd, trunk_bark)
     assert facts["bark_shed"] == int(np.isin(vd["bark"], [S.SHED_PLATE, S.SHED_FISSURE]).sum())
+
+
+@pytest.mark.parametrize("species", ["pine", "oak"])
+def test_the_later_rings_round_a_dead_knot_are_plain_trunk_wood(species):
+    """The rings laid after the branch's death on its axis (up the stub and over its end) have no
+    reaction wood, and their colours are the trunk wood's of the same tissue and season.
+
+    Before: 168 of the 449 such cells were marked compression (pine) or tension (oak) wood and
+    drawn tinted, a pale brown wedge beyond the dead knot's end in a cross-cut.
+    """
+    wood = knot_cut_wood(species)
+    vd = wood.gm.volume_data
+    later = (vd["axis"] == 2) & np.isin(vd["wood"], LATER)
+    assert later.sum() > 300 and not np.any(vd["reaction"][later])
+    rgb = W.cell_colors(vd, species).astype(int)
+    trunk = (vd["axis"] == 0) & np.isin(vd["wood"], LATER) & (vd["reaction"] == 0)
+    for tissue in LATER:
+        for season in (W.EARLY, W.LATE):
+            mine = later & (vd["wood"] == tissue) & (vd["season"] == season)
+            ref = trunk & (vd["wood"] == tissue) & (vd["season"] == season)
+            if mine.any():
+                assert np.all(rgb[mine] == rgb[ref][0])
+    # the dead knot's own wood keeps its reaction wood (it grew under the branch's weight)
+    knot = (vd["axis"] == 2) & (vd["wood"] == C["knot"])
+    assert np.any(vd["reaction"][knot] != S.REACTION_NONE)
+
+
+def test_the_later_rings_on_a_branch_axis_get_the_trunks_texture():
+    """``texture_face`` gives sapwood and heartwood its pores and rays whatever axis holds it: the
+    trunk's rings round a dead knot (on the branch's axis) look like the trunk's wood."""
+    import pyvista as pv
+
+    points = np.array([[x, y, z] for z in (0.0, 0.004) for x, y in ((0.02, 0.0), (0.03, 0.0), (0.03, 0.01), (0.02, 0.01))])
+    cells = np.array([8, 0, 1, 2, 3, 4, 5, 6, 7])
+    grid = pv.UnstructuredGrid(cells, np.array([pv.CellType.HEXAHEDRON]), points)
+    early = W.SPECIES["oak"]["colors"]["sapwood"][0]
+    sapwood = [int(early[i : i + 2], 16) for i in (1, 3, 5)]
+    grid.cell_data["rgb"] = np.array([sapwood], np.uint8)
+    grid.cell_data["season"] = np.array([W.EARLY], np.int8)
+    changed = {}
+    for axis in (0, 2):
+        for tissue in ("sapwood", "knot"):
+            part = grid.copy()
+            part.cell_data["axis"] = np.array([axis], np.int16)
+            part.cell_data["wood"] = np.array([C[tissue]], np.int8)
+            face = S.texture_face(part, (0.0, 0.0, 1.0), "oak", 5e-5, C)
+            changed[axis, tissue] = float(np.mean(np.any(face.point_data["rgb"] != sapwood, axis=1)))
+    assert changed[2, "sapwood"] == changed[0, "sapwood"] > 0.05  # oak's earlywood pores and rays
+    assert changed[0, "knot"] == changed[2, "knot"] == 0.0  # a knot keeps its plain colour
