@@ -10,6 +10,13 @@ dead knot keeps its bark as a dark ring and the trunk's later rings wrap round i
 loose knot). A flat-sawn board through the dead knot shows the same black ring on its face. A
 radial cut along the dead branch shows its occlusion: the rings laid after its death run up the
 stub and close over its end, so the dead knot is buried in the wood (``Wood._cap_stub``).
+
+A dead branch's knot is encased only outside the radius the trunk had when the branch died (here
+about 0.34 of the final radius): inside it the wood grew round a live branch, and the knot is
+intergrown there too (a "sound knot" near the pith, a "loose knot" outside; Moberg 2001, *Forest
+Ecology and Management* 147). So the cuts cross the dead knot in its loose part: its cross-cut four
+fifths of the way out along it (a horizontal cut runs a long way along a rising knot; the live
+knot's is half-way out), the board 0.55 of the radius from the pith.
 """
 
 import numpy as np
@@ -33,14 +40,14 @@ def knot_height(b, out):
 
 def cross_cut(b, path):
     state = "dead" if b in wood.dead else "live"
-    slab = W.plank(grid, (0.0, 0.0, 1.0), knot_height(b, 0.5), 0.004)
+    slab = W.plank(grid, (0.0, 0.0, 1.0), knot_height(b, 0.8 if b in wood.dead else 0.5), 0.004)
     render_plank(slab, path, np.array([0.0, 0.0, 1.0]), title=f"cross-cut through the {state} knot")
 
 
 def flat_sawn_dead(path):
-    offset = 0.35 * radius
+    offset = 0.55 * radius
     slab = W.plank(grid, (1.0, 0.0, 0.0), offset, 0.004)
-    part = W.plank_window(slab, 3 * radius, at=knot_height(1, 0.35))[0]
+    part = W.plank_window(slab, 3 * radius, at=knot_height(1, 0.55))[0]
     title = f"flat-sawn, {100 * offset:.1f} cm from the pith: the dead knot"
     render_plank(part, path, (1, 0, 0), title=title, legend=legend)
 

@@ -14,7 +14,7 @@ and larch.  Branch wood is darker on its lower side in the conifers
 (compression wood) and paler on its upper side in the broadleaves (tension
 wood).  Last, each species' knots: a 12-year tree with two branches on one side, the lower
 one alive, the upper one dead since year 7, cross-cut through each knot (the live knot's rings run
-into the trunk's; the dead one is ringed with its bark and encased).  See
+into the trunk's; the dead one is ringed with its dark bark and encased).  See
 :mod:`ramure.gmap.organs.wood_species` for the sources of the numbers.
 """
 
@@ -79,6 +79,16 @@ def quarter_sawn(species, path):
     render_plank(part, path, normal, title=title, legend=legend_for(species), species=species)
 
 
+#: Where the knot cuts cross the live and the dead knot's pith, as a share of the trunk's radius:
+#: half-way out along the live one, four fifths of the way out along the dead one, in its loose
+#: (encased) part.  A dead branch's knot is intergrown out to the radius the trunk had when it died
+#: (0.26-0.35 R here: the wood grew round it while it lived, a "sound knot") and encased past it
+#: (Moberg 2001, *Forest Ecology and Management* 147: sound-knot and loose-knot lengths); a
+#: cross-cut through a rising knot runs a long way along it, so a cut half-way out would reach the
+#: sound part and show its inner end with no bark round it.
+KNOT_CUTS = (0.5, 0.8)
+
+
 def knot_cuts(species, path):
     """Cross-cuts through a live knot and a dead one, side by side (the dead one on the right)."""
     wood = W.grow_wood(species, years=12, branches=[(3, 0), (4, 1)], branch_deaths={1: 7}, height=0.3)
@@ -87,7 +97,7 @@ def knot_cuts(species, path):
     for b in (0, 1):
         base, frame = wood.branch_frame(wood.branches[b], knot=True)
         rise = frame[0][2] / max(np.hypot(frame[0][0], frame[0][1]), 1e-9)
-        height = float(base[2] + 0.5 * radius * rise)  # half-way out along the knot
+        height = float(base[2] + KNOT_CUTS[b] * radius * rise)
         cut = W.plank(grid, (0.0, 0.0, 1.0), height, 0.004)
         cut.translate((-2.4 * radius * b, 0.0, -height), inplace=True)  # +x is drawn on the left
         cuts.append(cut)

@@ -78,8 +78,9 @@ if TYPE_CHECKING:
 SHED_WIDTH = 5e-5
 
 #: ``bark`` volume attribute: not bark, inner bark (the newest layer), outer bark on a plate or
-#: ridge, outer bark in a fissure, shed on a plate, shed in a fissure.
-BARK_NONE, BARK_INNER, BARK_PLATE, BARK_FISSURE, SHED_PLATE, SHED_FISSURE = -1, 0, 1, 2, 3, 4
+#: ridge, outer bark in a fissure, shed on a plate, shed in a fissure, and the bark of a dead
+#: knot that the trunk's later rings encase (``Wood.assign_roles``; drawn as dark as a fissure).
+BARK_NONE, BARK_INNER, BARK_PLATE, BARK_FISSURE, SHED_PLATE, SHED_FISSURE, BARK_ENCASED = -1, 0, 1, 2, 3, 4, 5
 
 #: ``reaction`` volume attribute: none, compression wood (softwoods), tension wood (hardwoods).
 REACTION_NONE, COMPRESSION, TENSION = 0, 1, 2
@@ -399,7 +400,9 @@ def reaction_marks(p: Mapping[str, Any], axis: np.ndarray, sector: np.ndarray, w
     """``reaction`` attribute of every volume: compression wood (softwoods) on the lower side of
     every branch, tension wood (hardwoods) on its upper side; in the trunk, on the wide side set
     by ``reaction`` and ``reaction_angle`` (a leaning stem's lower side for softwoods, upper for
-    hardwoods), when ``reaction > 0``.
+    hardwoods), when ``reaction > 0``.  ``wood`` flags the volumes that may react: the caller
+    leaves out the trunk's later rings round a dead knot (on a branch's axis, but trunk wood
+    laid after the branch died, which no branch's weight bends).
 
     A branch's sectors are numbered from its knot's side on the slot's
     bottom wall (``Wood.branch_frame``: sectors ``0 .. m/4 - 1`` face it),
@@ -441,10 +444,15 @@ def reaction_rgb(rgb: np.ndarray, marks: np.ndarray) -> np.ndarray:
 
 
 def bark_rgb(species: str, marks: np.ndarray) -> np.ndarray:
-    """Bark colours by ``bark`` attribute: inner bark, plates (or ridges), fissures."""
+    """Bark colours by ``bark`` attribute: inner bark, plates (or ridges), fissures.
+
+    A dead knot's encased bark (:data:`BARK_ENCASED`) takes the fissure colour, the species'
+    darkest: the dead bark round an encased knot is "a dark ring of bark around the eye of the
+    knot" in the lumber glossaries, with no pale living inner bark left in it.
+    """
     inner, plate, fissure = (_rgb(c) for c in SPECIES[species]["colors"]["bark"])
-    table = np.array([inner, plate, fissure, plate, fissure])
-    return table[np.clip(marks, 0, 4)]
+    table = np.array([inner, plate, fissure, plate, fissure, fissure])
+    return table[np.clip(marks, 0, BARK_ENCASED)]
 
 
 # ---------------------------------------------------------------------- texture
@@ -530,10 +538,11 @@ def texture_face(
     of a plank): points ``pixel`` apart, point data ``rgb``.
 
     The plane lies a hair in front of the face and samples the cells a hair
-    behind it (``rgb``, ``wood``, ``season``, ``axis``), then
-    :func:`texture_rgb` adds pores and rays to the trunk's sapwood and
-    heartwood (``codes``: the wood's tissue codes).  Points outside the part
-    are dropped.
+    behind it (``rgb``, ``wood``, ``season``), then :func:`texture_rgb` adds
+    pores and rays to the trunk's sapwood and heartwood (``codes``: the
+    wood's tissue codes), wherever they lie: the trunk's rings laid round a
+    dead knot and over its stub's end (on the branch's axis) are trunk wood
+    too, and look it.  Points outside the part are dropped.
     """
     import pyvista as pv
 
@@ -556,8 +565,8 @@ def texture_face(
     probe = pv.PolyData(flat + (depth + eps) * n)
     sampled = probe.sample(part)
     valid = np.asarray(sampled.point_data["vtkValidPointMask"]).astype(bool)
-    data = {k: np.asarray(sampled.point_data[k]) for k in ("rgb", "wood", "season", "axis")}
-    wood = (data["axis"] == 0) & np.isin(data["wood"], [codes["sapwood"], codes["heartwood"]])
+    data = {k: np.asarray(sampled.point_data[k]) for k in ("rgb", "wood", "season")}
+    wood = np.isin(data["wood"], [codes["sapwood"], codes["heartwood"]])
     rgb = texture_rgb(species, np.asarray(probe.points), data["rgb"], wood, data["season"])
     grid = pv.StructuredGrid(*(flat + (depth - eps) * n).T.reshape(3, ni, nj, 1))
     grid.point_data["rgb"] = rgb.reshape(ni, nj, 3).transpose(1, 0, 2).reshape(-1, 3)
@@ -584,6 +593,6 @@ def bark_and_reaction_facts(volume_data: Mapping[str, np.ndarray], trunk_bark: n
     per_stack = np.bincount(stacks, width) if width.size else np.zeros(1)
     return {
         "bark_mm": {"max": round(1000 * float(per_stack.max()), 3), "mean": round(1000 * float(per_stack.mean()), 3)},
-        "bark_shed": int((marks >= SHED_PLATE).sum()),
+        "bark_shed": int(np.isin(marks, (SHED_PLATE, SHED_FISSURE)).sum()),
         "reaction": {"compression": int((reaction == COMPRESSION).sum()), "tension": int((reaction == TENSION).sum())},
     }
