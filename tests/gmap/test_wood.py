@@ -8,6 +8,7 @@ from ramure.gmap.organs import wood as W
 from ramure.gmap.organs.wood_species import SHED_WIDTH
 from ramure.gmap.kernel.errors import ValueRefused
 from ramure.gmap.kernel.topology import assert_solid
+from wood_helpers import triangle_hits
 
 
 @pytest.fixture(scope="module")
@@ -649,18 +650,7 @@ def _coverage(grid, height: float, inner: float, outer: float, n: int = 4000) ->
     rng = np.random.default_rng(0)
     r, a = np.sqrt(rng.uniform(inner**2, outer**2, n)), rng.uniform(0, 2 * np.pi, n)
     q = np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
-    count = np.zeros(n, np.int64)
-    for i in range(0, len(tri), 2000):
-        t = tri[i : i + 2000]
-        v0, v1, v2 = t[:, 0], t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
-        det = v1[:, 0] * v2[:, 1] - v1[:, 1] * v2[:, 0]
-        ok = np.abs(det) > 1e-20
-        det = np.where(ok, det, 1.0)[:, None]
-        w = q[None] - v0[:, None]
-        s = (w[..., 0] * v2[:, None, 1] - w[..., 1] * v2[:, None, 0]) / det
-        u = (v1[:, None, 0] * w[..., 1] - v1[:, None, 1] * w[..., 0]) / det
-        count += (ok[:, None] & (s >= 0) & (u >= 0) & (s + u <= 1)).sum(axis=0)
-    return count
+    return triangle_hits(tri, q)
 
 
 def test_smooth_grid_rounds_the_rings_round_a_knot_and_leaves_no_gap():

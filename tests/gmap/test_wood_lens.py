@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ramure.gmap.organs import wood as W
+from wood_helpers import triangle_hits
 
 
 @pytest.fixture(scope="module")
@@ -91,22 +92,6 @@ def _board(grid, wood, offset):
     return section, kp.mean(axis=0), 0.5 * np.ptp(kp[:, 2])
 
 
-def _hits(triangles, q):
-    """How many of ``triangles`` (t, 3, 2) hold each point of ``q`` (n, 2)."""
-    count = np.zeros(len(q), np.int64)
-    for i in range(0, len(triangles), 2000):
-        t = triangles[i : i + 2000]
-        v0, v1, v2 = t[:, 0], t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
-        det = v1[:, 0] * v2[:, 1] - v1[:, 1] * v2[:, 0]
-        ok = np.abs(det) > 1e-20
-        det = np.where(ok, det, 1.0)[:, None]
-        w = q[None] - v0[:, None]
-        s = (w[..., 0] * v2[:, None, 1] - w[..., 1] * v2[:, None, 0]) / det
-        u = (v1[:, None, 0] * w[..., 1] - v1[:, None, 1] * w[..., 0]) / det
-        count += (ok[:, None] & (s >= 0) & (u >= 0) & (s + u <= 1)).sum(axis=0)
-    return count
-
-
 def test_rings_pass_a_knot_in_a_flat_sawn_board_without_corners(whorls):
     """A flat-sawn board facing the knot (half the trunk's radius from the pith): the rings that pass
     it (in the picture) turn by at most 32 degrees over 1 mm either side of any vertex within two
@@ -132,7 +117,7 @@ def test_a_knot_board_and_a_node_cross_cut_have_no_hole_and_no_overlap(whorls):
         section = smooth.slice(normal=(1, 0, 0), origin=(offset * radius, 0, 0)).triangulate()
         tri = section.points[np.asarray(section.faces).reshape(-1, 4)[:, 1:]][:, :, 1:]
         q = np.stack([rng.uniform(-0.6, 0.6, n) * radius, rng.uniform(0.85, 1.05, n)], axis=1)
-        assert np.count_nonzero(_hits(tri, q) != 1) == 0
+        assert np.count_nonzero(triangle_hits(tri, q) != 1) == 0
     o, _, h = wood.level_frames(wood.trunk)
     for br in wood.branches[:2]:
         phi = W.Wood.sector_centre(wood.trunk, br.sector)
@@ -145,7 +130,7 @@ def test_a_knot_board_and_a_node_cross_cut_have_no_hole_and_no_overlap(whorls):
                 section = grid.slice(normal=(0, 0, 1), origin=(0, 0, float(o[br.level, 2] + share * h[br.level])))
                 section = section.triangulate()
                 tri = section.points[np.asarray(section.faces).reshape(-1, 4)[:, 1:]][:, :, :2]
-                bad.append(np.count_nonzero(_hits(tri, q) != 1))
+                bad.append(np.count_nonzero(triangle_hits(tri, q) != 1))
             assert bad[1] <= bad[0] + 0.001 * n
 
 
