@@ -1,9 +1,12 @@
 """No trunk cell of a pine or a larch turned inside out under its lowest whorl (issue 39).
 
 The volumes are the kernel's own signed ones: each face walked from a dart
-of orientation class 0 (one sense per volume, by topology), fanned from its
-vertex centroid, summed over the volume (divergence theorem), and turned so
-the wood's total is positive.  A cell with a volume <= 0 is inside out.
+of orientation class 0, fanned from its vertex centroid, summed over the
+volume (divergence theorem), and turned so the wood's total is positive.
+The class is per volume (:func:`orientation_parity`), so the test checks
+that it flips across every face two volumes share: then the walks orient
+the whole solid one way, by topology alone, and a cell with a volume <= 0
+is inside out.
 (VTK's ``compute_cell_sizes`` is not used: it measures a hexahedron by the
 bottom face :func:`ramure.gmap.kernel.pyvista.to_unstructured_grid` picks,
 and turns a long thin valid cell over.)  On the code before the fix the
@@ -24,7 +27,10 @@ def signed_volumes(gm) -> np.ndarray:
     """Signed volume of every volume, positive for a wood whose cells are all the right way out."""
     vid, pos = gm.vertex_positions()
     side, n_sides = gm.orbit_ids("01")
-    even = np.flatnonzero(orientation_parity(gm) == 0)
+    parity = orientation_parity(gm)
+    sewn = np.flatnonzero(gm.alpha[3] != np.arange(gm.n_darts))
+    assert np.all(parity[sewn] != parity[gm.alpha[3][sewn]]), "volumes oriented apart: the sign means nothing"
+    even = np.flatnonzero(parity == 0)
     first = np.full(n_sides, -1, np.int64)
     first[side[even][::-1]] = even[::-1]
     first = first[first >= 0]
