@@ -53,9 +53,11 @@ volume ids, so regrowing one branch with a new seed changes only its cells.
 *Embedding.*  Default corners are analytic: level frames along each axis,
 corner angles ``2 pi (k - 1/2) / n``, radial boundaries at the cumulative
 widths (apothems).  The kernel's :meth:`GMap3.embed` then averages the
-corners of the volumes around each vertex (spec decision 3).  Default
-corners depend only on attributes, so embedding every step or once gives the
-same positions.
+corners of the volumes around each vertex (spec decision 3); where that
+average would fold a trunk ring cell (a shed bark sliver by a whorl's knots),
+its vertices are pulled in across the axis (:meth:`Wood._keep_rings_apart`).
+Default corners depend only on attributes, so embedding every step or once
+gives the same positions.
 
 *Knots.*  A year with new branches grows a short *node* level (1.6 times
 the branch's final base radius) under its internode.  A branch born in year
