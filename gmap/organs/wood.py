@@ -53,9 +53,11 @@ volume ids, so regrowing one branch with a new seed changes only its cells.
 *Embedding.*  Default corners are analytic: level frames along each axis,
 corner angles ``2 pi (k - 1/2) / n``, radial boundaries at the cumulative
 widths (apothems).  The kernel's :meth:`GMap3.embed` then averages the
-corners of the volumes around each vertex (spec decision 3).  Default
-corners depend only on attributes, so embedding every step or once gives the
-same positions.
+corners of the volumes around each vertex (spec decision 3); where that
+average would fold a trunk ring cell (a shed bark sliver by a whorl's knots),
+its vertices are pulled in across the axis (:meth:`Wood._keep_rings_apart`).
+Default corners depend only on attributes, so embedding every step or once
+gives the same positions.
 
 *Knots.*  A year with new branches grows a short *node* level (1.6 times
 the branch's final base radius) under its internode.  A branch born in year
@@ -2043,10 +2045,13 @@ class Wood:
         exposed = cell > above
         # where the trunk's level above goes on, the stack's outer corner at the boundary is the
         # average of its cell m's top and the level above's outermost cell's bottom (embed): close
-        # onto that (next to a knot's slot the push places that corner: left as it was)
+        # onto that.  Next to a knot's slot too (issue 39): left at its own radius there, that
+        # vertex's average leant on the older level's corners (4 of 6 volumes) while the one inside
+        # it had both levels' evenly, so it sank inside it by a sixth of the levels' step, more
+        # than a shed bark cell is wide (50 um): 4 such cells inside out under a pine's whorl.
         up = np.minimum(t + 1, n_levels - 1)
         goes_on = (ax.index == 0) & (t + 1 < n_levels) & (count[t + 1, k] > 0) & (m > s_up)
-        goes_on &= self._clear_of_slots(ax, up, k)
+        goes_on &= ax.alive[up, k]
         upper = table[up, k, np.clip(m - s_up, 0, table.shape[2] - 1)]
         base = np.where(exposed & goes_on, 0.5 * (base + upper), base)
         eps = self.TAPER
@@ -2534,7 +2539,87 @@ class Wood:
                 split_corners(gm, knots)
             self._bridge_corners(split)
             self._knot_bridge_corners(split)
-        return gm.embed()
+        pos = gm.embed()
+        if len(self.axes) > 1 and self.bend_rings:
+            self._keep_rings_apart(pos)
+        return pos
+
+    #: least radial gap the trunk's ring cells keep between their inner and outer vertices, over their width
+    RING_GAP = 0.1
+
+    def _keep_rings_apart(self, pos: np.ndarray, sweeps: int = 8) -> None:
+        """Pull embedded trunk vertices in so no ring cell is turned inside out (issue 39), in place.
+
+        ``pos``: the vertex positions :meth:`GMap3.embed` returned (numbered
+        as :meth:`GMap3.vertex_positions`), updated with the darts' points.
+
+        The knots' push (:meth:`_push`) moves a corner round and along the
+        trunk by a field that changes with the corner's radius too (its
+        fractional layer among the knot's rings), and near a slot it leaves
+        the corners off their rings (:meth:`_on_ring`).  The outer bark of
+        an old level is shed to ``SHED_WIDTH`` (50 um) slivers, thinner than
+        that change: between two knots of a pine's lowest whorl the push set
+        some sliver's inner corners up to 0.2 mm outside its outer ones, and
+        the kernel's average of the volumes' corners at a vertex mixes
+        stacks pushed apart, so 5 trunk cells of a 20-year pine (all shed
+        bark, levels 0 to 2) came out inside out.  A choice, after the
+        average, on the vertices themselves (so every volume at a vertex
+        agrees): along each corner line of each trunk stack (level, sector,
+        corner), from the bark in, a vertex's distance from its level's axis
+        is held at most its outer neighbour's less ``RING_GAP`` times the
+        cell's width between them, moving it across the axis only (height
+        and angle kept).  Pulled in rather than pushed out, so the bark
+        stays where the push put it; a vertex of a knot (an ``exclusive``
+        volume) never moves.  A few sweeps, as a vertex lies on up to four
+        stacks' lines; only the folded vertices move, a fraction of a
+        millimetre.
+        """
+        gm = self.gm
+        vd = gm.volume_data
+        tpl = self.corner[: gm.n_darts]
+        vol = gm.dart_volume.astype(np.int64)
+        ring = (vd["axis"] == 0) & (vd["cell"] > 0)
+        darts = np.flatnonzero((tpl >= 0) & ring[vol])
+        if not darts.size:
+            return
+        slot = np.full(8 * gm.n_volumes, -1, np.int64)  # one dart per (volume, corner): any will do
+        slot[vol[darts] * 8 + tpl[darts]] = darts
+        key = np.flatnonzero(slot >= 0)
+        darts = slot[key]
+        v, c = key // 8, key % 8
+        t, k, cell = (vd[name][v].astype(np.int64) for name in ("level", "sector", "cell"))
+        col = np.where(c >= 4, cell, cell - 1)  # column j: the vertex past cell j (0: the pith side)
+        line = (t * self.trunk.sides + k) * 4 + c % 4
+        lines, row = np.unique(line, return_inverse=True)
+        n_cols = int(col.max()) + 1
+        gap = np.zeros((len(lines), n_cols))
+        outer = c >= 4
+        gap[row[outer], col[outer]] = self.RING_GAP * vd["width"][v[outer]]
+        g = np.cumsum(gap, axis=1)
+        vid, _ = gm.cells(0)
+        point = vid[darts].astype(np.int64)
+        touched = np.zeros(len(pos), bool)  # a knot's vertex stays where the knot put it
+        touched[vid[vd["exclusive"][vol]]] = True
+        o, f, _ = self.level_frames(self.trunk)
+        up = f[t, 0]
+        changed = np.zeros(len(pos), bool)
+        for _ in range(sweeps):
+            rel = pos[point] - o[t]
+            across = rel - np.einsum("ij,ij->i", rel, up)[:, None] * up
+            dist = np.linalg.norm(across, axis=1)
+            table = np.full((len(lines), n_cols), np.inf)
+            table[row, col] = dist
+            held = g + np.minimum.accumulate((table - g)[:, ::-1], axis=1)[:, ::-1]
+            ratio = np.where(touched[point], 1.0, held[row, col] / np.maximum(dist, 1e-300))
+            least = np.ones(len(pos))
+            np.minimum.at(least, point, ratio)
+            fold = (least < 1.0 - 1e-12)[point] & (ratio == least[point])
+            if not fold.any():
+                break
+            pos[point[fold]] = (pos[point] + (ratio - 1.0)[:, None] * across)[fold]
+            changed[point[fold]] = True
+        moved = np.flatnonzero(changed[vid])
+        gm.points[moved] = pos[vid[moved]]
 
     def _knot_bridge_corners(self, split: np.ndarray) -> None:
         """Corners of the darts :meth:`_split_knot_bottoms` made: evenly along each cut edge.
