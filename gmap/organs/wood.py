@@ -3092,16 +3092,22 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     over all of them: a thin piece by the pith could pick another).
 
     Every edge is cut once, at points all the cells holding it share
-    (:func:`_edge_points`), so no gap opens: a knot's ring edge that the
-    trunk's cells seated over or under the knot hold follows the knot's
-    arc in both.  An edge stays a chord, cut at the same points, where a
-    cell left whole also holds it (the pith's wedges, the tetrahedra of the
-    slot walls and bridges, a dead stub's cap), where a trunk cell holds a
-    knot's ring edge off its own arcs (a slot's wall: the pieces of
-    :func:`seated_as_hexahedra` run along the knot there, and are not cut
-    along it), and where a ring's centre is unknown.  Other cells are kept;
-    the volumes are not the kernel's any more (arcs, not chords): measure a
-    :func:`to_grid`.
+    (:func:`_edge_points`), so no gap opens at the seam: a knot's ring
+    edge that the trunk's cells seated on the knot hold follows the knot's
+    arc in them too, so the knot's outline is round where it meets the
+    trunk.  Over and under the knot those edges run round the trunk, and
+    are cut with the rest; in a slot's wall they run along it (the pieces
+    of :func:`seated_as_hexahedra` are stacked along the knot), so the
+    wall's pieces are first cut in ``parts`` along them, on the knot's
+    arcs, their far edges straight at the same shares (on the
+    neighbour's straight edges and along its bilinear face), then round
+    like the rest.  An edge stays a chord, cut at the same points, where
+    a cell left whole also holds it (the pith's wedges, the tetrahedra of
+    the slot walls and bridges, a dead stub's cap), where a trunk cell
+    holds a knot's ring edge in neither of those ways, and where a ring's
+    centre is unknown.  Other cells keep their point ids
+    (:func:`_replace_cells`); the volumes are not the kernel's any more
+    (arcs, not chords): measure a :func:`to_grid`.
     """
     if parts <= 1:
         return grid
@@ -3123,19 +3129,63 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     known = np.ones((m, 4), bool)  # the arc's axis is known (else the edge stays a chord)
     o, f, _ = wood.level_frames(wood.trunk)
     level = vd["level"][vols[trunk]].astype(np.int64)
-    edges[trunk] = _trunk_tangents(pts[cells[trunk]], vols[trunk], o[level], f[level])
+    which = np.full(m, -1, np.int64)  # a trunk row's tangential class
+    which[trunk] = _trunk_tangents(pts[cells[trunk]], vols[trunk], o[level], f[level])
+    edges[trunk] = _HEX_EDGES[which[trunk]]
     origin[trunk], frame[trunk] = o[level][:, None], f[level][:, None]
     if np.any(~trunk):
         edges[~trunk], origin[~trunk], frame[~trunk], known[~trunk] = _branch_arcs(wood, pts[cells[~trunk]], vols[~trunk])
-    idx = np.arange(m)[:, None]
     h = _hash(pts)
-    ha, hb = h[cells[idx, edges[:, :, 0]]], h[cells[idx, edges[:, :, 1]]]
-    held = _held_keys(grid, ~hexa, h)
-    off = _off_arc_keys(cells, edges, trunk, h, _edge_keys(ha, hb)[~trunk])
-    a, b = pts[cells[idx, edges[:, :, 0]]], pts[cells[idx, edges[:, :, 1]]]
-    prio = np.broadcast_to(trunk[:, None], (m, 4))  # a knot's row gives the arc's axis (False sorts first)
-    inner = _edge_points(ha, hb, a, b, origin, frame, known, prio, np.union1d(held, off), parts)
-    new_pts, new_cells = _cut_rows(cells, edges, inner, len(pts))
+    idx = np.arange(m)[:, None]
+    ends = cells[idx, edges[:, :, 0]], cells[idx, edges[:, :, 1]]
+    knot_keys = np.unique(_edge_keys(h[ends[0]], h[ends[1]])[~trunk])
+    seat, off = _seats(cells, which, trunk, h, knot_keys)
+    chords = np.union1d(_held_keys(grid, ~hexa, h), off)
+    # every edge of the rows and the walls' edges along the knot, cut once (the walls' follow: prio 2)
+    walls = np.flatnonzero(seat >= 0)
+    s_edges = _HEX_EDGES[seat[walls]]
+    all_cells = np.concatenate([cells, cells[walls]])
+    all_edges = np.concatenate([edges, s_edges])
+    prio = np.concatenate([np.broadcast_to(trunk[:, None], (m, 4)).astype(np.int64), np.full((len(walls), 4), 2)])
+    inner, table = _edge_points(
+        h,
+        pts,
+        all_cells,
+        all_edges,
+        np.concatenate([origin, np.zeros((len(walls), 4, 3))]),
+        np.concatenate([frame, np.zeros((len(walls), 4, 3, 3))]),
+        np.concatenate([known, np.ones((len(walls), 4), bool)]),
+        prio,
+        chords,
+        parts,
+        layered=np.arange(len(all_cells)) < m,
+    )
+    inner_walls = inner[m:]
+    keep = np.ones(m, bool)
+    keep[walls] = False
+    source = np.concatenate([np.flatnonzero(keep), np.repeat(walls, parts)])  # each row's row before the walls' cut
+    inner = inner[:m][keep]
+    if walls.size:  # the walls' pieces along the knot, then cut round like the rest
+        w_pts, w_cells = _cut_rows(cells[walls], s_edges, inner_walls, len(pts))
+        pts = np.concatenate([pts, w_pts])
+        h = np.concatenate([h, _hash(w_pts)])
+        w_rows = source[len(inner) :]
+        w_inner, _ = _edge_points(
+            h,
+            pts,
+            w_cells,
+            edges[w_rows],
+            origin[w_rows],
+            frame[w_rows],
+            known[w_rows],
+            np.ones((len(w_rows), 4), np.int64),
+            chords,
+            parts,
+            fixed=table,
+        )
+        cells, inner = np.concatenate([cells[keep], w_cells]), np.concatenate([inner, w_inner])
+    new_pts, new_cells = _cut_rows(cells, edges[source], inner, len(pts))
+    rows = rows[source]
     return _replace_cells(grid, hexa, np.concatenate([pts, new_pts]), new_cells, np.repeat(rows, parts))
 
 
@@ -3158,7 +3208,8 @@ def _replace_cells(
         sub = pv.UnstructuredGrid(
             np.hstack([np.full((len(hexes), 1), 8), hexes]).ravel(), np.full(len(hexes), 12, np.uint8), points
         )
-        out = pv.merge([grid.extract_cells(keep), sub], merge_points=False)
+        mask: Any = ~drop  # a boolean mask (the stubs want one)
+        out = pv.merge([grid.extract_cells(mask), sub], merge_points=False)
         for name, values in data.items():
             out.cell_data[name] = values
         return out
@@ -3179,8 +3230,8 @@ def _replace_cells(
 
 
 def _trunk_tangents(corners: np.ndarray, vols: np.ndarray, origin: np.ndarray, frame: np.ndarray) -> np.ndarray:
-    """The four tangential edges (m, 4, 2) of trunk hexahedra ``corners`` (m, 8, 3): the edge class
-    of ``_HEX_EDGES`` running most round the level's axis (``origin``, ``frame`` per row), summed over
+    """The tangential edge class (m,) of trunk hexahedra ``corners`` (m, 8, 3): the class of
+    ``_HEX_EDGES`` whose edges run most round the level's axis (``origin``, ``frame`` per row), summed over
     the rows of each volume (a seated cell's pieces all cut the same way round)."""
     axis_dir = frame[:, 0]
     centre = corners.mean(axis=1)
@@ -3195,7 +3246,7 @@ def _trunk_tangents(corners: np.ndarray, vols: np.ndarray, origin: np.ndarray, f
     vol = np.unique(vols, return_inverse=True)[1].reshape(-1)
     total = np.zeros((int(vol.max(initial=-1)) + 1, 3))
     np.add.at(total, vol, score)
-    return _HEX_EDGES[np.argmax(total[vol], axis=1)]
+    return np.argmax(total[vol], axis=1)
 
 
 def _branch_arcs(wood: Wood, corners: np.ndarray, vols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -3283,72 +3334,103 @@ def _held_keys(grid: pv.UnstructuredGrid, whole: np.ndarray, h: np.ndarray) -> n
     return np.unique(np.concatenate(keys))
 
 
-def _off_arc_keys(cells: np.ndarray, edges: np.ndarray, trunk: np.ndarray, h: np.ndarray, knot_keys: np.ndarray) -> np.ndarray:
-    """Keys of the knots' ring edges (``knot_keys``) that a trunk row holds off its own tangential
-    edges (a slot wall's pieces run along the knot): they stay chords in both."""
+def _seats(
+    cells: np.ndarray, which: np.ndarray, trunk: np.ndarray, h: np.ndarray, knot_keys: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the trunk's rows ``cells`` (m, 8) hold a knot's ring edges (``knot_keys``) off their
+    tangential class ``which``: the class of ``_HEX_EDGES`` holding them (a slot wall's pieces run
+    along the knot: they are cut along it first), -1 elsewhere; and the keys of the knot's ring edges
+    a trunk row holds in neither class (a diagonal, or a second class): chords in both."""
+    seat = np.full(len(cells), -1, np.int64)
     near = np.flatnonzero(trunk & np.isin(h[cells], h[cells[~trunk]]).any(axis=1))
-    if not near.size:
-        return np.zeros(0, np.int64)
-    e = edges[near]  # (k, 4, 2)
-    i, j = np.triu_indices(8, 1)
+    if not near.size or not knot_keys.size:
+        return seat, np.zeros(0, np.int64)
     hc = h[cells[near]]
-    every = _edge_keys(hc[:, i], hc[:, j])  # (k, 28)
-    k = np.arange(len(near))[:, None]
-    own = _edge_keys(hc[k, e[:, :, 0]], hc[k, e[:, :, 1]])  # (k, 4)
-    pairs = every[~(every[:, :, None] == own[:, None, :]).any(axis=2)]
-    return np.intersect1d(pairs, knot_keys)
+    has = np.stack([np.isin(_edge_keys(hc[:, e[:, 0]], hc[:, e[:, 1]]), knot_keys).any(axis=1) for e in _HEX_EDGES], axis=1)
+    has[np.arange(len(near)), which[near]] = False
+    seat[near] = np.where(has.any(axis=1), np.argmax(has, axis=1), -1)
+    i, j = np.triu_indices(8, 1)
+    every = _edge_keys(hc[:, i], hc[:, j])  # (k, 28): every pair of the row's points
+    own = [which[near]] + [np.where(seat[near] >= 0, seat[near], which[near])]
+    cut = np.concatenate(
+        [
+            _edge_keys(
+                hc[np.arange(len(near))[:, None], _HEX_EDGES[c][:, :, 0]],
+                hc[np.arange(len(near))[:, None], _HEX_EDGES[c][:, :, 1]],
+            )
+            for c in own
+        ],
+        axis=1,
+    )
+    pairs = every[~(every[:, :, None] == cut[:, None, :]).any(axis=2)]
+    return seat, np.intersect1d(pairs, knot_keys)
 
 
 def _edge_points(
-    ha: np.ndarray,
-    hb: np.ndarray,
-    a: np.ndarray,
-    b: np.ndarray,
+    h: np.ndarray,
+    pts: np.ndarray,
+    cells: np.ndarray,
+    edges: np.ndarray,
     origin: np.ndarray,
     frame: np.ndarray,
     known: np.ndarray,
     prio: np.ndarray,
     chords: np.ndarray,
     parts: int,
-) -> np.ndarray:
-    """The ``parts - 1`` points (m, 4, parts - 1, 3) cutting each edge ``a`` -> ``b`` (m, 4, 3).
+    layered: np.ndarray | None = None,
+    fixed: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The ``parts - 1`` points (m, 4, parts - 1, 3) cutting each edge ``edges`` (m, 4, 2) of rows ``cells``.
 
-    Each edge (by its ends' hashes ``ha, hb``) is cut once, from its end of
-    lower hash, and every row holding it takes those very points (in its
-    own direction): no gap between cells, whichever way they hold it.  A
-    knot's row is preferred for the arc's axis (``origin``, ``frame`` (m, 4,
-    3, 3)), so the trunk's cells seated on a knot follow the knot's arcs.  An edge is a chord
-    where its key is in ``chords`` or a row holding it has ``known`` false;
-    under an outer chord (rows 2, 3) the inner edge (rows 0, 1) stays a chord
-    too (a rounded inner arc under a chord would cross a ring thinner than
-    its bulge), and so on inwards.
+    Each edge (by its ends' position hashes ``h``) is cut once, from its end
+    of lower hash, and every row holding it takes those very points (in its
+    own direction): no gap between cells, whichever way they hold it.  The
+    row of lowest ``prio`` (m, 4) holding it gives the arc's axis
+    (``origin``, ``frame`` (m, 4, 3, 3)): a knot's (0), so the trunk's
+    cells seated on a knot follow the knot's arcs, then the trunk's (1);
+    an edge only rows of ``prio`` 2 hold (they follow) is a chord.  An edge
+    is a chord too where its key is in ``chords`` or a row holding it has
+    ``known`` false; in the rows ``layered`` (all by default), under an
+    outer chord (edges 2, 3) the inner edge (0, 1) stays a chord too (a
+    rounded inner arc under a chord would cross a ring thinner than its
+    bulge), and so on inwards.  Edges in ``fixed`` (keys, points from their
+    lower end: the table this returns) keep those points.
     """
-    m = len(ha)
-    key = _edge_keys(ha, hb)
-    edge, inv = np.unique(key, return_inverse=True)
+    m = len(cells)
+    idx = np.arange(m)[:, None]
+    pa, pb = cells[idx, edges[:, :, 0]], cells[idx, edges[:, :, 1]]
+    ha, hb = h[pa], h[pb]
+    edge, inv = np.unique(_edge_keys(ha, hb), return_inverse=True)
     inv = inv.reshape(m, 4)
     is_chord = np.isin(edge, chords)
     is_chord[inv[~known]] = True
+    lay = inv if layered is None else inv[layered]
     while True:
-        chord = is_chord[inv]
+        chord = is_chord[lay]
         below = chord.copy()
         below[:, :2] |= chord[:, 2:]
         if np.array_equal(below, chord):
             break
-        is_chord[inv[below]] = True
+        is_chord[lay[below]] = True
     flip = (ha > hb).ravel()
     flat = inv.ravel()
     order = np.lexsort((prio.ravel(), flat))  # a knot's row first: its arc's axis
     first = order[np.r_[True, flat[order][1:] != flat[order][:-1]]]  # one row per edge, in edge order
-    a, b = a.reshape(-1, 3), b.reshape(-1, 3)
+    is_chord |= prio.ravel()[first] >= 2
+    a, b = pts[pa].reshape(-1, 3), pts[pb].reshape(-1, 3)
     lo = np.where(flip[first, None], b[first], a[first])
     hi = np.where(flip[first, None], a[first], b[first])
     w = np.broadcast_to(np.arange(1, parts) / parts, (len(first), parts - 1))
     arc = _polar_lerp(lo, hi, w, origin.reshape(-1, 3)[first], frame.reshape(-1, 3, 3)[first])
     line = lo[:, None] + w[..., None] * (hi - lo)[:, None]
-    out = np.where(is_chord[:, None, None], line, arc)[flat]
+    points = np.where(is_chord[:, None, None], line, arc)
+    if fixed is not None and len(fixed[0]):
+        at = np.minimum(np.searchsorted(fixed[0], edge), len(fixed[0]) - 1)
+        hit = fixed[0][at] == edge
+        points[hit] = fixed[1][at[hit]]
+    out = points[flat]
     out[flip] = out[flip, ::-1]
-    return out.reshape(m, 4, parts - 1, 3)
+    return out.reshape(m, 4, parts - 1, 3), (edge, points)
 
 
 def _cut_rows(cells: np.ndarray, edges: np.ndarray, inner: np.ndarray, base: int) -> tuple[np.ndarray, np.ndarray]:

@@ -49,8 +49,9 @@ def _knot_sections(wood, grid):
 def test_a_knot_and_its_rings_are_round_in_a_board_and_a_cross_cut(whorls):
     """The knot's outline and its rings (the outlines of its rings 0..4 and 0..8) turn by small steps:
     a corner every 5.6 degrees on the arcs, where the kernel's 16-gon turns 22.5 at each.  Before,
-    the median turn was 15 to 22 degrees and the largest 32 to 38 on the boards; now the median is 1
-    to 6 and the largest 25 (where the rounded seam meets a slot wall's chord)."""
+    the median turn was 15 to 22 degrees, the 90th percentile 23 to 27 and the largest 32 to 38 on
+    the boards; now about 5, 7 and 25 (at a corner of the slot, where the seam meets the bridges'
+    chords).  In the cross-cut the rings' median turn went from 15-17 degrees to 4."""
     wood, _, smooth = whorls
     for name, _, section in _knot_sections(wood, smooth):
         knot = np.zeros(section.n_cells, bool)
@@ -62,7 +63,8 @@ def test_a_knot_and_its_rings_are_round_in_a_board_and_a_cross_cut(whorls):
             turns = _turns(section, select)
             assert len(turns) > 20, (name, label)
             assert np.median(turns) < 10.0, (name, label, np.median(turns))
-            if name != "cross":
+            if name != "cross":  # on the boards, the slot walls' side of the knot is round too
+                assert np.percentile(turns, 90) < 10.0, (name, label, np.percentile(turns, 90))
                 assert turns.max() < 30.0, (name, label, turns.max())
 
 
