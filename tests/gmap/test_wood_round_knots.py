@@ -142,3 +142,24 @@ def test_trunk_cells_away_from_knots_keep_their_arcs(whorls):
     got = smooth.extract_cells(rows).points
     assert smooth.extract_cells(rows).n_cells == 4 * len(vols)
     assert set(map(tuple, W._keys(got))) == set(map(tuple, W._keys(np.concatenate(want))))
+
+
+def test_a_branch_past_its_knot_is_round_about_its_pith(whorls):
+    """Past the knot a branch is straight: its rings turn about its level's axis, the pith line, as
+    the trunk's do.  A cut across branch 0 half-way along its second level: its outline and rings
+    turn by small steps (22.5 degrees at each corner before), and its disc is covered once."""
+    wood, raw, smooth = whorls
+    o, f, h = wood.level_frames(wood.branch_axis[0])
+    normal, centre = f[1, 0], o[1] + 0.5 * h[1] * f[1, 0]
+    section = smooth.slice(normal=normal, origin=centre)
+    branch = np.asarray(section.cell_data["axis"]) == 1
+    turns = _turns(section, branch)
+    assert len(turns) > 20 and np.median(turns) < 10.0 and np.percentile(turns, 90) < 10.0
+    outer = np.linalg.norm(np.asarray(section.extract_cells(np.flatnonzero(branch)).points) - centre, axis=1).max()
+    rng = np.random.default_rng(1)
+    r, a = np.sqrt(rng.uniform(0.0, (0.8 * outer) ** 2, 2000)), rng.uniform(0, 2 * np.pi, 2000)
+    q = centre + r[:, None] * (np.cos(a)[:, None] * f[1, 1] + np.sin(a)[:, None] * f[1, 2])
+    count = _coverage(section, normal, q)
+    before = _coverage(raw.slice(normal=normal, origin=centre), normal, q)
+    assert np.count_nonzero(count == 0) == 0
+    assert np.count_nonzero(count > 1) <= np.count_nonzero(before > 1)
