@@ -3275,9 +3275,12 @@ def _branch_arcs(wood: Wood, corners: np.ndarray, vols: np.ndarray) -> tuple[np.
     vd = wood.gm.volume_data
     tpl = _template_corners(wood, vols)
     d = np.linalg.norm(corners[:, :, None, :] - tpl[:, None, :, :], axis=3)  # grid corner x template corner
+    d = np.nan_to_num(d, nan=np.inf)
     at = np.argmin(d, axis=1)  # (m, 8): the grid corner at each template corner
+    # a row whose points are not its template corners one to one is cut straight, in the grid's order
+    matched = (np.sort(at, axis=1) == np.arange(8)).all(axis=1) & (d.min(axis=1) < 1e-9).all(axis=1)
     template = _HEX_EDGES[0]  # round the branch: bottom th0-th1, top th0-th1, inner then outer
-    edges = at[:, template]  # (m, 4, 2)
+    edges = np.where(matched[:, None, None], at[:, template], template[None])  # (m, 4, 2)
     m = len(corners)
     idx = np.arange(m)[:, None]
     a, b = corners[idx, edges[:, :, 0]], corners[idx, edges[:, :, 1]]
@@ -3302,6 +3305,7 @@ def _branch_arcs(wood: Wood, corners: np.ndarray, vols: np.ndarray) -> tuple[np.
     frame = np.stack([normal, e1, np.cross(normal, e1)], axis=1)
     known = (size > 0) & (count == sides)
     centre, frame, known = centre[inv], frame[inv], known[inv]
+    known &= matched[:, None]
     straight = level > 0  # past the knot the branch is straight: its level's axis is its pith
     o_all, f_all = np.zeros((m, 3)), np.zeros((m, 3, 3))
     for ax in np.unique(axis[straight]):  # one per branch
@@ -3309,7 +3313,7 @@ def _branch_arcs(wood: Wood, corners: np.ndarray, vols: np.ndarray) -> tuple[np.
         sel = straight & (axis == ax)
         sel[sel] = level[sel] < len(o)  # (a level the frames do not hold keeps its ring's mean)
         o_all[sel], f_all[sel] = o[level[sel]], f[level[sel]]
-        centre[sel], frame[sel], known[sel] = o_all[sel, None], f_all[sel, None], True
+        centre[sel], frame[sel], known[sel] = o_all[sel, None], f_all[sel, None], matched[sel, None]
     return edges, centre, frame, known
 
 
