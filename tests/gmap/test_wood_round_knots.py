@@ -50,8 +50,10 @@ def test_a_knot_and_its_rings_are_round_in_a_board_and_a_cross_cut(whorls):
     """The knot's outline and its rings (the outlines of its rings 0..4 and 0..8) turn by small steps:
     a corner every 5.6 degrees on the arcs, where the kernel's 16-gon turns 22.5 at each.  Before,
     the median turn was 15 to 22 degrees, the 90th percentile 23 to 27 and the largest 32 to 38 on
-    the boards; now about 5, 7 and 25 (at a corner of the slot, where the seam meets the bridges'
-    chords).  In the cross-cut the rings' median turn went from 15-17 degrees to 4."""
+    the boards; now about 5, 7 and 25.  The outline is the slice's boundary edges, and the picture's
+    pieces do not share points, so the lines between the knot's sectors inside it count too: the
+    largest turns are there (a sector line bends where it crosses a ring), not on the knot's edge.
+    In the cross-cut the rings' median turn went from 15-17 degrees to 4."""
     wood, _, smooth = whorls
     for name, _, section in _knot_sections(wood, smooth):
         knot = np.zeros(section.n_cells, bool)
