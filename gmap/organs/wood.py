@@ -3082,9 +3082,9 @@ def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.Uns
     hexahedra across its sector, the new points interpolated in polar
     coordinates (radius, angle and height linear) about its ring's axis, so
     the rings are drawn with ``16 parts`` sides, on circles.  A trunk cell
-    turns about its level's axis; a branch's or a knot's cell about the
-    centre of its own ring (:func:`_branch_arcs`: a knot is bent, so no
-    level frame is its axis there).  The trunk's cells bent round a knot
+    turns about its level's axis, and so does a branch's past its knot; a
+    knot's cell turns about the centre of its own ring (:func:`_branch_arcs`:
+    a knot is bent, so no level frame is its axis).  The trunk's cells bent round a knot
     are rounded too (a flat-sawn board shows arches there, not the
     16-gon's chevrons); those seated on a knot are first drawn as rows of
     hexahedra (:func:`seated_as_hexahedra`), each piece rounded the way its
