@@ -3196,144 +3196,399 @@ def _polar_lerp(a: np.ndarray, b: np.ndarray, w: np.ndarray, origin: np.ndarray,
 
 
 def smooth_grid(wood: Wood, grid: pv.UnstructuredGrid, parts: int = 4) -> pv.UnstructuredGrid:
-    """A picture grid whose trunk rings are round: each trunk ring cell cut in ``parts`` along its arc.
+    """A picture grid whose rings are round: each ring cell, the trunk's and the branches', cut in ``parts`` along its arc.
 
     A trunk of 16 sides shows 16-gons in a cross-cut; at 64 sides the wood
     would hold four times the darts (the 30-year, 20-branch pine: 12 million).
-    For pictures only, each hexahedral ring cell of the trunk is cut into
-    ``parts`` hexahedra across its sector, the new points interpolated in
-    polar coordinates about its level's axis (radius, angle and height
-    linear), so the rings are drawn with ``16 parts`` sides, on circles.
-    The cells bent round a knot are rounded too (a flat-sawn board shows
-    arches there, not the chevrons of the 16-gon's facets).  An arc edge
-    that a cell left whole also holds (the pith's wedges, the tetrahedra
-    of the slot walls round a knot, the knot's own cells) stays a chord,
-    cut at the same points, so no gap opens between a rounded cell and
-    its neighbour.  The ring cells seated on a knot are first drawn as
-    rows of hexahedra (:func:`seated_as_hexahedra`) and rounded too, each
-    piece the way its cell's pieces are rounded together (the edge class
-    most round the trunk over all of them: a thin piece by the pith could
-    pick another).  Other cells are kept; the volumes are not the kernel's
-    any more (arcs, not chords): measure a :func:`to_grid`.
-    """
-    import pyvista as pv
+    For pictures only, each hexahedral ring cell is cut into ``parts``
+    hexahedra across its sector, the new points interpolated in polar
+    coordinates (radius, angle and height linear) about its ring's axis, so
+    the rings are drawn with ``16 parts`` sides, on circles.  A trunk cell
+    turns about its level's axis, and so does a branch's past its knot; a
+    knot's cell turns about the centre of its own ring (:func:`_branch_arcs`:
+    a knot is bent, so no level frame is its axis).  The trunk's cells bent round a knot
+    are rounded too (a flat-sawn board shows arches there, not the
+    16-gon's chevrons); those seated on a knot are first drawn as rows of
+    hexahedra (:func:`seated_as_hexahedra`), each piece rounded the way its
+    cell's pieces are rounded together (the edge class most round the trunk
+    over all of them: a thin piece by the pith could pick another).
 
+    Every edge is cut once, at points all the cells holding it share
+    (:func:`_edge_points`), so no gap opens at the seam: a knot's ring
+    edge that the trunk's cells seated on the knot hold follows the knot's
+    arc in them too, so the knot's outline is round where it meets the
+    trunk.  Over and under the knot those edges run round the trunk, and
+    are cut with the rest; in a slot's wall they run along it (the pieces
+    of :func:`seated_as_hexahedra` are stacked along the knot), so the
+    wall's pieces are first cut in ``parts`` along them, on the knot's
+    arcs, their far edges straight at the same shares (on the
+    neighbour's straight edges and along its bilinear face), then round
+    like the rest.  An edge stays a chord, cut at the same points, where
+    a cell left whole also holds it (the pith's wedges, the tetrahedra of
+    the slot walls and bridges, a dead stub's cap), where a trunk cell
+    holds a knot's ring edge in neither of those ways, and where a ring's
+    centre is unknown.  Other cells keep their point ids
+    (:func:`_replace_cells`); the volumes are not the kernel's any more
+    (arcs, not chords): measure a :func:`to_grid`.
+    """
     if parts <= 1:
         return grid
     grid = bridged_as_hexahedra(wood, seated_as_hexahedra(wood, grid))
     vd = wood.gm.volume_data
     owner = np.asarray(grid.cell_data["volume"])
-    hexa = (grid.celltypes == 12) & (vd["axis"][owner] == 0) & (vd["cell"][owner] > 0)
+    hexa = (grid.celltypes == 12) & (vd["cell"][owner] > 0)
     rows = np.flatnonzero(hexa)
     if not rows.size:
         return grid
     conn = grid.cell_connectivity.reshape(-1)
-    starts = np.asarray(grid.cell_offsets, np.int64)[rows]
-    cells = conn[starts[:, None] + np.arange(8, dtype=np.int64)[None, :]]
-    pts = np.asarray(grid.points)
+    cells = conn[np.asarray(grid.cell_offsets, np.int64)[rows][:, None] + np.arange(8, dtype=np.int64)[None, :]]
+    pts = np.asarray(grid.points, float)
+    vols = owner[rows]
+    trunk = vd["axis"][vols] == 0
+    m = len(rows)
+    edges = np.zeros((m, 4, 2), np.int64)  # each row's four tangential edges (its corners), 'a' end to 'b' end
+    origin, frame = np.zeros((m, 4, 3)), np.zeros((m, 4, 3, 3))
+    known = np.ones((m, 4), bool)  # the arc's axis is known (else the edge stays a chord)
     o, f, _ = wood.level_frames(wood.trunk)
-    level = vd["level"][owner[rows]].astype(np.int64)
-    origin, axis_dir, e1, e2 = o[level], f[level, 0], f[level, 1], f[level, 2]
+    level = vd["level"][vols[trunk]].astype(np.int64)
+    which = np.full(m, -1, np.int64)  # a trunk row's tangential class
+    which[trunk] = _trunk_tangents(pts[cells[trunk]], vols[trunk], o[level], f[level])
+    edges[trunk] = _HEX_EDGES[which[trunk]]
+    origin[trunk], frame[trunk] = o[level][:, None], f[level][:, None]
+    if np.any(~trunk):
+        edges[~trunk], origin[~trunk], frame[~trunk], known[~trunk] = _branch_arcs(wood, pts[cells[~trunk]], vols[~trunk])
+    h = _hash(pts)
+    idx = np.arange(m)[:, None]
+    ends = cells[idx, edges[:, :, 0]], cells[idx, edges[:, :, 1]]
+    knot_keys = np.unique(_edge_keys(h[ends[0]], h[ends[1]])[~trunk])
+    seat, off = _seats(cells, which, trunk, h, knot_keys)
+    chords = np.union1d(_held_keys(grid, ~hexa, h), off)
+    # every edge of the rows and the walls' edges along the knot, cut once (the walls' follow: prio 2)
+    walls = np.flatnonzero(seat >= 0)
+    s_edges = _HEX_EDGES[seat[walls]]
+    all_cells = np.concatenate([cells, cells[walls]])
+    all_edges = np.concatenate([edges, s_edges])
+    prio = np.concatenate([np.broadcast_to(trunk[:, None], (m, 4)).astype(np.int64), np.full((len(walls), 4), 2)])
+    inner, table = _edge_points(
+        h,
+        pts,
+        all_cells,
+        all_edges,
+        np.concatenate([origin, np.zeros((len(walls), 4, 3))]),
+        np.concatenate([frame, np.zeros((len(walls), 4, 3, 3))]),
+        np.concatenate([known, np.ones((len(walls), 4), bool)]),
+        prio,
+        chords,
+        parts,
+        layered=np.arange(len(all_cells)) < m,
+    )
+    inner_walls = inner[m:]
+    keep = np.ones(m, bool)
+    keep[walls] = False
+    source = np.concatenate([np.flatnonzero(keep), np.repeat(walls, parts)])  # each row's row before the walls' cut
+    inner = inner[:m][keep]
+    if walls.size:  # the walls' pieces along the knot, then cut round like the rest
+        w_pts, w_cells = _cut_rows(cells[walls], s_edges, inner_walls, len(pts))
+        pts = np.concatenate([pts, w_pts])
+        h = np.concatenate([h, _hash(w_pts)])
+        w_rows = source[len(inner) :]
+        w_inner, _ = _edge_points(
+            h,
+            pts,
+            w_cells,
+            edges[w_rows],
+            origin[w_rows],
+            frame[w_rows],
+            known[w_rows],
+            np.ones((len(w_rows), 4), np.int64),
+            chords,
+            parts,
+            fixed=table,
+        )
+        cells, inner = np.concatenate([cells[keep], w_cells]), np.concatenate([inner, w_inner])
+    new_pts, new_cells = _cut_rows(cells, edges[source], inner, len(pts))
+    rows = rows[source]
+    return _replace_cells(grid, hexa, np.concatenate([pts, new_pts]), new_cells, np.repeat(rows, parts))
 
-    def polar(p):  # (m, 8, 3) -> radius, angle, height about each cell's level axis
-        rel = p - origin[:, None, :]
-        z = np.einsum("mcx,mx->mc", rel, axis_dir)
-        x = np.einsum("mcx,mx->mc", rel, e1)
-        y = np.einsum("mcx,mx->mc", rel, e2)
-        return np.hypot(x, y), np.arctan2(y, x), z
 
-    r, th, z = polar(pts[cells])
-    corners = pts[cells]
+def _replace_cells(
+    grid: pv.UnstructuredGrid, drop: np.ndarray, points: np.ndarray, hexes: np.ndarray, rows: np.ndarray
+) -> pv.UnstructuredGrid:
+    """``grid`` without the cells ``drop`` and with the hexahedra ``hexes`` (k, 8) on ``points`` (the
+    grid's points first), each with the data of the grid's row ``rows``.  The kept cells keep their
+    point ids, so cells that shared points still do (a knot's wedges and its rounded ring cells make
+    one region, :func:`knot_states`); a grid of polyhedra is merged instead."""
+    import pyvista as pv
+
+    keep = np.flatnonzero(~drop)
+    types = np.asarray(grid.celltypes)
+    data = {
+        name: np.concatenate([np.asarray(grid.cell_data[name])[keep], np.asarray(grid.cell_data[name])[rows]])
+        for name in grid.cell_data.keys()
+    }
+    if np.any(types[keep] == 42):  # polyhedra (face streams): merge, without sharing points
+        sub = pv.UnstructuredGrid(
+            np.hstack([np.full((len(hexes), 1), 8), hexes]).ravel(), np.full(len(hexes), 12, np.uint8), points
+        )
+        mask: Any = ~drop  # a boolean mask (the stubs want one)
+        out = pv.merge([grid.extract_cells(mask), sub], merge_points=False)
+        for name, values in data.items():
+            out.cell_data[name] = values
+        return out
+    offsets = np.asarray(grid.cell_offsets, np.int64)
+    conn = np.asarray(grid.cell_connectivity, np.int64)
+    sizes = np.diff(offsets)[keep]
+    head = np.concatenate([[0], np.cumsum(sizes + 1)[:-1]])  # where each kept cell's size goes
+    flat = np.empty(int((sizes + 1).sum()), np.int64)
+    flat[head] = sizes
+    body = np.ones(len(flat), bool)
+    body[head] = False
+    flat[body] = conn[np.repeat(offsets[:-1][keep] - np.cumsum(np.r_[0, sizes[:-1]]), sizes) + np.arange(int(sizes.sum()))]
+    cells = np.concatenate([flat, np.hstack([np.full((len(hexes), 1), 8), hexes]).ravel()])
+    out = pv.UnstructuredGrid(cells, np.concatenate([types[keep], np.full(len(hexes), 12, np.uint8)]), points)
+    for name, values in data.items():
+        out.cell_data[name] = values
+    return out
+
+
+def _trunk_tangents(corners: np.ndarray, vols: np.ndarray, origin: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """The tangential edge class (m,) of trunk hexahedra ``corners`` (m, 8, 3): the class of
+    ``_HEX_EDGES`` whose edges run most round the level's axis (``origin``, ``frame`` per row), summed over
+    the rows of each volume (a seated cell's pieces all cut the same way round)."""
+    axis_dir = frame[:, 0]
     centre = corners.mean(axis=1)
     radial = centre - origin - np.einsum("mx,mx->m", centre - origin, axis_dir)[:, None] * axis_dir
     tangent = np.cross(axis_dir, radial)
     tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-300)[:, None]
-
-    def along_tangent(e):  # how much the class's edges run round the trunk (|cos| to the tangent)
+    score = np.zeros((len(corners), 3))
+    for c, e in enumerate(_HEX_EDGES):  # how much the class's edges run round the trunk (|cos| to the tangent)
         vec = corners[:, e[:, 1]] - corners[:, e[:, 0]]
         length = np.maximum(np.linalg.norm(vec, axis=2).sum(axis=1), 1e-300)
-        return np.abs(np.einsum("mkx,mx->mk", vec, tangent)).sum(axis=1) / length
-
-    # per volume (a seated cell's pieces, :func:`seated_as_hexahedra`, all cut the same way round)
-    score = np.stack([along_tangent(e) for e in _HEX_EDGES], axis=1)
-    vol = np.unique(owner[rows], return_inverse=True)[1].reshape(-1)
-    total = np.zeros((int(vol.max()) + 1, 3))
+        score[:, c] = np.abs(np.einsum("mkx,mx->mk", vec, tangent)).sum(axis=1) / length
+    vol = np.unique(vols, return_inverse=True)[1].reshape(-1)
+    total = np.zeros((int(vol.max(initial=-1)) + 1, 3))
     np.add.at(total, vol, score)
-    which = np.argmax(total[vol], axis=1)
-    edges = _HEX_EDGES[which]  # (m, 4, 2): the four tangential edges, each from its 'a' corner to 'b'
-    m = len(rows)
+    return np.argmax(total[vol], axis=1)
+
+
+def _branch_arcs(wood: Wood, corners: np.ndarray, vols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Tangential edges (m, 4, 2), arc centres (m, 4, 3), frames (m, 4, 3, 3) and whether known
+    (m, 4) of branch hexahedra ``corners`` (m, 8, 3), one row per volume ``vols``.
+
+    The tangential edges are the template's (corners 0-1, 3-2, 4-5, 7-6:
+    round the branch), found by matching the row's points to the volume's
+    template corners.  Past the knot (levels 1 on) the branch is straight:
+    each edge turns about its level's axis, the pith line, as the trunk's
+    do (an eccentric ring, or one missing a sector for a sub-branch's
+    slot, is drawn round the pith).  In the knot (level 0), which is bent,
+    each edge turns about the centre of its own ring: the mean of the
+    ring's vertices at that end of the cell (the edges' first ends, over
+    the ring's sectors), the axis the normal of the ring's polygon (its
+    vector area).  Those vertices are the branch's ``sides`` equally
+    spaced points of one section of the knot, moved rigidly by the bend
+    (:meth:`Wood.knot_bender` turns each section with the arc) and
+    squeezed across where two knots share a node (an ellipse), so their
+    mean is the pith's point there: a straight level frame is not the
+    bent knot's axis (the ring's vertices spread by 94 % of their radius
+    about it, by 7 % about the mean, on a 12-year pine's knots), and the
+    pith line at the same height would need the bend's inverse.  A knot's
+    ring missing a sector has no reliable mean: its edges stay chords.
+    """
+    vd = wood.gm.volume_data
+    tpl = _template_corners(wood, vols)
+    d = np.linalg.norm(corners[:, :, None, :] - tpl[:, None, :, :], axis=3)  # grid corner x template corner
+    d = np.nan_to_num(d, nan=np.inf)
+    at = np.argmin(d, axis=1)  # (m, 8): the grid corner at each template corner
+    # a row whose points are not its template corners one to one is cut straight, in the grid's order
+    matched = (np.sort(at, axis=1) == np.arange(8)).all(axis=1) & (d.min(axis=1) < 1e-9).all(axis=1)
+    template = _HEX_EDGES[0]  # round the branch: bottom th0-th1, top th0-th1, inner then outer
+    edges = np.where(matched[:, None, None], at[:, template], template[None])  # (m, 4, 2)
+    m = len(corners)
     idx = np.arange(m)[:, None]
-    a, b = cells[idx, edges[:, :, 0]], cells[idx, edges[:, :, 1]]  # point ids (m, 4)
-    ra, ta, za = r[idx, edges[:, :, 0]], th[idx, edges[:, :, 0]], z[idx, edges[:, :, 0]]
-    rb, tb, zb = r[idx, edges[:, :, 1]], th[idx, edges[:, :, 1]], z[idx, edges[:, :, 1]]
-    tb = ta + np.angle(np.exp(1j * (tb - ta)))  # the short way round
-    chord = _chord_edges(grid, ~hexa, a, b)  # (m, 4): edges a cell left whole holds too
-    new_pts, new_cells = [pts], []
-    ring = [a]
-    base = len(pts)
-    for j in range(1, parts):
-        w = j / parts
-        rr, tt, zz = ra + w * (rb - ra), ta + w * (tb - ta), za + w * (zb - za)
-        p = (
-            origin[:, None, :]
-            + zz[..., None] * axis_dir[:, None, :]
-            + rr[..., None] * (np.cos(tt)[..., None] * e1[:, None, :] + np.sin(tt)[..., None] * e2[:, None, :])
-        )
-        p = np.where(chord[..., None], (1 - w) * pts[a] + w * pts[b], p)
-        new_pts.append(p.reshape(-1, 3))
-        ring.append(base + np.arange(4 * m).reshape(m, 4))
-        base += 4 * m
-    ring.append(b)
-    # the hexahedron's corner of each tangential edge's end: rebuild each slice with the same VTK order
-    slot = np.zeros((m, 8), np.int64)  # for corner c: (edge index, 0 = a end / 1 = b end)
+    a, b = corners[idx, edges[:, :, 0]], corners[idx, edges[:, :, 1]]
+    axis, level, cell = (vd[k][vols].astype(np.int64) for k in ("axis", "level", "cell"))
+    dims = (int(axis.max()) + 1, int(level.max()) + 1, int(cell.max()) + 1, 4)
+    key = np.ravel_multi_index((axis[:, None], level[:, None], cell[:, None], np.arange(4)[None, :]), dims)
+    ring_key, inv = np.unique(key, return_inverse=True)
+    inv = inv.reshape(m, 4)
+    ring = np.stack(np.unravel_index(ring_key, dims), axis=1)
+    count = np.bincount(inv.ravel(), minlength=len(ring))
+    centre = np.zeros((len(ring), 3))
+    np.add.at(centre, inv.ravel(), a.reshape(-1, 3))
+    centre /= np.maximum(count, 1)[:, None]
+    normal = np.zeros((len(ring), 3))
+    np.add.at(normal, inv.ravel(), np.cross(a - centre[inv], b - centre[inv]).reshape(-1, 3))
+    size = np.linalg.norm(normal, axis=1)
+    sides = np.array([ax.sides for ax in wood.axes])[ring[:, 0]]
+    normal /= np.maximum(size, 1e-300)[:, None]
+    ref = np.where((np.abs(normal[:, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    e1 = np.cross(normal, ref)
+    e1 /= np.maximum(np.linalg.norm(e1, axis=1), 1e-300)[:, None]
+    frame = np.stack([normal, e1, np.cross(normal, e1)], axis=1)
+    known = (size > 0) & (count == sides)
+    centre, frame, known = centre[inv], frame[inv], known[inv]
+    known &= matched[:, None]
+    straight = level > 0  # past the knot the branch is straight: its level's axis is its pith
+    o_all, f_all = np.zeros((m, 3)), np.zeros((m, 3, 3))
+    for ax in np.unique(axis[straight]):  # one per branch
+        o, f, _ = wood.level_frames(wood.axes[ax])
+        sel = straight & (axis == ax)
+        sel[sel] = level[sel] < len(o)  # (a level the frames do not hold keeps its ring's mean)
+        o_all[sel], f_all[sel] = o[level[sel]], f[level[sel]]
+        centre[sel], frame[sel], known[sel] = o_all[sel, None], f_all[sel, None], matched[sel, None]
+    return edges, centre, frame, known
+
+
+def _template_corners(wood: Wood, vols: np.ndarray) -> np.ndarray:
+    """The template corners (m, 8, 3) of volumes ``vols`` (one row each; NaN where missing)."""
+    gm = wood.gm
+    row = np.full(gm.n_volumes, -1, np.int64)
+    row[vols] = np.arange(len(vols))
+    darts = np.flatnonzero(row[gm.dart_volume[: gm.n_darts]] >= 0)
+    tpl = wood.corner[darts]
+    darts, tpl = darts[(tpl >= 0) & (tpl < 8)], tpl[(tpl >= 0) & (tpl < 8)]
+    out = np.full((len(vols), 8, 3), np.nan)
+    out[row[gm.dart_volume[darts]], tpl] = gm.points[darts]
+    return out
+
+
+def _edge_keys(ha: np.ndarray, hb: np.ndarray) -> np.ndarray:
+    """One integer per unordered pair of points, from their position hashes (:func:`_hash`)."""
+    lo, hi = np.minimum(ha, hb), np.maximum(ha, hb)
+    return lo * 1_000_003 + hi  # wraps round: a hash
+
+
+def _held_keys(grid: pv.UnstructuredGrid, whole: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Sorted :func:`_edge_keys` of every pair of points one of the cells ``whole`` holds (a
+    tetrahedron's six edges, a wedge's or a hexahedron's edges and diagonals); ``h`` hashes the grid's points."""
+    conn = np.asarray(grid.cell_connectivity, np.int64)
+    offsets = np.asarray(grid.cell_offsets, np.int64)
+    sizes = np.diff(offsets)
+    keys = [np.zeros(0, np.int64)]
+    for size in np.unique(sizes[whole]):
+        rows = np.flatnonzero(whole & (sizes == size))
+        ids = h[conn[offsets[rows][:, None] + np.arange(size)]]
+        i, j = np.triu_indices(int(size), 1)
+        keys.append(_edge_keys(ids[:, i], ids[:, j]).reshape(-1))
+    return np.unique(np.concatenate(keys))
+
+
+def _seats(
+    cells: np.ndarray, which: np.ndarray, trunk: np.ndarray, h: np.ndarray, knot_keys: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the trunk's rows ``cells`` (m, 8) hold a knot's ring edges (``knot_keys``) off their
+    tangential class ``which``: the class of ``_HEX_EDGES`` holding them (a slot wall's pieces run
+    along the knot: they are cut along it first), -1 elsewhere; and the keys of the knot's ring edges
+    a trunk row holds in neither class (a diagonal, or a second class): chords in both."""
+    seat = np.full(len(cells), -1, np.int64)
+    near = np.flatnonzero(trunk & np.isin(h[cells], h[cells[~trunk]]).any(axis=1))
+    if not near.size or not knot_keys.size:
+        return seat, np.zeros(0, np.int64)
+    hc = h[cells[near]]
+    has = np.stack([np.isin(_edge_keys(hc[:, e[:, 0]], hc[:, e[:, 1]]), knot_keys).any(axis=1) for e in _HEX_EDGES], axis=1)
+    has[np.arange(len(near)), which[near]] = False
+    seat[near] = np.where(has.any(axis=1), np.argmax(has, axis=1), -1)
+    i, j = np.triu_indices(8, 1)
+    every = _edge_keys(hc[:, i], hc[:, j])  # (k, 28): every pair of the row's points
+    own = [which[near]] + [np.where(seat[near] >= 0, seat[near], which[near])]
+    cut = np.concatenate(
+        [
+            _edge_keys(
+                hc[np.arange(len(near))[:, None], _HEX_EDGES[c][:, :, 0]],
+                hc[np.arange(len(near))[:, None], _HEX_EDGES[c][:, :, 1]],
+            )
+            for c in own
+        ],
+        axis=1,
+    )
+    pairs = every[~(every[:, :, None] == cut[:, None, :]).any(axis=2)]
+    return seat, np.intersect1d(pairs, knot_keys)
+
+
+def _edge_points(
+    h: np.ndarray,
+    pts: np.ndarray,
+    cells: np.ndarray,
+    edges: np.ndarray,
+    origin: np.ndarray,
+    frame: np.ndarray,
+    known: np.ndarray,
+    prio: np.ndarray,
+    chords: np.ndarray,
+    parts: int,
+    layered: np.ndarray | None = None,
+    fixed: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The ``parts - 1`` points (m, 4, parts - 1, 3) cutting each edge ``edges`` (m, 4, 2) of rows ``cells``.
+
+    Each edge (by its ends' position hashes ``h``) is cut once, from its end
+    of lower hash, and every row holding it takes those very points (in its
+    own direction): no gap between cells, whichever way they hold it.  The
+    row of lowest ``prio`` (m, 4) holding it gives the arc's axis
+    (``origin``, ``frame`` (m, 4, 3, 3)): a knot's (0), so the trunk's
+    cells seated on a knot follow the knot's arcs, then the trunk's (1);
+    an edge only rows of ``prio`` 2 hold (they follow) is a chord.  An edge
+    is a chord too where its key is in ``chords`` or a row holding it has
+    ``known`` false; in the rows ``layered`` (all by default), under an
+    outer chord (edges 2, 3) the inner edge (0, 1) stays a chord too (a
+    rounded inner arc under a chord would cross a ring thinner than its
+    bulge), and so on inwards.  Edges in ``fixed`` (keys, points from their
+    lower end: the table this returns) keep those points.
+    """
+    m = len(cells)
+    idx = np.arange(m)[:, None]
+    pa, pb = cells[idx, edges[:, :, 0]], cells[idx, edges[:, :, 1]]
+    ha, hb = h[pa], h[pb]
+    edge, inv = np.unique(_edge_keys(ha, hb), return_inverse=True)
+    inv = inv.reshape(m, 4)
+    is_chord = np.isin(edge, chords)
+    is_chord[inv[~known]] = True
+    lay = inv if layered is None else inv[layered]
+    while True:
+        chord = is_chord[lay]
+        below = chord.copy()
+        below[:, :2] |= chord[:, 2:]
+        if np.array_equal(below, chord):
+            break
+        is_chord[lay[below]] = True
+    flip = (ha > hb).ravel()
+    flat = inv.ravel()
+    order = np.lexsort((prio.ravel(), flat))  # a knot's row first: its arc's axis
+    first = order[np.r_[True, flat[order][1:] != flat[order][:-1]]]  # one row per edge, in edge order
+    is_chord |= prio.ravel()[first] >= 2
+    a, b = pts[pa].reshape(-1, 3), pts[pb].reshape(-1, 3)
+    lo = np.where(flip[first, None], b[first], a[first])
+    hi = np.where(flip[first, None], a[first], b[first])
+    w = np.broadcast_to(np.arange(1, parts) / parts, (len(first), parts - 1))
+    arc = _polar_lerp(lo, hi, w, origin.reshape(-1, 3)[first], frame.reshape(-1, 3, 3)[first])
+    line = lo[:, None] + w[..., None] * (hi - lo)[:, None]
+    points = np.where(is_chord[:, None, None], line, arc)
+    if fixed is not None and len(fixed[0]):
+        at = np.minimum(np.searchsorted(fixed[0], edge), len(fixed[0]) - 1)
+        hit = fixed[0][at] == edge
+        points[hit] = fixed[1][at[hit]]
+    out = points[flat]
+    out[flip] = out[flip, ::-1]
+    return out.reshape(m, 4, parts - 1, 3), (edge, points)
+
+
+def _cut_rows(cells: np.ndarray, edges: np.ndarray, inner: np.ndarray, base: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each hexahedron ``cells`` (m, 8) cut in ``parts`` across its edges ``edges`` (m, 4, 2) at the points
+    ``inner`` (m, 4, parts - 1, 3), numbered from ``base``: the new points and the pieces
+    (m parts, 8), row by row, each in its cell's VTK order."""
+    m, parts = len(cells), inner.shape[2] + 1
+    idx = np.arange(m)[:, None]
+    ids = base + np.arange(m * 4 * (parts - 1)).reshape(m, 4, parts - 1)
+    chain = np.concatenate([cells[idx, edges[:, :, 0]][..., None], ids, cells[idx, edges[:, :, 1]][..., None]], axis=2)
+    slot = np.zeros((m, 8), np.int64)  # corner c: on the row's edge slot[c], at its 'a' (0) or 'b' (1) end
     end = np.zeros((m, 8), np.int64)
     for k in range(4):
         slot[idx[:, 0], edges[:, k, 0]] = k
         slot[idx[:, 0], edges[:, k, 1]] = k
         end[idx[:, 0], edges[:, k, 1]] = 1
-    for j in range(parts):
-        lo, hi = ring[j], ring[j + 1]
-        piece = np.where(end == 0, np.take_along_axis(lo, slot, axis=1), np.take_along_axis(hi, slot, axis=1))
-        new_cells.append(piece)
-    old = grid.extract_cells(~hexa)
-    sub = pv.UnstructuredGrid(
-        np.hstack([np.full((m * parts, 1), 8), np.concatenate(new_cells)]).ravel(),
-        np.full(m * parts, 12, np.uint8),
-        np.concatenate(new_pts),
-    )
-    for name in grid.cell_data.keys():
-        sub.cell_data[name] = np.concatenate([np.asarray(grid.cell_data[name])[rows]] * parts)
-    out = pv.merge([old, sub], merge_points=False)
-    return out
-
-
-def _chord_edges(grid: pv.UnstructuredGrid, whole: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Which edges ``a[i, j] - b[i, j]`` (grid point ids) join two points of one of the cells ``whole``.
-
-    Points are matched by position (the grid's pieces are merged without
-    merging points), rounded to a nanometre.  Every pair of a cell's points
-    counts (a tetrahedron's six edges, a wedge's or a hexahedron's edges
-    and diagonals): a pair that is no edge of that cell is never an arc
-    edge of a neighbour, so counting it changes nothing.  ``a, b`` hold
-    each hexahedron's four tangential edges, inner bottom and top, then
-    outer bottom and top: under an outer edge that stays a chord, the
-    inner one stays a chord too (a rounded inner arc under a chord would
-    cross a ring thinner than its bulge), and so on inwards across the
-    rings at that height.  A rounded outer arc over an inner chord (the
-    ring next to the pith) bulges away and is kept.
-    """
-    pid, held = _held_pairs(grid, whole)
-    want = _pair_keys(pid[a], pid[b], int(pid.max()) + 1 if pid.size else 1)
-    edge, inv = np.unique(want, return_inverse=True)  # each edge once, however many cells hold it
-    inv = inv.reshape(want.shape)
-    is_chord = np.isin(edge, held)
-    while True:  # under an outer chord the inner arc stays a chord too: a thin ring never turns over
-        chord = is_chord[inv]
-        below = chord.copy()
-        below[:, :2] |= chord[:, 2:]
-        if np.array_equal(below, chord):
-            return chord
-        is_chord[inv[below]] = True
+    j = np.arange(parts)[None, :, None]
+    pieces = chain[np.arange(m)[:, None, None], slot[:, None, :], j + end[:, None, :]]
+    return inner.reshape(-1, 3), pieces.reshape(-1, 8)
 
 
 def _pair_keys(pa: np.ndarray, pb: np.ndarray, n_ids: int) -> np.ndarray:

@@ -137,7 +137,8 @@ def test_a_knot_board_and_a_node_cross_cut_have_no_hole_and_no_overlap(whorls):
 def test_seated_cells_are_hexahedra_and_the_rest_is_unchanged(whorls, monkeypatch):
     """Each ring cell seated on a knot (its walls, the cells over and under it) is drawn as four
     hexahedra across its seated edges, each cut in four round the trunk (but the bark cell under
-    a knot, seated on one edge only, left in tetrahedra); every other cell keeps its four pieces,
+    a knot, seated on one edge only, left in tetrahedra); a wall's pieces, stacked along the knot,
+    are first cut in four along it too (on the knot's arcs: 64 pieces); every other cell keeps its four pieces,
     and three levels or more from the knots' nodes they keep their very points (nearer, an arc
     that met a seated cell's tetrahedra was left a chord)."""
     wood, raw, smooth = whorls
@@ -150,9 +151,11 @@ def test_seated_cells_are_hexahedra_and_the_rest_is_unchanged(whorls, monkeypatc
     pieces = np.bincount(owner, minlength=len(vd["cell"]))[ring_cells]
     whole = np.bincount(owner[smooth.celltypes != 12], minlength=len(vd["cell"]))[ring_cells] > 0
     assert np.count_nonzero(whole) <= len(wood.branches)  # the bark under a knot, seated on one edge
-    assert set(np.unique(pieces[~whole])) == {4, 16}
-    assert np.count_nonzero(pieces == 16) > 100
-    assert np.all(seated[ring_cells[pieces == 16]])
+    assert set(np.unique(pieces[~whole])) == {4, 16, 64}
+    assert np.count_nonzero(pieces == 16) > 100 and np.count_nonzero(pieces == 64) > 100
+    assert np.all(seated[ring_cells[pieces >= 16]])
+    walls = ring_cells[pieces == 64]
+    assert np.all(np.isin(vd["level"][walls], nodes))  # the slot walls, in the knots' nodes
     monkeypatch.setattr(W, "seated_as_hexahedra", lambda wood, grid: grid)
     before = W.smooth_grid(wood, raw)
     far = ring_cells[np.abs(vd["level"][ring_cells] - nodes[:, None]).min(axis=0) >= 3]
