@@ -1882,14 +1882,75 @@ class Wood:
         c = 1.0 / math.cos(math.pi / m)
         theta = self.sector_angles(ax)
         kk = vd["sector"][sel].astype(np.int64)
+        br = self.branches[ax.index - 1]
+        edge = np.arange(m + 1)
+        layer = np.arange(len(s_layer))
+        down = c * rho_layer[:, None] * np.cos(theta[edge])[None, :]  # (layers, edges)
+        s_seat = self._level_seam(br, frame, np.repeat(s_layer[:, None], m + 1, 1), down, self._outer_weight(br, layer)[:, None])
+        squeeze = np.hypot(np.cos(theta[edge])[None, :], lateral[:, None] * np.sin(theta[edge])[None, :])
+        s_seat = self._clear_of_tops(br, frame, pts[level0], i, kk, s_seat, c * rho_layer[:, None] * squeeze)
         out = pts.copy()
-        for corner, th, j in ((0, theta[kk], i - 1), (1, theta[kk + 1], i - 1), (4, theta[kk], i), (5, theta[kk + 1], i)):
+        for corner, e, j in ((0, kk, i - 1), (1, kk + 1, i - 1), (4, kk, i), (5, kk + 1, i)):
             r = rho_layer[j]
-            br = self.branches[ax.index - 1]
-            s_at = self._level_seam(br, frame, s_layer[j], c * r * np.cos(th), self._outer_weight(br, j))
+            th = theta[e]
             radial = np.cos(th)[:, None] * f[0, 1] + (lateral[j] * np.sin(th))[:, None] * f[0, 2]
-            out[level0, corner] = p0 + s_at[:, None] * frame[0] + (c * r)[:, None] * radial
+            out[level0, corner] = p0 + s_seat[j, e][:, None] * frame[0] + (c * r)[:, None] * radial
         return out
+
+    #: the most of its room a knot ring's seat point may slide towards the level's end (``_clear_of_tops``)
+    SEAT_ROOM = 0.5
+
+    def _clear_of_tops(
+        self,
+        br: Branch,
+        frame: np.ndarray,
+        pts: np.ndarray,
+        cell: np.ndarray,
+        sector: np.ndarray,
+        s_seat: np.ndarray,
+        radius: np.ndarray,
+    ) -> np.ndarray:
+        """The seam's positions ``s_seat`` (layers, edges) along the knot, held so no knot ring turns over.
+
+        A ring cell of the knot's first level runs from its seat on the slot
+        wall (:meth:`_seat_knot`) to the level's end, where its radii are
+        the knot's own (drawn) widths, not the nominal ``rho_j`` of the seat:
+        a ring's face rises (or sinks) between the two.  On the knot's upper
+        side :meth:`_level_seam` slides the seat of the outer layers along
+        the knot by up to ``|down| tan(e)`` (some centimetres), ramped over
+        ``LEVEL_RAMP`` layers, so each layer's seat lies millimetres past the
+        one inside it while the rings are 0.2 mm apart: where the inner face
+        rises towards the end, the outer seat lay under it (issue 39: 5 bark
+        cells of the last ring of the lowest whorl's knot of a 30-year pine
+        inside out).  A choice: from the pith out, layer ``j``'s seat may go
+        at most ``SEAT_ROOM`` of the way along layer ``j - 1``'s face that
+        keeps it outside that face (in the knot's straight frame, radius
+        across its axis, the end's corners as :meth:`_level_knot_end` puts
+        them); the seat never moves out, only back towards the pith, so the
+        trunk's walls (which take the knot's positions) only fold less.
+        ``pts``: the corners of the level-0 cells, with their ``cell`` and
+        ``sector``; ``radius``: the seat's distance from the knot's axis (layers, edges).
+        """
+        p0 = self.branch_frame(br, knot=True)[0]
+        n_layers, n_edges = s_seat.shape
+        ends = self._level_knot_end(br, pts[:, [3, 2, 7, 6]])  # top corners: inner (kk, kk+1), outer
+        rel = ends - p0
+        along = rel @ frame[0]
+        across = np.linalg.norm(rel - along[..., None] * frame[0], axis=-1)
+        top_s = np.full((n_layers, n_edges), np.nan)
+        top_r = np.full((n_layers, n_edges), np.nan)
+        j = np.minimum(cell, n_layers - 1)
+        for col, lay, e in ((0, j - 1, sector), (1, j - 1, sector + 1), (2, j, sector), (3, j, sector + 1)):
+            top_s[lay, e], top_r[lay, e] = along[:, col], across[:, col]
+        s = s_seat.copy()
+        for jj in range(1, n_layers):  # outwards: each layer's bound rests on the (held) layer inside it
+            rise = top_r[jj - 1] - radius[jj - 1]
+            room = top_s[jj - 1] - s[jj - 1]
+            gain = radius[jj] - radius[jj - 1]
+            bound = s[jj - 1] + self.SEAT_ROOM * room * gain / np.where(rise > 0, rise, np.inf)
+            ok = (rise > 0) & (room > 0) & np.isfinite(bound)
+            s[jj] = np.where(ok, np.minimum(s[jj], np.maximum(bound, s[jj - 1])), s[jj])
+        return s
 
     #: slot layers (half-years) over which the seam goes from following the knot's section to
     #: following the trunk's rings, under the knot's outer wood (see ``_level_seam``)
@@ -2572,7 +2633,9 @@ class Wood:
         stays where the push put it; a vertex of a knot (an ``exclusive``
         volume) never moves.  A few sweeps, as a vertex lies on up to four
         stacks' lines; only the folded vertices move, a fraction of a
-        millimetre.
+        millimetre.  A sliver the push tilts along the trunk stays inside out
+        with its layers in order across the axis: its outer vertices are put
+        straight out from its inner ones after (:meth:`_square_turned_cells`).
         """
         gm = self.gm
         vd = gm.volume_data
@@ -2618,8 +2681,65 @@ class Wood:
                 break
             pos[point[fold]] = (pos[point] + (ratio - 1.0)[:, None] * across)[fold]
             changed[point[fold]] = True
+        self._square_turned_cells(pos, v, c, point, touched, changed)
         moved = np.flatnonzero(changed[vid])
         gm.points[moved] = pos[vid[moved]]
+
+    #: the hexahedron's faces over its default corners (0..3 inner, 4..7 outer): positive volume the right way out
+    HEX_FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [3, 7, 6, 2], [0, 4, 7, 3], [1, 2, 6, 5]])
+
+    @classmethod
+    def hex_volumes(cls, corners: np.ndarray) -> np.ndarray:
+        """Signed volumes of hexahedra ``corners`` (m, 8, 3) in the cube order, each face fanned from its centroid."""
+        ref = corners.mean(axis=1, keepdims=True)
+        quads = corners[:, cls.HEX_FACES] - ref[:, None]  # (m, 6, 4, 3)
+        centre = quads.mean(axis=2, keepdims=True)
+        cross = np.cross(quads, np.roll(quads, -1, axis=2))
+        return np.einsum("mfki,mfki->m", cross, np.broadcast_to(centre, quads.shape)) / 6.0
+
+    def _square_turned_cells(
+        self, pos: np.ndarray, v: np.ndarray, c: np.ndarray, point: np.ndarray, touched: np.ndarray, changed: np.ndarray
+    ) -> None:
+        """Outer vertices of trunk ring cells still inside out put straight out from their inner ones, in place.
+
+        ``v, c, point``: each trunk ring cell's default corner ``c`` and its
+        vertex (:meth:`_keep_rings_apart`).  A shed bark sliver (50 um) the
+        knots' push tilts along the trunk by more than its width stays
+        inside out with its layers in order across the axis (issue 39: a
+        30-year pine's level 2, sector 13, cell 87, its outer bottom corners
+        0.2 mm lower than its inner ones by a knot's push), so pulling in
+        across the axis cannot fix it.  A choice: an outer vertex of such a
+        cell (its 8 corners' signed volume <= 0) takes its inner vertex's
+        height and angle round its level's axis, keeping its own distance
+        from the axis (held past the inner one's by the ring gap): the cell's
+        corner lines run straight out, so it has the width of its layer.  A
+        knot's vertex never moves; a few rounds, as a moved vertex is the
+        inner one of the cell outside it.
+        """
+        corners = np.full((self.gm.n_volumes, 8), -1, np.int64)
+        corners[v, c] = point
+        cells = np.flatnonzero((corners >= 0).all(axis=1))
+        if not cells.size:
+            return
+        level = self.gm.volume_data["level"][cells].astype(np.int64)
+        o, f, _ = self.level_frames(self.trunk)
+        for _ in range(4):
+            turned = np.flatnonzero(self.hex_volumes(pos[corners[cells]]) <= 0)
+            if not turned.size:
+                return
+            inner = corners[cells[turned], :4].ravel()
+            outer = corners[cells[turned], 4:].ravel()
+            free = ~touched[outer]
+            inner, outer = inner[free], outer[free]
+            up = f[np.repeat(level[turned], 4)[free], 0]
+            base = o[np.repeat(level[turned], 4)[free]]
+            rel_i, rel_o = pos[inner] - base, pos[outer] - base
+            across_i = rel_i - np.einsum("ij,ij->i", rel_i, up)[:, None] * up
+            across_o = rel_o - np.einsum("ij,ij->i", rel_o, up)[:, None] * up
+            r_i = np.linalg.norm(across_i, axis=1)
+            r_o = np.maximum(np.linalg.norm(across_o, axis=1), r_i * (1 + 1e-9))
+            pos[outer] = pos[inner] + ((r_o / np.maximum(r_i, 1e-300)) - 1.0)[:, None] * across_i
+            changed[outer] = True
 
     def _knot_bridge_corners(self, split: np.ndarray) -> None:
         """Corners of the darts :meth:`_split_knot_bottoms` made: evenly along each cut edge.

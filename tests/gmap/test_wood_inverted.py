@@ -93,3 +93,40 @@ def test_vtk_measures_every_hexahedron_the_way_out_the_kernel_does():
     assert np.all(kernel > 0)
     assert np.all(vtk > 0)
     assert np.allclose(vtk, kernel, rtol=0.05)
+
+
+@pytest.fixture(scope="module")
+def pine30():
+    """The issue's benchmark tree: a 30-year pine, default branches."""
+    return W.grow_wood("pine", years=30, height=0.3)
+
+
+def test_no_knot_ring_inside_out_where_its_seat_slides_along_it(pine30):
+    """The seat of the lowest whorl's knot's last ring slid along the knot past the face inside it
+    (:meth:`Wood._clear_of_tops`): 5 of its cells (branch 1, level 0, sectors 7-11, cell 58) were inside out."""
+    vd = pine30.gm.volume_data
+    vol = signed_volumes(pine30.gm)
+    bad = np.flatnonzero((vd["axis"] > 0) & (vd["cell"] > 0) & (vol <= 0))
+    where = [(int(vd["axis"][v]), int(vd["level"][v]), int(vd["sector"][v]), int(vd["cell"][v])) for v in bad]
+    assert not bad.size, f"{bad.size} knot cells inside out (axis, level, sector, cell): {where[:10]}"
+
+
+def test_no_shed_sliver_inside_out_where_a_knot_tilts_it(pine30):
+    """A shed bark sliver tilted along the trunk by a knot's push (level 2, sector 13, cell 87)
+    was inside out with its layers in order across the axis (:meth:`Wood._square_turned_cells`)."""
+    vd = pine30.gm.volume_data
+    vol = signed_volumes(pine30.gm)
+    bad = np.flatnonzero((vd["axis"] == 0) & (vd["cell"] > 0) & (vol <= 0))
+    where = [(int(vd["level"][v]), int(vd["sector"][v]), int(vd["cell"][v])) for v in bad]
+    assert not bad.size, f"{bad.size} trunk cells inside out (level, sector, cell): {where[:10]}"
+    pine30.check_topology()
+    brs = pine30.branches
+    est = W.estimated_darts(pine30.p, 30, [b.year for b in brs], [b.death for b in brs], [b.parent for b in brs])
+    assert pine30.gm.n_darts == est
+
+
+def test_hex_volumes_are_positive_the_right_way_out():
+    """The 8-corner measure :meth:`Wood._square_turned_cells` tests: a unit cube in the cube order is +1."""
+    cube = np.array([[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1], [1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]], float)
+    assert np.isclose(W.Wood.hex_volumes(cube[None])[0], 1.0)
+    assert np.isclose(W.Wood.hex_volumes(cube[None, [4, 5, 6, 7, 0, 1, 2, 3]])[0], -1.0)
