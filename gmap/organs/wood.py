@@ -3168,12 +3168,10 @@ def seated_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.Unstructure
     np.add.at(seated, (extra_cell[seat], on[seat]), 1)
     ok = np.isfinite(corners).all(axis=(1, 2))
     ok[extra_cell[on < 0]] = False
-    pid, held = _held_pairs(grid, (grid.celltypes != 12) & ~np.isin(owner, vols))
+    held = _held_keys(grid, (grid.celltypes != 12) & ~np.isin(owner, vols), _hash(grid.points))
 
     def straight(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # edges a cell left whole holds
-        ia, ib = _find(np.asarray(grid.points), a), _find(np.asarray(grid.points), b)
-        keys = _pair_keys(pid[ia], pid[ib], int(pid.max()) + 1)
-        return (ia >= 0) & (ib >= 0) & np.isin(keys, held)
+        return np.isin(_edge_keys(_hash(a), _hash(b)), held)
 
     pieces, rows, points = [], [], []
     base = 0
@@ -3709,31 +3707,6 @@ def _cut_rows(cells: np.ndarray, edges: np.ndarray, inner: np.ndarray, base: int
     j = np.arange(parts)[None, :, None]
     pieces = chain[np.arange(m)[:, None, None], slot[:, None, :], j + end[:, None, :]]
     return inner.reshape(-1, 3), pieces.reshape(-1, 8)
-
-
-def _pair_keys(pa: np.ndarray, pb: np.ndarray, n_ids: int) -> np.ndarray:
-    """One integer per unordered pair of point ids (``n_ids`` of them)."""
-    return np.minimum(pa, pb) * n_ids + np.maximum(pa, pb)
-
-
-def _held_pairs(grid: pv.UnstructuredGrid, whole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every pair of points that one of the cells ``whole`` holds: the grid points' ids by position
-    (rounded to a nanometre: the grid's pieces are merged without merging points), and the sorted
-    pair keys (:func:`_pair_keys`).  Every pair of a cell's points counts (a tetrahedron's six
-    edges, a wedge's or a hexahedron's edges and diagonals)."""
-    _, pid = np.unique(_hash(grid.points), return_inverse=True)
-    pid = pid.reshape(-1)
-    n_ids = int(pid.max()) + 1 if pid.size else 1
-    conn = np.asarray(grid.cell_connectivity, np.int64)
-    offsets = np.asarray(grid.cell_offsets, np.int64)
-    sizes = np.diff(offsets)
-    keys = [np.zeros(0, np.int64)]
-    for size in np.unique(sizes[whole]):
-        rows = np.flatnonzero(whole & (sizes == size))
-        ids = pid[conn[offsets[rows][:, None] + np.arange(size)]]
-        i, j = np.triu_indices(int(size), 1)
-        keys.append(_pair_keys(ids[:, i], ids[:, j], n_ids).reshape(-1))
-    return pid, np.unique(np.concatenate(keys))
 
 
 def parse_plank(text: str) -> tuple[np.ndarray, float, float]:

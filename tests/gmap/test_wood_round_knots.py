@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from ramure.gmap.organs import wood as W
+from wood_helpers import triangle_hits
 
 
 @pytest.fixture(scope="module")
@@ -80,18 +81,7 @@ def _coverage(section, normal, points: np.ndarray) -> np.ndarray:
     corners = np.asarray(tri.points)[np.asarray(tri.faces).reshape(-1, 4)[:, 1:]]
     t = np.stack([corners @ u, corners @ v], axis=2)
     q = np.stack([points @ u, points @ v], axis=1)
-    count = np.zeros(len(q), np.int64)
-    for i in range(0, len(t), 2000):
-        c = t[i : i + 2000]
-        v0, v1, v2 = c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
-        det = v1[:, 0] * v2[:, 1] - v1[:, 1] * v2[:, 0]
-        ok = np.abs(det) > 1e-20
-        det = np.where(ok, det, 1.0)[:, None]
-        w = q[None] - v0[:, None]
-        s = (w[..., 0] * v2[:, None, 1] - w[..., 1] * v2[:, None, 0]) / det
-        r = (v1[:, None, 0] * w[..., 1] - v1[:, None, 1] * w[..., 0]) / det
-        count += (ok[:, None] & (s >= 0) & (r >= 0) & (s + r <= 1)).sum(axis=0)
-    return count
+    return triangle_hits(t, q)
 
 
 def test_round_knots_leave_no_hole_and_no_overlap_in_a_board_or_a_cross_cut(whorls):
