@@ -2666,21 +2666,28 @@ class Wood:
         o, f, _ = self.level_frames(self.trunk)
         up = f[t, 0]
         changed = np.zeros(len(pos), bool)
+        on = np.arange(len(point))  # the entries swept: after the first sweep, the lines that moved
         for _ in range(sweeps):
-            rel = pos[point] - o[t]
-            across = rel - np.einsum("ij,ij->i", rel, up)[:, None] * up
+            p_on, r_on, c_on, t_on = point[on], row[on], col[on], t[on]
+            rel = pos[p_on] - o[t_on]
+            across = rel - np.einsum("ij,ij->i", rel, up[on])[:, None] * up[on]
             dist = np.linalg.norm(across, axis=1)
             table = np.full((len(lines), n_cols), np.inf)
-            table[row, col] = dist
+            table[r_on, c_on] = dist
             held = g + np.minimum.accumulate((table - g)[:, ::-1], axis=1)[:, ::-1]
-            ratio = np.where(touched[point], 1.0, held[row, col] / np.maximum(dist, 1e-300))
+            ratio = np.where(touched[p_on], 1.0, held[r_on, c_on] / np.maximum(dist, 1e-300))
             least = np.ones(len(pos))
-            np.minimum.at(least, point, ratio)
-            fold = (least < 1.0 - 1e-12)[point] & (ratio == least[point])
+            np.minimum.at(least, p_on, ratio)
+            fold = (least < 1.0 - 1e-12)[p_on] & (ratio == least[p_on])
             if not fold.any():
                 break
-            pos[point[fold]] = (pos[point] + (ratio - 1.0)[:, None] * across)[fold]
-            changed[point[fold]] = True
+            pos[p_on[fold]] = (pos[p_on] + (ratio - 1.0)[:, None] * across)[fold]
+            changed[p_on[fold]] = True
+            moved = np.zeros(len(pos), bool)
+            moved[p_on[fold]] = True
+            lines_moved = np.zeros(len(lines), bool)
+            lines_moved[row[moved[point]]] = True  # every line through a moved vertex
+            on = np.flatnonzero(lines_moved[row])
         self._square_turned_cells(pos, v, c, point, touched, changed)
         moved = np.flatnonzero(changed[vid])
         gm.points[moved] = pos[vid[moved]]
@@ -2690,12 +2697,19 @@ class Wood:
 
     @classmethod
     def hex_volumes(cls, corners: np.ndarray) -> np.ndarray:
-        """Signed volumes of hexahedra ``corners`` (m, 8, 3) in the cube order, each face fanned from its centroid."""
+        """Signed volumes of hexahedra ``corners`` (m, 8, 3) in the cube order, each face fanned from its centroid.
+
+        A face's fan from its centroid ``c`` holds ``c . (q_k x q_k+1) / 6`` per
+        edge; summed round a quad the cross products are the cross product of
+        its diagonals, so each face costs one cross product, not four.
+        """
         ref = corners.mean(axis=1, keepdims=True)
         quads = corners[:, cls.HEX_FACES] - ref[:, None]  # (m, 6, 4, 3)
-        centre = quads.mean(axis=2, keepdims=True)
-        cross = np.cross(quads, np.roll(quads, -1, axis=2))
-        return np.einsum("mfki,mfki->m", cross, np.broadcast_to(centre, quads.shape)) / 6.0
+        a, b = quads[:, :, 2] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 1]
+        x, y, z = a[..., 0], a[..., 1], a[..., 2]
+        u, v, w = b[..., 0], b[..., 1], b[..., 2]
+        area = np.stack([y * w - z * v, z * u - x * w, x * v - y * u], axis=-1)
+        return np.einsum("mfi,mfi->m", area, quads.mean(axis=2)) / 6.0
 
     def _square_turned_cells(
         self, pos: np.ndarray, v: np.ndarray, c: np.ndarray, point: np.ndarray, touched: np.ndarray, changed: np.ndarray
