@@ -111,7 +111,11 @@ def bench_wood_30_years_20_branches():
     year, dead stubs capped and branches of every order then added work and 14,336 darts; the
     corner gathers stopped buffering (``np.take(mode="clip")``).  Timed after a 3-year wood has
     loaded the compiled kernels (``bench_first_call`` times that load): quiet, 7 processes,
-    growth 1.45-1.92 s, median 1.60 s; 576 MiB.
+    growth 1.45-1.92 s, median 1.60 s; 576 MiB.  Then cells kept the right way out (the
+    unfolding pull and checks of issue 39) and dead bark kept: whole process against the code
+    before, 5 pairs in turn, wall ratio 1.02, peak 662 MiB; growth here, 7 processes on a machine
+    slower that day (the code before grew in 1.56-2.47 s in the same hour): 1.71-2.99 s, median
+    1.95 s, 661-663 MB.
     """
     W.grow_wood("pine", years=3, branches=2)  # warm: the kernels load from numba's cache once a process
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
