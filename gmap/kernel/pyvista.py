@@ -22,7 +22,7 @@ import numpy as np
 import pyvista as pv
 from numpy.typing import ArrayLike
 
-from ramure.gmap.kernel.measure import face_triangles, turned_over
+from ramure.gmap.kernel.measure import face_triangles, faces_up, turned_over
 from ramure.gmap.kernel.storage import TISSUES
 
 if TYPE_CHECKING:
@@ -73,21 +73,6 @@ def _outward(pos, cycles, degree, cell_centre):
     return np.where(inward[:, None], np.take_along_axis(cycles, rev, axis=1), cycles)
 
 
-def _faces_up(bottom: np.ndarray, top: np.ndarray) -> np.ndarray:
-    """Whether each bottom face ``(n, m, 3)``, in its order, turns towards its opposite face ``top``.
-
-    The face's normal is Newell's (the sum of its edges' cross products,
-    right for a skew quad) and the direction to the top is between the two
-    faces' centroids.  A test at one corner (that corner's two edges against
-    its own top corner) read a long thin cone cell's side face backwards: the
-    cell was written inside out and VTK measured it negative (82 of a 20-year
-    pine's ring cells).
-    """
-    nxt = np.roll(bottom, -1, axis=1)
-    normal = np.cross(bottom, nxt).sum(axis=1)
-    return np.einsum("nx,nx->n", normal, top.mean(axis=1) - bottom.mean(axis=1)) >= 0
-
-
 def _cell_records(gm, pos):
     """Cell types, the flat legacy cell array and each record's length, one cell per volume in volume order."""
     vid, _ = gm.cells(0)
@@ -133,7 +118,7 @@ def _cell_records(gm, pos):
             darts = cd_s[f, :m]
             bottom = vid[darts]
             top = vid[alpha[0][alpha[1][alpha[2][darts]]]]
-            up = _faces_up(pos[bottom], pos[top])
+            up = faces_up(pos[bottom], pos[top])
             flip = np.concatenate([[0], np.arange(m - 1, 0, -1)])
             bottom = np.where(up[:, None], bottom, bottom[:, flip])
             top = np.where(up[:, None], top, top[:, flip])

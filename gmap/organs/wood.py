@@ -163,6 +163,7 @@ from ramure.gmap.kernel import prism as _prism
 from ramure.gmap.kernel.errors import GMapError, ValueRefused
 from ramure.gmap.lsystem.engine import mix
 from ramure.gmap.kernel.map3 import GMap3
+from ramure.gmap.kernel.measure import faces_up
 from ramure.gmap.organs import wood_species as _species
 
 if TYPE_CHECKING:
@@ -409,6 +410,11 @@ def estimated_darts(
 
 
 # ---------------------------------------------------------------------- geometry helpers
+def _across(rel: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """The part of each offset ``rel`` (n, 3) across its axis direction ``up`` (n, 3), a unit vector."""
+    return rel - np.einsum("ij,ij->i", rel, up)[:, None] * up
+
+
 def _u01(*key):
     """A uniform number in [0, 1) from a key (no shared random stream)."""
     return mix(*key) / float(1 << 63)
@@ -2504,8 +2510,8 @@ class Wood:
         o, f, _ = self.level_frames(host)
         up = f[levels, 0]
         rel_b, rel_a = before - o[levels], after - o[levels]
-        across_b = rel_b - np.einsum("ij,ij->i", rel_b, up)[:, None] * up
-        across_a = rel_a - np.einsum("ij,ij->i", rel_a, up)[:, None] * up
+        across_b = _across(rel_b, up)
+        across_a = _across(rel_a, up)
         scale = np.linalg.norm(across_b, axis=1) / np.maximum(np.linalg.norm(across_a, axis=1), 1e-300)
         return after + (share * (scale - 1.0))[:, None] * across_a
 
@@ -2670,7 +2676,7 @@ class Wood:
         for _ in range(sweeps):
             p_on, r_on, c_on, t_on = point[on], row[on], col[on], t[on]
             rel = pos[p_on] - o[t_on]
-            across = rel - np.einsum("ij,ij->i", rel, up[on])[:, None] * up[on]
+            across = _across(rel, up[on])
             dist = np.linalg.norm(across, axis=1)
             table = np.full((len(lines), n_cols), np.inf)
             table[r_on, c_on] = dist
@@ -2748,8 +2754,8 @@ class Wood:
             up = f[np.repeat(level[turned], 4)[free], 0]
             base = o[np.repeat(level[turned], 4)[free]]
             rel_i, rel_o = pos[inner] - base, pos[outer] - base
-            across_i = rel_i - np.einsum("ij,ij->i", rel_i, up)[:, None] * up
-            across_o = rel_o - np.einsum("ij,ij->i", rel_o, up)[:, None] * up
+            across_i = _across(rel_i, up)
+            across_o = _across(rel_o, up)
             r_i = np.linalg.norm(across_i, axis=1)
             r_o = np.maximum(np.linalg.norm(across_o, axis=1), r_i * (1 + 1e-9))
             pos[outer] = pos[inner] + ((r_o / np.maximum(r_i, 1e-300)) - 1.0)[:, None] * across_i
@@ -3054,6 +3060,15 @@ _HEX_EDGES = np.array(
 )
 
 
+def _vtk_order(corners: np.ndarray) -> np.ndarray:
+    """The order (m, 8) that writes hexahedra of template ``corners`` (m, 8, 3) (inner quad 0..3,
+    outer quad 4..7) as VTK wants them: the first quad turned towards the second, judged as the
+    kernel's converter judges it (:func:`~ramure.gmap.kernel.measure.faces_up`, a Newell normal,
+    not one corner's edges, which read a long thin cone cell backwards)."""
+    up = faces_up(corners[:, :4], corners[:, 4:])
+    return np.where(up[:, None], np.arange(8), np.array([0, 3, 2, 1, 4, 7, 6, 5]))
+
+
 def bridged_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.UnstructuredGrid:
     """``grid`` with each ring cell :meth:`Wood._bridge` cut drawn as one hexahedron of its 8 corners.
 
@@ -3094,8 +3109,7 @@ def bridged_as_hexahedra(wood: Wood, grid: pv.UnstructuredGrid) -> pv.Unstructur
     if np.any(corner_dart < 0):
         raise GMapError("a bridged ring cell has lost a corner")
     pts = gm.points[corner_dart]  # (m, 8, 3), VTK order: inner quad 0..3, outer quad 4..7
-    up = np.einsum("mx,mx->m", np.cross(pts[:, 1] - pts[:, 0], pts[:, 3] - pts[:, 0]), pts[:, 4] - pts[:, 0]) >= 0
-    order = np.where(up[:, None], np.arange(8), np.array([0, 3, 2, 1, 4, 7, 6, 5]))
+    order = _vtk_order(pts)
     conn = np.arange(8 * len(vols)).reshape(-1, 8)[np.arange(len(vols))[:, None], order]
     hexes = pv.UnstructuredGrid(
         np.hstack([np.full((len(vols), 1), 8), conn]).ravel(), np.full(len(vols), 12, np.uint8), pts.reshape(-1, 3)
@@ -3303,9 +3317,7 @@ def _seated_rows(
         end[edges[k, 1]] = 1
     ids = np.arange(m * 4 * (n + 2)).reshape(m, 4, n + 2)
     cells = ids[np.arange(m)[:, None, None], slot[None, None, :], np.arange(n + 1)[None, :, None] + end[None, None, :]]
-    c = corners
-    up = np.einsum("mx,mx->m", np.cross(c[:, 1] - c[:, 0], c[:, 3] - c[:, 0]), c[:, 4] - c[:, 0]) >= 0
-    order = np.where(up[:, None], np.arange(8), np.array([0, 3, 2, 1, 4, 7, 6, 5]))  # as bridged_as_hexahedra
+    order = _vtk_order(corners)
     cells = np.take_along_axis(cells, np.broadcast_to(order[:, None, :], cells.shape), axis=2)
     return cells.reshape(-1, 8), chain.reshape(-1, 3)
 
