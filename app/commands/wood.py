@@ -104,7 +104,7 @@ def render_plank(
     offset), unlit so the colours are the tissues'; the length runs left to right.
     The board fills the picture but for the title's band and the legend's box
     (:func:`plank_view`): neither covers wood.
-    With ``species`` (and the part's ``wood``, ``season`` and ``axis`` cell
+    With ``species`` (and the part's ``wood`` and ``season`` cell
     data) the face is drawn at one point a pixel with the species' pores,
     resin canals and rays (:func:`ramure.gmap.organs.wood_species.texture_face`).
     """
@@ -119,7 +119,7 @@ def render_plank(
     plotter = pv.Plotter(off_screen=True, window_size=list(size))
     plotter.set_background("white")  # type: ignore[arg-type]  # pyvista stubs: decorated method
     plotter.add_mesh(surface, scalars="rgb", rgb=True, lighting=False, name="plank")
-    if species is not None and all(k in part.cell_data for k in ("wood", "season", "axis")):
+    if species is not None and all(k in part.cell_data for k in ("wood", "season")):
         from ramure.gmap.organs.wood import CODES
         from ramure.gmap.organs.wood_species import texture_face
 

@@ -125,7 +125,7 @@ class WoodPanel(QWidget):
         from ramure.gmap.organs.wood_species import texture_face
 
         species = self.species.currentText()
-        if species not in W.SPECIES or not all(k in part.cell_data for k in ("wood", "season", "axis")):
+        if species not in W.SPECIES or not all(k in part.cell_data for k in ("wood", "season")):
             return
         face = texture_face(part, normal, species, pixel=max(pixel, 1e-5), codes=W.CODES, up=up)
         if face.n_points:
